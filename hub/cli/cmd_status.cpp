@@ -1,0 +1,89 @@
+// `afhub status`: the hub's health: processes, bodies and mempool usage.
+#include <cstdio>
+#include <memory>
+#include <thread>
+
+#include "afhub/hub/bodies.hpp"
+#include "afhub/hub/error.hpp"
+#include "afhub/hub/hub_presence.hpp"
+#include "afhub/shm_layout/health.hpp"
+#include "commands.hpp"
+#include "json_writer.hpp"
+
+namespace afhub::cli {
+namespace {
+
+struct StatusOptions {
+  bool json = false;
+};
+
+const Health& wait_for_health(LatestReader<Health>& reader) {
+  auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(1500);
+  while (!reader.latest()) {
+    if (std::chrono::steady_clock::now() > deadline)
+      throw Error(
+          "a RouDi answers but publishes no afhub health: it is not an afhub hub (a plain "
+          "iox-roudi?). Stop it and start `afhub hub`.");
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  return *reader.latest();
+}
+
+int run_status(const StatusOptions& options) {
+  connect_to_hub("status", HubPolicy::kRequire);
+  LatestReader<Health> reader(
+      {std::string(kService), std::string(kHubInstance), std::string(kHealthEvent)});
+  const Health& health = wait_for_health(reader);
+  if (options.json) {
+    JsonWriter json;
+    json.begin_object();
+    json.key("hub_pid").value(static_cast<long long>(health.header.publisher_pid));
+    json.key("uptime_s").value(health.hub_uptime_s);
+    json.key("body_count").value(static_cast<long long>(health.body_count));
+    json.key("processes").begin_array();
+    for (std::uint32_t i = 0; i < health.process_count; ++i)
+      json.begin_object()
+          .key("name").value(name_of(health.processes[i].name))
+          .key("pid").value(static_cast<long long>(health.processes[i].pid))
+          .end_object();
+    json.end_array();
+    json.key("mempools").begin_array();
+    for (std::uint32_t i = 0; i < health.mempool_count; ++i) {
+      const MempoolUsage& pool = health.mempools[i];
+      json.begin_object()
+          .key("segment").value(static_cast<long long>(pool.segment_id))
+          .key("chunk_payload_bytes").value(static_cast<long long>(pool.chunk_payload_bytes))
+          .key("chunks").value(static_cast<long long>(pool.chunk_count))
+          .key("used").value(static_cast<long long>(pool.used_chunks))
+          .key("min_free").value(static_cast<long long>(pool.min_free_chunks))
+          .end_object();
+    }
+    json.end_array().end_object();
+    std::printf("%s\n", json.str().c_str());
+    return 0;
+  }
+  std::printf("hub: pid %u, up %.1f s, %u bodies, %u processes\n", health.header.publisher_pid,
+              health.hub_uptime_s, health.body_count, health.process_count);
+  std::printf("\nprocesses:\n");
+  for (std::uint32_t i = 0; i < health.process_count; ++i)
+    std::printf("  %-40s pid %d\n", std::string(name_of(health.processes[i].name)).c_str(),
+                health.processes[i].pid);
+  std::printf("\nmempools: segment  chunk bytes     chunks       used   min free\n");
+  for (std::uint32_t i = 0; i < health.mempool_count; ++i) {
+    const MempoolUsage& pool = health.mempools[i];
+    std::printf("          %7u %12u %10u %10u %10u\n", pool.segment_id, pool.chunk_payload_bytes, pool.chunk_count,
+                pool.used_chunks, pool.min_free_chunks);
+  }
+  return 0;
+}
+
+}  // namespace
+
+void register_status(CLI::App& app, Runner& selected) {
+  auto options = std::make_shared<StatusOptions>();
+  auto* status = app.add_subcommand("status", "Show the hub's health: processes, bodies, mempool usage.");
+  status->add_flag("--json", options->json, "Print one JSON object.");
+  status->callback([&selected, options] { selected = [options] { return run_status(*options); }; });
+}
+
+}  // namespace afhub::cli

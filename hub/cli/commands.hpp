@@ -1,0 +1,21 @@
+// The afhub subcommands. Each register_* adds one subcommand to the CLI; when the
+// user picks it, `selected` is set to the function that runs it and returns the
+// exit code.
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <functional>
+
+namespace afhub::cli {
+
+using Runner = std::function<int()>;
+
+void register_hub(CLI::App& app, Runner& selected);
+void register_ls(CLI::App& app, Runner& selected);
+void register_echo(CLI::App& app, Runner& selected);
+void register_cmd(CLI::App& app, Runner& selected);
+void register_status(CLI::App& app, Runner& selected);
+void register_synth(CLI::App& app, Runner& selected);
+void register_demo(CLI::App& app, Runner& selected);
+
+}  // namespace afhub::cli

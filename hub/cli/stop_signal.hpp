@@ -1,0 +1,16 @@
+// Ctrl-C and SIGTERM for long-running commands: a flag the loops poll, and a
+// deadline-paced sleep that wakes early when asked to stop.
+#pragma once
+
+#include <cstdint>
+
+namespace afhub::cli {
+
+void install_stop_signal_handlers();
+bool stop_requested();
+
+// Sleeps until the absolute CLOCK_MONOTONIC time `deadline_ns`.
+void sleep_until_ns(std::int64_t deadline_ns);
+std::int64_t monotonic_ns();
+
+}  // namespace afhub::cli

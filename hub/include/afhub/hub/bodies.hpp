@@ -1,0 +1,98 @@
+// One body's two channels, from either side, and the body catalog.
+//   BodyPublisher (the physics side): publishes state, reads the command slot.
+//   BodyClient (controllers, drivers, tools): reads state, writes commands.
+//   DirectoryPublisher: the bodies a process owns, announced once for the catalog.
+//   CatalogReader: every live body, as merged by the hub.
+#pragma once
+
+#include <chrono>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "afhub/hub/channel.hpp"
+#include "afhub/shm_layout/body_command.hpp"
+#include "afhub/shm_layout/body_state.hpp"
+#include "afhub/shm_layout/catalog.hpp"
+
+namespace afhub {
+
+class BodyPublisher {
+ public:
+  explicit BodyPublisher(std::string_view body_channel);
+
+  // Zero-initialised state in shared memory to fill, or nullptr when memory is exhausted.
+  BodyState* loan_state() noexcept { return state_.loan(); }
+  void publish_state(BodyState* state) noexcept { state_.publish(state); }
+  // The newest command, or nullptr before the first; read in place.
+  const BodyCommand* latest_command() noexcept { return command_.latest(); }
+  bool command_updated() const { return command_.updated(); }
+  std::uint64_t refused_commands() { return command_.raw().refused_count(); }
+  const std::string& channel() const { return channel_; }
+
+ private:
+  std::string channel_;
+  Writer<BodyState> state_;
+  LatestReader<BodyCommand> command_;
+};
+
+class BodyClient {
+ public:
+  // `body_channel` is a full channel name as listed in the catalog.
+  explicit BodyClient(std::string_view body_channel);
+
+  // The newest state, or nullptr before the first; read in place.
+  const BodyState* latest_state() noexcept { return state_.latest(); }
+  bool state_updated() const { return state_.updated(); }
+  // A zero-initialised command in shared memory to fill, then publish_command().
+  BodyCommand* loan_command() noexcept { return command_.loan(); }
+  void publish_command(BodyCommand* command) noexcept { command_.publish(command); }
+  const std::string& channel() const { return channel_; }
+
+ private:
+  std::string channel_;
+  LatestReader<BodyState> state_;
+  Writer<BodyCommand> command_;
+};
+
+// A catalog entry for a body this process owns; throws afhub::Error on a bad name.
+BodyInfo make_body_info(std::string_view body_channel, const std::vector<std::string>& joint_names);
+
+class DirectoryPublisher {
+ public:
+  DirectoryPublisher();  // on {"afhub", "<runtime name>", "directory"}; needs connect_to_hub()
+  // Announces a body; publish() sends the directory.
+  void add(const BodyInfo& body);
+  void publish();
+
+ private:
+  std::vector<BodyInfo> bodies_;
+  RawWriter writer_;
+};
+
+class CatalogReader {
+ public:
+  CatalogReader();
+  // Waits up to `timeout` for the hub's catalog. Throws afhub::Error if none comes:
+  // the RouDi that answered is then not an afhub hub.
+  void wait(std::chrono::milliseconds timeout);
+  // The newest catalog (after wait()); read in place.
+  const BodyList& latest() noexcept;
+  std::vector<std::string> channels() noexcept(false);
+  // Resolves an exact name or unique suffix; throws afhub::Error listing candidates.
+  BodyInfo resolve(std::string_view query);
+
+ private:
+  RawLatestReader reader_;
+  const BodyList* current_ = nullptr;
+};
+
+// Text of a fixed NUL-terminated name buffer.
+template <std::size_t N>
+std::string_view name_of(const std::array<char, N>& buffer) {
+  std::size_t length = 0;
+  while (length < N && buffer[length] != '\0') ++length;
+  return {buffer.data(), length};
+}
+
+}  // namespace afhub

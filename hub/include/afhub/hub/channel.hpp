@@ -1,0 +1,108 @@
+// Zero-copy channel ends with latest-value semantics.
+//   Writer<T>: loan a chunk in shared memory, fill it in place, publish it.
+//   LatestReader<T>: read the newest valid sample in place; older ones are dropped.
+// A late joiner receives the last published sample at once (history of one).
+// loan(), publish() and latest() are real-time safe: no heap, no exceptions.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <new>
+#include <string>
+
+#include "afhub/hub/channel_names.hpp"
+#include "afhub/shm_layout/header.hpp"
+#include "afhub/shm_layout/layout_id.hpp"
+#include "afhub/shm_layout/payload_check.hpp"
+
+namespace afhub {
+
+// Untyped ends; the typed templates below are what code uses.
+class RawWriter {
+ public:
+  RawWriter(const ChannelId& channel, PayloadKind kind);
+  ~RawWriter();
+  RawWriter(const RawWriter&) = delete;
+  RawWriter& operator=(const RawWriter&) = delete;
+
+  // A chunk of `bytes` bytes, or nullptr when shared memory is exhausted.
+  void* loan(std::uint32_t bytes) noexcept;
+  // Stamps the header (layout, kind, pid, sequence, monotonic time) and publishes.
+  // The caller sets header.sim_step and header.sim_time_s.
+  void publish(void* payload) noexcept;
+  // Gives a loaned chunk back unpublished.
+  void release(void* payload) noexcept;
+
+  const ChannelId& channel() const { return channel_; }
+  std::uint64_t published_count() const { return sequence_; }
+  std::uint64_t failed_loans() const { return failed_loans_; }
+
+ private:
+  struct Port;
+  ChannelId channel_;
+  PayloadKind kind_;
+  std::uint64_t sequence_ = 0;
+  std::uint64_t failed_loans_ = 0;
+  std::unique_ptr<Port> port_;
+};
+
+class RawLatestReader {
+ public:
+  RawLatestReader(const ChannelId& channel, PayloadKind kind);
+  ~RawLatestReader();
+  RawLatestReader(const RawLatestReader&) = delete;
+  RawLatestReader& operator=(const RawLatestReader&) = delete;
+
+  // The newest valid payload, or nullptr before the first one. It stays valid
+  // and unchanged until the next call. Invalid payloads are refused and counted.
+  const void* latest() noexcept;
+  // Whether the last latest() call found a sample newer than the one before.
+  bool updated() const { return updated_; }
+  // Bytes of the payload latest() returned.
+  std::uint32_t latest_bytes() const { return held_bytes_; }
+  std::uint64_t refused_count() const { return refused_; }
+  // Whether any writer is connected to this channel.
+  bool has_writers() const noexcept;
+  const ChannelId& channel() const { return channel_; }
+
+ private:
+  struct Port;
+  void report_refusal(const void* payload, PayloadError error) noexcept;
+  ChannelId channel_;
+  PayloadKind kind_;
+  const void* held_ = nullptr;
+  std::uint32_t held_bytes_ = 0;
+  bool updated_ = false;
+  std::uint64_t refused_ = 0;
+  std::unique_ptr<Port> port_;
+};
+
+template <class T>
+class Writer {
+ public:
+  explicit Writer(const ChannelId& channel) : raw_(channel, PayloadTraits<T>::kKind) {}
+  // A zero-initialised payload in shared memory, or nullptr when memory is exhausted.
+  T* loan() noexcept {
+    void* chunk = raw_.loan(sizeof(T));
+    return chunk ? new (chunk) T{} : nullptr;
+  }
+  void publish(T* payload) noexcept { raw_.publish(payload); }
+  RawWriter& raw() { return raw_; }
+
+ private:
+  RawWriter raw_;
+};
+
+template <class T>
+class LatestReader {
+ public:
+  explicit LatestReader(const ChannelId& channel) : raw_(channel, PayloadTraits<T>::kKind) {}
+  const T* latest() noexcept { return static_cast<const T*>(raw_.latest()); }
+  bool updated() const { return raw_.updated(); }
+  RawLatestReader& raw() { return raw_; }
+
+ private:
+  RawLatestReader raw_;
+};
+
+}  // namespace afhub

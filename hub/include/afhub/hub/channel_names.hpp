@@ -1,0 +1,47 @@
+// Channel naming: {"afhub", "<namespace>/<body>", "state" | "command"}, the
+// world, catalog, health and directory channels, and the lookup of a body by a
+// unique suffix of its name.
+#pragma once
+
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace afhub {
+
+inline constexpr std::string_view kService = "afhub";
+inline constexpr std::string_view kStateEvent = "state";
+inline constexpr std::string_view kCommandEvent = "command";
+inline constexpr std::string_view kDirectoryEvent = "directory";
+inline constexpr std::string_view kWorldInstance = "world";
+inline constexpr std::string_view kHubInstance = "hub";
+inline constexpr std::string_view kCatalogEvent = "catalog";
+inline constexpr std::string_view kHealthEvent = "health";
+
+// A channel's three iceoryx strings.
+struct ChannelId {
+  std::string service;
+  std::string instance;
+  std::string event;
+  std::string to_string() const { return service + "/" + instance + "/" + event; }
+};
+
+// "<namespace>/<body>" with leading, trailing and doubled slashes removed, and
+// spaces removed from the body name as AMBF does ("base link" -> "baselink").
+std::string body_channel_name(std::string_view name_space, std::string_view body_name);
+
+// Empty string when `name` can be a channel instance, else what is wrong with it.
+std::string channel_name_problem(std::string_view name);
+
+// Throws afhub::Error with a clear message when the name cannot be used.
+void require_valid_channel_name(std::string_view name);
+
+ChannelId body_state_channel(std::string_view body_channel);
+ChannelId body_command_channel(std::string_view body_channel);
+
+// Finds `query` among `channels`: an exact name, or a unique suffix that starts
+// after a '/' ("base" finds "ambf/env/base"). Throws afhub::Error listing the
+// candidates when the query is unknown or ambiguous.
+std::string resolve_body(std::string_view query, const std::vector<std::string>& channels);
+
+}  // namespace afhub

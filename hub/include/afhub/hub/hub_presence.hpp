@@ -1,0 +1,42 @@
+// Is a hub running? Answered without touching iceoryx, whose runtime would wait
+// 60 s for a missing RouDi and then abort the process.
+#pragma once
+
+#include <sys/types.h>
+
+#include <optional>
+#include <string>
+
+namespace afhub {
+
+enum class RoudiPresence { kAbsent, kRunning };
+
+// Probes RouDi's Unix socket (/tmp/roudi): ENOENT or ECONNREFUSED mean no RouDi.
+RoudiPresence probe_roudi() noexcept;
+
+// The hub holds an exclusive lock on this file for its lifetime and writes its pid in it.
+std::string hub_lock_path();
+
+// The pid of the running afhub hub, if one holds the lock.
+std::optional<pid_t> running_hub_pid();
+
+// How a process that needs a hub gets one.
+enum class HubPolicy {
+  kAutostart,  // start a hub in the background when none runs, and say so on stderr
+  kRequire,    // fail with a message when none runs
+};
+
+// Makes sure a hub is reachable under `policy`; throws afhub::Error otherwise.
+void ensure_hub(HubPolicy policy);
+
+// Registers this process with the hub under "afhub-<role>-<pid>", after ensure_hub().
+// Call once per process, before opening any channel.
+void connect_to_hub(const std::string& role, HubPolicy policy);
+
+// iceoryx logs warnings and errors only (its default is verbose).
+void quiet_iceoryx_logs();
+
+// This process's iceoryx runtime name (empty before connect_to_hub).
+const std::string& runtime_name();
+
+}  // namespace afhub

@@ -1,0 +1,130 @@
+// The hub's catalog (see catalog_builder.hpp).
+#include "catalog_builder.hpp"
+
+#include <cstdio>
+#include <set>
+
+#include "afhub/hub/bodies.hpp"
+#include "iceoryx_posh/runtime/service_discovery.hpp"
+
+namespace afhub {
+namespace {
+constexpr auto kRepublishPeriod = std::chrono::seconds(1);
+}
+
+CatalogBuilder::CatalogBuilder()
+    : discovery_(std::make_unique<iox::runtime::ServiceDiscovery>()),
+      writer_({std::string(kService), std::string(kHubInstance), std::string(kCatalogEvent)},
+              PayloadKind::kCatalog) {
+  publish();  // an empty catalog at once: tools can tell a hub from a plain RouDi
+}
+
+CatalogBuilder::~CatalogBuilder() = default;
+
+void CatalogBuilder::poll(std::chrono::steady_clock::time_point now) {
+  const bool changed = merge(refresh_directories());
+  const bool due = now - last_publish_ >= kRepublishPeriod;
+  if (due) {
+    measure_rates(now);
+    last_publish_ = now;
+  }
+  if (changed || due) publish();
+}
+
+bool CatalogBuilder::refresh_directories() {
+  std::set<std::string> live;
+  discovery_->findService(
+      iox::capro::IdString_t(iox::cxx::TruncateToCapacity, std::string(kService).c_str()),
+      iox::cxx::nullopt,
+      iox::capro::IdString_t(iox::cxx::TruncateToCapacity, std::string(kDirectoryEvent).c_str()),
+      [&](const iox::capro::ServiceDescription& service) {
+        live.insert(service.getInstanceIDString().c_str());
+      },
+      iox::popo::MessagingPattern::PUB_SUB);
+  bool changed = false;
+  for (auto it = directories_.begin(); it != directories_.end();) {
+    if (live.count(it->first)) {
+      ++it;
+    } else {
+      it = directories_.erase(it);
+      changed = true;
+    }
+  }
+  for (const auto& instance : live) {
+    if (directories_.count(instance)) continue;
+    directories_[instance] = std::make_unique<RawLatestReader>(
+        ChannelId{std::string(kService), instance, std::string(kDirectoryEvent)},
+        PayloadKind::kBodyDirectory);
+    changed = true;
+  }
+  return changed;
+}
+
+bool CatalogBuilder::merge(bool directories_changed) {
+  bool any_update = directories_changed;
+  for (auto& [instance, reader] : directories_) {
+    reader->latest();
+    any_update = any_update || reader->updated();
+  }
+  if (!any_update) return false;
+  std::vector<BodyInfo> merged;
+  std::set<std::string> seen;
+  for (auto& [instance, reader] : directories_) {
+    const auto* list = static_cast<const BodyList*>(reader->latest());
+    if (!list) continue;
+    for (std::uint32_t i = 0; i < list->body_count; ++i) {
+      std::string channel(name_of(list->bodies[i].channel));
+      if (!seen.insert(channel).second) {
+        std::fprintf(stderr, "afhub hub: body %s is claimed by two processes; keeping the first\n",
+                     channel.c_str());
+        continue;
+      }
+      merged.push_back(list->bodies[i]);
+    }
+  }
+  bodies_ = std::move(merged);
+  // Rate probes follow the body set.
+  std::map<std::string, RateProbe> probes;
+  for (const auto& body : bodies_) {
+    std::string channel(name_of(body.channel));
+    auto old = rates_.find(channel);
+    if (old != rates_.end()) {
+      probes[channel] = std::move(old->second);
+    } else {
+      probes[channel].reader = std::make_unique<LatestReader<BodyState>>(body_state_channel(channel));
+    }
+  }
+  rates_ = std::move(probes);
+  return true;
+}
+
+void CatalogBuilder::measure_rates(std::chrono::steady_clock::time_point now) {
+  for (auto& [channel, probe] : rates_) {
+    const BodyState* state = probe.reader->latest();
+    const std::uint64_t sequence = state ? state->header.sequence : 0;
+    const double seconds = std::chrono::duration<double>(now - probe.last_time).count();
+    if (probe.last_sequence != 0 && sequence >= probe.last_sequence && seconds > 0.0)
+      probe.rate_hz = static_cast<double>(sequence - probe.last_sequence) / seconds;
+    else
+      probe.rate_hz = 0.0;
+    probe.last_sequence = sequence;
+    probe.last_time = now;
+  }
+}
+
+void CatalogBuilder::publish() {
+  auto* list = static_cast<BodyList*>(writer_.loan(body_list_bytes(bodies_.size())));
+  if (!list) {
+    std::fprintf(stderr, "afhub hub: shared memory exhausted, catalog not published\n");
+    return;
+  }
+  list->header = PayloadHeader{};
+  list->body_count = static_cast<std::uint32_t>(bodies_.size());
+  for (std::size_t i = 0; i < bodies_.size(); ++i) {
+    list->bodies[i] = bodies_[i];
+    list->bodies[i].publish_rate_hz = rates_[std::string(name_of(bodies_[i].channel))].rate_hz;
+  }
+  writer_.publish(list);
+}
+
+}  // namespace afhub

@@ -1,0 +1,141 @@
+// Zero-copy channel ends over iceoryx's untyped publisher and subscriber.
+#include "afhub/hub/channel.hpp"
+
+#include <time.h>
+#include <unistd.h>
+
+#include <cstdio>
+
+#include "afhub/hub/error.hpp"
+#include "iceoryx_posh/mepoo/chunk_header.hpp"
+#include "iceoryx_posh/popo/untyped_publisher.hpp"
+#include "iceoryx_posh/popo/untyped_subscriber.hpp"
+
+namespace afhub {
+namespace {
+
+iox::capro::ServiceDescription describe_channel(const ChannelId& channel) {
+  using iox::capro::IdString_t;
+  using iox::cxx::TruncateToCapacity;
+  // Names were validated on the way in; nothing here is ever truncated.
+  return {IdString_t(TruncateToCapacity, channel.service.c_str()),
+          IdString_t(TruncateToCapacity, channel.instance.c_str()),
+          IdString_t(TruncateToCapacity, channel.event.c_str())};
+}
+
+void require_fits(const ChannelId& channel) {
+  for (const std::string* part : {&channel.service, &channel.instance, &channel.event})
+    if (part->empty() || part->size() > iox::capro::IdString_t::capacity())
+      throw Error("channel '" + channel.to_string() + "': '" + *part +
+                  "' must have 1 to 100 characters");
+}
+
+std::int64_t monotonic_now_ns() noexcept {
+  timespec now{};
+  clock_gettime(CLOCK_MONOTONIC, &now);
+  return static_cast<std::int64_t>(now.tv_sec) * 1'000'000'000 + now.tv_nsec;
+}
+
+}  // namespace
+
+struct RawWriter::Port {
+  explicit Port(const ChannelId& channel)
+      : publisher(describe_channel(channel), [] {
+          iox::popo::PublisherOptions options;
+          options.historyCapacity = 1;  // a late joiner gets the last value at once
+          return options;
+        }()) {}
+  iox::popo::UntypedPublisher publisher;
+};
+
+RawWriter::RawWriter(const ChannelId& channel, PayloadKind kind) : channel_(channel), kind_(kind) {
+  require_fits(channel);
+  port_ = std::make_unique<Port>(channel);
+}
+
+RawWriter::~RawWriter() = default;
+
+void* RawWriter::loan(std::uint32_t bytes) noexcept {
+  auto result = port_->publisher.loan(bytes, alignof(PayloadHeader));
+  if (result.has_error()) {
+    ++failed_loans_;
+    return nullptr;
+  }
+  return result.value();
+}
+
+void RawWriter::publish(void* payload) noexcept {
+  auto* header = static_cast<PayloadHeader*>(payload);
+  header->layout_id = kLayoutId;
+  header->kind = kind_;
+  header->publisher_pid = static_cast<std::uint32_t>(getpid());
+  header->sequence = ++sequence_;
+  header->publish_stamp_ns = monotonic_now_ns();
+  port_->publisher.publish(payload);
+}
+
+void RawWriter::release(void* payload) noexcept { port_->publisher.release(payload); }
+
+struct RawLatestReader::Port {
+  explicit Port(const ChannelId& channel)
+      : subscriber(describe_channel(channel), [] {
+          iox::popo::SubscriberOptions options;
+          options.queueCapacity = 1;  // latest value: a newer sample replaces a queued one
+          options.historyRequest = 1;
+          options.queueFullPolicy = iox::popo::QueueFullPolicy::DISCARD_OLDEST_DATA;
+          return options;
+        }()) {}
+  iox::popo::UntypedSubscriber subscriber;
+};
+
+RawLatestReader::RawLatestReader(const ChannelId& channel, PayloadKind kind)
+    : channel_(channel), kind_(kind) {
+  require_fits(channel);
+  port_ = std::make_unique<Port>(channel);
+}
+
+RawLatestReader::~RawLatestReader() {
+  if (held_) port_->subscriber.release(held_);
+}
+
+const void* RawLatestReader::latest() noexcept {
+  updated_ = false;
+  for (;;) {
+    auto taken = port_->subscriber.take();
+    if (taken.has_error()) break;  // no more samples (or too many held: keep the current)
+    const void* payload = taken.value();
+    const std::uint32_t bytes = iox::mepoo::ChunkHeader::fromUserPayload(payload)->userPayloadSize();
+    PayloadError error = check_payload(payload, bytes, kind_);
+    if (error != PayloadError::kNone) {
+      report_refusal(payload, error);
+      port_->subscriber.release(payload);
+      continue;
+    }
+    if (held_) port_->subscriber.release(held_);
+    held_ = payload;
+    held_bytes_ = bytes;
+    updated_ = true;
+  }
+  return held_;
+}
+
+bool RawLatestReader::has_writers() const noexcept {
+  return port_->subscriber.getSubscriptionState() == iox::SubscribeState::SUBSCRIBED;
+}
+
+void RawLatestReader::report_refusal(const void* payload, PayloadError error) noexcept {
+  // Said once per reader: a foreign writer publishes at its own rate.
+  if (refused_++ > 0) return;
+  PayloadHeader header{};
+  const std::uint32_t bytes = iox::mepoo::ChunkHeader::fromUserPayload(payload)->userPayloadSize();
+  if (bytes >= sizeof header) header = *static_cast<const PayloadHeader*>(payload);
+  std::fprintf(stderr,
+               "afhub: refused a payload on %s/%s/%s from pid %u (layout id %016llx, this "
+               "build %016llx): %s\n",
+               channel_.service.c_str(), channel_.instance.c_str(), channel_.event.c_str(),
+               header.publisher_pid,
+               static_cast<unsigned long long>(header.layout_id),
+               static_cast<unsigned long long>(kLayoutId), describe(error));
+}
+
+}  // namespace afhub

@@ -1,0 +1,90 @@
+// The hub's health channel (see health_reporter.hpp).
+#include "health_reporter.hpp"
+
+#include <algorithm>
+#include <cstring>
+#include <optional>
+
+#include "iceoryx_posh/popo/subscriber.hpp"
+#include "iceoryx_posh/roudi/introspection_types.hpp"
+
+namespace afhub {
+namespace {
+
+constexpr auto kPublishPeriod = std::chrono::seconds(1);
+
+template <class Topic>
+iox::popo::SubscriberOptions latest_only() {
+  iox::popo::SubscriberOptions options;
+  options.queueCapacity = 1;
+  options.historyRequest = 1;
+  return options;
+}
+
+// Keeps the newest sample of an introspection topic.
+template <class Topic>
+struct LatestTopic {
+  explicit LatestTopic(const iox::capro::ServiceDescription& service)
+      : subscriber(service, latest_only<Topic>()) {}
+  const Topic* latest() {
+    for (;;) {
+      auto taken = subscriber.take();
+      if (taken.has_error()) break;
+      held.emplace(std::move(taken.value()));
+    }
+    return held ? held->get() : nullptr;
+  }
+  iox::popo::Subscriber<Topic> subscriber;
+  std::optional<iox::popo::Sample<const Topic>> held;
+};
+
+}  // namespace
+
+struct HealthReporter::Introspection {
+  LatestTopic<iox::roudi::ProcessIntrospectionFieldTopic> processes{
+      iox::roudi::IntrospectionProcessService};
+  LatestTopic<iox::roudi::MemPoolIntrospectionInfoContainer> mempools{
+      iox::roudi::IntrospectionMempoolService};
+};
+
+HealthReporter::HealthReporter()
+    : introspection_(std::make_unique<Introspection>()),
+      writer_({std::string(kService), std::string(kHubInstance), std::string(kHealthEvent)}),
+      started_(std::chrono::steady_clock::now()) {}
+
+HealthReporter::~HealthReporter() = default;
+
+void HealthReporter::poll(std::chrono::steady_clock::time_point now, std::uint32_t body_count) {
+  const auto* processes = introspection_->processes.latest();
+  const auto* mempools = introspection_->mempools.latest();
+  if (now - last_publish_ < kPublishPeriod) return;
+  Health* health = writer_.loan();
+  if (!health) return;
+  last_publish_ = now;
+  health->hub_uptime_s = std::chrono::duration<double>(now - started_).count();
+  health->body_count = body_count;
+  if (processes) {
+    for (const auto& process : processes->m_processList) {
+      if (health->process_count == kMaxHealthProcesses) break;
+      ProcessEntry& entry = health->processes[health->process_count++];
+      entry.pid = process.m_pid;
+      std::strncpy(entry.name.data(), process.m_name.c_str(), entry.name.size() - 1);
+    }
+  }
+  if (mempools) {
+    for (const auto& segment : *mempools) {
+      for (const auto& pool : segment.m_mempoolInfo) {
+        if (health->mempool_count == kMaxMempools) break;
+        MempoolUsage& usage = health->mempools[health->mempool_count++];
+        usage.segment_id = segment.m_id;
+        usage.chunk_payload_bytes = pool.m_chunkPayloadSize;
+        usage.chunk_count = pool.m_numChunks;
+        usage.used_chunks = pool.m_usedChunks;
+        usage.min_free_chunks = pool.m_minFreeChunks;
+      }
+    }
+  }
+  writer_.publish(health);
+}
+
+}  // namespace afhub

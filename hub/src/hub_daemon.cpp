@@ -1,0 +1,148 @@
+// The hub daemon (see hub_daemon.hpp): one lock file, RouDi in this process, the
+// catalog and health publishers, and a clean stop on SIGINT or SIGTERM.
+#include "afhub/hub/hub_daemon.hpp"
+
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/file.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <string>
+#include <thread>
+
+#include "afhub/hub/hub_presence.hpp"
+#include "catalog_builder.hpp"
+#include "health_reporter.hpp"
+#include "iceoryx_hoofs/posix_wrapper/posix_access_rights.hpp"
+#include "iceoryx_posh/iceoryx_posh_config.hpp"
+#include "iceoryx_posh/internal/roudi/roudi.hpp"
+#include "iceoryx_posh/roudi/iceoryx_roudi_components.hpp"
+#include "iceoryx_posh/runtime/posh_runtime_single_process.hpp"
+
+namespace afhub {
+namespace {
+
+std::atomic<bool> g_stop_requested{false};
+
+extern "C" void request_stop(int) { g_stop_requested = true; }
+
+void install_stop_handlers() {
+  struct sigaction action {};
+  action.sa_handler = request_stop;
+  sigemptyset(&action.sa_mask);
+  sigaction(SIGINT, &action, nullptr);
+  sigaction(SIGTERM, &action, nullptr);
+}
+
+iox::RouDiConfig_t roudi_config(double& total_mib) {
+  iox::mepoo::MePooConfig mempools;
+  total_mib = 0.0;
+  for (const MempoolSpec& pool : hub_mempools()) {
+    mempools.addMemPool({pool.payload_bytes, pool.chunk_count});
+    total_mib += static_cast<double>(pool.payload_bytes) * pool.chunk_count / (1024.0 * 1024.0);
+  }
+  iox::RouDiConfig_t config;
+  auto group = iox::posix::PosixGroup::getGroupOfCurrentProcess().getName();
+  config.m_sharedMemorySegments.push_back({group, group, mempools});
+  return config;
+}
+
+// The hub lock, released last: after RouDi is gone, so that a new hub can start at once.
+struct HubLock {
+  int fd = -1;
+  ~HubLock() {
+    if (fd >= 0) close(fd);
+  }
+};
+
+// Takes the hub lock and writes this pid in it; -1 when another hub has it.
+int take_hub_lock() {
+  int fd = open(hub_lock_path().c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (fd < 0) return -1;
+  if (flock(fd, LOCK_EX | LOCK_NB) != 0) {
+    close(fd);
+    return -1;
+  }
+  std::string pid = std::to_string(getpid()) + "\n";
+  if (ftruncate(fd, 0) != 0 || write(fd, pid.data(), pid.size()) < 0) {
+    close(fd);
+    return -1;
+  }
+  return fd;
+}
+
+void serve_until_stopped() {
+  CatalogBuilder catalog;
+  HealthReporter health;
+  while (!g_stop_requested) {
+    auto now = std::chrono::steady_clock::now();
+    catalog.poll(now);
+    health.poll(now, catalog.body_count());
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+}
+
+}  // namespace
+
+int run_hub_daemon() {
+  HubLock lock{take_hub_lock()};
+  if (lock.fd < 0) {
+    auto pid = running_hub_pid();
+    std::fprintf(stderr,
+                 "afhub hub: a hub is already running (pid %d); there can be one per machine. "
+                 "Use it, or stop it with `afhub hub stop`.\n",
+                 pid ? static_cast<int>(*pid) : -1);
+    return 1;
+  }
+  if (probe_roudi() == RoudiPresence::kRunning) {
+    std::fprintf(stderr,
+                 "afhub hub: another iceoryx RouDi (not an afhub hub, e.g. iox-roudi) is running; "
+                 "iceoryx allows one per machine. Stop it, then run `afhub hub` again.\n");
+    return 1;
+  }
+  install_stop_handlers();
+  quiet_iceoryx_logs();
+
+  double pool_mib = 0.0;
+  iox::roudi::IceOryxRouDiComponents components(roudi_config(pool_mib));
+  // Monitoring on: a crashed client is removed and its chunks are freed. The hub
+  // does not kill clients when it stops: they keep running and can reconnect.
+  iox::roudi::RouDi roudi(components.rouDiMemoryManager, components.portManager,
+                          iox::roudi::RouDi::RoudiStartupParameters{
+                              iox::roudi::MonitoringMode::ON, false});
+  iox::runtime::PoshRuntimeSingleProcess runtime("afhub-hub");
+  std::fprintf(stderr, "afhub hub: running (pid %d, %.1f MiB of payload mempools). Ctrl-C stops it.\n",
+               static_cast<int>(getpid()), pool_mib);
+  serve_until_stopped();
+  std::fprintf(stderr, "afhub hub: stopped\n");
+  return 0;
+}
+
+int stop_hub() {
+  auto pid = running_hub_pid();
+  if (!pid || *pid <= 0) {
+    std::fprintf(stderr, "afhub hub stop: no hub is running\n");
+    return 0;
+  }
+  if (kill(*pid, SIGTERM) != 0) {
+    std::fprintf(stderr, "afhub hub stop: cannot signal the hub (pid %d): %s\n", *pid,
+                 std::strerror(errno));
+    return 1;
+  }
+  auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+  while (running_hub_pid()) {
+    if (std::chrono::steady_clock::now() > deadline) {
+      std::fprintf(stderr, "afhub hub stop: the hub (pid %d) did not stop within 5 s\n", *pid);
+      return 1;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  std::fprintf(stderr, "afhub hub stop: stopped the hub (pid %d)\n", *pid);
+  return 0;
+}
+
+}  // namespace afhub

@@ -1,0 +1,40 @@
+// Shared-memory pools of the hub, sized from the payload types rather than
+// iceoryx's 206 MiB default. (RouDi keeps its introspection samples in a segment
+// of its own, so these pools hold afhub payloads only.)
+#include <algorithm>
+
+#include "afhub/hub/hub_daemon.hpp"
+#include "afhub/shm_layout/body_command.hpp"
+#include "afhub/shm_layout/body_state.hpp"
+#include "afhub/shm_layout/catalog.hpp"
+#include "afhub/shm_layout/health.hpp"
+#include "afhub/shm_layout/world.hpp"
+
+namespace afhub {
+namespace {
+
+constexpr std::uint32_t round_up8(std::size_t bytes) {
+  return static_cast<std::uint32_t>((bytes + 7) / 8 * 8);
+}
+
+}  // namespace
+
+std::vector<MempoolSpec> hub_mempools() {
+  // Chunk counts: each active body holds about six state and six command chunks
+  // (publisher history, a loan, a queued and a held sample per reader, the hub's
+  // rate probe), for up to kMaxBodies bodies with a margin.
+  std::vector<MempoolSpec> pools = {
+      {128, 512, "world commands, small iceoryx samples"},
+      {round_up8(std::max(sizeof(BodyCommand), sizeof(WorldState))), 2048, "body commands, world state"},
+      {round_up8(sizeof(BodyState)), 2048, "body states"},
+      {round_up8(sizeof(Health)), 128, "hub health"},
+      {round_up8(body_list_bytes(7)), 128, "catalogs and directories of up to 7 bodies"},
+      {round_up8(body_list_bytes(60)), 32, "catalogs and directories of up to 60 bodies"},
+      {round_up8(sizeof(BodyList)), 12, "catalogs and directories of up to kMaxBodies bodies"},
+  };
+  std::sort(pools.begin(), pools.end(),
+            [](const MempoolSpec& a, const MempoolSpec& b) { return a.payload_bytes < b.payload_bytes; });
+  return pools;
+}
+
+}  // namespace afhub

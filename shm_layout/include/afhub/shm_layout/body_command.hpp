@@ -1,0 +1,33 @@
+// BodyCommand: what a controller writes into one body's command slot
+// (AMBF's afCommand: a Cartesian command and per-joint commands).
+#pragma once
+
+#include <array>
+#include <cstdint>
+
+#include "afhub/shm_layout/geometry.hpp"
+#include "afhub/shm_layout/header.hpp"
+#include "afhub/shm_layout/limits.hpp"
+
+namespace afhub {
+
+// Values as in AMBF: FORCE=0, POSITION=1, VELOCITY=2.
+enum class CartesianCommandType : std::uint8_t { kForce = 0, kPosition = 1, kVelocity = 2 };
+
+enum class JointCommandType : std::uint8_t { kEffort = 0, kPosition = 1, kVelocity = 2 };
+
+struct BodyCommand {
+  PayloadHeader header;
+  CartesianCommandType cartesian_type{CartesianCommandType::kForce};
+  std::array<std::uint8_t, 3> reserved{};
+  // Joint command i drives the i-th joint of the body's state; entries
+  // [0, joint_count) are valid and the list may be shorter than the body's joints.
+  std::uint32_t joint_count{0};
+  Pose pose;      // target for kPosition
+  Wrench wrench;  // applied for kForce, world frame
+  Twist twist;    // target for kVelocity
+  std::array<double, kMaxJointsPerBody> joint_values{};
+  std::array<JointCommandType, kMaxJointsPerBody> joint_types{};
+};
+
+}  // namespace afhub

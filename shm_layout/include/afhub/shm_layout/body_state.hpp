@@ -1,0 +1,29 @@
+// BodyState: what the physics process publishes for one body every step
+// (AMBF's afState: pose, twist, wrench, inertia and the body's descendant joints).
+#pragma once
+
+#include <array>
+#include <cstdint>
+
+#include "afhub/shm_layout/geometry.hpp"
+#include "afhub/shm_layout/header.hpp"
+#include "afhub/shm_layout/limits.hpp"
+
+namespace afhub {
+
+struct BodyState {
+  PayloadHeader header;
+  Pose pose;  // the body's mesh frame in the world
+  Twist twist;
+  Wrench wrench;  // the wrench applied to the body in the last step
+  double mass_kg{0.0};
+  Vec3 principal_inertia_kgm2;
+  // Descendant joints in the catalog's order; entries [0, joint_count) are valid.
+  std::uint32_t joint_count{0};
+  std::uint32_t reserved{0};
+  std::array<double, kMaxJointsPerBody> joint_positions{};   // rad or m
+  std::array<double, kMaxJointsPerBody> joint_velocities{};  // rad/s or m/s
+  std::array<double, kMaxJointsPerBody> joint_efforts{};     // N m or N
+};
+
+}  // namespace afhub

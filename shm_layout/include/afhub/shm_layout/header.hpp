@@ -1,0 +1,30 @@
+// The header that starts every payload: who wrote it, with which layout, and when.
+#pragma once
+
+#include <cstdint>
+
+namespace afhub {
+
+// Which payload a chunk holds. A reader checks it so that a channel carrying
+// another type is refused instead of misread.
+enum class PayloadKind : std::uint32_t {
+  kBodyState = 1,
+  kBodyCommand = 2,
+  kWorldState = 3,
+  kWorldCommand = 4,
+  kBodyDirectory = 5,  // one process's bodies, read by the hub
+  kCatalog = 6,        // every live body, published by the hub
+  kHealth = 7,
+};
+
+struct PayloadHeader {
+  std::uint64_t layout_id{0};  // kLayoutId of the build that wrote it
+  PayloadKind kind{};
+  std::uint32_t publisher_pid{0};
+  std::uint64_t sequence{0};  // per publisher, starts at 1, +1 per publish
+  std::uint64_t sim_step{0};  // state: step it describes; command: step it answers
+  double sim_time_s{0.0};
+  std::int64_t publish_stamp_ns{0};  // CLOCK_MONOTONIC, same clock in every process
+};
+
+}  // namespace afhub

@@ -1,0 +1,109 @@
+// kLayoutId: a fingerprint of every payload's layout, stamped into each header.
+// It mixes the size, alignment and every field offset of every payload, so any
+// layout change gives another id and a process built from other sources is
+// refused instead of misread. Adding a field means adding its offset below.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <initializer_list>
+#include <type_traits>
+
+#include "afhub/shm_layout/body_command.hpp"
+#include "afhub/shm_layout/body_state.hpp"
+#include "afhub/shm_layout/catalog.hpp"
+#include "afhub/shm_layout/health.hpp"
+#include "afhub/shm_layout/world.hpp"
+
+namespace afhub {
+
+// Bump when a field's meaning changes without its layout changing.
+inline constexpr std::uint64_t kLayoutRevision = 1;
+
+namespace layout_detail {
+
+constexpr std::uint64_t fnv1a(std::uint64_t hash, std::uint64_t value) {
+  for (int byte = 0; byte < 8; ++byte) {
+    hash ^= (value >> (8 * byte)) & 0xffU;
+    hash *= 0x100000001b3ULL;
+  }
+  return hash;
+}
+
+constexpr std::uint64_t mix(std::initializer_list<std::size_t> values) {
+  std::uint64_t hash = 0xcbf29ce484222325ULL;
+  for (std::size_t v : values) hash = fnv1a(hash, v);
+  return hash;
+}
+
+template <class T>
+constexpr bool is_shm_payload = std::is_trivially_copyable_v<T> && std::is_standard_layout_v<T>;
+
+}  // namespace layout_detail
+
+#define AFHUB_OFF(type, field) offsetof(type, field)
+inline constexpr std::uint64_t kLayoutId = layout_detail::mix({
+    kLayoutRevision,
+    kMaxJointsPerBody, kMaxBodies, kMaxHealthProcesses, kMaxMempools,
+    sizeof(PayloadHeader), AFHUB_OFF(PayloadHeader, kind), AFHUB_OFF(PayloadHeader, publisher_pid),
+    AFHUB_OFF(PayloadHeader, sequence), AFHUB_OFF(PayloadHeader, sim_step),
+    AFHUB_OFF(PayloadHeader, sim_time_s), AFHUB_OFF(PayloadHeader, publish_stamp_ns),
+    sizeof(Vec3), sizeof(Quaternion), sizeof(Pose), sizeof(Twist), sizeof(Wrench),
+    sizeof(BodyState), alignof(BodyState), AFHUB_OFF(BodyState, pose), AFHUB_OFF(BodyState, twist),
+    AFHUB_OFF(BodyState, wrench), AFHUB_OFF(BodyState, mass_kg),
+    AFHUB_OFF(BodyState, principal_inertia_kgm2), AFHUB_OFF(BodyState, joint_count),
+    AFHUB_OFF(BodyState, joint_positions), AFHUB_OFF(BodyState, joint_velocities),
+    AFHUB_OFF(BodyState, joint_efforts),
+    sizeof(BodyCommand), alignof(BodyCommand), AFHUB_OFF(BodyCommand, cartesian_type),
+    AFHUB_OFF(BodyCommand, joint_count), AFHUB_OFF(BodyCommand, pose),
+    AFHUB_OFF(BodyCommand, wrench), AFHUB_OFF(BodyCommand, twist),
+    AFHUB_OFF(BodyCommand, joint_values), AFHUB_OFF(BodyCommand, joint_types),
+    sizeof(WorldState), AFHUB_OFF(WorldState, wall_time_s), AFHUB_OFF(WorldState, achieved_rate_hz),
+    AFHUB_OFF(WorldState, body_count), AFHUB_OFF(WorldState, paused),
+    sizeof(WorldCommand), AFHUB_OFF(WorldCommand, action), AFHUB_OFF(WorldCommand, step_count),
+    sizeof(BodyInfo), AFHUB_OFF(BodyInfo, channel), AFHUB_OFF(BodyInfo, owner),
+    AFHUB_OFF(BodyInfo, owner_pid), AFHUB_OFF(BodyInfo, joint_count),
+    AFHUB_OFF(BodyInfo, publish_rate_hz), AFHUB_OFF(BodyInfo, joint_names),
+    sizeof(BodyList), AFHUB_OFF(BodyList, body_count), AFHUB_OFF(BodyList, bodies),
+    sizeof(Health), AFHUB_OFF(Health, hub_uptime_s), AFHUB_OFF(Health, process_count),
+    AFHUB_OFF(Health, mempool_count), AFHUB_OFF(Health, body_count),
+    AFHUB_OFF(Health, processes), AFHUB_OFF(Health, mempools), sizeof(ProcessEntry),
+    sizeof(MempoolUsage), AFHUB_OFF(MempoolUsage, chunk_payload_bytes),
+});
+#undef AFHUB_OFF
+
+// Shared memory is mapped at another address in every process: payloads must be
+// plain bytes, with no pointers, no owning members and no virtual functions.
+static_assert(layout_detail::is_shm_payload<BodyState>);
+static_assert(layout_detail::is_shm_payload<BodyCommand>);
+static_assert(layout_detail::is_shm_payload<WorldState>);
+static_assert(layout_detail::is_shm_payload<WorldCommand>);
+static_assert(layout_detail::is_shm_payload<BodyList>);
+static_assert(layout_detail::is_shm_payload<Health>);
+
+// Which kind each payload type carries in its header.
+template <class T>
+struct PayloadTraits;
+template <>
+struct PayloadTraits<BodyState> {
+  static constexpr PayloadKind kKind = PayloadKind::kBodyState;
+};
+template <>
+struct PayloadTraits<BodyCommand> {
+  static constexpr PayloadKind kKind = PayloadKind::kBodyCommand;
+};
+template <>
+struct PayloadTraits<WorldState> {
+  static constexpr PayloadKind kKind = PayloadKind::kWorldState;
+};
+template <>
+struct PayloadTraits<WorldCommand> {
+  static constexpr PayloadKind kKind = PayloadKind::kWorldCommand;
+};
+template <>
+struct PayloadTraits<Health> {
+  static constexpr PayloadKind kKind = PayloadKind::kHealth;
+};
+// BodyList carries kBodyDirectory or kCatalog: its readers name the kind.
+
+}  // namespace afhub

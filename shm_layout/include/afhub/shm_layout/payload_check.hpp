@@ -1,0 +1,26 @@
+// Checks a received chunk before anything reads it: size, layout id, kind and
+// counts. Real-time safe: no allocation, no exceptions.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "afhub/shm_layout/header.hpp"
+
+namespace afhub {
+
+enum class PayloadError : std::uint8_t {
+  kNone = 0,
+  kTooSmall,        // chunk shorter than the payload it claims to be
+  kForeignLayout,   // written by a build with another kLayoutId
+  kWrongKind,       // another payload type on this channel
+  kCountTooLarge,   // a count beyond the payload's capacity or the chunk's bytes
+};
+
+// Checks `bytes` bytes at `data` as a payload of `expected` kind.
+PayloadError check_payload(const void* data, std::size_t bytes, PayloadKind expected) noexcept;
+
+// One line for the user: what is wrong with the payload and what to do about it.
+const char* describe(PayloadError error) noexcept;
+
+}  // namespace afhub
