@@ -44,6 +44,7 @@ class BodyClient {
   // The newest state, or nullptr before the first; read in place.
   const BodyState* latest_state() noexcept { return state_.latest(); }
   bool state_updated() const { return state_.updated(); }
+  std::uint64_t refused_states() { return state_.raw().refused_count(); }
   // A zero-initialised command in shared memory to fill, then publish_command().
   BodyCommand* loan_command() noexcept { return command_.loan(); }
   void publish_command(BodyCommand* command) noexcept { command_.publish(command); }

@@ -1,0 +1,68 @@
+#!/usr/bin/env bash
+# afhub's one entry point for a Debian 12 machine (run as root, or with sudo for apt):
+#   ./run.sh demo   install what is missing, build, run the demo
+#   ./run.sh test   install what is missing, build, run every test, then again under
+#                   AddressSanitizer and UndefinedBehaviorSanitizer
+#   ./run.sh build  install what is missing and build (build/release/bin/afhub)
+# Each step is skipped when nothing changed, so a second run is quick.
+set -euo pipefail
+cd "$(dirname "$0")"
+
+PACKAGES=(
+  g++ cmake ninja-build pkg-config
+  iceoryx libiceoryx-posh-dev libiceoryx-hoofs-dev libacl1-dev
+  libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev
+)
+
+install_packages() {
+  local missing=()
+  for package in "${PACKAGES[@]}"; do
+    dpkg-query -W -f='${Status}' "$package" 2>/dev/null | grep -q "install ok installed" ||
+      missing+=("$package")
+  done
+  [ ${#missing[@]} -eq 0 ] && return
+  echo "run.sh: installing ${missing[*]}"
+  local sudo=""
+  [ "$(id -u)" -ne 0 ] && sudo="sudo"
+  $sudo apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
+}
+
+# build DIR [cmake options...]
+build() {
+  local dir=$1
+  shift
+  if [ ! -f "$dir/build.ninja" ]; then
+    cmake -S . -B "$dir" -G Ninja -DAFHUB_WARNINGS_AS_ERRORS=ON "$@"
+  fi
+  cmake --build "$dir" --parallel "$(nproc)"
+}
+
+run_tests() {
+  local dir=$1
+  # Hub tests hold the iceoryx_roudi resource lock; the others run in parallel.
+  ctest --test-dir "$dir" --output-on-failure --parallel "$(nproc)"
+}
+
+case "${1:-}" in
+  demo)
+    install_packages
+    build build/release -DCMAKE_BUILD_TYPE=RelWithDebInfo
+    exec build/release/bin/afhub demo "${@:2}"
+    ;;
+  test)
+    install_packages
+    build build/release -DCMAKE_BUILD_TYPE=RelWithDebInfo
+    run_tests build/release
+    build build/sanitize -DCMAKE_BUILD_TYPE=Debug -DAFHUB_SANITIZE=ON
+    run_tests build/sanitize
+    ;;
+  build)
+    install_packages
+    build build/release -DCMAKE_BUILD_TYPE=RelWithDebInfo
+    ;;
+  *)
+    echo "usage: ./run.sh demo|test|build" >&2
+    exit 2
+    ;;
+esac

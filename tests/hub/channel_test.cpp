@@ -1,0 +1,148 @@
+// Zero-copy channels against a live hub: in-place reads and writes, latest-value
+// semantics, late joiners, foreign payloads refused, and the catalog.
+#include "afhub/hub/channel.hpp"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstring>
+
+#include "afhub/hub/bodies.hpp"
+#include "afhub/hub/error.hpp"
+#include "afhub/hub/hub_presence.hpp"
+#include "afhub_process.hpp"
+#include "iceoryx_posh/popo/untyped_publisher.hpp"
+
+namespace afhub {
+namespace {
+
+using namespace std::chrono_literals;
+
+TEST(Channel, ReaderSeesTheWritersChunkInPlace) {
+  BodyPublisher physics("test/zero_copy");
+  BodyClient controller("test/zero_copy");
+  BodyState* loaned = physics.loan_state();
+  ASSERT_NE(loaned, nullptr);
+  loaned->header.sim_step = 42;
+  loaned->joint_count = 2;
+  loaned->joint_positions[1] = 0.25;
+  physics.publish_state(loaned);
+  const BodyState* read = nullptr;
+  ASSERT_TRUE(test::wait_until([&] { return (read = controller.latest_state()) != nullptr; }, 2s));
+  // One process maps the segment once: the reader's pointer is the writer's chunk.
+  EXPECT_EQ(static_cast<const void*>(read), static_cast<const void*>(loaned));
+  EXPECT_EQ(read->header.sim_step, 42u);
+  EXPECT_EQ(read->header.layout_id, kLayoutId);
+  EXPECT_EQ(read->header.publisher_pid, static_cast<std::uint32_t>(getpid()));
+  EXPECT_GT(read->header.publish_stamp_ns, 0);
+  EXPECT_EQ(read->joint_positions[1], 0.25);
+}
+
+TEST(Channel, ReaderGetsOnlyTheNewestSample) {
+  BodyPublisher physics("test/latest");
+  BodyClient controller("test/latest");
+  for (std::uint64_t step = 1; step <= 5; ++step) {
+    BodyState* state = physics.loan_state();
+    ASSERT_NE(state, nullptr);
+    state->header.sim_step = step;
+    physics.publish_state(state);
+  }
+  const BodyState* read = nullptr;
+  ASSERT_TRUE(test::wait_until([&] { return (read = controller.latest_state()) != nullptr; }, 2s));
+  EXPECT_EQ(read->header.sim_step, 5u);
+  EXPECT_EQ(read->header.sequence, 5u);
+  // Nothing new: the same sample again, marked as not updated.
+  EXPECT_EQ(controller.latest_state(), read);
+  EXPECT_FALSE(controller.state_updated());
+}
+
+TEST(Channel, LateJoinerGetsTheLastValueAtOnce) {
+  BodyPublisher physics("test/late_joiner");
+  BodyState* state = physics.loan_state();
+  ASSERT_NE(state, nullptr);
+  state->header.sim_step = 7;
+  physics.publish_state(state);
+  BodyClient late("test/late_joiner");
+  const BodyState* read = nullptr;
+  ASSERT_TRUE(test::wait_until([&] { return (read = late.latest_state()) != nullptr; }, 1s));
+  EXPECT_EQ(read->header.sim_step, 7u);
+}
+
+TEST(Channel, CommandsTravelToThePhysicsSide) {
+  BodyPublisher physics("test/command");
+  BodyClient controller("test/command");
+  BodyCommand* command = controller.loan_command();
+  ASSERT_NE(command, nullptr);
+  command->cartesian_type = CartesianCommandType::kPosition;
+  command->pose.position_m = {1.0, 2.0, 3.0};
+  command->joint_count = 3;
+  command->joint_types[2] = JointCommandType::kVelocity;
+  command->joint_values[2] = -0.5;
+  controller.publish_command(command);
+  const BodyCommand* read = nullptr;
+  ASSERT_TRUE(test::wait_until([&] { return (read = physics.latest_command()) != nullptr; }, 2s));
+  EXPECT_EQ(read->cartesian_type, CartesianCommandType::kPosition);
+  EXPECT_EQ(read->pose.position_m.z, 3.0);
+  EXPECT_EQ(read->joint_count, 3u);
+  EXPECT_EQ(read->joint_types[2], JointCommandType::kVelocity);
+  EXPECT_EQ(read->joint_values[2], -0.5);
+}
+
+// A writer built from other sources: same channel, another layout id.
+TEST(Channel, ForeignLayoutIsRefusedNotMisread) {
+  BodyClient controller("test/foreign");
+  iox::popo::UntypedPublisher foreign({"afhub", "test/foreign", "state"});
+  void* chunk = foreign.loan(sizeof(BodyState)).value();
+  BodyState forged{};
+  forged.header.layout_id = kLayoutId + 1;
+  forged.header.kind = PayloadKind::kBodyState;
+  std::memcpy(chunk, &forged, sizeof forged);
+  foreign.publish(chunk);
+  ASSERT_TRUE(test::wait_until(
+      [&] { return controller.latest_state() == nullptr && controller.refused_states() == 1; }, 2s));
+
+  // A payload of this build on the same channel is still accepted.
+  BodyPublisher physics("test/foreign");
+  BodyState* state = physics.loan_state();
+  ASSERT_NE(state, nullptr);
+  state->header.sim_step = 3;
+  physics.publish_state(state);
+  ASSERT_TRUE(test::wait_until([&] { return controller.latest_state() != nullptr; }, 2s));
+  EXPECT_EQ(controller.latest_state()->header.sim_step, 3u);
+  EXPECT_EQ(controller.refused_states(), 1u);
+}
+
+TEST(Catalog, ListsAnnouncedBodiesWithJointsAndOwnerUntilTheyGo) {
+  CatalogReader catalog;
+  catalog.wait(1s);
+  {
+    DirectoryPublisher directory;
+    directory.add(make_body_info("test_ns/arm/widget", {"joint_a", "joint_b"}));
+    directory.publish();
+    ASSERT_TRUE(test::wait_until(
+        [&] {
+          auto names = catalog.channels();
+          return std::find(names.begin(), names.end(), "test_ns/arm/widget") != names.end();
+        },
+        2s));
+    BodyInfo info = catalog.resolve("widget");
+    EXPECT_EQ(name_of(info.channel), "test_ns/arm/widget");
+    EXPECT_EQ(info.joint_count, 2u);
+    EXPECT_EQ(name_of(info.joint_names[1]), "joint_b");
+    EXPECT_EQ(name_of(info.owner), runtime_name());
+    EXPECT_EQ(info.owner_pid, static_cast<std::uint32_t>(getpid()));
+  }
+  // The directory's publisher is gone: so is the body.
+  EXPECT_TRUE(test::wait_until([&] { return catalog.channels().empty(); }, 3s));
+}
+
+TEST(Catalog, RejectsNamesThatIceoryxCannotCarry) {
+  EXPECT_THROW(make_body_info(std::string(101, 'x'), {}), Error);
+  EXPECT_THROW(make_body_info("test/ok", std::vector<std::string>(kMaxJointsPerBody + 1, "j")), Error);
+  EXPECT_THROW(make_body_info("test/ok", {std::string(64, 'j')}), Error);
+  EXPECT_THROW(BodyPublisher(std::string(101, 'x')), Error);
+}
+
+}  // namespace
+}  // namespace afhub

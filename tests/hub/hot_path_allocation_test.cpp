@@ -1,0 +1,114 @@
+// The steady-state loop (publish state, read command; read state, write command)
+// must not touch the heap. Every operator new and, outside sanitizer builds,
+// every malloc in this binary is counted while the loop runs.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cstdlib>
+#include <new>
+
+#include "afhub/hub/bodies.hpp"
+#include "afhub_process.hpp"
+
+// The replacements below pair malloc with free on purpose; GCC cannot see that.
+#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
+
+namespace {
+std::atomic<bool> g_counting{false};
+std::atomic<long> g_allocations{0};
+
+void note_allocation() {
+  if (g_counting.load(std::memory_order_relaxed)) g_allocations.fetch_add(1, std::memory_order_relaxed);
+}
+}  // namespace
+
+#if defined(AFHUB_SANITIZED)
+// The sanitizers own malloc: count C++ allocations only.
+void* raw_malloc(std::size_t size) { return std::malloc(size); }
+#else
+// glibc's allocator under its internal names; the public ones are counted below.
+extern "C" void* __libc_malloc(std::size_t);
+extern "C" void* __libc_calloc(std::size_t, std::size_t);
+extern "C" void* __libc_realloc(void*, std::size_t);
+void* raw_malloc(std::size_t size) { return __libc_malloc(size); }
+extern "C" void* malloc(std::size_t size) {
+  note_allocation();
+  return __libc_malloc(size);
+}
+extern "C" void* calloc(std::size_t count, std::size_t size) {
+  note_allocation();
+  return __libc_calloc(count, size);
+}
+extern "C" void* realloc(void* p, std::size_t size) {
+  note_allocation();
+  return __libc_realloc(p, size);
+}
+#endif
+
+void* operator new(std::size_t size) {
+  note_allocation();
+  if (void* p = raw_malloc(size ? size : 1)) return p;
+  throw std::bad_alloc();
+}
+void* operator new[](std::size_t size) { return operator new(size); }
+void* operator new(std::size_t size, const std::nothrow_t&) noexcept {
+  note_allocation();
+  return raw_malloc(size ? size : 1);
+}
+void* operator new[](std::size_t size, const std::nothrow_t& tag) noexcept { return operator new(size, tag); }
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete[](void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+
+namespace afhub {
+namespace {
+
+using namespace std::chrono_literals;
+
+TEST(HotPath, CountsAllocationsWhenThereAreSome) {
+  // The counter itself must see an allocation, or a zero below would prove nothing.
+  g_allocations = 0;
+  g_counting = true;
+  auto* probe = new int(3);
+  g_counting = false;
+  delete probe;
+  EXPECT_EQ(g_allocations.load(), 1);
+}
+
+TEST(HotPath, SteadyStateLoopDoesNotAllocate) {
+  BodyPublisher physics("test/hot_path");
+  BodyClient controller("test/hot_path");
+  auto one_cycle = [&](std::uint64_t step) {
+    BodyState* state = physics.loan_state();
+    if (!state) return false;
+    state->header.sim_step = step;
+    state->joint_count = 7;
+    state->joint_positions[6] = static_cast<double>(step);
+    physics.publish_state(state);
+    const BodyState* seen = controller.latest_state();
+    BodyCommand* command = controller.loan_command();
+    if (!seen || !command) return false;
+    command->header.sim_step = seen->header.sim_step;
+    command->joint_count = 7;
+    command->joint_values[6] = seen->joint_positions[6];
+    controller.publish_command(command);
+    return physics.latest_command() != nullptr;
+  };
+  // Warm-up: subscriptions settle and first-use paths run.
+  ASSERT_TRUE(test::wait_until([&] { return one_cycle(0); }, 2s));
+  for (std::uint64_t step = 1; step < 100; ++step) ASSERT_TRUE(one_cycle(step));
+
+  constexpr std::uint64_t kCycles = 10000;
+  g_allocations = 0;
+  g_counting = true;
+  bool all_ok = true;
+  for (std::uint64_t step = 100; step < 100 + kCycles; ++step) all_ok = one_cycle(step) && all_ok;
+  g_counting = false;
+  EXPECT_TRUE(all_ok);
+  EXPECT_EQ(g_allocations.load(), 0) << "heap allocations in " << kCycles << " steady-state cycles";
+  EXPECT_EQ(physics.latest_command()->joint_values[6], static_cast<double>(100 + kCycles - 1));
+}
+
+}  // namespace
+}  // namespace afhub

@@ -1,0 +1,46 @@
+// Runs the afhub executable from tests: to completion with a timeout, or in the
+// background, and stops processes it started.
+#pragma once
+
+#include <sys/types.h>
+
+#include <chrono>
+#include <string>
+#include <vector>
+
+namespace afhub::test {
+
+struct RunResult {
+  int exit_code = -1;  // 128 + signal when killed; -1 when it timed out
+  std::string out;
+  std::string err;
+  double seconds = 0.0;
+};
+
+// Runs `afhub args...` and waits at most `timeout` for it.
+RunResult run_afhub(const std::vector<std::string>& args,
+                    std::chrono::milliseconds timeout = std::chrono::seconds(20));
+
+// Starts `afhub args...` in the background (stdout and stderr to `log_path`).
+pid_t spawn_afhub(const std::vector<std::string>& args, const std::string& log_path = "/dev/null");
+
+// Sends `signal`, waits up to `timeout` for the exit, SIGKILLs after that; returns
+// the exit code (128 + signal when killed by one).
+int stop_process(pid_t pid, int signal, std::chrono::milliseconds timeout = std::chrono::seconds(5));
+
+// Waits until `predicate` holds, polling every 10 ms, for at most `timeout`.
+template <class Predicate>
+bool wait_until(Predicate predicate, std::chrono::milliseconds timeout) {
+  auto deadline = std::chrono::steady_clock::now() + timeout;
+  while (!predicate()) {
+    if (std::chrono::steady_clock::now() > deadline) return false;
+    struct timespec pause {0, 10'000'000};
+    nanosleep(&pause, nullptr);
+  }
+  return true;
+}
+
+std::string afhub_executable();
+std::string read_file(const std::string& path);
+
+}  // namespace afhub::test
