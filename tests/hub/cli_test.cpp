@@ -1,0 +1,190 @@
+// The afhub command line end to end: hub lifecycle, autostart, tools without a
+// hub, and ls / echo / cmd / status against synthetic bodies.
+#include <gtest/gtest.h>
+#include <signal.h>
+
+#include <cmath>
+#include <cstdlib>
+
+#include "afhub/hub/hub_presence.hpp"
+#include "afhub_process.hpp"
+#include "hub_environment.hpp"
+
+namespace afhub::test {
+namespace {
+
+using namespace std::chrono_literals;
+
+bool contains(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
+
+// The comma-separated numbers that follow `key` in `text`, up to the closing ']'.
+std::vector<double> numbers_after(const std::string& text, const std::string& key) {
+  std::vector<double> numbers;
+  std::size_t at = text.find(key);
+  if (at == std::string::npos) return numbers;
+  const char* cursor = text.c_str() + at + key.size();
+  while (*cursor && *cursor != ']') {
+    char* end = nullptr;
+    numbers.push_back(std::strtod(cursor, &end));
+    if (end == cursor) break;
+    cursor = *end == ',' ? end + 1 : end;
+  }
+  return numbers;
+}
+
+void expect_no_hub() {
+  ASSERT_NE(probe_roudi(), RoudiPresence::kRunning) << "a hub is running before the test";
+}
+
+TEST(Cli, EveryCommandHasHelp) {
+  for (const char* command : {"hub", "ls", "echo", "cmd", "status", "synth", "demo"}) {
+    RunResult help = run_afhub({command, "--help"});
+    EXPECT_EQ(help.exit_code, 0) << command;
+    EXPECT_TRUE(contains(help.out, "Usage")) << command << ": " << help.out;
+  }
+  RunResult bad = run_afhub({"frobnicate"});
+  EXPECT_NE(bad.exit_code, 0);
+}
+
+TEST(Cli, LookingToolsWithoutAHubFailFastAndSayHowToStartOne) {
+  expect_no_hub();
+  for (auto args : std::vector<std::vector<std::string>>{
+           {"ls"}, {"echo", "base"}, {"status"}, {"cmd", "base", "--force", "0,0,1"}}) {
+    RunResult result = run_afhub(args, 5s);
+    EXPECT_EQ(result.exit_code, 1) << args[0];
+    EXPECT_LT(result.seconds, 2.0) << args[0];
+    EXPECT_TRUE(contains(result.err, "no hub is running")) << result.err;
+    EXPECT_TRUE(contains(result.err, "afhub hub")) << result.err;
+  }
+  EXPECT_NE(probe_roudi(), RoudiPresence::kRunning) << "a looking tool started a hub";
+}
+
+TEST(Cli, SecondHubIsRefusedAndStopWorks) {
+  expect_no_hub();
+  pid_t hub = start_test_hub();
+  RunResult second = run_afhub({"hub"}, 5s);
+  EXPECT_EQ(second.exit_code, 1);
+  EXPECT_LT(second.seconds, 1.0);
+  EXPECT_TRUE(contains(second.err, "already running")) << second.err;
+  EXPECT_TRUE(contains(second.err, "pid " + std::to_string(hub))) << second.err;
+
+  RunResult stop = run_afhub({"hub", "stop"});
+  EXPECT_EQ(stop.exit_code, 0) << stop.err;
+  EXPECT_EQ(stop_process(hub, 0), 0) << "the hub did not exit 0 on `afhub hub stop`";
+  EXPECT_FALSE(running_hub_pid());
+}
+
+TEST(Cli, HubStopsCleanlyOnSigint) {
+  expect_no_hub();
+  pid_t hub = start_test_hub();
+  EXPECT_EQ(stop_process(hub, SIGINT), 0);
+}
+
+TEST(Cli, PublishersStartAHubUnlessToldNotTo) {
+  expect_no_hub();
+  RunResult refused = run_afhub({"synth", "--no-autostart", "--seconds", "0.2"});
+  EXPECT_EQ(refused.exit_code, 1);
+  EXPECT_TRUE(contains(refused.err, "no hub is running")) << refused.err;
+
+  RunResult started = run_afhub({"synth", "--seconds", "0.3"});
+  EXPECT_EQ(started.exit_code, 0) << started.err;
+  EXPECT_TRUE(contains(started.err, "started one in the background")) << started.err;
+  EXPECT_EQ(probe_roudi(), RoudiPresence::kRunning);
+  EXPECT_EQ(run_afhub({"hub", "stop"}).exit_code, 0);
+  EXPECT_TRUE(wait_until([] { return probe_roudi() != RoudiPresence::kRunning; }, 5s));
+}
+
+class CliWithBodies : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    expect_no_hub();
+    hub_ = start_test_hub();
+    synth_ = spawn_afhub({"synth", "--bodies", "2", "--joints", "3", "--no-autostart"},
+                         "/tmp/afhub-test-synth.log");
+    ASSERT_TRUE(wait_until([] { return contains(run_afhub({"ls"}).out, "synth/body1"); }, 5s));
+  }
+  void TearDown() override {
+    EXPECT_EQ(stop_process(synth_, SIGTERM), 0);
+    EXPECT_EQ(stop_process(hub_, SIGTERM), 0);
+  }
+  pid_t hub_ = -1, synth_ = -1;
+};
+
+TEST_F(CliWithBodies, LsListsBodiesJointsOwnerAndRate) {
+  RunResult json = run_afhub({"ls", "--json"});
+  EXPECT_EQ(json.exit_code, 0) << json.err;
+  EXPECT_TRUE(contains(json.out, "\"body\":\"synth/body0\"")) << json.out;
+  EXPECT_TRUE(contains(json.out, "\"joints\":[\"body1-joint0\",\"body1-joint1\",\"body1-joint2\"]"))
+      << json.out;
+  EXPECT_TRUE(contains(json.out, "\"owner_pid\":" + std::to_string(synth_))) << json.out;
+  // The hub measures rates over a second; synth publishes at 1 kHz.
+  ASSERT_TRUE(wait_until([] { return contains(run_afhub({"ls"}).out, "1000.0"); }, 5s))
+      << run_afhub({"ls"}).out;
+}
+
+TEST_F(CliWithBodies, EchoPrintsJsonLines) {
+  RunResult echo = run_afhub({"echo", "body1", "--count", "3", "--json"});
+  EXPECT_EQ(echo.exit_code, 0) << echo.err;
+  int lines = 0;
+  for (std::size_t at = 0; (at = echo.out.find("{\"body\":\"synth/body1\"", at)) != std::string::npos; ++at)
+    ++lines;
+  EXPECT_EQ(lines, 3) << echo.out;
+  EXPECT_TRUE(contains(echo.out, "\"joint_names\":[\"body1-joint0\"")) << echo.out;
+}
+
+TEST_F(CliWithBodies, CmdDrivesTheJointsOfABody) {
+  pid_t commander = spawn_afhub({"cmd", "body0", "--joint-pos", "0.3,-0.2", "--repeat", "200"});
+  // synth's joints converge on a position target within a few hundred steps.
+  bool converged = wait_until(
+      [] {
+        std::string line = run_afhub({"echo", "synth/body0", "-n", "1", "--json"}).out;
+        auto positions = numbers_after(line, "\"joint_positions\":[");
+        return positions.size() == 3 && std::abs(positions[0] - 0.3) < 1e-3 &&
+               std::abs(positions[1] + 0.2) < 1e-3;
+      },
+      5s);
+  EXPECT_TRUE(converged) << run_afhub({"echo", "synth/body0", "-n", "1", "--json"}).out;
+  EXPECT_EQ(stop_process(commander, SIGINT), 0);
+}
+
+TEST_F(CliWithBodies, CmdExplainsBadInput) {
+  struct Case {
+    std::vector<std::string> args;
+    std::string message;
+  };
+  for (const Case& bad : std::vector<Case>{
+           {{"cmd", "nobody", "--force", "1,2,3"}, "no live body is named 'nobody'"},
+           {{"cmd", "body", "--force", "1,2,3"}, "no live body"},
+           {{"cmd", "body0", "--joint-pos", "1,nan"}, "'nan' is not a finite number"},
+           {{"cmd", "body0", "--joint-pos", "1,2,3,4"}, "has 3 joints"},
+           {{"cmd", "body0", "--force", "1,2"}, "--force takes 3 numbers"},
+           {{"cmd", "body0", "--pose", "0,0,0,0,0,0", "--force", "1,0,0"}, "two Cartesian modes"},
+           {{"cmd", "body0", "--joint-pos", "1", "--joint-vel", "1"}, "give one"},
+           {{"cmd", "body0"}, "nothing to command"},
+           {{"echo", "nobody"}, "synth/body0"},
+       }) {
+    RunResult result = run_afhub(bad.args);
+    EXPECT_EQ(result.exit_code, 1) << bad.args[1];
+    EXPECT_TRUE(contains(result.err, bad.message)) << "expected '" << bad.message << "' in: " << result.err;
+  }
+}
+
+TEST_F(CliWithBodies, StatusShowsProcessesAndMempools) {
+  // Health comes once a second: wait for one that has seen synth.
+  RunResult status;
+  EXPECT_TRUE(wait_until(
+      [&] {
+        status = run_afhub({"status", "--json"});
+        return contains(status.out, "\"name\":\"afhub-synth-" + std::to_string(synth_) + "\"");
+      },
+      3s))
+      << status.out;
+  EXPECT_EQ(status.exit_code, 0) << status.err;
+  EXPECT_TRUE(contains(status.out, "\"chunk_payload_bytes\":1776")) << status.out;
+  EXPECT_TRUE(contains(status.out, "\"body_count\":2")) << status.out;
+}
+
+}  // namespace
+}  // namespace afhub::test
