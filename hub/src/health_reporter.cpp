@@ -58,6 +58,8 @@ void HealthReporter::poll(std::chrono::steady_clock::time_point now, std::uint32
   const auto* processes = introspection_->processes.latest();
   const auto* mempools = introspection_->mempools.latest();
   if (now - last_publish_ < kPublishPeriod) return;
+  // RouDi's introspection arrives shortly after start: wait for it, briefly.
+  if ((!processes || !mempools) && now - started_ < kPublishPeriod) return;
   Health* health = writer_.loan();
   if (!health) return;
   last_publish_ = now;

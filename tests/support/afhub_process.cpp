@@ -114,4 +114,11 @@ int stop_process(pid_t pid, int signal, std::chrono::milliseconds timeout) {
   return exit_code_of(status);
 }
 
+int ScopedProcess::stop() {
+  if (pid <= 0) return 0;
+  int code = stop_process(pid, SIGTERM);
+  pid = -1;
+  return code;
+}
+
 }  // namespace afhub::test

@@ -28,6 +28,18 @@ pid_t spawn_afhub(const std::vector<std::string>& args, const std::string& log_p
 // the exit code (128 + signal when killed by one).
 int stop_process(pid_t pid, int signal, std::chrono::milliseconds timeout = std::chrono::seconds(5));
 
+// A process that is stopped (SIGTERM, then SIGKILL) when the test leaves its scope,
+// however it leaves: a failed assertion never leaves a hub running.
+struct ScopedProcess {
+  ScopedProcess(pid_t started) : pid(started) {}
+  ScopedProcess(const ScopedProcess&) = delete;
+  ScopedProcess& operator=(const ScopedProcess&) = delete;
+  ~ScopedProcess() { stop(); }
+  // Stops it now; returns its exit code (0 when it was already stopped).
+  int stop();
+  pid_t pid;
+};
+
 // Waits until `predicate` holds, polling every 10 ms, for at most `timeout`.
 template <class Predicate>
 bool wait_until(Predicate predicate, std::chrono::milliseconds timeout) {
