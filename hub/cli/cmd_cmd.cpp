@@ -55,9 +55,10 @@ BodyCommand build_command(const CmdOptions& options, const BodyInfo& info) {
     JointCommandType type;
   };
   std::optional<JointFlag> joints;
-  for (const JointFlag flag : {JointFlag{options.joint_pos, "--joint-pos", JointCommandType::kPosition},
-                               JointFlag{options.joint_vel, "--joint-vel", JointCommandType::kVelocity},
-                               JointFlag{options.joint_effort, "--joint-effort", JointCommandType::kEffort}}) {
+  for (const JointFlag flag :
+       {JointFlag{options.joint_pos, "--joint-pos", JointCommandType::kPosition},
+        JointFlag{options.joint_vel, "--joint-vel", JointCommandType::kVelocity},
+        JointFlag{options.joint_effort, "--joint-effort", JointCommandType::kEffort}}) {
     if (flag.text.empty()) continue;
     if (joints)
       throw Error(std::string(joints->name) + " and " + flag.name +
@@ -77,7 +78,9 @@ BodyCommand build_command(const CmdOptions& options, const BodyInfo& info) {
     }
   }
   if (!cartesian_force && options.pose.empty() && !joints)
-    throw Error("nothing to command: give --force, --torque, --pose, --joint-pos, --joint-vel or --joint-effort");
+    throw Error(
+        "nothing to command: give --force, --torque, --pose, --joint-pos, --joint-vel or "
+        "--joint-effort");
   return command;
 }
 
@@ -116,8 +119,9 @@ int run_cmd(const CmdOptions& options) {
     next += period_ns;
     sleep_until_ns(next);
   }
-  if (failed) std::fprintf(stderr, "afhub cmd: %llu commands not sent (shared memory exhausted)\n",
-                           static_cast<unsigned long long>(failed));
+  if (failed)
+    std::fprintf(stderr, "afhub cmd: %llu commands not sent (shared memory exhausted)\n",
+                 static_cast<unsigned long long>(failed));
   return 0;
 }
 
@@ -128,12 +132,16 @@ void register_cmd(CLI::App& app, Runner& selected) {
   auto* cmd = app.add_subcommand("cmd", "Write a command into a body's command slot.");
   cmd->add_option("body", options->body, "Body channel name or a unique suffix of it")->required();
   cmd->add_option("--force", options->force, "Force x,y,z in N, world frame (Cartesian FORCE)");
-  cmd->add_option("--torque", options->torque, "Torque x,y,z in N m, world frame (Cartesian FORCE)");
-  cmd->add_option("--pose", options->pose, "Target x,y,z,roll,pitch,yaw in m and rad (Cartesian POSITION)");
+  cmd->add_option("--torque", options->torque,
+                  "Torque x,y,z in N m, world frame (Cartesian FORCE)");
+  cmd->add_option("--pose", options->pose,
+                  "Target x,y,z,roll,pitch,yaw in m and rad (Cartesian POSITION)");
   cmd->add_option("--joint-pos", options->joint_pos, "Joint position targets a,b,... (rad or m)");
-  cmd->add_option("--joint-vel", options->joint_vel, "Joint velocity targets a,b,... (rad/s or m/s)");
+  cmd->add_option("--joint-vel", options->joint_vel,
+                  "Joint velocity targets a,b,... (rad/s or m/s)");
   cmd->add_option("--joint-effort", options->joint_effort, "Joint efforts a,b,... (N m or N)");
-  cmd->add_option("--repeat", options->repeat_hz, "Send at this rate in Hz until Ctrl-C (default: once)");
+  cmd->add_option("--repeat", options->repeat_hz,
+                  "Send at this rate in Hz until Ctrl-C (default: once)");
   cmd->callback([&selected, options] { selected = [options] { return run_cmd(*options); }; });
 }
 

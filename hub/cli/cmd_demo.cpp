@@ -38,7 +38,9 @@ pid_t spawn_synth() {
 void draw(CatalogReader& catalog, std::vector<std::unique_ptr<BodyClient>>& clients, bool tty) {
   const BodyList& list = catalog.latest();
   std::string screen = tty ? "\033[H\033[2J" : "";
-  screen += "afhub demo: live bodies (Ctrl-C stops; `afhub ls`, `afhub echo demo/body0` in another shell)\n";
+  screen +=
+      "afhub demo: live bodies (Ctrl-C stops; `afhub ls`, `afhub echo demo/body0` in another "
+      "shell)\n";
   char line[256];
   std::snprintf(line, sizeof line, "%-16s %9s %9s %9s  %-26s %s\n", "BODY", "RATE_HZ", "STEP",
                 "SIM_S", "POSITION_M", "JOINTS_RAD");
@@ -99,7 +101,8 @@ void register_demo(CLI::App& app, Runner& selected) {
   auto options = std::make_shared<DemoOptions>();
   auto* demo = app.add_subcommand(
       "demo", "Run the demo: a hub, synthetic bodies published at 1 kHz, and a live view of them.");
-  demo->add_option("--seconds", options->seconds, "Stop after this many seconds (default: until Ctrl-C)");
+  demo->add_option("--seconds", options->seconds,
+                   "Stop after this many seconds (default: until Ctrl-C)");
   demo->callback([&selected, options] { selected = [options] { return run_demo(*options); }; });
 }
 

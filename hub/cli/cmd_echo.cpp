@@ -36,8 +36,8 @@ int run_echo(const EchoOptions& options) {
       std::fflush(stdout);
       ++printed;
       last_sample_ns = monotonic_ns();
-    } else if (options.count != 0 &&
-               monotonic_ns() - last_sample_ns > static_cast<std::int64_t>(options.timeout_s * 1e9)) {
+    } else if (options.count != 0 && monotonic_ns() - last_sample_ns >
+                                         static_cast<std::int64_t>(options.timeout_s * 1e9)) {
       throw Error("no state from " + std::string(name_of(info.channel)) + " for " +
                   std::to_string(options.timeout_s) + " s; is its publisher paused or gone?");
     }
@@ -53,10 +53,12 @@ void register_echo(CLI::App& app, Runner& selected) {
   auto* echo = app.add_subcommand("echo", "Print each new state of a body (text, or JSON lines).");
   echo->add_option("body", options->body, "Body channel name or a unique suffix of it, e.g. 'base'")
       ->required();
-  echo->add_option("--count,-n", options->count, "Stop after this many states (default: until Ctrl-C)");
+  echo->add_option("--count,-n", options->count,
+                   "Stop after this many states (default: until Ctrl-C)");
   echo->add_flag("--json", options->json, "One JSON object per line.");
-  echo->add_option("--timeout", options->timeout_s,
-                   "With --count: fail when no new state arrives for this many seconds (default 5)");
+  echo->add_option(
+      "--timeout", options->timeout_s,
+      "With --count: fail when no new state arrives for this many seconds (default 5)");
   echo->callback([&selected, options] { selected = [options] { return run_echo(*options); }; });
 }
 

@@ -38,7 +38,8 @@ int run_ls(const LsOptions& options) {
     return 0;
   }
   if (list.body_count == 0) {
-    std::printf("no bodies are published yet (start a simulation with `afhub run`, or `afhub synth`)\n");
+    std::printf(
+        "no bodies are published yet (start a simulation with `afhub run`, or `afhub synth`)\n");
     return 0;
   }
   std::printf("%-40s %10s %6s  %s\n", "BODY", "RATE_HZ", "JOINTS", "OWNER");
@@ -55,7 +56,8 @@ int run_ls(const LsOptions& options) {
 
 void register_ls(CLI::App& app, Runner& selected) {
   auto options = std::make_shared<LsOptions>();
-  auto* ls = app.add_subcommand("ls", "List the live bodies: publish rate, joints and owner process.");
+  auto* ls =
+      app.add_subcommand("ls", "List the live bodies: publish rate, joints and owner process.");
   ls->add_flag("--json", options->json, "Print a JSON array instead of a table.");
   ls->callback([&selected, options] { selected = [options] { return run_ls(*options); }; });
 }

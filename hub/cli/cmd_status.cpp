@@ -34,6 +34,9 @@ int run_status(const StatusOptions& options) {
   LatestReader<Health> reader(
       {std::string(kService), std::string(kHubInstance), std::string(kHealthEvent)});
   const Health& health = wait_for_health(reader);
+  CatalogReader catalog;
+  catalog.wait(std::chrono::milliseconds(1000));
+  const BodyList& bodies = catalog.latest();
   if (options.json) {
     JsonWriter json;
     json.begin_object();
@@ -43,19 +46,35 @@ int run_status(const StatusOptions& options) {
     json.key("processes").begin_array();
     for (std::uint32_t i = 0; i < health.process_count; ++i)
       json.begin_object()
-          .key("name").value(name_of(health.processes[i].name))
-          .key("pid").value(static_cast<long long>(health.processes[i].pid))
+          .key("name")
+          .value(name_of(health.processes[i].name))
+          .key("pid")
+          .value(static_cast<long long>(health.processes[i].pid))
+          .end_object();
+    json.end_array();
+    json.key("bodies").begin_array();
+    for (std::uint32_t i = 0; i < bodies.body_count; ++i)
+      json.begin_object()
+          .key("body")
+          .value(name_of(bodies.bodies[i].channel))
+          .key("rate_hz")
+          .value(bodies.bodies[i].publish_rate_hz)
           .end_object();
     json.end_array();
     json.key("mempools").begin_array();
     for (std::uint32_t i = 0; i < health.mempool_count; ++i) {
       const MempoolUsage& pool = health.mempools[i];
       json.begin_object()
-          .key("segment").value(static_cast<long long>(pool.segment_id))
-          .key("chunk_payload_bytes").value(static_cast<long long>(pool.chunk_payload_bytes))
-          .key("chunks").value(static_cast<long long>(pool.chunk_count))
-          .key("used").value(static_cast<long long>(pool.used_chunks))
-          .key("min_free").value(static_cast<long long>(pool.min_free_chunks))
+          .key("segment")
+          .value(static_cast<long long>(pool.segment_id))
+          .key("chunk_payload_bytes")
+          .value(static_cast<long long>(pool.chunk_payload_bytes))
+          .key("chunks")
+          .value(static_cast<long long>(pool.chunk_count))
+          .key("used")
+          .value(static_cast<long long>(pool.used_chunks))
+          .key("min_free")
+          .value(static_cast<long long>(pool.min_free_chunks))
           .end_object();
     }
     json.end_array().end_object();
@@ -68,11 +87,15 @@ int run_status(const StatusOptions& options) {
   for (std::uint32_t i = 0; i < health.process_count; ++i)
     std::printf("  %-40s pid %d\n", std::string(name_of(health.processes[i].name)).c_str(),
                 health.processes[i].pid);
+  std::printf("\nbodies:\n");
+  for (std::uint32_t i = 0; i < bodies.body_count; ++i)
+    std::printf("  %-40s %8.1f Hz\n", std::string(name_of(bodies.bodies[i].channel)).c_str(),
+                bodies.bodies[i].publish_rate_hz);
   std::printf("\nmempools: segment  chunk bytes     chunks       used   min free\n");
   for (std::uint32_t i = 0; i < health.mempool_count; ++i) {
     const MempoolUsage& pool = health.mempools[i];
-    std::printf("          %7u %12u %10u %10u %10u\n", pool.segment_id, pool.chunk_payload_bytes, pool.chunk_count,
-                pool.used_chunks, pool.min_free_chunks);
+    std::printf("          %7u %12u %10u %10u %10u\n", pool.segment_id, pool.chunk_payload_bytes,
+                pool.chunk_count, pool.used_chunks, pool.min_free_chunks);
   }
   return 0;
 }
@@ -81,7 +104,8 @@ int run_status(const StatusOptions& options) {
 
 void register_status(CLI::App& app, Runner& selected) {
   auto options = std::make_shared<StatusOptions>();
-  auto* status = app.add_subcommand("status", "Show the hub's health: processes, bodies, mempool usage.");
+  auto* status =
+      app.add_subcommand("status", "Show the hub's health: processes, bodies, mempool usage.");
   status->add_flag("--json", options->json, "Print one JSON object.");
   status->callback([&selected, options] { selected = [options] { return run_status(*options); }; });
 }

@@ -48,9 +48,15 @@ void step_body(SyntheticBody& body, std::size_t index, double t, double dt) {
     if (commanded && j < command->joint_count) {
       const double value = command->joint_values[j];
       switch (command->joint_types[j]) {
-        case JointCommandType::kPosition: joint.position += (value - joint.position) * 0.05; break;
-        case JointCommandType::kVelocity: joint.position += value * dt; break;
-        case JointCommandType::kEffort: joint.position += (joint.velocity + value * dt) * dt; break;
+        case JointCommandType::kPosition:
+          joint.position += (value - joint.position) * 0.05;
+          break;
+        case JointCommandType::kVelocity:
+          joint.position += value * dt;
+          break;
+        case JointCommandType::kEffort:
+          joint.position += (joint.velocity + value * dt) * dt;
+          break;
       }
     } else {
       joint.position = 0.5 * std::sin(2.0 * M_PI * 0.5 * t + 0.7 * static_cast<double>(j + index));
@@ -66,7 +72,8 @@ void publish_body(SyntheticBody& body, std::size_t index, std::uint64_t step, do
   const double angle = 2.0 * M_PI * 0.2 * t;
   state->header.sim_step = step;
   state->header.sim_time_s = t;
-  state->pose.position_m = {radius * std::cos(angle), radius * std::sin(angle), 0.05 * static_cast<double>(index)};
+  state->pose.position_m = {radius * std::cos(angle), radius * std::sin(angle),
+                            0.05 * static_cast<double>(index)};
   state->pose.orientation = {0.0, 0.0, std::sin(angle / 2), std::cos(angle / 2)};
   state->twist.linear_mps = {-radius * std::sin(angle) * 2.0 * M_PI * 0.2,
                              radius * std::cos(angle) * 2.0 * M_PI * 0.2, 0.0};
@@ -103,7 +110,8 @@ int run_synth(const SynthOptions& options) {
     bodies[i].joints.resize(options.joints);
   }
   directory.publish();
-  Writer<WorldState> world({std::string(kService), std::string(kWorldInstance), std::string(kStateEvent)});
+  Writer<WorldState> world(
+      {std::string(kService), std::string(kWorldInstance), std::string(kStateEvent)});
   LatestReader<WorldCommand> world_command(
       {std::string(kService), std::string(kWorldInstance), std::string(kCommandEvent)});
 
@@ -121,11 +129,20 @@ int run_synth(const SynthOptions& options) {
         command && command->header.sequence != last_world_command) {
       last_world_command = command->header.sequence;
       switch (command->action) {
-        case WorldAction::kPause: paused = true; break;
-        case WorldAction::kResume: paused = false; break;
-        case WorldAction::kStep: steps_to_run += command->step_count; break;
-        case WorldAction::kReset: step = 0; break;
-        case WorldAction::kNone: break;
+        case WorldAction::kPause:
+          paused = true;
+          break;
+        case WorldAction::kResume:
+          paused = false;
+          break;
+        case WorldAction::kStep:
+          steps_to_run += command->step_count;
+          break;
+        case WorldAction::kReset:
+          step = 0;
+          break;
+        case WorldAction::kNone:
+          break;
       }
     }
     if (!paused || steps_to_run > 0) {
@@ -153,7 +170,8 @@ int run_synth(const SynthOptions& options) {
       rate_window_step = step;
       rate_window_ns = next_ns;
     }
-    if (options.seconds > 0.0 && static_cast<double>(next_ns - start_ns) * 1e-9 >= options.seconds) break;
+    if (options.seconds > 0.0 && static_cast<double>(next_ns - start_ns) * 1e-9 >= options.seconds)
+      break;
     sleep_until_ns(next_ns);
   }
   return 0;
@@ -167,12 +185,15 @@ void register_synth(CLI::App& app, Runner& selected) {
       "synth",
       "Publish synthetic bodies at a fixed rate (a stand-in for physics): joints follow a "
       "sinusoid, or the commands written to them.");
-  synth->add_option("--namespace", options->name_space, "Namespace of the bodies (default 'synth')");
+  synth->add_option("--namespace", options->name_space,
+                    "Namespace of the bodies (default 'synth')");
   synth->add_option("--bodies", options->bodies, "Number of bodies (default 3)");
   synth->add_option("--joints", options->joints, "Joints per body (default 4)");
   synth->add_option("--rate", options->rate_hz, "Steps per second (default 1000)");
-  synth->add_option("--seconds", options->seconds, "Stop after this many seconds (default: until Ctrl-C)");
-  synth->add_flag("--no-autostart", options->no_autostart, "Fail instead of starting a hub when none runs");
+  synth->add_option("--seconds", options->seconds,
+                    "Stop after this many seconds (default: until Ctrl-C)");
+  synth->add_flag("--no-autostart", options->no_autostart,
+                  "Fail instead of starting a hub when none runs");
   synth->callback([&selected, options] { selected = [options] { return run_synth(*options); }; });
 }
 

@@ -32,7 +32,13 @@ std::string state_json(const BodyInfo& info, const BodyState& state) {
   json.key("position_m");
   vec3(json, state.pose.position_m);
   const Quaternion& q = state.pose.orientation;
-  json.key("orientation_xyzw").begin_array().value(q.x).value(q.y).value(q.z).value(q.w).end_array();
+  json.key("orientation_xyzw")
+      .begin_array()
+      .value(q.x)
+      .value(q.y)
+      .value(q.z)
+      .value(q.w)
+      .end_array();
   json.key("linear_velocity_mps");
   vec3(json, state.twist.linear_mps);
   json.key("angular_velocity_radps");

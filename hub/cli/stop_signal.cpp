@@ -10,7 +10,9 @@
 namespace afhub::cli {
 namespace {
 std::atomic<bool> g_stop{false};
-extern "C" void on_stop_signal(int) { g_stop = true; }
+extern "C" void on_stop_signal(int) {
+  g_stop = true;
+}
 }  // namespace
 
 void install_stop_signal_handlers() {
@@ -21,7 +23,9 @@ void install_stop_signal_handlers() {
   sigaction(SIGTERM, &action, nullptr);
 }
 
-bool stop_requested() { return g_stop; }
+bool stop_requested() {
+  return g_stop;
+}
 
 std::int64_t monotonic_ns() {
   timespec now{};

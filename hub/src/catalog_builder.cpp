@@ -91,7 +91,8 @@ bool CatalogBuilder::merge(bool directories_changed) {
     if (old != rates_.end()) {
       probes[channel] = std::move(old->second);
     } else {
-      probes[channel].reader = std::make_unique<LatestReader<BodyState>>(body_state_channel(channel));
+      probes[channel].reader =
+          std::make_unique<LatestReader<BodyState>>(body_state_channel(channel));
     }
   }
   rates_ = std::move(probes);

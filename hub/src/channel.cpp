@@ -74,7 +74,9 @@ void RawWriter::publish(void* payload) noexcept {
   port_->publisher.publish(payload);
 }
 
-void RawWriter::release(void* payload) noexcept { port_->publisher.release(payload); }
+void RawWriter::release(void* payload) noexcept {
+  port_->publisher.release(payload);
+}
 
 struct RawLatestReader::Port {
   explicit Port(const ChannelId& channel)
@@ -104,7 +106,8 @@ const void* RawLatestReader::latest() noexcept {
     auto taken = port_->subscriber.take();
     if (taken.has_error()) break;  // no more samples (or too many held: keep the current)
     const void* payload = taken.value();
-    const std::uint32_t bytes = iox::mepoo::ChunkHeader::fromUserPayload(payload)->userPayloadSize();
+    const std::uint32_t bytes =
+        iox::mepoo::ChunkHeader::fromUserPayload(payload)->userPayloadSize();
     PayloadError error = check_payload(payload, bytes, kind_);
     if (error != PayloadError::kNone) {
       report_refusal(payload, error);
@@ -133,8 +136,7 @@ void RawLatestReader::report_refusal(const void* payload, PayloadError error) no
                "afhub: refused a payload on %s/%s/%s from pid %u (layout id %016llx, this "
                "build %016llx): %s\n",
                channel_.service.c_str(), channel_.instance.c_str(), channel_.event.c_str(),
-               header.publisher_pid,
-               static_cast<unsigned long long>(header.layout_id),
+               header.publisher_pid, static_cast<unsigned long long>(header.layout_id),
                static_cast<unsigned long long>(kLayoutId), describe(error));
 }
 

@@ -75,7 +75,8 @@ ChannelId body_command_channel(std::string_view body_channel) {
 
 std::string resolve_body(std::string_view query, const std::vector<std::string>& channels) {
   std::string wanted = body_channel_name("", query);
-  if (wanted.empty()) throw Error("no body name given: name a body, e.g. 'base' or 'ambf/env/base'");
+  if (wanted.empty())
+    throw Error("no body name given: name a body, e.g. 'base' or 'ambf/env/base'");
   if (std::find(channels.begin(), channels.end(), wanted) != channels.end()) return wanted;
   std::vector<std::string> matches;
   for (const auto& channel : channels) {

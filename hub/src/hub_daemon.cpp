@@ -28,7 +28,9 @@ namespace {
 
 std::atomic<bool> g_stop_requested{false};
 
-extern "C" void request_stop(int) { g_stop_requested = true; }
+extern "C" void request_stop(int) {
+  g_stop_requested = true;
+}
 
 void install_stop_handlers() {
   struct sigaction action {};
@@ -111,11 +113,12 @@ int run_hub_daemon() {
   iox::roudi::IceOryxRouDiComponents components(roudi_config(pool_mib));
   // Monitoring on: a crashed client is removed and its chunks are freed. The hub
   // does not kill clients when it stops: they keep running and can reconnect.
-  iox::roudi::RouDi roudi(components.rouDiMemoryManager, components.portManager,
-                          iox::roudi::RouDi::RoudiStartupParameters{
-                              iox::roudi::MonitoringMode::ON, false});
+  iox::roudi::RouDi roudi(
+      components.rouDiMemoryManager, components.portManager,
+      iox::roudi::RouDi::RoudiStartupParameters{iox::roudi::MonitoringMode::ON, false});
   iox::runtime::PoshRuntimeSingleProcess runtime("afhub-hub");
-  std::fprintf(stderr, "afhub hub: running (pid %d, %.1f MiB of payload mempools). Ctrl-C stops it.\n",
+  std::fprintf(stderr,
+               "afhub hub: running (pid %d, %.1f MiB of payload mempools). Ctrl-C stops it.\n",
                static_cast<int>(getpid()), pool_mib);
   serve_until_stopped();
   std::fprintf(stderr, "afhub hub: stopped\n");

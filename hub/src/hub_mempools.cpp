@@ -25,15 +25,17 @@ std::vector<MempoolSpec> hub_mempools() {
   // rate probe), for up to kMaxBodies bodies with a margin.
   std::vector<MempoolSpec> pools = {
       {128, 512, "world commands, small iceoryx samples"},
-      {round_up8(std::max(sizeof(BodyCommand), sizeof(WorldState))), 2048, "body commands, world state"},
+      {round_up8(std::max(sizeof(BodyCommand), sizeof(WorldState))), 2048,
+       "body commands, world state"},
       {round_up8(sizeof(BodyState)), 2048, "body states"},
       {round_up8(sizeof(Health)), 128, "hub health"},
       {round_up8(body_list_bytes(7)), 128, "catalogs and directories of up to 7 bodies"},
       {round_up8(body_list_bytes(60)), 32, "catalogs and directories of up to 60 bodies"},
       {round_up8(sizeof(BodyList)), 12, "catalogs and directories of up to kMaxBodies bodies"},
   };
-  std::sort(pools.begin(), pools.end(),
-            [](const MempoolSpec& a, const MempoolSpec& b) { return a.payload_bytes < b.payload_bytes; });
+  std::sort(pools.begin(), pools.end(), [](const MempoolSpec& a, const MempoolSpec& b) {
+    return a.payload_bytes < b.payload_bytes;
+  });
   return pools;
 }
 

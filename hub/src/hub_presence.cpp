@@ -24,7 +24,8 @@
 namespace afhub {
 namespace {
 
-constexpr const char* kRoudiSocketPath = "/tmp/roudi";  // iceoryx 2.0: IOX_UDS_SOCKET_PATH_PREFIX + "roudi"
+constexpr const char* kRoudiSocketPath =
+    "/tmp/roudi";  // iceoryx 2.0: IOX_UDS_SOCKET_PATH_PREFIX + "roudi"
 constexpr const char* kHubLogPath = "/tmp/afhub-hub.log";
 constexpr auto kAutostartTimeout = std::chrono::seconds(10);
 
@@ -93,7 +94,9 @@ RoudiPresence probe_roudi() noexcept {
 }
 
 // Not "<runtime name>.lock": iceoryx locks /tmp/<runtime name>.lock for each process.
-std::string hub_lock_path() { return "/tmp/afhub.lock"; }
+std::string hub_lock_path() {
+  return "/tmp/afhub.lock";
+}
 
 std::optional<pid_t> running_hub_pid() {
   int fd = open(hub_lock_path().c_str(), O_RDONLY | O_CLOEXEC);
@@ -146,6 +149,8 @@ void quiet_iceoryx_logs() {
                                                            iox::log::LogLevelOutput::kHideLogLevel);
 }
 
-const std::string& runtime_name() { return runtime_name_storage(); }
+const std::string& runtime_name() {
+  return runtime_name_storage();
+}
 
 }  // namespace afhub

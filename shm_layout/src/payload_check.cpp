@@ -10,13 +10,19 @@ namespace {
 
 std::size_t fixed_size_of(PayloadKind kind) noexcept {
   switch (kind) {
-    case PayloadKind::kBodyState: return sizeof(BodyState);
-    case PayloadKind::kBodyCommand: return sizeof(BodyCommand);
-    case PayloadKind::kWorldState: return sizeof(WorldState);
-    case PayloadKind::kWorldCommand: return sizeof(WorldCommand);
-    case PayloadKind::kHealth: return sizeof(Health);
+    case PayloadKind::kBodyState:
+      return sizeof(BodyState);
+    case PayloadKind::kBodyCommand:
+      return sizeof(BodyCommand);
+    case PayloadKind::kWorldState:
+      return sizeof(WorldState);
+    case PayloadKind::kWorldCommand:
+      return sizeof(WorldCommand);
+    case PayloadKind::kHealth:
+      return sizeof(Health);
     case PayloadKind::kBodyDirectory:
-    case PayloadKind::kCatalog: return body_list_bytes(0);
+    case PayloadKind::kCatalog:
+      return body_list_bytes(0);
   }
   return 0;
 }
@@ -54,14 +60,16 @@ PayloadError check_payload(const void* data, std::size_t bytes, PayloadKind expe
       break;
     }
     case PayloadKind::kWorldState:
-    case PayloadKind::kWorldCommand: break;
+    case PayloadKind::kWorldCommand:
+      break;
   }
   return PayloadError::kNone;
 }
 
 const char* describe(PayloadError error) noexcept {
   switch (error) {
-    case PayloadError::kNone: return "valid";
+    case PayloadError::kNone:
+      return "valid";
     case PayloadError::kTooSmall:
       return "the chunk is smaller than the payload it claims to be; the writer was built "
              "from other afhub sources: rebuild it from the same sources as this process";

@@ -99,8 +99,15 @@ TEST(Channel, ForeignLayoutIsRefusedNotMisread) {
   forged.header.kind = PayloadKind::kBodyState;
   std::memcpy(chunk, &forged, sizeof forged);
   foreign.publish(chunk);
-  ASSERT_TRUE(test::wait_until(
-      [&] { return controller.latest_state() == nullptr && controller.refused_states() == 1; }, 2s));
+  testing::internal::CaptureStderr();
+  bool refused = test::wait_until(
+      [&] { return controller.latest_state() == nullptr && controller.refused_states() == 1; }, 2s);
+  std::string message = testing::internal::GetCapturedStderr();
+  ASSERT_TRUE(refused);
+  EXPECT_NE(message.find("refused a payload on afhub/test/foreign/state"), std::string::npos)
+      << message;
+  EXPECT_NE(message.find("layout id"), std::string::npos) << message;
+  EXPECT_NE(message.find("rebuild both from the same sources"), std::string::npos) << message;
 
   // A payload of this build on the same channel is still accepted.
   BodyPublisher physics("test/foreign");
@@ -139,7 +146,8 @@ TEST(Catalog, ListsAnnouncedBodiesWithJointsAndOwnerUntilTheyGo) {
 
 TEST(Catalog, RejectsNamesThatIceoryxCannotCarry) {
   EXPECT_THROW(make_body_info(std::string(101, 'x'), {}), Error);
-  EXPECT_THROW(make_body_info("test/ok", std::vector<std::string>(kMaxJointsPerBody + 1, "j")), Error);
+  EXPECT_THROW(make_body_info("test/ok", std::vector<std::string>(kMaxJointsPerBody + 1, "j")),
+               Error);
   EXPECT_THROW(make_body_info("test/ok", {std::string(64, 'j')}), Error);
   EXPECT_THROW(BodyPublisher(std::string(101, 'x')), Error);
 }

@@ -104,7 +104,7 @@ class CliWithBodies : public ::testing::Test {
     expect_no_hub();
     hub_.pid = start_test_hub();
     synth_.pid = spawn_afhub({"synth", "--bodies", "2", "--joints", "3", "--no-autostart"},
-                         "/tmp/afhub-test-synth.log");
+                             "/tmp/afhub-test-synth.log");
     ASSERT_TRUE(wait_until([] { return contains(run_afhub({"ls"}).out, "synth/body1"); }, 5s));
   }
   void TearDown() override {
@@ -137,14 +137,16 @@ TEST_F(CliWithBodies, EchoPrintsJsonLines) {
   RunResult echo = run_afhub({"echo", "body1", "--count", "3", "--json"});
   EXPECT_EQ(echo.exit_code, 0) << echo.err;
   int lines = 0;
-  for (std::size_t at = 0; (at = echo.out.find("{\"body\":\"synth/body1\"", at)) != std::string::npos; ++at)
+  for (std::size_t at = 0;
+       (at = echo.out.find("{\"body\":\"synth/body1\"", at)) != std::string::npos; ++at)
     ++lines;
   EXPECT_EQ(lines, 3) << echo.out;
   EXPECT_TRUE(contains(echo.out, "\"joint_names\":[\"body1-joint0\"")) << echo.out;
 }
 
 TEST_F(CliWithBodies, CmdDrivesTheJointsOfABody) {
-  ScopedProcess commander = spawn_afhub({"cmd", "body0", "--joint-pos", "0.3,-0.2", "--repeat", "200"});
+  ScopedProcess commander =
+      spawn_afhub({"cmd", "body0", "--joint-pos", "0.3,-0.2", "--repeat", "200"});
   // synth's joints converge on a position target within a few hundred steps.
   bool converged = wait_until(
       [] {
@@ -177,7 +179,8 @@ TEST_F(CliWithBodies, CmdExplainsBadInput) {
        }) {
     RunResult result = run_afhub(bad.args);
     EXPECT_EQ(result.exit_code, 1) << bad.args[1];
-    EXPECT_TRUE(contains(result.err, bad.message)) << "expected '" << bad.message << "' in: " << result.err;
+    EXPECT_TRUE(contains(result.err, bad.message))
+        << "expected '" << bad.message << "' in: " << result.err;
   }
 }
 
@@ -194,6 +197,7 @@ TEST_F(CliWithBodies, StatusShowsProcessesAndMempools) {
   EXPECT_EQ(status.exit_code, 0) << status.err;
   EXPECT_TRUE(contains(status.out, "\"chunk_payload_bytes\":1776")) << status.out;
   EXPECT_TRUE(contains(status.out, "\"body_count\":2")) << status.out;
+  EXPECT_TRUE(contains(status.out, "{\"body\":\"synth/body1\",\"rate_hz\":")) << status.out;
 }
 
 }  // namespace

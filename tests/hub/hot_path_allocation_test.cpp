@@ -18,19 +18,24 @@ std::atomic<bool> g_counting{false};
 std::atomic<long> g_allocations{0};
 
 void note_allocation() {
-  if (g_counting.load(std::memory_order_relaxed)) g_allocations.fetch_add(1, std::memory_order_relaxed);
+  if (g_counting.load(std::memory_order_relaxed))
+    g_allocations.fetch_add(1, std::memory_order_relaxed);
 }
 }  // namespace
 
 #if defined(AFHUB_SANITIZED)
 // The sanitizers own malloc: count C++ allocations only.
-void* raw_malloc(std::size_t size) { return std::malloc(size); }
+void* raw_malloc(std::size_t size) {
+  return std::malloc(size);
+}
 #else
 // glibc's allocator under its internal names; the public ones are counted below.
 extern "C" void* __libc_malloc(std::size_t);
 extern "C" void* __libc_calloc(std::size_t, std::size_t);
 extern "C" void* __libc_realloc(void*, std::size_t);
-void* raw_malloc(std::size_t size) { return __libc_malloc(size); }
+void* raw_malloc(std::size_t size) {
+  return __libc_malloc(size);
+}
 extern "C" void* malloc(std::size_t size) {
   note_allocation();
   return __libc_malloc(size);
@@ -50,16 +55,28 @@ void* operator new(std::size_t size) {
   if (void* p = raw_malloc(size ? size : 1)) return p;
   throw std::bad_alloc();
 }
-void* operator new[](std::size_t size) { return operator new(size); }
+void* operator new[](std::size_t size) {
+  return operator new(size);
+}
 void* operator new(std::size_t size, const std::nothrow_t&) noexcept {
   note_allocation();
   return raw_malloc(size ? size : 1);
 }
-void* operator new[](std::size_t size, const std::nothrow_t& tag) noexcept { return operator new(size, tag); }
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+void* operator new[](std::size_t size, const std::nothrow_t& tag) noexcept {
+  return operator new(size, tag);
+}
+void operator delete(void* p) noexcept {
+  std::free(p);
+}
+void operator delete[](void* p) noexcept {
+  std::free(p);
+}
+void operator delete(void* p, std::size_t) noexcept {
+  std::free(p);
+}
+void operator delete[](void* p, std::size_t) noexcept {
+  std::free(p);
+}
 
 namespace afhub {
 namespace {

@@ -26,7 +26,8 @@ std::int64_t now_ns();
 
 // Used chunks of every pool in the payload segment, from the first health sample
 // published after `after_ns` (empty when none comes).
-std::vector<std::uint32_t> payload_chunks_in_use(LatestReader<Health>& health, std::int64_t after_ns) {
+std::vector<std::uint32_t> payload_chunks_in_use(LatestReader<Health>& health,
+                                                 std::int64_t after_ns) {
   const Health* sample = nullptr;
   wait_until(
       [&] {
@@ -101,7 +102,7 @@ TEST(Resilience, KilledClientRestartsWhileOthersKeepWorking) {
   ASSERT_FALSE(before.empty());
 
   ScopedProcess synth = spawn_afhub({"synth", "--bodies", "2", "--joints", "2", "--no-autostart"},
-                            "/tmp/afhub-test-synth.log");
+                                    "/tmp/afhub-test-synth.log");
   ASSERT_TRUE(wait_until(
       [] {
         return run_afhub({"echo", "synth/body1", "-n", "1"}).exit_code == 0;

@@ -28,27 +28,33 @@ TEST(PayloadCheck, AcceptsAPayloadOfThisBuild) {
 TEST(PayloadCheck, RefusesAForeignLayout) {
   auto state = stamped<BodyState>(PayloadKind::kBodyState);
   state.header.layout_id = kLayoutId ^ 1;
-  EXPECT_EQ(check_payload(&state, sizeof state, PayloadKind::kBodyState), PayloadError::kForeignLayout);
+  EXPECT_EQ(check_payload(&state, sizeof state, PayloadKind::kBodyState),
+            PayloadError::kForeignLayout);
 }
 
 TEST(PayloadCheck, RefusesAnotherPayloadKind) {
   auto command = stamped<BodyCommand>(PayloadKind::kBodyCommand);
-  EXPECT_EQ(check_payload(&command, sizeof command, PayloadKind::kBodyState), PayloadError::kWrongKind);
+  EXPECT_EQ(check_payload(&command, sizeof command, PayloadKind::kBodyState),
+            PayloadError::kWrongKind);
 }
 
 TEST(PayloadCheck, RefusesAChunkShorterThanItsPayload) {
   auto state = stamped<BodyState>(PayloadKind::kBodyState);
-  EXPECT_EQ(check_payload(&state, sizeof state - 8, PayloadKind::kBodyState), PayloadError::kTooSmall);
-  EXPECT_EQ(check_payload(&state, sizeof(PayloadHeader) - 1, PayloadKind::kBodyState), PayloadError::kTooSmall);
+  EXPECT_EQ(check_payload(&state, sizeof state - 8, PayloadKind::kBodyState),
+            PayloadError::kTooSmall);
+  EXPECT_EQ(check_payload(&state, sizeof(PayloadHeader) - 1, PayloadKind::kBodyState),
+            PayloadError::kTooSmall);
 }
 
 TEST(PayloadCheck, RefusesJointCountsBeyondCapacity) {
   auto state = stamped<BodyState>(PayloadKind::kBodyState);
   state.joint_count = kMaxJointsPerBody + 1;
-  EXPECT_EQ(check_payload(&state, sizeof state, PayloadKind::kBodyState), PayloadError::kCountTooLarge);
+  EXPECT_EQ(check_payload(&state, sizeof state, PayloadKind::kBodyState),
+            PayloadError::kCountTooLarge);
   auto command = stamped<BodyCommand>(PayloadKind::kBodyCommand);
   command.joint_count = 1000;
-  EXPECT_EQ(check_payload(&command, sizeof command, PayloadKind::kBodyCommand), PayloadError::kCountTooLarge);
+  EXPECT_EQ(check_payload(&command, sizeof command, PayloadKind::kBodyCommand),
+            PayloadError::kCountTooLarge);
 }
 
 TEST(PayloadCheck, BodyListsMustHoldTheBodiesTheyCount) {
@@ -60,12 +66,13 @@ TEST(PayloadCheck, BodyListsMustHoldTheBodiesTheyCount) {
   EXPECT_EQ(check_payload(bytes.data(), bytes.size(), PayloadKind::kCatalog), PayloadError::kNone);
   count = 3;  // claims one more body than the chunk holds
   std::memcpy(bytes.data() + offsetof(BodyList, body_count), &count, sizeof count);
-  EXPECT_EQ(check_payload(bytes.data(), bytes.size(), PayloadKind::kCatalog), PayloadError::kCountTooLarge);
+  EXPECT_EQ(check_payload(bytes.data(), bytes.size(), PayloadKind::kCatalog),
+            PayloadError::kCountTooLarge);
 }
 
 TEST(PayloadCheck, EveryErrorHasAnExplanation) {
-  for (auto error : {PayloadError::kTooSmall, PayloadError::kForeignLayout, PayloadError::kWrongKind,
-                     PayloadError::kCountTooLarge})
+  for (auto error : {PayloadError::kTooSmall, PayloadError::kForeignLayout,
+                     PayloadError::kWrongKind, PayloadError::kCountTooLarge})
     EXPECT_GT(std::strlen(describe(error)), 30u);
 }
 

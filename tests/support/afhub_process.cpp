@@ -33,7 +33,9 @@ int exit_code_of(int status) {
 
 }  // namespace
 
-std::string afhub_executable() { return AFHUB_TEST_EXECUTABLE; }
+std::string afhub_executable() {
+  return AFHUB_TEST_EXECUTABLE;
+}
 
 std::string read_file(const std::string& path) {
   std::ifstream in(path);
@@ -61,7 +63,8 @@ RunResult run_afhub(const std::vector<std::string>& args, std::chrono::milliseco
   auto deadline = start + timeout;
   bool timed_out = false;
   while (open_streams > 0) {
-    auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+    auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
+        deadline - std::chrono::steady_clock::now());
     if (left.count() <= 0) {
       timed_out = true;
       kill(pid, SIGKILL);

@@ -26,7 +26,8 @@ pid_t spawn_afhub(const std::vector<std::string>& args, const std::string& log_p
 
 // Sends `signal`, waits up to `timeout` for the exit, SIGKILLs after that; returns
 // the exit code (128 + signal when killed by one).
-int stop_process(pid_t pid, int signal, std::chrono::milliseconds timeout = std::chrono::seconds(5));
+int stop_process(pid_t pid, int signal,
+                 std::chrono::milliseconds timeout = std::chrono::seconds(5));
 
 // A process that is stopped (SIGTERM, then SIGKILL) when the test leaves its scope,
 // however it leaves: a failed assertion never leaves a hub running.
@@ -46,7 +47,9 @@ bool wait_until(Predicate predicate, std::chrono::milliseconds timeout) {
   auto deadline = std::chrono::steady_clock::now() + timeout;
   while (!predicate()) {
     if (std::chrono::steady_clock::now() > deadline) return false;
-    struct timespec pause {0, 10'000'000};
+    struct timespec pause {
+      0, 10'000'000
+    };
     nanosleep(&pause, nullptr);
   }
   return true;

@@ -11,10 +11,10 @@ namespace afhub {
 
 enum class PayloadError : std::uint8_t {
   kNone = 0,
-  kTooSmall,        // chunk shorter than the payload it claims to be
-  kForeignLayout,   // written by a build with another kLayoutId
-  kWrongKind,       // another payload type on this channel
-  kCountTooLarge,   // a count beyond the payload's capacity or the chunk's bytes
+  kTooSmall,       // chunk shorter than the payload it claims to be
+  kForeignLayout,  // written by a build with another kLayoutId
+  kWrongKind,      // another payload type on this channel
+  kCountTooLarge,  // a count beyond the payload's capacity or the chunk's bytes
 };
 
 // Checks `bytes` bytes at `data` as a payload of `expected` kind.

@@ -8,8 +8,8 @@
 namespace afhub {
 
 struct WorldState {
-  PayloadHeader header;  // sim_step and sim_time_s are the world's clock
-  double wall_time_s{0.0};   // since the simulation started
+  PayloadHeader header;          // sim_step and sim_time_s are the world's clock
+  double wall_time_s{0.0};       // since the simulation started
   double achieved_rate_hz{0.0};  // steps per wall-clock second, over the last second
   std::uint32_t body_count{0};
   std::uint8_t paused{0};
