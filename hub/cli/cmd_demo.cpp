@@ -13,8 +13,8 @@
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/error.hpp"
 #include "afhub/hub/hub_presence.hpp"
+#include "afhub/hub/stop_signal.hpp"
 #include "commands.hpp"
-#include "stop_signal.hpp"
 
 namespace afhub::cli {
 namespace {

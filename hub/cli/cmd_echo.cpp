@@ -5,9 +5,9 @@
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/error.hpp"
 #include "afhub/hub/hub_presence.hpp"
+#include "afhub/hub/stop_signal.hpp"
 #include "commands.hpp"
 #include "format.hpp"
-#include "stop_signal.hpp"
 
 namespace afhub::cli {
 namespace {

@@ -57,11 +57,7 @@ RawWriter::~RawWriter() = default;
 
 void* RawWriter::loan(std::uint32_t bytes) noexcept {
   auto result = port_->publisher.loan(bytes, alignof(PayloadHeader));
-  if (result.has_error()) {
-    ++failed_loans_;
-    return nullptr;
-  }
-  return result.value();
+  return result.has_error() ? nullptr : result.value();
 }
 
 void RawWriter::publish(void* payload) noexcept {
@@ -72,10 +68,6 @@ void RawWriter::publish(void* payload) noexcept {
   header->sequence = ++sequence_;
   header->publish_stamp_ns = monotonic_now_ns();
   port_->publisher.publish(payload);
-}
-
-void RawWriter::release(void* payload) noexcept {
-  port_->publisher.release(payload);
 }
 
 struct RawLatestReader::Port {
@@ -116,14 +108,9 @@ const void* RawLatestReader::latest() noexcept {
     }
     if (held_) port_->subscriber.release(held_);
     held_ = payload;
-    held_bytes_ = bytes;
     updated_ = true;
   }
   return held_;
-}
-
-bool RawLatestReader::has_writers() const noexcept {
-  return port_->subscriber.getSubscriptionState() == iox::SubscribeState::SUBSCRIBED;
 }
 
 void RawLatestReader::report_refusal(const void* payload, PayloadError error) noexcept {

@@ -7,7 +7,6 @@
 #include <sys/file.h>
 #include <unistd.h>
 
-#include <atomic>
 #include <chrono>
 #include <cstdio>
 #include <cstring>
@@ -15,6 +14,7 @@
 #include <thread>
 
 #include "afhub/hub/hub_presence.hpp"
+#include "afhub/hub/stop_signal.hpp"
 #include "catalog_builder.hpp"
 #include "health_reporter.hpp"
 #include "iceoryx_hoofs/posix_wrapper/posix_access_rights.hpp"
@@ -25,20 +25,6 @@
 
 namespace afhub {
 namespace {
-
-std::atomic<bool> g_stop_requested{false};
-
-extern "C" void request_stop(int) {
-  g_stop_requested = true;
-}
-
-void install_stop_handlers() {
-  struct sigaction action {};
-  action.sa_handler = request_stop;
-  sigemptyset(&action.sa_mask);
-  sigaction(SIGINT, &action, nullptr);
-  sigaction(SIGTERM, &action, nullptr);
-}
 
 iox::RouDiConfig_t roudi_config(double& total_mib) {
   iox::mepoo::MePooConfig mempools;
@@ -80,7 +66,7 @@ int take_hub_lock() {
 void serve_until_stopped() {
   CatalogBuilder catalog;
   HealthReporter health;
-  while (!g_stop_requested) {
+  while (!stop_requested()) {
     auto now = std::chrono::steady_clock::now();
     catalog.poll(now);
     health.poll(now, catalog.body_count());
@@ -106,7 +92,7 @@ int run_hub_daemon() {
                  "iceoryx allows one per machine. Stop it, then run `afhub hub` again.\n");
     return 1;
   }
-  install_stop_handlers();
+  install_stop_signal_handlers();
   quiet_iceoryx_logs();
 
   double pool_mib = 0.0;

@@ -30,19 +30,14 @@ class RawWriter {
   // Stamps the header (layout, kind, pid, sequence, monotonic time) and publishes.
   // The caller sets header.sim_step and header.sim_time_s.
   void publish(void* payload) noexcept;
-  // Gives a loaned chunk back unpublished.
-  void release(void* payload) noexcept;
 
   const ChannelId& channel() const { return channel_; }
-  std::uint64_t published_count() const { return sequence_; }
-  std::uint64_t failed_loans() const { return failed_loans_; }
 
  private:
   struct Port;
   ChannelId channel_;
   PayloadKind kind_;
   std::uint64_t sequence_ = 0;
-  std::uint64_t failed_loans_ = 0;
   std::unique_ptr<Port> port_;
 };
 
@@ -58,11 +53,7 @@ class RawLatestReader {
   const void* latest() noexcept;
   // Whether the last latest() call found a sample newer than the one before.
   bool updated() const { return updated_; }
-  // Bytes of the payload latest() returned.
-  std::uint32_t latest_bytes() const { return held_bytes_; }
   std::uint64_t refused_count() const { return refused_; }
-  // Whether any writer is connected to this channel.
-  bool has_writers() const noexcept;
   const ChannelId& channel() const { return channel_; }
 
  private:
@@ -71,7 +62,6 @@ class RawLatestReader {
   ChannelId channel_;
   PayloadKind kind_;
   const void* held_ = nullptr;
-  std::uint32_t held_bytes_ = 0;
   bool updated_ = false;
   std::uint64_t refused_ = 0;
   std::unique_ptr<Port> port_;
@@ -80,7 +70,7 @@ class RawLatestReader {
 template <class T>
 class Writer {
  public:
-  explicit Writer(const ChannelId& channel) : raw_(channel, PayloadTraits<T>::kKind) {}
+  explicit Writer(const ChannelId& channel) : raw_(channel, T::kKind) {}
   // A zero-initialised payload in shared memory, or nullptr when memory is exhausted.
   T* loan() noexcept {
     void* chunk = raw_.loan(sizeof(T));
@@ -96,7 +86,7 @@ class Writer {
 template <class T>
 class LatestReader {
  public:
-  explicit LatestReader(const ChannelId& channel) : raw_(channel, PayloadTraits<T>::kKind) {}
+  explicit LatestReader(const ChannelId& channel) : raw_(channel, T::kKind) {}
   const T* latest() noexcept { return static_cast<const T*>(raw_.latest()); }
   bool updated() const { return raw_.updated(); }
   RawLatestReader& raw() { return raw_; }

@@ -17,6 +17,7 @@ enum class CartesianCommandType : std::uint8_t { kForce = 0, kPosition = 1, kVel
 enum class JointCommandType : std::uint8_t { kEffort = 0, kPosition = 1, kVelocity = 2 };
 
 struct BodyCommand {
+  static constexpr PayloadKind kKind = PayloadKind::kBodyCommand;
   PayloadHeader header;
   CartesianCommandType cartesian_type{CartesianCommandType::kForce};
   std::array<std::uint8_t, 3> reserved{};

@@ -12,6 +12,7 @@
 namespace afhub {
 
 struct BodyState {
+  static constexpr PayloadKind kKind = PayloadKind::kBodyState;
   PayloadHeader header;
   Pose pose;  // the body's mesh frame in the world
   Twist twist;

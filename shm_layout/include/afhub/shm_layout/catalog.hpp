@@ -23,7 +23,8 @@ struct BodyInfo {
 };
 
 struct BodyList {
-  PayloadHeader header;  // kind: kBodyDirectory or kCatalog
+  // No kKind: a BodyList is a kBodyDirectory or a kCatalog, named by its channel.
+  PayloadHeader header;
   std::uint32_t body_count{0};
   std::uint32_t reserved{0};
   std::array<BodyInfo, kMaxBodies> bodies{};

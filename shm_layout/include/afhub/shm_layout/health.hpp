@@ -24,6 +24,7 @@ struct MempoolUsage {
 };
 
 struct Health {
+  static constexpr PayloadKind kKind = PayloadKind::kHealth;
   PayloadHeader header;
   double hub_uptime_s{0.0};
   std::uint32_t process_count{0};

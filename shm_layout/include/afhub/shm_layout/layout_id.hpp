@@ -120,29 +120,4 @@ static_assert(layout_detail::is_shm_payload<WorldCommand>);
 static_assert(layout_detail::is_shm_payload<BodyList>);
 static_assert(layout_detail::is_shm_payload<Health>);
 
-// Which kind each payload type carries in its header.
-template <class T>
-struct PayloadTraits;
-template <>
-struct PayloadTraits<BodyState> {
-  static constexpr PayloadKind kKind = PayloadKind::kBodyState;
-};
-template <>
-struct PayloadTraits<BodyCommand> {
-  static constexpr PayloadKind kKind = PayloadKind::kBodyCommand;
-};
-template <>
-struct PayloadTraits<WorldState> {
-  static constexpr PayloadKind kKind = PayloadKind::kWorldState;
-};
-template <>
-struct PayloadTraits<WorldCommand> {
-  static constexpr PayloadKind kKind = PayloadKind::kWorldCommand;
-};
-template <>
-struct PayloadTraits<Health> {
-  static constexpr PayloadKind kKind = PayloadKind::kHealth;
-};
-// BodyList carries kBodyDirectory or kCatalog: its readers name the kind.
-
 }  // namespace afhub

@@ -8,6 +8,7 @@
 namespace afhub {
 
 struct WorldState {
+  static constexpr PayloadKind kKind = PayloadKind::kWorldState;
   PayloadHeader header;          // sim_step and sim_time_s are the world's clock
   double wall_time_s{0.0};       // since the simulation started
   double achieved_rate_hz{0.0};  // steps per wall-clock second, over the last second
@@ -26,6 +27,7 @@ enum class WorldAction : std::uint32_t {
 
 // Each command is acted on once, identified by its header sequence number.
 struct WorldCommand {
+  static constexpr PayloadKind kKind = PayloadKind::kWorldCommand;
   PayloadHeader header;
   WorldAction action{WorldAction::kNone};
   std::uint32_t step_count{1};

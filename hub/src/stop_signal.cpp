@@ -1,5 +1,5 @@
 // Stop flag and absolute-deadline sleeping (see stop_signal.hpp).
-#include "stop_signal.hpp"
+#include "afhub/hub/stop_signal.hpp"
 
 #include <signal.h>
 #include <time.h>
@@ -7,7 +7,7 @@
 #include <atomic>
 #include <cerrno>
 
-namespace afhub::cli {
+namespace afhub {
 namespace {
 std::atomic<bool> g_stop{false};
 extern "C" void on_stop_signal(int) {
@@ -40,4 +40,4 @@ void sleep_until_ns(std::int64_t deadline_ns) {
   }
 }
 
-}  // namespace afhub::cli
+}  // namespace afhub

@@ -1,10 +1,10 @@
-// Ctrl-C and SIGTERM for long-running commands: a flag the loops poll, and a
+// SIGINT and SIGTERM for long-running processes: a flag their loops poll, and a
 // deadline-paced sleep that wakes early when asked to stop.
 #pragma once
 
 #include <cstdint>
 
-namespace afhub::cli {
+namespace afhub {
 
 void install_stop_signal_handlers();
 bool stop_requested();
@@ -13,4 +13,4 @@ bool stop_requested();
 void sleep_until_ns(std::int64_t deadline_ns);
 std::int64_t monotonic_ns();
 
-}  // namespace afhub::cli
+}  // namespace afhub
