@@ -11,7 +11,7 @@ cd "$(dirname "$0")"
 PACKAGES=(
   g++ cmake ninja-build pkg-config
   iceoryx libiceoryx-posh-dev libiceoryx-hoofs-dev libacl1-dev
-  libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev clang-format
+  libcli11-dev libyaml-cpp-dev libgtest-dev libgmock-dev libbenchmark-dev clang-format
 )
 
 install_packages() {
@@ -53,7 +53,7 @@ case "${1:-}" in
   test)
     install_packages
     # The code follows .clang-format.
-    find shm_layout hub tests -name '*.[ch]pp' -print0 | xargs -0 clang-format --dry-run --Werror
+    find shm_layout hub physics tests -name '*.[ch]pp' -print0 | xargs -0 clang-format --dry-run --Werror
     build build/release -DCMAKE_BUILD_TYPE=RelWithDebInfo
     run_tests build/release
     build build/sanitize -DCMAKE_BUILD_TYPE=Debug -DAFHUB_SANITIZE=ON

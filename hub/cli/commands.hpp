@@ -17,5 +17,6 @@ void register_cmd(CLI::App& app, Runner& selected);
 void register_status(CLI::App& app, Runner& selected);
 void register_synth(CLI::App& app, Runner& selected);
 void register_demo(CLI::App& app, Runner& selected);
+void register_check(CLI::App& app, Runner& selected);
 
 }  // namespace afhub::cli

@@ -39,13 +39,25 @@ void expect_no_hub() {
 }
 
 TEST(Cli, EveryCommandHasHelp) {
-  for (const char* command : {"hub", "ls", "echo", "cmd", "status", "synth", "demo"}) {
+  for (const char* command : {"hub", "ls", "echo", "cmd", "status", "synth", "demo", "check"}) {
     RunResult help = run_afhub({command, "--help"});
     EXPECT_EQ(help.exit_code, 0) << command;
     EXPECT_TRUE(contains(help.out, "Usage")) << command << ": " << help.out;
   }
   RunResult bad = run_afhub({"frobnicate"});
   EXPECT_NE(bad.exit_code, 0);
+}
+
+TEST(Cli, CheckReportsAModelOrWhereItIsWrong) {
+  const std::string models = AFHUB_SHARED_MODELS "/descriptions/multi-bodies/";
+  RunResult four_bar = run_afhub({"check", models + "puzzles/parallel_structure.yaml"});
+  EXPECT_EQ(four_bar.exit_code, 0) << four_bar.err;
+  EXPECT_TRUE(contains(four_bar.out, "bodies: 5 (total mass 4.000 kg)")) << four_bar.out;
+  EXPECT_TRUE(contains(four_bar.out, "closed loops: 1")) << four_bar.out;
+  EXPECT_TRUE(contains(four_bar.err, "parallel_structure.yaml:131:3: warning:")) << four_bar.err;
+  RunResult missing = run_afhub({"check", "/nonexistent/model.yaml"});
+  EXPECT_EQ(missing.exit_code, 1);
+  EXPECT_TRUE(contains(missing.err, "/nonexistent/model.yaml: error: no such file")) << missing.err;
 }
 
 TEST(Cli, LookingToolsWithoutAHubFailFastAndSayHowToStartOne) {

@@ -1,0 +1,58 @@
+// Lineage (see lineage.hpp). A joint is below a body when the body reaches the
+// joint's parent going from parent to child. Sorting by joint index keeps the
+// file's order, and a set keeps each joint once inside closed loops (upstream
+// AMBF dropped loop joints and scrambled the order: issues 38, 107, 204).
+#include "afhub/physics/lineage.hpp"
+
+#include <algorithm>
+#include <numeric>
+
+namespace afhub::physics {
+
+void compute_lineage(Model& model) {
+  const int body_count = static_cast<int>(model.bodies.size());
+  std::vector<std::vector<int>> joints_from(body_count);
+  for (int j = 0; j < static_cast<int>(model.joints.size()); ++j)
+    joints_from[model.joints[j].parent].push_back(j);
+
+  model.descendant_joints.assign(body_count, {});
+  for (int body = 0; body < body_count; ++body) {
+    std::vector<bool> body_seen(body_count, false), joint_seen(model.joints.size(), false);
+    std::vector<int> stack = {body};
+    body_seen[body] = true;
+    while (!stack.empty()) {
+      int current = stack.back();
+      stack.pop_back();
+      for (int j : joints_from[current]) {
+        if (joint_seen[j]) continue;
+        joint_seen[j] = true;
+        model.descendant_joints[body].push_back(j);
+        int child = model.joints[j].child;
+        if (!body_seen[child]) {
+          body_seen[child] = true;
+          stack.push_back(child);
+        }
+      }
+    }
+    std::sort(model.descendant_joints[body].begin(), model.descendant_joints[body].end());
+  }
+
+  // Loops = edges - vertices + components, over bodies connected by joints.
+  std::vector<int> group(body_count);
+  std::iota(group.begin(), group.end(), 0);
+  auto root = [&](int b) {
+    while (group[b] != b) b = group[b] = group[group[b]];
+    return b;
+  };
+  int loops = 0;
+  for (const JointSpec& joint : model.joints) {
+    int a = root(joint.parent), b = root(joint.child);
+    if (a == b)
+      ++loops;
+    else
+      group[a] = b;
+  }
+  model.closed_loop_count = loops;
+}
+
+}  // namespace afhub::physics

@@ -1,0 +1,36 @@
+// Small helpers of the model (see model.hpp).
+#include "afhub/physics/model.hpp"
+
+namespace afhub::physics {
+
+std::string SourceLocation::str() const {
+  return file + ":" + std::to_string(line) + ":" + std::to_string(column);
+}
+
+const char* joint_type_name(JointType type) {
+  switch (type) {
+    case JointType::kRevolute:
+      return "revolute";
+    case JointType::kContinuous:
+      return "continuous";
+    case JointType::kPrismatic:
+      return "prismatic";
+    case JointType::kFixed:
+      return "fixed";
+    case JointType::kP2P:
+      return "p2p";
+    case JointType::kLinearSpring:
+      return "linear spring";
+    case JointType::kTorsionSpring:
+      return "torsion spring";
+    case JointType::kConeTwist:
+      return "cone twist";
+    case JointType::kSixDof:
+      return "six dof";
+    case JointType::kSixDofSpring:
+      return "six dof spring";
+  }
+  return "unknown";
+}
+
+}  // namespace afhub::physics

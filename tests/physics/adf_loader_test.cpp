@@ -1,0 +1,181 @@
+// The ADF loader on the real AMBF models in ../shared/ambf_models, and on broken
+// files: every problem is reported as "file:line:col: error: ...".
+#include "afhub/physics/adf_loader.hpp"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "afhub/hub/error.hpp"
+
+namespace afhub::physics {
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::string kModels = AFHUB_SHARED_MODELS "/descriptions/multi-bodies/";
+
+std::vector<std::string> joint_names_below(const Model& model, const std::string& channel) {
+  for (std::size_t b = 0; b < model.bodies.size(); ++b) {
+    if (model.bodies[b].channel != channel) continue;
+    std::vector<std::string> names;
+    for (int j : model.descendant_joints[b]) names.push_back(model.joints[j].name);
+    return names;
+  }
+  return {};
+}
+
+TEST(AdfLoader, LoadsTheKuka) {
+  Model model = load_adf_files({kModels + "robots/blender-kuka.yaml"});
+  ASSERT_EQ(model.bodies.size(), 8u);
+  ASSERT_EQ(model.joints.size(), 7u);
+  EXPECT_EQ(model.bodies[0].channel, "ambf/env/base");
+  EXPECT_EQ(model.bodies[0].mass_kg, 0.0);
+  EXPECT_TRUE(fs::exists(model.bodies[3].visual_mesh)) << model.bodies[3].visual_mesh;
+  EXPECT_NE(model.bodies[3].collision_mesh.find("low_res/link3.STL"), std::string::npos);
+  EXPECT_DOUBLE_EQ(model.bodies[1].location.position_m.z, -1.197);
+  EXPECT_EQ(model.joints[0].type, JointType::kRevolute);
+  EXPECT_DOUBLE_EQ(*model.joints[0].limit_high, 2.094);
+  EXPECT_DOUBLE_EQ(model.joints[0].controller->p, 1000.0);
+  EXPECT_EQ(joint_names_below(model, "ambf/env/base"),
+            (std::vector<std::string>{"base-link1", "link1-link2", "link2-link3", "link3-link4",
+                                      "link4-link5", "link5-link6", "link6-link7"}));
+  EXPECT_EQ(model.closed_loop_count, 0);
+  EXPECT_TRUE(model.warnings.empty());
+}
+
+TEST(AdfLoader, FourBarKeepsItsLoopJointOnceInFileOrder) {
+  Model model = load_adf_files({kModels + "puzzles/parallel_structure.yaml"});
+  EXPECT_EQ(model.closed_loop_count, 1);
+  EXPECT_EQ(joint_names_below(model, "ambf/env/l1"),
+            (std::vector<std::string>{"l1-l2", "l2-l3", "l3-l4", "l1-l4"}));
+  EXPECT_EQ(model.joints[4].type, JointType::kContinuous);
+  ASSERT_EQ(model.warnings.size(), 1u);  // an unknown key 'redundant', located
+  EXPECT_NE(
+      model.warnings[0].find("parallel_structure.yaml:131:3: warning: unknown key 'redundant'"),
+      std::string::npos)
+      << model.warnings[0];
+}
+
+// Writes `text` to a fresh file and loads it; returns the error message ("" if none).
+class BrokenFiles : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("afhub_adf_" + std::to_string(::getpid()));
+    fs::create_directories(dir_);
+    std::ofstream(dir_ / "box.STL") << "solid box\nendsolid box\n";
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  std::string error_of(const std::string& text, const std::string& name = "model.yaml") {
+    std::ofstream(dir_ / name) << text;
+    try {
+      load_adf_files({(dir_ / name).string()});
+    } catch (const Error& error) {
+      return error.what();
+    }
+    return "";
+  }
+  fs::path dir_;
+};
+
+const char* kGoodBody = "BODY a:\n  name: a\n  mass: 1.0\n";
+
+TEST_F(BrokenFiles, EachProblemIsLocatedAndExplained) {
+  struct Case {
+    std::string text, expected;
+  };
+  const std::vector<Case> cases = {
+      {"", "model.yaml:1:1: error: the file is empty"},
+      {"bodies: [BODY a\n", "model.yaml:2:1: error: YAML syntax"},
+      {"- a\n- b\n", "error: an ADF file is a map"},
+      {"bodies: BODY a\n", "model.yaml:1:9: error: 'bodies' must be a list"},
+      {"bodies: [BODY a]\n",
+       "model.yaml:1:10: error: 'BODY a' is listed in 'bodies' but the file has no"},
+      {"bodies: [BODY a]\nBODY a:\n  mass: 1.0\n", "model.yaml:3:3: error: missing 'name'"},
+      {"bodies: [BODY a]\nBODY a:\n  name: a\n", "model.yaml:3:3: error: 'BODY a' has no 'mass'"},
+      {"bodies: [BODY a]\nBODY a:\n  name: a\n  mass: heavy\n",
+       "model.yaml:4:9: error: 'mass' must be a number, got 'heavy'"},
+      {"bodies: [BODY a]\nBODY a:\n  name: a\n  mass: -2\n",
+       "model.yaml:4:9: error: 'mass' must not be negative"},
+      {"bodies: [BODY a]\nBODY a:\n  name: a\n  mass: .nan\n",
+       "model.yaml:4:9: error: 'mass' must be finite"},
+      {"bodies: [BODY a]\nBODY a:\n  name: a\n  mass: {x: 1}\n",
+       "'mass' must be a number, not a map"},
+      {"bodies: [BODY a]\nBODY a:\n  name: a\n  mass: 1\n  scale: 0\n",
+       "model.yaml:5:10: error: 'scale' must be positive"},
+      {"bodies: [BODY a]\nBODY a:\n  name: a\n  mass: 1\n  mesh: nothere.STL\n",
+       "model.yaml:5:9: error: mesh 'nothere.STL' not found; searched:"},
+      {"bodies: [BODY a]\nBODY a:\n  name: a\n  mass: 1\n  shape: blob\n  geometry: {}\n",
+       "model.yaml:5:10: error: unknown shape 'blob'"},
+      {"bodies: [BODY a]\nBODY a:\n  name: a\n  mass: 1\n  location: {position: {x: 1, y: 2}}\n",
+       "error: 'location.position' is missing 'z'"},
+      {"bodies: [BODY a]\nBODY a:\n  name: a\n  mass: 1\n  collision groups: [1000]\n",
+       "model.yaml:5:22: error: collision groups are integers from 0 to 999"},
+      {"bodies: [BODY a]\nBODY a:\n  name: a\n  mass: 1\n  inertia: {ix: 1, iy: -1, iz: 1}\n",
+       "error: 'inertia' components must not be negative"},
+      {std::string("bodies: [BODY a]\nBODY a:\n  name: ") + std::string(101, 'n') + "\n  mass: 1\n",
+       "characters; iceoryx allows at most 100"},
+  };
+  for (const Case& c : cases) {
+    std::string message = error_of(c.text);
+    EXPECT_NE(message.find(c.expected), std::string::npos) << "file:\n"
+                                                           << c.text << "\nmessage: " << message;
+  }
+}
+
+TEST_F(BrokenFiles, JointProblemsAreLocatedAndExplained) {
+  const std::string bodies = std::string("bodies: [BODY a, BODY b]\njoints: [JOINT j]\n") +
+                             kGoodBody + "BODY b:\n  name: b\n  mass: 1.0\n";
+  const std::string joint_head = "JOINT j:\n  name: j\n  parent: BODY a\n";
+  const std::string pivots =
+      "  parent pivot: {x: 0, y: 0, z: 0}\n  child pivot: {x: 0, y: 0, z: 0}\n"
+      "  parent axis: {x: 0, y: 0, z: 1}\n";
+  struct Case {
+    std::string joint, expected;
+  };
+  const std::vector<Case> cases = {
+      {joint_head + "  child: BODY c\n" + pivots +
+           "  child axis: {x: 0, y: 0, z: 1}\n  type: revolute\n",
+       "model.yaml:12:10: error: child 'BODY c' of JOINT j is not a loaded body"},
+      {joint_head + "  child: BODY b\n" + pivots +
+           "  child axis: {x: 0, y: 0, z: 0}\n  type: revolute\n",
+       "model.yaml:16:15: error: 'child axis' has zero length"},
+      {joint_head + "  child: BODY b\n" + pivots +
+           "  child axis: {x: 0, y: 0, z: 1}\n  type: wobbly\n",
+       "model.yaml:17:9: error: unknown joint type 'wobbly'"},
+      {joint_head + "  child: BODY b\n" + pivots + "  type: revolute\n",
+       "error: missing 'child axis'"},
+      {joint_head + "  child: BODY a\n" + pivots +
+           "  child axis: {x: 0, y: 0, z: 1}\n  type: revolute\n",
+       "joins 'BODY a' to itself"},
+      {joint_head + "  child: BODY b\n" + pivots +
+           "  child axis: {x: 0, y: 0, z: 1}\n  type: revolute\n  joint limits: {low: 1, high: "
+           "-1}\n",
+       "model.yaml:18:17: error: 'joint limits' has low 1 above high -1"},
+  };
+  for (const Case& c : cases) {
+    std::string message = error_of(bodies + c.joint);
+    EXPECT_NE(message.find(c.expected), std::string::npos) << "joint:\n"
+                                                           << c.joint << "\nmessage: " << message;
+  }
+}
+
+TEST_F(BrokenFiles, ModelSplitOverTwoFilesLoadsAndUnlistedBlocksAreSkipped) {
+  std::ofstream(dir_ / "bodies.yaml")
+      << "bodies: [BODY a, BODY b]\n"
+      << kGoodBody << "BODY b:\n  name: b\n  mass: 2.0\nBODY c:\n  name: c\n  mass: oops\n";
+  std::ofstream(dir_ / "joints.yaml")
+      << "joints: [JOINT j]\nJOINT j:\n  name: j\n  parent: BODY a\n  child: BODY b\n"
+         "  parent pivot: {x: 0, y: 0, z: 0}\n  child pivot: {x: 0, y: 0, z: 0}\n"
+         "  parent axis: {x: 1, y: 0, z: 0}\n  child axis: {x: 1, y: 0, z: 0}\n  type: prismatic\n";
+  Model model = load_adf_files({(dir_ / "bodies.yaml").string(), (dir_ / "joints.yaml").string()});
+  EXPECT_EQ(model.bodies.size(), 2u);  // BODY c is not listed: not loaded, not checked
+  ASSERT_EQ(model.joints.size(), 1u);
+  EXPECT_EQ(model.joints[0].type, JointType::kPrismatic);
+  EXPECT_EQ(model.bodies[model.joints[0].child].name, "b");
+}
+
+}  // namespace
+}  // namespace afhub::physics
