@@ -76,7 +76,6 @@ int run_demo(const DemoOptions& options) {
   const bool tty = isatty(STDOUT_FILENO);
   const auto refresh = std::chrono::milliseconds(tty ? 100 : 1000);
   const auto start = std::chrono::steady_clock::now();
-  int exit_code = 0;
   while (!stop_requested()) {
     if (options.seconds > 0 &&
         std::chrono::steady_clock::now() - start > std::chrono::duration<double>(options.seconds))
@@ -92,7 +91,7 @@ int run_demo(const DemoOptions& options) {
   kill(synth, SIGTERM);
   waitpid(synth, nullptr, 0);
   std::fprintf(stderr, "afhub demo: done. The hub keeps running; stop it with `afhub hub stop`.\n");
-  return exit_code;
+  return 0;
 }
 
 }  // namespace

@@ -82,6 +82,21 @@ class FileReader {
     return node.Scalar();
   }
 
+  void require_map(const YAML::Node& node, const std::string& what,
+                   const std::string& example) const {
+    if (!node.IsMap())
+      fail(at(node), "'" + what + "' must be a map such as " + example + ", not " + kind_of(node));
+  }
+
+  // Sets `out` from block[key] when the key is given; `what` names it in messages.
+  void optional_non_negative(const YAML::Node& block, const char* key, double& out,
+                             const std::string& what) const {
+    if (YAML::Node value = block[key]) out = non_negative(value, what);
+  }
+  void optional_flag(const YAML::Node& block, const char* key, bool& out) const {
+    if (YAML::Node value = block[key]) out = flag(value, key);
+  }
+
   const YAML::Node require(const YAML::Node& block, const char* key,
                            const SourceLocation& where) const {
     YAML::Node value = block[key];
@@ -301,23 +316,19 @@ BodySpec read_body(const FileReader& file, const YAML::Node& block, const std::s
     body.scale = file.number(scale, "scale");
     if (body.scale <= 0) fail(file.at(scale), "'scale' must be positive, got " + scale.Scalar());
   }
-  if (YAML::Node passive = block["passive"]) body.passive = file.flag(passive, "passive");
+  file.optional_flag(block, "passive", body.passive);
   if (YAML::Node friction = block["friction"]) {
-    if (YAML::Node s = friction["static"])
-      body.static_friction = file.non_negative(s, "friction.static");
-    if (YAML::Node r = friction["rolling"])
-      body.rolling_friction = file.non_negative(r, "friction.rolling");
+    file.require_map(friction, "friction", "{static: 0.5, rolling: 0.01}");
+    file.optional_non_negative(friction, "static", body.static_friction, "friction.static");
+    file.optional_non_negative(friction, "rolling", body.rolling_friction, "friction.rolling");
   }
   if (YAML::Node damping = block["damping"]) {
-    if (YAML::Node l = damping["linear"])
-      body.linear_damping = file.non_negative(l, "damping.linear");
-    if (YAML::Node a = damping["angular"])
-      body.angular_damping = file.non_negative(a, "damping.angular");
+    file.require_map(damping, "damping", "{linear: 0.04, angular: 0.1}");
+    file.optional_non_negative(damping, "linear", body.linear_damping, "damping.linear");
+    file.optional_non_negative(damping, "angular", body.angular_damping, "damping.angular");
   }
-  if (YAML::Node restitution = block["restitution"])
-    body.restitution = file.non_negative(restitution, "restitution");
-  if (YAML::Node margin = block["collision margin"])
-    body.collision_margin = file.non_negative(margin, "collision margin");
+  file.optional_non_negative(block, "restitution", body.restitution, "restitution");
+  file.optional_non_negative(block, "collision margin", body.collision_margin, "collision margin");
   if (YAML::Node groups = block["collision groups"]) {
     if (!groups.IsSequence())
       fail(file.at(groups), "'collision groups' must be a list of integers 0..999");
@@ -435,14 +446,12 @@ PendingJoint read_joint(const FileReader& file, const YAML::Node& block,
     }
   }
   if (YAML::Node offset = block["offset"]) joint.offset_rad = file.number(offset, "offset");
-  if (YAML::Node damping = block["damping"]) joint.damping = file.non_negative(damping, "damping");
-  if (YAML::Node stiffness = block["stiffness"])
-    joint.stiffness = file.non_negative(stiffness, "stiffness");
-  if (YAML::Node impulse = block["max motor impulse"])
-    joint.max_motor_impulse = file.non_negative(impulse, "max motor impulse");
-  if (YAML::Node feedback = block["enable feedback"])
-    joint.enable_feedback = file.flag(feedback, "enable feedback");
-  if (YAML::Node passive = block["passive"]) joint.passive = file.flag(passive, "passive");
+  file.optional_non_negative(block, "damping", joint.damping, "damping");
+  file.optional_non_negative(block, "stiffness", joint.stiffness, "stiffness");
+  file.optional_non_negative(block, "max motor impulse", joint.max_motor_impulse,
+                             "max motor impulse");
+  file.optional_flag(block, "enable feedback", joint.enable_feedback);
+  file.optional_flag(block, "passive", joint.passive);
   if (YAML::Node controller = block["controller"]) {
     if (!controller.IsMap()) fail(file.at(controller), "'controller' must be a map {P, I, D}");
     Pid pid;
@@ -470,6 +479,37 @@ YAML::Node parse_file(const std::string& path) {
   return root;
 }
 
+// Reads one file's header, bodies and (still unresolved) joints.
+void load_file(const std::string& path, const YAML::Node& root, Model& model,
+               std::vector<PendingJoint>& pending, std::map<std::string, int>& body_by_identifier) {
+  FileReader file(path, model);
+
+  FileContext context;
+  context.dir = fs::path(path).parent_path();
+  context.name_space = kDefaultNamespace;
+  if (YAML::Node ns = root["namespace"])
+    context.name_space = resolve_namespace(kDefaultNamespace, file.text(ns, "namespace"));
+  context.high_res_folder = context.low_res_folder = context.dir.string();
+  if (YAML::Node h = root["high resolution path"])
+    context.high_res_folder = mesh_folder(file, h, context.dir);
+  if (YAML::Node l = root["low resolution path"])
+    context.low_res_folder = mesh_folder(file, l, context.dir);
+  if (YAML::Node gravity = root["gravity"]) context.gravity = file.vec3(gravity, "gravity");
+  if (!root["bodies"] && !root["joints"])
+    model.warnings.push_back(
+        path + ":1:1: warning: no 'bodies' or 'joints' list: nothing is loaded from this file");
+
+  for (const auto& [identifier, listed] : header_list(file, root, "bodies")) {
+    if (body_by_identifier.count(identifier))
+      fail(file.at(listed), "'" + identifier + "' is defined twice (first at " +
+                                model.bodies[body_by_identifier[identifier]].where.str() + ")");
+    body_by_identifier[identifier] = static_cast<int>(model.bodies.size());
+    model.bodies.push_back(read_body(file, root[identifier], identifier, context));
+  }
+  for (const auto& [identifier, listed] : header_list(file, root, "joints"))
+    pending.push_back(read_joint(file, root[identifier], identifier, context));
+}
+
 }  // namespace
 
 Model load_adf_files(const std::vector<std::string>& paths) {
@@ -478,31 +518,13 @@ Model load_adf_files(const std::vector<std::string>& paths) {
   std::map<std::string, int> body_by_identifier;
   for (const std::string& path : paths) {
     YAML::Node root = parse_file(path);
-    FileReader file(path, model);
-    FileContext context;
-    context.dir = fs::path(path).parent_path();
-    context.name_space = kDefaultNamespace;
-    if (YAML::Node ns = root["namespace"])
-      context.name_space = resolve_namespace(kDefaultNamespace, file.text(ns, "namespace"));
-    context.high_res_folder = context.low_res_folder = context.dir.string();
-    if (YAML::Node h = root["high resolution path"])
-      context.high_res_folder = mesh_folder(file, h, context.dir);
-    if (YAML::Node l = root["low resolution path"])
-      context.low_res_folder = mesh_folder(file, l, context.dir);
-    if (YAML::Node gravity = root["gravity"]) context.gravity = file.vec3(gravity, "gravity");
-    if (!root["bodies"] && !root["joints"])
-      model.warnings.push_back(
-          path + ":1:1: warning: no 'bodies' or 'joints' list: nothing is loaded from this file");
-
-    for (const auto& [identifier, listed] : header_list(file, root, "bodies")) {
-      if (body_by_identifier.count(identifier))
-        fail(file.at(listed), "'" + identifier + "' is defined twice (first at " +
-                                  model.bodies[body_by_identifier[identifier]].where.str() + ")");
-      body_by_identifier[identifier] = static_cast<int>(model.bodies.size());
-      model.bodies.push_back(read_body(file, root[identifier], identifier, context));
+    try {
+      load_file(path, root, model, pending, body_by_identifier);
+    } catch (const YAML::Exception& error) {
+      // A key looked up inside a scalar or a list, for instance.
+      throw Error(path + ":" + std::to_string(error.mark.line + 1) + ":" +
+                  std::to_string(error.mark.column + 1) + ": error: " + error.msg);
     }
-    for (const auto& [identifier, listed] : header_list(file, root, "joints"))
-      pending.push_back(read_joint(file, root[identifier], identifier, context));
   }
 
   for (PendingJoint& joint : pending) {

@@ -115,6 +115,8 @@ TEST_F(BrokenFiles, EachProblemIsLocatedAndExplained) {
        "model.yaml:5:22: error: collision groups are integers from 0 to 999"},
       {"bodies: [BODY a]\nBODY a:\n  name: a\n  mass: 1\n  inertia: {ix: 1, iy: -1, iz: 1}\n",
        "error: 'inertia' components must not be negative"},
+      {"bodies: [BODY a]\nBODY a:\n  name: a\n  mass: 1\n  friction: 3\n",
+       "model.yaml:5:13: error: 'friction' must be a map such as {static: 0.5, rolling: 0.01}"},
       {std::string("bodies: [BODY a]\nBODY a:\n  name: ") + std::string(101, 'n') + "\n  mass: 1\n",
        "characters; iceoryx allows at most 100"},
   };
