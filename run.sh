@@ -11,7 +11,8 @@ cd "$(dirname "$0")"
 PACKAGES=(
   g++ cmake ninja-build pkg-config
   iceoryx libiceoryx-posh-dev libiceoryx-hoofs-dev libacl1-dev
-  libcli11-dev libyaml-cpp-dev libgtest-dev libgmock-dev libbenchmark-dev clang-format
+  libcli11-dev libyaml-cpp-dev libbullet-dev libassimp-dev
+  libgtest-dev libgmock-dev libbenchmark-dev clang-format
 )
 
 install_packages() {

@@ -4,8 +4,8 @@
 
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/hub_presence.hpp"
+#include "afhub/hub/json_writer.hpp"
 #include "commands.hpp"
-#include "json_writer.hpp"
 
 namespace afhub::cli {
 namespace {

@@ -6,9 +6,9 @@
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/error.hpp"
 #include "afhub/hub/hub_presence.hpp"
+#include "afhub/hub/json_writer.hpp"
 #include "afhub/shm_layout/health.hpp"
 #include "commands.hpp"
-#include "json_writer.hpp"
 
 namespace afhub::cli {
 namespace {

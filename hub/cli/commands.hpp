@@ -18,5 +18,6 @@ void register_status(CLI::App& app, Runner& selected);
 void register_synth(CLI::App& app, Runner& selected);
 void register_demo(CLI::App& app, Runner& selected);
 void register_check(CLI::App& app, Runner& selected);
+void register_run(CLI::App& app, Runner& selected);
 
 }  // namespace afhub::cli

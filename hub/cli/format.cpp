@@ -8,7 +8,7 @@
 
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/error.hpp"
-#include "json_writer.hpp"
+#include "afhub/hub/json_writer.hpp"
 
 namespace afhub::cli {
 namespace {

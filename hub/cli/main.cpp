@@ -18,6 +18,7 @@ int main(int argc, char** argv) {
   afhub::cli::register_synth(app, selected);
   afhub::cli::register_demo(app, selected);
   afhub::cli::register_check(app, selected);
+  afhub::cli::register_run(app, selected);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {

@@ -25,8 +25,8 @@ std::vector<MempoolSpec> hub_mempools() {
   // rate probe), for up to kMaxBodies bodies with a margin.
   std::vector<MempoolSpec> pools = {
       {128, 512, "world commands, small iceoryx samples"},
-      {round_up8(std::max(sizeof(BodyCommand), sizeof(WorldState))), 2048,
-       "body commands, world state"},
+      {round_up8(sizeof(BodyCommand)), 2048, "body commands"},
+      {round_up8(sizeof(WorldState)), 64, "world state"},
       {round_up8(sizeof(BodyState)), 2048, "body states"},
       {round_up8(sizeof(Health)), 128, "hub health"},
       {round_up8(body_list_bytes(7)), 128, "catalogs and directories of up to 7 bodies"},

@@ -7,6 +7,7 @@
 #include <cstdlib>
 
 #include "afhub/hub/hub_presence.hpp"
+#include "afhub/shm_layout/body_state.hpp"
 #include "afhub_process.hpp"
 #include "hub_environment.hpp"
 
@@ -207,7 +208,8 @@ TEST_F(CliWithBodies, StatusShowsProcessesAndMempools) {
       3s))
       << status.out;
   EXPECT_EQ(status.exit_code, 0) << status.err;
-  EXPECT_TRUE(contains(status.out, "\"chunk_payload_bytes\":1776")) << status.out;
+  EXPECT_TRUE(contains(status.out, "\"chunk_payload_bytes\":" + std::to_string(sizeof(BodyState))))
+      << status.out;
   EXPECT_TRUE(contains(status.out, "\"body_count\":2")) << status.out;
   EXPECT_TRUE(contains(status.out, "{\"body\":\"synth/body1\",\"rate_hz\":")) << status.out;
 }

@@ -37,7 +37,7 @@ TEST(AdfLoader, LoadsTheKuka) {
   EXPECT_DOUBLE_EQ(model.bodies[1].location.position_m.z, -1.197);
   EXPECT_EQ(model.joints[0].type, JointType::kRevolute);
   EXPECT_DOUBLE_EQ(*model.joints[0].limit_high, 2.094);
-  EXPECT_DOUBLE_EQ(model.joints[0].controller->p, 1000.0);
+  EXPECT_DOUBLE_EQ(model.joints[0].controller.p, 1000.0);
   EXPECT_EQ(joint_names_below(model, "ambf/env/base"),
             (std::vector<std::string>{"base-link1", "link1-link2", "link2-link3", "link3-link4",
                                       "link4-link5", "link5-link6", "link6-link7"}));
@@ -89,7 +89,7 @@ TEST_F(BrokenFiles, EachProblemIsLocatedAndExplained) {
   const std::vector<Case> cases = {
       {"", "model.yaml:1:1: error: the file is empty"},
       {"bodies: [BODY a\n", "model.yaml:2:1: error: YAML syntax"},
-      {"- a\n- b\n", "error: an ADF file is a map"},
+      {"- a\n- b\n", "error: expected an ADF file"},
       {"bodies: BODY a\n", "model.yaml:1:9: error: 'bodies' must be a list"},
       {"bodies: [BODY a]\n",
        "model.yaml:1:10: error: 'BODY a' is listed in 'bodies' but the file has no"},

@@ -12,4 +12,7 @@ namespace afhub::physics {
 // Loads the files together: joints may refer to bodies of any of them.
 Model load_adf_files(const std::vector<std::string>& paths);
 
+// The same into `model`, which keeps its world settings (see scene_loader.hpp).
+void load_adf_files_into(const std::vector<std::string>& paths, Model& model);
+
 }  // namespace afhub::physics

@@ -2,6 +2,7 @@
 // simulating (MuJoCo's mjModel, in spirit). Units are SI; frames as in ambf.md.
 #pragma once
 
+#include <array>
 #include <optional>
 #include <string>
 #include <vector>
@@ -24,18 +25,43 @@ struct Placement {
   Vec3 rpy_rad;
 };
 
+enum class ShapeKind { kBox, kSphere, kCylinder, kCapsule, kCone, kPlane };
+
+// A primitive shape (`shape` + `geometry`, or one entry of a compound shape).
+struct ShapeSpec {
+  ShapeKind kind = ShapeKind::kBox;
+  Vec3 box_size_m;  // full sizes, BOX
+  double radius_m = 0.0, height_m = 0.0;
+  int axis = 2;           // 0, 1, 2 = X, Y, Z: CYLINDER, CAPSULE, CONE
+  Vec3 plane_normal;      // PLANE
+  double plane_offset_m;  // PLANE
+  Placement offset;       // in the body's mesh frame
+};
+
+enum class CollisionMeshType { kConvexHull, kConvexMesh, kTrimesh, kPointCloud };
+
+struct Pid {
+  double p = 0.0, i = 0.0, d = 0.0;
+};
+
+enum class ControllerOutput { kForce, kVelocity };
+
 struct BodySpec {
   std::string identifier;  // "BODY base": the key joints refer to
   std::string name;        // spaces removed, as AMBF does
   std::string channel;     // "<namespace>/<name>"
   SourceLocation where;
+  int file_index = 0;    // which loaded file defined it
   double mass_kg = 0.0;  // 0: static
   std::optional<Vec3> inertia_kgm2;
   std::optional<Placement> inertial_offset;
   Placement location;
-  std::string visual_mesh;     // resolved path, empty when a primitive shape is used
-  std::string collision_mesh;  // resolved path, empty when a primitive shape is used
-  std::string shape;           // BOX, SPHERE, ... when given
+  std::string visual_mesh;  // resolved path, empty when shapes are used
+  std::vector<ShapeSpec> visual_shapes;
+  std::string collision_mesh;  // resolved path; empty when shapes are used
+  CollisionMeshType collision_mesh_type = CollisionMeshType::kTrimesh;
+  std::vector<ShapeSpec> collision_shapes;  // empty: the collision mesh, else the visual shapes
+  std::optional<Placement> collision_offset;
   double scale = 1.0;
   bool passive = false;
   double static_friction = 0.5;
@@ -46,6 +72,11 @@ struct BodySpec {
   double collision_margin = 0.001;
   std::vector<int> collision_groups;
   std::optional<Vec3> gravity_mps2;
+  // Cartesian controller for POSITION commands (AMBF's defaults).
+  Pid linear_controller{10.0, 0.0, 1.0}, angular_controller{10.0, 0.0, 1.0};
+  ControllerOutput controller_output = ControllerOutput::kVelocity;
+  std::optional<std::array<double, 4>> color_rgba;  // kept for a future viewer
+  std::string color_name;
 };
 
 enum class JointType {
@@ -62,8 +93,9 @@ enum class JointType {
 };
 const char* joint_type_name(JointType type);
 
-struct Pid {
-  double p = 0.0, i = 0.0, d = 0.0;
+// Per-axis limits of a six dof joint; a cone twist's {x, y, z} go in angular_high.
+struct SixDofLimits {
+  Vec3 linear_low, linear_high, angular_low, angular_high;
 };
 
 struct JointSpec {
@@ -76,18 +108,79 @@ struct JointSpec {
   Vec3 parent_pivot_m, parent_axis, child_pivot_m, child_axis;
   JointType type = JointType::kRevolute;
   std::optional<double> limit_low, limit_high;
-  double offset_rad = 0.0;
+  std::optional<SixDofLimits> multi_limits;  // cone twist, six dof
+  double offset_rad = 0.0;                   // child rotation about the axis at joint zero
+  double joint_offset_rad = 0.0;             // added to the reported position
   double damping = 0.0;
   double stiffness = 0.0;
+  std::optional<double> equilibrium;  // default: mid-limits
   double max_motor_impulse = 0.1;
+  std::optional<double> erp, cfm;
+  bool ignore_inter_collision = true;
   bool enable_feedback = false;
   bool passive = false;
-  std::optional<Pid> controller;
+  Pid controller{10.0, 0.0, 1.0};  // joint PID for position commands
+  ControllerOutput controller_output = ControllerOutput::kForce;
+};
+
+// Soft body: a rigid body's placement and mass, its mesh, Bullet's btSoftBody config.
+struct SoftBodySpec {
+  std::string identifier, name, channel;
+  SourceLocation where;
+  double mass_kg = 0.0;
+  Placement location;
+  double scale = 1.0;
+  std::string mesh;  // resolved path
+  // Bullet btSoftBody::Config / Material fields, by their ADF names (kLST, kDP, ...).
+  std::vector<std::pair<std::string, double>> config;
+  std::vector<int> fixed_nodes;
+  int bending_constraint = 0;  // 0: none, else the distance in links
+  int clusters = 0;
+};
+
+struct SensorSpec {
+  std::string identifier, name;
+  SourceLocation where;
+  int parent = -1;  // body index
+  Placement location;
+  double range_m = 0.5;
+  std::vector<std::pair<Vec3, Vec3>> rays;  // (offset, direction) in the sensor frame
+};
+
+struct ActuatorSpec {
+  std::string identifier, name;
+  SourceLocation where;
+  int parent = -1;
+  Placement location;
+  double max_impulse = 10.0;
+  double tau = 1.0;
+};
+
+// A world file's light or camera: its pose is published in the world state.
+struct WorldObjectSpec {
+  std::string name;  // "<namespace>/<name>"
+  Vec3 position_m;
+  Vec3 direction;  // light direction, or camera look-at minus location
+  Vec3 up{0.0, 0.0, 1.0};
+  std::string parent;  // empty: world frame
+};
+
+struct WorldSpec {
+  std::string file;  // empty: no world file
+  Vec3 gravity_mps2{0.0, 0.0, -9.81};
+  Vec3 enclosure_m{0.0, 0.0, 0.0};
+  int max_iterations = 10;
+  std::vector<WorldObjectSpec> lights, cameras;
 };
 
 struct Model {
+  WorldSpec world;
   std::vector<BodySpec> bodies;
   std::vector<JointSpec> joints;
+  std::vector<SoftBodySpec> soft_bodies;
+  std::vector<SensorSpec> sensors;
+  std::vector<ActuatorSpec> actuators;
+  std::vector<bool> file_ignores_inter_collision;  // per loaded file
   // For each body, every joint below it (paper Algorithm 1), each once, in file order.
   std::vector<std::vector<int>> descendant_joints;
   std::vector<std::string> warnings;  // "file:line:col: warning: ..."

@@ -25,6 +25,12 @@ struct BodyState {
   std::array<double, kMaxJointsPerBody> joint_positions{};   // rad or m
   std::array<double, kMaxJointsPerBody> joint_velocities{};  // rad/s or m/s
   std::array<double, kMaxJointsPerBody> joint_efforts{};     // N m or N
+  // Proximity sensors on this body, their rays in file order; entries
+  // [0, sensor_ray_count) are valid. Distance to the first hit, or -1 when nothing
+  // is within the sensor's range.
+  std::uint32_t sensor_ray_count{0};
+  std::uint32_t reserved2{0};
+  std::array<double, kMaxSensorRaysPerBody> sensor_distances_m{};
 };
 
 }  // namespace afhub

@@ -30,6 +30,13 @@ inline constexpr std::size_t kProcessNameBufferSize = 104;
 // every active body needs a state publisher and at least one command publisher.
 inline constexpr std::size_t kMaxBodies = 256;
 
+// Proximity-sensor rays reported in one body's state (AMBF's parametric sensors
+// are resolution^2 rays; 32 covers a 5x5 grid and several small arrays).
+inline constexpr std::size_t kMaxSensorRaysPerBody = 32;
+
+// Lights and cameras whose poses the world state carries.
+inline constexpr std::size_t kMaxWorldObjects = 8;
+
 // Processes listed in the hub's health. iceoryx allows 300 runtimes; a co-simulation
 // rarely has more than a few dozen, and the health payload stays small.
 inline constexpr std::size_t kMaxHealthProcesses = 64;

@@ -3,9 +3,20 @@
 
 #include <cstdint>
 
+#include <array>
+
+#include "afhub/shm_layout/geometry.hpp"
 #include "afhub/shm_layout/header.hpp"
+#include "afhub/shm_layout/limits.hpp"
 
 namespace afhub {
+
+// A light or camera of the world file: its name and pose (x forward for a camera
+// looking along it, z up; a light shines along its x axis).
+struct WorldObjectPose {
+  std::array<char, kChannelNameBufferSize> name{};
+  Pose pose;
+};
 
 struct WorldState {
   static constexpr PayloadKind kKind = PayloadKind::kWorldState;
@@ -15,6 +26,14 @@ struct WorldState {
   std::uint32_t body_count{0};
   std::uint8_t paused{0};
   std::uint8_t reserved[3]{};
+  // Commands refused since the start (NaN or Inf, joint index beyond the body's
+  // joints), and watchdog expiries (a body's commands stopped for too long).
+  std::uint64_t rejected_commands{0};
+  std::uint64_t watchdog_expiries{0};
+  std::uint32_t light_count{0};
+  std::uint32_t camera_count{0};
+  std::array<WorldObjectPose, kMaxWorldObjects> lights{};
+  std::array<WorldObjectPose, kMaxWorldObjects> cameras{};
 };
 
 enum class WorldAction : std::uint32_t {

@@ -1,4 +1,4 @@
-// A small JSON writer for the CLI's --json outputs (objects, arrays, numbers, strings).
+// A small JSON writer for --json outputs and reports (objects, arrays, numbers, strings).
 #pragma once
 
 #include <cmath>
@@ -6,7 +6,7 @@
 #include <string>
 #include <string_view>
 
-namespace afhub::cli {
+namespace afhub {
 
 class JsonWriter {
  public:
@@ -114,4 +114,4 @@ class JsonWriter {
   bool after_key_ = false;
 };
 
-}  // namespace afhub::cli
+}  // namespace afhub

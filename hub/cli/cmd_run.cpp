@@ -1,0 +1,109 @@
+// `afhub run`: load AMBF descriptions (files, a launch file with -l, -a lists, a
+// world file) and simulate them in Bullet, each active body on its channels.
+#include <cstdio>
+#include <fstream>
+#include <memory>
+#include <sstream>
+
+#include "afhub/hub/error.hpp"
+#include "afhub/hub/hub_presence.hpp"
+#include "afhub/hub/stop_signal.hpp"
+#include "afhub/physics/run_loop.hpp"
+#include "afhub/physics/scene_loader.hpp"
+#include "commands.hpp"
+
+namespace afhub::cli {
+namespace {
+
+struct RunCliOptions {
+  std::vector<std::string> files;
+  std::string launch_file, indices, adf_list, world_file, report_file;
+  double dt_s = 0.001;
+  double watchdog_s = 0.5;
+  std::uint64_t steps = 0;
+  bool fast = false;
+  bool offline = false;
+  bool no_autostart = false;
+};
+
+std::vector<std::string> split_commas(const std::string& text) {
+  std::vector<std::string> out;
+  std::stringstream stream(text);
+  for (std::string item; std::getline(stream, item, ',');)
+    if (!item.empty()) out.push_back(item);
+  return out;
+}
+
+int run_run(const RunCliOptions& options) {
+  if (!(options.dt_s >= 1e-5 && options.dt_s <= 0.1))
+    throw Error("--dt must be between 0.00001 and 0.1 s, got " + std::to_string(options.dt_s));
+  if (!(options.watchdog_s > 0.0)) throw Error("--watchdog must be a positive number of seconds");
+  physics::SceneRequest request;
+  request.launch_file = options.launch_file;
+  if (!options.indices.empty()) request.launch_indices = physics::parse_index_list(options.indices);
+  request.adf_files = split_commas(options.adf_list);
+  request.adf_files.insert(request.adf_files.end(), options.files.begin(), options.files.end());
+  request.world_file = options.world_file;
+
+  physics::Model model;
+  try {
+    model = physics::load_scene(request);
+  } catch (const Error& error) {
+    std::fprintf(stderr, "%s\n", error.what());  // "file:line:col: error: ..."
+    return 1;
+  }
+  for (const auto& warning : model.warnings) std::fprintf(stderr, "%s\n", warning.c_str());
+
+  install_stop_signal_handlers();
+  physics::Simulation sim(model, options.dt_s);
+  std::unique_ptr<physics::SimChannels> channels;
+  if (!options.offline) {
+    connect_to_hub("physics", options.no_autostart ? HubPolicy::kRequire : HubPolicy::kAutostart);
+    channels = std::make_unique<physics::SimChannels>(sim, options.watchdog_s);
+    std::fprintf(stderr, "afhub run: %zu bodies, %zu joints on channels; %s at dt %.6g s\n",
+                 channels->channel_count(), model.joints.size(),
+                 options.fast ? "as fast as possible" : "real time", options.dt_s);
+  }
+  physics::RunOptions run;
+  run.fast = options.fast;
+  run.steps = options.steps;
+  physics::RunReport report;
+  physics::run_loop(sim, channels.get(), run, report);
+  if (!options.report_file.empty()) {
+    std::ofstream out(options.report_file);
+    out << physics::report_json(report, sim);
+    if (!out) throw Error("cannot write the report to " + options.report_file);
+  }
+  return report.nan_detected ? 1 : 0;
+}
+
+}  // namespace
+
+void register_run(CLI::App& app, Runner& selected) {
+  auto options = std::make_shared<RunCliOptions>();
+  auto* run = app.add_subcommand(
+      "run",
+      "Simulate AMBF descriptions in Bullet; every active body publishes its state and reads "
+      "its commands on the hub's channels.");
+  run->add_option("files", options->files, "ADF files, loaded together");
+  run->add_option("--launch", options->launch_file,
+                  "A launch file: its world config, colors, and the models picked with -l");
+  run->add_option("-l", options->indices, "Indices into the launch file's multibody configs: 0,3");
+  run->add_option("-a", options->adf_list, "ADF files, comma-separated: a.yaml,b.yaml");
+  run->add_option("--world", options->world_file,
+                  "A world file (gravity, enclosure, lights, cameras, environment)");
+  run->add_option("--dt", options->dt_s, "Fixed step in seconds (default 0.001)");
+  run->add_flag("--fast", options->fast, "Step as fast as possible instead of in real time");
+  run->add_option("--steps", options->steps, "Stop after this many steps (default: until Ctrl-C)");
+  run->add_option("--watchdog", options->watchdog_s,
+                  "Seconds without a command before a body's commands fall to zero (default 0.5)");
+  run->add_option("--report", options->report_file,
+                  "Write a JSON report at the end (steps, step times, poses, joints)");
+  run->add_flag("--offline", options->offline,
+                "Simulate without a hub: no channels (for reports and measurements)");
+  run->add_flag("--no-autostart", options->no_autostart,
+                "Fail instead of starting a hub when none runs");
+  run->callback([&selected, options] { selected = [options] { return run_run(*options); }; });
+}
+
+}  // namespace afhub::cli

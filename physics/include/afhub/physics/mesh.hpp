@@ -1,0 +1,31 @@
+// Triangle meshes read through assimp (STL, OBJ, DAE and the rest it knows), and
+// their mass properties, used when a body gives no inertia or inertial offset.
+#pragma once
+
+#include <array>
+#include <string>
+#include <vector>
+
+namespace afhub::physics {
+
+struct TriangleMesh {
+  std::vector<std::array<double, 3>> vertices;  // in the mesh frame, scaled
+  std::vector<std::array<unsigned, 3>> triangles;
+};
+
+// Reads every mesh of the file into one, node transforms applied, scaled by `scale`.
+// Throws afhub::Error naming the file when assimp cannot read it or it has no triangles.
+TriangleMesh load_mesh(const std::string& path, double scale);
+
+// Of a closed mesh of uniform density: volume, centroid, and the inertia tensor's
+// diagonal about the centroid per kg. Open or degenerate meshes (volume ~ 0) fall
+// back to the vertices' bounding box.
+struct MeshMassProperties {
+  double volume_m3 = 0.0;
+  std::array<double, 3> centroid_m{};
+  std::array<double, 3> inertia_per_kg{};  // m^2
+  bool from_bounding_box = false;
+};
+MeshMassProperties mass_properties(const TriangleMesh& mesh);
+
+}  // namespace afhub::physics

@@ -1,0 +1,36 @@
+// The physics loop of `afhub run`: a fixed step, paced in real time by absolute
+// deadlines (start + k * dt, never re-based, so there is no drift) or run as fast
+// as possible; commands in and states out through SimChannels when given; world
+// commands (pause, resume, step, reset) obeyed. Measures what the report needs.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "afhub/hub/latency_histogram.hpp"
+#include "afhub/physics/sim_channels.hpp"
+#include "afhub/physics/simulation.hpp"
+
+namespace afhub::physics {
+
+struct RunOptions {
+  bool fast = false;
+  std::uint64_t steps = 0;  // stop after this many steps; 0: until a stop signal
+};
+
+struct RunReport {
+  std::uint64_t steps = 0;
+  double wall_time_s = 0.0;
+  LatencyHistogram step_time;  // one loop iteration: commands, step, publish
+  bool nan_detected = false;
+  double max_joint_error_m = 0.0;  // the largest pivot gap seen, over all joints and steps
+};
+
+// Runs until options.steps, a stop signal or a NaN (then report.nan_detected).
+void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options, RunReport& report);
+
+// The --report JSON: steps, times, step-time percentiles, NaN flag, largest
+// pivot gap, final body poses and joint positions. Keys are sorted.
+std::string report_json(const RunReport& report, const Simulation& sim);
+
+}  // namespace afhub::physics

@@ -1,0 +1,375 @@
+// Joints in Bullet (see joint_model.hpp).
+#include "joint_model.hpp"
+
+#include <BulletDynamics/ConstraintSolver/btGeneric6DofSpring2Constraint.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "frames.hpp"
+
+namespace afhub::physics {
+namespace {
+
+// Bullet's own axis for each constraint: a hinge turns about Z, a slider moves
+// along X, a cone twists about X, springs act along or about Z.
+int constraint_axis(JointType type) {
+  switch (type) {
+    case JointType::kPrismatic:
+    case JointType::kConeTwist:
+      return 0;
+    default:
+      return 2;
+  }
+}
+
+btVector3 unit(int axis) {
+  btVector3 v(0, 0, 0);
+  v[axis] = 1;
+  return v;
+}
+
+double wrap_angle(double angle) {
+  return std::remainder(angle, 2.0 * M_PI);
+}
+
+// The inertia a joint effort meets at the child (or parent): about the joint axis
+// through the pivot for a rotational joint, the mass for a linear one. `frame` is
+// the joint frame in the body's centre-of-mass frame.
+double inertia_along(const btRigidBody& body, const btTransform& frame, int axis, bool rotational) {
+  if (body.getInvMass() == 0) return 0.0;  // static: infinite, does not limit
+  const double mass = 1.0 / body.getInvMass();
+  if (!rotational) return mass;
+  const btVector3 a = frame.getBasis().getColumn(axis);
+  const btVector3 inverse = body.getInvInertiaDiagLocal();
+  double about_com = 0.0;
+  for (int i = 0; i < 3; ++i)
+    if (inverse[i] > 0) about_com += a[i] * a[i] / inverse[i];
+  const double distance = frame.getOrigin().cross(a).length();  // COM to the axis
+  return about_com + mass * distance * distance;
+}
+
+void set_six_dof_limits(btGeneric6DofSpring2Constraint& c, const JointSpec& spec) {
+  if (spec.multi_limits) {
+    const SixDofLimits& l = *spec.multi_limits;
+    c.setLinearLowerLimit(to_bt(l.linear_low));
+    c.setLinearUpperLimit(to_bt(l.linear_high));
+    c.setAngularLowerLimit(to_bt(l.angular_low));
+    c.setAngularUpperLimit(to_bt(l.angular_high));
+  } else {
+    // No limits given: every direction is free.
+    c.setLinearLowerLimit(btVector3(1, 1, 1));
+    c.setLinearUpperLimit(btVector3(-1, -1, -1));
+    c.setAngularLowerLimit(btVector3(1, 1, 1));
+    c.setAngularUpperLimit(btVector3(-1, -1, -1));
+  }
+}
+
+}  // namespace
+
+JointModel::JointModel(const JointSpec& spec, btRigidBody& parent, btRigidBody& child,
+                       const btTransform& parent_com_from_mesh,
+                       const btTransform& child_com_from_mesh, double dt_s)
+    : spec_(spec), parent_(parent), child_(child), dt_s_(dt_s), gains_(spec.controller) {
+  axis_index_ = constraint_axis(spec.type);
+  const btVector3 axis = unit(axis_index_);
+  // Algorithm 2: each frame turns the constraint axis onto the body's joint axis.
+  // The child's frame is also turned by `offset` about the axis, so that the
+  // joint reads zero when the child sits at that angle.
+  const btQuaternion in_parent = rotation_between(axis, to_bt(spec.parent_axis));
+  const btQuaternion in_child =
+      rotation_between(axis, to_bt(spec.child_axis)) * btQuaternion(axis, -spec.offset_rad);
+  frame_in_parent_ = parent_com_from_mesh * btTransform(in_parent, to_bt(spec.parent_pivot_m));
+  frame_in_child_ = child_com_from_mesh * btTransform(in_child, to_bt(spec.child_pivot_m));
+  const btTransform& a = frame_in_parent_;
+  const btTransform& b = frame_in_child_;
+
+  switch (spec.type) {
+    case JointType::kRevolute:
+    case JointType::kContinuous: {
+      auto hinge = std::make_unique<btHingeConstraint>(parent, child, a, b, true);
+      if (spec.type == JointType::kRevolute && spec.limit_low)
+        hinge->setLimit(*spec.limit_low, *spec.limit_high);
+      constraint_ = std::move(hinge);
+      break;
+    }
+    case JointType::kPrismatic: {
+      auto slider = std::make_unique<btSliderConstraint>(parent, child, a, b, true);
+      if (spec.limit_low) {
+        slider->setLowerLinLimit(*spec.limit_low);
+        slider->setUpperLinLimit(*spec.limit_high);
+      } else {
+        slider->setLowerLinLimit(1);  // lower above upper: free
+        slider->setUpperLinLimit(-1);
+      }
+      slider->setLowerAngLimit(0);
+      slider->setUpperAngLimit(0);
+      free_linear_[0] = true;
+      constraint_ = std::move(slider);
+      break;
+    }
+    case JointType::kFixed:
+      constraint_ = std::make_unique<btFixedConstraint>(parent, child, a, b);
+      break;
+    case JointType::kP2P:
+      constraint_ =
+          std::make_unique<btPoint2PointConstraint>(parent, child, a.getOrigin(), b.getOrigin());
+      break;
+    case JointType::kConeTwist: {
+      auto cone = std::make_unique<btConeTwistConstraint>(parent, child, a, b);
+      if (spec.multi_limits) {
+        const Vec3& l = spec.multi_limits->angular_high;
+        cone->setLimit(l.y, l.z, l.x);  // swing about y, swing about z, twist about x
+      }
+      constraint_ = std::move(cone);
+      break;
+    }
+    case JointType::kLinearSpring:
+    case JointType::kTorsionSpring:
+    case JointType::kSixDof:
+    case JointType::kSixDofSpring: {
+      auto six = std::make_unique<btGeneric6DofSpring2Constraint>(parent, child, a, b);
+      // Locked by default; the spring's one direction, or the six dof's limits, are free.
+      six->setLinearLowerLimit(btVector3(0, 0, 0));
+      six->setLinearUpperLimit(btVector3(0, 0, 0));
+      six->setAngularLowerLimit(btVector3(0, 0, 0));
+      six->setAngularUpperLimit(btVector3(0, 0, 0));
+      const double low = spec.limit_low.value_or(1), high = spec.limit_high.value_or(-1);
+      const double middle = spec.limit_low ? (low + high) / 2 : 0.0;
+      int spring_dofs[6] = {-1, -1, -1, -1, -1, -1};
+      if (spec.type == JointType::kLinearSpring) {
+        six->setLimit(2, low, high);
+        spring_dofs[0] = 2;
+        free_linear_[2] = true;
+      } else if (spec.type == JointType::kTorsionSpring) {
+        six->setLimit(5, low, high);
+        spring_dofs[0] = 5;
+      } else {
+        set_six_dof_limits(*six, spec);
+        for (bool& free : free_linear_) free = !spec.multi_limits;
+        if (spec.multi_limits) {
+          const SixDofLimits& l = *spec.multi_limits;
+          const double lows[3] = {l.linear_low.x, l.linear_low.y, l.linear_low.z};
+          const double highs[3] = {l.linear_high.x, l.linear_high.y, l.linear_high.z};
+          for (int i = 0; i < 3; ++i) free_linear_[i] = lows[i] != highs[i];
+        }
+        if (spec.type == JointType::kSixDofSpring)
+          for (int i = 0; i < 6; ++i) spring_dofs[i] = i;
+      }
+      for (int dof : spring_dofs) {
+        if (dof < 0) continue;
+        six->enableSpring(dof, true);
+        six->setStiffness(dof, spec.stiffness);
+        six->setDamping(dof, spec.damping);
+        six->setEquilibriumPoint(dof, spec.equilibrium.value_or(middle));
+      }
+      constraint_ = std::move(six);
+      break;
+    }
+  }
+  if (spec.erp || spec.cfm) {
+    for (int axis_param = -1; axis_param < 6; ++axis_param) {
+      if (spec.erp) constraint_->setParam(BT_CONSTRAINT_STOP_ERP, *spec.erp, axis_param);
+      if (spec.cfm) constraint_->setParam(BT_CONSTRAINT_STOP_CFM, *spec.cfm, axis_param);
+    }
+  }
+  limit_gains();
+  if (spec.enable_feedback) {
+    constraint_->enableFeedback(true);
+    constraint_->setJointFeedback(&feedback_);
+  }
+  update_readings();
+}
+
+// An effort PID is explicit: with the step dt and an inertia I at the joint, a
+// gain P beyond about I / dt^2 (or D beyond I / dt) makes it blow up, which AMBF
+// users meet as "joint control explodes with high gains". The gains are capped at
+// P <= 0.1 I / dt^2 and D <= 0.5 I / dt, with I the smaller of the two bodies'
+// inertias at the joint: a lower bound of what the joint really moves, so the cap
+// errs on the stable side. Velocity output goes through Bullet's motor, which the
+// solver handles implicitly, and is left as written.
+void JointModel::limit_gains() {
+  if (spec_.controller_output != ControllerOutput::kForce) return;
+  const double at_child = inertia_along(child_, frame_in_child_, axis_index_, rotational());
+  const double at_parent = inertia_along(parent_, frame_in_parent_, axis_index_, rotational());
+  double inertia = at_child;
+  if (at_parent > 0 && (inertia == 0 || at_parent < inertia)) inertia = at_parent;
+  if (inertia <= 0) return;
+  gains_.p = std::min(gains_.p, 0.1 * inertia / (dt_s_ * dt_s_));
+  gains_.d = std::min(gains_.d, 0.5 * inertia / dt_s_);
+}
+
+bool JointModel::rotational() const {
+  switch (spec_.type) {
+    case JointType::kRevolute:
+    case JointType::kContinuous:
+    case JointType::kTorsionSpring:
+    case JointType::kConeTwist:
+      return true;
+    default:
+      return false;
+  }
+}
+
+btVector3 JointModel::world_axis() const {
+  return parent_.getWorldTransform().getBasis() *
+         frame_in_parent_.getBasis().getColumn(axis_index_);
+}
+
+void JointModel::command(JointCommandType type, double value) noexcept {
+  if (!commanded_ || type != command_type_) {
+    integral_ = 0.0;
+    has_previous_error_ = false;
+  }
+  commanded_ = true;
+  command_type_ = type;
+  command_value_ = value;
+}
+
+void JointModel::release() noexcept {
+  commanded_ = false;
+  integral_ = 0.0;
+  has_previous_error_ = false;
+  set_motor(false, 0.0);
+}
+
+void JointModel::set_motor(bool on, double velocity) noexcept {
+  const double max_force = spec_.max_motor_impulse / dt_s_;
+  switch (spec_.type) {
+    case JointType::kRevolute:
+    case JointType::kContinuous:
+      static_cast<btHingeConstraint&>(*constraint_)
+          .enableAngularMotor(on, velocity, spec_.max_motor_impulse);
+      break;
+    case JointType::kPrismatic: {
+      auto& slider = static_cast<btSliderConstraint&>(*constraint_);
+      slider.setPoweredLinMotor(on);
+      slider.setTargetLinMotorVelocity(velocity);
+      slider.setMaxLinMotorForce(max_force);
+      break;
+    }
+    case JointType::kLinearSpring:
+    case JointType::kTorsionSpring: {
+      auto& six = static_cast<btGeneric6DofSpring2Constraint&>(*constraint_);
+      const int dof = spec_.type == JointType::kLinearSpring ? 2 : 5;
+      six.enableMotor(dof, on);
+      six.setTargetVelocity(dof, velocity);
+      six.setMaxMotorForce(dof, max_force);
+      break;
+    }
+    default:
+      break;  // no single motor axis
+  }
+}
+
+void JointModel::apply_effort(double effort) noexcept {
+  const btVector3 axis = world_axis();
+  if (rotational()) {
+    child_.applyTorque(axis * effort);
+    parent_.applyTorque(-axis * effort);
+  } else {
+    child_.applyCentralForce(axis * effort);
+    parent_.applyCentralForce(-axis * effort);
+  }
+  if (effort != 0.0) {
+    child_.activate();
+    parent_.activate();
+  }
+}
+
+void JointModel::apply_control() noexcept {
+  double effort = 0.0;
+  bool motor = false;
+  double motor_velocity = 0.0;
+  if (commanded_) {
+    switch (command_type_) {
+      case JointCommandType::kEffort:
+        effort = command_value_;
+        break;
+      case JointCommandType::kVelocity:
+        motor = true;
+        motor_velocity = command_value_;
+        break;
+      case JointCommandType::kPosition: {
+        double target = command_value_ - spec_.joint_offset_rad;
+        if (spec_.limit_low) target = std::clamp(target, *spec_.limit_low, *spec_.limit_high);
+        double error = target - (position_ - spec_.joint_offset_rad);
+        if (spec_.type == JointType::kContinuous) error = wrap_angle(error);
+        integral_ += error * dt_s_;
+        const double derivative = has_previous_error_ ? (error - previous_error_) / dt_s_ : 0.0;
+        previous_error_ = error;
+        has_previous_error_ = true;
+        const Pid& pid = gains_;
+        const double output = pid.p * error + pid.i * integral_ + pid.d * derivative;
+        if (spec_.controller_output == ControllerOutput::kVelocity) {
+          motor = true;
+          motor_velocity = output;
+        } else {
+          effort = output;
+        }
+        break;
+      }
+    }
+  }
+  // Joint damping, which upstream parses but never applies to hinges and sliders.
+  const bool spring = spec_.type == JointType::kLinearSpring ||
+                      spec_.type == JointType::kTorsionSpring ||
+                      spec_.type == JointType::kSixDofSpring;
+  if (!spring) effort -= spec_.damping * velocity_;
+  set_motor(motor, motor_velocity);
+  applied_effort_ = effort;
+  if (effort != 0.0) apply_effort(effort);
+}
+
+void JointModel::update_readings() noexcept {
+  double position = 0.0;
+  switch (spec_.type) {
+    case JointType::kRevolute:
+    case JointType::kContinuous:
+      position = static_cast<btHingeConstraint&>(*constraint_).getHingeAngle();
+      break;
+    case JointType::kPrismatic: {
+      auto& slider = static_cast<btSliderConstraint&>(*constraint_);
+      slider.calculateTransforms(parent_.getWorldTransform(), child_.getWorldTransform());
+      position = slider.getLinearPos();
+      break;
+    }
+    case JointType::kLinearSpring:
+    case JointType::kTorsionSpring: {
+      auto& six = static_cast<btGeneric6DofSpring2Constraint&>(*constraint_);
+      six.calculateTransforms();
+      position = spec_.type == JointType::kLinearSpring ? six.getRelativePivotPosition(2)
+                                                        : six.getAngle(2);
+      break;
+    }
+    case JointType::kConeTwist: {
+      auto& cone = static_cast<btConeTwistConstraint&>(*constraint_);
+      position = cone.getTwistAngle();
+      break;
+    }
+    default:
+      break;
+  }
+  position_ = position + spec_.joint_offset_rad;
+  const btVector3 axis = world_axis();
+  velocity_ = rotational() ? (child_.getAngularVelocity() - parent_.getAngularVelocity()).dot(axis)
+                           : (child_.getLinearVelocity() - parent_.getLinearVelocity()).dot(axis);
+  if (spec_.enable_feedback) {
+    const double reaction = rotational() ? feedback_.m_appliedTorqueBodyB.dot(axis)
+                                         : feedback_.m_appliedForceBodyB.dot(axis);
+    effort_ = applied_effort_ + reaction;
+  } else {
+    effort_ = 0.0;
+  }
+}
+
+double JointModel::pivot_gap_m() const noexcept {
+  const btTransform a = parent_.getWorldTransform() * frame_in_parent_;
+  const btVector3 b = child_.getWorldTransform() * frame_in_child_.getOrigin();
+  btVector3 local = a.invXform(b);
+  for (int i = 0; i < 3; ++i)
+    if (free_linear_[i]) local[i] = 0;
+  return local.length();
+}
+
+}  // namespace afhub::physics

@@ -1,0 +1,104 @@
+// Mesh reading (assimp) and mass properties (see mesh.hpp).
+#include "afhub/physics/mesh.hpp"
+
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+
+#include <algorithm>
+#include <assimp/Importer.hpp>
+#include <cmath>
+
+#include "afhub/hub/error.hpp"
+
+namespace afhub::physics {
+
+TriangleMesh load_mesh(const std::string& path, double scale) {
+  Assimp::Importer importer;
+  const aiScene* scene =
+      importer.ReadFile(path, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
+                                  aiProcess_PreTransformVertices);
+  if (!scene || !scene->mRootNode)
+    throw Error(path + ": error: cannot read this mesh: " + importer.GetErrorString());
+  TriangleMesh mesh;
+  for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
+    const aiMesh* part = scene->mMeshes[m];
+    const auto base = static_cast<unsigned>(mesh.vertices.size());
+    for (unsigned v = 0; v < part->mNumVertices; ++v) {
+      const aiVector3D& p = part->mVertices[v];
+      mesh.vertices.push_back({p.x * scale, p.y * scale, p.z * scale});
+    }
+    for (unsigned f = 0; f < part->mNumFaces; ++f) {
+      const aiFace& face = part->mFaces[f];
+      if (face.mNumIndices != 3) continue;  // points and lines have no volume
+      mesh.triangles.push_back(
+          {base + face.mIndices[0], base + face.mIndices[1], base + face.mIndices[2]});
+    }
+  }
+  if (mesh.triangles.empty())
+    throw Error(path + ": error: the mesh has no triangles; export it with faces");
+  return mesh;
+}
+
+MeshMassProperties mass_properties(const TriangleMesh& mesh) {
+  // Signed tetrahedra from the origin to each triangle: volume, first and second moments.
+  double volume = 0.0;
+  std::array<double, 3> first{};
+  std::array<double, 6> second{};  // xx, yy, zz, xy, yz, zx integrals of the volume
+  for (const auto& triangle : mesh.triangles) {
+    const auto& a = mesh.vertices[triangle[0]];
+    const auto& b = mesh.vertices[triangle[1]];
+    const auto& c = mesh.vertices[triangle[2]];
+    const double det = a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) +
+                       a[2] * (b[0] * c[1] - b[1] * c[0]);
+    const double v = det / 6.0;
+    volume += v;
+    for (int k = 0; k < 3; ++k) first[k] += v * (a[k] + b[k] + c[k]) / 4.0;
+    // Integral of x_i x_j over a tetrahedron with one vertex at the origin.
+    auto moment = [&](int i, int j) {
+      return det / 120.0 *
+             (2 * (a[i] * a[j] + b[i] * b[j] + c[i] * c[j]) + a[i] * b[j] + a[j] * b[i] +
+              a[i] * c[j] + a[j] * c[i] + b[i] * c[j] + b[j] * c[i]);
+    };
+    second[0] += moment(0, 0);
+    second[1] += moment(1, 1);
+    second[2] += moment(2, 2);
+    second[3] += moment(0, 1);
+    second[4] += moment(1, 2);
+    second[5] += moment(2, 0);
+  }
+  MeshMassProperties out;
+  std::array<double, 3> low{1e300, 1e300, 1e300}, high{-1e300, -1e300, -1e300};
+  for (const auto& p : mesh.vertices)
+    for (int k = 0; k < 3; ++k) {
+      low[k] = std::min(low[k], p[k]);
+      high[k] = std::max(high[k], p[k]);
+    }
+  double box_volume = 1.0;
+  for (int k = 0; k < 3; ++k) box_volume *= std::max(high[k] - low[k], 1e-9);
+  if (std::abs(volume) < 1e-6 * box_volume) {
+    // Not closed: a solid box over the vertices.
+    out.from_bounding_box = true;
+    out.volume_m3 = box_volume;
+    std::array<double, 3> size{};
+    for (int k = 0; k < 3; ++k) {
+      out.centroid_m[k] = (low[k] + high[k]) / 2;
+      size[k] = high[k] - low[k];
+    }
+    out.inertia_per_kg = {(size[1] * size[1] + size[2] * size[2]) / 12,
+                          (size[0] * size[0] + size[2] * size[2]) / 12,
+                          (size[0] * size[0] + size[1] * size[1]) / 12};
+    return out;
+  }
+  // Inward-facing triangles give a negative volume; the ratios below do not mind.
+  out.volume_m3 = std::abs(volume);
+  for (int k = 0; k < 3; ++k) out.centroid_m[k] = first[k] / volume;
+  // Second moments per unit mass about the centroid (parallel axis theorem).
+  const auto& c = out.centroid_m;
+  const double xx = second[0] / volume - c[0] * c[0];
+  const double yy = second[1] / volume - c[1] * c[1];
+  const double zz = second[2] / volume - c[2] * c[2];
+  out.inertia_per_kg = {yy + zz, xx + zz, xx + yy};
+  return out;
+}
+
+}  // namespace afhub::physics

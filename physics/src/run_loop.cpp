@@ -1,0 +1,127 @@
+// The physics loop and its report (see run_loop.hpp).
+#include "afhub/physics/run_loop.hpp"
+
+#include <algorithm>
+#include <cstdio>
+#include <map>
+
+#include "afhub/hub/json_writer.hpp"
+#include "afhub/hub/stop_signal.hpp"
+
+namespace afhub::physics {
+namespace {
+
+double largest_pivot_gap(const Simulation& sim) noexcept {
+  double largest = 0.0;
+  for (std::size_t j = 0; j < sim.model().joints.size(); ++j)
+    largest = std::max(largest, sim.joint_pivot_gap_m(j));
+  return largest;
+}
+
+}  // namespace
+
+void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
+              RunReport& report) {
+  const auto period_ns = static_cast<std::int64_t>(sim.dt_s() * 1e9);
+  const std::int64_t start_ns = monotonic_ns();
+  std::int64_t next_ns = start_ns;
+  bool paused = false;
+  std::uint64_t steps_to_run = 0;
+  std::uint64_t rate_window_step = 0;
+  std::int64_t rate_window_ns = start_ns;
+  double achieved_rate_hz = 0.0;
+  report.max_joint_error_m = std::max(report.max_joint_error_m, largest_pivot_gap(sim));
+  if (channels) channels->publish(0.0, 0.0, false);  // step 0: the model as loaded
+  while (!stop_requested() && (options.steps == 0 || report.steps < options.steps)) {
+    const std::int64_t begin_ns = monotonic_ns();
+    if (channels) {
+      if (const WorldCommand* command = channels->new_world_command()) {
+        switch (command->action) {
+          case WorldAction::kPause:
+            paused = true;
+            break;
+          case WorldAction::kResume:
+            paused = false;
+            break;
+          case WorldAction::kStep:
+            steps_to_run += command->step_count;
+            break;
+          case WorldAction::kReset:
+            sim.reset();
+            break;
+          case WorldAction::kNone:
+            break;
+        }
+      }
+      channels->apply_commands(begin_ns);
+    }
+    const bool stepping = !paused || steps_to_run > 0;
+    if (stepping) {
+      if (paused) --steps_to_run;
+      sim.step();
+      ++report.steps;
+      report.max_joint_error_m = std::max(report.max_joint_error_m, largest_pivot_gap(sim));
+      if (!sim.all_finite()) {
+        report.nan_detected = true;
+        std::fprintf(stderr,
+                     "afhub run: the simulation became NaN or infinite at step %llu; stopping. "
+                     "Lower the gains or --dt, or check masses and inertias\n",
+                     static_cast<unsigned long long>(sim.step_count()));
+        break;
+      }
+    }
+    if (channels)
+      channels->publish(static_cast<double>(monotonic_ns() - start_ns) * 1e-9, achieved_rate_hz,
+                        paused);
+    if (stepping) report.step_time.record(static_cast<double>(monotonic_ns() - begin_ns) * 1e-3);
+
+    next_ns += period_ns;
+    if (next_ns - rate_window_ns >= 1'000'000'000) {
+      achieved_rate_hz = static_cast<double>(report.steps - rate_window_step) * 1e9 /
+                         static_cast<double>(monotonic_ns() - rate_window_ns);
+      rate_window_step = report.steps;
+      rate_window_ns = monotonic_ns();
+    }
+    if (!options.fast) sleep_until_ns(next_ns);
+  }
+  report.wall_time_s = static_cast<double>(monotonic_ns() - start_ns) * 1e-9;
+}
+
+std::string report_json(const RunReport& report, const Simulation& sim) {
+  const Model& model = sim.model();
+  JsonWriter json;
+  json.begin_object();
+  // Bodies and joints sorted by name, so that keys are stable from run to run.
+  std::map<std::string, std::size_t> bodies, joints;
+  for (std::size_t b = 0; b < model.bodies.size(); ++b) bodies[model.bodies[b].channel] = b;
+  for (std::size_t j = 0; j < model.joints.size(); ++j) joints[model.joints[j].channel] = j;
+  json.key("bodies").begin_object();
+  for (const auto& [name, b] : bodies) {
+    const Pose pose = sim.body_pose(b);
+    const Quaternion& q = pose.orientation;
+    json.key(name).begin_object();
+    json.key("position").begin_array().value(pose.position_m.x).value(pose.position_m.y);
+    json.value(pose.position_m.z).end_array();
+    json.key("quaternion").begin_array().value(q.x).value(q.y).value(q.z).value(q.w).end_array();
+    json.end_object();
+  }
+  json.end_object();
+  json.key("joints").begin_object();
+  for (const auto& [name, j] : joints)
+    json.key(name).begin_object().key("position").value(sim.joint_position(j)).end_object();
+  json.end_object();
+  json.key("max_joint_error_m").value(report.max_joint_error_m);
+  json.key("nan_detected").value(report.nan_detected);
+  json.key("sim_time_s").value(sim.time_s());
+  json.key("step_time_us").begin_object();
+  json.key("max").value(report.step_time.max_us());
+  json.key("p50").value(report.step_time.percentile_us(0.50));
+  json.key("p99").value(report.step_time.percentile_us(0.99));
+  json.end_object();
+  json.key("steps").value(static_cast<unsigned long long>(report.steps));
+  json.key("wall_time_s").value(report.wall_time_s);
+  json.end_object();
+  return json.str() + "\n";
+}
+
+}  // namespace afhub::physics

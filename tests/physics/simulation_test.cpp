@@ -1,0 +1,332 @@
+// The Bullet simulation against physics and against the real AMBF models:
+// free fall, a pendulum's period, joint PID on the KUKA, closed loops holding
+// together (the four-bar, a slider-crank with a prismatic joint), soft bodies,
+// proximity sensors, and the command checks.
+#include "afhub/physics/simulation.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "afhub/physics/adf_loader.hpp"
+#include "model_files.hpp"
+
+namespace afhub::physics {
+namespace {
+
+const std::string kModels = AFHUB_SHARED_MODELS "/descriptions/multi-bodies/";
+constexpr double kGravity = 9.81;
+
+int body_index(const Model& model, const std::string& name) {
+  for (std::size_t b = 0; b < model.bodies.size(); ++b)
+    if (model.bodies[b].name == name) return static_cast<int>(b);
+  ADD_FAILURE() << "no body " << name;
+  return 0;
+}
+
+// Steps `seconds` of simulated time; returns the largest pivot gap seen.
+double run_for(Simulation& sim, double seconds) {
+  double largest = 0.0;
+  const auto steps = static_cast<int>(std::lround(seconds / sim.dt_s()));
+  for (int i = 0; i < steps; ++i) {
+    sim.step();
+    for (std::size_t j = 0; j < sim.model().joints.size(); ++j)
+      largest = std::max(largest, sim.joint_pivot_gap_m(j));
+    if (!sim.all_finite()) {
+      ADD_FAILURE() << "NaN at step " << sim.step_count();
+      break;
+    }
+  }
+  return largest;
+}
+
+TEST(Simulation, FreeFallMatchesHalfGTSquared) {
+  testing::ModelFolder folder;
+  const Model model = load_adf_files(
+      {folder.write("ball.yaml",
+                    "bodies: [BODY ball]\nBODY ball:\n  name: ball\n  mass: 2.0\n  shape: sphere\n"
+                    "  geometry: {radius: 0.05}\n  damping: {linear: 0, angular: 0}\n"
+                    "  location: {position: {x: 0, y: 0, z: 10}}\n")});
+  Simulation sim(model, 0.001);
+  for (double t : {0.5, 1.0, 2.0}) {
+    run_for(sim, t - sim.time_s());
+    const double fallen = 10.0 - sim.body_pose(0).position_m.z;
+    const double expected = kGravity * t * t / 2;
+    EXPECT_NEAR(fallen, expected, 0.01 * expected) << "at t = " << t;
+  }
+}
+
+TEST(Simulation, PendulumPeriodMatchesTheAnalyticValue) {
+  // A 1 kg ball of radius 2 cm on a 0.5 m massless arm, released 0.05 rad from vertical.
+  const double length = 0.5, radius = 0.02, start = 0.05;
+  const double inertia = 0.4 * radius * radius;
+  testing::ModelFolder folder;
+  const std::string x = std::to_string(length * std::sin(start));
+  const std::string z = std::to_string(-length * std::cos(start));
+  const std::string pivot = "{x: " + std::to_string(-length * std::sin(start)) +
+                            ", y: 0, z: " + std::to_string(length * std::cos(start)) + "}";
+  const Model model = load_adf_files({folder.write(
+      "pendulum.yaml",
+      "bodies: [BODY base, BODY bob]\njoints: [JOINT swing]\n"
+      "BODY base:\n  name: base\n  mass: 0\n"
+      "BODY bob:\n  name: bob\n  mass: 1\n  shape: sphere\n  geometry: {radius: 0.02}\n"
+      "  inertia: {ix: " +
+          std::to_string(inertia) + ", iy: " + std::to_string(inertia) +
+          ", iz: " + std::to_string(inertia) +
+          "}\n  damping: {linear: 0, angular: 0}\n"
+          "  location: {position: {x: " +
+          x + ", y: 0, z: " + z +
+          "}}\n"
+          "JOINT swing:\n  name: swing\n  parent: BODY base\n  child: BODY bob\n"
+          "  parent pivot: {x: 0, y: 0, z: 0}\n  parent axis: {x: 0, y: 1, z: 0}\n"
+          "  child pivot: " +
+          pivot + "\n  child axis: {x: 0, y: 1, z: 0}\n  type: continuous\n")});
+  Simulation sim(model, 0.001);
+  std::vector<double> crossings;  // times the bob passes x = 0 (interpolated)
+  double previous_x = sim.body_pose(1).position_m.x;
+  while (sim.time_s() < 10.0) {
+    sim.step();
+    const double now_x = sim.body_pose(1).position_m.x;
+    if ((previous_x > 0) != (now_x > 0))
+      crossings.push_back(sim.time_s() - sim.dt_s() * now_x / (now_x - previous_x));
+    previous_x = now_x;
+  }
+  ASSERT_GE(crossings.size(), 10u);
+  const double measured = 2 * (crossings.back() - crossings.front()) / (crossings.size() - 1);
+  const double expected = 2 * M_PI * std::sqrt((inertia + length * length) / (kGravity * length)) *
+                          (1 + start * start / 16);
+  EXPECT_NEAR(measured, expected, 0.02 * expected);
+}
+
+TEST(Simulation, KukaJointsReachTheirTargetsUnderTheirPid) {
+  const Model model = load_adf_files({kModels + "robots/blender-kuka.yaml"});
+  Simulation sim(model, 0.001);
+  const std::array<double, 7> targets = {0.5, -0.4, 0.3, 0.6, -0.5, 0.4, 0.7};
+  BodyCommand command{};
+  command.joint_count = 7;
+  for (std::size_t j = 0; j < 7; ++j) {
+    command.joint_values[j] = targets[j];
+    command.joint_types[j] = JointCommandType::kPosition;
+  }
+  ASSERT_EQ(command_problem(command, 7), nullptr);
+  sim.set_command(body_index(model, "base"), command);
+  const double gap = run_for(sim, 2.0);
+  const std::vector<int>& joints = model.descendant_joints[body_index(model, "base")];
+  for (std::size_t j = 0; j < 7; ++j)
+    EXPECT_NEAR(sim.joint_position(joints[j]), targets[j], 0.01) << model.joints[joints[j]].name;
+  EXPECT_LT(gap, 0.002);
+}
+
+TEST(Simulation, RealModelsRunTenSecondsHoldingTogether) {
+  for (const char* file : {"robots/blender-kuka.yaml", "puzzles/parallel_structure.yaml"}) {
+    const Model model = load_adf_files({kModels + file});
+    Simulation sim(model, 0.001);
+    const double gap = run_for(sim, 10.0);
+    EXPECT_TRUE(sim.all_finite()) << file;
+    EXPECT_LT(gap, 0.002) << file;
+  }
+}
+
+TEST(Simulation, FourBarLoopStaysClosedUnderGravity) {
+  Model model = load_adf_files({kModels + "puzzles/parallel_structure.yaml"});
+  ASSERT_EQ(model.closed_loop_count, 1);
+  Simulation sim(model, 0.001);
+  run_for(sim, 10.0);
+  const std::size_t loop_joint = 4;  // JOINT l1-l4 closes the loop
+  ASSERT_EQ(model.joints[loop_joint].name, "l1-l4");
+  EXPECT_LT(sim.joint_pivot_gap_m(loop_joint), 0.002);
+  // It did move: gravity swings the linkage away from where it was drawn.
+  EXPECT_GT(std::abs(sim.joint_position(1)), 0.1);
+}
+
+// Crank r = 0.1 m turning about z at the origin, rod l = 0.3 m, and a slider on
+// the x axis: the slider's joint follows x = r cos(q) + sqrt(l^2 - r^2 sin^2(q)).
+TEST(Simulation, PrismaticJointInsideAClosedLoopFollowsTheSliderCrank) {
+  testing::ModelFolder folder;
+  auto box = [](const std::string& name, double x, double length) {
+    return "BODY " + name + ":\n  name: " + name + "\n  mass: 0.5\n  shape: box\n" +
+           "  geometry: {x: " + std::to_string(length) + ", y: 0.02, z: 0.02}\n" +
+           "  damping: {linear: 0, angular: 0}\n  location: {position: {x: " + std::to_string(x) +
+           ", y: 0, z: 0}}\n";
+  };
+  auto joint = [](const std::string& name, const std::string& parent, const std::string& child,
+                  const std::string& parent_pivot, const std::string& child_pivot,
+                  const std::string& type, const std::string& axis) {
+    return "JOINT " + name + ":\n  name: " + name + "\n  parent: BODY " + parent +
+           "\n  child: BODY " + child + "\n  parent pivot: " + parent_pivot +
+           "\n  child pivot: " + child_pivot + "\n  parent axis: " + axis +
+           "\n  child axis: " + axis + "\n  type: " + type + "\n  max motor impulse: 1.0\n";
+  };
+  const std::string z = "{x: 0, y: 0, z: 1}", x = "{x: 1, y: 0, z: 0}";
+  const Model model = load_adf_files({folder.write(
+      "slider_crank.yaml",
+      "bodies: [BODY base, BODY crank, BODY rod, BODY slider]\n"
+      "joints: [JOINT base-crank, JOINT crank-rod, JOINT rod-slider, JOINT base-slider]\n"
+      "gravity: {x: 0, y: 0, z: 0}\nignore inter-collision: true\n"
+      "BODY base:\n  name: base\n  mass: 0\n" +
+          box("crank", 0.05, 0.1) + box("rod", 0.25, 0.3) + box("slider", 0.4, 0.04) +
+          joint("base-crank", "base", "crank", "{x: 0, y: 0, z: 0}", "{x: -0.05, y: 0, z: 0}",
+                "continuous", z) +
+          joint("crank-rod", "crank", "rod", "{x: 0.05, y: 0, z: 0}", "{x: -0.15, y: 0, z: 0}",
+                "continuous", z) +
+          joint("rod-slider", "rod", "slider", "{x: 0.15, y: 0, z: 0}", "{x: 0, y: 0, z: 0}",
+                "continuous", z) +
+          joint("base-slider", "base", "slider", "{x: 0.4, y: 0, z: 0}", "{x: 0, y: 0, z: 0}",
+                "prismatic", x))});
+  ASSERT_EQ(model.closed_loop_count, 1);
+  Simulation sim(model, 0.001);
+  BodyCommand command{};
+  command.joint_count = 1;  // the crank, turning at 2 rad/s
+  command.joint_values[0] = 2.0;
+  command.joint_types[0] = JointCommandType::kVelocity;
+  sim.set_command(0, command);
+  double worst_error = 0.0, largest_gap = 0.0, turned = 0.0;
+  for (int i = 0; i < 3000; ++i) {
+    sim.step();
+    const double q = sim.joint_position(0);
+    const double expected = 0.1 * std::cos(q) + std::sqrt(0.09 - 0.01 * std::sin(q) * std::sin(q));
+    worst_error = std::max(worst_error, std::abs(sim.joint_position(3) + 0.4 - expected));
+    for (std::size_t j = 0; j < 4; ++j)
+      largest_gap = std::max(largest_gap, sim.joint_pivot_gap_m(j));
+    turned = std::max(turned, std::abs(q));
+  }
+  EXPECT_GT(turned, 2.0);  // the crank went well round
+  EXPECT_LT(worst_error, 0.002);
+  EXPECT_LT(largest_gap, 0.002);
+}
+
+TEST(Simulation, ModelSplitOverTwoFilesSimulates) {
+  testing::ModelFolder folder;
+  const std::string bodies = folder.write(
+      "bodies.yaml",
+      "bodies: [BODY base, BODY arm]\nBODY base:\n  name: base\n  mass: 0\n"
+      "BODY arm:\n  name: arm\n  mass: 1\n  shape: box\n  geometry: {x: 0.2, y: 0.02, z: 0.02}\n"
+      "  location: {position: {x: 0.1, y: 0, z: 0}}\n");
+  const std::string joints = folder.write(
+      "joints.yaml",
+      "joints: [JOINT hinge]\nJOINT hinge:\n  name: hinge\n  parent: BODY base\n"
+      "  child: BODY arm\n  parent pivot: {x: 0, y: 0, z: 0}\n  parent axis: {x: 0, y: 1, z: 0}\n"
+      "  child pivot: {x: -0.1, y: 0, z: 0}\n  child axis: {x: 0, y: 1, z: 0}\n  type: revolute\n");
+  const Model model = load_adf_files({bodies, joints});
+  Simulation sim(model, 0.001);
+  const double gap = run_for(sim, 1.0);
+  EXPECT_LT(gap, 0.002);
+  // Hinged at the origin, the arm swings down instead of falling away.
+  const Pose arm = sim.body_pose(1);
+  EXPECT_NEAR(std::hypot(arm.position_m.x, arm.position_m.z), 0.1, 0.002);
+  EXPECT_LT(arm.position_m.z, -0.05);
+}
+
+TEST(Simulation, ClothWithFixedCornersHangsInsteadOfFalling) {
+  testing::ModelFolder folder;
+  std::string obj;
+  const int n = 11;  // an 11 x 11 grid over 1 m x 1 m in the xy plane
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j)
+      obj += "v " + std::to_string(j * 0.1) + " " + std::to_string(i * 0.1) + " 0\n";
+  for (int i = 0; i + 1 < n; ++i)
+    for (int j = 0; j + 1 < n; ++j) {
+      const int a = i * n + j + 1, b = a + 1, c = a + n, d = c + 1;  // OBJ is 1-based
+      obj += "f " + std::to_string(a) + " " + std::to_string(b) + " " + std::to_string(d) + "\n";
+      obj += "f " + std::to_string(a) + " " + std::to_string(d) + " " + std::to_string(c) + "\n";
+    }
+  folder.write("sheet.obj", obj);
+  const Model model = load_adf_files(
+      {folder.write("cloth.yaml",
+                    "soft bodies: [SOFTBODY cloth]\nSOFTBODY cloth:\n  name: cloth\n  mass: 0.5\n"
+                    "  mesh: sheet.obj\n  location: {position: {x: 0, y: 0, z: 1}}\n"
+                    "  config: {kLST: 0.9, kDP: 0.01, piterations: 10, bending constraint: 2,\n"
+                    "           fixed nodes: [0, 10]}\n")});
+  ASSERT_EQ(model.soft_bodies.size(), 1u);
+  Simulation sim(model, 0.001);
+  BodyState start{}, end{};
+  sim.fill_soft_body_state(0, start);
+  run_for(sim, 2.0);
+  sim.fill_soft_body_state(0, end);
+  ASSERT_TRUE(sim.all_finite());
+  const double drop = start.pose.position_m.z - end.pose.position_m.z;
+  EXPECT_GT(drop, 0.05);  // it sags
+  EXPECT_LT(drop, 1.0);   // but hangs from its corners: free fall would be 19.6 m
+}
+
+TEST(Simulation, ProximitySensorMeasuresTheDistanceToABody) {
+  testing::ModelFolder folder;
+  const Model model = load_adf_files({folder.write(
+      "sensor.yaml",
+      "bodies: [BODY probe, BODY wall]\nsensors: [SENSOR range]\n"
+      "BODY probe:\n  name: probe\n  mass: 0\n  shape: sphere\n  geometry: {radius: 0.05}\n"
+      "BODY wall:\n  name: wall\n  mass: 0\n  shape: box\n  geometry: {x: 0.2, y: 1, z: 1}\n"
+      "  location: {position: {x: 1, y: 0, z: 0}}\n"
+      "SENSOR range:\n  name: range\n  type: Proximity\n  parent: BODY probe\n  range: 2.0\n"
+      "  array:\n  - {offset: {x: 0, y: 0, z: 0}, direction: {x: 1, y: 0, z: 0}}\n"
+      "  - {offset: {x: 0, y: 0, z: 0}, direction: {x: -1, y: 0, z: 0}}\n")});
+  Simulation sim(model, 0.001);
+  sim.step();
+  BodyState state{};
+  sim.fill_state(0, state);
+  ASSERT_EQ(state.sensor_ray_count, 2u);
+  EXPECT_NEAR(state.sensor_distances_m[0], 0.9, 0.005);  // the wall's near face
+  EXPECT_EQ(state.sensor_distances_m[1], -1.0);          // nothing behind
+}
+
+TEST(Simulation, CommandsWithNanOrBadJointsAreRefused) {
+  BodyCommand good{};
+  good.joint_count = 2;
+  EXPECT_EQ(command_problem(good, 2), nullptr);
+  BodyCommand too_many = good;
+  too_many.joint_count = 3;
+  EXPECT_NE(command_problem(too_many, 2), nullptr);
+  BodyCommand nan_joint = good;
+  nan_joint.joint_values[1] = std::nan("");
+  EXPECT_NE(command_problem(nan_joint, 2), nullptr);
+  BodyCommand inf_force = good;
+  inf_force.wrench.force_n.y = INFINITY;
+  EXPECT_NE(command_problem(inf_force, 2), nullptr);
+  BodyCommand bad_type = good;
+  bad_type.cartesian_type = static_cast<CartesianCommandType>(7);
+  EXPECT_NE(command_problem(bad_type, 2), nullptr);
+}
+
+TEST(Simulation, ResetReturnsToTheStart) {
+  const Model model = load_adf_files({kModels + "puzzles/parallel_structure.yaml"});
+  Simulation sim(model, 0.001);
+  const double start = sim.joint_position(1);
+  run_for(sim, 1.0);
+  EXPECT_GT(std::abs(sim.joint_position(1) - start), 0.05);
+  sim.reset();
+  EXPECT_EQ(sim.step_count(), 0u);
+  EXPECT_NEAR(sim.joint_position(1), start, 1e-9);
+}
+
+// Effort, velocity and position commands move a joint the way its position counts.
+TEST(Simulation, JointCommandsFollowTheSignOfThePosition) {
+  for (const std::string type : {"revolute", "prismatic"}) {
+    testing::ModelFolder folder;
+    const Model model = load_adf_files({folder.write(
+        "arm.yaml",
+        "bodies: [BODY base, BODY arm]\njoints: [JOINT j]\ngravity: {x: 0, y: 0, z: 0}\n"
+        "BODY base:\n  name: base\n  mass: 0\n"
+        "BODY arm:\n  name: arm\n  mass: 1\n  shape: box\n  geometry: {x: 0.2, y: 0.02, z: 0.02}\n"
+        "  location: {position: {x: 0.1, y: 0, z: 0}}\n"
+        "JOINT j:\n  name: j\n  parent: BODY base\n  child: BODY arm\n"
+        "  parent pivot: {x: 0, y: 0, z: 0}\n  parent axis: {x: 0, y: 1, z: 1}\n"
+        "  child pivot: {x: -0.1, y: 0, z: 0}\n  child axis: {x: 0, y: 1, z: 1}\n"
+        "  controller: {P: 20, I: 0, D: 2}\n  max motor impulse: 1\n  type: " +
+            type + "\n")});
+    for (JointCommandType kind :
+         {JointCommandType::kEffort, JointCommandType::kVelocity, JointCommandType::kPosition}) {
+      Simulation sim(model, 0.001);
+      BodyCommand command{};
+      command.joint_count = 1;
+      command.joint_types[0] = kind;
+      command.joint_values[0] = 0.3;
+      sim.set_command(0, command);
+      run_for(sim, 0.5);
+      EXPECT_GT(sim.joint_position(0), 0.02) << type << " command " << static_cast<int>(kind);
+      EXPECT_LT(sim.joint_pivot_gap_m(0), 0.002) << type;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace afhub::physics
