@@ -1,4 +1,5 @@
-// `afhub status`: the hub's health: processes, bodies and mempool usage.
+// `afhub status`: the hub's health (processes, bodies, mempool usage) and, when a
+// simulation runs, its world state (clock, rate, refused commands, watchdog expiries).
 #include <cstdio>
 #include <memory>
 #include <thread>
@@ -8,6 +9,7 @@
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/hub/json_writer.hpp"
 #include "afhub/shm_layout/health.hpp"
+#include "afhub/shm_layout/world.hpp"
 #include "commands.hpp"
 
 namespace afhub::cli {
@@ -37,6 +39,13 @@ int run_status(const StatusOptions& options) {
   CatalogReader catalog;
   catalog.wait(std::chrono::milliseconds(1000));
   const BodyList& bodies = catalog.latest();
+  // A running simulation's world state arrives at once (publisher history); allow a moment.
+  LatestReader<WorldState> world_reader(
+      {std::string(kService), std::string(kWorldInstance), std::string(kStateEvent)});
+  const auto world_deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(100);
+  while (!world_reader.latest() && std::chrono::steady_clock::now() < world_deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  const WorldState* world = world_reader.latest();
   if (options.json) {
     JsonWriter json;
     json.begin_object();
@@ -61,6 +70,25 @@ int run_status(const StatusOptions& options) {
           .value(bodies.bodies[i].publish_rate_hz)
           .end_object();
     json.end_array();
+    json.key("world");
+    if (world) {
+      json.begin_object()
+          .key("sim_step")
+          .value(static_cast<unsigned long long>(world->header.sim_step))
+          .key("sim_time_s")
+          .value(world->header.sim_time_s)
+          .key("rate_hz")
+          .value(world->achieved_rate_hz)
+          .key("paused")
+          .value(world->paused != 0)
+          .key("rejected_commands")
+          .value(static_cast<unsigned long long>(world->rejected_commands))
+          .key("watchdog_expiries")
+          .value(static_cast<unsigned long long>(world->watchdog_expiries))
+          .end_object();
+    } else {
+      json.begin_object().end_object();
+    }
     json.key("mempools").begin_array();
     for (std::uint32_t i = 0; i < health.mempool_count; ++i) {
       const MempoolUsage& pool = health.mempools[i];
@@ -83,6 +111,14 @@ int run_status(const StatusOptions& options) {
   }
   std::printf("hub: pid %u, up %.1f s, %u bodies, %u processes\n", health.header.publisher_pid,
               health.hub_uptime_s, health.body_count, health.process_count);
+  if (world)
+    std::printf(
+        "world: step %llu, sim time %.3f s, %.1f steps/s%s, %llu commands refused, %llu watchdog "
+        "expiries\n",
+        static_cast<unsigned long long>(world->header.sim_step), world->header.sim_time_s,
+        world->achieved_rate_hz, world->paused ? " (paused)" : "",
+        static_cast<unsigned long long>(world->rejected_commands),
+        static_cast<unsigned long long>(world->watchdog_expiries));
   std::printf("\nprocesses:\n");
   for (std::uint32_t i = 0; i < health.process_count; ++i)
     std::printf("  %-40s pid %d\n", std::string(name_of(health.processes[i].name)).c_str(),

@@ -2,7 +2,7 @@
 #include "collision_shapes.hpp"
 
 #include <BulletCollision/CollisionShapes/btConvexPointCloudShape.h>
-#include <BulletCollision/Gimpact/btGImpactShape.h>
+#include <LinearMath/btConvexHullComputer.h>
 
 #include "frames.hpp"
 
@@ -45,6 +45,17 @@ btCollisionShape* primitive(const ShapeSpec& spec, CollisionShape& owner) {
   return owner.shapes.back().get();
 }
 
+// The hull's own vertices only (a mesh has many more): cheaper support queries.
+std::unique_ptr<btCollisionShape> convex_hull(const std::vector<btVector3>& points) {
+  btConvexHullComputer computer;
+  computer.compute(points.data()->m_floats, sizeof(btVector3), static_cast<int>(points.size()), 0,
+                   0);
+  auto hull = std::make_unique<btConvexHullShape>();
+  for (int i = 0; i < computer.vertices.size(); ++i) hull->addPoint(computer.vertices[i], false);
+  hull->recalcLocalAabb();
+  return hull;
+}
+
 void add_mesh(const BodySpec& body, const btTransform& com_from_mesh, const TriangleMesh& mesh,
               bool dynamic, CollisionShape& owner) {
   // Vertices move into the centre-of-mass frame, so no compound is needed.
@@ -59,14 +70,9 @@ void add_mesh(const BodySpec& body, const btTransform& com_from_mesh, const Tria
     return owner.triangles.get();
   };
   switch (body.collision_mesh_type) {
-    case CollisionMeshType::kConvexHull: {
-      auto hull = std::make_unique<btConvexHullShape>();
-      for (const auto& p : points) hull->addPoint(p, false);
-      hull->recalcLocalAabb();
-      hull->optimizeConvexHull();
-      shape = std::move(hull);
+    case CollisionMeshType::kConvexHull:
+      shape = convex_hull(points);
       break;
-    }
     case CollisionMeshType::kConvexMesh:
       shape = std::make_unique<btConvexTriangleMeshShape>(triangles());
       break;
@@ -80,13 +86,12 @@ void add_mesh(const BodySpec& body, const btTransform& com_from_mesh, const Tria
       break;
     }
     case CollisionMeshType::kTrimesh:
-      if (dynamic) {
-        auto gimpact = std::make_unique<btGImpactMeshShape>(triangles());
-        gimpact->updateBound();
-        shape = std::move(gimpact);
-      } else {
+      // A moving triangle mesh collides as its convex hull, as in MuJoCo: Bullet's
+      // GImpact (AMBF's choice) allocates on every contact step and is far slower.
+      if (dynamic)
+        shape = convex_hull(points);
+      else
         shape = std::make_unique<btBvhTriangleMeshShape>(triangles(), true);
-      }
       break;
   }
   shape->setMargin(body.collision_margin);

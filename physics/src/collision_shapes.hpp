@@ -22,7 +22,7 @@ struct CollisionShape {
 
 // `com_from_mesh`: the mesh frame seen from the centre of mass (inverse of the
 // inertial offset). `mesh` is the loaded collision mesh, when the body has one.
-// A dynamic body cannot have a static triangle mesh: its TRIMESH becomes a GImpact shape.
+// A dynamic body cannot have a static triangle mesh: its TRIMESH collides as its convex hull.
 CollisionShape build_collision_shape(const BodySpec& body, const btTransform& com_from_mesh,
                                      const TriangleMesh* mesh, bool dynamic);
 

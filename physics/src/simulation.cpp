@@ -3,7 +3,6 @@
 // Cartesian and joint commands applied before each fixed step.
 #include "afhub/physics/simulation.hpp"
 
-#include <BulletCollision/Gimpact/btGImpactCollisionAlgorithm.h>
 #include <BulletSoftBody/btSoftBodyHelpers.h>
 #include <BulletSoftBody/btSoftBodyRigidBodyCollisionConfiguration.h>
 #include <BulletSoftBody/btSoftRigidDynamicsWorld.h>
@@ -108,6 +107,26 @@ struct SensorRayCallback : btCollisionWorld::ClosestRayResultCallback {
   const btCollisionObject* ignore_;
 };
 
+// Bullet's solver grows its work arrays when a scene gets more contacts or active
+// joint limits than before: a heap allocation in the middle of a run. Reserving
+// room up front keeps the step allocation-free for any scene that fits.
+class PreallocatedSolver : public btSequentialImpulseConstraintSolver {
+ public:
+  PreallocatedSolver(int bodies, int joints) {
+    constexpr int kContacts = 4096;  // contact points, each with two friction rows
+    const int joint_rows = 6 * joints + 64;
+    m_tmpSolverBodyPool.reserve(bodies + 64);
+    m_tmpSolverContactConstraintPool.reserve(kContacts);
+    m_tmpSolverContactFrictionConstraintPool.reserve(2 * kContacts);
+    m_tmpSolverContactRollingFrictionConstraintPool.reserve(3 * kContacts);
+    m_tmpSolverNonContactConstraintPool.reserve(joint_rows);
+    m_orderTmpConstraintPool.reserve(kContacts);
+    m_orderFrictionConstraintPool.reserve(2 * kContacts);
+    m_orderNonContactConstraintPool.reserve(joint_rows);
+    m_tmpConstraintSizesPool.reserve(joints + 64);
+  }
+};
+
 // Bullet's btSoftBody::Config and Material fields by their ADF names.
 void configure_soft_body(btSoftBody& soft, const SoftBodySpec& spec) {
   btSoftBody::Config& c = soft.m_cfg;
@@ -158,7 +177,7 @@ struct Simulation::Data {
   btSoftBodyRigidBodyCollisionConfiguration collision_config;
   btCollisionDispatcher dispatcher{&collision_config};
   btDbvtBroadphase broadphase;
-  btSequentialImpulseConstraintSolver solver;
+  PreallocatedSolver solver;
   btSoftRigidDynamicsWorld world{&dispatcher, &broadphase, &solver, &collision_config};
   CollisionFilter filter;
 
@@ -167,7 +186,11 @@ struct Simulation::Data {
   std::vector<SoftBodyData> soft_bodies;
   std::vector<Ray> rays;
 
-  Data(const Model& m, double dt) : model(m), dt_s(dt), filter(m) {}
+  Data(const Model& m, double dt)
+      : model(m),
+        dt_s(dt),
+        solver(static_cast<int>(m.bodies.size()), static_cast<int>(m.joints.size())),
+        filter(m) {}
   ~Data() {
     for (auto& joint : joints) world.removeConstraint(&joint->constraint());
     for (auto& body : bodies) world.removeRigidBody(body.body.get());
@@ -379,7 +402,6 @@ void Simulation::Data::read_sensors() noexcept {
 Simulation::Simulation(const Model& model, double dt_s)
     : data_(std::make_unique<Data>(model, dt_s)) {
   Data& d = *data_;
-  btGImpactCollisionAlgorithm::registerAlgorithm(&d.dispatcher);
   d.broadphase.getOverlappingPairCache()->setOverlapFilterCallback(&d.filter);
   d.world.setGravity(to_bt(model.world.gravity_mps2));
   d.world.getWorldInfo().m_gravity = to_bt(model.world.gravity_mps2);

@@ -1,13 +1,17 @@
-// The steady-state loop (publish state, read command; read state, write command)
-// must not touch the heap. Every operator new and, outside sanitizer builds,
-// every malloc in this binary is counted while the loop runs.
+// The steady-state loop (publish state, read command; read state, write command;
+// and the physics step between them) must not touch the heap. Every operator new and, outside
+// sanitizer builds, every malloc in this binary is counted while the loop runs.
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <cmath>
 #include <cstdlib>
 #include <new>
 
 #include "afhub/hub/bodies.hpp"
+#include "afhub/hub/stop_signal.hpp"
+#include "afhub/physics/adf_loader.hpp"
+#include "afhub/physics/sim_channels.hpp"
 #include "afhub_process.hpp"
 
 // The replacements below pair malloc with free on purpose; GCC cannot see that.
@@ -126,6 +130,46 @@ TEST(HotPath, SteadyStateLoopDoesNotAllocate) {
   EXPECT_TRUE(all_ok);
   EXPECT_EQ(g_allocations.load(), 0) << "heap allocations in " << kCycles << " steady-state cycles";
   EXPECT_EQ(physics.latest_command()->joint_values[6], static_cast<double>(100 + kCycles - 1));
+}
+
+// The physics loop of `afhub run` on the real models: commands in, Bullet step
+// (joint PID, closed loop, mesh shapes), states and world state out, and a
+// controller reading the state and writing position commands.
+TEST(HotPath, PhysicsLoopDoesNotAllocate) {
+  const std::string models = AFHUB_SHARED_MODELS "/descriptions/multi-bodies/";
+  const physics::Model model = physics::load_adf_files(
+      {models + "robots/blender-kuka.yaml", models + "puzzles/parallel_structure.yaml"});
+  physics::Simulation sim(model, 0.001);
+  physics::SimChannels channels(sim, 0.5);
+  BodyClient controller("ambf/env/base");
+  auto one_cycle = [&]() {
+    channels.apply_commands(monotonic_ns());
+    sim.step();
+    channels.publish(0.0, 0.0, false);
+    const BodyState* state = controller.latest_state();
+    BodyCommand* command = controller.loan_command();
+    if (!state || !command) return false;
+    command->joint_count = state->joint_count;
+    for (std::uint32_t j = 0; j < state->joint_count; ++j) {
+      command->joint_types[j] = JointCommandType::kPosition;
+      command->joint_values[j] = 0.3 * std::sin(1e-3 * static_cast<double>(sim.step_count()) + j);
+    }
+    controller.publish_command(command);
+    return true;
+  };
+  ASSERT_TRUE(test::wait_until([&] { return one_cycle(); }, 2s));
+  for (int i = 0; i < 500; ++i) ASSERT_TRUE(one_cycle());  // first contacts, first commands
+
+  constexpr int kCycles = 5000;
+  g_allocations = 0;
+  g_counting = true;
+  bool all_ok = true;
+  for (int i = 0; i < kCycles; ++i) all_ok = one_cycle() && all_ok;
+  g_counting = false;
+  EXPECT_TRUE(all_ok);
+  EXPECT_EQ(g_allocations.load(), 0) << "heap allocations in " << kCycles << " physics cycles";
+  EXPECT_TRUE(sim.all_finite());
+  EXPECT_EQ(channels.rejected_commands(), 0u);
 }
 
 }  // namespace

@@ -1,0 +1,124 @@
+// `afhub run` end to end against a hub: the KUKA on its channels, commands that
+// move it, refused NaN commands counted in the world state, the watchdog, the
+// launch file with -l, the report, and real-time pacing.
+#include <gtest/gtest.h>
+#include <signal.h>
+
+#include <cmath>
+#include <thread>
+
+#include "afhub/hub/bodies.hpp"
+#include "afhub/hub/channel_names.hpp"
+#include "afhub/shm_layout/world.hpp"
+#include "afhub_process.hpp"
+#include "model_files.hpp"
+
+namespace afhub::test {
+namespace {
+
+using namespace std::chrono_literals;
+
+const std::string kDescriptions = AFHUB_SHARED_MODELS "/descriptions/";
+const std::string kKuka = kDescriptions + "multi-bodies/robots/blender-kuka.yaml";
+
+bool contains(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
+
+// The number after "key": in a flat JSON text, or NaN.
+double json_number(const std::string& json, const std::string& key) {
+  const std::size_t at = json.find("\"" + key + "\":");
+  if (at == std::string::npos) return std::nan("");
+  return std::strtod(json.c_str() + at + key.size() + 3, nullptr);
+}
+
+TEST(Run, KukaOnChannelsObeysCommandsRefusesNanAndTripsTheWatchdog) {
+  afhub::testing::ModelFolder folder;
+  const std::string log = (folder.dir() / "run.log").string();
+  ScopedProcess physics(spawn_afhub({"run", kKuka, "--no-autostart"}, log));
+  BodyClient base("ambf/env/base");
+  LatestReader<WorldState> world(
+      {std::string(kService), std::string(kWorldInstance), std::string(kStateEvent)});
+  ASSERT_TRUE(wait_until([&] { return base.latest_state() && world.latest(); }, 10s))
+      << read_file(log);
+  ASSERT_EQ(base.latest_state()->joint_count, 7u);
+
+  // A NaN command is refused and counted, and nothing moves.
+  BodyCommand* bad = base.loan_command();
+  ASSERT_NE(bad, nullptr);
+  bad->joint_count = 1;
+  bad->joint_types[0] = JointCommandType::kPosition;
+  bad->joint_values[0] = std::nan("");
+  base.publish_command(bad);
+  ASSERT_TRUE(wait_until([&] { return world.latest()->rejected_commands == 1; }, 2s));
+  EXPECT_TRUE(std::isfinite(base.latest_state()->joint_positions[0]));
+  RunResult status = run_afhub({"status", "--json"});
+  EXPECT_TRUE(contains(status.out, "\"rejected_commands\":1")) << status.out;
+
+  // Position commands at 200 Hz for 2 s bring every joint to its target.
+  const double targets[7] = {0.4, -0.3, 0.2, 0.5, -0.4, 0.3, 0.6};
+  const auto until = std::chrono::steady_clock::now() + 2s;
+  while (std::chrono::steady_clock::now() < until) {
+    BodyCommand* command = base.loan_command();
+    ASSERT_NE(command, nullptr);
+    command->joint_count = 7;
+    for (int j = 0; j < 7; ++j) {
+      command->joint_types[j] = JointCommandType::kPosition;
+      command->joint_values[j] = targets[j];
+    }
+    base.publish_command(command);
+    std::this_thread::sleep_for(5ms);
+  }
+  const BodyState* state = base.latest_state();
+  for (int j = 0; j < 7; ++j) EXPECT_NEAR(state->joint_positions[j], targets[j], 0.01) << j;
+
+  // Commands stop: the watchdog engages after 0.5 s and says so once.
+  ASSERT_TRUE(wait_until([&] { return world.latest()->watchdog_expiries == 1; }, 2s));
+  EXPECT_EQ(physics.stop(), 0);
+  const std::string output = read_file(log);
+  EXPECT_TRUE(contains(output, "refused a command for ambf/env/base: a joint value is NaN"))
+      << output;
+  EXPECT_TRUE(contains(output, "no command for ambf/env/base in 0.500 s")) << output;
+}
+
+TEST(Run, LaunchFileWithIndexRunsRealTimeAndReports) {
+  afhub::testing::ModelFolder folder;
+  const std::string report = (folder.dir() / "report.json").string();
+  RunResult run = run_afhub({"run", "--launch", kDescriptions + "launch.yaml", "-l", "10",
+                             "--steps", "2000", "--report", report, "--no-autostart"},
+                            30s);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const std::string json = read_file(report);
+  EXPECT_EQ(json_number(json, "steps"), 2000);
+  EXPECT_NEAR(json_number(json, "sim_time_s"), 2.0, 1e-9);
+  // Absolute deadlines: never faster than real time; a little slower when the machine is busy.
+  EXPECT_GE(json_number(json, "wall_time_s"), 1.999);
+  EXPECT_LT(json_number(json, "wall_time_s"), 3.0);
+  EXPECT_LT(json_number(json, "max_joint_error_m"), 0.002);
+  EXPECT_TRUE(contains(json, "\"nan_detected\":false")) << json;
+  for (const char* key : {"\"ambf/env/l1\":{\"position\":[", "\"ambf/env/Plane\"",
+                          "\"ambf/env/l1-l4\":{\"position\":", "\"step_time_us\":{\"max\":",
+                          "\"p50\":", "\"p99\":", "\"quaternion\":["})
+    EXPECT_TRUE(contains(json, key)) << key << " in " << json;
+}
+
+TEST(Run, MissingModelOfALaunchFileIsReportedWhereItIsListed) {
+  RunResult run =
+      run_afhub({"run", "--launch", kDescriptions + "launch.yaml", "-l", "3", "--offline"});
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_TRUE(contains(run.err,
+                       "launch.yaml:10:5: error: multibody config #3 "
+                       "'./multi-bodies/robots/blender-raven2.yaml' not found"))
+      << run.err;
+  RunResult beyond =
+      run_afhub({"run", "--launch", kDescriptions + "launch.yaml", "-l", "40", "--offline"});
+  EXPECT_EQ(beyond.exit_code, 1);
+  EXPECT_TRUE(contains(beyond.err, "model index 40 (-l) is beyond 'multibody configs'"))
+      << beyond.err;
+  RunResult no_model = run_afhub({"run", "--offline"});
+  EXPECT_EQ(no_model.exit_code, 1);
+  EXPECT_TRUE(contains(no_model.err, "nothing to simulate")) << no_model.err;
+}
+
+}  // namespace
+}  // namespace afhub::test
