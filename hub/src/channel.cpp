@@ -48,7 +48,8 @@ struct RawWriter::Port {
   iox::popo::UntypedPublisher publisher;
 };
 
-RawWriter::RawWriter(const ChannelId& channel, PayloadKind kind) : channel_(channel), kind_(kind) {
+RawWriter::RawWriter(const ChannelId& channel, PayloadKind kind)
+    : channel_(channel), kind_(kind), pid_(static_cast<std::uint32_t>(getpid())) {
   require_fits(channel);
   port_ = std::make_unique<Port>(channel);
 }
@@ -64,7 +65,7 @@ void RawWriter::publish(void* payload) noexcept {
   auto* header = static_cast<PayloadHeader*>(payload);
   header->layout_id = kLayoutId;
   header->kind = kind_;
-  header->publisher_pid = static_cast<std::uint32_t>(getpid());
+  header->publisher_pid = pid_;
   header->sequence = ++sequence_;
   header->publish_stamp_ns = monotonic_now_ns();
   port_->publisher.publish(payload);

@@ -37,6 +37,7 @@ class RawWriter {
   struct Port;
   ChannelId channel_;
   PayloadKind kind_;
+  std::uint32_t pid_;  // read once: getpid() is a system call
   std::uint64_t sequence_ = 0;
   std::unique_ptr<Port> port_;
 };

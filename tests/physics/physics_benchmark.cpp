@@ -1,0 +1,91 @@
+// Load and step times of the real AMBF models, with and without publishing, and
+// what publishing ten bodies costs. Run: build/release/bin/physics_benchmark
+// (it starts a hub when none runs, and stops it at the end).
+#include <benchmark/benchmark.h>
+
+#include <signal.h>
+
+#include <cstdio>
+
+#include "afhub/hub/hub_presence.hpp"
+#include "afhub/hub/stop_signal.hpp"
+#include "afhub/physics/adf_loader.hpp"
+#include "afhub/physics/sim_channels.hpp"
+#include "afhub_process.hpp"
+#include "model_files.hpp"
+
+namespace afhub::physics {
+namespace {
+
+const std::string kModels = AFHUB_SHARED_MODELS "/descriptions/multi-bodies/";
+const std::string kKuka = kModels + "robots/blender-kuka.yaml";
+const std::string kFourBar = kModels + "puzzles/parallel_structure.yaml";
+
+// Loading is parsing the files, reading the meshes and building the Bullet world.
+void BM_Load(benchmark::State& state, const std::string& file) {
+  for (auto _ : state) {
+    Model model = load_adf_files({file});
+    Simulation sim(model, 0.001);
+    benchmark::DoNotOptimize(sim.step_count());
+  }
+}
+BENCHMARK_CAPTURE(BM_Load, kuka, kKuka)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_Load, four_bar, kFourBar)->Unit(benchmark::kMillisecond);
+
+// One step of the physics alone, or the whole loop iteration of `afhub run`:
+// commands read, step, every body's state and the world state published.
+void BM_Step(benchmark::State& state, const std::string& file, bool publish) {
+  const Model model = load_adf_files({file});
+  Simulation sim(model, 0.001);
+  std::unique_ptr<SimChannels> channels;
+  if (publish) channels = std::make_unique<SimChannels>(sim, 0.5);
+  for (auto _ : state) {
+    if (channels) channels->apply_commands(monotonic_ns());
+    sim.step();
+    if (channels) channels->publish(0.0, 0.0, false);
+  }
+  state.counters["bodies"] = static_cast<double>(model.bodies.size());
+}
+BENCHMARK_CAPTURE(BM_Step, kuka_physics, kKuka, false)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_Step, kuka_published, kKuka, true)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_Step, four_bar_physics, kFourBar, false)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_Step, four_bar_published, kFourBar, true)->Unit(benchmark::kMicrosecond);
+
+// Publishing alone, for ten bodies with seven joints each.
+void BM_PublishTenBodies(benchmark::State& state) {
+  afhub::testing::ModelFolder folder;
+  std::string text = "bodies: [";
+  for (int b = 0; b < 10; ++b) text += (b ? ", " : "") + std::string("BODY b") + std::to_string(b);
+  text += "]\n";
+  for (int b = 0; b < 10; ++b)
+    text += "BODY b" + std::to_string(b) + ":\n  name: bench" + std::to_string(b) +
+            "\n  mass: 0\n  shape: sphere\n  geometry: {radius: 0.01}\n";
+  const Model model = load_adf_files({folder.write("ten.yaml", text)});
+  Simulation sim(model, 0.001);
+  SimChannels channels(sim, 0.5);
+  for (auto _ : state) channels.publish(0.0, 0.0, false);
+}
+BENCHMARK(BM_PublishTenBodies)->Unit(benchmark::kMicrosecond);
+
+}  // namespace
+}  // namespace afhub::physics
+
+int main(int argc, char** argv) {
+  benchmark::Initialize(&argc, argv);
+  // A hub of our own when none runs, stopped at the end.
+  pid_t hub = -1;
+  if (afhub::probe_roudi() != afhub::RoudiPresence::kRunning) {
+    hub = afhub::test::spawn_afhub({"hub"});
+    if (!afhub::test::wait_until(
+            [] { return afhub::probe_roudi() == afhub::RoudiPresence::kRunning; },
+            std::chrono::seconds(10))) {
+      std::fprintf(stderr, "physics_benchmark: the hub did not start\n");
+      return 1;
+    }
+  }
+  afhub::connect_to_hub("physics-benchmark", afhub::HubPolicy::kRequire);
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  if (hub > 0) afhub::test::stop_process(hub, SIGTERM);
+  return 0;
+}
