@@ -50,6 +50,16 @@ TEST(Cli, EveryCommandHasHelp) {
   EXPECT_NE(bad.exit_code, 0);
 }
 
+TEST(Cli, DemoSimulatesTheKukaLive) {
+  expect_no_hub();
+  RunResult demo = run_afhub({"demo", "--seconds", "3"}, 30s);
+  EXPECT_EQ(demo.exit_code, 0) << demo.err;
+  EXPECT_TRUE(contains(demo.err, "no hub was running; started one")) << demo.err;
+  EXPECT_TRUE(contains(demo.err, "afhub run: 8 bodies, 7 joints on channels")) << demo.err;
+  EXPECT_TRUE(contains(demo.out, "ambf/env/link7")) << demo.out;
+  EXPECT_EQ(run_afhub({"hub", "stop"}).exit_code, 0);
+}
+
 TEST(Cli, CheckReportsAModelOrWhereItIsWrong) {
   const std::string models = AFHUB_SHARED_MODELS "/descriptions/multi-bodies/";
   RunResult four_bar = run_afhub({"check", models + "puzzles/parallel_structure.yaml"});

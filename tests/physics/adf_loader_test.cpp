@@ -127,6 +127,40 @@ TEST_F(BrokenFiles, EachProblemIsLocatedAndExplained) {
   }
 }
 
+TEST_F(BrokenFiles, ShapeSensorSoftBodyAndActuatorProblemsAreLocatedAndExplained) {
+  const std::string body = "bodies: [BODY a]\nBODY a:\n  name: a\n  mass: 1\n";
+  struct Case {
+    std::string text, expected;
+  };
+  const std::vector<Case> cases = {
+      {body + "  shape: box\n  geometry: {x: 1, y: 1}\n",
+       "model.yaml:6:13: error: 'geometry' of a box needs 'z'"},
+      {body + "  shape: sphere\n  geometry: {radius: -1}\n",
+       "model.yaml:6:22: error: 'geometry.radius' must be positive"},
+      {body + "  shape: cylinder\n  geometry: {radius: 1, height: 1, axis: W}\n",
+       "error: 'geometry.axis' must be X, Y or Z"},
+      {body + "  compound shape: 3\n", "model.yaml:5:19: error: 'compound shape' must be a"},
+      {body + "  mesh: box.STL\n  collision mesh type: BLOB\n",
+       "model.yaml:6:24: error: unknown collision mesh type 'BLOB'"},
+      {body + "  controller output type: TORQUE\n",
+       "error: 'controller output type' must be FORCE or VELOCITY"},
+      {body + "sensors: [SENSOR s]\nSENSOR s:\n  name: s\n  type: Sonar\n  parent: BODY a\n",
+       "model.yaml:8:9: error: unknown sensor type 'Sonar'"},
+      {body + "sensors: [SENSOR s]\nSENSOR s:\n  name: s\n  type: Proximity\n  parent: BODY a\n",
+       "model.yaml:7:3: error: 'SENSOR s' needs 'array' or 'parametric'"},
+      {body + "actuators: [ACTUATOR c]\nACTUATOR c:\n  name: c\n  type: Constraint\n"
+              "  parent: BODY z\n",
+       "model.yaml:9:11: error: parent 'BODY z' of ACTUATOR c is not a loaded body"},
+      {"soft bodies: [SOFTBODY s]\nSOFTBODY s:\n  name: s\n  mass: 1\n",
+       "model.yaml:3:3: error: missing 'mesh'"},
+  };
+  for (const Case& c : cases) {
+    std::string message = error_of(c.text);
+    EXPECT_NE(message.find(c.expected), std::string::npos) << "file:\n"
+                                                           << c.text << "\nmessage: " << message;
+  }
+}
+
 TEST_F(BrokenFiles, JointProblemsAreLocatedAndExplained) {
   const std::string bodies = std::string("bodies: [BODY a, BODY b]\njoints: [JOINT j]\n") +
                              kGoodBody + "BODY b:\n  name: b\n  mass: 1.0\n";
