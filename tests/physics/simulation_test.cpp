@@ -195,6 +195,45 @@ TEST(Simulation, PrismaticJointInsideAClosedLoopFollowsTheSliderCrank) {
   EXPECT_LT(largest_gap, 0.002);
 }
 
+// Every joint type builds, holds its bodies together under gravity, and stays finite.
+TEST(Simulation, EveryJointTypeHoldsTogether) {
+  const std::vector<std::pair<std::string, std::string>> types = {
+      {"revolute", "  joint limits: {low: -1, high: 1}\n"},
+      {"continuous", ""},
+      {"prismatic", "  joint limits: {low: -0.1, high: 0.1}\n"},
+      {"fixed", ""},
+      {"p2p", ""},
+      {"linear spring", "  stiffness: 200\n  damping: 2\n  joint limits: {low: -0.2, high: 0.2}\n"},
+      {"torsion spring", "  stiffness: 20\n  damping: 0.2\n  joint limits: {low: -1, high: 1}\n"},
+      {"cone twist", "  joint limits: {x: 0.5, y: 0.5, z: 0.5}\n"},
+      {"six dof",
+       "  joint limits: {linear: {low: {x: 0, y: 0, z: -0.05}, high: {x: 0, y: 0, z: 0.05}},\n"
+       "                 angular: {low: {x: 0, y: 0, z: -1}, high: {x: 0, y: 0, z: 1}}}\n"},
+      {"six dof spring",
+       "  stiffness: 100\n  damping: 1\n"
+       "  joint limits: {linear: {low: {x: 0, y: 0, z: -0.05}, high: {x: 0, y: 0, z: 0.05}},\n"
+       "                 angular: {low: {x: 0, y: 0, z: -1}, high: {x: 0, y: 0, z: 1}}}\n"},
+  };
+  for (const auto& [type, extra] : types) {
+    testing::ModelFolder folder;
+    const Model model = load_adf_files({folder.write(
+        "joint.yaml",
+        "bodies: [BODY base, BODY arm]\njoints: [JOINT j]\n"
+        "BODY base:\n  name: base\n  mass: 0\n"
+        "BODY arm:\n  name: arm\n  mass: 1\n  shape: box\n  geometry: {x: 0.2, y: 0.02, z: 0.02}\n"
+        "  location: {position: {x: 0.1, y: 0, z: 0}}\n"
+        "JOINT j:\n  name: j\n  parent: BODY base\n  child: BODY arm\n"
+        "  parent pivot: {x: 0, y: 0, z: 0}\n  parent axis: {x: 0, y: 1, z: 0}\n"
+        "  child pivot: {x: -0.1, y: 0, z: 0}\n  child axis: {x: 0, y: 1, z: 0}\n  type: " +
+            type + "\n" + extra)});
+    Simulation sim(model, 0.001);
+    const double gap = run_for(sim, 2.0);
+    EXPECT_TRUE(sim.all_finite()) << type;
+    // The gap leaves out a joint's free directions (a slider's or a spring's travel).
+    EXPECT_LT(gap, 0.002) << type;
+  }
+}
+
 TEST(Simulation, ModelSplitOverTwoFilesSimulates) {
   testing::ModelFolder folder;
   const std::string bodies = folder.write(

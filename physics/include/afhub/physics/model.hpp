@@ -169,7 +169,7 @@ struct WorldSpec {
   std::string file;  // empty: no world file
   Vec3 gravity_mps2{0.0, 0.0, -9.81};
   Vec3 enclosure_m{0.0, 0.0, 0.0};
-  int max_iterations = 10;
+  int max_iterations = 20;  // solver iterations; Bullet has 10, which lets a loop open 2 mm
   std::vector<WorldObjectSpec> lights, cameras;
 };
 
