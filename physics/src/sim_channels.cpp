@@ -97,6 +97,8 @@ SimChannels::SimChannels(Simulation& sim, double watchdog_s)
     channel.index = b;
     channel.publisher = std::make_unique<BodyPublisher>(body.channel);
     channel.joint_count = static_cast<std::uint32_t>(joint_names.size());
+    for (const ActuatorSpec& actuator : model.actuators)
+      if (actuator.parent == static_cast<int>(b)) ++channel.actuator_count;
     channels_.push_back(std::move(channel));
   }
   for (std::size_t s = 0; s < model.soft_bodies.size(); ++s) {
@@ -126,7 +128,8 @@ void SimChannels::apply_commands(std::int64_t now_ns) noexcept {
     if (channel.soft) continue;  // soft bodies take no commands
     const BodyCommand* command = channel.publisher->latest_command();
     if (command && channel.publisher->command_updated()) {
-      if (const char* problem = command_problem(*command, channel.joint_count)) {
+      if (const char* problem =
+              command_problem(*command, channel.joint_count, channel.actuator_count)) {
         ++rejected_;
         if (!channel.told_rejected) {
           std::fprintf(stderr,

@@ -55,11 +55,38 @@ struct BodyData {
   Wrench applied;
   std::vector<int> commanded_joints;         // joints whose current command came from this body
   std::size_t first_ray = 0, ray_count = 0;  // into Data::rays
+  std::vector<int> actuators;                // into Data::actuators, file order
 };
 
 struct SoftBodyData {
   btSoftBody* body = nullptr;  // owned by the world
   std::vector<btVector3> initial_positions;
+};
+
+// A constraint actuator: a point-to-point constraint to whatever body touches it,
+// made when commanded and removed when released.
+struct ActuatorData {
+  int parent = -1;
+  btVector3 point_in_mesh;  // in the parent's mesh frame
+  std::unique_ptr<btPoint2PointConstraint> hold;
+};
+
+// The first dynamic rigid body, other than `parent`, touching the probe sphere.
+struct TouchingBody : btCollisionWorld::ContactResultCallback {
+  explicit TouchingBody(const btCollisionObject* parent) : parent_(parent) {}
+  btScalar addSingleResult(btManifoldPoint&, const btCollisionObjectWrapper* a, int, int,
+                           const btCollisionObjectWrapper* b, int, int) override {
+    for (const btCollisionObjectWrapper* side : {a, b}) {
+      const btCollisionObject* object = side->getCollisionObject();
+      const btRigidBody* body = btRigidBody::upcast(object);
+      if (!found && body && object != parent_ && object->getUserIndex() >= 0 &&
+          body->getInvMass() > 0)
+        found = const_cast<btRigidBody*>(body);
+    }
+    return 0;
+  }
+  const btCollisionObject* parent_;
+  btRigidBody* found = nullptr;
 };
 
 struct Ray {
@@ -185,6 +212,9 @@ struct Simulation::Data {
   std::vector<std::unique_ptr<JointModel>> joints;
   std::vector<SoftBodyData> soft_bodies;
   std::vector<Ray> rays;
+  std::vector<ActuatorData> actuators;
+  btSphereShape probe_shape{0.01};  // what an actuator feels for: 1 cm around its point
+  btCollisionObject probe;
 
   Data(const Model& m, double dt)
       : model(m),
@@ -193,6 +223,8 @@ struct Simulation::Data {
         filter(m) {}
   ~Data() {
     for (auto& joint : joints) world.removeConstraint(&joint->constraint());
+    for (auto& actuator : actuators)
+      if (actuator.hold) world.removeConstraint(actuator.hold.get());
     for (auto& body : bodies) world.removeRigidBody(body.body.get());
     for (auto& soft : soft_bodies) {
       world.removeSoftBody(soft.body);
@@ -204,6 +236,8 @@ struct Simulation::Data {
   void build_joints();
   void build_soft_bodies();
   void build_sensors();
+  void build_actuators();
+  void actuate(ActuatorData& actuator, bool engage) noexcept;
   void apply_cartesian(BodyData& body) noexcept;
   void read_sensors() noexcept;
 };
@@ -331,6 +365,41 @@ void Simulation::Data::build_sensors() {
   }
 }
 
+void Simulation::Data::build_actuators() {
+  probe.setCollisionShape(&probe_shape);
+  for (std::size_t a = 0; a < model.actuators.size(); ++a) {
+    const ActuatorSpec& spec = model.actuators[a];
+    ActuatorData actuator;
+    actuator.parent = spec.parent;
+    actuator.point_in_mesh = to_bt(spec.location.position_m);
+    actuators.push_back(std::move(actuator));
+    bodies[spec.parent].actuators.push_back(static_cast<int>(a));
+  }
+}
+
+void Simulation::Data::actuate(ActuatorData& actuator, bool engage) noexcept {
+  if (engage == static_cast<bool>(actuator.hold)) return;
+  if (!engage) {
+    world.removeConstraint(actuator.hold.get());
+    actuator.hold.reset();
+    return;
+  }
+  BodyData& parent = bodies[actuator.parent];
+  const btTransform mesh = parent.body->getWorldTransform() * parent.com_from_mesh;
+  const btVector3 point = mesh * actuator.point_in_mesh;
+  probe.setWorldTransform(btTransform(btQuaternion::getIdentity(), point));
+  TouchingBody touching(parent.body.get());
+  world.contactTest(&probe, touching);
+  if (!touching.found) return;  // nothing to hold: stays released
+  const ActuatorSpec& spec = model.actuators[&actuator - actuators.data()];
+  actuator.hold = std::make_unique<btPoint2PointConstraint>(
+      *parent.body, *touching.found, parent.body->getWorldTransform().invXform(point),
+      touching.found->getWorldTransform().invXform(point));
+  actuator.hold->m_setting.m_impulseClamp = spec.max_impulse;
+  actuator.hold->m_setting.m_tau = spec.tau;
+  world.addConstraint(actuator.hold.get(), true);
+}
+
 void Simulation::Data::apply_cartesian(BodyData& body) noexcept {
   body.applied = {};
   if (!body.commanded) return;
@@ -411,6 +480,7 @@ Simulation::Simulation(const Model& model, double dt_s)
   d.build_joints();
   d.build_soft_bodies();
   d.build_sensors();
+  d.build_actuators();
   d.read_sensors();
 }
 
@@ -450,6 +520,7 @@ void Simulation::reset() noexcept {
     rb.clearForces();
   }
   for (std::size_t b = 0; b < d.bodies.size(); ++b) clear_command(b);
+  for (ActuatorData& actuator : d.actuators) d.actuate(actuator, false);
   for (SoftBodyData& soft : d.soft_bodies)
     for (int n = 0; n < soft.body->m_nodes.size(); ++n) {
       soft.body->m_nodes[n].m_x = soft.initial_positions[n];
@@ -479,6 +550,8 @@ void Simulation::set_command(std::size_t index, const BodyCommand& command) noex
     d.joints[below[j]]->command(command.joint_types[j], command.joint_values[j]);
     body.commanded_joints.push_back(below[j]);
   }
+  for (std::uint32_t a = 0; a < command.actuator_count && a < body.actuators.size(); ++a)
+    d.actuate(d.actuators[body.actuators[a]], command.actuate[a] != 0);
 }
 
 void Simulation::clear_command(std::size_t index) noexcept {
@@ -544,6 +617,10 @@ double Simulation::joint_pivot_gap_m(std::size_t joint) const noexcept {
   return data_->joints[joint]->pivot_gap_m();
 }
 
+bool Simulation::actuator_engaged(std::size_t actuator) const noexcept {
+  return static_cast<bool>(data_->actuators[actuator].hold);
+}
+
 bool Simulation::all_finite() const noexcept {
   for (const BodyData& body : data_->bodies) {
     const btRigidBody& rb = *body.body;
@@ -557,10 +634,13 @@ bool Simulation::all_finite() const noexcept {
   return true;
 }
 
-const char* command_problem(const BodyCommand& command, std::uint32_t joint_count) noexcept {
+const char* command_problem(const BodyCommand& command, std::uint32_t joint_count,
+                            std::uint32_t actuator_count) noexcept {
   const auto type = static_cast<std::uint8_t>(command.cartesian_type);
   if (type > 2) return "cartesian_type is not FORCE (0), POSITION (1) or VELOCITY (2)";
   if (command.joint_count > joint_count) return "joint_count is beyond the body's joints";
+  if (command.actuator_count > actuator_count)
+    return "actuator_count is beyond the body's actuators";
   const Pose& p = command.pose;
   if (!finite(p.position_m) || !std::isfinite(p.orientation.x) || !std::isfinite(p.orientation.y) ||
       !std::isfinite(p.orientation.z) || !std::isfinite(p.orientation.w))

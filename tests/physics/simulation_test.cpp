@@ -308,6 +308,38 @@ TEST(Simulation, ProximitySensorMeasuresTheDistanceToABody) {
   EXPECT_EQ(state.sensor_distances_m[1], -1.0);          // nothing behind
 }
 
+TEST(Simulation, ConstraintActuatorHoldsWhatTouchesItAndLetsGo) {
+  testing::ModelFolder folder;
+  const Model model = load_adf_files({folder.write(
+      "gripper.yaml",
+      "bodies: [BODY gripper, BODY ball, BODY far]\nactuators: [ACTUATOR grip]\n"
+      "BODY gripper:\n  name: gripper\n  mass: 0\n"
+      "BODY ball:\n  name: ball\n  mass: 1\n  shape: sphere\n  geometry: {radius: 0.05}\n"
+      "  location: {position: {x: 0, y: 0, z: -0.045}}\n"
+      "BODY far:\n  name: far\n  mass: 0\n"
+      "  location: {position: {x: 5, y: 0, z: 0}}\n"
+      "ACTUATOR grip:\n  name: grip\n  type: Constraint\n  parent: BODY gripper\n"
+      "  max impulse: 10\n  tau: 1\n")});
+  Simulation sim(model, 0.001);
+  BodyCommand command{};
+  command.actuator_count = 1;
+  command.actuate[0] = 1;
+  ASSERT_EQ(command_problem(command, 0, 1), nullptr);
+  EXPECT_NE(command_problem(command, 0, 0), nullptr);  // a body without actuators
+  sim.set_command(0, command);
+  ASSERT_TRUE(sim.actuator_engaged(0));
+  run_for(sim, 1.0);
+  EXPECT_NEAR(sim.body_pose(1).position_m.z, -0.045, 0.005);  // held against gravity
+  command.actuate[0] = 0;
+  sim.set_command(0, command);
+  EXPECT_FALSE(sim.actuator_engaged(0));
+  run_for(sim, 0.5);
+  EXPECT_LT(sim.body_pose(1).position_m.z, -1.0);  // let go: it falls
+  command.actuate[0] = 1;
+  sim.set_command(0, command);  // nothing touches it any more
+  EXPECT_FALSE(sim.actuator_engaged(0));
+}
+
 TEST(Simulation, CommandsWithNanOrBadJointsAreRefused) {
   BodyCommand good{};
   good.joint_count = 2;

@@ -36,6 +36,7 @@ class SimChannels {
     bool soft = false;
     std::unique_ptr<BodyPublisher> publisher;
     std::uint32_t joint_count = 0;
+    std::uint32_t actuator_count = 0;
     std::int64_t last_command_ns = 0;
     bool commanded = false;  // a command is being applied (the watchdog is armed)
     bool told_rejected = false;

@@ -34,7 +34,8 @@ class Simulation {
   // A command (checked with command_problem first) becomes the body's current
   // one; its joint values go to the body's descendant joints in order.
   void set_command(std::size_t body, const BodyCommand& command) noexcept;
-  // Zero wrench and zero effort on the joints this body commanded (the watchdog).
+  // Zero wrench and zero effort on the joints this body commanded (the watchdog);
+  // its actuators keep what they hold.
   void clear_command(std::size_t body) noexcept;
 
   // Readings of body `body` (an index into model().bodies) and of soft body `soft`.
@@ -46,14 +47,18 @@ class Simulation {
   double joint_pivot_gap_m(std::size_t joint) const noexcept;
   // False as soon as any body or soft-body node holds a NaN or infinite value.
   bool all_finite() const noexcept;
+  // Whether actuator `actuator` (an index into model().actuators) holds a body.
+  bool actuator_engaged(std::size_t actuator) const noexcept;
 
  private:
   struct Data;
   std::unique_ptr<Data> data_;
 };
 
-// nullptr when `command` can be applied to a body with `joint_count` joints; else
-// what is wrong with it (NaN or Inf, a joint beyond the body's, an unknown type).
-const char* command_problem(const BodyCommand& command, std::uint32_t joint_count) noexcept;
+// nullptr when `command` can be applied to a body with `joint_count` joints and
+// `actuator_count` actuators; else what is wrong with it (NaN or Inf, a joint or an
+// actuator beyond the body's, an unknown type).
+const char* command_problem(const BodyCommand& command, std::uint32_t joint_count,
+                            std::uint32_t actuator_count = 0) noexcept;
 
 }  // namespace afhub::physics

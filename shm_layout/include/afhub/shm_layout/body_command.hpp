@@ -29,6 +29,10 @@ struct BodyCommand {
   Twist twist;    // target for kVelocity
   std::array<double, kMaxJointsPerBody> joint_values{};
   std::array<JointCommandType, kMaxJointsPerBody> joint_types{};
+  // The body's constraint actuators in file order: 1 holds whatever body touches the
+  // actuator, 0 lets go; entries [0, actuator_count) are valid.
+  std::uint32_t actuator_count{0};
+  std::array<std::uint8_t, kMaxActuatorsPerBody> actuate{};
 };
 
 }  // namespace afhub

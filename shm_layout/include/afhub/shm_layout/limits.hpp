@@ -34,6 +34,9 @@ inline constexpr std::size_t kMaxBodies = 256;
 // are resolution^2 rays; 32 covers a 5x5 grid and several small arrays).
 inline constexpr std::size_t kMaxSensorRaysPerBody = 32;
 
+// Constraint actuators one body command can drive.
+inline constexpr std::size_t kMaxActuatorsPerBody = 8;
+
 // Lights and cameras whose poses the world state carries.
 inline constexpr std::size_t kMaxWorldObjects = 8;
 
