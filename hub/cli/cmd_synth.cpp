@@ -10,7 +10,7 @@
 #include "afhub/hub/error.hpp"
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/hub/stop_signal.hpp"
-#include "afhub/shm_layout/world.hpp"
+#include "afhub/shm_layout/world_control.hpp"
 #include "commands.hpp"
 
 namespace afhub::cli {
@@ -119,8 +119,8 @@ int run_synth(const SynthOptions& options) {
   const auto period_ns = static_cast<std::int64_t>(1e9 * dt);
   const std::int64_t start_ns = monotonic_ns();
   std::int64_t next_ns = start_ns;
-  std::uint64_t step = 0, last_world_command = 0, steps_to_run = 0;
-  bool paused = false;
+  std::uint64_t step = 0, last_world_command = 0;
+  WorldControl control;
   std::uint64_t rate_window_step = 0;
   std::int64_t rate_window_ns = start_ns;
   double achieved_rate_hz = 0.0;
@@ -128,25 +128,9 @@ int run_synth(const SynthOptions& options) {
     if (const WorldCommand* command = world_command.latest();
         command && command->header.sequence != last_world_command) {
       last_world_command = command->header.sequence;
-      switch (command->action) {
-        case WorldAction::kPause:
-          paused = true;
-          break;
-        case WorldAction::kResume:
-          paused = false;
-          break;
-        case WorldAction::kStep:
-          steps_to_run += command->step_count;
-          break;
-        case WorldAction::kReset:
-          step = 0;
-          break;
-        case WorldAction::kNone:
-          break;
-      }
+      if (control.apply(*command)) step = 0;
     }
-    if (!paused || steps_to_run > 0) {
-      if (paused) --steps_to_run;
+    if (control.take_step()) {
       const double t = static_cast<double>(step) * dt;
       for (std::size_t i = 0; i < bodies.size(); ++i) {
         step_body(bodies[i], i, t, dt);
@@ -158,7 +142,7 @@ int run_synth(const SynthOptions& options) {
         state->wall_time_s = static_cast<double>(monotonic_ns() - start_ns) * 1e-9;
         state->achieved_rate_hz = achieved_rate_hz;
         state->body_count = static_cast<std::uint32_t>(bodies.size());
-        state->paused = paused;
+        state->paused = control.paused;
         world.publish(state);
       }
       ++step;

@@ -119,6 +119,17 @@ struct FileContext {
   int file_index = 0;
 };
 
+// What every block starts with: where it is, that it is a map, its keys, its name.
+template <class Spec>
+void read_block_head(const FileReader& file, const YAML::Node& block, const std::string& identifier,
+                     const std::set<std::string>& keys, const char* kind, Spec& spec) {
+  spec.identifier = identifier;
+  spec.where = file.at(block);
+  if (!block.IsMap()) fail(spec.where, "'" + identifier + "' must be a map of " + kind + " keys");
+  file.warn_unknown_keys(block, keys, identifier);
+  spec.name = file.text(file.require(block, "name", spec.where), "name");
+}
+
 ShapeKind read_shape_kind(const FileReader& file, const YAML::Node& node) {
   static const std::map<std::string, ShapeKind> kShapes = {
       {"box", ShapeKind::kBox},           {"sphere", ShapeKind::kSphere},
@@ -256,12 +267,8 @@ void read_color(const FileReader& file, const YAML::Node& block, BodySpec& body)
 BodySpec read_body(const FileReader& file, const YAML::Node& block, const std::string& identifier,
                    const FileContext& context) {
   BodySpec body;
-  body.identifier = identifier;
-  body.where = file.at(block);
-  if (!block.IsMap()) fail(body.where, "'" + identifier + "' must be a map of body keys");
-  file.warn_unknown_keys(block, kBodyKeys, identifier);
+  read_block_head(file, block, identifier, kBodyKeys, "body", body);
   body.file_index = context.file_index;
-  body.name = file.text(file.require(block, "name", body.where), "name");
   std::erase(body.name, ' ');
   std::string name_space = context.name_space;
   if (YAML::Node ns = block["namespace"])
@@ -463,11 +470,7 @@ PendingJoint read_joint(const FileReader& file, const YAML::Node& block,
                         const std::string& identifier, const FileContext& context) {
   PendingJoint pending;
   JointSpec& joint = pending.spec;
-  joint.identifier = identifier;
-  joint.where = file.at(block);
-  if (!block.IsMap()) fail(joint.where, "'" + identifier + "' must be a map of joint keys");
-  file.warn_unknown_keys(block, kJointKeys, identifier);
-  joint.name = file.text(file.require(block, "name", joint.where), "name");
+  read_block_head(file, block, identifier, kJointKeys, "joint", joint);
   std::string name_space = context.name_space;
   if (YAML::Node ns = block["namespace"])
     name_space = resolve_namespace(name_space, file.text(ns, "namespace"));
@@ -517,6 +520,13 @@ struct PendingParent {
   SourceLocation parent_at;
 };
 
+void read_parent(const FileReader& file, const YAML::Node& block, const SourceLocation& where,
+                 PendingParent& pending) {
+  const YAML::Node parent = file.require(block, "parent", where);
+  pending.parent = file.text(parent, "parent");
+  pending.parent_at = file.at(parent);
+}
+
 const std::set<std::string> kSoftBodyKeys = {"name",
                                              "namespace",
                                              "mesh",
@@ -537,11 +547,7 @@ const std::set<std::string> kSoftBodyKeys = {"name",
 SoftBodySpec read_soft_body(const FileReader& file, const YAML::Node& block,
                             const std::string& identifier, const FileContext& context) {
   SoftBodySpec soft;
-  soft.identifier = identifier;
-  soft.where = file.at(block);
-  if (!block.IsMap()) fail(soft.where, "'" + identifier + "' must be a map of soft body keys");
-  file.warn_unknown_keys(block, kSoftBodyKeys, identifier);
-  soft.name = file.text(file.require(block, "name", soft.where), "name");
+  read_block_head(file, block, identifier, kSoftBodyKeys, "soft body", soft);
   std::erase(soft.name, ' ');
   std::string name_space = context.name_space;
   if (YAML::Node ns = block["namespace"])
@@ -593,18 +599,12 @@ const std::set<std::string> kSensorKeys = {
 SensorSpec read_sensor(const FileReader& file, const YAML::Node& block,
                        const std::string& identifier, PendingParent& pending) {
   SensorSpec sensor;
-  sensor.identifier = identifier;
-  sensor.where = file.at(block);
-  if (!block.IsMap()) fail(sensor.where, "'" + identifier + "' must be a map of sensor keys");
-  file.warn_unknown_keys(block, kSensorKeys, identifier);
-  sensor.name = file.text(file.require(block, "name", sensor.where), "name");
+  read_block_head(file, block, identifier, kSensorKeys, "sensor", sensor);
   const YAML::Node type = file.require(block, "type", sensor.where);
   const std::string kind = lower(file.text(type, "type"));
   if (kind != "proximity" && kind != "resistance")
     fail(file.at(type), "unknown sensor type '" + type.Scalar() + "'; use Proximity or Resistance");
-  const YAML::Node parent = file.require(block, "parent", sensor.where);
-  pending.parent = file.text(parent, "parent");
-  pending.parent_at = file.at(parent);
+  read_parent(file, block, sensor.where, pending);
   if (YAML::Node location = block["location"])
     sensor.location = file.placement(location, "location");
   if (YAML::Node range = block["range"]) sensor.range_m = positive(file, range, "range");
@@ -653,17 +653,11 @@ const std::set<std::string> kActuatorKeys = {
 ActuatorSpec read_actuator(const FileReader& file, const YAML::Node& block,
                            const std::string& identifier, PendingParent& pending) {
   ActuatorSpec actuator;
-  actuator.identifier = identifier;
-  actuator.where = file.at(block);
-  if (!block.IsMap()) fail(actuator.where, "'" + identifier + "' must be a map of actuator keys");
-  file.warn_unknown_keys(block, kActuatorKeys, identifier);
-  actuator.name = file.text(file.require(block, "name", actuator.where), "name");
+  read_block_head(file, block, identifier, kActuatorKeys, "actuator", actuator);
   const YAML::Node type = file.require(block, "type", actuator.where);
   if (lower(file.text(type, "type")) != "constraint")
     fail(file.at(type), "unknown actuator type '" + type.Scalar() + "'; use Constraint");
-  const YAML::Node parent = file.require(block, "parent", actuator.where);
-  pending.parent = file.text(parent, "parent");
-  pending.parent_at = file.at(parent);
+  read_parent(file, block, actuator.where, pending);
   if (YAML::Node location = block["location"])
     actuator.location = file.placement(location, "location");
   if (YAML::Node impulse = block["max impulse"])

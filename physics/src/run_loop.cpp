@@ -7,6 +7,7 @@
 
 #include "afhub/hub/json_writer.hpp"
 #include "afhub/hub/stop_signal.hpp"
+#include "afhub/shm_layout/world_control.hpp"
 
 namespace afhub::physics {
 namespace {
@@ -25,8 +26,7 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
   const auto period_ns = static_cast<std::int64_t>(sim.dt_s() * 1e9);
   const std::int64_t start_ns = monotonic_ns();
   std::int64_t next_ns = start_ns;
-  bool paused = false;
-  std::uint64_t steps_to_run = 0;
+  WorldControl control;
   std::uint64_t rate_window_step = 0;
   std::int64_t rate_window_ns = start_ns;
   double achieved_rate_hz = 0.0;
@@ -35,29 +35,12 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
   while (!stop_requested() && (options.steps == 0 || report.steps < options.steps)) {
     const std::int64_t begin_ns = monotonic_ns();
     if (channels) {
-      if (const WorldCommand* command = channels->new_world_command()) {
-        switch (command->action) {
-          case WorldAction::kPause:
-            paused = true;
-            break;
-          case WorldAction::kResume:
-            paused = false;
-            break;
-          case WorldAction::kStep:
-            steps_to_run += command->step_count;
-            break;
-          case WorldAction::kReset:
-            sim.reset();
-            break;
-          case WorldAction::kNone:
-            break;
-        }
-      }
+      if (const WorldCommand* command = channels->new_world_command())
+        if (control.apply(*command)) sim.reset();
       channels->apply_commands(begin_ns);
     }
-    const bool stepping = !paused || steps_to_run > 0;
+    const bool stepping = control.take_step();
     if (stepping) {
-      if (paused) --steps_to_run;
       sim.step();
       ++report.steps;
       report.max_joint_error_m = std::max(report.max_joint_error_m, largest_pivot_gap(sim));
@@ -72,7 +55,7 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
     }
     if (channels)
       channels->publish(static_cast<double>(monotonic_ns() - start_ns) * 1e-9, achieved_rate_hz,
-                        paused);
+                        control.paused);
     if (stepping) report.step_time.record(static_cast<double>(monotonic_ns() - begin_ns) * 1e-3);
 
     next_ns += period_ns;

@@ -1,0 +1,44 @@
+// How a simulating process obeys world commands: pause, resume, a number of single
+// steps while paused, and reset (which the caller carries out on its own state).
+#pragma once
+
+#include <cstdint>
+
+#include "afhub/shm_layout/world.hpp"
+
+namespace afhub {
+
+struct WorldControl {
+  bool paused = false;
+  std::uint64_t steps_to_run = 0;
+
+  // Returns true when the command asks for a reset.
+  bool apply(const WorldCommand& command) noexcept {
+    switch (command.action) {
+      case WorldAction::kPause:
+        paused = true;
+        break;
+      case WorldAction::kResume:
+        paused = false;
+        break;
+      case WorldAction::kStep:
+        steps_to_run += command.step_count;
+        break;
+      case WorldAction::kReset:
+        return true;
+      case WorldAction::kNone:
+        break;
+    }
+    return false;
+  }
+
+  // Whether to advance this cycle; a single step asked for while paused is used up.
+  bool take_step() noexcept {
+    if (!paused) return true;
+    if (steps_to_run == 0) return false;
+    --steps_to_run;
+    return true;
+  }
+};
+
+}  // namespace afhub
