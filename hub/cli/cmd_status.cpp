@@ -1,5 +1,6 @@
 // `afhub status`: the hub's health (processes, bodies, mempool usage) and, when a
-// simulation runs, its world state (clock, rate, refused commands, watchdog expiries).
+// simulation runs, its world state (clock, rate, refused commands, watchdog expiries,
+// lockstep), and the timing of every loop (as `afhub top` shows it).
 #include <cstdio>
 #include <memory>
 #include <thread>
@@ -8,9 +9,11 @@
 #include "afhub/hub/error.hpp"
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/hub/json_writer.hpp"
+#include "afhub/hub/loop_stats_reader.hpp"
 #include "afhub/shm_layout/health.hpp"
 #include "afhub/shm_layout/world.hpp"
 #include "commands.hpp"
+#include "loop_table.hpp"
 
 namespace afhub::cli {
 namespace {
@@ -46,6 +49,11 @@ int run_status(const StatusOptions& options) {
   while (!world_reader.latest() && std::chrono::steady_clock::now() < world_deadline)
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
   const WorldState* world = world_reader.latest();
+  // Loops found now deliver their last stats (history) once subscribed: a moment.
+  LoopStatsReader loop_reader;
+  std::vector<LoopStats> loops = loop_reader.latest();
+  std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  loops = loop_reader.latest();
   if (options.json) {
     JsonWriter json;
     json.begin_object();
@@ -85,10 +93,20 @@ int run_status(const StatusOptions& options) {
           .value(static_cast<unsigned long long>(world->rejected_commands))
           .key("watchdog_expiries")
           .value(static_cast<unsigned long long>(world->watchdog_expiries))
+          .key("lockstep")
+          .value(world->lockstep != 0)
+          .key("lockstep_clients")
+          .value(static_cast<long long>(world->lockstep_clients))
+          .key("late_answers")
+          .value(static_cast<unsigned long long>(world->late_answers))
+          .key("dropped_clients")
+          .value(static_cast<unsigned long long>(world->dropped_clients))
           .end_object();
     } else {
       json.begin_object().end_object();
     }
+    json.key("loops");
+    loop_json(json, loops);
     json.key("mempools").begin_array();
     for (std::uint32_t i = 0; i < health.mempool_count; ++i) {
       const MempoolUsage& pool = health.mempools[i];
@@ -119,6 +137,10 @@ int run_status(const StatusOptions& options) {
         world->achieved_rate_hz, world->paused ? " (paused)" : "",
         static_cast<unsigned long long>(world->rejected_commands),
         static_cast<unsigned long long>(world->watchdog_expiries));
+  if (world && world->lockstep)
+    std::printf("lockstep: %u clients in the barrier, %llu late answers, %llu clients dropped\n",
+                world->lockstep_clients, static_cast<unsigned long long>(world->late_answers),
+                static_cast<unsigned long long>(world->dropped_clients));
   std::printf("\nprocesses:\n");
   for (std::uint32_t i = 0; i < health.process_count; ++i)
     std::printf("  %-40s pid %d\n", std::string(name_of(health.processes[i].name)).c_str(),
@@ -127,6 +149,7 @@ int run_status(const StatusOptions& options) {
   for (std::uint32_t i = 0; i < bodies.body_count; ++i)
     std::printf("  %-40s %8.1f Hz\n", std::string(name_of(bodies.bodies[i].channel)).c_str(),
                 bodies.bodies[i].publish_rate_hz);
+  if (!loops.empty()) std::printf("\nloops:\n%s", loop_table(loops).c_str());
   std::printf("\nmempools: segment  chunk bytes     chunks       used   min free\n");
   for (std::uint32_t i = 0; i < health.mempool_count; ++i) {
     const MempoolUsage& pool = health.mempools[i];

@@ -19,6 +19,8 @@ int main(int argc, char** argv) {
   afhub::cli::register_demo(app, selected);
   afhub::cli::register_check(app, selected);
   afhub::cli::register_run(app, selected);
+  afhub::cli::register_ctl(app, selected);
+  afhub::cli::register_top(app, selected);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {

@@ -8,6 +8,7 @@
 #include "afhub/shm_layout/body_state.hpp"
 #include "afhub/shm_layout/catalog.hpp"
 #include "afhub/shm_layout/health.hpp"
+#include "afhub/shm_layout/loop_stats.hpp"
 #include "afhub/shm_layout/world.hpp"
 
 namespace afhub {
@@ -29,6 +30,7 @@ std::vector<MempoolSpec> hub_mempools() {
       {round_up8(sizeof(WorldState)), 64, "world state"},
       {round_up8(sizeof(BodyState)), 2048, "body states"},
       {round_up8(sizeof(Health)), 128, "hub health"},
+      {round_up8(sizeof(LoopStats)), 256, "loop stats"},
       {round_up8(body_list_bytes(7)), 128, "catalogs and directories of up to 7 bodies"},
       {round_up8(body_list_bytes(60)), 32, "catalogs and directories of up to 60 bodies"},
       {round_up8(sizeof(BodyList)), 12, "catalogs and directories of up to kMaxBodies bodies"},

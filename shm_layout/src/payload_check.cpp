@@ -4,6 +4,7 @@
 #include <cstring>
 
 #include "afhub/shm_layout/layout_id.hpp"
+#include "afhub/shm_layout/loop_stats.hpp"
 
 namespace afhub {
 namespace {
@@ -20,6 +21,8 @@ std::size_t fixed_size_of(PayloadKind kind) noexcept {
       return sizeof(WorldCommand);
     case PayloadKind::kHealth:
       return sizeof(Health);
+    case PayloadKind::kLoopStats:
+      return sizeof(LoopStats);
     case PayloadKind::kBodyDirectory:
     case PayloadKind::kCatalog:
       return body_list_bytes(0);
@@ -61,6 +64,7 @@ PayloadError check_payload(const void* data, std::size_t bytes, PayloadKind expe
     }
     case PayloadKind::kWorldState:
     case PayloadKind::kWorldCommand:
+    case PayloadKind::kLoopStats:
       break;
   }
   return PayloadError::kNone;

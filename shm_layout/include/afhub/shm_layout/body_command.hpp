@@ -20,7 +20,10 @@ struct BodyCommand {
   static constexpr PayloadKind kKind = PayloadKind::kBodyCommand;
   PayloadHeader header;
   CartesianCommandType cartesian_type{CartesianCommandType::kForce};
-  std::array<std::uint8_t, 3> reserved{};
+  // 1: written by a lockstep client, answering the state of step header.sim_step;
+  // a lockstep physics waits for it before stepping (see `afhub run --lockstep`).
+  std::uint8_t lockstep{0};
+  std::array<std::uint8_t, 2> reserved{};
   // Joint command i drives the i-th joint of the body's state; entries
   // [0, joint_count) are valid and the list may be shorter than the body's joints.
   std::uint32_t joint_count{0};

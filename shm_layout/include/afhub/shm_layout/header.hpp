@@ -15,6 +15,7 @@ enum class PayloadKind : std::uint32_t {
   kBodyDirectory = 5,  // one process's bodies, read by the hub
   kCatalog = 6,        // every live body, published by the hub
   kHealth = 7,
+  kLoopStats = 8,  // a periodic loop's timing
 };
 
 struct PayloadHeader {

@@ -13,6 +13,7 @@
 #include "afhub/shm_layout/body_state.hpp"
 #include "afhub/shm_layout/catalog.hpp"
 #include "afhub/shm_layout/health.hpp"
+#include "afhub/shm_layout/loop_stats.hpp"
 #include "afhub/shm_layout/world.hpp"
 
 namespace afhub {
@@ -79,6 +80,7 @@ inline constexpr std::uint64_t kLayoutId = layout_detail::mix({
     sizeof(BodyCommand),
     alignof(BodyCommand),
     AFHUB_OFF(BodyCommand, cartesian_type),
+    AFHUB_OFF(BodyCommand, lockstep),
     AFHUB_OFF(BodyCommand, joint_count),
     AFHUB_OFF(BodyCommand, pose),
     AFHUB_OFF(BodyCommand, wrench),
@@ -92,6 +94,10 @@ inline constexpr std::uint64_t kLayoutId = layout_detail::mix({
     AFHUB_OFF(WorldState, achieved_rate_hz),
     AFHUB_OFF(WorldState, body_count),
     AFHUB_OFF(WorldState, paused),
+    AFHUB_OFF(WorldState, lockstep),
+    AFHUB_OFF(WorldState, lockstep_clients),
+    AFHUB_OFF(WorldState, late_answers),
+    AFHUB_OFF(WorldState, dropped_clients),
     AFHUB_OFF(WorldState, rejected_commands),
     AFHUB_OFF(WorldState, watchdog_expiries),
     AFHUB_OFF(WorldState, light_count),
@@ -122,6 +128,21 @@ inline constexpr std::uint64_t kLayoutId = layout_detail::mix({
     sizeof(ProcessEntry),
     sizeof(MempoolUsage),
     AFHUB_OFF(MempoolUsage, chunk_payload_bytes),
+    sizeof(LoopStats),
+    AFHUB_OFF(LoopStats, name),
+    AFHUB_OFF(LoopStats, body),
+    AFHUB_OFF(LoopStats, period_s),
+    AFHUB_OFF(LoopStats, rate_hz),
+    AFHUB_OFF(LoopStats, cycles),
+    AFHUB_OFF(LoopStats, overruns),
+    AFHUB_OFF(LoopStats, late_commands),
+    AFHUB_OFF(LoopStats, wake_latency),
+    AFHUB_OFF(LoopStats, compute),
+    AFHUB_OFF(LoopStats, realtime),
+    AFHUB_OFF(LoopStats, memory_locked),
+    AFHUB_OFF(LoopStats, lockstep),
+    AFHUB_OFF(LoopStats, cpu),
+    sizeof(DurationPercentiles),
 });
 #undef AFHUB_OFF
 
@@ -133,5 +154,6 @@ static_assert(layout_detail::is_shm_payload<WorldState>);
 static_assert(layout_detail::is_shm_payload<WorldCommand>);
 static_assert(layout_detail::is_shm_payload<BodyList>);
 static_assert(layout_detail::is_shm_payload<Health>);
+static_assert(layout_detail::is_shm_payload<LoopStats>);
 
 }  // namespace afhub

@@ -25,11 +25,18 @@ struct WorldState {
   double achieved_rate_hz{0.0};  // steps per wall-clock second, over the last second
   std::uint32_t body_count{0};
   std::uint8_t paused{0};
-  std::uint8_t reserved[3]{};
+  std::uint8_t lockstep{0};  // stepping waits for the lockstep clients
+  std::uint8_t reserved[2]{};
   // Commands refused since the start (NaN or Inf, joint index beyond the body's
   // joints), and watchdog expiries (a body's commands stopped for too long).
   std::uint64_t rejected_commands{0};
   std::uint64_t watchdog_expiries{0};
+  // Lockstep: clients in the barrier now, steps taken without a late client's
+  // answer, and clients dropped from the barrier after repeated misses.
+  std::uint32_t lockstep_clients{0};
+  std::uint32_t reserved2{0};
+  std::uint64_t late_answers{0};
+  std::uint64_t dropped_clients{0};
   std::uint32_t light_count{0};
   std::uint32_t camera_count{0};
   std::array<WorldObjectPose, kMaxWorldObjects> lights{};

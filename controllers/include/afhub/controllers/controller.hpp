@@ -1,0 +1,43 @@
+// Write a controller in a few lines: name a body, give a function that turns its
+// newest state into a command, and run it.
+//
+//   afhub::ControllerOptions options;
+//   options.name = "my pd";
+//   options.body = "kuka/link7";  // a channel name or a unique suffix of one
+//   return afhub::run_controller(options, [](const afhub::BodyState& state,
+//                                            afhub::BodyCommand& command) {
+//     command.joint_count = state.joint_count;  // ... fill the command ...
+//   });
+//
+// Free-running (the default), `cycle` runs every period on the periodic loop with
+// the newest state. With `lockstep`, it runs once per physics step, answering that
+// step, and a physics started with `afhub run --lockstep` waits for the answer.
+// Either way the loop's timing is published on the stats channel (`afhub top`).
+#pragma once
+
+#include <functional>
+#include <string>
+
+#include "afhub/controllers/periodic_loop.hpp"
+#include "afhub/shm_layout/body_command.hpp"
+#include "afhub/shm_layout/body_state.hpp"
+
+namespace afhub {
+
+struct ControllerOptions {
+  std::string name = "controller";  // shown by `afhub top`
+  std::string body;                 // the body's channel name or a unique suffix of it
+  LoopOptions loop;                 // period, SCHED_FIFO, CPU, memory locking
+  bool lockstep = false;            // answer every physics step instead of running on a clock
+};
+
+// `state` is the body's newest state; `command` starts zeroed. Both live in shared
+// memory: no copy. Runs in the real-time loop: do not allocate or block in it.
+using ControllerCycle = std::function<void(const BodyState& state, BodyCommand& command)>;
+
+// Connects to the hub, opens the body and runs `cycle` until Ctrl-C or SIGTERM
+// (or options.loop.max_cycles). Returns the process exit code; throws afhub::Error
+// when there is no hub or no such body.
+int run_controller(const ControllerOptions& options, const ControllerCycle& cycle);
+
+}  // namespace afhub

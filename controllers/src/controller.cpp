@@ -1,0 +1,97 @@
+// Controller processes (see controller.hpp).
+#include "afhub/controllers/controller.hpp"
+
+#include <sched.h>
+
+#include <cstdio>
+
+#include "afhub/controllers/loop_stats_publisher.hpp"
+#include "afhub/hub/bodies.hpp"
+#include "afhub/hub/hub_presence.hpp"
+#include "afhub/hub/stop_signal.hpp"
+
+namespace afhub {
+namespace {
+
+// Fills and publishes one command answering `state`.
+void answer(BodyClient& body, const BodyState& state, const ControllerCycle& cycle, bool lockstep) {
+  BodyCommand* command = body.loan_command();
+  if (!command) return;  // shared memory exhausted: the watchdog covers a lasting shortage
+  cycle(state, *command);
+  command->header.sim_step = state.header.sim_step;
+  command->header.sim_time_s = state.header.sim_time_s;
+  command->lockstep = lockstep;
+  body.publish_command(command);
+}
+
+// Free-running: every period, the newest state in, a command out.
+void run_free(BodyClient& body, const ControllerOptions& options, const ControllerCycle& cycle,
+              LoopTiming& timing, LoopStatsPublisher& stats) {
+  run_periodic(
+      options.loop, timing,
+      [&] {
+        const BodyState* state = body.latest_state();
+        if (!state) return true;
+        const std::uint64_t step = state->header.sim_step;
+        answer(body, *state, cycle, false);
+        // Late: the physics published a newer state while this command was computed.
+        const BodyState* newest = body.latest_state();
+        if (newest && newest->header.sim_step != step) timing.count_late(1);
+        return true;
+      },
+      [&](std::int64_t now) { stats.maybe_publish(now, timing); });
+}
+
+// Lockstep: answer each new step as soon as its state arrives. Polling (with a
+// yield) rather than sleeping keeps the round trip in microseconds.
+void run_lockstep(BodyClient& body, const ControllerOptions& options, const ControllerCycle& cycle,
+                  LoopTiming& timing, LoopStatsPublisher& stats) {
+  bool answered_any = false;
+  std::uint64_t last_step = 0;
+  for (std::uint64_t done = 0;
+       !stop_requested() && (options.loop.max_cycles == 0 || done < options.loop.max_cycles);) {
+    const BodyState* state = body.latest_state();
+    const std::int64_t now = monotonic_ns();
+    stats.maybe_publish(now, timing);
+    if (!state || (answered_any && state->header.sim_step == last_step)) {
+      sched_yield();
+      continue;
+    }
+    const std::uint64_t step = state->header.sim_step;
+    // Steps skipped since the last answer went ahead without this controller.
+    if (answered_any && step > last_step + 1) timing.count_late(step - last_step - 1);
+    answer(body, *state, cycle, true);
+    timing.record(0, monotonic_ns() - now);
+    answered_any = true;
+    last_step = step;
+    ++done;
+  }
+}
+
+}  // namespace
+
+int run_controller(const ControllerOptions& options, const ControllerCycle& cycle) {
+  install_stop_signal_handlers();
+  connect_to_hub("ctl", HubPolicy::kRequire);
+  CatalogReader catalog;
+  catalog.wait(std::chrono::milliseconds(1000));
+  const BodyInfo info = catalog.resolve(options.body);
+  const std::string channel(name_of(info.channel));
+  BodyClient body(channel);
+  LoopTiming timing;  // preallocated before memory is locked and the loop starts
+  const std::string who = "afhub " + options.name;
+  const RealtimeGrant grant = apply_realtime(options.loop, who.c_str());
+  LoopStatsPublisher stats(options.name, channel, options.loop.period_ns, options.lockstep, grant);
+  if (options.lockstep) {
+    std::fprintf(stderr, "%s: commanding %s in lockstep with the physics\n", who.c_str(),
+                 channel.c_str());
+    run_lockstep(body, options, cycle, timing, stats);
+  } else {
+    std::fprintf(stderr, "%s: commanding %s every %.3f ms\n", who.c_str(), channel.c_str(),
+                 static_cast<double>(options.loop.period_ns) * 1e-6);
+    run_free(body, options, cycle, timing, stats);
+  }
+  return 0;
+}
+
+}  // namespace afhub
