@@ -17,13 +17,16 @@ namespace {
 
 struct RunCliOptions {
   std::vector<std::string> files;
-  std::string launch_file, indices, adf_list, world_file, report_file;
+  std::string launch_file, indices, adf_list, world_file, report_file, watchdog_hold;
   double dt_s = 0.001;
   double watchdog_s = 0.5;
   std::uint64_t steps = 0;
   bool fast = false;
   bool offline = false;
   bool no_autostart = false;
+  bool lockstep = false;
+  std::uint32_t wait_for = 0;
+  double client_timeout_ms = 100.0;
 };
 
 std::vector<std::string> split_commas(const std::string& text) {
@@ -38,6 +41,12 @@ int run_run(const RunCliOptions& options) {
   if (!(options.dt_s >= 1e-5 && options.dt_s <= 0.1))
     throw Error("--dt must be between 0.00001 and 0.1 s, got " + std::to_string(options.dt_s));
   if (!(options.watchdog_s > 0.0)) throw Error("--watchdog must be a positive number of seconds");
+  if (!(options.client_timeout_ms > 0.0 && options.client_timeout_ms <= 60'000.0))
+    throw Error("--client-timeout must be between 0 and 60000 ms");
+  if (!options.lockstep && options.wait_for > 0)
+    throw Error("--wait-for needs --lockstep: it holds the first step for lockstep clients");
+  if (options.offline && (options.lockstep || !options.watchdog_hold.empty()))
+    throw Error("--lockstep and --watchdog-hold need the hub's channels: drop --offline");
   physics::SceneRequest request;
   request.launch_file = options.launch_file;
   if (!options.indices.empty()) request.launch_indices = physics::parse_index_list(options.indices);
@@ -60,9 +69,18 @@ int run_run(const RunCliOptions& options) {
   if (!options.offline) {
     connect_to_hub("physics", options.no_autostart ? HubPolicy::kRequire : HubPolicy::kAutostart);
     channels = std::make_unique<physics::SimChannels>(sim, options.watchdog_s);
-    std::fprintf(stderr, "afhub run: %zu bodies, %zu joints on channels; %s at dt %.6g s\n",
+    for (const std::string& body : split_commas(options.watchdog_hold))
+      channels->hold_on_watchdog(body);
+    if (options.lockstep) {
+      physics::LockstepOptions lockstep;
+      lockstep.wait_for = options.wait_for;
+      lockstep.client_timeout_ns = static_cast<std::int64_t>(options.client_timeout_ms * 1e6);
+      channels->enable_lockstep(lockstep);
+    }
+    std::fprintf(stderr, "afhub run: %zu bodies, %zu joints on channels; %s%s at dt %.6g s\n",
                  channels->channel_count(), model.joints.size(),
-                 options.fast ? "as fast as possible" : "real time", options.dt_s);
+                 options.fast ? "as fast as possible" : "real time",
+                 options.lockstep ? " in lockstep" : "", options.dt_s);
   }
   physics::RunOptions run;
   run.fast = options.fast;
@@ -97,6 +115,17 @@ void register_run(CLI::App& app, Runner& selected) {
   run->add_option("--steps", options->steps, "Stop after this many steps (default: until Ctrl-C)");
   run->add_option("--watchdog", options->watchdog_s,
                   "Seconds without a command before a body's commands fall to zero (default 0.5)");
+  run->add_option("--watchdog-hold", options->watchdog_hold,
+                  "Bodies whose joints hold their positions when the watchdog fires, instead of "
+                  "zero effort: names or last parts, comma-separated");
+  run->add_flag("--lockstep", options->lockstep,
+                "Step only when every lockstep client (`afhub ctl ... --lockstep`) has answered "
+                "the current step");
+  run->add_option("--wait-for", options->wait_for,
+                  "With --lockstep: hold step 0 until this many lockstep clients joined");
+  run->add_option("--client-timeout", options->client_timeout_ms,
+                  "With --lockstep: ms a step waits for a client's answer before going ahead "
+                  "(default 100); 3 misses in a row drop the client until it answers again");
   run->add_option("--report", options->report_file,
                   "Write a JSON report at the end (steps, step times, poses, joints)");
   run->add_flag("--offline", options->offline,

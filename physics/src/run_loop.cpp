@@ -24,7 +24,7 @@ double largest_pivot_gap(const Simulation& sim) noexcept {
 void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
               RunReport& report) {
   const auto period_ns = static_cast<std::int64_t>(sim.dt_s() * 1e9);
-  const std::int64_t start_ns = monotonic_ns();
+  std::int64_t start_ns = monotonic_ns();
   std::int64_t next_ns = start_ns;
   WorldControl control;
   std::uint64_t rate_window_step = 0;
@@ -33,12 +33,18 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
   report.max_joint_error_m = std::max(report.max_joint_error_m, largest_pivot_gap(sim));
   if (channels) channels->publish(0.0, 0.0, false);  // step 0: the model as loaded
   while (!stop_requested() && (options.steps == 0 || report.steps < options.steps)) {
-    const std::int64_t begin_ns = monotonic_ns();
     if (channels) {
       if (const WorldCommand* command = channels->new_world_command())
         if (control.apply(*command)) sim.reset();
-      channels->apply_commands(begin_ns);
+      if (channels->lockstep() && !control.paused) {
+        if (!channels->await_lockstep()) break;  // stopped while waiting
+        // The wait for clients before the first step is setup: the clock starts after it.
+        if (report.steps == 0) start_ns = next_ns = rate_window_ns = monotonic_ns();
+      } else {
+        channels->apply_commands(monotonic_ns());
+      }
     }
+    const std::int64_t begin_ns = monotonic_ns();
     const bool stepping = control.take_step();
     if (stepping) {
       sim.step();

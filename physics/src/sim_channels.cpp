@@ -1,12 +1,15 @@
 // The simulation's channels (see sim_channels.hpp).
 #include "afhub/physics/sim_channels.hpp"
 
+#include <sched.h>
+
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 
 #include "afhub/hub/channel_names.hpp"
 #include "afhub/hub/error.hpp"
+#include "afhub/hub/stop_signal.hpp"
 
 namespace afhub::physics {
 namespace {
@@ -138,21 +141,111 @@ void SimChannels::apply_commands(std::int64_t now_ns) noexcept {
           channel.told_rejected = true;
         }
       } else {
+        if (lockstep_ && command->lockstep) note_lockstep_answer(channel, *command);
         sim_.set_command(channel.index, *command);
         channel.last_command_ns = now_ns;
         channel.commanded = true;
       }
     }
     if (channel.commanded && now_ns - channel.last_command_ns > watchdog_ns_) {
-      sim_.clear_command(channel.index);
+      if (channel.hold_on_watchdog)
+        sim_.hold_command(channel.index);
+      else
+        sim_.clear_command(channel.index);
       channel.commanded = false;
       ++expiries_;
-      std::fprintf(stderr,
-                   "afhub run: no command for %s in %.3f s: its wrench and joint efforts are "
-                   "zero until commands come again\n",
-                   channel.publisher->channel().c_str(), static_cast<double>(watchdog_ns_) * 1e-9);
+      std::fprintf(stderr, "afhub run: no command for %s in %.3f s: %s until commands come again\n",
+                   channel.publisher->channel().c_str(), static_cast<double>(watchdog_ns_) * 1e-9,
+                   channel.hold_on_watchdog ? "its joints hold their positions"
+                                            : "its wrench and joint efforts are zero");
     }
   }
+}
+
+void SimChannels::hold_on_watchdog(const std::string& body) {
+  bool found = false;
+  for (Channel& channel : channels_) {
+    const std::string& name = channel.publisher->channel();
+    const bool match =
+        name == body || (name.size() > body.size() &&
+                         name.compare(name.size() - body.size(), body.size(), body) == 0 &&
+                         name[name.size() - body.size() - 1] == '/');
+    if (match && !channel.soft) channel.hold_on_watchdog = found = true;
+  }
+  if (!found)
+    throw Error("--watchdog-hold: no active body is named '" + body +
+                "'; give a body's channel name or its last part (see `afhub check`)");
+}
+
+void SimChannels::enable_lockstep(const LockstepOptions& options) {
+  lockstep_ = true;
+  lockstep_options_ = options;
+}
+
+void SimChannels::note_lockstep_answer(Channel& channel, const BodyCommand& command) noexcept {
+  channel.answered_step = command.header.sim_step;
+  if (command.header.sim_step != sim_.step_count()) return;  // an old step: no (re)join
+  if (channel.lockstep_pid != command.header.publisher_pid)
+    std::fprintf(stderr,
+                 "afhub run: lockstep client pid %u joined the barrier for %s at step %llu\n",
+                 command.header.publisher_pid, channel.publisher->channel().c_str(),
+                 static_cast<unsigned long long>(command.header.sim_step));
+  channel.lockstep_pid = command.header.publisher_pid;
+  channel.misses = 0;
+}
+
+std::uint32_t SimChannels::lockstep_clients() const noexcept {
+  std::uint32_t clients = 0;
+  for (std::size_t i = 0; i < channels_.size(); ++i) {
+    const std::uint32_t pid = channels_[i].lockstep_pid;
+    if (pid == 0) continue;
+    bool seen = false;
+    for (std::size_t k = 0; k < i && !seen; ++k) seen = channels_[k].lockstep_pid == pid;
+    if (!seen) ++clients;
+  }
+  return clients;
+}
+
+bool SimChannels::await_lockstep() noexcept {
+  const std::uint64_t step = sim_.step_count();
+  const std::int64_t start = monotonic_ns();
+  bool told_waiting = false;
+  for (;;) {
+    const std::int64_t now = monotonic_ns();
+    apply_commands(now);
+    if (stop_requested()) return false;
+    if (step == 0 && lockstep_clients() < lockstep_options_.wait_for) {
+      if (!told_waiting)
+        std::fprintf(stderr, "afhub run: waiting for %u lockstep clients before the first step\n",
+                     lockstep_options_.wait_for);
+      told_waiting = true;
+      sched_yield();
+      continue;
+    }
+    bool pending = false;
+    for (const Channel& channel : channels_)
+      pending = pending || (channel.lockstep_pid != 0 && channel.answered_step != step);
+    if (!pending) {
+      for (Channel& channel : channels_) channel.misses = 0;
+      return true;
+    }
+    if (now - start > lockstep_options_.client_timeout_ns) break;
+    sched_yield();
+  }
+  // Timed out: the step goes ahead without the late answers.
+  for (Channel& channel : channels_) {
+    if (channel.lockstep_pid == 0 || channel.answered_step == step) continue;
+    ++late_answers_;
+    if (++channel.misses < lockstep_options_.max_misses) continue;
+    std::fprintf(stderr,
+                 "afhub run: lockstep client pid %u missed %d steps in a row for %s; dropped from "
+                 "the barrier (it rejoins by answering a current step)\n",
+                 channel.lockstep_pid, channel.misses, channel.publisher->channel().c_str());
+    channel.lockstep_pid = 0;
+    channel.misses = 0;
+    ++dropped_;
+  }
+  return true;
 }
 
 void SimChannels::fill_objects(std::array<WorldObjectPose, kMaxWorldObjects>& out,
@@ -194,6 +287,10 @@ void SimChannels::publish(double wall_time_s, double achieved_rate_hz, bool paus
     world->paused = paused;
     world->rejected_commands = rejected_;
     world->watchdog_expiries = expiries_;
+    world->lockstep = lockstep_;
+    world->lockstep_clients = lockstep_clients();
+    world->late_answers = late_answers_;
+    world->dropped_clients = dropped_;
     world->light_count = static_cast<std::uint32_t>(lights_.size());
     world->camera_count = static_cast<std::uint32_t>(cameras_.size());
     fill_objects(world->lights, lights_);

@@ -256,6 +256,7 @@ void Simulation::Data::build_bodies() {
   for (std::size_t i = 0; i < model.bodies.size(); ++i) {
     const BodySpec& spec = model.bodies[i];
     BodyData& body = bodies[i];
+    body.commanded_joints.reserve(model.descendant_joints[i].size());  // no allocation in a run
     const TriangleMesh* mesh = mesh_of(spec);
     body.dynamic = spec.mass_kg > 0.0;
     Placement inertial = spec.inertial_offset.value_or(Placement{});
@@ -545,7 +546,7 @@ void Simulation::set_command(std::size_t index, const BodyCommand& command) noex
   body.linear_velocity = to_bt(command.twist.linear_mps);
   body.angular_velocity = to_bt(command.twist.angular_radps);
   const std::vector<int>& below = d.model.descendant_joints[index];
-  body.commanded_joints.clear();  // capacity kept: no allocation after the first command
+  body.commanded_joints.clear();  // capacity reserved for every descendant joint
   for (std::uint32_t j = 0; j < command.joint_count && j < below.size(); ++j) {
     d.joints[below[j]]->command(command.joint_types[j], command.joint_values[j]);
     body.commanded_joints.push_back(below[j]);
@@ -559,6 +560,16 @@ void Simulation::clear_command(std::size_t index) noexcept {
   body.commanded = false;
   for (int joint : body.commanded_joints) data_->joints[joint]->release();
   body.commanded_joints.clear();
+}
+
+void Simulation::hold_command(std::size_t index) noexcept {
+  clear_command(index);
+  BodyData& body = data_->bodies[index];
+  for (int joint : data_->model.descendant_joints[index]) {
+    JointModel& model = *data_->joints[joint];
+    model.command(JointCommandType::kPosition, model.position());
+    body.commanded_joints.push_back(joint);
+  }
 }
 
 void Simulation::fill_state(std::size_t index, BodyState& state) const noexcept {

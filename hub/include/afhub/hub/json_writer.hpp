@@ -1,6 +1,7 @@
 // A small JSON writer for --json outputs and reports (objects, arrays, numbers, strings).
 #pragma once
 
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -32,9 +33,10 @@ class JsonWriter {
     if (!std::isfinite(number)) {
       out_ += "null";  // JSON has no NaN or Inf
     } else {
+      // The shortest text that reads back as exactly this double.
       char buffer[32];
-      std::snprintf(buffer, sizeof buffer, "%.9g", number);
-      out_ += buffer;
+      const auto end = std::to_chars(buffer, buffer + sizeof buffer, number).ptr;
+      out_.append(buffer, end);
     }
     return *this;
   }

@@ -1,7 +1,8 @@
 // The physics loop of `afhub run`: a fixed step, paced in real time by absolute
 // deadlines (start + k * dt, never re-based, so there is no drift) or run as fast
 // as possible; commands in and states out through SimChannels when given; world
-// commands (pause, resume, step, reset) obeyed. Measures what the report needs.
+// commands (pause, resume, step, reset) obeyed; in lockstep, each step waits for
+// the lockstep clients' answers. Measures what the report needs.
 #pragma once
 
 #include <cstdint>
@@ -21,7 +22,7 @@ struct RunOptions {
 struct RunReport {
   std::uint64_t steps = 0;
   double wall_time_s = 0.0;
-  LatencyHistogram step_time;  // one loop iteration: commands, step, publish
+  LatencyHistogram step_time;  // one loop iteration: step and publish (after the commands)
   bool nan_detected = false;
   double max_joint_error_m = 0.0;  // the largest pivot gap seen, over all joints and steps
 };

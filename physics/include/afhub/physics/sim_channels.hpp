@@ -3,6 +3,13 @@
 // its clock, counters, lights and cameras, and reads world commands.
 // Commands are checked before they reach Bullet; a per-body watchdog zeroes a
 // body's commands when they stop coming. Needs connect_to_hub() first.
+//
+// Lockstep (enable_lockstep): a body whose command is marked lockstep and answers
+// the current step joins the barrier; await_lockstep() then holds the step until
+// every body in the barrier has an answer for it. A body whose answer is later than
+// the client timeout is counted late; after `max_misses` late steps in a row it
+// leaves the barrier (a dead client never freezes the world), and it rejoins with
+// its next answer to a current step.
 #pragma once
 
 #include <cstdint>
@@ -15,9 +22,26 @@
 
 namespace afhub::physics {
 
+struct LockstepOptions {
+  std::uint32_t wait_for = 0;                    // hold step 0 until this many clients joined
+  std::int64_t client_timeout_ns = 100'000'000;  // how long a step waits for an answer
+  int max_misses = 3;                            // late steps in a row before a client is dropped
+};
+
 class SimChannels {
  public:
   SimChannels(Simulation& sim, double watchdog_s);
+
+  // The watchdog's policy for a body (its channel name or a suffix after a '/'):
+  // hold its joints where they are instead of zeroing efforts. Throws afhub::Error
+  // when no body matches.
+  void hold_on_watchdog(const std::string& body);
+
+  void enable_lockstep(const LockstepOptions& options);
+  bool lockstep() const { return lockstep_; }
+  // Applies commands as they come until every body in the barrier has answered the
+  // current step, or the timeout. False when a stop signal came while waiting.
+  bool await_lockstep() noexcept;
 
   // Reads each body's newest command, applies it, and runs the watchdogs.
   void apply_commands(std::int64_t now_ns) noexcept;
@@ -29,6 +53,9 @@ class SimChannels {
   std::size_t channel_count() const { return channels_.size(); }
   std::uint64_t rejected_commands() const { return rejected_; }
   std::uint64_t watchdog_expiries() const { return expiries_; }
+  std::uint32_t lockstep_clients() const noexcept;
+  std::uint64_t late_answers() const { return late_answers_; }
+  std::uint64_t dropped_clients() const { return dropped_; }
 
  private:
   struct Channel {
@@ -38,8 +65,12 @@ class SimChannels {
     std::uint32_t joint_count = 0;
     std::uint32_t actuator_count = 0;
     std::int64_t last_command_ns = 0;
-    bool commanded = false;  // a command is being applied (the watchdog is armed)
+    bool commanded = false;         // a command is being applied (the watchdog is armed)
+    bool hold_on_watchdog = false;  // the watchdog holds the joints rather than zeroing efforts
     bool told_rejected = false;
+    std::uint32_t lockstep_pid = 0;  // the lockstep client answering for this body; 0: none
+    std::uint64_t answered_step = 0;
+    int misses = 0;  // late steps in a row
   };
   struct WorldObject {
     const WorldObjectSpec* spec = nullptr;
@@ -47,6 +78,7 @@ class SimChannels {
     Pose local;
   };
 
+  void note_lockstep_answer(Channel& channel, const BodyCommand& command) noexcept;
   void fill_objects(std::array<WorldObjectPose, kMaxWorldObjects>& out,
                     const std::vector<WorldObject>& objects) const noexcept;
 
@@ -59,6 +91,9 @@ class SimChannels {
   LatestReader<WorldCommand> world_command_;
   std::uint64_t last_world_sequence_ = 0;
   std::uint64_t rejected_ = 0, expiries_ = 0;
+  bool lockstep_ = false;
+  LockstepOptions lockstep_options_;
+  std::uint64_t late_answers_ = 0, dropped_ = 0;
 };
 
 }  // namespace afhub::physics

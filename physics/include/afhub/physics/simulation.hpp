@@ -37,6 +37,9 @@ class Simulation {
   // Zero wrench and zero effort on the joints this body commanded (the watchdog);
   // its actuators keep what they hold.
   void clear_command(std::size_t body) noexcept;
+  // Zero wrench, and every joint below the body held where it is now by its
+  // position controller (the watchdog's hold policy).
+  void hold_command(std::size_t body) noexcept;
 
   // Readings of body `body` (an index into model().bodies) and of soft body `soft`.
   void fill_state(std::size_t body, BodyState& state) const noexcept;
