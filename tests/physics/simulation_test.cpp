@@ -117,6 +117,40 @@ TEST(Simulation, KukaJointsReachTheirTargetsUnderTheirPid) {
   EXPECT_LT(gap, 0.002);
 }
 
+// The watchdog's two policies after the KUKA was driven to a pose: zero effort lets
+// the arm fall under gravity; hold keeps every joint where it was.
+TEST(Simulation, WatchdogPoliciesZeroEffortOrHoldPosition) {
+  const Model model = load_adf_files({kModels + "robots/blender-kuka.yaml"});
+  const int base = body_index(model, "base");
+  const std::vector<int>& joints = model.descendant_joints[base];
+  BodyCommand command{};
+  command.joint_count = 7;
+  for (std::size_t j = 0; j < 7; ++j) {
+    command.joint_values[j] = 0.6;
+    command.joint_types[j] = JointCommandType::kPosition;
+  }
+  double largest_drift[2] = {0.0, 0.0};
+  for (const bool hold : {false, true}) {
+    Simulation sim(model, 0.001);
+    sim.set_command(base, command);
+    run_for(sim, 1.5);
+    std::array<double, 7> before{};
+    for (std::size_t j = 0; j < 7; ++j) before[j] = sim.joint_position(joints[j]);
+    if (hold)
+      sim.hold_command(base);
+    else
+      sim.clear_command(base);
+    run_for(sim, 3.0);
+    for (std::size_t j = 0; j < 7; ++j)
+      largest_drift[hold] =
+          std::max(largest_drift[hold], std::abs(sim.joint_position(joints[j]) - before[j]));
+  }
+  std::printf("largest joint drift in 3 s: zero effort %.4f rad, hold %.6f rad\n",
+              largest_drift[false], largest_drift[true]);
+  EXPECT_GT(largest_drift[false], 0.02) << "with zero effort the arm should sag under gravity";
+  EXPECT_LT(largest_drift[true], 0.001) << "holding, every joint should stay where it was";
+}
+
 TEST(Simulation, RealModelsRunTenSecondsHoldingTogether) {
   for (const char* file : {"robots/blender-kuka.yaml", "puzzles/parallel_structure.yaml"}) {
     const Model model = load_adf_files({kModels + file});

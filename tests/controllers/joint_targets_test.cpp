@@ -1,0 +1,106 @@
+// The shipped joint controllers: sine, hold and track targets, and trajectory files.
+#include "afhub/controllers/joint_targets.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "afhub/hub/error.hpp"
+#include "model_files.hpp"
+
+namespace afhub {
+namespace {
+
+BodyState state_at(double time_s, std::initializer_list<double> positions) {
+  BodyState state;
+  state.header.sim_time_s = time_s;
+  state.joint_count = static_cast<std::uint32_t>(positions.size());
+  std::copy(positions.begin(), positions.end(), state.joint_positions.begin());
+  return state;
+}
+
+TEST(JointControllers, SineStartsAtTheInitialPositionsAndSpreadsThePhases) {
+  ControllerCycle cycle = joint_position_controller(sine_targets(0.2, 2.0, {}));
+  BodyCommand command;
+  cycle(state_at(10.0, {0.5, -0.5, 1.0, 0.0}), command);
+  ASSERT_EQ(command.joint_count, 4u);
+  for (int j = 0; j < 4; ++j) {
+    EXPECT_EQ(command.joint_types[j], JointCommandType::kPosition);
+    EXPECT_DOUBLE_EQ(command.joint_values[j], (std::array{0.5, -0.5, 1.0, 0.0})[j]);
+  }
+  // After the ramp (one period), at t = 2.25 s: 0.2 sin(2 pi 2.25 / 2 + 2 pi j / 4),
+  // around the first state's positions whatever the joints read now.
+  cycle(state_at(12.25, {9.0, 9.0, 9.0, 9.0}), command);
+  for (int j = 0; j < 4; ++j) {
+    const double expected =
+        (std::array{0.5, -0.5, 1.0, 0.0})[j] +
+        0.2 * std::sin(2 * std::numbers::pi * 2.25 / 2.0 + std::numbers::pi * j / 2);
+    EXPECT_NEAR(command.joint_values[j], expected, 1e-12) << "joint " << j;
+  }
+}
+
+TEST(JointControllers, SineMovesOnlyTheChosenJoints) {
+  ControllerCycle cycle = joint_position_controller(sine_targets(0.3, 1.0, {2}));
+  BodyCommand command;
+  cycle(state_at(0.0, {0.1, 0.2, 0.3}), command);
+  cycle(state_at(1.25, {0, 0, 0}), command);
+  EXPECT_DOUBLE_EQ(command.joint_values[0], 0.1);
+  EXPECT_DOUBLE_EQ(command.joint_values[1], 0.2);
+  EXPECT_NEAR(command.joint_values[2], 0.3 + 0.3, 1e-12);  // a quarter period after the ramp
+}
+
+TEST(JointControllers, HoldKeepsTheFirstPositions) {
+  ControllerCycle cycle = joint_position_controller(hold_targets());
+  BodyCommand command;
+  cycle(state_at(0.0, {0.1, -0.2}), command);
+  cycle(state_at(5.0, {1.0, 1.0}), command);
+  EXPECT_EQ(command.joint_count, 2u);
+  EXPECT_DOUBLE_EQ(command.joint_values[0], 0.1);
+  EXPECT_DOUBLE_EQ(command.joint_values[1], -0.2);
+}
+
+TEST(JointControllers, TrackInterpolatesAndHoldsTheEnds) {
+  testing::ModelFolder folder;
+  const std::string file =
+      folder.write("path.csv", "time,q0,q1\n0,0,1\n1,1,1\n# a comment\n3,1,-1\n");
+  ControllerCycle cycle = joint_position_controller(track_targets(read_trajectory_csv(file)));
+  BodyCommand command;
+  const auto at = [&](double t) {
+    cycle(state_at(100.0 + t, {5, 5, 5}), command);
+    return std::array{command.joint_values[0], command.joint_values[1], command.joint_values[2]};
+  };
+  EXPECT_EQ(at(0.0), (std::array{0.0, 1.0, 5.0}));  // the third joint is not in the file: holds
+  EXPECT_EQ(at(0.25), (std::array{0.25, 1.0, 5.0}));
+  EXPECT_EQ(at(2.0), (std::array{1.0, 0.0, 5.0}));
+  EXPECT_EQ(at(10.0), (std::array{1.0, -1.0, 5.0}));
+}
+
+TEST(JointControllers, BadTrajectoryFilesSayWhereAndWhat) {
+  testing::ModelFolder folder;
+  const struct {
+    const char* text;
+    const char* expected;
+  } cases[] = {
+      {"0,1\n1,x\n", "path.csv:2: error: column 2 is 'x', not a number"},
+      {"0,1\n0,2\n", "path.csv:2: error: time 0 does not increase"},
+      {"0,1,2\n1,2\n", "path.csv:2: error: this row has 1 joint positions, the first had 2"},
+      {"0\n", "path.csv:1: error: a row needs a time and at least one joint position"},
+      {"t,q\n", "path.csv: error: no trajectory rows"},
+      {"0,nan\n", "path.csv:1: error: column 2 is not finite"},
+  };
+  for (const auto& c : cases) {
+    const std::string file = folder.write("path.csv", c.text);
+    try {
+      read_trajectory_csv(file);
+      ADD_FAILURE() << "accepted: " << c.text;
+    } catch (const Error& error) {
+      EXPECT_NE(std::string(error.what()).find(c.expected), std::string::npos)
+          << error.what() << "\nexpected: " << c.expected;
+    }
+  }
+  EXPECT_THROW(read_trajectory_csv(folder.dir().string() + "/missing.csv"), Error);
+}
+
+}  // namespace
+}  // namespace afhub
