@@ -7,6 +7,7 @@
 
 #include "afhub/controllers/loop_stats_publisher.hpp"
 #include "afhub/hub/bodies.hpp"
+#include "afhub/hub/error.hpp"
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/hub/stop_signal.hpp"
 
@@ -68,14 +69,28 @@ void run_lockstep(BodyClient& body, const ControllerOptions& options, const Cont
   }
 }
 
+// The body's catalog entry. A controller started together with the simulation may
+// look before the hub has listed the simulation's bodies: it keeps looking a while.
+BodyInfo find_body(const std::string& query) {
+  CatalogReader catalog;
+  catalog.wait(std::chrono::milliseconds(1000));
+  const std::int64_t give_up = monotonic_ns() + 3'000'000'000;
+  for (;;) {
+    try {
+      return catalog.resolve(query);
+    } catch (const Error&) {
+      if (monotonic_ns() > give_up || stop_requested()) throw;
+    }
+    sleep_until_ns(monotonic_ns() + 50'000'000);
+  }
+}
+
 }  // namespace
 
 int run_controller(const ControllerOptions& options, const ControllerCycle& cycle) {
   install_stop_signal_handlers();
   connect_to_hub("ctl", HubPolicy::kRequire);
-  CatalogReader catalog;
-  catalog.wait(std::chrono::milliseconds(1000));
-  const BodyInfo info = catalog.resolve(options.body);
+  const BodyInfo info = find_body(options.body);
   const std::string channel(name_of(info.channel));
   BodyClient body(channel);
   LoopTiming timing;  // preallocated before memory is locked and the loop starts

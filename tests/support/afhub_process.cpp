@@ -124,4 +124,12 @@ int ScopedProcess::stop() {
   return code;
 }
 
+int wait_for_exit(ScopedProcess& process, std::chrono::milliseconds timeout) {
+  int status = 0;
+  if (!wait_until([&] { return waitpid(process.pid, &status, WNOHANG) == process.pid; }, timeout))
+    return -1;
+  process.pid = -1;
+  return exit_code_of(status);
+}
+
 }  // namespace afhub::test

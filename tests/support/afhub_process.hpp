@@ -41,6 +41,10 @@ struct ScopedProcess {
   pid_t pid;
 };
 
+// Waits up to `timeout` for the process to end by itself; returns its exit code,
+// or -1 when it is still running (it is then left to the ScopedProcess).
+int wait_for_exit(ScopedProcess& process, std::chrono::milliseconds timeout);
+
 // Waits until `predicate` holds, polling every 10 ms, for at most `timeout`.
 template <class Predicate>
 bool wait_until(Predicate predicate, std::chrono::milliseconds timeout) {

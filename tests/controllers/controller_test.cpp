@@ -1,0 +1,202 @@
+// Controllers as processes against the real simulation: lockstep runs that are
+// bit-identical, a killed lockstep client dropped from the barrier and a restarted
+// one rejoining, a killed free-running controller tripping the watchdog (hold
+// policy) and a restarted one taking over, `afhub top` and `afhub status`.
+#include <gtest/gtest.h>
+#include <signal.h>
+
+#include <cmath>
+#include <thread>
+
+#include "afhub/hub/bodies.hpp"
+#include "afhub/hub/channel_names.hpp"
+#include "afhub/shm_layout/world.hpp"
+#include "afhub_process.hpp"
+#include "model_files.hpp"
+
+namespace afhub::test {
+namespace {
+
+using namespace std::chrono_literals;
+
+const std::string kKuka =
+    AFHUB_SHARED_MODELS "/descriptions/multi-bodies/robots/blender-kuka.yaml";
+
+bool contains(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
+
+// The number after "key": in a JSON text, or NaN.
+double json_number(const std::string& json, const std::string& key) {
+  const std::size_t at = json.find("\"" + key + "\":");
+  if (at == std::string::npos) return std::nan("");
+  return std::strtod(json.c_str() + at + key.size() + 3, nullptr);
+}
+
+LatestReader<WorldState> world_reader() {
+  return LatestReader<WorldState>(
+      {std::string(kService), std::string(kWorldInstance), std::string(kStateEvent)});
+}
+
+// One lockstep run of the KUKA driven by `afhub ctl sine`; returns the report.
+std::string lockstep_sine_run(const afhub::testing::ModelFolder& folder, int run) {
+  const std::string report = (folder.dir() / ("report" + std::to_string(run) + ".json")).string();
+  const std::string log = (folder.dir() / "run.log").string();
+  ScopedProcess physics(spawn_afhub({"run", kKuka, "--no-autostart", "--lockstep", "--wait-for",
+                                     "1", "--fast", "--steps", "3000", "--report", report},
+                                    log));
+  BodyClient base("ambf/env/base");
+  EXPECT_TRUE(wait_until([&] { return base.latest_state() != nullptr; }, 10s)) << read_file(log);
+  ScopedProcess controller(
+      spawn_afhub({"ctl", "sine", "base", "--lockstep", "--period", "1", "--amplitude", "0.4"}));
+  EXPECT_EQ(wait_for_exit(physics, 30s), 0) << read_file(log);
+  return read_file(report);
+}
+
+TEST(Lockstep, SameModelSameControllerGivesBitIdenticalRuns) {
+  afhub::testing::ModelFolder folder;
+  const std::string first = lockstep_sine_run(folder, 1);
+  const std::string second = lockstep_sine_run(folder, 2);
+  ASSERT_TRUE(contains(first, "\"steps\":3000")) << first;
+  // Poses and joints are written in full (shortest round-trip) precision: equal
+  // text is equal bits. Times differ from run to run and are left out.
+  const auto trajectory = [](const std::string& report) {
+    return report.substr(0, report.find("\"max_joint_error_m\""));
+  };
+  EXPECT_EQ(trajectory(first), trajectory(second));
+  // And the controller did drive the arm: joint 2 is 0.4 sin(2 pi 3 + pi/7 * ...) away
+  // from where it started, which is far from zero.
+  const double q1 = json_number(first, "ambf/env/link1-link2\":{\"position");
+  EXPECT_GT(std::abs(q1), 0.05) << first;
+}
+
+TEST(Lockstep, KilledClientIsDroppedTheWorldGoesOnAndARestartedClientRejoins) {
+  afhub::testing::ModelFolder folder;
+  const std::string log = (folder.dir() / "run.log").string();
+  ScopedProcess physics(spawn_afhub({"run", kKuka, "--no-autostart", "--lockstep", "--wait-for",
+                                     "1", "--client-timeout", "50"},
+                                    log));
+  BodyClient base("ambf/env/base");
+  LatestReader<WorldState> world = world_reader();
+  ASSERT_TRUE(wait_until([&] { return base.latest_state() && world.latest(); }, 10s))
+      << read_file(log);
+  EXPECT_EQ(world.latest()->header.sim_step, 0u) << "step 0 must wait for the client";
+
+  ScopedProcess first(spawn_afhub({"ctl", "hold", "base", "--lockstep"}));
+  ASSERT_TRUE(wait_until(
+      [&] { return world.latest()->lockstep_clients == 1 && world.latest()->header.sim_step > 300; },
+      10s))
+      << read_file(log);
+  EXPECT_EQ(world.latest()->dropped_clients, 0u);
+
+  kill(first.pid, SIGKILL);
+  const auto killed = std::chrono::steady_clock::now();
+  ASSERT_TRUE(wait_until([&] { return world.latest()->dropped_clients == 1; }, 3s))
+      << read_file(log);
+  EXPECT_EQ(world.latest()->lockstep_clients, 0u);
+  EXPECT_GE(world.latest()->late_answers, 3u);
+  // The world goes on without it, and the body's watchdog engages.
+  const std::uint64_t step = world.latest()->header.sim_step;
+  ASSERT_TRUE(wait_until([&] { return world.latest()->header.sim_step > step + 200; }, 3s));
+  ASSERT_TRUE(wait_until([&] { return world.latest()->watchdog_expiries == 1; }, 3s));
+  const double to_watchdog =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - killed).count();
+  EXPECT_LT(to_watchdog, 0.5 + 3 * 0.05 + 0.5) << "watchdog 0.5 s after the last command";
+
+  ScopedProcess second(spawn_afhub({"ctl", "hold", "base", "--lockstep"}));
+  ASSERT_TRUE(wait_until([&] { return world.latest()->lockstep_clients == 1; }, 5s))
+      << read_file(log);
+  const std::uint64_t rejoined = world.latest()->header.sim_step;
+  ASSERT_TRUE(wait_until([&] { return world.latest()->header.sim_step > rejoined + 300; }, 5s));
+  EXPECT_EQ(world.latest()->lockstep_clients, 1u);
+  EXPECT_EQ(world.latest()->dropped_clients, 1u);
+
+  EXPECT_EQ(physics.stop(), 0);
+  const std::string output = read_file(log);
+  EXPECT_TRUE(contains(output, "waiting for 1 lockstep clients")) << output;
+  EXPECT_TRUE(contains(output, "dropped from the barrier")) << output;
+  EXPECT_TRUE(contains(output, "lockstep client pid " + std::to_string(second.pid) + " joined"))
+      << output;
+}
+
+TEST(Controllers, KilledControllerTripsTheHoldWatchdogAndARestartTakesOver) {
+  afhub::testing::ModelFolder folder;
+  const std::string log = (folder.dir() / "run.log").string();
+  ScopedProcess physics(
+      spawn_afhub({"run", kKuka, "--no-autostart", "--watchdog-hold", "base"}, log));
+  BodyClient base("ambf/env/base");
+  LatestReader<WorldState> world = world_reader();
+  LatestReader<BodyCommand> commands(body_command_channel("ambf/env/base"));
+  ASSERT_TRUE(wait_until([&] { return base.latest_state() && world.latest(); }, 10s))
+      << read_file(log);
+
+  ScopedProcess sine(spawn_afhub({"ctl", "sine", "base", "--amplitude", "0.4", "--period", "1"}));
+  ASSERT_TRUE(wait_until(
+      [&] {
+        const BodyCommand* command = commands.latest();
+        return command && command->header.publisher_pid == static_cast<std::uint32_t>(sine.pid);
+      },
+      5s));
+  std::this_thread::sleep_for(1500ms);  // mid-swing
+  kill(sine.pid, SIGKILL);
+  const auto killed = std::chrono::steady_clock::now();
+  ASSERT_TRUE(wait_until([&] { return world.latest()->watchdog_expiries == 1; }, 2s));
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - killed).count(), 1.0);
+
+  // Held: the joints stay where the watchdog found them, mid-swing, while the physics
+  // runs on (after a moment to absorb the swing's speed).
+  std::this_thread::sleep_for(300ms);
+  const BodyState held = *base.latest_state();
+  std::this_thread::sleep_for(1s);
+  const BodyState later = *base.latest_state();
+  EXPECT_GT(later.header.sim_step, held.header.sim_step + 500);
+  for (int j = 0; j < 7; ++j)
+    EXPECT_NEAR(later.joint_positions[j], held.joint_positions[j], 0.005) << "joint " << j;
+
+  // A restarted controller takes over: its commands arrive and none is refused.
+  ScopedProcess hold(spawn_afhub({"ctl", "hold", "base"}));
+  ASSERT_TRUE(wait_until(
+      [&] {
+        const BodyCommand* command = commands.latest();
+        return command && command->header.publisher_pid == static_cast<std::uint32_t>(hold.pid);
+      },
+      5s));
+  EXPECT_EQ(world.latest()->rejected_commands, 0u);
+
+  // Its loop shows in `afhub top` and `afhub status` once it has run a second.
+  std::this_thread::sleep_for(1200ms);
+  RunResult top = run_afhub({"top", "--json"});
+  EXPECT_EQ(top.exit_code, 0) << top.err;
+  EXPECT_TRUE(contains(top.out, "\"name\":\"ctl hold\"")) << top.out;
+  EXPECT_TRUE(contains(top.out, "\"body\":\"ambf/env/base\"")) << top.out;
+  EXPECT_NEAR(json_number(top.out, "rate_hz"), 1000.0, 200.0) << top.out;
+  EXPECT_GT(json_number(top.out, "cycles"), 500.0) << top.out;
+  RunResult status = run_afhub({"status"});
+  EXPECT_TRUE(contains(status.out, "loops:")) << status.out;
+  EXPECT_TRUE(contains(status.out, "ctl hold")) << status.out;
+
+  EXPECT_EQ(physics.stop(), 0);
+  EXPECT_TRUE(contains(read_file(log), "its joints hold their positions")) << read_file(log);
+}
+
+TEST(Controllers, BadArgumentsGetClearErrors) {
+  afhub::testing::ModelFolder folder;
+  ScopedProcess physics(spawn_afhub({"run", kKuka, "--no-autostart"}));
+  BodyClient base("ambf/env/base");
+  ASSERT_TRUE(wait_until([&] { return base.latest_state() != nullptr; }, 10s));
+  RunResult missing_body = run_afhub({"ctl", "sine", "nosuchbody"});
+  EXPECT_EQ(missing_body.exit_code, 1);
+  EXPECT_TRUE(contains(missing_body.err, "nosuchbody")) << missing_body.err;
+  RunResult missing_file = run_afhub({"ctl", "track", "base", folder.dir().string() + "/x.csv"});
+  EXPECT_EQ(missing_file.exit_code, 1);
+  EXPECT_TRUE(contains(missing_file.err, "cannot open the trajectory file")) << missing_file.err;
+  RunResult bad_rate = run_afhub({"ctl", "hold", "base", "--rate", "0"});
+  EXPECT_EQ(bad_rate.exit_code, 1);
+  EXPECT_TRUE(contains(bad_rate.err, "--rate")) << bad_rate.err;
+  RunResult bad_hold = run_afhub({"run", kKuka, "--offline", "--steps", "1", "--watchdog-hold", "x"});
+  EXPECT_EQ(bad_hold.exit_code, 1);
+  EXPECT_TRUE(contains(bad_hold.err, "drop --offline")) << bad_hold.err;
+}
+
+}  // namespace
+}  // namespace afhub::test
