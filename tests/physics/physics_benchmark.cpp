@@ -8,6 +8,7 @@
 #include <cstdio>
 
 #include "afhub/hub/hub_presence.hpp"
+#include "afhub/hub/latency_histogram.hpp"
 #include "afhub/hub/stop_signal.hpp"
 #include "afhub/physics/adf_loader.hpp"
 #include "afhub/physics/sim_channels.hpp"
@@ -66,6 +67,51 @@ void BM_PublishTenBodies(benchmark::State& state) {
   for (auto _ : state) channels.publish(0.0, 0.0, false);
 }
 BENCHMARK(BM_PublishTenBodies)->Unit(benchmark::kMicrosecond);
+
+// Lockstep: the physics publishes a step, an `afhub ctl hold --lockstep` process
+// answers it, the physics resumes. Counters: the round trip (publish start to the
+// answer applied) p50 and p99 in us, and simulated seconds per wall second with the
+// physics step included. One body (a ball) isolates the protocol; the KUKA
+// (8 bodies published per step) is the realistic case.
+void BM_LockstepRoundTrip(benchmark::State& state, bool kuka) {
+  afhub::testing::ModelFolder folder;
+  const std::string file =
+      kuka ? kKuka
+           : folder.write("ball.yaml",
+                          "bodies: [BODY ball]\nBODY ball:\n  name: ball\n  mass: 1\n"
+                          "  shape: sphere\n  geometry: {radius: 0.05}\n");
+  const Model model = load_adf_files({file});
+  Simulation sim(model, 0.001);
+  SimChannels channels(sim, 0.5);
+  LockstepOptions options;
+  options.wait_for = 1;
+  channels.enable_lockstep(options);
+  channels.publish(0.0, 0.0, false);
+  afhub::test::ScopedProcess client(
+      afhub::test::spawn_afhub({"ctl", "hold", kuka ? "base" : "ball", "--lockstep"}));
+  channels.await_lockstep();  // step 0 waits for the client to join
+  LatencyHistogram round_trip;
+  for (auto _ : state) {
+    sim.step();
+    const std::int64_t published = monotonic_ns();
+    channels.publish(0.0, 0.0, false);
+    channels.await_lockstep();
+    round_trip.record(static_cast<double>(monotonic_ns() - published) * 1e-3);
+  }
+  state.counters["round_trip_p50_us"] = round_trip.percentile_us(0.50);
+  state.counters["round_trip_p99_us"] = round_trip.percentile_us(0.99);
+  state.counters["x_real_time"] = benchmark::Counter(
+      static_cast<double>(state.iterations()) * sim.dt_s(), benchmark::Counter::kIsRate);
+  state.counters["late"] = static_cast<double>(channels.late_answers());
+}
+// Fixed iterations: one run per case, so the client process starts once (a second
+// SimChannels in this process would briefly publish beside the first).
+BENCHMARK_CAPTURE(BM_LockstepRoundTrip, one_body, false)
+    ->Unit(benchmark::kMicrosecond)
+    ->Iterations(20000);
+BENCHMARK_CAPTURE(BM_LockstepRoundTrip, kuka, true)
+    ->Unit(benchmark::kMicrosecond)
+    ->Iterations(20000);
 
 }  // namespace
 }  // namespace afhub::physics
