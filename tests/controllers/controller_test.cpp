@@ -19,8 +19,7 @@ namespace {
 
 using namespace std::chrono_literals;
 
-const std::string kKuka =
-    AFHUB_SHARED_MODELS "/descriptions/multi-bodies/robots/blender-kuka.yaml";
+const std::string kKuka = AFHUB_SHARED_MODELS "/descriptions/multi-bodies/robots/blender-kuka.yaml";
 
 bool contains(const std::string& text, const std::string& part) {
   return text.find(part) != std::string::npos;
@@ -73,9 +72,9 @@ TEST(Lockstep, SameModelSameControllerGivesBitIdenticalRuns) {
 TEST(Lockstep, KilledClientIsDroppedTheWorldGoesOnAndARestartedClientRejoins) {
   afhub::testing::ModelFolder folder;
   const std::string log = (folder.dir() / "run.log").string();
-  ScopedProcess physics(spawn_afhub({"run", kKuka, "--no-autostart", "--lockstep", "--wait-for",
-                                     "1", "--client-timeout", "50"},
-                                    log));
+  ScopedProcess physics(spawn_afhub(
+      {"run", kKuka, "--no-autostart", "--lockstep", "--wait-for", "1", "--client-timeout", "50"},
+      log));
   BodyClient base("ambf/env/base");
   LatestReader<WorldState> world = world_reader();
   ASSERT_TRUE(wait_until([&] { return base.latest_state() && world.latest(); }, 10s))
@@ -84,7 +83,9 @@ TEST(Lockstep, KilledClientIsDroppedTheWorldGoesOnAndARestartedClientRejoins) {
 
   ScopedProcess first(spawn_afhub({"ctl", "hold", "base", "--lockstep"}));
   ASSERT_TRUE(wait_until(
-      [&] { return world.latest()->lockstep_clients == 1 && world.latest()->header.sim_step > 300; },
+      [&] {
+        return world.latest()->lockstep_clients == 1 && world.latest()->header.sim_step > 300;
+      },
       10s))
       << read_file(log);
   EXPECT_EQ(world.latest()->dropped_clients, 0u);
@@ -193,7 +194,8 @@ TEST(Controllers, BadArgumentsGetClearErrors) {
   RunResult bad_rate = run_afhub({"ctl", "hold", "base", "--rate", "0"});
   EXPECT_EQ(bad_rate.exit_code, 1);
   EXPECT_TRUE(contains(bad_rate.err, "--rate")) << bad_rate.err;
-  RunResult bad_hold = run_afhub({"run", kKuka, "--offline", "--steps", "1", "--watchdog-hold", "x"});
+  RunResult bad_hold =
+      run_afhub({"run", kKuka, "--offline", "--steps", "1", "--watchdog-hold", "x"});
   EXPECT_EQ(bad_hold.exit_code, 1);
   EXPECT_TRUE(contains(bad_hold.err, "drop --offline")) << bad_hold.err;
 }

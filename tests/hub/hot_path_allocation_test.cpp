@@ -8,6 +8,8 @@
 #include <cstdlib>
 #include <new>
 
+#include "afhub/controllers/joint_targets.hpp"
+#include "afhub/controllers/loop_stats_publisher.hpp"
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/stop_signal.hpp"
 #include "afhub/physics/adf_loader.hpp"
@@ -170,6 +172,52 @@ TEST(HotPath, PhysicsLoopDoesNotAllocate) {
   EXPECT_EQ(g_allocations.load(), 0) << "heap allocations in " << kCycles << " physics cycles";
   EXPECT_TRUE(sim.all_finite());
   EXPECT_EQ(channels.rejected_commands(), 0u);
+}
+
+// The controller side too: the shipped sine controller answering each step in
+// lockstep, its timing recorded and its stats published, against the KUKA's
+// lockstep barrier, step and publish.
+TEST(HotPath, LockstepControllerLoopDoesNotAllocate) {
+  const physics::Model model = physics::load_adf_files(
+      {AFHUB_SHARED_MODELS "/descriptions/multi-bodies/robots/blender-kuka.yaml"});
+  physics::Simulation sim(model, 0.001);
+  physics::SimChannels channels(sim, 0.5);
+  channels.enable_lockstep(physics::LockstepOptions{});
+  BodyClient client("ambf/env/base");
+  const ControllerCycle controller = joint_position_controller(sine_targets(0.3, 1.0, {}));
+  LoopTiming timing;
+  LoopStatsPublisher stats("test", "ambf/env/base", 1'000'000, true, RealtimeGrant{});
+  std::int64_t fake_clock_ns = 0;  // a second per cycle: stats are published every cycle
+  auto one_cycle = [&]() {
+    channels.publish(0.0, 0.0, false);
+    const BodyState* state = client.latest_state();
+    BodyCommand* command = client.loan_command();
+    if (!state || !command) return false;
+    const std::int64_t begin = monotonic_ns();
+    controller(*state, *command);
+    command->header.sim_step = state->header.sim_step;
+    command->lockstep = 1;
+    client.publish_command(command);
+    timing.record(0, monotonic_ns() - begin);
+    stats.maybe_publish(fake_clock_ns += 1'000'000'000, timing);
+    channels.await_lockstep();
+    sim.step();
+    return true;
+  };
+  ASSERT_TRUE(test::wait_until([&] { return one_cycle(); }, 2s));
+  for (int i = 0; i < 500; ++i) ASSERT_TRUE(one_cycle());
+  ASSERT_EQ(channels.lockstep_clients(), 1u);
+
+  constexpr int kCycles = 5000;
+  g_allocations = 0;
+  g_counting = true;
+  bool all_ok = true;
+  for (int i = 0; i < kCycles; ++i) all_ok = one_cycle() && all_ok;
+  g_counting = false;
+  EXPECT_TRUE(all_ok);
+  EXPECT_EQ(g_allocations.load(), 0) << "heap allocations in " << kCycles << " lockstep cycles";
+  EXPECT_EQ(channels.late_answers(), 0u);
+  EXPECT_EQ(timing.cycles(), static_cast<std::uint64_t>(kCycles + 501));
 }
 
 }  // namespace
