@@ -1,29 +1,17 @@
 // The stats channel of a loop (see loop_stats_publisher.hpp).
 #include "afhub/controllers/loop_stats_publisher.hpp"
 
-#include <algorithm>
-#include <cstring>
-
+#include "afhub/hub/bodies.hpp"
 #include "afhub/hub/hub_presence.hpp"
 
 namespace afhub {
-namespace {
-
-template <std::size_t N>
-void copy_name(std::array<char, N>& out, const std::string& text) {
-  const std::size_t length = std::min(text.size(), N - 1);
-  std::memcpy(out.data(), text.data(), length);
-  out[length] = '\0';
-}
-
-}  // namespace
 
 LoopStatsPublisher::LoopStatsPublisher(const std::string& name, const std::string& body,
                                        std::int64_t period_ns, bool lockstep,
                                        const RealtimeGrant& grant)
     : writer_({std::string(kService), runtime_name(), std::string(kStatsEvent)}) {
-  copy_name(identity_.name, name);
-  copy_name(identity_.body, body);
+  set_name(identity_.name, name);
+  set_name(identity_.body, body);
   identity_.period_s = lockstep ? 0.0 : static_cast<double>(period_ns) * 1e-9;
   identity_.lockstep = lockstep;
   identity_.realtime = grant.realtime;

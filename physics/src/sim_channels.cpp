@@ -68,13 +68,6 @@ int find_parent(const Model& model, const std::string& parent) {
   return -1;
 }
 
-template <std::size_t N>
-void copy_name(std::array<char, N>& out, const std::string& name) {
-  const std::size_t length = std::min(name.size(), N - 1);
-  std::memcpy(out.data(), name.data(), length);
-  out[length] = '\0';
-}
-
 }  // namespace
 
 SimChannels::SimChannels(Simulation& sim, double watchdog_s)
@@ -251,7 +244,7 @@ bool SimChannels::await_lockstep() noexcept {
 void SimChannels::fill_objects(std::array<WorldObjectPose, kMaxWorldObjects>& out,
                                const std::vector<WorldObject>& objects) const noexcept {
   for (std::size_t i = 0; i < objects.size(); ++i) {
-    copy_name(out[i].name, objects[i].spec->name);
+    set_name(out[i].name, objects[i].spec->name);
     if (objects[i].parent < 0) {
       out[i].pose = objects[i].local;
       continue;

@@ -87,6 +87,17 @@ void operator delete[](void* p, std::size_t) noexcept {
 namespace afhub {
 namespace {
 
+// Runs `cycle` `count` times counting heap allocations; false if a cycle failed.
+template <class Cycle>
+bool count_allocations(int count, Cycle&& cycle) {
+  g_allocations = 0;
+  g_counting = true;
+  bool all_ok = true;
+  for (int i = 0; i < count; ++i) all_ok = cycle() && all_ok;
+  g_counting = false;
+  return all_ok;
+}
+
 using namespace std::chrono_literals;
 
 TEST(HotPath, CountsAllocationsWhenThereAreSome) {
@@ -123,13 +134,9 @@ TEST(HotPath, SteadyStateLoopDoesNotAllocate) {
   ASSERT_TRUE(test::wait_until([&] { return one_cycle(0); }, 2s));
   for (std::uint64_t step = 1; step < 100; ++step) ASSERT_TRUE(one_cycle(step));
 
-  constexpr std::uint64_t kCycles = 10000;
-  g_allocations = 0;
-  g_counting = true;
-  bool all_ok = true;
-  for (std::uint64_t step = 100; step < 100 + kCycles; ++step) all_ok = one_cycle(step) && all_ok;
-  g_counting = false;
-  EXPECT_TRUE(all_ok);
+  constexpr int kCycles = 10000;
+  std::uint64_t step = 100;
+  EXPECT_TRUE(count_allocations(kCycles, [&] { return one_cycle(step++); }));
   EXPECT_EQ(g_allocations.load(), 0) << "heap allocations in " << kCycles << " steady-state cycles";
   EXPECT_EQ(physics.latest_command()->joint_values[6], static_cast<double>(100 + kCycles - 1));
 }
@@ -163,12 +170,7 @@ TEST(HotPath, PhysicsLoopDoesNotAllocate) {
   for (int i = 0; i < 500; ++i) ASSERT_TRUE(one_cycle());  // first contacts, first commands
 
   constexpr int kCycles = 5000;
-  g_allocations = 0;
-  g_counting = true;
-  bool all_ok = true;
-  for (int i = 0; i < kCycles; ++i) all_ok = one_cycle() && all_ok;
-  g_counting = false;
-  EXPECT_TRUE(all_ok);
+  EXPECT_TRUE(count_allocations(kCycles, one_cycle));
   EXPECT_EQ(g_allocations.load(), 0) << "heap allocations in " << kCycles << " physics cycles";
   EXPECT_TRUE(sim.all_finite());
   EXPECT_EQ(channels.rejected_commands(), 0u);
@@ -209,12 +211,7 @@ TEST(HotPath, LockstepControllerLoopDoesNotAllocate) {
   ASSERT_EQ(channels.lockstep_clients(), 1u);
 
   constexpr int kCycles = 5000;
-  g_allocations = 0;
-  g_counting = true;
-  bool all_ok = true;
-  for (int i = 0; i < kCycles; ++i) all_ok = one_cycle() && all_ok;
-  g_counting = false;
-  EXPECT_TRUE(all_ok);
+  EXPECT_TRUE(count_allocations(kCycles, one_cycle));
   EXPECT_EQ(g_allocations.load(), 0) << "heap allocations in " << kCycles << " lockstep cycles";
   EXPECT_EQ(channels.late_answers(), 0u);
   EXPECT_EQ(timing.cycles(), static_cast<std::uint64_t>(kCycles + 501));

@@ -21,17 +21,6 @@ using namespace std::chrono_literals;
 const std::string kDescriptions = AFHUB_SHARED_MODELS "/descriptions/";
 const std::string kKuka = kDescriptions + "multi-bodies/robots/blender-kuka.yaml";
 
-bool contains(const std::string& text, const std::string& part) {
-  return text.find(part) != std::string::npos;
-}
-
-// The number after "key": in a flat JSON text, or NaN.
-double json_number(const std::string& json, const std::string& key) {
-  const std::size_t at = json.find("\"" + key + "\":");
-  if (at == std::string::npos) return std::nan("");
-  return std::strtod(json.c_str() + at + key.size() + 3, nullptr);
-}
-
 TEST(Run, KukaOnChannelsObeysCommandsRefusesNanAndTripsTheWatchdog) {
   afhub::testing::ModelFolder folder;
   const std::string log = (folder.dir() / "run.log").string();

@@ -8,6 +8,8 @@
 #include <time.h>
 #include <unistd.h>
 
+#include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
@@ -122,6 +124,16 @@ int ScopedProcess::stop() {
   int code = stop_process(pid, SIGTERM);
   pid = -1;
   return code;
+}
+
+bool contains(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
+
+double json_number(const std::string& json, const std::string& key) {
+  const std::size_t at = json.find("\"" + key + "\":");
+  if (at == std::string::npos) return std::nan("");
+  return std::strtod(json.c_str() + at + key.size() + 3, nullptr);
 }
 
 int wait_for_exit(ScopedProcess& process, std::chrono::milliseconds timeout) {

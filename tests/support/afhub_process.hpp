@@ -60,6 +60,10 @@ bool wait_until(Predicate predicate, std::chrono::milliseconds timeout) {
 }
 
 std::string afhub_executable();
+
+bool contains(const std::string& text, const std::string& part);
+// The number after "key": in a JSON text (the first occurrence), or NaN.
+double json_number(const std::string& json, const std::string& key);
 std::string read_file(const std::string& path);
 
 }  // namespace afhub::test

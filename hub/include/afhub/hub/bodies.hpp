@@ -5,6 +5,7 @@
 //   CatalogReader: every live body, as merged by the hub.
 #pragma once
 
+#include <algorithm>
 #include <chrono>
 #include <string>
 #include <string_view>
@@ -87,6 +88,14 @@ class CatalogReader {
   RawLatestReader reader_;
   const BodyList* current_ = nullptr;
 };
+
+// Writes `text` into a fixed name buffer, cut to fit, NUL-terminated.
+template <std::size_t N>
+void set_name(std::array<char, N>& buffer, std::string_view text) noexcept {
+  const std::size_t length = std::min(text.size(), N - 1);
+  std::copy_n(text.data(), length, buffer.data());
+  buffer[length] = '\0';
+}
 
 // Text of a fixed NUL-terminated name buffer.
 template <std::size_t N>
