@@ -5,7 +5,7 @@
 
 #include <cstdio>
 
-#include "afhub/controllers/loop_stats_publisher.hpp"
+#include "afhub/hub/loop_stats_publisher.hpp"
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/error.hpp"
 #include "afhub/hub/hub_presence.hpp"

@@ -35,9 +35,10 @@ std::string loop_table(const std::vector<LoopStats>& loops) {
                   "  %-7u %-11s %-26s %9.1f   %6.0f %6.0f %6.0f %8.0f   %8.1f %8.0f   %8llu %6llu  "
                   "%s\n",
                   s.header.publisher_pid, std::string(name_of(s.name)).c_str(),
-                  std::string(name_of(s.body)).c_str(), s.rate_hz, s.wake_latency.p50_us,
-                  s.wake_latency.p99_us, s.wake_latency.p999_us, s.wake_latency.max_us,
-                  s.compute.p99_us, s.compute.max_us, static_cast<unsigned long long>(s.overruns),
+                  name_of(s.body).empty() ? "-" : std::string(name_of(s.body)).c_str(), s.rate_hz,
+                  s.wake_latency.p50_us, s.wake_latency.p99_us, s.wake_latency.p999_us,
+                  s.wake_latency.max_us, s.compute.p99_us, s.compute.max_us,
+                  static_cast<unsigned long long>(s.overruns),
                   static_cast<unsigned long long>(s.late_commands), realtime_flags(s).c_str());
     out += line;
   }

@@ -4,8 +4,10 @@
 #include <algorithm>
 #include <cstdio>
 #include <map>
+#include <memory>
 
 #include "afhub/hub/json_writer.hpp"
+#include "afhub/hub/loop_stats_publisher.hpp"
 #include "afhub/hub/stop_signal.hpp"
 #include "afhub/shm_layout/world_control.hpp"
 
@@ -30,7 +32,13 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
   std::uint64_t rate_window_step = 0;
   std::int64_t rate_window_ns = start_ns;
   double achieved_rate_hz = 0.0;
+  std::uint64_t late_counted = 0;
   report.max_joint_error_m = std::max(report.max_joint_error_m, largest_pivot_gap(sim));
+  // The physics loop's own timing, on its stats channel like every loop (`afhub top`).
+  std::unique_ptr<LoopStatsPublisher> stats;
+  if (channels)
+    stats = std::make_unique<LoopStatsPublisher>("run", "", options.fast ? 0 : period_ns,
+                                                 channels->lockstep(), RealtimeGrant{});
   if (channels) channels->publish(0.0, 0.0, false);  // step 0: the model as loaded
   while (!stop_requested() && (options.steps == 0 || report.steps < options.steps)) {
     if (channels) {
@@ -62,7 +70,17 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
     if (channels)
       channels->publish(static_cast<double>(monotonic_ns() - start_ns) * 1e-9, achieved_rate_hz,
                         control.paused);
-    if (stepping) report.step_time.record(static_cast<double>(monotonic_ns() - begin_ns) * 1e-3);
+    const std::int64_t end_ns = monotonic_ns();
+    if (stepping) report.step_time.record(static_cast<double>(end_ns - begin_ns) * 1e-3);
+    if (stats) {
+      report.timing.record(options.fast ? 0 : std::max<std::int64_t>(0, begin_ns - next_ns),
+                           end_ns - begin_ns);
+      // Behind schedule: the next steps run back to back until the clock is caught up.
+      if (!options.fast && end_ns > next_ns + period_ns) report.timing.count_overruns(1);
+      report.timing.count_late(channels->late_answers() - late_counted);
+      late_counted = channels->late_answers();
+      stats->maybe_publish(end_ns, report.timing);
+    }
 
     next_ns += period_ns;
     if (next_ns - rate_window_ns >= 1'000'000'000) {

@@ -159,6 +159,8 @@ TEST(Controllers, KilledControllerTripsTheHoldWatchdogAndARestartTakesOver) {
   EXPECT_EQ(top.exit_code, 0) << top.err;
   EXPECT_TRUE(contains(top.out, "\"name\":\"ctl hold\"")) << top.out;
   EXPECT_TRUE(contains(top.out, "\"body\":\"ambf/env/base\"")) << top.out;
+  EXPECT_TRUE(contains(top.out, "\"name\":\"run\"")) << "the physics loop is listed too\n"
+                                                     << top.out;
   EXPECT_NEAR(json_number(top.out, "rate_hz"), 1000.0, 200.0) << top.out;
   EXPECT_GT(json_number(top.out, "cycles"), 500.0) << top.out;
   RunResult status = run_afhub({"status"});

@@ -9,7 +9,7 @@
 #include <new>
 
 #include "afhub/controllers/joint_targets.hpp"
-#include "afhub/controllers/loop_stats_publisher.hpp"
+#include "afhub/hub/loop_stats_publisher.hpp"
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/stop_signal.hpp"
 #include "afhub/physics/adf_loader.hpp"

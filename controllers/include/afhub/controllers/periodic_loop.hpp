@@ -8,7 +8,8 @@
 #include <cstdint>
 #include <functional>
 
-#include "afhub/controllers/loop_timing.hpp"
+#include "afhub/hub/loop_stats_publisher.hpp"
+#include "afhub/hub/loop_timing.hpp"
 
 namespace afhub {
 
@@ -20,13 +21,7 @@ struct LoopOptions {
   std::uint64_t max_cycles = 0;  // stop after this many cycles; 0: until a stop signal
 };
 
-// What the system granted. Each request it refused is reported once on stderr,
-// naming `who`, and the loop runs anyway.
-struct RealtimeGrant {
-  bool realtime = false;
-  bool memory_locked = false;
-  int cpu = -1;
-};
+// Applies the options to the calling thread; refusals are reported naming `who`.
 RealtimeGrant apply_realtime(const LoopOptions& options, const char* who);
 
 // Calls `cycle` once per period until it returns false, options.max_cycles or a

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "afhub/hub/latency_histogram.hpp"
+#include "afhub/hub/loop_timing.hpp"
 #include "afhub/physics/sim_channels.hpp"
 #include "afhub/physics/simulation.hpp"
 
@@ -23,6 +24,7 @@ struct RunReport {
   std::uint64_t steps = 0;
   double wall_time_s = 0.0;
   LatencyHistogram step_time;  // one loop iteration: step and publish (after the commands)
+  LoopTiming timing;           // wake-up lateness, work time, overruns, late lockstep answers
   bool nan_detected = false;
   double max_joint_error_m = 0.0;  // the largest pivot gap seen, over all joints and steps
 };

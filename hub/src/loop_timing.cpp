@@ -1,5 +1,5 @@
 // Loop measurements into a stats payload (see loop_timing.hpp).
-#include "afhub/controllers/loop_timing.hpp"
+#include "afhub/hub/loop_timing.hpp"
 
 namespace afhub {
 

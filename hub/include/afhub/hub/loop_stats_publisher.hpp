@@ -5,11 +5,17 @@
 #include <cstdint>
 #include <string>
 
-#include "afhub/controllers/loop_timing.hpp"
-#include "afhub/controllers/periodic_loop.hpp"
 #include "afhub/hub/channel.hpp"
+#include "afhub/hub/loop_timing.hpp"
 
 namespace afhub {
+
+// What the system granted a loop's real-time requests (SCHED_FIFO, mlockall, CPU).
+struct RealtimeGrant {
+  bool realtime = false;
+  bool memory_locked = false;
+  int cpu = -1;
+};
 
 class LoopStatsPublisher {
  public:
