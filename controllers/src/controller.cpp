@@ -5,10 +5,10 @@
 
 #include <cstdio>
 
-#include "afhub/hub/loop_stats_publisher.hpp"
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/error.hpp"
 #include "afhub/hub/hub_presence.hpp"
+#include "afhub/hub/loop_stats_publisher.hpp"
 #include "afhub/hub/stop_signal.hpp"
 
 namespace afhub {

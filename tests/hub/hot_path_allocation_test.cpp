@@ -9,8 +9,8 @@
 #include <new>
 
 #include "afhub/controllers/joint_targets.hpp"
-#include "afhub/hub/loop_stats_publisher.hpp"
 #include "afhub/hub/bodies.hpp"
+#include "afhub/hub/loop_stats_publisher.hpp"
 #include "afhub/hub/stop_signal.hpp"
 #include "afhub/physics/adf_loader.hpp"
 #include "afhub/physics/sim_channels.hpp"
