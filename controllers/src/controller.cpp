@@ -28,8 +28,18 @@ void answer(BodyClient& body, const BodyState& state, const ControllerCycle& cyc
 // Free-running: every period, the newest state in, a command out.
 void run_free(BodyClient& body, const ControllerOptions& options, const ControllerCycle& cycle,
               LoopTiming& timing, LoopStatsPublisher& stats) {
+  LoopOptions loop = options.loop;
+  if (options.after_step_ns >= 0) {
+    const BodyState* state = body.latest_state();
+    for (const std::int64_t give_up = monotonic_ns() + 3'000'000'000;
+         !state && monotonic_ns() < give_up && !stop_requested(); state = body.latest_state())
+      sleep_until_ns(monotonic_ns() + 1'000'000);
+    if (!state)
+      throw Error("no state came from " + body.channel() + " in 3 s: is the physics running?");
+    loop.grid_origin_ns = state->header.publish_stamp_ns + options.after_step_ns;
+  }
   run_periodic(
-      options.loop, timing,
+      loop, timing,
       [&] {
         const BodyState* state = body.latest_state();
         if (!state) return true;
@@ -87,13 +97,15 @@ BodyInfo find_body(const std::string& query) {
 
 }  // namespace
 
-int run_controller(const ControllerOptions& options, const ControllerCycle& cycle) {
+int run_controller(const ControllerOptions& options, const ControllerCycle& cycle,
+                   LoopTiming* timing_out) {
   install_stop_signal_handlers();
   connect_to_hub("ctl", HubPolicy::kRequire);
   const BodyInfo info = find_body(options.body);
   const std::string channel(name_of(info.channel));
   BodyClient body(channel);
-  LoopTiming timing;  // preallocated before memory is locked and the loop starts
+  LoopTiming own_timing;  // preallocated before memory is locked and the loop starts
+  LoopTiming& timing = timing_out ? *timing_out : own_timing;
   const std::string who = "afhub " + options.name;
   const RealtimeGrant grant = apply_realtime(options.loop, who.c_str());
   LoopStatsPublisher stats(options.name, channel, options.loop.period_ns, options.lockstep, grant);

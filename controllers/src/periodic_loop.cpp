@@ -67,7 +67,12 @@ void run_periodic(const LoopOptions& options, LoopTiming& timing,
                   const std::function<bool()>& cycle,
                   const std::function<void(std::int64_t)>& after) {
   const std::int64_t period = options.period_ns;
-  std::int64_t scheduled = monotonic_ns() + period;
+  const std::int64_t now = monotonic_ns();
+  std::int64_t scheduled = now + period;
+  if (options.grid_origin_ns > now)
+    scheduled = options.grid_origin_ns;
+  else if (options.grid_origin_ns > 0)  // the grid's first point after now
+    scheduled = options.grid_origin_ns + ((now - options.grid_origin_ns) / period + 1) * period;
   for (std::uint64_t done = 0;
        !stop_requested() && (options.max_cycles == 0 || done < options.max_cycles); ++done) {
     sleep_until_ns(scheduled);

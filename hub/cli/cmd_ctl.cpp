@@ -21,6 +21,7 @@ struct CtlOptions {
   bool lock_memory = false;
   bool lockstep = false;
   std::uint64_t cycles = 0;
+  double after_step_us = -1.0;
 };
 
 ControllerOptions controller_options(const CtlOptions& options, const std::string& name) {
@@ -37,6 +38,12 @@ ControllerOptions controller_options(const CtlOptions& options, const std::strin
   controller.loop.cpu = options.cpu;
   controller.loop.lock_memory = options.lock_memory;
   controller.loop.max_cycles = options.cycles;
+  if (options.after_step_us >= 0.0) {
+    if (options.lockstep) throw Error("--after-step is for free-running loops, not --lockstep");
+    if (options.after_step_us * 1e3 >= static_cast<double>(controller.loop.period_ns))
+      throw Error("--after-step must be shorter than the loop's period");
+    controller.after_step_ns = std::llround(options.after_step_us * 1e3);
+  }
   return controller;
 }
 
@@ -53,6 +60,9 @@ void add_loop_options(CLI::App* command, CtlOptions& options) {
   command->add_flag("--lockstep", options.lockstep,
                     "Answer every physics step (with `afhub run --lockstep`) instead of a clock");
   command->add_option("--cycles", options.cycles, "Stop after this many cycles (default: Ctrl-C)");
+  command->add_option("--after-step", options.after_step_us,
+                      "Wake this many microseconds after each physics step (aligns the loop "
+                      "to the physics so that every command is ready for the next step)");
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 #include <memory>
 #include <sstream>
 
+#include "afhub/controllers/periodic_loop.hpp"
 #include "afhub/hub/error.hpp"
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/hub/stop_signal.hpp"
@@ -27,6 +28,9 @@ struct RunCliOptions {
   bool lockstep = false;
   std::uint32_t wait_for = 0;
   double client_timeout_ms = 100.0;
+  int fifo_priority = 0;
+  int cpu = -1;
+  bool lock_memory = false;
 };
 
 std::vector<std::string> split_commas(const std::string& text) {
@@ -45,6 +49,8 @@ int run_run(const RunCliOptions& options) {
     throw Error("--client-timeout must be between 0 and 60000 ms");
   if (!options.lockstep && options.wait_for > 0)
     throw Error("--wait-for needs --lockstep: it holds the first step for lockstep clients");
+  if (options.fifo_priority < 0 || options.fifo_priority > 99)
+    throw Error("--fifo takes a SCHED_FIFO priority from 1 to 99");
   if (options.offline && (options.lockstep || !options.watchdog_hold.empty()))
     throw Error("--lockstep and --watchdog-hold need the hub's channels: drop --offline");
   physics::SceneRequest request;
@@ -85,6 +91,11 @@ int run_run(const RunCliOptions& options) {
   physics::RunOptions run;
   run.fast = options.fast;
   run.steps = options.steps;
+  LoopOptions realtime;
+  realtime.fifo_priority = options.fifo_priority;
+  realtime.cpu = options.cpu;
+  realtime.lock_memory = options.lock_memory;
+  run.grant = apply_realtime(realtime, "afhub run");
   physics::RunReport report;
   physics::run_loop(sim, channels.get(), run, report);
   if (!options.report_file.empty()) {
@@ -126,6 +137,11 @@ void register_run(CLI::App& app, Runner& selected) {
   run->add_option("--client-timeout", options->client_timeout_ms,
                   "With --lockstep: ms a step waits for a client's answer before going ahead "
                   "(default 100); 3 misses in a row drop the client until it answers again");
+  run->add_option("--fifo", options->fifo_priority,
+                  "Step under SCHED_FIFO at this priority (1-99); says so if refused");
+  run->add_option("--cpu", options->cpu, "Pin the physics loop to this CPU");
+  run->add_flag("--lock-memory", options->lock_memory,
+                "mlockall and pre-fault, so the physics loop takes no page faults");
   run->add_option("--report", options->report_file,
                   "Write a JSON report at the end (steps, step times, poses, joints)");
   run->add_flag("--offline", options->offline,

@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
   afhub::cli::register_run(app, selected);
   afhub::cli::register_ctl(app, selected);
   afhub::cli::register_top(app, selected);
+  afhub::cli::register_bench(app, selected);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {

@@ -61,14 +61,15 @@ void* RawWriter::loan(std::uint32_t bytes) noexcept {
   return result.has_error() ? nullptr : result.value();
 }
 
-void RawWriter::publish(void* payload) noexcept {
+std::int64_t RawWriter::publish(void* payload) noexcept {
   auto* header = static_cast<PayloadHeader*>(payload);
   header->layout_id = kLayoutId;
   header->kind = kind_;
   header->publisher_pid = pid_;
   header->sequence = ++sequence_;
-  header->publish_stamp_ns = monotonic_now_ns();
+  const std::int64_t stamp = header->publish_stamp_ns = monotonic_now_ns();
   port_->publisher.publish(payload);
+  return stamp;
 }
 
 struct RawLatestReader::Port {
@@ -109,6 +110,7 @@ const void* RawLatestReader::latest() noexcept {
     }
     if (held_) port_->subscriber.release(held_);
     held_ = payload;
+    held_bytes_ = bytes;
     updated_ = true;
   }
   return held_;

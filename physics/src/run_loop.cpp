@@ -38,7 +38,7 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
   std::unique_ptr<LoopStatsPublisher> stats;
   if (channels)
     stats = std::make_unique<LoopStatsPublisher>("run", "", options.fast ? 0 : period_ns,
-                                                 channels->lockstep(), RealtimeGrant{});
+                                                 channels->lockstep(), options.grant);
   if (channels) channels->publish(0.0, 0.0, false);  // step 0: the model as loaded
   while (!stop_requested() && (options.steps == 0 || report.steps < options.steps)) {
     if (channels) {

@@ -135,6 +135,7 @@ void SimChannels::apply_commands(std::int64_t now_ns) noexcept {
         }
       } else {
         if (lockstep_ && command->lockstep) note_lockstep_answer(channel, *command);
+        channel.applied_answer_step = command->header.sim_step;
         sim_.set_command(channel.index, *command);
         channel.last_command_ns = now_ns;
         channel.commanded = true;
@@ -260,6 +261,14 @@ void SimChannels::fill_objects(std::array<WorldObjectPose, kMaxWorldObjects>& ou
 void SimChannels::publish(double wall_time_s, double achieved_rate_hz, bool paused) noexcept {
   const std::uint64_t step = sim_.step_count();
   const double time_s = sim_.time_s();
+  if (step != timeliness_step_) {  // once per step taken, not per publish while paused
+    timeliness_step_ = step;
+    for (const Channel& channel : channels_) {
+      if (!channel.commanded) continue;
+      ++commanded_steps_;
+      if (channel.applied_answer_step + 1 == step) ++answered_steps_;
+    }
+  }
   for (Channel& channel : channels_) {
     BodyState* state = channel.publisher->loan_state();
     if (!state) continue;  // shared memory exhausted: skip this step, never block
@@ -284,6 +293,8 @@ void SimChannels::publish(double wall_time_s, double achieved_rate_hz, bool paus
     world->lockstep_clients = lockstep_clients();
     world->late_answers = late_answers_;
     world->dropped_clients = dropped_;
+    world->commanded_steps = commanded_steps_;
+    world->answered_steps = answered_steps_;
     world->light_count = static_cast<std::uint32_t>(lights_.size());
     world->camera_count = static_cast<std::uint32_t>(cameras_.size());
     fill_objects(world->lights, lights_);

@@ -23,6 +23,8 @@ std::size_t fixed_size_of(PayloadKind kind) noexcept {
       return sizeof(Health);
     case PayloadKind::kLoopStats:
       return sizeof(LoopStats);
+    case PayloadKind::kBenchSample:
+      return sizeof(BenchSample);
     case PayloadKind::kBodyDirectory:
     case PayloadKind::kCatalog:
       return body_list_bytes(0);
@@ -65,6 +67,7 @@ PayloadError check_payload(const void* data, std::size_t bytes, PayloadKind expe
     case PayloadKind::kWorldState:
     case PayloadKind::kWorldCommand:
     case PayloadKind::kLoopStats:
+    case PayloadKind::kBenchSample:
       break;
   }
   return PayloadError::kNone;

@@ -29,6 +29,10 @@ struct ControllerOptions {
   std::string body;                 // the body's channel name or a unique suffix of it
   LoopOptions loop;                 // period, SCHED_FIFO, CPU, memory locking
   bool lockstep = false;            // answer every physics step instead of running on a clock
+  // Free-running: wake this long after the physics publishes a step, so that each
+  // command is ready before the next step (the grid is aligned to the first state
+  // seen; both loops keep absolute deadlines). -1: start on the clock, unaligned.
+  std::int64_t after_step_ns = -1;
 };
 
 // `state` is the body's newest state; `command` starts zeroed. Both live in shared
@@ -37,7 +41,9 @@ using ControllerCycle = std::function<void(const BodyState& state, BodyCommand& 
 
 // Connects to the hub, opens the body and runs `cycle` until Ctrl-C or SIGTERM
 // (or options.loop.max_cycles). Returns the process exit code; throws afhub::Error
-// when there is no hub or no such body.
-int run_controller(const ControllerOptions& options, const ControllerCycle& cycle);
+// when there is no hub or no such body. When `timing` is given, the loop records
+// its timing there, for the caller to read after the return.
+int run_controller(const ControllerOptions& options, const ControllerCycle& cycle,
+                   LoopTiming* timing = nullptr);
 
 }  // namespace afhub

@@ -19,6 +19,9 @@ struct LoopOptions {
   int cpu = -1;                  // pin the loop's thread to this CPU; -1: any
   bool lock_memory = false;      // mlockall and pre-fault the stack: no page faults in the loop
   std::uint64_t max_cycles = 0;  // stop after this many cycles; 0: until a stop signal
+  // A point of the grid (CLOCK_MONOTONIC ns): cycles wake at grid_origin_ns + k * period.
+  // 0: the grid starts one period from now.
+  std::int64_t grid_origin_ns = 0;
 };
 
 // Applies the options to the calling thread; refusals are reported naming `who`.

@@ -28,8 +28,8 @@ class RawWriter {
   // A chunk of `bytes` bytes, or nullptr when shared memory is exhausted.
   void* loan(std::uint32_t bytes) noexcept;
   // Stamps the header (layout, kind, pid, sequence, monotonic time) and publishes.
-  // The caller sets header.sim_step and header.sim_time_s.
-  void publish(void* payload) noexcept;
+  // The caller sets header.sim_step and header.sim_time_s. Returns the stamp.
+  std::int64_t publish(void* payload) noexcept;
 
   const ChannelId& channel() const { return channel_; }
 
@@ -54,6 +54,8 @@ class RawLatestReader {
   const void* latest() noexcept;
   // Whether the last latest() call found a sample newer than the one before.
   bool updated() const { return updated_; }
+  // The size in bytes of the payload latest() returned.
+  std::uint32_t latest_bytes() const { return held_bytes_; }
   std::uint64_t refused_count() const { return refused_; }
   const ChannelId& channel() const { return channel_; }
 
@@ -63,6 +65,7 @@ class RawLatestReader {
   ChannelId channel_;
   PayloadKind kind_;
   const void* held_ = nullptr;
+  std::uint32_t held_bytes_ = 0;
   bool updated_ = false;
   std::uint64_t refused_ = 0;
   std::unique_ptr<Port> port_;

@@ -55,6 +55,11 @@ class JsonWriter {
     out_ += flag ? "true" : "false";
     return *this;
   }
+  JsonWriter& null() {
+    separate();
+    out_ += "null";
+    return *this;
+  }
   template <class Container>
   JsonWriter& numbers(const Container& values, std::size_t count) {
     begin_array();

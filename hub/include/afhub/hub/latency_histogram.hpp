@@ -24,6 +24,8 @@ class LatencyHistogram {
   }
 
   std::uint64_t count() const { return count_; }
+  // Samples in [bin, bin + 1) us (the last bin: everything above).
+  std::uint64_t bin_count(std::size_t bin) const { return bin < kBins ? bins_[bin] : 0; }
   double max_us() const { return max_us_; }
 
   // The upper edge of the bin holding the q-th quantile (0 < q <= 1), or 0 when empty.

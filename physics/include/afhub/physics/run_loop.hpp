@@ -9,6 +9,7 @@
 #include <string>
 
 #include "afhub/hub/latency_histogram.hpp"
+#include "afhub/hub/loop_stats_publisher.hpp"
 #include "afhub/hub/loop_timing.hpp"
 #include "afhub/physics/sim_channels.hpp"
 #include "afhub/physics/simulation.hpp"
@@ -18,6 +19,7 @@ namespace afhub::physics {
 struct RunOptions {
   bool fast = false;
   std::uint64_t steps = 0;  // stop after this many steps; 0: until a stop signal
+  RealtimeGrant grant;      // what the loop's thread was granted, for its loop stats
 };
 
 struct RunReport {

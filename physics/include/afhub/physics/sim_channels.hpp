@@ -56,6 +56,8 @@ class SimChannels {
   std::uint32_t lockstep_clients() const noexcept;
   std::uint64_t late_answers() const { return late_answers_; }
   std::uint64_t dropped_clients() const { return dropped_; }
+  std::uint64_t commanded_steps() const { return commanded_steps_; }
+  std::uint64_t answered_steps() const { return answered_steps_; }
 
  private:
   struct Channel {
@@ -69,7 +71,8 @@ class SimChannels {
     bool hold_on_watchdog = false;  // the watchdog holds the joints rather than zeroing efforts
     bool told_rejected = false;
     std::uint32_t lockstep_pid = 0;  // the lockstep client answering for this body; 0: none
-    std::uint64_t answered_step = 0;
+    std::uint64_t answered_step = 0;        // lockstep: the step this client answered last
+    std::uint64_t applied_answer_step = 0;  // the step the command being applied answers
     int misses = 0;  // late steps in a row
   };
   struct WorldObject {
@@ -94,6 +97,8 @@ class SimChannels {
   bool lockstep_ = false;
   LockstepOptions lockstep_options_;
   std::uint64_t late_answers_ = 0, dropped_ = 0;
+  // Steps taken under command, and those whose command answered the newest state.
+  std::uint64_t commanded_steps_ = 0, answered_steps_ = 0, timeliness_step_ = 0;
 };
 
 }  // namespace afhub::physics

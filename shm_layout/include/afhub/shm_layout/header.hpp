@@ -15,7 +15,8 @@ enum class PayloadKind : std::uint32_t {
   kBodyDirectory = 5,  // one process's bodies, read by the hub
   kCatalog = 6,        // every live body, published by the hub
   kHealth = 7,
-  kLoopStats = 8,  // a periodic loop's timing
+  kLoopStats = 8,    // a periodic loop's timing
+  kBenchSample = 9,  // `afhub bench` pings and pongs
 };
 
 struct PayloadHeader {

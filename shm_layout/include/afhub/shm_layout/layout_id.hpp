@@ -9,6 +9,7 @@
 #include <initializer_list>
 #include <type_traits>
 
+#include "afhub/shm_layout/bench_sample.hpp"
 #include "afhub/shm_layout/body_command.hpp"
 #include "afhub/shm_layout/body_state.hpp"
 #include "afhub/shm_layout/catalog.hpp"
@@ -98,6 +99,8 @@ inline constexpr std::uint64_t kLayoutId = layout_detail::mix({
     AFHUB_OFF(WorldState, lockstep_clients),
     AFHUB_OFF(WorldState, late_answers),
     AFHUB_OFF(WorldState, dropped_clients),
+    AFHUB_OFF(WorldState, commanded_steps),
+    AFHUB_OFF(WorldState, answered_steps),
     AFHUB_OFF(WorldState, rejected_commands),
     AFHUB_OFF(WorldState, watchdog_expiries),
     AFHUB_OFF(WorldState, light_count),
@@ -143,6 +146,9 @@ inline constexpr std::uint64_t kLayoutId = layout_detail::mix({
     AFHUB_OFF(LoopStats, lockstep),
     AFHUB_OFF(LoopStats, cpu),
     sizeof(DurationPercentiles),
+    sizeof(BenchSample),
+    AFHUB_OFF(BenchSample, round),
+    AFHUB_OFF(BenchSample, peer_receive_ns),
 });
 #undef AFHUB_OFF
 
@@ -155,5 +161,6 @@ static_assert(layout_detail::is_shm_payload<WorldCommand>);
 static_assert(layout_detail::is_shm_payload<BodyList>);
 static_assert(layout_detail::is_shm_payload<Health>);
 static_assert(layout_detail::is_shm_payload<LoopStats>);
+static_assert(layout_detail::is_shm_payload<BenchSample>);
 
 }  // namespace afhub

@@ -37,6 +37,11 @@ struct WorldState {
   std::uint32_t reserved2{0};
   std::uint64_t late_answers{0};
   std::uint64_t dropped_clients{0};
+  // Command timeliness, summed over the bodies under command: steps taken, and
+  // steps whose command answered the state published just before (it arrived in
+  // time for the step). A controller stamps header.sim_step with the state it answers.
+  std::uint64_t commanded_steps{0};
+  std::uint64_t answered_steps{0};
   std::uint32_t light_count{0};
   std::uint32_t camera_count{0};
   std::array<WorldObjectPose, kMaxWorldObjects> lights{};

@@ -1,0 +1,37 @@
+// The processes `afhub bench` starts: its peers, the physics, cyclictest and
+// rosmaster. Each gets SIGTERM when the bench dies, and is stopped (SIGTERM, then
+// SIGKILL) when its ChildProcess goes out of scope.
+#pragma once
+
+#include <sys/types.h>
+
+#include <string>
+#include <vector>
+
+namespace afhub::bench {
+
+class ChildProcess {
+ public:
+  // Runs argv[0] (searched in PATH) with stdout and stderr to `output_path`.
+  explicit ChildProcess(const std::vector<std::string>& argv,
+                        const std::string& output_path = "/dev/null");
+  ~ChildProcess() { stop(); }
+  ChildProcess(const ChildProcess&) = delete;
+  ChildProcess& operator=(const ChildProcess&) = delete;
+
+  // Waits up to timeout_ms for the exit; returns the exit code, 128 + signal when
+  // killed, or -1 when still running.
+  int wait(int timeout_ms);
+  // SIGTERM, then SIGKILL after 5 s; returns the exit code as wait() does.
+  int stop();
+  bool running();
+
+ private:
+  pid_t pid_ = -1;
+  int exit_code_ = -1;
+};
+
+// This executable, for starting `afhub` subcommands.
+std::string self_executable();
+
+}  // namespace afhub::bench

@@ -1,0 +1,116 @@
+// The 1 kHz loop: `afhub run` simulates the model in real time; this process runs
+// a controller at 1 kHz on the model's body (holding its joints), woken half a
+// period after each physics step; cyclictest runs beside it, at the same priority
+// and over the same seconds, as the machine's floor. Measured: the controller's
+// wake-up latency, cyclictest's, and the share of steps whose command answered the
+// state published just before (from the physics' own counters).
+#include <unistd.h>
+
+#include <cstdio>
+#include <fstream>
+#include <memory>
+#include <sstream>
+
+#include "afhub/bench/bench.hpp"
+#include "afhub/controllers/controller.hpp"
+#include "afhub/controllers/joint_targets.hpp"
+#include "afhub/hub/channel.hpp"
+#include "afhub/hub/error.hpp"
+#include "afhub/hub/hub_presence.hpp"
+#include "afhub/shm_layout/world.hpp"
+#include "child_process.hpp"
+#include "transport.hpp"
+
+namespace afhub::bench {
+namespace {
+
+constexpr std::int64_t kPeriodNs = 1'000'000;
+
+// cyclictest -h output: "# Histogram", one "bin count" line per microsecond, then
+// "# Max Latencies: N" and "# Histogram Overflows: N".
+void read_cyclictest(const std::string& path, LoopResult& result) {
+  std::ifstream in(path);
+  std::uint64_t overflows = 0;
+  for (std::string line; std::getline(in, line);) {
+    unsigned long long bin = 0, count = 0;
+    if (std::sscanf(line.c_str(), "%llu %llu", &bin, &count) == 2) {
+      for (unsigned long long i = 0; i < count; ++i)
+        result.cyclictest_wake.record(static_cast<double>(bin));
+    } else if (std::sscanf(line.c_str(), "# Max Latencies: %llu", &bin) == 1) {
+      result.cyclictest_max_us = static_cast<double>(bin);
+    } else if (std::sscanf(line.c_str(), "# Histogram Overflows: %llu", &count) == 1) {
+      overflows = count;
+    }
+  }
+  // Samples beyond the histogram's range count at the maximum.
+  for (std::uint64_t i = 0; i < overflows; ++i)
+    result.cyclictest_wake.record(result.cyclictest_max_us);
+  if (result.cyclictest_wake.count() == 0)
+    throw Error("cyclictest wrote no histogram to " + path + ": see that file");
+}
+
+}  // namespace
+
+void run_loop_bench(const BenchOptions& options, LoopResult& result) {
+  result.seconds = options.loop_seconds;
+  connect_to_hub("bench", HubPolicy::kAutostart);
+  const std::string prefix = "/tmp/afhub-bench-" + std::to_string(getpid());
+  const std::string priority = std::to_string(options.fifo_priority);
+  std::fprintf(stderr, "afhub bench: 1 kHz loop for %.0f s against %s\n", options.loop_seconds,
+               options.model.c_str());
+  ChildProcess physics({self_executable(), "run", options.model, "--no-autostart", "--fifo",
+                        priority, "--lock-memory"},
+                       prefix + "-physics.log");
+
+  const auto cycles = static_cast<std::uint64_t>(options.loop_seconds * 1e9 / kPeriodNs);
+  std::unique_ptr<ChildProcess> cyclictest;
+  if (access("/usr/bin/cyclictest", X_OK) == 0)
+    cyclictest = std::make_unique<ChildProcess>(
+        std::vector<std::string>{"cyclictest", "-m", "-q", "-p", priority, "-i", "1000", "-l",
+                                 std::to_string(cycles), "-h", "20000"},
+        prefix + "-cyclictest.txt");
+  else
+    result.cyclictest_skipped = "cyclictest not found: install Debian's rt-tests";
+
+  LatestReader<WorldState> world(
+      {std::string(kService), std::string(kWorldInstance), std::string(kStateEvent)});
+  ControllerOptions controller;
+  controller.name = "bench";
+  controller.body = options.body;
+  controller.loop.period_ns = kPeriodNs;
+  controller.loop.fifo_priority = options.fifo_priority;
+  controller.loop.lock_memory = true;
+  controller.loop.max_cycles = cycles;
+  controller.after_step_ns = kPeriodNs / 2;
+  LoopTiming timing;
+  // The counters at the start are read on the first cycle, once the physics runs.
+  bool started = false;
+  std::uint64_t commanded_before = 0, answered_before = 0;
+  const ControllerCycle hold = joint_position_controller(hold_targets());
+  run_controller(
+      controller,
+      [&](const BodyState& state, BodyCommand& command) {
+        if (!started)
+          if (const WorldState* now = world.latest()) {
+            commanded_before = now->commanded_steps;
+            answered_before = now->answered_steps;
+            started = true;
+          }
+        hold(state, command);
+      },
+      &timing);
+  if (const WorldState* now = world.latest()) {
+    result.commanded_steps = now->commanded_steps - commanded_before;
+    result.answered_steps = now->answered_steps - answered_before;
+  }
+  result.controller_wake = timing.wake_latency();
+  physics.stop();
+  if (cyclictest) {
+    if (cyclictest->wait(10'000) == -1)
+      throw Error("cyclictest did not finish 10 s after the loop; see " + prefix +
+                  "-cyclictest.txt");
+    read_cyclictest(prefix + "-cyclictest.txt", result);
+  }
+}
+
+}  // namespace afhub::bench

@@ -1,0 +1,57 @@
+// One end of the ping-pong `afhub bench` times over each transport. The bench
+// process is the ping side; a peer process it starts is the pong side. Every
+// message is exactly `bytes` long and starts with the round and two stamps.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+
+namespace afhub::bench {
+
+enum class TransportKind { kAfhub, kDds, kUds, kRos1 };
+enum class Side { kPing, kPong };
+
+struct Message {
+  std::uint32_t bytes = 0;
+  std::uint64_t round = 0;
+  std::int64_t send_ns = 0;          // stamped by the sender just before sending
+  std::int64_t peer_receive_ns = 0;  // pong: when the peer had the ping
+  std::int64_t receive_ns = 0;       // stamped by the receiver once the whole message is in
+};
+
+class Transport {
+ public:
+  virtual ~Transport() = default;
+  // After the peer process started: accept or wait for it (until deadline_ns).
+  virtual void connect(std::int64_t /*deadline_ns*/) {}
+  // Sends `bytes` bytes; returns the send stamp written into the message.
+  virtual std::int64_t send(std::uint32_t bytes, std::uint64_t round,
+                            std::int64_t peer_receive_ns) = 0;
+  // The next message, or nothing when none came before deadline_ns.
+  virtual std::optional<Message> receive(std::int64_t deadline_ns) = 0;
+};
+
+const char* transport_name(TransportKind kind);
+std::optional<TransportKind> parse_transport(const std::string& name);
+// Why a transport cannot run in this build or on this machine; empty when it can.
+std::string transport_unavailable(TransportKind kind);
+
+// `session` names this bench run's channels, topics and socket. Throws afhub::Error.
+std::unique_ptr<Transport> open_transport(TransportKind kind, Side side,
+                                          const std::string& session);
+
+// The largest payload and the smallest message (the round and the stamps must fit).
+inline constexpr std::uint32_t kMaxPayloadBytes = 1u << 20;
+inline constexpr std::uint32_t kMinPayloadBytes = 64;
+
+std::int64_t now_ns() noexcept;
+
+// The transports, each in its own file.
+std::unique_ptr<Transport> open_afhub_transport(Side side, const std::string& session);
+std::unique_ptr<Transport> open_uds_transport(Side side, const std::string& session);
+std::unique_ptr<Transport> open_dds_transport(Side side, const std::string& session);
+std::unique_ptr<Transport> open_ros1_transport(Side side, const std::string& session);
+
+}  // namespace afhub::bench
