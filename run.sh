@@ -13,6 +13,9 @@ PACKAGES=(
   iceoryx libiceoryx-posh-dev libiceoryx-hoofs-dev libacl1-dev
   libcli11-dev libyaml-cpp-dev libbullet-dev libassimp-dev
   libgtest-dev libgmock-dev libbenchmark-dev clang-format
+  # afhub bench: the transports it compares with, the machine's floor, the plot
+  cyclonedds-dev cyclonedds-tools libroscpp-dev libstd-msgs-dev python3-rosmaster
+  rt-tests gnuplot-nox
 )
 
 install_packages() {
@@ -54,7 +57,7 @@ case "${1:-}" in
   test)
     install_packages
     # The code follows .clang-format.
-    find shm_layout hub physics controllers tests examples -name '*.[ch]pp' -print0 | xargs -0 clang-format --dry-run --Werror
+    find shm_layout hub physics controllers bench tests examples -name '*.[ch]pp' -print0 | xargs -0 clang-format --dry-run --Werror
     build build/release -DCMAKE_BUILD_TYPE=RelWithDebInfo
     run_tests build/release
     build build/sanitize -DCMAKE_BUILD_TYPE=Debug -DAFHUB_SANITIZE=ON

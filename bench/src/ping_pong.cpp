@@ -93,10 +93,12 @@ void run_ping_pong(const BenchOptions& options, BenchResults& results) {
   const std::string session = std::to_string(getpid());
   std::unique_ptr<ChildProcess> rosmaster;
   std::vector<Peer> peers;
+  for (const std::string& name : options.transports)
+    if (!parse_transport(name))
+      throw Error("unknown transport '" + name + "': choose from afhub, dds, uds, ros1");
   results.transports.reserve(options.transports.size());
   for (const std::string& name : options.transports) {
     const std::optional<TransportKind> kind = parse_transport(name);
-    if (!kind) throw Error("unknown transport '" + name + "': choose from afhub, dds, uds, ros1");
     TransportResult& result = results.transports.emplace_back();
     result.name = name;
     result.skipped = transport_unavailable(*kind);

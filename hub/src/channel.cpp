@@ -92,10 +92,15 @@ RawLatestReader::RawLatestReader(const ChannelId& channel, PayloadKind kind)
 
 RawLatestReader::~RawLatestReader() {
   if (held_) port_->subscriber.release(held_);
+  if (retired_) port_->subscriber.release(retired_);
 }
 
 const void* RawLatestReader::latest() noexcept {
   updated_ = false;
+  // The sample replaced by the last call is released now, while polling, rather
+  // than between a new sample's arrival and its reader seeing it.
+  if (retired_) port_->subscriber.release(retired_);
+  retired_ = nullptr;
   for (;;) {
     auto taken = port_->subscriber.take();
     if (taken.has_error()) break;  // no more samples (or too many held: keep the current)
@@ -108,7 +113,8 @@ const void* RawLatestReader::latest() noexcept {
       port_->subscriber.release(payload);
       continue;
     }
-    if (held_) port_->subscriber.release(held_);
+    if (retired_) port_->subscriber.release(retired_);
+    retired_ = held_;
     held_ = payload;
     held_bytes_ = bytes;
     updated_ = true;

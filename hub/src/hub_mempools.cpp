@@ -21,14 +21,15 @@ constexpr std::uint32_t round_up8(std::size_t bytes) {
 }  // namespace
 
 std::vector<MempoolSpec> hub_mempools() {
-  // Chunk counts: each active body holds about six state and six command chunks
-  // (publisher history, a loan, a queued and a held sample per reader, the hub's
-  // rate probe), for up to kMaxBodies bodies with a margin.
+  // Chunk counts: each active body holds up to eight state and eight command chunks
+  // (publisher history, a loan, and per reader a queued, a held and a retired
+  // sample, for the hub's rate probe and a controller or two), for up to kMaxBodies
+  // bodies with a margin.
   std::vector<MempoolSpec> pools = {
       {128, 512, "world commands, small iceoryx samples"},
-      {round_up8(sizeof(BodyCommand)), 2048, "body commands"},
+      {round_up8(sizeof(BodyCommand)), 3072, "body commands"},
       {round_up8(sizeof(WorldState)), 64, "world state"},
-      {round_up8(sizeof(BodyState)), 2048, "body states"},
+      {round_up8(sizeof(BodyState)), 3072, "body states"},
       {round_up8(sizeof(Health)), 128, "hub health"},
       {round_up8(sizeof(LoopStats)), 256, "loop stats"},
       {round_up8(body_list_bytes(7)), 128, "catalogs and directories of up to 7 bodies"},

@@ -171,6 +171,29 @@ TEST(Controllers, KilledControllerTripsTheHoldWatchdogAndARestartTakesOver) {
   EXPECT_TRUE(contains(read_file(log), "its joints hold their positions")) << read_file(log);
 }
 
+TEST(Controllers, AfterStepAlignsTheLoopSoEachCommandAnswersTheNewestState) {
+  afhub::testing::ModelFolder folder;
+  const std::string log = (folder.dir() / "run.log").string();
+  ScopedProcess physics(spawn_afhub({"run", kKuka, "--no-autostart"}, log));
+  LatestReader<WorldState> world = world_reader();
+  ASSERT_TRUE(wait_until([&] { return world.latest() != nullptr; }, 10s)) << read_file(log);
+  EXPECT_EQ(world.latest()->commanded_steps, 0u);  // nothing commands the arm yet
+
+  // Woken half a period after each step, the controller's command is in place
+  // before the next one: the physics counts the steps whose command answered the
+  // state it had just published.
+  ScopedProcess hold(
+      spawn_afhub({"ctl", "hold", "base", "--after-step", "500", "--cycles", "3000"}));
+  ASSERT_EQ(wait_for_exit(hold, 15s), 0);
+  ASSERT_TRUE(wait_until([&] { return world.latest()->commanded_steps >= 2900; }, 2s));
+  const WorldState& counts = *world.latest();
+  EXPECT_LE(counts.answered_steps, counts.commanded_steps);
+  // Misses come only from this machine's stalls.
+  EXPECT_GT(static_cast<double>(counts.answered_steps) / counts.commanded_steps, 0.9)
+      << counts.answered_steps << " of " << counts.commanded_steps;
+  EXPECT_EQ(physics.stop(), 0);
+}
+
 TEST(Controllers, BadArgumentsGetClearErrors) {
   afhub::testing::ModelFolder folder;
   ScopedProcess physics(spawn_afhub({"run", kKuka, "--no-autostart"}));
@@ -185,6 +208,13 @@ TEST(Controllers, BadArgumentsGetClearErrors) {
   RunResult bad_rate = run_afhub({"ctl", "hold", "base", "--rate", "0"});
   EXPECT_EQ(bad_rate.exit_code, 1);
   EXPECT_TRUE(contains(bad_rate.err, "--rate")) << bad_rate.err;
+  RunResult long_phase = run_afhub({"ctl", "hold", "base", "--after-step", "1000"});
+  EXPECT_EQ(long_phase.exit_code, 1);
+  EXPECT_TRUE(contains(long_phase.err, "--after-step must be shorter than the loop's period"))
+      << long_phase.err;
+  RunResult bad_fifo = run_afhub({"run", kKuka, "--offline", "--steps", "1", "--fifo", "120"});
+  EXPECT_EQ(bad_fifo.exit_code, 1);
+  EXPECT_TRUE(contains(bad_fifo.err, "--fifo takes a SCHED_FIFO priority")) << bad_fifo.err;
   RunResult bad_hold =
       run_afhub({"run", kKuka, "--offline", "--steps", "1", "--watchdog-hold", "x"});
   EXPECT_EQ(bad_hold.exit_code, 1);

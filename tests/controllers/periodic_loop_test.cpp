@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <thread>
+#include <vector>
 
 #include "afhub/hub/stop_signal.hpp"
 
@@ -70,6 +71,37 @@ TEST(PeriodicLoop, AnOverrunSkipsTheMissedPeriodsAndCountsThem) {
   // Skipped, not made up in a burst: 20 cycles span 20 + 2 periods.
   EXPECT_GE(static_cast<double>(elapsed), 22.0 * 1e7 - 1e7);
   EXPECT_LE(static_cast<double>(elapsed), 22.0 * 1e7 + 2e7);
+}
+
+TEST(PeriodicLoop, AGivenGridOriginSetsThePhaseOfEveryWakeUp) {
+  // The origin lies 2.3 periods in the past: wake-ups fall on origin + k * period,
+  // 0.7 periods from now first, never on now + period.
+  LoopOptions options;
+  options.period_ns = 10'000'000;
+  options.max_cycles = 10;
+  options.grid_origin_ns = monotonic_ns() - 23'000'000;
+  LoopTiming timing;
+  std::vector<std::int64_t> woke;
+  run_periodic(options, timing, [&] {
+    woke.push_back(monotonic_ns());
+    return true;
+  });
+  ASSERT_EQ(woke.size(), 10u);
+  for (std::int64_t at : woke) {
+    // The phase on the grid: how late after a grid point, below 2 ms on a loaded machine.
+    const std::int64_t phase = (at - options.grid_origin_ns) % options.period_ns;
+    EXPECT_LT(phase, 2'000'000) << "woke " << phase << " ns after a grid point";
+  }
+  // A future origin is the first wake-up.
+  options.max_cycles = 1;
+  options.grid_origin_ns = monotonic_ns() + 35'000'000;
+  woke.clear();
+  run_periodic(options, timing, [&] {
+    woke.push_back(monotonic_ns());
+    return true;
+  });
+  EXPECT_GE(woke.at(0), options.grid_origin_ns);
+  EXPECT_LT(woke.at(0), options.grid_origin_ns + 2'000'000);
 }
 
 TEST(PeriodicLoop, TheCycleCanEndTheLoop) {

@@ -65,6 +65,7 @@ class RawLatestReader {
   ChannelId channel_;
   PayloadKind kind_;
   const void* held_ = nullptr;
+  const void* retired_ = nullptr;  // replaced by held_, released on the next call
   std::uint32_t held_bytes_ = 0;
   bool updated_ = false;
   std::uint64_t refused_ = 0;

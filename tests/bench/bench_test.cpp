@@ -1,0 +1,75 @@
+// `afhub bench` end to end, briefly: every transport with real peer processes, the
+// 1 kHz loop against the real physics beside cyclictest, the JSON and the plot.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "afhub_process.hpp"
+#include "json_tree.hpp"
+#include "model_files.hpp"
+
+namespace afhub::test {
+namespace {
+
+using namespace std::chrono_literals;
+
+TEST(Bench, ShortRunMeasuresEveryTransportAndTheLoop) {
+  afhub::testing::ModelFolder folder;
+  const std::string json_path = (folder.dir() / "bench.json").string();
+  const std::string plot_path = (folder.dir() / "bench.png").string();
+  const RunResult run = run_afhub({"bench", "--rounds", "2", "--pings", "25", "--loop-seconds", "3",
+                                   "--json", json_path, "--plot", plot_path},
+                                  180s);
+  ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
+  EXPECT_TRUE(contains(run.out, "One-way latency, median")) << run.out;
+  EXPECT_TRUE(contains(run.out, "Goals")) << run.out;
+  EXPECT_TRUE(contains(run.err, "latency round 2 of 2")) << run.err;  // progress
+
+  const JsonValue json = parse_json(read_file(json_path));
+  const JsonValue& transports = json.at("transports");
+  for (const char* name : {"afhub", "dds", "uds", "ros1"}) {
+    ASSERT_TRUE(transports.has(name)) << name << " missing: " << read_file(json_path);
+    for (const char* bytes : {"64", "1024", "16384", "262144", "1048576"}) {
+      const JsonValue& one_way = transports.at(name).at(bytes);
+      const JsonValue& round_trip = json.at("round_trip").at(name).at(bytes);
+      // 2 rounds x 25 pings, each giving two one-way samples and one round trip.
+      EXPECT_EQ(one_way.at("samples").number, 100.0) << name << " " << bytes;
+      EXPECT_EQ(round_trip.at("samples").number, 50.0) << name << " " << bytes;
+      const double p50 = one_way.at("p50_us").number;
+      EXPECT_GT(p50, 0.0) << name << " " << bytes;
+      EXPECT_LE(p50, one_way.at("p99_us").number);
+      EXPECT_LE(one_way.at("p99_us").number, one_way.at("max_us").number);
+      // Each way is part of the round trip.
+      EXPECT_LT(p50, round_trip.at("p50_us").number) << name << " " << bytes;
+    }
+  }
+  // The loop ran 3 s at 1 kHz, and so did cyclictest.
+  const JsonValue& jitter = json.at("loop_jitter");
+  EXPECT_EQ(jitter.at("afhub_us").at("samples").number, 3000.0);
+  EXPECT_EQ(jitter.at("cyclictest_us").at("samples").number, 3000.0);
+  EXPECT_GT(jitter.at("afhub_us").at("p50").number, 0.0);
+  EXPECT_GT(jitter.at("cyclictest_us").at("p50").number, 0.0);
+  const double ratio = json.at("loop_deadline_hit_ratio").number;
+  EXPECT_GT(ratio, 0.0);
+  EXPECT_LE(ratio, 1.0);
+  EXPECT_GT(json.at("loop_steps").number, 2000.0);
+
+  // A PNG came out.
+  ASSERT_TRUE(std::filesystem::exists(plot_path));
+  EXPECT_EQ(read_file(plot_path).substr(1, 3), "PNG");
+  EXPECT_GT(std::filesystem::file_size(plot_path), 20'000u);
+}
+
+TEST(Bench, BadArgumentsAreRefusedClearly) {
+  RunResult run = run_afhub({"bench", "--transports", "afhub,zeromq", "--loop-seconds", "0"});
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_TRUE(contains(run.err, "unknown transport 'zeromq': choose from afhub, dds, uds, ros1"))
+      << run.err;
+  run = run_afhub({"bench", "--loop-seconds", "1"});
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_TRUE(contains(run.err, "--loop-seconds must be 0 (skip the loop) or at least 2"))
+      << run.err;
+}
+
+}  // namespace
+}  // namespace afhub::test

@@ -1,0 +1,109 @@
+// The bench's outputs from known results: the JSON document's shape and values,
+// and the table's ratios and goal verdicts.
+#include <gtest/gtest.h>
+
+#include "afhub/bench/bench.hpp"
+#include "json_tree.hpp"
+
+namespace afhub::bench {
+namespace {
+
+using test::JsonValue;
+
+bool contains(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
+
+// One-way latencies 1..100 us times `scale` at every size; round trips twice that.
+TransportResult transport(const std::string& name, double scale) {
+  TransportResult result;
+  result.name = name;
+  for (std::uint32_t bytes : kPayloadSizes)
+    for (int i = 1; i <= 100; ++i) {
+      result.one_way_us[bytes].push_back(i * scale);
+      if (i % 2 == 0) result.round_trip_us[bytes].push_back(2 * i * scale);
+    }
+  return result;
+}
+
+BenchResults known_results() {
+  BenchResults results;
+  results.machine = {"Test CPU", "6.1", "Debian 12", "2026-11-21T00:00:00Z", 2, 24.0};
+  results.transports.push_back(transport("afhub", 1.0));
+  results.transports.push_back(transport("dds", 10.0));
+  results.transports.push_back(transport("uds", 1.2));
+  TransportResult ros1;
+  ros1.name = "ros1";
+  ros1.skipped = "not built";
+  results.transports.push_back(ros1);
+  results.loop.seconds = 20.0;
+  for (int i = 0; i < 1000; ++i) results.loop.controller_wake.record(i < 990 ? 20.5 : 70.5);
+  for (int i = 0; i < 1000; ++i) results.loop.cyclictest_wake.record(i < 990 ? 19.0 : 30.0);
+  results.loop.cyclictest_max_us = 30.0;
+  results.loop.commanded_steps = 20000;
+  results.loop.answered_steps = 19990;
+  return results;
+}
+
+TEST(BenchReport, JsonHasTheDocumentedShape) {
+  const JsonValue json = test::parse_json(results_json(known_results()));
+  EXPECT_EQ(json.at("machine").at("cpu").text, "Test CPU");
+  EXPECT_EQ(json.at("machine").at("cores").number, 2.0);
+
+  const JsonValue& transports = json.at("transports");
+  EXPECT_EQ(transports.members.size(), 3u);  // ros1 was skipped
+  EXPECT_FALSE(transports.has("ros1"));
+  EXPECT_EQ(json.at("skipped").at("ros1").text, "not built");
+  for (const char* name : {"afhub", "dds", "uds"}) {
+    const JsonValue& sizes = transports.at(name);
+    ASSERT_EQ(sizes.members.size(), kPayloadSizes.size()) << name;
+    for (std::uint32_t bytes : kPayloadSizes) {
+      const JsonValue& d = sizes.at(std::to_string(bytes));  // byte counts as strings
+      for (const char* key : {"p50_us", "p90_us", "p99_us", "p999_us", "max_us", "samples"})
+        EXPECT_EQ(d.at(key).type, JsonValue::Type::kNumber) << name << " " << bytes << " " << key;
+      EXPECT_EQ(d.members.size(), 6u);
+      EXPECT_EQ(d.at("samples").number, 100.0);
+    }
+  }
+  const JsonValue& dds_1k = transports.at("dds").at("1024");
+  EXPECT_DOUBLE_EQ(dds_1k.at("p50_us").number, 500.0);
+  EXPECT_DOUBLE_EQ(dds_1k.at("p90_us").number, 900.0);
+  EXPECT_DOUBLE_EQ(dds_1k.at("max_us").number, 1000.0);
+  EXPECT_EQ(json.at("round_trip").at("afhub").at("64").at("samples").number, 50.0);
+
+  const JsonValue& jitter = json.at("loop_jitter");
+  for (const char* who : {"afhub_us", "cyclictest_us"})
+    for (const char* key : {"p50", "p99", "p999", "max"})
+      EXPECT_EQ(jitter.at(who).at(key).type, JsonValue::Type::kNumber) << who << " " << key;
+  EXPECT_DOUBLE_EQ(jitter.at("afhub_us").at("p50").number, 21.0);
+  EXPECT_DOUBLE_EQ(jitter.at("afhub_us").at("p99").number, 21.0);
+  EXPECT_DOUBLE_EQ(jitter.at("afhub_us").at("max").number, 70.5);
+  EXPECT_DOUBLE_EQ(jitter.at("cyclictest_us").at("max").number, 30.0);
+  EXPECT_DOUBLE_EQ(json.at("loop_deadline_hit_ratio").number, 0.9995);
+}
+
+TEST(BenchReport, JsonSaysNullForALoopThatDidNotRun) {
+  BenchResults results = known_results();
+  results.loop.skipped = "--loop-seconds 0";
+  const JsonValue json = test::parse_json(results_json(results));
+  EXPECT_EQ(json.at("loop_jitter").at("afhub_us").type, JsonValue::Type::kNull);
+  EXPECT_EQ(json.at("loop_deadline_hit_ratio").type, JsonValue::Type::kNull);
+  EXPECT_EQ(json.at("skipped").at("loop").text, "--loop-seconds 0");
+}
+
+TEST(BenchReport, TableGivesRatiosToAfhubAndTheGoalsVerdicts) {
+  const std::string table = results_table(known_results());
+  EXPECT_TRUE(contains(table, "(10.0x)")) << table;  // dds is 10x afhub at every size
+  EXPECT_TRUE(contains(table, "(1.2x)")) << table;
+  EXPECT_TRUE(contains(table, "ros1    skipped: not built")) << table;
+  EXPECT_TRUE(contains(table, "vs dds 500.00 us: 10.0x lower (goal 3.0x): met")) << table;
+  EXPECT_TRUE(contains(table, "vs uds 60.00 us: 1.2x lower (goal 1.5x): NOT met")) << table;
+  EXPECT_TRUE(contains(table, "1 MiB is 1.00x its median at 1 KiB (goal <= 2): met")) << table;
+  EXPECT_TRUE(contains(table, "99.95 % of 20000 steps")) << table;
+  // The loop's p99 is 21 us against cyclictest's 20: within 2x.
+  EXPECT_TRUE(contains(table, "loop p99 wake-up 21 us vs cyclictest 20 us: 1.05x (goal <= 2): met"))
+      << table;
+}
+
+}  // namespace
+}  // namespace afhub::bench
