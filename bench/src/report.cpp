@@ -257,7 +257,8 @@ void write_plot(const BenchResults& results, const std::string& png_path) {
     script << "\n";
   }
   const LoopResult& loop = results.loop;
-  script << "unset logscale x\nset logscale y\nset key top right\n"
+  // Wake-up histograms on a log-log scale, so that the tail shows beside the bulk.
+  script << "set logscale xy\nset key top right\n"
          << "set title '1 kHz loop wake-up latency'\nset xlabel 'wake-up latency (us)'\n"
          << "set ylabel 'cycles'\n";
   if (loop.skipped.empty()) {
@@ -265,8 +266,10 @@ void write_plot(const BenchResults& results, const std::string& png_path) {
                                const std::string& title) {
       const std::string data = dir + "/loop-" + file + ".dat";
       std::ofstream out(data);
-      const auto last = static_cast<std::size_t>(std::min(h.percentile_us(0.999) * 2.0, 2000.0));
-      for (std::size_t bin = 0; bin <= last; ++bin) out << bin << " " << h.bin_count(bin) << "\n";
+      // One line per 1 us bin up to the maximum, at the bin's upper edge.
+      const auto last = std::min(static_cast<std::size_t>(h.max_us()), LatencyHistogram::kBins - 1);
+      for (std::size_t bin = 0; bin <= last; ++bin)
+        out << bin + 1 << " " << h.bin_count(bin) << "\n";
       return "'" + data + "' with steps lw 2 title '" + title + "'";
     };
     script << "plot " << histogram(loop.controller_wake, "afhub", "afhub controller");
