@@ -110,6 +110,7 @@ void run_ping_pong(const BenchOptions& options, BenchResults& results) {
       const std::string port = std::to_string(free_port());
       setenv("ROS_MASTER_URI", ("http://127.0.0.1:" + port + "/").c_str(), 1);
       setenv("ROS_IP", "127.0.0.1", 1);
+      setenv("ROS_HOME", "/tmp/afhub-bench-ros", 1);  // its logs, wherever HOME is
       rosmaster = std::make_unique<ChildProcess>(
           std::vector<std::string>{"rosmaster", "--core", "-p", port});
     }

@@ -258,7 +258,7 @@ void write_plot(const BenchResults& results, const std::string& png_path) {
   }
   const LoopResult& loop = results.loop;
   // Wake-up histograms on a log-log scale, so that the tail shows beside the bulk.
-  script << "set logscale xy\nset key top right\n"
+  script << "set logscale xy\nset yrange [0.7:*]\nset key top right\n"
          << "set title '1 kHz loop wake-up latency'\nset xlabel 'wake-up latency (us)'\n"
          << "set ylabel 'cycles'\n";
   if (loop.skipped.empty()) {

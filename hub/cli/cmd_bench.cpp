@@ -1,6 +1,7 @@
 // `afhub bench`: end-to-end latency and jitter, afhub beside Cyclone DDS, Unix
 // sockets and ROS 1, and a 1 kHz loop beside cyclictest (see docs/bench.md).
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <memory>
 
@@ -48,7 +49,7 @@ int run_bench(const BenchCliOptions& cli) {
   if (cli.loop_seconds >= 0.0) options.loop_seconds = cli.loop_seconds;
   if (options.loop_seconds > 0.0 && options.loop_seconds < 2.0)
     throw Error("--loop-seconds must be 0 (skip the loop) or at least 2");
-  options.model = cli.model;
+  options.model = std::filesystem::path(cli.model).lexically_normal().string();
   options.body = cli.body;
 
   bench::BenchResults results;
@@ -76,7 +77,7 @@ void register_bench(CLI::App& app, Runner& selected) {
       "bench",
       "Measure end-to-end latency over afhub, Cyclone DDS, Unix sockets and ROS 1 (64 B to "
       "1 MiB), and a 1 kHz controller's jitter against the physics beside cyclictest.");
-  bench->add_flag("--quick", options->quick, "A shorter run (about 2 minutes instead of 10)");
+  bench->add_flag("--quick", options->quick, "A shorter run: about 30 s instead of 2.5 min");
   bench->add_option("--json", options->json_file, "Write every distribution to this JSON file");
   bench->add_option("--plot", options->plot_file,
                     "Draw latency CDFs and the loop's jitter histogram into this PNG (gnuplot)");
