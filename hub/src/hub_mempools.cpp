@@ -35,8 +35,8 @@ std::vector<MempoolSpec> hub_mempools() {
       {round_up8(body_list_bytes(7)), 128, "catalogs and directories of up to 7 bodies"},
       {round_up8(body_list_bytes(60)), 32, "catalogs and directories of up to 60 bodies"},
       {round_up8(sizeof(BodyList)), 12, "catalogs and directories of up to kMaxBodies bodies"},
-      // `afhub bench`: a ping and a pong channel per payload size, each holding a few
-      // chunks (a loan, the history, a queued and a held sample).
+      // `afhub bench`: a ping and a pong channel per payload size, each holding up to
+      // five chunks (a loan, the history, a queued, a held and a retired sample).
       {1 << 10, 16, "bench samples of 1 KiB"},
       {1 << 14, 16, "bench samples of 16 KiB"},
       {1 << 18, 16, "bench samples of 256 KiB"},

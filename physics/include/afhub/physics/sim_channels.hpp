@@ -70,10 +70,10 @@ class SimChannels {
     bool commanded = false;         // a command is being applied (the watchdog is armed)
     bool hold_on_watchdog = false;  // the watchdog holds the joints rather than zeroing efforts
     bool told_rejected = false;
-    std::uint32_t lockstep_pid = 0;  // the lockstep client answering for this body; 0: none
+    std::uint32_t lockstep_pid = 0;         // the lockstep client answering for this body; 0: none
     std::uint64_t answered_step = 0;        // lockstep: the step this client answered last
     std::uint64_t applied_answer_step = 0;  // the step the command being applied answers
-    int misses = 0;  // late steps in a row
+    int misses = 0;                         // late steps in a row
   };
   struct WorldObject {
     const WorldObjectSpec* spec = nullptr;
