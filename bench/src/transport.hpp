@@ -21,6 +21,13 @@ struct Message {
   std::int64_t receive_ns = 0;       // stamped by the receiver once the whole message is in
 };
 
+// What every message starts with, on transports that carry plain bytes.
+struct Stamps {
+  std::uint64_t round;
+  std::int64_t send_ns;
+  std::int64_t peer_receive_ns;
+};
+
 class Transport {
  public:
   virtual ~Transport() = default;

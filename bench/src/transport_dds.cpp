@@ -29,12 +29,6 @@ const std::array<SizedType, 5> kTypes = {{
     {1048576, &afhub_bench_Sample1048576_desc},
 }};
 
-// Every sample type starts with these fields.
-struct Stamps {
-  std::uint64_t round;
-  std::int64_t send_ns;
-  std::int64_t peer_receive_ns;
-};
 static_assert(sizeof(afhub_bench_Sample64) == 64 && sizeof(afhub_bench_Sample1048576) == 1048576);
 
 // Loopback only, no shared memory, no tracing; both processes read it from the environment.

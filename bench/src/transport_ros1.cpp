@@ -15,12 +15,6 @@
 namespace afhub::bench {
 namespace {
 
-struct Stamps {
-  std::uint64_t round;
-  std::int64_t send_ns;
-  std::int64_t peer_receive_ns;
-};
-
 class Ros1Transport : public Transport {
  public:
   Ros1Transport(Side side, const std::string& session) {

@@ -8,6 +8,7 @@
 #include "afhub/bench/bench.hpp"
 #include "afhub/hub/error.hpp"
 #include "commands.hpp"
+#include "format.hpp"
 
 namespace afhub::cli {
 namespace {
@@ -22,17 +23,6 @@ struct BenchCliOptions {
   int peer_cpu = -1;
 };
 
-std::vector<std::string> split(const std::string& text) {
-  std::vector<std::string> out;
-  std::size_t start = 0;
-  while (start <= text.size()) {
-    const std::size_t comma = std::min(text.find(',', start), text.size());
-    if (comma > start) out.push_back(text.substr(start, comma - start));
-    start = comma + 1;
-  }
-  return out;
-}
-
 void write_file(const std::string& path, const std::string& text) {
   std::ofstream out(path);
   out << text;
@@ -43,7 +33,7 @@ int run_bench(const BenchCliOptions& cli) {
   if (!cli.peer.empty()) return bench::run_peer(cli.peer, cli.session, cli.peer_cpu);
   bench::BenchOptions options;
   if (cli.quick) options = bench::quick_options(options);
-  if (!cli.transports.empty()) options.transports = split(cli.transports);
+  if (!cli.transports.empty()) options.transports = split_commas(cli.transports);
   if (cli.rounds > 0) options.rounds = cli.rounds;
   if (cli.pings > 0) options.pings_per_round = cli.pings;
   if (cli.loop_seconds >= 0.0) options.loop_seconds = cli.loop_seconds;

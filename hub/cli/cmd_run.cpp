@@ -3,7 +3,6 @@
 #include <cstdio>
 #include <fstream>
 #include <memory>
-#include <sstream>
 
 #include "afhub/controllers/periodic_loop.hpp"
 #include "afhub/hub/error.hpp"
@@ -12,6 +11,7 @@
 #include "afhub/physics/run_loop.hpp"
 #include "afhub/physics/scene_loader.hpp"
 #include "commands.hpp"
+#include "format.hpp"
 
 namespace afhub::cli {
 namespace {
@@ -32,14 +32,6 @@ struct RunCliOptions {
   int cpu = -1;
   bool lock_memory = false;
 };
-
-std::vector<std::string> split_commas(const std::string& text) {
-  std::vector<std::string> out;
-  std::stringstream stream(text);
-  for (std::string item; std::getline(stream, item, ',');)
-    if (!item.empty()) out.push_back(item);
-  return out;
-}
 
 int run_run(const RunCliOptions& options) {
   if (!(options.dt_s >= 1e-5 && options.dt_s <= 0.1))

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <sstream>
 
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/error.hpp"
@@ -103,6 +104,14 @@ std::vector<double> parse_numbers(std::string_view text, std::string_view flag,
     throw Error(std::string(flag) + " takes " + std::to_string(expected) + " numbers, got " +
                 std::to_string(values.size()) + " ('" + rest + "')");
   return values;
+}
+
+std::vector<std::string> split_commas(const std::string& text) {
+  std::vector<std::string> out;
+  std::stringstream stream(text);
+  for (std::string item; std::getline(stream, item, ',');)
+    if (!item.empty()) out.push_back(item);
+  return out;
 }
 
 }  // namespace afhub::cli
