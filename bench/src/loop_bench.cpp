@@ -9,7 +9,6 @@
 #include <cstdio>
 #include <fstream>
 #include <memory>
-#include <sstream>
 
 #include "afhub/bench/bench.hpp"
 #include "afhub/controllers/controller.hpp"
@@ -19,7 +18,6 @@
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/shm_layout/world.hpp"
 #include "child_process.hpp"
-#include "transport.hpp"
 
 namespace afhub::bench {
 namespace {
