@@ -111,7 +111,8 @@ int run_synth(const SynthOptions& options) {
   }
   directory.publish();
   Writer<WorldState> world(
-      {std::string(kService), std::string(kWorldInstance), std::string(kStateEvent)});
+      {std::string(kService), std::string(kWorldInstance), std::string(kStateEvent)},
+      History::kNone);
   LatestReader<WorldCommand> world_command(
       {std::string(kService), std::string(kWorldInstance), std::string(kCommandEvent)});
 
@@ -130,23 +131,24 @@ int run_synth(const SynthOptions& options) {
       last_world_command = command->header.sequence;
       if (control.apply(*command)) step = 0;
     }
-    if (control.take_step()) {
-      const double t = static_cast<double>(step) * dt;
-      for (std::size_t i = 0; i < bodies.size(); ++i) {
-        step_body(bodies[i], i, t, dt);
-        publish_body(bodies[i], i, step, t);
-      }
-      if (WorldState* state = world.loan()) {
-        state->header.sim_step = step;
-        state->header.sim_time_s = t;
-        state->wall_time_s = static_cast<double>(monotonic_ns() - start_ns) * 1e-9;
-        state->achieved_rate_hz = achieved_rate_hz;
-        state->body_count = static_cast<std::uint32_t>(bodies.size());
-        state->paused = control.paused;
-        world.publish(state);
-      }
-      ++step;
+    // Published every period, paused or not, like the physics: the state
+    // channels keep no history for late joiners.
+    const bool stepping = control.take_step();
+    const double t = static_cast<double>(step) * dt;
+    for (std::size_t i = 0; i < bodies.size(); ++i) {
+      if (stepping) step_body(bodies[i], i, t, dt);
+      publish_body(bodies[i], i, step, t);
     }
+    if (WorldState* state = world.loan()) {
+      state->header.sim_step = step;
+      state->header.sim_time_s = t;
+      state->wall_time_s = static_cast<double>(monotonic_ns() - start_ns) * 1e-9;
+      state->achieved_rate_hz = achieved_rate_hz;
+      state->body_count = static_cast<std::uint32_t>(bodies.size());
+      state->paused = control.paused;
+      world.publish(state);
+    }
+    if (stepping) ++step;
     next_ns += period_ns;
     if (next_ns - rate_window_ns >= 1'000'000'000) {
       achieved_rate_hz = static_cast<double>(step - rate_window_step) * 1e9 /

@@ -23,9 +23,10 @@ CatalogBuilder::~CatalogBuilder() = default;
 
 void CatalogBuilder::poll(std::chrono::steady_clock::time_point now) {
   const bool changed = merge(refresh_directories());
+  take_rate_samples();
   const bool due = now - last_publish_ >= kRepublishPeriod;
   if (due) {
-    measure_rates(now);
+    start_rate_samples();
     last_publish_ = now;
   }
   if (changed || due) publish();
@@ -99,17 +100,32 @@ bool CatalogBuilder::merge(bool directories_changed) {
   return true;
 }
 
-void CatalogBuilder::measure_rates(std::chrono::steady_clock::time_point now) {
+void CatalogBuilder::take_rate_samples() {
   for (auto& [channel, probe] : rates_) {
+    if (!probe.sampling) continue;
     const BodyState* state = probe.reader->latest();
-    const std::uint64_t sequence = state ? state->header.sequence : 0;
-    const double seconds = std::chrono::duration<double>(now - probe.last_time).count();
-    if (probe.last_sequence != 0 && sequence >= probe.last_sequence && seconds > 0.0)
-      probe.rate_hz = static_cast<double>(sequence - probe.last_sequence) / seconds;
-    else
-      probe.rate_hz = 0.0;
+    if (!probe.reader->updated()) continue;
+    const std::uint64_t sequence = state->header.sequence;
+    const std::int64_t stamp_ns = state->header.publish_stamp_ns;
+    if (probe.last_sequence != 0 && sequence >= probe.last_sequence &&
+        stamp_ns > probe.last_stamp_ns)
+      probe.rate_hz = static_cast<double>(sequence - probe.last_sequence) * 1e9 /
+                      static_cast<double>(stamp_ns - probe.last_stamp_ns);
     probe.last_sequence = sequence;
-    probe.last_time = now;
+    probe.last_stamp_ns = stamp_ns;
+    probe.sampling = false;
+    probe.reader->raw().unsubscribe();
+  }
+}
+
+void CatalogBuilder::start_rate_samples() {
+  for (auto& [channel, probe] : rates_) {
+    if (probe.sampling) {
+      probe.rate_hz = 0.0;  // nothing published for a whole round
+      continue;
+    }
+    probe.sampling = true;
+    probe.reader->raw().subscribe();
   }
 }
 

@@ -1,5 +1,8 @@
 // The hub's catalog: discovers every process's body directory, merges them,
 // measures each body's publish rate, and publishes the result.
+// Rates come from one state sample per body a second, (sequence, publish stamp)
+// against the last: the hub subscribes until that sample arrives and then steps
+// aside, so it is not a reader the physics pays for on every step.
 #pragma once
 
 #include <chrono>
@@ -29,15 +32,20 @@ class CatalogBuilder {
 
  private:
   struct RateProbe {
-    std::unique_ptr<LatestReader<BodyState>> reader;
+    std::unique_ptr<LatestReader<BodyState>> reader;  // subscribed while sampling
+    bool sampling = true;
     std::uint64_t last_sequence = 0;
-    std::chrono::steady_clock::time_point last_time;
+    std::int64_t last_stamp_ns = 0;
     double rate_hz = 0.0;
   };
   bool refresh_directories();
   // Rebuilds the body list when a directory changed; true if it did.
   bool merge(bool directories_changed);
-  void measure_rates(std::chrono::steady_clock::time_point now);
+  // Takes the sample each sampling probe waits for, and steps aside.
+  void take_rate_samples();
+  // Starts the next round of samples; a probe still waiting after a whole round
+  // has a silent publisher.
+  void start_rate_samples();
   void publish();
 
   std::unique_ptr<iox::runtime::ServiceDiscovery> discovery_;

@@ -39,19 +39,19 @@ std::int64_t monotonic_now_ns() noexcept {
 }  // namespace
 
 struct RawWriter::Port {
-  explicit Port(const ChannelId& channel)
-      : publisher(describe_channel(channel), [] {
+  Port(const ChannelId& channel, History history)
+      : publisher(describe_channel(channel), [history] {
           iox::popo::PublisherOptions options;
-          options.historyCapacity = 1;  // a late joiner gets the last value at once
+          options.historyCapacity = history == History::kKeepLast ? 1 : 0;
           return options;
         }()) {}
   iox::popo::UntypedPublisher publisher;
 };
 
-RawWriter::RawWriter(const ChannelId& channel, PayloadKind kind)
+RawWriter::RawWriter(const ChannelId& channel, PayloadKind kind, History history)
     : channel_(channel), kind_(kind), pid_(static_cast<std::uint32_t>(getpid())) {
   require_fits(channel);
-  port_ = std::make_unique<Port>(channel);
+  port_ = std::make_unique<Port>(channel, history);
 }
 
 RawWriter::~RawWriter() = default;
@@ -70,6 +70,10 @@ std::int64_t RawWriter::publish(void* payload) noexcept {
   const std::int64_t stamp = header->publish_stamp_ns = monotonic_now_ns();
   port_->publisher.publish(payload);
   return stamp;
+}
+
+bool RawWriter::has_readers() const noexcept {
+  return port_->publisher.hasSubscribers();
 }
 
 struct RawLatestReader::Port {
@@ -120,6 +124,18 @@ const void* RawLatestReader::latest() noexcept {
     updated_ = true;
   }
   return held_;
+}
+
+void RawLatestReader::subscribe() noexcept {
+  port_->subscriber.subscribe();
+}
+
+void RawLatestReader::unsubscribe() noexcept {
+  port_->subscriber.unsubscribe();
+}
+
+bool RawLatestReader::subscribed() const noexcept {
+  return port_->subscriber.getSubscriptionState() == iox::SubscribeState::SUBSCRIBED;
 }
 
 void RawLatestReader::report_refusal(const void* payload, PayloadError error) noexcept {

@@ -73,7 +73,8 @@ int find_parent(const Model& model, const std::string& parent) {
 SimChannels::SimChannels(Simulation& sim, double watchdog_s)
     : sim_(sim),
       watchdog_ns_(static_cast<std::int64_t>(watchdog_s * 1e9)),
-      world_({std::string(kService), std::string(kWorldInstance), std::string(kStateEvent)}),
+      world_({std::string(kService), std::string(kWorldInstance), std::string(kStateEvent)},
+             History::kNone),
       world_command_(
           {std::string(kService), std::string(kWorldInstance), std::string(kCommandEvent)}) {
   const Model& model = sim.model();
@@ -203,11 +204,19 @@ std::uint32_t SimChannels::lockstep_clients() const noexcept {
 bool SimChannels::await_lockstep() noexcept {
   const std::uint64_t step = sim_.step_count();
   const std::int64_t start = monotonic_ns();
+  std::int64_t republish_ns = start + kRepublishWhileWaitingNs;
   bool told_waiting = false;
   for (;;) {
     const std::int64_t now = monotonic_ns();
     apply_commands(now);
     if (stop_requested()) return false;
+    // State channels keep no history: a client that subscribes while the step is
+    // held sees it only if it is published again.
+    if (now >= republish_ns) {
+      publish(last_published_.wall_time_s, last_published_.achieved_rate_hz,
+              last_published_.paused);
+      republish_ns = now + kRepublishWhileWaitingNs;
+    }
     if (step == 0 && lockstep_clients() < lockstep_options_.wait_for) {
       if (!told_waiting)
         std::fprintf(stderr, "afhub run: waiting for %u lockstep clients before the first step\n",
@@ -259,6 +268,7 @@ void SimChannels::fill_objects(std::array<WorldObjectPose, kMaxWorldObjects>& ou
 }
 
 void SimChannels::publish(double wall_time_s, double achieved_rate_hz, bool paused) noexcept {
+  last_published_ = {wall_time_s, achieved_rate_hz, paused};
   const std::uint64_t step = sim_.step_count();
   const double time_s = sim_.time_s();
   if (step != timeliness_step_) {  // once per step taken, not per publish while paused

@@ -6,11 +6,13 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/error.hpp"
 #include "afhub/hub/hub_presence.hpp"
+#include "afhub/hub/stop_signal.hpp"
 #include "afhub_process.hpp"
 #include "iceoryx_posh/popo/untyped_publisher.hpp"
 
@@ -22,6 +24,7 @@ using namespace std::chrono_literals;
 TEST(Channel, ReaderSeesTheWritersChunkInPlace) {
   BodyPublisher physics("test/zero_copy");
   BodyClient controller("test/zero_copy");
+  ASSERT_TRUE(test::wait_until([&] { return controller.subscribed(); }, 2s));
   BodyState* loaned = physics.loan_state();
   ASSERT_NE(loaned, nullptr);
   loaned->header.sim_step = 42;
@@ -42,6 +45,7 @@ TEST(Channel, ReaderSeesTheWritersChunkInPlace) {
 TEST(Channel, ReaderGetsOnlyTheNewestSample) {
   BodyPublisher physics("test/latest");
   BodyClient controller("test/latest");
+  ASSERT_TRUE(test::wait_until([&] { return controller.subscribed(); }, 2s));
   for (std::uint64_t step = 1; step <= 5; ++step) {
     BodyState* state = physics.loan_state();
     ASSERT_NE(state, nullptr);
@@ -57,16 +61,63 @@ TEST(Channel, ReaderGetsOnlyTheNewestSample) {
   EXPECT_FALSE(controller.state_updated());
 }
 
-TEST(Channel, LateJoinerGetsTheLastValueAtOnce) {
-  BodyPublisher physics("test/late_joiner");
-  BodyState* state = physics.loan_state();
-  ASSERT_NE(state, nullptr);
-  state->header.sim_step = 7;
-  physics.publish_state(state);
-  BodyClient late("test/late_joiner");
-  const BodyState* read = nullptr;
-  ASSERT_TRUE(test::wait_until([&] { return (read = late.latest_state()) != nullptr; }, 1s));
-  EXPECT_EQ(read->header.sim_step, 7u);
+TEST(Channel, LateJoinerGetsTheLastCommandAtOnce) {
+  BodyClient controller("test/late_command");
+  BodyCommand* command = controller.loan_command();
+  ASSERT_NE(command, nullptr);
+  command->joint_count = 7;
+  controller.publish_command(command);
+  BodyPublisher physics("test/late_command");  // subscribes after the publish
+  const BodyCommand* read = nullptr;
+  ASSERT_TRUE(test::wait_until([&] { return (read = physics.latest_command()) != nullptr; }, 1s));
+  EXPECT_EQ(read->joint_count, 7u);
+}
+
+// State is published every period, so its channel keeps no history: a reader that
+// joins late gets the next state, never an old one.
+TEST(Channel, LateJoinerGetsTheNextStateNotAnOldOne) {
+  BodyPublisher physics("test/late_state");
+  auto publish_step = [&](std::uint64_t step) {
+    BodyState* state = physics.loan_state();
+    ASSERT_NE(state, nullptr);
+    state->header.sim_step = step;
+    physics.publish_state(state);
+  };
+  publish_step(7);
+  BodyClient late("test/late_state");
+  ASSERT_TRUE(test::wait_until([&] { return late.subscribed(); }, 2s));
+  EXPECT_EQ(late.latest_state(), nullptr);
+  publish_step(8);
+  const BodyState* read = late.latest_state();
+  ASSERT_NE(read, nullptr);
+  EXPECT_EQ(read->header.sim_step, 8u);
+}
+
+TEST(Channel, UnsubscribedReaderKeepsItsSampleAndMissesNewOnes) {
+  BodyPublisher physics("test/step_aside");
+  LatestReader<BodyState> probe(body_state_channel("test/step_aside"));
+  ASSERT_TRUE(test::wait_until([&] { return probe.raw().subscribed(); }, 2s));
+  auto publish_step = [&](std::uint64_t step) {
+    BodyState* state = physics.loan_state();
+    ASSERT_NE(state, nullptr);
+    state->header.sim_step = step;
+    physics.publish_state(state);
+  };
+  publish_step(1);
+  const BodyState* held = probe.latest();
+  ASSERT_NE(held, nullptr);
+  probe.raw().unsubscribe();
+  ASSERT_TRUE(test::wait_until([&] { return !probe.raw().subscribed(); }, 2s));
+  publish_step(2);
+  EXPECT_EQ(probe.latest(), held);
+  EXPECT_FALSE(probe.updated());
+  EXPECT_EQ(held->header.sim_step, 1u);
+  probe.raw().subscribe();
+  ASSERT_TRUE(test::wait_until([&] { return probe.raw().subscribed(); }, 2s));
+  publish_step(3);
+  const BodyState* read = probe.latest();
+  ASSERT_NE(read, nullptr);
+  EXPECT_EQ(read->header.sim_step, 3u);
 }
 
 TEST(Channel, CommandsTravelToThePhysicsSide) {
@@ -142,6 +193,41 @@ TEST(Catalog, ListsAnnouncedBodiesWithJointsAndOwnerUntilTheyGo) {
   }
   // The directory's publisher is gone: so is the body.
   EXPECT_TRUE(test::wait_until([&] { return catalog.channels().empty(); }, 3s));
+}
+
+// The hub measures each body's rate from one state sample a second: it is a reader
+// now and then, not on every publish.
+TEST(Catalog, MeasuresRatesWithoutStayingSubscribed) {
+  CatalogReader catalog;
+  catalog.wait(1s);
+  DirectoryPublisher directory;
+  directory.add(make_body_info("test/rated", {}));
+  directory.publish();
+  BodyPublisher body("test/rated");
+  bool seen_reader = false, seen_none = false;  // the hub's reader, then none
+  double rate_hz = 0.0;
+  const std::int64_t give_up = monotonic_ns() + 6'000'000'000;
+  std::int64_t next = monotonic_ns();
+  for (int i = 0; monotonic_ns() < give_up; ++i) {
+    BodyState* state = body.loan_state();
+    ASSERT_NE(state, nullptr);
+    body.publish_state(state);
+    if (body.has_state_readers())
+      seen_reader = true;
+    else if (seen_reader)
+      seen_none = true;  // stepped aside after sampling
+    if (i % 100 == 0) {
+      catalog.latest();
+      const auto names = catalog.channels();
+      if (std::find(names.begin(), names.end(), "test/rated") != names.end())
+        rate_hz = catalog.resolve("test/rated").publish_rate_hz;
+      if (seen_reader && seen_none && std::abs(rate_hz - 1000.0) < 50.0) break;
+    }
+    sleep_until_ns(next += 1'000'000);
+  }
+  EXPECT_TRUE(seen_reader) << "the hub never sampled the state";
+  EXPECT_TRUE(seen_none) << "the hub stayed subscribed";
+  EXPECT_NEAR(rate_hz, 1000.0, 50.0);
 }
 
 TEST(Catalog, RejectsNamesThatIceoryxCannotCarry) {

@@ -18,6 +18,8 @@
 
 namespace afhub {
 
+// The owner publishes state every period, paused or not: the state channel keeps
+// no history (History::kNone), so a reader that joins gets the next period's state.
 class BodyPublisher {
  public:
   explicit BodyPublisher(std::string_view body_channel);
@@ -25,6 +27,7 @@ class BodyPublisher {
   // Zero-initialised state in shared memory to fill, or nullptr when memory is exhausted.
   BodyState* loan_state() noexcept { return state_.loan(); }
   void publish_state(BodyState* state) noexcept { state_.publish(state); }
+  bool has_state_readers() const noexcept { return state_.raw().has_readers(); }
   // The newest command, or nullptr before the first; read in place.
   const BodyCommand* latest_command() noexcept { return command_.latest(); }
   bool command_updated() const { return command_.updated(); }
@@ -45,6 +48,8 @@ class BodyClient {
   // The newest state, or nullptr before the first; read in place.
   const BodyState* latest_state() noexcept { return state_.latest(); }
   bool state_updated() const { return state_.updated(); }
+  // Connected to the owner's state channel: every state published from now on arrives.
+  bool subscribed() { return state_.raw().subscribed(); }
   std::uint64_t refused_states() { return state_.raw().refused_count(); }
   // A zero-initialised command in shared memory to fill, then publish_command().
   BodyCommand* loan_command() noexcept { return command_.loan(); }

@@ -1,7 +1,8 @@
 // Zero-copy channel ends with latest-value semantics.
 //   Writer<T>: loan a chunk in shared memory, fill it in place, publish it.
 //   LatestReader<T>: read the newest valid sample in place; older ones are dropped.
-// A late joiner receives the last published sample at once (history of one).
+// A late joiner receives the last published sample at once (History::kKeepLast),
+// or, on a channel published every period, the next one (History::kNone).
 // loan(), publish() and latest() are real-time safe: no heap, no exceptions.
 #pragma once
 
@@ -17,10 +18,17 @@
 
 namespace afhub {
 
+// What a writer keeps for readers that subscribe after it published.
+//   kKeepLast: the last sample, handed to a late joiner at once.
+//   kNone: nothing; a late joiner gets the next sample. For channels written every
+//     period (body and world state): a publish then costs about half as much in
+//     iceoryx 2.0.3 (no history chunk to swap), and a reader waits at most a period.
+enum class History { kKeepLast, kNone };
+
 // Untyped ends; the typed templates below are what code uses.
 class RawWriter {
  public:
-  RawWriter(const ChannelId& channel, PayloadKind kind);
+  RawWriter(const ChannelId& channel, PayloadKind kind, History history = History::kKeepLast);
   ~RawWriter();
   RawWriter(const RawWriter&) = delete;
   RawWriter& operator=(const RawWriter&) = delete;
@@ -32,6 +40,8 @@ class RawWriter {
   std::int64_t publish(void* payload) noexcept;
 
   const ChannelId& channel() const { return channel_; }
+  // Whether any reader is subscribed now: each one costs every publish.
+  bool has_readers() const noexcept;
 
  private:
   struct Port;
@@ -58,6 +68,13 @@ class RawLatestReader {
   std::uint32_t latest_bytes() const { return held_bytes_; }
   std::uint64_t refused_count() const { return refused_; }
   const ChannelId& channel() const { return channel_; }
+  // A reader starts subscribed. Every subscribed reader costs the writer on each
+  // publish, so one that looks only now and then can step aside in between; what
+  // latest() holds stays valid.
+  void subscribe() noexcept;
+  void unsubscribe() noexcept;
+  // Connected to the writer: every sample published from now on reaches this reader.
+  bool subscribed() const noexcept;
 
  private:
   struct Port;
@@ -75,7 +92,8 @@ class RawLatestReader {
 template <class T>
 class Writer {
  public:
-  explicit Writer(const ChannelId& channel) : raw_(channel, T::kKind) {}
+  explicit Writer(const ChannelId& channel, History history = History::kKeepLast)
+      : raw_(channel, T::kKind, history) {}
   // A zero-initialised payload in shared memory, or nullptr when memory is exhausted.
   T* loan() noexcept {
     void* chunk = raw_.loan(sizeof(T));
@@ -83,6 +101,7 @@ class Writer {
   }
   void publish(T* payload) noexcept { raw_.publish(payload); }
   RawWriter& raw() { return raw_; }
+  const RawWriter& raw() const { return raw_; }
 
  private:
   RawWriter raw_;

@@ -9,7 +9,8 @@
 // every body in the barrier has an answer for it. A body whose answer is later than
 // the client timeout is counted late; after `max_misses` late steps in a row it
 // leaves the barrier (a dead client never freezes the world), and it rejoins with
-// its next answer to a current step.
+// its next answer to a current step. A held step is published again every 20 ms:
+// state channels keep no history, and a client joining during the wait needs it.
 #pragma once
 
 #include <cstdint>
@@ -81,6 +82,14 @@ class SimChannels {
     Pose local;
   };
 
+  // The world's clock as last published, for publishing a held step again.
+  struct WorldClock {
+    double wall_time_s = 0.0;
+    double achieved_rate_hz = 0.0;
+    bool paused = false;
+  };
+  static constexpr std::int64_t kRepublishWhileWaitingNs = 20'000'000;
+
   void note_lockstep_answer(Channel& channel, const BodyCommand& command) noexcept;
   void fill_objects(std::array<WorldObjectPose, kMaxWorldObjects>& out,
                     const std::vector<WorldObject>& objects) const noexcept;
@@ -99,6 +108,7 @@ class SimChannels {
   std::uint64_t late_answers_ = 0, dropped_ = 0;
   // Steps taken under command, and those whose command answered the newest state.
   std::uint64_t commanded_steps_ = 0, answered_steps_ = 0, timeliness_step_ = 0;
+  WorldClock last_published_;
 };
 
 }  // namespace afhub::physics
