@@ -52,21 +52,63 @@ BENCHMARK_CAPTURE(BM_Step, kuka_published, kKuka, true)->Unit(benchmark::kMicros
 BENCHMARK_CAPTURE(BM_Step, four_bar_physics, kFourBar, false)->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(BM_Step, four_bar_published, kFourBar, true)->Unit(benchmark::kMicrosecond);
 
-// Publishing alone, for ten bodies with seven joints each.
+// Publishing alone: one step's ten body states (a ten-link chain, so each body
+// carries its descendant joints) and the world state. Argument: readers per body.
+// With none this is the physics' own cost; each subscribed reader adds iceoryx's
+// push into its queue (a chunk swap) to every publish.
 void BM_PublishTenBodies(benchmark::State& state) {
   afhub::testing::ModelFolder folder;
   std::string text = "bodies: [";
   for (int b = 0; b < 10; ++b) text += (b ? ", " : "") + std::string("BODY b") + std::to_string(b);
+  text += "]\njoints: [";
+  for (int j = 1; j < 10; ++j)
+    text += (j > 1 ? ", " : "") + std::string("JOINT j") + std::to_string(j);
   text += "]\n";
   for (int b = 0; b < 10; ++b)
-    text += "BODY b" + std::to_string(b) + ":\n  name: bench" + std::to_string(b) +
-            "\n  mass: 0\n  shape: sphere\n  geometry: {radius: 0.01}\n";
-  const Model model = load_adf_files({folder.write("ten.yaml", text)});
+    text += "BODY b" + std::to_string(b) + ":\n  name: link" + std::to_string(b) +
+            "\n  mass: " + (b ? "1" : "0") + "\n  shape: sphere\n  geometry: {radius: 0.01}\n";
+  for (int j = 1; j < 10; ++j)
+    text += "JOINT j" + std::to_string(j) + ":\n  name: j" + std::to_string(j) +
+            "\n  parent: BODY b" + std::to_string(j - 1) + "\n  child: BODY b" + std::to_string(j) +
+            "\n  parent pivot: {x: 0, y: 0, z: 0.1}\n  parent axis: {x: 0, y: 1, z: 0}\n"
+            "  child pivot: {x: 0, y: 0, z: 0}\n  child axis: {x: 0, y: 1, z: 0}\n"
+            "  type: revolute\n";
+  const Model model = load_adf_files({folder.write("chain.yaml", text)});
   Simulation sim(model, 0.001);
   SimChannels channels(sim, 0.5);
+  std::vector<std::unique_ptr<BodyClient>> readers;
+  for (int r = 0; r < state.range(0); ++r)
+    for (const BodySpec& body : model.bodies)
+      readers.push_back(std::make_unique<BodyClient>(body.channel));
+  for (auto& reader : readers)
+    if (!afhub::test::wait_until([&] { return reader->subscribed(); }, std::chrono::seconds(5)))
+      state.SkipWithError("a reader did not connect");
   for (auto _ : state) channels.publish(0.0, 0.0, false);
+  state.counters["bodies"] = static_cast<double>(channels.channel_count());
 }
-BENCHMARK(BM_PublishTenBodies)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_PublishTenBodies)->ArgName("readers")->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
+
+// One body state channel alone, the physics' fill left out: what a publish costs
+// with the channel's history (kKeepLast, as commands have; kNone, as state has)
+// and with 0 or 1 subscribed reader. Arguments: keeps history, readers.
+void BM_PublishOneChannel(benchmark::State& state) {
+  static int instance = 0;  // a fresh channel per run: no reader left from the last
+  const ChannelId channel = body_state_channel("bench/one" + std::to_string(instance++));
+  Writer<BodyState> writer(channel, state.range(0) ? History::kKeepLast : History::kNone);
+  std::unique_ptr<LatestReader<BodyState>> reader;
+  if (state.range(1)) {
+    reader = std::make_unique<LatestReader<BodyState>>(channel);
+    if (!afhub::test::wait_until([&] { return reader->raw().subscribed(); },
+                                 std::chrono::seconds(5)))
+      state.SkipWithError("the reader did not connect");
+  }
+  for (auto _ : state)
+    if (BodyState* sample = writer.loan()) writer.publish(sample);
+}
+BENCHMARK(BM_PublishOneChannel)
+    ->ArgNames({"history", "readers"})
+    ->ArgsProduct({{0, 1}, {0, 1}})
+    ->Unit(benchmark::kNanosecond);
 
 // Lockstep: the physics publishes a step, an `afhub ctl hold --lockstep` process
 // answers it, the physics resumes. Counters: the round trip (publish start to the
