@@ -21,6 +21,20 @@ namespace {
 
 using namespace std::chrono_literals;
 
+// Publishes a state stamped with `step`; false when no chunk could be loaned.
+bool publish_step(BodyPublisher& physics, std::uint64_t step) {
+  BodyState* state = physics.loan_state();
+  if (!state) return false;
+  state->header.sim_step = step;
+  physics.publish_state(state);
+  return true;
+}
+
+// The step a state carries, or -1 (as unsigned) for no state.
+std::uint64_t step_of(const BodyState* state) {
+  return state ? state->header.sim_step : ~0ull;
+}
+
 TEST(Channel, ReaderSeesTheWritersChunkInPlace) {
   BodyPublisher physics("test/zero_copy");
   BodyClient controller("test/zero_copy");
@@ -77,47 +91,31 @@ TEST(Channel, LateJoinerGetsTheLastCommandAtOnce) {
 // joins late gets the next state, never an old one.
 TEST(Channel, LateJoinerGetsTheNextStateNotAnOldOne) {
   BodyPublisher physics("test/late_state");
-  auto publish_step = [&](std::uint64_t step) {
-    BodyState* state = physics.loan_state();
-    ASSERT_NE(state, nullptr);
-    state->header.sim_step = step;
-    physics.publish_state(state);
-  };
-  publish_step(7);
+  ASSERT_TRUE(publish_step(physics, 7));
   BodyClient late("test/late_state");
   ASSERT_TRUE(test::wait_until([&] { return late.subscribed(); }, 2s));
   EXPECT_EQ(late.latest_state(), nullptr);
-  publish_step(8);
-  const BodyState* read = late.latest_state();
-  ASSERT_NE(read, nullptr);
-  EXPECT_EQ(read->header.sim_step, 8u);
+  ASSERT_TRUE(publish_step(physics, 8));
+  EXPECT_EQ(step_of(late.latest_state()), 8u);
 }
 
 TEST(Channel, UnsubscribedReaderKeepsItsSampleAndMissesNewOnes) {
   BodyPublisher physics("test/step_aside");
   LatestReader<BodyState> probe(body_state_channel("test/step_aside"));
   ASSERT_TRUE(test::wait_until([&] { return probe.raw().subscribed(); }, 2s));
-  auto publish_step = [&](std::uint64_t step) {
-    BodyState* state = physics.loan_state();
-    ASSERT_NE(state, nullptr);
-    state->header.sim_step = step;
-    physics.publish_state(state);
-  };
-  publish_step(1);
+  ASSERT_TRUE(publish_step(physics, 1));
   const BodyState* held = probe.latest();
   ASSERT_NE(held, nullptr);
   probe.raw().unsubscribe();
   ASSERT_TRUE(test::wait_until([&] { return !probe.raw().subscribed(); }, 2s));
-  publish_step(2);
+  ASSERT_TRUE(publish_step(physics, 2));
   EXPECT_EQ(probe.latest(), held);
   EXPECT_FALSE(probe.updated());
   EXPECT_EQ(held->header.sim_step, 1u);
   probe.raw().subscribe();
   ASSERT_TRUE(test::wait_until([&] { return probe.raw().subscribed(); }, 2s));
-  publish_step(3);
-  const BodyState* read = probe.latest();
-  ASSERT_NE(read, nullptr);
-  EXPECT_EQ(read->header.sim_step, 3u);
+  ASSERT_TRUE(publish_step(physics, 3));
+  EXPECT_EQ(step_of(probe.latest()), 3u);
 }
 
 TEST(Channel, CommandsTravelToThePhysicsSide) {
