@@ -111,8 +111,7 @@ int run_synth(const SynthOptions& options) {
   }
   directory.publish();
   Writer<WorldState> world(
-      {std::string(kService), std::string(kWorldInstance), std::string(kStateEvent)},
-      History::kNone);
+      {std::string(kService), std::string(kWorldInstance), std::string(kStateEvent)});
   LatestReader<WorldCommand> world_command(
       {std::string(kService), std::string(kWorldInstance), std::string(kCommandEvent)});
 

@@ -13,7 +13,7 @@ namespace afhub {
 
 BodyPublisher::BodyPublisher(std::string_view body_channel)
     : channel_(body_channel),
-      state_(body_state_channel(body_channel), History::kNone),
+      state_(body_state_channel(body_channel)),
       command_(body_command_channel(body_channel)) {}
 
 BodyClient::BodyClient(std::string_view body_channel)

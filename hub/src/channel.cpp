@@ -77,11 +77,11 @@ bool RawWriter::has_readers() const noexcept {
 }
 
 struct RawLatestReader::Port {
-  explicit Port(const ChannelId& channel)
-      : subscriber(describe_channel(channel), [] {
+  Port(const ChannelId& channel, History history)
+      : subscriber(describe_channel(channel), [history] {
           iox::popo::SubscriberOptions options;
           options.queueCapacity = 1;  // latest value: a newer sample replaces a queued one
-          options.historyRequest = 1;
+          options.historyRequest = history == History::kKeepLast ? 1 : 0;
           options.queueFullPolicy = iox::popo::QueueFullPolicy::DISCARD_OLDEST_DATA;
           return options;
         }()) {}
@@ -91,7 +91,7 @@ struct RawLatestReader::Port {
 RawLatestReader::RawLatestReader(const ChannelId& channel, PayloadKind kind)
     : channel_(channel), kind_(kind) {
   require_fits(channel);
-  port_ = std::make_unique<Port>(channel);
+  port_ = std::make_unique<Port>(channel, history_of(kind));
 }
 
 RawLatestReader::~RawLatestReader() {

@@ -22,6 +22,7 @@
 #include "iceoryx_posh/internal/roudi/roudi.hpp"
 #include "iceoryx_posh/roudi/iceoryx_roudi_components.hpp"
 #include "iceoryx_posh/runtime/posh_runtime_single_process.hpp"
+#include "port_lock_repair.hpp"
 
 namespace afhub {
 namespace {
@@ -63,11 +64,12 @@ int take_hub_lock() {
   return fd;
 }
 
-void serve_until_stopped() {
+void serve_until_stopped(iox::roudi::PortPool& ports) {
   CatalogBuilder catalog;
   HealthReporter health;
   while (!stop_requested()) {
     auto now = std::chrono::steady_clock::now();
+    release_port_locks_of_dead_threads(ports);
     catalog.poll(now);
     health.poll(now, catalog.body_count());
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
@@ -106,7 +108,7 @@ int run_hub_daemon() {
   std::fprintf(stderr,
                "afhub hub: running (pid %d, %.1f MiB of payload mempools). Ctrl-C stops it.\n",
                static_cast<int>(getpid()), pool_mib);
-  serve_until_stopped();
+  serve_until_stopped(*components.rouDiMemoryManager.portPool().value());
   std::fprintf(stderr, "afhub hub: stopped\n");
   return 0;
 }

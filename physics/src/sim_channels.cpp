@@ -73,8 +73,7 @@ int find_parent(const Model& model, const std::string& parent) {
 SimChannels::SimChannels(Simulation& sim, double watchdog_s)
     : sim_(sim),
       watchdog_ns_(static_cast<std::int64_t>(watchdog_s * 1e9)),
-      world_({std::string(kService), std::string(kWorldInstance), std::string(kStateEvent)},
-             History::kNone),
+      world_({std::string(kService), std::string(kWorldInstance), std::string(kStateEvent)}),
       world_command_(
           {std::string(kService), std::string(kWorldInstance), std::string(kCommandEvent)}) {
   const Model& model = sim.model();

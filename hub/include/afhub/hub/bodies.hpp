@@ -19,7 +19,7 @@
 namespace afhub {
 
 // The owner publishes state every period, paused or not: the state channel keeps
-// no history (History::kNone), so a reader that joins gets the next period's state.
+// no history (see history_of), so a reader that joins gets the next period's state.
 class BodyPublisher {
  public:
   explicit BodyPublisher(std::string_view body_channel);

@@ -1,8 +1,8 @@
 // Zero-copy channel ends with latest-value semantics.
 //   Writer<T>: loan a chunk in shared memory, fill it in place, publish it.
 //   LatestReader<T>: read the newest valid sample in place; older ones are dropped.
-// A late joiner receives the last published sample at once (History::kKeepLast),
-// or, on a channel published every period, the next one (History::kNone).
+// A late joiner receives the last published sample at once, or, on a state channel
+// (published every period), the next one: see History.
 // loan(), publish() and latest() are real-time safe: no heap, no exceptions.
 #pragma once
 
@@ -25,10 +25,20 @@ namespace afhub {
 //     iceoryx 2.0.3 (no history chunk to swap), and a reader waits at most a period.
 enum class History { kKeepLast, kNone };
 
+// Body and world state keep no history; every other kind keeps the last sample.
+// Writers and readers both follow it, so a reader never asks for a history the
+// writer does not keep (RouDi would log a warning on every such subscribe).
+constexpr History history_of(PayloadKind kind) {
+  return kind == PayloadKind::kBodyState || kind == PayloadKind::kWorldState ? History::kNone
+                                                                             : History::kKeepLast;
+}
+
 // Untyped ends; the typed templates below are what code uses.
 class RawWriter {
  public:
-  RawWriter(const ChannelId& channel, PayloadKind kind, History history = History::kKeepLast);
+  RawWriter(const ChannelId& channel, PayloadKind kind)
+      : RawWriter(channel, kind, history_of(kind)) {}
+  RawWriter(const ChannelId& channel, PayloadKind kind, History history);
   ~RawWriter();
   RawWriter(const RawWriter&) = delete;
   RawWriter& operator=(const RawWriter&) = delete;
@@ -92,7 +102,7 @@ class RawLatestReader {
 template <class T>
 class Writer {
  public:
-  explicit Writer(const ChannelId& channel, History history = History::kKeepLast)
+  explicit Writer(const ChannelId& channel, History history = history_of(T::kKind))
       : raw_(channel, T::kKind, history) {}
   // A zero-initialised payload in shared memory, or nullptr when memory is exhausted.
   T* loan() noexcept {

@@ -1,0 +1,89 @@
+// Releasing iceoryx port locks held by dead threads (see port_lock_repair.hpp).
+#include "port_lock_repair.hpp"
+
+#include <linux/futex.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <climits>
+#include <cstdio>
+#include <cstring>
+#include <type_traits>
+
+#include "iceoryx_posh/internal/popo/building_blocks/locking_policy.hpp"
+#include "iceoryx_posh/roudi/port_pool.hpp"
+
+namespace afhub {
+namespace {
+
+using iox::popo::ThreadSafePolicy;
+
+// ThreadSafePolicy's one (private) member is a posix::mutex, whose one member is
+// the public pthread mutex: the three share an address. Checked for this build.
+static_assert(std::is_standard_layout_v<ThreadSafePolicy> &&
+                  sizeof(ThreadSafePolicy) == sizeof(iox::posix::mutex) &&
+                  sizeof(iox::posix::mutex) == sizeof(pthread_mutex_t),
+              "iceoryx's ThreadSafePolicy is no longer a bare pthread mutex: revisit this repair");
+
+// Whether thread `tid` no longer runs: no /proc entry, or a zombie (its parent has
+// not reaped it yet, but it will never unlock anything).
+bool thread_is_gone(pid_t tid) {
+  char path[32];
+  std::snprintf(path, sizeof path, "/proc/%d/stat", static_cast<int>(tid));
+  std::FILE* file = std::fopen(path, "r");
+  if (!file) return errno == ENOENT || errno == ESRCH;
+  char stat[512];
+  const std::size_t length = std::fread(stat, 1, sizeof stat - 1, file);
+  std::fclose(file);
+  stat[length] = '\0';
+  // "tid (name) S ...": the state follows the last ')' (a name may hold one).
+  const char* name_end = std::strrchr(stat, ')');
+  if (!name_end || name_end[1] != ' ') return false;
+  return name_end[2] == 'Z' || name_end[2] == 'X';
+}
+
+}  // namespace
+
+pthread_mutex_t& native_mutex(const ThreadSafePolicy& policy) {
+  return const_cast<pthread_mutex_t&>(reinterpret_cast<const iox::posix::mutex&>(policy).m_handle);
+}
+
+pid_t release_if_owner_died(pthread_mutex_t& mutex) {
+  // glibc's layout of a normal or recursive, non-robust mutex: __lock is 0 when
+  // free, 1 when held, 2 when held with waiters; __owner is the holder's thread id.
+  auto& data = mutex.__data;
+  std::atomic_ref<int> lock(data.__lock);
+  std::atomic_ref<int> owner(data.__owner);
+  if (lock.load() == 0) return 0;
+  const pid_t tid = owner.load();
+  if (tid <= 0 || !thread_is_gone(tid)) return 0;
+  // What the owner's unlock would have done. Nobody else can hold the lock now:
+  // it has been held by the dead thread since it died.
+  data.__count = 0;
+  owner.store(0);
+  if (data.__nusers > 0) --data.__nusers;
+  if (lock.exchange(0) > 1)  // waiters sleep on the futex: process-shared, so no private flag
+    syscall(SYS_futex, &data.__lock, FUTEX_WAKE, INT_MAX, nullptr, nullptr, 0);
+  return tid;
+}
+
+std::size_t release_port_locks_of_dead_threads(iox::roudi::PortPool& ports) {
+  std::size_t released = 0;
+  auto release = [&](const ThreadSafePolicy& policy, const char* what) {
+    if (pid_t tid = release_if_owner_died(native_mutex(policy))) {
+      std::fprintf(stderr,
+                   "afhub hub: thread %d died holding a %s lock inside iceoryx (a client killed "
+                   "mid-publish); released it so the hub and the other clients keep running\n",
+                   static_cast<int>(tid), what);
+      ++released;
+    }
+  };
+  for (auto* publisher : ports.getPublisherPortDataList())
+    release(publisher->m_chunkSenderData, "publisher");
+  for (auto* subscriber : ports.getSubscriberPortDataList())
+    release(subscriber->m_chunkReceiverData, "subscriber queue");
+  return released;
+}
+
+}  // namespace afhub
