@@ -51,17 +51,18 @@ pthread_mutex_t& native_mutex(const ThreadSafePolicy& policy) {
 
 pid_t release_if_owner_died(pthread_mutex_t& mutex) {
   // glibc's layout of a normal or recursive, non-robust mutex: __lock is 0 when
-  // free, 1 when held, 2 when held with waiters; __owner is the holder's thread id.
+  // free, 1 when held, 2 when held with waiters; __owner is the holder's thread id,
+  // cleared by its unlock before __lock is.
   auto& data = mutex.__data;
   std::atomic_ref<int> lock(data.__lock);
   std::atomic_ref<int> owner(data.__owner);
   if (lock.load() == 0) return 0;
-  const pid_t tid = owner.load();
+  pid_t tid = owner.load();
   if (tid <= 0 || !thread_is_gone(tid)) return 0;
-  // What the owner's unlock would have done. Nobody else can hold the lock now:
-  // it has been held by the dead thread since it died.
+  // Still that thread's: had it unlocked before dying, __owner would have changed.
+  if (!owner.compare_exchange_strong(tid, 0)) return 0;
+  // The rest of the unlock the owner never reached.
   data.__count = 0;
-  owner.store(0);
   if (data.__nusers > 0) --data.__nusers;
   if (lock.exchange(0) > 1)  // waiters sleep on the futex: process-shared, so no private flag
     syscall(SYS_futex, &data.__lock, FUTEX_WAKE, INT_MAX, nullptr, nullptr, 0);
