@@ -10,7 +10,7 @@
 #include <cerrno>
 #include <cstring>
 
-#include "afhub/hub/error.hpp"
+#include "afhub/shm_layout/error.hpp"
 
 namespace afhub::bench {
 

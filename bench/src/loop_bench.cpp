@@ -14,8 +14,8 @@
 #include "afhub/controllers/controller.hpp"
 #include "afhub/controllers/joint_targets.hpp"
 #include "afhub/hub/channel.hpp"
-#include "afhub/hub/error.hpp"
 #include "afhub/hub/hub_presence.hpp"
+#include "afhub/shm_layout/error.hpp"
 #include "afhub/shm_layout/world.hpp"
 #include "child_process.hpp"
 

@@ -11,8 +11,8 @@
 #include <memory>
 
 #include "afhub/bench/bench.hpp"
-#include "afhub/hub/error.hpp"
 #include "afhub/hub/stop_signal.hpp"
+#include "afhub/shm_layout/error.hpp"
 #include "child_process.hpp"
 #include "transport.hpp"
 
@@ -62,13 +62,13 @@ Message exchange(Peer& peer, std::uint32_t bytes, std::uint64_t round, std::int6
 
 // Pings until the peer answers: subscriptions and discovery take their time.
 void handshake(Peer& peer, std::uint64_t& round) {
-  const std::int64_t give_up = now_ns() + kConnectTimeoutNs;
+  const std::int64_t give_up = monotonic_ns() + kConnectTimeoutNs;
   for (;;) {
     const std::uint64_t asked = ++round;
     peer.end->send(kMinPayloadBytes, asked, 0);
-    for (std::int64_t until = now_ns() + 100'000'000; now_ns() < until;)
+    for (std::int64_t until = monotonic_ns() + 100'000'000; monotonic_ns() < until;)
       if (auto pong = peer.end->receive(until); pong && pong->round == asked) return;
-    if (now_ns() > give_up || stop_requested())
+    if (monotonic_ns() > give_up || stop_requested())
       throw Error(std::string(transport_name(peer.kind)) + ": the peer did not answer in 20 s");
   }
 }
@@ -120,7 +120,7 @@ void run_ping_pong(const BenchOptions& options, BenchResults& results) {
         std::vector<std::string>{self_executable(), "bench", "--peer", name, "--session", session,
                                  "--peer-cpu", std::to_string(pong_cpu())},
         "/tmp/afhub-bench-" + session + "-" + name + ".log");
-    peer.end->connect(now_ns() + kConnectTimeoutNs);
+    peer.end->connect(monotonic_ns() + kConnectTimeoutNs);
     peers.push_back(std::move(peer));
   }
   pin_to_cpu(ping_cpu());
@@ -157,10 +157,10 @@ int run_peer(const std::string& transport, const std::string& session, int cpu) 
   const std::optional<TransportKind> kind = parse_transport(transport);
   if (!kind) throw Error("unknown transport '" + transport + "'");
   std::unique_ptr<Transport> end = open_transport(*kind, Side::kPong, session);
-  end->connect(now_ns() + kConnectTimeoutNs);
+  end->connect(monotonic_ns() + kConnectTimeoutNs);
   pin_to_cpu(cpu);
   while (!stop_requested())
-    if (std::optional<Message> ping = end->receive(now_ns() + 100'000'000))
+    if (std::optional<Message> ping = end->receive(monotonic_ns() + 100'000'000))
       end->send(ping->bytes, ping->round, ping->receive_ns);
   return 0;
 }

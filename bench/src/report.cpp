@@ -8,8 +8,8 @@
 #include <fstream>
 
 #include "afhub/bench/bench.hpp"
-#include "afhub/hub/error.hpp"
 #include "afhub/hub/json_writer.hpp"
+#include "afhub/shm_layout/error.hpp"
 #include "child_process.hpp"
 
 namespace afhub::bench {

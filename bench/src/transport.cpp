@@ -4,7 +4,7 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "afhub/hub/error.hpp"
+#include "afhub/shm_layout/error.hpp"
 
 namespace afhub::bench {
 
@@ -60,12 +60,6 @@ std::unique_ptr<Transport> open_transport(TransportKind kind, Side side,
       break;
   }
   throw Error("unknown transport");
-}
-
-std::int64_t now_ns() noexcept {
-  timespec now{};
-  clock_gettime(CLOCK_MONOTONIC, &now);
-  return static_cast<std::int64_t>(now.tv_sec) * 1'000'000'000 + now.tv_nsec;
 }
 
 }  // namespace afhub::bench

@@ -8,6 +8,8 @@
 #include <optional>
 #include <string>
 
+#include "afhub/shm_layout/header.hpp"
+
 namespace afhub::bench {
 
 enum class TransportKind { kAfhub, kDds, kUds, kRos1 };
@@ -52,8 +54,6 @@ std::unique_ptr<Transport> open_transport(TransportKind kind, Side side,
 // The largest payload and the smallest message (the round and the stamps must fit).
 inline constexpr std::uint32_t kMaxPayloadBytes = 1u << 20;
 inline constexpr std::uint32_t kMinPayloadBytes = 64;
-
-std::int64_t now_ns() noexcept;
 
 // The transports, each in its own file.
 std::unique_ptr<Transport> open_afhub_transport(Side side, const std::string& session);

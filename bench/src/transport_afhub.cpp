@@ -4,9 +4,9 @@
 #include <new>
 
 #include "afhub/hub/channel.hpp"
-#include "afhub/hub/error.hpp"
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/shm_layout/bench_sample.hpp"
+#include "afhub/shm_layout/error.hpp"
 #include "transport.hpp"
 
 namespace afhub::bench {
@@ -35,14 +35,14 @@ class AfhubTransport : public Transport {
       const auto* sample = static_cast<const BenchSample*>(reader_.latest());
       if (reader_.updated()) {
         Message message;
-        message.receive_ns = now_ns();
+        message.receive_ns = monotonic_ns();
         message.bytes = static_cast<std::uint32_t>(reader_.latest_bytes());
         message.round = sample->round;
         message.send_ns = sample->header.publish_stamp_ns;
         message.peer_receive_ns = sample->peer_receive_ns;
         return message;
       }
-      if (now_ns() > deadline_ns) return std::nullopt;
+      if (monotonic_ns() > deadline_ns) return std::nullopt;
     }
   }
 

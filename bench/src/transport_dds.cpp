@@ -10,7 +10,7 @@
 #include <functional>
 #include <vector>
 
-#include "afhub/hub/error.hpp"
+#include "afhub/shm_layout/error.hpp"
 #include "bench_samples.h"
 #include "transport.hpp"
 
@@ -77,7 +77,7 @@ class DdsTransport : public Transport {
   std::int64_t send(std::uint32_t bytes, std::uint64_t round,
                     std::int64_t peer_receive_ns) override {
     const std::size_t i = index_of(bytes);
-    const Stamps stamps{round, now_ns(), peer_receive_ns};
+    const Stamps stamps{round, monotonic_ns(), peer_receive_ns};
     std::memcpy(buffer_.data(), &stamps, sizeof stamps);
     check(dds_write(writers_[i], buffer_.data()), "write");
     return stamps.send_ns;
@@ -90,7 +90,7 @@ class DdsTransport : public Transport {
         dds_sample_info_t info;
         const dds_return_t taken = dds_take(readers_[i], samples, &info, 1, 1);
         if (taken <= 0) continue;
-        const std::int64_t received = now_ns();
+        const std::int64_t received = monotonic_ns();
         std::optional<Message> message;
         if (info.valid_data) {
           Stamps stamps;
@@ -101,7 +101,7 @@ class DdsTransport : public Transport {
         dds_return_loan(readers_[i], samples, taken);
         if (message) return message;
       }
-      const std::int64_t left = deadline_ns - now_ns();
+      const std::int64_t left = deadline_ns - monotonic_ns();
       if (left <= 0) return std::nullopt;
       dds_waitset_wait(waitset_, nullptr, 0, left);
     }

@@ -9,7 +9,7 @@
 
 #include <cstring>
 
-#include "afhub/hub/error.hpp"
+#include "afhub/shm_layout/error.hpp"
 #include "transport.hpp"
 
 namespace afhub::bench {
@@ -30,7 +30,7 @@ class Ros1Transport : public Transport {
                     std::int64_t peer_receive_ns) override {
     // The layout (8 bytes) and the array length (4) come first: the message is `bytes` long.
     message_.data.resize(bytes - kOverheadBytes);
-    const Stamps stamps{round, now_ns(), peer_receive_ns};
+    const Stamps stamps{round, monotonic_ns(), peer_receive_ns};
     std::memcpy(message_.data.data(), &stamps, sizeof stamps);
     publisher_.publish(message_);
     return stamps.send_ns;
@@ -38,7 +38,7 @@ class Ros1Transport : public Transport {
 
   std::optional<Message> receive(std::int64_t deadline_ns) override {
     while (!received_) {
-      const std::int64_t left = deadline_ns - now_ns();
+      const std::int64_t left = deadline_ns - monotonic_ns();
       if (left <= 0 || !ros::ok()) return std::nullopt;
       ros::getGlobalCallbackQueue()->callAvailable(
           ros::WallDuration(0, static_cast<int>(std::min<std::int64_t>(left, 100'000'000))));
@@ -52,7 +52,7 @@ class Ros1Transport : public Transport {
   static constexpr std::uint32_t kOverheadBytes = 12;
 
   void on_message(const std_msgs::UInt8MultiArray::ConstPtr& incoming) {
-    const std::int64_t received = now_ns();
+    const std::int64_t received = monotonic_ns();
     if (incoming->data.size() < sizeof(Stamps)) return;
     Stamps stamps;
     std::memcpy(&stamps, incoming->data.data(), sizeof stamps);
@@ -75,9 +75,9 @@ std::unique_ptr<Transport> open_ros1_transport(Side side, const std::string& ses
     ros::init(argc, nullptr, side == Side::kPing ? "afhub_bench" : "afhub_bench_peer",
               ros::init_options::NoSigintHandler | ros::init_options::AnonymousName |
                   ros::init_options::NoRosout);
-    const std::int64_t give_up = now_ns() + 10'000'000'000;
+    const std::int64_t give_up = monotonic_ns() + 10'000'000'000;
     while (!ros::master::check()) {
-      if (now_ns() > give_up)
+      if (monotonic_ns() > give_up)
         throw Error("ros1: no rosmaster at " + ros::master::getURI() + " after 10 s");
       usleep(50'000);
     }

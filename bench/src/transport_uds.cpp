@@ -9,7 +9,7 @@
 #include <cstring>
 #include <vector>
 
-#include "afhub/hub/error.hpp"
+#include "afhub/shm_layout/error.hpp"
 #include "transport.hpp"
 
 namespace afhub::bench {
@@ -67,7 +67,7 @@ class UdsTransport : public Transport {
     if (side_ == Side::kPing) {
       while ((fd_ = accept4(listener_, nullptr, nullptr, SOCK_NONBLOCK)) < 0) {
         if (errno != EAGAIN && errno != EINTR) fail("accept");
-        if (now_ns() > deadline_ns) throw Error("uds: the peer did not connect");
+        if (monotonic_ns() > deadline_ns) throw Error("uds: the peer did not connect");
         usleep(1'000);
       }
       return;
@@ -79,14 +79,14 @@ class UdsTransport : public Transport {
       if (::connect(fd_, reinterpret_cast<const sockaddr*>(&address), sizeof address) == 0) return;
       close(fd_);
       fd_ = -1;
-      if (now_ns() > deadline_ns) fail("connect " + path_);
+      if (monotonic_ns() > deadline_ns) fail("connect " + path_);
       usleep(10'000);
     }
   }
 
   std::int64_t send(std::uint32_t bytes, std::uint64_t round,
                     std::int64_t peer_receive_ns) override {
-    Frame frame{bytes, 0, round, now_ns(), peer_receive_ns};
+    Frame frame{bytes, 0, round, monotonic_ns(), peer_receive_ns};
     std::memcpy(buffer_.data(), &frame, sizeof frame);
     for (std::size_t sent = 0; sent < bytes;) {
       const ssize_t n = ::send(fd_, buffer_.data() + sent, bytes - sent, MSG_NOSIGNAL);
@@ -107,7 +107,7 @@ class UdsTransport : public Transport {
       throw Error("uds: a frame of " + std::to_string(frame.bytes) + " bytes is out of range");
     // A message once begun is read to its end, whatever the deadline.
     read_exactly(sizeof frame, frame.bytes, 0);
-    return Message{frame.bytes, frame.round, frame.send_ns, frame.peer_receive_ns, now_ns()};
+    return Message{frame.bytes, frame.round, frame.send_ns, frame.peer_receive_ns, monotonic_ns()};
   }
 
  private:
@@ -122,7 +122,7 @@ class UdsTransport : public Transport {
         throw Error("uds: the other end closed the socket");
       } else if (errno != EAGAIN && errno != EINTR) {
         fail("recv");
-      } else if (got == from && deadline_ns != 0 && now_ns() > deadline_ns) {
+      } else if (got == from && deadline_ns != 0 && monotonic_ns() > deadline_ns) {
         return false;
       }
     }

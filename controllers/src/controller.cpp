@@ -1,15 +1,16 @@
 // Controller processes (see controller.hpp).
 #include "afhub/controllers/controller.hpp"
+#include "afhub/rt/clock.hpp"
 
 #include <sched.h>
 
 #include <cstdio>
 
 #include "afhub/hub/bodies.hpp"
-#include "afhub/hub/error.hpp"
 #include "afhub/hub/hub_presence.hpp"
-#include "afhub/hub/loop_stats_publisher.hpp"
 #include "afhub/hub/stop_signal.hpp"
+#include "afhub/rt/loop_stats_publisher.hpp"
+#include "afhub/shm_layout/error.hpp"
 
 namespace afhub {
 namespace {

@@ -8,7 +8,7 @@
 #include <numbers>
 #include <sstream>
 
-#include "afhub/hub/error.hpp"
+#include "afhub/shm_layout/error.hpp"
 
 namespace afhub {
 

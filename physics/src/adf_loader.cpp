@@ -10,9 +10,9 @@
 #include <map>
 #include <set>
 
-#include "afhub/hub/channel_names.hpp"
-#include "afhub/hub/error.hpp"
 #include "afhub/physics/lineage.hpp"
+#include "afhub/shm_layout/channel_names.hpp"
+#include "afhub/shm_layout/error.hpp"
 #include "yaml_reader.hpp"
 
 namespace afhub::physics {

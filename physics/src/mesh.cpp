@@ -8,7 +8,7 @@
 #include <assimp/Importer.hpp>
 #include <cmath>
 
-#include "afhub/hub/error.hpp"
+#include "afhub/shm_layout/error.hpp"
 
 namespace afhub::physics {
 

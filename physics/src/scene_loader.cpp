@@ -7,8 +7,8 @@
 #include <filesystem>
 #include <map>
 
-#include "afhub/hub/channel_names.hpp"
 #include "afhub/physics/adf_loader.hpp"
+#include "afhub/shm_layout/channel_names.hpp"
 #include "yaml_reader.hpp"
 
 namespace afhub::physics {

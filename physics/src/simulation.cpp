@@ -11,7 +11,7 @@
 #include <cmath>
 #include <map>
 
-#include "afhub/hub/error.hpp"
+#include "afhub/shm_layout/error.hpp"
 #include "collision_shapes.hpp"
 #include "frames.hpp"
 #include "joint_model.hpp"

@@ -10,8 +10,8 @@
 #include <set>
 #include <string>
 
-#include "afhub/hub/error.hpp"
 #include "afhub/physics/model.hpp"
+#include "afhub/shm_layout/error.hpp"
 
 namespace afhub::physics {
 

@@ -6,7 +6,7 @@
 #include <cmath>
 #include <numbers>
 
-#include "afhub/hub/error.hpp"
+#include "afhub/shm_layout/error.hpp"
 #include "model_files.hpp"
 
 namespace afhub {

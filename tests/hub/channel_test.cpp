@@ -1,6 +1,7 @@
 // Zero-copy channels against a live hub: in-place reads and writes, latest-value
 // semantics, late joiners, foreign payloads refused, and the catalog.
 #include "afhub/hub/channel.hpp"
+#include "afhub/rt/clock.hpp"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -10,9 +11,9 @@
 #include <cstring>
 
 #include "afhub/hub/bodies.hpp"
-#include "afhub/hub/error.hpp"
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/hub/stop_signal.hpp"
+#include "afhub/shm_layout/error.hpp"
 #include "afhub_process.hpp"
 #include "iceoryx_posh/popo/untyped_publisher.hpp"
 

@@ -10,10 +10,10 @@
 
 #include "afhub/controllers/joint_targets.hpp"
 #include "afhub/hub/bodies.hpp"
-#include "afhub/hub/loop_stats_publisher.hpp"
 #include "afhub/hub/stop_signal.hpp"
 #include "afhub/physics/adf_loader.hpp"
 #include "afhub/physics/sim_channels.hpp"
+#include "afhub/rt/loop_stats_publisher.hpp"
 #include "afhub_process.hpp"
 
 // The replacements below pair malloc with free on purpose; GCC cannot see that.

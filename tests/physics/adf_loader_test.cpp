@@ -7,7 +7,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include "afhub/hub/error.hpp"
+#include "afhub/shm_layout/error.hpp"
 
 namespace afhub::physics {
 namespace {

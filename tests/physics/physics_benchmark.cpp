@@ -8,10 +8,10 @@
 #include <cstdio>
 
 #include "afhub/hub/hub_presence.hpp"
-#include "afhub/hub/latency_histogram.hpp"
 #include "afhub/hub/stop_signal.hpp"
 #include "afhub/physics/adf_loader.hpp"
 #include "afhub/physics/sim_channels.hpp"
+#include "afhub/rt/latency_histogram.hpp"
 #include "afhub_process.hpp"
 #include "model_files.hpp"
 

@@ -8,7 +8,7 @@
 #include <thread>
 
 #include "afhub/hub/bodies.hpp"
-#include "afhub/hub/channel_names.hpp"
+#include "afhub/shm_layout/channel_names.hpp"
 #include "afhub/shm_layout/world.hpp"
 #include "afhub_process.hpp"
 #include "model_files.hpp"

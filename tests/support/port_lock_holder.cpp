@@ -9,8 +9,8 @@
 #include <cstdio>
 #include <thread>
 
-#include "afhub/hub/channel_names.hpp"
 #include "afhub/hub/hub_presence.hpp"
+#include "afhub/shm_layout/channel_names.hpp"
 #include "iceoryx_posh/internal/popo/ports/publisher_port_user.hpp"
 #include "iceoryx_posh/internal/popo/ports/subscriber_port_user.hpp"
 #include "iceoryx_posh/runtime/posh_runtime.hpp"

@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "afhub/hub/latency_histogram.hpp"
+#include "afhub/rt/latency_histogram.hpp"
 
 namespace afhub::bench {
 

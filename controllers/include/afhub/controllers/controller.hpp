@@ -18,7 +18,7 @@
 #include <functional>
 #include <string>
 
-#include "afhub/controllers/periodic_loop.hpp"
+#include "afhub/rt/periodic_loop.hpp"
 #include "afhub/shm_layout/body_command.hpp"
 #include "afhub/shm_layout/body_state.hpp"
 

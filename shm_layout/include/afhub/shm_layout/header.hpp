@@ -1,6 +1,8 @@
 // The header that starts every payload: who wrote it, with which layout, and when.
 #pragma once
 
+#include <time.h>
+
 #include <cstdint>
 
 namespace afhub {
@@ -26,7 +28,14 @@ struct PayloadHeader {
   std::uint64_t sequence{0};  // per publisher, starts at 1, +1 per publish
   std::uint64_t sim_step{0};  // state: step it describes; command: step it answers
   double sim_time_s{0.0};
-  std::int64_t publish_stamp_ns{0};  // CLOCK_MONOTONIC, same clock in every process
+  std::int64_t publish_stamp_ns{0};  // monotonic_ns(): the same clock in every process
 };
+
+// The clock of every stamp and deadline in afhub: CLOCK_MONOTONIC, in nanoseconds.
+inline std::int64_t monotonic_ns() noexcept {
+  timespec now{};
+  clock_gettime(CLOCK_MONOTONIC, &now);
+  return static_cast<std::int64_t>(now.tv_sec) * 1'000'000'000 + now.tv_nsec;
+}
 
 }  // namespace afhub

@@ -1,0 +1,90 @@
+// `afhub bench`: end-to-end latency and jitter, afhub beside Cyclone DDS, Unix
+// sockets and ROS 1, and a 1 kHz loop beside cyclictest (see docs/bench.md).
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+
+#include "afhub/bench/bench.hpp"
+#include "afhub/shm_layout/error.hpp"
+#include "commands.hpp"
+#include "format.hpp"
+
+namespace afhub::cli {
+namespace {
+
+struct BenchCliOptions {
+  bool quick = false;
+  std::string transports, json_file, plot_file, model = AFHUB_DEMO_MODEL, body = "base";
+  std::uint32_t rounds = 0, pings = 0;
+  double loop_seconds = -1.0;
+  // The peer process the bench starts for each transport.
+  std::string peer, session;
+  int peer_cpu = -1;
+};
+
+void write_file(const std::string& path, const std::string& text) {
+  std::ofstream out(path);
+  out << text;
+  if (!out) throw Error("cannot write " + path);
+}
+
+int run_bench(const BenchCliOptions& cli) {
+  if (!cli.peer.empty()) return bench::run_peer(cli.peer, cli.session, cli.peer_cpu);
+  bench::BenchOptions options;
+  if (cli.quick) options = bench::quick_options(options);
+  if (!cli.transports.empty()) options.transports = split_commas(cli.transports);
+  if (cli.rounds > 0) options.rounds = cli.rounds;
+  if (cli.pings > 0) options.pings_per_round = cli.pings;
+  if (cli.loop_seconds >= 0.0) options.loop_seconds = cli.loop_seconds;
+  if (options.loop_seconds > 0.0 && options.loop_seconds < 2.0)
+    throw Error("--loop-seconds must be 0 (skip the loop) or at least 2");
+  options.model = std::filesystem::path(cli.model).lexically_normal().string();
+  options.body = cli.body;
+
+  bench::BenchResults results;
+  results.machine = bench::read_machine_info();
+  results.options = options;
+  bench::run_ping_pong(options, results);
+  if (options.loop_seconds > 0.0)
+    bench::run_loop_bench(options, results.loop);
+  else
+    results.loop.skipped = "--loop-seconds 0";
+  std::printf("afhub bench on %s (%u cores, %.0f GiB), %s, %s\n\n", results.machine.cpu.c_str(),
+              results.machine.cores, results.machine.memory_gib, results.machine.kernel.c_str(),
+              results.machine.date.c_str());
+  std::printf("%s", bench::results_table(results).c_str());
+  if (!cli.json_file.empty()) write_file(cli.json_file, bench::results_json(results));
+  if (!cli.plot_file.empty()) bench::write_plot(results, cli.plot_file);
+  return 0;
+}
+
+}  // namespace
+
+void register_bench(CLI::App& app, Runner& selected) {
+  auto options = std::make_shared<BenchCliOptions>();
+  auto* bench = app.add_subcommand(
+      "bench",
+      "Measure end-to-end latency over afhub, Cyclone DDS, Unix sockets and ROS 1 (64 B to "
+      "1 MiB), and a 1 kHz controller's jitter against the physics beside cyclictest.");
+  bench->add_flag("--quick", options->quick, "A shorter run: about 30 s instead of 2.5 min");
+  bench->add_option("--json", options->json_file, "Write every distribution to this JSON file");
+  bench->add_option("--plot", options->plot_file,
+                    "Draw latency CDFs and the loop's jitter histogram into this PNG (gnuplot)");
+  bench->add_option("--transports", options->transports,
+                    "Transports to compare, comma-separated (default afhub,dds,uds,ros1)");
+  bench->add_option("--rounds", options->rounds, "Interleaved rounds (default 20, quick 5)");
+  bench->add_option("--pings", options->pings,
+                    "Round trips per transport, size and round (default 500, quick 200)");
+  bench->add_option("--loop-seconds", options->loop_seconds,
+                    "Length of the 1 kHz loop (default 60, quick 20; 0 skips it)");
+  bench->add_option("--model", options->model, "ADF model for the loop (default: the AMBF KUKA)");
+  bench->add_option("--body", options->body,
+                    "The body the loop's controller commands (default base)");
+  bench->add_option("--peer", options->peer)->group("");  // the bench's own peer processes
+  bench->add_option("--session", options->session)->group("");
+  bench->add_option("--peer-cpu", options->peer_cpu)->group("");
+  bench->callback([&selected, options] { selected = [options] { return run_bench(*options); }; });
+}
+
+}  // namespace afhub::cli

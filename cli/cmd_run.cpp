@@ -1,0 +1,146 @@
+// `afhub run`: load AMBF descriptions (files, a launch file with -l, -a lists, a
+// world file) and simulate them in Bullet, each active body on its channels.
+#include <cstdio>
+#include <fstream>
+#include <memory>
+
+#include "afhub/hub/hub_presence.hpp"
+#include "afhub/hub/stop_signal.hpp"
+#include "afhub/physics/run_loop.hpp"
+#include "afhub/physics/scene_loader.hpp"
+#include "afhub/rt/periodic_loop.hpp"
+#include "afhub/shm_layout/error.hpp"
+#include "commands.hpp"
+#include "format.hpp"
+
+namespace afhub::cli {
+namespace {
+
+struct RunCliOptions {
+  std::vector<std::string> files;
+  std::string launch_file, indices, adf_list, world_file, report_file, watchdog_hold;
+  double dt_s = 0.001;
+  double watchdog_s = 0.5;
+  std::uint64_t steps = 0;
+  bool fast = false;
+  bool offline = false;
+  bool no_autostart = false;
+  bool lockstep = false;
+  std::uint32_t wait_for = 0;
+  double client_timeout_ms = 100.0;
+  int fifo_priority = 0;
+  int cpu = -1;
+  bool lock_memory = false;
+};
+
+int run_run(const RunCliOptions& options) {
+  if (!(options.dt_s >= 1e-5 && options.dt_s <= 0.1))
+    throw Error("--dt must be between 0.00001 and 0.1 s, got " + std::to_string(options.dt_s));
+  if (!(options.watchdog_s > 0.0)) throw Error("--watchdog must be a positive number of seconds");
+  if (!(options.client_timeout_ms > 0.0 && options.client_timeout_ms <= 60'000.0))
+    throw Error("--client-timeout must be between 0 and 60000 ms");
+  if (!options.lockstep && options.wait_for > 0)
+    throw Error("--wait-for needs --lockstep: it holds the first step for lockstep clients");
+  if (options.fifo_priority < 0 || options.fifo_priority > 99)
+    throw Error("--fifo takes a SCHED_FIFO priority from 1 to 99");
+  if (options.offline && (options.lockstep || !options.watchdog_hold.empty()))
+    throw Error("--lockstep and --watchdog-hold need the hub's channels: drop --offline");
+  physics::SceneRequest request;
+  request.launch_file = options.launch_file;
+  if (!options.indices.empty()) request.launch_indices = physics::parse_index_list(options.indices);
+  request.adf_files = split_commas(options.adf_list);
+  request.adf_files.insert(request.adf_files.end(), options.files.begin(), options.files.end());
+  request.world_file = options.world_file;
+
+  physics::Model model;
+  try {
+    model = physics::load_scene(request);
+  } catch (const Error& error) {
+    std::fprintf(stderr, "%s\n", error.what());  // "file:line:col: error: ..."
+    return 1;
+  }
+  for (const auto& warning : model.warnings) std::fprintf(stderr, "%s\n", warning.c_str());
+
+  install_stop_signal_handlers();
+  physics::Simulation sim(model, options.dt_s);
+  std::unique_ptr<physics::SimChannels> channels;
+  if (!options.offline) {
+    connect_to_hub("physics", options.no_autostart ? HubPolicy::kRequire : HubPolicy::kAutostart);
+    channels = std::make_unique<physics::SimChannels>(sim, options.watchdog_s);
+    for (const std::string& body : split_commas(options.watchdog_hold))
+      channels->hold_on_watchdog(body);
+    if (options.lockstep) {
+      physics::LockstepOptions lockstep;
+      lockstep.wait_for = options.wait_for;
+      lockstep.client_timeout_ns = static_cast<std::int64_t>(options.client_timeout_ms * 1e6);
+      channels->enable_lockstep(lockstep);
+    }
+    std::fprintf(stderr, "afhub run: %zu bodies, %zu joints on channels; %s%s at dt %.6g s\n",
+                 channels->channel_count(), model.joints.size(),
+                 options.fast ? "as fast as possible" : "real time",
+                 options.lockstep ? " in lockstep" : "", options.dt_s);
+  }
+  physics::RunOptions run;
+  run.fast = options.fast;
+  run.steps = options.steps;
+  LoopOptions realtime;
+  realtime.fifo_priority = options.fifo_priority;
+  realtime.cpu = options.cpu;
+  realtime.lock_memory = options.lock_memory;
+  run.grant = apply_realtime(realtime, "afhub run");
+  physics::RunReport report;
+  physics::run_loop(sim, channels.get(), run, report);
+  if (!options.report_file.empty()) {
+    std::ofstream out(options.report_file);
+    out << physics::report_json(report, sim);
+    if (!out) throw Error("cannot write the report to " + options.report_file);
+  }
+  return report.nan_detected ? 1 : 0;
+}
+
+}  // namespace
+
+void register_run(CLI::App& app, Runner& selected) {
+  auto options = std::make_shared<RunCliOptions>();
+  auto* run = app.add_subcommand(
+      "run",
+      "Simulate AMBF descriptions in Bullet; every active body publishes its state and reads "
+      "its commands on the hub's channels.");
+  run->add_option("files", options->files, "ADF files, loaded together");
+  run->add_option("--launch", options->launch_file,
+                  "A launch file: its world config, colors, and the models picked with -l");
+  run->add_option("-l", options->indices, "Indices into the launch file's multibody configs: 0,3");
+  run->add_option("-a", options->adf_list, "ADF files, comma-separated: a.yaml,b.yaml");
+  run->add_option("--world", options->world_file,
+                  "A world file (gravity, enclosure, lights, cameras, environment)");
+  run->add_option("--dt", options->dt_s, "Fixed step in seconds (default 0.001)");
+  run->add_flag("--fast", options->fast, "Step as fast as possible instead of in real time");
+  run->add_option("--steps", options->steps, "Stop after this many steps (default: until Ctrl-C)");
+  run->add_option("--watchdog", options->watchdog_s,
+                  "Seconds without a command before a body's commands fall to zero (default 0.5)");
+  run->add_option("--watchdog-hold", options->watchdog_hold,
+                  "Bodies whose joints hold their positions when the watchdog fires, instead of "
+                  "zero effort: names or last parts, comma-separated");
+  run->add_flag("--lockstep", options->lockstep,
+                "Step only when every lockstep client (`afhub ctl ... --lockstep`) has answered "
+                "the current step");
+  run->add_option("--wait-for", options->wait_for,
+                  "With --lockstep: hold step 0 until this many lockstep clients joined");
+  run->add_option("--client-timeout", options->client_timeout_ms,
+                  "With --lockstep: ms a step waits for a client's answer before going ahead "
+                  "(default 100); 3 misses in a row drop the client until it answers again");
+  run->add_option("--fifo", options->fifo_priority,
+                  "Step under SCHED_FIFO at this priority (1-99); says so if refused");
+  run->add_option("--cpu", options->cpu, "Pin the physics loop to this CPU");
+  run->add_flag("--lock-memory", options->lock_memory,
+                "mlockall and pre-fault, so the physics loop takes no page faults");
+  run->add_option("--report", options->report_file,
+                  "Write a JSON report at the end (steps, step times, poses, joints)");
+  run->add_flag("--offline", options->offline,
+                "Simulate without a hub: no channels (for reports and measurements)");
+  run->add_flag("--no-autostart", options->no_autostart,
+                "Fail instead of starting a hub when none runs");
+  run->callback([&selected, options] { selected = [options] { return run_run(*options); }; });
+}
+
+}  // namespace afhub::cli

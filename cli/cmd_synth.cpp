@@ -1,0 +1,186 @@
+// `afhub synth`: publishes synthetic bodies at a fixed rate, the stand-in for a
+// physics process. Joints follow a sinusoid, or the position, velocity or effort
+// commands written to the body (as a unit-inertia joint) while commands keep coming.
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <vector>
+
+#include "afhub/hub/bodies.hpp"
+#include "afhub/hub/hub_presence.hpp"
+#include "afhub/hub/stop_signal.hpp"
+#include "afhub/rt/clock.hpp"
+#include "afhub/shm_layout/error.hpp"
+#include "afhub/shm_layout/world_control.hpp"
+#include "commands.hpp"
+
+namespace afhub::cli {
+namespace {
+
+constexpr double kCommandTimeoutS = 0.5;  // AMBF's watchdog: back to the sinusoid after this
+
+struct SynthOptions {
+  std::string name_space = "synth";
+  unsigned bodies = 3;
+  unsigned joints = 4;
+  double rate_hz = 1000.0;
+  double seconds = 0.0;  // 0: until Ctrl-C
+  bool no_autostart = false;
+};
+
+struct SyntheticJoint {
+  double position = 0.0;
+  double velocity = 0.0;
+};
+
+struct SyntheticBody {
+  std::unique_ptr<BodyPublisher> channel;
+  std::vector<SyntheticJoint> joints;
+  double last_command_time_s = -1e9;
+};
+
+void step_body(SyntheticBody& body, std::size_t index, double t, double dt) {
+  const BodyCommand* command = body.channel->latest_command();
+  if (command && body.channel->command_updated()) body.last_command_time_s = t;
+  const bool commanded = command && t - body.last_command_time_s < kCommandTimeoutS;
+  for (std::size_t j = 0; j < body.joints.size(); ++j) {
+    SyntheticJoint& joint = body.joints[j];
+    const double previous = joint.position;
+    if (commanded && j < command->joint_count) {
+      const double value = command->joint_values[j];
+      switch (command->joint_types[j]) {
+        case JointCommandType::kPosition:
+          joint.position += (value - joint.position) * 0.05;
+          break;
+        case JointCommandType::kVelocity:
+          joint.position += value * dt;
+          break;
+        case JointCommandType::kEffort:
+          joint.position += (joint.velocity + value * dt) * dt;
+          break;
+      }
+    } else {
+      joint.position = 0.5 * std::sin(2.0 * M_PI * 0.5 * t + 0.7 * static_cast<double>(j + index));
+    }
+    joint.velocity = (joint.position - previous) / dt;
+  }
+}
+
+void publish_body(SyntheticBody& body, std::size_t index, std::uint64_t step, double t) {
+  BodyState* state = body.channel->loan_state();
+  if (!state) return;
+  const double radius = 0.1 * static_cast<double>(index + 1);
+  const double angle = 2.0 * M_PI * 0.2 * t;
+  state->header.sim_step = step;
+  state->header.sim_time_s = t;
+  state->pose.position_m = {radius * std::cos(angle), radius * std::sin(angle),
+                            0.05 * static_cast<double>(index)};
+  state->pose.orientation = {0.0, 0.0, std::sin(angle / 2), std::cos(angle / 2)};
+  state->twist.linear_mps = {-radius * std::sin(angle) * 2.0 * M_PI * 0.2,
+                             radius * std::cos(angle) * 2.0 * M_PI * 0.2, 0.0};
+  state->twist.angular_radps = {0.0, 0.0, 2.0 * M_PI * 0.2};
+  state->mass_kg = 1.0;
+  state->principal_inertia_kgm2 = {0.01, 0.01, 0.01};
+  state->joint_count = static_cast<std::uint32_t>(body.joints.size());
+  for (std::size_t j = 0; j < body.joints.size(); ++j) {
+    state->joint_positions[j] = body.joints[j].position;
+    state->joint_velocities[j] = body.joints[j].velocity;
+  }
+  body.channel->publish_state(state);
+}
+
+int run_synth(const SynthOptions& options) {
+  if (options.bodies == 0 || options.bodies > kMaxBodies)
+    throw Error("--bodies must be between 1 and " + std::to_string(kMaxBodies));
+  if (options.joints > kMaxJointsPerBody)
+    throw Error("--joints must be at most " + std::to_string(kMaxJointsPerBody));
+  if (!(options.rate_hz > 0.0 && options.rate_hz <= 100'000.0))
+    throw Error("--rate must be between 0 and 100000 Hz");
+  install_stop_signal_handlers();
+  connect_to_hub("synth", options.no_autostart ? HubPolicy::kRequire : HubPolicy::kAutostart);
+
+  DirectoryPublisher directory;
+  std::vector<SyntheticBody> bodies(options.bodies);
+  for (std::size_t i = 0; i < bodies.size(); ++i) {
+    std::string channel = body_channel_name(options.name_space, "body" + std::to_string(i));
+    std::vector<std::string> joint_names;
+    for (unsigned j = 0; j < options.joints; ++j)
+      joint_names.push_back("body" + std::to_string(i) + "-joint" + std::to_string(j));
+    directory.add(make_body_info(channel, joint_names));
+    bodies[i].channel = std::make_unique<BodyPublisher>(channel);
+    bodies[i].joints.resize(options.joints);
+  }
+  directory.publish();
+  Writer<WorldState> world(
+      {std::string(kService), std::string(kWorldInstance), std::string(kStateEvent)});
+  LatestReader<WorldCommand> world_command(
+      {std::string(kService), std::string(kWorldInstance), std::string(kCommandEvent)});
+
+  const double dt = 1.0 / options.rate_hz;
+  const auto period_ns = static_cast<std::int64_t>(1e9 * dt);
+  const std::int64_t start_ns = monotonic_ns();
+  std::int64_t next_ns = start_ns;
+  std::uint64_t step = 0, last_world_command = 0;
+  WorldControl control;
+  std::uint64_t rate_window_step = 0;
+  std::int64_t rate_window_ns = start_ns;
+  double achieved_rate_hz = 0.0;
+  while (!stop_requested()) {
+    if (const WorldCommand* command = world_command.latest();
+        command && command->header.sequence != last_world_command) {
+      last_world_command = command->header.sequence;
+      if (control.apply(*command)) step = 0;
+    }
+    // Published every period, paused or not, like the physics: the state
+    // channels keep no history for late joiners.
+    const bool stepping = control.take_step();
+    const double t = static_cast<double>(step) * dt;
+    for (std::size_t i = 0; i < bodies.size(); ++i) {
+      if (stepping) step_body(bodies[i], i, t, dt);
+      publish_body(bodies[i], i, step, t);
+    }
+    if (WorldState* state = world.loan()) {
+      state->header.sim_step = step;
+      state->header.sim_time_s = t;
+      state->wall_time_s = static_cast<double>(monotonic_ns() - start_ns) * 1e-9;
+      state->achieved_rate_hz = achieved_rate_hz;
+      state->body_count = static_cast<std::uint32_t>(bodies.size());
+      state->paused = control.paused;
+      world.publish(state);
+    }
+    if (stepping) ++step;
+    next_ns += period_ns;
+    if (next_ns - rate_window_ns >= 1'000'000'000) {
+      achieved_rate_hz = static_cast<double>(step - rate_window_step) * 1e9 /
+                         static_cast<double>(next_ns - rate_window_ns);
+      rate_window_step = step;
+      rate_window_ns = next_ns;
+    }
+    if (options.seconds > 0.0 && static_cast<double>(next_ns - start_ns) * 1e-9 >= options.seconds)
+      break;
+    sleep_until_ns(next_ns);
+  }
+  return 0;
+}
+
+}  // namespace
+
+void register_synth(CLI::App& app, Runner& selected) {
+  auto options = std::make_shared<SynthOptions>();
+  auto* synth = app.add_subcommand(
+      "synth",
+      "Publish synthetic bodies at a fixed rate (a stand-in for physics): joints follow a "
+      "sinusoid, or the commands written to them.");
+  synth->add_option("--namespace", options->name_space,
+                    "Namespace of the bodies (default 'synth')");
+  synth->add_option("--bodies", options->bodies, "Number of bodies (default 3)");
+  synth->add_option("--joints", options->joints, "Joints per body (default 4)");
+  synth->add_option("--rate", options->rate_hz, "Steps per second (default 1000)");
+  synth->add_option("--seconds", options->seconds,
+                    "Stop after this many seconds (default: until Ctrl-C)");
+  synth->add_flag("--no-autostart", options->no_autostart,
+                  "Fail instead of starting a hub when none runs");
+  synth->callback([&selected, options] { selected = [options] { return run_synth(*options); }; });
+}
+
+}  // namespace afhub::cli

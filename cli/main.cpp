@@ -1,0 +1,37 @@
+// afhub: the one command-line front door.
+#include <cstdio>
+
+#include "afhub/shm_layout/error.hpp"
+#include "commands.hpp"
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "afhub: a shared-memory, zero-copy co-simulation hub for robots.\n"
+      "Run `afhub <command> --help` for a command's options."};
+  app.require_subcommand(1);
+  afhub::cli::Runner selected;
+  afhub::cli::register_hub(app, selected);
+  afhub::cli::register_ls(app, selected);
+  afhub::cli::register_echo(app, selected);
+  afhub::cli::register_cmd(app, selected);
+  afhub::cli::register_status(app, selected);
+  afhub::cli::register_synth(app, selected);
+  afhub::cli::register_demo(app, selected);
+  afhub::cli::register_check(app, selected);
+  afhub::cli::register_run(app, selected);
+  afhub::cli::register_ctl(app, selected);
+  afhub::cli::register_top(app, selected);
+  afhub::cli::register_bench(app, selected);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& error) {
+    return app.exit(error);
+  }
+  try {
+    return selected ? selected() : 2;
+  } catch (const afhub::Error& error) {
+    std::fprintf(stderr, "afhub %s: error: %s\n", app.get_subcommands().front()->get_name().c_str(),
+                 error.what());
+    return 1;
+  }
+}

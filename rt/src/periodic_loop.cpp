@@ -1,0 +1,96 @@
+// The periodic loop (see periodic_loop.hpp).
+#include "afhub/rt/periodic_loop.hpp"
+
+#include <pthread.h>
+#include <sched.h>
+#include <sys/mman.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+
+#include "afhub/hub/stop_signal.hpp"
+#include "afhub/rt/clock.hpp"
+
+namespace afhub {
+namespace {
+
+// Touches this much stack once, so that the pages are resident before the loop.
+void prefault_stack() {
+  constexpr std::size_t kBytes = 256 * 1024;
+  char stack[kBytes];
+  volatile char* page = stack;
+  for (std::size_t i = 0; i < kBytes; i += 4096) page[i] = 0;
+}
+
+}  // namespace
+
+RealtimeGrant apply_realtime(const LoopOptions& options, const char* who) {
+  RealtimeGrant grant;
+  if (options.lock_memory) {
+    if (mlockall(MCL_CURRENT | MCL_FUTURE) == 0) {
+      prefault_stack();
+      grant.memory_locked = true;
+    } else {
+      std::fprintf(stderr,
+                   "%s: cannot lock memory (%s); running without: page faults may add latency. "
+                   "Raise `ulimit -l` or run with CAP_IPC_LOCK\n",
+                   who, std::strerror(errno));
+    }
+  }
+  if (options.cpu >= 0) {
+    cpu_set_t set;
+    CPU_ZERO(&set);
+    CPU_SET(options.cpu, &set);
+    const int error = pthread_setaffinity_np(pthread_self(), sizeof set, &set);
+    if (error == 0)
+      grant.cpu = options.cpu;
+    else
+      std::fprintf(stderr, "%s: cannot pin to CPU %d (%s); running on any CPU\n", who, options.cpu,
+                   std::strerror(error));
+  }
+  if (options.fifo_priority > 0) {
+    sched_param param{};
+    param.sched_priority = options.fifo_priority;
+    const int error = pthread_setschedparam(pthread_self(), SCHED_FIFO, &param);
+    if (error == 0)
+      grant.realtime = true;
+    else
+      std::fprintf(stderr,
+                   "%s: cannot use SCHED_FIFO priority %d (%s); running under the normal "
+                   "scheduler. Run as root, with CAP_SYS_NICE, or raise `ulimit -r`\n",
+                   who, options.fifo_priority, std::strerror(error));
+  }
+  return grant;
+}
+
+void run_periodic(const LoopOptions& options, LoopTiming& timing,
+                  const std::function<bool()>& cycle,
+                  const std::function<void(std::int64_t)>& after) {
+  const std::int64_t period = options.period_ns;
+  const std::int64_t now = monotonic_ns();
+  std::int64_t scheduled = now + period;
+  if (options.grid_origin_ns > now)
+    scheduled = options.grid_origin_ns;
+  else if (options.grid_origin_ns > 0)  // the grid's first point after now
+    scheduled = options.grid_origin_ns + ((now - options.grid_origin_ns) / period + 1) * period;
+  for (std::uint64_t done = 0;
+       !stop_requested() && (options.max_cycles == 0 || done < options.max_cycles); ++done) {
+    sleep_until_ns(scheduled);
+    const std::int64_t woke = monotonic_ns();
+    const bool go_on = cycle();
+    const std::int64_t finished = monotonic_ns();
+    timing.record(woke - scheduled, finished - woke);
+    scheduled += period;
+    if (finished >= scheduled) {
+      // Past the next deadline already: skip the periods missed, stay on the grid.
+      const std::int64_t missed = (finished - scheduled) / period + 1;
+      timing.count_overruns(static_cast<std::uint64_t>(missed));
+      scheduled += missed * period;
+    }
+    if (after) after(monotonic_ns());
+    if (!go_on) break;
+  }
+}
+
+}  // namespace afhub

@@ -1,0 +1,38 @@
+#!/usr/bin/env bash
+# The dependency rule of the folders (see README, "Architecture"):
+#   shm_layout <- hub <- rt <- {physics, controllers} <- bench <- cli
+# Fails, naming the file, when a layer includes one above it, or when the physics
+# core's test binary links iceoryx.
+set -euo pipefail
+source_dir=$1
+physics_core_tests=$2
+status=0
+
+# forbid FOLDER PATTERN...: no file under FOLDER includes a header matching PATTERN.
+forbid() {
+  local folder=$1
+  shift
+  for pattern in "$@"; do
+    if grep -rnE "#include \"afhub/($pattern)/" "$source_dir/$folder"; then
+      echo "layering: $folder/ must not include afhub/$pattern/ (a layer above it)" >&2
+      status=1
+    fi
+  done
+}
+
+forbid shm_layout 'hub|rt|physics|controllers|bench'
+forbid hub 'rt|physics|controllers|bench'
+forbid rt 'physics|controllers|bench'
+forbid physics/src 'hub|rt|controllers|bench'
+forbid physics/include 'hub|rt|controllers|bench'
+forbid controllers 'physics|bench'
+
+if ldd "$physics_core_tests" | grep -i iceoryx; then
+  echo "layering: the physics core's tests link iceoryx" >&2
+  status=1
+fi
+if nm -C "$physics_core_tests" | grep -q "iox::"; then
+  echo "layering: the physics core's tests contain iceoryx symbols" >&2
+  status=1
+fi
+exit $status
