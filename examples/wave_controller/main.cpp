@@ -3,7 +3,7 @@
 // (see CMakeLists.txt beside it), start a simulation, and run:
 //   ./wave_controller base            (Ctrl-C to stop; `afhub top` shows its timing)
 #include <afhub/controllers/controller.hpp>
-#include <afhub/hub/error.hpp>
+#include <afhub/shm_layout/error.hpp>
 #include <cmath>
 #include <cstdio>
 #include <numbers>
