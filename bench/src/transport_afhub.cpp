@@ -1,12 +1,15 @@
 // afhub's own channels: iceoryx through the hub, zero copy. The sender loans a
 // chunk of the payload's size and writes only the fields it needs into it, as a
 // producer filling its data in place would; the receiver reads it in place.
+#include <chrono>
 #include <new>
+#include <thread>
 
 #include "afhub/hub/channel.hpp"
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/shm_layout/bench_sample.hpp"
 #include "afhub/shm_layout/error.hpp"
+#include "afhub/shm_layout/health.hpp"
 #include "transport.hpp"
 
 namespace afhub::bench {
@@ -54,10 +57,41 @@ class AfhubTransport : public Transport {
   RawLatestReader reader_;
 };
 
+// A production hub has no pools for samples this large; a hub the bench starts
+// gets them (`afhub hub --bench-pools`). Refuses, saying what to do, a running hub
+// without them.
+void require_bench_pools() {
+  LatestReader<Health> reader(
+      {std::string(kService), std::string(kHubInstance), std::string(kHealthEvent)});
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(3);
+  while (!reader.latest() && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  const Health* health = reader.latest();
+  if (!health) throw Error("the hub publishes no health: is it an afhub hub?");
+  // Free chunks that fit the largest sample, in the payload pools (RouDi's own
+  // introspection segment comes first). Two channels hold up to five chunks each.
+  constexpr std::uint32_t kNeeded = 16;
+  std::uint32_t free_chunks = 0;
+  for (std::uint32_t i = 0; i < health->mempool_count; ++i) {
+    const MempoolUsage& pool = health->mempools[i];
+    if (pool.segment_id != health->mempools[0].segment_id &&
+        pool.chunk_payload_bytes >= kMaxPayloadBytes)
+      free_chunks += pool.chunk_count - pool.used_chunks;
+  }
+  if (free_chunks < kNeeded)
+    throw Error("the running hub has " + std::to_string(free_chunks) + " free chunks for " +
+                std::to_string(kMaxPayloadBytes) + " byte samples; the bench needs " +
+                std::to_string(kNeeded) +
+                ". Stop it (`afhub hub stop`) and let the bench start one, or start it with "
+                "`afhub hub --bench-pools`");
+}
+
 }  // namespace
 
 std::unique_ptr<Transport> open_afhub_transport(Side side, const std::string& session) {
-  connect_to_hub(side == Side::kPing ? "bench" : "bench-peer", HubPolicy::kAutostart);
+  connect_to_hub(side == Side::kPing ? "bench" : "bench-peer", HubPolicy::kAutostart,
+                 {"--bench-pools"});
+  if (side == Side::kPing) require_bench_pools();
   return std::make_unique<AfhubTransport>(side, session);
 }
 

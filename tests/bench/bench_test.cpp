@@ -4,6 +4,7 @@
 
 #include <filesystem>
 
+#include "afhub/hub/hub_presence.hpp"
 #include "afhub_process.hpp"
 #include "json_tree.hpp"
 #include "model_files.hpp"
@@ -13,7 +14,12 @@ namespace {
 
 using namespace std::chrono_literals;
 
+// No hub runs: the bench starts one with the pools it needs (a production hub has none).
 TEST(Bench, ShortRunMeasuresEveryTransportAndTheLoop) {
+  ASSERT_EQ(probe_roudi(), RoudiPresence::kAbsent) << "stop the running hub first";
+  struct StopHub {
+    ~StopHub() { run_afhub({"hub", "stop"}); }
+  } stop_hub_afterwards;
   afhub::testing::ModelFolder folder;
   const std::string json_path = (folder.dir() / "bench.json").string();
   const std::string plot_path = (folder.dir() / "bench.png").string();
@@ -58,6 +64,17 @@ TEST(Bench, ShortRunMeasuresEveryTransportAndTheLoop) {
   ASSERT_TRUE(std::filesystem::exists(plot_path));
   EXPECT_EQ(read_file(plot_path).substr(1, 3), "PNG");
   EXPECT_GT(std::filesystem::file_size(plot_path), 20'000u);
+}
+
+TEST(Bench, RunningHubWithoutBenchPoolsIsRefusedSayingWhatToDo) {
+  ScopedProcess hub(spawn_afhub({"hub"}));
+  ASSERT_TRUE(wait_until(
+      [] { return probe_roudi() == RoudiPresence::kRunning && running_hub_pid(); }, 10s));
+  const RunResult run = run_afhub({"bench", "--transports", "afhub", "--loop-seconds", "0"}, 60s);
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_TRUE(contains(run.err, "free chunks for 1048576 byte samples; the bench needs 16"))
+      << run.err;
+  EXPECT_TRUE(contains(run.err, "afhub hub --bench-pools")) << run.err;
 }
 
 TEST(Bench, BadArgumentsAreRefusedClearly) {

@@ -65,7 +65,7 @@ std::string afhub_executable() {
 }
 
 // Starts `afhub hub` detached from this process (own session, log in /tmp).
-pid_t spawn_background_hub(const std::string& exe) {
+pid_t spawn_background_hub(const std::string& exe, const std::vector<std::string>& options) {
   pid_t pid = fork();
   if (pid < 0) throw Error(std::string("cannot start a hub: fork failed: ") + std::strerror(errno));
   if (pid == 0) {
@@ -79,7 +79,10 @@ pid_t spawn_background_hub(const std::string& exe) {
     if (null_in >= 0) dup2(null_in, STDIN_FILENO);
     // A second fork so that the hub is not our child and outlives us cleanly.
     if (fork() != 0) _exit(0);
-    execl(exe.c_str(), exe.c_str(), "hub", static_cast<char*>(nullptr));
+    std::vector<const char*> argv{exe.c_str(), "hub"};
+    for (const std::string& option : options) argv.push_back(option.c_str());
+    argv.push_back(nullptr);
+    execv(exe.c_str(), const_cast<char* const*>(argv.data()));
     std::fprintf(stderr, "afhub: cannot run %s: %s\n", exe.c_str(), std::strerror(errno));
     _exit(127);
   }
@@ -126,14 +129,14 @@ std::optional<pid_t> running_hub_pid() {
   return pid;
 }
 
-void ensure_hub(HubPolicy policy) {
+void ensure_hub(HubPolicy policy, const std::vector<std::string>& hub_options) {
   if (probe_roudi() == RoudiPresence::kRunning) return;
   if (policy == HubPolicy::kRequire)
     throw Error(
         "no hub is running. Start one with `afhub hub` (foreground) or let `afhub run` start one "
         "in the background.");
   std::string exe = afhub_executable();
-  spawn_background_hub(exe);
+  spawn_background_hub(exe, hub_options);
   auto deadline = std::chrono::steady_clock::now() + kAutostartTimeout;
   while (probe_roudi() != RoudiPresence::kRunning) {
     if (std::chrono::steady_clock::now() > deadline)
@@ -149,9 +152,10 @@ void ensure_hub(HubPolicy policy) {
                pid ? static_cast<int>(*pid) : -1, kHubLogPath);
 }
 
-void connect_to_hub(const std::string& role, HubPolicy policy) {
+void connect_to_hub(const std::string& role, HubPolicy policy,
+                    const std::vector<std::string>& hub_options) {
   if (!runtime_name_storage().empty()) return;
-  ensure_hub(policy);
+  ensure_hub(policy, hub_options);
   quiet_iceoryx_logs();
   std::string name = "afhub-" + role + "-" + std::to_string(getpid());
   if (name.size() > 100) throw Error("process role '" + role + "' is too long for iceoryx");

@@ -2,10 +2,8 @@
 #include "catalog_builder.hpp"
 
 #include <cstdio>
-#include <set>
 
 #include "afhub/hub/bodies.hpp"
-#include "iceoryx_posh/runtime/service_discovery.hpp"
 
 namespace afhub {
 namespace {
@@ -13,8 +11,7 @@ constexpr auto kRepublishPeriod = std::chrono::seconds(1);
 }
 
 CatalogBuilder::CatalogBuilder()
-    : discovery_(std::make_unique<iox::runtime::ServiceDiscovery>()),
-      writer_({std::string(kService), std::string(kHubInstance), std::string(kCatalogEvent)},
+    : writer_({std::string(kService), std::string(kHubInstance), std::string(kCatalogEvent)},
               PayloadKind::kCatalog) {
   publish();  // an empty catalog at once: tools can tell a hub from a plain RouDi
 }
@@ -33,32 +30,11 @@ void CatalogBuilder::poll(std::chrono::steady_clock::time_point now) {
 }
 
 bool CatalogBuilder::refresh_directories() {
-  std::set<std::string> live;
-  discovery_->findService(
-      iox::capro::IdString_t(iox::cxx::TruncateToCapacity, std::string(kService).c_str()),
-      iox::cxx::nullopt,
-      iox::capro::IdString_t(iox::cxx::TruncateToCapacity, std::string(kDirectoryEvent).c_str()),
-      [&](const iox::capro::ServiceDescription& service) {
-        live.insert(service.getInstanceIDString().c_str());
-      },
-      iox::popo::MessagingPattern::PUB_SUB);
-  bool changed = false;
-  for (auto it = directories_.begin(); it != directories_.end();) {
-    if (live.count(it->first)) {
-      ++it;
-    } else {
-      it = directories_.erase(it);
-      changed = true;
-    }
-  }
-  for (const auto& instance : live) {
-    if (directories_.count(instance)) continue;
-    directories_[instance] = std::make_unique<RawLatestReader>(
+  return discovery_.follow(kDirectoryEvent, directories_, [](const std::string& instance) {
+    return std::make_unique<RawLatestReader>(
         ChannelId{std::string(kService), instance, std::string(kDirectoryEvent)},
         PayloadKind::kBodyDirectory);
-    changed = true;
-  }
-  return changed;
+  });
 }
 
 bool CatalogBuilder::merge(bool directories_changed) {

@@ -12,12 +12,9 @@
 #include <vector>
 
 #include "afhub/hub/channel.hpp"
+#include "afhub/hub/channel_discovery.hpp"
 #include "afhub/shm_layout/body_state.hpp"
 #include "afhub/shm_layout/catalog.hpp"
-
-namespace iox::runtime {
-class ServiceDiscovery;
-}
 
 namespace afhub {
 
@@ -48,7 +45,7 @@ class CatalogBuilder {
   void start_rate_samples();
   void publish();
 
-  std::unique_ptr<iox::runtime::ServiceDiscovery> discovery_;
+  ChannelDiscovery discovery_;
   std::map<std::string, std::unique_ptr<RawLatestReader>> directories_;  // by owner instance
   std::map<std::string, RateProbe> rates_;                               // by body channel
   std::vector<BodyInfo> bodies_;

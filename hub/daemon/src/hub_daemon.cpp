@@ -27,10 +27,10 @@
 namespace afhub {
 namespace {
 
-iox::RouDiConfig_t roudi_config(double& total_mib) {
+iox::RouDiConfig_t roudi_config(const std::vector<MempoolSpec>& pools, double& total_mib) {
   iox::mepoo::MePooConfig mempools;
   total_mib = 0.0;
-  for (const MempoolSpec& pool : hub_mempools()) {
+  for (const MempoolSpec& pool : pools) {
     mempools.addMemPool({pool.payload_bytes, pool.chunk_count});
     total_mib += static_cast<double>(pool.payload_bytes) * pool.chunk_count / (1024.0 * 1024.0);
   }
@@ -78,7 +78,7 @@ void serve_until_stopped(iox::roudi::PortPool& ports) {
 
 }  // namespace
 
-int run_hub_daemon() {
+int run_hub_daemon(const HubOptions& options) {
   HubLock lock{take_hub_lock()};
   if (lock.fd < 0) {
     auto pid = running_hub_pid();
@@ -98,7 +98,7 @@ int run_hub_daemon() {
   quiet_iceoryx_logs();
 
   double pool_mib = 0.0;
-  iox::roudi::IceOryxRouDiComponents components(roudi_config(pool_mib));
+  iox::roudi::IceOryxRouDiComponents components(roudi_config(options.mempools, pool_mib));
   // Monitoring on: a crashed client is removed and its chunks are freed. The hub
   // does not kill clients when it stops: they keep running and can reconnect.
   iox::roudi::RouDi roudi(
@@ -106,8 +106,8 @@ int run_hub_daemon() {
       iox::roudi::RouDi::RoudiStartupParameters{iox::roudi::MonitoringMode::ON, false});
   iox::runtime::PoshRuntimeSingleProcess runtime("afhub-hub");
   std::fprintf(stderr,
-               "afhub hub: running (pid %d, %.1f MiB of payload mempools). Ctrl-C stops it.\n",
-               static_cast<int>(getpid()), pool_mib);
+               "afhub hub: running (pid %d, %zu payload mempools, %.1f MiB). Ctrl-C stops it.\n",
+               static_cast<int>(getpid()), options.mempools.size(), pool_mib);
   serve_until_stopped(*components.rouDiMemoryManager.portPool().value());
   std::fprintf(stderr, "afhub hub: stopped\n");
   return 0;

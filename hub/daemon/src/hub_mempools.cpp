@@ -1,12 +1,16 @@
 // Shared-memory pools of the hub, sized from the payload types rather than
-// iceoryx's 206 MiB default. (RouDi keeps its introspection samples in a segment
-// of its own, so these pools hold afhub payloads only.)
+// iceoryx's 206 MiB default, and the pool file and flags that change them. (RouDi
+// keeps its introspection samples in a segment of its own, so these pools hold
+// afhub payloads only.)
 #include <algorithm>
+#include <fstream>
+#include <sstream>
 
 #include "afhub/hub/hub_daemon.hpp"
 #include "afhub/shm_layout/body_command.hpp"
 #include "afhub/shm_layout/body_state.hpp"
 #include "afhub/shm_layout/catalog.hpp"
+#include "afhub/shm_layout/error.hpp"
 #include "afhub/shm_layout/health.hpp"
 #include "afhub/shm_layout/loop_stats.hpp"
 #include "afhub/shm_layout/world.hpp"
@@ -18,9 +22,35 @@ constexpr std::uint32_t round_up8(std::size_t bytes) {
   return static_cast<std::uint32_t>((bytes + 7) / 8 * 8);
 }
 
+// iceoryx rejects a chunk above 4 GiB; a pool beyond this many bytes in all is
+// surely a typo, and would fail only when the hub maps its segment.
+constexpr double kMaxPoolBytes = 16.0 * 1024 * 1024 * 1024;
+
+void sort_by_size(std::vector<MempoolSpec>& pools) {
+  std::sort(pools.begin(), pools.end(), [](const MempoolSpec& a, const MempoolSpec& b) {
+    return a.payload_bytes < b.payload_bytes;
+  });
+}
+
+// Parses "<bytes> <count>" (the separator already replaced by a space); empty
+// string when it is good, else what is wrong.
+std::string parse_pool(const std::string& text, MempoolSpec& pool) {
+  std::istringstream in(text);
+  long long bytes = 0, count = 0;
+  std::string rest;
+  if (!(in >> bytes >> count) || (in >> rest))
+    return "expected '<payload bytes> <chunk count>', two whole numbers";
+  if (bytes < 8 || bytes > (1LL << 31)) return "payload bytes must be 8 .. 2147483648";
+  if (count < 1 || count > 1'000'000) return "chunk count must be 1 .. 1000000";
+  if (static_cast<double>(bytes) * static_cast<double>(count) > kMaxPoolBytes)
+    return "the pool would take more than 16 GiB of shared memory";
+  pool = {round_up8(static_cast<std::size_t>(bytes)), static_cast<std::uint32_t>(count), "user"};
+  return "";
+}
+
 }  // namespace
 
-std::vector<MempoolSpec> hub_mempools() {
+std::vector<MempoolSpec> default_mempools() {
   // Chunk counts: each active body holds up to eight state and eight command chunks
   // (publisher history, a loan, and per reader a queued, a held and a retired
   // sample, for the hub's rate probe and a controller or two), for up to kMaxBodies
@@ -35,16 +65,63 @@ std::vector<MempoolSpec> hub_mempools() {
       {round_up8(body_list_bytes(7)), 128, "catalogs and directories of up to 7 bodies"},
       {round_up8(body_list_bytes(60)), 32, "catalogs and directories of up to 60 bodies"},
       {round_up8(sizeof(BodyList)), 12, "catalogs and directories of up to kMaxBodies bodies"},
-      // `afhub bench`: a ping and a pong channel per payload size, each holding up to
-      // five chunks (a loan, the history, a queued, a held and a retired sample).
-      {1 << 10, 16, "bench samples of 1 KiB"},
-      {1 << 14, 16, "bench samples of 16 KiB"},
-      {1 << 18, 16, "bench samples of 256 KiB"},
-      {1 << 20, 16, "bench samples of 1 MiB"},
   };
-  std::sort(pools.begin(), pools.end(), [](const MempoolSpec& a, const MempoolSpec& b) {
-    return a.payload_bytes < b.payload_bytes;
-  });
+  sort_by_size(pools);
+  return pools;
+}
+
+std::vector<MempoolSpec> bench_mempools() {
+  // A ping and a pong channel per payload size, each holding up to five chunks (a
+  // loan, the history, a queued, a held and a retired sample).
+  return {{1 << 10, 16, "bench samples of 1 KiB"},
+          {1 << 14, 16, "bench samples of 16 KiB"},
+          {1 << 18, 16, "bench samples of 256 KiB"},
+          {1 << 20, 16, "bench samples of 1 MiB"}};
+}
+
+std::vector<MempoolSpec> read_mempool_file(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw Error("cannot read the mempool file " + path);
+  std::vector<MempoolSpec> pools;
+  int number = 0;
+  for (std::string line; std::getline(in, line);) {
+    ++number;
+    line = line.substr(0, line.find('#'));
+    if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+    MempoolSpec pool{};
+    if (const std::string problem = parse_pool(line, pool); !problem.empty())
+      throw Error(path + ":" + std::to_string(number) + ": " + problem);
+    pool.holds = path + ":" + std::to_string(number);
+    pools.push_back(pool);
+  }
+  return pools;
+}
+
+MempoolSpec parse_mempool(const std::string& text) {
+  std::string spaced = text;
+  std::replace(spaced.begin(), spaced.end(), ':', ' ');
+  MempoolSpec pool{};
+  if (const std::string problem = parse_pool(spaced, pool); !problem.empty())
+    throw Error("--pool " + text + ": " + problem + " (as BYTES:COUNT, e.g. 65536:32)");
+  return pool;
+}
+
+std::vector<MempoolSpec> merge_mempools(std::vector<MempoolSpec> pools,
+                                        const std::vector<MempoolSpec>& extra) {
+  for (const MempoolSpec& add : extra) {
+    auto same = std::find_if(pools.begin(), pools.end(), [&](const MempoolSpec& pool) {
+      return pool.payload_bytes == add.payload_bytes;
+    });
+    if (same != pools.end())
+      *same = add;
+    else
+      pools.push_back(add);
+  }
+  sort_by_size(pools);
+  if (pools.size() > kMaxMempools)
+    throw Error("the hub would have " + std::to_string(pools.size()) +
+                " mempools; iceoryx allows " + std::to_string(kMaxMempools) +
+                ". Merge sizes, or give fewer --pool options");
   return pools;
 }
 

@@ -6,6 +6,7 @@
 
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace afhub {
 
@@ -26,12 +27,14 @@ enum class HubPolicy {
   kRequire,    // fail with a message when none runs
 };
 
-// Makes sure a hub is reachable under `policy`; throws afhub::Error otherwise.
-void ensure_hub(HubPolicy policy);
+// Makes sure a hub is reachable under `policy`; throws afhub::Error otherwise. A hub
+// started here gets `hub_options` (e.g. {"--bench-pools"}).
+void ensure_hub(HubPolicy policy, const std::vector<std::string>& hub_options = {});
 
 // Registers this process with the hub under "afhub-<role>-<pid>", after ensure_hub().
 // Call once per process, before opening any channel.
-void connect_to_hub(const std::string& role, HubPolicy policy);
+void connect_to_hub(const std::string& role, HubPolicy policy,
+                    const std::vector<std::string>& hub_options = {});
 
 // iceoryx logs warnings and errors only (its default is verbose).
 void quiet_iceoryx_logs();

@@ -8,24 +8,19 @@
 #include <vector>
 
 #include "afhub/hub/channel.hpp"
+#include "afhub/hub/channel_discovery.hpp"
 #include "afhub/shm_layout/loop_stats.hpp"
-
-namespace iox::runtime {
-class ServiceDiscovery;
-}
 
 namespace afhub {
 
 class LoopStatsReader {
  public:
-  LoopStatsReader();
-  ~LoopStatsReader();
   // The newest stats of each live loop, ordered by process name. A loop that just
   // appeared may have published nothing yet: it is left out until it does.
   std::vector<LoopStats> latest();
 
  private:
-  std::unique_ptr<iox::runtime::ServiceDiscovery> discovery_;
+  ChannelDiscovery discovery_;
   std::map<std::string, std::unique_ptr<LatestReader<LoopStats>>> readers_;
 };
 

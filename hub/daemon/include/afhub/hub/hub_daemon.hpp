@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 namespace afhub {
@@ -11,14 +12,34 @@ namespace afhub {
 struct MempoolSpec {
   std::uint32_t payload_bytes;
   std::uint32_t chunk_count;
-  const char* holds;  // which payloads the pool is for
+  std::string holds;  // which payloads the pool is for
 };
 
-// The hub's shared-memory pools, smallest first.
-std::vector<MempoolSpec> hub_mempools();
+// The pools every hub has, sized from the payload types and their limits
+// (shm_layout/limits.hpp), smallest first.
+std::vector<MempoolSpec> default_mempools();
+
+// The pools `afhub bench` needs on top: its ping and pong samples up to 1 MiB.
+std::vector<MempoolSpec> bench_mempools();
+
+// A pool file: one pool per line, "<payload bytes> <chunk count>", '#' starts a
+// comment. Throws afhub::Error naming the file and line of a bad entry.
+std::vector<MempoolSpec> read_mempool_file(const std::string& path);
+
+// "<payload bytes>:<chunk count>", as `afhub hub --pool` takes it. Throws afhub::Error.
+MempoolSpec parse_mempool(const std::string& text);
+
+// `extra` added to `pools`: a pool of a size already there replaces its count.
+// Sorted by size; throws afhub::Error when there are more than iceoryx allows.
+std::vector<MempoolSpec> merge_mempools(std::vector<MempoolSpec> pools,
+                                        const std::vector<MempoolSpec>& extra);
+
+struct HubOptions {
+  std::vector<MempoolSpec> mempools = default_mempools();
+};
 
 // Runs the hub; returns the process exit code (0 on a clean stop).
-int run_hub_daemon();
+int run_hub_daemon(const HubOptions& options);
 
 // Stops the running hub (SIGTERM, then waits up to 5 s); returns an exit code.
 int stop_hub();
