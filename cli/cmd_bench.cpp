@@ -8,6 +8,7 @@
 #include "afhub/bench/bench.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "commands.hpp"
+#include "example_models.hpp"
 #include "format.hpp"
 
 namespace afhub::cli {
@@ -15,7 +16,7 @@ namespace {
 
 struct BenchCliOptions {
   bool quick = false;
-  std::string transports, json_file, plot_file, model = AFHUB_DEMO_MODEL, body = "base";
+  std::string transports, json_file, plot_file, model, body = "arm/base";
   std::uint32_t rounds = 0, pings = 0;
   double loop_seconds = -1.0;
   // The peer process the bench starts for each transport.
@@ -39,7 +40,8 @@ int run_bench(const BenchCliOptions& cli) {
   if (cli.loop_seconds >= 0.0) options.loop_seconds = cli.loop_seconds;
   if (options.loop_seconds > 0.0 && options.loop_seconds < 2.0)
     throw Error("--loop-seconds must be 0 (skip the loop) or at least 2");
-  options.model = std::filesystem::path(cli.model).lexically_normal().string();
+  options.model = cli.model.empty() ? example_model("arm7.yaml")
+                                    : std::filesystem::path(cli.model).lexically_normal().string();
   options.body = cli.body;
 
   bench::BenchResults results;
@@ -78,7 +80,8 @@ void register_bench(CLI::App& app, Runner& selected) {
                     "Round trips per transport, size and round (default 500, quick 200)");
   bench->add_option("--loop-seconds", options->loop_seconds,
                     "Length of the 1 kHz loop (default 60, quick 20; 0 skips it)");
-  bench->add_option("--model", options->model, "ADF model for the loop (default: the AMBF KUKA)");
+  bench->add_option("--model", options->model,
+                    "ADF model for the loop (default: the example arm, arm7.yaml)");
   bench->add_option("--body", options->body,
                     "The body the loop's controller commands (default base)");
   bench->add_option("--peer", options->peer)->group("");  // the bench's own peer processes

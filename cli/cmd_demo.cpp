@@ -1,6 +1,8 @@
-// `afhub demo`: a hub (started if none runs), `afhub run` simulating the KUKA arm
-// of the AMBF models in Bullet, a 200 Hz loop waving its joints through position
-// commands, and a live view of every body read through zero-copy channels.
+// `afhub demo`: a hub (started if none runs), `afhub run` simulating the project's
+// example scene in Bullet (the 7-DOF arm, the remote-centre-of-motion arm and the
+// gripper, with the world's floor, lights and cameras), a 200 Hz loop moving their
+// joints through position commands, and a live view of every body read through
+// zero-copy channels. `--model FILE` simulates another model and waves its root.
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -18,48 +20,88 @@
 #include "afhub/hub/stop_signal.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "commands.hpp"
+#include "example_models.hpp"
 
 namespace afhub::cli {
 namespace {
 
 struct DemoOptions {
   double seconds = 0.0;  // 0: until Ctrl-C
-  std::string model = AFHUB_DEMO_MODEL;
+  std::string model;     // empty: the example scene
 };
 
-pid_t spawn_physics(const std::string& model) {
+// One commanded joint of the example scene: center + amplitude * sin(2 pi t / period + phase).
+struct JointMotion {
+  double center, amplitude, period_s, phase;
+};
+// A root body and the motions of its first joints, in the body's joint order.
+struct BodyMotion {
+  const char* body;
+  std::vector<JointMotion> joints;
+};
+
+// The example scene's choreography, within each joint's limits (examples/models).
+const std::vector<BodyMotion>& example_scene_motions() {
+  static const std::vector<BodyMotion> motions = {
+      {"afhub/arm/base",
+       {{0, 0.8, 8, 0},
+        {0, 0.5, 6, 1},
+        {0, 0.5, 7, 2},
+        {-0.6, 0.4, 5, 0},
+        {0, 0.6, 4, 1},
+        {0.3, 0.4, 5, 2},
+        {0, 1.0, 3, 0}}},
+      // Yaw, pitch about the remote centre, insertion; the loop joints after them are free.
+      {"afhub/rcm/base", {{0, 0.5, 6, 0}, {0, 0.4, 5, 1}, {0.075, 0.06, 4, 0}}},
+      {"afhub/gripper/palm", {{0.015, 0.014, 2, 0}, {0.015, 0.014, 2, 0}}},
+  };
+  return motions;
+}
+
+pid_t spawn_physics(const std::vector<std::string>& run_arguments) {
   pid_t pid = fork();
   if (pid < 0) throw Error("cannot start the simulation: fork failed");
   if (pid == 0) {
-    execl("/proc/self/exe", "afhub", "run", model.c_str(), "--no-autostart",
-          static_cast<char*>(nullptr));
+    std::vector<const char*> argv{"afhub", "run"};
+    for (const std::string& argument : run_arguments) argv.push_back(argument.c_str());
+    argv.push_back("--no-autostart");
+    argv.push_back(nullptr);
+    execv("/proc/self/exe", const_cast<char* const*>(argv.data()));
     std::perror("afhub demo: cannot run afhub run");
     _exit(127);
   }
   return pid;
 }
 
-// Each joint of the root body follows its own slow sinusoid (position commands).
-void wave_joints(BodyClient& root, double t) {
-  const BodyState* state = root.latest_state();
-  BodyCommand* command = root.loan_command();
-  if (!state || !command) return;
-  command->joint_count = state->joint_count;
-  for (std::uint32_t j = 0; j < state->joint_count; ++j) {
+// Position commands for a body's first joints, following `motion`.
+void move_joints(BodyClient& body, const std::vector<JointMotion>& motion, double t) {
+  BodyCommand* command = body.loan_command();
+  if (!command) return;
+  command->joint_count = static_cast<std::uint32_t>(motion.size());
+  for (std::size_t j = 0; j < motion.size(); ++j) {
+    const JointMotion& m = motion[j];
     command->joint_types[j] = JointCommandType::kPosition;
-    command->joint_values[j] = 0.6 * std::sin(2.0 * M_PI * 0.2 * t + 0.9 * j);
+    command->joint_values[j] =
+        m.center + m.amplitude * std::sin(2.0 * M_PI * t / m.period_s + m.phase);
   }
-  root.publish_command(command);
+  body.publish_command(command);
+}
+
+// Another model: every joint of its root body on its own slow sinusoid.
+std::vector<JointMotion> wave_every_joint(std::uint32_t joint_count) {
+  std::vector<JointMotion> motion;
+  for (std::uint32_t j = 0; j < joint_count; ++j) motion.push_back({0, 0.6, 5, 0.9 * j});
+  return motion;
 }
 
 void draw(CatalogReader& catalog, std::vector<std::unique_ptr<BodyClient>>& clients, bool tty) {
   const BodyList& list = catalog.latest();
   std::string screen = tty ? "\033[H\033[2J" : "";
   screen +=
-      "afhub demo: the KUKA simulated live (Ctrl-C stops; try `afhub ls`, `afhub echo link7`, "
+      "afhub demo: simulated live (Ctrl-C stops; try `afhub ls`, `afhub echo arm/link7`, "
       "`afhub status` in another shell)\n";
   char line[256];
-  std::snprintf(line, sizeof line, "%-16s %9s %9s %9s  %-26s %s\n", "BODY", "RATE_HZ", "STEP",
+  std::snprintf(line, sizeof line, "%-28s %9s %9s %9s  %-26s %s\n", "BODY", "RATE_HZ", "STEP",
                 "SIM_S", "POSITION_M", "JOINTS_RAD");
   screen += line;
   for (std::uint32_t i = 0; i < list.body_count; ++i) {
@@ -68,7 +110,7 @@ void draw(CatalogReader& catalog, std::vector<std::unique_ptr<BodyClient>>& clie
     const BodyState* state = clients[i]->latest_state();
     if (!state) continue;
     const Vec3& p = state->pose.position_m;
-    std::snprintf(line, sizeof line, "%-16s %9.1f %9llu %9.3f  [%7.3f %7.3f %7.3f]   ",
+    std::snprintf(line, sizeof line, "%-28s %9.1f %9llu %9.3f  [%7.3f %7.3f %7.3f]   ",
                   channel.c_str(), list.bodies[i].publish_rate_hz,
                   static_cast<unsigned long long>(state->header.sim_step), state->header.sim_time_s,
                   p.x, p.y, p.z);
@@ -85,13 +127,20 @@ void draw(CatalogReader& catalog, std::vector<std::unique_ptr<BodyClient>>& clie
 
 int run_demo(const DemoOptions& options) {
   install_stop_signal_handlers();
-  if (!std::filesystem::is_regular_file(options.model))
-    throw Error("the demo model " + options.model + " is not there; give one with --model FILE");
+  std::vector<std::string> run_arguments;
+  if (options.model.empty()) {
+    run_arguments = {"--launch", example_model("launch.yaml"), "-l", "0,1,2"};
+  } else {
+    if (!std::filesystem::is_regular_file(options.model))
+      throw Error("the demo model " + options.model + " is not a file; give one with --model FILE");
+    run_arguments = {options.model};
+  }
   connect_to_hub("demo", HubPolicy::kAutostart);
-  const pid_t physics = spawn_physics(options.model);
+  const pid_t physics = spawn_physics(run_arguments);
   CatalogReader catalog;
   catalog.wait(std::chrono::milliseconds(1000));
-  std::unique_ptr<BodyClient> root;
+  // The bodies the demo moves, opened once they are in the catalog.
+  std::vector<std::pair<std::unique_ptr<BodyClient>, std::vector<JointMotion>>> movers;
   std::vector<std::unique_ptr<BodyClient>> clients;
   const bool tty = isatty(STDOUT_FILENO);
   const auto refresh = std::chrono::milliseconds(tty ? 100 : 1000);
@@ -106,11 +155,21 @@ int run_demo(const DemoOptions& options) {
       std::fprintf(stderr, "afhub demo: the simulation exited unexpectedly\n");
       return 1;
     }
-    // The root body (the first in the catalog with joints) carries every joint.
     const BodyList& list = catalog.latest();
-    if (!root && list.body_count > 0 && list.bodies[0].joint_count > 0)
-      root = std::make_unique<BodyClient>(std::string(name_of(list.bodies[0].channel)));
-    if (root) wave_joints(*root, t);
+    if (movers.empty() && list.body_count > 0) {
+      if (options.model.empty()) {
+        for (const BodyMotion& motion : example_scene_motions())
+          movers.emplace_back(std::make_unique<BodyClient>(motion.body), motion.joints);
+      } else {
+        // The root body (the first in the catalog with joints) carries every joint.
+        for (std::uint32_t i = 0; i < list.body_count && movers.empty(); ++i)
+          if (list.bodies[i].joint_count > 0)
+            movers.emplace_back(
+                std::make_unique<BodyClient>(std::string(name_of(list.bodies[i].channel))),
+                wave_every_joint(list.bodies[i].joint_count));
+      }
+    }
+    for (auto& [body, motion] : movers) move_joints(*body, motion, t);
     if (now >= next_draw) {
       draw(catalog, clients, tty);
       next_draw = now + refresh;
@@ -129,9 +188,12 @@ void register_demo(CLI::App& app, Runner& selected) {
   auto options = std::make_shared<DemoOptions>();
   auto* demo = app.add_subcommand(
       "demo",
-      "Run the demo: a hub, the KUKA arm simulated in Bullet at 1 kHz with its joints waving, "
-      "and a live view of its bodies.");
-  demo->add_option("--model", options->model, "ADF file to simulate (default: the AMBF KUKA)");
+      "Run the demo: a hub, the example scene (a 7-DOF arm, a remote-centre-of-motion arm "
+      "and a gripper) simulated in Bullet at 1 kHz with their joints moving, and a live view "
+      "of their bodies.");
+  demo->add_option("--model", options->model,
+                   "ADF file to simulate instead, its root body's joints waving (default: the "
+                   "example scene, examples/models/launch.yaml)");
   demo->add_option("--seconds", options->seconds,
                    "Stop after this many seconds (default: until Ctrl-C)");
   demo->callback([&selected, options] { selected = [options] { return run_demo(*options); }; });

@@ -19,21 +19,22 @@ namespace {
 
 using namespace std::chrono_literals;
 
-const std::string kKuka = AFHUB_SHARED_MODELS "/descriptions/multi-bodies/robots/blender-kuka.yaml";
+// The project's own 7-DOF arm: these tests need no AMBF corpus.
+const std::string kArm = AFHUB_EXAMPLE_MODELS "/arm7.yaml";
 
 LatestReader<WorldState> world_reader() {
   return LatestReader<WorldState>(
       {std::string(kService), std::string(kWorldInstance), std::string(kStateEvent)});
 }
 
-// One lockstep run of the KUKA driven by `afhub ctl sine`; returns the report.
+// One lockstep run of the arm driven by `afhub ctl sine`; returns the report.
 std::string lockstep_sine_run(const afhub::testing::ModelFolder& folder, int run) {
   const std::string report = (folder.dir() / ("report" + std::to_string(run) + ".json")).string();
   const std::string log = (folder.dir() / "run.log").string();
-  ScopedProcess physics(spawn_afhub({"run", kKuka, "--no-autostart", "--lockstep", "--wait-for",
-                                     "1", "--fast", "--steps", "3000", "--report", report},
+  ScopedProcess physics(spawn_afhub({"run", kArm, "--no-autostart", "--lockstep", "--wait-for", "1",
+                                     "--fast", "--steps", "3000", "--report", report},
                                     log));
-  BodyClient base("ambf/env/base");
+  BodyClient base("afhub/arm/base");
   EXPECT_TRUE(wait_until([&] { return base.latest_state() != nullptr; }, 10s)) << read_file(log);
   ScopedProcess controller(
       spawn_afhub({"ctl", "sine", "base", "--lockstep", "--period", "1", "--amplitude", "0.4"}));
@@ -54,7 +55,7 @@ TEST(Lockstep, SameModelSameControllerGivesBitIdenticalRuns) {
   EXPECT_EQ(trajectory(first), trajectory(second));
   // And the controller did drive the arm: joint 2 is 0.4 sin(2 pi 3 + pi/7 * ...) away
   // from where it started, which is far from zero.
-  const double q1 = json_number(first, "ambf/env/link1-link2\":{\"position");
+  const double q1 = json_number(first, "afhub/arm/link1-link2\":{\"position");
   EXPECT_GT(std::abs(q1), 0.05) << first;
 }
 
@@ -62,9 +63,9 @@ TEST(Lockstep, KilledClientIsDroppedTheWorldGoesOnAndARestartedClientRejoins) {
   afhub::testing::ModelFolder folder;
   const std::string log = (folder.dir() / "run.log").string();
   ScopedProcess physics(spawn_afhub(
-      {"run", kKuka, "--no-autostart", "--lockstep", "--wait-for", "1", "--client-timeout", "50"},
+      {"run", kArm, "--no-autostart", "--lockstep", "--wait-for", "1", "--client-timeout", "50"},
       log));
-  BodyClient base("ambf/env/base");
+  BodyClient base("afhub/arm/base");
   LatestReader<WorldState> world = world_reader();
   ASSERT_TRUE(wait_until([&] { return base.latest_state() && world.latest(); }, 10s))
       << read_file(log);
@@ -113,10 +114,10 @@ TEST(Controllers, KilledControllerTripsTheHoldWatchdogAndARestartTakesOver) {
   afhub::testing::ModelFolder folder;
   const std::string log = (folder.dir() / "run.log").string();
   ScopedProcess physics(
-      spawn_afhub({"run", kKuka, "--no-autostart", "--watchdog-hold", "base"}, log));
-  BodyClient base("ambf/env/base");
+      spawn_afhub({"run", kArm, "--no-autostart", "--watchdog-hold", "base"}, log));
+  BodyClient base("afhub/arm/base");
   LatestReader<WorldState> world = world_reader();
-  LatestReader<BodyCommand> commands(body_command_channel("ambf/env/base"));
+  LatestReader<BodyCommand> commands(body_command_channel("afhub/arm/base"));
   ASSERT_TRUE(wait_until([&] { return base.latest_state() && world.latest(); }, 10s))
       << read_file(log);
 
@@ -158,7 +159,7 @@ TEST(Controllers, KilledControllerTripsTheHoldWatchdogAndARestartTakesOver) {
   RunResult top = run_afhub({"top", "--json"});
   EXPECT_EQ(top.exit_code, 0) << top.err;
   EXPECT_TRUE(contains(top.out, "\"name\":\"ctl hold\"")) << top.out;
-  EXPECT_TRUE(contains(top.out, "\"body\":\"ambf/env/base\"")) << top.out;
+  EXPECT_TRUE(contains(top.out, "\"body\":\"afhub/arm/base\"")) << top.out;
   EXPECT_TRUE(contains(top.out, "\"name\":\"run\"")) << "the physics loop is listed too\n"
                                                      << top.out;
   EXPECT_NEAR(json_number(top.out, "rate_hz"), 1000.0, 200.0) << top.out;
@@ -174,7 +175,7 @@ TEST(Controllers, KilledControllerTripsTheHoldWatchdogAndARestartTakesOver) {
 TEST(Controllers, AfterStepAlignsTheLoopSoEachCommandAnswersTheNewestState) {
   afhub::testing::ModelFolder folder;
   const std::string log = (folder.dir() / "run.log").string();
-  ScopedProcess physics(spawn_afhub({"run", kKuka, "--no-autostart"}, log));
+  ScopedProcess physics(spawn_afhub({"run", kArm, "--no-autostart"}, log));
   LatestReader<WorldState> world = world_reader();
   ASSERT_TRUE(wait_until([&] { return world.latest() != nullptr; }, 10s)) << read_file(log);
   EXPECT_EQ(world.latest()->commanded_steps, 0u);  // nothing commands the arm yet
@@ -196,8 +197,8 @@ TEST(Controllers, AfterStepAlignsTheLoopSoEachCommandAnswersTheNewestState) {
 
 TEST(Controllers, BadArgumentsGetClearErrors) {
   afhub::testing::ModelFolder folder;
-  ScopedProcess physics(spawn_afhub({"run", kKuka, "--no-autostart"}));
-  BodyClient base("ambf/env/base");
+  ScopedProcess physics(spawn_afhub({"run", kArm, "--no-autostart"}));
+  BodyClient base("afhub/arm/base");
   ASSERT_TRUE(wait_until([&] { return base.latest_state() != nullptr; }, 10s));
   RunResult missing_body = run_afhub({"ctl", "sine", "nosuchbody"});
   EXPECT_EQ(missing_body.exit_code, 1);
@@ -212,11 +213,11 @@ TEST(Controllers, BadArgumentsGetClearErrors) {
   EXPECT_EQ(long_phase.exit_code, 1);
   EXPECT_TRUE(contains(long_phase.err, "--after-step must be shorter than the loop's period"))
       << long_phase.err;
-  RunResult bad_fifo = run_afhub({"run", kKuka, "--offline", "--steps", "1", "--fifo", "120"});
+  RunResult bad_fifo = run_afhub({"run", kArm, "--offline", "--steps", "1", "--fifo", "120"});
   EXPECT_EQ(bad_fifo.exit_code, 1);
   EXPECT_TRUE(contains(bad_fifo.err, "--fifo takes a SCHED_FIFO priority")) << bad_fifo.err;
   RunResult bad_hold =
-      run_afhub({"run", kKuka, "--offline", "--steps", "1", "--watchdog-hold", "x"});
+      run_afhub({"run", kArm, "--offline", "--steps", "1", "--watchdog-hold", "x"});
   EXPECT_EQ(bad_hold.exit_code, 1);
   EXPECT_TRUE(contains(bad_hold.err, "drop --offline")) << bad_hold.err;
 }

@@ -9,6 +9,7 @@
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/shm_layout/body_state.hpp"
 #include "afhub_process.hpp"
+#include "ambf_corpus.hpp"
 #include "hub_environment.hpp"
 
 namespace afhub::test {
@@ -55,21 +56,30 @@ TEST(Cli, DemoSimulatesTheKukaLive) {
   RunResult demo = run_afhub({"demo", "--seconds", "3"}, 30s);
   EXPECT_EQ(demo.exit_code, 0) << demo.err;
   EXPECT_TRUE(contains(demo.err, "no hub was running; started one")) << demo.err;
-  EXPECT_TRUE(contains(demo.err, "afhub run: 8 bodies, 7 joints on channels")) << demo.err;
-  EXPECT_TRUE(contains(demo.out, "ambf/env/link7")) << demo.out;
+  // The example scene: the arm, the remote-centre-of-motion arm and the gripper.
+  EXPECT_TRUE(contains(demo.err, "afhub run: 19 bodies, 19 joints on channels")) << demo.err;
+  for (const char* body : {"afhub/arm/link7", "afhub/rcm/insertion_link", "afhub/gripper/palm"})
+    EXPECT_TRUE(contains(demo.out, body)) << body << " missing:\n" << demo.out;
   EXPECT_EQ(run_afhub({"hub", "stop"}).exit_code, 0);
 }
 
 TEST(Cli, CheckReportsAModelOrWhereItIsWrong) {
+  RunResult rcm = run_afhub({"check", AFHUB_EXAMPLE_MODELS "/rcm.yaml"});
+  EXPECT_EQ(rcm.exit_code, 0) << rcm.err;
+  EXPECT_TRUE(contains(rcm.out, "closed loops: 2")) << rcm.out;
+  RunResult missing = run_afhub({"check", "/nonexistent/model.yaml"});
+  EXPECT_EQ(missing.exit_code, 1);
+  EXPECT_TRUE(contains(missing.err, "/nonexistent/model.yaml: error: no such file")) << missing.err;
+}
+
+TEST(Cli, CheckReportsTheAmbfFourBar) {
+  AFHUB_REQUIRE_AMBF_CORPUS();
   const std::string models = AFHUB_SHARED_MODELS "/descriptions/multi-bodies/";
   RunResult four_bar = run_afhub({"check", models + "puzzles/parallel_structure.yaml"});
   EXPECT_EQ(four_bar.exit_code, 0) << four_bar.err;
   EXPECT_TRUE(contains(four_bar.out, "bodies: 5 (total mass 4.000 kg)")) << four_bar.out;
   EXPECT_TRUE(contains(four_bar.out, "closed loops: 1")) << four_bar.out;
   EXPECT_TRUE(contains(four_bar.err, "parallel_structure.yaml:131:3: warning:")) << four_bar.err;
-  RunResult missing = run_afhub({"check", "/nonexistent/model.yaml"});
-  EXPECT_EQ(missing.exit_code, 1);
-  EXPECT_TRUE(contains(missing.err, "/nonexistent/model.yaml: error: no such file")) << missing.err;
 }
 
 TEST(Cli, LookingToolsWithoutAHubFailFastAndSayHowToStartOne) {

@@ -15,6 +15,7 @@
 #include "afhub/physics/sim_channels.hpp"
 #include "afhub/rt/loop_stats_publisher.hpp"
 #include "afhub_process.hpp"
+#include "ambf_corpus.hpp"
 
 // The replacements below pair malloc with free on purpose; GCC cannot see that.
 #pragma GCC diagnostic ignored "-Wmismatched-new-delete"
@@ -141,16 +142,15 @@ TEST(HotPath, SteadyStateLoopDoesNotAllocate) {
   EXPECT_EQ(physics.latest_command()->joint_values[6], static_cast<double>(100 + kCycles - 1));
 }
 
-// The physics loop of `afhub run` on the real models: commands in, Bullet step
-// (joint PID, closed loop, mesh shapes), states and world state out, and a
-// controller reading the state and writing position commands.
-TEST(HotPath, PhysicsLoopDoesNotAllocate) {
-  const std::string models = AFHUB_SHARED_MODELS "/descriptions/multi-bodies/";
-  const physics::Model model = physics::load_adf_files(
-      {models + "robots/blender-kuka.yaml", models + "puzzles/parallel_structure.yaml"});
+// The physics loop of `afhub run`: commands in, Bullet step (joint PID, closed
+// loops), states and world state out, and a controller reading `body`'s state and
+// writing position commands.
+void expect_physics_loop_allocation_free(const std::vector<std::string>& files,
+                                         const std::string& body) {
+  const physics::Model model = physics::load_adf_files(files);
   physics::Simulation sim(model, 0.001);
   physics::SimChannels channels(sim, 0.5);
-  BodyClient controller("ambf/env/base");
+  BodyClient controller(body);
   auto one_cycle = [&]() {
     channels.apply_commands(monotonic_ns());
     sim.step();
@@ -176,19 +176,34 @@ TEST(HotPath, PhysicsLoopDoesNotAllocate) {
   EXPECT_EQ(channels.rejected_commands(), 0u);
 }
 
+// The example arm, and the remote-centre-of-motion arm with its closed loops and
+// prismatic insertion.
+TEST(HotPath, PhysicsLoopDoesNotAllocate) {
+  expect_physics_loop_allocation_free(
+      {AFHUB_EXAMPLE_MODELS "/arm7.yaml", AFHUB_EXAMPLE_MODELS "/rcm.yaml"}, "afhub/arm/base");
+}
+
+// The real AMBF models: mesh shapes, and the four-bar's loop.
+TEST(HotPath, PhysicsLoopOnAmbfModelsDoesNotAllocate) {
+  AFHUB_REQUIRE_AMBF_CORPUS();
+  const std::string models = AFHUB_SHARED_MODELS "/descriptions/multi-bodies/";
+  expect_physics_loop_allocation_free(
+      {models + "robots/blender-kuka.yaml", models + "puzzles/parallel_structure.yaml"},
+      "ambf/env/base");
+}
+
 // The controller side too: the shipped sine controller answering each step in
-// lockstep, its timing recorded and its stats published, against the KUKA's
+// lockstep, its timing recorded and its stats published, against the arm's
 // lockstep barrier, step and publish.
 TEST(HotPath, LockstepControllerLoopDoesNotAllocate) {
-  const physics::Model model = physics::load_adf_files(
-      {AFHUB_SHARED_MODELS "/descriptions/multi-bodies/robots/blender-kuka.yaml"});
+  const physics::Model model = physics::load_adf_files({AFHUB_EXAMPLE_MODELS "/arm7.yaml"});
   physics::Simulation sim(model, 0.001);
   physics::SimChannels channels(sim, 0.5);
   channels.enable_lockstep(physics::LockstepOptions{});
-  BodyClient client("ambf/env/base");
+  BodyClient client("afhub/arm/base");
   const ControllerCycle controller = joint_position_controller(sine_targets(0.3, 1.0, {}));
   LoopTiming timing;
-  LoopStatsPublisher stats("test", "ambf/env/base", 1'000'000, true, RealtimeGrant{});
+  LoopStatsPublisher stats("test", "afhub/arm/base", 1'000'000, true, RealtimeGrant{});
   std::int64_t fake_clock_ns = 0;  // a second per cycle: stats are published every cycle
   auto one_cycle = [&]() {
     channels.publish(0.0, 0.0, false);

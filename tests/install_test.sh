@@ -1,0 +1,73 @@
+#!/usr/bin/env bash
+# An installed afhub works on its own: `cmake --install` to a prefix, the example
+# controller built against it with find_package(afhub), the installed `afhub run`
+# simulating the installed example arm, and the controller moving a joint.
+# Nothing installed may point into the build tree.
+#   install_test.sh BUILD_DIR SOURCE_DIR WORK_DIR
+set -euo pipefail
+build_dir=$1
+source_dir=$2
+work=$3
+prefix=$work/prefix
+rm -rf "$work" && mkdir -p "$work"
+cmake --install "$build_dir" --prefix "$prefix" > "$work/install.log"
+
+# The program's strings (not its debug information, which names the sources' build).
+if readelf -p .rodata "$prefix/bin/afhub" | grep -F "$build_dir" ||
+  grep -rlF "$build_dir" "$prefix/lib/cmake"; then
+  echo "install_test: the installed afhub points into the build tree $build_dir (above)" >&2
+  exit 1
+fi
+
+cmake -S "$source_dir/examples/wave_controller" -B "$work/example" -G Ninja \
+  -DCMAKE_PREFIX_PATH="$prefix" > "$work/example-configure.log"
+cmake --build "$work/example" > "$work/example-build.log"
+
+# Only the installed afhub is reachable; the hub it starts is stopped at the end.
+export PATH="$prefix/bin:/usr/bin:/bin"
+unset AFHUB_EXECUTABLE AFHUB_MODELS
+pids=()
+cleanup() {
+  for pid in "${pids[@]}"; do kill "$pid" 2> /dev/null || true; done
+  wait 2> /dev/null || true
+  afhub hub stop > /dev/null 2>&1 || true
+}
+trap cleanup EXIT
+
+# wait_for WHAT COMMAND...: retries the command for up to 20 s.
+wait_for() {
+  local what=$1
+  shift
+  for _ in $(seq 200); do
+    "$@" > /dev/null 2>&1 && return 0
+    sleep 0.1
+  done
+  echo "install_test: $what did not come within 20 s" >&2
+  cat "$work"/*.log >&2
+  exit 1
+}
+afhub hub > "$work/hub.log" 2>&1 &
+pids+=($!)
+wait_for "the hub" afhub ls
+afhub run "$prefix/share/afhub/models/arm7.yaml" > "$work/run.log" 2>&1 &
+pids+=($!)
+wait_for "the arm" afhub echo arm/base --count 1
+"$work/example/wave_controller" arm/base > "$work/controller.log" 2>&1 &
+pids+=($!)
+
+# The controller swings joint 0 by +-0.5 rad at 0.5 Hz: within 4 s it passes 0.3 rad.
+afhub echo arm/base --json --count 4000 --timeout 10 > "$work/states.jsonl" 2> "$work/echo.log" || {
+  echo "install_test: no states from arm/base" >&2
+  cat "$work/run.log" "$work/controller.log" "$work/echo.log" >&2
+  exit 1
+}
+largest=$(python3 -c '
+import json, sys
+print(max(abs(json.loads(line)["joint_positions"][0]) for line in open(sys.argv[1])))' \
+  "$work/states.jsonl")
+echo "install_test: the example controller moved joint 0 of arm/base up to $largest rad"
+python3 -c "import sys; sys.exit(0 if $largest > 0.3 else 1)" || {
+  echo "install_test: joint 0 stayed within 0.3 rad: the controller did not move the arm" >&2
+  cat "$work/run.log" "$work/controller.log" >&2
+  exit 1
+}
