@@ -27,6 +27,7 @@ struct RunCliOptions {
   bool no_autostart = false;
   bool lockstep = false;
   std::uint32_t wait_for = 0;
+  double wait_timeout_s = 0.0;
   double client_timeout_ms = 100.0;
   int fifo_priority = 0;
   int cpu = -1;
@@ -41,6 +42,10 @@ int run_run(const RunCliOptions& options) {
     throw Error("--client-timeout must be between 0 and 60000 ms");
   if (!options.lockstep && options.wait_for > 0)
     throw Error("--wait-for needs --lockstep: it holds the first step for lockstep clients");
+  if (!(options.wait_timeout_s >= 0.0))
+    throw Error("--wait-timeout must be a number of seconds, 0 (the default) to wait forever");
+  if (options.wait_timeout_s > 0.0 && options.wait_for == 0)
+    throw Error("--wait-timeout needs --wait-for N: it limits the wait for N lockstep clients");
   if (options.fifo_priority < 0 || options.fifo_priority > 99)
     throw Error("--fifo takes a SCHED_FIFO priority from 1 to 99");
   if (options.offline && (options.lockstep || !options.watchdog_hold.empty()))
@@ -72,6 +77,7 @@ int run_run(const RunCliOptions& options) {
     if (options.lockstep) {
       physics::LockstepOptions lockstep;
       lockstep.wait_for = options.wait_for;
+      lockstep.wait_timeout_ns = static_cast<std::int64_t>(options.wait_timeout_s * 1e9);
       lockstep.client_timeout_ns = static_cast<std::int64_t>(options.client_timeout_ms * 1e6);
       channels->enable_lockstep(lockstep);
     }
@@ -125,7 +131,11 @@ void register_run(CLI::App& app, Runner& selected) {
                 "Step only when every lockstep client (`afhub ctl ... --lockstep`) has answered "
                 "the current step");
   run->add_option("--wait-for", options->wait_for,
-                  "With --lockstep: hold step 0 until this many lockstep clients joined");
+                  "With --lockstep: hold step 0 until this many lockstep clients joined; says "
+                  "every 2 s whom it still waits for");
+  run->add_option("--wait-timeout", options->wait_timeout_s,
+                  "With --wait-for: give up with an error (exit 1) when the clients have not all "
+                  "joined after this many seconds (default 0: wait until Ctrl-C)");
   run->add_option("--client-timeout", options->client_timeout_ms,
                   "With --lockstep: ms a step waits for a client's answer before going ahead "
                   "(default 100); 3 misses in a row drop the client until it answers again");

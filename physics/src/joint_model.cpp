@@ -216,7 +216,7 @@ btVector3 JointModel::world_axis() const {
          frame_in_parent_.getBasis().getColumn(axis_index_);
 }
 
-void JointModel::command(JointCommandType type, double value) noexcept {
+void JointModel::command(JointMode type, double value) noexcept {
   if (!commanded_ || type != command_type_) {
     integral_ = 0.0;
     has_previous_error_ = false;
@@ -283,14 +283,14 @@ void JointModel::apply_control() noexcept {
   double motor_velocity = 0.0;
   if (commanded_) {
     switch (command_type_) {
-      case JointCommandType::kEffort:
+      case JointMode::kEffort:
         effort = command_value_;
         break;
-      case JointCommandType::kVelocity:
+      case JointMode::kVelocity:
         motor = true;
         motor_velocity = command_value_;
         break;
-      case JointCommandType::kPosition: {
+      case JointMode::kPosition: {
         double target = command_value_ - spec_.joint_offset_rad;
         if (spec_.limit_low) target = std::clamp(target, *spec_.limit_low, *spec_.limit_high);
         double error = target - (position_ - spec_.joint_offset_rad);

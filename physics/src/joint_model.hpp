@@ -7,8 +7,8 @@
 
 #include <memory>
 
+#include "afhub/physics/body_input.hpp"
 #include "afhub/physics/model.hpp"
-#include "afhub/shm_layout/body_command.hpp"
 
 namespace afhub::physics {
 
@@ -23,7 +23,7 @@ class JointModel {
   const JointSpec& spec() const { return spec_; }
 
   // Control for the coming step; stays until replaced or released.
-  void command(JointCommandType type, double value) noexcept;
+  void command(JointMode type, double value) noexcept;
   void release() noexcept;  // zero effort, motor off, PID state cleared
   void apply_control() noexcept;
   // Reads position, velocity and effort after a step.
@@ -58,7 +58,7 @@ class JointModel {
   Pid gains_;
 
   bool commanded_ = false;
-  JointCommandType command_type_ = JointCommandType::kEffort;
+  JointMode command_type_ = JointMode::kEffort;
   double command_value_ = 0.0;
   double integral_ = 0.0, previous_error_ = 0.0;
   bool has_previous_error_ = false;

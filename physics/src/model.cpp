@@ -1,7 +1,14 @@
 // Small helpers of the model (see model.hpp).
 #include "afhub/physics/model.hpp"
 
+#include "frames.hpp"
+
 namespace afhub::physics {
+
+Quaternion rpy_to_quaternion(const Vec3& rpy_rad) {
+  const btQuaternion q = rpy_rotation(rpy_rad);
+  return {q.x(), q.y(), q.z(), q.w()};
+}
 
 std::string SourceLocation::str() const {
   return file + ":" + std::to_string(line) + ":" + std::to_string(column);

@@ -64,33 +64,44 @@ RealtimeGrant apply_realtime(const LoopOptions& options, const char* who) {
   return grant;
 }
 
-void run_periodic(const LoopOptions& options, LoopTiming& timing,
-                  const std::function<bool()>& cycle,
-                  const std::function<void(std::int64_t)>& after) {
+void run_periodic(const LoopOptions& options, LoopTiming& timing, const LoopCycle& cycle) {
   const std::int64_t period = options.period_ns;
   const std::int64_t now = monotonic_ns();
   std::int64_t scheduled = now + period;
   if (options.grid_origin_ns > now)
     scheduled = options.grid_origin_ns;
-  else if (options.grid_origin_ns > 0)  // the grid's first point after now
+  else if (options.grid_origin_ns > 0 && period > 0)  // the grid's first point after now
     scheduled = options.grid_origin_ns + ((now - options.grid_origin_ns) / period + 1) * period;
   for (std::uint64_t done = 0;
        !stop_requested() && (options.max_cycles == 0 || done < options.max_cycles); ++done) {
-    sleep_until_ns(scheduled);
+    if (period > 0) sleep_until_ns(scheduled);
     const std::int64_t woke = monotonic_ns();
-    const bool go_on = cycle();
+    if (cycle.wait && !cycle.wait()) break;
+    const std::int64_t began = monotonic_ns();
+    const bool go_on = cycle.work();
     const std::int64_t finished = monotonic_ns();
-    timing.record(woke - scheduled, finished - woke);
+    timing.record(period > 0 ? woke - scheduled : 0, finished - began);
     scheduled += period;
-    if (finished >= scheduled) {
-      // Past the next deadline already: skip the periods missed, stay on the grid.
-      const std::int64_t missed = (finished - scheduled) / period + 1;
-      timing.count_overruns(static_cast<std::uint64_t>(missed));
-      scheduled += missed * period;
+    if (period > 0 && finished >= scheduled) {
+      if (options.overrun == OverrunPolicy::kSkip) {
+        // Past the next deadline already: skip the periods missed, stay on the grid.
+        const std::int64_t missed = (finished - scheduled) / period + 1;
+        timing.count_overruns(static_cast<std::uint64_t>(missed));
+        scheduled += missed * period;
+      } else {
+        // Behind: the next cycles run at once, back to back, until caught up.
+        timing.count_overruns(1);
+      }
     }
-    if (after) after(monotonic_ns());
+    if (cycle.after) cycle.after(monotonic_ns());
     if (!go_on) break;
   }
+}
+
+void run_periodic(const LoopOptions& options, LoopTiming& timing,
+                  const std::function<bool()>& cycle,
+                  const std::function<void(std::int64_t)>& after) {
+  run_periodic(options, timing, LoopCycle{{}, cycle, after});
 }
 
 }  // namespace afhub

@@ -8,6 +8,7 @@
 #include <fstream>
 
 #include "afhub/shm_layout/error.hpp"
+#include "shared_models.hpp"
 
 namespace afhub::physics {
 namespace {
@@ -27,6 +28,7 @@ std::vector<std::string> joint_names_below(const Model& model, const std::string
 }
 
 TEST(AdfLoader, LoadsTheKuka) {
+  SKIP_WITHOUT_SHARED_MODELS();
   Model model = load_adf_files({kModels + "robots/blender-kuka.yaml"});
   ASSERT_EQ(model.bodies.size(), 8u);
   ASSERT_EQ(model.joints.size(), 7u);
@@ -46,6 +48,7 @@ TEST(AdfLoader, LoadsTheKuka) {
 }
 
 TEST(AdfLoader, FourBarKeepsItsLoopJointOnceInFileOrder) {
+  SKIP_WITHOUT_SHARED_MODELS();
   Model model = load_adf_files({kModels + "puzzles/parallel_structure.yaml"});
   EXPECT_EQ(model.closed_loop_count, 1);
   EXPECT_EQ(joint_names_below(model, "ambf/env/l1"),

@@ -42,5 +42,15 @@ TEST(Frames, RollPitchYawIsFixedAxisXyz) {
   EXPECT_NEAR((quatRotate(q, btVector3(1, 0, 0)) - btVector3(0, 1, 0)).length(), 0.0, 1e-12);
 }
 
+TEST(Frames, RollPitchYawAsAQuaternionIsTheSameRotation) {
+  const Vec3 rpy{0.3, -0.7, 1.9};
+  const Quaternion q = rpy_to_quaternion(rpy);
+  const btQuaternion expected = rpy_rotation(rpy);
+  EXPECT_NEAR(q.x, expected.x(), 1e-15);
+  EXPECT_NEAR(q.y, expected.y(), 1e-15);
+  EXPECT_NEAR(q.z, expected.z(), 1e-15);
+  EXPECT_NEAR(q.w, expected.w(), 1e-15);
+}
+
 }  // namespace
 }  // namespace afhub::physics

@@ -14,6 +14,7 @@
 #include "afhub/rt/latency_histogram.hpp"
 #include "afhub_process.hpp"
 #include "model_files.hpp"
+#include "shared_models.hpp"
 
 namespace afhub::physics {
 namespace {
@@ -22,8 +23,16 @@ const std::string kModels = AFHUB_SHARED_MODELS "/descriptions/multi-bodies/";
 const std::string kKuka = kModels + "robots/blender-kuka.yaml";
 const std::string kFourBar = kModels + "puzzles/parallel_structure.yaml";
 
+// False, with the benchmark skipped naming the directory, when the corpus is missing.
+bool have_shared_models(benchmark::State& state) {
+  if (afhub::testing::shared_models_present()) return true;
+  state.SkipWithError(afhub::testing::shared_models_missing().c_str());
+  return false;
+}
+
 // Loading is parsing the files, reading the meshes and building the Bullet world.
 void BM_Load(benchmark::State& state, const std::string& file) {
+  if (!have_shared_models(state)) return;
   for (auto _ : state) {
     Model model = load_adf_files({file});
     Simulation sim(model, 0.001);
@@ -36,6 +45,7 @@ BENCHMARK_CAPTURE(BM_Load, four_bar, kFourBar)->Unit(benchmark::kMillisecond);
 // One step of the physics alone, or the whole loop iteration of `afhub run`:
 // commands read, step, every body's state and the world state published.
 void BM_Step(benchmark::State& state, const std::string& file, bool publish) {
+  if (!have_shared_models(state)) return;
   const Model model = load_adf_files({file});
   Simulation sim(model, 0.001);
   std::unique_ptr<SimChannels> channels;
@@ -116,6 +126,7 @@ BENCHMARK(BM_PublishOneChannel)
 // physics step included. One body (a ball) isolates the protocol; the KUKA
 // (8 bodies published per step) is the realistic case.
 void BM_LockstepRoundTrip(benchmark::State& state, bool kuka) {
+  if (kuka && !have_shared_models(state)) return;
   afhub::testing::ModelFolder folder;
   const std::string file =
       kuka ? kKuka
@@ -131,7 +142,8 @@ void BM_LockstepRoundTrip(benchmark::State& state, bool kuka) {
   channels.publish(0.0, 0.0, false);
   afhub::test::ScopedProcess client(
       afhub::test::spawn_afhub({"ctl", "hold", kuka ? "base" : "ball", "--lockstep"}));
-  channels.await_lockstep();  // step 0 waits for the client to join
+  channels.wait_for_clients();  // step 0 waits for the client to join
+  channels.await_lockstep();
   LatencyHistogram round_trip;
   for (auto _ : state) {
     sim.step();

@@ -12,6 +12,7 @@
 #include "afhub/shm_layout/world.hpp"
 #include "afhub_process.hpp"
 #include "model_files.hpp"
+#include "shared_models.hpp"
 
 namespace afhub::test {
 namespace {
@@ -22,6 +23,7 @@ const std::string kDescriptions = AFHUB_SHARED_MODELS "/descriptions/";
 const std::string kKuka = kDescriptions + "multi-bodies/robots/blender-kuka.yaml";
 
 TEST(Run, KukaOnChannelsObeysCommandsRefusesNanAndTripsTheWatchdog) {
+  SKIP_WITHOUT_SHARED_MODELS();
   afhub::testing::ModelFolder folder;
   const std::string log = (folder.dir() / "run.log").string();
   ScopedProcess physics(spawn_afhub({"run", kKuka, "--no-autostart"}, log));
@@ -71,6 +73,7 @@ TEST(Run, KukaOnChannelsObeysCommandsRefusesNanAndTripsTheWatchdog) {
 }
 
 TEST(Run, LaunchFileWithIndexRunsRealTimeAndReports) {
+  SKIP_WITHOUT_SHARED_MODELS();
   afhub::testing::ModelFolder folder;
   const std::string report = (folder.dir() / "report.json").string();
   RunResult run = run_afhub({"run", "--launch", kDescriptions + "launch.yaml", "-l", "10",
@@ -92,6 +95,7 @@ TEST(Run, LaunchFileWithIndexRunsRealTimeAndReports) {
 }
 
 TEST(Run, MissingModelOfALaunchFileIsReportedWhereItIsListed) {
+  SKIP_WITHOUT_SHARED_MODELS();
   RunResult run =
       run_afhub({"run", "--launch", kDescriptions + "launch.yaml", "-l", "3", "--offline"});
   EXPECT_EQ(run.exit_code, 1);
@@ -107,6 +111,34 @@ TEST(Run, MissingModelOfALaunchFileIsReportedWhereItIsListed) {
   RunResult no_model = run_afhub({"run", "--offline"});
   EXPECT_EQ(no_model.exit_code, 1);
   EXPECT_TRUE(contains(no_model.err, "nothing to simulate")) << no_model.err;
+}
+
+// `--lockstep --wait-for N` says every 2 s whom it still waits for, and
+// `--wait-timeout S` gives up with an error. (No client ever comes: only the
+// messages and the exit code are checked, not how long anything took.)
+TEST(Run, LockstepWaitSaysWhomItWaitsForAndGivesUpAfterTheTimeout) {
+  afhub::testing::ModelFolder folder;
+  const std::string ball =
+      folder.write("ball.yaml",
+                   "bodies: [BODY ball]\nBODY ball:\n  name: ball\n  mass: 1\n  shape: sphere\n"
+                   "  geometry: {radius: 0.05}\n");
+  RunResult run = run_afhub(
+      {"run", ball, "--no-autostart", "--lockstep", "--wait-for", "1", "--wait-timeout", "3"},
+      120s);
+  EXPECT_EQ(run.exit_code, 1) << run.err;
+  EXPECT_TRUE(contains(run.err, "waiting for 1 lockstep clients before the first step")) << run.err;
+  EXPECT_TRUE(contains(run.err, "afhub run: still waiting after ")) << run.err;
+  EXPECT_TRUE(contains(run.err, "0 of 1 lockstep clients joined; no client yet for ambf/env/ball"))
+      << run.err;
+  EXPECT_TRUE(contains(run.err, "afhub run: error: gave up after ")) << run.err;
+  EXPECT_TRUE(contains(run.err,
+                       "(--wait-timeout): 0 of 1 lockstep clients joined; no client for "
+                       "ambf/env/ball"))
+      << run.err;
+
+  RunResult no_wait_for = run_afhub({"run", ball, "--offline", "--wait-timeout", "3"});
+  EXPECT_EQ(no_wait_for.exit_code, 1);
+  EXPECT_TRUE(contains(no_wait_for.err, "--wait-timeout needs --wait-for")) << no_wait_for.err;
 }
 
 }  // namespace

@@ -6,10 +6,13 @@
 
 #include <gtest/gtest.h>
 
+#include <btBulletDynamicsCommon.h>
+
 #include <cmath>
 
 #include "afhub/physics/adf_loader.hpp"
 #include "model_files.hpp"
+#include "shared_models.hpp"
 
 namespace afhub::physics {
 namespace {
@@ -56,6 +59,46 @@ TEST(Simulation, FreeFallMatchesHalfGTSquared) {
   }
 }
 
+// Lights and cameras look along their direction (their x axis) with `up` as their
+// z axis; one with a parent body is carried by it.
+TEST(Simulation, LightsAndCamerasLookAlongTheirDirectionAndFollowTheirParent) {
+  testing::ModelFolder folder;
+  Model model = load_adf_files(
+      {folder.write("ball.yaml",
+                    "bodies: [BODY ball]\nBODY ball:\n  name: ball\n  mass: 1.0\n  shape: sphere\n"
+                    "  geometry: {radius: 0.05}\n  location: {position: {x: 0, y: 0, z: 1}}\n")});
+  WorldObjectSpec camera;
+  camera.name = "ambf/env/main_camera";
+  camera.position_m = {2, 0, 1};
+  camera.direction = {-1, 0, 0};  // looking back at the origin's x
+  model.world.cameras.push_back(camera);
+  WorldObjectSpec light;
+  light.name = "ambf/env/lamp";
+  light.position_m = {0, 0, 0.5};  // in the ball's frame
+  light.direction = {0, 0, -1};
+  light.parent = "/ambf/env/BODY ball";
+  model.world.lights.push_back(light);
+  Simulation sim(model, 0.001);
+
+  auto rotate = [](const Quaternion& q, double x, double y, double z) {
+    const btVector3 v = quatRotate(btQuaternion(q.x, q.y, q.z, q.w), btVector3(x, y, z));
+    return Vec3{v.x(), v.y(), v.z()};
+  };
+  const Pose seen_by = sim.camera_pose(0);
+  EXPECT_NEAR(seen_by.position_m.x, 2.0, 1e-12);
+  const Vec3 forward = rotate(seen_by.orientation, 1, 0, 0);
+  const Vec3 up = rotate(seen_by.orientation, 0, 0, 1);
+  EXPECT_NEAR(forward.x, -1.0, 1e-12);
+  EXPECT_NEAR(up.z, 1.0, 1e-12);
+
+  EXPECT_NEAR(sim.light_pose(0).position_m.z, 1.5, 1e-9);
+  EXPECT_NEAR(rotate(sim.light_pose(0).orientation, 1, 0, 0).z, -1.0, 1e-12);
+  run_for(sim, 0.5);
+  const double fallen = 1.0 - sim.body_pose(0).position_m.z;
+  EXPECT_GT(fallen, 0.5);
+  EXPECT_NEAR(sim.light_pose(0).position_m.z, 1.5 - fallen, 1e-9);  // carried by the ball
+}
+
 TEST(Simulation, PendulumPeriodMatchesTheAnalyticValue) {
   // A 1 kg ball of radius 2 cm on a 0.5 m massless arm, released 0.05 rad from vertical.
   const double length = 0.5, radius = 0.02, start = 0.05;
@@ -99,17 +142,18 @@ TEST(Simulation, PendulumPeriodMatchesTheAnalyticValue) {
 }
 
 TEST(Simulation, KukaJointsReachTheirTargetsUnderTheirPid) {
+  SKIP_WITHOUT_SHARED_MODELS();
   const Model model = load_adf_files({kModels + "robots/blender-kuka.yaml"});
   Simulation sim(model, 0.001);
   const std::array<double, 7> targets = {0.5, -0.4, 0.3, 0.6, -0.5, 0.4, 0.7};
-  BodyCommand command{};
+  BodyInput command{};
   command.joint_count = 7;
   for (std::size_t j = 0; j < 7; ++j) {
     command.joint_values[j] = targets[j];
-    command.joint_types[j] = JointCommandType::kPosition;
+    command.joint_modes[j] = JointMode::kPosition;
   }
-  ASSERT_EQ(command_problem(command, 7), nullptr);
-  sim.set_command(body_index(model, "base"), command);
+  ASSERT_EQ(input_problem(command, 7), nullptr);
+  sim.set_input(body_index(model, "base"), command);
   const double gap = run_for(sim, 2.0);
   const std::vector<int>& joints = model.descendant_joints[body_index(model, "base")];
   for (std::size_t j = 0; j < 7; ++j)
@@ -120,26 +164,27 @@ TEST(Simulation, KukaJointsReachTheirTargetsUnderTheirPid) {
 // The watchdog's two policies after the KUKA was driven to a pose: zero effort lets
 // the arm fall under gravity; hold keeps every joint where it was.
 TEST(Simulation, WatchdogPoliciesZeroEffortOrHoldPosition) {
+  SKIP_WITHOUT_SHARED_MODELS();
   const Model model = load_adf_files({kModels + "robots/blender-kuka.yaml"});
   const int base = body_index(model, "base");
   const std::vector<int>& joints = model.descendant_joints[base];
-  BodyCommand command{};
+  BodyInput command{};
   command.joint_count = 7;
   for (std::size_t j = 0; j < 7; ++j) {
     command.joint_values[j] = 0.6;
-    command.joint_types[j] = JointCommandType::kPosition;
+    command.joint_modes[j] = JointMode::kPosition;
   }
   double largest_drift[2] = {0.0, 0.0};
   for (const bool hold : {false, true}) {
     Simulation sim(model, 0.001);
-    sim.set_command(base, command);
+    sim.set_input(base, command);
     run_for(sim, 1.5);
     std::array<double, 7> before{};
     for (std::size_t j = 0; j < 7; ++j) before[j] = sim.joint_position(joints[j]);
     if (hold)
-      sim.hold_command(base);
+      sim.hold_joints(base);
     else
-      sim.clear_command(base);
+      sim.clear_input(base);
     run_for(sim, 3.0);
     for (std::size_t j = 0; j < 7; ++j)
       largest_drift[hold] =
@@ -152,6 +197,7 @@ TEST(Simulation, WatchdogPoliciesZeroEffortOrHoldPosition) {
 }
 
 TEST(Simulation, RealModelsRunTenSecondsHoldingTogether) {
+  SKIP_WITHOUT_SHARED_MODELS();
   for (const char* file : {"robots/blender-kuka.yaml", "puzzles/parallel_structure.yaml"}) {
     const Model model = load_adf_files({kModels + file});
     Simulation sim(model, 0.001);
@@ -162,6 +208,7 @@ TEST(Simulation, RealModelsRunTenSecondsHoldingTogether) {
 }
 
 TEST(Simulation, FourBarLoopStaysClosedUnderGravity) {
+  SKIP_WITHOUT_SHARED_MODELS();
   Model model = load_adf_files({kModels + "puzzles/parallel_structure.yaml"});
   ASSERT_EQ(model.closed_loop_count, 1);
   Simulation sim(model, 0.001);
@@ -209,11 +256,11 @@ TEST(Simulation, PrismaticJointInsideAClosedLoopFollowsTheSliderCrank) {
                 "prismatic", x))});
   ASSERT_EQ(model.closed_loop_count, 1);
   Simulation sim(model, 0.001);
-  BodyCommand command{};
+  BodyInput command{};
   command.joint_count = 1;  // the crank, turning at 2 rad/s
   command.joint_values[0] = 2.0;
-  command.joint_types[0] = JointCommandType::kVelocity;
-  sim.set_command(0, command);
+  command.joint_modes[0] = JointMode::kVelocity;
+  sim.set_input(0, command);
   double worst_error = 0.0, largest_gap = 0.0, turned = 0.0;
   for (int i = 0; i < 3000; ++i) {
     sim.step();
@@ -312,10 +359,10 @@ TEST(Simulation, ClothWithFixedCornersHangsInsteadOfFalling) {
                     "           fixed nodes: [0, 10]}\n")});
   ASSERT_EQ(model.soft_bodies.size(), 1u);
   Simulation sim(model, 0.001);
-  BodyState start{}, end{};
-  sim.fill_soft_body_state(0, start);
+  BodyReading start{}, end{};
+  sim.read_soft_body(0, start);
   run_for(sim, 2.0);
-  sim.fill_soft_body_state(0, end);
+  sim.read_soft_body(0, end);
   ASSERT_TRUE(sim.all_finite());
   const double drop = start.pose.position_m.z - end.pose.position_m.z;
   EXPECT_GT(drop, 0.05);  // it sags
@@ -335,11 +382,11 @@ TEST(Simulation, ProximitySensorMeasuresTheDistanceToABody) {
       "  - {offset: {x: 0, y: 0, z: 0}, direction: {x: -1, y: 0, z: 0}}\n")});
   Simulation sim(model, 0.001);
   sim.step();
-  BodyState state{};
-  sim.fill_state(0, state);
-  ASSERT_EQ(state.sensor_ray_count, 2u);
-  EXPECT_NEAR(state.sensor_distances_m[0], 0.9, 0.005);  // the wall's near face
-  EXPECT_EQ(state.sensor_distances_m[1], -1.0);          // nothing behind
+  BodyReading state{};
+  sim.read_body(0, state);
+  ASSERT_EQ(state.ray_count, 2u);
+  EXPECT_NEAR(state.ray_distances_m[0], 0.9, 0.005);  // the wall's near face
+  EXPECT_EQ(state.ray_distances_m[1], -1.0);          // nothing behind
 }
 
 TEST(Simulation, ConstraintActuatorHoldsWhatTouchesItAndLetsGo) {
@@ -355,44 +402,45 @@ TEST(Simulation, ConstraintActuatorHoldsWhatTouchesItAndLetsGo) {
       "ACTUATOR grip:\n  name: grip\n  type: Constraint\n  parent: BODY gripper\n"
       "  max impulse: 10\n  tau: 1\n")});
   Simulation sim(model, 0.001);
-  BodyCommand command{};
+  BodyInput command{};
   command.actuator_count = 1;
-  command.actuate[0] = 1;
-  ASSERT_EQ(command_problem(command, 0, 1), nullptr);
-  EXPECT_NE(command_problem(command, 0, 0), nullptr);  // a body without actuators
-  sim.set_command(0, command);
+  command.engage[0] = true;
+  ASSERT_EQ(input_problem(command, 0, 1), nullptr);
+  EXPECT_NE(input_problem(command, 0, 0), nullptr);  // a body without actuators
+  sim.set_input(0, command);
   ASSERT_TRUE(sim.actuator_engaged(0));
   run_for(sim, 1.0);
   EXPECT_NEAR(sim.body_pose(1).position_m.z, -0.045, 0.005);  // held against gravity
-  command.actuate[0] = 0;
-  sim.set_command(0, command);
+  command.engage[0] = false;
+  sim.set_input(0, command);
   EXPECT_FALSE(sim.actuator_engaged(0));
   run_for(sim, 0.5);
   EXPECT_LT(sim.body_pose(1).position_m.z, -1.0);  // let go: it falls
-  command.actuate[0] = 1;
-  sim.set_command(0, command);  // nothing touches it any more
+  command.engage[0] = true;
+  sim.set_input(0, command);  // nothing touches it any more
   EXPECT_FALSE(sim.actuator_engaged(0));
 }
 
 TEST(Simulation, CommandsWithNanOrBadJointsAreRefused) {
-  BodyCommand good{};
+  BodyInput good{};
   good.joint_count = 2;
-  EXPECT_EQ(command_problem(good, 2), nullptr);
-  BodyCommand too_many = good;
+  EXPECT_EQ(input_problem(good, 2), nullptr);
+  BodyInput too_many = good;
   too_many.joint_count = 3;
-  EXPECT_NE(command_problem(too_many, 2), nullptr);
-  BodyCommand nan_joint = good;
+  EXPECT_NE(input_problem(too_many, 2), nullptr);
+  BodyInput nan_joint = good;
   nan_joint.joint_values[1] = std::nan("");
-  EXPECT_NE(command_problem(nan_joint, 2), nullptr);
-  BodyCommand inf_force = good;
+  EXPECT_NE(input_problem(nan_joint, 2), nullptr);
+  BodyInput inf_force = good;
   inf_force.wrench.force_n.y = INFINITY;
-  EXPECT_NE(command_problem(inf_force, 2), nullptr);
-  BodyCommand bad_type = good;
-  bad_type.cartesian_type = static_cast<CartesianCommandType>(7);
-  EXPECT_NE(command_problem(bad_type, 2), nullptr);
+  EXPECT_NE(input_problem(inf_force, 2), nullptr);
+  BodyInput bad_type = good;
+  bad_type.cartesian = static_cast<CartesianMode>(7);
+  EXPECT_NE(input_problem(bad_type, 2), nullptr);
 }
 
 TEST(Simulation, ResetReturnsToTheStart) {
+  SKIP_WITHOUT_SHARED_MODELS();
   const Model model = load_adf_files({kModels + "puzzles/parallel_structure.yaml"});
   Simulation sim(model, 0.001);
   const double start = sim.joint_position(1);
@@ -418,14 +466,13 @@ TEST(Simulation, JointCommandsFollowTheSignOfThePosition) {
         "  child pivot: {x: -0.1, y: 0, z: 0}\n  child axis: {x: 0, y: 1, z: 1}\n"
         "  controller: {P: 20, I: 0, D: 2}\n  max motor impulse: 1\n  type: " +
             type + "\n")});
-    for (JointCommandType kind :
-         {JointCommandType::kEffort, JointCommandType::kVelocity, JointCommandType::kPosition}) {
+    for (JointMode kind : {JointMode::kEffort, JointMode::kVelocity, JointMode::kPosition}) {
       Simulation sim(model, 0.001);
-      BodyCommand command{};
+      BodyInput command{};
       command.joint_count = 1;
-      command.joint_types[0] = kind;
+      command.joint_modes[0] = kind;
       command.joint_values[0] = 0.3;
-      sim.set_command(0, command);
+      sim.set_input(0, command);
       run_for(sim, 0.5);
       EXPECT_GT(sim.joint_position(0), 0.02) << type << " command " << static_cast<int>(kind);
       EXPECT_LT(sim.joint_pivot_gap_m(0), 0.002) << type;

@@ -1,6 +1,5 @@
 // The physics loop and its report (see run_loop.hpp).
 #include "afhub/physics/run_loop.hpp"
-#include "afhub/rt/clock.hpp"
 
 #include <algorithm>
 #include <cstdio>
@@ -9,7 +8,9 @@
 
 #include "afhub/hub/json_writer.hpp"
 #include "afhub/hub/stop_signal.hpp"
+#include "afhub/rt/clock.hpp"
 #include "afhub/rt/loop_stats_publisher.hpp"
+#include "afhub/rt/periodic_loop.hpp"
 #include "afhub/shm_layout/world_control.hpp"
 
 namespace afhub::physics {
@@ -27,11 +28,7 @@ double largest_pivot_gap(const Simulation& sim) noexcept {
 void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
               RunReport& report) {
   const auto period_ns = static_cast<std::int64_t>(sim.dt_s() * 1e9);
-  std::int64_t start_ns = monotonic_ns();
-  std::int64_t next_ns = start_ns;
   WorldControl control;
-  std::uint64_t rate_window_step = 0;
-  std::int64_t rate_window_ns = start_ns;
   double achieved_rate_hz = 0.0;
   std::uint64_t late_counted = 0;
   report.max_joint_error_m = std::max(report.max_joint_error_m, largest_pivot_gap(sim));
@@ -41,18 +38,31 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
     stats = std::make_unique<LoopStatsPublisher>("run", "", options.fast ? 0 : period_ns,
                                                  channels->lockstep(), options.grant);
   if (channels) channels->publish(0.0, 0.0, false);  // step 0: the model as loaded
-  while (!stop_requested() && (options.steps == 0 || report.steps < options.steps)) {
-    if (channels) {
-      if (const WorldCommand* command = channels->new_world_command())
-        if (control.apply(*command)) sim.reset();
-      if (channels->lockstep() && !control.paused) {
-        if (!channels->await_lockstep()) break;  // stopped while waiting
-        // The wait for clients before the first step is setup: the clock starts after it.
-        if (report.steps == 0) start_ns = next_ns = rate_window_ns = monotonic_ns();
-      } else {
-        channels->apply_commands(monotonic_ns());
-      }
-    }
+  // The wait for lockstep clients before the first step is setup: the clock starts after it.
+  if (channels && channels->lockstep() && !channels->wait_for_clients()) return;
+  const std::int64_t start_ns = monotonic_ns();
+  std::uint64_t rate_window_step = 0;
+  std::int64_t rate_window_ns = start_ns;
+
+  // Paced on rt's loop runner: absolute deadlines start + k dt, never re-based, and
+  // late steps caught up so that simulated time keeps up with the wall; --fast: no period.
+  LoopOptions pacing;
+  pacing.period_ns = options.fast ? 0 : period_ns;
+  pacing.overrun = OverrunPolicy::kCatchUp;
+  pacing.grid_origin_ns = start_ns;
+  LoopCycle cycle;
+  // Commands in: the world's (pause, resume, step, reset), then the bodies'; in
+  // lockstep, the clients' answers to the current step.
+  cycle.wait = [&] {
+    if (!channels) return true;
+    if (const WorldCommand* command = channels->new_world_command())
+      if (control.apply(*command)) sim.reset();
+    if (channels->lockstep() && !control.paused) return channels->await_lockstep();
+    channels->apply_commands(monotonic_ns());
+    return true;
+  };
+  // One step, and the states out.
+  cycle.work = [&] {
     const std::int64_t begin_ns = monotonic_ns();
     const bool stepping = control.take_step();
     if (stepping) {
@@ -65,33 +75,31 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
                      "afhub run: the simulation became NaN or infinite at step %llu; stopping. "
                      "Lower the gains or --dt, or check masses and inertias\n",
                      static_cast<unsigned long long>(sim.step_count()));
-        break;
+        return false;
       }
     }
     if (channels)
       channels->publish(static_cast<double>(monotonic_ns() - start_ns) * 1e-9, achieved_rate_hz,
                         control.paused);
-    const std::int64_t end_ns = monotonic_ns();
-    if (stepping) report.step_time.record(static_cast<double>(end_ns - begin_ns) * 1e-3);
+    if (stepping) report.step_time.record(static_cast<double>(monotonic_ns() - begin_ns) * 1e-3);
+    return options.steps == 0 || report.steps < options.steps;
+  };
+  // The loop's statistics, and the achieved rate over each second.
+  cycle.after = [&](std::int64_t now_ns) {
     if (stats) {
-      report.timing.record(options.fast ? 0 : std::max<std::int64_t>(0, begin_ns - next_ns),
-                           end_ns - begin_ns);
-      // Behind schedule: the next steps run back to back until the clock is caught up.
-      if (!options.fast && end_ns > next_ns + period_ns) report.timing.count_overruns(1);
       report.timing.count_late(channels->late_answers() - late_counted);
       late_counted = channels->late_answers();
-      stats->maybe_publish(end_ns, report.timing);
+      stats->maybe_publish(now_ns, report.timing);
     }
-
-    next_ns += period_ns;
-    if (next_ns - rate_window_ns >= 1'000'000'000) {
+    if (now_ns - rate_window_ns >= 1'000'000'000) {
       achieved_rate_hz = static_cast<double>(report.steps - rate_window_step) * 1e9 /
-                         static_cast<double>(monotonic_ns() - rate_window_ns);
+                         static_cast<double>(now_ns - rate_window_ns);
       rate_window_step = report.steps;
-      rate_window_ns = monotonic_ns();
+      rate_window_ns = now_ns;
     }
-    if (!options.fast) sleep_until_ns(next_ns);
-  }
+  };
+  if (options.steps == 0 || report.steps < options.steps)
+    run_periodic(pacing, report.timing, cycle);
   report.wall_time_s = static_cast<double>(monotonic_ns() - start_ns) * 1e-9;
 }
 

@@ -3,9 +3,8 @@
 
 #include <sched.h>
 
-#include <cmath>
+#include <algorithm>
 #include <cstdio>
-#include <cstring>
 
 #include "afhub/hub/stop_signal.hpp"
 #include "afhub/shm_layout/channel_names.hpp"
@@ -14,58 +13,57 @@
 namespace afhub::physics {
 namespace {
 
-// A light or camera looking along `direction` with `up` as its z axis.
-Quaternion look_rotation(const Vec3& direction, const Vec3& up) {
-  auto normalize = [](Vec3 v) {
-    const double n = std::sqrt(v.x * v.x + v.y * v.y + v.z * v.z);
-    return n > 1e-12 ? Vec3{v.x / n, v.y / n, v.z / n} : Vec3{1, 0, 0};
-  };
-  auto cross = [](const Vec3& a, const Vec3& b) {
-    return Vec3{a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
-  };
-  const Vec3 x = normalize(direction);
-  Vec3 y = cross(up, x);
-  if (y.x * y.x + y.y * y.y + y.z * y.z < 1e-12) y = cross(Vec3{0, 1, 0}, x);
-  y = normalize(y);
-  const Vec3 z = cross(x, y);
-  // Rotation matrix with columns x, y, z to a quaternion.
-  const double m[3][3] = {{x.x, y.x, z.x}, {x.y, y.y, z.y}, {x.z, y.z, z.z}};
-  const double trace = m[0][0] + m[1][1] + m[2][2];
-  Quaternion q;
-  if (trace > 0) {
-    const double s = std::sqrt(trace + 1.0) * 2;
-    q = {(m[2][1] - m[1][2]) / s, (m[0][2] - m[2][0]) / s, (m[1][0] - m[0][1]) / s, s / 4};
-  } else if (m[0][0] > m[1][1] && m[0][0] > m[2][2]) {
-    const double s = std::sqrt(1.0 + m[0][0] - m[1][1] - m[2][2]) * 2;
-    q = {s / 4, (m[0][1] + m[1][0]) / s, (m[0][2] + m[2][0]) / s, (m[2][1] - m[1][2]) / s};
-  } else if (m[1][1] > m[2][2]) {
-    const double s = std::sqrt(1.0 + m[1][1] - m[0][0] - m[2][2]) * 2;
-    q = {(m[0][1] + m[1][0]) / s, s / 4, (m[1][2] + m[2][1]) / s, (m[0][2] - m[2][0]) / s};
-  } else {
-    const double s = std::sqrt(1.0 + m[2][2] - m[0][0] - m[1][1]) * 2;
-    q = {(m[0][2] + m[2][0]) / s, (m[1][2] + m[2][1]) / s, s / 4, (m[1][0] - m[0][1]) / s};
+std::string format_seconds(double seconds) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.1f", seconds);
+  return text;
+}
+
+// The wire and the core agree on capacities, so a copy never truncates what fits.
+static_assert(kBodyJointCapacity == kMaxJointsPerBody);
+static_assert(kBodyRayCapacity == kMaxSensorRaysPerBody);
+static_assert(kBodyActuatorCapacity == kMaxActuatorsPerBody);
+static_assert(static_cast<int>(CartesianMode::kPosition) ==
+              static_cast<int>(CartesianCommandType::kPosition));
+static_assert(static_cast<int>(JointMode::kVelocity) ==
+              static_cast<int>(JointCommandType::kVelocity));
+
+// A command out of shared memory into the core's input: copied once, so that a
+// writer cannot change it between the check and its use. Counts are copied as
+// written (input_problem refuses those beyond the body's); entries up to capacity.
+void to_input(const BodyCommand& command, BodyInput& input) noexcept {
+  input.cartesian = static_cast<CartesianMode>(command.cartesian_type);
+  input.target_pose = command.pose;
+  input.wrench = command.wrench;
+  input.twist = command.twist;
+  input.joint_count = command.joint_count;
+  const std::size_t joints = std::min<std::size_t>(command.joint_count, kBodyJointCapacity);
+  for (std::size_t j = 0; j < joints; ++j) {
+    input.joint_modes[j] = static_cast<JointMode>(command.joint_types[j]);
+    input.joint_values[j] = command.joint_values[j];
   }
-  return q;
+  input.actuator_count = command.actuator_count;
+  const std::size_t actuators =
+      std::min<std::size_t>(command.actuator_count, kBodyActuatorCapacity);
+  for (std::size_t a = 0; a < actuators; ++a) input.engage[a] = command.actuate[a] != 0;
 }
 
-Quaternion multiply(const Quaternion& a, const Quaternion& b) {
-  return {
-      a.w * b.x + a.x * b.w + a.y * b.z - a.z * b.y, a.w * b.y - a.x * b.z + a.y * b.w + a.z * b.x,
-      a.w * b.z + a.x * b.y - a.y * b.x + a.z * b.w, a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z};
-}
-
-Vec3 rotate(const Quaternion& q, const Vec3& v) {
-  const Quaternion p = multiply(multiply(q, {v.x, v.y, v.z, 0}), {-q.x, -q.y, -q.z, q.w});
-  return {p.x, p.y, p.z};
-}
-
-// "/ambf/env/BODY LightCone" names the body whose identifier is "BODY LightCone".
-int find_parent(const Model& model, const std::string& parent) {
-  if (parent.empty()) return -1;
-  const std::string identifier = parent.substr(parent.find_last_of('/') + 1);
-  for (std::size_t b = 0; b < model.bodies.size(); ++b)
-    if (model.bodies[b].identifier == identifier) return static_cast<int>(b);
-  return -1;
+// A reading into a loaned state (its header is the caller's).
+void to_state(const BodyReading& reading, BodyState& state) noexcept {
+  state.pose = reading.pose;
+  state.twist = reading.twist;
+  state.wrench = reading.wrench;
+  state.mass_kg = reading.mass_kg;
+  state.principal_inertia_kgm2 = reading.principal_inertia_kgm2;
+  state.joint_count = reading.joint_count;
+  for (std::uint32_t j = 0; j < reading.joint_count; ++j) {
+    state.joint_positions[j] = reading.joint_positions[j];
+    state.joint_velocities[j] = reading.joint_velocities[j];
+    state.joint_efforts[j] = reading.joint_efforts[j];
+  }
+  state.sensor_ray_count = reading.ray_count;
+  for (std::uint32_t r = 0; r < reading.ray_count; ++r)
+    state.sensor_distances_m[r] = reading.ray_distances_m[r];
 }
 
 }  // namespace
@@ -106,17 +104,6 @@ SimChannels::SimChannels(Simulation& sim, double watchdog_s)
     channels_.push_back(std::move(channel));
   }
   directory_.publish();
-  auto objects = [&](const std::vector<WorldObjectSpec>& specs, std::vector<WorldObject>& out) {
-    for (std::size_t i = 0; i < specs.size() && i < kMaxWorldObjects; ++i) {
-      WorldObject object;
-      object.spec = &specs[i];
-      object.parent = find_parent(model, specs[i].parent);
-      object.local = {specs[i].position_m, look_rotation(specs[i].direction, specs[i].up)};
-      out.push_back(object);
-    }
-  };
-  objects(model.world.lights, lights_);
-  objects(model.world.cameras, cameras_);
 }
 
 void SimChannels::apply_commands(std::int64_t now_ns) noexcept {
@@ -124,8 +111,12 @@ void SimChannels::apply_commands(std::int64_t now_ns) noexcept {
     if (channel.soft) continue;  // soft bodies take no commands
     const BodyCommand* command = channel.publisher->latest_command();
     if (command && channel.publisher->command_updated()) {
+      // Copied out of shared memory once, then checked, then applied.
+      to_input(*command, input_);
+      const Answer answer{command->header.sim_step, command->header.publisher_pid,
+                          command->lockstep != 0};
       if (const char* problem =
-              command_problem(*command, channel.joint_count, channel.actuator_count)) {
+              input_problem(input_, channel.joint_count, channel.actuator_count)) {
         ++rejected_;
         if (!channel.told_rejected) {
           std::fprintf(stderr,
@@ -134,18 +125,18 @@ void SimChannels::apply_commands(std::int64_t now_ns) noexcept {
           channel.told_rejected = true;
         }
       } else {
-        if (lockstep_ && command->lockstep) note_lockstep_answer(channel, *command);
-        channel.applied_answer_step = command->header.sim_step;
-        sim_.set_command(channel.index, *command);
+        if (lockstep_ && answer.lockstep) note_lockstep_answer(channel, answer);
+        channel.applied_answer_step = answer.step;
+        sim_.set_input(channel.index, input_);
         channel.last_command_ns = now_ns;
         channel.commanded = true;
       }
     }
     if (channel.commanded && now_ns - channel.last_command_ns > watchdog_ns_) {
       if (channel.hold_on_watchdog)
-        sim_.hold_command(channel.index);
+        sim_.hold_joints(channel.index);
       else
-        sim_.clear_command(channel.index);
+        sim_.clear_input(channel.index);
       channel.commanded = false;
       ++expiries_;
       std::fprintf(stderr, "afhub run: no command for %s in %.3f s: %s until commands come again\n",
@@ -157,18 +148,17 @@ void SimChannels::apply_commands(std::int64_t now_ns) noexcept {
 }
 
 void SimChannels::hold_on_watchdog(const std::string& body) {
-  bool found = false;
-  for (Channel& channel : channels_) {
-    const std::string& name = channel.publisher->channel();
-    const bool match =
-        name == body || (name.size() > body.size() &&
-                         name.compare(name.size() - body.size(), body.size(), body) == 0 &&
-                         name[name.size() - body.size() - 1] == '/');
-    if (match && !channel.soft) channel.hold_on_watchdog = found = true;
+  std::vector<std::string> active;
+  for (const Channel& channel : channels_)
+    if (!channel.soft) active.push_back(channel.publisher->channel());
+  std::string name;
+  try {
+    name = resolve_body(body, active);
+  } catch (const Error& error) {
+    throw Error(std::string("--watchdog-hold: ") + error.what());
   }
-  if (!found)
-    throw Error("--watchdog-hold: no active body is named '" + body +
-                "'; give a body's channel name or its last part (see `afhub check`)");
+  for (Channel& channel : channels_)
+    if (!channel.soft && channel.publisher->channel() == name) channel.hold_on_watchdog = true;
 }
 
 void SimChannels::enable_lockstep(const LockstepOptions& options) {
@@ -176,15 +166,15 @@ void SimChannels::enable_lockstep(const LockstepOptions& options) {
   lockstep_options_ = options;
 }
 
-void SimChannels::note_lockstep_answer(Channel& channel, const BodyCommand& command) noexcept {
-  channel.answered_step = command.header.sim_step;
-  if (command.header.sim_step != sim_.step_count()) return;  // an old step: no (re)join
-  if (channel.lockstep_pid != command.header.publisher_pid)
+void SimChannels::note_lockstep_answer(Channel& channel, const Answer& answer) noexcept {
+  channel.answered_step = answer.step;
+  if (answer.step != sim_.step_count()) return;  // an old step: no (re)join
+  if (channel.lockstep_pid != answer.pid)
     std::fprintf(stderr,
                  "afhub run: lockstep client pid %u joined the barrier for %s at step %llu\n",
-                 command.header.publisher_pid, channel.publisher->channel().c_str(),
-                 static_cast<unsigned long long>(command.header.sim_step));
-  channel.lockstep_pid = command.header.publisher_pid;
+                 answer.pid, channel.publisher->channel().c_str(),
+                 static_cast<unsigned long long>(answer.step));
+  channel.lockstep_pid = answer.pid;
   channel.misses = 0;
 }
 
@@ -200,11 +190,63 @@ std::uint32_t SimChannels::lockstep_clients() const noexcept {
   return clients;
 }
 
+void SimChannels::republish_held_step() noexcept {
+  publish(last_published_.wall_time_s, last_published_.achieved_rate_hz, last_published_.paused);
+}
+
+std::string SimChannels::bodies_without_client() const {
+  constexpr int kListed = 8;
+  std::string names;
+  int count = 0;
+  for (const Channel& channel : channels_) {
+    if (channel.soft || channel.lockstep_pid != 0) continue;
+    if (++count <= kListed) names += (names.empty() ? "" : ", ") + channel.publisher->channel();
+  }
+  if (count > kListed) names += " and " + std::to_string(count - kListed) + " more";
+  return names;
+}
+
+bool SimChannels::wait_for_clients() {
+  const std::uint32_t wanted = lockstep_options_.wait_for;
+  if (lockstep_clients() >= wanted) return true;
+  std::fprintf(stderr, "afhub run: waiting for %u lockstep clients before the first step\n",
+               wanted);
+  const std::int64_t start = monotonic_ns();
+  std::int64_t republish_ns = start + kRepublishWhileWaitingNs;
+  std::int64_t report_ns = start + lockstep_options_.wait_report_ns;
+  while (lockstep_clients() < wanted) {
+    const std::int64_t now = monotonic_ns();
+    apply_commands(now);
+    if (stop_requested()) return false;
+    // State channels keep no history: a client that subscribes while the step is
+    // held sees it only if it is published again.
+    if (now >= republish_ns) {
+      republish_held_step();
+      republish_ns = now + kRepublishWhileWaitingNs;
+    }
+    const double waited_s = static_cast<double>(now - start) * 1e-9;
+    // The report first: even a process stalled past the timeout says it once.
+    if (now >= report_ns) {
+      std::fprintf(stderr,
+                   "afhub run: still waiting after %.0f s: %u of %u lockstep clients joined; no "
+                   "client yet for %s\n",
+                   waited_s, lockstep_clients(), wanted, bodies_without_client().c_str());
+      report_ns = now + lockstep_options_.wait_report_ns;
+    }
+    if (lockstep_options_.wait_timeout_ns > 0 && now - start >= lockstep_options_.wait_timeout_ns)
+      throw Error("gave up after " + format_seconds(waited_s) + " s (--wait-timeout): " +
+                  std::to_string(lockstep_clients()) + " of " + std::to_string(wanted) +
+                  " lockstep clients joined; no client for " + bodies_without_client() +
+                  ". Start them with `afhub ctl ... --lockstep`, or lower --wait-for");
+    sched_yield();
+  }
+  return true;
+}
+
 bool SimChannels::await_lockstep() noexcept {
   const std::uint64_t step = sim_.step_count();
   const std::int64_t start = monotonic_ns();
   std::int64_t republish_ns = start + kRepublishWhileWaitingNs;
-  bool told_waiting = false;
   for (;;) {
     const std::int64_t now = monotonic_ns();
     apply_commands(now);
@@ -212,17 +254,8 @@ bool SimChannels::await_lockstep() noexcept {
     // State channels keep no history: a client that subscribes while the step is
     // held sees it only if it is published again.
     if (now >= republish_ns) {
-      publish(last_published_.wall_time_s, last_published_.achieved_rate_hz,
-              last_published_.paused);
+      republish_held_step();
       republish_ns = now + kRepublishWhileWaitingNs;
-    }
-    if (step == 0 && lockstep_clients() < lockstep_options_.wait_for) {
-      if (!told_waiting)
-        std::fprintf(stderr, "afhub run: waiting for %u lockstep clients before the first step\n",
-                     lockstep_options_.wait_for);
-      told_waiting = true;
-      sched_yield();
-      continue;
     }
     bool pending = false;
     for (const Channel& channel : channels_)
@@ -251,18 +284,12 @@ bool SimChannels::await_lockstep() noexcept {
 }
 
 void SimChannels::fill_objects(std::array<WorldObjectPose, kMaxWorldObjects>& out,
-                               const std::vector<WorldObject>& objects) const noexcept {
-  for (std::size_t i = 0; i < objects.size(); ++i) {
-    set_name(out[i].name, objects[i].spec->name);
-    if (objects[i].parent < 0) {
-      out[i].pose = objects[i].local;
-      continue;
-    }
-    const Pose parent = sim_.body_pose(static_cast<std::size_t>(objects[i].parent));
-    const Vec3 offset = rotate(parent.orientation, objects[i].local.position_m);
-    out[i].pose = {{parent.position_m.x + offset.x, parent.position_m.y + offset.y,
-                    parent.position_m.z + offset.z},
-                   multiply(parent.orientation, objects[i].local.orientation)};
+                               const std::vector<WorldObjectSpec>& specs,
+                               Pose (Simulation::*pose)(std::size_t)
+                                   const noexcept) const noexcept {
+  for (std::size_t i = 0; i < specs.size() && i < kMaxWorldObjects; ++i) {
+    set_name(out[i].name, specs[i].name);
+    out[i].pose = (sim_.*pose)(i);
   }
 }
 
@@ -284,9 +311,10 @@ void SimChannels::publish(double wall_time_s, double achieved_rate_hz, bool paus
     state->header.sim_step = step;
     state->header.sim_time_s = time_s;
     if (channel.soft)
-      sim_.fill_soft_body_state(channel.index, *state);
+      sim_.read_soft_body(channel.index, reading_);
     else
-      sim_.fill_state(channel.index, *state);
+      sim_.read_body(channel.index, reading_);
+    to_state(reading_, *state);
     channel.publisher->publish_state(state);
   }
   if (WorldState* world = world_.loan()) {
@@ -304,10 +332,12 @@ void SimChannels::publish(double wall_time_s, double achieved_rate_hz, bool paus
     world->dropped_clients = dropped_;
     world->commanded_steps = commanded_steps_;
     world->answered_steps = answered_steps_;
-    world->light_count = static_cast<std::uint32_t>(lights_.size());
-    world->camera_count = static_cast<std::uint32_t>(cameras_.size());
-    fill_objects(world->lights, lights_);
-    fill_objects(world->cameras, cameras_);
+    const WorldSpec& spec = sim_.model().world;
+    world->light_count = static_cast<std::uint32_t>(std::min(spec.lights.size(), kMaxWorldObjects));
+    world->camera_count =
+        static_cast<std::uint32_t>(std::min(spec.cameras.size(), kMaxWorldObjects));
+    fill_objects(world->lights, spec.lights, &Simulation::light_pose);
+    fill_objects(world->cameras, spec.cameras, &Simulation::camera_pose);
     world_.publish(world);
   }
 }

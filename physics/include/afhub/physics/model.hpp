@@ -25,6 +25,10 @@ struct Placement {
   Vec3 rpy_rad;
 };
 
+// Fixed-axis roll, pitch, yaw (about x, then y, then z of the parent frame, as ADF
+// and AMBF write them) as a quaternion: the one conversion, with Bullet's maths.
+Quaternion rpy_to_quaternion(const Vec3& rpy_rad);
+
 enum class ShapeKind { kBox, kSphere, kCylinder, kCapsule, kCone, kPlane };
 
 // A primitive shape (`shape` + `geometry`, or one entry of a compound shape).

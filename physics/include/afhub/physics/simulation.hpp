@@ -1,14 +1,16 @@
 // The simulation: a Bullet world built once from a Model, stepped at a fixed dt
 // (MuJoCo's mjData, in spirit: everything that changes while simulating lives
-// here, allocated when it is built; step() and the readings allocate nothing).
+// here, allocated when it is built; step(), the inputs and the readings allocate
+// nothing). It takes BodyInput and gives BodyReading, its own types: it knows no
+// transport (the channel adapter, sim_channels.hpp, does).
 #pragma once
 
 #include <cstdint>
 #include <memory>
 
+#include "afhub/physics/body_input.hpp"
+#include "afhub/physics/body_reading.hpp"
 #include "afhub/physics/model.hpp"
-#include "afhub/shm_layout/body_command.hpp"
-#include "afhub/shm_layout/body_state.hpp"
 
 namespace afhub::physics {
 
@@ -31,20 +33,25 @@ class Simulation {
   // Everything back to where the model placed it; commands cleared; time zero.
   void reset() noexcept;
 
-  // A command (checked with command_problem first) becomes the body's current
-  // one; its joint values go to the body's descendant joints in order.
-  void set_command(std::size_t body, const BodyCommand& command) noexcept;
-  // Zero wrench and zero effort on the joints this body commanded (the watchdog);
-  // its actuators keep what they hold.
-  void clear_command(std::size_t body) noexcept;
+  // An input (checked with input_problem first) becomes the body's current one;
+  // its joint values go to the body's descendant joints in order.
+  void set_input(std::size_t body, const BodyInput& input) noexcept;
+  // Zero wrench and zero effort on the joints this body's input drove (the
+  // watchdog); its actuators keep what they hold.
+  void clear_input(std::size_t body) noexcept;
   // Zero wrench, and every joint below the body held where it is now by its
   // position controller (the watchdog's hold policy).
-  void hold_command(std::size_t body) noexcept;
+  void hold_joints(std::size_t body) noexcept;
 
   // Readings of body `body` (an index into model().bodies) and of soft body `soft`.
-  void fill_state(std::size_t body, BodyState& state) const noexcept;
-  void fill_soft_body_state(std::size_t soft, BodyState& state) const noexcept;
+  void read_body(std::size_t body, BodyReading& reading) const noexcept;
+  void read_soft_body(std::size_t soft, BodyReading& reading) const noexcept;
   Pose body_pose(std::size_t body) const noexcept;  // the mesh frame, as `location`
+  // The world file's lights and cameras (indices into model().world.lights and
+  // .cameras): looking along their direction, with `up` as their z axis, carried
+  // by their parent body when they have one.
+  Pose light_pose(std::size_t light) const noexcept;
+  Pose camera_pose(std::size_t camera) const noexcept;
   double joint_position(std::size_t joint) const noexcept;
   double joint_velocity(std::size_t joint) const noexcept;
   double joint_pivot_gap_m(std::size_t joint) const noexcept;
@@ -57,11 +64,5 @@ class Simulation {
   struct Data;
   std::unique_ptr<Data> data_;
 };
-
-// nullptr when `command` can be applied to a body with `joint_count` joints and
-// `actuator_count` actuators; else what is wrong with it (NaN or Inf, a joint or an
-// actuator beyond the body's, an unknown type).
-const char* command_problem(const BodyCommand& command, std::uint32_t joint_count,
-                            std::uint32_t actuator_count = 0) noexcept;
 
 }  // namespace afhub::physics

@@ -1,8 +1,10 @@
 // A periodic loop for hard-real-time work at 1 kHz: paced by absolute deadlines
 // (clock_nanosleep TIMER_ABSTIME on start + k * period, never re-based on now, so
 // it does not drift), optionally under SCHED_FIFO, pinned to a CPU and with memory
-// locked. A cycle that runs past later deadlines skips those periods and counts
-// them as overruns: the loop stays on its grid instead of bursting to catch up.
+// locked. What a cycle that runs past later deadlines does is the overrun policy:
+// a controller skips those periods (it stays on its grid), the physics catches up
+// (its late steps run back to back, so that simulated time keeps up with the wall).
+// A period of 0 runs the cycles back to back, as fast as possible.
 #pragma once
 
 #include <cstdint>
@@ -13,8 +15,19 @@
 
 namespace afhub {
 
+enum class OverrunPolicy {
+  // Stay on the grid: the periods a cycle ran past are skipped and counted as
+  // overruns (controllers: a late command is worth less than the next one on time).
+  kSkip,
+  // Catch up: the cycles whose deadlines passed run back to back until the loop is
+  // on time again; each cycle that ends past the next deadline counts as an overrun
+  // (the physics: 10 s of wall time are 10 000 steps of 1 ms).
+  kCatchUp,
+};
+
 struct LoopOptions {
-  std::int64_t period_ns = 1'000'000;
+  std::int64_t period_ns = 1'000'000;  // 0: as fast as possible (no sleeping, no overruns)
+  OverrunPolicy overrun = OverrunPolicy::kSkip;
   int fifo_priority = 0;         // 1..99: SCHED_FIFO at this priority; 0: the normal scheduler
   int cpu = -1;                  // pin the loop's thread to this CPU; -1: any
   bool lock_memory = false;      // mlockall and pre-fault the stack: no page faults in the loop
@@ -27,10 +40,24 @@ struct LoopOptions {
 // Applies the options to the calling thread; refusals are reported naming `who`.
 RealtimeGrant apply_realtime(const LoopOptions& options, const char* who);
 
-// Calls `cycle` once per period until it returns false, options.max_cycles or a
-// stop signal. Each cycle's wake-up latency and compute time go into `timing`;
-// `after` (optional) runs once per cycle outside the measured compute time, with
-// the current CLOCK_MONOTONIC time: publish statistics there.
+// What a periodic loop runs each cycle, in this order.
+struct LoopCycle {
+  // Optional and untimed: waiting for something other than the clock once awake
+  // (a lockstep barrier). False ends the loop at once.
+  std::function<bool()> wait;
+  // The cycle's work, timed as its compute time. False ends the loop after `after`.
+  std::function<bool()> work;
+  // Optional, outside the measured time, with the current CLOCK_MONOTONIC time:
+  // publish statistics there.
+  std::function<void(std::int64_t now_ns)> after;
+};
+
+// Runs `cycle` once per period until its work returns false, options.max_cycles or
+// a stop signal. Each cycle's wake-up latency (from its deadline to the wake-up)
+// and compute time (its work) go into `timing`, with the overruns.
+void run_periodic(const LoopOptions& options, LoopTiming& timing, const LoopCycle& cycle);
+
+// The same with no wait: `cycle` is the work.
 void run_periodic(const LoopOptions& options, LoopTiming& timing,
                   const std::function<bool()>& cycle,
                   const std::function<void(std::int64_t now_ns)>& after = {});

@@ -1,8 +1,8 @@
-// The physics loop of `afhub run`: a fixed step, paced in real time by absolute
-// deadlines (start + k * dt, never re-based, so there is no drift) or run as fast
-// as possible; commands in and states out through SimChannels when given; world
-// commands (pause, resume, step, reset) obeyed; in lockstep, each step waits for
-// the lockstep clients' answers. Measures what the report needs.
+// The physics loop of `afhub run`: a fixed step, paced in real time on rt's loop
+// runner by absolute deadlines (start + k * dt, never re-based, so there is no
+// drift; late steps are caught up) or run as fast as possible; commands in and states out through
+// SimChannels when given; world commands (pause, resume, step, reset) obeyed; in lockstep, each
+// step waits for the lockstep clients' answers. Measures what the report needs.
 #pragma once
 
 #include <cstdint>

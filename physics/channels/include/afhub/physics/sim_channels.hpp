@@ -1,7 +1,9 @@
 // The simulation on the hub's channels: each active body (not `passive`) and each
 // soft body publishes its state and reads its command slot; the world publishes
 // its clock, counters, lights and cameras, and reads world commands.
-// Commands are checked before they reach Bullet; a per-body watchdog zeroes a
+// This adapter is the one place where the wire payloads (BodyCommand, BodyState,
+// WorldState) meet the core's types (BodyInput, BodyReading): a command is copied
+// out of shared memory once, checked, then applied. A per-body watchdog zeroes a
 // body's commands when they stop coming. Needs connect_to_hub() first.
 //
 // Lockstep (enable_lockstep): a body whose command is marked lockstep and answers
@@ -19,12 +21,16 @@
 
 #include "afhub/hub/bodies.hpp"
 #include "afhub/physics/simulation.hpp"
+#include "afhub/shm_layout/body_command.hpp"
+#include "afhub/shm_layout/body_state.hpp"
 #include "afhub/shm_layout/world.hpp"
 
 namespace afhub::physics {
 
 struct LockstepOptions {
   std::uint32_t wait_for = 0;                    // hold step 0 until this many clients joined
+  std::int64_t wait_timeout_ns = 0;              // give up waiting for them after this; 0: never
+  std::int64_t wait_report_ns = 2'000'000'000;   // say whom it still waits for this often
   std::int64_t client_timeout_ns = 100'000'000;  // how long a step waits for an answer
   int max_misses = 3;                            // late steps in a row before a client is dropped
 };
@@ -35,11 +41,16 @@ class SimChannels {
 
   // The watchdog's policy for a body (its channel name or a suffix after a '/'):
   // hold its joints where they are instead of zeroing efforts. Throws afhub::Error
-  // when no body matches.
+  // listing the candidates when no active body matches or the name is ambiguous.
   void hold_on_watchdog(const std::string& body);
 
   void enable_lockstep(const LockstepOptions& options);
   bool lockstep() const { return lockstep_; }
+  // Before the first step: holds step 0 (publishing it again, applying commands)
+  // until `wait_for` lockstep clients joined, saying every `wait_report_ns` how many
+  // joined and which bodies have no client yet. False when a stop signal came;
+  // throws afhub::Error when `wait_timeout_ns` passes first.
+  bool wait_for_clients();
   // Applies commands as they come until every body in the barrier has answered the
   // current step, or the timeout. False when a stop signal came while waiting.
   bool await_lockstep() noexcept;
@@ -76,12 +87,6 @@ class SimChannels {
     std::uint64_t applied_answer_step = 0;  // the step the command being applied answers
     int misses = 0;                         // late steps in a row
   };
-  struct WorldObject {
-    const WorldObjectSpec* spec = nullptr;
-    int parent = -1;  // body index, or -1 for the world frame
-    Pose local;
-  };
-
   // The world's clock as last published, for publishing a held step again.
   struct WorldClock {
     double wall_time_s = 0.0;
@@ -90,14 +95,25 @@ class SimChannels {
   };
   static constexpr std::int64_t kRepublishWhileWaitingNs = 20'000'000;
 
-  void note_lockstep_answer(Channel& channel, const BodyCommand& command) noexcept;
+  // What a command's header says about the step it answers, copied with the command.
+  struct Answer {
+    std::uint64_t step = 0;
+    std::uint32_t pid = 0;
+    bool lockstep = false;
+  };
+  void note_lockstep_answer(Channel& channel, const Answer& answer) noexcept;
+  void republish_held_step() noexcept;
+  // "ambf/env/base, ambf/env/link1": the active bodies no lockstep client answers for.
+  std::string bodies_without_client() const;
   void fill_objects(std::array<WorldObjectPose, kMaxWorldObjects>& out,
-                    const std::vector<WorldObject>& objects) const noexcept;
+                    const std::vector<WorldObjectSpec>& specs,
+                    Pose (Simulation::*pose)(std::size_t) const noexcept) const noexcept;
 
   Simulation& sim_;
   std::int64_t watchdog_ns_;
   std::vector<Channel> channels_;
-  std::vector<WorldObject> lights_, cameras_;
+  BodyInput input_;      // the command being checked and applied, out of shared memory
+  BodyReading reading_;  // a body's readings on their way into its state
   DirectoryPublisher directory_;
   Writer<WorldState> world_;
   LatestReader<WorldCommand> world_command_;

@@ -1,0 +1,211 @@
+// ADF rigid bodies (BODY blocks): mass and inertia, placement, material, visual and
+// collision geometry (meshes or primitive shapes), the Cartesian controller, color.
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+#include "adf_blocks.hpp"
+#include "afhub/shm_layout/channel_names.hpp"
+
+namespace afhub::physics::adf {
+namespace {
+
+const std::set<std::string> kBodyKeys = {"name",
+                                         "namespace",
+                                         "mesh",
+                                         "shape",
+                                         "geometry",
+                                         "compound shape",
+                                         "collision mesh",
+                                         "collision mesh type",
+                                         "collision shape",
+                                         "collision geometry",
+                                         "collision offset",
+                                         "compound collision shape",
+                                         "collision margin",
+                                         "collision groups",
+                                         "mass",
+                                         "inertia",
+                                         "inertial offset",
+                                         "location",
+                                         "scale",
+                                         "friction",
+                                         "damping",
+                                         "restitution",
+                                         "passive",
+                                         "visible",
+                                         "color",
+                                         "color rgba",
+                                         "color components",
+                                         "controller",
+                                         "controller output type",
+                                         "publish frequency",
+                                         "publish children names",
+                                         "publish joint names",
+                                         "publish joint positions",
+                                         "high resolution path",
+                                         "low resolution path",
+                                         "gravity",
+                                         "plugins",
+                                         "shaders"};
+
+// Colors are kept for a future viewer: `color rgba`, `color components` or a named `color`.
+void read_color(const FileReader& file, const YAML::Node& block, BodySpec& body) {
+  if (YAML::Node rgba = block["color rgba"]) {
+    file.require_map(rgba, "color rgba", "{r: 1, g: 0, b: 0, a: 1}");
+    std::array<double, 4> color{0.0, 0.0, 0.0, 1.0};
+    const char* keys[4] = {"r", "g", "b", "a"};
+    for (int i = 0; i < 4; ++i)
+      file.optional_non_negative(rgba, keys[i], color[i], std::string("color rgba.") + keys[i]);
+    body.color_rgba = color;
+  } else if (YAML::Node components = block["color components"]) {
+    file.require_map(components, "color components", "{diffuse: {r, g, b}, transparency: 1}");
+    std::array<double, 4> color{0.5, 0.5, 0.5, 1.0};
+    if (YAML::Node diffuse = components["diffuse"]) {
+      file.require_map(diffuse, "color components.diffuse", "{r: 1, g: 0, b: 0}");
+      const char* keys[3] = {"r", "g", "b"};
+      for (int i = 0; i < 3; ++i)
+        file.optional_non_negative(diffuse, keys[i], color[i],
+                                   std::string("color components.diffuse.") + keys[i]);
+    }
+    file.optional_non_negative(components, "transparency", color[3],
+                               "color components.transparency");
+    body.color_rgba = color;
+  }
+  if (YAML::Node name = block["color"]) body.color_name = file.text(name, "color");
+}
+
+}  // namespace
+
+BodySpec read_body(const FileReader& file, const YAML::Node& block, const std::string& identifier,
+                   const FileContext& context) {
+  BodySpec body;
+  read_block_head(file, block, identifier, kBodyKeys, "body", body);
+  body.file_index = context.file_index;
+  std::erase(body.name, ' ');
+  const std::string name_space = block_namespace(file, block, context);
+  body.channel = body_channel_name(name_space, body.name);
+  if (auto problem = channel_name_problem(body.channel); !problem.empty())
+    fail(body.where, problem);
+
+  YAML::Node mass = block["mass"];
+  if (!mass)
+    fail(body.where, "'" + identifier +
+                         "' has no 'mass' (AMBF would silently use 1 kg); give 'mass: 0' for a "
+                         "static body or its mass in kg");
+  body.mass_kg = file.non_negative(mass, "mass");
+  if (YAML::Node inertia = block["inertia"]) {
+    Vec3 value = file.vec3(inertia, "inertia", "ix", "iy", "iz");
+    if (value.x < 0 || value.y < 0 || value.z < 0)
+      fail(file.at(inertia), "'inertia' components must not be negative");
+    body.inertia_kgm2 = value;
+  }
+  if (YAML::Node offset = block["inertial offset"])
+    body.inertial_offset = file.placement(offset, "inertial offset");
+  if (YAML::Node location = block["location"]) body.location = file.placement(location, "location");
+  if (YAML::Node scale = block["scale"]) {
+    body.scale = file.number(scale, "scale");
+    if (body.scale <= 0) fail(file.at(scale), "'scale' must be positive, got " + scale.Scalar());
+  }
+  file.optional_flag(block, "passive", body.passive);
+  if (YAML::Node friction = block["friction"]) {
+    file.require_map(friction, "friction", "{static: 0.5, rolling: 0.01}");
+    file.optional_non_negative(friction, "static", body.static_friction, "friction.static");
+    file.optional_non_negative(friction, "rolling", body.rolling_friction, "friction.rolling");
+  }
+  if (YAML::Node damping = block["damping"]) {
+    file.require_map(damping, "damping", "{linear: 0.04, angular: 0.1}");
+    file.optional_non_negative(damping, "linear", body.linear_damping, "damping.linear");
+    file.optional_non_negative(damping, "angular", body.angular_damping, "damping.angular");
+  }
+  file.optional_non_negative(block, "restitution", body.restitution, "restitution");
+  file.optional_non_negative(block, "collision margin", body.collision_margin, "collision margin");
+  if (YAML::Node groups = block["collision groups"]) {
+    if (!groups.IsSequence())
+      fail(file.at(groups), "'collision groups' must be a list of integers 0..999");
+    for (const auto& group : groups) {
+      double value = file.number(group, "collision groups entry");
+      if (value < 0 || value > 999 || value != std::floor(value))
+        fail(file.at(group), "collision groups are integers from 0 to 999, got " + group.Scalar());
+      body.collision_groups.push_back(static_cast<int>(value));
+    }
+  }
+  if (YAML::Node gravity = block["gravity"])
+    body.gravity_mps2 = file.vec3(gravity, "gravity");
+  else
+    body.gravity_mps2 = context.gravity;
+
+  std::string high = context.high_res_folder, low = context.low_res_folder;
+  if (YAML::Node h = block["high resolution path"]) high = mesh_folder(file, h, context.dir);
+  if (YAML::Node l = block["low resolution path"]) low = mesh_folder(file, l, context.dir);
+  // `mesh: ''` (Blender exports it for an empty) means no geometry at all.
+  const YAML::Node mesh_node = block["mesh"];
+  const bool mesh = mesh_node && !(mesh_node.IsScalar() && mesh_node.Scalar().empty());
+  YAML::Node shape = block["shape"];
+  YAML::Node compound = block["compound shape"];
+  const int visual_kinds = (mesh ? 1 : 0) + (shape ? 1 : 0) + (compound ? 1 : 0);
+  if (visual_kinds > 1)
+    fail(body.where, "'" + identifier +
+                         "' gives more than one of 'mesh', 'shape' and 'compound shape'; keep one");
+  if (mesh) body.visual_mesh = resolve_mesh(file, mesh_node, high, "mesh");
+  if (shape)
+    body.visual_shapes.push_back(read_shape(file, shape, block["geometry"], "geometry", block));
+  if (compound) body.visual_shapes = read_compound(file, compound, "compound shape");
+
+  if (YAML::Node type = block["collision mesh type"]) {
+    static const std::map<std::string, CollisionMeshType> kTypes = {
+        {"convex_hull", CollisionMeshType::kConvexHull},
+        {"convex_mesh", CollisionMeshType::kConvexMesh},
+        {"trimesh", CollisionMeshType::kTrimesh},
+        {"point_cloud", CollisionMeshType::kPointCloud}};
+    auto found = kTypes.find(lower(file.text(type, "collision mesh type")));
+    if (found == kTypes.end())
+      fail(file.at(type), "unknown collision mesh type '" + type.Scalar() +
+                              "'; use CONVEX_HULL, CONVEX_MESH, TRIMESH or POINT_CLOUD");
+    body.collision_mesh_type = found->second;
+  }
+  if (YAML::Node offset = block["collision offset"])
+    body.collision_offset = file.placement(offset, "collision offset");
+  YAML::Node collision_shape = block["collision shape"];
+  YAML::Node collision_compound = block["compound collision shape"];
+  YAML::Node collision_mesh = block["collision mesh"];
+  if ((collision_shape ? 1 : 0) + (collision_compound ? 1 : 0) + (collision_mesh ? 1 : 0) > 1)
+    fail(body.where, "'" + identifier +
+                         "' gives more than one of 'collision mesh', 'collision shape' and "
+                         "'compound collision shape'; keep one");
+  if (collision_shape) {
+    ShapeSpec spec =
+        read_shape(file, collision_shape, block["collision geometry"], "collision geometry", block);
+    // Upstream: a primitive collision shape without its own offset sits at the inertial offset.
+    if (body.collision_offset)
+      spec.offset = *body.collision_offset;
+    else if (body.inertial_offset)
+      spec.offset = *body.inertial_offset;
+    body.collision_shapes.push_back(spec);
+  } else if (collision_compound) {
+    body.collision_shapes = read_compound(file, collision_compound, "compound collision shape");
+  } else if (collision_mesh) {
+    body.collision_mesh = resolve_mesh(file, collision_mesh, low, "collision mesh");
+  } else if (mesh) {
+    body.collision_mesh = resolve_mesh(file, mesh_node, low,
+                                       "mesh (as collision mesh, from the low resolution path)");
+  } else {
+    body.collision_shapes = body.visual_shapes;
+  }
+
+  scale_shapes(body.visual_shapes, body.scale);
+  scale_shapes(body.collision_shapes, body.scale);
+  if (YAML::Node controller = block["controller"]) {
+    file.require_map(controller, "controller", "{linear: {P, I, D}, angular: {P, I, D}}");
+    if (YAML::Node linear = controller["linear"])
+      body.linear_controller = read_pid(file, linear, "controller.linear");
+    if (YAML::Node angular = controller["angular"])
+      body.angular_controller = read_pid(file, angular, "controller.angular");
+  }
+  if (YAML::Node output = block["controller output type"])
+    body.controller_output = read_output_type(file, output);
+  read_color(file, block, body);
+  return body;
+}
+
+}  // namespace afhub::physics::adf

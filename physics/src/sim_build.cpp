@@ -1,0 +1,225 @@
+// Build: the Bullet objects, made once from the Model. Rigid bodies at `location` x
+// `inertial offset` with their collision shapes and inertia, joints, soft bodies
+// with their config, sensor rays grouped by body, constraint actuators, and the
+// world file's lights and cameras (their frames, on their parent bodies).
+#include <BulletSoftBody/btSoftBodyHelpers.h>
+
+#include <map>
+
+#include "afhub/shm_layout/error.hpp"
+#include "simulation_data.hpp"
+
+namespace afhub::physics {
+namespace {
+
+// Bullet's btSoftBody::Config and Material fields by their ADF names.
+void configure_soft_body(btSoftBody& soft, const SoftBodySpec& spec) {
+  btSoftBody::Config& c = soft.m_cfg;
+  btSoftBody::Material& m = *soft.m_materials[0];
+  const std::map<std::string, btScalar*> fields = {{"kVCF", &c.kVCF},
+                                                   {"kDP", &c.kDP},
+                                                   {"kDG", &c.kDG},
+                                                   {"kLF", &c.kLF},
+                                                   {"kPR", &c.kPR},
+                                                   {"kVC", &c.kVC},
+                                                   {"kDF", &c.kDF},
+                                                   {"kMT", &c.kMT},
+                                                   {"kCHR", &c.kCHR},
+                                                   {"kKHR", &c.kKHR},
+                                                   {"kSHR", &c.kSHR},
+                                                   {"kAHR", &c.kAHR},
+                                                   {"kSRHR_CL", &c.kSRHR_CL},
+                                                   {"kSKHR_CL", &c.kSKHR_CL},
+                                                   {"kSSHR_CL", &c.kSSHR_CL},
+                                                   {"kSR_SPLT_CL", &c.kSR_SPLT_CL},
+                                                   {"kSK_SPLT_CL", &c.kSK_SPLT_CL},
+                                                   {"kSS_SPLT_CL", &c.kSS_SPLT_CL},
+                                                   {"maxvolume", &c.maxvolume},
+                                                   {"timescale", &c.timescale},
+                                                   {"kLST", &m.m_kLST},
+                                                   {"kAST", &m.m_kAST},
+                                                   {"kVST", &m.m_kVST}};
+  const std::map<std::string, int*> iterations = {{"viterations", &c.viterations},
+                                                  {"piterations", &c.piterations},
+                                                  {"diterations", &c.diterations},
+                                                  {"citerations", &c.citerations}};
+  for (const auto& [key, value] : spec.config) {
+    if (auto field = fields.find(key); field != fields.end()) *field->second = value;
+    if (auto count = iterations.find(key); count != iterations.end())
+      *count->second = static_cast<int>(value);
+  }
+  if (spec.bending_constraint > 0) soft.generateBendingConstraints(spec.bending_constraint, &m);
+  if (spec.clusters > 0) soft.generateClusters(spec.clusters);
+}
+
+// A light or camera looking along `direction` (its x axis) with `up` as its z axis.
+btQuaternion look_rotation(const Vec3& direction, const Vec3& up) {
+  btVector3 x = to_bt(direction);
+  x = x.length2() > 1e-24 ? x.normalized() : btVector3(1, 0, 0);
+  btVector3 y = to_bt(up).cross(x);
+  if (y.length2() < 1e-12) y = btVector3(0, 1, 0).cross(x);
+  y.normalize();
+  const btVector3 z = x.cross(y);
+  btQuaternion rotation;
+  btMatrix3x3(x.x(), y.x(), z.x(), x.y(), y.y(), z.y(), x.z(), y.z(), z.z()).getRotation(rotation);
+  return rotation;
+}
+
+// "/ambf/env/BODY LightCone" names the body whose identifier is "BODY LightCone".
+int find_parent(const Model& model, const std::string& parent) {
+  if (parent.empty()) return -1;
+  const std::string identifier = parent.substr(parent.find_last_of('/') + 1);
+  for (std::size_t b = 0; b < model.bodies.size(); ++b)
+    if (model.bodies[b].identifier == identifier) return static_cast<int>(b);
+  return -1;
+}
+
+}  // namespace
+
+void Simulation::Data::build_bodies() {
+  std::map<std::string, TriangleMesh> meshes;  // each file read once
+  auto mesh_of = [&](const BodySpec& spec) -> const TriangleMesh* {
+    const std::string& path = spec.collision_mesh;
+    if (path.empty()) return nullptr;
+    const std::string key = path + "@" + std::to_string(spec.scale);
+    auto found = meshes.find(key);
+    if (found == meshes.end()) found = meshes.emplace(key, load_mesh(path, spec.scale)).first;
+    return &found->second;
+  };
+  bodies.resize(model.bodies.size());
+  for (std::size_t i = 0; i < model.bodies.size(); ++i) {
+    const BodySpec& spec = model.bodies[i];
+    BodyData& body = bodies[i];
+    body.commanded_joints.reserve(model.descendant_joints[i].size());  // no allocation in a run
+    const TriangleMesh* mesh = mesh_of(spec);
+    body.dynamic = spec.mass_kg > 0.0;
+    Placement inertial = spec.inertial_offset.value_or(Placement{});
+    std::optional<MeshMassProperties> properties;
+    if (mesh && (!spec.inertial_offset || !spec.inertia_kgm2)) properties = mass_properties(*mesh);
+    if (!spec.inertial_offset && properties) {
+      const auto& c = properties->centroid_m;
+      inertial.position_m = {c[0], c[1], c[2]};
+    }
+    const btTransform mesh_from_com = to_transform(inertial);
+    body.com_from_mesh = mesh_from_com.inverse();
+    body.shape = build_collision_shape(spec, body.com_from_mesh, mesh, body.dynamic);
+    btVector3 inertia(0, 0, 0);
+    if (body.dynamic) {
+      if (spec.inertia_kgm2) {
+        inertia = to_bt(*spec.inertia_kgm2);
+      } else if (properties) {
+        const auto& unit = properties->inertia_per_kg;
+        inertia = btVector3(unit[0], unit[1], unit[2]) * spec.mass_kg;
+      } else if (!spec.collision_shapes.empty()) {
+        body.shape.root->calculateLocalInertia(spec.mass_kg, inertia);
+      } else {
+        // No geometry at all: a small solid sphere of 5 cm radius.
+        inertia = btVector3(1, 1, 1) * (0.4 * spec.mass_kg * 0.05 * 0.05);
+      }
+    }
+    btRigidBody::btRigidBodyConstructionInfo info(spec.mass_kg, nullptr, body.shape.root, inertia);
+    body.initial_com = to_transform(spec.location) * mesh_from_com;
+    info.m_startWorldTransform = body.initial_com;
+    info.m_friction = spec.static_friction;
+    info.m_rollingFriction = spec.rolling_friction;
+    info.m_restitution = spec.restitution;
+    info.m_linearDamping = spec.linear_damping;
+    info.m_angularDamping = spec.angular_damping;
+    body.body = std::make_unique<btRigidBody>(info);
+    body.body->setUserIndex(static_cast<int>(i));
+    body.body->setActivationState(DISABLE_DEACTIVATION);  // controllers expect live bodies
+    if (spec.gravity_mps2) body.body->setFlags(body.body->getFlags() | BT_DISABLE_WORLD_GRAVITY);
+    world.addRigidBody(body.body.get());
+    if (spec.gravity_mps2) body.body->setGravity(to_bt(*spec.gravity_mps2));
+  }
+}
+
+void Simulation::Data::build_joints() {
+  for (const JointSpec& spec : model.joints) {
+    BodyData& parent = bodies[spec.parent];
+    BodyData& child = bodies[spec.child];
+    joints.push_back(std::make_unique<JointModel>(spec, *parent.body, *child.body,
+                                                  parent.com_from_mesh, child.com_from_mesh, dt_s));
+    world.addConstraint(&joints.back()->constraint(), spec.ignore_inter_collision);
+  }
+}
+
+void Simulation::Data::build_soft_bodies() {
+  for (const SoftBodySpec& spec : model.soft_bodies) {
+    const TriangleMesh mesh = load_mesh(spec.mesh, spec.scale);
+    const btTransform place = to_transform(spec.location);
+    std::vector<btScalar> vertices;
+    for (const auto& v : mesh.vertices) {
+      const btVector3 p = place * btVector3(v[0], v[1], v[2]);
+      vertices.insert(vertices.end(), {p.x(), p.y(), p.z()});
+    }
+    std::vector<int> triangles;
+    for (const auto& t : mesh.triangles)
+      triangles.insert(triangles.end(),
+                       {static_cast<int>(t[0]), static_cast<int>(t[1]), static_cast<int>(t[2])});
+    btSoftBody* soft = btSoftBodyHelpers::CreateFromTriMesh(
+        world.getWorldInfo(), vertices.data(), triangles.data(),
+        static_cast<int>(mesh.triangles.size()), false);
+    configure_soft_body(*soft, spec);
+    soft->setTotalMass(spec.mass_kg);
+    for (int node : spec.fixed_nodes) {
+      if (node >= soft->m_nodes.size())
+        throw Error(spec.where.str() + ": error: fixed node " + std::to_string(node) +
+                    " does not exist; the mesh has " + std::to_string(soft->m_nodes.size()) +
+                    " nodes (0 to " + std::to_string(soft->m_nodes.size() - 1) + ")");
+      soft->setMass(node, 0);
+    }
+    soft->setUserIndex(-1);
+    soft->setActivationState(DISABLE_DEACTIVATION);
+    world.addSoftBody(soft);
+    SoftBodyData data;
+    data.body = soft;
+    for (int n = 0; n < soft->m_nodes.size(); ++n)
+      data.initial_positions.push_back(soft->m_nodes[n].m_x);
+    soft_bodies.push_back(std::move(data));
+  }
+}
+
+void Simulation::Data::build_sensors() {
+  // Rays grouped by parent body, in file order, so that each body reads a contiguous run.
+  for (std::size_t b = 0; b < bodies.size(); ++b) {
+    bodies[b].first_ray = rays.size();
+    for (const SensorSpec& sensor : model.sensors) {
+      if (sensor.parent != static_cast<int>(b)) continue;
+      const btTransform place = to_transform(sensor.location);
+      for (const auto& [offset, direction] : sensor.rays) {
+        Ray ray;
+        ray.parent = static_cast<int>(b);
+        ray.from_in_mesh = place * to_bt(offset);
+        ray.to_in_mesh = place * (to_bt(offset) + to_bt(direction).normalized() * sensor.range_m);
+        ray.range_m = sensor.range_m;
+        rays.push_back(ray);
+      }
+    }
+    bodies[b].ray_count = rays.size() - bodies[b].first_ray;
+  }
+}
+
+void Simulation::Data::build_actuators() {
+  probe.setCollisionShape(&probe_shape);
+  for (std::size_t a = 0; a < model.actuators.size(); ++a) {
+    const ActuatorSpec& spec = model.actuators[a];
+    ActuatorData actuator;
+    actuator.parent = spec.parent;
+    actuator.point_in_mesh = to_bt(spec.location.position_m);
+    actuators.push_back(std::move(actuator));
+    bodies[spec.parent].actuators.push_back(static_cast<int>(a));
+  }
+}
+
+void Simulation::Data::build_world_objects() {
+  auto build = [&](const std::vector<WorldObjectSpec>& specs, std::vector<WorldObjectData>& out) {
+    for (const WorldObjectSpec& spec : specs)
+      out.push_back({find_parent(model, spec.parent),
+                     btTransform(look_rotation(spec.direction, spec.up), to_bt(spec.position_m))});
+  };
+  build(model.world.lights, lights);
+  build(model.world.cameras, cameras);
+}
+
+}  // namespace afhub::physics

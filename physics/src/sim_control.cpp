@@ -1,0 +1,130 @@
+// Control: a body's input, once checked (input_problem), becomes its current one:
+// its joint values go to its descendant joints in order, its actuators hold or let
+// go. Before each step its Cartesian input is applied as a force, a velocity or
+// through its PID; the watchdog clears an input or holds the joints where they are.
+#include "simulation_data.hpp"
+
+namespace afhub::physics {
+
+void Simulation::set_input(std::size_t index, const BodyInput& input) noexcept {
+  Data& d = *data_;
+  BodyData& body = d.bodies[index];
+  if (!body.commanded || body.type != input.cartesian) {
+    body.linear_integral = body.angular_integral = btVector3(0, 0, 0);
+    body.has_previous_error = false;
+  }
+  body.commanded = true;
+  body.type = input.cartesian;
+  body.target = from_pose(input.target_pose);
+  body.force = to_bt(input.wrench.force_n);
+  body.torque = to_bt(input.wrench.torque_nm);
+  body.linear_velocity = to_bt(input.twist.linear_mps);
+  body.angular_velocity = to_bt(input.twist.angular_radps);
+  const std::vector<int>& below = d.model.descendant_joints[index];
+  body.commanded_joints.clear();  // capacity reserved for every descendant joint
+  for (std::uint32_t j = 0; j < input.joint_count && j < below.size(); ++j) {
+    d.joints[below[j]]->command(input.joint_modes[j], input.joint_values[j]);
+    body.commanded_joints.push_back(below[j]);
+  }
+  for (std::uint32_t a = 0; a < input.actuator_count && a < body.actuators.size(); ++a)
+    d.actuate(d.actuators[body.actuators[a]], input.engage[a]);
+}
+
+void Simulation::clear_input(std::size_t index) noexcept {
+  BodyData& body = data_->bodies[index];
+  body.commanded = false;
+  for (int joint : body.commanded_joints) data_->joints[joint]->release();
+  body.commanded_joints.clear();
+}
+
+void Simulation::hold_joints(std::size_t index) noexcept {
+  clear_input(index);
+  BodyData& body = data_->bodies[index];
+  for (int joint : data_->model.descendant_joints[index]) {
+    JointModel& model = *data_->joints[joint];
+    model.command(JointMode::kPosition, model.position());
+    body.commanded_joints.push_back(joint);
+  }
+}
+
+void Simulation::Data::apply_cartesian(BodyData& body) noexcept {
+  body.applied = {};
+  if (!body.commanded) return;
+  btRigidBody& rb = *body.body;
+  switch (body.type) {
+    case CartesianMode::kForce:
+      rb.applyCentralForce(body.force);
+      rb.applyTorque(body.torque);
+      body.applied = {from_bt(body.force), from_bt(body.torque)};
+      break;
+    case CartesianMode::kVelocity:
+      rb.setLinearVelocity(body.linear_velocity);
+      rb.setAngularVelocity(body.angular_velocity);
+      break;
+    case CartesianMode::kPosition: {
+      const btTransform target_com = body.target * body.com_from_mesh.inverse();
+      if (!body.dynamic) {  // static bodies are moved, as upstream
+        rb.setWorldTransform(target_com);
+        break;
+      }
+      const btTransform& now = rb.getWorldTransform();
+      const btVector3 linear_error = target_com.getOrigin() - now.getOrigin();
+      const btQuaternion delta = target_com.getRotation() * now.getRotation().inverse();
+      btVector3 angular_error = delta.getAxis() * delta.getAngle();
+      if (delta.getAngle() > SIMD_PI)
+        angular_error = delta.getAxis() * (delta.getAngle() - SIMD_2_PI);
+      body.linear_integral += linear_error * dt_s;
+      body.angular_integral += angular_error * dt_s;
+      const btVector3 linear_rate = body.has_previous_error
+                                        ? (linear_error - body.previous_linear_error) / dt_s
+                                        : btVector3(0, 0, 0);
+      const btVector3 angular_rate = body.has_previous_error
+                                         ? (angular_error - body.previous_angular_error) / dt_s
+                                         : btVector3(0, 0, 0);
+      body.previous_linear_error = linear_error;
+      body.previous_angular_error = angular_error;
+      body.has_previous_error = true;
+      const BodySpec& spec = model.bodies[rb.getUserIndex()];
+      const Pid& l = spec.linear_controller;
+      const Pid& a = spec.angular_controller;
+      const btVector3 linear = l.p * linear_error + l.i * body.linear_integral + l.d * linear_rate;
+      const btVector3 angular =
+          a.p * angular_error + a.i * body.angular_integral + a.d * angular_rate;
+      if (spec.controller_output == ControllerOutput::kForce) {
+        rb.applyCentralForce(linear);
+        rb.applyTorque(angular);
+        body.applied = {from_bt(linear), from_bt(angular)};
+      } else {
+        rb.setLinearVelocity(linear);
+        rb.setAngularVelocity(angular);
+      }
+      break;
+    }
+  }
+}
+
+const char* input_problem(const BodyInput& input, std::uint32_t joint_count,
+                          std::uint32_t actuator_count) noexcept {
+  if (static_cast<std::uint8_t>(input.cartesian) > 2)
+    return "cartesian_type is not FORCE (0), POSITION (1) or VELOCITY (2)";
+  if (input.joint_count > joint_count || input.joint_count > kBodyJointCapacity)
+    return "joint_count is beyond the body's joints";
+  if (input.actuator_count > actuator_count || input.actuator_count > kBodyActuatorCapacity)
+    return "actuator_count is beyond the body's actuators";
+  const Pose& p = input.target_pose;
+  if (!finite(p.position_m) || !std::isfinite(p.orientation.x) || !std::isfinite(p.orientation.y) ||
+      !std::isfinite(p.orientation.z) || !std::isfinite(p.orientation.w))
+    return "pose holds NaN or Inf";
+  if (!finite(input.wrench.force_n) || !finite(input.wrench.torque_nm))
+    return "wrench holds NaN or Inf";
+  if (!finite(input.twist.linear_mps) || !finite(input.twist.angular_radps))
+    return "twist holds NaN or Inf";
+  for (std::uint32_t j = 0; j < input.joint_count; ++j) {
+    if (!std::isfinite(input.joint_values[j])) return "a joint value is NaN or Inf";
+    if (static_cast<std::uint8_t>(input.joint_modes[j]) > 2)
+      return "a joint type is not EFFORT (0), POSITION (1) or VELOCITY (2)";
+  }
+  return nullptr;
+}
+
+}  // namespace afhub::physics
