@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
-# An installed afhub works on its own: `cmake --install` to a prefix, the example
-# controller built against it with find_package(afhub), the installed `afhub run`
-# simulating the installed example arm, and the controller moving a joint.
+# An installed afhub works on its own: `cmake --install` to a prefix, the examples
+# built against it with find_package(afhub) (a controller, and the simulation
+# embedded in a program), the installed `afhub run` simulating the installed
+# example arm, and the controller moving a joint.
 # Nothing installed may point into the build tree.
 #   install_test.sh BUILD_DIR SOURCE_DIR WORK_DIR
 set -euo pipefail
@@ -19,9 +20,23 @@ if readelf -p .rodata "$prefix/bin/afhub" | grep -F "$build_dir" ||
   exit 1
 fi
 
-cmake -S "$source_dir/examples/wave_controller" -B "$work/example" -G Ninja \
-  -DCMAKE_PREFIX_PATH="$prefix" > "$work/example-configure.log"
-cmake --build "$work/example" > "$work/example-build.log"
+for example in wave_controller embedded_simulation; do
+  cmake -S "$source_dir/examples/$example" -B "$work/$example" -G Ninja \
+    -DCMAKE_PREFIX_PATH="$prefix" > "$work/$example-configure.log"
+  cmake --build "$work/$example" > "$work/$example-build.log"
+done
+
+# The physics library alone, in a program of the user's: the arm's joints driven
+# to 0.5 rad for 2 s; the shoulder gets there.
+"$work/embedded_simulation/embedded_simulation" "$prefix/share/afhub/models/arm7.yaml" base 0.5 2 \
+  > "$work/embedded.txt"
+shoulder=$(awk '$1 == "afhub/arm/link1-link2" {print $2}' "$work/embedded.txt")
+echo "install_test: the embedded simulation drove the arm's shoulder to $shoulder rad (target 0.5)"
+python3 -c "import sys; sys.exit(0 if abs($shoulder - 0.5) < 0.05 else 1)" || {
+  echo "install_test: the embedded simulation did not drive the shoulder to 0.5 rad" >&2
+  cat "$work/embedded.txt" >&2
+  exit 1
+}
 
 # Only the installed afhub is reachable; the hub it starts is stopped at the end.
 export PATH="$prefix/bin:/usr/bin:/bin"
@@ -52,7 +67,7 @@ wait_for "the hub" afhub ls
 afhub run "$prefix/share/afhub/models/arm7.yaml" > "$work/run.log" 2>&1 &
 pids+=($!)
 wait_for "the arm" afhub echo arm/base --count 1
-"$work/example/wave_controller" arm/base > "$work/controller.log" 2>&1 &
+"$work/wave_controller/wave_controller" arm/base > "$work/controller.log" 2>&1 &
 pids+=($!)
 
 # The controller swings joint 0 by +-0.5 rad at 0.5 Hz: within 4 s it passes 0.3 rad.

@@ -9,8 +9,8 @@
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/shm_layout/body_state.hpp"
 #include "afhub_process.hpp"
-#include "ambf_corpus.hpp"
 #include "hub_environment.hpp"
+#include "shared_models.hpp"
 
 namespace afhub::test {
 namespace {
@@ -73,7 +73,7 @@ TEST(Cli, CheckReportsAModelOrWhereItIsWrong) {
 }
 
 TEST(Cli, CheckReportsTheAmbfFourBar) {
-  AFHUB_REQUIRE_AMBF_CORPUS();
+  SKIP_WITHOUT_SHARED_MODELS();
   const std::string models = AFHUB_SHARED_MODELS "/descriptions/multi-bodies/";
   RunResult four_bar = run_afhub({"check", models + "puzzles/parallel_structure.yaml"});
   EXPECT_EQ(four_bar.exit_code, 0) << four_bar.err;

@@ -15,7 +15,7 @@
 #include "afhub/physics/sim_channels.hpp"
 #include "afhub/rt/loop_stats_publisher.hpp"
 #include "afhub_process.hpp"
-#include "ambf_corpus.hpp"
+#include "shared_models.hpp"
 
 // The replacements below pair malloc with free on purpose; GCC cannot see that.
 #pragma GCC diagnostic ignored "-Wmismatched-new-delete"
@@ -185,7 +185,7 @@ TEST(HotPath, PhysicsLoopDoesNotAllocate) {
 
 // The real AMBF models: mesh shapes, and the four-bar's loop.
 TEST(HotPath, PhysicsLoopOnAmbfModelsDoesNotAllocate) {
-  AFHUB_REQUIRE_AMBF_CORPUS();
+  SKIP_WITHOUT_SHARED_MODELS();
   const std::string models = AFHUB_SHARED_MODELS "/descriptions/multi-bodies/";
   expect_physics_loop_allocation_free(
       {models + "robots/blender-kuka.yaml", models + "puzzles/parallel_structure.yaml"},
