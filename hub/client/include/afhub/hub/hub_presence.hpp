@@ -4,6 +4,7 @@
 
 #include <sys/types.h>
 
+#include <chrono>
 #include <optional>
 #include <string>
 
@@ -27,11 +28,15 @@ enum class HubPolicy {
 };
 
 // Makes sure a hub is reachable under `policy`; throws afhub::Error otherwise.
-void ensure_hub(HubPolicy policy);
+// With kRequire and a `wait`, a process started together with the hub waits up to
+// `wait` for it to come up, saying so once on stderr as `who` ("afhub ctl").
+void ensure_hub(HubPolicy policy, std::chrono::milliseconds wait = std::chrono::milliseconds(0),
+                const std::string& who = "afhub");
 
-// Registers this process with the hub under "afhub-<role>-<pid>", after ensure_hub().
-// Call once per process, before opening any channel.
-void connect_to_hub(const std::string& role, HubPolicy policy);
+// Registers this process with the hub under "afhub-<role>-<pid>", after ensure_hub()
+// (with `wait`, as there). Call once per process, before opening any channel.
+void connect_to_hub(const std::string& role, HubPolicy policy,
+                    std::chrono::milliseconds wait = std::chrono::milliseconds(0));
 
 // iceoryx logs warnings and errors only (its default is verbose).
 void quiet_iceoryx_logs();
