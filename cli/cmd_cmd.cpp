@@ -1,12 +1,18 @@
-// `afhub cmd BODY ...`: writes a command into a body's command slot, once or at a rate.
+// `afhub cmd BODY ...`: writes a command into a body's command slot at a rate until
+// Ctrl-C (or once), joints by name or index, the joints left unnamed held.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <memory>
 #include <optional>
+#include <string>
+#include <vector>
 
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/hub/stop_signal.hpp"
+#include "afhub/physics/model.hpp"
 #include "afhub/rt/clock.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "commands.hpp"
@@ -15,21 +21,17 @@
 namespace afhub::cli {
 namespace {
 
+// As `ros2 topic pub`: keep sending, well inside the physics' 0.5 s watchdog.
+constexpr double kDefaultRateHz = 100.0;
+
 struct CmdOptions {
   std::string body;
   std::string force, torque, pose, joint_pos, joint_vel, joint_effort;
-  double repeat_hz = 0.0;
+  std::vector<std::string> joints;  // NAME=VALUE or INDEX=VALUE, position targets
+  std::string others = "hold";      // what the joints left unnamed do: hold | release
+  double repeat_hz = kDefaultRateHz;
+  bool once = false;
 };
-
-// Fixed-axis roll, pitch, yaw (AMBF's convention) to a quaternion.
-Quaternion from_rpy(double roll, double pitch, double yaw) {
-  const double cr = std::cos(roll / 2), sr = std::sin(roll / 2);
-  const double cp = std::cos(pitch / 2), sp = std::sin(pitch / 2);
-  const double cy = std::cos(yaw / 2), sy = std::sin(yaw / 2);
-  return {sr * cp * cy - cr * sp * sy, cr * sp * cy + sr * cp * sy, cr * cp * sy - sr * sp * cy,
-          cr * cp * cy + sr * sp * sy};
-}
-
 // The command every publish repeats, checked once against the body's catalog entry.
 BodyCommand build_command(const CmdOptions& options, const BodyInfo& info) {
   BodyCommand command{};
@@ -40,7 +42,7 @@ BodyCommand build_command(const CmdOptions& options, const BodyInfo& info) {
     auto v = parse_numbers(options.pose, "--pose", 6);
     command.cartesian_type = CartesianCommandType::kPosition;
     command.pose.position_m = {v[0], v[1], v[2]};
-    command.pose.orientation = from_rpy(v[3], v[4], v[5]);
+    command.pose.orientation = physics::rpy_to_quaternion({v[3], v[4], v[5]});
   }
   if (!options.force.empty()) {
     auto v = parse_numbers(options.force, "--force", 3);
@@ -66,6 +68,10 @@ BodyCommand build_command(const CmdOptions& options, const BodyInfo& info) {
                   " both set the joints; give one (per-joint types come from one flag)");
     joints.emplace(flag);
   }
+  if (joints && !options.joints.empty())
+    throw Error(std::string(joints->name) +
+                " and --joint both set the joints; give one (--joint NAME=VALUE, repeated, or a "
+                "list)");
   if (joints) {
     auto values = parse_numbers(joints->text, joints->name, 0);
     if (values.size() > info.joint_count)
@@ -78,11 +84,115 @@ BodyCommand build_command(const CmdOptions& options, const BodyInfo& info) {
       command.joint_types[i] = joints->type;
     }
   }
-  if (!cartesian_force && options.pose.empty() && !joints)
+  if (!cartesian_force && options.pose.empty() && !joints && options.joints.empty())
     throw Error(
-        "nothing to command: give --force, --torque, --pose, --joint-pos, --joint-vel or "
-        "--joint-effort");
+        "nothing to command: give --joint NAME=VALUE, --force, --torque, --pose, --joint-pos, "
+        "--joint-vel or --joint-effort");
   return command;
+}
+
+// --joint NAME=VALUE (or INDEX=VALUE), repeated: position targets by joint.
+std::map<std::size_t, double> named_joint_targets(const CmdOptions& options, const BodyInfo& info,
+                                                  BodyClient& body) {
+  const std::vector<std::string> names = joint_names_of(info);
+  std::map<std::size_t, double> targets;
+  for (const std::string& item : options.joints) {
+    const auto equals = item.rfind('=');
+    if (equals == std::string::npos || equals == 0)
+      throw Error("--joint takes NAME=VALUE or INDEX=VALUE, e.g. --joint " +
+                  (names.empty() ? std::string("shoulder") : names.front()) + "=0.3; got '" + item +
+                  "'");
+    const std::string joint = item.substr(0, equals);
+    const double value = parse_numbers(item.substr(equals + 1), "--joint " + joint, 1)[0];
+    std::size_t index = 0;
+    if (joint.find_first_not_of("0123456789") == std::string::npos) {
+      index = joint.size() < 6 ? std::stoul(joint) : names.size();
+      if (index >= names.size())
+        throw Error("--joint " + item + ": body " + std::string(name_of(info.channel)) + " has " +
+                    std::to_string(names.size()) + " joints, indices 0 to " +
+                    std::to_string(names.size() == 0 ? 0 : names.size() - 1));
+    } else {
+      index = body.joint_index(joint);  // the error lists the body's joints
+    }
+    if (!targets.emplace(index, value).second)
+      throw Error("--joint names joint " + std::to_string(index) + " (" + names[index] + ") twice");
+  }
+  return targets;
+}
+
+// The body's newest state: the positions the unnamed joints hold.
+BodyState current_state(BodyClient& body) {
+  const std::int64_t give_up = monotonic_ns() + 2'000'000'000;
+  while (!body.latest_state()) {
+    if (monotonic_ns() > give_up || stop_requested())
+      throw Error("no state came from " + body.channel() +
+                  " in 2 s, so its joints' positions are unknown: is its simulation running "
+                  "(or paused in a lockstep wait)? `--others release` commands only the joints "
+                  "given");
+    sleep_until_ns(monotonic_ns() + 1'000'000);
+  }
+  return *body.latest_state();
+}
+
+// Completes the joint part: named targets, then the joints left unnamed hold their
+// current positions (or, with --others release, are left out of the command when
+// they come after the last one given). Returns a description for stderr.
+std::string complete_joints(const CmdOptions& options, const BodyInfo& info, BodyClient& body,
+                            BodyCommand& command) {
+  const std::map<std::size_t, double> targets = named_joint_targets(options, info, body);
+  const std::vector<std::string> names = joint_names_of(info);
+  const bool any_joint = command.joint_count > 0 || !targets.empty();
+  if (!any_joint) return names.empty() ? "" : "its joints are not commanded (no joint flag given)";
+  const std::uint32_t given = command.joint_count;
+  std::vector<bool> named(names.size(), false);
+  for (std::uint32_t i = 0; i < given; ++i) named[i] = true;
+  for (const auto& [index, value] : targets) named[index] = true;
+  std::size_t unnamed = 0;
+  for (bool is_named : named) unnamed += !is_named;
+  std::string described;
+  for (const auto& [index, value] : targets) {
+    char line[160];
+    std::snprintf(line, sizeof line, "%s%s -> %g", described.empty() ? "" : ", ",
+                  names[index].c_str(), value);
+    described += line;
+  }
+  if (given > 0)
+    described = std::string(options.joint_pos.empty()
+                                ? (options.joint_vel.empty() ? "efforts on joints 0-"
+                                                             : "velocities on joints 0-")
+                                : "positions on joints 0-") +
+                std::to_string(given - 1);
+  if (options.others == "release") {
+    // Only the joints up to the last one named are in the command; a gap among them
+    // gets a zero effort, the nearest thing to letting go.
+    std::uint32_t count = given;
+    for (const auto& [index, value] : targets)
+      count = std::max(count, static_cast<std::uint32_t>(index + 1));
+    for (std::uint32_t i = given; i < count; ++i) {
+      const auto target = targets.find(i);
+      command.joint_types[i] =
+          target == targets.end() ? JointCommandType::kEffort : JointCommandType::kPosition;
+      command.joint_values[i] = target == targets.end() ? 0.0 : target->second;
+    }
+    command.joint_count = count;
+    return described + (unnamed == 1 ? "; the joint left unnamed is released (--others release)"
+                        : unnamed    ? "; the " + std::to_string(unnamed) +
+                                        " joints left unnamed are released (--others release)"
+                                  : "");
+  }
+  const BodyState state = current_state(body);
+  command.joint_count = static_cast<std::uint32_t>(names.size());
+  for (std::uint32_t i = given; i < names.size(); ++i) {
+    const auto target = targets.find(i);
+    command.joint_types[i] = JointCommandType::kPosition;
+    command.joint_values[i] = target != targets.end()
+                                  ? target->second
+                                  : (i < state.joint_count ? state.joint_positions[i] : 0.0);
+  }
+  return described + (unnamed == 1 ? "; the joint left unnamed holds its current position"
+                      : unnamed    ? "; the " + std::to_string(unnamed) +
+                                      " joints left unnamed hold their current positions"
+                                : "");
 }
 
 bool publish_once(BodyClient& body, const BodyCommand& prototype) {
@@ -100,18 +210,31 @@ bool publish_once(BodyClient& body, const BodyCommand& prototype) {
 
 int run_cmd(const CmdOptions& options) {
   install_stop_signal_handlers();
+  // --repeat 0 meant once before cmd kept sending by default: it still does.
+  const bool once = options.once || options.repeat_hz == 0.0;
   if (options.repeat_hz < 0.0 || !std::isfinite(options.repeat_hz) || options.repeat_hz > 100'000.0)
-    throw Error("--repeat must be a rate in Hz between 0 and 100000");
+    throw Error("--repeat must be a rate in Hz above 0 and at most 100000 (0: --once)");
+  if (options.others != "hold" && options.others != "release")
+    throw Error("--others takes hold or release");
   connect_to_hub("cmd", HubPolicy::kRequire);
   CatalogReader catalog;
   catalog.wait(std::chrono::milliseconds(1000));
   const BodyInfo info = catalog.resolve(options.body);
-  const BodyCommand prototype = build_command(options, info);
-  BodyClient body(name_of(info.channel));
-  if (options.repeat_hz == 0.0) {
+  BodyCommand prototype = build_command(options, info);
+  BodyClient body(info);
+  const std::string joints = complete_joints(options, info, body, prototype);
+  const std::string channel(name_of(info.channel));
+  if (once) {
     if (!publish_once(body, prototype)) throw Error("shared memory exhausted: command not sent");
+    std::fprintf(stderr,
+                 "afhub cmd: sent one command to %s%s%s.\nwarning: the physics' watchdog releases "
+                 "it when no new command comes within its period (0.5 s unless `afhub run "
+                 "--watchdog` says otherwise); leave out --once to keep sending until Ctrl-C\n",
+                 channel.c_str(), joints.empty() ? "" : ": ", joints.c_str());
     return 0;
   }
+  std::fprintf(stderr, "afhub cmd: commanding %s at %g Hz until Ctrl-C%s%s\n", channel.c_str(),
+               options.repeat_hz, joints.empty() ? "" : ": ", joints.c_str());
   const auto period_ns = static_cast<std::int64_t>(1e9 / options.repeat_hz);
   std::int64_t next = monotonic_ns();
   std::uint64_t failed = 0;
@@ -123,6 +246,10 @@ int run_cmd(const CmdOptions& options) {
   if (failed)
     std::fprintf(stderr, "afhub cmd: %llu commands not sent (shared memory exhausted)\n",
                  static_cast<unsigned long long>(failed));
+  std::fprintf(stderr,
+               "afhub cmd: stopped; the physics' watchdog releases %s after its period (0.5 s "
+               "by default)\n",
+               channel.c_str());
   return 0;
 }
 
@@ -130,19 +257,39 @@ int run_cmd(const CmdOptions& options) {
 
 void register_cmd(CLI::App& app, Runner& selected) {
   auto options = std::make_shared<CmdOptions>();
-  auto* cmd = app.add_subcommand("cmd", "Write a command into a body's command slot.");
+  auto* cmd = app.add_subcommand(
+      "cmd",
+      "Write a command into a body's command slot, again and again (100 Hz) until Ctrl-C, as "
+      "`ros2 topic pub` does: the physics' watchdog releases a body whose commands stop for its "
+      "period (0.5 s by default), so a command sent once lasts only that long (--once).\n"
+      "Joints: --joint NAME=VALUE (names from `afhub ls`, or INDEX=VALUE), repeated, sets "
+      "position targets; the joints left unnamed hold the positions they had when cmd started "
+      "(--others release lets them go instead). Without a joint flag the joints are not "
+      "commanded.");
   cmd->add_option("body", options->body, "Body channel name or a unique suffix of it")->required();
+  cmd->add_option("--joint,-j", options->joints,
+                  "NAME=VALUE or INDEX=VALUE: a joint's position target (rad or m); repeat it "
+                  "for more joints")
+      ->allow_extra_args(false);
+  cmd->add_option("--others", options->others,
+                  "What the joints left unnamed do: hold (default: hold their current positions) "
+                  "or release (no command; a gap before a named joint gets zero effort)");
   cmd->add_option("--force", options->force, "Force x,y,z in N, world frame (Cartesian FORCE)");
   cmd->add_option("--torque", options->torque,
                   "Torque x,y,z in N m, world frame (Cartesian FORCE)");
   cmd->add_option("--pose", options->pose,
                   "Target x,y,z,roll,pitch,yaw in m and rad (Cartesian POSITION)");
-  cmd->add_option("--joint-pos", options->joint_pos, "Joint position targets a,b,... (rad or m)");
+  cmd->add_option("--joint-pos", options->joint_pos,
+                  "Position targets a,b,... for joints 0, 1, ... (rad or m)");
   cmd->add_option("--joint-vel", options->joint_vel,
-                  "Joint velocity targets a,b,... (rad/s or m/s)");
-  cmd->add_option("--joint-effort", options->joint_effort, "Joint efforts a,b,... (N m or N)");
-  cmd->add_option("--repeat", options->repeat_hz,
-                  "Send at this rate in Hz until Ctrl-C (default: once)");
+                  "Velocity targets a,b,... for joints 0, 1, ... (rad/s or m/s)");
+  cmd->add_option("--joint-effort", options->joint_effort,
+                  "Efforts a,b,... for joints 0, 1, ... (N m or N)");
+  auto* repeat = cmd->add_option("--repeat,--rate", options->repeat_hz,
+                                 "Send at this rate in Hz until Ctrl-C (default 100; 0 is --once)");
+  cmd->add_flag("--once", options->once,
+                "Send one command and exit; the watchdog releases it after its period (0.5 s)")
+      ->excludes(repeat);
   cmd->callback([&selected, options] { selected = [options] { return run_cmd(*options); }; });
 }
 

@@ -22,6 +22,7 @@ struct CtlOptions {
   bool lockstep = false;
   std::uint64_t cycles = 0;
   double after_step_us = -1.0;
+  double wait_s = 10.0;
 };
 
 ControllerOptions controller_options(const CtlOptions& options, const std::string& name) {
@@ -29,8 +30,11 @@ ControllerOptions controller_options(const CtlOptions& options, const std::strin
     throw Error("--rate must be between 0 and 100000 Hz");
   if (options.fifo_priority < 0 || options.fifo_priority > 99)
     throw Error("--fifo takes a SCHED_FIFO priority from 1 to 99");
+  if (!(options.wait_s >= 0.0 && options.wait_s <= 1e6))
+    throw Error("--wait takes a number of seconds from 0 to 1e6");
   ControllerOptions controller;
   controller.name = name;
+  controller.wait_s = options.wait_s;
   controller.body = options.body;
   controller.lockstep = options.lockstep;
   controller.loop.period_ns = static_cast<std::int64_t>(std::llround(1e9 / options.rate_hz));
@@ -63,6 +67,10 @@ void add_loop_options(CLI::App* command, CtlOptions& options) {
   command->add_option("--after-step", options.after_step_us,
                       "Wake this many microseconds after each physics step (aligns the loop "
                       "to the physics so that every command is ready for the next step)");
+  command->add_option("--wait", options.wait_s,
+                      "Started before the hub or the physics (a launch script), wait this many "
+                      "seconds for the hub and then the body, saying so once, before failing "
+                      "(default 10; 0 fails at once)");
 }
 
 }  // namespace

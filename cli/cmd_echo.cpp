@@ -1,4 +1,5 @@
 // `afhub echo BODY`: prints each new state of a body, as text or JSON lines.
+#include <cmath>
 #include <cstdio>
 #include <memory>
 
@@ -18,9 +19,19 @@ struct EchoOptions {
   std::uint64_t count = 0;  // 0: until Ctrl-C
   bool json = false;
   double timeout_s = 5.0;
+  std::string fields;    // empty: all in JSON, pose, twist and joints in text
+  double rate_hz = 0.0;  // 0: every new state
 };
 
 int run_echo(const EchoOptions& options) {
+  if (options.rate_hz < 0.0 || !std::isfinite(options.rate_hz))
+    throw Error("--rate takes a rate in Hz above 0");
+  const StateFields fields = !options.fields.empty() ? parse_state_fields(options.fields)
+                             : options.json          ? StateFields{}
+                                                     : default_text_fields();
+  // Rate limited by the states' publish stamps: printed states are at least a period apart.
+  const std::int64_t min_gap_ns =
+      options.rate_hz > 0.0 ? static_cast<std::int64_t>(1e9 / options.rate_hz) : 0;
   install_stop_signal_handlers();
   connect_to_hub("echo", HubPolicy::kRequire);
   CatalogReader catalog;
@@ -29,14 +40,21 @@ int run_echo(const EchoOptions& options) {
   BodyClient body(name_of(info.channel));
   std::uint64_t printed = 0;
   std::int64_t last_sample_ns = monotonic_ns();
+  std::int64_t last_printed_stamp_ns = 0;
   while (!stop_requested() && (options.count == 0 || printed < options.count)) {
     const BodyState* state = body.latest_state();
     if (state && body.state_updated()) {
-      std::string line = options.json ? state_json(info, *state) : state_text(info, *state);
+      last_sample_ns = monotonic_ns();
+      if (printed > 0 && state->header.publish_stamp_ns - last_printed_stamp_ns < min_gap_ns) {
+        sleep_until_ns(monotonic_ns() + 200'000);
+        continue;
+      }
+      last_printed_stamp_ns = state->header.publish_stamp_ns;
+      std::string line =
+          options.json ? state_json(info, *state, fields) : state_text(info, *state, fields);
       std::printf("%s\n", line.c_str());
       std::fflush(stdout);
       ++printed;
-      last_sample_ns = monotonic_ns();
     } else if (options.count != 0 && monotonic_ns() - last_sample_ns >
                                          static_cast<std::int64_t>(options.timeout_s * 1e9)) {
       throw Error("no state from " + std::string(name_of(info.channel)) + " for " +
@@ -51,12 +69,23 @@ int run_echo(const EchoOptions& options) {
 
 void register_echo(CLI::App& app, Runner& selected) {
   auto options = std::make_shared<EchoOptions>();
-  auto* echo = app.add_subcommand("echo", "Print each new state of a body (text, or JSON lines).");
+  auto* echo = app.add_subcommand(
+      "echo",
+      "Print each new state of a body, one line each: step, time, position, orientation "
+      "(quaternion x y z w), twist and joint positions, or the --fields asked for (--json: JSON "
+      "lines).");
   echo->add_option("body", options->body, "Body channel name or a unique suffix of it, e.g. 'base'")
       ->required();
   echo->add_option("--count,-n", options->count,
                    "Stop after this many states (default: until Ctrl-C)");
   echo->add_flag("--json", options->json, "One JSON object per line.");
+  echo->add_option("--fields", options->fields,
+                   std::string("The parts of each state to show, comma-separated: ") +
+                       kStateFieldNames +
+                       " (default: pose,twist,joints in text, all in JSON; step and time always)");
+  echo->add_option("--rate", options->rate_hz,
+                   "Print at most this many states per second (by their publish stamps; default: "
+                   "every new state)");
   echo->add_option(
       "--timeout", options->timeout_s,
       "With --count: fail when no new state arrives for this many seconds (default 5)");

@@ -6,6 +6,7 @@
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/hub/json_writer.hpp"
 #include "commands.hpp"
+#include "format.hpp"
 
 namespace afhub::cli {
 namespace {
@@ -26,7 +27,12 @@ int run_ls(const LsOptions& options) {
       const BodyInfo& body = list.bodies[i];
       json.begin_object();
       json.key("body").value(name_of(body.channel));
-      json.key("rate_hz").value(body.publish_rate_hz);
+      // null until the hub has measured the rate (its first seconds).
+      json.key("rate_hz");
+      if (rate_measured(body.publish_rate_hz))
+        json.value(body.publish_rate_hz);
+      else
+        json.null();
       json.key("owner").value(name_of(body.owner));
       json.key("owner_pid").value(static_cast<long long>(body.owner_pid));
       json.key("joints").begin_array();
@@ -45,9 +51,9 @@ int run_ls(const LsOptions& options) {
   std::printf("%-40s %10s %6s  %s\n", "BODY", "RATE_HZ", "JOINTS", "OWNER");
   for (std::uint32_t i = 0; i < list.body_count; ++i) {
     const BodyInfo& body = list.bodies[i];
-    std::printf("%-40s %10.1f %6u  %s (pid %u)\n", std::string(name_of(body.channel)).c_str(),
-                body.publish_rate_hz, body.joint_count, std::string(name_of(body.owner)).c_str(),
-                body.owner_pid);
+    std::printf("%-40s %10s %6u  %s (pid %u)\n", std::string(name_of(body.channel)).c_str(),
+                rate_text(body.publish_rate_hz).c_str(), body.joint_count,
+                std::string(name_of(body.owner)).c_str(), body.owner_pid);
   }
   return 0;
 }
@@ -57,7 +63,9 @@ int run_ls(const LsOptions& options) {
 void register_ls(CLI::App& app, Runner& selected) {
   auto options = std::make_shared<LsOptions>();
   auto* ls =
-      app.add_subcommand("ls", "List the live bodies: publish rate, joints and owner process.");
+      app.add_subcommand("ls",
+                         "List the live bodies: publish rate ('-' until the hub has measured it, "
+                         "in a body's first seconds), joints and owner process.");
   ls->add_flag("--json", options->json, "Print a JSON array instead of a table.");
   ls->callback([&selected, options] { selected = [options] { return run_ls(*options); }; });
 }

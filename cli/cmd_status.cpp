@@ -13,6 +13,7 @@
 #include "afhub/shm_layout/health.hpp"
 #include "afhub/shm_layout/world.hpp"
 #include "commands.hpp"
+#include "format.hpp"
 #include "loop_table.hpp"
 
 namespace afhub::cli {
@@ -70,13 +71,14 @@ int run_status(const StatusOptions& options) {
           .end_object();
     json.end_array();
     json.key("bodies").begin_array();
-    for (std::uint32_t i = 0; i < bodies.body_count; ++i)
-      json.begin_object()
-          .key("body")
-          .value(name_of(bodies.bodies[i].channel))
-          .key("rate_hz")
-          .value(bodies.bodies[i].publish_rate_hz)
-          .end_object();
+    for (std::uint32_t i = 0; i < bodies.body_count; ++i) {
+      json.begin_object().key("body").value(name_of(bodies.bodies[i].channel)).key("rate_hz");
+      if (rate_measured(bodies.bodies[i].publish_rate_hz))
+        json.value(bodies.bodies[i].publish_rate_hz);
+      else
+        json.null();  // not measured yet
+      json.end_object();
+    }
     json.end_array();
     json.key("world");
     if (world) {
@@ -147,8 +149,8 @@ int run_status(const StatusOptions& options) {
                 health.processes[i].pid);
   std::printf("\nbodies:\n");
   for (std::uint32_t i = 0; i < bodies.body_count; ++i)
-    std::printf("  %-40s %8.1f Hz\n", std::string(name_of(bodies.bodies[i].channel)).c_str(),
-                bodies.bodies[i].publish_rate_hz);
+    std::printf("  %-40s %8s Hz\n", std::string(name_of(bodies.bodies[i].channel)).c_str(),
+                rate_text(bodies.bodies[i].publish_rate_hz).c_str());
   if (!loops.empty()) std::printf("\nloops:\n%s", loop_table(loops).c_str());
   std::printf("\nmempools: segment  chunk bytes     chunks       used   min free\n");
   for (std::uint32_t i = 0; i < health.mempool_count; ++i) {

@@ -1,6 +1,8 @@
 // Payload rendering and flag parsing (see format.hpp).
 #include "format.hpp"
 
+#include <algorithm>
+#include <array>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -20,7 +22,42 @@ void vec3(JsonWriter& json, const Vec3& v) {
 
 }  // namespace
 
-std::string state_json(const BodyInfo& info, const BodyState& state) {
+StateFields parse_state_fields(const std::string& text) {
+  StateFields fields{false, false, false, false, false, false, false};
+  const std::vector<std::string> names = split_commas(text);
+  if (names.empty())
+    throw Error(std::string("--fields takes a comma-separated list of: ") + kStateFieldNames);
+  for (const std::string& name : names) {
+    if (name == "pose") {
+      fields.pose = true;
+    } else if (name == "twist") {
+      fields.twist = true;
+    } else if (name == "wrench") {
+      fields.wrench = true;
+    } else if (name == "joints") {
+      fields.joints = true;
+    } else if (name == "joint_velocities") {
+      fields.joint_velocities = true;
+    } else if (name == "joint_efforts") {
+      fields.joint_efforts = true;
+    } else if (name == "mass") {
+      fields.mass = true;
+    } else if (name == "all") {
+      fields = StateFields{};
+    } else {
+      throw Error("--fields: no field '" + name + "'; the fields are " + kStateFieldNames);
+    }
+  }
+  return fields;
+}
+
+StateFields default_text_fields() {
+  StateFields fields;
+  fields.wrench = fields.joint_velocities = fields.joint_efforts = fields.mass = false;
+  return fields;
+}
+
+std::string state_json(const BodyInfo& info, const BodyState& state, const StateFields& fields) {
   JsonWriter json;
   const std::size_t joints = state.joint_count;
   json.begin_object();
@@ -30,55 +67,107 @@ std::string state_json(const BodyInfo& info, const BodyState& state) {
   json.key("sim_time_s").value(state.header.sim_time_s);
   json.key("publish_stamp_ns").value(static_cast<long long>(state.header.publish_stamp_ns));
   json.key("publisher_pid").value(static_cast<long long>(state.header.publisher_pid));
-  json.key("position_m");
-  vec3(json, state.pose.position_m);
-  const Quaternion& q = state.pose.orientation;
-  json.key("orientation_xyzw")
-      .begin_array()
-      .value(q.x)
-      .value(q.y)
-      .value(q.z)
-      .value(q.w)
-      .end_array();
-  json.key("linear_velocity_mps");
-  vec3(json, state.twist.linear_mps);
-  json.key("angular_velocity_radps");
-  vec3(json, state.twist.angular_radps);
-  json.key("force_n");
-  vec3(json, state.wrench.force_n);
-  json.key("torque_nm");
-  vec3(json, state.wrench.torque_nm);
-  json.key("mass_kg").value(state.mass_kg);
-  json.key("principal_inertia_kgm2");
-  vec3(json, state.principal_inertia_kgm2);
-  json.key("joint_names").begin_array();
-  for (std::size_t i = 0; i < joints && i < info.joint_count; ++i)
-    json.value(name_of(info.joint_names[i]));
-  json.end_array();
-  json.key("joint_positions").numbers(state.joint_positions, joints);
-  json.key("joint_velocities").numbers(state.joint_velocities, joints);
-  json.key("joint_efforts").numbers(state.joint_efforts, joints);
+  if (fields.pose) {
+    json.key("position_m");
+    vec3(json, state.pose.position_m);
+    const Quaternion& q = state.pose.orientation;
+    json.key("orientation_xyzw")
+        .begin_array()
+        .value(q.x)
+        .value(q.y)
+        .value(q.z)
+        .value(q.w)
+        .end_array();
+  }
+  if (fields.twist) {
+    json.key("linear_velocity_mps");
+    vec3(json, state.twist.linear_mps);
+    json.key("angular_velocity_radps");
+    vec3(json, state.twist.angular_radps);
+  }
+  if (fields.wrench) {
+    json.key("force_n");
+    vec3(json, state.wrench.force_n);
+    json.key("torque_nm");
+    vec3(json, state.wrench.torque_nm);
+  }
+  if (fields.mass) {
+    json.key("mass_kg").value(state.mass_kg);
+    json.key("principal_inertia_kgm2");
+    vec3(json, state.principal_inertia_kgm2);
+  }
+  if (fields.joints || fields.joint_velocities || fields.joint_efforts) {
+    json.key("joint_names").begin_array();
+    for (std::size_t i = 0; i < joints && i < info.joint_count; ++i)
+      json.value(name_of(info.joint_names[i]));
+    json.end_array();
+  }
+  if (fields.joints) json.key("joint_positions").numbers(state.joint_positions, joints);
+  if (fields.joint_velocities) json.key("joint_velocities").numbers(state.joint_velocities, joints);
+  if (fields.joint_efforts) json.key("joint_efforts").numbers(state.joint_efforts, joints);
   json.end_object();
   return json.str();
 }
 
-std::string state_text(const BodyInfo& info, const BodyState& state) {
+namespace {
+
+void append(std::string& out, const char* label, const double* values, std::size_t count) {
+  char number[64];
+  out += " ";
+  out += label;
+  out += " [";
+  for (std::size_t i = 0; i < count; ++i) {
+    std::snprintf(number, sizeof number, "%s%.4f", i ? " " : "", values[i]);
+    out += number;
+  }
+  out += "]";
+}
+
+}  // namespace
+
+std::string state_text(const BodyInfo& info, const BodyState& state, const StateFields& fields) {
   char line[256];
-  const Vec3& p = state.pose.position_m;
-  std::snprintf(line, sizeof line, "%s step %llu t=%.3fs pos [%.4f %.4f %.4f]",
+  std::snprintf(line, sizeof line, "%s step %llu t=%.3fs",
                 std::string(name_of(info.channel)).c_str(),
-                static_cast<unsigned long long>(state.header.sim_step), state.header.sim_time_s,
-                p.x, p.y, p.z);
+                static_cast<unsigned long long>(state.header.sim_step), state.header.sim_time_s);
   std::string out = line;
-  if (state.joint_count > 0) {
-    out += " joints [";
-    for (std::uint32_t i = 0; i < state.joint_count; ++i) {
-      std::snprintf(line, sizeof line, "%s%.4f", i ? " " : "", state.joint_positions[i]);
-      out += line;
-    }
-    out += "]";
+  const auto v3 = [](const Vec3& v) { return std::array<double, 3>{v.x, v.y, v.z}; };
+  if (fields.pose) {
+    const Quaternion& q = state.pose.orientation;
+    const std::array<double, 4> quat{q.x, q.y, q.z, q.w};
+    append(out, "pos", v3(state.pose.position_m).data(), 3);
+    append(out, "quat_xyzw", quat.data(), 4);
+  }
+  if (fields.twist) {
+    append(out, "lin_vel", v3(state.twist.linear_mps).data(), 3);
+    append(out, "ang_vel", v3(state.twist.angular_radps).data(), 3);
+  }
+  if (fields.wrench) {
+    append(out, "force", v3(state.wrench.force_n).data(), 3);
+    append(out, "torque", v3(state.wrench.torque_nm).data(), 3);
+  }
+  if (fields.mass) {
+    append(out, "mass", &state.mass_kg, 1);
+    append(out, "inertia", v3(state.principal_inertia_kgm2).data(), 3);
+  }
+  const std::size_t joints = std::min<std::size_t>(state.joint_count, kMaxJointsPerBody);
+  if (joints > 0) {
+    if (fields.joints) append(out, "joints", state.joint_positions.data(), joints);
+    if (fields.joint_velocities) append(out, "joint_vel", state.joint_velocities.data(), joints);
+    if (fields.joint_efforts) append(out, "joint_eff", state.joint_efforts.data(), joints);
   }
   return out;
+}
+
+bool rate_measured(double rate_hz) {
+  return std::isfinite(rate_hz) && rate_hz > 0.0;
+}
+
+std::string rate_text(double rate_hz) {
+  if (!rate_measured(rate_hz)) return "-";
+  char text[32];
+  std::snprintf(text, sizeof text, "%.1f", rate_hz);
+  return text;
 }
 
 std::vector<double> parse_numbers(std::string_view text, std::string_view flag,

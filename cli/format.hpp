@@ -10,10 +10,35 @@
 
 namespace afhub::cli {
 
-// One JSON line for a body state; joint names come from the catalog entry.
-std::string state_json(const BodyInfo& info, const BodyState& state);
+// The parts of a body state to show (`afhub echo --fields`).
+struct StateFields {
+  bool pose = true;    // position and orientation
+  bool twist = true;   // linear and angular velocity
+  bool wrench = true;  // applied force and torque
+  bool joints = true;  // joint positions (with their names in JSON)
+  bool joint_velocities = true;
+  bool joint_efforts = true;
+  bool mass = true;  // mass and principal inertia
+};
+// What `--fields` takes, comma-separated.
+inline constexpr const char* kStateFieldNames =
+    "pose, twist, wrench, joints, joint_velocities, joint_efforts, mass, all";
+// Parses "pose,twist,joints": the fields named; throws afhub::Error listing the valid ones.
+StateFields parse_state_fields(const std::string& text);
+// What the text form shows unless told otherwise.
+StateFields default_text_fields();
+
+// One JSON line for a body state; joint names come from the catalog entry. The
+// header's fields (body, sequence, step, times, publisher) are always there.
+std::string state_json(const BodyInfo& info, const BodyState& state,
+                       const StateFields& fields = {});
 // One human-readable line for a body state.
-std::string state_text(const BodyInfo& info, const BodyState& state);
+std::string state_text(const BodyInfo& info, const BodyState& state,
+                       const StateFields& fields = default_text_fields());
+
+// A measured rate for a table: "-" when there is no measurement yet (0 or less).
+std::string rate_text(double rate_hz);
+bool rate_measured(double rate_hz);
 
 // Parses "a,b,c" into finite numbers; throws afhub::Error naming `flag` when a value
 // is not a number, is NaN or Inf, or when the count is not `expected` (0: any count).

@@ -14,6 +14,7 @@ int main(int argc, char** argv) {
   afhub::cli::register_ls(app, selected);
   afhub::cli::register_echo(app, selected);
   afhub::cli::register_cmd(app, selected);
+  afhub::cli::register_world(app, selected);
   afhub::cli::register_status(app, selected);
   afhub::cli::register_synth(app, selected);
   afhub::cli::register_demo(app, selected);

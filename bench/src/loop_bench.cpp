@@ -51,7 +51,7 @@ void read_cyclictest(const std::string& path, LoopResult& result) {
 
 void run_loop_bench(const BenchOptions& options, LoopResult& result) {
   result.seconds = options.loop_seconds;
-  connect_to_hub("bench", HubPolicy::kAutostart, {"--bench-pools"});
+  connect_to_hub("bench", HubPolicy::kAutostart, {}, {"--bench-pools"});
   const std::string prefix = "/tmp/afhub-bench-" + std::to_string(getpid());
   const std::string priority = std::to_string(options.fifo_priority);
   std::fprintf(stderr, "afhub bench: 1 kHz loop for %.0f s against %s\n", options.loop_seconds,

@@ -89,7 +89,7 @@ void require_bench_pools() {
 }  // namespace
 
 std::unique_ptr<Transport> open_afhub_transport(Side side, const std::string& session) {
-  connect_to_hub(side == Side::kPing ? "bench" : "bench-peer", HubPolicy::kAutostart,
+  connect_to_hub(side == Side::kPing ? "bench" : "bench-peer", HubPolicy::kAutostart, {},
                  {"--bench-pools"});
   if (side == Side::kPing) require_bench_pools();
   return std::make_unique<AfhubTransport>(side, session);

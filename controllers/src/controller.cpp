@@ -81,18 +81,27 @@ void run_lockstep(BodyClient& body, const ControllerOptions& options, const Cont
 }
 
 // The body's catalog entry. A controller started together with the simulation may
-// look before the hub has listed the simulation's bodies: it keeps looking a while.
-BodyInfo find_body(const std::string& query) {
+// look before the physics has listed its bodies: it waits until `give_up_ns`,
+// saying so once.
+BodyInfo find_body(const std::string& query, const std::string& who, std::int64_t give_up_ns) {
   CatalogReader catalog;
   catalog.wait(std::chrono::milliseconds(1000));
-  const std::int64_t give_up = monotonic_ns() + 3'000'000'000;
+  bool said = false;
   for (;;) {
     try {
       return catalog.resolve(query);
-    } catch (const Error&) {
-      if (monotonic_ns() > give_up || stop_requested()) throw;
+    } catch (const Error& error) {
+      if (monotonic_ns() > give_up_ns || stop_requested()) {
+        if (!said) throw;
+        throw Error(std::string(error.what()) + " (waited for it; wait longer with --wait)");
+      }
+      if (!said)
+        std::fprintf(stderr, "%s: no body '%s' is live yet; waiting up to %.3g s for it\n",
+                     who.c_str(), query.c_str(),
+                     static_cast<double>(give_up_ns - monotonic_ns()) * 1e-9);
+      said = true;
     }
-    sleep_until_ns(monotonic_ns() + 50'000'000);
+    sleep_until_ns(monotonic_ns() + 20'000'000);
   }
 }
 
@@ -101,13 +110,18 @@ BodyInfo find_body(const std::string& query) {
 int run_controller(const ControllerOptions& options, const ControllerCycle& cycle,
                    LoopTiming* timing_out) {
   install_stop_signal_handlers();
-  connect_to_hub("ctl", HubPolicy::kRequire);
-  const BodyInfo info = find_body(options.body);
+  if (!(options.wait_s >= 0.0 && options.wait_s <= 1e6))
+    throw Error("the wait for the hub and the body must be 0 to 1e6 seconds (--wait)");
+  const std::string who = "afhub " + options.name;
+  // One deadline for the hub and then the body: what a launch script waits at most.
+  const std::int64_t give_up_ns = monotonic_ns() + static_cast<std::int64_t>(options.wait_s * 1e9);
+  connect_to_hub("ctl", HubPolicy::kRequire,
+                 std::chrono::milliseconds(static_cast<std::int64_t>(options.wait_s * 1e3)));
+  const BodyInfo info = find_body(options.body, who, give_up_ns);
   const std::string channel(name_of(info.channel));
-  BodyClient body(channel);
+  BodyClient body(info);
   LoopTiming own_timing;  // preallocated before memory is locked and the loop starts
   LoopTiming& timing = timing_out ? *timing_out : own_timing;
-  const std::string who = "afhub " + options.name;
   const RealtimeGrant grant = apply_realtime(options.loop, who.c_str());
   LoopStatsPublisher stats(options.name, channel, options.loop.period_ns, options.lockstep, grant);
   if (options.lockstep) {

@@ -200,9 +200,12 @@ TEST(Controllers, BadArgumentsGetClearErrors) {
   ScopedProcess physics(spawn_afhub({"run", kArm, "--no-autostart"}));
   BodyClient base("afhub/arm/base");
   ASSERT_TRUE(wait_until([&] { return base.latest_state() != nullptr; }, 10s));
-  RunResult missing_body = run_afhub({"ctl", "sine", "nosuchbody"});
+  RunResult missing_body = run_afhub({"ctl", "sine", "nosuchbody", "--wait", "0.5"});
   EXPECT_EQ(missing_body.exit_code, 1);
-  EXPECT_TRUE(contains(missing_body.err, "nosuchbody")) << missing_body.err;
+  EXPECT_TRUE(contains(missing_body.err, "no body 'nosuchbody' is live yet; waiting up to"))
+      << missing_body.err;
+  EXPECT_TRUE(contains(missing_body.err, "no live body is named 'nosuchbody'")) << missing_body.err;
+  EXPECT_TRUE(contains(missing_body.err, "wait longer with --wait")) << missing_body.err;
   RunResult missing_file = run_afhub({"ctl", "track", "base", folder.dir().string() + "/x.csv"});
   EXPECT_EQ(missing_file.exit_code, 1);
   EXPECT_TRUE(contains(missing_file.err, "cannot open the trajectory file")) << missing_file.err;

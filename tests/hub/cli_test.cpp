@@ -42,7 +42,7 @@ void expect_no_hub() {
 
 TEST(Cli, EveryCommandHasHelp) {
   for (const char* command :
-       {"hub", "ls", "echo", "cmd", "status", "synth", "demo", "check", "run"}) {
+       {"hub", "ls", "echo", "cmd", "status", "synth", "demo", "check", "run", "world", "ctl"}) {
     RunResult help = run_afhub({command, "--help"});
     EXPECT_EQ(help.exit_code, 0) << command;
     EXPECT_TRUE(contains(help.out, "Usage")) << command << ": " << help.out;

@@ -21,6 +21,40 @@ BodyClient::BodyClient(std::string_view body_channel)
       state_(body_state_channel(body_channel)),
       command_(body_command_channel(body_channel)) {}
 
+BodyClient::BodyClient(const BodyInfo& info) : BodyClient(name_of(info.channel)) {
+  joint_names_ = joint_names_of(info);
+  joint_names_known_ = true;
+}
+
+const std::vector<std::string>& BodyClient::joint_names() {
+  if (!joint_names_known_) {
+    CatalogReader catalog;
+    catalog.wait(std::chrono::milliseconds(1000));
+    joint_names_ = joint_names_of(catalog.resolve(channel_));
+    joint_names_known_ = true;
+  }
+  return joint_names_;
+}
+
+std::size_t BodyClient::joint_index(std::string_view name) {
+  const std::vector<std::string>& names = joint_names();
+  for (std::size_t i = 0; i < names.size(); ++i)
+    if (names[i] == name) return i;
+  std::string known;
+  for (std::size_t i = 0; i < names.size(); ++i)
+    known += (i ? ", " : "") + std::to_string(i) + " " + names[i];
+  throw Error(
+      "body " + channel_ + " has no joint named '" + std::string(name) + "'; " +
+      (names.empty() ? std::string("it has no joints") : "its joints are (index name): " + known));
+}
+
+std::vector<std::string> joint_names_of(const BodyInfo& info) {
+  std::vector<std::string> names;
+  for (std::uint32_t i = 0; i < info.joint_count && i < kMaxJointsPerBody; ++i)
+    names.emplace_back(name_of(info.joint_names[i]));
+  return names;
+}
+
 namespace {
 
 template <std::size_t N>

@@ -19,6 +19,7 @@
 #include <thread>
 #include <vector>
 
+#include "afhub/hub/stop_signal.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "iceoryx_hoofs/log/logmanager.hpp"
 #include "iceoryx_posh/runtime/posh_runtime.hpp"
@@ -129,8 +130,26 @@ std::optional<pid_t> running_hub_pid() {
   return pid;
 }
 
-void ensure_hub(HubPolicy policy, const std::vector<std::string>& hub_options) {
+void ensure_hub(HubPolicy policy, std::chrono::milliseconds wait, const std::string& who,
+                const std::vector<std::string>& hub_options) {
   if (probe_roudi() == RoudiPresence::kRunning) return;
+  if (policy == HubPolicy::kRequire && wait.count() > 0) {
+    // Probing the socket, never iceoryx: its runtime would wait 60 s, then abort.
+    char seconds[32];
+    std::snprintf(seconds, sizeof seconds, "%g", static_cast<double>(wait.count()) * 1e-3);
+    std::fprintf(stderr, "%s: no hub is running yet; waiting up to %s s for one\n", who.c_str(),
+                 seconds);
+    const auto deadline = std::chrono::steady_clock::now() + wait;
+    while (probe_roudi() != RoudiPresence::kRunning) {
+      if (stop_requested()) throw Error("stopped while waiting for a hub");
+      if (std::chrono::steady_clock::now() > deadline)
+        throw Error("no hub came up within " + std::string(seconds) +
+                    " s. Start one with `afhub hub` (foreground), or `afhub run MODEL`, which "
+                    "starts one in the background; or wait longer (--wait)");
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    return;
+  }
   if (policy == HubPolicy::kRequire)
     throw Error(
         "no hub is running. Start one with `afhub hub` (foreground) or let `afhub run` start one "
@@ -152,10 +171,10 @@ void ensure_hub(HubPolicy policy, const std::vector<std::string>& hub_options) {
                pid ? static_cast<int>(*pid) : -1, kHubLogPath);
 }
 
-void connect_to_hub(const std::string& role, HubPolicy policy,
+void connect_to_hub(const std::string& role, HubPolicy policy, std::chrono::milliseconds wait,
                     const std::vector<std::string>& hub_options) {
   if (!runtime_name_storage().empty()) return;
-  ensure_hub(policy, hub_options);
+  ensure_hub(policy, wait, "afhub " + role, hub_options);
   quiet_iceoryx_logs();
   std::string name = "afhub-" + role + "-" + std::to_string(getpid());
   if (name.size() > 100) throw Error("process role '" + role + "' is too long for iceoryx");

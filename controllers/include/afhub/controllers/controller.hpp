@@ -33,6 +33,10 @@ struct ControllerOptions {
   // command is ready before the next step (the grid is aligned to the first state
   // seen; both loops keep absolute deadlines). -1: start on the clock, unaligned.
   std::int64_t after_step_ns = -1;
+  // Started together with the hub and the physics (a launch script), the controller
+  // waits this long for the hub and then for its body, saying so once on stderr,
+  // before giving up with an error. 0: fail at once when either is missing.
+  double wait_s = 10.0;
 };
 
 // `state` is the body's newest state; `command` starts zeroed. Both live in shared
@@ -41,8 +45,8 @@ using ControllerCycle = std::function<void(const BodyState& state, BodyCommand& 
 
 // Connects to the hub, opens the body and runs `cycle` until Ctrl-C or SIGTERM
 // (or options.loop.max_cycles). Returns the process exit code; throws afhub::Error
-// when there is no hub or no such body. When `timing` is given, the loop records
-// its timing there, for the caller to read after the return.
+// when there is no hub or no such body after options.wait_s. When `timing` is given, the loop
+// records its timing there, for the caller to read after the return.
 int run_controller(const ControllerOptions& options, const ControllerCycle& cycle,
                    LoopTiming* timing = nullptr);
 

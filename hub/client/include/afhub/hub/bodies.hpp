@@ -44,6 +44,17 @@ class BodyClient {
  public:
   // `body_channel` is a full channel name as listed in the catalog.
   explicit BodyClient(std::string_view body_channel);
+  // From the body's catalog entry (CatalogReader::resolve): its joint names come along.
+  explicit BodyClient(const BodyInfo& info);
+
+  // The body's joint names, in the order of its state's and command's joint arrays.
+  // Constructed from a channel name, the client looks them up in the catalog on the
+  // first call (not real-time safe: call it before the loop).
+  const std::vector<std::string>& joint_names();
+  // The index of joint `name` in the body's state and command, e.g.
+  //   command.joint_values[body.joint_index("link1-link2")] = 0.3;
+  // Throws afhub::Error listing the body's joint names when it has no such joint.
+  std::size_t joint_index(std::string_view name);
 
   // The newest state, or nullptr before the first; read in place.
   const BodyState* latest_state() noexcept { return state_.latest(); }
@@ -60,7 +71,12 @@ class BodyClient {
   std::string channel_;
   LatestReader<BodyState> state_;
   Writer<BodyCommand> command_;
+  std::vector<std::string> joint_names_;
+  bool joint_names_known_ = false;
 };
+
+// The joint names of a catalog entry, in state order.
+std::vector<std::string> joint_names_of(const BodyInfo& info);
 
 // A catalog entry for a body this process owns; throws afhub::Error on a bad name.
 BodyInfo make_body_info(std::string_view body_channel, const std::vector<std::string>& joint_names);

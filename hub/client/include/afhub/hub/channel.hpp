@@ -52,6 +52,10 @@ class RawWriter {
   const ChannelId& channel() const { return channel_; }
   // Whether any reader is subscribed now: each one costs every publish.
   bool has_readers() const noexcept;
+  // The next publish carries sequence `last` + 1. A short-lived writer of commands
+  // that readers act on once per sequence number (world commands) starts from a
+  // number no earlier process used, e.g. the monotonic clock.
+  void continue_sequence_after(std::uint64_t last) noexcept { sequence_ = last; }
 
  private:
   struct Port;

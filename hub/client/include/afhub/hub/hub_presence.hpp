@@ -4,6 +4,7 @@
 
 #include <sys/types.h>
 
+#include <chrono>
 #include <optional>
 #include <string>
 #include <vector>
@@ -27,13 +28,18 @@ enum class HubPolicy {
   kRequire,    // fail with a message when none runs
 };
 
-// Makes sure a hub is reachable under `policy`; throws afhub::Error otherwise. A hub
-// started here gets `hub_options` (e.g. {"--bench-pools"}).
-void ensure_hub(HubPolicy policy, const std::vector<std::string>& hub_options = {});
+// Makes sure a hub is reachable under `policy`; throws afhub::Error otherwise.
+// With kRequire and a `wait`, a process started together with the hub waits up to
+// `wait` for it to come up, saying so once on stderr as `who` ("afhub ctl"). With
+// kAutostart, a hub started here gets `hub_options` (e.g. {"--bench-pools"}).
+void ensure_hub(HubPolicy policy, std::chrono::milliseconds wait = std::chrono::milliseconds(0),
+                const std::string& who = "afhub", const std::vector<std::string>& hub_options = {});
 
-// Registers this process with the hub under "afhub-<role>-<pid>", after ensure_hub().
-// Call once per process, before opening any channel.
+// Registers this process with the hub under "afhub-<role>-<pid>", after ensure_hub()
+// (with `wait` and `hub_options`, as there). Call once per process, before opening
+// any channel.
 void connect_to_hub(const std::string& role, HubPolicy policy,
+                    std::chrono::milliseconds wait = std::chrono::milliseconds(0),
                     const std::vector<std::string>& hub_options = {});
 
 // iceoryx logs warnings and errors only (its default is verbose).

@@ -1,0 +1,164 @@
+// `afhub world pause|resume|step N|reset`: controls the simulation's clock from the
+// command line. Each writes one WorldCommand, then reads the world state until the
+// simulation has acted on it, and says what happened.
+#include <chrono>
+#include <cstdio>
+#include <memory>
+#include <thread>
+
+#include "afhub/hub/bodies.hpp"
+#include "afhub/hub/hub_presence.hpp"
+#include "afhub/hub/stop_signal.hpp"
+#include "afhub/rt/clock.hpp"
+#include "afhub/shm_layout/channel_names.hpp"
+#include "afhub/shm_layout/error.hpp"
+#include "afhub/shm_layout/world.hpp"
+#include "commands.hpp"
+
+namespace afhub::cli {
+namespace {
+
+struct WorldOptions {
+  std::uint32_t steps = 1;
+  double timeout_s = 5.0;
+};
+
+ChannelId world_channel(std::string_view event) {
+  return {std::string(kService), std::string(kWorldInstance), std::string(event)};
+}
+
+// The world state is published every step, paused or not, and keeps no history:
+// a reader gets the next one.
+WorldState first_world_state(LatestReader<WorldState>& reader) {
+  const std::int64_t give_up = monotonic_ns() + 2'000'000'000;
+  while (!reader.latest()) {
+    if (monotonic_ns() > give_up || stop_requested())
+      throw Error(
+          "no simulation is running: nothing has published the world state for 2 s. Start one "
+          "with `afhub run MODEL` (or `afhub synth`); a lockstep run waiting for its clients "
+          "publishes nothing until they join");
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  return *reader.latest();
+}
+
+void print_state(const char* what, const WorldState& state) {
+  std::printf("%s at step %llu (t = %.3f s)\n", what,
+              static_cast<unsigned long long>(state.header.sim_step), state.header.sim_time_s);
+}
+
+int run_world(WorldAction action, const WorldOptions& options) {
+  if (!(options.timeout_s > 0.0 && options.timeout_s <= 3600.0))
+    throw Error("--timeout takes a number of seconds from 0 to 3600");
+  if (action == WorldAction::kStep && options.steps == 0)
+    throw Error("step takes a number of steps of 1 or more");
+  install_stop_signal_handlers();
+  connect_to_hub("world", HubPolicy::kRequire);
+  LatestReader<WorldState> reader(world_channel(kStateEvent));
+  const WorldState before = first_world_state(reader);
+  if (action == WorldAction::kStep && !before.paused)
+    throw Error(
+        "the world is running, so there is nothing to step: pause it first (`afhub world "
+        "pause`), then `afhub world step N`");
+
+  Writer<WorldCommand> writer(world_channel(kCommandEvent));
+  // The simulation acts on each sequence number once: start past any number an
+  // earlier `afhub world` could have used.
+  writer.raw().continue_sequence_after(static_cast<std::uint64_t>(monotonic_ns()));
+  WorldCommand* command = writer.loan();
+  if (!command) throw Error("shared memory is exhausted: the world command was not sent");
+  command->action = action;
+  command->step_count = options.steps;
+  writer.publish(command);
+
+  // Confirmed by the world state: the paused flag, or the step count.
+  const std::uint64_t target_step = before.header.sim_step + options.steps;
+  std::uint64_t previous_step = before.header.sim_step;
+  const std::int64_t give_up = monotonic_ns() + static_cast<std::int64_t>(options.timeout_s * 1e9);
+  while (!stop_requested() && monotonic_ns() < give_up) {
+    const WorldState* state = reader.latest();
+    if (state && reader.updated()) {
+      switch (action) {
+        case WorldAction::kPause:
+          if (state->paused) {
+            print_state(before.paused ? "already paused" : "paused", *state);
+            return 0;
+          }
+          break;
+        case WorldAction::kResume:
+          if (!state->paused) {
+            print_state(before.paused ? "resumed" : "already running", *state);
+            return 0;
+          }
+          break;
+        case WorldAction::kStep:
+          if (state->header.sim_step >= target_step) {
+            std::printf("stepped %u step%s: now paused at step %llu (t = %.3f s)\n", options.steps,
+                        options.steps == 1 ? "" : "s",
+                        static_cast<unsigned long long>(state->header.sim_step),
+                        state->header.sim_time_s);
+            return 0;
+          }
+          break;
+        case WorldAction::kReset:
+          // The step count goes back to 0; from step 0 there is nothing to see.
+          if (state->header.sim_step < previous_step || before.header.sim_step == 0) {
+            std::printf("reset from step %llu: now at step %llu (t = %.3f s)%s\n",
+                        static_cast<unsigned long long>(previous_step),
+                        static_cast<unsigned long long>(state->header.sim_step),
+                        state->header.sim_time_s, state->paused ? ", paused" : "");
+            return 0;
+          }
+          previous_step = state->header.sim_step;
+          break;
+        case WorldAction::kNone:
+          return 0;
+      }
+    }
+    std::this_thread::sleep_for(std::chrono::microseconds(200));
+  }
+  throw Error("the command was sent but the simulation did not act on it within " +
+              std::to_string(options.timeout_s) +
+              " s: is it stalled, or waiting for lockstep clients? (`afhub status`)");
+}
+
+}  // namespace
+
+void register_world(CLI::App& app, Runner& selected) {
+  auto* world = app.add_subcommand(
+      "world",
+      "Control the running simulation's clock: pause, resume, step N while paused, reset. "
+      "Each waits until the simulation has acted (read back from its world state) and says "
+      "what happened; it fails when no simulation runs.");
+  world->require_subcommand(1);
+  struct Action {
+    const char* name;
+    const char* help;
+    WorldAction action;
+  };
+  for (const Action& entry :
+       {Action{"pause", "Stop stepping; states are still published every period.",
+               WorldAction::kPause},
+        Action{"resume", "Step again in real time (or lockstep) after a pause.",
+               WorldAction::kResume},
+        Action{"step", "While paused, advance N steps (default 1), then stay paused.",
+               WorldAction::kStep},
+        Action{"reset",
+               "Put every body back where the model starts it, clear its commands and set the "
+               "step count to 0 (paused or running, as before).",
+               WorldAction::kReset}}) {
+    auto options = std::make_shared<WorldOptions>();
+    auto* command = world->add_subcommand(entry.name, entry.help);
+    if (entry.action == WorldAction::kStep)
+      command->add_option("N", options->steps, "Number of steps (default 1)");
+    command->add_option("--timeout", options->timeout_s,
+                        "Fail when the simulation has not acted within this many seconds "
+                        "(default 5)");
+    const WorldAction action = entry.action;
+    command->callback([&selected, options, action] {
+      selected = [options, action] { return run_world(action, *options); };
+    });
+  }
+}
+
+}  // namespace afhub::cli

@@ -1,0 +1,306 @@
+// The command line a user expects, end to end against one hub: `afhub world`
+// against the real simulation, `afhub cmd` keeping a command alive with joints by
+// name (and the C++ client's joint_index), `afhub echo --fields/--rate`, and
+// `afhub ls` before a rate is measured.
+#include <gtest/gtest.h>
+#include <signal.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <thread>
+
+#include "afhub/hub/bodies.hpp"
+#include "afhub/shm_layout/channel_names.hpp"
+#include "afhub/shm_layout/error.hpp"
+#include "afhub/shm_layout/world.hpp"
+#include "afhub_process.hpp"
+#include "model_files.hpp"
+
+namespace afhub::test {
+namespace {
+
+using namespace std::chrono_literals;
+
+const std::string kArm = AFHUB_EXAMPLE_MODELS "/arm7.yaml";
+
+LatestReader<WorldState> world_reader() {
+  return LatestReader<WorldState>(
+      {std::string(kService), std::string(kWorldInstance), std::string(kStateEvent)});
+}
+
+// The comma-separated numbers that follow `key` in `text`, up to the closing ']'.
+std::vector<double> numbers_after(const std::string& text, const std::string& key,
+                                  std::size_t from = 0) {
+  std::vector<double> numbers;
+  std::size_t at = text.find(key, from);
+  if (at == std::string::npos) return numbers;
+  const char* cursor = text.c_str() + at + key.size();
+  while (*cursor && *cursor != ']') {
+    char* end = nullptr;
+    numbers.push_back(std::strtod(cursor, &end));
+    if (end == cursor) break;
+    cursor = *end == ',' ? end + 1 : end;
+  }
+  return numbers;
+}
+
+int occurrences(const std::string& text, const std::string& part) {
+  int count = 0;
+  for (std::size_t at = text.find(part); at != std::string::npos; at = text.find(part, at + 1))
+    ++count;
+  return count;
+}
+
+TEST(World, HelpOnEverySubcommand) {
+  for (std::vector<std::string> args : {std::vector<std::string>{"world", "--help"},
+                                        {"world", "pause", "--help"},
+                                        {"world", "resume", "--help"},
+                                        {"world", "step", "--help"},
+                                        {"world", "reset", "--help"}}) {
+    RunResult help = run_afhub(args);
+    EXPECT_EQ(help.exit_code, 0) << args[1];
+    EXPECT_TRUE(contains(help.out, "Usage")) << help.out;
+  }
+  EXPECT_TRUE(contains(run_afhub({"world", "step", "--help"}).out, "While paused"));
+}
+
+TEST(World, WithoutASimulationItSaysSo) {
+  RunResult pause = run_afhub({"world", "pause"});
+  EXPECT_EQ(pause.exit_code, 1);
+  EXPECT_TRUE(contains(pause.err, "no simulation is running")) << pause.err;
+  EXPECT_TRUE(contains(pause.err, "afhub run")) << pause.err;
+}
+
+TEST(World, PauseStepResumeAndResetTheSimulation) {
+  afhub::testing::ModelFolder folder;
+  const std::string log = (folder.dir() / "run.log").string();
+  ScopedProcess physics(spawn_afhub({"run", kArm, "--no-autostart"}, log));
+  LatestReader<WorldState> world = world_reader();
+  ASSERT_TRUE(
+      wait_until([&] { return world.latest() && world.latest()->header.sim_step > 50; }, 10s))
+      << read_file(log);
+
+  RunResult refused = run_afhub({"world", "step", "5"});
+  EXPECT_EQ(refused.exit_code, 1);
+  EXPECT_TRUE(contains(refused.err, "pause it first")) << refused.err;
+
+  RunResult pause = run_afhub({"world", "pause"});
+  ASSERT_EQ(pause.exit_code, 0) << pause.err;
+  EXPECT_TRUE(contains(pause.out, "paused at step ")) << pause.out;
+  ASSERT_TRUE(wait_until([&] { return world.latest()->paused == 1; }, 2s));
+  const std::uint64_t paused_at = world.latest()->header.sim_step;
+  EXPECT_EQ(std::strtoull(pause.out.c_str() + pause.out.find("step ") + 5, nullptr, 10), paused_at)
+      << pause.out;
+
+  // Each `afhub world` is a new process: its command must not be taken for an old one.
+  RunResult step = run_afhub({"world", "step", "10"});
+  ASSERT_EQ(step.exit_code, 0) << step.err;
+  EXPECT_TRUE(
+      contains(step.out, "stepped 10 steps: now paused at step " + std::to_string(paused_at + 10)))
+      << step.out;
+  RunResult step_again = run_afhub({"world", "step"});
+  ASSERT_EQ(step_again.exit_code, 0) << step_again.err;
+  EXPECT_TRUE(contains(step_again.out,
+                       "stepped 1 step: now paused at step " + std::to_string(paused_at + 11)))
+      << step_again.out;
+  std::this_thread::sleep_for(100ms);
+  world.latest();
+  EXPECT_EQ(world.latest()->header.sim_step, paused_at + 11) << "paused: no step of its own";
+  EXPECT_TRUE(contains(run_afhub({"world", "pause"}).out, "already paused"));
+
+  RunResult reset = run_afhub({"world", "reset"});
+  ASSERT_EQ(reset.exit_code, 0) << reset.err;
+  EXPECT_TRUE(contains(reset.out, "reset from step " + std::to_string(paused_at + 11) +
+                                      ": now at step 0 (t = 0.000 s), paused"))
+      << reset.out;
+  ASSERT_TRUE(wait_until([&] { return world.latest()->header.sim_step == 0; }, 2s));
+
+  RunResult resume = run_afhub({"world", "resume"});
+  ASSERT_EQ(resume.exit_code, 0) << resume.err;
+  EXPECT_TRUE(contains(resume.out, "resumed at step ")) << resume.out;
+  EXPECT_TRUE(wait_until(
+      [&] { return world.latest()->paused == 0 && world.latest()->header.sim_step > 100; }, 5s));
+  EXPECT_EQ(physics.stop(), 0);
+}
+
+// Synthetic bodies: synth/body0 and synth/body1, joints "bodyN-jointJ". Uncommanded,
+// their joints follow a sinusoid; a position target pulls a joint to it.
+class WithSynth : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    synth_.pid = spawn_afhub({"synth", "--bodies", "2", "--joints", "3", "--no-autostart"},
+                             "/tmp/afhub-test-synth.log");
+    ASSERT_TRUE(wait_until([&] { return body0_.latest_state() && body1_.latest_state(); }, 10s));
+    // The hub lists a new process's bodies a moment after their states flow.
+    CatalogReader catalog;
+    catalog.wait(1s);
+    ASSERT_TRUE(wait_until(
+        [&] {
+          const BodyList& list = catalog.latest();
+          return list.body_count == 2 &&
+                 list.bodies[0].owner_pid == static_cast<std::uint32_t>(synth_.pid);
+        },
+        5s));
+  }
+  void TearDown() override { EXPECT_EQ(synth_.stop(), 0); }
+  // The joint positions of a fresh state of body0.
+  std::array<double, 3> joints_now() {
+    const std::uint64_t seen = body0_.latest_state()->header.sequence;
+    EXPECT_TRUE(wait_until([&] { return body0_.latest_state()->header.sequence > seen; }, 2s));
+    const BodyState& state = *body0_.latest_state();
+    return {state.joint_positions[0], state.joint_positions[1], state.joint_positions[2]};
+  }
+  ScopedProcess synth_{-1};
+  BodyClient body0_{"synth/body0"};
+  BodyClient body1_{"synth/body1"};
+};
+
+TEST_F(WithSynth, CmdKeepsSendingPastTheWatchdogAndUnnamedJointsHold) {
+  afhub::testing::ModelFolder folder;
+  const std::string log = (folder.dir() / "cmd.log").string();
+  ScopedProcess commander(
+      spawn_afhub({"cmd", "body0", "--joint", "body0-joint0=0.3", "-j", "2=-0.1"}, log));
+  ASSERT_TRUE(wait_until(
+      [&] {
+        auto q = joints_now();
+        return std::abs(q[0] - 0.3) < 1e-3 && std::abs(q[2] + 0.1) < 1e-3;
+      },
+      5s))
+      << read_file(log);
+  const std::array<double, 3> first = joints_now();
+  // Well past synth's 0.5 s watchdog: still commanded, and the unnamed joint 1 holds
+  // where it was (uncommanded, it would follow its sinusoid).
+  std::this_thread::sleep_for(1500ms);
+  const std::array<double, 3> later = joints_now();
+  EXPECT_NEAR(later[0], 0.3, 1e-3);
+  EXPECT_NEAR(later[2], -0.1, 1e-3);
+  EXPECT_NEAR(later[1], first[1], 1e-6) << "the unnamed joint moved";
+  EXPECT_EQ(wait_for_exit(commander, 0ms), -1) << "cmd stopped by itself: " << read_file(log);
+  EXPECT_EQ(stop_process(commander.pid, SIGINT), 0);
+  commander.pid = -1;
+  const std::string said = read_file(log);
+  EXPECT_TRUE(contains(said, "commanding synth/body0 at 100 Hz until Ctrl-C")) << said;
+  EXPECT_TRUE(contains(said, "body0-joint0 -> 0.3, body0-joint2 -> -0.1")) << said;
+  EXPECT_TRUE(contains(said, "the joint left unnamed holds its current position")) << said;
+  EXPECT_TRUE(contains(said, "watchdog")) << said;
+}
+
+TEST_F(WithSynth, CmdOnceWarnsAboutTheWatchdog) {
+  RunResult once = run_afhub({"cmd", "body0", "--joint", "0=0.2", "--once"});
+  EXPECT_EQ(once.exit_code, 0) << once.err;
+  EXPECT_TRUE(contains(once.err, "sent one command to synth/body0")) << once.err;
+  EXPECT_TRUE(contains(once.err, "warning: the physics' watchdog releases it")) << once.err;
+  RunResult help = run_afhub({"cmd", "--help"});
+  EXPECT_TRUE(contains(help.out, "until Ctrl-C")) << help.out;
+  EXPECT_TRUE(contains(help.out, "--once")) << help.out;
+  EXPECT_TRUE(contains(help.out, "left unnamed hold")) << help.out;
+}
+
+TEST_F(WithSynth, CmdExplainsBadJoints) {
+  struct Case {
+    std::vector<std::string> args;
+    std::string message;
+  };
+  for (const Case& bad : std::vector<Case>{
+           {{"cmd", "body0", "--joint", "elbow=0.3"},
+            "no joint named 'elbow'; its joints are (index name): 0 body0-joint0, 1 body0-joint1"},
+           {{"cmd", "body0", "--joint", "3=0.3"}, "indices 0 to 2"},
+           {{"cmd", "body0", "--joint", "99999999999999999999=0.3"}, "indices 0 to 2"},
+           {{"cmd", "body0", "--joint", "0.3"}, "--joint takes NAME=VALUE"},
+           {{"cmd", "body0", "--joint", "0=x"}, "'x' is not a finite number"},
+           {{"cmd", "body0", "--joint", "0=1", "--joint", "body0-joint0=2"}, "twice"},
+           {{"cmd", "body0", "--joint", "0=1", "--joint-pos", "1"}, "give one"},
+           {{"cmd", "body0", "--joint", "0=1", "--others", "drop"}, "--others takes hold"},
+           {{"cmd", "body0", "--joint", "0=1", "--once", "--repeat", "5"}, "excludes"},
+       }) {
+    RunResult result = run_afhub(bad.args);
+    EXPECT_NE(result.exit_code, 0) << bad.args[3];
+    EXPECT_TRUE(contains(result.err, bad.message))
+        << "expected '" << bad.message << "' in: " << result.err;
+  }
+}
+
+TEST_F(WithSynth, ClientAddressesJointsByName) {
+  CatalogReader catalog;
+  catalog.wait(1s);
+  BodyClient from_catalog(catalog.resolve("body1"));
+  EXPECT_EQ(from_catalog.joint_index("body1-joint2"), 2u);
+  EXPECT_EQ(from_catalog.joint_names().size(), 3u);
+  // From a channel name alone, the names are looked up in the catalog.
+  BodyClient from_channel("synth/body0");
+  EXPECT_EQ(from_channel.joint_index("body0-joint1"), 1u);
+  try {
+    from_channel.joint_index("elbow");
+    ADD_FAILURE() << "an unknown joint name was accepted";
+  } catch (const Error& error) {
+    EXPECT_TRUE(contains(error.what(), "no joint named 'elbow'")) << error.what();
+    EXPECT_TRUE(contains(error.what(), "0 body0-joint0, 1 body0-joint1, 2 body0-joint2"))
+        << error.what();
+  }
+}
+
+TEST_F(WithSynth, EchoShowsOrientationAndTwistAndPicksFields) {
+  RunResult text = run_afhub({"echo", "body1", "-n", "2"});
+  ASSERT_EQ(text.exit_code, 0) << text.err;
+  EXPECT_EQ(occurrences(text.out, "synth/body1 step "), 2) << text.out;
+  for (const char* part : {" pos [", " quat_xyzw [", " lin_vel [", " ang_vel [", " joints ["})
+    EXPECT_TRUE(contains(text.out, part)) << part << " in " << text.out;
+  // synth turns body1 about z at 0.2 Hz: the angular velocity is 2 pi 0.2 rad/s.
+  EXPECT_NEAR(numbers_after(text.out, "ang_vel [")[2], 2 * M_PI * 0.2, 1e-3) << text.out;
+
+  RunResult twist = run_afhub({"echo", "body1", "-n", "1", "--fields", "twist"});
+  ASSERT_EQ(twist.exit_code, 0) << twist.err;
+  EXPECT_TRUE(contains(twist.out, "lin_vel [")) << twist.out;
+  EXPECT_FALSE(contains(twist.out, " pos [")) << twist.out;
+  EXPECT_FALSE(contains(twist.out, "joints [")) << twist.out;
+
+  RunResult json = run_afhub({"echo", "body1", "-n", "1", "--json", "--fields", "joints,wrench"});
+  ASSERT_EQ(json.exit_code, 0) << json.err;
+  EXPECT_TRUE(contains(json.out, "\"joint_positions\":[")) << json.out;
+  EXPECT_TRUE(contains(json.out, "\"force_n\":[")) << json.out;
+  EXPECT_FALSE(contains(json.out, "\"position_m\"")) << json.out;
+  EXPECT_FALSE(contains(json.out, "\"joint_velocities\"")) << json.out;
+
+  RunResult bad = run_afhub({"echo", "body1", "--fields", "pose,colour"});
+  EXPECT_EQ(bad.exit_code, 1);
+  EXPECT_TRUE(contains(bad.err, "no field 'colour'; the fields are pose, twist")) << bad.err;
+}
+
+TEST_F(WithSynth, EchoRateLimitsByThePublishStamps) {
+  RunResult limited = run_afhub({"echo", "body0", "-n", "3", "--json", "--rate", "5"});
+  ASSERT_EQ(limited.exit_code, 0) << limited.err;
+  std::vector<double> stamps;
+  for (std::size_t at = 0;
+       (at = limited.out.find("\"publish_stamp_ns\":", at)) != std::string::npos; ++at)
+    stamps.push_back(std::strtod(limited.out.c_str() + at + 19, nullptr));
+  ASSERT_EQ(stamps.size(), 3u) << limited.out;
+  // At most 5 a second: the states printed were published at least 0.2 s apart
+  // (at 1 kHz, every state would be about 1 ms after the last).
+  EXPECT_GE(stamps[1] - stamps[0], 0.2e9);
+  EXPECT_GE(stamps[2] - stamps[1], 0.2e9);
+}
+
+TEST(Ls, ARateNotMeasuredYetShowsAsADash) {
+  // A body that never publishes a state: the hub has no rate to measure.
+  DirectoryPublisher directory;
+  directory.add(make_body_info("test/silent", {"a"}));
+  directory.publish();
+  RunResult ls;
+  ASSERT_TRUE(wait_until(
+      [&] {
+        ls = run_afhub({"ls"});
+        return contains(ls.out, "test/silent");
+      },
+      5s))
+      << ls.out;
+  const std::string row = ls.out.substr(ls.out.find("test/silent"));
+  EXPECT_TRUE(contains(row.substr(0, row.find('\n')), " - ")) << ls.out;
+  EXPECT_FALSE(contains(row.substr(0, row.find('\n')), "0.0")) << ls.out;
+  RunResult json = run_afhub({"ls", "--json"});
+  EXPECT_TRUE(contains(json.out, "{\"body\":\"test/silent\",\"rate_hz\":null,")) << json.out;
+  RunResult help = run_afhub({"ls", "--help"});
+  EXPECT_TRUE(contains(help.out, "'-' until")) << help.out;
+}
+
+}  // namespace
+}  // namespace afhub::test
