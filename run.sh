@@ -46,6 +46,15 @@ run_tests() {
   local dir=$1
   # Hub tests hold the iceoryx_roudi resource lock; the others run in parallel.
   ctest --test-dir "$dir" --output-on-failure --parallel "$(nproc)"
+  # Tests skip only for a reason they print (the AMBF corpus beside the project is
+  # missing, say): say how many, and why.
+  local log="$dir/Testing/Temporary/LastTest.log" skipped
+  local one_skip='^\[  SKIPPED \] [A-Za-z].* ([0-9]* ms)$'
+  skipped=$(grep -c "$one_skip" "$log" || true)
+  if [ "$skipped" -gt 0 ]; then
+    echo "run.sh: $skipped tests skipped, because:"
+    grep -B1 "$one_skip" "$log" | grep -v "$one_skip\|^--$" | sort | uniq -c
+  fi
 }
 
 case "${1:-}" in

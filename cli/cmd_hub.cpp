@@ -13,6 +13,7 @@ struct HubCliOptions {
   std::vector<std::string> pools;
   bool bench_pools = false;
   bool dry_run = false;
+  bool force = false;  // stop: even with processes attached
 };
 
 int run_hub(const HubCliOptions& cli) {
@@ -49,11 +50,15 @@ void register_hub(CLI::App& app, Runner& selected) {
   hub->add_flag("--bench-pools", options->bench_pools,
                 "Add the pools `afhub bench` needs (1 KiB to 1 MiB samples, 20 MiB)");
   hub->add_flag("--dry-run", options->dry_run, "Print the mempools the hub would have, and exit");
-  auto* stop = hub->add_subcommand("stop", "Stop the running hub (SIGTERM, waits up to 5 s).");
+  auto* stop = hub->add_subcommand(
+      "stop",
+      "Stop the running hub (SIGTERM, waits up to 5 s). With processes attached it lists them "
+      "and stops only with --force.");
+  stop->add_flag("--force", options->force, "Stop the hub even with processes attached");
   hub->require_subcommand(0, 1);
   hub->callback([&selected, stop, options] {
     if (stop->parsed())
-      selected = [] { return stop_hub(); };
+      selected = [options] { return stop_hub(options->force); };
     else
       selected = [options] { return run_hub(*options); };
   });

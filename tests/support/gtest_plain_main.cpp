@@ -16,7 +16,7 @@ class NoHubLeftBehind : public ::testing::Environment {
     std::string command = afhub::test::read_file("/proc/" + std::to_string(*pid) + "/cmdline");
     for (char& c : command) c = c ? c : ' ';
     ADD_FAILURE() << "a hub (pid " << *pid << ": " << command << ") was left running; stopping it";
-    afhub::test::run_afhub({"hub", "stop"});
+    afhub::test::run_afhub({"hub", "stop", "--force"});
   }
 };
 

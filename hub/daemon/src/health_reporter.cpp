@@ -89,4 +89,12 @@ void HealthReporter::poll(std::chrono::steady_clock::time_point now, std::uint32
   writer_.publish(health);
 }
 
+std::vector<std::pair<std::string, pid_t>> HealthReporter::registered_processes() {
+  std::vector<std::pair<std::string, pid_t>> registered;
+  if (const auto* processes = introspection_->processes.latest())
+    for (const auto& process : processes->m_processList)
+      registered.emplace_back(process.m_name.c_str(), static_cast<pid_t>(process.m_pid));
+  return registered;
+}
+
 }  // namespace afhub

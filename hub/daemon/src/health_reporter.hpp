@@ -2,8 +2,13 @@
 // RouDi's introspection, plus uptime and body count, once a second.
 #pragma once
 
+#include <sys/types.h>
+
 #include <chrono>
 #include <memory>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "afhub/hub/channel.hpp"
 #include "afhub/shm_layout/health.hpp"
@@ -15,6 +20,8 @@ class HealthReporter {
   HealthReporter();
   ~HealthReporter();
   void poll(std::chrono::steady_clock::time_point now, std::uint32_t body_count);
+  // The processes RouDi has registered, as its introspection last said: (name, pid).
+  std::vector<std::pair<std::string, pid_t>> registered_processes();
 
  private:
   struct Introspection;

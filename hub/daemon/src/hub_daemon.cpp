@@ -10,19 +10,22 @@
 #include <chrono>
 #include <cstdio>
 #include <cstring>
+#include <set>
 #include <string>
 #include <thread>
 
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/hub/stop_signal.hpp"
+#include "afhub_roudi.hpp"
 #include "catalog_builder.hpp"
 #include "health_reporter.hpp"
 #include "iceoryx_hoofs/posix_wrapper/posix_access_rights.hpp"
 #include "iceoryx_posh/iceoryx_posh_config.hpp"
-#include "iceoryx_posh/internal/roudi/roudi.hpp"
 #include "iceoryx_posh/roudi/iceoryx_roudi_components.hpp"
 #include "iceoryx_posh/runtime/posh_runtime_single_process.hpp"
+#include "liveness.hpp"
 #include "port_lock_repair.hpp"
+#include "runtime_files.hpp"
 
 namespace afhub {
 namespace {
@@ -64,12 +67,36 @@ int take_hub_lock() {
   return fd;
 }
 
-void serve_until_stopped(iox::roudi::PortPool& ports) {
+// Unregisters every process whose pid is gone (`removed`: those already asked for,
+// which RouDi's introspection may list a moment longer).
+void remove_dead_processes(AfhubRouDi& roudi, HealthReporter& health,
+                           std::set<std::string>& removed) {
+  std::set<std::string> listed;
+  for (const auto& [name, pid] : health.registered_processes()) {
+    listed.insert(name);
+    if (pid <= 0 || pid == getpid() || removed.count(name) || !task_is_gone(pid)) continue;
+    removed.insert(name);
+    if (roudi.remove_process(name))
+      std::fprintf(stderr, "afhub hub: %s (pid %d) is gone; removed its ports and chunks\n",
+                   name.c_str(), static_cast<int>(pid));
+  }
+  std::erase_if(removed, [&](const std::string& name) { return !listed.count(name); });
+}
+
+void serve_until_stopped(AfhubRouDi& roudi, iox::roudi::PortPool& ports) {
   CatalogBuilder catalog;
   HealthReporter health;
+  std::set<std::string> removed;
+  auto next_file_sweep = std::chrono::steady_clock::now();
   while (!stop_requested()) {
     auto now = std::chrono::steady_clock::now();
     release_port_locks_of_dead_threads(ports);
+    remove_dead_processes(roudi, health, removed);
+    if (now >= next_file_sweep) {
+      for (const std::string& name : remove_stale_runtime_files())
+        std::fprintf(stderr, "afhub hub: removed the files %s left in /tmp\n", name.c_str());
+      next_file_sweep = now + std::chrono::seconds(1);
+    }
     catalog.poll(now);
     health.poll(now, catalog.body_count());
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
@@ -99,25 +126,33 @@ int run_hub_daemon(const HubOptions& options) {
 
   double pool_mib = 0.0;
   iox::roudi::IceOryxRouDiComponents components(roudi_config(options.mempools, pool_mib));
-  // Monitoring on: a crashed client is removed and its chunks are freed. The hub
-  // does not kill clients when it stops: they keep running and can reconnect.
-  iox::roudi::RouDi roudi(
-      components.rouDiMemoryManager, components.portManager,
-      iox::roudi::RouDi::RoudiStartupParameters{iox::roudi::MonitoringMode::ON, false});
+  AfhubRouDi roudi(components.rouDiMemoryManager, components.portManager);
   iox::runtime::PoshRuntimeSingleProcess runtime("afhub-hub");
   std::fprintf(stderr,
                "afhub hub: running (pid %d, %zu payload mempools, %.1f MiB). Ctrl-C stops it.\n",
                static_cast<int>(getpid()), options.mempools.size(), pool_mib);
-  serve_until_stopped(*components.rouDiMemoryManager.portPool().value());
+  serve_until_stopped(roudi, *components.rouDiMemoryManager.portPool().value());
   std::fprintf(stderr, "afhub hub: stopped\n");
   return 0;
 }
 
-int stop_hub() {
+int stop_hub(bool force) {
   auto pid = running_hub_pid();
   if (!pid || *pid <= 0) {
     std::fprintf(stderr, "afhub hub stop: no hub is running\n");
     return 0;
+  }
+  if (const auto attached = attached_processes(); !attached.empty()) {
+    std::fprintf(stderr, "afhub hub stop: %zu process%s attached to the hub (pid %d):\n",
+                 attached.size(), attached.size() == 1 ? " is" : "es are", *pid);
+    for (const AttachedProcess& process : attached)
+      std::fprintf(stderr, "  %s (pid %d)\n", process.name.c_str(), static_cast<int>(process.pid));
+    if (!force) {
+      std::fprintf(stderr,
+                   "They would lose the hub until a new one starts. Stop them first, or stop the "
+                   "hub anyway with `afhub hub stop --force`.\n");
+      return 1;
+    }
   }
   if (kill(*pid, SIGTERM) != 0) {
     std::fprintf(stderr, "afhub hub stop: cannot signal the hub (pid %d): %s\n", *pid,

@@ -14,6 +14,7 @@
 
 #include "iceoryx_posh/internal/popo/building_blocks/locking_policy.hpp"
 #include "iceoryx_posh/roudi/port_pool.hpp"
+#include "liveness.hpp"
 
 namespace afhub {
 namespace {
@@ -26,23 +27,6 @@ static_assert(std::is_standard_layout_v<ThreadSafePolicy> &&
                   sizeof(ThreadSafePolicy) == sizeof(iox::posix::mutex) &&
                   sizeof(iox::posix::mutex) == sizeof(pthread_mutex_t),
               "iceoryx's ThreadSafePolicy is no longer a bare pthread mutex: revisit this repair");
-
-// Whether thread `tid` no longer runs: no /proc entry, or a zombie (its parent has
-// not reaped it yet, but it will never unlock anything).
-bool thread_is_gone(pid_t tid) {
-  char path[32];
-  std::snprintf(path, sizeof path, "/proc/%d/stat", static_cast<int>(tid));
-  std::FILE* file = std::fopen(path, "r");
-  if (!file) return errno == ENOENT || errno == ESRCH;
-  char stat[512];
-  const std::size_t length = std::fread(stat, 1, sizeof stat - 1, file);
-  std::fclose(file);
-  stat[length] = '\0';
-  // "tid (name) S ...": the state follows the last ')' (a name may hold one).
-  const char* name_end = std::strrchr(stat, ')');
-  if (!name_end || name_end[1] != ' ') return false;
-  return name_end[2] == 'Z' || name_end[2] == 'X';
-}
 
 }  // namespace
 
@@ -59,7 +43,7 @@ pid_t release_if_owner_died(pthread_mutex_t& mutex) {
   std::atomic_ref<int> owner(data.__owner);
   if (lock.load() == 0) return 0;
   pid_t tid = owner.load();
-  if (tid <= 0 || !thread_is_gone(tid)) return 0;
+  if (tid <= 0 || !task_is_gone(tid)) return 0;
   // Still that thread's: had it unlocked before dying, __owner would have changed.
   if (!owner.compare_exchange_strong(tid, 0)) return 0;
   // The rest of the unlock the owner never reached.

@@ -42,6 +42,7 @@ struct HubOptions {
 int run_hub_daemon(const HubOptions& options);
 
 // Stops the running hub (SIGTERM, then waits up to 5 s); returns an exit code.
-int stop_hub();
+// With processes attached, it lists them and stops the hub only when `force`.
+int stop_hub(bool force);
 
 }  // namespace afhub

@@ -1,0 +1,96 @@
+// iceoryx runtimes' files in /tmp (see runtime_files.hpp).
+#include "runtime_files.hpp"
+
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <filesystem>
+#include <set>
+
+namespace afhub {
+namespace {
+
+namespace fs = std::filesystem;
+
+// iceoryx 2.0's folder for runtime sockets and locks (IOX_UDS_SOCKET_PATH_PREFIX).
+const fs::path kRuntimeDir = "/tmp";
+constexpr auto kStartupGrace = std::chrono::seconds(2);
+
+// Lock files that are not a client runtime's: RouDi's, the hub's own runtime and
+// the afhub hub lock.
+bool is_client_lock(const std::string& name) {
+  static const std::set<std::string> kNotClients = {"roudi", "iox-unique-roudi", "afhub",
+                                                    "afhub-hub"};
+  return !kNotClients.count(name);
+}
+
+pid_t pid_suffix(const std::string& name) {
+  const auto dash = name.rfind('-');
+  if (dash == std::string::npos || dash + 1 == name.size()) return 0;
+  pid_t pid = 0;
+  for (std::size_t i = dash + 1; i < name.size(); ++i) {
+    if (name[i] < '0' || name[i] > '9') return 0;
+    pid = pid * 10 + (name[i] - '0');
+  }
+  return pid;
+}
+
+enum class LockState { kHeld, kFree, kUnreadable };
+
+// Whether a live process holds the lock at `path`. When it is free and `remove`,
+// the lock and the socket beside it are removed while this process holds the lock.
+LockState probe_lock(const fs::path& path, bool remove) {
+  const int fd = open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return LockState::kUnreadable;
+  LockState state = LockState::kHeld;
+  if (flock(fd, LOCK_EX | LOCK_NB) == 0) {
+    state = LockState::kFree;
+    if (remove) {
+      std::error_code ignored;
+      fs::remove(fs::path(path).replace_extension(""), ignored);
+      fs::remove(path, ignored);
+    }
+  }
+  close(fd);
+  return state;
+}
+
+// The client runtimes' lock files: (name, path).
+std::vector<std::pair<std::string, fs::path>> client_locks() {
+  std::vector<std::pair<std::string, fs::path>> locks;
+  std::error_code error;
+  for (const auto& entry : fs::directory_iterator(kRuntimeDir, error)) {
+    const fs::path& path = entry.path();
+    if (path.extension() != ".lock" || !entry.is_regular_file(error)) continue;
+    const std::string name = path.stem().string();
+    if (is_client_lock(name)) locks.emplace_back(name, path);
+  }
+  std::sort(locks.begin(), locks.end());
+  return locks;
+}
+
+}  // namespace
+
+std::vector<AttachedProcess> attached_processes() {
+  std::vector<AttachedProcess> attached;
+  for (const auto& [name, path] : client_locks())
+    if (probe_lock(path, false) == LockState::kHeld) attached.push_back({name, pid_suffix(name)});
+  return attached;
+}
+
+std::vector<std::string> remove_stale_runtime_files() {
+  std::vector<std::string> removed;
+  const auto now = fs::file_time_type::clock::now();
+  for (const auto& [name, path] : client_locks()) {
+    std::error_code error;
+    const auto written = fs::last_write_time(path, error);
+    if (error || now - written < kStartupGrace) continue;
+    if (probe_lock(path, true) == LockState::kFree) removed.push_back(name);
+  }
+  return removed;
+}
+
+}  // namespace afhub

@@ -1,0 +1,26 @@
+// The files an iceoryx runtime keeps in /tmp: its socket /tmp/<name> and its lock
+// /tmp/<name>.lock, locked (flock) for as long as the process lives. The lock tells
+// which processes are attached without asking iceoryx; a lock nobody holds is what a
+// killed process left behind.
+#pragma once
+
+#include <sys/types.h>
+
+#include <string>
+#include <vector>
+
+namespace afhub {
+
+struct AttachedProcess {
+  std::string name;  // its iceoryx runtime name, e.g. "afhub-ctl-1234"
+  pid_t pid = 0;     // from the name's "-<pid>" suffix; 0 when it has none
+};
+
+// Every runtime attached to the hub now, but the hub's own; sorted by name.
+std::vector<AttachedProcess> attached_processes();
+
+// Removes the socket and lock of every runtime that is gone (its lock is free and
+// more than 2 s old, so a process starting now is never touched); returns their names.
+std::vector<std::string> remove_stale_runtime_files();
+
+}  // namespace afhub

@@ -1,0 +1,130 @@
+// Processes that stop and resume, or die: a process stopped for 5 s (SIGSTOP, as a
+// debugger breakpoint, Ctrl-Z or a VM pause would) carries on when resumed, be it a
+// controller, the physics or the hub itself; a killed one is cleaned up, files in
+// /tmp included; and `afhub hub stop` does not pull the hub from under attached
+// processes without --force.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+
+#include <filesystem>
+#include <string>
+#include <thread>
+
+#include "afhub/hub/bodies.hpp"
+#include "afhub/hub/hub_presence.hpp"
+#include "afhub/shm_layout/world.hpp"
+#include "afhub_process.hpp"
+#include "hub_environment.hpp"
+
+namespace afhub::test {
+namespace {
+
+using namespace std::chrono_literals;
+
+bool still_running(pid_t pid) {
+  int status = 0;
+  return waitpid(pid, &status, WNOHANG) == 0;
+}
+
+// Files in /tmp whose names start with `prefix`.
+int files_starting_with(const std::string& prefix) {
+  int count = 0;
+  for (const auto& entry : std::filesystem::directory_iterator("/tmp"))
+    if (entry.path().filename().string().rfind(prefix, 0) == 0) ++count;
+  return count;
+}
+
+TEST(Pause, KilledProcessesAreCleanedUpFilesIncluded) {
+  ScopedProcess hub(start_test_hub());
+  ASSERT_GT(hub.pid, 0);
+  for (int round = 0; round < 10; ++round) {
+    const pid_t top = spawn_afhub({"top"});
+    const std::string lock = "/tmp/afhub-top-" + std::to_string(top) + ".lock";
+    ASSERT_TRUE(wait_until([&] { return std::filesystem::exists(lock); }, 10s)) << lock;
+    kill(top, SIGKILL);
+    waitpid(top, nullptr, 0);
+  }
+  // Each killed runtime left a socket and a lock; the hub removes them.
+  EXPECT_TRUE(wait_until([] { return files_starting_with("afhub-top-") == 0; }, 15s))
+      << files_starting_with("afhub-top-") << " files of killed processes are left in /tmp";
+  const std::string hub_log = read_file("/tmp/afhub-test-hub.log");
+  EXPECT_TRUE(contains(hub_log, "is gone; removed its ports and chunks")) << hub_log;
+  EXPECT_EQ(run_afhub({"hub", "stop"}).exit_code, 0);
+  EXPECT_EQ(stop_process(hub.pid, 0), 0);
+  hub.pid = -1;
+}
+
+TEST(Pause, HubStopListsAttachedProcessesAndAsksForForce) {
+  ScopedProcess hub(start_test_hub());
+  ASSERT_GT(hub.pid, 0);
+  ScopedProcess top(spawn_afhub({"top"}));
+  const std::string name = "afhub-top-" + std::to_string(top.pid);
+  ASSERT_TRUE(wait_until([&] { return std::filesystem::exists("/tmp/" + name + ".lock"); }, 10s));
+  const RunResult refused = run_afhub({"hub", "stop"});
+  EXPECT_EQ(refused.exit_code, 1);
+  EXPECT_TRUE(contains(refused.err, "attached to the hub")) << refused.err;
+  EXPECT_TRUE(contains(refused.err, name + " (pid " + std::to_string(top.pid) + ")"))
+      << refused.err;
+  EXPECT_TRUE(contains(refused.err, "afhub hub stop --force")) << refused.err;
+  EXPECT_TRUE(still_running(hub.pid));
+  const RunResult forced = run_afhub({"hub", "stop", "--force"});
+  EXPECT_EQ(forced.exit_code, 0) << forced.err;
+  EXPECT_EQ(stop_process(hub.pid, 0), 0);
+  hub.pid = -1;
+}
+
+// Last: this test attaches itself to the hub (an iceoryx runtime lives as long as
+// the process), which the tests above must not see.
+TEST(Pause, StoppedProcessesCarryOnWhenResumed) {
+  ScopedProcess hub(start_test_hub());
+  ASSERT_GT(hub.pid, 0);
+  connect_to_hub("pause-test", HubPolicy::kRequire);
+  const std::string log = "/tmp/afhub-pause-run.log";
+  ScopedProcess physics(
+      spawn_afhub({"run", AFHUB_EXAMPLE_MODELS "/arm7.yaml", "--no-autostart"}, log));
+  BodyClient base("afhub/arm/base");
+  LatestReader<WorldState> world(
+      {std::string(kService), std::string(kWorldInstance), std::string(kStateEvent)});
+  ASSERT_TRUE(wait_until([&] { return base.latest_state() && world.latest(); }, 10s))
+      << read_file(log);
+  ScopedProcess controller(spawn_afhub({"ctl", "hold", "arm/base"}));
+  LatestReader<BodyCommand> commands(body_command_channel("afhub/arm/base"));
+  const auto controller_commands_after = [&](std::int64_t stamp_ns) {
+    const BodyCommand* command = commands.latest();
+    return command && command->header.publisher_pid == static_cast<std::uint32_t>(controller.pid) &&
+           command->header.publish_stamp_ns > stamp_ns;
+  };
+  ASSERT_TRUE(wait_until([&] { return controller_commands_after(0); }, 10s));
+
+  for (const auto& [who, pid] : {std::pair<const char*, pid_t>{"controller", controller.pid},
+                                 {"physics", physics.pid},
+                                 {"hub", hub.pid}}) {
+    kill(pid, SIGSTOP);
+    std::this_thread::sleep_for(5s);  // beyond iceoryx's 1.5 s keep-alive deadline
+    kill(pid, SIGCONT);
+    const std::int64_t resumed_ns = monotonic_ns();
+    const std::uint64_t step = world.latest() ? world.latest()->header.sim_step : 0;
+    // It carries on: the world steps, the controller's commands arrive, the hub serves.
+    EXPECT_TRUE(wait_until(
+        [&] { return world.latest() && world.latest()->header.sim_step > step + 500; }, 10s))
+        << "the world did not go on after the " << who << " resumed\n"
+        << read_file(log);
+    EXPECT_TRUE(wait_until([&] { return controller_commands_after(resumed_ns); }, 10s))
+        << "the controller's commands stopped after the " << who << " resumed";
+    const RunResult ls = run_afhub({"ls"});
+    EXPECT_EQ(ls.exit_code, 0) << who << ": " << ls.err;
+    EXPECT_TRUE(contains(ls.out, "afhub/arm/base")) << who << ": " << ls.out;
+    for (pid_t process : {hub.pid, physics.pid, controller.pid})
+      EXPECT_TRUE(still_running(process))
+          << "pid " << process << " died after the " << who << " was stopped for 5 s";
+  }
+  EXPECT_EQ(controller.stop(), 0);
+  EXPECT_EQ(physics.stop(), 0);
+  EXPECT_EQ(run_afhub({"hub", "stop", "--force"}).exit_code, 0);  // this test is attached
+  EXPECT_EQ(stop_process(hub.pid, 0), 0);
+  hub.pid = -1;
+}
+
+}  // namespace
+}  // namespace afhub::test
