@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "afhub/hub/bodies.hpp"
+#include "afhub/hub/body_claims.hpp"
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/hub/stop_signal.hpp"
 #include "afhub/rt/clock.hpp"
@@ -99,10 +100,15 @@ int run_synth(const SynthOptions& options) {
   install_stop_signal_handlers();
   connect_to_hub("synth", options.no_autostart ? HubPolicy::kRequire : HubPolicy::kAutostart);
 
+  std::vector<std::string> channels;
+  for (unsigned i = 0; i < options.bodies; ++i)
+    channels.push_back(body_channel_name(options.name_space, "body" + std::to_string(i)));
+  // A state publisher per body, the world's, the directory's.
+  check_room_for_bodies(channels, channels.size() + 2);
   DirectoryPublisher directory;
   std::vector<SyntheticBody> bodies(options.bodies);
   for (std::size_t i = 0; i < bodies.size(); ++i) {
-    std::string channel = body_channel_name(options.name_space, "body" + std::to_string(i));
+    const std::string& channel = channels[i];
     std::vector<std::string> joint_names;
     for (unsigned j = 0; j < options.joints; ++j)
       joint_names.push_back("body" + std::to_string(i) + "-joint" + std::to_string(j));
@@ -111,6 +117,7 @@ int run_synth(const SynthOptions& options) {
     bodies[i].joints.resize(options.joints);
   }
   directory.publish();
+  confirm_body_claims(channels, std::chrono::seconds(2));
   Writer<WorldState> world(
       {std::string(kService), std::string(kWorldInstance), std::string(kStateEvent)});
   LatestReader<WorldCommand> world_command(

@@ -56,6 +56,13 @@ bool CatalogBuilder::merge(bool directories_changed) {
                      channel.c_str());
         continue;
       }
+      // A full catalog refuses the rest; their owner sees them missing and says so.
+      if (merged.size() == kMaxBodies) {
+        std::fprintf(stderr, "afhub hub: the catalog is full (%zu bodies); %s of %s is refused\n",
+                     kMaxBodies, channel.c_str(),
+                     std::string(name_of(list->bodies[i].owner)).c_str());
+        continue;
+      }
       merged.push_back(list->bodies[i]);
     }
   }

@@ -54,7 +54,8 @@ HealthReporter::HealthReporter()
 
 HealthReporter::~HealthReporter() = default;
 
-void HealthReporter::poll(std::chrono::steady_clock::time_point now, std::uint32_t body_count) {
+void HealthReporter::poll(std::chrono::steady_clock::time_point now, std::uint32_t body_count,
+                          std::uint32_t free_publisher_ports) {
   const auto* processes = introspection_->processes.latest();
   const auto* mempools = introspection_->mempools.latest();
   if (now - last_publish_ < kPublishPeriod) return;
@@ -65,6 +66,7 @@ void HealthReporter::poll(std::chrono::steady_clock::time_point now, std::uint32
   last_publish_ = now;
   health->hub_uptime_s = std::chrono::duration<double>(now - started_).count();
   health->body_count = body_count;
+  health->free_publisher_ports = free_publisher_ports;
   if (processes) {
     for (const auto& process : processes->m_processList) {
       if (health->process_count == kMaxHealthProcesses) break;

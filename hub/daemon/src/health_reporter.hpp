@@ -19,7 +19,8 @@ class HealthReporter {
  public:
   HealthReporter();
   ~HealthReporter();
-  void poll(std::chrono::steady_clock::time_point now, std::uint32_t body_count);
+  void poll(std::chrono::steady_clock::time_point now, std::uint32_t body_count,
+            std::uint32_t free_publisher_ports);
   // The processes RouDi has registered, as its introspection last said: (name, pid).
   std::vector<std::pair<std::string, pid_t>> registered_processes();
 

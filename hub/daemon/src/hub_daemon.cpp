@@ -22,6 +22,7 @@
 #include "iceoryx_hoofs/posix_wrapper/posix_access_rights.hpp"
 #include "iceoryx_posh/iceoryx_posh_config.hpp"
 #include "iceoryx_posh/roudi/iceoryx_roudi_components.hpp"
+#include "iceoryx_posh/roudi/port_pool.hpp"
 #include "iceoryx_posh/runtime/posh_runtime_single_process.hpp"
 #include "liveness.hpp"
 #include "port_lock_repair.hpp"
@@ -98,7 +99,8 @@ void serve_until_stopped(AfhubRouDi& roudi, iox::roudi::PortPool& ports) {
       next_file_sweep = now + std::chrono::seconds(1);
     }
     catalog.poll(now);
-    health.poll(now, catalog.body_count());
+    const auto publishers = static_cast<std::uint32_t>(ports.getPublisherPortDataList().size());
+    health.poll(now, catalog.body_count(), iox::MAX_PUBLISHERS - publishers);
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
 }

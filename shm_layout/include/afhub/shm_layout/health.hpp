@@ -30,7 +30,9 @@ struct Health {
   std::uint32_t process_count{0};
   std::uint32_t mempool_count{0};
   std::uint32_t body_count{0};
-  std::uint32_t reserved{0};
+  // iceoryx publisher ports left in the whole system (one per body state, per
+  // command writer, per loop's stats): a process checks before it asks for more.
+  std::uint32_t free_publisher_ports{0};
   std::array<ProcessEntry, kMaxHealthProcesses> processes{};
   std::array<MempoolUsage, kMaxMempools> mempools{};
 };

@@ -1,0 +1,26 @@
+// Claiming bodies through the hub: a body has one publisher. Before a process opens
+// its bodies' channels it checks that the hub has room for them and that no live
+// process publishes them already; once its directory is out, the hub's catalog
+// confirms that it owns them (of two processes that checked at the same moment, the
+// hub keeps the first). Needs connect_to_hub() first.
+#pragma once
+
+#include <chrono>
+#include <cstddef>
+#include <string>
+#include <vector>
+
+namespace afhub {
+
+// Throws afhub::Error, saying what to do, when a body in `channels` is published by
+// another live process, when the catalog cannot take them all, or when iceoryx has
+// fewer than `publishers` publisher ports left.
+void check_room_for_bodies(const std::vector<std::string>& channels, std::size_t publishers);
+
+// Waits up to `timeout` for the catalog to list every channel as this process's.
+// Throws afhub::Error naming the owner of a body another process holds, or the
+// bodies a full catalog refused.
+void confirm_body_claims(const std::vector<std::string>& channels,
+                         std::chrono::milliseconds timeout);
+
+}  // namespace afhub

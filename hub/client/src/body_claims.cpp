@@ -1,0 +1,101 @@
+// Claiming bodies through the hub (see body_claims.hpp).
+#include "afhub/hub/body_claims.hpp"
+
+#include <signal.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <map>
+#include <thread>
+
+#include "afhub/hub/bodies.hpp"
+#include "afhub/shm_layout/channel_names.hpp"
+#include "afhub/shm_layout/error.hpp"
+#include "afhub/shm_layout/health.hpp"
+
+namespace afhub {
+namespace {
+
+bool process_exists(std::uint32_t pid) {
+  return pid > 0 && (kill(static_cast<pid_t>(pid), 0) == 0 || errno == EPERM);
+}
+
+struct Owner {
+  std::string name;
+  std::uint32_t pid = 0;
+};
+
+// The catalog's bodies and their owners.
+std::map<std::string, Owner> catalog_owners(CatalogReader& catalog) {
+  std::map<std::string, Owner> owners;
+  const BodyList& list = catalog.latest();
+  for (std::uint32_t i = 0; i < list.body_count; ++i)
+    owners[std::string(name_of(list.bodies[i].channel))] = {
+        std::string(name_of(list.bodies[i].owner)), list.bodies[i].owner_pid};
+  return owners;
+}
+
+std::string taken_message(const std::string& channel, const Owner& owner) {
+  return channel + " is published by " + owner.name + " (pid " + std::to_string(owner.pid) +
+         "): a body has one publisher. Stop that process, or run this copy in another "
+         "namespace (--namespace)";
+}
+
+}  // namespace
+
+void check_room_for_bodies(const std::vector<std::string>& channels, std::size_t publishers) {
+  CatalogReader catalog;
+  catalog.wait(std::chrono::milliseconds(1000));
+  std::size_t live_bodies = 0;
+  const auto owners = catalog_owners(catalog);
+  for (const auto& [channel, owner] : owners) {
+    if (!process_exists(owner.pid)) continue;  // gone; the hub is removing it
+    ++live_bodies;
+    if (owner.pid == static_cast<std::uint32_t>(getpid())) continue;
+    for (const std::string& mine : channels)
+      if (mine == channel) throw Error(taken_message(channel, owner));
+  }
+  if (live_bodies + channels.size() > kMaxBodies)
+    throw Error("the hub lists " + std::to_string(live_bodies) + " bodies and this adds " +
+                std::to_string(channels.size()) + "; it holds at most " +
+                std::to_string(kMaxBodies) + " (iceoryx's 512 publisher ports allow no more)");
+  LatestReader<Health> health(
+      {std::string(kService), std::string(kHubInstance), std::string(kHealthEvent)});
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(1500);
+  while (!health.latest() && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  if (health.latest() && health.latest()->free_publisher_ports < publishers)
+    throw Error("these bodies need " + std::to_string(publishers) +
+                " iceoryx publisher ports and the hub has " +
+                std::to_string(health.latest()->free_publisher_ports) +
+                " left of 512 (one per body state, per command writer, per loop's stats). "
+                "Stop another process, or simulate fewer bodies");
+}
+
+void confirm_body_claims(const std::vector<std::string>& channels,
+                         std::chrono::milliseconds timeout) {
+  CatalogReader catalog;
+  catalog.wait(timeout);
+  const auto me = static_cast<std::uint32_t>(getpid());
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  for (;;) {
+    const auto owners = catalog_owners(catalog);
+    std::vector<std::string> missing;
+    for (const std::string& channel : channels) {
+      const auto found = owners.find(channel);
+      if (found == owners.end())
+        missing.push_back(channel);
+      else if (found->second.pid != me && process_exists(found->second.pid))
+        throw Error(taken_message(channel, found->second));
+    }
+    if (missing.empty()) return;
+    if (std::chrono::steady_clock::now() > deadline)
+      throw Error("the hub did not list " + std::to_string(missing.size()) + " of " +
+                  std::to_string(channels.size()) + " bodies (first: " + missing.front() +
+                  "): its catalog is full (" + std::to_string(kMaxBodies) +
+                  " bodies); `afhub ls` shows who holds them");
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+}
+
+}  // namespace afhub

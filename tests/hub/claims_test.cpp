@@ -1,0 +1,135 @@
+// One client must never take the hub down, nor two publish one body: a second
+// publisher of a live body is refused, naming the owner, and runs beside it in
+// another namespace; more bodies than the hub holds, or more publishers than
+// iceoryx has ports for, are refused with a message to the process that asked,
+// while the hub and everyone else go on.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "afhub/hub/bodies.hpp"
+#include "afhub/hub/hub_presence.hpp"
+#include "afhub/shm_layout/health.hpp"
+#include "afhub_process.hpp"
+#include "hub_environment.hpp"
+
+namespace afhub::test {
+namespace {
+
+using namespace std::chrono_literals;
+
+bool listed(const std::string& body) {
+  const RunResult ls = run_afhub({"ls"});
+  return ls.exit_code == 0 && contains(ls.out, body);
+}
+
+TEST(Claims, ASecondPublisherOfALiveBodyIsRefusedNamingTheOwner) {
+  ScopedProcess first(spawn_afhub({"synth", "--bodies", "2", "--no-autostart"}));
+  ASSERT_TRUE(wait_until([] { return listed("synth/body1"); }, 10s));
+  const RunResult second = run_afhub({"synth", "--bodies", "2", "--no-autostart"});
+  EXPECT_EQ(second.exit_code, 1);
+  EXPECT_TRUE(contains(second.err, "synth/body0 is published by afhub-synth-" +
+                                       std::to_string(first.pid) + " (pid " +
+                                       std::to_string(first.pid) + ")"))
+      << second.err;
+  EXPECT_TRUE(contains(second.err, "--namespace")) << second.err;
+
+  // On purpose, side by side: another namespace.
+  ScopedProcess beside(
+      spawn_afhub({"synth", "--bodies", "2", "--namespace", "copy", "--no-autostart"}));
+  EXPECT_TRUE(wait_until([] { return listed("copy/body1"); }, 10s));
+  // One publisher per body: the steps a reader sees only go up.
+  BodyClient body("synth/body0");
+  std::uint64_t last = 0;
+  int seen = 0, backwards = 0;
+  wait_until(
+      [&] {
+        if (const BodyState* state = body.latest_state(); state && body.state_updated()) {
+          if (state->header.sim_step < last) ++backwards;
+          last = state->header.sim_step;
+          ++seen;
+        }
+        return seen >= 500;
+      },
+      10s);
+  EXPECT_GE(seen, 500);
+  EXPECT_EQ(backwards, 0) << "two publishers interleave on synth/body0";
+  EXPECT_EQ(first.stop(), 0);
+  EXPECT_EQ(beside.stop(), 0);
+}
+
+TEST(Claims, MoreBodiesThanTheHubHoldsAreRefusedAndTheRestGoOn) {
+  ScopedProcess big(spawn_afhub(
+      {"synth", "--bodies", "200", "--joints", "1", "--namespace", "a", "--no-autostart"}));
+  ASSERT_TRUE(wait_until([] { return listed("a/body199"); }, 20s));
+  const RunResult more = run_afhub(
+      {"synth", "--bodies", "100", "--joints", "1", "--namespace", "b", "--no-autostart"}, 30s);
+  EXPECT_EQ(more.exit_code, 1);
+  EXPECT_TRUE(
+      contains(more.err, "the hub lists 200 bodies and this adds 100; it holds at most 256"))
+      << more.err;
+  // The hub and the first process go on.
+  EXPECT_TRUE(listed("a/body199"));
+  EXPECT_EQ(big.stop(), 0);
+}
+
+// Both check at the same moment and both fit alone: the hub's catalog takes what it
+// holds, never more, and the one left out says so.
+TEST(Claims, TwoProcessesAskingAtOnceNeverTakeTheHubDown) {
+  ScopedProcess a(spawn_afhub(
+      {"synth", "--bodies", "200", "--joints", "1", "--namespace", "a", "--no-autostart"},
+      "/tmp/afhub-claims-a.log"));
+  ScopedProcess b(spawn_afhub(
+      {"synth", "--bodies", "100", "--joints", "1", "--namespace", "b", "--no-autostart"},
+      "/tmp/afhub-claims-b.log"));
+  int a_exit = -1, b_exit = -1;
+  wait_until(
+      [&] {
+        if (a_exit < 0) a_exit = wait_for_exit(a, 0ms);
+        if (b_exit < 0) b_exit = wait_for_exit(b, 0ms);
+        return a_exit >= 0 || b_exit >= 0;
+      },
+      15s);
+  EXPECT_TRUE(a_exit == 1 || b_exit == 1) << "exits " << a_exit << " and " << b_exit;
+  const std::string refused =
+      read_file("/tmp/afhub-claims-a.log") + read_file("/tmp/afhub-claims-b.log");
+  EXPECT_TRUE(contains(refused, "holds at most 256") || contains(refused, "its catalog is full"))
+      << refused;
+  const RunResult ls = run_afhub({"ls", "--json"});
+  EXPECT_EQ(ls.exit_code, 0) << "the hub no longer answers: " << ls.err;
+  EXPECT_EQ(a.stop() + b.stop(), 0);
+}
+
+TEST(Claims, RunningOutOfPublisherPortsIsRefusedSayingHowManyAreLeft) {
+  // This process takes 300 publisher ports: a command writer for each of 300 bodies.
+  std::vector<std::unique_ptr<BodyClient>> writers;
+  for (int i = 0; i < 300; ++i)
+    writers.push_back(std::make_unique<BodyClient>("ports/body" + std::to_string(i)));
+  // The hub's health (once a second) counts them.
+  LatestReader<Health> health(
+      {std::string(kService), std::string(kHubInstance), std::string(kHealthEvent)});
+  ASSERT_TRUE(wait_until(
+      [&] { return health.latest() && health.latest()->free_publisher_ports < 250; }, 5s));
+  const RunResult synth = run_afhub(
+      {"synth", "--bodies", "250", "--joints", "1", "--namespace", "p", "--no-autostart"}, 30s);
+  EXPECT_EQ(synth.exit_code, 1);
+  EXPECT_TRUE(contains(synth.err, "these bodies need 252 iceoryx publisher ports and the hub has"))
+      << synth.err;
+  writers.clear();
+  // With the ports back (the hub's health says so within a second or two), it runs.
+  EXPECT_TRUE(wait_until(
+      [] {
+        const RunResult run = run_afhub({"synth", "--bodies", "250", "--joints", "1", "--namespace",
+                                         "p", "--seconds", "0.5", "--no-autostart"},
+                                        30s);
+        return run.exit_code == 0;
+      },
+      20s));
+}
+
+}  // namespace
+}  // namespace afhub::test
