@@ -19,6 +19,7 @@ namespace {
 struct RunCliOptions {
   std::vector<std::string> files;
   std::string launch_file, indices, adf_list, world_file, report_file, watchdog_hold;
+  std::vector<std::string> watchdog_bodies;  // "BODY=SECONDS"
   double dt_s = 0.001;
   double watchdog_s = 0.5;
   std::uint64_t steps = 0;
@@ -37,7 +38,10 @@ struct RunCliOptions {
 int run_run(const RunCliOptions& options) {
   if (!(options.dt_s >= 1e-5 && options.dt_s <= 0.1))
     throw Error("--dt must be between 0.00001 and 0.1 s, got " + std::to_string(options.dt_s));
-  if (!(options.watchdog_s > 0.0)) throw Error("--watchdog must be a positive number of seconds");
+  if (!(options.watchdog_s >= physics::SimChannels::kMinWatchdogS &&
+        options.watchdog_s <= physics::SimChannels::kMaxWatchdogS))
+    throw Error("--watchdog must be 0.002 to 3600 seconds, got " +
+                std::to_string(options.watchdog_s));
   if (!(options.client_timeout_ms > 0.0 && options.client_timeout_ms <= 60'000.0))
     throw Error("--client-timeout must be between 0 and 60000 ms");
   if (!options.lockstep && options.wait_for > 0)
@@ -48,8 +52,28 @@ int run_run(const RunCliOptions& options) {
     throw Error("--wait-timeout needs --wait-for N: it limits the wait for N lockstep clients");
   if (options.fifo_priority < 0 || options.fifo_priority > 99)
     throw Error("--fifo takes a SCHED_FIFO priority from 1 to 99");
-  if (options.offline && (options.lockstep || !options.watchdog_hold.empty()))
-    throw Error("--lockstep and --watchdog-hold need the hub's channels: drop --offline");
+  if (options.offline &&
+      (options.lockstep || !options.watchdog_hold.empty() || !options.watchdog_bodies.empty()))
+    throw Error(
+        "--lockstep, --watchdog-hold and --watchdog-body need the hub's channels: drop --offline");
+  // "arm/link3=0.002": each body's own watchdog period.
+  std::vector<std::pair<std::string, double>> watchdog_bodies;
+  for (const std::string& list : options.watchdog_bodies)
+    for (const std::string& entry : split_commas(list)) {
+      const std::size_t equals = entry.rfind('=');
+      double seconds = 0.0;
+      std::size_t used = 0;
+      try {
+        if (equals != std::string::npos) seconds = std::stod(entry.substr(equals + 1), &used);
+      } catch (const std::exception&) {
+        used = 0;
+      }
+      if (equals == std::string::npos || equals == 0 || used == 0 ||
+          used != entry.size() - equals - 1)
+        throw Error("--watchdog-body takes BODY=SECONDS, e.g. arm/link3=0.002; got '" + entry +
+                    "'");
+      watchdog_bodies.emplace_back(entry.substr(0, equals), seconds);
+    }
   physics::SceneRequest request;
   request.launch_file = options.launch_file;
   if (!options.indices.empty()) request.launch_indices = physics::parse_index_list(options.indices);
@@ -74,6 +98,7 @@ int run_run(const RunCliOptions& options) {
     channels = std::make_unique<physics::SimChannels>(sim, options.watchdog_s);
     for (const std::string& body : split_commas(options.watchdog_hold))
       channels->hold_on_watchdog(body);
+    for (const auto& [body, seconds] : watchdog_bodies) channels->set_watchdog(body, seconds);
     if (options.lockstep) {
       physics::LockstepOptions lockstep;
       lockstep.wait_for = options.wait_for;
@@ -123,7 +148,11 @@ void register_run(CLI::App& app, Runner& selected) {
   run->add_flag("--fast", options->fast, "Step as fast as possible instead of in real time");
   run->add_option("--steps", options->steps, "Stop after this many steps (default: until Ctrl-C)");
   run->add_option("--watchdog", options->watchdog_s,
-                  "Seconds without a command before a body's commands fall to zero (default 0.5)");
+                  "Seconds without a command before a body's commands fall to zero, and the age "
+                  "past which a command is stale and ignored (default 0.5; 0.002 to 3600)");
+  run->add_option("--watchdog-body", options->watchdog_bodies,
+                  "A body's own watchdog, BODY=SECONDS, comma-separated or repeated: "
+                  "--watchdog-body arm/link3=0.002 for a 500 Hz+ haptic device");
   run->add_option("--watchdog-hold", options->watchdog_hold,
                   "Bodies whose joints hold their positions when the watchdog fires, instead of "
                   "zero effort: names or last parts, comma-separated");

@@ -95,6 +95,14 @@ int run_status(const StatusOptions& options) {
           .value(static_cast<unsigned long long>(world->rejected_commands))
           .key("watchdog_expiries")
           .value(static_cast<unsigned long long>(world->watchdog_expiries))
+          .key("stale_commands")
+          .value(static_cast<unsigned long long>(world->stale_commands))
+          .key("commanded_steps")
+          .value(static_cast<unsigned long long>(world->commanded_steps))
+          .key("answered_steps")
+          .value(static_cast<unsigned long long>(world->answered_steps))
+          .key("late_steps")
+          .value(static_cast<unsigned long long>(world->commanded_steps - world->answered_steps))
           .key("lockstep")
           .value(world->lockstep != 0)
           .key("lockstep_clients")
@@ -133,12 +141,21 @@ int run_status(const StatusOptions& options) {
               health.hub_uptime_s, health.body_count, health.process_count);
   if (world)
     std::printf(
-        "world: step %llu, sim time %.3f s, %.1f steps/s%s, %llu commands refused, %llu watchdog "
-        "expiries\n",
+        "world: step %llu, sim time %.3f s, %.1f steps/s%s, %llu commands refused, %llu stale, "
+        "%llu watchdog expiries\n",
         static_cast<unsigned long long>(world->header.sim_step), world->header.sim_time_s,
         world->achieved_rate_hz, world->paused ? " (paused)" : "",
         static_cast<unsigned long long>(world->rejected_commands),
+        static_cast<unsigned long long>(world->stale_commands),
         static_cast<unsigned long long>(world->watchdog_expiries));
+  if (world && world->commanded_steps > 0)
+    std::printf(
+        "commands: %llu steps under command, %llu late (the command answered an older state), "
+        "%.1f %%\n",
+        static_cast<unsigned long long>(world->commanded_steps),
+        static_cast<unsigned long long>(world->commanded_steps - world->answered_steps),
+        100.0 * static_cast<double>(world->commanded_steps - world->answered_steps) /
+            static_cast<double>(world->commanded_steps));
   if (world && world->lockstep)
     std::printf("lockstep: %u clients in the barrier, %llu late answers, %llu clients dropped\n",
                 world->lockstep_clients, static_cast<unsigned long long>(world->late_answers),

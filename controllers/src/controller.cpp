@@ -39,16 +39,22 @@ void run_free(BodyClient& body, const ControllerOptions& options, const Controll
       throw Error("no state came from " + body.channel() + " in 3 s: is the physics running?");
     loop.grid_origin_ns = state->header.publish_stamp_ns + options.after_step_ns;
   }
+  // Late commands as the physics counts them for this body (its state carries the
+  // body's steps under command and those answered in time), so that this loop's
+  // stats, `afhub top` and `afhub status` agree. A restarted physics counts from 0.
+  std::uint32_t physics_late = 0;  // modulo 2^32, as the state carries it
+  std::uint32_t physics_pid = 0;
   run_periodic(
       loop, timing,
       [&] {
         const BodyState* state = body.latest_state();
         if (!state) return true;
-        const std::uint64_t step = state->header.sim_step;
+        const std::uint32_t late = state->commanded_steps - state->answered_steps;
+        if (state->header.publisher_pid == physics_pid)
+          timing.count_late(static_cast<std::uint32_t>(late - physics_late));
+        physics_pid = state->header.publisher_pid;
+        physics_late = late;
         answer(body, *state, cycle, false);
-        // Late: the physics published a newer state while this command was computed.
-        const BodyState* newest = body.latest_state();
-        if (newest && newest->header.sim_step != step) timing.count_late(1);
         return true;
       },
       [&](std::int64_t now) { stats.maybe_publish(now, timing); });

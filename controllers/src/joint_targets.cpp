@@ -16,6 +16,8 @@ ControllerCycle joint_position_controller(JointTargetFunction targets) {
   struct Memory {
     bool started = false;
     double start_time_s = 0.0;
+    std::uint64_t last_step = 0;
+    std::uint32_t physics_pid = 0;
     JointArray initial{};
     JointArray targets{};
   };
@@ -23,7 +25,15 @@ ControllerCycle joint_position_controller(JointTargetFunction targets) {
   return [memory, targets = std::move(targets)](const BodyState& state, BodyCommand& command) {
     Memory& m = *memory;
     const std::uint32_t count = std::min<std::uint32_t>(state.joint_count, kMaxJointsPerBody);
-    if (!m.started) {
+    // Simulated time jumped back (`afhub world reset`) or another physics publishes
+    // (a restart): the trajectory starts again from where the joints are now,
+    // ramping in, rather than from a time before its start.
+    const bool jumped = state.header.sim_step < m.last_step ||
+                        state.header.sim_time_s < m.start_time_s ||
+                        state.header.publisher_pid != m.physics_pid;
+    m.last_step = state.header.sim_step;
+    m.physics_pid = state.header.publisher_pid;
+    if (!m.started || jumped) {
       m.started = true;
       m.start_time_s = state.header.sim_time_s;
       std::copy_n(state.joint_positions.begin(), count, m.initial.begin());

@@ -90,7 +90,6 @@ void Simulation::Data::build_bodies() {
   for (std::size_t i = 0; i < model.bodies.size(); ++i) {
     const BodySpec& spec = model.bodies[i];
     BodyData& body = bodies[i];
-    body.commanded_joints.reserve(model.descendant_joints[i].size());  // no allocation in a run
     const TriangleMesh* mesh = mesh_of(spec);
     body.dynamic = spec.mass_kg > 0.0;
     Placement inertial = spec.inertial_offset.value_or(Placement{});

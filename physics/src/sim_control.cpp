@@ -21,30 +21,39 @@ void Simulation::set_input(std::size_t index, const BodyInput& input) noexcept {
   body.linear_velocity = to_bt(input.twist.linear_mps);
   body.angular_velocity = to_bt(input.twist.angular_radps);
   const std::vector<int>& below = d.model.descendant_joints[index];
-  body.commanded_joints.clear();  // capacity reserved for every descendant joint
   for (std::uint32_t j = 0; j < input.joint_count && j < below.size(); ++j) {
     d.joints[below[j]]->command(input.joint_modes[j], input.joint_values[j]);
-    body.commanded_joints.push_back(below[j]);
+    d.joint_driver[below[j]] = static_cast<int>(index);
   }
   for (std::uint32_t a = 0; a < input.actuator_count && a < body.actuators.size(); ++a)
     d.actuate(d.actuators[body.actuators[a]], input.engage[a]);
 }
 
 void Simulation::clear_input(std::size_t index) noexcept {
-  BodyData& body = data_->bodies[index];
-  body.commanded = false;
-  for (int joint : body.commanded_joints) data_->joints[joint]->release();
-  body.commanded_joints.clear();
+  Data& d = *data_;
+  d.bodies[index].commanded = false;
+  // Only the joints this body drives: a joint below it that another body (a
+  // descendant with its own controller) commanded since stays with that body.
+  for (int joint : d.model.descendant_joints[index])
+    if (d.joint_driver[joint] == static_cast<int>(index)) {
+      d.joints[joint]->release();
+      d.joint_driver[joint] = -1;
+    }
 }
 
 void Simulation::hold_joints(std::size_t index) noexcept {
   clear_input(index);
-  BodyData& body = data_->bodies[index];
-  for (int joint : data_->model.descendant_joints[index]) {
-    JointModel& model = *data_->joints[joint];
+  Data& d = *data_;
+  for (int joint : d.model.descendant_joints[index]) {
+    if (d.joint_driver[joint] >= 0) continue;  // another body drives it
+    JointModel& model = *d.joints[joint];
     model.command(JointMode::kPosition, model.position());
-    body.commanded_joints.push_back(joint);
+    d.joint_driver[joint] = static_cast<int>(index);
   }
+}
+
+int Simulation::joint_driver(std::size_t joint) const noexcept {
+  return data_->joint_driver[joint];
 }
 
 void Simulation::Data::apply_cartesian(BodyData& body) noexcept {

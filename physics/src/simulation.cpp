@@ -21,6 +21,8 @@ Simulation::Simulation(const Model& model, double dt_s)
   d.build_sensors();
   d.build_actuators();
   d.build_world_objects();
+  d.build_bounds();
+  d.joint_driver.assign(model.joints.size(), -1);
   d.read_sensors();
 }
 
@@ -60,6 +62,8 @@ void Simulation::reset() noexcept {
     rb.clearForces();
   }
   for (std::size_t b = 0; b < d.bodies.size(); ++b) clear_input(b);
+  for (auto& joint : d.joints) joint->release();
+  std::fill(d.joint_driver.begin(), d.joint_driver.end(), -1);
   for (ActuatorData& actuator : d.actuators) d.actuate(actuator, false);
   for (SoftBodyData& soft : d.soft_bodies)
     for (int n = 0; n < soft.body->m_nodes.size(); ++n) {

@@ -12,6 +12,7 @@
 #include <BulletSoftBody/btSoftRigidDynamicsWorld.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <memory>
 #include <vector>
@@ -57,7 +58,6 @@ struct BodyData {
   btVector3 previous_linear_error{0, 0, 0}, previous_angular_error{0, 0, 0};
   bool has_previous_error = false;
   Wrench applied;
-  std::vector<int> commanded_joints;         // joints whose current command came from this body
   std::size_t first_ray = 0, ray_count = 0;  // into Data::rays
   std::vector<int> actuators;                // into Data::actuators, file order
 };
@@ -149,7 +149,10 @@ struct Simulation::Data {
   CollisionFilter filter;
 
   std::vector<BodyData> bodies;
+  std::vector<InputBounds> bounds;  // per body, see body_input.hpp
   std::vector<std::unique_ptr<JointModel>> joints;
+  std::vector<int> joint_driver;            // per joint: the body whose input drives it, or -1
+  mutable std::array<char, 256> problem{};  // the last input_problem's text
   std::vector<SoftBodyData> soft_bodies;
   std::vector<Ray> rays;
   std::vector<ActuatorData> actuators;
@@ -179,6 +182,7 @@ struct Simulation::Data {
   void build_sensors();
   void build_actuators();
   void build_world_objects();
+  void build_bounds();
   void actuate(ActuatorData& actuator, bool engage) noexcept;
   void apply_cartesian(BodyData& body) noexcept;
   void read_sensors() noexcept;

@@ -64,9 +64,23 @@ RealtimeGrant apply_realtime(const LoopOptions& options, const char* who) {
   return grant;
 }
 
+namespace {
+
+class MonotonicClock final : public LoopClock {
+ public:
+  std::int64_t now_ns() noexcept override { return monotonic_ns(); }
+  void sleep_until_ns(std::int64_t deadline_ns) noexcept override {
+    afhub::sleep_until_ns(deadline_ns);
+  }
+};
+
+}  // namespace
+
 void run_periodic(const LoopOptions& options, LoopTiming& timing, const LoopCycle& cycle) {
+  MonotonicClock monotonic;
+  LoopClock& clock = options.clock ? *options.clock : monotonic;
   const std::int64_t period = options.period_ns;
-  const std::int64_t now = monotonic_ns();
+  const std::int64_t now = clock.now_ns();
   std::int64_t scheduled = now + period;
   if (options.grid_origin_ns > now)
     scheduled = options.grid_origin_ns;
@@ -74,12 +88,12 @@ void run_periodic(const LoopOptions& options, LoopTiming& timing, const LoopCycl
     scheduled = options.grid_origin_ns + ((now - options.grid_origin_ns) / period + 1) * period;
   for (std::uint64_t done = 0;
        !stop_requested() && (options.max_cycles == 0 || done < options.max_cycles); ++done) {
-    if (period > 0) sleep_until_ns(scheduled);
-    const std::int64_t woke = monotonic_ns();
+    if (period > 0) clock.sleep_until_ns(scheduled);
+    const std::int64_t woke = clock.now_ns();
     if (cycle.wait && !cycle.wait()) break;
-    const std::int64_t began = monotonic_ns();
+    const std::int64_t began = clock.now_ns();
     const bool go_on = cycle.work();
-    const std::int64_t finished = monotonic_ns();
+    const std::int64_t finished = clock.now_ns();
     timing.record(period > 0 ? woke - scheduled : 0, finished - began);
     scheduled += period;
     if (period > 0 && finished >= scheduled) {
@@ -93,7 +107,7 @@ void run_periodic(const LoopOptions& options, LoopTiming& timing, const LoopCycl
         timing.count_overruns(1);
       }
     }
-    if (cycle.after) cycle.after(monotonic_ns());
+    if (cycle.after) cycle.after(clock.now_ns());
     if (!go_on) break;
   }
 }

@@ -104,3 +104,38 @@ TEST(JointControllers, BadTrajectoryFilesSayWhereAndWhat) {
 
 }  // namespace
 }  // namespace afhub
+
+namespace afhub {
+namespace {
+
+BodyState state_of(std::uint32_t pid, std::uint64_t step, std::initializer_list<double> positions) {
+  BodyState state = state_at(static_cast<double>(step) * 0.001, positions);
+  state.header.sim_step = step;
+  state.header.publisher_pid = pid;
+  return state;
+}
+
+// A `ctl sine` that outlived its physics: its trajectory had run 181 s; the new
+// physics starts at 0. Restarted from where the joints are, ramping in again, the
+// targets stay near the joints instead of t = -181 s driving them to their limits.
+TEST(JointControllers, WhenSimulatedTimeJumpsBackTheTrajectoryRestartsFromTheJoints) {
+  for (const bool restart : {true, false}) {  // a new physics, or `afhub world reset`
+    ControllerCycle cycle = joint_position_controller(sine_targets(0.3, 2.0, {}));
+    BodyCommand command;
+    cycle(state_of(100, 1000, {0.0, 0.0}), command);
+    cycle(state_of(100, 182'000, {0.1, -0.2}), command);  // 181 s later
+    const std::uint32_t pid = restart ? 200 : 100;
+    cycle(state_of(pid, 1, {0.7, -0.4}), command);
+    ASSERT_EQ(command.joint_count, 2u);
+    // Time 0 of the new trajectory: the joints' own positions.
+    EXPECT_DOUBLE_EQ(command.joint_values[0], 0.7) << "restart " << restart;
+    EXPECT_DOUBLE_EQ(command.joint_values[1], -0.4) << "restart " << restart;
+    // 10 ms in, still ramping: within the amplitude of where the joints were.
+    cycle(state_of(pid, 11, {0.7, -0.4}), command);
+    EXPECT_NEAR(command.joint_values[0], 0.7, 0.3 * 0.01 / 2.0 + 1e-12);
+    EXPECT_NEAR(command.joint_values[1], -0.4, 0.3 * 0.01 / 2.0 + 1e-12);
+  }
+}
+
+}  // namespace
+}  // namespace afhub

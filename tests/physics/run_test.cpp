@@ -83,9 +83,10 @@ TEST(Run, LaunchFileWithIndexRunsRealTimeAndReports) {
   const std::string json = read_file(report);
   EXPECT_EQ(json_number(json, "steps"), 2000);
   EXPECT_NEAR(json_number(json, "sim_time_s"), 2.0, 1e-9);
-  // Absolute deadlines: never faster than real time; a little slower when the machine is busy.
+  // Absolute deadlines: never faster than real time. (How much slower depends on this
+  // shared machine's load, so it is not asserted; the pacing itself is tested on an
+  // injected clock in tests/rt/periodic_loop_test.cpp.)
   EXPECT_GE(json_number(json, "wall_time_s"), 1.999);
-  EXPECT_LT(json_number(json, "wall_time_s"), 3.0);
   EXPECT_LT(json_number(json, "max_joint_error_m"), 0.002);
   EXPECT_TRUE(contains(json, "\"nan_detected\":false")) << json;
   for (const char* key : {"\"ambf/env/l1\":{\"position\":[", "\"ambf/env/Plane\"",

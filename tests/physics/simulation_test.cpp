@@ -9,6 +9,8 @@
 #include <btBulletDynamicsCommon.h>
 
 #include <cmath>
+#include <functional>
+#include <vector>
 
 #include "afhub/physics/adf_loader.hpp"
 #include "model_files.hpp"
@@ -478,6 +480,132 @@ TEST(Simulation, JointCommandsFollowTheSignOfThePosition) {
       EXPECT_LT(sim.joint_pivot_gap_m(0), 0.002) << type;
     }
   }
+}
+
+}  // namespace
+}  // namespace afhub::physics
+
+namespace afhub::physics {
+namespace {
+
+const std::string kArm = AFHUB_EXAMPLE_MODELS "/arm7.yaml";
+
+int arm_body(const Model& model, const std::string& name) {
+  for (std::size_t b = 0; b < model.bodies.size(); ++b)
+    if (model.bodies[b].name == name) return static_cast<int>(b);
+  ADD_FAILURE() << "no body " << name;
+  return 0;
+}
+
+// A finite but extreme command (1e308) passes the NaN check, yet makes the world NaN
+// within a step: each field is bounded by the model (InputBounds) and refused,
+// naming the field, its value and the bound.
+TEST(CommandBounds, FiniteExtremeCommandsAreRefusedNamingTheField) {
+  const Model model = load_adf_files({kArm});
+  Simulation sim(model, 0.001);
+  const std::size_t base = arm_body(model, "base");
+  const InputBounds& bounds = sim.input_bounds(base);
+  // The arm7's base carries 23.3 kg, reaching 1.3 m: 100 g of force on it, ten
+  // times its shoulder's gravity load, and the motor's 0.18 N m s per step.
+  EXPECT_GT(bounds.force_n, 20'000.0);
+  EXPECT_LT(bounds.force_n, 30'000.0);
+  EXPECT_GE(bounds.joint_effort[0], 180.0);
+  EXPECT_LT(bounds.joint_effort[0], 5'000.0);
+  EXPECT_GT(bounds.joint_effort[6], 100.0);  // the wrist: its motor's, or 10 g R on 1 kg
+  EXPECT_LT(bounds.joint_effort[6], bounds.joint_effort[0]);
+  struct Case {
+    const char* field;
+    std::function<void(BodyInput&)> set;
+  };
+  const std::vector<Case> cases = {
+      {"joint 0 (base-link1) effort",
+       [](BodyInput& in) {
+         in.joint_count = 1;
+         in.joint_modes[0] = JointMode::kEffort;
+         in.joint_values[0] = 1e308;
+       }},
+      {"joint 2 (link2-link3) velocity",
+       [](BodyInput& in) {
+         in.joint_count = 3;
+         in.joint_modes[2] = JointMode::kVelocity;
+         in.joint_values[2] = -1e308;
+       }},
+      {"joint 1 (link1-link2) position",
+       [](BodyInput& in) {
+         in.joint_count = 2;
+         in.joint_modes[1] = JointMode::kPosition;
+         in.joint_values[1] = 1e308;
+       }},
+      {"force", [](BodyInput& in) { in.wrench.force_n.x = 1e308; }},
+      {"torque", [](BodyInput& in) { in.wrench.torque_nm.z = 1e308; }},
+      {"linear velocity", [](BodyInput& in) { in.twist.linear_mps.y = 1e308; }},
+      {"angular velocity", [](BodyInput& in) { in.twist.angular_radps.x = 1e308; }},
+      {"pose position", [](BodyInput& in) { in.target_pose.position_m.z = 1e308; }},
+      {"pose orientation", [](BodyInput& in) { in.target_pose.orientation.w = 1e308; }},
+  };
+  for (const Case& c : cases) {
+    BodyInput input{};
+    c.set(input);
+    EXPECT_EQ(input_problem(input, 7), nullptr) << c.field << ": finite, so the NaN check passes";
+    const char* problem = sim.input_problem(base, input);
+    ASSERT_NE(problem, nullptr) << c.field;
+    EXPECT_NE(std::string(problem).find(c.field), std::string::npos) << problem;
+  }
+  // Ordinary commands pass: 50 N m on a joint, 100 N, a pose in reach, 1 rad/s.
+  BodyInput fine{};
+  fine.joint_count = 7;
+  fine.joint_modes[0] = JointMode::kEffort;
+  fine.joint_values[0] = 50.0;
+  fine.joint_modes[1] = JointMode::kVelocity;
+  fine.joint_values[1] = 1.0;
+  fine.wrench.force_n = {100.0, 0.0, 0.0};
+  fine.target_pose.position_m = {0.5, 0.2, 1.0};
+  fine.target_pose.orientation = {0.0, 0.0, 0.0, 1.0};
+  EXPECT_EQ(sim.input_problem(base, fine), nullptr) << sim.input_problem(base, fine);
+}
+
+// Two bodies command joints below both (an ancestor's list covers a descendant's):
+// each joint follows the body that commanded it last, and one body's watchdog
+// releases only the joints it drives.
+TEST(CommandBounds, AWatchdogReleasesOnlyWhatItsBodyCommanded) {
+  const Model model = load_adf_files({kArm});
+  Simulation sim(model, 0.001);
+  const std::size_t base = arm_body(model, "base");
+  const std::size_t link3 = arm_body(model, "link3");
+  const std::vector<int>& below_base = model.descendant_joints[base];
+  const std::vector<int>& below_link3 = model.descendant_joints[link3];
+  ASSERT_EQ(below_base.size(), 7u);
+  ASSERT_EQ(below_link3.size(), 4u);  // link3-link4 .. link6-link7
+  BodyInput all{};
+  all.joint_count = 7;
+  for (std::size_t j = 0; j < 7; ++j) all.joint_modes[j] = JointMode::kPosition;
+  sim.set_input(base, all);
+  BodyInput wrist{};
+  wrist.joint_count = 4;
+  for (std::size_t j = 0; j < 4; ++j) {
+    wrist.joint_modes[j] = JointMode::kPosition;
+    wrist.joint_values[j] = 0.3;
+  }
+  sim.set_input(link3, wrist);
+  for (int joint : below_link3) EXPECT_EQ(sim.joint_driver(joint), static_cast<int>(link3));
+  EXPECT_EQ(sim.joint_driver(below_base[0]), static_cast<int>(base));
+  // The base's watchdog: its own three joints are released, the wrist's four stay
+  // with link3's controller and reach its targets.
+  sim.clear_input(base);
+  for (int joint : below_link3) EXPECT_EQ(sim.joint_driver(joint), static_cast<int>(link3));
+  for (std::size_t k = 0; k < 3; ++k) EXPECT_EQ(sim.joint_driver(below_base[k]), -1);
+  for (int i = 0; i < 2000; ++i) sim.step();
+  for (int joint : below_link3) EXPECT_NEAR(sim.joint_position(joint), 0.3, 0.02);
+  // The hold policy holds what no other body drives, and leaves link3's joints alone.
+  sim.hold_joints(base);
+  for (std::size_t k = 0; k < 3; ++k)
+    EXPECT_EQ(sim.joint_driver(below_base[k]), static_cast<int>(base));
+  for (int joint : below_link3) EXPECT_EQ(sim.joint_driver(joint), static_cast<int>(link3));
+  // link3's watchdog releases its four, not the base's held three.
+  sim.clear_input(link3);
+  for (int joint : below_link3) EXPECT_EQ(sim.joint_driver(joint), -1);
+  for (std::size_t k = 0; k < 3; ++k)
+    EXPECT_EQ(sim.joint_driver(below_base[k]), static_cast<int>(base));
 }
 
 }  // namespace

@@ -5,164 +5,225 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <functional>
+
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "afhub/hub/stop_signal.hpp"
+#include "afhub/rt/clock.hpp"
 
 namespace afhub {
 namespace {
 
+// The pacing is checked on a clock the test drives, never on this shared machine's
+// wall clock: sleeping jumps to the deadline plus a lateness the test chooses (a
+// loaded machine wakes late), and a cycle's work advances the clock by what the
+// test says it takes. Every deadline the loop asks for is recorded.
+class FakeClock final : public LoopClock {
+ public:
+  std::int64_t now = 1'000'000'000'000;
+  std::vector<std::int64_t> deadlines;  // each sleep's deadline, in order
+  std::vector<std::int64_t> woke;       // when each sleep returned
+  // How late the n-th wake-up is (ns); none by default.
+  std::function<std::int64_t(std::size_t)> lateness = [](std::size_t) { return 0; };
+
+  FakeClock() {
+    deadlines.reserve(1000);
+    woke.reserve(1000);
+  }
+  std::int64_t now_ns() noexcept override { return now; }
+  void sleep_until_ns(std::int64_t deadline_ns) noexcept override {
+    deadlines.push_back(deadline_ns);
+    now = std::max(now, deadline_ns) + lateness(deadlines.size() - 1);
+    woke.push_back(now);
+  }
+};
+
+// A machine's noise: wake-ups late by 0 to `max_ns`, varying from cycle to cycle.
+std::function<std::int64_t(std::size_t)> noisy(std::int64_t max_ns) {
+  return [max_ns](std::size_t n) {
+    return static_cast<std::int64_t>((n * 7919) % 101) * max_ns / 100;
+  };
+}
+
 TEST(PeriodicLoop, NPeriodsTakeNTimesThePeriodWithoutDrift) {
+  // Every wake-up is up to 3 ms late and every cycle works 1 ms: a loop re-based on
+  // "now + period" would drift by both each cycle; absolute deadlines do not.
+  FakeClock clock;
+  clock.lateness = noisy(3'000'000);
   LoopOptions options;
   options.period_ns = 5'000'000;
   options.max_cycles = 200;
+  options.clock = &clock;
   LoopTiming timing;
+  const std::int64_t start = clock.now;
   int cycles = 0;
-  const std::int64_t start = monotonic_ns();
   run_periodic(options, timing, [&] {
     ++cycles;
+    clock.now += 1'000'000;
     return true;
   });
-  const std::int64_t elapsed = monotonic_ns() - start;
   EXPECT_EQ(cycles, 200);
   EXPECT_EQ(timing.cycles(), 200u);
-  // 200 periods of 5 ms: 1 s, within one period either way, plus any periods a
-  // stall of this shared machine made the loop skip (counted as overruns).
-  const double periods = 200.0 + static_cast<double>(timing.overruns());
-  EXPECT_NEAR(static_cast<double>(elapsed), periods * 5e6, 5e6);
-  EXPECT_LT(timing.overruns(), 20u);
+  EXPECT_EQ(timing.overruns(), 0u);
+  ASSERT_EQ(clock.deadlines.size(), 200u);
+  EXPECT_EQ(clock.deadlines.front(), start + 5'000'000);
+  for (std::size_t k = 0; k < clock.deadlines.size(); ++k)
+    ASSERT_EQ(clock.deadlines[k], start + static_cast<std::int64_t>(k + 1) * 5'000'000) << k;
+  // The wake-up latency is measured from each deadline: the chosen lateness, at most 3 ms.
+  EXPECT_LE(timing.wake_latency().max_us(), 3000.0 + 1.0);
 }
 
 TEST(PeriodicLoop, WakeUpsStayOnTheGridDespiteSlowCycles) {
-  // Every cycle works for 60% of a period: a loop re-based on "now + period"
-  // would drift by that much per cycle; absolute deadlines do not.
+  // Every cycle works for 60% of a period and wakes up to 1 ms late.
+  FakeClock clock;
+  clock.lateness = noisy(1'000'000);
   LoopOptions options;
   options.period_ns = 5'000'000;
   options.max_cycles = 100;
+  options.clock = &clock;
   LoopTiming timing;
-  const std::int64_t start = monotonic_ns();
+  const std::int64_t start = clock.now;
   run_periodic(options, timing, [&] {
-    std::this_thread::sleep_for(std::chrono::milliseconds(3));
+    clock.now += 3'000'000;
     return true;
   });
-  const std::int64_t elapsed = monotonic_ns() - start;
-  // The last cycle wakes on the grid, at 100 periods plus any skipped by a stall of
-  // this shared machine, and works 3 ms more. Re-basing would add 3 ms per cycle.
-  const double periods = 100.0 + static_cast<double>(timing.overruns());
-  EXPECT_NEAR(static_cast<double>(elapsed), periods * 5e6 + 3e6, 5e6);
-  EXPECT_LT(timing.overruns(), 50u);
+  EXPECT_EQ(timing.overruns(), 0u);
+  ASSERT_EQ(clock.deadlines.size(), 100u);
+  for (std::size_t k = 0; k < clock.deadlines.size(); ++k)
+    ASSERT_EQ(clock.deadlines[k], start + static_cast<std::int64_t>(k + 1) * 5'000'000) << k;
   EXPECT_GE(timing.compute().percentile_us(0.5), 3000.0);
 }
 
 TEST(PeriodicLoop, AnOverrunSkipsTheMissedPeriodsAndCountsThem) {
+  FakeClock clock;
   LoopOptions options;
   options.period_ns = 10'000'000;
   options.max_cycles = 20;
+  options.clock = &clock;
   LoopTiming timing;
   int cycle = 0;
-  const std::int64_t start = monotonic_ns();
   run_periodic(options, timing, [&] {
     // Cycle 5 runs for 2.5 periods: the next two deadlines pass while it works.
-    if (++cycle == 5) std::this_thread::sleep_for(std::chrono::milliseconds(25));
+    if (++cycle == 5) clock.now += 25'000'000;
     return true;
   });
-  const std::int64_t elapsed = monotonic_ns() - start;
   EXPECT_EQ(timing.cycles(), 20u);
-  // Two periods skipped (a stall of the machine may add one more).
-  EXPECT_GE(timing.overruns(), 2u);
-  EXPECT_LE(timing.overruns(), 3u);
-  // Skipped, not made up in a burst: 20 cycles span 20 + 2 periods.
-  EXPECT_GE(static_cast<double>(elapsed), 22.0 * 1e7 - 1e7);
-  EXPECT_LE(static_cast<double>(elapsed), 22.0 * 1e7 + 2e7);
+  EXPECT_EQ(timing.overruns(), 2u);
+  ASSERT_EQ(clock.deadlines.size(), 20u);
+  // Skipped, not made up in a burst: cycle 6 wakes 3 periods after cycle 5, and the
+  // 20 cycles span 19 + 2 periods.
+  EXPECT_EQ(clock.deadlines[5] - clock.deadlines[4], 30'000'000);
+  EXPECT_EQ(clock.deadlines.back() - clock.deadlines.front(), 21 * 10'000'000);
 }
 
 TEST(PeriodicLoop, CatchingUpRunsTheLateCyclesBackToBack) {
+  FakeClock clock;
   LoopOptions options;
   options.period_ns = 10'000'000;
   options.max_cycles = 20;
   options.overrun = OverrunPolicy::kCatchUp;
+  options.clock = &clock;
   LoopTiming timing;
   int cycle = 0;
-  const std::int64_t start = monotonic_ns();
   run_periodic(options, timing, [&] {
     // Cycle 5 runs for 2.5 periods: cycles 6 and 7 follow at once to make up for it.
-    if (++cycle == 5) std::this_thread::sleep_for(std::chrono::milliseconds(25));
+    if (++cycle == 5) clock.now += 25'000'000;
     return true;
   });
-  const std::int64_t elapsed = monotonic_ns() - start;
   EXPECT_EQ(timing.cycles(), 20u);
-  EXPECT_GE(timing.overruns(), 1u);  // cycle 5, and any the machine's stalls add
-  // Made up, not skipped: 20 cycles span 20 periods, as if nothing had been late.
-  EXPECT_GE(static_cast<double>(elapsed), 20.0 * 1e7 - 1e7);
-  EXPECT_LE(static_cast<double>(elapsed), 20.0 * 1e7 + 2e7);
+  EXPECT_EQ(timing.overruns(), 2u);  // cycles 5 and 6 ended past the next deadline
+  ASSERT_EQ(clock.deadlines.size(), 20u);
+  // Made up, not skipped: 20 cycles span 19 periods, as if nothing had been late...
+  for (std::size_t k = 1; k < clock.deadlines.size(); ++k)
+    EXPECT_EQ(clock.deadlines[k] - clock.deadlines[k - 1], 10'000'000) << k;
+  // ...and cycles 6 and 7 woke at once, when cycle 5 ended.
+  EXPECT_EQ(clock.woke[5], clock.woke[4] + 25'000'000);
+  EXPECT_EQ(clock.woke[6], clock.woke[5]);
+  EXPECT_EQ(clock.woke[7], clock.deadlines[7]);
 }
 
 TEST(PeriodicLoop, PeriodZeroRunsAsFastAsPossible) {
+  FakeClock clock;
   LoopOptions options;
   options.period_ns = 0;
   options.max_cycles = 100'000;
+  options.clock = &clock;
   LoopTiming timing;
-  const std::int64_t start = monotonic_ns();
   run_periodic(options, timing, [] { return true; });
   EXPECT_EQ(timing.cycles(), 100'000u);
   EXPECT_EQ(timing.overruns(), 0u);
-  // A period of even 1 us would take 100 ms; no sleeping takes far less.
-  EXPECT_LT(monotonic_ns() - start, 5'000'000'000);
+  EXPECT_TRUE(clock.deadlines.empty());  // it never slept
 }
 
 TEST(PeriodicLoop, TheWaitRunsFirstUntimedAndCanEndTheLoop) {
+  FakeClock clock;
   LoopOptions options;
   options.period_ns = 1'000'000;
+  options.clock = &clock;
   LoopTiming timing;
   std::vector<char> order;
   LoopCycle cycle;
   cycle.wait = [&] {
     order.push_back('w');
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));  // not compute time
+    clock.now += 5'000'000;  // waiting: not compute time
     return order.size() < 7;
   };
   cycle.work = [&] {
     order.push_back('c');
+    clock.now += 100'000;
     return true;
   };
   cycle.after = [&](std::int64_t) { order.push_back('a'); };
   run_periodic(options, timing, cycle);
   EXPECT_EQ(std::string(order.begin(), order.end()), "wcawcaw");
   EXPECT_EQ(timing.cycles(), 2u);
-  EXPECT_LT(timing.compute().max_us(), 5000.0);
+  EXPECT_DOUBLE_EQ(timing.compute().max_us(), 100.0);
 }
 
 TEST(PeriodicLoop, AGivenGridOriginSetsThePhaseOfEveryWakeUp) {
   // The origin lies 2.3 periods in the past: wake-ups fall on origin + k * period,
   // 0.7 periods from now first, never on now + period.
+  FakeClock clock;
+  clock.lateness = noisy(2'000'000);
   LoopOptions options;
   options.period_ns = 10'000'000;
   options.max_cycles = 10;
-  options.grid_origin_ns = monotonic_ns() - 23'000'000;
+  options.grid_origin_ns = clock.now - 23'000'000;
+  options.clock = &clock;
   LoopTiming timing;
-  std::vector<std::int64_t> woke;
-  run_periodic(options, timing, [&] {
-    woke.push_back(monotonic_ns());
-    return true;
-  });
-  ASSERT_EQ(woke.size(), 10u);
-  for (std::int64_t at : woke) {
-    // The phase on the grid: how late after a grid point, below 2 ms on a loaded machine.
-    const std::int64_t phase = (at - options.grid_origin_ns) % options.period_ns;
-    EXPECT_LT(phase, 2'000'000) << "woke " << phase << " ns after a grid point";
-  }
+  run_periodic(options, timing, [] { return true; });
+  ASSERT_EQ(clock.deadlines.size(), 10u);
+  EXPECT_EQ(clock.deadlines.front(), options.grid_origin_ns + 30'000'000);
+  for (std::int64_t at : clock.deadlines)
+    EXPECT_EQ((at - options.grid_origin_ns) % options.period_ns, 0) << at;
   // A future origin is the first wake-up.
   options.max_cycles = 1;
-  options.grid_origin_ns = monotonic_ns() + 35'000'000;
-  woke.clear();
+  options.grid_origin_ns = clock.now + 35'000'000;
+  clock.deadlines.clear();
+  run_periodic(options, timing, [] { return true; });
+  ASSERT_EQ(clock.deadlines.size(), 1u);
+  EXPECT_EQ(clock.deadlines.front(), options.grid_origin_ns);
+}
+
+TEST(PeriodicLoop, OnTheRealClockItSleepsToItsDeadlines) {
+  // The real clock, checked only from below (a loaded machine may always be later):
+  // 20 periods of 5 ms never take less than 20 periods from the start.
+  LoopOptions options;
+  options.period_ns = 5'000'000;
+  options.max_cycles = 20;
+  LoopTiming timing;
+  const std::int64_t start = monotonic_ns();
+  std::int64_t last = 0;
   run_periodic(options, timing, [&] {
-    woke.push_back(monotonic_ns());
+    last = monotonic_ns();
     return true;
   });
-  EXPECT_GE(woke.at(0), options.grid_origin_ns);
-  EXPECT_LT(woke.at(0), options.grid_origin_ns + 2'000'000);
+  EXPECT_EQ(timing.cycles(), 20u);
+  EXPECT_GE(last - start, 20 * 5'000'000);
 }
 
 TEST(PeriodicLoop, TheCycleCanEndTheLoop) {

@@ -29,6 +29,7 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
               RunReport& report) {
   const auto period_ns = static_cast<std::int64_t>(sim.dt_s() * 1e9);
   WorldControl control;
+  WorldCommand world_command;
   double achieved_rate_hz = 0.0;
   std::uint64_t late_counted = 0;
   report.max_joint_error_m = std::max(report.max_joint_error_m, largest_pivot_gap(sim));
@@ -55,8 +56,9 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
   // lockstep, the clients' answers to the current step.
   cycle.wait = [&] {
     if (!channels) return true;
-    if (const WorldCommand* command = channels->new_world_command())
-      if (control.apply(*command)) sim.reset();
+    // Every world command from every writer, in order, each once.
+    while (channels->next_world_command(world_command))
+      if (control.apply(world_command)) sim.reset();
     if (channels->lockstep() && !control.paused) return channels->await_lockstep();
     channels->apply_commands(monotonic_ns());
     return true;

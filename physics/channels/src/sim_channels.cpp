@@ -9,6 +9,7 @@
 #include "afhub/hub/stop_signal.hpp"
 #include "afhub/shm_layout/channel_names.hpp"
 #include "afhub/shm_layout/error.hpp"
+#include "world_command_queue.hpp"
 
 namespace afhub::physics {
 namespace {
@@ -70,10 +71,12 @@ void to_state(const BodyReading& reading, BodyState& state) noexcept {
 
 SimChannels::SimChannels(Simulation& sim, double watchdog_s)
     : sim_(sim),
-      watchdog_ns_(static_cast<std::int64_t>(watchdog_s * 1e9)),
+      created_ns_(monotonic_ns()),
       world_({std::string(kService), std::string(kWorldInstance), std::string(kStateEvent)}),
-      world_command_(
-          {std::string(kService), std::string(kWorldInstance), std::string(kCommandEvent)}) {
+      world_commands_(std::make_unique<WorldCommandQueue>()) {
+  if (!(watchdog_s >= kMinWatchdogS && watchdog_s <= kMaxWatchdogS))
+    throw Error("the watchdog period must be 0.002 to 3600 s, got " + std::to_string(watchdog_s));
+  const auto watchdog_ns = static_cast<std::int64_t>(watchdog_s * 1e9);
   const Model& model = sim.model();
   if (model.bodies.size() + model.soft_bodies.size() > kMaxBodies)
     throw Error("the model has more than " + std::to_string(kMaxBodies) + " bodies");
@@ -91,6 +94,7 @@ SimChannels::SimChannels(Simulation& sim, double watchdog_s)
     channel.index = b;
     channel.publisher = std::make_unique<BodyPublisher>(body.channel);
     channel.joint_count = static_cast<std::uint32_t>(joint_names.size());
+    channel.watchdog_ns = watchdog_ns;
     for (const ActuatorSpec& actuator : model.actuators)
       if (actuator.parent == static_cast<int>(b)) ++channel.actuator_count;
     channels_.push_back(std::move(channel));
@@ -106,6 +110,8 @@ SimChannels::SimChannels(Simulation& sim, double watchdog_s)
   directory_.publish();
 }
 
+SimChannels::~SimChannels() = default;
+
 void SimChannels::apply_commands(std::int64_t now_ns) noexcept {
   for (Channel& channel : channels_) {
     if (channel.soft) continue;  // soft bodies take no commands
@@ -115,24 +121,39 @@ void SimChannels::apply_commands(std::int64_t now_ns) noexcept {
       to_input(*command, input_);
       const Answer answer{command->header.sim_step, command->header.publisher_pid,
                           command->lockstep != 0};
-      if (const char* problem =
-              input_problem(input_, channel.joint_count, channel.actuator_count)) {
+      // Its age by its publish stamp (the same monotonic clock in every process),
+      // not by when this process first saw it.
+      const std::int64_t stamp_ns = std::min(command->header.publish_stamp_ns, now_ns);
+      const std::int64_t age_ns = now_ns - stamp_ns;
+      if (age_ns > channel.watchdog_ns) {
+        ++stale_;
+        if (!channel.told_stale) {
+          std::fprintf(stderr,
+                       "afhub run: ignored a command for %s from pid %u: published %.3f s ago, "
+                       "older than the body's watchdog of %.3f s (counted in `afhub status`)\n",
+                       channel.publisher->channel().c_str(), answer.pid,
+                       static_cast<double>(age_ns) * 1e-9,
+                       static_cast<double>(channel.watchdog_ns) * 1e-9);
+          channel.told_stale = true;
+        }
+      } else if (const char* problem = sim_.input_problem(channel.index, input_)) {
         ++rejected_;
         if (!channel.told_rejected) {
           std::fprintf(stderr,
-                       "afhub run: refused a command for %s: %s (counted in `afhub status`)\n",
-                       channel.publisher->channel().c_str(), problem);
+                       "afhub run: refused a command for %s: %s (from pid %u; counted in `afhub "
+                       "status`; said once per body)\n",
+                       channel.publisher->channel().c_str(), problem, answer.pid);
           channel.told_rejected = true;
         }
       } else {
         if (lockstep_ && answer.lockstep) note_lockstep_answer(channel, answer);
         channel.applied_answer_step = answer.step;
         sim_.set_input(channel.index, input_);
-        channel.last_command_ns = now_ns;
+        channel.last_command_ns = stamp_ns;
         channel.commanded = true;
       }
     }
-    if (channel.commanded && now_ns - channel.last_command_ns > watchdog_ns_) {
+    if (channel.commanded && now_ns - channel.last_command_ns > channel.watchdog_ns) {
       if (channel.hold_on_watchdog)
         sim_.hold_joints(channel.index);
       else
@@ -140,14 +161,15 @@ void SimChannels::apply_commands(std::int64_t now_ns) noexcept {
       channel.commanded = false;
       ++expiries_;
       std::fprintf(stderr, "afhub run: no command for %s in %.3f s: %s until commands come again\n",
-                   channel.publisher->channel().c_str(), static_cast<double>(watchdog_ns_) * 1e-9,
+                   channel.publisher->channel().c_str(),
+                   static_cast<double>(channel.watchdog_ns) * 1e-9,
                    channel.hold_on_watchdog ? "its joints hold their positions"
-                                            : "its wrench and joint efforts are zero");
+                                            : "its wrench and the efforts it drove are zero");
     }
   }
 }
 
-void SimChannels::hold_on_watchdog(const std::string& body) {
+SimChannels::Channel& SimChannels::active_channel(const std::string& body, const char* option) {
   std::vector<std::string> active;
   for (const Channel& channel : channels_)
     if (!channel.soft) active.push_back(channel.publisher->channel());
@@ -155,10 +177,22 @@ void SimChannels::hold_on_watchdog(const std::string& body) {
   try {
     name = resolve_body(body, active);
   } catch (const Error& error) {
-    throw Error(std::string("--watchdog-hold: ") + error.what());
+    throw Error(std::string(option) + ": " + error.what());
   }
   for (Channel& channel : channels_)
-    if (!channel.soft && channel.publisher->channel() == name) channel.hold_on_watchdog = true;
+    if (!channel.soft && channel.publisher->channel() == name) return channel;
+  throw Error(std::string(option) + ": no active body " + name);
+}
+
+void SimChannels::hold_on_watchdog(const std::string& body) {
+  active_channel(body, "--watchdog-hold").hold_on_watchdog = true;
+}
+
+void SimChannels::set_watchdog(const std::string& body, double seconds) {
+  if (!(seconds >= kMinWatchdogS && seconds <= kMaxWatchdogS))
+    throw Error("--watchdog-body: the watchdog of '" + body + "' must be 0.002 to 3600 s, got " +
+                std::to_string(seconds));
+  active_channel(body, "--watchdog-body").watchdog_ns = static_cast<std::int64_t>(seconds * 1e9);
 }
 
 void SimChannels::enable_lockstep(const LockstepOptions& options) {
@@ -299,10 +333,14 @@ void SimChannels::publish(double wall_time_s, double achieved_rate_hz, bool paus
   const double time_s = sim_.time_s();
   if (step != timeliness_step_) {  // once per step taken, not per publish while paused
     timeliness_step_ = step;
-    for (const Channel& channel : channels_) {
+    for (Channel& channel : channels_) {
       if (!channel.commanded) continue;
       ++commanded_steps_;
-      if (channel.applied_answer_step + 1 == step) ++answered_steps_;
+      ++channel.commanded_steps;
+      if (channel.applied_answer_step + 1 == step) {
+        ++answered_steps_;
+        ++channel.answered_steps;
+      }
     }
   }
   for (Channel& channel : channels_) {
@@ -315,6 +353,8 @@ void SimChannels::publish(double wall_time_s, double achieved_rate_hz, bool paus
     else
       sim_.read_body(channel.index, reading_);
     to_state(reading_, *state);
+    state->commanded_steps = static_cast<std::uint32_t>(channel.commanded_steps);
+    state->answered_steps = static_cast<std::uint32_t>(channel.answered_steps);
     channel.publisher->publish_state(state);
   }
   if (WorldState* world = world_.loan()) {
@@ -326,6 +366,7 @@ void SimChannels::publish(double wall_time_s, double achieved_rate_hz, bool paus
     world->paused = paused;
     world->rejected_commands = rejected_;
     world->watchdog_expiries = expiries_;
+    world->stale_commands = stale_;
     world->lockstep = lockstep_;
     world->lockstep_clients = lockstep_clients();
     world->late_answers = late_answers_;
@@ -342,11 +383,31 @@ void SimChannels::publish(double wall_time_s, double achieved_rate_hz, bool paus
   }
 }
 
-const WorldCommand* SimChannels::new_world_command() noexcept {
-  const WorldCommand* command = world_command_.latest();
-  if (!command || command->header.sequence == last_world_sequence_) return nullptr;
-  last_world_sequence_ = command->header.sequence;
-  return command;
+bool SimChannels::seen_world_command(const PayloadHeader& header) noexcept {
+  for (WorldWriter& writer : world_writers_) {
+    if (writer.pid != header.publisher_pid || writer.stamp_ns == 0) continue;
+    // The same writer: a sequence it used already is a repeat, unless its stamp is
+    // newer (another process that got the same pid, its sequence from 1 again).
+    if (header.sequence <= writer.sequence && header.publish_stamp_ns <= writer.stamp_ns)
+      return true;
+    writer.sequence = header.sequence;
+    writer.stamp_ns = header.publish_stamp_ns;
+    return false;
+  }
+  world_writers_[next_world_writer_] = {header.publisher_pid, header.sequence,
+                                        header.publish_stamp_ns};
+  next_world_writer_ = (next_world_writer_ + 1) % world_writers_.size();
+  return false;
+}
+
+bool SimChannels::next_world_command(WorldCommand& out) noexcept {
+  while (world_commands_->next(out)) {
+    // History from a writer that outlived an earlier physics: not for this one.
+    if (out.header.publish_stamp_ns < created_ns_) continue;
+    if (seen_world_command(out.header)) continue;
+    return true;
+  }
+  return false;
 }
 
 }  // namespace afhub::physics

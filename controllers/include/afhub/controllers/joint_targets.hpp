@@ -20,7 +20,10 @@ using JointArray = std::array<double, kMaxJointsPerBody>;
 using JointTargetFunction = std::function<void(double t_s, const JointArray& initial,
                                                std::uint32_t count, JointArray& targets)>;
 
-// A ControllerCycle sending position commands from `targets` for every joint of the body.
+// A ControllerCycle sending position commands from `targets` for every joint of the
+// body. When simulated time jumps back (a reset: the step decreases) or another
+// physics process publishes the state (a restart), it starts over: time 0 and the
+// joint positions of that state as `initial`, so that the targets ramp in again.
 ControllerCycle joint_position_controller(JointTargetFunction targets);
 
 // Holds every joint where it was.

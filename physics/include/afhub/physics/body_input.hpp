@@ -37,6 +37,32 @@ struct BodyInput {
   std::array<bool, kBodyActuatorCapacity> engage{};
 };
 
+// The physical bounds a body's input is held to, derived from the model when the
+// simulation is built (Simulation::input_bounds); a finite value beyond them (1e308)
+// would make the world NaN, so it is refused like a NaN. With g = 9.81 m/s^2, M the
+// mass of the body and of everything below it (at least 1 kg), R the reach of the
+// scene (the farthest body origin, or the enclosure's half diagonal, at least 1 m):
+//   workspace_m    R + 10 m: a pose target farther than that from the world origin
+//   force_n        M * 100 g: a Cartesian force of 100 g on what the body carries
+//   torque_nm      force_n * R
+//   linear_mps     max(10 m/s, P_linear * 2 workspace): the body's own position PID
+//                  (velocity output) never asks for more anywhere in the workspace
+//   angular_radps  max(20 pi rad/s, P_angular * 2 pi)
+// Per descendant joint, in order, with m the mass the joint carries (its child and
+// everything below it):
+//   joint_effort   max(max motor impulse / dt, 10 m g R) for a rotational joint
+//                  (N m: ten times the largest gravity load it carries at full
+//                  reach), max(max motor impulse / dt, 10 m g) for a linear one (N)
+//   joint_velocity max(20 pi rad/s, P * 2 pi) rotational, max(10 m/s, P * workspace)
+//                  linear, with P the joint PID's gain
+//   joint_position 100 rad (16 turns) rotational, the workspace linear
+struct InputBounds {
+  double workspace_m = 0.0;
+  double force_n = 0.0, torque_nm = 0.0;
+  double linear_mps = 0.0, angular_radps = 0.0;
+  std::array<double, kBodyJointCapacity> joint_effort{}, joint_velocity{}, joint_position{};
+};
+
 // nullptr when `input` can be applied to a body with `joint_count` joints and
 // `actuator_count` actuators; else what is wrong with it (NaN or Inf, a joint or an
 // actuator beyond the body's, an unknown mode).

@@ -33,15 +33,26 @@ class Simulation {
   // Everything back to where the model placed it; commands cleared; time zero.
   void reset() noexcept;
 
+  // nullptr when `input` can be applied to body `body`: input_problem's checks, and
+  // every value within the body's InputBounds. Else what is wrong, naming the field,
+  // the value and the bound ("joint 3 (link3-link4) effort 1e+308 is beyond its
+  // bound of 2180 N m"); the text stays valid until the next call.
+  const char* input_problem(std::size_t body, const BodyInput& input) const noexcept;
+  const InputBounds& input_bounds(std::size_t body) const noexcept;
+
   // An input (checked with input_problem first) becomes the body's current one;
-  // its joint values go to the body's descendant joints in order.
+  // its joint values go to the body's descendant joints in order. Each joint
+  // remembers which body's input drives it: the last one to command it.
   void set_input(std::size_t body, const BodyInput& input) noexcept;
-  // Zero wrench and zero effort on the joints this body's input drove (the
-  // watchdog); its actuators keep what they hold.
+  // Zero wrench and zero effort on the joints this body's input drives (the
+  // watchdog): joints another body commands since keep that body's command. Its
+  // actuators keep what they hold.
   void clear_input(std::size_t body) noexcept;
-  // Zero wrench, and every joint below the body held where it is now by its
-  // position controller (the watchdog's hold policy).
+  // Zero wrench, and the joints below the body that no other body drives held where
+  // they are now by their position controllers (the watchdog's hold policy).
   void hold_joints(std::size_t body) noexcept;
+  // The body whose input drives joint `joint` (an index into model().joints), or -1.
+  int joint_driver(std::size_t joint) const noexcept;
 
   // Readings of body `body` (an index into model().bodies) and of soft body `soft`.
   void read_body(std::size_t body, BodyReading& reading) const noexcept;

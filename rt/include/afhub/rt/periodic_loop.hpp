@@ -25,6 +25,16 @@ enum class OverrunPolicy {
   kCatchUp,
 };
 
+// The clock a loop paces itself by. By default (LoopOptions::clock null) it is
+// monotonic_ns() and clock_nanosleep to an absolute deadline; a test injects its own
+// to check the pacing exactly, whatever the load of the machine it runs on.
+class LoopClock {
+ public:
+  virtual ~LoopClock() = default;
+  virtual std::int64_t now_ns() noexcept = 0;
+  virtual void sleep_until_ns(std::int64_t deadline_ns) noexcept = 0;
+};
+
 struct LoopOptions {
   std::int64_t period_ns = 1'000'000;  // 0: as fast as possible (no sleeping, no overruns)
   OverrunPolicy overrun = OverrunPolicy::kSkip;
@@ -35,6 +45,7 @@ struct LoopOptions {
   // A point of the grid (CLOCK_MONOTONIC ns): cycles wake at grid_origin_ns + k * period.
   // 0: the grid starts one period from now.
   std::int64_t grid_origin_ns = 0;
+  LoopClock* clock = nullptr;  // null: the real monotonic clock
 };
 
 // Applies the options to the calling thread; refusals are reported naming `who`.

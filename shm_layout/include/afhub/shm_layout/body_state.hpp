@@ -21,7 +21,12 @@ struct BodyState {
   Vec3 principal_inertia_kgm2;
   // Descendant joints in the catalog's order; entries [0, joint_count) are valid.
   std::uint32_t joint_count{0};
-  std::uint32_t reserved{0};
+  // This body's command timeliness, as the physics counts it since it started
+  // (modulo 2^32): steps taken under command, and those whose command answered the
+  // state published just before (the command's header.sim_step + 1 == the step). A
+  // controller reports the growth of commanded - answered as its late commands, so
+  // that `afhub top` and `afhub status` show the physics' one count.
+  std::uint32_t commanded_steps{0};
   std::array<double, kMaxJointsPerBody> joint_positions{};   // rad or m
   std::array<double, kMaxJointsPerBody> joint_velocities{};  // rad/s or m/s
   std::array<double, kMaxJointsPerBody> joint_efforts{};     // N m or N
@@ -29,7 +34,7 @@ struct BodyState {
   // [0, sensor_ray_count) are valid. Distance to the first hit, or -1 when nothing
   // is within the sensor's range.
   std::uint32_t sensor_ray_count{0};
-  std::uint32_t reserved2{0};
+  std::uint32_t answered_steps{0};  // see commanded_steps
   std::array<double, kMaxSensorRaysPerBody> sensor_distances_m{};
 };
 

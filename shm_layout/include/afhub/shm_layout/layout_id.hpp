@@ -20,7 +20,7 @@
 namespace afhub {
 
 // Bump when a field's meaning changes without its layout changing.
-inline constexpr std::uint64_t kLayoutRevision = 1;
+inline constexpr std::uint64_t kLayoutRevision = 2;
 
 namespace layout_detail {
 
@@ -78,6 +78,8 @@ inline constexpr std::uint64_t kLayoutId = layout_detail::mix({
     AFHUB_OFF(BodyState, joint_efforts),
     AFHUB_OFF(BodyState, sensor_ray_count),
     AFHUB_OFF(BodyState, sensor_distances_m),
+    AFHUB_OFF(BodyState, commanded_steps),
+    AFHUB_OFF(BodyState, answered_steps),
     sizeof(BodyCommand),
     alignof(BodyCommand),
     AFHUB_OFF(BodyCommand, cartesian_type),
@@ -103,6 +105,7 @@ inline constexpr std::uint64_t kLayoutId = layout_detail::mix({
     AFHUB_OFF(WorldState, answered_steps),
     AFHUB_OFF(WorldState, rejected_commands),
     AFHUB_OFF(WorldState, watchdog_expiries),
+    AFHUB_OFF(WorldState, stale_commands),
     AFHUB_OFF(WorldState, light_count),
     AFHUB_OFF(WorldState, camera_count),
     AFHUB_OFF(WorldState, lights),

@@ -27,10 +27,13 @@ struct WorldState {
   std::uint8_t paused{0};
   std::uint8_t lockstep{0};  // stepping waits for the lockstep clients
   std::uint8_t reserved[2]{};
-  // Commands refused since the start (NaN or Inf, joint index beyond the body's
-  // joints), and watchdog expiries (a body's commands stopped for too long).
+  // Commands refused since the start (NaN or Inf, a value beyond the body's physical
+  // bounds, a joint index beyond the body's joints), watchdog expiries (a body's
+  // commands stopped for too long), and commands not applied because they were
+  // older than their body's watchdog period when read (by their publish stamp).
   std::uint64_t rejected_commands{0};
   std::uint64_t watchdog_expiries{0};
+  std::uint64_t stale_commands{0};
   // Lockstep: clients in the barrier now, steps taken without a late client's
   // answer, and clients dropped from the barrier after repeated misses.
   std::uint32_t lockstep_clients{0};
@@ -52,11 +55,12 @@ enum class WorldAction : std::uint32_t {
   kNone = 0,
   kPause = 1,
   kResume = 2,
-  kStep = 3,  // while paused: advance step_count steps
+  kStep = 3,  // while paused: advance step_count steps (ignored while running)
   kReset = 4,
 };
 
-// Each command is acted on once, identified by its header sequence number.
+// Each command is acted on once, in the order it arrived, identified by its header's
+// (publisher_pid, sequence): every writer's sequence starts at 1.
 struct WorldCommand {
   static constexpr PayloadKind kKind = PayloadKind::kWorldCommand;
   PayloadHeader header;

@@ -20,11 +20,15 @@ struct WorldControl {
         break;
       case WorldAction::kResume:
         paused = false;
+        steps_to_run = 0;
         break;
       case WorldAction::kStep:
-        steps_to_run += command.step_count;
+        // Only while paused: steps asked for while running would otherwise pile up
+        // and all run at the next pause.
+        if (paused) steps_to_run += command.step_count;
         break;
       case WorldAction::kReset:
+        steps_to_run = 0;
         return true;
       case WorldAction::kNone:
         break;

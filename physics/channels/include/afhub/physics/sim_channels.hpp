@@ -3,8 +3,14 @@
 // its clock, counters, lights and cameras, and reads world commands.
 // This adapter is the one place where the wire payloads (BodyCommand, BodyState,
 // WorldState) meet the core's types (BodyInput, BodyReading): a command is copied
-// out of shared memory once, checked, then applied. A per-body watchdog zeroes a
-// body's commands when they stop coming. Needs connect_to_hub() first.
+// out of shared memory once, checked (against the body's physical bounds too: see
+// InputBounds), then applied. A command older than its body's watchdog period when
+// read, by its publish stamp, is stale and not applied (a restarted physics never
+// applies a live controller's old command as new). A per-body watchdog (0.5 s by
+// default, down to 2 ms for haptics) zeroes or holds what that body commanded when
+// its commands stop coming. World commands are read as a queue, every command from
+// every writer once, in order, keyed by (publisher pid, sequence).
+// Needs connect_to_hub() first.
 //
 // Lockstep (enable_lockstep): a body whose command is marked lockstep and answers
 // the current step joins the barrier; await_lockstep() then holds the step until
@@ -15,6 +21,7 @@
 // state channels keep no history, and a client joining during the wait needs it.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -27,6 +34,8 @@
 
 namespace afhub::physics {
 
+class WorldCommandQueue;
+
 struct LockstepOptions {
   std::uint32_t wait_for = 0;                    // hold step 0 until this many clients joined
   std::int64_t wait_timeout_ns = 0;              // give up waiting for them after this; 0: never
@@ -37,7 +46,16 @@ struct LockstepOptions {
 
 class SimChannels {
  public:
+  // `watchdog_s`: every body's watchdog period, until set_watchdog changes one.
   SimChannels(Simulation& sim, double watchdog_s);
+  ~SimChannels();
+
+  // Body `body`'s watchdog period (a name as for hold_on_watchdog): its commands
+  // older than this are stale, and this long without one its commands are released.
+  // Throws afhub::Error for an unknown body or a period outside [0.002, 3600] s.
+  void set_watchdog(const std::string& body, double seconds);
+  // The smallest and largest watchdog period accepted, in seconds.
+  static constexpr double kMinWatchdogS = 0.002, kMaxWatchdogS = 3600.0;
 
   // The watchdog's policy for a body (its channel name or a suffix after a '/'):
   // hold its joints where they are instead of zeroing efforts. Throws afhub::Error
@@ -59,12 +77,15 @@ class SimChannels {
   void apply_commands(std::int64_t now_ns) noexcept;
   // Publishes every body's state and the world state.
   void publish(double wall_time_s, double achieved_rate_hz, bool paused) noexcept;
-  // A world command not seen before, or nullptr.
-  const WorldCommand* new_world_command() noexcept;
+  // The next world command not acted on before, oldest first, copied into `out`;
+  // false when none waits. Commands published before this SimChannels existed (a
+  // live writer's history seen by a restarted physics) are skipped.
+  bool next_world_command(WorldCommand& out) noexcept;
 
   std::size_t channel_count() const { return channels_.size(); }
   std::uint64_t rejected_commands() const { return rejected_; }
   std::uint64_t watchdog_expiries() const { return expiries_; }
+  std::uint64_t stale_commands() const { return stale_; }
   std::uint32_t lockstep_clients() const noexcept;
   std::uint64_t late_answers() const { return late_answers_; }
   std::uint64_t dropped_clients() const { return dropped_; }
@@ -78,10 +99,13 @@ class SimChannels {
     std::unique_ptr<BodyPublisher> publisher;
     std::uint32_t joint_count = 0;
     std::uint32_t actuator_count = 0;
-    std::int64_t last_command_ns = 0;
-    bool commanded = false;         // a command is being applied (the watchdog is armed)
-    bool hold_on_watchdog = false;  // the watchdog holds the joints rather than zeroing efforts
+    std::int64_t watchdog_ns = 0;
+    std::int64_t last_command_ns = 0;  // the publish stamp of the command being applied
+    bool commanded = false;            // a command is being applied (the watchdog is armed)
+    bool hold_on_watchdog = false;     // the watchdog holds the joints rather than zeroing efforts
     bool told_rejected = false;
+    bool told_stale = false;
+    std::uint64_t commanded_steps = 0, answered_steps = 0;  // this body's timeliness
     std::uint32_t lockstep_pid = 0;         // the lockstep client answering for this body; 0: none
     std::uint64_t answered_step = 0;        // lockstep: the step this client answered last
     std::uint64_t applied_answer_step = 0;  // the step the command being applied answers
@@ -102,6 +126,8 @@ class SimChannels {
     bool lockstep = false;
   };
   void note_lockstep_answer(Channel& channel, const Answer& answer) noexcept;
+  Channel& active_channel(const std::string& body, const char* option);
+  bool seen_world_command(const PayloadHeader& header) noexcept;
   void republish_held_step() noexcept;
   // "ambf/env/base, ambf/env/link1": the active bodies no lockstep client answers for.
   std::string bodies_without_client() const;
@@ -110,15 +136,22 @@ class SimChannels {
                     Pose (Simulation::*pose)(std::size_t) const noexcept) const noexcept;
 
   Simulation& sim_;
-  std::int64_t watchdog_ns_;
+  std::int64_t created_ns_;  // commands published before this are history, not news
   std::vector<Channel> channels_;
   BodyInput input_;      // the command being checked and applied, out of shared memory
   BodyReading reading_;  // a body's readings on their way into its state
   DirectoryPublisher directory_;
   Writer<WorldState> world_;
-  LatestReader<WorldCommand> world_command_;
-  std::uint64_t last_world_sequence_ = 0;
-  std::uint64_t rejected_ = 0, expiries_ = 0;
+  std::unique_ptr<WorldCommandQueue> world_commands_;
+  // The last world command acted on from each recent writer, for exactly-once.
+  struct WorldWriter {
+    std::uint32_t pid = 0;
+    std::uint64_t sequence = 0;
+    std::int64_t stamp_ns = 0;
+  };
+  std::array<WorldWriter, 32> world_writers_{};
+  std::size_t next_world_writer_ = 0;  // the slot a new writer takes (the oldest)
+  std::uint64_t rejected_ = 0, expiries_ = 0, stale_ = 0;
   bool lockstep_ = false;
   LockstepOptions lockstep_options_;
   std::uint64_t late_answers_ = 0, dropped_ = 0;

@@ -1,0 +1,143 @@
+// The physical bounds of every body's input, derived from the model once (see
+// InputBounds in body_input.hpp), and the check of an input against them.
+#include <cstdio>
+
+#include "simulation_data.hpp"
+
+namespace afhub::physics {
+namespace {
+
+constexpr double kGravity = 9.81;
+constexpr double kTwoPi = 2.0 * M_PI;
+
+double length(const Vec3& v) {
+  return std::sqrt(v.x * v.x + v.y * v.y + v.z * v.z);
+}
+
+bool rotational(JointType type) {
+  switch (type) {
+    case JointType::kRevolute:
+    case JointType::kContinuous:
+    case JointType::kTorsionSpring:
+    case JointType::kConeTwist:
+      return true;
+    default:
+      return false;
+  }
+}
+
+}  // namespace
+
+void Simulation::Data::build_bounds() {
+  // The reach of the scene: the farthest body origin, or the enclosure's half diagonal.
+  double reach = 1.0;
+  for (const BodySpec& body : model.bodies)
+    reach = std::max(reach, length(body.location.position_m));
+  reach = std::max(reach, 0.5 * length(model.world.enclosure_m));
+  const double workspace = reach + 10.0;
+  // The mass each body carries: itself and the children of every joint below it.
+  std::vector<double> carried(model.bodies.size(), 0.0);
+  for (std::size_t b = 0; b < model.bodies.size(); ++b) {
+    std::vector<bool> counted(model.bodies.size(), false);
+    counted[b] = true;
+    double mass = model.bodies[b].mass_kg;
+    for (int j : model.descendant_joints[b]) {
+      const int child = model.joints[j].child;
+      if (child < 0 || counted[child]) continue;
+      counted[child] = true;
+      mass += model.bodies[child].mass_kg;
+    }
+    carried[b] = mass;
+  }
+  bounds.assign(model.bodies.size(), InputBounds{});
+  for (std::size_t b = 0; b < model.bodies.size(); ++b) {
+    const BodySpec& spec = model.bodies[b];
+    InputBounds& out = bounds[b];
+    out.workspace_m = workspace;
+    out.force_n = std::max(1.0, carried[b]) * 100.0 * kGravity;
+    out.torque_nm = out.force_n * reach;
+    out.linear_mps = std::max(10.0, spec.linear_controller.p * 2.0 * workspace);
+    out.angular_radps = std::max(10.0 * kTwoPi, spec.angular_controller.p * kTwoPi);
+    const std::vector<int>& below = model.descendant_joints[b];
+    for (std::size_t k = 0; k < below.size() && k < kBodyJointCapacity; ++k) {
+      const JointSpec& joint = model.joints[below[k]];
+      const double motor = joint.max_motor_impulse / dt_s;
+      const double mass = std::max(1.0, joint.child >= 0 ? carried[joint.child] : 0.0);
+      if (rotational(joint.type)) {
+        out.joint_effort[k] = std::max(motor, 10.0 * mass * kGravity * reach);
+        out.joint_velocity[k] = std::max(10.0 * kTwoPi, joint.controller.p * kTwoPi);
+        out.joint_position[k] = 100.0;
+      } else {
+        out.joint_effort[k] = std::max(motor, 10.0 * mass * kGravity);
+        out.joint_velocity[k] = std::max(10.0, joint.controller.p * workspace);
+        out.joint_position[k] = workspace;
+      }
+    }
+  }
+}
+
+const InputBounds& Simulation::input_bounds(std::size_t body) const noexcept {
+  return data_->bounds[body];
+}
+
+const char* Simulation::input_problem(std::size_t index, const BodyInput& input) const noexcept {
+  const Data& d = *data_;
+  std::uint32_t actuators = static_cast<std::uint32_t>(d.bodies[index].actuators.size());
+  const auto joints = static_cast<std::uint32_t>(d.model.descendant_joints[index].size());
+  if (const char* problem = physics::input_problem(input, joints, actuators)) return problem;
+  const InputBounds& bound = d.bounds[index];
+  char* text = d.problem.data();
+  const std::size_t size = d.problem.size();
+  // Only the fields the Cartesian mode uses are applied, but all are checked: a
+  // command carries one meaning, and a huge unused value is a sender's bug too.
+  const Vec3& p = input.target_pose.position_m;
+  if (length(p) > bound.workspace_m) {
+    std::snprintf(text, size,
+                  "pose position (%g, %g, %g) m is outside the workspace, %.4g m from the origin",
+                  p.x, p.y, p.z, bound.workspace_m);
+    return text;
+  }
+  const Quaternion& q = input.target_pose.orientation;
+  if (q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w > 4.0) {
+    std::snprintf(text, size,
+                  "pose orientation (%g, %g, %g, %g) is no rotation: a quaternion's norm is 1", q.x,
+                  q.y, q.z, q.w);
+    return text;
+  }
+  struct Check {
+    const char* field;
+    double value, bound;
+    const char* unit;
+  };
+  const Check cartesian[] = {
+      {"force", length(input.wrench.force_n), bound.force_n, "N"},
+      {"torque", length(input.wrench.torque_nm), bound.torque_nm, "N m"},
+      {"linear velocity", length(input.twist.linear_mps), bound.linear_mps, "m/s"},
+      {"angular velocity", length(input.twist.angular_radps), bound.angular_radps, "rad/s"},
+  };
+  for (const Check& c : cartesian)
+    if (c.value > c.bound) {
+      std::snprintf(text, size, "%s %g %s is beyond the body's bound of %.4g %s", c.field, c.value,
+                    c.unit, c.bound, c.unit);
+      return text;
+    }
+  const std::vector<int>& below = d.model.descendant_joints[index];
+  for (std::uint32_t j = 0; j < input.joint_count; ++j) {
+    const JointSpec& joint = d.model.joints[below[j]];
+    const bool turns = rotational(joint.type);
+    const double value = input.joint_values[j];
+    Check c{"position", value, bound.joint_position[j], turns ? "rad" : "m"};
+    if (input.joint_modes[j] == JointMode::kEffort)
+      c = {"effort", value, bound.joint_effort[j], turns ? "N m" : "N"};
+    else if (input.joint_modes[j] == JointMode::kVelocity)
+      c = {"velocity", value, bound.joint_velocity[j], turns ? "rad/s" : "m/s"};
+    if (std::abs(c.value) > c.bound) {
+      std::snprintf(text, size, "joint %u (%s) %s %g %s is beyond its bound of %.4g %s", j,
+                    joint.name.c_str(), c.field, c.value, c.unit, c.bound, c.unit);
+      return text;
+    }
+  }
+  return nullptr;
+}
+
+}  // namespace afhub::physics

@@ -1,0 +1,230 @@
+// Commands are bounded, arrive, and are never stale (issue 12), against `afhub run`
+// of the example arm on a test hub: finite extreme commands refused and counted
+// while the world runs on; world commands from several writers acted on once each,
+// in order; a restarted physics ignoring a live writer's old command; a per-body
+// watchdog of 2 ms; and one count of late commands in `status`, `top` and the world.
+// Assertions are on counters, states and messages, never on tight wall-clock times.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <thread>
+
+#include "afhub/hub/bodies.hpp"
+#include "afhub/shm_layout/channel_names.hpp"
+#include "afhub/shm_layout/world.hpp"
+#include "afhub_process.hpp"
+#include "model_files.hpp"
+
+namespace afhub::test {
+namespace {
+
+using namespace std::chrono_literals;
+
+const std::string kArm = AFHUB_EXAMPLE_MODELS "/arm7.yaml";
+
+ChannelId world_channel(std::string_view event) {
+  return {std::string(kService), std::string(kWorldInstance), std::string(event)};
+}
+
+// The arm on the hub; the world state read as it comes.
+struct ArmRun {
+  explicit ArmRun(const std::vector<std::string>& extra = {})
+      : log((folder.dir() / "run.log").string()) {
+    std::vector<std::string> args = {"run", kArm, "--no-autostart"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    physics = std::make_unique<ScopedProcess>(spawn_afhub(args, log));
+  }
+  bool ready() {
+    return wait_until([&] { return world.latest() != nullptr; }, 10s);
+  }
+  const WorldState& now() { return *world.latest(); }
+  afhub::testing::ModelFolder folder;
+  std::string log;
+  std::unique_ptr<ScopedProcess> physics;
+  LatestReader<WorldState> world{world_channel(kStateEvent)};
+};
+
+TEST(FaultsCommands, FiniteExtremeCommandsAreRefusedAndCountedWhileTheWorldRunsOn) {
+  ArmRun run;
+  ASSERT_TRUE(run.ready()) << read_file(run.log);
+  const std::vector<std::vector<std::string>> extremes = {
+      {"--joint-effort", "1e308"},
+      {"--force", "1e308,0,0"},
+      {"--torque", "0,0,1e308"},
+      {"--pose", "1e308,0,0,0,0,0"},
+  };
+  std::uint64_t expected = 0;
+  for (const auto& extreme : extremes) {
+    std::vector<std::string> args = {"cmd", "arm/base", "--once"};
+    args.insert(args.end(), extreme.begin(), extreme.end());
+    RunResult sent = run_afhub(args);
+    ASSERT_EQ(sent.exit_code, 0) << sent.err;
+    ++expected;
+    ASSERT_TRUE(wait_until([&] { return run.now().rejected_commands >= expected; }, 5s))
+        << extreme[0] << ": " << run.now().rejected_commands << " refused\n"
+        << read_file(run.log);
+  }
+  // The world runs on: it keeps stepping, and the physics is alive.
+  const std::uint64_t step = run.now().header.sim_step;
+  EXPECT_TRUE(wait_until([&] { return run.now().header.sim_step > step + 100; }, 5s));
+  EXPECT_EQ(wait_for_exit(*run.physics, 0ms), -1) << read_file(run.log);
+  RunResult status = run_afhub({"status", "--json"});
+  EXPECT_TRUE(contains(status.out, "\"rejected_commands\":4")) << status.out;
+  EXPECT_EQ(run.physics->stop(), 0);
+  const std::string output = read_file(run.log);
+  // Said once for the body, naming the field, the value and the bound.
+  EXPECT_TRUE(contains(output, "refused a command for afhub/arm/base: joint 0 (base-link1) effort"))
+      << output;
+  EXPECT_TRUE(contains(output, "joint 0 (base-link1) effort 1e+308 N m is beyond its bound"))
+      << output;
+  EXPECT_FALSE(contains(output, "NaN")) << output;
+}
+
+TEST(FaultsCommands, WorldCommandsFromEveryWriterActOnceEachInOrder) {
+  ArmRun run;
+  ASSERT_TRUE(run.ready()) << read_file(run.log);
+  // Writers whose sequences all start at 1, as every process's do.
+  auto send = [](Writer<WorldCommand>& writer, WorldAction action, std::uint32_t steps = 1) {
+    WorldCommand* command = writer.loan();
+    ASSERT_NE(command, nullptr);
+    command->action = action;
+    command->step_count = steps;
+    writer.publish(command);
+  };
+  Writer<WorldCommand> a(world_channel(kCommandEvent)), b(world_channel(kCommandEvent)),
+      c(world_channel(kCommandEvent)), d(world_channel(kCommandEvent));
+  // Pause from one writer, resume from another: both act.
+  send(a, WorldAction::kPause);
+  ASSERT_TRUE(wait_until([&] { return run.now().paused == 1; }, 5s));
+  send(b, WorldAction::kResume);
+  ASSERT_TRUE(wait_until([&] { return run.now().paused == 0; }, 5s)) << "resume from b was lost";
+  // A step asked for while running is ignored, not kept for the next pause.
+  send(c, WorldAction::kStep, 500);
+  std::this_thread::sleep_for(20ms);
+  send(a, WorldAction::kPause);
+  ASSERT_TRUE(wait_until([&] { return run.now().paused == 1; }, 5s));
+  std::this_thread::sleep_for(50ms);
+  const std::uint64_t paused_at = run.now().header.sim_step;
+  std::this_thread::sleep_for(700ms);
+  EXPECT_EQ(run.now().header.sim_step, paused_at) << "steps asked for while running ran later";
+  // Two writers' steps published back to back, within one physics cycle: both run.
+  send(c, WorldAction::kStep, 5);
+  send(d, WorldAction::kStep, 7);
+  EXPECT_TRUE(wait_until([&] { return run.now().header.sim_step == paused_at + 12; }, 5s))
+      << "stepped " << run.now().header.sim_step - paused_at << " of 12";
+  std::this_thread::sleep_for(300ms);
+  EXPECT_EQ(run.now().header.sim_step, paused_at + 12);
+  // `resume resume` from a third writer: each acts once (the world runs), then a
+  // pause from the first stops it again.
+  send(d, WorldAction::kResume);
+  send(d, WorldAction::kResume);
+  ASSERT_TRUE(wait_until([&] { return run.now().paused == 0; }, 5s));
+  send(b, WorldAction::kPause);
+  EXPECT_TRUE(wait_until([&] { return run.now().paused == 1; }, 5s));
+  EXPECT_EQ(run.physics->stop(), 0);
+}
+
+TEST(FaultsCommands, ARestartedPhysicsIgnoresALiveWritersOldCommand) {
+  BodyClient* base = nullptr;
+  std::unique_ptr<BodyClient> client;
+  {
+    ArmRun first;
+    ASSERT_TRUE(first.ready()) << read_file(first.log);
+    client = std::make_unique<BodyClient>("afhub/arm/base");
+    base = client.get();
+    ASSERT_TRUE(wait_until([&] { return base->latest_state() != nullptr; }, 5s));
+    // One command, kept by the writer's history: joint 0 to 1 rad.
+    BodyCommand* command = base->loan_command();
+    ASSERT_NE(command, nullptr);
+    command->joint_count = 1;
+    command->joint_types[0] = JointCommandType::kPosition;
+    command->joint_values[0] = 1.0;
+    base->publish_command(command);
+    ASSERT_TRUE(wait_until([&] { return base->latest_state()->joint_positions[0] > 0.5; }, 5s));
+    EXPECT_EQ(first.physics->stop(), 0);
+  }
+  // Longer than the watchdog (0.5 s): the command is stale when the new physics reads it.
+  std::this_thread::sleep_for(1s);
+  ArmRun second;
+  ASSERT_TRUE(second.ready()) << read_file(second.log);
+  ASSERT_TRUE(wait_until([&] { return second.now().stale_commands == 1; }, 5s))
+      << read_file(second.log);
+  std::this_thread::sleep_for(1s);
+  ASSERT_NE(base->latest_state(), nullptr);
+  EXPECT_LT(std::abs(base->latest_state()->joint_positions[0]), 0.05)
+      << "the old command moved the new physics' arm";
+  EXPECT_EQ(second.now().rejected_commands, 0u);
+  RunResult status = run_afhub({"status", "--json"});
+  EXPECT_TRUE(contains(status.out, "\"stale_commands\":1")) << status.out;
+  EXPECT_EQ(second.physics->stop(), 0);
+  const std::string output = read_file(second.log);
+  EXPECT_TRUE(contains(output, "ignored a command for afhub/arm/base from pid")) << output;
+}
+
+TEST(FaultsCommands, APerBodyWatchdogOfTwoMillisecondsFiresForThatBodyAlone) {
+  ArmRun run({"--watchdog-body", "arm/link3=0.002"});
+  ASSERT_TRUE(run.ready()) << read_file(run.log);
+  BodyClient base("afhub/arm/base"), link3("afhub/arm/link3");
+  ASSERT_TRUE(wait_until([&] { return link3.latest_state() && base.latest_state(); }, 5s));
+  auto hold = [](BodyClient& body, std::uint32_t joints) {
+    BodyCommand* command = body.loan_command();
+    if (!command) return;
+    command->joint_count = joints;
+    for (std::uint32_t j = 0; j < joints; ++j)
+      command->joint_types[j] = JointCommandType::kPosition;
+    body.publish_command(command);
+  };
+  // Both commanded for 0.3 s (link3 at about 1 kHz), then link3 stops while the base
+  // goes on at 100 Hz, well within its 0.5 s.
+  for (int i = 0; i < 300; ++i) {
+    hold(link3, 4);
+    if (i % 10 == 0) hold(base, 7);
+    std::this_thread::sleep_for(1ms);
+  }
+  for (int i = 0; i < 100; ++i) {
+    hold(base, 7);
+    std::this_thread::sleep_for(10ms);
+  }
+  EXPECT_GE(run.now().watchdog_expiries, 1u);
+  EXPECT_EQ(run.physics->stop(), 0);
+  const std::string output = read_file(run.log);
+  EXPECT_TRUE(contains(output, "no command for afhub/arm/link3 in 0.002 s")) << output;
+  EXPECT_FALSE(contains(output, "no command for afhub/arm/base")) << output;
+  // Out of range: refused with a message.
+  RunResult bad = run_afhub(
+      {"run", kArm, "--no-autostart", "--steps", "1", "--watchdog-body", "arm/link3=0.0001"});
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_TRUE(contains(bad.err, "0.002 to 3600")) << bad.err;
+}
+
+TEST(FaultsCommands, LateCommandsAreOneCountInTheWorldStatusAndTop) {
+  ArmRun run;
+  ASSERT_TRUE(run.ready()) << read_file(run.log);
+  // A 500 Hz controller of a 1 kHz physics: every other step runs on a command that
+  // answered the state before the last.
+  ScopedProcess controller(spawn_afhub({"ctl", "hold", "arm/base", "--rate", "500"}));
+  ASSERT_TRUE(wait_until([&] { return run.now().commanded_steps > 500; }, 10s));
+  const std::uint64_t late_before = run.now().commanded_steps - run.now().answered_steps;
+  EXPECT_GT(late_before, run.now().commanded_steps / 4);
+  std::this_thread::sleep_for(1500ms);  // the controller publishes its stats every second
+  RunResult top = run_afhub({"top", "--json"});
+  const std::uint64_t late_after = run.now().commanded_steps - run.now().answered_steps;
+  const double loop_late = json_number(top.out, "late_commands");  // the first loop with it
+  ASSERT_TRUE(contains(top.out, "\"name\":\"ctl hold\"")) << top.out;
+  // The controller's late count is the physics' count for its body, as of its last
+  // stats: between the world's counts before and after.
+  std::size_t at = top.out.find("\"name\":\"ctl hold\"");
+  std::size_t object = top.out.rfind('{', at);
+  const double controller_late = json_number(top.out.substr(object), "late_commands");
+  (void)loop_late;
+  EXPECT_GE(controller_late, static_cast<double>(late_before)) << top.out;
+  EXPECT_LE(controller_late, static_cast<double>(late_after)) << top.out;
+  RunResult status = run_afhub({"status", "--json"});
+  EXPECT_TRUE(contains(status.out, "\"late_steps\":")) << status.out;
+  EXPECT_TRUE(contains(status.out, "\"commanded_steps\":")) << status.out;
+  controller.stop();
+  EXPECT_EQ(run.physics->stop(), 0);
+}
+
+}  // namespace
+}  // namespace afhub::test
