@@ -224,9 +224,11 @@ TEST_F(CliWithBodies, StatusShowsProcessesAndMempools) {
   EXPECT_TRUE(wait_until(
       [&] {
         status = run_afhub({"status", "--json"});
-        return contains(status.out, "\"name\":\"afhub-synth-" + std::to_string(synth_.pid) + "\"");
+        return contains(status.out,
+                        "\"name\":\"afhub-synth-" + std::to_string(synth_.pid) + "\"") &&
+               contains(status.out, "\"body_count\":2");
       },
-      3s))
+      5s))
       << status.out;
   EXPECT_EQ(status.exit_code, 0) << status.err;
   EXPECT_TRUE(contains(status.out, "\"chunk_payload_bytes\":" + std::to_string(sizeof(BodyState))))

@@ -83,10 +83,10 @@ void confirm_body_claims(const std::vector<std::string>& channels,
     std::vector<std::string> missing;
     for (const std::string& channel : channels) {
       const auto found = owners.find(channel);
-      if (found == owners.end())
-        missing.push_back(channel);
-      else if (found->second.pid != me && process_exists(found->second.pid))
+      if (found != owners.end() && found->second.pid != me && process_exists(found->second.pid))
         throw Error(taken_message(channel, found->second));
+      // Not listed yet, or still as a process that is gone: the hub is catching up.
+      if (found == owners.end() || found->second.pid != me) missing.push_back(channel);
     }
     if (missing.empty()) return;
     if (std::chrono::steady_clock::now() > deadline)

@@ -44,27 +44,50 @@ bool CatalogBuilder::merge(bool directories_changed) {
     any_update = any_update || reader->updated();
   }
   if (!any_update) return false;
-  std::vector<BodyInfo> merged;
-  std::set<std::string> seen;
+  // What the live directories offer, in their order; a body two processes offer
+  // goes to the one the catalog already lists, else to the first.
+  std::map<std::string, std::uint32_t> admitted_owner;
+  for (const auto& body : bodies_)
+    admitted_owner[std::string(name_of(body.channel))] = body.owner_pid;
+  std::vector<BodyInfo> offered;
+  std::map<std::string, std::size_t> offered_at;
   for (auto& [instance, reader] : directories_) {
     const auto* list = static_cast<const BodyList*>(reader->latest());
     if (!list) continue;
     for (std::uint32_t i = 0; i < list->body_count; ++i) {
-      std::string channel(name_of(list->bodies[i].channel));
-      if (!seen.insert(channel).second) {
-        std::fprintf(stderr, "afhub hub: body %s is claimed by two processes; keeping the first\n",
-                     channel.c_str());
+      const BodyInfo& body = list->bodies[i];
+      std::string channel(name_of(body.channel));
+      const auto [at, added] = offered_at.emplace(channel, offered.size());
+      if (added) {
+        offered.push_back(body);
         continue;
       }
-      // A full catalog refuses the rest; their owner sees them missing and says so.
-      if (merged.size() == kMaxBodies) {
-        std::fprintf(stderr, "afhub hub: the catalog is full (%zu bodies); %s of %s is refused\n",
-                     kMaxBodies, channel.c_str(),
-                     std::string(name_of(list->bodies[i].owner)).c_str());
-        continue;
-      }
-      merged.push_back(list->bodies[i]);
+      std::fprintf(stderr, "afhub hub: body %s is claimed by two processes; keeping the first\n",
+                   channel.c_str());
+      const auto admitted = admitted_owner.find(channel);
+      if (admitted != admitted_owner.end() && admitted->second == body.owner_pid)
+        offered[at->second] = body;
     }
+  }
+  // First come, first served: bodies the catalog lists keep their place, new ones
+  // join while there is room. Their owner sees the refused ones missing and says so.
+  std::vector<BodyInfo> merged;
+  std::vector<bool> taken(offered.size(), false);
+  for (const auto& body : bodies_) {
+    const auto at = offered_at.find(std::string(name_of(body.channel)));
+    if (at == offered_at.end() || taken[at->second]) continue;
+    merged.push_back(offered[at->second]);
+    taken[at->second] = true;
+  }
+  for (std::size_t k = 0; k < offered.size(); ++k) {
+    if (taken[k]) continue;
+    if (merged.size() == kMaxBodies) {
+      std::fprintf(stderr, "afhub hub: the catalog is full (%zu bodies); %s of %s is refused\n",
+                   kMaxBodies, std::string(name_of(offered[k].channel)).c_str(),
+                   std::string(name_of(offered[k].owner)).c_str());
+      continue;
+    }
+    merged.push_back(offered[k]);
   }
   bodies_ = std::move(merged);
   // Rate probes follow the body set.
