@@ -146,6 +146,7 @@ int run_demo(const DemoOptions& options) {
   const auto refresh = std::chrono::milliseconds(tty ? 100 : 1000);
   const auto start = std::chrono::steady_clock::now();
   auto next_draw = start;
+  std::uint32_t drawn_bodies = 0;
   while (!stop_requested()) {
     const auto now = std::chrono::steady_clock::now();
     const double t = std::chrono::duration<double>(now - start).count();
@@ -170,7 +171,9 @@ int run_demo(const DemoOptions& options) {
       }
     }
     for (auto& [body, motion] : movers) move_joints(*body, motion, t);
-    if (now >= next_draw) {
+    // Drawn at the refresh rate, and at once when bodies come or go.
+    if (now >= next_draw || list.body_count != drawn_bodies) {
+      drawn_bodies = list.body_count;
       draw(catalog, clients, tty);
       next_draw = now + refresh;
     }

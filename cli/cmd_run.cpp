@@ -18,7 +18,7 @@ namespace {
 
 struct RunCliOptions {
   std::vector<std::string> files;
-  std::string launch_file, indices, adf_list, world_file, report_file, watchdog_hold;
+  std::string launch_file, indices, adf_list, world_file, report_file, watchdog_hold, name_space;
   std::vector<std::string> watchdog_bodies;  // "BODY=SECONDS"
   double dt_s = 0.001;
   double watchdog_s = 0.5;
@@ -89,6 +89,7 @@ int run_run(const RunCliOptions& options) {
     return 1;
   }
   for (const auto& warning : model.warnings) std::fprintf(stderr, "%s\n", warning.c_str());
+  if (!options.name_space.empty()) physics::prefix_channels(model, options.name_space);
 
   install_stop_signal_handlers();
   physics::Simulation sim(model, options.dt_s);
@@ -144,6 +145,9 @@ void register_run(CLI::App& app, Runner& selected) {
   run->add_option("-a", options->adf_list, "ADF files, comma-separated: a.yaml,b.yaml");
   run->add_option("--world", options->world_file,
                   "A world file (gravity, enclosure, lights, cameras, environment)");
+  run->add_option("--namespace", options->name_space,
+                  "Put every body's channels under this prefix (copy/afhub/arm/base), to run a "
+                  "second copy of a model beside the first: a live body has one publisher");
   run->add_option("--dt", options->dt_s, "Fixed step in seconds (default 0.001)");
   run->add_flag("--fast", options->fast, "Step as fast as possible instead of in real time");
   run->add_option("--steps", options->steps, "Stop after this many steps (default: until Ctrl-C)");

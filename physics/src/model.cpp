@@ -1,6 +1,7 @@
 // Small helpers of the model (see model.hpp).
 #include "afhub/physics/model.hpp"
 
+#include "afhub/shm_layout/channel_names.hpp"
 #include "frames.hpp"
 
 namespace afhub::physics {
@@ -38,6 +39,16 @@ const char* joint_type_name(JointType type) {
       return "six dof spring";
   }
   return "unknown";
+}
+
+void prefix_channels(Model& model, std::string_view prefix) {
+  const auto prefixed = [&](std::string& channel) {
+    channel = body_channel_name(prefix, channel);
+    require_valid_channel_name(channel);
+  };
+  for (BodySpec& body : model.bodies) prefixed(body.channel);
+  for (SoftBodySpec& soft : model.soft_bodies) prefixed(soft.channel);
+  for (JointSpec& joint : model.joints) prefixed(joint.channel);
 }
 
 }  // namespace afhub::physics

@@ -62,6 +62,23 @@ TEST(Claims, ASecondPublisherOfALiveBodyIsRefusedNamingTheOwner) {
   EXPECT_EQ(beside.stop(), 0);
 }
 
+TEST(Claims, ASecondPhysicsOfTheSameModelIsRefusedUnlessInAnotherNamespace) {
+  const std::string arm = AFHUB_EXAMPLE_MODELS "/arm7.yaml";
+  ScopedProcess first(spawn_afhub({"run", arm, "--no-autostart"}));
+  ASSERT_TRUE(wait_until([] { return listed("afhub/arm/link7"); }, 10s));
+  const RunResult second = run_afhub({"run", arm, "--no-autostart"});
+  EXPECT_EQ(second.exit_code, 1);
+  EXPECT_TRUE(contains(second.err,
+                       "afhub/arm/base is published by afhub-physics-" + std::to_string(first.pid)))
+      << second.err;
+  ScopedProcess copy(spawn_afhub({"run", arm, "--namespace", "copy", "--no-autostart"}));
+  EXPECT_TRUE(wait_until([] { return listed("copy/afhub/arm/link7"); }, 10s));
+  const RunResult echo = run_afhub({"echo", "copy/afhub/arm/base", "-n", "1"});
+  EXPECT_EQ(echo.exit_code, 0) << echo.err;
+  EXPECT_EQ(copy.stop(), 0);
+  EXPECT_EQ(first.stop(), 0);
+}
+
 TEST(Claims, MoreBodiesThanTheHubHoldsAreRefusedAndTheRestGoOn) {
   ScopedProcess big(spawn_afhub(
       {"synth", "--bodies", "200", "--joints", "1", "--namespace", "a", "--no-autostart"}));

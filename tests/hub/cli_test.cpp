@@ -51,7 +51,7 @@ TEST(Cli, EveryCommandHasHelp) {
   EXPECT_NE(bad.exit_code, 0);
 }
 
-TEST(Cli, DemoSimulatesTheKukaLive) {
+TEST(Cli, DemoSimulatesTheExampleSceneLive) {
   expect_no_hub();
   RunResult demo = run_afhub({"demo", "--seconds", "3"}, 30s);
   EXPECT_EQ(demo.exit_code, 0) << demo.err;

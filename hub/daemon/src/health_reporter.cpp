@@ -58,9 +58,11 @@ void HealthReporter::poll(std::chrono::steady_clock::time_point now, std::uint32
                           std::uint32_t free_publisher_ports) {
   const auto* processes = introspection_->processes.latest();
   const auto* mempools = introspection_->mempools.latest();
-  if (now - last_publish_ < kPublishPeriod) return;
-  // RouDi's introspection arrives shortly after start: wait for it, briefly.
-  if ((!processes || !mempools) && now - started_ < kPublishPeriod) return;
+  // At once on start (processes and mempools follow with RouDi's introspection),
+  // then once a second.
+  if (last_publish_ != std::chrono::steady_clock::time_point{} &&
+      now - last_publish_ < kPublishPeriod)
+    return;
   Health* health = writer_.loan();
   if (!health) return;
   last_publish_ = now;

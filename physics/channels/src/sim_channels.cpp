@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cstdio>
 
+#include "afhub/hub/body_claims.hpp"
 #include "afhub/hub/stop_signal.hpp"
 #include "afhub/shm_layout/channel_names.hpp"
 #include "afhub/shm_layout/error.hpp"
@@ -80,6 +81,13 @@ SimChannels::SimChannels(Simulation& sim, double watchdog_s)
   const Model& model = sim.model();
   if (model.bodies.size() + model.soft_bodies.size() > kMaxBodies)
     throw Error("the model has more than " + std::to_string(kMaxBodies) + " bodies");
+  // Claimed through the hub: one publisher per body. A state publisher per body, the
+  // world's, the directory's and the loop stats'.
+  std::vector<std::string> claimed;
+  for (const BodySpec& body : model.bodies)
+    if (!body.passive) claimed.push_back(body.channel);
+  for (const SoftBodySpec& soft : model.soft_bodies) claimed.push_back(soft.channel);
+  check_room_for_bodies(claimed, claimed.size() + 3);
   for (std::size_t b = 0; b < model.bodies.size(); ++b) {
     const BodySpec& body = model.bodies[b];
     if (body.passive) continue;
@@ -108,6 +116,7 @@ SimChannels::SimChannels(Simulation& sim, double watchdog_s)
     channels_.push_back(std::move(channel));
   }
   directory_.publish();
+  confirm_body_claims(claimed, std::chrono::seconds(2));
 }
 
 SimChannels::~SimChannels() = default;

@@ -5,6 +5,7 @@
 #include <array>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "afhub/shm_layout/geometry.hpp"
@@ -191,5 +192,10 @@ struct Model {
   // Independent closed kinematic loops (joints - bodies + connected groups).
   int closed_loop_count = 0;
 };
+
+// Puts every body, soft body and joint channel under `prefix` ("copy" makes
+// "afhub/arm/base" "copy/afhub/arm/base"), so that two copies of a model can run side
+// by side. Throws afhub::Error when a name gets too long for a channel.
+void prefix_channels(Model& model, std::string_view prefix);
 
 }  // namespace afhub::physics
