@@ -6,6 +6,7 @@
 #include <map>
 #include <memory>
 
+#include "afhub/hub/hub_loss.hpp"
 #include "afhub/hub/json_writer.hpp"
 #include "afhub/hub/stop_signal.hpp"
 #include "afhub/rt/clock.hpp"
@@ -54,7 +55,7 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
   // Commands in: the world's (pause, resume, step, reset), then the bodies'; in
   // lockstep, the clients' answers to the current step.
   cycle.wait = [&] {
-    if (!channels) return true;
+    if (!channels || hub_lost()) return true;
     if (const WorldCommand* command = channels->new_world_command())
       if (control.apply(*command)) sim.reset();
     if (channels->lockstep() && !control.paused) return channels->await_lockstep();
@@ -63,6 +64,8 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
   };
   // One step, and the states out.
   cycle.work = [&] {
+    // The hub is gone: hold, neither stepping nor publishing, until the re-exec.
+    if (channels && hub_lost()) return true;
     const std::int64_t begin_ns = monotonic_ns();
     const bool stepping = control.take_step();
     if (stepping) {
