@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <map>
 #include <memory>
 #include <optional>
@@ -10,6 +11,7 @@
 #include <vector>
 
 #include "afhub/hub/bodies.hpp"
+#include "afhub/hub/hub_loss.hpp"
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/hub/stop_signal.hpp"
 #include "afhub/physics/model.hpp"
@@ -196,6 +198,7 @@ std::string complete_joints(const CmdOptions& options, const BodyInfo& info, Bod
 }
 
 bool publish_once(BodyClient& body, const BodyCommand& prototype) {
+  if (hub_lost()) return true;  // outputs safe: no command into a hub that is gone
   BodyCommand* command = body.loan_command();
   if (!command) return false;
   *command = prototype;
@@ -216,10 +219,12 @@ int run_cmd(const CmdOptions& options) {
     throw Error("--repeat must be a rate in Hz above 0 and at most 100000 (0: --once)");
   if (options.others != "hold" && options.others != "release")
     throw Error("--others takes hold or release");
+  if (!once) survive_hub_loss("afhub cmd");
   connect_to_hub("cmd", HubPolicy::kRequire);
-  CatalogReader catalog;
-  catalog.wait(std::chrono::milliseconds(1000));
-  const BodyInfo info = catalog.resolve(options.body);
+  // Re-attached after a hub loss, the body's physics may come back after this process.
+  const BodyInfo info =
+      wait_for_body(options.body, "afhub cmd",
+                    reattach_count() > 0 ? std::numeric_limits<std::int64_t>::max() : 0);
   BodyCommand prototype = build_command(options, info);
   BodyClient body(info);
   const std::string joints = complete_joints(options, info, body, prototype);

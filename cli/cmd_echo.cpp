@@ -1,9 +1,11 @@
 // `afhub echo BODY`: prints each new state of a body, as text or JSON lines.
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <memory>
 
 #include "afhub/hub/bodies.hpp"
+#include "afhub/hub/hub_loss.hpp"
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/hub/stop_signal.hpp"
 #include "afhub/rt/clock.hpp"
@@ -33,10 +35,12 @@ int run_echo(const EchoOptions& options) {
   const std::int64_t min_gap_ns =
       options.rate_hz > 0.0 ? static_cast<std::int64_t>(1e9 / options.rate_hz) : 0;
   install_stop_signal_handlers();
+  survive_hub_loss("afhub echo");
   connect_to_hub("echo", HubPolicy::kRequire);
-  CatalogReader catalog;
-  catalog.wait(std::chrono::milliseconds(1000));
-  const BodyInfo info = catalog.resolve(options.body);
+  // Re-attached after a hub loss, the body's physics may come back after this process.
+  const BodyInfo info =
+      wait_for_body(options.body, "afhub echo",
+                    reattach_count() > 0 ? std::numeric_limits<std::int64_t>::max() : 0);
   BodyClient body(name_of(info.channel));
   std::uint64_t printed = 0;
   std::int64_t last_sample_ns = monotonic_ns();

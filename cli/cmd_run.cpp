@@ -4,6 +4,7 @@
 #include <fstream>
 #include <memory>
 
+#include "afhub/hub/hub_loss.hpp"
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/hub/stop_signal.hpp"
 #include "afhub/physics/run_loop.hpp"
@@ -95,6 +96,9 @@ int run_run(const RunCliOptions& options) {
   physics::Simulation sim(model, options.dt_s);
   std::unique_ptr<physics::SimChannels> channels;
   if (!options.offline) {
+    // A lost hub: the loop holds (no step, no state out), then the process re-executes,
+    // waits for a hub and starts its world again from the model (hub_loss.hpp).
+    survive_hub_loss("afhub run");
     connect_to_hub("physics", options.no_autostart ? HubPolicy::kRequire : HubPolicy::kAutostart);
     channels = std::make_unique<physics::SimChannels>(sim, options.watchdog_s);
     for (const std::string& body : split_commas(options.watchdog_hold))

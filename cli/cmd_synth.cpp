@@ -8,6 +8,7 @@
 
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/body_claims.hpp"
+#include "afhub/hub/hub_loss.hpp"
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/hub/stop_signal.hpp"
 #include "afhub/rt/clock.hpp"
@@ -98,6 +99,7 @@ int run_synth(const SynthOptions& options) {
   if (!(options.rate_hz > 0.0 && options.rate_hz <= 100'000.0))
     throw Error("--rate must be between 0 and 100000 Hz");
   install_stop_signal_handlers();
+  survive_hub_loss("afhub synth");
   connect_to_hub("synth", options.no_autostart ? HubPolicy::kRequire : HubPolicy::kAutostart);
 
   std::vector<std::string> channels;
@@ -133,6 +135,10 @@ int run_synth(const SynthOptions& options) {
   std::int64_t rate_window_ns = start_ns;
   double achieved_rate_hz = 0.0;
   while (!stop_requested()) {
+    if (hub_lost()) {  // outputs safe: nothing more is published until the re-exec
+      sleep_until_ns(monotonic_ns() + period_ns);
+      continue;
+    }
     if (const WorldCommand* command = world_command.latest();
         command && command->header.sequence != last_world_command) {
       last_world_command = command->header.sequence;

@@ -4,6 +4,7 @@
 #include <memory>
 #include <thread>
 
+#include "afhub/hub/hub_loss.hpp"
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/hub/loop_stats_reader.hpp"
 #include "afhub/hub/stop_signal.hpp"
@@ -20,6 +21,7 @@ struct TopOptions {
 
 int run_top(const TopOptions& options) {
   install_stop_signal_handlers();
+  if (!options.once && !options.json) survive_hub_loss("afhub top");
   connect_to_hub("top", HubPolicy::kRequire);
   LoopStatsReader reader;
   // Loops publish once a second: the first table waits up to that long for them.

@@ -5,8 +5,10 @@
 #include <sched.h>
 
 #include <cstdio>
+#include <limits>
 
 #include "afhub/hub/bodies.hpp"
+#include "afhub/hub/hub_loss.hpp"
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/hub/stop_signal.hpp"
 #include "afhub/rt/loop_stats_publisher.hpp"
@@ -17,6 +19,7 @@ namespace {
 
 // Fills and publishes one command answering `state`.
 void answer(BodyClient& body, const BodyState& state, const ControllerCycle& cycle, bool lockstep) {
+  if (hub_lost()) return;  // outputs safe: no command into a hub that is gone
   BodyCommand* command = body.loan_command();
   if (!command) return;  // shared memory exhausted: the watchdog covers a lasting shortage
   cycle(state, *command);
@@ -86,31 +89,6 @@ void run_lockstep(BodyClient& body, const ControllerOptions& options, const Cont
   }
 }
 
-// The body's catalog entry. A controller started together with the simulation may
-// look before the physics has listed its bodies: it waits until `give_up_ns`,
-// saying so once.
-BodyInfo find_body(const std::string& query, const std::string& who, std::int64_t give_up_ns) {
-  CatalogReader catalog;
-  catalog.wait(std::chrono::milliseconds(1000));
-  bool said = false;
-  for (;;) {
-    try {
-      return catalog.resolve(query);
-    } catch (const Error& error) {
-      if (monotonic_ns() > give_up_ns || stop_requested()) {
-        if (!said) throw;
-        throw Error(std::string(error.what()) + " (waited for it; wait longer with --wait)");
-      }
-      if (!said)
-        std::fprintf(stderr, "%s: no body '%s' is live yet; waiting up to %.3g s for it\n",
-                     who.c_str(), query.c_str(),
-                     static_cast<double>(give_up_ns - monotonic_ns()) * 1e-9);
-      said = true;
-    }
-    sleep_until_ns(monotonic_ns() + 20'000'000);
-  }
-}
-
 }  // namespace
 
 int run_controller(const ControllerOptions& options, const ControllerCycle& cycle,
@@ -119,11 +97,15 @@ int run_controller(const ControllerOptions& options, const ControllerCycle& cycl
   if (!(options.wait_s >= 0.0 && options.wait_s <= 1e6))
     throw Error("the wait for the hub and the body must be 0 to 1e6 seconds (--wait)");
   const std::string who = "afhub " + options.name;
+  if (options.survive_hub_loss) survive_hub_loss(who);
   // One deadline for the hub and then the body: what a launch script waits at most.
-  const std::int64_t give_up_ns = monotonic_ns() + static_cast<std::int64_t>(options.wait_s * 1e9);
+  // Re-attached after a hub loss, it waits for its body as long as it takes.
+  const std::int64_t give_up_ns =
+      reattach_count() > 0 ? std::numeric_limits<std::int64_t>::max()
+                           : monotonic_ns() + static_cast<std::int64_t>(options.wait_s * 1e9);
   connect_to_hub("ctl", HubPolicy::kRequire,
                  std::chrono::milliseconds(static_cast<std::int64_t>(options.wait_s * 1e3)));
-  const BodyInfo info = find_body(options.body, who, give_up_ns);
+  const BodyInfo info = wait_for_body(options.body, who, give_up_ns, "wait longer with --wait");
   const std::string channel(name_of(info.channel));
   BodyClient body(info);
   LoopTiming own_timing;  // preallocated before memory is locked and the loop starts

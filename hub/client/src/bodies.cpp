@@ -3,10 +3,15 @@
 
 #include <unistd.h>
 
+#include <time.h>
+
+#include <cstdio>
 #include <cstring>
+#include <limits>
 #include <thread>
 
 #include "afhub/hub/hub_presence.hpp"
+#include "afhub/hub/stop_signal.hpp"
 #include "afhub/shm_layout/error.hpp"
 
 namespace afhub {
@@ -141,6 +146,43 @@ BodyInfo CatalogReader::resolve(std::string_view query) {
   for (std::uint32_t i = 0; i < list.body_count; ++i)
     if (name_of(list.bodies[i].channel) == channel) return list.bodies[i];
   throw Error("body '" + channel + "' left the catalog while it was looked up");
+}
+
+namespace {
+std::int64_t monotonic_now_ns() {
+  timespec now{};
+  clock_gettime(CLOCK_MONOTONIC, &now);
+  return static_cast<std::int64_t>(now.tv_sec) * 1'000'000'000 + now.tv_nsec;
+}
+}  // namespace
+
+BodyInfo wait_for_body(const std::string& query, const std::string& who, std::int64_t give_up_ns,
+                       const std::string& hint) {
+  CatalogReader catalog;
+  catalog.wait(std::chrono::milliseconds(1000));
+  bool said = false;
+  for (;;) {
+    try {
+      return catalog.resolve(query);
+    } catch (const Error& error) {
+      if (monotonic_now_ns() > give_up_ns || stop_requested()) {
+        if (!said) throw;
+        throw Error(std::string(error.what()) + " (waited for it" +
+                    (hint.empty() ? "" : "; " + hint) + ")");
+      }
+      if (!said) {
+        if (give_up_ns == std::numeric_limits<std::int64_t>::max())
+          std::fprintf(stderr, "%s: no body '%s' is live yet; waiting for it\n", who.c_str(),
+                       query.c_str());
+        else
+          std::fprintf(stderr, "%s: no body '%s' is live yet; waiting up to %.3g s for it\n",
+                       who.c_str(), query.c_str(),
+                       static_cast<double>(give_up_ns - monotonic_now_ns()) * 1e-9);
+      }
+      said = true;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
 }
 
 }  // namespace afhub

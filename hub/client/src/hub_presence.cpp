@@ -1,26 +1,34 @@
-// Finding, starting and joining the hub (see hub_presence.hpp).
+// Finding, starting and joining the hub (see hub_presence.hpp), and outliving it
+// (see hub_loss.hpp).
 #include "afhub/hub/hub_presence.hpp"
 
 #include <fcntl.h>
+#include <pthread.h>
 #include <signal.h>
 #include <sys/file.h>
 #include <sys/socket.h>
 #include <sys/un.h>
 #include <sys/wait.h>
+#include <time.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <cerrno>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <functional>
+#include <mutex>
 #include <string_view>
 #include <thread>
 #include <vector>
 
+#include "afhub/hub/hub_loss.hpp"
 #include "afhub/hub/stop_signal.hpp"
 #include "afhub/shm_layout/error.hpp"
+#include "iceoryx_hoofs/error_handling/error_handling.hpp"
 #include "iceoryx_hoofs/log/logmanager.hpp"
 #include "iceoryx_posh/runtime/posh_runtime.hpp"
 
@@ -30,6 +38,8 @@ namespace {
 constexpr const char* kRoudiSocketPath =
     "/tmp/roudi";  // iceoryx 2.0: IOX_UDS_SOCKET_PATH_PREFIX + "roudi"
 constexpr const char* kHubLogPath = "/tmp/afhub-hub.log";
+// Not "<runtime name>.lock": iceoryx locks /tmp/<runtime name>.lock for each process.
+constexpr const char* kHubLockPath = "/tmp/afhub.lock";
 constexpr auto kAutostartTimeout = std::chrono::seconds(10);
 
 std::string& runtime_name_storage() {
@@ -99,6 +109,185 @@ std::string hub_log_tail() {
   return all;
 }
 
+// ---- Outliving the hub (hub_loss.hpp) ----
+
+constexpr const char* kReattachVariable = "AFHUB_REATTACH";
+constexpr std::int64_t kWatchPeriodNs = 20'000'000;
+constexpr std::int64_t kReattachPollNs = 10'000'000;
+// A fatal iceoryx error is a lost hub only when the hub goes within this long.
+constexpr std::int64_t kFatalErrorGraceNs = 3'000'000'000;
+
+std::int64_t steady_now_ns() noexcept {
+  timespec now{};
+  clock_gettime(CLOCK_MONOTONIC, &now);
+  return static_cast<std::int64_t>(now.tv_sec) * 1'000'000'000 + now.tv_nsec;
+}
+
+void sleep_ns(std::int64_t ns) noexcept {
+  timespec pause{static_cast<time_t>(ns / 1'000'000'000), static_cast<long>(ns % 1'000'000'000)};
+  nanosleep(&pause, nullptr);
+}
+
+// What the re-exec needs, prepared when the process opts in, so that the loss path
+// itself only formats one variable and calls execve.
+struct LossState {
+  std::string who;
+  std::vector<std::string> arguments, environment;
+  std::vector<char*> argv, envp;  // into the strings above; envp ends in reattach_entry
+  char reattach_entry[96] = {};
+  sigset_t signal_mask{};
+  std::mutex hooks_mutex;
+  std::vector<std::function<void()>> hooks;
+};
+
+// Never destroyed: the watcher thread may still look at it while the process exits.
+LossState& loss_state() {
+  static LossState* state = new LossState;
+  return *state;
+}
+
+std::atomic<bool> g_armed{false};
+std::atomic<bool> g_lost{false};
+std::atomic<bool> g_handling{false};  // one thread handles a loss; the others wait for the exec
+std::atomic<bool> g_exiting{false};   // the process is exiting on its own: never re-execute it
+std::atomic<pid_t> g_attached_hub_pid{0};
+unsigned g_reattach_count = 0;  // from AFHUB_REATTACH, at the opt-in
+pid_t g_lost_hub_pid = 0;       // the hub the previous image lost (0: not an afhub hub)
+std::int64_t g_lost_at_ns = 0;  // when it was lost (CLOCK_MONOTONIC)
+
+pid_t hub_pid_now() noexcept {
+  const std::optional<pid_t> pid = running_hub_pid();
+  return pid ? *pid : 0;
+}
+
+// The hub this process attached to is gone, or is going: its socket refuses, or the
+// hub lock names another pid or none.
+bool hub_gone() noexcept {
+  if (probe_roudi() != RoudiPresence::kRunning) return true;
+  const pid_t attached = g_attached_hub_pid;
+  return attached > 0 && hub_pid_now() != attached;
+}
+
+std::vector<std::string> own_arguments() {
+  std::ifstream in("/proc/self/cmdline", std::ios::binary);
+  std::vector<std::string> arguments;
+  std::string argument;
+  while (std::getline(in, argument, '\0')) arguments.push_back(argument);
+  if (arguments.empty())
+    throw Error(
+        "cannot read this process's arguments from /proc/self/cmdline: it could not "
+        "re-attach to a hub that comes back");
+  return arguments;
+}
+
+[[noreturn]] void reexecute() noexcept {
+  LossState& state = loss_state();
+  std::snprintf(state.reattach_entry, sizeof state.reattach_entry, "%s=%u:%d:%lld",
+                kReattachVariable, g_reattach_count + 1, static_cast<int>(g_attached_hub_pid),
+                static_cast<long long>(steady_now_ns()));
+  std::fflush(stdout);
+  std::fflush(stderr);
+  // Only the three standard streams go across: iceoryx's descriptors (its runtime
+  // name's lock file among them) would otherwise keep their locks in the new image.
+  if (close_range(3, ~0U, CLOSE_RANGE_CLOEXEC) != 0)
+    for (int fd = 3; fd < 65536; ++fd) fcntl(fd, F_SETFD, FD_CLOEXEC);
+  pthread_sigmask(SIG_SETMASK, &state.signal_mask, nullptr);
+  execve("/proc/self/exe", state.argv.data(), state.envp.data());
+  std::fprintf(stderr, "%s: cannot re-execute itself to re-attach: %s\n", state.who.c_str(),
+               std::strerror(errno));
+  _exit(1);
+}
+
+enum class LossHandling { kReexecuted, kOtherThread, kStopping };
+
+// Outputs safe first, then the re-exec (unless the process is stopping anyway).
+LossHandling handle_loss(const char* why) noexcept {
+  if (g_handling.exchange(true)) return LossHandling::kOtherThread;
+  g_lost = true;
+  LossState& state = loss_state();
+  char hub[32] = "";
+  if (const pid_t pid = g_attached_hub_pid; pid > 0)
+    std::snprintf(hub, sizeof hub, " (pid %d)", static_cast<int>(pid));
+  {
+    std::lock_guard<std::mutex> lock(state.hooks_mutex);
+    for (const auto& hook : state.hooks) {
+      try {
+        hook();
+      } catch (...) {
+      }
+    }
+  }
+  std::fprintf(stderr,
+               "%s: the hub%s went away (%s); outputs made safe, re-attaching when a hub "
+               "comes back\n",
+               state.who.c_str(), hub, why);
+  if (stop_requested() || g_exiting) return LossHandling::kStopping;
+  reexecute();
+}
+
+// A thread that meets the loss while another one handles it waits for the exec, or,
+// when the process is stopping instead, ends it.
+[[noreturn]] void wait_for_reexec() noexcept {
+  for (;;) {
+    sleep_ns(kReattachPollNs);
+    if (stop_requested() || g_exiting) _exit(0);
+  }
+}
+
+void watch_hub() noexcept {
+  int strikes = 0;  // two looks in a row, 20 ms apart: one failed open() is not a loss
+  while (!g_lost) {
+    sleep_ns(kWatchPeriodNs);
+    if (g_exiting) return;
+    strikes = hub_gone() ? strikes + 1 : 0;
+    if (strikes < 2) continue;
+    handle_loss(probe_roudi() == RoudiPresence::kRunning ? "another hub replaced it"
+                                                         : "its socket no longer answers");
+    return;
+  }
+}
+
+// iceoryx's errors in an opted-in process. A fatal one once the hub's memory is gone
+// (`afhub hub stop`) is the hub's loss, not this process's end.
+void on_iceoryx_error(const iox::Error error, const std::function<void()> callback,
+                      const iox::ErrorLevel level) {
+  const char* name = iox::ErrorHandler::toString(error);
+  const std::string& who = loss_state().who;
+  if (level != iox::ErrorLevel::FATAL) {
+    std::fprintf(stderr, "%s: iceoryx: %s\n", who.c_str(), name);
+    if (callback) callback();
+    return;
+  }
+  if (g_handling) wait_for_reexec();
+  for (const std::int64_t give_up = steady_now_ns() + kFatalErrorGraceNs; steady_now_ns() < give_up;
+       sleep_ns(kReattachPollNs)) {
+    if (!hub_gone()) continue;
+    char why[160];
+    std::snprintf(why, sizeof why, "iceoryx: %s", name);
+    if (handle_loss(why) == LossHandling::kStopping) _exit(0);
+    wait_for_reexec();
+  }
+  std::fprintf(stderr, "%s: fatal iceoryx error %s, with the hub still up\n", who.c_str(), name);
+  if (callback) callback();
+  std::abort();
+}
+
+// After a re-exec: waits for a hub other than the one lost, never starting one.
+void wait_for_new_hub(const std::string& who) {
+  std::fprintf(stderr, "%s: waiting for a hub to re-attach to\n", who.c_str());
+  for (;;) {
+    if (stop_requested()) {
+      std::fprintf(stderr, "%s: stopped while waiting for a hub\n", who.c_str());
+      std::exit(0);
+    }
+    const pid_t before = hub_pid_now();
+    if (before != g_lost_hub_pid && probe_roudi() == RoudiPresence::kRunning &&
+        hub_pid_now() == before)
+      return;
+    sleep_ns(kReattachPollNs);
+  }
+}
+
 }  // namespace
 
 RoudiPresence probe_roudi() noexcept {
@@ -112,13 +301,12 @@ RoudiPresence probe_roudi() noexcept {
   return rc == 0 ? RoudiPresence::kRunning : RoudiPresence::kAbsent;
 }
 
-// Not "<runtime name>.lock": iceoryx locks /tmp/<runtime name>.lock for each process.
 std::string hub_lock_path() {
-  return "/tmp/afhub.lock";
+  return kHubLockPath;
 }
 
 std::optional<pid_t> running_hub_pid() {
-  int fd = open(hub_lock_path().c_str(), O_RDONLY | O_CLOEXEC);
+  int fd = open(kHubLockPath, O_RDONLY | O_CLOEXEC);
   if (fd < 0) return std::nullopt;
   std::optional<pid_t> pid;
   if (flock(fd, LOCK_SH | LOCK_NB) != 0 && errno == EWOULDBLOCK) {
@@ -174,12 +362,77 @@ void ensure_hub(HubPolicy policy, std::chrono::milliseconds wait, const std::str
 void connect_to_hub(const std::string& role, HubPolicy policy, std::chrono::milliseconds wait,
                     const std::vector<std::string>& hub_options) {
   if (!runtime_name_storage().empty()) return;
-  ensure_hub(policy, wait, "afhub " + role, hub_options);
+  const bool reattaching = g_armed && g_reattach_count > 0;
+  std::int64_t hub_seen_ns = 0;
+  if (reattaching) {
+    wait_for_new_hub(loss_state().who);
+    hub_seen_ns = steady_now_ns();
+  } else {
+    ensure_hub(policy, wait, "afhub " + role, hub_options);
+  }
   quiet_iceoryx_logs();
   std::string name = "afhub-" + role + "-" + std::to_string(getpid());
   if (name.size() > 100) throw Error("process role '" + role + "' is too long for iceoryx");
+  // The image before the re-exec had this name too: its socket is ours to remove
+  // (iceoryx would, with a warning).
+  if (reattaching) unlink(("/tmp/" + name).c_str());
   iox::runtime::PoshRuntime::initRuntime(iox::RuntimeName_t(iox::cxx::TruncateToCapacity, name));
   runtime_name_storage() = name;
+  if (!g_armed) return;
+  // Registered after the runtime, so that it runs before the runtime's destructor.
+  std::atexit([] { g_exiting = true; });
+  g_attached_hub_pid = hub_pid_now();
+  if (reattaching)
+    std::fprintf(stderr,
+                 "%s: re-attached to the hub (pid %d), %.0f ms after it answered and %.2f s after "
+                 "the last one was lost\n",
+                 loss_state().who.c_str(), static_cast<int>(g_attached_hub_pid),
+                 static_cast<double>(steady_now_ns() - hub_seen_ns) * 1e-6,
+                 static_cast<double>(steady_now_ns() - g_lost_at_ns) * 1e-9);
+  std::thread(watch_hub).detach();
+}
+
+void survive_hub_loss(const std::string& who) {
+  if (g_armed) return;
+  LossState& state = loss_state();
+  state.who = who;
+  state.arguments = own_arguments();
+  if (const char* value = std::getenv(kReattachVariable)) {
+    unsigned count = 0;
+    int lost_pid = 0;
+    long long lost_at = 0;
+    if (std::sscanf(value, "%u:%d:%lld", &count, &lost_pid, &lost_at) == 3) {
+      g_reattach_count = count;
+      g_lost_hub_pid = lost_pid;
+      g_lost_at_ns = lost_at;
+    }
+    unsetenv(kReattachVariable);
+  }
+  for (char** entry = environ; *entry; ++entry) state.environment.emplace_back(*entry);
+  for (std::string& argument : state.arguments) state.argv.push_back(argument.data());
+  state.argv.push_back(nullptr);
+  for (std::string& entry : state.environment) state.envp.push_back(entry.data());
+  state.envp.push_back(state.reattach_entry);
+  state.envp.push_back(nullptr);
+  pthread_sigmask(SIG_SETMASK, nullptr, &state.signal_mask);
+  static iox::cxx::GenericRAII handler = iox::ErrorHandler::setTemporaryErrorHandler(
+      [](const iox::Error error, const std::function<void()> callback,
+         const iox::ErrorLevel level) { on_iceoryx_error(error, callback, level); });
+  g_armed = true;
+}
+
+void on_hub_lost(std::function<void()> make_safe) {
+  LossState& state = loss_state();
+  std::lock_guard<std::mutex> lock(state.hooks_mutex);
+  state.hooks.push_back(std::move(make_safe));
+}
+
+bool hub_lost() noexcept {
+  return g_lost.load(std::memory_order_relaxed);
+}
+
+unsigned reattach_count() noexcept {
+  return g_reattach_count;
 }
 
 void quiet_iceoryx_logs() {

@@ -6,6 +6,7 @@
 #include <map>
 #include <memory>
 
+#include "afhub/hub/hub_loss.hpp"
 #include "afhub/hub/json_writer.hpp"
 #include "afhub/hub/stop_signal.hpp"
 #include "afhub/rt/clock.hpp"
@@ -55,7 +56,7 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
   // Commands in: the world's (pause, resume, step, reset), then the bodies'; in
   // lockstep, the clients' answers to the current step.
   cycle.wait = [&] {
-    if (!channels) return true;
+    if (!channels || hub_lost()) return true;
     // Every world command from every writer, in order, each once.
     while (channels->next_world_command(world_command))
       if (control.apply(world_command)) sim.reset();
@@ -65,6 +66,8 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
   };
   // One step, and the states out.
   cycle.work = [&] {
+    // The hub is gone: hold, neither stepping nor publishing, until the re-exec.
+    if (channels && hub_lost()) return true;
     const std::int64_t begin_ns = monotonic_ns();
     const bool stepping = control.take_step();
     if (stepping) {

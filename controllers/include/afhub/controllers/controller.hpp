@@ -13,6 +13,8 @@
 // the newest state. With `lockstep`, it runs once per physics step, answering that
 // step, and a physics started with `afhub run --lockstep` waits for the answer.
 // Either way the loop's timing is published on the stats channel (`afhub top`).
+// When the hub goes away the controller stops commanding and re-attaches to the next
+// hub (ControllerOptions::survive_hub_loss).
 #pragma once
 
 #include <functional>
@@ -37,6 +39,11 @@ struct ControllerOptions {
   // waits this long for the hub and then for its body, saying so once on stderr,
   // before giving up with an error. 0: fail at once when either is missing.
   double wait_s = 10.0;
+  // When the hub goes away, stop commanding, wait for a hub to come back and re-attach
+  // to it, by re-executing this program with its arguments (see afhub/hub/hub_loss.hpp;
+  // register more "make outputs safe" steps with on_hub_lost()). false: the process
+  // ends on a lost hub, as a plain iceoryx client does.
+  bool survive_hub_loss = true;
 };
 
 // `state` is the body's newest state; `command` starts zeroed. Both live in shared

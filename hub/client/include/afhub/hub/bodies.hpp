@@ -110,6 +110,14 @@ class CatalogReader {
   const BodyList* current_ = nullptr;
 };
 
+// The catalog entry for `query` (see CatalogReader::resolve). A process started with
+// the physics that owns the body, or re-attached to a hub before it, waits for it
+// until `give_up_ns` (CLOCK_MONOTONIC; INT64_MAX: until it comes), saying so once on
+// stderr as `who`. Throws afhub::Error when it is still missing then (adding `hint`
+// to the message when it waited), or on Ctrl-C.
+BodyInfo wait_for_body(const std::string& query, const std::string& who, std::int64_t give_up_ns,
+                       const std::string& hint = "");
+
 // Writes `text` into a fixed name buffer, cut to fit, NUL-terminated.
 template <std::size_t N>
 void set_name(std::array<char, N>& buffer, std::string_view text) noexcept {

@@ -1,0 +1,131 @@
+// The fault tests' eyes on a hub: a process of its own, since a test process that
+// joined one hub's iceoryx runtime could never join the next (the runtime is a
+// per-process singleton).
+//   fault_probe attached TIMEOUT_MS BODY:PID...
+//     Waits until every BODY is in the hub's catalog and commands published by PID
+//     arrive on it (PID 0: the body alone). Prints "catalog BODY NS" and "command BODY NS"
+//     (CLOCK_MONOTONIC) as each first holds; exit 0 when all hold, 1 at the timeout.
+//   fault_probe chunks
+//     Prints "BYTES:USED" for every payload mempool (its chunks' payload size, its
+//     chunks in use), once two health samples agree.
+#include <time.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "afhub/hub/bodies.hpp"
+#include "afhub/hub/hub_presence.hpp"
+#include "afhub/shm_layout/error.hpp"
+#include "afhub/shm_layout/health.hpp"
+
+namespace {
+
+std::int64_t now_ns() {
+  timespec now{};
+  clock_gettime(CLOCK_MONOTONIC, &now);
+  return static_cast<std::int64_t>(now.tv_sec) * 1'000'000'000 + now.tv_nsec;
+}
+
+void sleep_ms(int ms) {
+  timespec pause{0, ms * 1'000'000L};
+  nanosleep(&pause, nullptr);
+}
+
+struct Watched {
+  std::string query;
+  std::uint32_t pid = 0;
+  std::string channel;  // once in the catalog
+  std::unique_ptr<afhub::LatestReader<afhub::BodyCommand>> commands;
+  bool commanded = false;
+};
+
+int attached(std::int64_t timeout_ms, std::vector<Watched>& bodies) {
+  afhub::CatalogReader catalog;
+  catalog.wait(std::chrono::milliseconds(2000));
+  const std::int64_t give_up = now_ns() + timeout_ms * 1'000'000;
+  for (;;) {
+    bool all = true;
+    for (Watched& body : bodies) {
+      if (body.channel.empty()) {
+        try {
+          body.channel = std::string(afhub::name_of(catalog.resolve(body.query).channel));
+          std::printf("catalog %s %lld\n", body.query.c_str(), static_cast<long long>(now_ns()));
+          if (body.pid != 0)
+            body.commands = std::make_unique<afhub::LatestReader<afhub::BodyCommand>>(
+                afhub::body_command_channel(body.channel));
+        } catch (const afhub::Error&) {
+        }
+      }
+      if (!body.channel.empty() && body.pid != 0 && !body.commanded) {
+        const afhub::BodyCommand* command = body.commands->latest();
+        if (command && command->header.publisher_pid == body.pid) {
+          body.commanded = true;
+          std::printf("command %s %lld\n", body.query.c_str(), static_cast<long long>(now_ns()));
+        }
+      }
+      all = all && !body.channel.empty() && (body.pid == 0 || body.commanded);
+    }
+    std::fflush(stdout);
+    if (all) return 0;
+    if (now_ns() > give_up) return 1;
+    sleep_ms(2);
+  }
+}
+
+// "BYTES:USED" per payload pool from the first health sample published after `after_ns`.
+std::vector<std::string> chunks_in_use(afhub::LatestReader<afhub::Health>& health,
+                                       std::int64_t after_ns) {
+  std::vector<std::string> used;
+  for (const std::int64_t give_up = now_ns() + 3'000'000'000; now_ns() < give_up; sleep_ms(10)) {
+    const afhub::Health* sample = health.latest();
+    if (!sample || sample->header.publish_stamp_ns <= after_ns || sample->mempool_count == 0)
+      continue;
+    for (std::uint32_t i = 0; i < sample->mempool_count; ++i)
+      if (sample->mempools[i].segment_id != sample->mempools[0].segment_id)
+        used.push_back(std::to_string(sample->mempools[i].chunk_payload_bytes) + ":" +
+                       std::to_string(sample->mempools[i].used_chunks));
+    break;
+  }
+  return used;
+}
+
+int chunks() {
+  afhub::LatestReader<afhub::Health> health({"afhub", "hub", "health"});
+  std::vector<std::string> previous = chunks_in_use(health, now_ns());
+  for (int attempt = 0; attempt < 5; ++attempt) {
+    std::vector<std::string> current = chunks_in_use(health, now_ns());
+    if (current == previous) break;
+    previous = current;
+  }
+  for (const std::string& used : previous) std::printf("%s ", used.c_str());
+  std::printf("\n");
+  return previous.empty() ? 1 : 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    if (argc < 2) return 2;
+    afhub::connect_to_hub("faultprobe", afhub::HubPolicy::kRequire);
+    const std::string mode = argv[1];
+    if (mode == "chunks") return chunks();
+    if (mode != "attached" || argc < 4) return 2;
+    std::vector<Watched> bodies;
+    for (int i = 3; i < argc; ++i) {
+      const std::string item = argv[i];
+      const auto colon = item.rfind(':');
+      Watched body;
+      body.query = item.substr(0, colon);
+      body.pid = static_cast<std::uint32_t>(std::atol(item.c_str() + colon + 1));
+      bodies.push_back(std::move(body));
+    }
+    return attached(std::atoll(argv[2]), bodies);
+  } catch (const std::exception& error) {
+    std::fprintf(stderr, "fault_probe: %s\n", error.what());
+    return 3;
+  }
+}
