@@ -102,6 +102,11 @@ void run_periodic(const LoopOptions& options, LoopTiming& timing, const LoopCycl
         const std::int64_t missed = (finished - scheduled) / period + 1;
         timing.count_overruns(static_cast<std::uint64_t>(missed));
         scheduled += missed * period;
+      } else if (finished - scheduled > options.max_catch_up_ns) {
+        // Stopped for longer than is worth making up: the periods beyond are skipped.
+        const std::int64_t missed = (finished - scheduled) / period + 1;
+        timing.count_overruns(static_cast<std::uint64_t>(missed));
+        scheduled += missed * period;
       } else {
         // Behind: the next cycles run at once, back to back, until caught up.
         timing.count_overruns(1);

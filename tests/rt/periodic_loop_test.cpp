@@ -146,6 +146,32 @@ TEST(PeriodicLoop, CatchingUpRunsTheLateCyclesBackToBack) {
   EXPECT_EQ(clock.woke[7], clock.deadlines[7]);
 }
 
+// A loop stopped for 5 s (SIGSTOP, a debugger) does not burst through 500 cycles
+// when it resumes: it makes up nothing beyond max_catch_up_ns and stays on its grid.
+TEST(PeriodicLoop, CatchingUpSkipsWhatIsBeyondTheBound) {
+  FakeClock clock;
+  LoopOptions options;
+  options.period_ns = 10'000'000;
+  options.max_cycles = 20;
+  options.overrun = OverrunPolicy::kCatchUp;
+  options.max_catch_up_ns = 100'000'000;
+  options.clock = &clock;
+  LoopTiming timing;
+  int cycle = 0;
+  run_periodic(options, timing, [&] {
+    if (++cycle == 5) clock.now += 5'000'000'000;  // stopped for 5 s during cycle 5
+    return true;
+  });
+  EXPECT_EQ(timing.cycles(), 20u);
+  EXPECT_EQ(timing.overruns(), 500u);  // the 500 periods it was away, skipped
+  ASSERT_EQ(clock.deadlines.size(), 20u);
+  // Cycle 6 wakes on the grid after the stop, and every later one a period apart.
+  EXPECT_EQ(clock.deadlines[5] - clock.deadlines[4], 501 * 10'000'000LL);
+  EXPECT_GE(clock.deadlines[5], clock.woke[4] + 5'000'000'000);
+  for (std::size_t k = 6; k < clock.deadlines.size(); ++k)
+    EXPECT_EQ(clock.deadlines[k] - clock.deadlines[k - 1], 10'000'000) << k;
+}
+
 TEST(PeriodicLoop, PeriodZeroRunsAsFastAsPossible) {
   FakeClock clock;
   LoopOptions options;

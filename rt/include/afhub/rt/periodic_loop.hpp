@@ -21,7 +21,9 @@ enum class OverrunPolicy {
   kSkip,
   // Catch up: the cycles whose deadlines passed run back to back until the loop is
   // on time again; each cycle that ends past the next deadline counts as an overrun
-  // (the physics: 10 s of wall time are 10 000 steps of 1 ms).
+  // (the physics: 10 s of wall time are 10 000 steps of 1 ms). Up to
+  // LoopOptions::max_catch_up_ns behind: a loop stopped longer (a debugger, SIGSTOP,
+  // a VM pause) skips what is beyond, as kSkip does, rather than burst through it.
   kCatchUp,
 };
 
@@ -46,6 +48,8 @@ struct LoopOptions {
   // 0: the grid starts one period from now.
   std::int64_t grid_origin_ns = 0;
   LoopClock* clock = nullptr;  // null: the real monotonic clock
+  // kCatchUp: the most a loop makes up; further behind, it skips to the grid.
+  std::int64_t max_catch_up_ns = 100'000'000;
 };
 
 // Applies the options to the calling thread; refusals are reported naming `who`.
