@@ -100,7 +100,7 @@ int run_run(const RunCliOptions& options) {
     // waits for a hub and starts its world again from the model (hub_loss.hpp).
     survive_hub_loss("afhub run");
     connect_to_hub("physics", options.no_autostart ? HubPolicy::kRequire : HubPolicy::kAutostart);
-    channels = std::make_unique<physics::SimChannels>(sim, options.watchdog_s);
+    channels = std::make_unique<physics::SimChannels>(sim, options.watchdog_s, options.name_space);
     for (const std::string& body : split_commas(options.watchdog_hold))
       channels->hold_on_watchdog(body);
     for (const auto& [body, seconds] : watchdog_bodies) channels->set_watchdog(body, seconds);
@@ -149,9 +149,11 @@ void register_run(CLI::App& app, Runner& selected) {
   run->add_option("-a", options->adf_list, "ADF files, comma-separated: a.yaml,b.yaml");
   run->add_option("--world", options->world_file,
                   "A world file (gravity, enclosure, lights, cameras, environment)");
-  run->add_option("--namespace", options->name_space,
-                  "Put every body's channels under this prefix (copy/afhub/arm/base), to run a "
-                  "second copy of a model beside the first: a live body has one publisher");
+  run->add_option(
+      "--namespace", options->name_space,
+      "Put every body's channels under this prefix (copy/afhub/arm/base), and the world's "
+      "(copy/world: `afhub world --namespace copy`), to run a second copy of a model "
+      "beside the first: a live body has one publisher");
   run->add_option("--dt", options->dt_s, "Fixed step in seconds (default 0.001)");
   run->add_flag("--fast", options->fast, "Step as fast as possible instead of in real time");
   run->add_option("--steps", options->steps, "Stop after this many steps (default: until Ctrl-C)");

@@ -21,10 +21,11 @@ namespace {
 struct WorldOptions {
   std::uint32_t steps = 1;
   double timeout_s = 5.0;
+  std::string name_space;  // the world of a physics run with --namespace
 };
 
-ChannelId world_channel(std::string_view event) {
-  return {std::string(kService), std::string(kWorldInstance), std::string(event)};
+ChannelId world_channel(const WorldOptions& options, std::string_view event) {
+  return {std::string(kService), world_instance(options.name_space), std::string(event)};
 }
 
 // The world state is published every step, paused or not, and keeps no history:
@@ -54,14 +55,14 @@ int run_world(WorldAction action, const WorldOptions& options) {
     throw Error("step takes a number of steps of 1 or more");
   install_stop_signal_handlers();
   connect_to_hub("world", HubPolicy::kRequire);
-  LatestReader<WorldState> reader(world_channel(kStateEvent));
+  LatestReader<WorldState> reader(world_channel(options, kStateEvent));
   const WorldState before = first_world_state(reader);
   if (action == WorldAction::kStep && !before.paused)
     throw Error(
         "the world is running, so there is nothing to step: pause it first (`afhub world "
         "pause`), then `afhub world step N`");
 
-  Writer<WorldCommand> writer(world_channel(kCommandEvent));
+  Writer<WorldCommand> writer(world_channel(options, kCommandEvent));
   // The simulation acts on each sequence number once: start past any number an
   // earlier `afhub world` could have used.
   writer.raw().continue_sequence_after(static_cast<std::uint64_t>(monotonic_ns()));
@@ -151,6 +152,8 @@ void register_world(CLI::App& app, Runner& selected) {
     auto* command = world->add_subcommand(entry.name, entry.help);
     if (entry.action == WorldAction::kStep)
       command->add_option("N", options->steps, "Number of steps (default 1)");
+    command->add_option("--namespace", options->name_space,
+                        "The world of a physics run with `afhub run --namespace NS`");
     command->add_option("--timeout", options->timeout_s,
                         "Fail when the simulation has not acted within this many seconds "
                         "(default 5)");

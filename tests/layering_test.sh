@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
-# The dependency rule of the folders (see README, "Architecture"):
-#   shm_layout <- hub <- rt <- {physics, controllers} <- bench <- cli
-# Fails, naming the file, when a layer includes one above it, or when the physics
-# core's test binary links iceoryx.
+# The dependency rule of the folders (README, "Architecture"): shm_layout at the
+# bottom; hub/client on it, hub/daemon on the client; rt on hub/client; the physics
+# core on shm_layout alone; physics/channels and controllers on rt; bench on those;
+# cli on everything. Fails, naming the file, when a layer includes one above it, or
+# when the physics core's test binary links iceoryx.
 set -euo pipefail
 source_dir=$1
 physics_core_tests=$2
@@ -25,7 +26,17 @@ forbid hub 'rt|physics|controllers|bench'
 forbid rt 'physics|controllers|bench'
 forbid physics/src 'hub|rt|controllers|bench'
 forbid physics/include 'hub|rt|controllers|bench'
+forbid physics/channels 'controllers|bench'
 forbid controllers 'physics|bench'
+forbid bench '(cli)'
+if grep -rn '#include "afhub/hub/hub_daemon.hpp"' "$source_dir/hub/client"; then
+  echo "layering: hub/client must not include the daemon" >&2
+  status=1
+fi
+if grep -rn '#include "commands.hpp"\|#include "format.hpp"' "$source_dir"/{shm_layout,hub,rt,physics,controllers,bench}; then
+  echo "layering: only cli/ includes the command line's headers" >&2
+  status=1
+fi
 
 if ldd "$physics_core_tests" | grep -i iceoryx; then
   echo "layering: the physics core's tests link iceoryx" >&2

@@ -63,6 +63,11 @@ void require_valid_channel_name(std::string_view name) {
   if (auto problem = channel_name_problem(name); !problem.empty()) throw Error(problem);
 }
 
+std::string world_instance(std::string_view name_space) {
+  return name_space.empty() ? std::string(kWorldInstance)
+                            : body_channel_name(name_space, kWorldInstance);
+}
+
 ChannelId body_state_channel(std::string_view body_channel) {
   require_valid_channel_name(body_channel);
   return {std::string(kService), std::string(body_channel), std::string(kStateEvent)};

@@ -14,6 +14,7 @@
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/shm_layout/health.hpp"
+#include "afhub/shm_layout/world.hpp"
 #include "afhub_process.hpp"
 #include "hub_environment.hpp"
 
@@ -75,6 +76,20 @@ TEST(Claims, ASecondPhysicsOfTheSameModelIsRefusedUnlessInAnotherNamespace) {
   EXPECT_TRUE(wait_until([] { return listed("copy/afhub/arm/link7"); }, 10s));
   const RunResult echo = run_afhub({"echo", "copy/afhub/arm/base", "-n", "1"});
   EXPECT_EQ(echo.exit_code, 0) << echo.err;
+  // Each copy has its own world: pausing the copy's leaves the first running.
+  LatestReader<WorldState> world(
+      {std::string(kService), world_instance(), std::string(kStateEvent)});
+  LatestReader<WorldState> copy_world(
+      {std::string(kService), world_instance("copy"), std::string(kStateEvent)});
+  const RunResult pause = run_afhub({"world", "pause", "--namespace", "copy"});
+  EXPECT_EQ(pause.exit_code, 0) << pause.err;
+  EXPECT_TRUE(wait_until([&] { return copy_world.latest() && copy_world.latest()->paused; }, 5s));
+  EXPECT_TRUE(wait_until([&] { return world.latest() != nullptr; }, 5s));
+  const std::uint64_t step = world.latest()->header.sim_step;
+  EXPECT_FALSE(world.latest()->paused);
+  EXPECT_TRUE(wait_until([&] { return world.latest()->header.sim_step > step + 100; }, 5s));
+  EXPECT_EQ(world.latest()->header.publisher_pid, static_cast<std::uint32_t>(first.pid))
+      << "the copy publishes on the first's world channel";
   EXPECT_EQ(copy.stop(), 0);
   EXPECT_EQ(first.stop(), 0);
 }

@@ -88,7 +88,8 @@ TEST(Cli, LookingToolsWithoutAHubFailFastAndSayHowToStartOne) {
            {"ls"}, {"echo", "base"}, {"status"}, {"cmd", "base", "--force", "0,0,1"}}) {
     RunResult result = run_afhub(args, 5s);
     EXPECT_EQ(result.exit_code, 1) << args[0];
-    EXPECT_LT(result.seconds, 2.0) << args[0];
+    // At once, not after iceoryx's 60 s wait for a RouDi (a bound no load reaches).
+    EXPECT_LT(result.seconds, 10.0) << args[0];
     EXPECT_TRUE(contains(result.err, "no hub is running")) << result.err;
     EXPECT_TRUE(contains(result.err, "afhub hub")) << result.err;
   }
@@ -100,7 +101,7 @@ TEST(Cli, SecondHubIsRefusedAndStopWorks) {
   ScopedProcess hub(start_test_hub());
   RunResult second = run_afhub({"hub"}, 5s);
   EXPECT_EQ(second.exit_code, 1);
-  EXPECT_LT(second.seconds, 1.0);
+  EXPECT_LT(second.seconds, 10.0);  // at once, not after a wait for the first to go
   EXPECT_TRUE(contains(second.err, "already running")) << second.err;
   EXPECT_TRUE(contains(second.err, "pid " + std::to_string(hub.pid))) << second.err;
 

@@ -1,6 +1,6 @@
 // Processes that stop and resume, or die: a process stopped for 5 s (SIGSTOP, as a
-// debugger breakpoint, Ctrl-Z or a VM pause would) carries on when resumed, be it a
-// controller, the physics or the hub itself; a killed one is cleaned up, files in
+// debugger breakpoint, Ctrl-Z or a VM pause would) carries on when resumed, be it one
+// of two controllers, an echo, the physics or the hub itself; a killed one is cleaned up, files in
 // /tmp included; and `afhub hub stop` does not pull the hub from under attached
 // processes without --force.
 #include <gtest/gtest.h>
@@ -88,18 +88,31 @@ TEST(Pause, StoppedProcessesCarryOnWhenResumed) {
       {std::string(kService), std::string(kWorldInstance), std::string(kStateEvent)});
   ASSERT_TRUE(wait_until([&] { return base.latest_state() && world.latest(); }, 10s))
       << read_file(log);
+  // Two controllers, and an echo printing every state to a file.
   ScopedProcess controller(spawn_afhub({"ctl", "hold", "arm/base"}));
+  ScopedProcess second(spawn_afhub({"ctl", "sine", "arm/link3", "--amplitude", "0.2"}));
+  const std::string echo_out = "/tmp/afhub-pause-echo.log";
+  ScopedProcess echo(spawn_afhub({"echo", "arm/link7"}, echo_out));
   LatestReader<BodyCommand> commands(body_command_channel("afhub/arm/base"));
-  const auto controller_commands_after = [&](std::int64_t stamp_ns) {
-    const BodyCommand* command = commands.latest();
-    return command && command->header.publisher_pid == static_cast<std::uint32_t>(controller.pid) &&
+  LatestReader<BodyCommand> second_commands(body_command_channel("afhub/arm/link3"));
+  const auto commands_after = [](LatestReader<BodyCommand>& reader, pid_t from,
+                                 std::int64_t stamp_ns) {
+    const BodyCommand* command = reader.latest();
+    return command && command->header.publisher_pid == static_cast<std::uint32_t>(from) &&
            command->header.publish_stamp_ns > stamp_ns;
+  };
+  const auto controller_commands_after = [&](std::int64_t stamp_ns) {
+    return commands_after(commands, controller.pid, stamp_ns) &&
+           commands_after(second_commands, second.pid, stamp_ns);
   };
   ASSERT_TRUE(wait_until([&] { return controller_commands_after(0); }, 10s));
 
   for (const auto& [who, pid] : {std::pair<const char*, pid_t>{"controller", controller.pid},
+                                 {"second controller", second.pid},
+                                 {"echo", echo.pid},
                                  {"physics", physics.pid},
                                  {"hub", hub.pid}}) {
+    const std::size_t printed = read_file(echo_out).size();
     kill(pid, SIGSTOP);
     std::this_thread::sleep_for(5s);  // beyond iceoryx's 1.5 s keep-alive deadline
     kill(pid, SIGCONT);
@@ -111,14 +124,18 @@ TEST(Pause, StoppedProcessesCarryOnWhenResumed) {
         << "the world did not go on after the " << who << " resumed\n"
         << read_file(log);
     EXPECT_TRUE(wait_until([&] { return controller_commands_after(resumed_ns); }, 10s))
-        << "the controller's commands stopped after the " << who << " resumed";
+        << "the controllers' commands stopped after the " << who << " resumed";
+    EXPECT_TRUE(wait_until([&] { return read_file(echo_out).size() > printed + 1000; }, 10s))
+        << "echo stopped printing after the " << who << " resumed";
     const RunResult ls = run_afhub({"ls"});
     EXPECT_EQ(ls.exit_code, 0) << who << ": " << ls.err;
     EXPECT_TRUE(contains(ls.out, "afhub/arm/base")) << who << ": " << ls.out;
-    for (pid_t process : {hub.pid, physics.pid, controller.pid})
+    for (pid_t process : {hub.pid, physics.pid, controller.pid, second.pid, echo.pid})
       EXPECT_TRUE(still_running(process))
           << "pid " << process << " died after the " << who << " was stopped for 5 s";
   }
+  EXPECT_EQ(echo.stop(), 0);
+  EXPECT_EQ(second.stop(), 0);
   EXPECT_EQ(controller.stop(), 0);
   EXPECT_EQ(physics.stop(), 0);
   EXPECT_EQ(run_afhub({"hub", "stop", "--force"}).exit_code, 0);  // this test is attached

@@ -148,14 +148,6 @@ BodyInfo CatalogReader::resolve(std::string_view query) {
   throw Error("body '" + channel + "' left the catalog while it was looked up");
 }
 
-namespace {
-std::int64_t monotonic_now_ns() {
-  timespec now{};
-  clock_gettime(CLOCK_MONOTONIC, &now);
-  return static_cast<std::int64_t>(now.tv_sec) * 1'000'000'000 + now.tv_nsec;
-}
-}  // namespace
-
 BodyInfo wait_for_body(const std::string& query, const std::string& who, std::int64_t give_up_ns,
                        const std::string& hint) {
   CatalogReader catalog;
@@ -165,7 +157,7 @@ BodyInfo wait_for_body(const std::string& query, const std::string& who, std::in
     try {
       return catalog.resolve(query);
     } catch (const Error& error) {
-      if (monotonic_now_ns() > give_up_ns || stop_requested()) {
+      if (monotonic_ns() > give_up_ns || stop_requested()) {
         if (!said) throw;
         throw Error(std::string(error.what()) + " (waited for it" +
                     (hint.empty() ? "" : "; " + hint) + ")");
@@ -177,7 +169,7 @@ BodyInfo wait_for_body(const std::string& query, const std::string& who, std::in
         else
           std::fprintf(stderr, "%s: no body '%s' is live yet; waiting up to %.3g s for it\n",
                        who.c_str(), query.c_str(),
-                       static_cast<double>(give_up_ns - monotonic_now_ns()) * 1e-9);
+                       static_cast<double>(give_up_ns - monotonic_ns()) * 1e-9);
       }
       said = true;
     }

@@ -28,6 +28,7 @@
 #include "afhub/hub/hub_loss.hpp"
 #include "afhub/hub/stop_signal.hpp"
 #include "afhub/shm_layout/error.hpp"
+#include "afhub/shm_layout/header.hpp"
 #include "iceoryx_hoofs/error_handling/error_handling.hpp"
 #include "iceoryx_hoofs/log/logmanager.hpp"
 #include "iceoryx_posh/runtime/posh_runtime.hpp"
@@ -117,12 +118,6 @@ constexpr std::int64_t kReattachPollNs = 10'000'000;
 // A fatal iceoryx error is a lost hub only when the hub goes within this long.
 constexpr std::int64_t kFatalErrorGraceNs = 3'000'000'000;
 
-std::int64_t steady_now_ns() noexcept {
-  timespec now{};
-  clock_gettime(CLOCK_MONOTONIC, &now);
-  return static_cast<std::int64_t>(now.tv_sec) * 1'000'000'000 + now.tv_nsec;
-}
-
 void sleep_ns(std::int64_t ns) noexcept {
   timespec pause{static_cast<time_t>(ns / 1'000'000'000), static_cast<long>(ns % 1'000'000'000)};
   nanosleep(&pause, nullptr);
@@ -184,7 +179,7 @@ std::vector<std::string> own_arguments() {
   LossState& state = loss_state();
   std::snprintf(state.reattach_entry, sizeof state.reattach_entry, "%s=%u:%d:%lld",
                 kReattachVariable, g_reattach_count + 1, static_cast<int>(g_attached_hub_pid),
-                static_cast<long long>(steady_now_ns()));
+                static_cast<long long>(monotonic_ns()));
   std::fflush(stdout);
   std::fflush(stderr);
   // Only the three standard streams go across: iceoryx's descriptors (its runtime
@@ -259,7 +254,7 @@ void on_iceoryx_error(const iox::Error error, const std::function<void()> callba
     return;
   }
   if (g_handling) wait_for_reexec();
-  for (const std::int64_t give_up = steady_now_ns() + kFatalErrorGraceNs; steady_now_ns() < give_up;
+  for (const std::int64_t give_up = monotonic_ns() + kFatalErrorGraceNs; monotonic_ns() < give_up;
        sleep_ns(kReattachPollNs)) {
     if (!hub_gone()) continue;
     char why[160];
@@ -366,7 +361,7 @@ void connect_to_hub(const std::string& role, HubPolicy policy, std::chrono::mill
   std::int64_t hub_seen_ns = 0;
   if (reattaching) {
     wait_for_new_hub(loss_state().who);
-    hub_seen_ns = steady_now_ns();
+    hub_seen_ns = monotonic_ns();
   } else {
     ensure_hub(policy, wait, "afhub " + role, hub_options);
   }
@@ -387,8 +382,8 @@ void connect_to_hub(const std::string& role, HubPolicy policy, std::chrono::mill
                  "%s: re-attached to the hub (pid %d), %.0f ms after it answered and %.2f s after "
                  "the last one was lost\n",
                  loss_state().who.c_str(), static_cast<int>(g_attached_hub_pid),
-                 static_cast<double>(steady_now_ns() - hub_seen_ns) * 1e-6,
-                 static_cast<double>(steady_now_ns() - g_lost_at_ns) * 1e-9);
+                 static_cast<double>(monotonic_ns() - hub_seen_ns) * 1e-6,
+                 static_cast<double>(monotonic_ns() - g_lost_at_ns) * 1e-9);
   std::thread(watch_hub).detach();
 }
 

@@ -56,9 +56,15 @@ struct HubLock {
 int take_hub_lock() {
   int fd = open(hub_lock_path().c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
   if (fd < 0) return -1;
-  if (flock(fd, LOCK_EX | LOCK_NB) != 0) {
-    close(fd);
-    return -1;
+  // Clients waiting to re-attach look at the lock (a shared flock for a moment) every
+  // few ms: tried for 200 ms, a lock held all along is another hub's.
+  int tries = 0;
+  while (flock(fd, LOCK_EX | LOCK_NB) != 0) {
+    if (++tries == 20) {
+      close(fd);
+      return -1;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
   std::string pid = std::to_string(getpid()) + "\n";
   if (ftruncate(fd, 0) != 0 || write(fd, pid.data(), pid.size()) < 0) {

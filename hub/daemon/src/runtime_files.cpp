@@ -8,7 +8,8 @@
 #include <algorithm>
 #include <chrono>
 #include <filesystem>
-#include <set>
+
+#include "liveness.hpp"
 
 namespace afhub {
 namespace {
@@ -19,12 +20,10 @@ namespace fs = std::filesystem;
 const fs::path kRuntimeDir = "/tmp";
 constexpr auto kStartupGrace = std::chrono::seconds(2);
 
-// Lock files that are not a client runtime's: RouDi's, the hub's own runtime and
-// the afhub hub lock.
+// An afhub client's runtime: "afhub-<role>-<pid>" (connect_to_hub). Other programs'
+// files in /tmp, RouDi's and the hub's own are never touched.
 bool is_client_lock(const std::string& name) {
-  static const std::set<std::string> kNotClients = {"roudi", "iox-unique-roudi", "afhub",
-                                                    "afhub-hub"};
-  return !kNotClients.count(name);
+  return name.rfind("afhub-", 0) == 0 && name != "afhub-hub";
 }
 
 pid_t pid_suffix(const std::string& name) {
@@ -88,6 +87,10 @@ std::vector<std::string> remove_stale_runtime_files() {
     std::error_code error;
     const auto written = fs::last_write_time(path, error);
     if (error || now - written < kStartupGrace) continue;
+    // Only a process that is gone: one that re-executed itself to re-attach keeps
+    // its name, and its old lock, free until its runtime starts again.
+    const pid_t pid = pid_suffix(name);
+    if (pid <= 0 || !task_is_gone(pid)) continue;
     if (probe_lock(path, true) == LockState::kFree) removed.push_back(name);
   }
   return removed;

@@ -16,11 +16,11 @@ struct AttachedProcess {
   pid_t pid = 0;     // from the name's "-<pid>" suffix; 0 when it has none
 };
 
-// Every runtime attached to the hub now, but the hub's own; sorted by name.
+// Every afhub runtime attached to the hub now, but the hub's own; sorted by name.
 std::vector<AttachedProcess> attached_processes();
 
-// Removes the socket and lock of every runtime that is gone (its lock is free and
-// more than 2 s old, so a process starting now is never touched); returns their names.
+// Removes the socket and lock of every afhub runtime that is gone (its pid is gone,
+// its lock is free and more than 2 s old); returns their names.
 std::vector<std::string> remove_stale_runtime_files();
 
 }  // namespace afhub

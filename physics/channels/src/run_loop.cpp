@@ -59,7 +59,10 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
     if (!channels || hub_lost()) return true;
     // Every world command from every writer, in order, each once.
     while (channels->next_world_command(world_command))
-      if (control.apply(world_command)) sim.reset();
+      if (control.apply(world_command)) {
+        sim.reset();
+        channels->forget_commands();
+      }
     if (channels->lockstep() && !control.paused) return channels->await_lockstep();
     channels->apply_commands(monotonic_ns());
     return true;
@@ -91,7 +94,7 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
   };
   // The loop's statistics, and the achieved rate over each second.
   cycle.after = [&](std::int64_t now_ns) {
-    if (stats) {
+    if (stats && !hub_lost()) {
       report.timing.count_late(channels->late_answers() - late_counted);
       late_counted = channels->late_answers();
       stats->maybe_publish(now_ns, report.timing);

@@ -68,26 +68,33 @@ void to_state(const BodyReading& reading, BodyState& state) noexcept {
     state.sensor_distances_m[r] = reading.ray_distances_m[r];
 }
 
-}  // namespace
-
-SimChannels::SimChannels(Simulation& sim, double watchdog_s)
-    : sim_(sim),
-      created_ns_(monotonic_ns()),
-      world_({std::string(kService), std::string(kWorldInstance), std::string(kStateEvent)}),
-      world_commands_(std::make_unique<WorldCommandQueue>()) {
-  if (!(watchdog_s >= kMinWatchdogS && watchdog_s <= kMaxWatchdogS))
-    throw Error("the watchdog period must be 0.002 to 3600 s, got " + std::to_string(watchdog_s));
-  const auto watchdog_ns = static_cast<std::int64_t>(watchdog_s * 1e9);
-  const Model& model = sim.model();
-  if (model.bodies.size() + model.soft_bodies.size() > kMaxBodies)
-    throw Error("the model has more than " + std::to_string(kMaxBodies) + " bodies");
-  // Claimed through the hub: one publisher per body. A state publisher per body, the
-  // world's, the directory's and the loop stats'.
+// The bodies the model publishes (passive ones publish nothing), checked with the hub
+// before this process opens a publisher: one publisher per body, and room for them.
+// A state publisher per body, the world's, the directory's and the loop stats'.
+std::vector<std::string> claim_bodies(const Model& model) {
   std::vector<std::string> claimed;
   for (const BodySpec& body : model.bodies)
     if (!body.passive) claimed.push_back(body.channel);
   for (const SoftBodySpec& soft : model.soft_bodies) claimed.push_back(soft.channel);
+  if (claimed.size() > kMaxBodies)
+    throw Error("the model publishes " + std::to_string(claimed.size()) +
+                " bodies; the hub holds " + std::to_string(kMaxBodies));
   check_room_for_bodies(claimed, claimed.size() + 3);
+  return claimed;
+}
+
+}  // namespace
+
+SimChannels::SimChannels(Simulation& sim, double watchdog_s, std::string_view name_space)
+    : sim_(sim),
+      claimed_(claim_bodies(sim.model())),
+      created_ns_(monotonic_ns()),
+      world_({std::string(kService), world_instance(name_space), std::string(kStateEvent)}),
+      world_commands_(std::make_unique<WorldCommandQueue>(world_instance(name_space))) {
+  if (!(watchdog_s >= kMinWatchdogS && watchdog_s <= kMaxWatchdogS))
+    throw Error("the watchdog period must be 0.002 to 3600 s, got " + std::to_string(watchdog_s));
+  const auto watchdog_ns = static_cast<std::int64_t>(watchdog_s * 1e9);
+  const Model& model = sim.model();
   for (std::size_t b = 0; b < model.bodies.size(); ++b) {
     const BodySpec& body = model.bodies[b];
     if (body.passive) continue;
@@ -116,7 +123,7 @@ SimChannels::SimChannels(Simulation& sim, double watchdog_s)
     channels_.push_back(std::move(channel));
   }
   directory_.publish();
-  confirm_body_claims(claimed, std::chrono::seconds(2));
+  confirm_body_claims(claimed_, std::chrono::seconds(2));
 }
 
 SimChannels::~SimChannels() = default;
@@ -169,13 +176,27 @@ void SimChannels::apply_commands(std::int64_t now_ns) noexcept {
         sim_.clear_input(channel.index);
       channel.commanded = false;
       ++expiries_;
-      std::fprintf(stderr, "afhub run: no command for %s in %.3f s: %s until commands come again\n",
-                   channel.publisher->channel().c_str(),
-                   static_cast<double>(channel.watchdog_ns) * 1e-9,
-                   channel.hold_on_watchdog ? "its joints hold their positions"
-                                            : "its wrench and the efforts it drove are zero");
+      if (!channel.told_expired)
+        std::fprintf(stderr,
+                     "afhub run: no command for %s in %.3f s: %s until commands come again "
+                     "(said once; `afhub status` counts every expiry)\n",
+                     channel.publisher->channel().c_str(),
+                     static_cast<double>(channel.watchdog_ns) * 1e-9,
+                     channel.hold_on_watchdog ? "its joints hold their positions"
+                                              : "its wrench and the efforts it drove are zero");
+      channel.told_expired = true;
     }
   }
+}
+
+void SimChannels::forget_commands() noexcept {
+  for (Channel& channel : channels_) {
+    channel.commanded = false;
+    channel.answered_step = 0;
+    channel.applied_answer_step = 0;
+    channel.misses = 0;
+  }
+  timeliness_step_ = 0;
 }
 
 SimChannels::Channel& SimChannels::active_channel(const std::string& body, const char* option) {

@@ -12,11 +12,10 @@
 namespace afhub::physics {
 
 struct WorldCommandQueue::Port {
-  Port()
+  explicit Port(const std::string& world)
       : subscriber(
             {iox::capro::IdString_t(iox::cxx::TruncateToCapacity, kService.data(), kService.size()),
-             iox::capro::IdString_t(iox::cxx::TruncateToCapacity, kWorldInstance.data(),
-                                    kWorldInstance.size()),
+             iox::capro::IdString_t(iox::cxx::TruncateToCapacity, world.data(), world.size()),
              iox::capro::IdString_t(iox::cxx::TruncateToCapacity, kCommandEvent.data(),
                                     kCommandEvent.size())},
             [] {
@@ -34,7 +33,8 @@ struct WorldCommandQueue::Port {
 
 static_assert(WorldCommandQueue::kCapacity <= iox::MAX_SUBSCRIBER_QUEUE_CAPACITY);
 
-WorldCommandQueue::WorldCommandQueue() : port_(std::make_unique<Port>()) {}
+WorldCommandQueue::WorldCommandQueue(const std::string& world_instance)
+    : port_(std::make_unique<Port>(world_instance)) {}
 
 WorldCommandQueue::~WorldCommandQueue() = default;
 

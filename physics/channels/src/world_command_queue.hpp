@@ -7,6 +7,7 @@
 #pragma once
 
 #include <memory>
+#include <string>
 
 #include "afhub/shm_layout/world.hpp"
 
@@ -16,7 +17,7 @@ class WorldCommandQueue {
  public:
   // Holds up to this many commands between two reads; older ones are dropped past it.
   static constexpr unsigned kCapacity = 64;
-  WorldCommandQueue();
+  explicit WorldCommandQueue(const std::string& world_instance);
   ~WorldCommandQueue();
   WorldCommandQueue(const WorldCommandQueue&) = delete;
   WorldCommandQueue& operator=(const WorldCommandQueue&) = delete;

@@ -37,6 +37,10 @@ std::string channel_name_problem(std::string_view name);
 // Throws afhub::Error with a clear message when the name cannot be used.
 void require_valid_channel_name(std::string_view name);
 
+// The world's channel instance: "world", or "<namespace>/world" for a physics run
+// under a namespace (`afhub run --namespace`), whose world is its own.
+std::string world_instance(std::string_view name_space = {});
+
 ChannelId body_state_channel(std::string_view body_channel);
 ChannelId body_command_channel(std::string_view body_channel);
 

@@ -24,6 +24,7 @@
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <string_view>
 #include <vector>
 
 #include "afhub/hub/bodies.hpp"
@@ -47,7 +48,9 @@ struct LockstepOptions {
 class SimChannels {
  public:
   // `watchdog_s`: every body's watchdog period, until set_watchdog changes one.
-  SimChannels(Simulation& sim, double watchdog_s);
+  // `name_space`: the world's channels go under it too (world_instance), as the
+  // bodies' do (prefix_channels): a second copy of a model has a world of its own.
+  SimChannels(Simulation& sim, double watchdog_s, std::string_view name_space = {});
   ~SimChannels();
 
   // Body `body`'s watchdog period (a name as for hold_on_watchdog): its commands
@@ -73,6 +76,9 @@ class SimChannels {
   // current step, or the timeout. False when a stop signal came while waiting.
   bool await_lockstep() noexcept;
 
+  // After a world reset (the simulation's inputs cleared, its steps from 0): no body
+  // is under command, and no lockstep answer or timeliness count carries across.
+  void forget_commands() noexcept;
   // Reads each body's newest command, applies it, and runs the watchdogs.
   void apply_commands(std::int64_t now_ns) noexcept;
   // Publishes every body's state and the world state.
@@ -105,6 +111,7 @@ class SimChannels {
     bool hold_on_watchdog = false;     // the watchdog holds the joints rather than zeroing efforts
     bool told_rejected = false;
     bool told_stale = false;
+    bool told_expired = false;  // a short watchdog may fire every few ms: said once
     std::uint64_t commanded_steps = 0, answered_steps = 0;  // this body's timeliness
     std::uint32_t lockstep_pid = 0;         // the lockstep client answering for this body; 0: none
     std::uint64_t answered_step = 0;        // lockstep: the step this client answered last
@@ -136,6 +143,9 @@ class SimChannels {
                     Pose (Simulation::*pose)(std::size_t) const noexcept) const noexcept;
 
   Simulation& sim_;
+  // The channels this process claims through the hub: checked before any publisher
+  // below is opened, confirmed once the directory is out.
+  std::vector<std::string> claimed_;
   std::int64_t created_ns_;  // commands published before this are history, not news
   std::vector<Channel> channels_;
   BodyInput input_;      // the command being checked and applied, out of shared memory
