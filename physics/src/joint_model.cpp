@@ -200,15 +200,7 @@ void JointModel::limit_gains() {
 }
 
 bool JointModel::rotational() const {
-  switch (spec_.type) {
-    case JointType::kRevolute:
-    case JointType::kContinuous:
-    case JointType::kTorsionSpring:
-    case JointType::kConeTwist:
-      return true;
-    default:
-      return false;
-  }
+  return is_rotational(spec_.type);
 }
 
 btVector3 JointModel::world_axis() const {

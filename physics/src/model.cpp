@@ -41,6 +41,18 @@ const char* joint_type_name(JointType type) {
   return "unknown";
 }
 
+bool is_rotational(JointType type) {
+  switch (type) {
+    case JointType::kRevolute:
+    case JointType::kContinuous:
+    case JointType::kTorsionSpring:
+    case JointType::kConeTwist:
+      return true;
+    default:
+      return false;
+  }
+}
+
 void prefix_channels(Model& model, std::string_view prefix) {
   const auto prefixed = [&](std::string& channel) {
     channel = body_channel_name(prefix, channel);

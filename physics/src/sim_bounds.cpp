@@ -14,18 +14,6 @@ double length(const Vec3& v) {
   return std::sqrt(v.x * v.x + v.y * v.y + v.z * v.z);
 }
 
-bool rotational(JointType type) {
-  switch (type) {
-    case JointType::kRevolute:
-    case JointType::kContinuous:
-    case JointType::kTorsionSpring:
-    case JointType::kConeTwist:
-      return true;
-    default:
-      return false;
-  }
-}
-
 }  // namespace
 
 void Simulation::Data::build_bounds() {
@@ -63,7 +51,7 @@ void Simulation::Data::build_bounds() {
       const JointSpec& joint = model.joints[below[k]];
       const double motor = joint.max_motor_impulse / dt_s;
       const double mass = std::max(1.0, joint.child >= 0 ? carried[joint.child] : 0.0);
-      if (rotational(joint.type)) {
+      if (is_rotational(joint.type)) {
         out.joint_effort[k] = std::max(motor, 10.0 * mass * kGravity * reach);
         out.joint_velocity[k] = std::max(10.0 * kTwoPi, joint.controller.p * kTwoPi);
         out.joint_position[k] = 100.0;
@@ -124,7 +112,7 @@ const char* Simulation::input_problem(std::size_t index, const BodyInput& input)
   const std::vector<int>& below = d.model.descendant_joints[index];
   for (std::uint32_t j = 0; j < input.joint_count; ++j) {
     const JointSpec& joint = d.model.joints[below[j]];
-    const bool turns = rotational(joint.type);
+    const bool turns = is_rotational(joint.type);
     const double value = input.joint_values[j];
     Check c{"position", value, bound.joint_position[j], turns ? "rad" : "m"};
     if (input.joint_modes[j] == JointMode::kEffort)

@@ -15,6 +15,7 @@
 #include "afhub/shm_layout/world.hpp"
 #include "afhub_process.hpp"
 #include "model_files.hpp"
+#include "world_reader.hpp"
 
 namespace afhub::test {
 namespace {
@@ -22,27 +23,6 @@ namespace {
 using namespace std::chrono_literals;
 
 const std::string kArm = AFHUB_EXAMPLE_MODELS "/arm7.yaml";
-
-LatestReader<WorldState> world_reader() {
-  return LatestReader<WorldState>(
-      {std::string(kService), std::string(kWorldInstance), std::string(kStateEvent)});
-}
-
-// The comma-separated numbers that follow `key` in `text`, up to the closing ']'.
-std::vector<double> numbers_after(const std::string& text, const std::string& key,
-                                  std::size_t from = 0) {
-  std::vector<double> numbers;
-  std::size_t at = text.find(key, from);
-  if (at == std::string::npos) return numbers;
-  const char* cursor = text.c_str() + at + key.size();
-  while (*cursor && *cursor != ']') {
-    char* end = nullptr;
-    numbers.push_back(std::strtod(cursor, &end));
-    if (end == cursor) break;
-    cursor = *end == ',' ? end + 1 : end;
-  }
-  return numbers;
-}
 
 int occurrences(const std::string& text, const std::string& part) {
   int count = 0;

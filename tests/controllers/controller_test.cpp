@@ -14,6 +14,7 @@
 #include "afhub/shm_layout/world.hpp"
 #include "afhub_process.hpp"
 #include "model_files.hpp"
+#include "world_reader.hpp"
 
 namespace afhub::test {
 namespace {
@@ -22,11 +23,6 @@ using namespace std::chrono_literals;
 
 // The project's own 7-DOF arm: these tests need no AMBF corpus.
 const std::string kArm = AFHUB_EXAMPLE_MODELS "/arm7.yaml";
-
-LatestReader<WorldState> world_reader() {
-  return LatestReader<WorldState>(
-      {std::string(kService), std::string(kWorldInstance), std::string(kStateEvent)});
-}
 
 // One lockstep run of the arm driven by `afhub ctl sine`; returns the report.
 std::string lockstep_sine_run(const afhub::testing::ModelFolder& folder, int run) {

@@ -17,25 +17,6 @@ namespace {
 
 using namespace std::chrono_literals;
 
-bool contains(const std::string& text, const std::string& part) {
-  return text.find(part) != std::string::npos;
-}
-
-// The comma-separated numbers that follow `key` in `text`, up to the closing ']'.
-std::vector<double> numbers_after(const std::string& text, const std::string& key) {
-  std::vector<double> numbers;
-  std::size_t at = text.find(key);
-  if (at == std::string::npos) return numbers;
-  const char* cursor = text.c_str() + at + key.size();
-  while (*cursor && *cursor != ']') {
-    char* end = nullptr;
-    numbers.push_back(std::strtod(cursor, &end));
-    if (end == cursor) break;
-    cursor = *end == ',' ? end + 1 : end;
-  }
-  return numbers;
-}
-
 void expect_no_hub() {
   ASSERT_NE(probe_roudi(), RoudiPresence::kRunning) << "a hub is running before the test";
 }

@@ -136,6 +136,21 @@ double json_number(const std::string& json, const std::string& key) {
   return std::strtod(json.c_str() + at + key.size() + 3, nullptr);
 }
 
+std::vector<double> numbers_after(const std::string& text, const std::string& key,
+                                  std::size_t from) {
+  std::vector<double> numbers;
+  const std::size_t at = text.find(key, from);
+  if (at == std::string::npos) return numbers;
+  const char* cursor = text.c_str() + at + key.size();
+  while (*cursor && *cursor != ']') {
+    char* end = nullptr;
+    numbers.push_back(std::strtod(cursor, &end));
+    if (end == cursor) break;
+    cursor = *end == ',' ? end + 1 : end;
+  }
+  return numbers;
+}
+
 int wait_for_exit(ScopedProcess& process, std::chrono::milliseconds timeout) {
   int status = 0;
   if (!wait_until([&] { return waitpid(process.pid, &status, WNOHANG) == process.pid; }, timeout))

@@ -254,8 +254,16 @@ std::uint32_t SimChannels::lockstep_clients() const noexcept {
   return clients;
 }
 
-void SimChannels::republish_held_step() noexcept {
-  publish(last_published_.wall_time_s, last_published_.achieved_rate_hz, last_published_.paused);
+bool SimChannels::hold_step_turn(std::int64_t now_ns, std::int64_t& republish_ns) noexcept {
+  apply_commands(now_ns);
+  if (stop_requested()) return false;
+  // State channels keep no history: a client that subscribes while the step is held
+  // sees it only if it is published again.
+  if (now_ns >= republish_ns) {
+    publish(last_published_.wall_time_s, last_published_.achieved_rate_hz, last_published_.paused);
+    republish_ns = now_ns + kRepublishWhileWaitingNs;
+  }
+  return true;
 }
 
 std::string SimChannels::bodies_without_client() const {
@@ -280,14 +288,7 @@ bool SimChannels::wait_for_clients() {
   std::int64_t report_ns = start + lockstep_options_.wait_report_ns;
   while (lockstep_clients() < wanted) {
     const std::int64_t now = monotonic_ns();
-    apply_commands(now);
-    if (stop_requested()) return false;
-    // State channels keep no history: a client that subscribes while the step is
-    // held sees it only if it is published again.
-    if (now >= republish_ns) {
-      republish_held_step();
-      republish_ns = now + kRepublishWhileWaitingNs;
-    }
+    if (!hold_step_turn(now, republish_ns)) return false;
     const double waited_s = static_cast<double>(now - start) * 1e-9;
     // The report first: even a process stalled past the timeout says it once.
     if (now >= report_ns) {
@@ -313,14 +314,7 @@ bool SimChannels::await_lockstep() noexcept {
   std::int64_t republish_ns = start + kRepublishWhileWaitingNs;
   for (;;) {
     const std::int64_t now = monotonic_ns();
-    apply_commands(now);
-    if (stop_requested()) return false;
-    // State channels keep no history: a client that subscribes while the step is
-    // held sees it only if it is published again.
-    if (now >= republish_ns) {
-      republish_held_step();
-      republish_ns = now + kRepublishWhileWaitingNs;
-    }
+    if (!hold_step_turn(now, republish_ns)) return false;
     bool pending = false;
     for (const Channel& channel : channels_)
       pending = pending || (channel.lockstep_pid != 0 && channel.answered_step != step);

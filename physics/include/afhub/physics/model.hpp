@@ -97,6 +97,8 @@ enum class JointType {
   kSixDofSpring,
 };
 const char* joint_type_name(JointType type);
+// Whether the joint's coordinate is an angle (rad) rather than a length (m).
+bool is_rotational(JointType type);
 
 // Per-axis limits of a six dof joint; a cone twist's {x, y, z} go in angular_high.
 struct SixDofLimits {

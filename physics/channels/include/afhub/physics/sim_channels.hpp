@@ -135,7 +135,9 @@ class SimChannels {
   void note_lockstep_answer(Channel& channel, const Answer& answer) noexcept;
   Channel& active_channel(const std::string& body, const char* option);
   bool seen_world_command(const PayloadHeader& header) noexcept;
-  void republish_held_step() noexcept;
+  // One turn of holding a step: commands in, and the held step published again every
+  // kRepublishWhileWaitingNs (`republish_ns`: when next). False on a stop signal.
+  bool hold_step_turn(std::int64_t now_ns, std::int64_t& republish_ns) noexcept;
   // "ambf/env/base, ambf/env/link1": the active bodies no lockstep client answers for.
   std::string bodies_without_client() const;
   void fill_objects(std::array<WorldObjectPose, kMaxWorldObjects>& out,
