@@ -24,13 +24,6 @@ using namespace std::chrono_literals;
 
 const std::string kArm = AFHUB_EXAMPLE_MODELS "/arm7.yaml";
 
-int occurrences(const std::string& text, const std::string& part) {
-  int count = 0;
-  for (std::size_t at = text.find(part); at != std::string::npos; at = text.find(part, at + 1))
-    ++count;
-  return count;
-}
-
 TEST(World, HelpOnEverySubcommand) {
   for (std::vector<std::string> args : {std::vector<std::string>{"world", "--help"},
                                         {"world", "pause", "--help"},

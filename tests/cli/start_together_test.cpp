@@ -19,13 +19,6 @@ using namespace std::chrono_literals;
 
 const std::string kArm = AFHUB_EXAMPLE_MODELS "/arm7.yaml";
 
-int occurrences(const std::string& text, const std::string& part) {
-  int count = 0;
-  for (std::size_t at = text.find(part); at != std::string::npos; at = text.find(part, at + 1))
-    ++count;
-  return count;
-}
-
 TEST(StartTogether, ControllerWithNoHubGivesUpAfterItsWait) {
   ASSERT_NE(probe_roudi(), RoudiPresence::kRunning) << "a hub is running before the test";
   RunResult ctl = run_afhub({"ctl", "hold", "base", "--wait", "1"}, 20s);

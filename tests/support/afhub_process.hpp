@@ -62,6 +62,8 @@ bool wait_until(Predicate predicate, std::chrono::milliseconds timeout) {
 std::string afhub_executable();
 
 bool contains(const std::string& text, const std::string& part);
+// How many times `part` occurs in `text` (overlaps counted).
+int occurrences(const std::string& text, const std::string& part);
 // The number after "key": in a JSON text (the first occurrence), or NaN.
 double json_number(const std::string& json, const std::string& key);
 // The comma-separated numbers that follow `key` in `text` (searched from `from`), up
