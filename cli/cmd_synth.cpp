@@ -11,6 +11,7 @@
 #include "afhub/hub/hub_loss.hpp"
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/hub/stop_signal.hpp"
+#include "afhub/hub/world_command_queue.hpp"
 #include "afhub/rt/clock.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "afhub/shm_layout/world_control.hpp"
@@ -122,14 +123,14 @@ int run_synth(const SynthOptions& options) {
   confirm_body_claims(channels, std::chrono::seconds(2));
   Writer<WorldState> world(
       {std::string(kService), std::string(kWorldInstance), std::string(kStateEvent)});
-  LatestReader<WorldCommand> world_command(
-      {std::string(kService), std::string(kWorldInstance), std::string(kCommandEvent)});
+  WorldCommandQueue world_commands{std::string(kWorldInstance)};
 
   const double dt = 1.0 / options.rate_hz;
   const auto period_ns = static_cast<std::int64_t>(1e9 * dt);
   const std::int64_t start_ns = monotonic_ns();
   std::int64_t next_ns = start_ns;
-  std::uint64_t step = 0, last_world_command = 0;
+  std::uint64_t step = 0;
+  WorldCommand world_command;
   WorldControl control;
   std::uint64_t rate_window_step = 0;
   std::int64_t rate_window_ns = start_ns;
@@ -139,11 +140,8 @@ int run_synth(const SynthOptions& options) {
       sleep_until_ns(monotonic_ns() + period_ns);
       continue;
     }
-    if (const WorldCommand* command = world_command.latest();
-        command && command->header.sequence != last_world_command) {
-      last_world_command = command->header.sequence;
-      if (control.apply(*command)) step = 0;
-    }
+    while (world_commands.next(world_command))
+      if (control.apply(world_command)) step = 0;
     // Published every period, paused or not, like the physics: the state
     // channels keep no history for late joiners.
     const bool stepping = control.take_step();

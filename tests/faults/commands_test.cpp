@@ -28,10 +28,9 @@ ChannelId world_channel(std::string_view event) {
 
 // The arm on the hub; the world state read as it comes.
 struct ArmRun {
-  explicit ArmRun(const std::vector<std::string>& extra = {})
+  // `args`: how afhub runs the world, the arm's physics by default.
+  explicit ArmRun(const std::vector<std::string>& args = {"run", kArm, "--no-autostart"})
       : log((folder.dir() / "run.log").string()) {
-    std::vector<std::string> args = {"run", kArm, "--no-autostart"};
-    args.insert(args.end(), extra.begin(), extra.end());
     physics = std::make_unique<ScopedProcess>(spawn_afhub(args, log));
   }
   bool ready() {
@@ -80,8 +79,14 @@ TEST(FaultsCommands, FiniteExtremeCommandsAreRefusedAndCountedWhileTheWorldRunsO
   EXPECT_FALSE(contains(output, "NaN")) << output;
 }
 
-TEST(FaultsCommands, WorldCommandsFromEveryWriterActOnceEachInOrder) {
-  ArmRun run;
+// Every process that runs a world (the physics, `afhub synth`) reads world commands
+// the same way: a queue, each command once, in order.
+class WorldCommands : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(WorldCommands, FromEveryWriterActOnceEachInOrder) {
+  ArmRun run(std::string(GetParam()) == "synth"
+                 ? std::vector<std::string>{"synth", "--bodies", "2", "--no-autostart"}
+                 : std::vector<std::string>{"run", kArm, "--no-autostart"});
   ASSERT_TRUE(run.ready()) << read_file(run.log);
   // Writers whose sequences all start at 1, as every process's do.
   auto send = [](Writer<WorldCommand>& writer, WorldAction action, std::uint32_t steps = 1) {
@@ -124,6 +129,8 @@ TEST(FaultsCommands, WorldCommandsFromEveryWriterActOnceEachInOrder) {
   EXPECT_EQ(run.physics->stop(), 0);
 }
 
+INSTANTIATE_TEST_SUITE_P(FaultsCommands, WorldCommands, ::testing::Values("run", "synth"));
+
 TEST(FaultsCommands, ARestartedPhysicsIgnoresALiveWritersOldCommand) {
   BodyClient* base = nullptr;
   std::unique_ptr<BodyClient> client;
@@ -162,7 +169,7 @@ TEST(FaultsCommands, ARestartedPhysicsIgnoresALiveWritersOldCommand) {
 }
 
 TEST(FaultsCommands, APerBodyWatchdogOfTwoMillisecondsFiresForThatBodyAlone) {
-  ArmRun run({"--watchdog-body", "arm/link3=0.002"});
+  ArmRun run({"run", kArm, "--no-autostart", "--watchdog-body", "arm/link3=0.002"});
   ASSERT_TRUE(run.ready()) << read_file(run.log);
   BodyClient base("afhub/arm/base"), link3("afhub/arm/link3");
   ASSERT_TRUE(wait_until([&] { return link3.latest_state() && base.latest_state(); }, 5s));
@@ -229,7 +236,7 @@ TEST(FaultsCommands, LateCommandsAreOneCountInTheWorldStatusAndTop) {
 // The rate the physics reports is the rate it steps at, with --fast too (it once said
 // 562 steps/s while the world ran at about 35 000). Both from the physics' own stamps.
 TEST(FaultsCommands, TheReportedStepRateIsTheRateTheWorldSteps) {
-  ArmRun run({"--fast"});
+  ArmRun run({"run", kArm, "--no-autostart", "--fast"});
   ASSERT_TRUE(run.ready()) << read_file(run.log);
   std::this_thread::sleep_for(1500ms);  // a first rate window
   const WorldState first = run.now();

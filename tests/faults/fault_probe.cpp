@@ -8,7 +8,12 @@
 //   fault_probe chunks
 //     Prints "BYTES:USED" for every payload mempool (its chunks' payload size, its
 //     chunks in use), once two health samples agree.
+//   fault_probe hooked
+//     Outlives the hub like a device driver: its make-safe hook prints "hook ran" on
+//     stderr. Prints "attached N" (N: its re-attach count) on stdout, then waits for
+//     SIGTERM.
 #include <time.h>
+#include <unistd.h>
 
 #include <cstdio>
 #include <cstdlib>
@@ -17,7 +22,9 @@
 #include <vector>
 
 #include "afhub/hub/bodies.hpp"
+#include "afhub/hub/hub_loss.hpp"
 #include "afhub/hub/hub_presence.hpp"
+#include "afhub/hub/stop_signal.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "afhub/shm_layout/health.hpp"
 
@@ -107,11 +114,26 @@ int chunks() {
 
 }  // namespace
 
+int hooked() {
+  afhub::install_stop_signal_handlers();
+  afhub::survive_hub_loss("fault_probe");
+  afhub::on_hub_lost([] {
+    constexpr char kLine[] = "hook ran\n";
+    (void)!write(STDERR_FILENO, kLine, sizeof kLine - 1);
+  });
+  afhub::connect_to_hub("faultprobe", afhub::HubPolicy::kRequire);
+  std::printf("attached %u\n", afhub::reattach_count());
+  std::fflush(stdout);
+  while (!afhub::stop_requested()) sleep_ms(10);
+  return 0;
+}
+
 int main(int argc, char** argv) {
   try {
     if (argc < 2) return 2;
-    afhub::connect_to_hub("faultprobe", afhub::HubPolicy::kRequire);
     const std::string mode = argv[1];
+    if (mode == "hooked") return hooked();
+    afhub::connect_to_hub("faultprobe", afhub::HubPolicy::kRequire);
     if (mode == "chunks") return chunks();
     if (mode != "attached" || argc < 4) return 2;
     std::vector<Watched> bodies;

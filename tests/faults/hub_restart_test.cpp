@@ -311,6 +311,43 @@ TEST_P(HubRestart, EveryClientOutlivesTheHubAndReattachesWithin2s) {
                      << "; with no client under the first hub: " << usage_text(empty);
 }
 
+// A process's make-safe hooks (a driver zeroing its force) run when the hub goes
+// away, before the process re-executes, and again in the next image.
+TEST(HubLoss, MakeSafeHooksRunBeforeTheReexec) {
+  const std::string hub_log = "/tmp/afhub-test-hub.log", out = "/tmp/afhub-fault-hooked.out",
+                    err = "/tmp/afhub-fault-hooked.err";
+  ScopedProcess hub = spawn_afhub({"hub"}, hub_log);
+  ASSERT_TRUE(wait_until([] { return probe_roudi() == RoudiPresence::kRunning; }, 10s));
+  ScopedProcess hooked = fork();
+  if (hooked.pid == 0) {
+    const int out_fd = open(out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    const int err_fd = open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    dup2(out_fd, STDOUT_FILENO);
+    dup2(err_fd, STDERR_FILENO);
+    execl(AFHUB_FAULT_PROBE, AFHUB_FAULT_PROBE, "hooked", nullptr);
+    _exit(127);
+  }
+  ASSERT_TRUE(wait_until([&] { return contains(read_file(out), "attached 0"); }, 10s))
+      << read_file(err);
+  EXPECT_FALSE(contains(read_file(err), "hook ran"));
+
+  for (int round = 1; round <= 2; ++round) {
+    ASSERT_EQ(run_afhub({"hub", "stop", "--force"}).exit_code, 0);
+    waitpid(hub.pid, nullptr, 0);
+    ASSERT_TRUE(wait_until([&] { return occurrences(read_file(err), "hook ran") == round; }, 5s))
+        << read_file(err);
+    // The hook ran first, then the process said its outputs are safe and re-executed.
+    const std::string text = read_file(err);
+    EXPECT_LT(text.rfind("hook ran"), text.rfind("outputs made safe")) << text;
+    hub.pid = spawn_afhub({"hub"}, hub_log);
+    ASSERT_TRUE(wait_until(
+        [&] { return contains(read_file(out), "attached " + std::to_string(round)); }, 10s))
+        << read_file(err);
+  }
+  EXPECT_EQ(hooked.stop(), 0) << read_file(err);
+  EXPECT_EQ(hub.stop(), 0);
+}
+
 INSTANTIATE_TEST_SUITE_P(Faults, HubRestart, ::testing::Values(false, true),
                          [](const ::testing::TestParamInfo<bool>& param) {
                            return param.param ? std::string("HubSigkill") : std::string("HubStop");

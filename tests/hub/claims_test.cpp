@@ -149,7 +149,7 @@ TEST(Claims, RunningOutOfPublisherPortsIsRefusedSayingHowManyAreLeft) {
   const RunResult synth = run_afhub(
       {"synth", "--bodies", "250", "--joints", "1", "--namespace", "p", "--no-autostart"}, 30s);
   EXPECT_EQ(synth.exit_code, 1);
-  EXPECT_TRUE(contains(synth.err, "these bodies need 252 iceoryx publisher ports and the hub has"))
+  EXPECT_TRUE(contains(synth.err, "bodies needs 252 iceoryx publisher ports and the hub has"))
       << synth.err;
   writers.clear();
   // With the ports back (the hub's health says so within a second or two), it runs.
@@ -161,6 +161,35 @@ TEST(Claims, RunningOutOfPublisherPortsIsRefusedSayingHowManyAreLeft) {
         return run.exit_code == 0;
       },
       20s));
+}
+
+// Not only the processes that own bodies: a controller that finds no publisher port
+// left says so, and exits, instead of iceoryx aborting it.
+TEST(Claims, AControllerFindingNoPublisherPortLeftSaysSo) {
+  ScopedProcess synth = spawn_afhub(
+      {"synth", "--bodies", "1", "--joints", "1", "--namespace", "q", "--no-autostart"});
+  ASSERT_TRUE(wait_until([] { return contains(run_afhub({"ls"}).out, "q/"); }, 10s));
+  // This process takes every publisher port left, the hub's health following.
+  std::vector<std::unique_ptr<BodyClient>> writers;
+  LatestReader<Health> health(
+      {std::string(kService), std::string(kHubInstance), std::string(kHealthEvent)});
+  ASSERT_TRUE(wait_until([&] { return health.latest() != nullptr; }, 5s));
+  while (health.latest()->free_publisher_ports > 0) {
+    const std::uint32_t free = health.latest()->free_publisher_ports;
+    const std::uint32_t taking = free > 8 ? free - 4 : 1;
+    for (std::uint32_t i = 0; i < taking; ++i)
+      writers.push_back(std::make_unique<BodyClient>("full/body" + std::to_string(writers.size())));
+    ASSERT_TRUE(
+        wait_until([&] { return health.latest()->free_publisher_ports <= free - taking; }, 5s))
+        << health.latest()->free_publisher_ports << " free, expected " << free - taking;
+  }
+  const std::string ls = run_afhub({"ls"}).out;
+  const std::string body =
+      ls.substr(ls.find("q/"), ls.find_first_of(" \n", ls.find("q/")) - ls.find("q/"));
+  const RunResult ctl = run_afhub({"ctl", "hold", body, "--wait", "1"}, 20s);
+  EXPECT_EQ(ctl.exit_code, 1) << ctl.err;
+  EXPECT_TRUE(contains(ctl.err, "iceoryx publisher port and the hub has 0 left of 512")) << ctl.err;
+  EXPECT_EQ(synth.stop(), 0);
 }
 
 }  // namespace

@@ -17,13 +17,15 @@
 namespace afhub::test {
 namespace {
 
-[[noreturn]] void exec_afhub(const std::vector<std::string>& args) {
+[[noreturn]] void exec_afhub(const std::vector<std::string>& args,
+                             const std::vector<std::string>& wrapper = {}) {
+  std::vector<std::string> words = wrapper;
+  words.push_back(afhub_executable());
+  words.insert(words.end(), args.begin(), args.end());
   std::vector<char*> argv;
-  std::string exe = afhub_executable();
-  argv.push_back(exe.data());
-  for (const auto& arg : args) argv.push_back(const_cast<char*>(arg.c_str()));
+  for (std::string& word : words) argv.push_back(word.data());
   argv.push_back(nullptr);
-  execv(exe.c_str(), argv.data());
+  execvp(argv[0], argv.data());
   _exit(127);
 }
 
@@ -96,6 +98,11 @@ RunResult run_afhub(const std::vector<std::string>& args, std::chrono::milliseco
 }
 
 pid_t spawn_afhub(const std::vector<std::string>& args, const std::string& log_path) {
+  return spawn_wrapped_afhub({}, args, log_path);
+}
+
+pid_t spawn_wrapped_afhub(const std::vector<std::string>& wrapper,
+                          const std::vector<std::string>& args, const std::string& log_path) {
   pid_t pid = fork();
   if (pid == 0) {
     int log = open(log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
@@ -103,7 +110,7 @@ pid_t spawn_afhub(const std::vector<std::string>& args, const std::string& log_p
       dup2(log, STDOUT_FILENO);
       dup2(log, STDERR_FILENO);
     }
-    exec_afhub(args);
+    exec_afhub(args, wrapper);
   }
   return pid;
 }

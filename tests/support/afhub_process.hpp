@@ -23,6 +23,10 @@ RunResult run_afhub(const std::vector<std::string>& args,
 
 // Starts `afhub args...` in the background (stdout and stderr to `log_path`).
 pid_t spawn_afhub(const std::vector<std::string>& args, const std::string& log_path = "/dev/null");
+// The same, with `wrapper` before afhub, e.g. {"unshare", "--pid", "--fork"} (found on PATH).
+pid_t spawn_wrapped_afhub(const std::vector<std::string>& wrapper,
+                          const std::vector<std::string>& args,
+                          const std::string& log_path = "/dev/null");
 
 // Sends `signal`, waits up to `timeout` for the exit, SIGKILLs after that; returns
 // the exit code (128 + signal when killed by one).

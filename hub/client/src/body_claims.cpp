@@ -9,9 +9,9 @@
 #include <thread>
 
 #include "afhub/hub/bodies.hpp"
+#include "afhub/hub/hub_health.hpp"
 #include "afhub/shm_layout/channel_names.hpp"
 #include "afhub/shm_layout/error.hpp"
-#include "afhub/shm_layout/health.hpp"
 
 namespace afhub {
 namespace {
@@ -59,17 +59,10 @@ void check_room_for_bodies(const std::vector<std::string>& channels, std::size_t
     throw Error("the hub lists " + std::to_string(live_bodies) + " bodies and this adds " +
                 std::to_string(channels.size()) + "; it holds at most " +
                 std::to_string(kMaxBodies) + " (iceoryx's 512 publisher ports allow no more)");
-  LatestReader<Health> health(
-      {std::string(kService), std::string(kHubInstance), std::string(kHealthEvent)});
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(1500);
-  while (!health.latest() && std::chrono::steady_clock::now() < deadline)
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
-  if (health.latest() && health.latest()->free_publisher_ports < publishers)
-    throw Error("these bodies need " + std::to_string(publishers) +
-                " iceoryx publisher ports and the hub has " +
-                std::to_string(health.latest()->free_publisher_ports) +
-                " left of 512 (one per body state, per command writer, per loop's stats). "
-                "Stop another process, or simulate fewer bodies");
+  // Counted afresh: other processes may have taken ports since this one connected.
+  count_publisher_ports_from(free_publisher_ports(std::chrono::milliseconds(1500)));
+  require_publisher_ports(publishers,
+                          "simulating these " + std::to_string(channels.size()) + " bodies");
 }
 
 void confirm_body_claims(const std::vector<std::string>& channels,

@@ -6,6 +6,7 @@
 
 #include <cstdio>
 
+#include "afhub/hub/hub_health.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "iceoryx_posh/mepoo/chunk_header.hpp"
 #include "iceoryx_posh/popo/untyped_publisher.hpp"
@@ -45,10 +46,14 @@ struct RawWriter::Port {
 RawWriter::RawWriter(const ChannelId& channel, PayloadKind kind, History history)
     : channel_(channel), kind_(kind), pid_(static_cast<std::uint32_t>(getpid())) {
   require_fits(channel);
+  require_publisher_ports(1, "writing '" + channel.to_string() + "'");
   port_ = std::make_unique<Port>(channel, history);
+  took_publisher_port();
 }
 
-RawWriter::~RawWriter() = default;
+RawWriter::~RawWriter() {
+  if (port_) gave_back_publisher_port();
+}
 
 void* RawWriter::loan(std::uint32_t bytes) noexcept {
   auto result = port_->publisher.loan(bytes, alignof(PayloadHeader));

@@ -25,6 +25,8 @@
 #include <thread>
 #include <vector>
 
+#include "afhub/hub/hub_files.hpp"
+#include "afhub/hub/hub_health.hpp"
 #include "afhub/hub/hub_loss.hpp"
 #include "afhub/hub/stop_signal.hpp"
 #include "afhub/shm_layout/error.hpp"
@@ -38,9 +40,6 @@ namespace {
 
 constexpr const char* kRoudiSocketPath =
     "/tmp/roudi";  // iceoryx 2.0: IOX_UDS_SOCKET_PATH_PREFIX + "roudi"
-constexpr const char* kHubLogPath = "/tmp/afhub-hub.log";
-// Not "<runtime name>.lock": iceoryx locks /tmp/<runtime name>.lock for each process.
-constexpr const char* kHubLockPath = "/tmp/afhub.lock";
 constexpr auto kAutostartTimeout = std::chrono::seconds(10);
 
 std::string& runtime_name_storage() {
@@ -76,13 +75,14 @@ std::string afhub_executable() {
       "AFHUB_EXECUTABLE to its path.");
 }
 
-// Starts `afhub hub` detached from this process (own session, log in /tmp).
-pid_t spawn_background_hub(const std::string& exe, const std::vector<std::string>& options) {
+// Starts `afhub hub` detached from this process (own session, log in `log_path`).
+pid_t spawn_background_hub(const std::string& exe, const std::vector<std::string>& options,
+                           const std::string& log_path) {
   pid_t pid = fork();
   if (pid < 0) throw Error(std::string("cannot start a hub: fork failed: ") + std::strerror(errno));
   if (pid == 0) {
     setsid();
-    int log = open(kHubLogPath, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+    int log = open_own_file(log_path, O_WRONLY | O_CREAT | O_TRUNC, 0644);
     int null_in = open("/dev/null", O_RDONLY | O_CLOEXEC);
     if (log >= 0) {
       dup2(log, STDOUT_FILENO);
@@ -103,8 +103,8 @@ pid_t spawn_background_hub(const std::string& exe, const std::vector<std::string
   return pid;
 }
 
-std::string hub_log_tail() {
-  std::ifstream in(kHubLogPath);
+std::string hub_log_tail(const std::string& log_path) {
+  std::ifstream in(log_path);
   std::string line, all;
   while (std::getline(in, line)) all += "  " + line + "\n";
   return all;
@@ -145,22 +145,27 @@ std::atomic<bool> g_armed{false};
 std::atomic<bool> g_lost{false};
 std::atomic<bool> g_handling{false};  // one thread handles a loss; the others wait for the exec
 std::atomic<bool> g_exiting{false};   // the process is exiting on its own: never re-execute it
+std::atomic<std::uint64_t> g_attached_hub{0};  // the instance of the hub attached to
 std::atomic<pid_t> g_attached_hub_pid{0};
 unsigned g_reattach_count = 0;  // from AFHUB_REATTACH, at the opt-in
-pid_t g_lost_hub_pid = 0;       // the hub the previous image lost (0: not an afhub hub)
+std::uint64_t g_lost_hub = 0;   // the instance the previous image lost (0: not an afhub hub)
 std::int64_t g_lost_at_ns = 0;  // when it was lost (CLOCK_MONOTONIC)
 
-pid_t hub_pid_now() noexcept {
-  const std::optional<pid_t> pid = running_hub_pid();
-  return pid ? *pid : 0;
+std::uint64_t hub_instance_now() noexcept {
+  try {
+    const std::optional<HubIdentity> hub = running_hub();
+    return hub ? hub->instance : 0;
+  } catch (...) {
+    return 0;
+  }
 }
 
 // The hub this process attached to is gone, or is going: its socket refuses, or the
-// hub lock names another pid or none.
+// hub lock is held by another instance or by none.
 bool hub_gone() noexcept {
   if (probe_roudi() != RoudiPresence::kRunning) return true;
-  const pid_t attached = g_attached_hub_pid;
-  return attached > 0 && hub_pid_now() != attached;
+  const std::uint64_t attached = g_attached_hub;
+  return attached != 0 && hub_instance_now() != attached;
 }
 
 std::vector<std::string> own_arguments() {
@@ -177,8 +182,9 @@ std::vector<std::string> own_arguments() {
 
 [[noreturn]] void reexecute() noexcept {
   LossState& state = loss_state();
-  std::snprintf(state.reattach_entry, sizeof state.reattach_entry, "%s=%u:%d:%lld",
-                kReattachVariable, g_reattach_count + 1, static_cast<int>(g_attached_hub_pid),
+  std::snprintf(state.reattach_entry, sizeof state.reattach_entry, "%s=%u:%llu:%lld",
+                kReattachVariable, g_reattach_count + 1,
+                static_cast<unsigned long long>(g_attached_hub.load()),
                 static_cast<long long>(monotonic_ns()));
   std::fflush(stdout);
   std::fflush(stderr);
@@ -275,9 +281,9 @@ void wait_for_new_hub(const std::string& who) {
       std::fprintf(stderr, "%s: stopped while waiting for a hub\n", who.c_str());
       std::exit(0);
     }
-    const pid_t before = hub_pid_now();
-    if (before != g_lost_hub_pid && probe_roudi() == RoudiPresence::kRunning &&
-        hub_pid_now() == before)
+    const std::uint64_t before = hub_instance_now();
+    if (before != 0 && before != g_lost_hub && probe_roudi() == RoudiPresence::kRunning &&
+        hub_instance_now() == before)
       return;
     sleep_ns(kReattachPollNs);
   }
@@ -296,21 +302,31 @@ RoudiPresence probe_roudi() noexcept {
   return rc == 0 ? RoudiPresence::kRunning : RoudiPresence::kAbsent;
 }
 
-std::string hub_lock_path() {
-  return kHubLockPath;
+std::optional<HubIdentity> running_hub() {
+  const std::string directory = hub_directory();
+  const std::string lock = hub_lock_path(directory);
+  if (!flock_held(lock)) return std::nullopt;
+  HubIdentity hub;
+  hub.pid = flock_holder(lock).value_or(0);
+  // Written by the hub after it took the lock: until then, a held lock with no
+  // instance is a hub starting up, not yet one to attach to.
+  const int fd = open_own_file(hub_identity_path(directory), O_RDONLY);
+  if (fd >= 0) {
+    char text[64] = {};
+    if (read(fd, text, sizeof text - 1) > 0) {
+      unsigned long long instance = 0;
+      int pid = 0;
+      if (std::sscanf(text, "%d %llu", &pid, &instance) == 2) hub.instance = instance;
+    }
+    close(fd);
+  }
+  return hub;
 }
 
 std::optional<pid_t> running_hub_pid() {
-  int fd = open(kHubLockPath, O_RDONLY | O_CLOEXEC);
-  if (fd < 0) return std::nullopt;
-  std::optional<pid_t> pid;
-  if (flock(fd, LOCK_SH | LOCK_NB) != 0 && errno == EWOULDBLOCK) {
-    char buffer[32] = {};
-    ssize_t n = read(fd, buffer, sizeof buffer - 1);
-    pid = n > 0 ? static_cast<pid_t>(std::atol(buffer)) : 0;
-  }
-  close(fd);
-  return pid;
+  const std::optional<HubIdentity> hub = running_hub();
+  if (!hub) return std::nullopt;
+  return hub->pid;
 }
 
 void ensure_hub(HubPolicy policy, std::chrono::milliseconds wait, const std::string& who,
@@ -338,20 +354,21 @@ void ensure_hub(HubPolicy policy, std::chrono::milliseconds wait, const std::str
         "no hub is running. Start one with `afhub hub` (foreground) or let `afhub run` start one "
         "in the background.");
   std::string exe = afhub_executable();
-  spawn_background_hub(exe, hub_options);
+  const std::string log_path = hub_log_path(own_hub_directory());
+  spawn_background_hub(exe, hub_options, log_path);
   auto deadline = std::chrono::steady_clock::now() + kAutostartTimeout;
   while (probe_roudi() != RoudiPresence::kRunning) {
     if (std::chrono::steady_clock::now() > deadline)
       throw Error("started a hub (" + exe + " hub) but it did not come up within " +
-                  std::to_string(kAutostartTimeout.count()) + " s; its log " + kHubLogPath +
-                  " says:\n" + hub_log_tail());
+                  std::to_string(kAutostartTimeout.count()) + " s; its log " + log_path +
+                  " says:\n" + hub_log_tail(log_path));
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
   auto pid = running_hub_pid();
   std::fprintf(stderr,
                "afhub: no hub was running; started one in the background (pid %d, log %s). "
                "Stop it with `afhub hub stop`.\n",
-               pid ? static_cast<int>(*pid) : -1, kHubLogPath);
+               pid ? static_cast<int>(*pid) : -1, log_path.c_str());
 }
 
 void connect_to_hub(const std::string& role, HubPolicy policy, std::chrono::milliseconds wait,
@@ -373,10 +390,14 @@ void connect_to_hub(const std::string& role, HubPolicy policy, std::chrono::mill
   if (reattaching) unlink(("/tmp/" + name).c_str());
   iox::runtime::PoshRuntime::initRuntime(iox::RuntimeName_t(iox::cxx::TruncateToCapacity, name));
   runtime_name_storage() = name;
+  count_publisher_ports_from(free_publisher_ports(std::chrono::milliseconds(500)));
   if (!g_armed) return;
   // Registered after the runtime, so that it runs before the runtime's destructor.
   std::atexit([] { g_exiting = true; });
-  g_attached_hub_pid = hub_pid_now();
+  if (const std::optional<HubIdentity> hub = running_hub()) {
+    g_attached_hub = hub->instance;
+    g_attached_hub_pid = hub->pid;
+  }
   if (reattaching)
     std::fprintf(stderr,
                  "%s: re-attached to the hub (pid %d), %.0f ms after it answered and %.2f s after "
@@ -394,11 +415,11 @@ void survive_hub_loss(const std::string& who) {
   state.arguments = own_arguments();
   if (const char* value = std::getenv(kReattachVariable)) {
     unsigned count = 0;
-    int lost_pid = 0;
+    unsigned long long lost_hub = 0;
     long long lost_at = 0;
-    if (std::sscanf(value, "%u:%d:%lld", &count, &lost_pid, &lost_at) == 3) {
+    if (std::sscanf(value, "%u:%llu:%lld", &count, &lost_hub, &lost_at) == 3) {
       g_reattach_count = count;
-      g_lost_hub_pid = lost_pid;
+      g_lost_hub = lost_hub;
       g_lost_at_ns = lost_at;
     }
     unsetenv(kReattachVariable);

@@ -60,12 +60,16 @@ void HealthReporter::poll(std::chrono::steady_clock::time_point now, std::uint32
   const auto* mempools = introspection_->mempools.latest();
   // At once on start (processes and mempools follow with RouDi's introspection),
   // then once a second.
-  if (last_publish_ != std::chrono::steady_clock::time_point{} &&
+  // Also at once when the bodies or the free ports change: writers check the ports.
+  const bool changed = body_count != last_body_count_ || free_publisher_ports != last_free_ports_;
+  if (last_publish_ != std::chrono::steady_clock::time_point{} && !changed &&
       now - last_publish_ < kPublishPeriod)
     return;
   Health* health = writer_.loan();
   if (!health) return;
   last_publish_ = now;
+  last_body_count_ = body_count;
+  last_free_ports_ = free_publisher_ports;
   health->hub_uptime_s = std::chrono::duration<double>(now - started_).count();
   health->body_count = body_count;
   health->free_publisher_ports = free_publisher_ports;

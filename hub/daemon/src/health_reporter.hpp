@@ -5,6 +5,7 @@
 #include <sys/types.h>
 
 #include <chrono>
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <utility>
@@ -30,6 +31,7 @@ class HealthReporter {
   Writer<Health> writer_;
   std::chrono::steady_clock::time_point started_;
   std::chrono::steady_clock::time_point last_publish_;
+  std::uint32_t last_body_count_ = 0, last_free_ports_ = 0;
 };
 
 }  // namespace afhub

@@ -7,13 +7,18 @@
 #include <sys/file.h>
 #include <unistd.h>
 
+#include <sys/random.h>
+
 #include <chrono>
 #include <cstdio>
 #include <cstring>
+#include <fstream>
+#include <optional>
 #include <set>
 #include <string>
 #include <thread>
 
+#include "afhub/hub/hub_files.hpp"
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/hub/stop_signal.hpp"
 #include "afhub_roudi.hpp"
@@ -24,12 +29,13 @@
 #include "iceoryx_posh/roudi/iceoryx_roudi_components.hpp"
 #include "iceoryx_posh/roudi/port_pool.hpp"
 #include "iceoryx_posh/runtime/posh_runtime_single_process.hpp"
-#include "liveness.hpp"
 #include "port_lock_repair.hpp"
 #include "runtime_files.hpp"
 
 namespace afhub {
 namespace {
+
+constexpr char kHubRuntimeName[] = "afhub-hub";
 
 iox::RouDiConfig_t roudi_config(const std::vector<MempoolSpec>& pools, double& total_mib) {
   iox::mepoo::MePooConfig mempools;
@@ -52,10 +58,30 @@ struct HubLock {
   }
 };
 
-// Takes the hub lock and writes this pid in it; -1 when another hub has it.
-int take_hub_lock() {
-  int fd = open(hub_lock_path().c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
-  if (fd < 0) return -1;
+// Writes "<pid> <instance>" beside the lock, atomically (clients read it at any time).
+bool write_hub_identity(const std::string& directory) {
+  std::uint64_t instance = 0;
+  while (instance == 0)
+    if (getrandom(&instance, sizeof instance, 0) != sizeof instance) return false;
+  const std::string text = std::to_string(getpid()) + " " + std::to_string(instance) + "\n";
+  const std::string path = hub_identity_path(directory), draft = path + ".new";
+  unlink(draft.c_str());
+  const int fd = open_own_file(draft, O_WRONLY | O_CREAT | O_EXCL, 0644);
+  if (fd < 0) return false;
+  const bool written = write(fd, text.data(), text.size()) == static_cast<ssize_t>(text.size());
+  close(fd);
+  return written && rename(draft.c_str(), path.c_str()) == 0;
+}
+
+// Takes the hub lock (0600: no other user can hold it) and writes this hub's identity;
+// -1 when another hub has the lock.
+int take_hub_lock(const std::string& directory) {
+  const int fd = open_own_file(hub_lock_path(directory), O_RDWR | O_CREAT, 0600);
+  if (fd < 0) {
+    std::fprintf(stderr, "afhub hub: cannot open %s: %s\n", hub_lock_path(directory).c_str(),
+                 std::strerror(errno));
+    return -1;
+  }
   // Clients waiting to re-attach look at the lock (a shared flock for a moment) every
   // few ms: tried for 200 ms, a lock held all along is another hub's.
   int tries = 0;
@@ -66,39 +92,57 @@ int take_hub_lock() {
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
-  std::string pid = std::to_string(getpid()) + "\n";
-  if (ftruncate(fd, 0) != 0 || write(fd, pid.data(), pid.size()) < 0) {
+  if (!write_hub_identity(directory)) {
+    std::fprintf(stderr, "afhub hub: cannot write %s: %s\n", hub_identity_path(directory).c_str(),
+                 std::strerror(errno));
     close(fd);
     return -1;
   }
   return fd;
 }
 
-// Unregisters every process whose pid is gone (`removed`: those already asked for,
-// which RouDi's introspection may list a moment longer).
-void remove_dead_processes(AfhubRouDi& roudi, HealthReporter& health,
-                           std::set<std::string>& removed) {
+// The registered processes, as the serve loop follows them.
+struct Registered {
+  std::set<std::string> removed;  // asked for; RouDi's introspection may list them a moment longer
+  std::set<std::string> foreign;  // in another pid namespace than the hub's
+};
+
+// Unregisters every process whose runtime lock is free: gone, in whatever pid
+// namespace it ran. Returns whether every registered process is in the hub's pid
+// namespace, where the thread ids in iceoryx's port locks mean what they say.
+bool remove_dead_processes(AfhubRouDi& roudi, HealthReporter& health, Registered& registered) {
   std::set<std::string> listed;
   for (const auto& [name, pid] : health.registered_processes()) {
     listed.insert(name);
-    if (pid <= 0 || pid == getpid() || removed.count(name) || !task_is_gone(pid)) continue;
-    removed.insert(name);
-    if (roudi.remove_process(name))
-      std::fprintf(stderr, "afhub hub: %s (pid %d) is gone; removed its ports and chunks\n",
-                   name.c_str(), static_cast<int>(pid));
+    // RouDi's and the hub's own entries: a pid alone cannot tell them, since a client in
+    // another pid namespace may have the hub's pid.
+    if (name == "roudi" || name == kHubRuntimeName || registered.removed.count(name)) continue;
+    if (runtime_is_gone(name)) {
+      registered.removed.insert(name);
+      if (roudi.remove_process(name))
+        std::fprintf(stderr, "afhub hub: %s (pid %d) is gone; removed its ports and chunks\n",
+                     name.c_str(), static_cast<int>(pid));
+    } else if (!runtime_in_hub_pid_namespace(name, pid) && registered.foreign.insert(name).second) {
+      std::fprintf(stderr,
+                   "afhub hub: %s runs in another pid namespace; while it is attached, the hub "
+                   "cannot tell whose thread holds a port lock, and repairs none\n",
+                   name.c_str());
+    }
   }
-  std::erase_if(removed, [&](const std::string& name) { return !listed.count(name); });
+  const auto unlisted = [&](const std::string& name) { return !listed.count(name); };
+  std::erase_if(registered.removed, unlisted);
+  std::erase_if(registered.foreign, unlisted);
+  return registered.foreign.empty();
 }
 
 void serve_until_stopped(AfhubRouDi& roudi, iox::roudi::PortPool& ports) {
   CatalogBuilder catalog;
   HealthReporter health;
-  std::set<std::string> removed;
+  Registered registered;
   auto next_file_sweep = std::chrono::steady_clock::now();
   while (!stop_requested()) {
     auto now = std::chrono::steady_clock::now();
-    release_port_locks_of_dead_threads(ports);
-    remove_dead_processes(roudi, health, removed);
+    if (remove_dead_processes(roudi, health, registered)) release_port_locks_of_dead_threads(ports);
     if (now >= next_file_sweep) {
       for (const std::string& name : remove_stale_runtime_files())
         std::fprintf(stderr, "afhub hub: removed the files %s left in /tmp\n", name.c_str());
@@ -114,7 +158,7 @@ void serve_until_stopped(AfhubRouDi& roudi, iox::roudi::PortPool& ports) {
 }  // namespace
 
 int run_hub_daemon(const HubOptions& options) {
-  HubLock lock{take_hub_lock()};
+  HubLock lock{take_hub_lock(own_hub_directory())};
   if (lock.fd < 0) {
     auto pid = running_hub_pid();
     std::fprintf(stderr,
@@ -135,7 +179,7 @@ int run_hub_daemon(const HubOptions& options) {
   double pool_mib = 0.0;
   iox::roudi::IceOryxRouDiComponents components(roudi_config(options.mempools, pool_mib));
   AfhubRouDi roudi(components.rouDiMemoryManager, components.portManager);
-  iox::runtime::PoshRuntimeSingleProcess runtime("afhub-hub");
+  iox::runtime::PoshRuntimeSingleProcess runtime(kHubRuntimeName);
   std::fprintf(stderr,
                "afhub hub: running (pid %d, %zu payload mempools, %.1f MiB). Ctrl-C stops it.\n",
                static_cast<int>(getpid()), options.mempools.size(), pool_mib);
@@ -144,11 +188,28 @@ int run_hub_daemon(const HubOptions& options) {
   return 0;
 }
 
+// Whether `pid` runs the afhub executable: a last check before signalling it.
+bool is_afhub_process(pid_t pid) {
+  std::ifstream comm("/proc/" + std::to_string(pid) + "/comm");
+  std::string name;
+  return std::getline(comm, name) && name == "afhub";
+}
+
 int stop_hub(bool force) {
-  auto pid = running_hub_pid();
-  if (!pid || *pid <= 0) {
+  const std::optional<HubIdentity> hub = running_hub();
+  if (!hub) {
     std::fprintf(stderr, "afhub hub stop: no hub is running\n");
     return 0;
+  }
+  // The pid is the kernel's holder of the hub's lock, never a number read from a file.
+  const std::optional<pid_t> pid = hub->pid > 0 ? std::optional<pid_t>(hub->pid) : std::nullopt;
+  if (!pid || !is_afhub_process(*pid)) {
+    std::fprintf(stderr,
+                 "afhub hub stop: the hub's lock is held by %s; not signalling it. Stop the hub "
+                 "where it runs (Ctrl-C, or `afhub hub stop` in its pid namespace).\n",
+                 pid ? ("pid " + std::to_string(*pid) + ", which is not afhub").c_str()
+                     : "a process in a pid namespace this one cannot see");
+    return 1;
   }
   if (const auto attached = attached_processes(); !attached.empty()) {
     std::fprintf(stderr, "afhub hub stop: %zu process%s attached to the hub (pid %d):\n",

@@ -9,6 +9,7 @@
 #include <chrono>
 #include <filesystem>
 
+#include "afhub/hub/hub_files.hpp"
 #include "liveness.hpp"
 
 namespace afhub {
@@ -76,8 +77,21 @@ std::vector<std::pair<std::string, fs::path>> client_locks() {
 std::vector<AttachedProcess> attached_processes() {
   std::vector<AttachedProcess> attached;
   for (const auto& [name, path] : client_locks())
-    if (probe_lock(path, false) == LockState::kHeld) attached.push_back({name, pid_suffix(name)});
+    if (probe_lock(path, false) == LockState::kHeld)
+      attached.push_back({name, flock_holder(path).value_or(0)});
   return attached;
+}
+
+bool runtime_is_gone(const std::string& name) {
+  return !flock_held((kRuntimeDir / (name + ".lock")).string());
+}
+
+bool runtime_in_hub_pid_namespace(const std::string& name, pid_t pid) {
+  const std::string lock = (kRuntimeDir / (name + ".lock")).string();
+  if (const std::optional<pid_t> holder = flock_holder(lock)) return *holder == pid;
+  // Unlisted: held by a process this namespace cannot see, or just released (the
+  // process is exiting, and is gone at the next look).
+  return !flock_held(lock);
 }
 
 std::vector<std::string> remove_stale_runtime_files() {
@@ -88,7 +102,8 @@ std::vector<std::string> remove_stale_runtime_files() {
     const auto written = fs::last_write_time(path, error);
     if (error || now - written < kStartupGrace) continue;
     // Only a process that is gone: one that re-executed itself to re-attach keeps
-    // its name, and its old lock, free until its runtime starts again.
+    // its name, and its old lock, free until its runtime starts again. (A pid from
+    // another pid namespace may name a live process here: its files then stay.)
     const pid_t pid = pid_suffix(name);
     if (pid <= 0 || !task_is_gone(pid)) continue;
     if (probe_lock(path, true) == LockState::kFree) removed.push_back(name);

@@ -13,8 +13,16 @@ namespace afhub {
 
 struct AttachedProcess {
   std::string name;  // its iceoryx runtime name, e.g. "afhub-ctl-1234"
-  pid_t pid = 0;     // from the name's "-<pid>" suffix; 0 when it has none
+  pid_t pid = 0;     // the holder of its lock, in the hub's pid namespace; 0 when unseen
 };
+
+// Whether the runtime `name` is gone: its lock is free, or missing. True in any pid
+// namespace, unlike a pid: the kernel frees a flock when its holder dies.
+bool runtime_is_gone(const std::string& name);
+
+// Whether the runtime `name`, registered with `pid` (its own getpid()), runs in the
+// hub's pid namespace: its lock's holder is that same pid here.
+bool runtime_in_hub_pid_namespace(const std::string& name, pid_t pid);
 
 // Every afhub runtime attached to the hub now, but the hub's own; sorted by name.
 std::vector<AttachedProcess> attached_processes();

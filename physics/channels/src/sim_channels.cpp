@@ -8,9 +8,9 @@
 
 #include "afhub/hub/body_claims.hpp"
 #include "afhub/hub/stop_signal.hpp"
+#include "afhub/hub/world_command_queue.hpp"
 #include "afhub/shm_layout/channel_names.hpp"
 #include "afhub/shm_layout/error.hpp"
-#include "world_command_queue.hpp"
 
 namespace afhub::physics {
 namespace {
@@ -88,7 +88,6 @@ std::vector<std::string> claim_bodies(const Model& model) {
 SimChannels::SimChannels(Simulation& sim, double watchdog_s, std::string_view name_space)
     : sim_(sim),
       claimed_(claim_bodies(sim.model())),
-      created_ns_(monotonic_ns()),
       world_({std::string(kService), world_instance(name_space), std::string(kStateEvent)}),
       world_commands_(std::make_unique<WorldCommandQueue>(world_instance(name_space))) {
   if (!(watchdog_s >= kMinWatchdogS && watchdog_s <= kMaxWatchdogS))
@@ -407,31 +406,8 @@ void SimChannels::publish(double wall_time_s, double achieved_rate_hz, bool paus
   }
 }
 
-bool SimChannels::seen_world_command(const PayloadHeader& header) noexcept {
-  for (WorldWriter& writer : world_writers_) {
-    if (writer.pid != header.publisher_pid || writer.stamp_ns == 0) continue;
-    // The same writer: a sequence it used already is a repeat, unless its stamp is
-    // newer (another process that got the same pid, its sequence from 1 again).
-    if (header.sequence <= writer.sequence && header.publish_stamp_ns <= writer.stamp_ns)
-      return true;
-    writer.sequence = header.sequence;
-    writer.stamp_ns = header.publish_stamp_ns;
-    return false;
-  }
-  world_writers_[next_world_writer_] = {header.publisher_pid, header.sequence,
-                                        header.publish_stamp_ns};
-  next_world_writer_ = (next_world_writer_ + 1) % world_writers_.size();
-  return false;
-}
-
 bool SimChannels::next_world_command(WorldCommand& out) noexcept {
-  while (world_commands_->next(out)) {
-    // History from a writer that outlived an earlier physics: not for this one.
-    if (out.header.publish_stamp_ns < created_ns_) continue;
-    if (seen_world_command(out.header)) continue;
-    return true;
-  }
-  return false;
+  return world_commands_->next(out);
 }
 
 }  // namespace afhub::physics

@@ -7,8 +7,8 @@
 //   1. The loss is noticed by an iceoryx error handler (a fatal iceoryx error once the
 //      hub's memory is gone, as on `afhub hub stop`; a fatal error while the same hub
 //      stays up still terminates the process, as before) or by a watcher thread that
-//      checks the hub every 20 ms (RouDi's socket refuses, or the hub lock names another
-//      pid or none: a hub SIGKILLed or replaced).
+//      checks the hub every 20 ms (RouDi's socket refuses, or the hub's identity names
+//      another instance or none: a hub SIGKILLed or replaced).
 //   2. hub_lost() turns true, so that loops stop writing (a controller stops commanding,
 //      the physics stops stepping and publishing), and the hooks given to on_hub_lost()
 //      run, in order (a device driver zeroes its force there).

@@ -5,6 +5,7 @@
 #include <sys/types.h>
 
 #include <chrono>
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
@@ -16,10 +17,16 @@ enum class RoudiPresence { kAbsent, kRunning };
 // Probes RouDi's Unix socket (/tmp/roudi): ENOENT or ECONNREFUSED mean no RouDi.
 RoudiPresence probe_roudi() noexcept;
 
-// The hub holds an exclusive lock on this file for its lifetime and writes its pid in it.
-std::string hub_lock_path();
+// A running hub: its pid here (0 when it runs in a pid namespace this process cannot
+// see) and the random instance number it drew at start, which tells one hub from the
+// next even when pids repeat across pid namespaces.
+struct HubIdentity {
+  pid_t pid = 0;
+  std::uint64_t instance = 0;
+};
 
-// The pid of the running afhub hub, if one holds the lock.
+// The running afhub hub, if one holds the lock in hub_directory() (hub_files.hpp).
+std::optional<HubIdentity> running_hub();
 std::optional<pid_t> running_hub_pid();
 
 // How a process that needs a hub gets one.

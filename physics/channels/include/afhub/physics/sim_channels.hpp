@@ -33,9 +33,11 @@
 #include "afhub/shm_layout/body_state.hpp"
 #include "afhub/shm_layout/world.hpp"
 
-namespace afhub::physics {
-
+namespace afhub {
 class WorldCommandQueue;
+}
+
+namespace afhub::physics {
 
 struct LockstepOptions {
   std::uint32_t wait_for = 0;                    // hold step 0 until this many clients joined
@@ -134,7 +136,6 @@ class SimChannels {
   };
   void note_lockstep_answer(Channel& channel, const Answer& answer) noexcept;
   Channel& active_channel(const std::string& body, const char* option);
-  bool seen_world_command(const PayloadHeader& header) noexcept;
   // One turn of holding a step: commands in, and the held step published again every
   // kRepublishWhileWaitingNs (`republish_ns`: when next). False on a stop signal.
   bool hold_step_turn(std::int64_t now_ns, std::int64_t& republish_ns) noexcept;
@@ -148,21 +149,12 @@ class SimChannels {
   // The channels this process claims through the hub: checked before any publisher
   // below is opened, confirmed once the directory is out.
   std::vector<std::string> claimed_;
-  std::int64_t created_ns_;  // commands published before this are history, not news
   std::vector<Channel> channels_;
   BodyInput input_;      // the command being checked and applied, out of shared memory
   BodyReading reading_;  // a body's readings on their way into its state
   DirectoryPublisher directory_;
   Writer<WorldState> world_;
   std::unique_ptr<WorldCommandQueue> world_commands_;
-  // The last world command acted on from each recent writer, for exactly-once.
-  struct WorldWriter {
-    std::uint32_t pid = 0;
-    std::uint64_t sequence = 0;
-    std::int64_t stamp_ns = 0;
-  };
-  std::array<WorldWriter, 32> world_writers_{};
-  std::size_t next_world_writer_ = 0;  // the slot a new writer takes (the oldest)
   std::uint64_t rejected_ = 0, expiries_ = 0, stale_ = 0;
   bool lockstep_ = false;
   LockstepOptions lockstep_options_;

@@ -1,15 +1,16 @@
 // The world command queue (see world_command_queue.hpp).
-#include "world_command_queue.hpp"
+#include "afhub/hub/world_command_queue.hpp"
 
 #include <cstdio>
 #include <cstring>
 
 #include "afhub/shm_layout/channel_names.hpp"
+#include "afhub/shm_layout/header.hpp"
 #include "afhub/shm_layout/payload_check.hpp"
 #include "iceoryx_posh/mepoo/chunk_header.hpp"
 #include "iceoryx_posh/popo/untyped_subscriber.hpp"
 
-namespace afhub::physics {
+namespace afhub {
 
 struct WorldCommandQueue::Port {
   explicit Port(const std::string& world)
@@ -34,9 +35,25 @@ struct WorldCommandQueue::Port {
 static_assert(WorldCommandQueue::kCapacity <= iox::MAX_SUBSCRIBER_QUEUE_CAPACITY);
 
 WorldCommandQueue::WorldCommandQueue(const std::string& world_instance)
-    : port_(std::make_unique<Port>(world_instance)) {}
+    : port_(std::make_unique<Port>(world_instance)), created_ns_(monotonic_ns()) {}
 
 WorldCommandQueue::~WorldCommandQueue() = default;
+
+bool WorldCommandQueue::seen(const PayloadHeader& header) noexcept {
+  for (Writer& writer : writers_) {
+    if (writer.pid != header.publisher_pid || writer.stamp_ns == 0) continue;
+    // The same writer: a sequence it used already is a repeat, unless its stamp is
+    // newer (another process that got the same pid, its sequence from 1 again).
+    if (header.sequence <= writer.sequence && header.publish_stamp_ns <= writer.stamp_ns)
+      return true;
+    writer.sequence = header.sequence;
+    writer.stamp_ns = header.publish_stamp_ns;
+    return false;
+  }
+  writers_[next_writer_] = {header.publisher_pid, header.sequence, header.publish_stamp_ns};
+  next_writer_ = (next_writer_ + 1) % writers_.size();
+  return false;
+}
 
 bool WorldCommandQueue::next(WorldCommand& out) noexcept {
   for (;;) {
@@ -48,11 +65,14 @@ bool WorldCommandQueue::next(WorldCommand& out) noexcept {
     const PayloadError error = check_payload(payload, bytes, PayloadKind::kWorldCommand);
     if (error == PayloadError::kNone) std::memcpy(&out, payload, sizeof out);
     port_->subscriber.release(payload);
-    if (error == PayloadError::kNone) return true;
+    if (error == PayloadError::kNone) {
+      if (out.header.publish_stamp_ns < created_ns_ || seen(out.header)) continue;
+      return true;
+    }
     if (!told_refused_)
-      std::fprintf(stderr, "afhub run: refused a world command: %s\n", describe(error));
+      std::fprintf(stderr, "afhub: refused a world command: %s\n", describe(error));
     told_refused_ = true;
   }
 }
 
-}  // namespace afhub::physics
+}  // namespace afhub

@@ -1,17 +1,19 @@
-// The physics' reader of world commands: a queue, not a latest value. Several
+// The reader of world commands for whoever runs a world (the physics, `afhub synth`): a queue, not a latest value. Several
 // processes may write world commands (`afhub world`, a GUI, a test) and two that
 // arrive between two reads must both be acted on, in the order they arrived; a
 // latest-value reader would keep the second alone. iceoryx 2.0 merges every
 // publisher's samples into the subscriber's one FIFO queue (queueCapacity > 1);
-// each sample is delivered once. Internal to physics/channels.
+// each sample is delivered once.
 #pragma once
 
+#include <array>
+#include <cstdint>
 #include <memory>
 #include <string>
 
 #include "afhub/shm_layout/world.hpp"
 
-namespace afhub::physics {
+namespace afhub {
 
 class WorldCommandQueue {
  public:
@@ -23,13 +25,26 @@ class WorldCommandQueue {
   WorldCommandQueue& operator=(const WorldCommandQueue&) = delete;
 
   // The oldest valid command not read yet, copied out of shared memory into `out`;
-  // false when none waits. Invalid payloads are refused (said once) and skipped.
+  // false when none waits. Invalid payloads are refused (said once) and skipped, and
+  // so are repeats and commands published before this queue was made (history from
+  // a writer that outlived an earlier world): each command is acted on exactly once.
   bool next(WorldCommand& out) noexcept;
 
  private:
+  bool seen(const PayloadHeader& header) noexcept;
+
   struct Port;
   std::unique_ptr<Port> port_;
+  std::int64_t created_ns_;
   bool told_refused_ = false;
+  // The last command taken from each recent writer.
+  struct Writer {
+    std::uint32_t pid = 0;
+    std::uint64_t sequence = 0;
+    std::int64_t stamp_ns = 0;
+  };
+  std::array<Writer, 32> writers_{};
+  std::size_t next_writer_ = 0;  // the slot a new writer takes (the oldest)
 };
 
-}  // namespace afhub::physics
+}  // namespace afhub

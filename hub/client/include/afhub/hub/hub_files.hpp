@@ -1,0 +1,41 @@
+// The hub's own files: its lock, its identity and its log, in a directory that only
+// the hub's user can write. Never /tmp, where another user could plant a symlink or
+// hold the lock.
+#pragma once
+
+#include <sys/types.h>
+
+#include <cstdint>
+#include <optional>
+#include <string>
+
+namespace afhub {
+
+// The directory of this user's hub: /run/afhub for root, else $XDG_RUNTIME_DIR/afhub,
+// else /tmp/afhub-<uid>. Created 0755 (root) or 0700 when missing; throws
+// afhub::Error when it exists but is a symlink, belongs to another user, or is
+// writable by others.
+std::string own_hub_directory();
+
+// The directory where a hub is looked for: root's /run/afhub when a hub runs there
+// (a member of the hub's --group attaches to it), else own_hub_directory().
+std::string hub_directory();
+
+std::string hub_lock_path(const std::string& directory);      // flock'ed by the hub, 0600
+std::string hub_identity_path(const std::string& directory);  // "<pid> <instance>", 0644
+std::string hub_log_path(const std::string& directory);
+
+// Opens `path` with `flags` | O_NOFOLLOW | O_CLOEXEC, refusing a file that belongs to
+// another user than this process's (or root's). Returns -1 with errno set.
+int open_own_file(const std::string& path, int flags, mode_t mode = 0600);
+
+// The pid, in this process's pid namespace, of the process holding a flock on `path`
+// (from /proc/locks); nullopt when none is held, or the holder is in a pid namespace
+// this process cannot see.
+std::optional<pid_t> flock_holder(const std::string& path);
+
+// Whether some process holds a flock on `path`, in any pid namespace: probed with a
+// non-blocking shared lock when the file can be opened, else from /proc/locks.
+bool flock_held(const std::string& path);
+
+}  // namespace afhub
