@@ -1,9 +1,9 @@
-// The reader of world commands for whoever runs a world (the physics, `afhub synth`): a queue, not a latest value. Several
-// processes may write world commands (`afhub world`, a GUI, a test) and two that
-// arrive between two reads must both be acted on, in the order they arrived; a
-// latest-value reader would keep the second alone. iceoryx 2.0 merges every
-// publisher's samples into the subscriber's one FIFO queue (queueCapacity > 1);
-// each sample is delivered once.
+// The reader of world commands for whoever runs a world (the physics, `afhub synth`):
+// a queue, not a latest value. Several processes may write world commands (`afhub
+// world`, a GUI, a test) and two that arrive between two reads must both be acted on,
+// in the order they arrived; a latest-value reader would keep the second alone.
+// iceoryx 2.0 merges every publisher's samples into the subscriber's one FIFO queue
+// (queueCapacity > 1); each sample is delivered once.
 #pragma once
 
 #include <array>
