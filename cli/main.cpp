@@ -1,8 +1,20 @@
 // afhub: the one command-line front door.
 #include <cstdio>
+#include <exception>
+#include <string>
 
 #include "afhub/shm_layout/error.hpp"
 #include "commands.hpp"
+
+namespace {
+
+// The command that ran: "run", or "" before one was parsed.
+std::string command(const CLI::App& app) {
+  const auto chosen = app.get_subcommands();
+  return chosen.empty() ? std::string() : chosen.front()->get_name();
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{
@@ -31,8 +43,14 @@ int main(int argc, char** argv) {
   try {
     return selected ? selected() : 2;
   } catch (const afhub::Error& error) {
-    std::fprintf(stderr, "afhub %s: error: %s\n", app.get_subcommands().front()->get_name().c_str(),
-                 error.what());
+    std::fprintf(stderr, "afhub %s: error: %s\n", command(app).c_str(), error.what());
+    return 1;
+  } catch (const std::exception& error) {
+    // Not one of afhub's own messages (a library's): said as it is, never std::terminate.
+    std::fprintf(stderr, "afhub %s: error: %s\n", command(app).c_str(), error.what());
+    return 1;
+  } catch (...) {
+    std::fprintf(stderr, "afhub %s: error: an unknown exception\n", command(app).c_str());
     return 1;
   }
 }

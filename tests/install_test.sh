@@ -38,6 +38,19 @@ python3 -c "import sys; sys.exit(0 if abs($shoulder - 0.5) < 0.05 else 1)" || {
   exit 1
 }
 
+# A bad argument is an error with a message and exit 1, never std::terminate
+# (std::stod throws std::invalid_argument, not afhub::Error).
+set +e
+"$work/embedded_simulation/embedded_simulation" "$prefix/share/afhub/models/arm7.yaml" base \
+  not-a-number 2 > /dev/null 2> "$work/embedded-bad.txt"
+status=$?
+set -e
+if [ "$status" -ne 1 ] || ! grep -q "embedded_simulation: error: " "$work/embedded-bad.txt"; then
+  echo "install_test: a bad target made embedded_simulation exit $status, not 1 with a message:" >&2
+  cat "$work/embedded-bad.txt" >&2
+  exit 1
+fi
+
 # Only the installed afhub is reachable; the hub it starts is stopped at the end.
 export PATH="$prefix/bin:/usr/bin:/bin"
 unset AFHUB_EXECUTABLE AFHUB_MODELS

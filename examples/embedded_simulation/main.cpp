@@ -7,6 +7,7 @@
 #include <afhub/physics/simulation.hpp>
 #include <afhub/shm_layout/error.hpp>
 #include <cstdio>
+#include <exception>
 #include <string>
 
 int main(int argc, char** argv) {
@@ -41,7 +42,7 @@ int main(int argc, char** argv) {
     for (std::size_t j = 0; j < model.joints.size(); ++j)
       std::printf("%-32s %9.4f\n", model.joints[j].channel.c_str(), sim.joint_position(j));
     return 0;
-  } catch (const afhub::Error& error) {
+  } catch (const std::exception& error) {  // afhub::Error, and any other (std::stod's)
     std::fprintf(stderr, "embedded_simulation: error: %s\n", error.what());
     return 1;
   }

@@ -6,6 +6,7 @@
 #include <afhub/shm_layout/error.hpp>
 #include <cmath>
 #include <cstdio>
+#include <exception>
 #include <numbers>
 
 int main(int argc, char** argv) {
@@ -30,7 +31,7 @@ int main(int argc, char** argv) {
           }
           command.joint_values[0] += 0.5 * std::sin(std::numbers::pi * t);
         });
-  } catch (const afhub::Error& error) {
+  } catch (const std::exception& error) {  // afhub::Error, and any other
     std::fprintf(stderr, "wave_controller: error: %s\n", error.what());
     return 1;
   }

@@ -32,44 +32,74 @@ std::size_t fixed_size_of(PayloadKind kind) noexcept {
   return 0;
 }
 
-}  // namespace
-
-PayloadError check_payload(const void* data, std::size_t bytes, PayloadKind expected) noexcept {
-  if (bytes < sizeof(PayloadHeader)) return PayloadError::kTooSmall;
-  PayloadHeader header;
-  std::memcpy(&header, data, sizeof header);
-  if (header.layout_id != kLayoutId) return PayloadError::kForeignLayout;
-  if (header.kind != expected) return PayloadError::kWrongKind;
-  if (bytes < fixed_size_of(expected)) return PayloadError::kTooSmall;
-
-  const auto* bytes_at = static_cast<const char*>(data);
-  switch (expected) {
-    case PayloadKind::kBodyState:
-      if (reinterpret_cast<const BodyState*>(bytes_at)->joint_count > kMaxJointsPerBody)
-        return PayloadError::kCountTooLarge;
-      break;
-    case PayloadKind::kBodyCommand:
-      if (reinterpret_cast<const BodyCommand*>(bytes_at)->joint_count > kMaxJointsPerBody)
-        return PayloadError::kCountTooLarge;
-      break;
+// The first count beyond its capacity, named; nullptr when every count fits.
+// The chunk holds at least the kind's fixed size (body lists: their counted bodies).
+const char* count_beyond_capacity(const char* at, PayloadKind kind) noexcept {
+  switch (kind) {
+    case PayloadKind::kBodyState: {
+      const auto* state = reinterpret_cast<const BodyState*>(at);
+      if (state->joint_count > kMaxJointsPerBody) return "BodyState.joint_count";
+      if (state->sensor_ray_count > kMaxSensorRaysPerBody) return "BodyState.sensor_ray_count";
+      return nullptr;
+    }
+    case PayloadKind::kBodyCommand: {
+      const auto* command = reinterpret_cast<const BodyCommand*>(at);
+      if (command->joint_count > kMaxJointsPerBody) return "BodyCommand.joint_count";
+      if (command->actuator_count > kMaxActuatorsPerBody) return "BodyCommand.actuator_count";
+      return nullptr;
+    }
+    case PayloadKind::kWorldState: {
+      const auto* world = reinterpret_cast<const WorldState*>(at);
+      if (world->light_count > kMaxWorldObjects) return "WorldState.light_count";
+      if (world->camera_count > kMaxWorldObjects) return "WorldState.camera_count";
+      return nullptr;
+    }
     case PayloadKind::kBodyDirectory:
     case PayloadKind::kCatalog: {
-      const std::uint32_t count = reinterpret_cast<const BodyList*>(bytes_at)->body_count;
-      if (count > kMaxBodies || bytes < body_list_bytes(count)) return PayloadError::kCountTooLarge;
-      break;
+      const auto* list = reinterpret_cast<const BodyList*>(at);
+      for (std::uint32_t i = 0; i < list->body_count; ++i)
+        if (list->bodies[i].joint_count > kMaxJointsPerBody) return "BodyInfo.joint_count";
+      return nullptr;
     }
     case PayloadKind::kHealth: {
-      const auto* health = reinterpret_cast<const Health*>(bytes_at);
-      if (health->process_count > kMaxHealthProcesses || health->mempool_count > kMaxMempools)
-        return PayloadError::kCountTooLarge;
-      break;
+      const auto* health = reinterpret_cast<const Health*>(at);
+      if (health->process_count > kMaxHealthProcesses) return "Health.process_count";
+      if (health->mempool_count > kMaxMempools) return "Health.mempool_count";
+      return nullptr;
     }
-    case PayloadKind::kWorldState:
     case PayloadKind::kWorldCommand:
     case PayloadKind::kLoopStats:
     case PayloadKind::kBenchSample:
-      break;
+      return nullptr;
   }
+  return nullptr;
+}
+
+PayloadError fail(PayloadError error, const char* what, const char** field) noexcept {
+  if (field) *field = what;
+  return error;
+}
+
+}  // namespace
+
+PayloadError check_payload(const void* data, std::size_t bytes, PayloadKind expected,
+                           const char** field) noexcept {
+  if (field) *field = "";
+  if (bytes < sizeof(PayloadHeader)) return fail(PayloadError::kTooSmall, "PayloadHeader", field);
+  PayloadHeader header;
+  std::memcpy(&header, data, sizeof header);
+  if (header.layout_id != kLayoutId)
+    return fail(PayloadError::kForeignLayout, "PayloadHeader.layout_id", field);
+  if (header.kind != expected) return fail(PayloadError::kWrongKind, "PayloadHeader.kind", field);
+  if (bytes < fixed_size_of(expected)) return fail(PayloadError::kTooSmall, "chunk size", field);
+  const auto* at = static_cast<const char*>(data);
+  if (expected == PayloadKind::kBodyDirectory || expected == PayloadKind::kCatalog) {
+    const std::uint32_t count = reinterpret_cast<const BodyList*>(at)->body_count;
+    if (count > kMaxBodies || bytes < body_list_bytes(count))
+      return fail(PayloadError::kCountTooLarge, "BodyList.body_count", field);
+  }
+  if (const char* count = count_beyond_capacity(at, expected))
+    return fail(PayloadError::kCountTooLarge, count, field);
   return PayloadError::kNone;
 }
 

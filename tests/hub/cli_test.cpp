@@ -32,6 +32,18 @@ TEST(Cli, EveryCommandHasHelp) {
   EXPECT_NE(bad.exit_code, 0);
 }
 
+// Any exception, not only afhub's own, ends a command with its message and exit 1,
+// never std::terminate: a path longer than the system allows makes
+// std::filesystem throw from the demo's model check.
+TEST(Cli, AnUnexpectedExceptionIsAnErrorNotACrash) {
+  expect_no_hub();
+  RunResult demo = run_afhub({"demo", "--model", std::string(5000, 'a')});
+  EXPECT_EQ(demo.exit_code, 1) << demo.err.substr(0, 300);
+  EXPECT_TRUE(contains(demo.err, "afhub demo: error: ")) << demo.err.substr(0, 300);
+  EXPECT_TRUE(contains(demo.err, "File name too long")) << demo.err.substr(0, 300);
+  EXPECT_FALSE(contains(demo.err, "terminate")) << demo.err.substr(0, 300);
+}
+
 TEST(Cli, DemoSimulatesTheExampleSceneLive) {
   expect_no_hub();
   RunResult demo = run_afhub({"demo", "--seconds", "3"}, 30s);

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <memory>
 #include <vector>
 
 #include "afhub/shm_layout/layout_id.hpp"
@@ -68,6 +69,63 @@ TEST(PayloadCheck, BodyListsMustHoldTheBodiesTheyCount) {
   std::memcpy(bytes.data() + offsetof(BodyList, body_count), &count, sizeof count);
   EXPECT_EQ(check_payload(bytes.data(), bytes.size(), PayloadKind::kCatalog),
             PayloadError::kCountTooLarge);
+}
+
+// Every count a consumer indexes an array with is held to the array's capacity,
+// and the refusal names the field.
+template <class T>
+void expect_count_refused(T payload, std::uint32_t T::*count, std::size_t capacity,
+                          const char* field_name) {
+  payload.*count = static_cast<std::uint32_t>(capacity);
+  const char* field = "unset";
+  EXPECT_EQ(check_payload(&payload, sizeof payload, T::kKind, &field), PayloadError::kNone)
+      << field_name;
+  EXPECT_STREQ(field, "");
+  payload.*count = static_cast<std::uint32_t>(capacity + 1);
+  EXPECT_EQ(check_payload(&payload, sizeof payload, T::kKind, &field), PayloadError::kCountTooLarge)
+      << field_name;
+  EXPECT_STREQ(field, field_name);
+  payload.*count = 0xffffffffu;
+  EXPECT_EQ(check_payload(&payload, sizeof payload, T::kKind), PayloadError::kCountTooLarge)
+      << field_name;
+}
+
+TEST(PayloadCheck, RefusesEveryCountBeyondItsArray) {
+  expect_count_refused(stamped<BodyState>(PayloadKind::kBodyState), &BodyState::joint_count,
+                       kMaxJointsPerBody, "BodyState.joint_count");
+  expect_count_refused(stamped<BodyState>(PayloadKind::kBodyState), &BodyState::sensor_ray_count,
+                       kMaxSensorRaysPerBody, "BodyState.sensor_ray_count");
+  expect_count_refused(stamped<BodyCommand>(PayloadKind::kBodyCommand), &BodyCommand::joint_count,
+                       kMaxJointsPerBody, "BodyCommand.joint_count");
+  expect_count_refused(stamped<BodyCommand>(PayloadKind::kBodyCommand),
+                       &BodyCommand::actuator_count, kMaxActuatorsPerBody,
+                       "BodyCommand.actuator_count");
+  expect_count_refused(stamped<WorldState>(PayloadKind::kWorldState), &WorldState::light_count,
+                       kMaxWorldObjects, "WorldState.light_count");
+  expect_count_refused(stamped<WorldState>(PayloadKind::kWorldState), &WorldState::camera_count,
+                       kMaxWorldObjects, "WorldState.camera_count");
+  expect_count_refused(stamped<Health>(PayloadKind::kHealth), &Health::process_count,
+                       kMaxHealthProcesses, "Health.process_count");
+  expect_count_refused(stamped<Health>(PayloadKind::kHealth), &Health::mempool_count, kMaxMempools,
+                       "Health.mempool_count");
+}
+
+TEST(PayloadCheck, RefusesABodyListWhoseBodyCountsTooManyJoints) {
+  for (auto kind : {PayloadKind::kBodyDirectory, PayloadKind::kCatalog}) {
+    auto list = std::make_unique<BodyList>();
+    const std::size_t bytes = body_list_bytes(2);  // published with its two bodies only
+    list->header = PayloadHeader{kLayoutId, kind};
+    list->body_count = 2;
+    list->bodies[1].joint_count = kMaxJointsPerBody;
+    EXPECT_EQ(check_payload(list.get(), bytes, kind), PayloadError::kNone);
+    list->bodies[1].joint_count = kMaxJointsPerBody + 1;
+    const char* field = nullptr;
+    EXPECT_EQ(check_payload(list.get(), bytes, kind, &field), PayloadError::kCountTooLarge);
+    EXPECT_STREQ(field, "BodyInfo.joint_count");
+    // A body beyond body_count is not the payload's: never read.
+    list->body_count = 1;
+    EXPECT_EQ(check_payload(list.get(), bytes, kind), PayloadError::kNone);
+  }
 }
 
 TEST(PayloadCheck, EveryErrorHasAnExplanation) {

@@ -110,9 +110,10 @@ const void* RawLatestReader::latest() noexcept {
     const void* payload = taken.value();
     const std::uint32_t bytes =
         iox::mepoo::ChunkHeader::fromUserPayload(payload)->userPayloadSize();
-    PayloadError error = check_payload(payload, bytes, kind_);
+    const char* field = "";
+    PayloadError error = check_payload(payload, bytes, kind_, &field);
     if (error != PayloadError::kNone) {
-      report_refusal(payload, error);
+      report_refusal(payload, error, field);
       port_->subscriber.release(payload);
       continue;
     }
@@ -137,7 +138,8 @@ bool RawLatestReader::subscribed() const noexcept {
   return port_->subscriber.getSubscriptionState() == iox::SubscribeState::SUBSCRIBED;
 }
 
-void RawLatestReader::report_refusal(const void* payload, PayloadError error) noexcept {
+void RawLatestReader::report_refusal(const void* payload, PayloadError error,
+                                     const char* field) noexcept {
   // Said once per reader: a foreign writer publishes at its own rate.
   if (refused_++ > 0) return;
   PayloadHeader header{};
@@ -145,10 +147,10 @@ void RawLatestReader::report_refusal(const void* payload, PayloadError error) no
   if (bytes >= sizeof header) header = *static_cast<const PayloadHeader*>(payload);
   std::fprintf(stderr,
                "afhub: refused a payload on %s/%s/%s from pid %u (layout id %016llx, this "
-               "build %016llx): %s\n",
+               "build %016llx): %s: %s (said once per reader)\n",
                channel_.service.c_str(), channel_.instance.c_str(), channel_.event.c_str(),
                header.publisher_pid, static_cast<unsigned long long>(header.layout_id),
-               static_cast<unsigned long long>(kLayoutId), describe(error));
+               static_cast<unsigned long long>(kLayoutId), field, describe(error));
 }
 
 }  // namespace afhub

@@ -62,7 +62,8 @@ bool WorldCommandQueue::next(WorldCommand& out) noexcept {
     const void* payload = taken.value();
     const std::uint32_t bytes =
         iox::mepoo::ChunkHeader::fromUserPayload(payload)->userPayloadSize();
-    const PayloadError error = check_payload(payload, bytes, PayloadKind::kWorldCommand);
+    const char* field = "";
+    const PayloadError error = check_payload(payload, bytes, PayloadKind::kWorldCommand, &field);
     if (error == PayloadError::kNone) std::memcpy(&out, payload, sizeof out);
     port_->subscriber.release(payload);
     if (error == PayloadError::kNone) {
@@ -70,7 +71,7 @@ bool WorldCommandQueue::next(WorldCommand& out) noexcept {
       return true;
     }
     if (!told_refused_)
-      std::fprintf(stderr, "afhub: refused a world command: %s\n", describe(error));
+      std::fprintf(stderr, "afhub: refused a world command: %s: %s\n", field, describe(error));
     told_refused_ = true;
   }
 }

@@ -4,6 +4,7 @@
 #include <cstdio>
 
 #include "afhub/hub/bodies.hpp"
+#include "catalog_merge.hpp"
 
 namespace afhub {
 namespace {
@@ -39,71 +40,45 @@ bool CatalogBuilder::refresh_directories() {
 
 bool CatalogBuilder::merge(bool directories_changed) {
   bool any_update = directories_changed;
+  std::vector<OfferedDirectory> offered;
   for (auto& [instance, reader] : directories_) {
-    reader->latest();
+    // Checked by the reader (check_payload): every count fits its chunk.
+    offered.push_back({instance, static_cast<const BodyList*>(reader->latest())});
     any_update = any_update || reader->updated();
   }
   if (!any_update) return false;
-  // What the live directories offer, in their order; a body two processes offer
-  // goes to the one the catalog already lists, else to the first.
-  std::map<std::string, std::uint32_t> admitted_owner;
-  for (const auto& body : bodies_)
-    admitted_owner[std::string(name_of(body.channel))] = body.owner_pid;
-  std::vector<BodyInfo> offered;
-  std::map<std::string, std::size_t> offered_at;
-  for (auto& [instance, reader] : directories_) {
-    const auto* list = static_cast<const BodyList*>(reader->latest());
-    if (!list) continue;
-    for (std::uint32_t i = 0; i < list->body_count; ++i) {
-      const BodyInfo& body = list->bodies[i];
-      std::string channel(name_of(body.channel));
-      const auto [at, added] = offered_at.emplace(channel, offered.size());
-      if (added) {
-        offered.push_back(body);
-        continue;
-      }
-      std::fprintf(stderr, "afhub hub: body %s is claimed by two processes; keeping the first\n",
-                   channel.c_str());
-      const auto admitted = admitted_owner.find(channel);
-      if (admitted != admitted_owner.end() && admitted->second == body.owner_pid)
-        offered[at->second] = body;
-    }
-  }
-  // First come, first served: bodies the catalog lists keep their place, new ones
-  // join while there is room. Their owner sees the refused ones missing and says so.
-  std::vector<BodyInfo> merged;
-  std::vector<bool> taken(offered.size(), false);
-  for (const auto& body : bodies_) {
-    const auto at = offered_at.find(std::string(name_of(body.channel)));
-    if (at == offered_at.end() || taken[at->second]) continue;
-    merged.push_back(offered[at->second]);
-    taken[at->second] = true;
-  }
-  for (std::size_t k = 0; k < offered.size(); ++k) {
-    if (taken[k]) continue;
-    if (merged.size() == kMaxBodies) {
-      std::fprintf(stderr, "afhub hub: the catalog is full (%zu bodies); %s of %s is refused\n",
-                   kMaxBodies, std::string(name_of(offered[k].channel)).c_str(),
-                   std::string(name_of(offered[k].owner)).c_str());
-      continue;
-    }
-    merged.push_back(offered[k]);
-  }
-  bodies_ = std::move(merged);
-  // Rate probes follow the body set.
+  std::vector<std::string> messages;
+  bodies_ = merge_directories(bodies_, offered, messages);
+  for (const std::string& message : messages) tell_once(message);
+  // Rate probes follow the body set. A body whose probe cannot open is dropped,
+  // said once: one bad entry never stops the hub.
   std::map<std::string, RateProbe> probes;
-  for (const auto& body : bodies_) {
+  std::erase_if(bodies_, [&](const BodyInfo& body) {
     std::string channel(name_of(body.channel));
     auto old = rates_.find(channel);
     if (old != rates_.end()) {
       probes[channel] = std::move(old->second);
-    } else {
+      return false;
+    }
+    try {
       probes[channel].reader =
           std::make_unique<LatestReader<BodyState>>(body_state_channel(channel));
+      return false;
+    } catch (const std::exception& error) {
+      probes.erase(channel);
+      tell_once("body " + channel + " of " + std::string(name_of(body.owner)) +
+                " is not listed: " + error.what());
+      return true;
     }
-  }
+  });
   rates_ = std::move(probes);
   return true;
+}
+
+void CatalogBuilder::tell_once(const std::string& message) {
+  // A faulty writer may publish new faults forever: the memory of what was said is bounded.
+  if (told_.size() > 1000) told_.clear();
+  if (told_.insert(message).second) std::fprintf(stderr, "afhub hub: %s\n", message.c_str());
 }
 
 void CatalogBuilder::take_rate_samples() {

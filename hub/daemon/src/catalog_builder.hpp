@@ -8,6 +8,7 @@
 #include <chrono>
 #include <map>
 #include <memory>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -44,11 +45,14 @@ class CatalogBuilder {
   // has a silent publisher.
   void start_rate_samples();
   void publish();
+  // Says `message` on stderr, unless it was said already.
+  void tell_once(const std::string& message);
 
   ChannelDiscovery discovery_;
   std::map<std::string, std::unique_ptr<RawLatestReader>> directories_;  // by owner instance
   std::map<std::string, RateProbe> rates_;                               // by body channel
   std::vector<BodyInfo> bodies_;
+  std::set<std::string> told_;
   RawWriter writer_;
   std::chrono::steady_clock::time_point last_publish_;
 };

@@ -12,6 +12,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstring>
+#include <exception>
 #include <fstream>
 #include <optional>
 #include <set>
@@ -139,6 +140,7 @@ void serve_until_stopped(AfhubRouDi& roudi, iox::roudi::PortPool& ports) {
   CatalogBuilder catalog;
   HealthReporter health;
   Registered registered;
+  bool catalog_failed = false;
   auto next_file_sweep = std::chrono::steady_clock::now();
   while (!stop_requested()) {
     auto now = std::chrono::steady_clock::now();
@@ -148,7 +150,15 @@ void serve_until_stopped(AfhubRouDi& roudi, iox::roudi::PortPool& ports) {
         std::fprintf(stderr, "afhub hub: removed the files %s left in /tmp\n", name.c_str());
       next_file_sweep = now + std::chrono::seconds(1);
     }
-    catalog.poll(now);
+    // What other processes publish must never stop the hub (and RouDi with it).
+    try {
+      catalog.poll(now);
+    } catch (const std::exception& error) {
+      if (!catalog_failed)
+        std::fprintf(stderr, "afhub hub: the catalog was not updated: %s (said once)\n",
+                     error.what());
+      catalog_failed = true;
+    }
     const auto publishers = static_cast<std::uint32_t>(ports.getPublisherPortDataList().size());
     health.poll(now, catalog.body_count(), iox::MAX_PUBLISHERS - publishers);
     std::this_thread::sleep_for(std::chrono::milliseconds(20));

@@ -11,6 +11,7 @@
 #include "afhub/hub/world_command_queue.hpp"
 #include "afhub/shm_layout/channel_names.hpp"
 #include "afhub/shm_layout/error.hpp"
+#include "command_input.hpp"
 
 namespace afhub::physics {
 namespace {
@@ -22,33 +23,7 @@ std::string format_seconds(double seconds) {
 }
 
 // The wire and the core agree on capacities, so a copy never truncates what fits.
-static_assert(kBodyJointCapacity == kMaxJointsPerBody);
 static_assert(kBodyRayCapacity == kMaxSensorRaysPerBody);
-static_assert(kBodyActuatorCapacity == kMaxActuatorsPerBody);
-static_assert(static_cast<int>(CartesianMode::kPosition) ==
-              static_cast<int>(CartesianCommandType::kPosition));
-static_assert(static_cast<int>(JointMode::kVelocity) ==
-              static_cast<int>(JointCommandType::kVelocity));
-
-// A command out of shared memory into the core's input: copied once, so that a
-// writer cannot change it between the check and its use. Counts are copied as
-// written (input_problem refuses those beyond the body's); entries up to capacity.
-void to_input(const BodyCommand& command, BodyInput& input) noexcept {
-  input.cartesian = static_cast<CartesianMode>(command.cartesian_type);
-  input.target_pose = command.pose;
-  input.wrench = command.wrench;
-  input.twist = command.twist;
-  input.joint_count = command.joint_count;
-  const std::size_t joints = std::min<std::size_t>(command.joint_count, kBodyJointCapacity);
-  for (std::size_t j = 0; j < joints; ++j) {
-    input.joint_modes[j] = static_cast<JointMode>(command.joint_types[j]);
-    input.joint_values[j] = command.joint_values[j];
-  }
-  input.actuator_count = command.actuator_count;
-  const std::size_t actuators =
-      std::min<std::size_t>(command.actuator_count, kBodyActuatorCapacity);
-  for (std::size_t a = 0; a < actuators; ++a) input.engage[a] = command.actuate[a] != 0;
-}
 
 // A reading into a loaned state (its header is the caller's).
 void to_state(const BodyReading& reading, BodyState& state) noexcept {

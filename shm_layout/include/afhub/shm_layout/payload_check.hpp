@@ -1,5 +1,7 @@
 // Checks a received chunk before anything reads it: size, layout id, kind and
-// counts. Real-time safe: no allocation, no exceptions.
+// every count it holds. A payload comes from another process and is untrusted:
+// once it passes, every count is within its array and within the chunk.
+// Real-time safe: no allocation, no exceptions.
 #pragma once
 
 #include <cstddef>
@@ -17,8 +19,11 @@ enum class PayloadError : std::uint8_t {
   kCountTooLarge,  // a count beyond the payload's capacity or the chunk's bytes
 };
 
-// Checks `bytes` bytes at `data` as a payload of `expected` kind.
-PayloadError check_payload(const void* data, std::size_t bytes, PayloadKind expected) noexcept;
+// Checks `bytes` bytes at `data` as a payload of `expected` kind. When `field` is
+// given, it is set to the field at fault ("BodyCommand.actuator_count"), or to ""
+// when the payload is valid.
+PayloadError check_payload(const void* data, std::size_t bytes, PayloadKind expected,
+                           const char** field = nullptr) noexcept;
 
 // One line for the user: what is wrong with the payload and what to do about it.
 const char* describe(PayloadError error) noexcept;

@@ -92,7 +92,7 @@ class RawLatestReader {
 
  private:
   struct Port;
-  void report_refusal(const void* payload, PayloadError error) noexcept;
+  void report_refusal(const void* payload, PayloadError error, const char* field) noexcept;
   ChannelId channel_;
   PayloadKind kind_;
   const void* held_ = nullptr;

@@ -1,0 +1,375 @@
+// Payloads come from other processes and are untrusted. Random and mutated bytes of
+// every payload kind go into check_payload, and what it accepts into every consumer,
+// as the real readers do: the CLI's renderings (echo, ls, status, top), command
+// application (the physics' copy into its input, the body's check, the input
+// applied and stepped), the hub's catalog merge, and world control. No hub runs.
+// Under the sanitize build (ASan, UBSan) an out-of-bounds read or undefined
+// behaviour ends the run. The bounded run is a ctest entry; AFHUB_FUZZ_CASES=N
+// runs N cases, AFHUB_FUZZ_SEED picks the sequence.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <memory>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "afhub/hub/bodies.hpp"
+#include "afhub/physics/adf_loader.hpp"
+#include "afhub/physics/simulation.hpp"
+#include "afhub/shm_layout/layout_id.hpp"
+#include "afhub/shm_layout/payload_check.hpp"
+#include "afhub/shm_layout/world_control.hpp"
+#include "catalog_merge.hpp"
+#include "command_input.hpp"
+#include "format.hpp"
+#include "listings.hpp"
+#include "loop_table.hpp"
+#include "model_files.hpp"
+
+namespace afhub {
+namespace {
+
+constexpr std::array kKinds{
+    PayloadKind::kBodyState,    PayloadKind::kBodyCommand,   PayloadKind::kWorldState,
+    PayloadKind::kWorldCommand, PayloadKind::kBodyDirectory, PayloadKind::kCatalog,
+    PayloadKind::kHealth,       PayloadKind::kLoopStats,     PayloadKind::kBenchSample};
+
+std::uint64_t env_number(const char* name, std::uint64_t fallback) {
+  const char* text = std::getenv(name);
+  return text && *text ? std::strtoull(text, nullptr, 10) : fallback;
+}
+
+// A valid payload of each kind, with its counts in use: the mutations' starting points.
+struct Seed {
+  std::vector<unsigned char> bytes;
+  std::vector<std::size_t> count_offsets;  // where its counts are, to hit them often
+};
+
+template <class T>
+Seed seed_of(const T& payload, std::vector<std::size_t> count_offsets) {
+  Seed seed;
+  seed.bytes.resize(sizeof payload);
+  std::memcpy(seed.bytes.data(), &payload, sizeof payload);
+  seed.count_offsets = std::move(count_offsets);
+  return seed;
+}
+
+template <class T>
+T stamped() {
+  T payload{};
+  payload.header.layout_id = kLayoutId;
+  payload.header.kind = T::kKind;
+  payload.header.sequence = 1;
+  return payload;
+}
+
+Seed body_list_seed(PayloadKind kind) {
+  constexpr std::uint32_t kBodies = 3;
+  auto list = std::make_unique<BodyList>();
+  list->header = PayloadHeader{kLayoutId, kind};
+  list->body_count = kBodies;
+  std::vector<std::size_t> counts{offsetof(BodyList, body_count)};
+  for (std::uint32_t b = 0; b < kBodies; ++b) {
+    BodyInfo& body = list->bodies[b];
+    set_name(body.channel, "fuzz/body" + std::to_string(b));
+    set_name(body.owner, "fuzz-owner");
+    body.joint_count = b == 2 ? kMaxJointsPerBody : 2;
+    for (std::uint32_t j = 0; j < body.joint_count; ++j)
+      set_name(body.joint_names[j], "joint" + std::to_string(j));
+    counts.push_back(offsetof(BodyList, bodies) + b * sizeof(BodyInfo) +
+                     offsetof(BodyInfo, joint_count));
+  }
+  // Published with only its counted bodies, as DirectoryPublisher and the hub do.
+  std::vector<unsigned char> bytes(body_list_bytes(kBodies));
+  std::memcpy(bytes.data(), list.get(), bytes.size());
+  return {std::move(bytes), std::move(counts)};
+}
+
+std::vector<Seed> make_seeds() {
+  auto state = stamped<BodyState>();
+  state.joint_count = 7;
+  state.sensor_ray_count = 3;
+  auto command = stamped<BodyCommand>();
+  command.cartesian_type = CartesianCommandType::kPosition;
+  command.joint_count = 3;
+  command.joint_types[1] = JointCommandType::kPosition;
+  auto world = stamped<WorldState>();
+  world.light_count = 2;
+  world.camera_count = 1;
+  set_name(world.lights[0].name, "light");
+  auto world_command = stamped<WorldCommand>();
+  world_command.action = WorldAction::kStep;
+  auto health = stamped<Health>();
+  health.process_count = 2;
+  health.mempool_count = 3;
+  set_name(health.processes[0].name, "afhub-hub");
+  auto loop = stamped<LoopStats>();
+  set_name(loop.name, "ctl sine");
+  set_name(loop.body, "arm/base");
+  auto bench = stamped<BenchSample>();
+  return {
+      seed_of(state, {offsetof(BodyState, joint_count), offsetof(BodyState, sensor_ray_count)}),
+      seed_of(command, {offsetof(BodyCommand, joint_count), offsetof(BodyCommand, actuator_count)}),
+      seed_of(world, {offsetof(WorldState, light_count), offsetof(WorldState, camera_count),
+                      offsetof(WorldState, body_count)}),
+      seed_of(world_command, {offsetof(WorldCommand, action), offsetof(WorldCommand, step_count)}),
+      body_list_seed(PayloadKind::kBodyDirectory),
+      body_list_seed(PayloadKind::kCatalog),
+      seed_of(health, {offsetof(Health, process_count), offsetof(Health, mempool_count)}),
+      seed_of(loop, {}),
+      seed_of(bench, {}),
+  };
+}
+
+// What the command consumers act on: the example arm, and a body with an actuator.
+struct CommandTarget {
+  CommandTarget() {
+    const std::string gripper_file = folder.write(
+        "gripper.yaml",
+        "bodies: [BODY gripper, BODY ball]\nactuators: [ACTUATOR grip]\n"
+        "BODY gripper:\n  name: gripper\n  mass: 0\n"
+        "BODY ball:\n  name: ball\n  mass: 1\n  shape: sphere\n  geometry: {radius: 0.05}\n"
+        "  location: {position: {x: 0, y: 0, z: -0.045}}\n"
+        "ACTUATOR grip:\n  name: grip\n  type: Constraint\n  parent: BODY gripper\n"
+        "  max impulse: 10\n  tau: 1\n");
+    model =
+        physics::load_adf_files({std::string(AFHUB_EXAMPLE_MODELS) + "/arm7.yaml", gripper_file});
+    sim = std::make_unique<physics::Simulation>(model, 0.001);
+    for (std::size_t b = 0; b < model.bodies.size(); ++b) {
+      if (model.descendant_joints[b].size() > model.descendant_joints[arm].size()) arm = b;
+      if (model.bodies[b].name == "gripper") gripper = b;
+    }
+  }
+  testing::ModelFolder folder;
+  physics::Model model;
+  std::unique_ptr<physics::Simulation> sim;
+  std::size_t arm = 0;      // the body with the most joints below it
+  std::size_t gripper = 0;  // the body with an actuator
+};
+
+struct Tally {
+  std::uint64_t cases = 0, accepted = 0;
+  std::array<std::uint64_t, 5> by_error{};
+};
+
+class Fuzzer {
+ public:
+  explicit Fuzzer(std::uint64_t seed) : random_(seed), seeds_(make_seeds()) {
+    const Seed& catalog = seeds_[5];
+    catalog_ = catalog.bytes;
+    health_ = seeds_[6].bytes;
+    world_ = seeds_[2].bytes;
+    info_ = reinterpret_cast<const BodyList*>(catalog_.data())->bodies[2];
+  }
+
+  void run_case(std::size_t kind_index) {
+    const PayloadKind kind = kKinds[kind_index];
+    const std::vector<unsigned char> bytes = next_bytes(kind_index);
+    // Exactly as long as the chunk: ASan sees a read one byte past it.
+    std::unique_ptr<unsigned char[]> exact(
+        new unsigned char[std::max<std::size_t>(bytes.size(), 1)]);
+    if (!bytes.empty()) std::memcpy(exact.get(), bytes.data(), bytes.size());
+    const char* field = nullptr;
+    const PayloadError error = check_payload(exact.get(), bytes.size(), kind, &field);
+    Tally& tally = tallies_[kind_index];
+    ++tally.cases;
+    ++tally.by_error[static_cast<std::size_t>(error)];
+    EXPECT_NE(field, nullptr);
+    // Read as any other kind, it is refused (the kinds differ) or valid as that kind.
+    const PayloadKind other =
+        kKinds[(kind_index + 1 + random_() % (kKinds.size() - 1)) % kKinds.size()];
+    if (check_payload(exact.get(), bytes.size(), other) == PayloadError::kNone)
+      consume(other, exact.get());
+    if (error != PayloadError::kNone) return;
+    ++tally.accepted;
+    consume(kind, exact.get());
+  }
+
+  const std::array<Tally, kKinds.size()>& tallies() const { return tallies_; }
+  std::uint64_t applied_commands() const { return applied_; }
+  std::uint64_t steps() const { return steps_; }
+
+ private:
+  std::vector<unsigned char> next_bytes(std::size_t kind_index) {
+    const Seed& seed = seeds_[kind_index];
+    std::vector<unsigned char> bytes;
+    switch (random_() % 4) {
+      case 0: {  // random bytes of a random length, the header sometimes valid
+        bytes.resize(random_() % (seed.bytes.size() + 64));
+        for (auto& byte : bytes) byte = static_cast<unsigned char>(random_());
+        if (random_() % 2 && bytes.size() >= sizeof(PayloadHeader))
+          std::memcpy(bytes.data(), seed.bytes.data(), sizeof(PayloadHeader));
+        return bytes;
+      }
+      case 1:  // the seed cut short or grown
+        bytes = seed.bytes;
+        bytes.resize(random_() % (seed.bytes.size() + 64), static_cast<unsigned char>(random_()));
+        return bytes;
+      default: {  // the seed with a few bytes changed, and often a count
+        bytes = seed.bytes;
+        const int flips = 1 + static_cast<int>(random_() % 8);
+        for (int i = 0; i < flips; ++i)
+          bytes[random_() % bytes.size()] = static_cast<unsigned char>(random_());
+        if (!seed.count_offsets.empty() && random_() % 4 != 0) {
+          const std::size_t at = seed.count_offsets[random_() % seed.count_offsets.size()];
+          const std::uint32_t value = interesting_count();
+          std::memcpy(bytes.data() + at, &value, sizeof value);
+        }
+        if (random_() % 8 == 0) bytes.resize(random_() % bytes.size());
+        return bytes;
+      }
+    }
+  }
+
+  // Around the capacities, and anything at all.
+  std::uint32_t interesting_count() {
+    static constexpr std::uint32_t kEdges[] = {0,  1,  7,  8,   9,   31,  32,         33,
+                                               63, 64, 65, 255, 256, 257, 0x7fffffff, 0xffffffff};
+    return random_() % 3 ? kEdges[random_() % std::size(kEdges)]
+                         : static_cast<std::uint32_t>(random_());
+  }
+
+  void consume(PayloadKind kind, const unsigned char* data) {
+    const auto& health = *reinterpret_cast<const Health*>(health_.data());
+    const auto& catalog = *reinterpret_cast<const BodyList*>(catalog_.data());
+    const auto* world = reinterpret_cast<const WorldState*>(world_.data());
+    std::size_t sink = 0;
+    switch (kind) {
+      case PayloadKind::kBodyState: {
+        const auto& state = *reinterpret_cast<const BodyState*>(data);
+        sink += cli::state_json(info_, state).size();
+        sink += cli::state_text(info_, state, cli::StateFields{}).size();
+        break;
+      }
+      case PayloadKind::kBodyCommand:
+        apply_command(*reinterpret_cast<const BodyCommand*>(data));
+        break;
+      case PayloadKind::kWorldState:
+        world = reinterpret_cast<const WorldState*>(data);
+        sink += cli::status_text(health, catalog, world, {}).size();
+        sink += cli::status_json(health, catalog, world, {}).size();
+        break;
+      case PayloadKind::kWorldCommand: {
+        WorldControl control;
+        control.paused = random_() % 2;
+        control.apply(*reinterpret_cast<const WorldCommand*>(data));
+        sink += control.take_step();
+        break;
+      }
+      case PayloadKind::kBodyDirectory: {
+        std::vector<std::string> messages;
+        const auto* listed = reinterpret_cast<const BodyList*>(catalog_.data());
+        const std::vector<BodyInfo> current(listed->bodies.begin(),
+                                            listed->bodies.begin() + listed->body_count);
+        const auto merged = merge_directories(
+            current, {{"fuzz", reinterpret_cast<const BodyList*>(data)}, {"seed", listed}},
+            messages);
+        sink += merged.size() + messages.size();
+        break;
+      }
+      case PayloadKind::kCatalog: {
+        const auto& list = *reinterpret_cast<const BodyList*>(data);
+        sink += cli::ls_text(list).size() + cli::ls_json(list).size();
+        sink += cli::status_text(health, list, world, {}).size();
+        sink += cli::status_json(health, list, world, {}).size();
+        // echo renders a state with the joint names of the body's catalog entry.
+        if (list.body_count > 0) {
+          const auto& state = *reinterpret_cast<const BodyState*>(seeds_[0].bytes.data());
+          const BodyInfo& entry = list.bodies[random_() % list.body_count];
+          sink += cli::state_json(entry, state).size();
+          sink += joint_names_of(entry).size();
+        }
+        break;
+      }
+      case PayloadKind::kHealth: {
+        const auto& checked = *reinterpret_cast<const Health*>(data);
+        sink += cli::status_text(checked, catalog, world, {}).size();
+        sink += cli::status_json(checked, catalog, world, {}).size();
+        break;
+      }
+      case PayloadKind::kLoopStats: {
+        const std::vector<LoopStats> loops{*reinterpret_cast<const LoopStats*>(data)};
+        JsonWriter json;
+        cli::loop_json(json, loops);
+        sink += cli::loop_table(loops).size() + json.str().size();
+        sink += cli::status_text(health, catalog, world, loops).size();
+        break;
+      }
+      case PayloadKind::kBenchSample:
+        break;  // its fields are stamps and a round number, read as numbers
+    }
+    sink_ += sink;
+  }
+
+  // As SimChannels::apply_commands does: copied, checked against the body, applied.
+  void apply_command(const BodyCommand& command) {
+    physics::BodyInput input;
+    physics::to_input(command, input);
+    physics::Simulation& sim = *target_.sim;
+    // Mostly a body the command may fit, so that commands get applied.
+    const std::size_t body = input.actuator_count > 0 ? target_.gripper
+                             : random_() % 4          ? target_.arm
+                                                      : random_() % target_.model.bodies.size();
+    if (sim.input_problem(body, input)) return;
+    sim.set_input(body, input);
+    ++applied_;
+    // Stepping is what costs: every so often, and a fresh world when it blew up.
+    if (applied_ % 64 == 0) {
+      sim.step();
+      ++steps_;
+      if (steps_ % 256 == 0)
+        target_.sim = std::make_unique<physics::Simulation>(target_.model, 0.001);
+    }
+  }
+
+  std::mt19937_64 random_;
+  std::vector<Seed> seeds_;
+  std::vector<unsigned char> catalog_, health_, world_;
+  BodyInfo info_{};
+  CommandTarget target_;
+  std::array<Tally, kKinds.size()> tallies_{};
+  std::uint64_t applied_ = 0, steps_ = 0;
+  std::size_t sink_ = 0;
+};
+
+TEST(PayloadFuzz, EveryKindIntoCheckAndEveryConsumer) {
+  const std::uint64_t cases = env_number("AFHUB_FUZZ_CASES", 200'000);
+  const std::uint64_t seed = env_number("AFHUB_FUZZ_SEED", 13);
+  Fuzzer fuzzer(seed);
+  for (std::uint64_t i = 0; i < cases; ++i) {
+    fuzzer.run_case(i % kKinds.size());
+    if (::testing::Test::HasFailure()) break;
+  }
+  std::printf("payload fuzz: %llu cases (seed %llu); %llu commands applied, %llu steps\n",
+              static_cast<unsigned long long>(cases), static_cast<unsigned long long>(seed),
+              static_cast<unsigned long long>(fuzzer.applied_commands()),
+              static_cast<unsigned long long>(fuzzer.steps()));
+  for (std::size_t k = 0; k < kKinds.size(); ++k) {
+    const Tally& tally = fuzzer.tallies()[k];
+    std::printf(
+        "  kind %u: %llu cases, %llu accepted; refused: %llu too small, %llu foreign, "
+        "%llu wrong kind, %llu count too large\n",
+        static_cast<unsigned>(kKinds[k]), static_cast<unsigned long long>(tally.cases),
+        static_cast<unsigned long long>(tally.accepted),
+        static_cast<unsigned long long>(tally.by_error[1]),
+        static_cast<unsigned long long>(tally.by_error[2]),
+        static_cast<unsigned long long>(tally.by_error[3]),
+        static_cast<unsigned long long>(tally.by_error[4]));
+    // Every kind reached its consumers, and was refused too: the fuzz covers both.
+    if (cases >= 10'000) {
+      EXPECT_GT(tally.accepted, tally.cases / 10) << "kind " << static_cast<unsigned>(kKinds[k]);
+      EXPECT_GT(tally.cases - tally.accepted, tally.cases / 10)
+          << "kind " << static_cast<unsigned>(kKinds[k]);
+    }
+  }
+  if (cases >= 10'000) {
+    EXPECT_GT(fuzzer.applied_commands(), 0u);
+  }
+}
+
+}  // namespace
+}  // namespace afhub
