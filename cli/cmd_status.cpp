@@ -97,6 +97,8 @@ int run_status(const StatusOptions& options) {
           .value(static_cast<unsigned long long>(world->watchdog_expiries))
           .key("stale_commands")
           .value(static_cast<unsigned long long>(world->stale_commands))
+          .key("nan_recoveries")
+          .value(static_cast<unsigned long long>(world->nan_recoveries))
           .key("commanded_steps")
           .value(static_cast<unsigned long long>(world->commanded_steps))
           .key("answered_steps")
@@ -148,6 +150,12 @@ int run_status(const StatusOptions& options) {
         static_cast<unsigned long long>(world->rejected_commands),
         static_cast<unsigned long long>(world->stale_commands),
         static_cast<unsigned long long>(world->watchdog_expiries));
+  if (world && world->nan_recoveries > 0)
+    std::printf(
+        "nan: %llu bodies put back after a step made them NaN or infinite; last: %s at "
+        "step %llu\n",
+        static_cast<unsigned long long>(world->nan_recoveries), world->last_nan_body.data(),
+        static_cast<unsigned long long>(world->last_nan_step));
   if (world && world->commanded_steps > 0)
     std::printf(
         "commands: %llu steps under command, %llu late (the command answered an older state), "
