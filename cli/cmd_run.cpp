@@ -34,6 +34,7 @@ struct RunCliOptions {
   int fifo_priority = 0;
   int cpu = -1;
   bool lock_memory = false;
+  bool stop_on_nan = false;
 };
 
 int run_run(const RunCliOptions& options) {
@@ -119,6 +120,7 @@ int run_run(const RunCliOptions& options) {
   physics::RunOptions run;
   run.fast = options.fast;
   run.steps = options.steps;
+  run.stop_on_nan = options.stop_on_nan;
   LoopOptions realtime;
   realtime.fifo_priority = options.fifo_priority;
   realtime.cpu = options.cpu;
@@ -126,6 +128,16 @@ int run_run(const RunCliOptions& options) {
   run.grant = apply_realtime(realtime, "afhub run");
   physics::RunReport report;
   physics::run_loop(sim, channels.get(), run, report);
+  if (const std::string nan = physics::nan_summary(sim); !nan.empty()) {
+    if (report.nan_detected)
+      std::fprintf(stderr,
+                   "afhub run: the simulation became NaN or infinite (%s); stopping "
+                   "(--stop-on-nan). Lower the gains or --dt, or check masses and inertias\n",
+                   nan.c_str());
+    else
+      std::fprintf(stderr, "afhub run: %s. Lower the gains or --dt, or check masses and inertias\n",
+                   nan.c_str());
+  }
   if (!options.report_file.empty()) {
     std::ofstream out(options.report_file);
     out << physics::report_json(report, sim);
@@ -189,6 +201,9 @@ void register_run(CLI::App& app, Runner& selected) {
                 "Simulate without a hub: no channels (for reports and measurements)");
   run->add_flag("--no-autostart", options->no_autostart,
                 "Fail instead of starting a hub when none runs");
+  run->add_flag("--stop-on-nan", options->stop_on_nan,
+                "Stop (exit 1) at the first step that makes a body NaN or infinite, instead of "
+                "putting the body back at its last good pose with its commands released");
   run->callback([&selected, options] { selected = [options] { return run_run(*options); }; });
 }
 

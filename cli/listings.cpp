@@ -3,6 +3,7 @@
 
 #include <cstdarg>
 #include <cstdio>
+#include <cstring>
 
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/json_writer.hpp"
@@ -104,6 +105,8 @@ std::string status_json(const Health& health, const BodyList& catalog, const Wor
         .value(static_cast<unsigned long long>(world->watchdog_expiries))
         .key("stale_commands")
         .value(static_cast<unsigned long long>(world->stale_commands))
+        .key("nan_recoveries")
+        .value(static_cast<unsigned long long>(world->nan_recoveries))
         .key("commanded_steps")
         .value(static_cast<unsigned long long>(world->commanded_steps))
         .key("answered_steps")
@@ -158,6 +161,13 @@ std::string status_text(const Health& health, const BodyList& catalog, const Wor
             static_cast<unsigned long long>(world->rejected_commands),
             static_cast<unsigned long long>(world->stale_commands),
             static_cast<unsigned long long>(world->watchdog_expiries));
+  if (world && world->nan_recoveries > 0)
+    appendf(out,
+            "nan: %llu bodies put back after a step made them NaN or infinite; last: %.*s at "
+            "step %llu\n",
+            static_cast<unsigned long long>(world->nan_recoveries),
+            static_cast<int>(strnlen(world->last_nan_body.data(), world->last_nan_body.size())),
+            world->last_nan_body.data(), static_cast<unsigned long long>(world->last_nan_step));
   if (world && world->commanded_steps > 0)
     appendf(out,
             "commands: %llu steps under command, %llu late (the command answered an older "

@@ -72,15 +72,22 @@ JointModel::JointModel(const JointSpec& spec, btRigidBody& parent, btRigidBody& 
                        const btTransform& child_com_from_mesh, double dt_s)
     : spec_(spec), parent_(parent), child_(child), dt_s_(dt_s), gains_(spec.controller) {
   axis_index_ = constraint_axis(spec.type);
+  // AMBF's frames, in each body's centre-of-mass frame: the parent's frame turns the
+  // constraint axis onto the parent axis (Algorithm 2). The child's frame is that
+  // same frame carried into the child: the joint reads zero when the child axis,
+  // turned onto the parent axis the short way and then by `offset` about it,
+  // leaves the child where it is. Each frame built on its own (constraint axis onto
+  // each body's axis) would measure zero from an arbitrary direction about the
+  // axis, so a consistent pose could start outside its joint limits and be thrown.
   const btVector3 axis = unit(axis_index_);
-  // Algorithm 2: each frame turns the constraint axis onto the body's joint axis.
-  // The child's frame is also turned by `offset` about the axis, so that the
-  // joint reads zero when the child sits at that angle.
-  const btQuaternion in_parent = rotation_between(axis, to_bt(spec.parent_axis));
-  const btQuaternion in_child =
-      rotation_between(axis, to_bt(spec.child_axis)) * btQuaternion(axis, -spec.offset_rad);
-  frame_in_parent_ = parent_com_from_mesh * btTransform(in_parent, to_bt(spec.parent_pivot_m));
-  frame_in_child_ = child_com_from_mesh * btTransform(in_child, to_bt(spec.child_pivot_m));
+  const btVector3 parent_axis = parent_com_from_mesh.getBasis() * to_bt(spec.parent_axis);
+  const btVector3 child_axis = child_com_from_mesh.getBasis() * to_bt(spec.child_axis);
+  const btQuaternion in_parent = rotation_between(axis, parent_axis);
+  const btQuaternion child_onto_parent = rotation_between(child_axis, parent_axis);
+  const btQuaternion offset(parent_axis.normalized(), spec.offset_rad);
+  const btQuaternion in_child = child_onto_parent.inverse() * offset.inverse() * in_parent;
+  frame_in_parent_ = btTransform(in_parent, parent_com_from_mesh * to_bt(spec.parent_pivot_m));
+  frame_in_child_ = btTransform(in_child, child_com_from_mesh * to_bt(spec.child_pivot_m));
   const btTransform& a = frame_in_parent_;
   const btTransform& b = frame_in_child_;
 

@@ -175,6 +175,7 @@ void Simulation::Data::build_soft_bodies() {
     data.body = soft;
     for (int n = 0; n < soft->m_nodes.size(); ++n)
       data.initial_positions.push_back(soft->m_nodes[n].m_x);
+    data.good_positions = data.initial_positions;
     soft_bodies.push_back(std::move(data));
   }
 }

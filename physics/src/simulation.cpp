@@ -24,6 +24,7 @@ Simulation::Simulation(const Model& model, double dt_s)
   d.build_bounds();
   d.joint_driver.assign(model.joints.size(), -1);
   d.read_sensors();
+  d.keep_good_state();
 }
 
 Simulation::~Simulation() = default;
@@ -46,9 +47,10 @@ void Simulation::step() noexcept {
   for (BodyData& body : d.bodies) d.apply_cartesian(body);
   for (auto& joint : d.joints) joint->apply_control();
   d.world.stepSimulation(d.dt_s, 1, d.dt_s);
+  ++d.steps;
+  d.recover_non_finite();
   for (auto& joint : d.joints) joint->update_readings();
   d.read_sensors();
-  ++d.steps;
 }
 
 void Simulation::reset() noexcept {
@@ -71,6 +73,7 @@ void Simulation::reset() noexcept {
       soft.body->m_nodes[n].m_v = btVector3(0, 0, 0);
     }
   for (auto& joint : d.joints) joint->update_readings();
+  d.keep_good_state();
   d.steps = 0;
 }
 

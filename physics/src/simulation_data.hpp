@@ -5,6 +5,7 @@
 //   sim_control.cpp            inputs: checked, then applied before each step
 //   sim_sensors_actuators.cpp  proximity rays and constraint actuators
 //   sim_state.cpp              the readings after a step
+//   sim_recovery.cpp           bodies put back after a step made them NaN
 //   simulation.cpp             construction, the step, reset
 #pragma once
 
@@ -60,6 +61,7 @@ struct BodyData {
   Wrench applied;
   std::size_t first_ray = 0, ray_count = 0;  // into Data::rays
   std::vector<int> actuators;                // into Data::actuators, file order
+  btTransform good_pose;                     // after the last step that left it finite
 };
 
 // A world file's light or camera, carried by its parent body when it has one.
@@ -71,6 +73,7 @@ struct WorldObjectData {
 struct SoftBodyData {
   btSoftBody* body = nullptr;  // owned by the world
   std::vector<btVector3> initial_positions;
+  std::vector<btVector3> good_positions;  // after the last step that left it finite
 };
 
 // A constraint actuator: a point-to-point constraint to whatever body touches it,
@@ -157,6 +160,7 @@ struct Simulation::Data {
   std::vector<Ray> rays;
   std::vector<ActuatorData> actuators;
   std::vector<WorldObjectData> lights, cameras;
+  NanRecoveries nan_recoveries;
   btSphereShape probe_shape{0.01};  // what an actuator feels for: 1 cm around its point
   btCollisionObject probe;
 
@@ -186,6 +190,8 @@ struct Simulation::Data {
   void actuate(ActuatorData& actuator, bool engage) noexcept;
   void apply_cartesian(BodyData& body) noexcept;
   void read_sensors() noexcept;
+  void recover_non_finite() noexcept;
+  void keep_good_state() noexcept;
   Pose world_object_pose(const WorldObjectData& object) const noexcept;
 };
 

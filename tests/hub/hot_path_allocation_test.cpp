@@ -192,6 +192,46 @@ TEST(HotPath, PhysicsLoopOnAmbfModelsDoesNotAllocate) {
       "ambf/env/base");
 }
 
+// A body that goes NaN is put back from storage made at build time: the recovery,
+// and the world state saying so, allocate nothing either. A NaN force (set_input
+// takes it unchecked) makes the arm's link3 NaN every 100th cycle.
+TEST(HotPath, NanRecoveryDoesNotAllocate) {
+  const physics::Model model = physics::load_adf_files(
+      {AFHUB_EXAMPLE_MODELS "/arm7.yaml", AFHUB_EXAMPLE_MODELS "/rcm.yaml"});
+  physics::Simulation sim(model, 0.001);
+  physics::SimChannels channels(sim, 0.5);
+  LatestReader<WorldState> world(
+      {std::string(kService), std::string(kWorldInstance), std::string(kStateEvent)});
+  std::size_t link = 0;
+  while (model.bodies[link].channel != "afhub/arm/link3") ++link;
+  physics::BodyInput poison;
+  poison.wrench.force_n = {std::nan(""), 0, 0};
+  int cycle = 0;
+  auto one_cycle = [&]() {
+    if (++cycle % 100 == 0) sim.set_input(link, poison);
+    sim.step();
+    channels.publish(0.0, 0.0, false);
+    return sim.all_finite();
+  };
+  ASSERT_TRUE(test::wait_until([&] { return one_cycle() && world.latest(); }, 2s));
+  for (int i = 0; i < 500; ++i) ASSERT_TRUE(one_cycle());
+  const std::uint64_t before = sim.nan_recoveries().count;
+  ASSERT_GE(before, 1u);
+
+  constexpr int kCycles = 5000;
+  EXPECT_TRUE(count_allocations(kCycles, one_cycle));
+  EXPECT_EQ(g_allocations.load(), 0) << "heap allocations in " << kCycles << " cycles with NaNs";
+  EXPECT_GE(sim.nan_recoveries().count, before + kCycles / 100);
+  ASSERT_TRUE(test::wait_until(
+      [&] {
+        return world.latest() && world.latest()->nan_recoveries == sim.nan_recoveries().count;
+      },
+      2s));
+  EXPECT_EQ(world.latest()->last_nan_step, sim.nan_recoveries().last.step);
+  EXPECT_EQ(name_of(world.latest()->last_nan_body),
+            model.bodies[sim.nan_recoveries().last.body].channel);
+}
+
 // The controller side too: the shipped sine controller answering each step in
 // lockstep, its timing recorded and its stats published, against the arm's
 // lockstep barrier, step and publish.

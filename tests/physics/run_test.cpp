@@ -8,6 +8,8 @@
 #include <thread>
 
 #include "afhub/hub/bodies.hpp"
+#include "afhub/physics/adf_loader.hpp"
+#include "afhub/physics/run_loop.hpp"
 #include "afhub/shm_layout/channel_names.hpp"
 #include "afhub/shm_layout/world.hpp"
 #include "afhub_process.hpp"
@@ -70,6 +72,39 @@ TEST(Run, KukaOnChannelsObeysCommandsRefusesNanAndTripsTheWatchdog) {
   EXPECT_TRUE(contains(output, "refused a command for ambf/env/base: a joint value is NaN"))
       << output;
   EXPECT_TRUE(contains(output, "no command for ambf/env/base in 0.500 s")) << output;
+}
+
+// A body gone NaN: the loop goes on with it put back, and the report and the summary
+// say which body and step; --stop-on-nan (stop_on_nan) stops at that step instead.
+// (A NaN force through set_input, which takes it unchecked: files and commands
+// that could cause one are refused by the loader and the command checks.)
+TEST(Run, ANanBodyIsPutBackUnlessStopOnNan) {
+  const physics::Model model = physics::load_adf_files({AFHUB_EXAMPLE_MODELS "/arm7.yaml"});
+  std::size_t link = 0;
+  while (model.bodies[link].channel != "afhub/arm/link3") ++link;
+  physics::BodyInput poison;
+  poison.wrench.force_n = {std::nan(""), 0, 0};
+  for (const bool stop : {false, true}) {
+    physics::Simulation sim(model, 0.001);
+    sim.set_input(link, poison);
+    physics::RunOptions options;
+    options.fast = true;
+    options.steps = 200;
+    options.stop_on_nan = stop;
+    physics::RunReport report;
+    physics::run_loop(sim, nullptr, options, report);
+    EXPECT_EQ(report.nan_detected, stop);
+    EXPECT_EQ(report.steps, stop ? 1u : 200u);
+    EXPECT_TRUE(sim.all_finite());
+    const std::string summary = physics::nan_summary(sim);
+    // The NaN spreads through the arm's joints within the step: the arm is put back.
+    EXPECT_TRUE(contains(summary,
+                         "bodies put back after a step made them NaN or infinite; "
+                         "first: afhub/arm/base at step 1; last: afhub/arm/link7 at "
+                         "step 1"))
+        << summary;
+    EXPECT_TRUE(contains(physics::report_json(report, sim), "\"nan_recoveries\":")) << stop;
+  }
 }
 
 TEST(Run, LaunchFileWithIndexRunsRealTimeAndReports) {

@@ -77,12 +77,8 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
       sim.step();
       ++report.steps;
       report.max_joint_error_m = std::max(report.max_joint_error_m, largest_pivot_gap(sim));
-      if (!sim.all_finite()) {
-        report.nan_detected = true;
-        std::fprintf(stderr,
-                     "afhub run: the simulation became NaN or infinite at step %llu; stopping. "
-                     "Lower the gains or --dt, or check masses and inertias\n",
-                     static_cast<unsigned long long>(sim.step_count()));
+      if (options.stop_on_nan && sim.nan_recoveries().count > 0) {
+        report.nan_detected = true;  // said after the loop
         return false;
       }
     }
@@ -111,6 +107,20 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
   report.wall_time_s = static_cast<double>(monotonic_ns() - start_ns) * 1e-9;
 }
 
+std::string nan_summary(const Simulation& sim) {
+  const NanRecoveries& nan = sim.nan_recoveries();
+  if (nan.count == 0) return "";
+  auto event = [&](const NanEvent& e) {
+    const Model& model = sim.model();
+    return (e.soft ? model.soft_bodies[e.body].channel : model.bodies[e.body].channel) +
+           " at step " + std::to_string(e.step);
+  };
+  std::string text = std::to_string(nan.count) + (nan.count == 1 ? " body" : " bodies") +
+                     " put back after a step made them NaN or infinite; first: " + event(nan.first);
+  if (nan.count > 1) text += "; last: " + event(nan.last);
+  return text;
+}
+
 std::string report_json(const RunReport& report, const Simulation& sim) {
   const Model& model = sim.model();
   JsonWriter json;
@@ -136,6 +146,7 @@ std::string report_json(const RunReport& report, const Simulation& sim) {
   json.end_object();
   json.key("max_joint_error_m").value(report.max_joint_error_m);
   json.key("nan_detected").value(report.nan_detected);
+  json.key("nan_recoveries").value(static_cast<unsigned long long>(sim.nan_recoveries().count));
   json.key("sim_time_s").value(sim.time_s());
   json.key("step_time_us").begin_object();
   json.key("max").value(report.step_time.max_us());

@@ -371,6 +371,14 @@ void SimChannels::publish(double wall_time_s, double achieved_rate_hz, bool paus
     world->dropped_clients = dropped_;
     world->commanded_steps = commanded_steps_;
     world->answered_steps = answered_steps_;
+    const NanRecoveries& nan = sim_.nan_recoveries();
+    world->nan_recoveries = nan.count;
+    world->last_nan_step = nan.count > 0 ? nan.last.step : 0;
+    const Model& model = sim_.model();
+    set_name(world->last_nan_body, nan.count == 0 ? std::string_view()
+                                   : nan.last.soft
+                                       ? std::string_view(model.soft_bodies[nan.last.body].channel)
+                                       : std::string_view(model.bodies[nan.last.body].channel));
     const WorldSpec& spec = sim_.model().world;
     world->light_count = static_cast<std::uint32_t>(std::min(spec.lights.size(), kMaxWorldObjects));
     world->camera_count =

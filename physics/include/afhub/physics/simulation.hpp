@@ -14,6 +14,17 @@
 
 namespace afhub::physics {
 
+// Bodies put back after a step made them NaN or infinite (Simulation::nan_recoveries).
+struct NanEvent {
+  std::uint64_t step = 0;  // the step that made it non-finite (1 = the first step)
+  std::size_t body = 0;    // into model().bodies, or into model().soft_bodies when `soft`
+  bool soft = false;
+};
+struct NanRecoveries {
+  std::uint64_t count = 0;  // bodies put back, one per body per step
+  NanEvent first, last;     // valid when count > 0
+};
+
 class Simulation {
  public:
   // Builds every body, joint, soft body and sensor; throws afhub::Error when a mesh
@@ -67,7 +78,13 @@ class Simulation {
   double joint_velocity(std::size_t joint) const noexcept;
   double joint_pivot_gap_m(std::size_t joint) const noexcept;
   // False as soon as any body or soft-body node holds a NaN or infinite value.
+  // step() never leaves one (see nan_recoveries); this checks that.
   bool all_finite() const noexcept;
+  // A step that leaves a body (or a soft body's node) NaN or infinite does not end
+  // the world: the body goes back to its pose after the last good step, at rest;
+  // its Cartesian input, and the inputs of every joint touching it or driven by
+  // it, are released. The count since the start, the first and the last such event.
+  const NanRecoveries& nan_recoveries() const noexcept;
   // Whether actuator `actuator` (an index into model().actuators) holds a body.
   bool actuator_engaged(std::size_t actuator) const noexcept;
 

@@ -45,6 +45,12 @@ struct WorldState {
   // time for the step). A controller stamps header.sim_step with the state it answers.
   std::uint64_t commanded_steps{0};
   std::uint64_t answered_steps{0};
+  // Bodies the physics put back after a step made them NaN or infinite, counted once
+  // per body per step (`afhub run` recovers instead of ending the world; with
+  // --stop-on-nan it stops), and the last of them: its channel and the step.
+  std::uint64_t nan_recoveries{0};
+  std::uint64_t last_nan_step{0};
+  std::array<char, kChannelNameBufferSize> last_nan_body{};
   std::uint32_t light_count{0};
   std::uint32_t camera_count{0};
   std::array<WorldObjectPose, kMaxWorldObjects> lights{};

@@ -20,22 +20,30 @@ struct RunOptions {
   bool fast = false;
   std::uint64_t steps = 0;  // stop after this many steps; 0: until a stop signal
   RealtimeGrant grant;      // what the loop's thread was granted, for its loop stats
+  // Stop at the first step that made a body NaN or infinite (report.nan_detected),
+  // instead of going on with the body put back (Simulation::nan_recoveries).
+  bool stop_on_nan = false;
 };
 
 struct RunReport {
   std::uint64_t steps = 0;
   double wall_time_s = 0.0;
-  LatencyHistogram step_time;  // one loop iteration: step and publish (after the commands)
-  LoopTiming timing;           // wake-up lateness, work time, overruns, late lockstep answers
-  bool nan_detected = false;
+  LatencyHistogram step_time;      // one loop iteration: step and publish (after the commands)
+  LoopTiming timing;               // wake-up lateness, work time, overruns, late lockstep answers
+  bool nan_detected = false;       // with stop_on_nan: the loop stopped on a NaN
   double max_joint_error_m = 0.0;  // the largest pivot gap seen, over all joints and steps
 };
 
-// Runs until options.steps, a stop signal or a NaN (then report.nan_detected).
+// Runs until options.steps, a stop signal, or with options.stop_on_nan a NaN (then
+// report.nan_detected).
 void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options, RunReport& report);
 
-// The --report JSON: steps, times, step-time percentiles, NaN flag, largest
-// pivot gap, final body poses and joint positions. Keys are sorted.
+// The --report JSON: steps, times, step-time percentiles, NaN flag and recoveries,
+// largest pivot gap, final body poses and joint positions. Keys are sorted.
 std::string report_json(const RunReport& report, const Simulation& sim);
+
+// "2 bodies put back after a step made them NaN or infinite; first: arm/link3 at
+// step 5; last: ...", or "" when none was. Said after the loop, never inside it.
+std::string nan_summary(const Simulation& sim);
 
 }  // namespace afhub::physics
