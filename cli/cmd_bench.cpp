@@ -8,6 +8,7 @@
 #include "afhub/bench/bench.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "commands.hpp"
+#include "count_option.hpp"
 #include "example_models.hpp"
 #include "format.hpp"
 
@@ -75,9 +76,9 @@ void register_bench(CLI::App& app, Runner& selected) {
                     "Draw latency CDFs and the loop's jitter histogram into this PNG (gnuplot)");
   bench->add_option("--transports", options->transports,
                     "Transports to compare, comma-separated (default afhub,dds,uds,ros1)");
-  bench->add_option("--rounds", options->rounds, "Interleaved rounds (default 20, quick 5)");
-  bench->add_option("--pings", options->pings,
-                    "Round trips per transport, size and round (default 500, quick 200)");
+  add_count_option(bench, "--rounds", options->rounds, "Interleaved rounds (default 20, quick 5)");
+  add_count_option(bench, "--pings", options->pings,
+                   "Round trips per transport, size and round (default 500, quick 200)");
   bench->add_option("--loop-seconds", options->loop_seconds,
                     "Length of the 1 kHz loop (default 60, quick 20; 0 skips it)");
   bench->add_option("--model", options->model,

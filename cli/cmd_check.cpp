@@ -1,10 +1,12 @@
 // `afhub check FILES...`: loads AMBF descriptions without simulating and reports
-// bodies, joints by type, closed loops, total mass and warnings.
+// bodies, joints by type, closed loops, total mass and warnings. It reads every
+// mesh too, so that what `afhub run` would refuse is refused here.
 #include <cstdio>
 #include <map>
 #include <memory>
 
 #include "afhub/physics/adf_loader.hpp"
+#include "afhub/physics/mesh.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "commands.hpp"
 
@@ -17,8 +19,11 @@ struct CheckOptions {
 
 int run_check(const CheckOptions& options) {
   physics::Model model;
+  std::size_t meshes = 0;
   try {
     model = physics::load_adf_files(options.files);
+    // The meshes too: `afhub run` reads them, and a broken one must show here first.
+    meshes = physics::check_meshes(model);
   } catch (const Error& error) {
     std::fprintf(stderr, "%s\n", error.what());  // already "file:line:col: error: ..."
     return 1;
@@ -35,6 +40,7 @@ int run_check(const CheckOptions& options) {
   std::printf("joints: %zu\n", model.joints.size());
   for (const auto& [type, count] : by_type) std::printf("  %-16s %d\n", type.c_str(), count);
   std::printf("closed loops: %d\n", model.closed_loop_count);
+  std::printf("meshes read: %zu\n", meshes);
   std::printf("warnings: %zu\n", model.warnings.size());
   return 0;
 }

@@ -6,6 +6,7 @@
 #include "afhub/controllers/joint_targets.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "commands.hpp"
+#include "count_option.hpp"
 
 namespace afhub::cli {
 namespace {
@@ -63,7 +64,8 @@ void add_loop_options(CLI::App* command, CtlOptions& options) {
                     "mlockall and pre-fault, so the loop takes no page faults");
   command->add_flag("--lockstep", options.lockstep,
                     "Answer every physics step (with `afhub run --lockstep`) instead of a clock");
-  command->add_option("--cycles", options.cycles, "Stop after this many cycles (default: Ctrl-C)");
+  add_count_option(command, "--cycles", options.cycles,
+                   "Stop after this many cycles (default: Ctrl-C)");
   command->add_option("--after-step", options.after_step_us,
                       "Wake this many microseconds after each physics step (aligns the loop "
                       "to the physics so that every command is ready for the next step)");

@@ -11,6 +11,7 @@
 #include "afhub/rt/clock.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "commands.hpp"
+#include "count_option.hpp"
 #include "format.hpp"
 
 namespace afhub::cli {
@@ -80,7 +81,7 @@ void register_echo(CLI::App& app, Runner& selected) {
       "lines).");
   echo->add_option("body", options->body, "Body channel name or a unique suffix of it, e.g. 'base'")
       ->required();
-  echo->add_option("--count,-n", options->count,
+  add_count_option(echo, "--count,-n", options->count,
                    "Stop after this many states (default: until Ctrl-C)");
   echo->add_flag("--json", options->json, "One JSON object per line.");
   echo->add_option("--fields", options->fields,

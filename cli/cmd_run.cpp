@@ -12,6 +12,7 @@
 #include "afhub/rt/periodic_loop.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "commands.hpp"
+#include "count_option.hpp"
 #include "format.hpp"
 
 namespace afhub::cli {
@@ -48,8 +49,9 @@ int run_run(const RunCliOptions& options) {
     throw Error("--client-timeout must be between 0 and 60000 ms");
   if (!options.lockstep && options.wait_for > 0)
     throw Error("--wait-for needs --lockstep: it holds the first step for lockstep clients");
-  if (!(options.wait_timeout_s >= 0.0))
-    throw Error("--wait-timeout must be a number of seconds, 0 (the default) to wait forever");
+  if (!(options.wait_timeout_s >= 0.0 && options.wait_timeout_s <= 1e6))
+    throw Error(
+        "--wait-timeout must be a number of seconds up to 1e6, 0 (the default) to wait forever");
   if (options.wait_timeout_s > 0.0 && options.wait_for == 0)
     throw Error("--wait-timeout needs --wait-for N: it limits the wait for N lockstep clients");
   if (options.fifo_priority < 0 || options.fifo_priority > 99)
@@ -94,7 +96,14 @@ int run_run(const RunCliOptions& options) {
   if (!options.name_space.empty()) physics::prefix_channels(model, options.name_space);
 
   install_stop_signal_handlers();
-  physics::Simulation sim(model, options.dt_s);
+  std::unique_ptr<physics::Simulation> built;
+  try {
+    built = std::make_unique<physics::Simulation>(model, options.dt_s);
+  } catch (const Error& error) {
+    std::fprintf(stderr, "%s\n", error.what());  // a mesh: "file:line:col: error: body ..."
+    return 1;
+  }
+  physics::Simulation& sim = *built;
   std::unique_ptr<physics::SimChannels> channels;
   if (!options.offline) {
     // A lost hub: the loop holds (no step, no state out), then the process re-executes,
@@ -168,7 +177,8 @@ void register_run(CLI::App& app, Runner& selected) {
       "beside the first: a live body has one publisher");
   run->add_option("--dt", options->dt_s, "Fixed step in seconds (default 0.001)");
   run->add_flag("--fast", options->fast, "Step as fast as possible instead of in real time");
-  run->add_option("--steps", options->steps, "Stop after this many steps (default: until Ctrl-C)");
+  add_count_option(run, "--steps", options->steps,
+                   "Stop after this many steps (default: until Ctrl-C)");
   run->add_option("--watchdog", options->watchdog_s,
                   "Seconds without a command before a body's commands fall to zero, and the age "
                   "past which a command is stale and ignored (default 0.5; 0.002 to 3600)");
@@ -181,9 +191,9 @@ void register_run(CLI::App& app, Runner& selected) {
   run->add_flag("--lockstep", options->lockstep,
                 "Step only when every lockstep client (`afhub ctl ... --lockstep`) has answered "
                 "the current step");
-  run->add_option("--wait-for", options->wait_for,
-                  "With --lockstep: hold step 0 until this many lockstep clients joined; says "
-                  "every 2 s whom it still waits for");
+  add_count_option(run, "--wait-for", options->wait_for,
+                   "With --lockstep: hold step 0 until this many lockstep clients joined; says "
+                   "every 2 s whom it still waits for");
   run->add_option("--wait-timeout", options->wait_timeout_s,
                   "With --wait-for: give up with an error (exit 1) when the clients have not all "
                   "joined after this many seconds (default 0: wait until Ctrl-C)");

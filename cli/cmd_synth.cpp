@@ -16,6 +16,7 @@
 #include "afhub/shm_layout/error.hpp"
 #include "afhub/shm_layout/world_control.hpp"
 #include "commands.hpp"
+#include "count_option.hpp"
 
 namespace afhub::cli {
 namespace {
@@ -184,8 +185,8 @@ void register_synth(CLI::App& app, Runner& selected) {
       "sinusoid, or the commands written to them.");
   synth->add_option("--namespace", options->name_space,
                     "Namespace of the bodies (default 'synth')");
-  synth->add_option("--bodies", options->bodies, "Number of bodies (default 3)");
-  synth->add_option("--joints", options->joints, "Joints per body (default 4)");
+  add_count_option(synth, "--bodies", options->bodies, "Number of bodies (default 3)");
+  add_count_option(synth, "--joints", options->joints, "Joints per body (default 4)");
   synth->add_option("--rate", options->rate_hz, "Steps per second (default 1000)");
   synth->add_option("--seconds", options->seconds,
                     "Stop after this many seconds (default: until Ctrl-C)");

@@ -14,6 +14,7 @@
 #include "afhub/shm_layout/error.hpp"
 #include "afhub/shm_layout/world.hpp"
 #include "commands.hpp"
+#include "count_option.hpp"
 
 namespace afhub::cli {
 namespace {
@@ -151,7 +152,7 @@ void register_world(CLI::App& app, Runner& selected) {
     auto options = std::make_shared<WorldOptions>();
     auto* command = world->add_subcommand(entry.name, entry.help);
     if (entry.action == WorldAction::kStep)
-      command->add_option("N", options->steps, "Number of steps (default 1)");
+      add_count_option(command, "N", options->steps, "Number of steps (default 1)");
     command->add_option("--namespace", options->name_space,
                         "The world of a physics run with `afhub run --namespace NS`");
     command->add_option("--timeout", options->timeout_s,

@@ -78,6 +78,13 @@ std::vector<ShapeSpec> read_compound(const FileReader& file, const YAML::Node& l
 // `scale` applies to primitives as it does to meshes: sizes and offsets.
 void scale_shapes(std::vector<ShapeSpec>& shapes, double scale);
 
+// The whole model's checks (model_checks.cpp): unique and unreserved channels, and
+// the per-body capacities of the hub's payloads.
+void check_model(const Model& model);
+// Counts a body that publishes; refuses the one past the hub's kMaxBodies.
+void count_published_body(const std::string& identifier, const SourceLocation& where,
+                          std::size_t& published);
+
 // The block readers, one per file.
 BodySpec read_body(const FileReader& file, const YAML::Node& block, const std::string& identifier,
                    const FileContext& context);

@@ -36,8 +36,13 @@ std::string resolve_mesh(const FileReader& file, const YAML::Node& node, const s
   } else {
     tried.push_back(fs::path(folder) / name);
   }
+  // The error_code forms: a name too long for the file system is "not found", not a throw.
+  std::error_code error;
   for (const auto& candidate : tried)
-    if (fs::is_regular_file(candidate)) return fs::weakly_canonical(candidate).string();
+    if (fs::is_regular_file(candidate, error)) {
+      const fs::path canonical = fs::weakly_canonical(candidate, error);
+      return (error ? candidate : canonical).string();
+    }
   std::string searched;
   for (const auto& candidate : tried) searched += " " + candidate.lexically_normal().string();
   fail(file.at(node), "mesh '" + name + "' not found; searched:" + searched +
@@ -92,52 +97,60 @@ constexpr const char* kDefaultNamespace = "/ambf/env/";
 struct Unresolved {
   std::vector<PendingJoint> joints;
   std::vector<PendingParent> parents;
+  std::size_t published_bodies = 0;  // refused at once past the hub's limit
 };
 
 void load_file(const std::string& path, const YAML::Node& root, Model& model, Unresolved& pending,
                std::map<std::string, int>& body_by_identifier) {
   FileReader file(path, model);
+  const MapIndex index(file, root);
+  auto key = [&](const char* name) { return index.find(name); };
 
   FileContext context;
   context.dir = fs::path(path).parent_path();
   context.name_space = kDefaultNamespace;
-  if (YAML::Node ns = root["namespace"])
-    context.name_space = resolve_namespace(kDefaultNamespace, file.text(ns, "namespace"));
+  if (const YAML::Node* ns = key("namespace"))
+    context.name_space = resolve_namespace(kDefaultNamespace, file.text(*ns, "namespace"));
   context.high_res_folder = context.low_res_folder = context.dir.string();
-  if (YAML::Node h = root["high resolution path"])
-    context.high_res_folder = mesh_folder(file, h, context.dir);
-  if (YAML::Node l = root["low resolution path"])
-    context.low_res_folder = mesh_folder(file, l, context.dir);
-  if (YAML::Node gravity = root["gravity"]) context.gravity = file.vec3(gravity, "gravity");
+  if (const YAML::Node* h = key("high resolution path"))
+    context.high_res_folder = mesh_folder(file, *h, context.dir);
+  if (const YAML::Node* l = key("low resolution path"))
+    context.low_res_folder = mesh_folder(file, *l, context.dir);
+  if (const YAML::Node* gravity = key("gravity")) context.gravity = file.vec3(*gravity, "gravity");
   context.file_index = static_cast<int>(model.file_ignores_inter_collision.size());
   bool ignore_inter_collision = false;
-  file.optional_flag(root, "ignore inter-collision", ignore_inter_collision);
+  if (const YAML::Node* ignore = key("ignore inter-collision"))
+    ignore_inter_collision = file.flag(*ignore, "ignore inter-collision");
   model.file_ignores_inter_collision.push_back(ignore_inter_collision);
-  if (!root["bodies"] && !root["joints"] && !root["soft bodies"])
+  if (!key("bodies") && !key("joints") && !key("soft bodies"))
     model.warnings.push_back(
         path + ":1:1: warning: no 'bodies' or 'joints' list: nothing is loaded from this file");
 
-  for (const auto& [identifier, listed] : header_list(file, root, "bodies")) {
+  for (const auto& [identifier, listed, block] : header_list(file, index, "bodies")) {
     if (body_by_identifier.count(identifier))
       fail(file.at(listed), "'" + identifier + "' is defined twice (first at " +
                                 model.bodies[body_by_identifier[identifier]].where.str() + ")");
     body_by_identifier[identifier] = static_cast<int>(model.bodies.size());
-    model.bodies.push_back(read_body(file, root[identifier], identifier, context));
+    model.bodies.push_back(read_body(file, block, identifier, context));
+    if (!model.bodies.back().passive)
+      count_published_body(identifier, model.bodies.back().where, pending.published_bodies);
   }
-  for (const auto& [identifier, listed] : header_list(file, root, "soft bodies"))
-    model.soft_bodies.push_back(read_soft_body(file, root[identifier], identifier, context));
-  for (const auto& [identifier, listed] : header_list(file, root, "sensors")) {
+  for (const auto& [identifier, listed, block] : header_list(file, index, "soft bodies")) {
+    model.soft_bodies.push_back(read_soft_body(file, block, identifier, context));
+    count_published_body(identifier, model.soft_bodies.back().where, pending.published_bodies);
+  }
+  for (const auto& [identifier, listed, block] : header_list(file, index, "sensors")) {
     PendingParent parent{true, model.sensors.size(), {}, {}};
-    model.sensors.push_back(read_sensor(file, root[identifier], identifier, parent));
+    model.sensors.push_back(read_sensor(file, block, identifier, parent));
     pending.parents.push_back(parent);
   }
-  for (const auto& [identifier, listed] : header_list(file, root, "actuators")) {
+  for (const auto& [identifier, listed, block] : header_list(file, index, "actuators")) {
     PendingParent parent{false, model.actuators.size(), {}, {}};
-    model.actuators.push_back(read_actuator(file, root[identifier], identifier, parent));
+    model.actuators.push_back(read_actuator(file, block, identifier, parent));
     pending.parents.push_back(parent);
   }
-  for (const auto& [identifier, listed] : header_list(file, root, "joints"))
-    pending.joints.push_back(read_joint(file, root[identifier], identifier, context));
+  for (const auto& [identifier, listed, block] : header_list(file, index, "joints"))
+    pending.joints.push_back(read_joint(file, block, identifier, context));
 }
 
 // A body identifier written in a joint, sensor or actuator, as a body index.
@@ -183,6 +196,7 @@ void load_adf_files_into(const std::vector<std::string>& paths, Model& model) {
     (item.sensor ? model.sensors[item.index].parent : model.actuators[item.index].parent) = body;
   }
   compute_lineage(model);
+  check_model(model);
 }
 
 Model load_adf_files(const std::vector<std::string>& paths) {

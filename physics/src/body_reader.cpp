@@ -94,6 +94,9 @@ BodySpec read_body(const FileReader& file, const YAML::Node& block, const std::s
                          "' has no 'mass' (AMBF would silently use 1 kg); give 'mass: 0' for a "
                          "static body or its mass in kg");
   body.mass_kg = file.non_negative(mass, "mass");
+  if (body.mass_kg > kMaxMassKg)
+    fail(file.at(mass), "'mass' is " + mass.Scalar() + " kg, beyond the bound of " +
+                            FileReader::bound_text(kMaxMassKg) + " kg for a model");
   if (YAML::Node inertia = block["inertia"]) {
     Vec3 value = file.vec3(inertia, "inertia", "ix", "iy", "iz");
     if (value.x < 0 || value.y < 0 || value.z < 0)
@@ -106,6 +109,9 @@ BodySpec read_body(const FileReader& file, const YAML::Node& block, const std::s
   if (YAML::Node scale = block["scale"]) {
     body.scale = file.number(scale, "scale");
     if (body.scale <= 0) fail(file.at(scale), "'scale' must be positive, got " + scale.Scalar());
+    if (body.scale > kMaxScale)
+      fail(file.at(scale), "'scale' is " + scale.Scalar() + ", beyond the bound of " +
+                               FileReader::bound_text(kMaxScale) + " for a model");
   }
   file.optional_flag(block, "passive", body.passive);
   if (YAML::Node friction = block["friction"]) {

@@ -112,8 +112,9 @@ PendingJoint read_joint(const FileReader& file, const YAML::Node& block,
   pending.parent_at = file.at(parent);
   pending.child_at = file.at(child);
   joint.parent_pivot_m =
-      file.vec3(file.require(block, "parent pivot", joint.where), "parent pivot");
-  joint.child_pivot_m = file.vec3(file.require(block, "child pivot", joint.where), "child pivot");
+      file.position(file.require(block, "parent pivot", joint.where), "parent pivot");
+  joint.child_pivot_m =
+      file.position(file.require(block, "child pivot", joint.where), "child pivot");
   joint.parent_axis = file.axis(file.require(block, "parent axis", joint.where), "parent axis");
   joint.child_axis = file.axis(file.require(block, "child axis", joint.where), "child axis");
   joint.type = parse_joint_type(file, file.require(block, "type", joint.where));

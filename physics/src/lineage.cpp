@@ -16,20 +16,24 @@ void compute_lineage(Model& model) {
     joints_from[model.joints[j].parent].push_back(j);
 
   model.descendant_joints.assign(body_count, {});
+  // Marks stamped with the body being walked, so that each walk costs what it
+  // visits, not a fresh array per body (which made loading quadratic in the bodies).
+  std::vector<int> body_seen(body_count, -1), joint_seen(model.joints.size(), -1);
+  std::vector<int> stack;
   for (int body = 0; body < body_count; ++body) {
-    std::vector<bool> body_seen(body_count, false), joint_seen(model.joints.size(), false);
-    std::vector<int> stack = {body};
-    body_seen[body] = true;
+    if (joints_from[body].empty()) continue;
+    stack.assign(1, body);
+    body_seen[body] = body;
     while (!stack.empty()) {
       int current = stack.back();
       stack.pop_back();
       for (int j : joints_from[current]) {
-        if (joint_seen[j]) continue;
-        joint_seen[j] = true;
+        if (joint_seen[j] == body) continue;
+        joint_seen[j] = body;
         model.descendant_joints[body].push_back(j);
         int child = model.joints[j].child;
-        if (!body_seen[child]) {
-          body_seen[child] = true;
+        if (body_seen[child] != body) {
+          body_seen[child] = body;
           stack.push_back(child);
         }
       }

@@ -8,11 +8,31 @@
 #include <assimp/Importer.hpp>
 #include <cmath>
 
+#include <set>
+
 #include "afhub/shm_layout/error.hpp"
+#include "input_file.hpp"
 
 namespace afhub::physics {
+namespace {
+
+// A vertex farther than this from its mesh's origin is garbage, not a part.
+constexpr double kMaxVertexM = 1e5;
+
+// Runs `load` and prefixes its error with the block that names the mesh.
+template <class Load>
+auto for_block(const SourceLocation& where, const std::string& owner, Load load) {
+  try {
+    return load();
+  } catch (const Error& error) {
+    throw Error(where.str() + ": error: " + owner + ": its mesh cannot be used: " + error.what());
+  }
+}
+
+}  // namespace
 
 TriangleMesh load_mesh(const std::string& path, double scale) {
+  check_input_file(path, kMaxMeshFileBytes, "a mesh (STL, OBJ, DAE, ...)");
   Assimp::Importer importer;
   const aiScene* scene =
       importer.ReadFile(path, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
@@ -23,13 +43,29 @@ TriangleMesh load_mesh(const std::string& path, double scale) {
   for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
     const aiMesh* part = scene->mMeshes[m];
     const auto base = static_cast<unsigned>(mesh.vertices.size());
+    if (mesh.vertices.size() + part->mNumVertices > kMaxMeshVertices ||
+        mesh.triangles.size() + part->mNumFaces > kMaxMeshTriangles)
+      throw Error(path + ": error: the mesh has more than " + std::to_string(kMaxMeshTriangles) +
+                  " triangles or " + std::to_string(kMaxMeshVertices) +
+                  " vertices; simplify it (a collision mesh needs far fewer)");
     for (unsigned v = 0; v < part->mNumVertices; ++v) {
       const aiVector3D& p = part->mVertices[v];
-      mesh.vertices.push_back({p.x * scale, p.y * scale, p.z * scale});
+      const std::array<double, 3> scaled{p.x * scale, p.y * scale, p.z * scale};
+      for (double component : scaled)
+        if (!std::isfinite(component) || std::abs(component) > kMaxVertexM)
+          throw Error(path + ": error: vertex " + std::to_string(mesh.vertices.size()) + " is (" +
+                      std::to_string(p.x) + ", " + std::to_string(p.y) + ", " +
+                      std::to_string(p.z) +
+                      "): not a finite point within 100 km of the origin; repair the mesh");
+      mesh.vertices.push_back(scaled);
     }
     for (unsigned f = 0; f < part->mNumFaces; ++f) {
       const aiFace& face = part->mFaces[f];
       if (face.mNumIndices != 3) continue;  // points and lines have no volume
+      for (unsigned k = 0; k < 3; ++k)
+        if (face.mIndices[k] >= part->mNumVertices)
+          throw Error(path + ": error: face " + std::to_string(f) + " names a vertex beyond the " +
+                      std::to_string(part->mNumVertices) + " of its part; repair the mesh");
       mesh.triangles.push_back(
           {base + face.mIndices[0], base + face.mIndices[1], base + face.mIndices[2]});
     }
@@ -37,6 +73,27 @@ TriangleMesh load_mesh(const std::string& path, double scale) {
   if (mesh.triangles.empty())
     throw Error(path + ": error: the mesh has no triangles; export it with faces");
   return mesh;
+}
+
+TriangleMesh load_body_mesh(const std::string& path, double scale, const SourceLocation& where,
+                            const std::string& owner) {
+  return for_block(where, owner, [&] { return load_mesh(path, scale); });
+}
+
+std::size_t check_meshes(const Model& model) {
+  std::set<std::pair<std::string, double>> read;
+  auto load = [&](const std::string& path, double scale, const SourceLocation& where,
+                  const std::string& owner) {
+    if (path.empty() || !read.emplace(path, scale).second) return;
+    load_body_mesh(path, scale, where, owner);
+  };
+  for (const BodySpec& body : model.bodies) {
+    load(body.collision_mesh, body.scale, body.where, "body '" + body.identifier + "'");
+    load(body.visual_mesh, body.scale, body.where, "body '" + body.identifier + "' (visual)");
+  }
+  for (const SoftBodySpec& soft : model.soft_bodies)
+    load(soft.mesh, soft.scale, soft.where, "soft body '" + soft.identifier + "'");
+  return read.size();
 }
 
 MeshMassProperties mass_properties(const TriangleMesh& mesh) {

@@ -9,6 +9,7 @@
 
 #include "afhub/physics/adf_loader.hpp"
 #include "afhub/shm_layout/channel_names.hpp"
+#include "afhub/shm_layout/limits.hpp"
 #include "yaml_reader.hpp"
 
 namespace afhub::physics {
@@ -21,7 +22,8 @@ std::string existing_path(const FileReader& file, const YAML::Node& node, const 
   const fs::path written(file.text(node, what));
   const fs::path resolved =
       written.is_absolute() ? written : fs::path(file.path()).parent_path() / written;
-  if (!fs::is_regular_file(resolved))
+  std::error_code error;  // a name too long for the file system is "not found", not a throw
+  if (!fs::is_regular_file(resolved, error))
     fail(file.at(node), what + " '" + written.string() + "' not found (looked for " +
                             resolved.lexically_normal().string() +
                             "); fix the path, relative to this file");
@@ -38,10 +40,11 @@ WorldObjectSpec read_world_object(const FileReader& file, const YAML::Node& bloc
     ns = resolve_namespace(name_space, file.text(given, "namespace"));
   const std::string name = block["name"] ? file.text(block["name"], "name") : identifier;
   object.name = body_channel_name(ns, name);
-  if (YAML::Node location = block["location"]) object.position_m = file.vec3(location, "location");
+  if (YAML::Node location = block["location"])
+    object.position_m = file.position(location, "location");
   if (camera) {
     Vec3 look_at;
-    if (YAML::Node target = block["look at"]) look_at = file.vec3(target, "look at");
+    if (YAML::Node target = block["look at"]) look_at = file.position(target, "look at");
     object.direction = {look_at.x - object.position_m.x, look_at.y - object.position_m.y,
                         look_at.z - object.position_m.z};
     if (YAML::Node up = block["up"]) object.up = file.axis(up, "up");
@@ -72,12 +75,20 @@ std::string load_world(const std::string& path, Model& model) {
       fail(file.at(iterations), "'max iterations' must be an integer from 1 to 1000");
     world.max_iterations = static_cast<int>(value);
   }
-  for (const auto& [identifier, listed] : header_list(file, root, "lights"))
-    world.lights.push_back(
-        read_world_object(file, root[identifier], identifier, name_space, false));
-  for (const auto& [identifier, listed] : header_list(file, root, "cameras"))
-    world.cameras.push_back(
-        read_world_object(file, root[identifier], identifier, name_space, true));
+  const MapIndex index(file, root);
+  for (const char* kind : {"lights", "cameras"}) {
+    const bool camera = std::string(kind) == "cameras";
+    auto& objects = camera ? world.cameras : world.lights;
+    for (const auto& [identifier, listed, block] : header_list(file, index, kind)) {
+      // The world state carries a fixed number of each (shm_layout/limits.hpp).
+      if (objects.size() == kMaxWorldObjects)
+        fail(file.at(listed), "more than " + std::to_string(kMaxWorldObjects) + " " + kind +
+                                  ": the world state carries at most " +
+                                  std::to_string(kMaxWorldObjects) + "; remove '" + identifier +
+                                  "' or others");
+      objects.push_back(read_world_object(file, block, identifier, name_space, camera));
+    }
+  }
   if (YAML::Node environment = root["environment"])
     return existing_path(file, environment, "environment");
   return {};
@@ -87,10 +98,12 @@ std::string load_world(const std::string& path, Model& model) {
 void apply_colors(const std::string& path, Model& model) {
   const YAML::Node root = parse_file(path, "a color file (name: {r, g, b, a})");
   FileReader file(path, model);
+  const MapIndex index(file, root);
   for (BodySpec& body : model.bodies) {
     if (body.color_name.empty() || body.color_rgba) continue;
-    const YAML::Node color = root[body.color_name];
-    if (!color) continue;  // "random" and unknown names: the viewer's choice
+    const YAML::Node* found = index.find(body.color_name);
+    if (!found) continue;  // "random" and unknown names: the viewer's choice
+    const YAML::Node& color = *found;
     const Vec3 rgb = file.vec3(color, body.color_name, "r", "g", "b");
     const double alpha = color["a"] ? file.number(color["a"], body.color_name + ".a") : 255.0;
     body.color_rgba = std::array<double, 4>{rgb.x / 255, rgb.y / 255, rgb.z / 255, alpha / 255};

@@ -1,6 +1,9 @@
 // ADF proximity sensors (SENSOR blocks): the parent body, placement, range, and
 // rays given as an array or spread parametrically over two angles.
+#include <cmath>
+
 #include "adf_blocks.hpp"
+#include "afhub/shm_layout/limits.hpp"
 #include "frames.hpp"
 
 namespace afhub::physics::adf {
@@ -23,22 +26,36 @@ SensorSpec read_sensor(const FileReader& file, const YAML::Node& block,
   read_parent(file, block, sensor.where, pending);
   if (YAML::Node location = block["location"])
     sensor.location = file.placement(location, "location");
-  if (YAML::Node range = block["range"]) sensor.range_m = positive(file, range, "range");
+  if (YAML::Node range = block["range"]) {
+    positive(file, range, "range");
+    sensor.range_m = file.length(range, "range");
+  }
   if (YAML::Node array = block["array"]) {
     if (!array.IsSequence() || array.size() == 0)
       fail(file.at(array), "'array' must be a non-empty list of {offset, direction}");
+    if (array.size() > kMaxSensorRaysPerBody)
+      fail(file.at(array), "'array' has " + std::to_string(array.size()) +
+                               " rays; a body's state carries at most " +
+                               std::to_string(kMaxSensorRaysPerBody) + " (kMaxSensorRaysPerBody)");
     for (const auto& ray : array) {
       file.require_map(ray, "array entry", "{offset: {x, y, z}, direction: {x, y, z}}");
       Vec3 offset;
-      if (ray["offset"]) offset = file.vec3(ray["offset"], "array.offset");
+      if (ray["offset"]) offset = file.position(ray["offset"], "array.offset");
       sensor.rays.emplace_back(
           offset, file.axis(file.require(ray, "direction", file.at(ray)), "array.direction"));
     }
   } else if (YAML::Node parametric = block["parametric"]) {
     file.require_map(parametric, "parametric", "{resolution: 4, horizontal angle: 0.5, ...}");
-    const int resolution =
-        static_cast<int>(positive(file, file.require(parametric, "resolution", file.at(parametric)),
-                                  "parametric.resolution"));
+    const YAML::Node resolution_node = file.require(parametric, "resolution", file.at(parametric));
+    const double rays_per_side = positive(file, resolution_node, "parametric.resolution");
+    // resolution^2 rays, and a body's state carries kMaxSensorRaysPerBody.
+    if (rays_per_side != std::floor(rays_per_side) ||
+        rays_per_side * rays_per_side > kMaxSensorRaysPerBody)
+      fail(file.at(resolution_node),
+           "'parametric.resolution' must be an integer whose square (the rays) is at most " +
+               std::to_string(kMaxSensorRaysPerBody) + " (kMaxSensorRaysPerBody), got " +
+               resolution_node.Scalar());
+    const int resolution = static_cast<int>(rays_per_side);
     double horizontal = 0.0, vertical = 0.0, start = 0.0;
     file.optional_non_negative(parametric, "horizontal angle", horizontal,
                                "parametric.horizontal angle");

@@ -34,7 +34,8 @@ ShapeSpec read_shape(const FileReader& file, const YAML::Node& kind_node,
     YAML::Node value = geometry[key];
     if (!value)
       fail(file.at(geometry), "'" + what + "' of a " + kind_node.Scalar() + " needs '" + key + "'");
-    return positive(file, value, what + "." + key);
+    positive(file, value, what + "." + key);
+    return file.length(value, what + "." + key);
   };
   switch (shape.kind) {
     case ShapeKind::kBox:
@@ -59,7 +60,7 @@ ShapeSpec read_shape(const FileReader& file, const YAML::Node& kind_node,
       if (!geometry["normal"]) fail(file.at(geometry), "'" + what + "' of a PLANE needs 'normal'");
       shape.plane_normal = file.axis(geometry["normal"], what + ".normal");
       shape.plane_offset_m =
-          geometry["offset"] ? file.number(geometry["offset"], what + ".offset") : 0.0;
+          geometry["offset"] ? file.length(geometry["offset"], what + ".offset") : 0.0;
       break;
   }
   return shape;

@@ -83,7 +83,11 @@ void Simulation::Data::build_bodies() {
     if (path.empty()) return nullptr;
     const std::string key = path + "@" + std::to_string(spec.scale);
     auto found = meshes.find(key);
-    if (found == meshes.end()) found = meshes.emplace(key, load_mesh(path, spec.scale)).first;
+    if (found == meshes.end())
+      found = meshes
+                  .emplace(key, load_body_mesh(path, spec.scale, spec.where,
+                                               "body '" + spec.identifier + "'"))
+                  .first;
     return &found->second;
   };
   bodies.resize(model.bodies.size());
@@ -145,7 +149,8 @@ void Simulation::Data::build_joints() {
 
 void Simulation::Data::build_soft_bodies() {
   for (const SoftBodySpec& spec : model.soft_bodies) {
-    const TriangleMesh mesh = load_mesh(spec.mesh, spec.scale);
+    const TriangleMesh mesh =
+        load_body_mesh(spec.mesh, spec.scale, spec.where, "soft body '" + spec.identifier + "'");
     const btTransform place = to_transform(spec.location);
     std::vector<btScalar> vertices;
     for (const auto& v : mesh.vertices) {

@@ -173,7 +173,9 @@ struct Simulation::Data {
     for (auto& joint : joints) world.removeConstraint(&joint->constraint());
     for (auto& actuator : actuators)
       if (actuator.hold) world.removeConstraint(actuator.hold.get());
-    for (auto& body : bodies) world.removeRigidBody(body.body.get());
+    // A build that failed part-way (a mesh it could not read) leaves bodies unmade.
+    for (auto& body : bodies)
+      if (body.body) world.removeRigidBody(body.body.get());
     for (auto& soft : soft_bodies) {
       world.removeSoftBody(soft.body);
       delete soft.body;

@@ -26,6 +26,18 @@ const std::set<std::string> kSoftBodyKeys = {"name",
                                              "publish frequency",
                                              "plugins"};
 
+// Counts that size Bullet's work (iterations, clusters, links): large ones would
+// make each step take hours.
+constexpr double kMaxSoftBodyCount = 1000;
+
+int count(const FileReader& file, const YAML::Node& node, const std::string& what) {
+  const double value = file.non_negative(node, what);
+  if (value != std::floor(value) || value > kMaxSoftBodyCount)
+    fail(file.at(node), "'" + what + "' must be an integer from 0 to " +
+                            FileReader::bound_text(kMaxSoftBodyCount) + ", got " + node.Scalar());
+  return static_cast<int>(value);
+}
+
 }  // namespace
 
 SoftBodySpec read_soft_body(const FileReader& file, const YAML::Node& block,
@@ -35,9 +47,16 @@ SoftBodySpec read_soft_body(const FileReader& file, const YAML::Node& block,
   std::erase(soft.name, ' ');
   const std::string name_space = block_namespace(file, block, context);
   soft.channel = body_channel_name(name_space, soft.name);
-  soft.mass_kg = positive(file, file.require(block, "mass", soft.where), "mass");
+  const YAML::Node mass = file.require(block, "mass", soft.where);
+  soft.mass_kg = positive(file, mass, "mass");
+  if (soft.mass_kg > kMaxMassKg)
+    fail(file.at(mass), "'mass' is " + mass.Scalar() + " kg, beyond the bound of " +
+                            FileReader::bound_text(kMaxMassKg) + " kg for a model");
   if (YAML::Node location = block["location"]) soft.location = file.placement(location, "location");
-  if (YAML::Node scale = block["scale"]) soft.scale = positive(file, scale, "scale");
+  if (YAML::Node scale = block["scale"]) {
+    positive(file, scale, "scale");
+    soft.scale = file.bounded(scale, "scale", kMaxScale, "(a factor)");
+  }
   std::string high = context.high_res_folder;
   if (YAML::Node h = block["high resolution path"]) high = mesh_folder(file, h, context.dir);
   soft.mesh = resolve_mesh(file, file.require(block, "mesh", soft.where), high, "mesh");
@@ -55,10 +74,11 @@ SoftBodySpec read_soft_body(const FileReader& file, const YAML::Node& block,
           soft.fixed_nodes.push_back(static_cast<int>(index));
         }
       } else if (key == "bending constraint") {
-        soft.bending_constraint =
-            static_cast<int>(file.non_negative(entry.second, "config.bending constraint"));
+        soft.bending_constraint = count(file, entry.second, "config.bending constraint");
       } else if (key == "clusters") {
-        soft.clusters = static_cast<int>(file.non_negative(entry.second, "config.clusters"));
+        soft.clusters = count(file, entry.second, "config.clusters");
+      } else if (key.ends_with("iterations")) {
+        soft.config.emplace_back(key, count(file, entry.second, "config." + key));
       } else if (entry.second.IsScalar()) {
         bool flag_value = false;
         if (YAML::convert<bool>::decode(entry.second, flag_value) &&

@@ -1,19 +1,36 @@
 // Reading YAML nodes of AMBF files with their locations: every value is checked
 // and every problem thrown as afhub::Error "file:line:col: error: ...".
+//
+// Bounds. No value in a robot model comes near these; values past them (1e308,
+// say) overflow Bullet's arithmetic and fail only while stepping, so they are
+// refused at load with their location:
+//   any number                    |x| <= 1e9 (gains, stiffness, impulses, ...)
+//   lengths: positions, offsets,  |x| <= 1e5 m (100 km)
+//     pivots, shape sizes
+//   mass                          <= 1e6 kg
+//   scale                         > 0 and <= 1e3
 #pragma once
 
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <set>
 #include <string>
+#include <unordered_map>
 
 #include "afhub/physics/model.hpp"
 #include "afhub/shm_layout/error.hpp"
+#include "input_file.hpp"
 
 namespace afhub::physics {
+
+inline constexpr double kMaxMagnitude = 1e9;
+inline constexpr double kMaxLengthM = 1e5;
+inline constexpr double kMaxMassKg = 1e6;
+inline constexpr double kMaxScale = 1e3;
 
 [[noreturn]] inline void fail(const SourceLocation& where, const std::string& what) {
   throw Error(where.str() + ": error: " + what);
@@ -55,7 +72,30 @@ class FileReader {
       fail(at(node), "'" + what + "' must be a number, got '" + node.Scalar() + "'");
     if (!std::isfinite(value))
       fail(at(node), "'" + what + "' must be finite, got '" + node.Scalar() + "'");
+    if (std::abs(value) > kMaxMagnitude)
+      fail(at(node), "'" + what + "' is " + node.Scalar() +
+                         ", beyond any physical value (at most " + bound_text(kMaxMagnitude) +
+                         " in magnitude)");
     return value;
+  }
+
+  // A number no larger than `limit` in magnitude; `unit` names it in the message.
+  double bounded(const YAML::Node& node, const std::string& what, double limit,
+                 const char* unit) const {
+    const double value = number(node, what);
+    if (std::abs(value) > limit)
+      fail(at(node), "'" + what + "' is " + node.Scalar() + ", beyond the bound of " +
+                         bound_text(limit) + " " + unit + " for a model");
+    return value;
+  }
+  double length(const YAML::Node& node, const std::string& what) const {
+    return bounded(node, what, kMaxLengthM, "m");
+  }
+
+  static std::string bound_text(double limit) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%g", limit);
+    return text;
   }
 
   double non_negative(const YAML::Node& node, const std::string& what) const {
@@ -98,6 +138,16 @@ class FileReader {
     return value;
   }
 
+  // {x, y, z} of lengths: positions, offsets, pivots.
+  Vec3 position(const YAML::Node& node, const std::string& what) const {
+    const Vec3 v = vec3(node, what);
+    for (double component : {v.x, v.y, v.z})
+      if (std::abs(component) > kMaxLengthM)
+        fail(at(node), "'" + what + "' has a component of " + bound_text(component) +
+                           " m, beyond the bound of " + bound_text(kMaxLengthM) + " m for a model");
+    return v;
+  }
+
   Vec3 vec3(const YAML::Node& node, const std::string& what, const char* a = "x",
             const char* b = "y", const char* c = "z") const {
     if (!node.IsMap())
@@ -125,7 +175,8 @@ class FileReader {
     if (!node.IsMap())
       fail(at(node), "'" + what + "' must be a map with 'position' and 'orientation'");
     Placement out;
-    if (YAML::Node position = node["position"]) out.position_m = vec3(position, what + ".position");
+    if (YAML::Node position = node["position"])
+      out.position_m = this->position(position, what + ".position");
     if (YAML::Node orientation = node["orientation"])
       out.rpy_rad = vec3(orientation, what + ".orientation", "r", "p", "y");
     return out;
@@ -158,36 +209,77 @@ inline std::string resolve_namespace(const std::string& enclosing, const std::st
   return enclosing + (enclosing.ends_with('/') ? "" : "/") + given;
 }
 
-// The identifiers a header list names, with where each one is written.
-inline std::vector<std::pair<std::string, YAML::Node>> header_list(const FileReader& file,
-                                                                   const YAML::Node& root,
-                                                                   const char* key) {
-  std::vector<std::pair<std::string, YAML::Node>> out;
-  YAML::Node list = root[key];
+// A map's entries by key, indexed once. yaml-cpp searches a map's keys one by one
+// on each lookup, so looking up every body of a file in its top-level map made
+// loading quadratic in the bodies. A key written twice is refused: which of the
+// two would be meant is a guess.
+class MapIndex {
+ public:
+  MapIndex(const FileReader& file, const YAML::Node& map) {
+    for (const auto& entry : map) {
+      const YAML::Node& key = entry.first;
+      const std::string name = key.IsScalar() ? key.Scalar() : std::string();
+      auto [found, added] = entries_.try_emplace(name, Entry{key, entry.second});
+      if (!added && key.IsScalar())
+        fail(file.at(key), "'" + name + "' is written twice in this map (first at " +
+                               file.at(found->second.key).str() + "); keep one");
+    }
+  }
+  // The value at `key`, or nullptr when the map has no such key.
+  const YAML::Node* find(const std::string& key) const {
+    auto found = entries_.find(key);
+    return found == entries_.end() ? nullptr : &found->second.value;
+  }
+
+ private:
+  struct Entry {
+    YAML::Node key, value;
+  };
+  std::unordered_map<std::string, Entry> entries_;
+};
+
+// One entry of a header list: the identifier, where it is listed, and its block.
+struct ListedBlock {
+  std::string identifier;
+  YAML::Node listed;
+  YAML::Node block;
+};
+
+// The blocks a header list names, with where each one is listed.
+inline std::vector<ListedBlock> header_list(const FileReader& file, const MapIndex& index,
+                                            const char* key) {
+  std::vector<ListedBlock> out;
+  const YAML::Node* list = index.find(key);
   if (!list) return out;
-  if (!list.IsSequence())
-    fail(file.at(list),
+  if (!list->IsSequence())
+    fail(file.at(*list),
          std::string("'") + key + "' must be a list of identifiers, e.g. [BODY base]");
-  for (const auto& item : list) {
+  for (const auto& item : *list) {
     std::string identifier = file.text(item, std::string(key) + " entry");
-    if (!root[identifier])
+    const YAML::Node* block = index.find(identifier);
+    if (!block)
       fail(file.at(item), "'" + identifier + "' is listed in '" + key +
                               "' but the file has no top-level '" + identifier +
                               "' block; add the block or remove it from the list");
-    out.emplace_back(identifier, item);
+    out.push_back({identifier, item, *block});
   }
   return out;
 }
 
+// Model and description files are read whole before parsing; none comes near this.
+inline constexpr std::uintmax_t kMaxDescriptionFileBytes = 64u << 20;
+
 // Parses a YAML file that must hold a map; `what` names the kind of file in messages.
 inline YAML::Node parse_file(const std::string& path, const std::string& what) {
-  if (!std::filesystem::is_regular_file(path)) throw Error(path + ": error: no such file");
+  const std::string text = read_input_file(path, kMaxDescriptionFileBytes, what);
   YAML::Node root;
   try {
-    root = YAML::LoadFile(path);
+    root = YAML::Load(text);
   } catch (const YAML::ParserException& error) {
     throw Error(path + ":" + std::to_string(error.mark.line + 1) + ":" +
                 std::to_string(error.mark.column + 1) + ": error: YAML syntax: " + error.msg);
+  } catch (const YAML::Exception& error) {
+    throw Error(path + ": error: YAML: " + error.msg);
   }
   if (root.IsNull()) throw Error(path + ":1:1: error: the file is empty; expected " + what);
   if (!root.IsMap()) throw Error(path + ":1:1: error: expected " + what + ", not " + kind_of(root));

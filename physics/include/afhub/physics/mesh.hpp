@@ -3,8 +3,12 @@
 #pragma once
 
 #include <array>
+#include <cstddef>
+#include <cstdint>
 #include <string>
 #include <vector>
+
+#include "afhub/physics/model.hpp"
 
 namespace afhub::physics {
 
@@ -13,9 +17,27 @@ struct TriangleMesh {
   std::vector<std::array<unsigned, 3>> triangles;
 };
 
+// Bounds on what a mesh may be: larger files are refused before parsing, and
+// larger meshes after it. A 256 MB binary STL holds 5 million triangles; a
+// collision mesh has a few thousand.
+inline constexpr std::uintmax_t kMaxMeshFileBytes = 256u << 20;
+inline constexpr std::size_t kMaxMeshTriangles = 10'000'000;
+inline constexpr std::size_t kMaxMeshVertices = 30'000'000;
+
 // Reads every mesh of the file into one, node transforms applied, scaled by `scale`.
-// Throws afhub::Error naming the file when assimp cannot read it or it has no triangles.
+// Throws afhub::Error naming the file when it cannot be read (missing, unreadable,
+// past the bounds above), assimp cannot parse it, it has no triangles, or a vertex
+// is not finite.
 TriangleMesh load_mesh(const std::string& path, double scale);
+
+// load_mesh for the block at `where` (`owner`: "body 'BODY base'"): its error
+// starts with that location.
+TriangleMesh load_body_mesh(const std::string& path, double scale, const SourceLocation& where,
+                            const std::string& owner);
+
+// Reads every mesh the model names once (what `afhub check` does, so that it
+// finds the mesh problems `afhub run` would); returns how many were read.
+std::size_t check_meshes(const Model& model);
 
 // Of a closed mesh of uniform density: volume, centroid, and the inertia tensor's
 // diagonal about the centroid per kg. Open or degenerate meshes (volume ~ 0) fall

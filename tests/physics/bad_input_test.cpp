@@ -1,0 +1,357 @@
+// Bad model files get a located error ("file:line:col: error: ..."), never a crash
+// or a hang (issue 13): broken and unreadable meshes and model files, loading
+// linear in the bodies, the hub's limits and every per-body capacity, duplicate
+// and reserved names, and physically absurd values.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+
+#include "afhub/physics/adf_loader.hpp"
+#include "afhub/physics/mesh.hpp"
+#include "afhub/physics/scene_loader.hpp"
+#include "afhub/physics/simulation.hpp"
+#include "afhub/shm_layout/error.hpp"
+#include "model_files.hpp"
+
+namespace afhub::physics {
+namespace {
+
+namespace fs = std::filesystem;
+
+bool contains(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
+
+// The error of loading `files` and building their simulation ("" if none).
+std::string error_of(const std::vector<std::string>& files, bool build = true) {
+  try {
+    Model model = load_adf_files(files);
+    check_meshes(model);
+    if (build) Simulation sim(model, 0.001);
+  } catch (const Error& error) {
+    return error.what();
+  }
+  return "";
+}
+
+// Runs `body` in a child process as an unprivileged user, so that file modes
+// apply (the tests may run as root); returns the child's exit code.
+int as_unprivileged_user(const std::function<int()>& body) {
+  const pid_t child = ::fork();
+  if (child == 0) {
+    if (::geteuid() == 0 && (::setgid(65534) != 0 || ::setuid(65534) != 0)) ::_exit(90);
+    ::_exit(body());
+  }
+  int status = 0;
+  ::waitpid(child, &status, 0);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
+
+class BadInput : public ::testing::Test {
+ protected:
+  // A body with `mesh` as its mesh, in model.yaml beside it.
+  std::string model_with_mesh(const std::string& mesh) {
+    return folder_.write("model.yaml",
+                         "bodies: [BODY a]\nBODY a:\n  name: a\n  mass: 1\n  mesh: " + mesh + "\n");
+  }
+  std::string write_bytes(const std::string& name, const std::string& bytes) {
+    const fs::path path = folder_.dir() / name;
+    std::ofstream(path, std::ios::binary) << bytes;
+    return path.string();
+  }
+  testing::ModelFolder folder_;
+};
+
+// A binary STL: 80-byte header, a triangle count, then 50 bytes per triangle.
+std::string binary_stl(std::uint32_t claimed, const std::vector<std::array<float, 9>>& triangles) {
+  std::string bytes(80, ' ');
+  bytes.append(reinterpret_cast<const char*>(&claimed), 4);
+  for (const auto& t : triangles) {
+    const float normal[3] = {0, 0, 1};
+    bytes.append(reinterpret_cast<const char*>(normal), 12);
+    bytes.append(reinterpret_cast<const char*>(t.data()), 36);
+    bytes.append(2, '\0');
+  }
+  return bytes;
+}
+
+TEST_F(BadInput, ABrokenMeshIsALocatedErrorNotACrash) {
+  const float nan = std::nanf("");
+  struct Case {
+    std::string name, bytes, expected;
+  };
+  const std::vector<Case> cases = {
+      {"empty.STL", "", "cannot read this mesh"},
+      {"garbage.STL", std::string(300, 'x') + "\nnot a mesh at all\n", "cannot read this mesh"},
+      {"claims.STL", binary_stl(0xFFFFFFFFu, {{0, 0, 0, 1, 0, 0, 0, 1, 0}}),
+       "cannot read this mesh"},
+      {"nan.STL", binary_stl(1, {{0, 0, 0, nan, 0, 0, 0, 1, 0}}), "not a finite point"},
+  };
+  for (const Case& c : cases) {
+    write_bytes(c.name, c.bytes);
+    const std::string model = model_with_mesh(c.name);
+    for (bool build : {false, true}) {
+      const std::string message = error_of({model}, build);
+      EXPECT_TRUE(
+          contains(message, "model.yaml:3:3: error: body 'BODY a': its mesh cannot be used"))
+          << c.name << ": " << message;
+      EXPECT_TRUE(contains(message, c.name)) << message;
+      EXPECT_TRUE(contains(message, c.expected)) << c.name << ": " << message;
+    }
+  }
+}
+
+TEST_F(BadInput, AMeshLargerThanTheBoundIsRefusedBeforeItIsRead) {
+  // Sparse: 1 GB on paper, nothing on disk.
+  const std::string mesh = write_bytes("huge.STL", "");
+  fs::resize_file(mesh, std::uintmax_t{1} << 30);
+  const std::string message = error_of({model_with_mesh("huge.STL")});
+  EXPECT_TRUE(contains(message, "model.yaml:3:3: error: body 'BODY a'")) << message;
+  EXPECT_TRUE(contains(message, "the file is 1024 MB, larger than the 256 MB")) << message;
+}
+
+TEST_F(BadInput, AnUnreadableMeshOrModelSaysPermissionDenied) {
+  const std::string mesh = write_bytes("locked.STL", binary_stl(1, {{0, 0, 0, 1, 0, 0, 0, 1, 0}}));
+  const std::string model = model_with_mesh("locked.STL");
+  const std::string locked_model = folder_.write("locked.yaml", "bodies: []\n");
+  fs::permissions(mesh, fs::perms::none);
+  fs::permissions(locked_model, fs::perms::none);
+  fs::permissions(folder_.dir(), fs::perms::all);
+  const int code = as_unprivileged_user([&] {
+    const std::string message = error_of({model}, false);
+    if (!contains(message, "model.yaml:3:3: error: body 'BODY a'") ||
+        !contains(message, "locked.STL: error: permission denied"))
+      return 1;
+    if (!contains(error_of({locked_model}), "locked.yaml: error: permission denied")) return 2;
+    return 0;
+  });
+  EXPECT_EQ(code, 0) << "1: the mesh, 2: the model file were not refused as unreadable";
+}
+
+TEST_F(BadInput, AMeshNameTooLongForTheFileSystemIsNotFound) {
+  const std::string name = std::string(300, 'm') + ".STL";
+  const std::string message = error_of({model_with_mesh(name)}, false);
+  EXPECT_TRUE(contains(message, "model.yaml:5:9: error: mesh '" + name + "' not found")) << message;
+  SceneRequest request;
+  request.world_file = folder_.write("world.yaml", "environment: " + name + "\n");
+  request.adf_files = {model_with_mesh("")};
+  try {
+    load_scene(request);
+    ADD_FAILURE() << "loaded a world whose environment cannot exist";
+  } catch (const Error& error) {
+    EXPECT_TRUE(contains(error.what(), "world.yaml:1:14: error: environment")) << error.what();
+  }
+}
+
+TEST_F(BadInput, ADirectoryGivenAsAModelSaysSo) {
+  const std::string message = error_of({folder_.dir().string()});
+  EXPECT_TRUE(contains(message, "this is a directory; expected an ADF file")) << message;
+}
+
+// `count` passive bodies (a passive body publishes nothing: the hub's limit is not hit).
+std::string many_bodies(int count) {
+  std::string text = "bodies: [";
+  for (int i = 0; i < count; ++i) text += (i ? ", BODY b" : "BODY b") + std::to_string(i);
+  text += "]\n";
+  for (int i = 0; i < count; ++i)
+    text += "BODY b" + std::to_string(i) + ":\n  name: b" + std::to_string(i) +
+            "\n  mass: 1\n  passive: true\n  shape: sphere\n  geometry: {radius: 0.1}\n";
+  return text;
+}
+
+double cpu_seconds_to_load(const std::string& path) {
+  double best = 1e9;
+  for (int round = 0; round < 3; ++round) {
+    const std::clock_t start = std::clock();
+    load_adf_files({path});
+    best = std::min(best, static_cast<double>(std::clock() - start) / CLOCKS_PER_SEC);
+  }
+  return best;
+}
+
+// Growth as a ratio of the process's CPU time (not wall clock), the fastest of
+// three: 8 times the bodies must cost about 8 times as much. Loading used to be
+// quadratic (over 30 times here); the bound leaves room for noise.
+TEST_F(BadInput, LoadingIsLinearInTheBodies) {
+  const std::string small = folder_.write("small.yaml", many_bodies(2000));
+  const std::string large = folder_.write("large.yaml", many_bodies(16000));
+  const double ratio = cpu_seconds_to_load(large) / cpu_seconds_to_load(small);
+  EXPECT_LT(ratio, 16.0) << "8x the bodies took " << ratio << "x the CPU time";
+  std::printf("8x the bodies took %.1fx the CPU time\n", ratio);
+}
+
+TEST_F(BadInput, MoreBodiesThanTheHubHoldsAreRefusedAtOnce) {
+  std::string text = many_bodies(300);
+  // Passive bodies publish nothing: 300 of them load.
+  EXPECT_EQ(error_of({folder_.write("passive.yaml", text)}, false), "");
+  std::string active;
+  for (std::size_t at = 0; (at = text.find("  passive: true\n")) != std::string::npos;)
+    text.erase(at, 16);
+  const std::string message = error_of({folder_.write("active.yaml", text)}, false);
+  EXPECT_TRUE(contains(message, "active.yaml:"));
+  EXPECT_TRUE(contains(message,
+                       "'BODY b256' is published body number 257; the hub holds at most "
+                       "256"))
+      << message;
+}
+
+std::string body(const std::string& id, const std::string& extra = "") {
+  return "BODY " + id + ":\n  name: " + id + "\n  mass: 1\n" + extra;
+}
+
+TEST_F(BadInput, DuplicateAndReservedNamesAreRefusedWithBothLocations) {
+  struct Case {
+    std::string text, expected;
+  };
+  const std::string joint =
+      "  parent pivot: {x: 0, y: 0, z: 0}\n  child pivot: {x: 0, y: 0, z: 0}\n"
+      "  parent axis: {x: 0, y: 0, z: 1}\n  child axis: {x: 0, y: 0, z: 1}\n  type: revolute\n";
+  const std::vector<Case> cases = {
+      {"bodies: [BODY a, BODY b]\n" + body("a") + "BODY b:\n  name: a\n  mass: 1\n",
+       "model.yaml:6:3: error: body channel 'ambf/env/a' is already used by the body at "},
+      {"namespace: /\nbodies: [BODY world]\n" + body("world"),
+       "model.yaml:4:3: error: a body on channel 'world' would collide with the hub's 'world'"},
+      {"bodies: [BODY a, BODY b, BODY c]\njoints: [JOINT j, JOINT k]\n" + body("a") + body("b") +
+           body("c") + "JOINT j:\n  name: j\n  parent: BODY a\n  child: BODY b\n" + joint +
+           "JOINT k:\n  name: j\n  parent: BODY b\n  child: BODY c\n" + joint,
+       "error: joint channel 'ambf/env/j' is already used by the joint at "},
+      {"bodies: [BODY a]\n" + body("a") + "BODY a:\n  name: b\n  mass: 1\n",
+       "model.yaml:5:1: error: 'BODY a' is written twice in this map (first at "},
+  };
+  for (const Case& c : cases) {
+    const std::string message = error_of({folder_.write("model.yaml", c.text)}, false);
+    EXPECT_TRUE(contains(message, c.expected)) << c.text << "\n" << message;
+    if (contains(c.expected, "already used") || contains(c.expected, "twice")) {
+      EXPECT_NE(message.find("model.yaml:"), message.rfind("model.yaml:"))
+          << "both locations: " << message;
+    }
+  }
+}
+
+TEST_F(BadInput, AbsurdValuesAreRefusedWithTheirLocation) {
+  const std::string head = "bodies: [BODY a]\nBODY a:\n  name: a\n";
+  struct Case {
+    std::string body, expected;
+  };
+  const std::vector<Case> cases = {
+      {"  mass: 1e308\n", "model.yaml:4:9: error: 'mass' is 1e308, beyond"},
+      {"  mass: 1e7\n", "model.yaml:4:9: error: 'mass' is 1e7 kg, beyond the bound of 1e+06 kg"},
+      {"  mass: .nan\n", "model.yaml:4:9: error: 'mass' must be finite"},
+      {"  mass: 1\n  location: {position: {x: 1e308, y: 0, z: 0}}\n",
+       "model.yaml:5:28: error: 'location.position.x' is 1e308, beyond"},
+      {"  mass: 1\n  location: {position: {x: 1e6, y: 0, z: 0}}\n",
+       "model.yaml:5:24: error: 'location.position' has a component of 1e+06 m, beyond the bound"},
+      {"  mass: 1\n  shape: sphere\n  geometry: {radius: 1e308}\n",
+       "model.yaml:6:22: error: 'geometry.radius' is 1e308, beyond"},
+      {"  mass: 1\n  shape: box\n  geometry: {x: 1, y: 1e6, z: 1}\n",
+       "model.yaml:6:23: error: 'geometry.y' is 1e6, beyond the bound of 100000 m"},
+      {"  mass: 1\n  scale: 1e308\n", "model.yaml:5:10: error: 'scale' is 1e308, beyond"},
+      {"  mass: 1\n  scale: 1e4\n", "model.yaml:5:10: error: 'scale' is 1e4, beyond the bound"},
+      {"  mass: 1\n  inertia: {ix: 1e308, iy: 1, iz: 1}\n",
+       "model.yaml:5:17: error: 'inertia.ix' is 1e308, beyond"},
+      {"  mass: 1\n  controller: {linear: {P: 1e308}}\n",
+       "model.yaml:5:28: error: 'controller.linear.P' is 1e308, beyond"},
+  };
+  for (const Case& c : cases) {
+    const std::string message = error_of({folder_.write("model.yaml", head + c.body)}, false);
+    EXPECT_TRUE(contains(message, c.expected)) << c.body << "\n" << message;
+  }
+  // Merely large values within the bounds load.
+  EXPECT_EQ(
+      error_of({folder_.write("model.yaml", head + "  mass: 1e5\n  shape: sphere\n  geometry: "
+                                                   "{radius: 1e3}\n  controller: {linear: {P: "
+                                                   "1e8}}\n")},
+               false),
+      "");
+}
+
+TEST_F(BadInput, EveryPerBodyCapacityIsEnforcedWithItsLocation) {
+  std::string actuators = "bodies: [BODY a]\n" + body("a") + "actuators: [";
+  for (int i = 0; i < 9; ++i) actuators += (i ? ", ACTUATOR " : "ACTUATOR ") + std::to_string(i);
+  actuators += "]\n";
+  for (int i = 0; i < 9; ++i)
+    actuators += "ACTUATOR " + std::to_string(i) + ":\n  name: c" + std::to_string(i) +
+                 "\n  type: Constraint\n  parent: BODY a\n";
+  std::string message = error_of({folder_.write("actuators.yaml", actuators)}, false);
+  EXPECT_TRUE(contains(message,
+                       "actuators.yaml:39:3: error: body 'BODY a' has more than 8 "
+                       "actuators"))
+      << message;
+
+  const std::string ray = "{offset: {x: 0, y: 0, z: 0}, direction: {x: 1, y: 0, z: 0}}";
+  std::string rays = "[" + ray;
+  for (int i = 1; i < 20; ++i) rays += ", " + ray;
+  rays += "]";
+  const std::string sensors =
+      "bodies: [BODY a]\n" + body("a") + "sensors: [SENSOR s, SENSOR t]\n" +
+      "SENSOR s:\n  name: s\n  type: Proximity\n  parent: BODY a\n  array: " + rays + "\n" +
+      "SENSOR t:\n  name: t\n  type: Proximity\n  parent: BODY a\n  array: " + rays + "\n";
+  message = error_of({folder_.write("sensors.yaml", sensors)}, false);
+  EXPECT_TRUE(contains(message,
+                       "sensors.yaml:12:3: error: the sensors on body 'BODY a' have 40 "
+                       "rays with this one; a body's state carries at most 32"))
+      << message;
+
+  const std::string parametric =
+      "bodies: [BODY a]\n" + body("a") + "sensors: [SENSOR s]\n" +
+      "SENSOR s:\n  name: s\n  type: Proximity\n  parent: BODY a\n"
+      "  parametric: {resolution: 1e9, horizontal angle: 1, vertical angle: 1}\n";
+  message = error_of({folder_.write("parametric.yaml", parametric)}, false);
+  EXPECT_TRUE(contains(message, "parametric.yaml:10:28: error: 'parametric.resolution' must be"))
+      << message;
+
+  std::string chain = "bodies: [BODY b0";
+  for (int i = 1; i <= 65; ++i) chain += ", BODY b" + std::to_string(i);
+  chain += "]\njoints: [JOINT j1";
+  for (int i = 2; i <= 65; ++i) chain += ", JOINT j" + std::to_string(i);
+  chain += "]\n";
+  for (int i = 0; i <= 65; ++i) chain += body("b" + std::to_string(i));
+  for (int i = 1; i <= 65; ++i)
+    chain += "JOINT j" + std::to_string(i) + ":\n  name: j" + std::to_string(i) +
+             "\n  parent: BODY b" + std::to_string(i - 1) + "\n  child: BODY b" +
+             std::to_string(i) +
+             "\n  parent pivot: {x: 0, y: 0, z: 0}\n  child pivot: {x: 0, y: 0, z: 0}\n"
+             "  parent axis: {x: 0, y: 0, z: 1}\n  child axis: {x: 0, y: 0, z: 1}\n"
+             "  type: revolute\n";
+  message = error_of({folder_.write("chain.yaml", chain)}, false);
+  EXPECT_TRUE(contains(message, "chain.yaml:4:3: error: body 'BODY b0' has 65 joints below it"))
+      << message;
+
+  std::string world = "lights: [";
+  for (int i = 0; i < 9; ++i) world += (i ? ", LIGHT " : "LIGHT ") + std::to_string(i);
+  world += "]\n";
+  for (int i = 0; i < 9; ++i) world += "LIGHT " + std::to_string(i) + ":\n  name: l\n";
+  SceneRequest request;
+  request.world_file = folder_.write("world.yaml", world);
+  request.adf_files = {folder_.write("one.yaml", "bodies: [BODY a]\n" + body("a"))};
+  message.clear();
+  try {
+    load_scene(request);
+  } catch (const Error& error) {
+    message = error.what();
+  }
+  EXPECT_TRUE(contains(message, "world.yaml:1:82: error: more than 8 lights")) << message;
+
+  const std::string long_name = std::string(64, 'j');
+  message = error_of(
+      {folder_.write("long.yaml", "bodies: [BODY a, BODY b]\njoints: [JOINT j]\n" + body("a") +
+                                      body("b") + "JOINT j:\n  name: " + long_name +
+                                      "\n  parent: BODY a\n  child: BODY b\n"
+                                      "  parent pivot: {x: 0, y: 0, z: 0}\n"
+                                      "  child pivot: {x: 0, y: 0, z: 0}\n"
+                                      "  parent axis: {x: 0, y: 0, z: 1}\n"
+                                      "  child axis: {x: 0, y: 0, z: 1}\n"
+                                      "  type: revolute\n")},
+      false);
+  EXPECT_TRUE(contains(message, "long.yaml:10:3: error: joint name '" + long_name + "' has 64"))
+      << message;
+}
+
+}  // namespace
+}  // namespace afhub::physics
