@@ -11,7 +11,7 @@ cd "$(dirname "$0")"
 PACKAGES=(
   g++ cmake ninja-build pkg-config
   iceoryx libiceoryx-posh-dev libiceoryx-hoofs-dev libacl1-dev
-  libcli11-dev libyaml-cpp-dev libbullet-dev libassimp-dev
+  libcli11-dev libyaml-cpp-dev libbullet-dev libassimp-dev libeigen3-dev
   libgtest-dev libgmock-dev libbenchmark-dev clang-format
   # afhub bench: the transports it compares with, the machine's floor, the plot
   cyclonedds-dev cyclonedds-tools libroscpp-dev libstd-msgs-dev python3-rosmaster

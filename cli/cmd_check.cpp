@@ -1,32 +1,69 @@
 // `afhub check FILES...`: loads AMBF descriptions without simulating and reports
-// bodies, joints by type, closed loops, total mass and warnings. It reads every
-// mesh too, so that what `afhub run` would refuse is refused here.
+// bodies, joints by type, closed loops, total mass, the effective gravity, joint
+// gains the stability cap lowers, and warnings. It reads every mesh too, so that
+// what `afhub run` would refuse is refused here.
 #include <cstdio>
 #include <map>
 #include <memory>
 
-#include "afhub/physics/adf_loader.hpp"
 #include "afhub/physics/mesh.hpp"
+#include "afhub/physics/scene_loader.hpp"
+#include "afhub/physics/simulation.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "commands.hpp"
+#include "format.hpp"
 
 namespace afhub::cli {
 namespace {
 
 struct CheckOptions {
   std::vector<std::string> files;
+  std::string world_file, gravity;
+  double dt_s = 0.001;
 };
 
+std::string vec3_text(const Vec3& v) {
+  char text[96];
+  std::snprintf(text, sizeof text, "(%g, %g, %g)", v.x, v.y, v.z);
+  return text;
+}
+
+// The gravity each body falls under, by AMBF's rule (a body's or its file's gravity
+// over the world's), grouped.
+void print_gravity(const physics::Model& model, const std::string& source) {
+  std::printf("gravity: world %s m/s^2 (%s)\n", vec3_text(model.world.gravity_mps2).c_str(),
+              source.c_str());
+  std::map<std::string, int> own;
+  for (const auto& body : model.bodies)
+    if (body.gravity_mps2) ++own[vec3_text(*body.gravity_mps2)];
+  for (const auto& [gravity, count] : own)
+    std::printf(
+        "  %d bodies fall under %s m/s^2: their file's or their own `gravity`, which "
+        "wins over the world's (--gravity overrides both)\n",
+        count, gravity.c_str());
+}
+
 int run_check(const CheckOptions& options) {
+  if (!(options.dt_s >= 1e-5 && options.dt_s <= 0.1))
+    throw Error("--dt must be between 0.00001 and 0.1 s, got " + std::to_string(options.dt_s));
   physics::Model model;
   std::size_t meshes = 0;
   try {
-    model = physics::load_adf_files(options.files);
+    physics::SceneRequest request;
+    request.adf_files = options.files;
+    request.world_file = options.world_file;
+    model = physics::load_scene(request);
     // The meshes too: `afhub run` reads them, and a broken one must show here first.
     meshes = physics::check_meshes(model);
   } catch (const Error& error) {
     std::fprintf(stderr, "%s\n", error.what());  // already "file:line:col: error: ..."
     return 1;
+  }
+  std::string gravity_source = options.world_file.empty() ? "default" : options.world_file;
+  if (!options.gravity.empty()) {
+    const std::vector<double> g = parse_numbers(options.gravity, "--gravity", 3);
+    physics::override_gravity(model, {g[0], g[1], g[2]});
+    gravity_source = "--gravity";
   }
   for (const auto& warning : model.warnings) std::fprintf(stderr, "%s\n", warning.c_str());
   double total_mass = 0.0;
@@ -41,6 +78,17 @@ int run_check(const CheckOptions& options) {
   for (const auto& [type, count] : by_type) std::printf("  %-16s %d\n", type.c_str(), count);
   std::printf("closed loops: %d\n", model.closed_loop_count);
   std::printf("meshes read: %zu\n", meshes);
+  print_gravity(model, gravity_source);
+  // The gains in use need the bodies' inertias: the world is built, not stepped.
+  try {
+    const physics::Simulation sim(model, options.dt_s);
+    const std::vector<std::string> notes = sim.gain_notes();
+    std::printf("joint gains lowered for stability at dt %g s: %zu\n", options.dt_s, notes.size());
+    for (const std::string& note : notes) std::printf("  %s\n", note.c_str());
+  } catch (const Error& error) {
+    std::fprintf(stderr, "%s\n", error.what());  // a mesh that cannot be read
+    return 1;
+  }
   std::printf("warnings: %zu\n", model.warnings.size());
   return 0;
 }
@@ -53,6 +101,11 @@ void register_check(CLI::App& app, Runner& selected) {
       "check",
       "Validate AMBF description files without simulating: bodies, joints, loops, mass, warnings.");
   check->add_option("files", options->files, "ADF files, loaded together")->required();
+  check->add_option("--world", options->world_file, "A world file (its gravity, as `afhub run`)");
+  check->add_option("--gravity", options->gravity,
+                    "x,y,z in m/s^2: the gravity `afhub run --gravity` would use");
+  check->add_option("--dt", options->dt_s,
+                    "The step the joint gains are checked for (default 0.001 s, as `afhub run`)");
   check->callback([&selected, options] { selected = [options] { return run_check(*options); }; });
 }
 

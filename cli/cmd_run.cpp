@@ -21,6 +21,7 @@ namespace {
 struct RunCliOptions {
   std::vector<std::string> files;
   std::string launch_file, indices, adf_list, world_file, report_file, watchdog_hold, name_space;
+  std::string gravity;                       // "x,y,z": over the world's and every file's
   std::vector<std::string> watchdog_bodies;  // "BODY=SECONDS"
   double dt_s = 0.001;
   double watchdog_s = 0.5;
@@ -94,6 +95,10 @@ int run_run(const RunCliOptions& options) {
   }
   for (const auto& warning : model.warnings) std::fprintf(stderr, "%s\n", warning.c_str());
   if (!options.name_space.empty()) physics::prefix_channels(model, options.name_space);
+  if (!options.gravity.empty()) {
+    const std::vector<double> g = parse_numbers(options.gravity, "--gravity", 3);
+    physics::override_gravity(model, {g[0], g[1], g[2]});
+  }
 
   install_stop_signal_handlers();
   std::unique_ptr<physics::Simulation> built;
@@ -104,6 +109,7 @@ int run_run(const RunCliOptions& options) {
     return 1;
   }
   physics::Simulation& sim = *built;
+  for (const std::string& note : sim.gain_notes()) std::fprintf(stderr, "%s\n", note.c_str());
   std::unique_ptr<physics::SimChannels> channels;
   if (!options.offline) {
     // A lost hub: the loop holds (no step, no state out), then the process re-executes,
@@ -175,6 +181,9 @@ void register_run(CLI::App& app, Runner& selected) {
       "Put every body's channels under this prefix (copy/afhub/arm/base), and the world's "
       "(copy/world: `afhub world --namespace copy`), to run a second copy of a model "
       "beside the first: a live body has one publisher");
+  run->add_option("--gravity", options->gravity,
+                  "x,y,z in m/s^2 for the world and every body, over the world file's and the "
+                  "model files' `gravity` (by AMBF's rule a file's gravity wins over the world's)");
   run->add_option("--dt", options->dt_s, "Fixed step in seconds (default 0.001)");
   run->add_flag("--fast", options->fast, "Step as fast as possible instead of in real time");
   add_count_option(run, "--steps", options->steps,

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include "frames.hpp"
 
@@ -29,8 +30,15 @@ btVector3 unit(int axis) {
   return v;
 }
 
-double wrap_angle(double angle) {
-  return std::remainder(angle, 2.0 * M_PI);
+bool is_spring(JointType type) {
+  return type == JointType::kLinearSpring || type == JointType::kTorsionSpring ||
+         type == JointType::kSixDofSpring;
+}
+
+std::string number(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.4g", value);
+  return text;
 }
 
 // The inertia a joint effort meets at the child (or parent): about the joint axis
@@ -191,19 +199,43 @@ JointModel::JointModel(const JointSpec& spec, btRigidBody& parent, btRigidBody& 
 // An effort PID is explicit: with the step dt and an inertia I at the joint, a
 // gain P beyond about I / dt^2 (or D beyond I / dt) makes it blow up, which AMBF
 // users meet as "joint control explodes with high gains". The gains are capped at
-// P <= 0.1 I / dt^2 and D <= 0.5 I / dt, with I the smaller of the two bodies'
-// inertias at the joint: a lower bound of what the joint really moves, so the cap
-// errs on the stable side. Velocity output goes through Bullet's motor, which the
-// solver handles implicitly, and is left as written.
+// P <= 0.1 I / dt^2 and D + damping <= 0.5 I / dt (damping is an explicit effort
+// on the velocity too), with I the smaller of the two bodies' inertias at the
+// joint: a lower bound of what the joint really moves, so the cap errs on the
+// stable side. Velocity output goes through Bullet's motor, which the solver
+// handles implicitly: its P and D are left as written, the damping still counts.
 void JointModel::limit_gains() {
-  if (spec_.controller_output != ControllerOutput::kForce) return;
+  damping_ = is_spring(spec_.type) ? 0.0 : spec_.damping;  // springs damp in Bullet
+  if (!has_axis()) {
+    damping_ = 0.0;  // no axis to damp about
+    return;
+  }
   const double at_child = inertia_along(child_, frame_in_child_, axis_index_, rotational());
   const double at_parent = inertia_along(parent_, frame_in_parent_, axis_index_, rotational());
   double inertia = at_child;
   if (at_parent > 0 && (inertia == 0 || at_parent < inertia)) inertia = at_parent;
   if (inertia <= 0) return;
-  gains_.p = std::min(gains_.p, 0.1 * inertia / (dt_s_ * dt_s_));
-  gains_.d = std::min(gains_.d, 0.5 * inertia / dt_s_);
+  const double p_cap = 0.1 * inertia / (dt_s_ * dt_s_);
+  const double d_cap = 0.5 * inertia / dt_s_;
+  damping_ = std::min(damping_, d_cap);
+  std::string lowered;
+  auto note = [&](const char* what, double written, double used) {
+    if (used >= written) return;
+    lowered += (lowered.empty() ? "" : ", ") + std::string(what) + " " + number(written) +
+               " lowered to " + number(used);
+  };
+  if (!is_spring(spec_.type)) note("damping", spec_.damping, damping_);
+  if (spec_.controller_output == ControllerOutput::kForce) {
+    gains_.p = std::min(gains_.p, p_cap);
+    gains_.d = std::min(gains_.d, d_cap - damping_);
+    note("P", spec_.controller.p, gains_.p);
+    note("D", spec_.controller.d, gains_.d);
+  }
+  if (!lowered.empty())
+    gain_note_ = spec_.where.str() + ": note: joint '" + spec_.name + "': " + lowered +
+                 " to be stable at dt " + number(dt_s_) + " s: it moves " + number(inertia) +
+                 (rotational() ? " kg m^2" : " kg") + ", so P <= 0.1 I/dt^2 = " + number(p_cap) +
+                 " and D + damping <= 0.5 I/dt = " + number(d_cap);
 }
 
 bool JointModel::rotational() const {
@@ -216,10 +248,8 @@ btVector3 JointModel::world_axis() const {
 }
 
 void JointModel::command(JointMode type, double value) noexcept {
-  if (!commanded_ || type != command_type_) {
-    integral_ = 0.0;
-    has_previous_error_ = false;
-  }
+  if (!has_axis()) return;  // refused (Simulation::axisless_entry says why)
+  if (!commanded_ || type != command_type_) integral_ = 0.0;
   commanded_ = true;
   command_type_ = type;
   command_value_ = value;
@@ -228,17 +258,15 @@ void JointModel::command(JointMode type, double value) noexcept {
 void JointModel::release() noexcept {
   commanded_ = false;
   integral_ = 0.0;
-  has_previous_error_ = false;
-  set_motor(false, 0.0);
+  set_motor(false, 0.0, spec_.max_motor_impulse);
 }
 
-void JointModel::set_motor(bool on, double velocity) noexcept {
-  const double max_force = spec_.max_motor_impulse / dt_s_;
+void JointModel::set_motor(bool on, double velocity, double max_impulse) noexcept {
+  const double max_force = max_impulse / dt_s_;
   switch (spec_.type) {
     case JointType::kRevolute:
     case JointType::kContinuous:
-      static_cast<btHingeConstraint&>(*constraint_)
-          .enableAngularMotor(on, velocity, spec_.max_motor_impulse);
+      static_cast<btHingeConstraint&>(*constraint_).enableAngularMotor(on, velocity, max_impulse);
       break;
     case JointType::kPrismatic: {
       auto& slider = static_cast<btSliderConstraint&>(*constraint_);
@@ -276,14 +304,19 @@ void JointModel::apply_effort(double effort) noexcept {
   }
 }
 
+// Efforts, commanded or from the PID, are capped to max_effort(). The PID acts on
+// the error's P and I, and on the measured velocity for D, so that a step in the
+// target gives no derivative kick; its integral is clamped so that its I term
+// alone stays within the cap (no wind-up while the effort saturates).
 void JointModel::apply_control() noexcept {
   double effort = 0.0;
   bool motor = false;
   double motor_velocity = 0.0;
+  const double cap = max_effort();
   if (commanded_) {
     switch (command_type_) {
       case JointMode::kEffort:
-        effort = command_value_;
+        effort = std::clamp(command_value_, -cap, cap);
         break;
       case JointMode::kVelocity:
         motor = true;
@@ -292,30 +325,42 @@ void JointModel::apply_control() noexcept {
       case JointMode::kPosition: {
         double target = command_value_ - spec_.joint_offset_rad;
         if (spec_.limit_low) target = std::clamp(target, *spec_.limit_low, *spec_.limit_high);
-        double error = target - (position_ - spec_.joint_offset_rad);
-        if (spec_.type == JointType::kContinuous) error = wrap_angle(error);
-        integral_ += error * dt_s_;
-        const double derivative = has_previous_error_ ? (error - previous_error_) / dt_s_ : 0.0;
-        previous_error_ = error;
-        has_previous_error_ = true;
+        const double error = target - (position_ - spec_.joint_offset_rad);
         const Pid& pid = gains_;
-        const double output = pid.p * error + pid.i * integral_ + pid.d * derivative;
+        integral_ += error * dt_s_;
+        if (pid.i > 0) integral_ = std::clamp(integral_, -cap / pid.i, cap / pid.i);
+        const double output = pid.p * error + pid.i * integral_ - pid.d * velocity_;
         if (spec_.controller_output == ControllerOutput::kVelocity) {
           motor = true;
           motor_velocity = output;
         } else {
-          effort = output;
+          effort = std::clamp(output, -cap, cap);
         }
         break;
       }
     }
   }
   // Joint damping, which upstream parses but never applies to hinges and sliders.
-  const bool spring = spec_.type == JointType::kLinearSpring ||
-                      spec_.type == JointType::kTorsionSpring ||
-                      spec_.type == JointType::kSixDofSpring;
-  if (!spring) effort -= spec_.damping * velocity_;
-  set_motor(motor, motor_velocity);
+  effort -= damping_ * velocity_;
+  double motor_impulse = spec_.max_motor_impulse;
+  // Bullet holds a limit only once it is crossed, so a fast joint went a step's
+  // travel past it. A joint that would cross a limit within this step is braked by
+  // its motor instead, to arrive on the limit (a speculative limit).
+  if (spec_.limit_low &&
+      (spec_.type == JointType::kRevolute || spec_.type == JointType::kPrismatic)) {
+    const double q = position_ - spec_.joint_offset_rad;
+    const double next = q + velocity_ * dt_s_;
+    if (velocity_ > 0 && next > *spec_.limit_high) {
+      motor = true;
+      motor_velocity = std::max(0.0, (*spec_.limit_high - q) / dt_s_);
+      motor_impulse = SIMD_INFINITY;
+    } else if (velocity_ < 0 && next < *spec_.limit_low) {
+      motor = true;
+      motor_velocity = std::min(0.0, (*spec_.limit_low - q) / dt_s_);
+      motor_impulse = SIMD_INFINITY;
+    }
+  }
+  set_motor(motor, motor_velocity, motor_impulse);
   applied_effort_ = effort;
   if (effort != 0.0) apply_effort(effort);
 }
@@ -324,9 +369,18 @@ void JointModel::update_readings() noexcept {
   double position = 0.0;
   switch (spec_.type) {
     case JointType::kRevolute:
-    case JointType::kContinuous:
-      position = static_cast<btHingeConstraint&>(*constraint_).getHingeAngle();
+    case JointType::kContinuous: {
+      // Bullet reads within +-pi; each step's change is far below pi, so the turns
+      // are counted: a continuous joint reports many turns.
+      const double reading = static_cast<btHingeConstraint&>(*constraint_).getHingeAngle();
+      hinge_angle_ = hinge_read_
+                         ? hinge_angle_ + std::remainder(reading - hinge_reading_, 2.0 * M_PI)
+                         : reading;
+      hinge_reading_ = reading;
+      hinge_read_ = true;
+      position = hinge_angle_;
       break;
+    }
     case JointType::kPrismatic: {
       auto& slider = static_cast<btSliderConstraint&>(*constraint_);
       slider.calculateTransforms(parent_.getWorldTransform(), child_.getWorldTransform());
@@ -350,9 +404,24 @@ void JointModel::update_readings() noexcept {
       break;
   }
   position_ = position + spec_.joint_offset_rad;
+  // Fixed, p2p and six dof joints have no axis to read along; a cone twist reads its twist.
+  if (!has_axis() && spec_.type != JointType::kConeTwist) {
+    velocity_ = effort_ = 0.0;
+    return;
+  }
   const btVector3 axis = world_axis();
-  velocity_ = rotational() ? (child_.getAngularVelocity() - parent_.getAngularVelocity()).dot(axis)
-                           : (child_.getLinearVelocity() - parent_.getLinearVelocity()).dot(axis);
+  if (rotational()) {
+    velocity_ = (child_.getAngularVelocity() - parent_.getAngularVelocity()).dot(axis);
+  } else {
+    // At the pivot, on both bodies: the parent's point there moves with the
+    // parent's turn too, which the centres of mass' velocities would miss.
+    const btVector3 pivot = child_.getWorldTransform() * frame_in_child_.getOrigin();
+    const btVector3 at_child =
+        child_.getVelocityInLocalPoint(pivot - child_.getCenterOfMassPosition());
+    const btVector3 at_parent =
+        parent_.getVelocityInLocalPoint(pivot - parent_.getCenterOfMassPosition());
+    velocity_ = (at_child - at_parent).dot(axis);
+  }
   if (spec_.enable_feedback) {
     const double reaction = rotational() ? feedback_.m_appliedTorqueBodyB.dot(axis)
                                          : feedback_.m_appliedForceBodyB.dot(axis);
@@ -360,6 +429,11 @@ void JointModel::update_readings() noexcept {
   } else {
     effort_ = 0.0;
   }
+}
+
+void JointModel::restart_readings() noexcept {
+  hinge_read_ = false;
+  update_readings();
 }
 
 double JointModel::pivot_gap_m() const noexcept {

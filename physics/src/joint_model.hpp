@@ -6,6 +6,7 @@
 #include <btBulletDynamicsCommon.h>
 
 #include <memory>
+#include <string>
 
 #include "afhub/physics/body_input.hpp"
 #include "afhub/physics/model.hpp"
@@ -22,12 +23,21 @@ class JointModel {
   btTypedConstraint& constraint() { return *constraint_; }
   const JointSpec& spec() const { return spec_; }
 
+  // Whether the joint has one axis to command (has_joint_axis): a command to a joint
+  // without one (fixed, p2p, cone twist, six dof) is ignored, never fed to a PID.
+  bool has_axis() const { return has_joint_axis(spec_.type); }
+  // The largest effort the joint applies, commanded or from its PID: AMBF's max
+  // motor impulse per step (N m or N).
+  double max_effort() const { return spec_.max_motor_impulse / dt_s_; }
+
   // Control for the coming step; stays until replaced or released.
   void command(JointMode type, double value) noexcept;
   void release() noexcept;  // zero effort, motor off, PID state cleared
   void apply_control() noexcept;
   // Reads position, velocity and effort after a step.
   void update_readings() noexcept;
+  // Forgets the turns counted so far (after the bodies were put back), then reads.
+  void restart_readings() noexcept;
 
   double position() const { return position_; }  // rad or m, with `joint offset`
   double velocity() const { return velocity_; }
@@ -38,13 +48,16 @@ class JointModel {
   // The PID gains in use: the file's, or lower when the file's cannot be stable at
   // this step for the bodies the joint moves (see the constructor).
   const Pid& gains() const { return gains_; }
+  double damping() const { return damping_; }  // the file's, or lower (see gains())
+  // What the stability cap lowered, with the values used; empty when nothing was.
+  const std::string& gain_note() const { return gain_note_; }
 
  private:
   void limit_gains();
   bool rotational() const;
   btVector3 world_axis() const;
   void apply_effort(double effort) noexcept;
-  void set_motor(bool on, double velocity) noexcept;
+  void set_motor(bool on, double velocity, double max_impulse) noexcept;
 
   JointSpec spec_;
   btRigidBody& parent_;
@@ -56,13 +69,17 @@ class JointModel {
   btJointFeedback feedback_{};
   double dt_s_;
   Pid gains_;
+  double damping_ = 0.0;
+  std::string gain_note_;
 
   bool commanded_ = false;
   JointMode command_type_ = JointMode::kEffort;
   double command_value_ = 0.0;
-  double integral_ = 0.0, previous_error_ = 0.0;
-  bool has_previous_error_ = false;
+  double integral_ = 0.0;
   double applied_effort_ = 0.0;
+  // A hinge's angle, unwrapped: Bullet's reading is within +-pi.
+  double hinge_reading_ = 0.0, hinge_angle_ = 0.0;
+  bool hinge_read_ = false;
 
   double position_ = 0.0, velocity_ = 0.0, effort_ = 0.0;
 };

@@ -2,6 +2,8 @@
 // joint's parent going from parent to child. Sorting by joint index keeps the
 // file's order, and a set keeps each joint once inside closed loops (upstream
 // AMBF dropped loop joints and scrambled the order: issues 38, 107, 204).
+// Passive joints are left out of the lists, as AMBF leaves them out of a body's
+// joint names and joint commands.
 #include "afhub/physics/lineage.hpp"
 
 #include <algorithm>
@@ -30,7 +32,8 @@ void compute_lineage(Model& model) {
       for (int j : joints_from[current]) {
         if (joint_seen[j] == body) continue;
         joint_seen[j] = body;
-        model.descendant_joints[body].push_back(j);
+        // A passive joint is walked through but not listed (AMBF's active list).
+        if (!model.joints[j].passive) model.descendant_joints[body].push_back(j);
         int child = model.joints[j].child;
         if (body_seen[child] != body) {
           body_seen[child] = body;

@@ -4,6 +4,8 @@
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
+#include <Eigen/Eigenvalues>
+
 #include <algorithm>
 #include <assimp/Importer.hpp>
 #include <cmath>
@@ -141,8 +143,8 @@ MeshMassProperties mass_properties(const TriangleMesh& mesh) {
       out.centroid_m[k] = (low[k] + high[k]) / 2;
       size[k] = high[k] - low[k];
     }
-    out.inertia_per_kg = {(size[1] * size[1] + size[2] * size[2]) / 12,
-                          (size[0] * size[0] + size[2] * size[2]) / 12,
+    out.inertia_per_kg = {(size[1] * size[1] + size[2] * size[2]) / 12, 0, 0, 0,
+                          (size[0] * size[0] + size[2] * size[2]) / 12, 0, 0, 0,
                           (size[0] * size[0] + size[1] * size[1]) / 12};
     return out;
   }
@@ -154,7 +156,33 @@ MeshMassProperties mass_properties(const TriangleMesh& mesh) {
   const double xx = second[0] / volume - c[0] * c[0];
   const double yy = second[1] / volume - c[1] * c[1];
   const double zz = second[2] / volume - c[2] * c[2];
-  out.inertia_per_kg = {yy + zz, xx + zz, xx + yy};
+  const double xy = second[3] / volume - c[0] * c[1];
+  const double yz = second[4] / volume - c[1] * c[2];
+  const double zx = second[5] / volume - c[2] * c[0];
+  out.inertia_per_kg = {yy + zz, -xy, -zx, -xy, xx + zz, -yz, -zx, -yz, xx + yy};
+  return out;
+}
+
+PrincipalInertia principal_inertia(const MeshMassProperties& mesh,
+                                   const std::array<double, 3>& point, const Matrix3& frame) {
+  using Matrix = Eigen::Matrix3d;
+  const Matrix about_centroid =
+      Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(mesh.inertia_per_kg.data());
+  // Parallel axis theorem, from the centroid to `point`.
+  const Eigen::Vector3d d(point[0] - mesh.centroid_m[0], point[1] - mesh.centroid_m[1],
+                          point[2] - mesh.centroid_m[2]);
+  const Matrix about_point =
+      about_centroid + (d.squaredNorm() * Matrix::Identity() - d * d.transpose());
+  const Matrix rotation =
+      Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(frame.data());
+  const Matrix in_frame = rotation.transpose() * about_point * rotation;
+  const Eigen::SelfAdjointEigenSolver<Matrix> solver(in_frame);
+  Matrix axes = solver.eigenvectors();
+  if (axes.determinant() < 0) axes.col(2) = -axes.col(2);  // a rotation, not a reflection
+  PrincipalInertia out;
+  for (int k = 0; k < 3; ++k) out.moments_per_kg[k] = solver.eigenvalues()[k];
+  for (int r = 0; r < 3; ++r)
+    for (int col = 0; col < 3; ++col) out.axes[3 * r + col] = axes(r, col);
   return out;
 }
 

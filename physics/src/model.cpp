@@ -53,6 +53,28 @@ bool is_rotational(JointType type) {
   }
 }
 
+bool has_joint_axis(JointType type) {
+  switch (type) {
+    case JointType::kRevolute:
+    case JointType::kContinuous:
+    case JointType::kPrismatic:
+    case JointType::kLinearSpring:
+    case JointType::kTorsionSpring:
+      return true;
+    default:
+      return false;
+  }
+}
+
+Vec3 effective_gravity(const Model& model, std::size_t body) {
+  return model.bodies[body].gravity_mps2.value_or(model.world.gravity_mps2);
+}
+
+void override_gravity(Model& model, const Vec3& gravity_mps2) {
+  model.world.gravity_mps2 = gravity_mps2;
+  for (BodySpec& body : model.bodies) body.gravity_mps2.reset();
+}
+
 void prefix_channels(Model& model, std::string_view prefix) {
   const auto prefixed = [&](std::string& channel) {
     channel = body_channel_name(prefix, channel);

@@ -23,19 +23,23 @@ void Simulation::Data::build_bounds() {
     reach = std::max(reach, length(body.location.position_m));
   reach = std::max(reach, 0.5 * length(model.world.enclosure_m));
   const double workspace = reach + 10.0;
-  // The mass each body carries: itself and the children of every joint below it.
+  // The mass each body carries: itself and every body below it, passive joints
+  // included (they are out of the joint lists, not out of the chain).
   std::vector<double> carried(model.bodies.size(), 0.0);
   for (std::size_t b = 0; b < model.bodies.size(); ++b) {
     std::vector<bool> counted(model.bodies.size(), false);
+    std::vector<std::size_t> stack = {b};
     counted[b] = true;
-    double mass = model.bodies[b].mass_kg;
-    for (int j : model.descendant_joints[b]) {
-      const int child = model.joints[j].child;
-      if (child < 0 || counted[child]) continue;
-      counted[child] = true;
-      mass += model.bodies[child].mass_kg;
+    while (!stack.empty()) {
+      const std::size_t body = stack.back();
+      stack.pop_back();
+      carried[b] += model.bodies[body].mass_kg;
+      for (const JointSpec& joint : model.joints)
+        if (joint.parent == static_cast<int>(body) && joint.child >= 0 && !counted[joint.child]) {
+          counted[joint.child] = true;
+          stack.push_back(static_cast<std::size_t>(joint.child));
+        }
     }
-    carried[b] = mass;
   }
   bounds.assign(model.bodies.size(), InputBounds{});
   for (std::size_t b = 0; b < model.bodies.size(); ++b) {
@@ -54,7 +58,8 @@ void Simulation::Data::build_bounds() {
       if (is_rotational(joint.type)) {
         out.joint_effort[k] = std::max(motor, 10.0 * mass * kGravity * reach);
         out.joint_velocity[k] = std::max(10.0 * kTwoPi, joint.controller.p * kTwoPi);
-        out.joint_position[k] = 100.0;
+        // A continuous joint counts its turns: a hold at its position stays valid.
+        out.joint_position[k] = joint.type == JointType::kContinuous ? 1e9 : 100.0;
       } else {
         out.joint_effort[k] = std::max(motor, 10.0 * mass * kGravity);
         out.joint_velocity[k] = std::max(10.0, joint.controller.p * workspace);

@@ -103,15 +103,28 @@ void Simulation::Data::build_bodies() {
       const auto& c = properties->centroid_m;
       inertial.position_m = {c[0], c[1], c[2]};
     }
-    const btTransform mesh_from_com = to_transform(inertial);
+    btTransform mesh_from_com = to_transform(inertial);
+    // Inertia from the mesh: its full tensor about its centroid, seen in the inertial
+    // frame and diagonalised; the inertial frame turns to the principal axes.
+    std::optional<PrincipalInertia> principal;
+    if (body.dynamic && !spec.inertia_kgm2 && properties) {
+      const btMatrix3x3 turn = mesh_from_com.getBasis();
+      Matrix3 frame{};
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) frame[3 * r + c] = turn[r][c];
+      principal = principal_inertia(*properties, properties->centroid_m, frame);
+      const Matrix3& a = principal->axes;
+      mesh_from_com.setBasis(turn *
+                             btMatrix3x3(a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7], a[8]));
+    }
     body.com_from_mesh = mesh_from_com.inverse();
     body.shape = build_collision_shape(spec, body.com_from_mesh, mesh, body.dynamic);
     btVector3 inertia(0, 0, 0);
     if (body.dynamic) {
       if (spec.inertia_kgm2) {
         inertia = to_bt(*spec.inertia_kgm2);
-      } else if (properties) {
-        const auto& unit = properties->inertia_per_kg;
+      } else if (principal) {
+        const auto& unit = principal->moments_per_kg;
         inertia = btVector3(unit[0], unit[1], unit[2]) * spec.mass_kg;
       } else if (!spec.collision_shapes.empty()) {
         body.shape.root->calculateLocalInertia(spec.mass_kg, inertia);

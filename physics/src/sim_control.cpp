@@ -2,6 +2,8 @@
 // its joint values go to its descendant joints in order, its actuators hold or let
 // go. Before each step its Cartesian input is applied as a force, a velocity or
 // through its PID; the watchdog clears an input or holds the joints where they are.
+#include <cstdio>
+
 #include "simulation_data.hpp"
 
 namespace afhub::physics {
@@ -22,7 +24,9 @@ void Simulation::set_input(std::size_t index, const BodyInput& input) noexcept {
   body.angular_velocity = to_bt(input.twist.angular_radps);
   const std::vector<int>& below = d.model.descendant_joints[index];
   for (std::uint32_t j = 0; j < input.joint_count && j < below.size(); ++j) {
-    d.joints[below[j]]->command(input.joint_modes[j], input.joint_values[j]);
+    JointModel& joint = *d.joints[below[j]];
+    if (!joint.has_axis()) continue;  // refused: axisless_entry
+    joint.command(input.joint_modes[j], input.joint_values[j]);
     d.joint_driver[below[j]] = static_cast<int>(index);
   }
   for (std::uint32_t a = 0; a < input.actuator_count && a < body.actuators.size(); ++a)
@@ -47,9 +51,26 @@ void Simulation::hold_joints(std::size_t index) noexcept {
   for (int joint : d.model.descendant_joints[index]) {
     if (d.joint_driver[joint] >= 0) continue;  // another body drives it
     JointModel& model = *d.joints[joint];
+    if (!model.has_axis()) continue;  // nothing to hold about
     model.command(JointMode::kPosition, model.position());
     d.joint_driver[joint] = static_cast<int>(index);
   }
+}
+
+const char* Simulation::axisless_entry(std::size_t index, const BodyInput& input) const noexcept {
+  const Data& d = *data_;
+  const std::vector<int>& below = d.model.descendant_joints[index];
+  for (std::uint32_t j = 0; j < input.joint_count && j < below.size(); ++j) {
+    const JointSpec& joint = d.model.joints[below[j]];
+    if (has_joint_axis(joint.type)) continue;
+    if (input.joint_values[j] == 0.0) continue;  // what a full-length command carries
+    std::snprintf(d.problem.data(), d.problem.size(),
+                  "joint %u (%s) is %s: it has no single axis to command, so its entry was "
+                  "ignored; send 0 for it",
+                  j, joint.name.c_str(), joint_type_name(joint.type));
+    return d.problem.data();
+  }
+  return nullptr;
 }
 
 int Simulation::joint_driver(std::size_t joint) const noexcept {

@@ -6,10 +6,33 @@
 #include "simulation_data.hpp"
 
 namespace afhub::physics {
+namespace {
+
+// Bullet's broadphase grows its pair table the first time more bodies' boxes
+// overlap than ever before: a heap allocation in the middle of a run (a swinging
+// linkage meeting a new neighbour). Growing it once here, by adding and removing
+// pairs of placeholder proxies, keeps the step allocation-free for any scene with
+// fewer overlapping pairs. Before the collision filter is set: it reads real bodies.
+void reserve_overlapping_pairs(btOverlappingPairCache& cache, btDispatcher& dispatcher, int pairs) {
+  std::vector<btBroadphaseProxy> proxies(static_cast<std::size_t>(pairs) + 1);
+  for (std::size_t i = 0; i < proxies.size(); ++i) {
+    proxies[i].m_uniqueId = -1 - static_cast<int>(i);  // no real proxy's id
+    proxies[i].m_collisionFilterGroup = proxies[i].m_collisionFilterMask = -1;
+  }
+  for (std::size_t i = 1; i < proxies.size(); ++i)
+    cache.addOverlappingPair(&proxies[0], &proxies[i]);
+  for (std::size_t i = 1; i < proxies.size(); ++i)
+    cache.removeOverlappingPair(&proxies[0], &proxies[i], &dispatcher);
+}
+
+}  // namespace
 
 Simulation::Simulation(const Model& model, double dt_s)
     : data_(std::make_unique<Data>(model, dt_s)) {
   Data& d = *data_;
+  const int bodies = static_cast<int>(model.bodies.size() + model.soft_bodies.size());
+  reserve_overlapping_pairs(*d.broadphase.getOverlappingPairCache(), d.dispatcher,
+                            std::max(4096, 8 * bodies));
   d.broadphase.getOverlappingPairCache()->setOverlapFilterCallback(&d.filter);
   d.world.setGravity(to_bt(model.world.gravity_mps2));
   d.world.getWorldInfo().m_gravity = to_bt(model.world.gravity_mps2);
@@ -42,6 +65,19 @@ double Simulation::time_s() const noexcept {
   return static_cast<double>(data_->steps) * data_->dt_s;
 }
 
+const Pid& Simulation::joint_gains(std::size_t joint) const noexcept {
+  return data_->joints[joint]->gains();
+}
+double Simulation::joint_damping(std::size_t joint) const noexcept {
+  return data_->joints[joint]->damping();
+}
+std::vector<std::string> Simulation::gain_notes() const {
+  std::vector<std::string> notes;
+  for (const auto& joint : data_->joints)
+    if (!joint->gain_note().empty()) notes.push_back(joint->gain_note());
+  return notes;
+}
+
 void Simulation::step() noexcept {
   Data& d = *data_;
   for (BodyData& body : d.bodies) d.apply_cartesian(body);
@@ -72,7 +108,7 @@ void Simulation::reset() noexcept {
       soft.body->m_nodes[n].m_x = soft.initial_positions[n];
       soft.body->m_nodes[n].m_v = btVector3(0, 0, 0);
     }
-  for (auto& joint : d.joints) joint->update_readings();
+  for (auto& joint : d.joints) joint->restart_readings();
   d.keep_good_state();
   d.steps = 0;
 }

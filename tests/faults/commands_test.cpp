@@ -79,6 +79,44 @@ TEST(FaultsCommands, FiniteExtremeCommandsAreRefusedAndCountedWhileTheWorldRunsO
   EXPECT_FALSE(contains(output, "NaN")) << output;
 }
 
+// A command entry for a joint without an axis (here a fixed one) is refused and
+// counted, said once; a 0, what a full-length command carries for it, is not.
+TEST(FaultsCommands, EntriesForJointsWithoutAnAxisAreRefusedAndCounted) {
+  afhub::testing::ModelFolder folder;
+  const std::string model = folder.write(
+      "fixed.yaml",
+      "bodies: [BODY base, BODY a, BODY b]\njoints: [JOINT weld, JOINT hinge]\n"
+      "gravity: {x: 0, y: 0, z: 0}\nBODY base:\n  name: base\n  mass: 0\n"
+      "BODY a:\n  name: a\n  mass: 1\n  location: {position: {x: 0.1, y: 0, z: 0}}\n"
+      "BODY b:\n  name: b\n  mass: 1\n  location: {position: {x: 0.3, y: 0, z: 0}}\n"
+      "JOINT weld:\n  name: weld\n  parent: BODY base\n  child: BODY a\n"
+      "  parent pivot: {x: 0, y: 0, z: 0}\n  parent axis: {x: 0, y: 0, z: 1}\n"
+      "  child pivot: {x: -0.1, y: 0, z: 0}\n  child axis: {x: 0, y: 0, z: 1}\n  type: fixed\n"
+      "JOINT hinge:\n  name: hinge\n  parent: BODY a\n  child: BODY b\n"
+      "  parent pivot: {x: 0.1, y: 0, z: 0}\n  parent axis: {x: 0, y: 0, z: 1}\n"
+      "  child pivot: {x: -0.1, y: 0, z: 0}\n  child axis: {x: 0, y: 0, z: 1}\n"
+      "  type: revolute\n");
+  const std::string log = (folder.dir() / "run.log").string();
+  ScopedProcess physics(spawn_afhub({"run", model, "--no-autostart"}, log));
+  LatestReader<WorldState> world{world_channel(kStateEvent)};
+  ASSERT_TRUE(wait_until([&] { return world.latest() != nullptr; }, 10s)) << read_file(log);
+  RunResult zero = run_afhub({"cmd", "env/base", "--once", "--joint-effort", "0,0.5"});
+  ASSERT_EQ(zero.exit_code, 0) << zero.err;
+  RunResult asks = run_afhub({"cmd", "env/base", "--once", "--joint-pos", "0.3,0.5"});
+  ASSERT_EQ(asks.exit_code, 0) << asks.err;
+  ASSERT_TRUE(wait_until([&] { return world.latest()->rejected_commands >= 1; }, 5s))
+      << read_file(log);
+  const std::uint64_t step = world.latest()->header.sim_step;
+  EXPECT_TRUE(wait_until([&] { return world.latest()->header.sim_step > step + 100; }, 5s));
+  EXPECT_EQ(world.latest()->rejected_commands, 1u) << "a 0 for the fixed joint is no command";
+  EXPECT_EQ(physics.stop(), 0);
+  const std::string output = read_file(log);
+  EXPECT_TRUE(contains(output,
+                       "refused part of a command for ambf/env/base: joint 0 (weld) is "
+                       "fixed: it has no single axis to command"))
+      << output;
+}
+
 // Every process that runs a world (the physics, `afhub synth`) reads world commands
 // the same way: a queue, each command once, in order.
 class WorldCommands : public ::testing::TestWithParam<const char*> {};

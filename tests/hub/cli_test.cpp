@@ -10,6 +10,8 @@
 #include "afhub/shm_layout/body_state.hpp"
 #include "afhub_process.hpp"
 #include "hub_environment.hpp"
+#include "json_tree.hpp"
+#include "model_files.hpp"
 #include "shared_models.hpp"
 
 namespace afhub::test {
@@ -73,6 +75,43 @@ TEST(Cli, CheckReportsTheAmbfFourBar) {
   EXPECT_TRUE(contains(four_bar.out, "bodies: 5 (total mass 4.000 kg)")) << four_bar.out;
   EXPECT_TRUE(contains(four_bar.out, "closed loops: 1")) << four_bar.out;
   EXPECT_TRUE(contains(four_bar.err, "parallel_structure.yaml:131:3: warning:")) << four_bar.err;
+}
+
+// The KUKA's file sets gravity 0, which by AMBF's rule wins over the world's:
+// `check` says so, and --gravity overrides both, in `check` and in `run`. Both say
+// which joint gains the stability cap lowered, with the values used.
+TEST(Cli, CheckAndRunSayTheGravityAndTheLoweredGains) {
+  SKIP_WITHOUT_SHARED_MODELS();
+  const std::string kuka =
+      AFHUB_SHARED_MODELS "/descriptions/multi-bodies/robots/blender-kuka.yaml";
+  RunResult check = run_afhub({"check", kuka});
+  EXPECT_EQ(check.exit_code, 0) << check.err;
+  EXPECT_TRUE(contains(check.out, "gravity: world (0, 0, -9.81) m/s^2 (default)")) << check.out;
+  EXPECT_TRUE(contains(check.out, "8 bodies fall under (0, 0, 0) m/s^2")) << check.out;
+  EXPECT_TRUE(contains(check.out, "lowered to")) << check.out;
+  EXPECT_TRUE(contains(check.out, "blender-kuka.yaml:")) << check.out;
+  RunResult overridden = run_afhub({"check", kuka, "--gravity", "0,0,-9.81"});
+  EXPECT_TRUE(contains(overridden.out, "gravity: world (0, 0, -9.81) m/s^2 (--gravity)"))
+      << overridden.out;
+  EXPECT_FALSE(contains(overridden.out, "bodies fall under")) << overridden.out;
+  RunResult bad = run_afhub({"check", kuka, "--gravity", "0,-9.81"});
+  EXPECT_EQ(bad.exit_code, 1);
+  EXPECT_TRUE(contains(bad.err, "--gravity")) << bad.err;
+
+  afhub::testing::ModelFolder folder;
+  const auto sag = [&](const std::vector<std::string>& extra) {
+    const std::string report = (folder.dir() / "report.json").string();
+    std::vector<std::string> args = {"run",     kuka,   "--offline", "--fast",
+                                     "--steps", "1000", "--report",  report};
+    args.insert(args.end(), extra.begin(), extra.end());
+    RunResult result = run_afhub(args, 60s);
+    EXPECT_EQ(result.exit_code, 0) << result.err;
+    EXPECT_TRUE(contains(result.err, "lowered to")) << result.err;
+    const JsonValue json = parse_json(read_file(report));
+    return std::abs(json.at("joints").at("ambf/env/link1-link2").at("position").number);
+  };
+  EXPECT_LT(sag({}), 1e-3) << "gravity 0 from the file: the arm stays";
+  EXPECT_GT(sag({"--gravity", "0,0,-9.81"}), 0.05) << "--gravity: the arm sags";
 }
 
 TEST(Cli, LookingToolsWithoutAHubFailFastAndSayHowToStartOne) {

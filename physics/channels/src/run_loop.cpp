@@ -1,6 +1,8 @@
 // The physics loop and its report (see run_loop.hpp).
 #include "afhub/physics/run_loop.hpp"
 
+#include "afhub/physics/rate_meter.hpp"
+
 #include <algorithm>
 #include <cstdio>
 #include <map>
@@ -43,8 +45,7 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
   // The wait for lockstep clients before the first step is setup: the clock starts after it.
   if (channels && channels->lockstep() && !channels->wait_for_clients()) return;
   const std::int64_t start_ns = monotonic_ns();
-  std::uint64_t rate_window_step = 0;
-  std::int64_t rate_window_ns = start_ns;
+  RateMeter rate;
 
   // Paced on rt's loop runner: absolute deadlines start + k dt, never re-based, and
   // late steps caught up so that simulated time keeps up with the wall; --fast: no period.
@@ -60,8 +61,10 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
     // Every world command from every writer, in order, each once.
     while (channels->next_world_command(world_command))
       if (control.apply(world_command)) {
+        // The world, the lockstep barrier's answers and the rate window start again.
         sim.reset();
         channels->forget_commands();
+        rate.restart();
       }
     if (channels->lockstep() && !control.paused) return channels->await_lockstep();
     channels->apply_commands(monotonic_ns());
@@ -95,12 +98,8 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
       late_counted = channels->late_answers();
       stats->maybe_publish(now_ns, report.timing);
     }
-    if (now_ns - rate_window_ns >= 1'000'000'000) {
-      achieved_rate_hz = static_cast<double>(report.steps - rate_window_step) * 1e9 /
-                         static_cast<double>(now_ns - rate_window_ns);
-      rate_window_step = report.steps;
-      rate_window_ns = now_ns;
-    }
+    rate.update(now_ns, report.steps, !control.paused);
+    achieved_rate_hz = rate.rate_hz();
   };
   if (options.steps == 0 || report.steps < options.steps)
     run_periodic(pacing, report.timing, cycle);

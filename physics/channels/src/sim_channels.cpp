@@ -136,6 +136,17 @@ void SimChannels::apply_commands(std::int64_t now_ns) noexcept {
           channel.told_rejected = true;
         }
       } else {
+        // Entries for joints without an axis are refused and counted; the rest applies.
+        if (const char* entry = sim_.axisless_entry(channel.index, input_)) {
+          ++rejected_;
+          if (!channel.told_axisless) {
+            std::fprintf(stderr,
+                         "afhub run: refused part of a command for %s: %s (from pid %u; counted "
+                         "in `afhub status`; said once per body)\n",
+                         channel.publisher->channel().c_str(), entry, answer.pid);
+            channel.told_axisless = true;
+          }
+        }
         if (lockstep_ && answer.lockstep) note_lockstep_answer(channel, answer);
         channel.applied_answer_step = answer.step;
         sim_.set_input(channel.index, input_);

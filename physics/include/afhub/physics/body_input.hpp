@@ -52,10 +52,12 @@ struct BodyInput {
 // everything below it):
 //   joint_effort   max(max motor impulse / dt, 10 m g R) for a rotational joint
 //                  (N m: ten times the largest gravity load it carries at full
-//                  reach), max(max motor impulse / dt, 10 m g) for a linear one (N)
+//                  reach), max(max motor impulse / dt, 10 m g) for a linear one (N);
+//                  an effort within it is applied capped to max motor impulse / dt
 //   joint_velocity max(20 pi rad/s, P * 2 pi) rotational, max(10 m/s, P * workspace)
 //                  linear, with P the joint PID's gain
-//   joint_position 100 rad (16 turns) rotational, the workspace linear
+//   joint_position 100 rad (16 turns) rotational, 1e9 rad continuous (it counts
+//                  its turns), the workspace linear
 struct InputBounds {
   double workspace_m = 0.0;
   double force_n = 0.0, torque_nm = 0.0;

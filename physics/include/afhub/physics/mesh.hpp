@@ -39,15 +39,28 @@ TriangleMesh load_body_mesh(const std::string& path, double scale, const SourceL
 // finds the mesh problems `afhub run` would); returns how many were read.
 std::size_t check_meshes(const Model& model);
 
-// Of a closed mesh of uniform density: volume, centroid, and the inertia tensor's
-// diagonal about the centroid per kg. Open or degenerate meshes (volume ~ 0) fall
-// back to the vertices' bounding box.
+// A 3x3 matrix, row-major.
+using Matrix3 = std::array<double, 9>;
+
+// Of a closed mesh of uniform density: volume, centroid, and the full inertia tensor
+// about the centroid per kg, in the mesh frame (products of inertia included). Open
+// or degenerate meshes (volume ~ 0) fall back to the vertices' bounding box.
 struct MeshMassProperties {
   double volume_m3 = 0.0;
   std::array<double, 3> centroid_m{};
-  std::array<double, 3> inertia_per_kg{};  // m^2
+  Matrix3 inertia_per_kg{};  // m^2
   bool from_bounding_box = false;
 };
 MeshMassProperties mass_properties(const TriangleMesh& mesh);
+
+// The mesh's inertia per kg about `point`, seen in a frame turned by `frame` (both
+// in the mesh frame), diagonalised: its principal moments, and the rotation from
+// `frame` to the principal axes (a proper rotation; its columns are the axes).
+struct PrincipalInertia {
+  std::array<double, 3> moments_per_kg{};  // m^2
+  Matrix3 axes{};
+};
+PrincipalInertia principal_inertia(const MeshMassProperties& mesh,
+                                   const std::array<double, 3>& point, const Matrix3& frame);
 
 }  // namespace afhub::physics

@@ -99,6 +99,11 @@ enum class JointType {
 const char* joint_type_name(JointType type);
 // Whether the joint's coordinate is an angle (rad) rather than a length (m).
 bool is_rotational(JointType type);
+// Whether the joint moves along or about one axis (revolute, continuous, prismatic,
+// the two 1-DOF springs), so that an effort, a velocity or a position means
+// something. Fixed, p2p, cone twist and six dof joints have no such axis: commands
+// to them are refused.
+bool has_joint_axis(JointType type);
 
 // Per-axis limits of a six dof joint; a cone twist's {x, y, z} go in angular_high.
 struct SixDofLimits {
@@ -125,7 +130,7 @@ struct JointSpec {
   std::optional<double> erp, cfm;
   bool ignore_inter_collision = true;
   bool enable_feedback = false;
-  bool passive = false;
+  bool passive = false;            // out of every body's joint list: not reported, not commanded
   Pid controller{10.0, 0.0, 1.0};  // joint PID for position commands
   ControllerOutput controller_output = ControllerOutput::kForce;
 };
@@ -188,12 +193,20 @@ struct Model {
   std::vector<SensorSpec> sensors;
   std::vector<ActuatorSpec> actuators;
   std::vector<bool> file_ignores_inter_collision;  // per loaded file
-  // For each body, every joint below it (paper Algorithm 1), each once, in file order.
+  // For each body, every joint below it (paper Algorithm 1), each once, in file
+  // order, passive joints left out (as AMBF's active child-joint list): the order of
+  // its state's joints and of its command's.
   std::vector<std::vector<int>> descendant_joints;
   std::vector<std::string> warnings;  // "file:line:col: warning: ..."
   // Independent closed kinematic loops (joints - bodies + connected groups).
   int closed_loop_count = 0;
 };
+
+// Gravity, by AMBF's rule: a body's own `gravity` wins, then its file's header
+// `gravity` (already copied into the body's by the loader), then the world file's.
+Vec3 effective_gravity(const Model& model, std::size_t body);
+// `afhub run --gravity`: one gravity for the world and every body, over both rules.
+void override_gravity(Model& model, const Vec3& gravity_mps2);
 
 // Puts every body, soft body and joint channel under `prefix` ("copy" makes
 // "afhub/arm/base" "copy/afhub/arm/base"), so that two copies of a model can run side

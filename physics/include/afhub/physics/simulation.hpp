@@ -7,6 +7,8 @@
 
 #include <cstdint>
 #include <memory>
+#include <string>
+#include <vector>
 
 #include "afhub/physics/body_input.hpp"
 #include "afhub/physics/body_reading.hpp"
@@ -50,9 +52,17 @@ class Simulation {
   // bound of 2180 N m"); the text stays valid until the next call.
   const char* input_problem(std::size_t body, const BodyInput& input) const noexcept;
   const InputBounds& input_bounds(std::size_t body) const noexcept;
+  // nullptr when no entry of `input` (checked with input_problem first) asks
+  // something of a joint without an axis (fixed, p2p, cone twist, six dof: see
+  // has_joint_axis). Else what is wrong with the first such entry, naming the joint;
+  // set_input ignores these entries, the caller counts the command as refused. A 0
+  // (effort, velocity or position: what a full-length command carries for such a
+  // joint, `afhub cmd`'s hold included, as it reads 0) asks nothing.
+  const char* axisless_entry(std::size_t body, const BodyInput& input) const noexcept;
 
   // An input (checked with input_problem first) becomes the body's current one;
-  // its joint values go to the body's descendant joints in order. Each joint
+  // its joint values go to the body's descendant joints in order (an entry for a
+  // joint without an axis is ignored: axisless_entry). Each joint
   // remembers which body's input drives it: the last one to command it.
   void set_input(std::size_t body, const BodyInput& input) noexcept;
   // Zero wrench and zero effort on the joints this body's input drives (the
@@ -77,6 +87,11 @@ class Simulation {
   double joint_position(std::size_t joint) const noexcept;
   double joint_velocity(std::size_t joint) const noexcept;
   double joint_pivot_gap_m(std::size_t joint) const noexcept;
+  // The joint PID gains and damping in use (the file's, or lower where the file's
+  // cannot be stable at this dt), and one note per joint whose gains were lowered.
+  const Pid& joint_gains(std::size_t joint) const noexcept;
+  double joint_damping(std::size_t joint) const noexcept;
+  std::vector<std::string> gain_notes() const;
   // False as soon as any body or soft-body node holds a NaN or infinite value.
   // step() never leaves one (see nan_recoveries); this checks that.
   bool all_finite() const noexcept;

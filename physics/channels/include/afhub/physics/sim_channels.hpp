@@ -112,6 +112,7 @@ class SimChannels {
     bool commanded = false;            // a command is being applied (the watchdog is armed)
     bool hold_on_watchdog = false;     // the watchdog holds the joints rather than zeroing efforts
     bool told_rejected = false;
+    bool told_axisless = false;  // a command entry for a joint without an axis
     bool told_stale = false;
     bool told_expired = false;  // a short watchdog may fire every few ms: said once
     std::uint64_t commanded_steps = 0, answered_steps = 0;  // this body's timeliness
