@@ -14,6 +14,7 @@ struct HubCliOptions {
   bool bench_pools = false;
   bool dry_run = false;
   bool force = false;  // stop: even with processes attached
+  std::string group;
 };
 
 int run_hub(const HubCliOptions& cli) {
@@ -24,6 +25,7 @@ int run_hub(const HubCliOptions& cli) {
   for (const std::string& text : cli.pools) extra.push_back(parse_mempool(text));
   HubOptions options;
   options.mempools = merge_mempools(default_mempools(), extra);
+  options.group = cli.group;
   if (cli.dry_run) {
     std::printf("payload bytes  chunks  holds\n");
     for (const MempoolSpec& pool : options.mempools)
@@ -50,6 +52,9 @@ void register_hub(CLI::App& app, Runner& selected) {
   hub->add_flag("--bench-pools", options->bench_pools,
                 "Add the pools `afhub bench` needs (1 KiB to 1 MiB samples, 20 MiB)");
   hub->add_flag("--dry-run", options->dry_run, "Print the mempools the hub would have, and exit");
+  hub->add_option("--group", options->group,
+                  "Let this group's members use the hub (its shared memory and socket); by "
+                  "default only the hub's user and its own group can");
   auto* stop = hub->add_subcommand(
       "stop",
       "Stop the running hub (SIGTERM, waits up to 5 s). With processes attached it lists them "

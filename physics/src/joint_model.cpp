@@ -87,15 +87,18 @@ JointModel::JointModel(const JointSpec& spec, btRigidBody& parent, btRigidBody& 
   // leaves the child where it is. Each frame built on its own (constraint axis onto
   // each body's axis) would measure zero from an arbitrary direction about the
   // axis, so a consistent pose could start outside its joint limits and be thrown.
+  // Built in the bodies' mesh frames, where the file's axes are written (the two
+  // axes are compared there), then carried into their centre-of-mass frames, which
+  // may be turned (an inertial offset's rotation, a mesh's principal axes).
   const btVector3 axis = unit(axis_index_);
-  const btVector3 parent_axis = parent_com_from_mesh.getBasis() * to_bt(spec.parent_axis);
-  const btVector3 child_axis = child_com_from_mesh.getBasis() * to_bt(spec.child_axis);
+  const btVector3 parent_axis = to_bt(spec.parent_axis);
+  const btVector3 child_axis = to_bt(spec.child_axis);
   const btQuaternion in_parent = rotation_between(axis, parent_axis);
   const btQuaternion child_onto_parent = rotation_between(child_axis, parent_axis);
   const btQuaternion offset(parent_axis.normalized(), spec.offset_rad);
   const btQuaternion in_child = child_onto_parent.inverse() * offset.inverse() * in_parent;
-  frame_in_parent_ = btTransform(in_parent, parent_com_from_mesh * to_bt(spec.parent_pivot_m));
-  frame_in_child_ = btTransform(in_child, child_com_from_mesh * to_bt(spec.child_pivot_m));
+  frame_in_parent_ = parent_com_from_mesh * btTransform(in_parent, to_bt(spec.parent_pivot_m));
+  frame_in_child_ = child_com_from_mesh * btTransform(in_child, to_bt(spec.child_pivot_m));
   const btTransform& a = frame_in_parent_;
   const btTransform& b = frame_in_child_;
 

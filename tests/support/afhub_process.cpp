@@ -49,6 +49,18 @@ std::string read_file(const std::string& path) {
 }
 
 RunResult run_afhub(const std::vector<std::string>& args, std::chrono::milliseconds timeout) {
+  std::vector<std::string> argv = {afhub_executable()};
+  argv.insert(argv.end(), args.begin(), args.end());
+  return run_command(argv, timeout);
+}
+
+int exit_code_if_ended(pid_t pid) {
+  int status = 0;
+  if (waitpid(pid, &status, WNOHANG) != pid) return -1;
+  return exit_code_of(status);
+}
+
+RunResult run_command(const std::vector<std::string>& args, std::chrono::milliseconds timeout) {
   int out_pipe[2], err_pipe[2];
   if (pipe2(out_pipe, O_CLOEXEC) != 0 || pipe2(err_pipe, O_CLOEXEC) != 0)
     throw std::runtime_error("pipe failed");
@@ -57,7 +69,12 @@ RunResult run_afhub(const std::vector<std::string>& args, std::chrono::milliseco
   if (pid == 0) {
     dup2(out_pipe[1], STDOUT_FILENO);
     dup2(err_pipe[1], STDERR_FILENO);
-    exec_afhub(args);
+    std::vector<std::string> words = args;
+    std::vector<char*> argv;
+    for (std::string& word : words) argv.push_back(word.data());
+    argv.push_back(nullptr);
+    execvp(argv[0], argv.data());
+    _exit(127);
   }
   close(out_pipe[1]);
   close(err_pipe[1]);

@@ -20,6 +20,9 @@ struct RunResult {
 // Runs `afhub args...` and waits at most `timeout` for it.
 RunResult run_afhub(const std::vector<std::string>& args,
                     std::chrono::milliseconds timeout = std::chrono::seconds(20));
+// Runs `argv` (argv[0] found on PATH) and waits at most `timeout` for it.
+RunResult run_command(const std::vector<std::string>& argv,
+                      std::chrono::milliseconds timeout = std::chrono::seconds(20));
 
 // Starts `afhub args...` in the background (stdout and stderr to `log_path`).
 pid_t spawn_afhub(const std::vector<std::string>& args, const std::string& log_path = "/dev/null");
@@ -44,6 +47,9 @@ struct ScopedProcess {
   int stop();
   pid_t pid;
 };
+
+// A child's exit code once it ended (128 + signal when killed by one), or -1 while it runs.
+int exit_code_if_ended(pid_t pid);
 
 // Waits up to `timeout` for the process to end by itself; returns its exit code,
 // or -1 when it is still running (it is then left to the ScopedProcess).

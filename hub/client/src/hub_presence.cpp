@@ -3,10 +3,12 @@
 #include "afhub/hub/hub_presence.hpp"
 
 #include <fcntl.h>
+#include <grp.h>
 #include <pthread.h>
 #include <signal.h>
 #include <sys/file.h>
 #include <sys/socket.h>
+#include <sys/stat.h>
 #include <sys/un.h>
 #include <sys/wait.h>
 #include <time.h>
@@ -41,6 +43,8 @@ namespace {
 constexpr const char* kRoudiSocketPath =
     "/tmp/roudi";  // iceoryx 2.0: IOX_UDS_SOCKET_PATH_PREFIX + "roudi"
 constexpr auto kAutostartTimeout = std::chrono::seconds(10);
+// iceoryx 2.0's management segment: every runtime maps it read-write.
+constexpr const char* kManagementSegment = "/dev/shm/iceoryx_mgmt";
 
 std::string& runtime_name_storage() {
   static std::string name;
@@ -273,6 +277,43 @@ void on_iceoryx_error(const iox::Error error, const std::function<void()> callba
   std::abort();
 }
 
+std::string group_name(gid_t gid) {
+  if (const group* entry = getgrgid(gid)) return entry->gr_name;
+  return "gid " + std::to_string(gid);
+}
+
+// Before iceoryx's runtime connects: it would wait on whatever answers at /tmp/roudi
+// (a socket another user planted there hangs it), and abort on shared memory it may
+// not open. The socket must belong to the user of the afhub hub that holds its lock,
+// and this user must be let into the hub's shared memory.
+void require_hub_access() {
+  const std::optional<HubIdentity> hub = running_hub();
+  struct stat socket_info {};
+  const bool socket = lstat(kRoudiSocketPath, &socket_info) == 0 && S_ISSOCK(socket_info.st_mode);
+  struct stat identity {};
+  if (!hub || hub->instance == 0 ||
+      stat(hub_identity_path(hub_directory()).c_str(), &identity) != 0)
+    throw Error(std::string("something answers at ") + kRoudiSocketPath +
+                " but no afhub hub holds its lock in " + hub_directory() +
+                ": a plain iceoryx RouDi (iox-roudi), or a socket left or planted there" +
+                (socket ? " (it belongs to uid " + std::to_string(socket_info.st_uid) + ")" : "") +
+                ". Stop it or remove it (as its owner or root), then start `afhub hub`.");
+  if (!socket || socket_info.st_uid != identity.st_uid)
+    throw Error(std::string(kRoudiSocketPath) + " belongs to uid " +
+                std::to_string(socket_info.st_uid) + ", not to the hub's user (uid " +
+                std::to_string(identity.st_uid) +
+                "): another user planted it. Remove it as root, and restart the hub.");
+  struct stat memory {};
+  if (access(kManagementSegment, R_OK | W_OK) != 0 && errno == EACCES &&
+      stat(kManagementSegment, &memory) == 0)
+    throw Error("permission denied: the hub (uid " + std::to_string(memory.st_uid) +
+                ") lets only the group '" + group_name(memory.st_gid) +
+                "' use its shared memory. Join that group (`sudo usermod -aG " +
+                group_name(memory.st_gid) +
+                " $USER`, then log in again), or have the hub started with `afhub hub --group "
+                "GROUP` for a group of yours.");
+}
+
 // After a re-exec: waits for a hub other than the one lost, never starting one.
 void wait_for_new_hub(const std::string& who) {
   std::fprintf(stderr, "%s: waiting for a hub to re-attach to\n", who.c_str());
@@ -298,8 +339,10 @@ RoudiPresence probe_roudi() noexcept {
   address.sun_family = AF_UNIX;
   std::strncpy(address.sun_path, kRoudiSocketPath, sizeof address.sun_path - 1);
   int rc = connect(fd, reinterpret_cast<sockaddr*>(&address), sizeof address);
+  const int error = errno;
   close(fd);
-  return rc == 0 ? RoudiPresence::kRunning : RoudiPresence::kAbsent;
+  // EACCES: a hub runs, but this user may not use it (connect_to_hub says so).
+  return rc == 0 || error == EACCES ? RoudiPresence::kRunning : RoudiPresence::kAbsent;
 }
 
 std::optional<HubIdentity> running_hub() {
@@ -388,7 +431,11 @@ void connect_to_hub(const std::string& role, HubPolicy policy, std::chrono::mill
   // The image before the re-exec had this name too: its socket is ours to remove
   // (iceoryx would, with a warning).
   if (reattaching) unlink(("/tmp/" + name).c_str());
-  iox::runtime::PoshRuntime::initRuntime(iox::RuntimeName_t(iox::cxx::TruncateToCapacity, name));
+  require_hub_access();
+  {
+    const StopEndsBlockingCall stoppable;
+    iox::runtime::PoshRuntime::initRuntime(iox::RuntimeName_t(iox::cxx::TruncateToCapacity, name));
+  }
   runtime_name_storage() = name;
   count_publisher_ports_from(free_publisher_ports(std::chrono::milliseconds(500)));
   if (!g_armed) return;

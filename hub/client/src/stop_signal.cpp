@@ -2,14 +2,17 @@
 #include "afhub/hub/stop_signal.hpp"
 
 #include <signal.h>
+#include <unistd.h>
 
 #include <atomic>
 
 namespace afhub {
 namespace {
 std::atomic<bool> g_stop{false};
+std::atomic<int> g_blocking_calls{0};
 extern "C" void on_stop_signal(int) {
   g_stop = true;
+  if (g_blocking_calls > 0) _exit(0);  // stuck in a call that never looks at the flag
 }
 }  // namespace
 
@@ -23,6 +26,15 @@ void install_stop_signal_handlers() {
 
 bool stop_requested() {
   return g_stop;
+}
+
+StopEndsBlockingCall::StopEndsBlockingCall() {
+  if (g_stop) _exit(0);
+  ++g_blocking_calls;
+}
+
+StopEndsBlockingCall::~StopEndsBlockingCall() {
+  --g_blocking_calls;
 }
 
 }  // namespace afhub

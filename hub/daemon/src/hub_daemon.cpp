@@ -7,7 +7,9 @@
 #include <sys/file.h>
 #include <unistd.h>
 
+#include <grp.h>
 #include <sys/random.h>
+#include <sys/stat.h>
 
 #include <chrono>
 #include <cstdio>
@@ -25,6 +27,7 @@
 #include "afhub_roudi.hpp"
 #include "catalog_builder.hpp"
 #include "health_reporter.hpp"
+#include "iceoryx_hoofs/error_handling/error_handling.hpp"
 #include "iceoryx_hoofs/posix_wrapper/posix_access_rights.hpp"
 #include "iceoryx_posh/iceoryx_posh_config.hpp"
 #include "iceoryx_posh/roudi/iceoryx_roudi_components.hpp"
@@ -38,7 +41,8 @@ namespace {
 
 constexpr char kHubRuntimeName[] = "afhub-hub";
 
-iox::RouDiConfig_t roudi_config(const std::vector<MempoolSpec>& pools, double& total_mib) {
+iox::RouDiConfig_t roudi_config(const std::vector<MempoolSpec>& pools, const std::string& group,
+                                double& total_mib) {
   iox::mepoo::MePooConfig mempools;
   total_mib = 0.0;
   for (const MempoolSpec& pool : pools) {
@@ -46,8 +50,8 @@ iox::RouDiConfig_t roudi_config(const std::vector<MempoolSpec>& pools, double& t
     total_mib += static_cast<double>(pool.payload_bytes) * pool.chunk_count / (1024.0 * 1024.0);
   }
   iox::RouDiConfig_t config;
-  auto group = iox::posix::PosixGroup::getGroupOfCurrentProcess().getName();
-  config.m_sharedMemorySegments.push_back({group, group, mempools});
+  const iox::posix::PosixGroup::string_t name(iox::cxx::TruncateToCapacity, group.c_str());
+  config.m_sharedMemorySegments.push_back({name, name, mempools});
   return config;
 }
 
@@ -167,7 +171,77 @@ void serve_until_stopped(AfhubRouDi& roudi, iox::roudi::PortPool& ports) {
 
 }  // namespace
 
+// iceoryx's own locks in /tmp, which RouDi takes after it made its shared memory: one
+// another user created or holds would abort it there, leaving that memory behind.
+bool iceoryx_locks_are_free() {
+  for (const char* path : {"/tmp/roudi.lock", "/tmp/iox-unique-roudi.lock"}) {
+    struct stat info {};
+    if (lstat(path, &info) != 0) continue;
+    const char* problem = nullptr;
+    if (!S_ISREG(info.st_mode) || info.st_uid != geteuid())
+      problem = "belongs to another user (planted there?)";
+    else if (flock_held(path))
+      problem = "is held by another process";
+    if (!problem) continue;
+    const std::optional<pid_t> holder = flock_holder(path);
+    std::fprintf(stderr,
+                 "afhub hub: iceoryx's lock %s %s (uid %u%s); RouDi could not start. Stop that "
+                 "process, or remove the file as root, then start the hub again.\n",
+                 path, problem, static_cast<unsigned>(info.st_uid),
+                 holder ? (", held by pid " + std::to_string(*holder)).c_str() : "");
+    return false;
+  }
+  return true;
+}
+
+// The hub's shared memory: the management segment and one payload segment, named
+// after its group.
+void remove_shared_memory(const std::string& group) {
+  unlink("/dev/shm/iceoryx_mgmt");
+  unlink(("/dev/shm/" + group).c_str());
+}
+
+// Lets `group` use what RouDi made for its own group: its management segment and its
+// socket (the payload segment has the group in its ACL, from the config).
+bool open_to_group(gid_t gid) {
+  for (const char* path : {"/dev/shm/iceoryx_mgmt", "/tmp/roudi"})
+    if (chown(path, static_cast<uid_t>(-1), gid) != 0 || chmod(path, 0660) != 0) {
+      std::fprintf(stderr, "afhub hub: cannot give %s to the hub's group: %s\n", path,
+                   std::strerror(errno));
+      return false;
+    }
+  return true;
+}
+
+std::string g_starting_group;  // the segment to remove when RouDi fails to start
+
 int run_hub_daemon(const HubOptions& options) {
+  std::string group = options.group;
+  gid_t gid = getegid();
+  if (group.empty()) {
+    group = iox::posix::PosixGroup::getGroupOfCurrentProcess().getName().c_str();
+  } else {
+    const struct group* entry = getgrnam(group.c_str());
+    if (!entry) {
+      std::fprintf(stderr, "afhub hub: no group '%s' on this machine (see /etc/group)\n",
+                   group.c_str());
+      return 1;
+    }
+    gid = entry->gr_gid;
+    // iceoryx lets a user write a segment when /etc/group makes it a member of the
+    // segment's group: the hub writes its catalog and health there too.
+    const iox::posix::PosixUser me = iox::posix::PosixUser::getUserOfCurrentProcess();
+    bool member = false;
+    for (const auto& own : me.getGroups()) member = member || own.getID() == gid;
+    if (!member) {
+      std::fprintf(stderr,
+                   "afhub hub: the hub's user (%s) is not a member of the group '%s', and "
+                   "iceoryx lets only members use its memory. Add it (`usermod -aG %s %s`) and "
+                   "start the hub again.\n",
+                   me.getName().c_str(), group.c_str(), group.c_str(), me.getName().c_str());
+      return 1;
+    }
+  }
   HubLock lock{take_hub_lock(own_hub_directory())};
   if (lock.fd < 0) {
     auto pid = running_hub_pid();
@@ -183,16 +257,38 @@ int run_hub_daemon(const HubOptions& options) {
                  "iceoryx allows one per machine. Stop it, then run `afhub hub` again.\n");
     return 1;
   }
+  if (!iceoryx_locks_are_free()) return 1;
   install_stop_signal_handlers();
   quiet_iceoryx_logs();
 
+  // RouDi's socket and management segment take the group they are made with (0660):
+  // made under `gid`, no member is ever refused by a moment of the wrong group.
+  const gid_t own_gid = getegid();
+  const bool made_in_group = gid != own_gid && setegid(gid) == 0;
   double pool_mib = 0.0;
-  iox::roudi::IceOryxRouDiComponents components(roudi_config(options.mempools, pool_mib));
+  // A fatal error while RouDi starts would abort with its shared memory left in /dev/shm.
+  g_starting_group = group;
+  std::optional<iox::cxx::GenericRAII> starting = iox::ErrorHandler::setTemporaryErrorHandler(
+      [](const iox::Error error, const std::function<void()>, const iox::ErrorLevel level) {
+        if (level != iox::ErrorLevel::FATAL) return;
+        std::fprintf(stderr, "afhub hub: RouDi could not start (%s); removed its shared memory\n",
+                     iox::ErrorHandler::toString(error));
+        remove_shared_memory(g_starting_group);
+        _exit(1);
+      });
+  iox::roudi::IceOryxRouDiComponents components(roudi_config(options.mempools, group, pool_mib));
   AfhubRouDi roudi(components.rouDiMemoryManager, components.portManager);
   iox::runtime::PoshRuntimeSingleProcess runtime(kHubRuntimeName);
+  starting.reset();
+  if (made_in_group) {
+    if (setegid(own_gid) != 0) return 1;
+  } else if (gid != own_gid && !open_to_group(gid)) {
+    return 1;
+  }
   std::fprintf(stderr,
-               "afhub hub: running (pid %d, %zu payload mempools, %.1f MiB). Ctrl-C stops it.\n",
-               static_cast<int>(getpid()), options.mempools.size(), pool_mib);
+               "afhub hub: running (pid %d, %zu payload mempools, %.1f MiB, group '%s'). Ctrl-C "
+               "stops it.\n",
+               static_cast<int>(getpid()), options.mempools.size(), pool_mib, group.c_str());
   serve_until_stopped(roudi, *components.rouDiMemoryManager.portPool().value());
   std::fprintf(stderr, "afhub hub: stopped\n");
   return 0;

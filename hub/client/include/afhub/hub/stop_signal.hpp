@@ -6,4 +6,14 @@ namespace afhub {
 void install_stop_signal_handlers();
 bool stop_requested();
 
+// While one lives, a stop signal ends the process at once (exit code 0): for calls
+// that block without looking at the flag, such as iceoryx's runtime registering.
+class StopEndsBlockingCall {
+ public:
+  StopEndsBlockingCall();
+  ~StopEndsBlockingCall();
+  StopEndsBlockingCall(const StopEndsBlockingCall&) = delete;
+  StopEndsBlockingCall& operator=(const StopEndsBlockingCall&) = delete;
+};
+
 }  // namespace afhub

@@ -36,6 +36,9 @@ std::vector<MempoolSpec> merge_mempools(std::vector<MempoolSpec> pools,
 
 struct HubOptions {
   std::vector<MempoolSpec> mempools = default_mempools();
+  // Who may use the hub's shared memory besides its user: the members of this group
+  // (empty: the hub user's own group).
+  std::string group;
 };
 
 // Runs the hub; returns the process exit code (0 on a clean stop).

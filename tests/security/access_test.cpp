@@ -1,0 +1,149 @@
+// Who may use the hub, and what another user can do to it through /tmp (issue 13):
+// a socket planted at /tmp/roudi, a hub that stops answering, iceoryx's lock files
+// taken by another user, and `afhub hub --group`. Runs as root; the other users are
+// played by `setpriv` (util-linux) as uid 65534.
+#include <gtest/gtest.h>
+#include <sched.h>
+#include <signal.h>
+#include <sys/mount.h>
+#include <sys/socket.h>
+#include <sys/stat.h>
+#include <sys/un.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <thread>
+
+#include "afhub/hub/hub_presence.hpp"
+#include "afhub_process.hpp"
+
+namespace afhub::test {
+namespace {
+
+using namespace std::chrono_literals;
+
+constexpr uid_t kNobody = 65534;    // a member of "users" in the test's /etc/group
+constexpr uid_t kOutsider = 65533;  // no user at all
+constexpr gid_t kUsersGid = 100;    // Debian's "users" group
+
+class Access : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (geteuid() != 0) GTEST_SKIP() << "needs root, to play other users with setpriv";
+    ASSERT_EQ(run_afhub({"hub", "stop", "--force"}).exit_code, 0);
+  }
+  bool hub_up() {
+    return wait_until([] { return probe_roudi() == RoudiPresence::kRunning && running_hub(); },
+                      10s);
+  }
+  // `afhub args...` as `uid`, with `gid` as its only group.
+  RunResult as_other_user(uid_t uid, gid_t gid, std::vector<std::string> args) {
+    std::vector<std::string> wrapped = {"setpriv",         "--reuid",           std::to_string(uid),
+                                        "--regid",         std::to_string(gid), "--clear-groups",
+                                        afhub_executable()};
+    wrapped.insert(wrapped.end(), args.begin(), args.end());
+    return run_command(wrapped, 20s);
+  }
+  const std::string hub_log_ = "/tmp/afhub-access-hub.log";
+};
+
+// A socket bound at /tmp/roudi by anyone but an afhub hub: clients refuse it at once,
+// instead of iceoryx waiting on it.
+TEST_F(Access, APlantedRoudiSocketIsRefusedAtOnce) {
+  const int planted = socket(AF_UNIX, SOCK_DGRAM, 0);
+  sockaddr_un address{};
+  address.sun_family = AF_UNIX;
+  std::snprintf(address.sun_path, sizeof address.sun_path, "/tmp/roudi");
+  unlink(address.sun_path);
+  ASSERT_EQ(bind(planted, reinterpret_cast<sockaddr*>(&address), sizeof address), 0);
+  const RunResult ls = run_afhub({"ls"}, 20s);
+  close(planted);
+  unlink(address.sun_path);
+  EXPECT_EQ(ls.exit_code, 1) << ls.err;
+  EXPECT_TRUE(contains(ls.err, "no afhub hub holds its lock")) << ls.err;
+}
+
+// A hub that does not answer (stopped) leaves a new client waiting inside iceoryx:
+// SIGTERM still ends it (synth handles SIGTERM itself, as a flag its loop polls).
+TEST_F(Access, SigtermEndsAClientWaitingOnAHubThatDoesNotAnswer) {
+  ScopedProcess hub = spawn_afhub({"hub"}, hub_log_);
+  ASSERT_TRUE(hub_up()) << read_file(hub_log_);
+  kill(hub.pid, SIGSTOP);
+  ScopedProcess ls =
+      spawn_afhub({"synth", "--bodies", "1", "--no-autostart"}, "/tmp/afhub-access-ls.log");
+  std::this_thread::sleep_for(1s);  // it is registering by now
+  EXPECT_EQ(exit_code_if_ended(ls.pid), -1)
+      << "it did not wait: " << read_file("/tmp/afhub-access-ls.log");
+  kill(ls.pid, SIGTERM);
+  EXPECT_EQ(wait_for_exit(ls, 5s), 0) << read_file("/tmp/afhub-access-ls.log");
+  kill(hub.pid, SIGCONT);
+  EXPECT_EQ(hub.stop(), 0);
+}
+
+// iceoryx's lock file created and held by another user: the hub refuses to start,
+// says why, and leaves no shared memory behind.
+TEST_F(Access, IceoryxLockTakenByAnotherUserIsRefusedWithoutLeavingMemory) {
+  unlink("/tmp/roudi.lock");
+  ScopedProcess holder = fork();
+  if (holder.pid == 0) {
+    execlp("setpriv", "setpriv", "--reuid", "65534", "--regid", "65534", "--clear-groups", "flock",
+           "/tmp/roudi.lock", "sleep", "30", nullptr);
+    _exit(127);
+  }
+  ASSERT_TRUE(wait_until([] { return access("/tmp/roudi.lock", F_OK) == 0; }, 5s));
+  const RunResult hub = run_afhub({"hub"}, 20s);
+  EXPECT_EQ(hub.exit_code, 1) << hub.err;
+  EXPECT_TRUE(contains(hub.err, "/tmp/roudi.lock belongs to another user")) << hub.err;
+  EXPECT_NE(access("/dev/shm/iceoryx_mgmt", F_OK), 0) << "the hub left its shared memory";
+  holder.stop();
+  unlink("/tmp/roudi.lock");
+}
+
+// /etc/group as iceoryx reads it (membership decides who may use a segment), with
+// root and nobody in "users": in this test process's own mount namespace only.
+bool users_group_with_root_and_nobody() {
+  if (unshare(CLONE_NEWNS) != 0 || mount(nullptr, "/", nullptr, MS_REC | MS_PRIVATE, nullptr) != 0)
+    return false;
+  std::string groups = read_file("/etc/group"), edited;
+  std::istringstream lines(groups);
+  for (std::string line; std::getline(lines, line);) {
+    if (line.rfind("users:", 0) == 0) line += line.back() == ':' ? "root,nobody" : ",root,nobody";
+    edited += line + "\n";
+  }
+  const std::string copy = "/tmp/afhub-access-group";
+  std::ofstream(copy) << edited;
+  chmod(copy.c_str(), 0644);
+  return mount(copy.c_str(), "/etc/group", nullptr, MS_BIND, nullptr) == 0;
+}
+
+// `afhub hub --group users`: a member is let in, anyone else is told "permission
+// denied" and which group to join. Without --group, only the hub's own group.
+TEST_F(Access, OnlyTheHubsGroupIsLetIn) {
+  if (access(afhub_executable().c_str(), X_OK) != 0)
+    GTEST_SKIP() << "the afhub executable is not reachable by other users here";
+  ASSERT_TRUE(users_group_with_root_and_nobody()) << std::strerror(errno);
+  for (const bool with_group : {true, false}) {
+    ScopedProcess hub = spawn_afhub(with_group ? std::vector<std::string>{"hub", "--group", "users"}
+                                               : std::vector<std::string>{"hub"},
+                                    hub_log_);
+    ASSERT_TRUE(hub_up()) << read_file(hub_log_);
+    const RunResult outsider = as_other_user(kOutsider, kNobody, {"ls"});
+    EXPECT_EQ(outsider.exit_code, 1) << outsider.err;
+    EXPECT_TRUE(contains(outsider.err, "permission denied")) << outsider.err;
+    EXPECT_TRUE(contains(outsider.err, with_group ? "'users'" : "'root'")) << outsider.err;
+    const RunResult member = as_other_user(kNobody, kUsersGid, {"ls"});
+    if (with_group)
+      EXPECT_EQ(member.exit_code, 0) << member.err << read_file(hub_log_);
+    else
+      EXPECT_EQ(member.exit_code, 1) << member.err;
+    EXPECT_EQ(hub.stop(), 0);
+  }
+}
+
+}  // namespace
+}  // namespace afhub::test
