@@ -21,6 +21,7 @@ struct CtlOptions {
   int cpu = -1;
   bool lock_memory = false;
   bool lockstep = false;
+  bool spin = false;
   std::uint64_t cycles = 0;
   double after_step_us = -1.0;
   double wait_s = 10.0;
@@ -38,6 +39,9 @@ ControllerOptions controller_options(const CtlOptions& options, const std::strin
   controller.wait_s = options.wait_s;
   controller.body = options.body;
   controller.lockstep = options.lockstep;
+  if (options.spin && !options.lockstep)
+    throw Error("--spin needs --lockstep: it is how a lockstep client waits for a step");
+  controller.spin = options.spin;
   controller.loop.period_ns = static_cast<std::int64_t>(std::llround(1e9 / options.rate_hz));
   controller.loop.fifo_priority = options.fifo_priority;
   controller.loop.cpu = options.cpu;
@@ -64,6 +68,10 @@ void add_loop_options(CLI::App* command, CtlOptions& options) {
                     "mlockall and pre-fault, so the loop takes no page faults");
   command->add_flag("--lockstep", options.lockstep,
                     "Answer every physics step (with `afhub run --lockstep`) instead of a clock");
+  command->add_flag("--spin", options.spin,
+                    "With --lockstep: poll for the next step with sched_yield instead of sleeping "
+                    "until it comes (only on a core of its own: under SCHED_FIFO a yield never "
+                    "lets the physics run on that core)");
   add_count_option(command, "--cycles", options.cycles,
                    "Stop after this many cycles (default: Ctrl-C)");
   command->add_option("--after-step", options.after_step_us,

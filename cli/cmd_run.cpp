@@ -30,6 +30,7 @@ struct RunCliOptions {
   bool offline = false;
   bool no_autostart = false;
   bool lockstep = false;
+  bool spin = false;
   std::uint32_t wait_for = 0;
   double wait_timeout_s = 0.0;
   double client_timeout_ms = 100.0;
@@ -37,6 +38,8 @@ struct RunCliOptions {
   int cpu = -1;
   bool lock_memory = false;
   bool stop_on_nan = false;
+  std::string overrun = "catch-up";
+  double max_catch_up_ms = 100.0;
 };
 
 int run_run(const RunCliOptions& options) {
@@ -48,6 +51,8 @@ int run_run(const RunCliOptions& options) {
                 std::to_string(options.watchdog_s));
   if (!(options.client_timeout_ms > 0.0 && options.client_timeout_ms <= 60'000.0))
     throw Error("--client-timeout must be between 0 and 60000 ms");
+  if (!options.lockstep && options.spin)
+    throw Error("--spin needs --lockstep: it is how the physics waits for lockstep answers");
   if (!options.lockstep && options.wait_for > 0)
     throw Error("--wait-for needs --lockstep: it holds the first step for lockstep clients");
   if (!(options.wait_timeout_s >= 0.0 && options.wait_timeout_s <= 1e6))
@@ -55,6 +60,11 @@ int run_run(const RunCliOptions& options) {
         "--wait-timeout must be a number of seconds up to 1e6, 0 (the default) to wait forever");
   if (options.wait_timeout_s > 0.0 && options.wait_for == 0)
     throw Error("--wait-timeout needs --wait-for N: it limits the wait for N lockstep clients");
+  if (options.overrun != "catch-up" && options.overrun != "skip")
+    throw Error("--overrun takes skip or catch-up, got '" + options.overrun + "'");
+  if (!(options.max_catch_up_ms >= 0.0 && options.max_catch_up_ms <= 10'000.0))
+    throw Error("--max-catch-up must be 0 to 10000 ms, got " +
+                std::to_string(options.max_catch_up_ms));
   if (options.fifo_priority < 0 || options.fifo_priority > 99)
     throw Error("--fifo takes a SCHED_FIFO priority from 1 to 99");
   if (options.offline &&
@@ -125,6 +135,7 @@ int run_run(const RunCliOptions& options) {
       lockstep.wait_for = options.wait_for;
       lockstep.wait_timeout_ns = static_cast<std::int64_t>(options.wait_timeout_s * 1e9);
       lockstep.client_timeout_ns = static_cast<std::int64_t>(options.client_timeout_ms * 1e6);
+      lockstep.spin = options.spin;
       channels->enable_lockstep(lockstep);
     }
     std::fprintf(stderr, "afhub run: %zu bodies, %zu joints on channels; %s%s at dt %.6g s\n",
@@ -136,6 +147,8 @@ int run_run(const RunCliOptions& options) {
   run.fast = options.fast;
   run.steps = options.steps;
   run.stop_on_nan = options.stop_on_nan;
+  run.overrun = options.overrun == "skip" ? OverrunPolicy::kSkip : OverrunPolicy::kCatchUp;
+  run.max_catch_up_ns = static_cast<std::int64_t>(options.max_catch_up_ms * 1e6);
   LoopOptions realtime;
   realtime.fifo_priority = options.fifo_priority;
   realtime.cpu = options.cpu;
@@ -200,6 +213,10 @@ void register_run(CLI::App& app, Runner& selected) {
   run->add_flag("--lockstep", options->lockstep,
                 "Step only when every lockstep client (`afhub ctl ... --lockstep`) has answered "
                 "the current step");
+  run->add_flag("--spin", options->spin,
+                "With --lockstep: poll for the clients' answers with sched_yield instead of "
+                "sleeping until one comes (only on a core of its own: under SCHED_FIFO a yield "
+                "never lets a client run on that core)");
   add_count_option(run, "--wait-for", options->wait_for,
                    "With --lockstep: hold step 0 until this many lockstep clients joined; says "
                    "every 2 s whom it still waits for");
@@ -209,6 +226,14 @@ void register_run(CLI::App& app, Runner& selected) {
   run->add_option("--client-timeout", options->client_timeout_ms,
                   "With --lockstep: ms a step waits for a client's answer before going ahead "
                   "(default 100); 3 misses in a row drop the client until it answers again");
+  run->add_option("--overrun", options->overrun,
+                  "After a stall (the process descheduled or stopped): catch-up (the default) "
+                  "runs the late steps back to back, at most --max-catch-up of them, skipping "
+                  "the rest; skip goes on at the next period, the steps missed skipped (no burst, "
+                  "for haptics)");
+  run->add_option("--max-catch-up", options->max_catch_up_ms,
+                  "With --overrun catch-up: the most simulated time, in ms, made up after a "
+                  "stall (default 100; 0 to 10000); a longer stall is skipped");
   run->add_option("--fifo", options->fifo_priority,
                   "Step under SCHED_FIFO at this priority (1-99); says so if refused");
   run->add_option("--cpu", options->cpu, "Pin the physics loop to this CPU");

@@ -6,10 +6,12 @@
 
 #include <cstdio>
 #include <limits>
+#include <memory>
 
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/hub_loss.hpp"
 #include "afhub/hub/hub_presence.hpp"
+#include "afhub/hub/sample_waiter.hpp"
 #include "afhub/hub/stop_signal.hpp"
 #include "afhub/rt/loop_stats_publisher.hpp"
 #include "afhub/shm_layout/error.hpp"
@@ -63,10 +65,16 @@ void run_free(BodyClient& body, const ControllerOptions& options, const Controll
       [&](std::int64_t now) { stats.maybe_publish(now, timing); });
 }
 
-// Lockstep: answer each new step as soon as its state arrives. Polling (with a
-// yield) rather than sleeping keeps the round trip in microseconds.
+// Lockstep: answer each new step as soon as its state arrives, asleep on the state
+// channel until then (a futex post wakes it in microseconds), or with `spin`
+// polling with a yield. The sleep ends every 10 ms to publish stats and see a stop.
 void run_lockstep(BodyClient& body, const ControllerOptions& options, const ControllerCycle& cycle,
                   LoopTiming& timing, LoopStatsPublisher& stats) {
+  std::unique_ptr<SampleWaiter> waiter;
+  if (!options.spin) {
+    waiter = std::make_unique<SampleWaiter>();
+    waiter->attach(body.state_reader());
+  }
   bool answered_any = false;
   std::uint64_t last_step = 0;
   for (std::uint64_t done = 0;
@@ -75,7 +83,10 @@ void run_lockstep(BodyClient& body, const ControllerOptions& options, const Cont
     const std::int64_t now = monotonic_ns();
     stats.maybe_publish(now, timing);
     if (!state || (answered_any && state->header.sim_step == last_step)) {
-      sched_yield();
+      if (waiter)
+        waiter->wait(10'000'000);
+      else
+        sched_yield();
       continue;
     }
     const std::uint64_t step = state->header.sim_step;

@@ -219,14 +219,29 @@ void Simulation::Data::build_sensors() {
 }
 
 void Simulation::Data::build_actuators() {
-  probe.setCollisionShape(&probe_shape);
+  world.reserve_constraints(static_cast<int>(model.joints.size() + model.actuators.size()));
   for (std::size_t a = 0; a < model.actuators.size(); ++a) {
     const ActuatorSpec& spec = model.actuators[a];
     ActuatorData actuator;
     actuator.parent = spec.parent;
     actuator.point_in_mesh = to_bt(spec.location.position_m);
+    actuator.storage = std::make_unique<std::optional<btPoint2PointConstraint>>();
     actuators.push_back(std::move(actuator));
     bodies[spec.parent].actuators.push_back(static_cast<int>(a));
+  }
+  // An engaged actuator adds a constraint reference to both bodies (and an entry to
+  // their lists of bodies not to collide with): Bullet grows those arrays on first
+  // use. Adding and removing as many references as there are actuators, here, leaves
+  // room for them on every body a constraint may hold.
+  if (actuators.empty()) return;
+  std::vector<std::unique_ptr<btPoint2PointConstraint>> room;
+  for (BodyData& body : bodies) {
+    if (!(body.body->getInvMass() > 0) && body.actuators.empty()) continue;
+    room.clear();
+    for (std::size_t a = 0; a < actuators.size(); ++a)
+      room.push_back(std::make_unique<btPoint2PointConstraint>(*body.body, btVector3(0, 0, 0)));
+    for (auto& constraint : room) body.body->addConstraintRef(constraint.get());
+    for (auto& constraint : room) body.body->removeConstraintRef(constraint.get());
   }
 }
 

@@ -3,7 +3,7 @@
 // goes back to its pose after the last good step, at rest: restoring its last
 // velocity too would often replay the blow-up. Its Cartesian input, and the inputs
 // of every joint touching it or driven by it, are released, so a command that
-// caused it stops.
+// caused it stops, and an actuator holding it or carried by it lets go.
 // Everything is kept in storage made when the world was built: no allocation.
 #include "simulation_data.hpp"
 
@@ -70,6 +70,9 @@ void Simulation::Data::recover_non_finite() noexcept {
       joints[j]->release();
       joint_driver[j] = -1;
     }
+    // An actuator on it or holding it lets go (releasing allocates nothing).
+    for (ActuatorData& actuator : actuators)
+      if (actuator.parent == index || actuator.held == index) actuate(actuator, false);
   }
   for (std::size_t s = 0; s < soft_bodies.size(); ++s) {
     SoftBodyData& data = soft_bodies[s];

@@ -16,6 +16,7 @@
 #include <array>
 #include <cmath>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "afhub/physics/simulation.hpp"
@@ -77,11 +78,24 @@ struct SoftBodyData {
 };
 
 // A constraint actuator: a point-to-point constraint to whatever body touches it,
-// made when commanded and removed when released.
+// made when commanded and removed when released. Its storage is made with the world,
+// so that engaging and releasing allocate nothing.
 struct ActuatorData {
   int parent = -1;
   btVector3 point_in_mesh;  // in the parent's mesh frame
-  std::unique_ptr<btPoint2PointConstraint> hold;
+  std::unique_ptr<std::optional<btPoint2PointConstraint>> storage;
+  btPoint2PointConstraint* hold = nullptr;  // engaged: the constraint in `storage`
+  int held = -1;                            // engaged: the body it holds
+};
+
+// The world, with room for every constraint it may hold at once.
+class ReservedWorld : public btSoftRigidDynamicsWorld {
+ public:
+  using btSoftRigidDynamicsWorld::btSoftRigidDynamicsWorld;
+  void reserve_constraints(int count) {
+    m_constraints.reserve(count);
+    m_sortedConstraints.reserve(count);
+  }
 };
 
 struct Ray {
@@ -148,7 +162,7 @@ struct Simulation::Data {
   btCollisionDispatcher dispatcher{&collision_config};
   btDbvtBroadphase broadphase;
   PreallocatedSolver solver;
-  btSoftRigidDynamicsWorld world{&dispatcher, &broadphase, &solver, &collision_config};
+  ReservedWorld world{&dispatcher, &broadphase, &solver, &collision_config};
   CollisionFilter filter;
 
   std::vector<BodyData> bodies;
@@ -161,18 +175,18 @@ struct Simulation::Data {
   std::vector<ActuatorData> actuators;
   std::vector<WorldObjectData> lights, cameras;
   NanRecoveries nan_recoveries;
-  btSphereShape probe_shape{0.01};  // what an actuator feels for: 1 cm around its point
-  btCollisionObject probe;
+  btSphereShape probe{0.01};  // what an actuator feels for: 1 cm around its point
 
   Data(const Model& m, double dt)
       : model(m),
         dt_s(dt),
-        solver(static_cast<int>(m.bodies.size()), static_cast<int>(m.joints.size())),
+        solver(static_cast<int>(m.bodies.size()),
+               static_cast<int>(m.joints.size() + m.actuators.size())),
         filter(m) {}
   ~Data() {
     for (auto& joint : joints) world.removeConstraint(&joint->constraint());
     for (auto& actuator : actuators)
-      if (actuator.hold) world.removeConstraint(actuator.hold.get());
+      if (actuator.hold) world.removeConstraint(actuator.hold);
     // A build that failed part-way (a mesh it could not read) leaves bodies unmade.
     for (auto& body : bodies)
       if (body.body) world.removeRigidBody(body.body.get());
@@ -190,6 +204,7 @@ struct Simulation::Data {
   void build_world_objects();
   void build_bounds();
   void actuate(ActuatorData& actuator, bool engage) noexcept;
+  int touching_body(int parent, const btVector3& point) const noexcept;
   void apply_cartesian(BodyData& body) noexcept;
   void read_sensors() noexcept;
   void recover_non_finite() noexcept;

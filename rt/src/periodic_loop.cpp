@@ -112,7 +112,11 @@ void run_periodic(const LoopOptions& options, LoopTiming& timing, const LoopCycl
         timing.count_overruns(1);
       }
     }
-    if (cycle.after) cycle.after(clock.now_ns());
+    if (cycle.after) {
+      const std::int64_t after_began = clock.now_ns();
+      cycle.after(after_began);
+      timing.record_housekeeping(clock.now_ns() - after_began);
+    }
     if (!go_on) break;
   }
 }

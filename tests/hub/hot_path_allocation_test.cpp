@@ -3,10 +3,14 @@
 // sanitizer builds, every malloc in this binary is counted while the loop runs.
 #include <gtest/gtest.h>
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <atomic>
 #include <cmath>
 #include <cstdlib>
 #include <new>
+#include <string>
 
 #include "afhub/controllers/joint_targets.hpp"
 #include "afhub/hub/bodies.hpp"
@@ -15,6 +19,7 @@
 #include "afhub/physics/sim_channels.hpp"
 #include "afhub/rt/loop_stats_publisher.hpp"
 #include "afhub_process.hpp"
+#include "model_files.hpp"
 #include "shared_models.hpp"
 
 // The replacements below pair malloc with free on purpose; GCC cannot see that.
@@ -232,6 +237,139 @@ TEST(HotPath, NanRecoveryDoesNotAllocate) {
   EXPECT_EQ(world.latest()->last_nan_step, sim.nan_recoveries().last.step);
   EXPECT_EQ(name_of(world.latest()->last_nan_body),
             model.bodies[sim.nan_recoveries().last.body].channel);
+}
+
+// Constraint actuators engaging and releasing, and a proximity sensor read every
+// step: a gripper (fixed, weightless world) holds a ball that touches it and lets
+// go, every 50 steps, while its ray measures the distance to the ball.
+TEST(HotPath, ActuatorsAndSensorsDoNotAllocate) {
+  testing::ModelFolder folder;
+  const physics::Model model = physics::load_adf_files({folder.write(
+      "gripper.yaml",
+      "bodies: [BODY gripper, BODY ball]\nactuators: [ACTUATOR grip]\nsensors: [SENSOR range]\n"
+      "namespace: /test/grip/\ngravity: {x: 0, y: 0, z: 0}\n"
+      "BODY gripper:\n  name: gripper\n  mass: 0\n"
+      "BODY ball:\n  name: ball\n  mass: 1\n  shape: sphere\n  geometry: {radius: 0.05}\n"
+      "  location: {position: {x: 0, y: 0, z: -0.045}}\n"
+      "ACTUATOR grip:\n  name: grip\n  type: Constraint\n  parent: BODY gripper\n"
+      "  max impulse: 10\n  tau: 1\n"
+      "SENSOR range:\n  name: range\n  type: Proximity\n  parent: BODY gripper\n  range: 1.0\n"
+      "  array:\n  - {offset: {x: 0, y: 0, z: 0.2}, direction: {x: 0, y: 0, z: -1}}\n")});
+  physics::Simulation sim(model, 0.001);
+  physics::SimChannels channels(sim, 0.5);
+  BodyClient controller(model.bodies[0].channel);
+  int cycle = 0, changes = 0;
+  bool engaged = false;
+  double distance = 0.0;
+  auto one_cycle = [&]() {
+    channels.apply_commands(monotonic_ns());
+    if (sim.actuator_engaged(0) != engaged) {
+      engaged = !engaged;
+      ++changes;
+    }
+    sim.step();
+    channels.publish(0.0, 0.0, false);
+    const BodyState* state = controller.latest_state();
+    BodyCommand* command = controller.loan_command();
+    if (!state || !command) return false;
+    distance = state->sensor_distances_m[0];
+    command->actuator_count = 1;
+    command->actuate[0] = (++cycle / 50) % 2;
+    controller.publish_command(command);
+    return true;
+  };
+  ASSERT_TRUE(test::wait_until([&] { return one_cycle(); }, 2s));
+  for (int i = 0; i < 500; ++i) ASSERT_TRUE(one_cycle());
+  ASSERT_GE(changes, 4);  // the ball is held and let go
+
+  changes = 0;
+  constexpr int kCycles = 5000;
+  EXPECT_TRUE(count_allocations(kCycles, one_cycle));
+  EXPECT_EQ(g_allocations.load(), 0)
+      << "heap allocations in " << kCycles << " cycles engaging and releasing an actuator";
+  EXPECT_GE(changes, kCycles / 50 - 2);
+  EXPECT_NEAR(distance, 0.2 - (0.05 - 0.045), 0.002);  // the ray meets the ball's top
+  EXPECT_EQ(channels.rejected_commands(), 0u);
+}
+
+// What the loop used to print as it happened (a refused command, a watchdog expiry,
+// a lockstep client joining and dropped) is noted without allocating or writing, and
+// said by report_events() outside the loop. stderr goes to a pipe while the loop runs.
+TEST(HotPath, EventsAreSaidOutsideTheLoopOnly) {
+  const physics::Model model = physics::load_adf_files({AFHUB_EXAMPLE_MODELS "/arm7.yaml"});
+  physics::Simulation sim(model, 0.001);
+  physics::SimChannels channels(sim, 0.5);
+  physics::LockstepOptions lockstep;
+  lockstep.client_timeout_ns = 100'000;  // a step waits 0.1 ms for a missing answer
+  lockstep.max_misses = 1;               // and drops its client at once
+  channels.enable_lockstep(lockstep);
+  channels.set_watchdog("afhub/arm/link2", 0.002);
+  BodyClient base("afhub/arm/base"), link2("afhub/arm/link2"), link7("afhub/arm/link7");
+  int cycle = 0;
+  std::int64_t link2_commanded_ns = 0;
+  auto one_cycle = [&]() {
+    channels.publish(0.0, 0.0, false);
+    const BodyState* state = base.latest_state();
+    if (!state) return false;
+    if (++cycle % 2 == 0) {  // the lockstep client answers every other step: joins, drops
+      if (BodyCommand* command = base.loan_command()) {
+        command->header.sim_step = state->header.sim_step;
+        command->lockstep = 1;
+        base.publish_command(command);
+      }
+    }
+    if (BodyCommand* bad = link7.loan_command()) {  // more joints than link7 has: refused
+      bad->joint_count = 3;
+      link7.publish_command(bad);
+    }
+    const std::int64_t now = monotonic_ns();
+    if (now - link2_commanded_ns > 5'000'000) {  // every 5 ms, past its 2 ms watchdog
+      if (BodyCommand* command = link2.loan_command()) link2.publish_command(command);
+      link2_commanded_ns = now;
+    }
+    channels.await_lockstep();
+    sim.step();
+    return true;
+  };
+  ASSERT_TRUE(test::wait_until([&] { return one_cycle(); }, 2s));
+  for (int i = 0; i < 500; ++i) ASSERT_TRUE(one_cycle());
+  channels.report_events(stdout);  // what the warm-up noted, said before the count
+
+  int pipe_fds[2];
+  ASSERT_EQ(pipe2(pipe_fds, O_NONBLOCK), 0);
+  std::fflush(stderr);
+  const int saved_stderr = dup(2);
+  dup2(pipe_fds[1], 2);
+  const std::uint64_t dropped = channels.dropped_clients(), expiries = channels.watchdog_expiries(),
+                      rejected = channels.rejected_commands();
+  constexpr int kCycles = 2000;
+  const bool ok = count_allocations(kCycles, one_cycle);
+  std::fflush(stderr);
+  char buffer[4096];
+  const ssize_t written_in_loop = read(pipe_fds[0], buffer, sizeof buffer);
+  const int lines = channels.report_events(stderr);
+  std::fflush(stderr);
+  const ssize_t report_bytes = read(pipe_fds[0], buffer, sizeof buffer - 1);
+  dup2(saved_stderr, 2);
+  close(saved_stderr);
+  close(pipe_fds[0]);
+  close(pipe_fds[1]);
+
+  EXPECT_TRUE(ok);
+  EXPECT_EQ(g_allocations.load(), 0) << "heap allocations in " << kCycles << " eventful cycles";
+  EXPECT_LE(written_in_loop, 0) << "the loop wrote to stderr: "
+                                << std::string(buffer, std::max<ssize_t>(written_in_loop, 0));
+  EXPECT_GE(channels.dropped_clients(), dropped + kCycles / 4);
+  EXPECT_GT(channels.watchdog_expiries(), expiries);
+  EXPECT_GE(channels.rejected_commands(), rejected + kCycles / 2);
+  // Outside the loop, the report says the events that repeat (joins and drops); the
+  // said-once ones (the refusal, the expiry) were said after the warm-up already.
+  ASSERT_GT(report_bytes, 0);
+  const std::string said(buffer, static_cast<std::size_t>(report_bytes));
+  EXPECT_GE(lines, 2);
+  EXPECT_NE(said.find("joined the barrier for afhub/arm/base"), std::string::npos) << said;
+  EXPECT_NE(said.find("dropped from the barrier"), std::string::npos) << said;
+  EXPECT_EQ(said.find("refused a command"), std::string::npos) << said;
 }
 
 // The controller side too: the shipped sine controller answering each step in

@@ -124,8 +124,9 @@ BENCHMARK(BM_PublishOneChannel)
 // answers it, the physics resumes. Counters: the round trip (publish start to the
 // answer applied) p50 and p99 in us, and simulated seconds per wall second with the
 // physics step included. One body (a ball) isolates the protocol; the KUKA
-// (8 bodies published per step) is the realistic case.
-void BM_LockstepRoundTrip(benchmark::State& state, bool kuka) {
+// (8 bodies published per step) is the realistic case. Both sides wait asleep on a
+// futex (iceoryx's WaitSet), or with `spin` poll with sched_yield (--spin).
+void BM_LockstepRoundTrip(benchmark::State& state, bool kuka, bool spin) {
   if (kuka && !have_shared_models(state)) return;
   afhub::testing::ModelFolder folder;
   const std::string file =
@@ -138,10 +139,12 @@ void BM_LockstepRoundTrip(benchmark::State& state, bool kuka) {
   SimChannels channels(sim, 0.5);
   LockstepOptions options;
   options.wait_for = 1;
+  options.spin = spin;
   channels.enable_lockstep(options);
   channels.publish(0.0, 0.0, false);
-  afhub::test::ScopedProcess client(
-      afhub::test::spawn_afhub({"ctl", "hold", kuka ? "base" : "ball", "--lockstep"}));
+  std::vector<std::string> client_args{"ctl", "hold", kuka ? "base" : "ball", "--lockstep"};
+  if (spin) client_args.push_back("--spin");
+  afhub::test::ScopedProcess client(afhub::test::spawn_afhub(client_args));
   channels.wait_for_clients();  // step 0 waits for the client to join
   channels.await_lockstep();
   LatencyHistogram round_trip;
@@ -160,10 +163,16 @@ void BM_LockstepRoundTrip(benchmark::State& state, bool kuka) {
 }
 // Fixed iterations: one run per case, so the client process starts once (a second
 // SimChannels in this process would briefly publish beside the first).
-BENCHMARK_CAPTURE(BM_LockstepRoundTrip, one_body, false)
+BENCHMARK_CAPTURE(BM_LockstepRoundTrip, one_body, false, false)
     ->Unit(benchmark::kMicrosecond)
     ->Iterations(20000);
-BENCHMARK_CAPTURE(BM_LockstepRoundTrip, kuka, true)
+BENCHMARK_CAPTURE(BM_LockstepRoundTrip, one_body_spin, false, true)
+    ->Unit(benchmark::kMicrosecond)
+    ->Iterations(20000);
+BENCHMARK_CAPTURE(BM_LockstepRoundTrip, kuka, true, false)
+    ->Unit(benchmark::kMicrosecond)
+    ->Iterations(20000);
+BENCHMARK_CAPTURE(BM_LockstepRoundTrip, kuka_spin, true, true)
     ->Unit(benchmark::kMicrosecond)
     ->Iterations(20000);
 

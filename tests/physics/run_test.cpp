@@ -3,7 +3,9 @@
 // launch file with -l, the report, and real-time pacing.
 #include <gtest/gtest.h>
 #include <signal.h>
+#include <time.h>
 
+#include <algorithm>
 #include <cmath>
 #include <thread>
 
@@ -23,6 +25,126 @@ using namespace std::chrono_literals;
 
 const std::string kDescriptions = AFHUB_SHARED_MODELS "/descriptions/";
 const std::string kKuka = kDescriptions + "multi-bodies/robots/blender-kuka.yaml";
+
+// The physics' pacing on a clock the test drives: every step takes no time, and one
+// sleep (the 100th) returns `stall_ns` late, as after a SIGSTOP or a long preemption.
+// Counts the steps that then ran back to back (their deadline already past).
+class StallingClock final : public LoopClock {
+ public:
+  explicit StallingClock(std::int64_t stall_ns) : stall_ns_(stall_ns) {}
+  std::int64_t now_ns() noexcept override { return now_; }
+  void sleep_until_ns(std::int64_t deadline_ns) noexcept override {
+    if (deadline_ns <= now_) ++back_to_back;
+    now_ = std::max(now_, deadline_ns) + (++sleeps_ == 100 ? stall_ns_ : 0);
+  }
+  int back_to_back = 0;
+
+ private:
+  std::int64_t now_ = 1'000'000'000'000;
+  std::int64_t stall_ns_;
+  int sleeps_ = 0;
+};
+
+int steps_in_a_burst_after_a_stall(OverrunPolicy policy, std::int64_t max_catch_up_ns,
+                                   std::int64_t stall_ns) {
+  afhub::testing::ModelFolder folder;
+  const physics::Model model = physics::load_adf_files(
+      {folder.write("ball.yaml", "bodies: [BODY ball]\nBODY ball:\n  name: ball\n  mass: 1\n")});
+  physics::Simulation sim(model, 0.001);
+  StallingClock clock(stall_ns);
+  physics::RunOptions options;
+  options.steps = 1000;
+  options.overrun = policy;
+  options.max_catch_up_ns = max_catch_up_ns;
+  options.clock = &clock;
+  physics::RunReport report;
+  physics::run_loop(sim, nullptr, options, report);
+  EXPECT_EQ(report.steps, 1000u);
+  return clock.back_to_back;
+}
+
+// After a stall, the physics catches up at most --max-catch-up of steps back to back
+// (beyond, it skips them), or with --overrun skip none: no burst a haptic user feels.
+TEST(Run, AfterAStallThePhysicsCatchesUpBoundedOrSkips) {
+  // 50 ms behind: caught up step by step, within the default 100 ms bound.
+  EXPECT_EQ(steps_in_a_burst_after_a_stall(OverrunPolicy::kCatchUp, 100'000'000, 50'000'000), 50);
+  // 5 s behind: beyond the bound, skipped rather than 5000 steps in a burst.
+  EXPECT_EQ(steps_in_a_burst_after_a_stall(OverrunPolicy::kCatchUp, 100'000'000, 5'000'000'000), 0);
+  // A tighter bound, or skipping, for haptics.
+  EXPECT_EQ(steps_in_a_burst_after_a_stall(OverrunPolicy::kCatchUp, 10'000'000, 50'000'000), 0);
+  EXPECT_EQ(steps_in_a_burst_after_a_stall(OverrunPolicy::kSkip, 100'000'000, 50'000'000), 0);
+  EXPECT_EQ(steps_in_a_burst_after_a_stall(OverrunPolicy::kSkip, 100'000'000, 2'000'000), 0);
+}
+
+// The CPU time this thread used while `wait` ran, in ms.
+template <class Wait>
+double thread_cpu_ms(Wait&& wait) {
+  auto cpu_ns = [] {
+    timespec t{};
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+    return static_cast<double>(t.tv_sec) * 1e9 + static_cast<double>(t.tv_nsec);
+  };
+  const double before = cpu_ns();
+  wait();
+  return (cpu_ns() - before) * 1e-6;
+}
+
+// A lockstep step waiting for an answer that does not come sleeps on the command
+// channels (a futex) instead of spinning: over a 300 ms wait it uses almost no CPU,
+// where --spin polls all along (under SCHED_FIFO, starving the client it waits for).
+// An answer wakes it: the step goes ahead with no answer counted late.
+TEST(Run, LockstepWaitsAsleepUnlessSpinning) {
+  afhub::testing::ModelFolder folder;
+  const physics::Model model =
+      physics::load_adf_files({folder.write("ball.yaml",
+                                            "bodies: [BODY ball]\nnamespace: /test/sleep/\n"
+                                            "BODY ball:\n  name: ball\n  mass: 1\n")});
+  physics::Simulation sim(model, 0.001);
+  physics::SimChannels channels(sim, 5.0);
+  BodyClient client(model.bodies[0].channel);
+  auto answer = [&] {
+    channels.publish(0.0, 0.0, false);
+    const BodyState* state = client.latest_state();
+    BodyCommand* command = client.loan_command();
+    if (!state || !command) return false;
+    command->header.sim_step = state->header.sim_step;
+    command->lockstep = 1;
+    client.publish_command(command);
+    return true;
+  };
+  for (bool spin : {false, true}) {
+    physics::LockstepOptions options;
+    options.client_timeout_ns = 300'000'000;
+    options.max_misses = 1000;
+    options.spin = spin;
+    channels.enable_lockstep(options);
+    ASSERT_TRUE(wait_until([&] { return answer() && channels.await_lockstep(); }, 5s));
+    ASSERT_EQ(channels.lockstep_clients(), 1u);
+    sim.step();
+    channels.publish(0.0, 0.0, false);
+    const std::uint64_t late = channels.late_answers();
+    const double cpu_ms = thread_cpu_ms([&] { channels.await_lockstep(); });  // no answer: 300 ms
+    EXPECT_EQ(channels.late_answers(), late + 1);
+    if (spin)
+      EXPECT_GT(cpu_ms, 30.0) << "spinning";
+    else
+      EXPECT_LT(cpu_ms, 15.0) << "asleep";
+    // An answer from another thread ends the wait before the timeout.
+    sim.step();
+    std::thread answering([&] {
+      std::this_thread::sleep_for(20ms);
+      if (BodyCommand* command = client.loan_command()) {
+        command->header.sim_step = sim.step_count();
+        command->lockstep = 1;
+        client.publish_command(command);
+      }
+    });
+    channels.publish(0.0, 0.0, false);
+    channels.await_lockstep();
+    answering.join();
+    EXPECT_EQ(channels.late_answers(), late + 1) << (spin ? "spinning" : "asleep");
+  }
+}
 
 TEST(Run, KukaOnChannelsObeysCommandsRefusesNanAndTripsTheWatchdog) {
   SKIP_WITHOUT_SHARED_MODELS();

@@ -11,6 +11,7 @@
 #include "iceoryx_posh/mepoo/chunk_header.hpp"
 #include "iceoryx_posh/popo/untyped_publisher.hpp"
 #include "iceoryx_posh/popo/untyped_subscriber.hpp"
+#include "reader_port.hpp"
 
 namespace afhub {
 namespace {
@@ -75,17 +76,14 @@ bool RawWriter::has_readers() const noexcept {
   return port_->publisher.hasSubscribers();
 }
 
-struct RawLatestReader::Port {
-  Port(const ChannelId& channel, History history)
-      : subscriber(describe_channel(channel), [history] {
-          iox::popo::SubscriberOptions options;
-          options.queueCapacity = 1;  // latest value: a newer sample replaces a queued one
-          options.historyRequest = history == History::kKeepLast ? 1 : 0;
-          options.queueFullPolicy = iox::popo::QueueFullPolicy::DISCARD_OLDEST_DATA;
-          return options;
-        }()) {}
-  iox::popo::UntypedSubscriber subscriber;
-};
+RawLatestReader::Port::Port(const ChannelId& channel, History history)
+    : subscriber(describe_channel(channel), [history] {
+        iox::popo::SubscriberOptions options;
+        options.queueCapacity = 1;  // latest value: a newer sample replaces a queued one
+        options.historyRequest = history == History::kKeepLast ? 1 : 0;
+        options.queueFullPolicy = iox::popo::QueueFullPolicy::DISCARD_OLDEST_DATA;
+        return options;
+      }()) {}
 
 RawLatestReader::RawLatestReader(const ChannelId& channel, PayloadKind kind)
     : channel_(channel), kind_(kind) {

@@ -31,6 +31,7 @@ double largest_pivot_gap(const Simulation& sim) noexcept {
 void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
               RunReport& report) {
   const auto period_ns = static_cast<std::int64_t>(sim.dt_s() * 1e9);
+  auto clock_ns = [&] { return options.clock ? options.clock->now_ns() : monotonic_ns(); };
   WorldControl control;
   WorldCommand world_command;
   double achieved_rate_hz = 0.0;
@@ -44,14 +45,19 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
   if (channels) channels->publish(0.0, 0.0, false);  // step 0: the model as loaded
   // The wait for lockstep clients before the first step is setup: the clock starts after it.
   if (channels && channels->lockstep() && !channels->wait_for_clients()) return;
-  const std::int64_t start_ns = monotonic_ns();
+  const std::int64_t start_ns = clock_ns();
   RateMeter rate;
+  // Events (refused commands, expiries, lockstep joins and drops) are said from here,
+  // outside the timed step, at most once a second: never from inside the step.
+  std::int64_t next_report_ns = start_ns;
 
-  // Paced on rt's loop runner: absolute deadlines start + k dt, never re-based, and
-  // late steps caught up so that simulated time keeps up with the wall; --fast: no period.
+  // Paced on rt's loop runner: absolute deadlines start + k dt, never re-based; after
+  // a stall, the overrun policy (bounded catch-up or skip); --fast: no period.
   LoopOptions pacing;
   pacing.period_ns = options.fast ? 0 : period_ns;
-  pacing.overrun = OverrunPolicy::kCatchUp;
+  pacing.overrun = options.overrun;
+  pacing.max_catch_up_ns = options.max_catch_up_ns;
+  pacing.clock = options.clock;
   pacing.grid_origin_ns = start_ns;
   LoopCycle cycle;
   // Commands in: the world's (pause, resume, step, reset), then the bodies'; in
@@ -86,7 +92,7 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
       }
     }
     if (channels)
-      channels->publish(static_cast<double>(monotonic_ns() - start_ns) * 1e-9, achieved_rate_hz,
+      channels->publish(static_cast<double>(clock_ns() - start_ns) * 1e-9, achieved_rate_hz,
                         control.paused);
     if (stepping) report.step_time.record(static_cast<double>(monotonic_ns() - begin_ns) * 1e-3);
     return options.steps == 0 || report.steps < options.steps;
@@ -100,10 +106,15 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
     }
     rate.update(now_ns, report.steps, !control.paused);
     achieved_rate_hz = rate.rate_hz();
+    if (channels && now_ns >= next_report_ns) {
+      channels->report_events(stderr);
+      next_report_ns = now_ns + 1'000'000'000;
+    }
   };
   if (options.steps == 0 || report.steps < options.steps)
     run_periodic(pacing, report.timing, cycle);
-  report.wall_time_s = static_cast<double>(monotonic_ns() - start_ns) * 1e-9;
+  if (channels) channels->report_events(stderr);
+  report.wall_time_s = static_cast<double>(clock_ns() - start_ns) * 1e-9;
 }
 
 std::string nan_summary(const Simulation& sim) {

@@ -7,6 +7,7 @@
 #include <cstdio>
 
 #include "afhub/hub/body_claims.hpp"
+#include "afhub/hub/sample_waiter.hpp"
 #include "afhub/hub/stop_signal.hpp"
 #include "afhub/hub/world_command_queue.hpp"
 #include "afhub/shm_layout/channel_names.hpp"
@@ -96,6 +97,7 @@ SimChannels::SimChannels(Simulation& sim, double watchdog_s, std::string_view na
     channel.publisher = std::make_unique<BodyPublisher>(model.soft_bodies[s].channel);
     channels_.push_back(std::move(channel));
   }
+  lockstep_pids_.reserve(channels_.size());
   directory_.publish();
   confirm_body_claims(claimed_, std::chrono::seconds(2));
 }
@@ -117,35 +119,16 @@ void SimChannels::apply_commands(std::int64_t now_ns) noexcept {
       const std::int64_t age_ns = now_ns - stamp_ns;
       if (age_ns > channel.watchdog_ns) {
         ++stale_;
-        if (!channel.told_stale) {
-          std::fprintf(stderr,
-                       "afhub run: ignored a command for %s from pid %u: published %.3f s ago, "
-                       "older than the body's watchdog of %.3f s (counted in `afhub status`)\n",
-                       channel.publisher->channel().c_str(), answer.pid,
-                       static_cast<double>(age_ns) * 1e-9,
-                       static_cast<double>(channel.watchdog_ns) * 1e-9);
-          channel.told_stale = true;
-        }
+        if (Notice* notice = note(channel, kStale, answer.pid))
+          notice->seconds = static_cast<double>(age_ns) * 1e-9;
       } else if (const char* problem = sim_.input_problem(channel.index, input_)) {
         ++rejected_;
-        if (!channel.told_rejected) {
-          std::fprintf(stderr,
-                       "afhub run: refused a command for %s: %s (from pid %u; counted in `afhub "
-                       "status`; said once per body)\n",
-                       channel.publisher->channel().c_str(), problem, answer.pid);
-          channel.told_rejected = true;
-        }
+        if (Notice* notice = note(channel, kRejected, answer.pid)) set_name(notice->why, problem);
       } else {
         // Entries for joints without an axis are refused and counted; the rest applies.
         if (const char* entry = sim_.axisless_entry(channel.index, input_)) {
           ++rejected_;
-          if (!channel.told_axisless) {
-            std::fprintf(stderr,
-                         "afhub run: refused part of a command for %s: %s (from pid %u; counted "
-                         "in `afhub status`; said once per body)\n",
-                         channel.publisher->channel().c_str(), entry, answer.pid);
-            channel.told_axisless = true;
-          }
+          if (Notice* notice = note(channel, kAxisless, answer.pid)) set_name(notice->why, entry);
         }
         if (lockstep_ && answer.lockstep) note_lockstep_answer(channel, answer);
         channel.applied_answer_step = answer.step;
@@ -161,17 +144,74 @@ void SimChannels::apply_commands(std::int64_t now_ns) noexcept {
         sim_.clear_input(channel.index);
       channel.commanded = false;
       ++expiries_;
-      if (!channel.told_expired)
-        std::fprintf(stderr,
-                     "afhub run: no command for %s in %.3f s: %s until commands come again "
-                     "(said once; `afhub status` counts every expiry)\n",
-                     channel.publisher->channel().c_str(),
-                     static_cast<double>(channel.watchdog_ns) * 1e-9,
-                     channel.hold_on_watchdog ? "its joints hold their positions"
-                                              : "its wrench and the efforts it drove are zero");
-      channel.told_expired = true;
+      note(channel, kExpired, 0);
     }
   }
+}
+
+SimChannels::Notice* SimChannels::note(Channel& channel, Event event, std::uint32_t pid) noexcept {
+  Notice& notice = channel.notices[event];
+  // Said once: the first occurrence's details stay until reported, later ones are counts.
+  if (said_once(event) && (notice.said || notice.pending)) return nullptr;
+  notice.pending = true;
+  notice.pid = pid;
+  return &notice;
+}
+
+int SimChannels::report_events(std::FILE* out) {
+  int lines = 0;
+  for (Channel& channel : channels_) {
+    const char* body = channel.publisher->channel().c_str();
+    for (int event = 0; event < kEventKinds; ++event) {
+      Notice& n = channel.notices[event];
+      if (!n.pending) continue;
+      n.pending = false;
+      n.said = said_once(static_cast<Event>(event));
+      ++lines;
+      switch (event) {
+        case kStale:
+          std::fprintf(out,
+                       "afhub run: ignored a command for %s from pid %u: published %.3f s ago, "
+                       "older than the body's watchdog of %.3f s (counted in `afhub status`)\n",
+                       body, n.pid, n.seconds, static_cast<double>(channel.watchdog_ns) * 1e-9);
+          break;
+        case kRejected:
+          std::fprintf(out,
+                       "afhub run: refused a command for %s: %s (from pid %u; counted in `afhub "
+                       "status`; said once per body)\n",
+                       body, n.why.data(), n.pid);
+          break;
+        case kAxisless:
+          std::fprintf(out,
+                       "afhub run: refused part of a command for %s: %s (from pid %u; counted "
+                       "in `afhub status`; said once per body)\n",
+                       body, n.why.data(), n.pid);
+          break;
+        case kExpired:
+          std::fprintf(out,
+                       "afhub run: no command for %s in %.3f s: %s until commands come again "
+                       "(said once; `afhub status` counts every expiry)\n",
+                       body, static_cast<double>(channel.watchdog_ns) * 1e-9,
+                       channel.hold_on_watchdog ? "its joints hold their positions"
+                                                : "its wrench and the efforts it drove are zero");
+          break;
+        case kJoined:
+          std::fprintf(out,
+                       "afhub run: lockstep client pid %u joined the barrier for %s at step %llu\n",
+                       n.pid, body, static_cast<unsigned long long>(n.step));
+          break;
+        case kDropped:
+          std::fprintf(out,
+                       "afhub run: lockstep client pid %u missed %d steps in a row for %s; dropped "
+                       "from the barrier (it rejoins by answering a current step)\n",
+                       n.pid, n.misses, body);
+          break;
+        default:
+          break;
+      }
+    }
+  }
+  return lines;
 }
 
 void SimChannels::forget_commands() noexcept {
@@ -213,30 +253,59 @@ void SimChannels::set_watchdog(const std::string& body, double seconds) {
 void SimChannels::enable_lockstep(const LockstepOptions& options) {
   lockstep_ = true;
   lockstep_options_ = options;
+  waiter_.reset();
+  if (options.spin) return;
+  waiter_ = std::make_unique<SampleWaiter>();
+  for (Channel& channel : channels_) {
+    if (channel.soft || waiter_->attach(channel.publisher->command_reader())) continue;
+    std::fprintf(stderr,
+                 "afhub run: the lockstep wait can sleep on at most %zu bodies' commands; this "
+                 "model has more, so it polls instead (as with --spin)\n",
+                 SampleWaiter::kCapacity);
+    waiter_.reset();
+    return;
+  }
+}
+
+void SimChannels::wait_for_commands(std::int64_t until_ns) noexcept {
+  if (waiter_)
+    waiter_->wait(until_ns - monotonic_ns());
+  else
+    sched_yield();
 }
 
 void SimChannels::note_lockstep_answer(Channel& channel, const Answer& answer) noexcept {
   channel.answered_step = answer.step;
   if (answer.step != sim_.step_count()) return;  // an old step: no (re)join
-  if (channel.lockstep_pid != answer.pid)
-    std::fprintf(stderr,
-                 "afhub run: lockstep client pid %u joined the barrier for %s at step %llu\n",
-                 answer.pid, channel.publisher->channel().c_str(),
-                 static_cast<unsigned long long>(answer.step));
-  channel.lockstep_pid = answer.pid;
+  if (channel.lockstep_pid != answer.pid) {
+    note(channel, kJoined, answer.pid)->step = answer.step;
+    set_lockstep_pid(channel, answer.pid);
+  }
   channel.misses = 0;
 }
 
-std::uint32_t SimChannels::lockstep_clients() const noexcept {
-  std::uint32_t clients = 0;
-  for (std::size_t i = 0; i < channels_.size(); ++i) {
-    const std::uint32_t pid = channels_[i].lockstep_pid;
-    if (pid == 0) continue;
-    bool seen = false;
-    for (std::size_t k = 0; k < i && !seen; ++k) seen = channels_[k].lockstep_pid == pid;
-    if (!seen) ++clients;
+// Runs only when a body joins or leaves the barrier: the count is then read in O(1).
+void SimChannels::set_lockstep_pid(Channel& channel, std::uint32_t pid) noexcept {
+  auto find = [&](std::uint32_t wanted) {
+    return std::find_if(lockstep_pids_.begin(), lockstep_pids_.end(),
+                        [&](const auto& entry) { return entry.first == wanted; });
+  };
+  if (channel.lockstep_pid != 0) {
+    const auto old = find(channel.lockstep_pid);
+    if (old != lockstep_pids_.end() && --old->second == 0) {
+      *old = lockstep_pids_.back();
+      lockstep_pids_.pop_back();
+    }
   }
-  return clients;
+  channel.lockstep_pid = pid;
+  if (pid != 0) {
+    const auto entry = find(pid);
+    if (entry != lockstep_pids_.end())
+      ++entry->second;
+    else
+      lockstep_pids_.emplace_back(pid, 1u);  // within the capacity reserved: no allocation
+  }
+  lockstep_client_count_ = static_cast<std::uint32_t>(lockstep_pids_.size());
 }
 
 bool SimChannels::hold_step_turn(std::int64_t now_ns, std::int64_t& republish_ns) noexcept {
@@ -274,6 +343,7 @@ bool SimChannels::wait_for_clients() {
   while (lockstep_clients() < wanted) {
     const std::int64_t now = monotonic_ns();
     if (!hold_step_turn(now, republish_ns)) return false;
+    report_events(stderr);  // setup, before the first step: joins are said as they come
     const double waited_s = static_cast<double>(now - start) * 1e-9;
     // The report first: even a process stalled past the timeout says it once.
     if (now >= report_ns) {
@@ -288,7 +358,10 @@ bool SimChannels::wait_for_clients() {
                   std::to_string(lockstep_clients()) + " of " + std::to_string(wanted) +
                   " lockstep clients joined; no client for " + bodies_without_client() +
                   ". Start them with `afhub ctl ... --lockstep`, or lower --wait-for");
-    sched_yield();
+    std::int64_t until = std::min(republish_ns, report_ns);
+    if (lockstep_options_.wait_timeout_ns > 0)
+      until = std::min(until, start + lockstep_options_.wait_timeout_ns);
+    wait_for_commands(until);
   }
   return true;
 }
@@ -308,18 +381,15 @@ bool SimChannels::await_lockstep() noexcept {
       return true;
     }
     if (now - start > lockstep_options_.client_timeout_ns) break;
-    sched_yield();
+    wait_for_commands(std::min(republish_ns, start + lockstep_options_.client_timeout_ns + 1));
   }
   // Timed out: the step goes ahead without the late answers.
   for (Channel& channel : channels_) {
     if (channel.lockstep_pid == 0 || channel.answered_step == step) continue;
     ++late_answers_;
     if (++channel.misses < lockstep_options_.max_misses) continue;
-    std::fprintf(stderr,
-                 "afhub run: lockstep client pid %u missed %d steps in a row for %s; dropped from "
-                 "the barrier (it rejoins by answering a current step)\n",
-                 channel.lockstep_pid, channel.misses, channel.publisher->channel().c_str());
-    channel.lockstep_pid = 0;
+    note(channel, kDropped, channel.lockstep_pid)->misses = channel.misses;
+    set_lockstep_pid(channel, 0);
     channel.misses = 0;
     ++dropped_;
   }

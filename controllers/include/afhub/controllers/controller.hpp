@@ -31,6 +31,9 @@ struct ControllerOptions {
   std::string body;                 // the body's channel name or a unique suffix of it
   LoopOptions loop;                 // period, SCHED_FIFO, CPU, memory locking
   bool lockstep = false;            // answer every physics step instead of running on a clock
+  // Lockstep: poll for the next step with sched_yield (a dedicated core) instead of
+  // sleeping until it comes (iceoryx's WaitSet, a futex).
+  bool spin = false;
   // Free-running: wake this long after the physics publishes a step, so that each
   // command is ready before the next step (the grid is aligned to the first state
   // seen; both loops keep absolute deadlines). -1: start on the clock, unaligned.

@@ -19,10 +19,18 @@ class LoopTiming {
   }
   void count_overruns(std::uint64_t periods) noexcept { overruns_ += periods; }
   void count_late(std::uint64_t commands) noexcept { late_ += commands; }
+  // The time a cycle spent after its work (publishing statistics, saying events):
+  // outside the compute time, but counted here, not lost.
+  void record_housekeeping(std::int64_t ns) noexcept {
+    housekeeping_total_ns_ += ns;
+    if (ns > housekeeping_max_ns_) housekeeping_max_ns_ = ns;
+  }
 
   std::uint64_t cycles() const { return cycles_; }
   std::uint64_t overruns() const { return overruns_; }
   std::uint64_t late_commands() const { return late_; }
+  std::int64_t housekeeping_max_ns() const { return housekeeping_max_ns_; }
+  std::int64_t housekeeping_total_ns() const { return housekeeping_total_ns_; }
   const LatencyHistogram& wake_latency() const { return wake_latency_; }
   const LatencyHistogram& compute() const { return compute_; }
 
@@ -33,6 +41,7 @@ class LoopTiming {
   LatencyHistogram wake_latency_;
   LatencyHistogram compute_;
   std::uint64_t cycles_ = 0, overruns_ = 0, late_ = 0;
+  std::int64_t housekeeping_max_ns_ = 0, housekeeping_total_ns_ = 0;
 };
 
 DurationPercentiles percentiles_of(const LatencyHistogram& histogram) noexcept;

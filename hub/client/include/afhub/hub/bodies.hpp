@@ -32,6 +32,8 @@ class BodyPublisher {
   const BodyCommand* latest_command() noexcept { return command_.latest(); }
   bool command_updated() const { return command_.updated(); }
   std::uint64_t refused_commands() { return command_.raw().refused_count(); }
+  // The command reader, to wait on (SampleWaiter).
+  RawLatestReader& command_reader() noexcept { return command_.raw(); }
   const std::string& channel() const { return channel_; }
 
  private:
@@ -62,6 +64,8 @@ class BodyClient {
   // Connected to the owner's state channel: every state published from now on arrives.
   bool subscribed() { return state_.raw().subscribed(); }
   std::uint64_t refused_states() { return state_.raw().refused_count(); }
+  // The state reader, to wait on (SampleWaiter).
+  RawLatestReader& state_reader() noexcept { return state_.raw(); }
   // A zero-initialised command in shared memory to fill, then publish_command().
   BodyCommand* loan_command() noexcept { return command_.loan(); }
   void publish_command(BodyCommand* command) noexcept { command_.publish(command); }

@@ -91,6 +91,7 @@ class RawLatestReader {
   bool subscribed() const noexcept;
 
  private:
+  friend class SampleWaiter;  // waits on the port's subscriber
   struct Port;
   void report_refusal(const void* payload, PayloadError error, const char* field) noexcept;
   ChannelId channel_;

@@ -1,6 +1,9 @@
 // The physics loop of `afhub run`: a fixed step, paced in real time on rt's loop
 // runner by absolute deadlines (start + k * dt, never re-based, so there is no
-// drift; late steps are caught up) or run as fast as possible; commands in and states out through
+// drift) or run as fast as possible. After a stall (the overrun policy, as the
+// controllers have it): kCatchUp runs the late steps back to back, at most
+// max_catch_up_ns of them, skipping the rest; kSkip skips them all and goes on at
+// the grid's next point. Commands in and states out through
 // SimChannels when given; world commands (pause, resume, step, reset) obeyed; in lockstep, each
 // step waits for the lockstep clients' answers. Measures what the report needs.
 #pragma once
@@ -13,6 +16,7 @@
 #include "afhub/rt/latency_histogram.hpp"
 #include "afhub/rt/loop_stats_publisher.hpp"
 #include "afhub/rt/loop_timing.hpp"
+#include "afhub/rt/periodic_loop.hpp"
 
 namespace afhub::physics {
 
@@ -23,6 +27,10 @@ struct RunOptions {
   // Stop at the first step that made a body NaN or infinite (report.nan_detected),
   // instead of going on with the body put back (Simulation::nan_recoveries).
   bool stop_on_nan = false;
+  // What a step that ran past later deadlines does (see above).
+  OverrunPolicy overrun = OverrunPolicy::kCatchUp;
+  std::int64_t max_catch_up_ns = 100'000'000;
+  LoopClock* clock = nullptr;  // the loop's pacing clock; null: the real one (tests inject theirs)
 };
 
 struct RunReport {

@@ -19,12 +19,19 @@
 // leaves the barrier (a dead client never freezes the world), and it rejoins with
 // its next answer to a current step. A held step is published again every 20 ms:
 // state channels keep no history, and a client joining during the wait needs it.
+//
+// Nothing in the loop writes to stderr or allocates: what happened (a command
+// refused or stale, a watchdog expiry, a lockstep client joining or dropped) is
+// counted, kept in fixed storage, and said by report_events(), which the caller runs
+// outside the loop's timed part (run_loop: at most once a second, and at the end).
 #pragma once
 
 #include <array>
 #include <cstdint>
+#include <cstdio>
 #include <memory>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "afhub/hub/bodies.hpp"
@@ -34,8 +41,9 @@
 #include "afhub/shm_layout/world.hpp"
 
 namespace afhub {
+class SampleWaiter;
 class WorldCommandQueue;
-}
+}  // namespace afhub
 
 namespace afhub::physics {
 
@@ -45,6 +53,10 @@ struct LockstepOptions {
   std::int64_t wait_report_ns = 2'000'000'000;   // say whom it still waits for this often
   std::int64_t client_timeout_ns = 100'000'000;  // how long a step waits for an answer
   int max_misses = 3;                            // late steps in a row before a client is dropped
+  // How the waits for answers wait: false, asleep on the command channels (a futex,
+  // iceoryx's WaitSet) until a command comes; true, polling with sched_yield, for a
+  // process given a core of its own (under SCHED_FIFO a yield never lets a client run).
+  bool spin = false;
 };
 
 class SimChannels {
@@ -94,13 +106,31 @@ class SimChannels {
   std::uint64_t rejected_commands() const { return rejected_; }
   std::uint64_t watchdog_expiries() const { return expiries_; }
   std::uint64_t stale_commands() const { return stale_; }
-  std::uint32_t lockstep_clients() const noexcept;
+  // The distinct lockstep clients in the barrier, kept as they join and leave.
+  std::uint32_t lockstep_clients() const noexcept { return lockstep_client_count_; }
+
   std::uint64_t late_answers() const { return late_answers_; }
   std::uint64_t dropped_clients() const { return dropped_; }
   std::uint64_t commanded_steps() const { return commanded_steps_; }
   std::uint64_t answered_steps() const { return answered_steps_; }
 
+  // Writes the events noted since the last call (see above) to `out`, one line each,
+  // and returns how many it wrote. Not real-time: call it outside the loop's timed part.
+  int report_events(std::FILE* out);
+
  private:
+  // An event to say from outside the loop. Refusals, stale commands and expiries are
+  // said once per body (a short watchdog may fire every few ms); joins and drops each time.
+  enum Event { kStale, kRejected, kAxisless, kExpired, kJoined, kDropped, kEventKinds };
+  struct Notice {
+    bool pending = false;  // noted since the last report
+    bool said = false;
+    std::uint32_t pid = 0;
+    double seconds = 0.0;         // kStale: the command's age
+    std::uint64_t step = 0;       // kJoined: the step it joined at
+    int misses = 0;               // kDropped: late steps in a row
+    std::array<char, 160> why{};  // kRejected, kAxisless: the problem
+  };
   struct Channel {
     std::size_t index = 0;  // into model bodies, or soft bodies when `soft`
     bool soft = false;
@@ -111,16 +141,19 @@ class SimChannels {
     std::int64_t last_command_ns = 0;  // the publish stamp of the command being applied
     bool commanded = false;            // a command is being applied (the watchdog is armed)
     bool hold_on_watchdog = false;     // the watchdog holds the joints rather than zeroing efforts
-    bool told_rejected = false;
-    bool told_axisless = false;  // a command entry for a joint without an axis
-    bool told_stale = false;
-    bool told_expired = false;  // a short watchdog may fire every few ms: said once
+    // What report_events() says about this body; noted in the loop without allocating.
+    std::array<Notice, kEventKinds> notices{};
     std::uint64_t commanded_steps = 0, answered_steps = 0;  // this body's timeliness
     std::uint32_t lockstep_pid = 0;         // the lockstep client answering for this body; 0: none
     std::uint64_t answered_step = 0;        // lockstep: the step this client answered last
     std::uint64_t applied_answer_step = 0;  // the step the command being applied answers
     int misses = 0;                         // late steps in a row
   };
+  // The notice to fill for `event`, or nullptr when a said-once event was noted already.
+  static Notice* note(Channel& channel, Event event, std::uint32_t pid) noexcept;
+  static bool said_once(Event event) { return event <= kExpired; }
+  // Puts `channel` in the barrier for client `pid` (0: out of it), keeping the count.
+  void set_lockstep_pid(Channel& channel, std::uint32_t pid) noexcept;
   // The world's clock as last published, for publishing a held step again.
   struct WorldClock {
     double wall_time_s = 0.0;
@@ -140,6 +173,8 @@ class SimChannels {
   // One turn of holding a step: commands in, and the held step published again every
   // kRepublishWhileWaitingNs (`republish_ns`: when next). False on a stop signal.
   bool hold_step_turn(std::int64_t now_ns, std::int64_t& republish_ns) noexcept;
+  // Until a command comes (or `until_ns`): asleep on the waiter, or one sched_yield.
+  void wait_for_commands(std::int64_t until_ns) noexcept;
   // "ambf/env/base, ambf/env/link1": the active bodies no lockstep client answers for.
   std::string bodies_without_client() const;
   void fill_objects(std::array<WorldObjectPose, kMaxWorldObjects>& out,
@@ -159,7 +194,12 @@ class SimChannels {
   std::uint64_t rejected_ = 0, expiries_ = 0, stale_ = 0;
   bool lockstep_ = false;
   LockstepOptions lockstep_options_;
+  std::unique_ptr<SampleWaiter> waiter_;  // lockstep without spin: the command readers
   std::uint64_t late_answers_ = 0, dropped_ = 0;
+  // Lockstep clients: each pid in the barrier with its number of bodies (room for
+  // one per channel, made at construction), and how many pids there are.
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> lockstep_pids_;
+  std::uint32_t lockstep_client_count_ = 0;
   // Steps taken under command, and those whose command answered the newest state.
   std::uint64_t commanded_steps_ = 0, answered_steps_ = 0, timeliness_step_ = 0;
   WorldClock last_published_;
