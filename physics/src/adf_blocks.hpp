@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "afhub/physics/model.hpp"
+#include "body_scope.hpp"
 #include "yaml_reader.hpp"
 
 namespace afhub::physics::adf {
@@ -30,6 +31,7 @@ struct PendingJoint {
   JointSpec spec;
   std::string parent, child;
   SourceLocation parent_at, child_at;
+  Referrer from;  // the joint's file and namespace, where its names are looked up first
 };
 
 // A sensor's or actuator's parent, resolved once every file is loaded.
@@ -38,6 +40,7 @@ struct PendingParent {
   std::size_t index = 0;
   std::string parent;
   SourceLocation parent_at;
+  Referrer from;
 };
 
 // What every block starts with: where it is, that it is a map, its keys, its name.

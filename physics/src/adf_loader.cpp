@@ -2,7 +2,9 @@
 // only the listed blocks, each with its reader (body_reader.cpp, joint_reader.cpp,
 // soft_body_reader.cpp, sensor_reader.cpp, actuator_reader.cpp); then resolves
 // joints, sensors and actuators against the bodies of all files, and computes the
-// lineage. The helpers the readers share are here too.
+// lineage. Block names are scoped per file and references resolve by AMBF's rule
+// (body_scope.cpp); a model loaded twice gets distinct channels (loaded_copies.cpp).
+// The helpers the readers share are here too.
 #include "afhub/physics/adf_loader.hpp"
 
 #include <yaml-cpp/yaml.h>
@@ -13,6 +15,8 @@
 #include "adf_blocks.hpp"
 #include "afhub/physics/lineage.hpp"
 #include "afhub/shm_layout/error.hpp"
+#include "body_scope.hpp"
+#include "loaded_copies.hpp"
 
 namespace afhub::physics {
 namespace adf {
@@ -100,8 +104,7 @@ struct Unresolved {
   std::size_t published_bodies = 0;  // refused at once past the hub's limit
 };
 
-void load_file(const std::string& path, const YAML::Node& root, Model& model, Unresolved& pending,
-               std::map<std::string, int>& body_by_identifier) {
+void load_file(const std::string& path, const YAML::Node& root, Model& model, Unresolved& pending) {
   FileReader file(path, model);
   const MapIndex index(file, root);
   auto key = [&](const char* name) { return index.find(name); };
@@ -126,11 +129,12 @@ void load_file(const std::string& path, const YAML::Node& root, Model& model, Un
     model.warnings.push_back(
         path + ":1:1: warning: no 'bodies' or 'joints' list: nothing is loaded from this file");
 
+  // Block names are scoped per file (as in AMBF): another file may use the same ones.
+  std::map<std::string, std::size_t> body_in_file;
   for (const auto& [identifier, listed, block] : header_list(file, index, "bodies")) {
-    if (body_by_identifier.count(identifier))
-      fail(file.at(listed), "'" + identifier + "' is defined twice (first at " +
-                                model.bodies[body_by_identifier[identifier]].where.str() + ")");
-    body_by_identifier[identifier] = static_cast<int>(model.bodies.size());
+    if (auto [first, added] = body_in_file.try_emplace(identifier, model.bodies.size()); !added)
+      fail(file.at(listed), "'" + identifier + "' is listed twice (first defined at " +
+                                model.bodies[first->second].where.str() + ")");
     model.bodies.push_back(read_body(file, block, identifier, context));
     if (!model.bodies.back().passive)
       count_published_body(identifier, model.bodies.back().where, pending.published_bodies);
@@ -140,12 +144,14 @@ void load_file(const std::string& path, const YAML::Node& root, Model& model, Un
     count_published_body(identifier, model.soft_bodies.back().where, pending.published_bodies);
   }
   for (const auto& [identifier, listed, block] : header_list(file, index, "sensors")) {
-    PendingParent parent{true, model.sensors.size(), {}, {}};
+    PendingParent parent{true, model.sensors.size(), {}, {}, {}};
+    parent.from = {context.file_index, block_namespace(file, block, context)};
     model.sensors.push_back(read_sensor(file, block, identifier, parent));
     pending.parents.push_back(parent);
   }
   for (const auto& [identifier, listed, block] : header_list(file, index, "actuators")) {
-    PendingParent parent{false, model.actuators.size(), {}, {}};
+    PendingParent parent{false, model.actuators.size(), {}, {}, {}};
+    parent.from = {context.file_index, block_namespace(file, block, context)};
     model.actuators.push_back(read_actuator(file, block, identifier, parent));
     pending.parents.push_back(parent);
   }
@@ -153,37 +159,32 @@ void load_file(const std::string& path, const YAML::Node& root, Model& model, Un
     pending.joints.push_back(read_joint(file, block, identifier, context));
 }
 
-// A body identifier written in a joint, sensor or actuator, as a body index.
-int find_body(const std::map<std::string, int>& body_by_identifier, const std::string& identifier,
-              const SourceLocation& where, const std::string& role, const std::string& owner) {
-  auto found = body_by_identifier.find(identifier);
-  if (found == body_by_identifier.end())
-    fail(where, role + " '" + identifier + "' of " + owner +
-                    " is not a loaded body; list it in a 'bodies' header of a loaded file");
-  return found->second;
-}
-
 }  // namespace
 
 void load_adf_files_into(const std::vector<std::string>& paths, Model& model) {
   Unresolved pending;
-  std::map<std::string, int> body_by_identifier;
+  LoadedChannels channels;
+  std::vector<std::string> copy_suffix;  // per body: the index a copy's name got
   for (const std::string& path : paths) {
     YAML::Node root = parse_file(path, "an ADF file (a map with 'bodies' and 'joints' lists)");
+    const FileSpan span{path, model.bodies.size(), model.soft_bodies.size(), pending.joints.size()};
     try {
-      load_file(path, root, model, pending, body_by_identifier);
+      load_file(path, root, model, pending);
     } catch (const YAML::Exception& error) {
       // A key looked up inside a scalar or a list, for instance.
       throw Error(path + ":" + std::to_string(error.mark.line + 1) + ":" +
                   std::to_string(error.mark.column + 1) + ": error: " + error.msg);
     }
+    channels.load_as_copies(span, model, pending.joints, copy_suffix);
   }
 
+  // Joints resolve once every body exists, as in AMBF: a joint may join bodies of
+  // other files (the distributed definition).
+  const BodyScope scope(model, copy_suffix);
   for (PendingJoint& joint : pending.joints) {
     const std::string& owner = joint.spec.identifier;
-    joint.spec.parent =
-        find_body(body_by_identifier, joint.parent, joint.parent_at, "parent", owner);
-    joint.spec.child = find_body(body_by_identifier, joint.child, joint.child_at, "child", owner);
+    joint.spec.parent = scope.find(joint.parent, joint.from, joint.parent_at, "parent", owner);
+    joint.spec.child = scope.find(joint.child, joint.from, joint.child_at, "child", owner);
     if (joint.spec.parent == joint.spec.child)
       fail(joint.child_at, joint.spec.identifier + " joins '" + joint.child +
                                "' to itself; parent and child must differ");
@@ -192,7 +193,7 @@ void load_adf_files_into(const std::vector<std::string>& paths, Model& model) {
   for (const PendingParent& item : pending.parents) {
     const std::string& owner =
         item.sensor ? model.sensors[item.index].identifier : model.actuators[item.index].identifier;
-    const int body = find_body(body_by_identifier, item.parent, item.parent_at, "parent", owner);
+    const int body = scope.find(item.parent, item.from, item.parent_at, "parent", owner);
     (item.sensor ? model.sensors[item.index].parent : model.actuators[item.index].parent) = body;
   }
   compute_lineage(model);

@@ -6,6 +6,7 @@
 
 #include "adf_blocks.hpp"
 #include "afhub/shm_layout/channel_names.hpp"
+#include "body_scope.hpp"
 
 namespace afhub::physics::adf {
 namespace {
@@ -85,6 +86,7 @@ BodySpec read_body(const FileReader& file, const YAML::Node& block, const std::s
   std::erase(body.name, ' ');
   const std::string name_space = block_namespace(file, block, context);
   body.channel = body_channel_name(name_space, body.name);
+  body.qualified_identifier = qualified_identifier(name_space, identifier);
   if (auto problem = channel_name_problem(body.channel); !problem.empty())
     fail(body.where, problem);
 

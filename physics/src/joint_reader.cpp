@@ -105,6 +105,7 @@ PendingJoint read_joint(const FileReader& file, const YAML::Node& block,
   read_block_head(file, block, identifier, kJointKeys, "joint", joint);
   const std::string name_space = block_namespace(file, block, context);
   joint.channel = body_channel_name(name_space, joint.name);
+  pending.from = {context.file_index, name_space};
   YAML::Node parent = file.require(block, "parent", joint.where);
   YAML::Node child = file.require(block, "child", joint.where);
   pending.parent = file.text(parent, "parent");

@@ -299,5 +299,37 @@ TEST(Run, LockstepWaitSaysWhomItWaitsForAndGivesUpAfterTheTimeout) {
   EXPECT_TRUE(contains(no_wait_for.err, "--wait-timeout needs --wait-for")) << no_wait_for.err;
 }
 
+// The same model twice (issue 18): the copy gets its own channels, named as AMBF
+// names copies (an index after each body's name), both move, and `afhub ls` lists them.
+TEST(Run, TheSameModelTwiceRunsAsTwoSetsOfChannelsThatLsShows) {
+  const std::string arm = AFHUB_EXAMPLE_MODELS "/arm7.yaml";
+  afhub::testing::ModelFolder folder;
+  const std::string log = (folder.dir() / "run.log").string();
+  ScopedProcess physics(spawn_afhub({"run", arm, arm, "--no-autostart"}, log));
+  BodyClient first("afhub/arm/base"), copy("afhub/arm/base1");
+  ASSERT_TRUE(wait_until([&] { return first.latest_state() && copy.latest_state(); }, 10s))
+      << read_file(log);
+  EXPECT_EQ(copy.latest_state()->joint_count, first.latest_state()->joint_count);
+  RunResult ls;  // the hub's catalog follows the physics' directory within its period
+  wait_until([&] { return contains((ls = run_afhub({"ls"})).out, "afhub/arm/link71 "); }, 10s);
+  ASSERT_EQ(ls.exit_code, 0) << ls.err;
+  for (const char* channel : {"afhub/arm/base ", "afhub/arm/base1 ", "afhub/arm/link71 "})
+    EXPECT_TRUE(contains(ls.out, channel)) << channel << " in " << ls.out;
+  EXPECT_EQ(physics.stop(), 0);
+  EXPECT_TRUE(contains(read_file(log), "arm7.yaml:1:1: warning: ")) << read_file(log);
+}
+
+// The PR2 grippers name their sensor's and actuator's parent qualified
+// ("/ambf/env/BODY r_gripper_palm_link"), and the two share block names.
+TEST(Run, CheckAcceptsThePr2GrippersAloneAndTogether) {
+  SKIP_WITHOUT_SHARED_MODELS();
+  const std::string grippers = kDescriptions + "multi-bodies/grippers/";
+  RunResult small = run_afhub({"check", grippers + "pr2 gripper small.yaml"}, 60s);
+  EXPECT_EQ(small.exit_code, 0) << small.err;
+  RunResult both = run_afhub(
+      {"check", grippers + "pr2 gripper small.yaml", grippers + "pr2 gripper small red.yaml"}, 60s);
+  EXPECT_EQ(both.exit_code, 0) << both.err;
+}
+
 }  // namespace
 }  // namespace afhub::test

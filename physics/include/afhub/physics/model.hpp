@@ -53,8 +53,10 @@ enum class ControllerOutput { kForce, kVelocity };
 
 struct BodySpec {
   std::string identifier;  // "BODY base": the key joints refer to
-  std::string name;        // spaces removed, as AMBF does
-  std::string channel;     // "<namespace>/<name>"
+  // "<namespace>/<identifier>" ("/ambf/env/BODY base"): how other files may name it.
+  std::string qualified_identifier;
+  std::string name;     // spaces removed, as AMBF does; a copy's has its index appended
+  std::string channel;  // "<namespace>/<name>"
   SourceLocation where;
   int file_index = 0;    // which loaded file defined it
   double mass_kg = 0.0;  // 0: static
