@@ -116,18 +116,18 @@ TEST(HotPath, SteadyStateLoopDoesNotAllocate) {
   BodyPublisher physics("test/hot_path");
   BodyClient controller("test/hot_path");
   auto one_cycle = [&](std::uint64_t step) {
-    BodyState* state = physics.loan_state();
+    BodyState* state = physics.loan_state(7);
     if (!state) return false;
     state->header.sim_step = step;
     state->joint_count = 7;
-    state->joint_positions[6] = static_cast<double>(step);
+    state->joints[6].position = static_cast<double>(step);
     physics.publish_state(state);
     const BodyState* seen = controller.latest_state();
-    BodyCommand* command = controller.loan_command();
+    BodyCommand* command = controller.loan_command(kMaxJointsPerBody);
     if (!seen || !command) return false;
     command->header.sim_step = seen->header.sim_step;
     command->joint_count = 7;
-    command->joint_values[6] = seen->joint_positions[6];
+    command->joints[6].value = seen->joints[6].position;
     controller.publish_command(command);
     return physics.latest_command() != nullptr;
   };
@@ -139,7 +139,7 @@ TEST(HotPath, SteadyStateLoopDoesNotAllocate) {
   std::uint64_t step = 100;
   EXPECT_TRUE(count_allocations(kCycles, [&] { return one_cycle(step++); }));
   EXPECT_EQ(g_allocations.load(), 0) << "heap allocations in " << kCycles << " steady-state cycles";
-  EXPECT_EQ(physics.latest_command()->joint_values[6], static_cast<double>(100 + kCycles - 1));
+  EXPECT_EQ(physics.latest_command()->joints[6].value, static_cast<double>(100 + kCycles - 1));
 }
 
 // The physics loop of `afhub run`: commands in, Bullet step (joint PID, closed
@@ -156,12 +156,12 @@ void expect_physics_loop_allocation_free(const std::vector<std::string>& files,
     sim.step();
     channels.publish(0.0, 0.0, false);
     const BodyState* state = controller.latest_state();
-    BodyCommand* command = controller.loan_command();
+    BodyCommand* command = controller.loan_command(kMaxJointsPerBody);
     if (!state || !command) return false;
     command->joint_count = state->joint_count;
     for (std::uint32_t j = 0; j < state->joint_count; ++j) {
-      command->joint_types[j] = JointCommandType::kPosition;
-      command->joint_values[j] = 0.3 * std::sin(1e-3 * static_cast<double>(sim.step_count()) + j);
+      command->joints[j].type = JointCommandType::kPosition;
+      command->joints[j].value = 0.3 * std::sin(1e-3 * static_cast<double>(sim.step_count()) + j);
     }
     controller.publish_command(command);
     return true;
@@ -250,7 +250,7 @@ TEST(HotPath, LockstepControllerLoopDoesNotAllocate) {
   auto one_cycle = [&]() {
     channels.publish(0.0, 0.0, false);
     const BodyState* state = client.latest_state();
-    BodyCommand* command = client.loan_command();
+    BodyCommand* command = client.loan_command(kMaxJointsPerBody);
     if (!state || !command) return false;
     const std::int64_t begin = monotonic_ns();
     controller(*state, *command);
