@@ -35,7 +35,8 @@ struct CmdOptions {
   bool once = false;
 };
 // The command every publish repeats, checked once against the body's catalog entry.
-BodyCommand build_command(const CmdOptions& options, const BodyInfo& info) {
+BodyCommand build_command(const CmdOptions& options, const BodyEntry& entry) {
+  const BodyInfo& info = entry.info;
   BodyCommand command{};
   const bool cartesian_force = !options.force.empty() || !options.torque.empty();
   if (cartesian_force && !options.pose.empty())
@@ -82,8 +83,8 @@ BodyCommand build_command(const CmdOptions& options, const BodyInfo& info) {
                   std::to_string(info.joint_count) + " joints (see `afhub ls`)");
     command.joint_count = static_cast<std::uint32_t>(values.size());
     for (std::size_t i = 0; i < values.size(); ++i) {
-      command.joint_values[i] = values[i];
-      command.joint_types[i] = joints->type;
+      command.joints[i].value = values[i];
+      command.joints[i].type = joints->type;
     }
   }
   if (!cartesian_force && options.pose.empty() && !joints && options.joints.empty())
@@ -94,9 +95,9 @@ BodyCommand build_command(const CmdOptions& options, const BodyInfo& info) {
 }
 
 // --joint NAME=VALUE (or INDEX=VALUE), repeated: position targets by joint.
-std::map<std::size_t, double> named_joint_targets(const CmdOptions& options, const BodyInfo& info,
+std::map<std::size_t, double> named_joint_targets(const CmdOptions& options, const BodyEntry& entry,
                                                   BodyClient& body) {
-  const std::vector<std::string> names = joint_names_of(info);
+  const std::vector<std::string>& names = entry.joint_names;
   std::map<std::size_t, double> targets;
   for (const std::string& item : options.joints) {
     const auto equals = item.rfind('=');
@@ -110,8 +111,8 @@ std::map<std::size_t, double> named_joint_targets(const CmdOptions& options, con
     if (joint.find_first_not_of("0123456789") == std::string::npos) {
       index = joint.size() < 6 ? std::stoul(joint) : names.size();
       if (index >= names.size())
-        throw Error("--joint " + item + ": body " + std::string(name_of(info.channel)) + " has " +
-                    std::to_string(names.size()) + " joints, indices 0 to " +
+        throw Error("--joint " + item + ": body " + std::string(name_of(entry.info.channel)) +
+                    " has " + std::to_string(names.size()) + " joints, indices 0 to " +
                     std::to_string(names.size() == 0 ? 0 : names.size() - 1));
     } else {
       index = body.joint_index(joint);  // the error lists the body's joints
@@ -133,16 +134,18 @@ BodyState current_state(BodyClient& body) {
                   "given");
     sleep_until_ns(monotonic_ns() + 1'000'000);
   }
-  return *body.latest_state();
+  BodyState state;
+  copy_body_state(*body.latest_state(), state);
+  return state;
 }
 
 // Completes the joint part: named targets, then the joints left unnamed hold their
 // current positions (or, with --others release, are left out of the command when
 // they come after the last one given). Returns a description for stderr.
-std::string complete_joints(const CmdOptions& options, const BodyInfo& info, BodyClient& body,
+std::string complete_joints(const CmdOptions& options, const BodyEntry& entry, BodyClient& body,
                             BodyCommand& command) {
-  const std::map<std::size_t, double> targets = named_joint_targets(options, info, body);
-  const std::vector<std::string> names = joint_names_of(info);
+  const std::map<std::size_t, double> targets = named_joint_targets(options, entry, body);
+  const std::vector<std::string>& names = entry.joint_names;
   const bool any_joint = command.joint_count > 0 || !targets.empty();
   if (!any_joint) return names.empty() ? "" : "its joints are not commanded (no joint flag given)";
   const std::uint32_t given = command.joint_count;
@@ -172,9 +175,9 @@ std::string complete_joints(const CmdOptions& options, const BodyInfo& info, Bod
       count = std::max(count, static_cast<std::uint32_t>(index + 1));
     for (std::uint32_t i = given; i < count; ++i) {
       const auto target = targets.find(i);
-      command.joint_types[i] =
+      command.joints[i].type =
           target == targets.end() ? JointCommandType::kEffort : JointCommandType::kPosition;
-      command.joint_values[i] = target == targets.end() ? 0.0 : target->second;
+      command.joints[i].value = target == targets.end() ? 0.0 : target->second;
     }
     command.joint_count = count;
     return described + (unnamed == 1 ? "; the joint left unnamed is released (--others release)"
@@ -186,10 +189,10 @@ std::string complete_joints(const CmdOptions& options, const BodyInfo& info, Bod
   command.joint_count = static_cast<std::uint32_t>(names.size());
   for (std::uint32_t i = given; i < names.size(); ++i) {
     const auto target = targets.find(i);
-    command.joint_types[i] = JointCommandType::kPosition;
-    command.joint_values[i] = target != targets.end()
+    command.joints[i].type = JointCommandType::kPosition;
+    command.joints[i].value = target != targets.end()
                                   ? target->second
-                                  : (i < state.joint_count ? state.joint_positions[i] : 0.0);
+                                  : (i < state.joint_count ? state.joints[i].position : 0.0);
   }
   return described + (unnamed == 1 ? "; the joint left unnamed holds its current position"
                       : unnamed    ? "; the " + std::to_string(unnamed) +
@@ -199,9 +202,9 @@ std::string complete_joints(const CmdOptions& options, const BodyInfo& info, Bod
 
 bool publish_once(BodyClient& body, const BodyCommand& prototype) {
   if (hub_lost()) return true;  // outputs safe: no command into a hub that is gone
-  BodyCommand* command = body.loan_command();
+  BodyCommand* command = body.loan_command(prototype.joint_count);
   if (!command) return false;
-  *command = prototype;
+  copy_body_command(prototype, *command);
   // A command answers the newest state it has seen.
   if (const BodyState* state = body.latest_state()) {
     command->header.sim_step = state->header.sim_step;
@@ -222,13 +225,13 @@ int run_cmd(const CmdOptions& options) {
   if (!once) survive_hub_loss("afhub cmd");
   connect_to_hub("cmd", HubPolicy::kRequire);
   // Re-attached after a hub loss, the body's physics may come back after this process.
-  const BodyInfo info =
+  const BodyEntry entry =
       wait_for_body(options.body, "afhub cmd",
                     reattach_count() > 0 ? std::numeric_limits<std::int64_t>::max() : 0);
-  BodyCommand prototype = build_command(options, info);
-  BodyClient body(info);
-  const std::string joints = complete_joints(options, info, body, prototype);
-  const std::string channel(name_of(info.channel));
+  BodyCommand prototype = build_command(options, entry);
+  BodyClient body(entry);
+  const std::string joints = complete_joints(options, entry, body, prototype);
+  const std::string channel(name_of(entry.info.channel));
   if (once) {
     if (!publish_once(body, prototype)) throw Error("shared memory exhausted: command not sent");
     std::fprintf(stderr,

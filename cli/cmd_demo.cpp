@@ -75,13 +75,12 @@ pid_t spawn_physics(const std::vector<std::string>& run_arguments) {
 
 // Position commands for a body's first joints, following `motion`.
 void move_joints(BodyClient& body, const std::vector<JointMotion>& motion, double t) {
-  BodyCommand* command = body.loan_command();
+  BodyCommand* command = body.loan_command(static_cast<std::uint32_t>(motion.size()));
   if (!command) return;
-  command->joint_count = static_cast<std::uint32_t>(motion.size());
   for (std::size_t j = 0; j < motion.size(); ++j) {
     const JointMotion& m = motion[j];
-    command->joint_types[j] = JointCommandType::kPosition;
-    command->joint_values[j] =
+    command->joints[j].type = JointCommandType::kPosition;
+    command->joints[j].value =
         m.center + m.amplitude * std::sin(2.0 * M_PI * t / m.period_s + m.phase);
   }
   body.publish_command(command);
@@ -116,7 +115,7 @@ void draw(CatalogReader& catalog, std::vector<std::unique_ptr<BodyClient>>& clie
                   p.x, p.y, p.z);
     screen += line;
     for (std::uint32_t j = 0; j < state->joint_count; ++j) {
-      std::snprintf(line, sizeof line, "%7.3f ", state->joint_positions[j]);
+      std::snprintf(line, sizeof line, "%7.3f ", state->joints[j].position);
       screen += line;
     }
     screen += "\n";

@@ -39,10 +39,10 @@ int run_echo(const EchoOptions& options) {
   survive_hub_loss("afhub echo");
   connect_to_hub("echo", HubPolicy::kRequire);
   // Re-attached after a hub loss, the body's physics may come back after this process.
-  const BodyInfo info =
+  const BodyEntry entry =
       wait_for_body(options.body, "afhub echo",
                     reattach_count() > 0 ? std::numeric_limits<std::int64_t>::max() : 0);
-  BodyClient body(name_of(info.channel));
+  BodyClient body(name_of(entry.info.channel));
   std::uint64_t printed = 0;
   std::int64_t last_sample_ns = monotonic_ns();
   std::int64_t last_printed_stamp_ns = 0;
@@ -56,13 +56,13 @@ int run_echo(const EchoOptions& options) {
       }
       last_printed_stamp_ns = state->header.publish_stamp_ns;
       std::string line =
-          options.json ? state_json(info, *state, fields) : state_text(info, *state, fields);
+          options.json ? state_json(entry, *state, fields) : state_text(entry, *state, fields);
       std::printf("%s\n", line.c_str());
       std::fflush(stdout);
       ++printed;
     } else if (options.count != 0 && monotonic_ns() - last_sample_ns >
                                          static_cast<std::int64_t>(options.timeout_s * 1e9)) {
-      throw Error("no state from " + std::string(name_of(info.channel)) + " for " +
+      throw Error("no state from " + std::string(name_of(entry.info.channel)) + " for " +
                   std::to_string(options.timeout_s) + " s; is its publisher paused or gone?");
     }
     sleep_until_ns(monotonic_ns() + 200'000);

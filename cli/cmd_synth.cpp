@@ -51,8 +51,8 @@ void step_body(SyntheticBody& body, std::size_t index, double t, double dt) {
     SyntheticJoint& joint = body.joints[j];
     const double previous = joint.position;
     if (commanded && j < command->joint_count) {
-      const double value = command->joint_values[j];
-      switch (command->joint_types[j]) {
+      const double value = command->joints[j].value;
+      switch (command->joints[j].type) {
         case JointCommandType::kPosition:
           joint.position += (value - joint.position) * 0.05;
           break;
@@ -71,7 +71,7 @@ void step_body(SyntheticBody& body, std::size_t index, double t, double dt) {
 }
 
 void publish_body(SyntheticBody& body, std::size_t index, std::uint64_t step, double t) {
-  BodyState* state = body.channel->loan_state();
+  BodyState* state = body.channel->loan_state(static_cast<std::uint32_t>(body.joints.size()));
   if (!state) return;
   const double radius = 0.1 * static_cast<double>(index + 1);
   const double angle = 2.0 * M_PI * 0.2 * t;
@@ -85,10 +85,9 @@ void publish_body(SyntheticBody& body, std::size_t index, std::uint64_t step, do
   state->twist.angular_radps = {0.0, 0.0, 2.0 * M_PI * 0.2};
   state->mass_kg = 1.0;
   state->principal_inertia_kgm2 = {0.01, 0.01, 0.01};
-  state->joint_count = static_cast<std::uint32_t>(body.joints.size());
   for (std::size_t j = 0; j < body.joints.size(); ++j) {
-    state->joint_positions[j] = body.joints[j].position;
-    state->joint_velocities[j] = body.joints[j].velocity;
+    state->joints[j].position = body.joints[j].position;
+    state->joints[j].velocity = body.joints[j].velocity;
   }
   body.channel->publish_state(state);
 }
@@ -116,7 +115,7 @@ int run_synth(const SynthOptions& options) {
     std::vector<std::string> joint_names;
     for (unsigned j = 0; j < options.joints; ++j)
       joint_names.push_back("body" + std::to_string(i) + "-joint" + std::to_string(j));
-    directory.add(make_body_info(channel, joint_names));
+    directory.add(make_body_entry(channel, joint_names));
     bodies[i].channel = std::make_unique<BodyPublisher>(channel);
     bodies[i].joints.resize(options.joints);
   }

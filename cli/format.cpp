@@ -57,7 +57,8 @@ StateFields default_text_fields() {
   return fields;
 }
 
-std::string state_json(const BodyInfo& info, const BodyState& state, const StateFields& fields) {
+std::string state_json(const BodyEntry& entry, const BodyState& state, const StateFields& fields) {
+  const BodyInfo& info = entry.info;
   JsonWriter json;
   const std::size_t joints = state.joint_count;
   json.begin_object();
@@ -98,13 +99,18 @@ std::string state_json(const BodyInfo& info, const BodyState& state, const State
   }
   if (fields.joints || fields.joint_velocities || fields.joint_efforts) {
     json.key("joint_names").begin_array();
-    for (std::size_t i = 0; i < joints && i < info.joint_count; ++i)
-      json.value(name_of(info.joint_names[i]));
+    for (std::size_t i = 0; i < joints && i < entry.joint_names.size(); ++i)
+      json.value(entry.joint_names[i]);
     json.end_array();
   }
-  if (fields.joints) json.key("joint_positions").numbers(state.joint_positions, joints);
-  if (fields.joint_velocities) json.key("joint_velocities").numbers(state.joint_velocities, joints);
-  if (fields.joint_efforts) json.key("joint_efforts").numbers(state.joint_efforts, joints);
+  auto joint_numbers = [&](const char* key, double JointSample::*field) {
+    json.key(key).begin_array();
+    for (std::size_t i = 0; i < joints; ++i) json.value(state.joints[i].*field);
+    json.end_array();
+  };
+  if (fields.joints) joint_numbers("joint_positions", &JointSample::position);
+  if (fields.joint_velocities) joint_numbers("joint_velocities", &JointSample::velocity);
+  if (fields.joint_efforts) joint_numbers("joint_efforts", &JointSample::effort);
   json.end_object();
   return json.str();
 }
@@ -123,12 +129,25 @@ void append(std::string& out, const char* label, const double* values, std::size
   out += "]";
 }
 
+void append(std::string& out, const char* label, const BodyState& state, double JointSample::*field,
+            std::size_t count) {
+  char number[64];
+  out += " ";
+  out += label;
+  out += " [";
+  for (std::size_t i = 0; i < count; ++i) {
+    std::snprintf(number, sizeof number, "%s%.4f", i ? " " : "", state.joints[i].*field);
+    out += number;
+  }
+  out += "]";
+}
+
 }  // namespace
 
-std::string state_text(const BodyInfo& info, const BodyState& state, const StateFields& fields) {
+std::string state_text(const BodyEntry& entry, const BodyState& state, const StateFields& fields) {
   char line[256];
   std::snprintf(line, sizeof line, "%s step %llu t=%.3fs",
-                std::string(name_of(info.channel)).c_str(),
+                std::string(name_of(entry.info.channel)).c_str(),
                 static_cast<unsigned long long>(state.header.sim_step), state.header.sim_time_s);
   std::string out = line;
   const auto v3 = [](const Vec3& v) { return std::array<double, 3>{v.x, v.y, v.z}; };
@@ -152,9 +171,9 @@ std::string state_text(const BodyInfo& info, const BodyState& state, const State
   }
   const std::size_t joints = std::min<std::size_t>(state.joint_count, kMaxJointsPerBody);
   if (joints > 0) {
-    if (fields.joints) append(out, "joints", state.joint_positions.data(), joints);
-    if (fields.joint_velocities) append(out, "joint_vel", state.joint_velocities.data(), joints);
-    if (fields.joint_efforts) append(out, "joint_eff", state.joint_efforts.data(), joints);
+    if (fields.joints) append(out, "joints", state, &JointSample::position, joints);
+    if (fields.joint_velocities) append(out, "joint_vel", state, &JointSample::velocity, joints);
+    if (fields.joint_efforts) append(out, "joint_eff", state, &JointSample::effort, joints);
   }
   return out;
 }

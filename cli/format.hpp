@@ -5,6 +5,7 @@
 #include <string_view>
 #include <vector>
 
+#include "afhub/hub/bodies.hpp"
 #include "afhub/shm_layout/body_state.hpp"
 #include "afhub/shm_layout/catalog.hpp"
 
@@ -30,10 +31,10 @@ StateFields default_text_fields();
 
 // One JSON line for a body state; joint names come from the catalog entry. The
 // header's fields (body, sequence, step, times, publisher) are always there.
-std::string state_json(const BodyInfo& info, const BodyState& state,
+std::string state_json(const BodyEntry& entry, const BodyState& state,
                        const StateFields& fields = {});
 // One human-readable line for a body state.
-std::string state_text(const BodyInfo& info, const BodyState& state,
+std::string state_text(const BodyEntry& entry, const BodyState& state,
                        const StateFields& fields = default_text_fields());
 
 // A measured rate for a table: "-" when there is no measurement yet (0 or less).

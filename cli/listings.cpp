@@ -55,7 +55,7 @@ std::string ls_json(const BodyList& catalog) {
     json.key("owner").value(name_of(body.owner));
     json.key("owner_pid").value(static_cast<long long>(body.owner_pid));
     json.key("joints").begin_array();
-    for (std::uint32_t j = 0; j < body.joint_count; ++j) json.value(name_of(body.joint_names[j]));
+    for (const std::string& name : joint_names_of(catalog, body)) json.value(name);
     json.end_array().end_object();
   }
   json.end_array();

@@ -22,7 +22,7 @@ namespace {
 // Fills and publishes one command answering `state`.
 void answer(BodyClient& body, const BodyState& state, const ControllerCycle& cycle, bool lockstep) {
   if (hub_lost()) return;  // outputs safe: no command into a hub that is gone
-  BodyCommand* command = body.loan_command();
+  BodyCommand* command = body.loan_command(state.joint_count);
   if (!command) return;  // shared memory exhausted: the watchdog covers a lasting shortage
   cycle(state, *command);
   command->header.sim_step = state.header.sim_step;
@@ -116,9 +116,9 @@ int run_controller(const ControllerOptions& options, const ControllerCycle& cycl
                            : monotonic_ns() + static_cast<std::int64_t>(options.wait_s * 1e9);
   connect_to_hub("ctl", HubPolicy::kRequire,
                  std::chrono::milliseconds(static_cast<std::int64_t>(options.wait_s * 1e3)));
-  const BodyInfo info = wait_for_body(options.body, who, give_up_ns, "wait longer with --wait");
-  const std::string channel(name_of(info.channel));
-  BodyClient body(info);
+  const BodyEntry entry = wait_for_body(options.body, who, give_up_ns, "wait longer with --wait");
+  const std::string channel(name_of(entry.info.channel));
+  BodyClient body(entry);
   LoopTiming own_timing;  // preallocated before memory is locked and the loop starts
   LoopTiming& timing = timing_out ? *timing_out : own_timing;
   const RealtimeGrant grant = apply_realtime(options.loop, who.c_str());

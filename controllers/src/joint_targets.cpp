@@ -36,13 +36,13 @@ ControllerCycle joint_position_controller(JointTargetFunction targets) {
     if (!m.started || jumped) {
       m.started = true;
       m.start_time_s = state.header.sim_time_s;
-      std::copy_n(state.joint_positions.begin(), count, m.initial.begin());
+      for (std::uint32_t j = 0; j < count; ++j) m.initial[j] = state.joints[j].position;
     }
     targets(state.header.sim_time_s - m.start_time_s, m.initial, count, m.targets);
     command.joint_count = count;
     for (std::uint32_t j = 0; j < count; ++j) {
-      command.joint_types[j] = JointCommandType::kPosition;
-      command.joint_values[j] = m.targets[j];
+      command.joints[j].type = JointCommandType::kPosition;
+      command.joints[j].value = m.targets[j];
     }
   };
 }

@@ -26,10 +26,10 @@ int main(int argc, char** argv) {
           const double t = state.header.sim_time_s - start.header.sim_time_s;
           command.joint_count = state.joint_count;
           for (std::uint32_t j = 0; j < state.joint_count; ++j) {
-            command.joint_types[j] = afhub::JointCommandType::kPosition;
-            command.joint_values[j] = start.joint_positions[j];
+            command.joints[j].type = afhub::JointCommandType::kPosition;
+            command.joints[j].value = start.joints[j].position;
           }
-          command.joint_values[0] += 0.5 * std::sin(std::numbers::pi * t);
+          command.joints[0].value += 0.5 * std::sin(std::numbers::pi * t);
         });
   } catch (const std::exception& error) {  // afhub::Error, and any other
     std::fprintf(stderr, "wave_controller: error: %s\n", error.what());

@@ -51,7 +51,11 @@ void Simulation::Data::build_bounds() {
     out.linear_mps = std::max(10.0, spec.linear_controller.p * 2.0 * workspace);
     out.angular_radps = std::max(10.0 * kTwoPi, spec.angular_controller.p * kTwoPi);
     const std::vector<int>& below = model.descendant_joints[b];
-    for (std::size_t k = 0; k < below.size() && k < kBodyJointCapacity; ++k) {
+    const std::size_t counted = std::min(below.size(), kBodyJointCapacity);
+    out.joint_effort.assign(counted, 0.0);
+    out.joint_velocity.assign(counted, 0.0);
+    out.joint_position.assign(counted, 0.0);
+    for (std::size_t k = 0; k < counted; ++k) {
       const JointSpec& joint = model.joints[below[k]];
       const double motor = joint.max_motor_impulse / dt_s;
       const double mass = std::max(1.0, joint.child >= 0 ? carried[joint.child] : 0.0);

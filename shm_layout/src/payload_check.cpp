@@ -12,9 +12,9 @@ namespace {
 std::size_t fixed_size_of(PayloadKind kind) noexcept {
   switch (kind) {
     case PayloadKind::kBodyState:
-      return sizeof(BodyState);
+      return body_state_bytes(0);
     case PayloadKind::kBodyCommand:
-      return sizeof(BodyCommand);
+      return body_command_bytes(0);
     case PayloadKind::kWorldState:
       return sizeof(WorldState);
     case PayloadKind::kWorldCommand:
@@ -32,19 +32,45 @@ std::size_t fixed_size_of(PayloadKind kind) noexcept {
   return 0;
 }
 
-// The first count beyond its capacity, named; nullptr when every count fits.
-// The chunk holds at least the kind's fixed size (body lists: their counted bodies).
-const char* count_beyond_capacity(const char* at, PayloadKind kind) noexcept {
+// A body list's joint names and refs: their counts within capacity and the chunk,
+// every body's refs within the list's, every ref a name. nullptr when all hold.
+const char* body_list_problem(const BodyList& list, std::size_t bytes) noexcept {
+  if (list.body_count > kMaxBodies || bytes < body_list_bytes(list.body_count))
+    return "BodyList.body_count";
+  if (list.joint_name_count > kMaxCatalogJointNames ||
+      bytes < body_list_bytes(list.body_count, list.joint_name_count))
+    return "BodyList.joint_name_count";
+  if (list.joint_ref_count > kMaxCatalogJointRefs ||
+      bytes < body_list_bytes(list.body_count, list.joint_name_count, list.joint_ref_count))
+    return "BodyList.joint_ref_count";
+  for (std::uint32_t i = 0; i < list.body_count; ++i) {
+    const BodyInfo& body = list.bodies[i];
+    if (body.joint_count > kMaxJointsPerBody) return "BodyInfo.joint_count";
+    if (std::uint64_t{body.first_joint_ref} + body.joint_count > list.joint_ref_count)
+      return "BodyInfo.first_joint_ref";
+  }
+  const std::uint32_t* refs = joint_refs_in(list);
+  for (std::uint32_t r = 0; r < list.joint_ref_count; ++r)
+    if (refs[r] >= list.joint_name_count) return "BodyList joint reference";
+  return nullptr;
+}
+
+// The first count beyond its capacity or the chunk's `bytes`, named; nullptr when
+// every count fits. The chunk holds at least the kind's fixed size.
+const char* count_beyond_capacity(const char* at, std::size_t bytes, PayloadKind kind) noexcept {
   switch (kind) {
     case PayloadKind::kBodyState: {
       const auto* state = reinterpret_cast<const BodyState*>(at);
-      if (state->joint_count > kMaxJointsPerBody) return "BodyState.joint_count";
+      if (state->joint_count > kMaxJointsPerBody || bytes < body_state_bytes(state->joint_count))
+        return "BodyState.joint_count";
       if (state->sensor_ray_count > kMaxSensorRaysPerBody) return "BodyState.sensor_ray_count";
       return nullptr;
     }
     case PayloadKind::kBodyCommand: {
       const auto* command = reinterpret_cast<const BodyCommand*>(at);
-      if (command->joint_count > kMaxJointsPerBody) return "BodyCommand.joint_count";
+      if (command->joint_count > kMaxJointsPerBody ||
+          bytes < body_command_bytes(command->joint_count))
+        return "BodyCommand.joint_count";
       if (command->actuator_count > kMaxActuatorsPerBody) return "BodyCommand.actuator_count";
       return nullptr;
     }
@@ -55,12 +81,8 @@ const char* count_beyond_capacity(const char* at, PayloadKind kind) noexcept {
       return nullptr;
     }
     case PayloadKind::kBodyDirectory:
-    case PayloadKind::kCatalog: {
-      const auto* list = reinterpret_cast<const BodyList*>(at);
-      for (std::uint32_t i = 0; i < list->body_count; ++i)
-        if (list->bodies[i].joint_count > kMaxJointsPerBody) return "BodyInfo.joint_count";
-      return nullptr;
-    }
+    case PayloadKind::kCatalog:
+      return body_list_problem(*reinterpret_cast<const BodyList*>(at), bytes);
     case PayloadKind::kHealth: {
       const auto* health = reinterpret_cast<const Health*>(at);
       if (health->process_count > kMaxHealthProcesses) return "Health.process_count";
@@ -93,12 +115,7 @@ PayloadError check_payload(const void* data, std::size_t bytes, PayloadKind expe
   if (header.kind != expected) return fail(PayloadError::kWrongKind, "PayloadHeader.kind", field);
   if (bytes < fixed_size_of(expected)) return fail(PayloadError::kTooSmall, "chunk size", field);
   const auto* at = static_cast<const char*>(data);
-  if (expected == PayloadKind::kBodyDirectory || expected == PayloadKind::kCatalog) {
-    const std::uint32_t count = reinterpret_cast<const BodyList*>(at)->body_count;
-    if (count > kMaxBodies || bytes < body_list_bytes(count))
-      return fail(PayloadError::kCountTooLarge, "BodyList.body_count", field);
-  }
-  if (const char* count = count_beyond_capacity(at, expected))
+  if (const char* count = count_beyond_capacity(at, bytes, expected))
     return fail(PayloadError::kCountTooLarge, count, field);
   return PayloadError::kNone;
 }

@@ -121,7 +121,7 @@ class WithSynth : public ::testing::Test {
     const std::uint64_t seen = body0_.latest_state()->header.sequence;
     EXPECT_TRUE(wait_until([&] { return body0_.latest_state()->header.sequence > seen; }, 2s));
     const BodyState& state = *body0_.latest_state();
-    return {state.joint_positions[0], state.joint_positions[1], state.joint_positions[2]};
+    return {state.joints[0].position, state.joints[1].position, state.joints[2].position};
   }
   ScopedProcess synth_{-1};
   BodyClient body0_{"synth/body0"};
@@ -256,7 +256,7 @@ TEST_F(WithSynth, EchoRateLimitsByThePublishStamps) {
 TEST(Ls, ARateNotMeasuredYetShowsAsADash) {
   // A body that never publishes a state: the hub has no rate to measure.
   DirectoryPublisher directory;
-  directory.add(make_body_info("test/silent", {"a"}));
+  directory.add(make_body_entry("test/silent", {"a"}));
   directory.publish();
   RunResult ls;
   ASSERT_TRUE(wait_until(

@@ -144,7 +144,7 @@ TEST(Controllers, KilledControllerTripsTheHoldWatchdogAndARestartTakesOver) {
   const BodyState later = *base.latest_state();
   EXPECT_GT(later.header.sim_step, held.header.sim_step + 500);
   for (int j = 0; j < 7; ++j)
-    EXPECT_NEAR(later.joint_positions[j], held.joint_positions[j], 0.005) << "joint " << j;
+    EXPECT_NEAR(later.joints[j].position, held.joints[j].position, 0.005) << "joint " << j;
 
   // A restarted controller takes over: its commands arrive and none is refused.
   ScopedProcess hold(spawn_afhub({"ctl", "hold", "base"}));

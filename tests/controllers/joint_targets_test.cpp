@@ -16,7 +16,8 @@ BodyState state_at(double time_s, std::initializer_list<double> positions) {
   BodyState state;
   state.header.sim_time_s = time_s;
   state.joint_count = static_cast<std::uint32_t>(positions.size());
-  std::copy(positions.begin(), positions.end(), state.joint_positions.begin());
+  std::size_t j = 0;
+  for (double position : positions) state.joints[j++].position = position;
   return state;
 }
 
@@ -26,8 +27,8 @@ TEST(JointControllers, SineStartsAtTheInitialPositionsAndSpreadsThePhases) {
   cycle(state_at(10.0, {0.5, -0.5, 1.0, 0.0}), command);
   ASSERT_EQ(command.joint_count, 4u);
   for (int j = 0; j < 4; ++j) {
-    EXPECT_EQ(command.joint_types[j], JointCommandType::kPosition);
-    EXPECT_DOUBLE_EQ(command.joint_values[j], (std::array{0.5, -0.5, 1.0, 0.0})[j]);
+    EXPECT_EQ(command.joints[j].type, JointCommandType::kPosition);
+    EXPECT_DOUBLE_EQ(command.joints[j].value, (std::array{0.5, -0.5, 1.0, 0.0})[j]);
   }
   // After the ramp (one period), at t = 2.25 s: 0.2 sin(2 pi 2.25 / 2 + 2 pi j / 4),
   // around the first state's positions whatever the joints read now.
@@ -36,7 +37,7 @@ TEST(JointControllers, SineStartsAtTheInitialPositionsAndSpreadsThePhases) {
     const double expected =
         (std::array{0.5, -0.5, 1.0, 0.0})[j] +
         0.2 * std::sin(2 * std::numbers::pi * 2.25 / 2.0 + std::numbers::pi * j / 2);
-    EXPECT_NEAR(command.joint_values[j], expected, 1e-12) << "joint " << j;
+    EXPECT_NEAR(command.joints[j].value, expected, 1e-12) << "joint " << j;
   }
 }
 
@@ -45,9 +46,9 @@ TEST(JointControllers, SineMovesOnlyTheChosenJoints) {
   BodyCommand command;
   cycle(state_at(0.0, {0.1, 0.2, 0.3}), command);
   cycle(state_at(1.25, {0, 0, 0}), command);
-  EXPECT_DOUBLE_EQ(command.joint_values[0], 0.1);
-  EXPECT_DOUBLE_EQ(command.joint_values[1], 0.2);
-  EXPECT_NEAR(command.joint_values[2], 0.3 + 0.3, 1e-12);  // a quarter period after the ramp
+  EXPECT_DOUBLE_EQ(command.joints[0].value, 0.1);
+  EXPECT_DOUBLE_EQ(command.joints[1].value, 0.2);
+  EXPECT_NEAR(command.joints[2].value, 0.3 + 0.3, 1e-12);  // a quarter period after the ramp
 }
 
 TEST(JointControllers, HoldKeepsTheFirstPositions) {
@@ -56,8 +57,8 @@ TEST(JointControllers, HoldKeepsTheFirstPositions) {
   cycle(state_at(0.0, {0.1, -0.2}), command);
   cycle(state_at(5.0, {1.0, 1.0}), command);
   EXPECT_EQ(command.joint_count, 2u);
-  EXPECT_DOUBLE_EQ(command.joint_values[0], 0.1);
-  EXPECT_DOUBLE_EQ(command.joint_values[1], -0.2);
+  EXPECT_DOUBLE_EQ(command.joints[0].value, 0.1);
+  EXPECT_DOUBLE_EQ(command.joints[1].value, -0.2);
 }
 
 TEST(JointControllers, TrackInterpolatesAndHoldsTheEnds) {
@@ -68,7 +69,7 @@ TEST(JointControllers, TrackInterpolatesAndHoldsTheEnds) {
   BodyCommand command;
   const auto at = [&](double t) {
     cycle(state_at(100.0 + t, {5, 5, 5}), command);
-    return std::array{command.joint_values[0], command.joint_values[1], command.joint_values[2]};
+    return std::array{command.joints[0].value, command.joints[1].value, command.joints[2].value};
   };
   EXPECT_EQ(at(0.0), (std::array{0.0, 1.0, 5.0}));  // the third joint is not in the file: holds
   EXPECT_EQ(at(0.25), (std::array{0.25, 1.0, 5.0}));
@@ -128,12 +129,12 @@ TEST(JointControllers, WhenSimulatedTimeJumpsBackTheTrajectoryRestartsFromTheJoi
     cycle(state_of(pid, 1, {0.7, -0.4}), command);
     ASSERT_EQ(command.joint_count, 2u);
     // Time 0 of the new trajectory: the joints' own positions.
-    EXPECT_DOUBLE_EQ(command.joint_values[0], 0.7) << "restart " << restart;
-    EXPECT_DOUBLE_EQ(command.joint_values[1], -0.4) << "restart " << restart;
+    EXPECT_DOUBLE_EQ(command.joints[0].value, 0.7) << "restart " << restart;
+    EXPECT_DOUBLE_EQ(command.joints[1].value, -0.4) << "restart " << restart;
     // 10 ms in, still ramping: within the amplitude of where the joints were.
     cycle(state_of(pid, 11, {0.7, -0.4}), command);
-    EXPECT_NEAR(command.joint_values[0], 0.7, 0.3 * 0.01 / 2.0 + 1e-12);
-    EXPECT_NEAR(command.joint_values[1], -0.4, 0.3 * 0.01 / 2.0 + 1e-12);
+    EXPECT_NEAR(command.joints[0].value, 0.7, 0.3 * 0.01 / 2.0 + 1e-12);
+    EXPECT_NEAR(command.joints[1].value, -0.4, 0.3 * 0.01 / 2.0 + 1e-12);
   }
 }
 

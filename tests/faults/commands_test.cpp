@@ -179,13 +179,13 @@ TEST(FaultsCommands, ARestartedPhysicsIgnoresALiveWritersOldCommand) {
     base = client.get();
     ASSERT_TRUE(wait_until([&] { return base->latest_state() != nullptr; }, 5s));
     // One command, kept by the writer's history: joint 0 to 1 rad.
-    BodyCommand* command = base->loan_command();
+    BodyCommand* command = base->loan_command(kMaxJointsPerBody);
     ASSERT_NE(command, nullptr);
     command->joint_count = 1;
-    command->joint_types[0] = JointCommandType::kPosition;
-    command->joint_values[0] = 1.0;
+    command->joints[0].type = JointCommandType::kPosition;
+    command->joints[0].value = 1.0;
     base->publish_command(command);
-    ASSERT_TRUE(wait_until([&] { return base->latest_state()->joint_positions[0] > 0.5; }, 5s));
+    ASSERT_TRUE(wait_until([&] { return base->latest_state()->joints[0].position > 0.5; }, 5s));
     EXPECT_EQ(first.physics->stop(), 0);
   }
   // Longer than the watchdog (0.5 s): the command is stale when the new physics reads it.
@@ -196,7 +196,7 @@ TEST(FaultsCommands, ARestartedPhysicsIgnoresALiveWritersOldCommand) {
       << read_file(second.log);
   std::this_thread::sleep_for(1s);
   ASSERT_NE(base->latest_state(), nullptr);
-  EXPECT_LT(std::abs(base->latest_state()->joint_positions[0]), 0.05)
+  EXPECT_LT(std::abs(base->latest_state()->joints[0].position), 0.05)
       << "the old command moved the new physics' arm";
   EXPECT_EQ(second.now().rejected_commands, 0u);
   RunResult status = run_afhub({"status", "--json"});
@@ -212,11 +212,11 @@ TEST(FaultsCommands, APerBodyWatchdogOfTwoMillisecondsFiresForThatBodyAlone) {
   BodyClient base("afhub/arm/base"), link3("afhub/arm/link3");
   ASSERT_TRUE(wait_until([&] { return link3.latest_state() && base.latest_state(); }, 5s));
   auto hold = [](BodyClient& body, std::uint32_t joints) {
-    BodyCommand* command = body.loan_command();
+    BodyCommand* command = body.loan_command(kMaxJointsPerBody);
     if (!command) return;
     command->joint_count = joints;
     for (std::uint32_t j = 0; j < joints; ++j)
-      command->joint_types[j] = JointCommandType::kPosition;
+      command->joints[j].type = JointCommandType::kPosition;
     body.publish_command(command);
   };
   // Both commanded for 0.3 s (link3 at about 1 kHz), then link3 stops while the base

@@ -58,7 +58,7 @@ int attached(std::int64_t timeout_ms, std::vector<Watched>& bodies) {
     for (Watched& body : bodies) {
       if (body.channel.empty()) {
         try {
-          body.channel = std::string(afhub::name_of(catalog.resolve(body.query).channel));
+          body.channel = std::string(afhub::name_of(catalog.resolve(body.query).info.channel));
           std::printf("catalog %s %lld\n", body.query.c_str(), static_cast<long long>(now_ns()));
           if (body.pid != 0)
             body.commands = std::make_unique<afhub::LatestReader<afhub::BodyCommand>>(

@@ -139,8 +139,9 @@ constexpr std::uint32_t kInFlightChunks = 4;
 // kInFlightChunks over those.
 bool same_usage(const PoolUsage& baseline, const PoolUsage& usage) {
   if (usage.size() != baseline.size() || usage.empty()) return false;
-  const std::uint32_t streaming[] = {pool_of(baseline, sizeof(BodyState)),
-                                     pool_of(baseline, sizeof(BodyCommand)),
+  // (Sent at their real size: the arm's states and commands are in the smallest tiers.)
+  const std::uint32_t streaming[] = {pool_of(baseline, body_command_bytes(0)),
+                                     pool_of(baseline, body_state_bytes(64)),
                                      pool_of(baseline, sizeof(WorldState))};
   long long streaming_difference = 0;
   for (const auto& [bytes, used] : baseline) {

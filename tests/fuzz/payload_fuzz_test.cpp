@@ -49,11 +49,14 @@ struct Seed {
   std::vector<std::size_t> count_offsets;  // where its counts are, to hit them often
 };
 
+// `bytes`: the payload's real size (states and commands are sent with their counted
+// joints only).
 template <class T>
-Seed seed_of(const T& payload, std::vector<std::size_t> count_offsets) {
+Seed seed_of(const T& payload, std::vector<std::size_t> count_offsets,
+             std::size_t bytes = sizeof(T)) {
   Seed seed;
-  seed.bytes.resize(sizeof payload);
-  std::memcpy(seed.bytes.data(), &payload, sizeof payload);
+  seed.bytes.resize(bytes);
+  std::memcpy(seed.bytes.data(), &payload, bytes);
   seed.count_offsets = std::move(count_offsets);
   return seed;
 }
@@ -67,25 +70,40 @@ T stamped() {
   return payload;
 }
 
+// Three bodies, the last with kMaxJointsPerBody joints; the first two share its
+// first two joint names, listed once, as loan_body_list writes them.
 Seed body_list_seed(PayloadKind kind) {
   constexpr std::uint32_t kBodies = 3;
-  auto list = std::make_unique<BodyList>();
+  constexpr std::uint32_t kNames = kMaxJointsPerBody;
+  constexpr std::uint32_t kRefs = 2 + 2 + kMaxJointsPerBody;
+  // Filled as a whole BodyList, then cut to its real size.
+  std::vector<unsigned char> bytes(
+      std::max(sizeof(BodyList), body_list_bytes(kBodies, kNames, kRefs)));
+  auto* list = reinterpret_cast<BodyList*>(bytes.data());
   list->header = PayloadHeader{kLayoutId, kind};
   list->body_count = kBodies;
-  std::vector<std::size_t> counts{offsetof(BodyList, body_count)};
+  list->joint_name_count = kNames;
+  list->joint_ref_count = kRefs;
+  std::vector<std::size_t> counts{offsetof(BodyList, body_count),
+                                  offsetof(BodyList, joint_name_count),
+                                  offsetof(BodyList, joint_ref_count)};
+  std::uint32_t first_ref = 0;
   for (std::uint32_t b = 0; b < kBodies; ++b) {
     BodyInfo& body = list->bodies[b];
     set_name(body.channel, "fuzz/body" + std::to_string(b));
     set_name(body.owner, "fuzz-owner");
     body.joint_count = b == 2 ? kMaxJointsPerBody : 2;
-    for (std::uint32_t j = 0; j < body.joint_count; ++j)
-      set_name(body.joint_names[j], "joint" + std::to_string(j));
-    counts.push_back(offsetof(BodyList, bodies) + b * sizeof(BodyInfo) +
-                     offsetof(BodyInfo, joint_count));
+    body.first_joint_ref = first_ref;
+    for (std::uint32_t j = 0; j < body.joint_count; ++j) joint_refs_in(*list)[first_ref + j] = j;
+    first_ref += body.joint_count;
+    const std::size_t at = offsetof(BodyList, bodies) + b * sizeof(BodyInfo);
+    counts.push_back(at + offsetof(BodyInfo, joint_count));
+    counts.push_back(at + offsetof(BodyInfo, first_joint_ref));
   }
-  // Published with only its counted bodies, as DirectoryPublisher and the hub do.
-  std::vector<unsigned char> bytes(body_list_bytes(kBodies));
-  std::memcpy(bytes.data(), list.get(), bytes.size());
+  for (std::uint32_t n = 0; n < kNames; ++n)
+    set_name(joint_names_in(*list)[n], "joint" + std::to_string(n));
+  counts.push_back(body_list_bytes(kBodies, kNames));  // the first joint reference
+  bytes.resize(body_list_bytes(kBodies, kNames, kRefs));
   return {std::move(bytes), std::move(counts)};
 }
 
@@ -96,7 +114,7 @@ std::vector<Seed> make_seeds() {
   auto command = stamped<BodyCommand>();
   command.cartesian_type = CartesianCommandType::kPosition;
   command.joint_count = 3;
-  command.joint_types[1] = JointCommandType::kPosition;
+  command.joints[1].type = JointCommandType::kPosition;
   auto world = stamped<WorldState>();
   world.light_count = 2;
   world.camera_count = 1;
@@ -112,8 +130,10 @@ std::vector<Seed> make_seeds() {
   set_name(loop.body, "arm/base");
   auto bench = stamped<BenchSample>();
   return {
-      seed_of(state, {offsetof(BodyState, joint_count), offsetof(BodyState, sensor_ray_count)}),
-      seed_of(command, {offsetof(BodyCommand, joint_count), offsetof(BodyCommand, actuator_count)}),
+      seed_of(state, {offsetof(BodyState, joint_count), offsetof(BodyState, sensor_ray_count)},
+              body_state_bytes(state.joint_count)),
+      seed_of(command, {offsetof(BodyCommand, joint_count), offsetof(BodyCommand, actuator_count)},
+              body_command_bytes(command.joint_count)),
       seed_of(world, {offsetof(WorldState, light_count), offsetof(WorldState, camera_count),
                       offsetof(WorldState, body_count)}),
       seed_of(world_command, {offsetof(WorldCommand, action), offsetof(WorldCommand, step_count)}),
@@ -163,7 +183,7 @@ class Fuzzer {
     catalog_ = catalog.bytes;
     health_ = seeds_[6].bytes;
     world_ = seeds_[2].bytes;
-    info_ = reinterpret_cast<const BodyList*>(catalog_.data())->bodies[2];
+    info_ = entry_of(*reinterpret_cast<const BodyList*>(catalog_.data()), 2);
   }
 
   void run_case(std::size_t kind_index) {
@@ -227,8 +247,10 @@ class Fuzzer {
 
   // Around the capacities, and anything at all.
   std::uint32_t interesting_count() {
-    static constexpr std::uint32_t kEdges[] = {0,  1,  7,  8,   9,   31,  32,         33,
-                                               63, 64, 65, 255, 256, 257, 0x7fffffff, 0xffffffff};
+    static constexpr std::uint32_t kEdges[] = {
+        0,    1,    7,    8,    9,     31,    32,    33,         63,
+        64,   65,   255,  256,  257,   499,   500,   501,        1023,
+        1024, 1025, 1028, 1029, 65535, 65536, 65537, 0x7fffffff, 0xffffffff};
     return random_() % 3 ? kEdges[random_() % std::size(kEdges)]
                          : static_cast<std::uint32_t>(random_());
   }
@@ -263,8 +285,9 @@ class Fuzzer {
       case PayloadKind::kBodyDirectory: {
         std::vector<std::string> messages;
         const auto* listed = reinterpret_cast<const BodyList*>(catalog_.data());
-        const std::vector<BodyInfo> current(listed->bodies.begin(),
-                                            listed->bodies.begin() + listed->body_count);
+        std::vector<BodyEntry> current;
+        for (std::uint32_t b = 0; b < listed->body_count; ++b)
+          current.push_back(entry_of(*listed, b));
         const auto merged = merge_directories(
             current, {{"fuzz", reinterpret_cast<const BodyList*>(data)}, {"seed", listed}},
             messages);
@@ -279,9 +302,10 @@ class Fuzzer {
         // echo renders a state with the joint names of the body's catalog entry.
         if (list.body_count > 0) {
           const auto& state = *reinterpret_cast<const BodyState*>(seeds_[0].bytes.data());
-          const BodyInfo& entry = list.bodies[random_() % list.body_count];
+          const BodyEntry entry =
+              entry_of(list, static_cast<std::uint32_t>(random_() % list.body_count));
           sink += cli::state_json(entry, state).size();
-          sink += joint_names_of(entry).size();
+          sink += entry.joint_names.size();
         }
         break;
       }
@@ -329,7 +353,7 @@ class Fuzzer {
   std::mt19937_64 random_;
   std::vector<Seed> seeds_;
   std::vector<unsigned char> catalog_, health_, world_;
-  BodyInfo info_{};
+  BodyEntry info_{};
   CommandTarget target_;
   std::array<Tally, kKinds.size()> tallies_{};
   std::uint64_t applied_ = 0, steps_ = 0;

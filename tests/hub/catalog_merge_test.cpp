@@ -18,9 +18,9 @@ std::unique_ptr<BodyList> list_of(const std::vector<std::string>& channels) {
   return list;
 }
 
-std::vector<std::string> names(const std::vector<BodyInfo>& bodies) {
+std::vector<std::string> names(const std::vector<BodyEntry>& bodies) {
   std::vector<std::string> out;
-  for (const BodyInfo& body : bodies) out.emplace_back(name_of(body.channel));
+  for (const BodyEntry& body : bodies) out.emplace_back(name_of(body.info.channel));
   return out;
 }
 
@@ -55,11 +55,11 @@ TEST(CatalogMerge, ListedBodiesKeepTheirPlaceAndTheirOwner) {
   second->bodies[0].owner_pid = 2;
   std::vector<std::string> messages;
   // The catalog lists x/shared as the second process's: it stays with it.
-  std::vector<BodyInfo> listed{second->bodies[0]};
+  std::vector<BodyEntry> listed{{second->bodies[0], {}}};
   const auto merged =
       merge_directories(listed, {{"first", first.get()}, {"second", second.get()}}, messages);
   ASSERT_EQ(names(merged), (std::vector<std::string>{"x/shared", "x/own"}));
-  EXPECT_EQ(merged[0].owner_pid, 2u);
+  EXPECT_EQ(merged[0].info.owner_pid, 2u);
   ASSERT_EQ(messages.size(), 1u);
   EXPECT_NE(messages[0].find("claimed by two processes"), std::string::npos);
 }

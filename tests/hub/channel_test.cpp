@@ -24,7 +24,7 @@ using namespace std::chrono_literals;
 
 // Publishes a state stamped with `step`; false when no chunk could be loaned.
 bool publish_step(BodyPublisher& physics, std::uint64_t step) {
-  BodyState* state = physics.loan_state();
+  BodyState* state = physics.loan_state(0);
   if (!state) return false;
   state->header.sim_step = step;
   physics.publish_state(state);
@@ -40,11 +40,11 @@ TEST(Channel, ReaderSeesTheWritersChunkInPlace) {
   BodyPublisher physics("test/zero_copy");
   BodyClient controller("test/zero_copy");
   ASSERT_TRUE(test::wait_until([&] { return controller.subscribed(); }, 2s));
-  BodyState* loaned = physics.loan_state();
+  BodyState* loaned = physics.loan_state(2);
   ASSERT_NE(loaned, nullptr);
   loaned->header.sim_step = 42;
   loaned->joint_count = 2;
-  loaned->joint_positions[1] = 0.25;
+  loaned->joints[1].position = 0.25;
   physics.publish_state(loaned);
   const BodyState* read = nullptr;
   ASSERT_TRUE(test::wait_until([&] { return (read = controller.latest_state()) != nullptr; }, 2s));
@@ -54,7 +54,7 @@ TEST(Channel, ReaderSeesTheWritersChunkInPlace) {
   EXPECT_EQ(read->header.layout_id, kLayoutId);
   EXPECT_EQ(read->header.publisher_pid, static_cast<std::uint32_t>(getpid()));
   EXPECT_GT(read->header.publish_stamp_ns, 0);
-  EXPECT_EQ(read->joint_positions[1], 0.25);
+  EXPECT_EQ(read->joints[1].position, 0.25);
 }
 
 TEST(Channel, ReaderGetsOnlyTheNewestSample) {
@@ -62,7 +62,7 @@ TEST(Channel, ReaderGetsOnlyTheNewestSample) {
   BodyClient controller("test/latest");
   ASSERT_TRUE(test::wait_until([&] { return controller.subscribed(); }, 2s));
   for (std::uint64_t step = 1; step <= 5; ++step) {
-    BodyState* state = physics.loan_state();
+    BodyState* state = physics.loan_state(0);
     ASSERT_NE(state, nullptr);
     state->header.sim_step = step;
     physics.publish_state(state);
@@ -78,7 +78,7 @@ TEST(Channel, ReaderGetsOnlyTheNewestSample) {
 
 TEST(Channel, LateJoinerGetsTheLastCommandAtOnce) {
   BodyClient controller("test/late_command");
-  BodyCommand* command = controller.loan_command();
+  BodyCommand* command = controller.loan_command(kMaxJointsPerBody);
   ASSERT_NE(command, nullptr);
   command->joint_count = 7;
   controller.publish_command(command);
@@ -122,21 +122,21 @@ TEST(Channel, UnsubscribedReaderKeepsItsSampleAndMissesNewOnes) {
 TEST(Channel, CommandsTravelToThePhysicsSide) {
   BodyPublisher physics("test/command");
   BodyClient controller("test/command");
-  BodyCommand* command = controller.loan_command();
+  BodyCommand* command = controller.loan_command(kMaxJointsPerBody);
   ASSERT_NE(command, nullptr);
   command->cartesian_type = CartesianCommandType::kPosition;
   command->pose.position_m = {1.0, 2.0, 3.0};
   command->joint_count = 3;
-  command->joint_types[2] = JointCommandType::kVelocity;
-  command->joint_values[2] = -0.5;
+  command->joints[2].type = JointCommandType::kVelocity;
+  command->joints[2].value = -0.5;
   controller.publish_command(command);
   const BodyCommand* read = nullptr;
   ASSERT_TRUE(test::wait_until([&] { return (read = physics.latest_command()) != nullptr; }, 2s));
   EXPECT_EQ(read->cartesian_type, CartesianCommandType::kPosition);
   EXPECT_EQ(read->pose.position_m.z, 3.0);
   EXPECT_EQ(read->joint_count, 3u);
-  EXPECT_EQ(read->joint_types[2], JointCommandType::kVelocity);
-  EXPECT_EQ(read->joint_values[2], -0.5);
+  EXPECT_EQ(read->joints[2].type, JointCommandType::kVelocity);
+  EXPECT_EQ(read->joints[2].value, -0.5);
 }
 
 // A writer built from other sources: same channel, another layout id.
@@ -161,7 +161,7 @@ TEST(Channel, ForeignLayoutIsRefusedNotMisread) {
 
   // A payload of this build on the same channel is still accepted.
   BodyPublisher physics("test/foreign");
-  BodyState* state = physics.loan_state();
+  BodyState* state = physics.loan_state(0);
   ASSERT_NE(state, nullptr);
   state->header.sim_step = 3;
   physics.publish_state(state);
@@ -175,7 +175,7 @@ TEST(Catalog, ListsAnnouncedBodiesWithJointsAndOwnerUntilTheyGo) {
   catalog.wait(1s);
   {
     DirectoryPublisher directory;
-    directory.add(make_body_info("test_ns/arm/widget", {"joint_a", "joint_b"}));
+    directory.add(make_body_entry("test_ns/arm/widget", {"joint_a", "joint_b"}));
     directory.publish();
     ASSERT_TRUE(test::wait_until(
         [&] {
@@ -183,12 +183,12 @@ TEST(Catalog, ListsAnnouncedBodiesWithJointsAndOwnerUntilTheyGo) {
           return std::find(names.begin(), names.end(), "test_ns/arm/widget") != names.end();
         },
         2s));
-    BodyInfo info = catalog.resolve("widget");
-    EXPECT_EQ(name_of(info.channel), "test_ns/arm/widget");
-    EXPECT_EQ(info.joint_count, 2u);
-    EXPECT_EQ(name_of(info.joint_names[1]), "joint_b");
-    EXPECT_EQ(name_of(info.owner), runtime_name());
-    EXPECT_EQ(info.owner_pid, static_cast<std::uint32_t>(getpid()));
+    BodyEntry entry = catalog.resolve("widget");
+    EXPECT_EQ(name_of(entry.info.channel), "test_ns/arm/widget");
+    EXPECT_EQ(entry.info.joint_count, 2u);
+    EXPECT_EQ(entry.joint_names, (std::vector<std::string>{"joint_a", "joint_b"}));
+    EXPECT_EQ(name_of(entry.info.owner), runtime_name());
+    EXPECT_EQ(entry.info.owner_pid, static_cast<std::uint32_t>(getpid()));
   }
   // The directory's publisher is gone: so is the body.
   EXPECT_TRUE(test::wait_until([&] { return catalog.channels().empty(); }, 3s));
@@ -200,7 +200,7 @@ TEST(Catalog, MeasuresRatesWithoutStayingSubscribed) {
   CatalogReader catalog;
   catalog.wait(1s);
   DirectoryPublisher directory;
-  directory.add(make_body_info("test/rated", {}));
+  directory.add(make_body_entry("test/rated", {}));
   directory.publish();
   BodyPublisher body("test/rated");
   bool seen_reader = false, seen_none = false;  // the hub's reader, then none
@@ -208,7 +208,7 @@ TEST(Catalog, MeasuresRatesWithoutStayingSubscribed) {
   const std::int64_t give_up = monotonic_ns() + 6'000'000'000;
   std::int64_t next = monotonic_ns();
   for (int i = 0; monotonic_ns() < give_up; ++i) {
-    BodyState* state = body.loan_state();
+    BodyState* state = body.loan_state(0);
     ASSERT_NE(state, nullptr);
     body.publish_state(state);
     if (body.has_state_readers())
@@ -219,7 +219,7 @@ TEST(Catalog, MeasuresRatesWithoutStayingSubscribed) {
       catalog.latest();
       const auto names = catalog.channels();
       if (std::find(names.begin(), names.end(), "test/rated") != names.end())
-        rate_hz = catalog.resolve("test/rated").publish_rate_hz;
+        rate_hz = catalog.resolve("test/rated").info.publish_rate_hz;
       if (seen_reader && seen_none && std::abs(rate_hz - 1000.0) < 300.0) break;
     }
     sleep_until_ns(next += 1'000'000);
@@ -232,10 +232,10 @@ TEST(Catalog, MeasuresRatesWithoutStayingSubscribed) {
 }
 
 TEST(Catalog, RejectsNamesThatIceoryxCannotCarry) {
-  EXPECT_THROW(make_body_info(std::string(101, 'x'), {}), Error);
-  EXPECT_THROW(make_body_info("test/ok", std::vector<std::string>(kMaxJointsPerBody + 1, "j")),
+  EXPECT_THROW(make_body_entry(std::string(101, 'x'), {}), Error);
+  EXPECT_THROW(make_body_entry("test/ok", std::vector<std::string>(kMaxJointsPerBody + 1, "j")),
                Error);
-  EXPECT_THROW(make_body_info("test/ok", {std::string(64, 'j')}), Error);
+  EXPECT_THROW(make_body_entry("test/ok", {std::string(64, 'j')}), Error);
   EXPECT_THROW(BodyPublisher(std::string(101, 'x')), Error);
 }
 

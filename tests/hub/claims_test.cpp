@@ -14,6 +14,7 @@
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/shm_layout/health.hpp"
+#include "afhub/shm_layout/limits.hpp"
 #include "afhub/shm_layout/world.hpp"
 #include "afhub_process.hpp"
 #include "hub_environment.hpp"
@@ -99,10 +100,10 @@ TEST(Claims, MoreBodiesThanTheHubHoldsAreRefusedAndTheRestGoOn) {
       {"synth", "--bodies", "200", "--joints", "1", "--namespace", "a", "--no-autostart"}));
   ASSERT_TRUE(wait_until([] { return listed("a/body199"); }, 20s));
   const RunResult more = run_afhub(
-      {"synth", "--bodies", "100", "--joints", "1", "--namespace", "b", "--no-autostart"}, 30s);
+      {"synth", "--bodies", "260", "--joints", "1", "--namespace", "b", "--no-autostart"}, 30s);
   EXPECT_EQ(more.exit_code, 1);
-  EXPECT_TRUE(
-      contains(more.err, "the hub lists 200 bodies and this adds 100; it holds at most 256"))
+  EXPECT_TRUE(contains(more.err, "the hub lists 200 bodies and this adds 260; it holds at most " +
+                                     std::to_string(kMaxBodies)))
       << more.err;
   // The hub and the first process go on.
   EXPECT_TRUE(listed("a/body199"));
@@ -116,7 +117,7 @@ TEST(Claims, TwoProcessesAskingAtOnceNeverTakeTheHubDown) {
       {"synth", "--bodies", "200", "--joints", "1", "--namespace", "a", "--no-autostart"},
       "/tmp/afhub-claims-a.log"));
   ScopedProcess b(spawn_afhub(
-      {"synth", "--bodies", "100", "--joints", "1", "--namespace", "b", "--no-autostart"},
+      {"synth", "--bodies", "260", "--joints", "1", "--namespace", "b", "--no-autostart"},
       "/tmp/afhub-claims-b.log"));
   int a_exit = -1, b_exit = -1;
   wait_until(
@@ -129,7 +130,8 @@ TEST(Claims, TwoProcessesAskingAtOnceNeverTakeTheHubDown) {
   EXPECT_TRUE(a_exit == 1 || b_exit == 1) << "exits " << a_exit << " and " << b_exit;
   const std::string refused =
       read_file("/tmp/afhub-claims-a.log") + read_file("/tmp/afhub-claims-b.log");
-  EXPECT_TRUE(contains(refused, "holds at most 256") || contains(refused, "its catalog is full"))
+  EXPECT_TRUE(contains(refused, "holds at most " + std::to_string(kMaxBodies)) ||
+              contains(refused, "its catalog is full") || contains(refused, "publisher port"))
       << refused;
   const RunResult ls = run_afhub({"ls", "--json"});
   EXPECT_EQ(ls.exit_code, 0) << "the hub no longer answers: " << ls.err;

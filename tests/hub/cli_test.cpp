@@ -264,7 +264,8 @@ TEST_F(CliWithBodies, StatusShowsProcessesAndMempools) {
       5s))
       << status.out;
   EXPECT_EQ(status.exit_code, 0) << status.err;
-  EXPECT_TRUE(contains(status.out, "\"chunk_payload_bytes\":" + std::to_string(sizeof(BodyState))))
+  EXPECT_TRUE(
+      contains(status.out, "\"chunk_payload_bytes\":" + std::to_string(body_state_bytes(64))))
       << status.out;
   EXPECT_TRUE(contains(status.out, "\"body_count\":2")) << status.out;
   EXPECT_TRUE(contains(status.out, "{\"body\":\"synth/body1\",\"rate_hz\":")) << status.out;

@@ -121,18 +121,18 @@ TEST(HotPath, SteadyStateLoopDoesNotAllocate) {
   BodyPublisher physics("test/hot_path");
   BodyClient controller("test/hot_path");
   auto one_cycle = [&](std::uint64_t step) {
-    BodyState* state = physics.loan_state();
+    BodyState* state = physics.loan_state(7);
     if (!state) return false;
     state->header.sim_step = step;
     state->joint_count = 7;
-    state->joint_positions[6] = static_cast<double>(step);
+    state->joints[6].position = static_cast<double>(step);
     physics.publish_state(state);
     const BodyState* seen = controller.latest_state();
-    BodyCommand* command = controller.loan_command();
+    BodyCommand* command = controller.loan_command(kMaxJointsPerBody);
     if (!seen || !command) return false;
     command->header.sim_step = seen->header.sim_step;
     command->joint_count = 7;
-    command->joint_values[6] = seen->joint_positions[6];
+    command->joints[6].value = seen->joints[6].position;
     controller.publish_command(command);
     return physics.latest_command() != nullptr;
   };
@@ -144,7 +144,7 @@ TEST(HotPath, SteadyStateLoopDoesNotAllocate) {
   std::uint64_t step = 100;
   EXPECT_TRUE(count_allocations(kCycles, [&] { return one_cycle(step++); }));
   EXPECT_EQ(g_allocations.load(), 0) << "heap allocations in " << kCycles << " steady-state cycles";
-  EXPECT_EQ(physics.latest_command()->joint_values[6], static_cast<double>(100 + kCycles - 1));
+  EXPECT_EQ(physics.latest_command()->joints[6].value, static_cast<double>(100 + kCycles - 1));
 }
 
 // The physics loop of `afhub run`: commands in, Bullet step (joint PID, closed
@@ -161,12 +161,12 @@ void expect_physics_loop_allocation_free(const std::vector<std::string>& files,
     sim.step();
     channels.publish(0.0, 0.0, false);
     const BodyState* state = controller.latest_state();
-    BodyCommand* command = controller.loan_command();
+    BodyCommand* command = controller.loan_command(kMaxJointsPerBody);
     if (!state || !command) return false;
     command->joint_count = state->joint_count;
     for (std::uint32_t j = 0; j < state->joint_count; ++j) {
-      command->joint_types[j] = JointCommandType::kPosition;
-      command->joint_values[j] = 0.3 * std::sin(1e-3 * static_cast<double>(sim.step_count()) + j);
+      command->joints[j].type = JointCommandType::kPosition;
+      command->joints[j].value = 0.3 * std::sin(1e-3 * static_cast<double>(sim.step_count()) + j);
     }
     controller.publish_command(command);
     return true;
@@ -270,7 +270,7 @@ TEST(HotPath, ActuatorsAndSensorsDoNotAllocate) {
     sim.step();
     channels.publish(0.0, 0.0, false);
     const BodyState* state = controller.latest_state();
-    BodyCommand* command = controller.loan_command();
+    BodyCommand* command = controller.loan_command(0);
     if (!state || !command) return false;
     distance = state->sensor_distances_m[0];
     command->actuator_count = 1;
@@ -312,19 +312,16 @@ TEST(HotPath, EventsAreSaidOutsideTheLoopOnly) {
     const BodyState* state = base.latest_state();
     if (!state) return false;
     if (++cycle % 2 == 0) {  // the lockstep client answers every other step: joins, drops
-      if (BodyCommand* command = base.loan_command()) {
+      if (BodyCommand* command = base.loan_command(0)) {
         command->header.sim_step = state->header.sim_step;
         command->lockstep = 1;
         base.publish_command(command);
       }
     }
-    if (BodyCommand* bad = link7.loan_command()) {  // more joints than link7 has: refused
-      bad->joint_count = 3;
-      link7.publish_command(bad);
-    }
+    if (BodyCommand* bad = link7.loan_command(3)) link7.publish_command(bad);  // link7 has 1
     const std::int64_t now = monotonic_ns();
     if (now - link2_commanded_ns > 5'000'000) {  // every 5 ms, past its 2 ms watchdog
-      if (BodyCommand* command = link2.loan_command()) link2.publish_command(command);
+      if (BodyCommand* command = link2.loan_command(0)) link2.publish_command(command);
       link2_commanded_ns = now;
     }
     channels.await_lockstep();
@@ -388,7 +385,7 @@ TEST(HotPath, LockstepControllerLoopDoesNotAllocate) {
   auto one_cycle = [&]() {
     channels.publish(0.0, 0.0, false);
     const BodyState* state = client.latest_state();
-    BodyCommand* command = client.loan_command();
+    BodyCommand* command = client.loan_command(kMaxJointsPerBody);
     if (!state || !command) return false;
     const std::int64_t begin = monotonic_ns();
     controller(*state, *command);

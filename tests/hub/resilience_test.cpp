@@ -108,15 +108,15 @@ struct SteadyClient {
       const std::int64_t now = now_ns();
       if (state && state->header.sequence != last_sequence) {
         last_sequence = state->header.sequence;
-        last_joint0 = state->joint_positions[0];
+        last_joint0 = state->joints[0].position;
         ++fresh_states;
         if (now - last_fresh > longest_gap_ns) longest_gap_ns = now - last_fresh;
         last_fresh = now;
       }
-      if (BodyCommand* command = body.loan_command()) {
+      if (BodyCommand* command = body.loan_command(kMaxJointsPerBody)) {
         command->joint_count = 1;
-        command->joint_types[0] = JointCommandType::kPosition;
-        command->joint_values[0] = 0.4;
+        command->joints[0].type = JointCommandType::kPosition;
+        command->joints[0].value = 0.4;
         body.publish_command(command);
       }
       std::this_thread::sleep_for(500us);

@@ -69,7 +69,7 @@ TEST(UntrustedDirectory, ABadDirectoryNeverStopsTheHubNorHidesTheOthers) {
 
   // A good directory published after them still joins the catalog.
   DirectoryPublisher good;
-  good.add(make_body_info("untrusted/good", {"j0"}));
+  good.add(make_body_entry("untrusted/good", {"j0"}));
   good.publish();
   EXPECT_TRUE(test::wait_until([&] { return catalog_lists(catalog, "untrusted/good"); }, 5s))
       << "the hub's log:\n"

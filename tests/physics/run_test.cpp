@@ -105,7 +105,7 @@ TEST(Run, LockstepWaitsAsleepUnlessSpinning) {
   auto answer = [&] {
     channels.publish(0.0, 0.0, false);
     const BodyState* state = client.latest_state();
-    BodyCommand* command = client.loan_command();
+    BodyCommand* command = client.loan_command(0);
     if (!state || !command) return false;
     command->header.sim_step = state->header.sim_step;
     command->lockstep = 1;
@@ -133,7 +133,7 @@ TEST(Run, LockstepWaitsAsleepUnlessSpinning) {
     sim.step();
     std::thread answering([&] {
       std::this_thread::sleep_for(20ms);
-      if (BodyCommand* command = client.loan_command()) {
+      if (BodyCommand* command = client.loan_command(0)) {
         command->header.sim_step = sim.step_count();
         command->lockstep = 1;
         client.publish_command(command);
@@ -159,14 +159,14 @@ TEST(Run, KukaOnChannelsObeysCommandsRefusesNanAndTripsTheWatchdog) {
   ASSERT_EQ(base.latest_state()->joint_count, 7u);
 
   // A NaN command is refused and counted, and nothing moves.
-  BodyCommand* bad = base.loan_command();
+  BodyCommand* bad = base.loan_command(kMaxJointsPerBody);
   ASSERT_NE(bad, nullptr);
   bad->joint_count = 1;
-  bad->joint_types[0] = JointCommandType::kPosition;
-  bad->joint_values[0] = std::nan("");
+  bad->joints[0].type = JointCommandType::kPosition;
+  bad->joints[0].value = std::nan("");
   base.publish_command(bad);
   ASSERT_TRUE(wait_until([&] { return world.latest()->rejected_commands == 1; }, 2s));
-  EXPECT_TRUE(std::isfinite(base.latest_state()->joint_positions[0]));
+  EXPECT_TRUE(std::isfinite(base.latest_state()->joints[0].position));
   RunResult status = run_afhub({"status", "--json"});
   EXPECT_TRUE(contains(status.out, "\"rejected_commands\":1")) << status.out;
 
@@ -174,18 +174,18 @@ TEST(Run, KukaOnChannelsObeysCommandsRefusesNanAndTripsTheWatchdog) {
   const double targets[7] = {0.4, -0.3, 0.2, 0.5, -0.4, 0.3, 0.6};
   const auto until = std::chrono::steady_clock::now() + 2s;
   while (std::chrono::steady_clock::now() < until) {
-    BodyCommand* command = base.loan_command();
+    BodyCommand* command = base.loan_command(kMaxJointsPerBody);
     ASSERT_NE(command, nullptr);
     command->joint_count = 7;
     for (int j = 0; j < 7; ++j) {
-      command->joint_types[j] = JointCommandType::kPosition;
-      command->joint_values[j] = targets[j];
+      command->joints[j].type = JointCommandType::kPosition;
+      command->joints[j].value = targets[j];
     }
     base.publish_command(command);
     std::this_thread::sleep_for(5ms);
   }
   const BodyState* state = base.latest_state();
-  for (int j = 0; j < 7; ++j) EXPECT_NEAR(state->joint_positions[j], targets[j], 0.01) << j;
+  for (int j = 0; j < 7; ++j) EXPECT_NEAR(state->joints[j].position, targets[j], 0.01) << j;
 
   // Commands stop: the watchdog engages after 0.5 s and says so once.
   ASSERT_TRUE(wait_until([&] { return world.latest()->watchdog_expiries == 1; }, 2s));

@@ -41,10 +41,30 @@ TEST(PayloadCheck, RefusesAnotherPayloadKind) {
 
 TEST(PayloadCheck, RefusesAChunkShorterThanItsPayload) {
   auto state = stamped<BodyState>(PayloadKind::kBodyState);
-  EXPECT_EQ(check_payload(&state, sizeof state - 8, PayloadKind::kBodyState),
+  EXPECT_EQ(check_payload(&state, body_state_bytes(0) - 8, PayloadKind::kBodyState),
             PayloadError::kTooSmall);
   EXPECT_EQ(check_payload(&state, sizeof(PayloadHeader) - 1, PayloadKind::kBodyState),
             PayloadError::kTooSmall);
+}
+
+// States and commands are sent at their real size: a count beyond the chunk's
+// joints is refused, naming the count, as one beyond capacity is.
+TEST(PayloadCheck, SizedPayloadsHoldTheirCountedJoints) {
+  const char* field = nullptr;
+  auto state = stamped<BodyState>(PayloadKind::kBodyState);
+  state.joint_count = 200;
+  EXPECT_EQ(check_payload(&state, body_state_bytes(200), PayloadKind::kBodyState),
+            PayloadError::kNone);
+  EXPECT_EQ(check_payload(&state, body_state_bytes(200) - 1, PayloadKind::kBodyState, &field),
+            PayloadError::kCountTooLarge);
+  EXPECT_STREQ(field, "BodyState.joint_count");
+  auto command = stamped<BodyCommand>(PayloadKind::kBodyCommand);
+  command.joint_count = 200;
+  EXPECT_EQ(check_payload(&command, body_command_bytes(200), PayloadKind::kBodyCommand),
+            PayloadError::kNone);
+  EXPECT_EQ(check_payload(&command, body_command_bytes(199), PayloadKind::kBodyCommand, &field),
+            PayloadError::kCountTooLarge);
+  EXPECT_STREQ(field, "BodyCommand.joint_count");
 }
 
 TEST(PayloadCheck, RefusesJointCountsBeyondCapacity) {
@@ -53,7 +73,7 @@ TEST(PayloadCheck, RefusesJointCountsBeyondCapacity) {
   EXPECT_EQ(check_payload(&state, sizeof state, PayloadKind::kBodyState),
             PayloadError::kCountTooLarge);
   auto command = stamped<BodyCommand>(PayloadKind::kBodyCommand);
-  command.joint_count = 1000;
+  command.joint_count = kMaxJointsPerBody + 1;
   EXPECT_EQ(check_payload(&command, sizeof command, PayloadKind::kBodyCommand),
             PayloadError::kCountTooLarge);
 }
@@ -113,18 +133,31 @@ TEST(PayloadCheck, RefusesEveryCountBeyondItsArray) {
 TEST(PayloadCheck, RefusesABodyListWhoseBodyCountsTooManyJoints) {
   for (auto kind : {PayloadKind::kBodyDirectory, PayloadKind::kCatalog}) {
     auto list = std::make_unique<BodyList>();
-    const std::size_t bytes = body_list_bytes(2);  // published with its two bodies only
+    // Published with its two bodies, one joint name and kMaxJointsPerBody references.
+    const std::size_t bytes = body_list_bytes(2, 1, kMaxJointsPerBody);
     list->header = PayloadHeader{kLayoutId, kind};
     list->body_count = 2;
+    list->joint_name_count = 1;
+    list->joint_ref_count = kMaxJointsPerBody;
     list->bodies[1].joint_count = kMaxJointsPerBody;
     EXPECT_EQ(check_payload(list.get(), bytes, kind), PayloadError::kNone);
     list->bodies[1].joint_count = kMaxJointsPerBody + 1;
     const char* field = nullptr;
     EXPECT_EQ(check_payload(list.get(), bytes, kind, &field), PayloadError::kCountTooLarge);
     EXPECT_STREQ(field, "BodyInfo.joint_count");
-    // A body beyond body_count is not the payload's: never read.
-    list->body_count = 1;
+    // Its references past the list's, a reference past the names, counts past the chunk.
+    list->bodies[1].joint_count = 2;
+    list->bodies[1].first_joint_ref = kMaxJointsPerBody - 1;
+    EXPECT_EQ(check_payload(list.get(), bytes, kind, &field), PayloadError::kCountTooLarge);
+    EXPECT_STREQ(field, "BodyInfo.first_joint_ref");
+    list->bodies[1].first_joint_ref = 0;
     EXPECT_EQ(check_payload(list.get(), bytes, kind), PayloadError::kNone);
+    joint_refs_in(*list)[5] = 1;
+    EXPECT_EQ(check_payload(list.get(), bytes, kind, &field), PayloadError::kCountTooLarge);
+    EXPECT_STREQ(field, "BodyList joint reference");
+    joint_refs_in(*list)[5] = 0;
+    EXPECT_EQ(check_payload(list.get(), bytes - 4, kind, &field), PayloadError::kCountTooLarge);
+    EXPECT_STREQ(field, "BodyList.joint_ref_count");
   }
 }
 
@@ -135,8 +168,12 @@ TEST(PayloadCheck, EveryErrorHasAnExplanation) {
 }
 
 TEST(Layout, PayloadsFitTheirMempoolsAndStaySmall) {
-  EXPECT_LE(sizeof(BodyState), 2048u);
-  EXPECT_LE(sizeof(BodyCommand), 1024u);
+  // Sent at their real size: a body of up to 64 joints stays within 2 KB, and one
+  // of kMaxJointsPerBody within the hub's largest body tier (hub_mempools.cpp).
+  EXPECT_LE(body_state_bytes(64), 2048u);
+  EXPECT_LE(body_command_bytes(64), 1280u);
+  EXPECT_EQ(body_state_bytes(kMaxJointsPerBody), sizeof(BodyState));
+  EXPECT_LE(body_command_bytes(kMaxJointsPerBody), body_state_bytes(kMaxJointsPerBody));
   EXPECT_EQ(sizeof(PayloadHeader), 48u);
 }
 

@@ -9,6 +9,7 @@
 #include <cstring>
 #include <limits>
 #include <thread>
+#include <unordered_map>
 
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/hub/stop_signal.hpp"
@@ -26,8 +27,8 @@ BodyClient::BodyClient(std::string_view body_channel)
       state_(body_state_channel(body_channel)),
       command_(body_command_channel(body_channel)) {}
 
-BodyClient::BodyClient(const BodyInfo& info) : BodyClient(name_of(info.channel)) {
-  joint_names_ = joint_names_of(info);
+BodyClient::BodyClient(const BodyEntry& entry) : BodyClient(name_of(entry.info.channel)) {
+  joint_names_ = entry.joint_names;
   joint_names_known_ = true;
 }
 
@@ -35,7 +36,7 @@ const std::vector<std::string>& BodyClient::joint_names() {
   if (!joint_names_known_) {
     CatalogReader catalog;
     catalog.wait(std::chrono::milliseconds(1000));
-    joint_names_ = joint_names_of(catalog.resolve(channel_));
+    joint_names_ = catalog.resolve(channel_).joint_names;
     joint_names_known_ = true;
   }
   return joint_names_;
@@ -53,11 +54,52 @@ std::size_t BodyClient::joint_index(std::string_view name) {
       (names.empty() ? std::string("it has no joints") : "its joints are (index name): " + known));
 }
 
-std::vector<std::string> joint_names_of(const BodyInfo& info) {
-  std::vector<std::string> names;
-  for (std::uint32_t i = 0; i < info.joint_count && i < kMaxJointsPerBody; ++i)
-    names.emplace_back(name_of(info.joint_names[i]));
-  return names;
+std::vector<std::string> joint_names_of(const BodyList& list, const BodyInfo& body) {
+  const JointName* names = joint_names_in(list);
+  const std::uint32_t* refs = joint_refs_in(list) + body.first_joint_ref;
+  std::vector<std::string> joint_names;
+  joint_names.reserve(body.joint_count);
+  for (std::uint32_t i = 0; i < body.joint_count; ++i)
+    joint_names.emplace_back(name_of(names[refs[i]]));
+  return joint_names;
+}
+
+BodyEntry entry_of(const BodyList& list, std::uint32_t index) {
+  return {list.bodies[index], joint_names_of(list, list.bodies[index])};
+}
+
+BodyList* loan_body_list(RawWriter& writer, const std::vector<BodyEntry>& entries) {
+  std::vector<std::string_view> names;
+  std::unordered_map<std::string_view, std::uint32_t> name_index;
+  std::vector<std::uint32_t> refs;
+  for (const BodyEntry& entry : entries)
+    for (const std::string& name : entry.joint_names) {
+      const auto [at, added] = name_index.emplace(name, static_cast<std::uint32_t>(names.size()));
+      if (added) names.push_back(name);
+      refs.push_back(at->second);
+    }
+  if (entries.size() > kMaxBodies || names.size() > kMaxCatalogJointNames ||
+      refs.size() > kMaxCatalogJointRefs)
+    return nullptr;
+  auto* list = static_cast<BodyList*>(writer.loan(
+      static_cast<std::uint32_t>(body_list_bytes(entries.size(), names.size(), refs.size()))));
+  if (!list) return nullptr;
+  list->header = PayloadHeader{};
+  list->body_count = static_cast<std::uint32_t>(entries.size());
+  list->joint_name_count = static_cast<std::uint32_t>(names.size());
+  list->joint_ref_count = static_cast<std::uint32_t>(refs.size());
+  list->reserved = 0;
+  std::uint32_t first_ref = 0;
+  for (std::size_t i = 0; i < entries.size(); ++i) {
+    list->bodies[i] = entries[i].info;
+    list->bodies[i].joint_count = static_cast<std::uint32_t>(entries[i].joint_names.size());
+    list->bodies[i].first_joint_ref = first_ref;
+    first_ref += list->bodies[i].joint_count;
+  }
+  JointName* name_slots = joint_names_in(*list);
+  for (std::size_t n = 0; n < names.size(); ++n) set_name(name_slots[n], names[n]);
+  std::copy(refs.begin(), refs.end(), joint_refs_in(*list));
+  return list;
 }
 
 namespace {
@@ -74,21 +116,22 @@ void copy_name(std::array<char, N>& buffer, std::string_view text, std::string_v
 
 }  // namespace
 
-BodyInfo make_body_info(std::string_view body_channel,
-                        const std::vector<std::string>& joint_names) {
+BodyEntry make_body_entry(std::string_view body_channel,
+                          const std::vector<std::string>& joint_names) {
   require_valid_channel_name(body_channel);
   if (joint_names.size() > kMaxJointsPerBody)
     throw Error("body '" + std::string(body_channel) + "' has " +
                 std::to_string(joint_names.size()) + " descendant joints; afhub carries at most " +
                 std::to_string(kMaxJointsPerBody) + " per body (kMaxJointsPerBody)");
-  BodyInfo info;
-  copy_name(info.channel, body_channel, "body channel");
-  copy_name(info.owner, runtime_name(), "process name");
-  info.owner_pid = static_cast<std::uint32_t>(getpid());
-  info.joint_count = static_cast<std::uint32_t>(joint_names.size());
-  for (std::size_t i = 0; i < joint_names.size(); ++i)
-    copy_name(info.joint_names[i], joint_names[i], "joint name");
-  return info;
+  BodyEntry entry;
+  copy_name(entry.info.channel, body_channel, "body channel");
+  copy_name(entry.info.owner, runtime_name(), "process name");
+  entry.info.owner_pid = static_cast<std::uint32_t>(getpid());
+  entry.info.joint_count = static_cast<std::uint32_t>(joint_names.size());
+  JointName checked{};
+  for (const std::string& name : joint_names) copy_name(checked, name, "joint name");
+  entry.joint_names = joint_names;
+  return entry;
 }
 
 DirectoryPublisher::DirectoryPublisher()
@@ -97,18 +140,20 @@ DirectoryPublisher::DirectoryPublisher()
   if (runtime_name().empty()) throw Error("DirectoryPublisher needs connect_to_hub() first");
 }
 
-void DirectoryPublisher::add(const BodyInfo& body) {
+void DirectoryPublisher::add(const BodyEntry& body) {
   if (bodies_.size() >= kMaxBodies)
     throw Error("a process can own at most " + std::to_string(kMaxBodies) + " bodies");
   bodies_.push_back(body);
 }
 
 void DirectoryPublisher::publish() {
-  auto* list = static_cast<BodyList*>(writer_.loan(body_list_bytes(bodies_.size())));
-  if (!list) throw Error("shared memory is exhausted: cannot publish the body directory");
-  list->header = PayloadHeader{};
-  list->body_count = static_cast<std::uint32_t>(bodies_.size());
-  for (std::size_t i = 0; i < bodies_.size(); ++i) list->bodies[i] = bodies_[i];
+  BodyList* list = loan_body_list(writer_, bodies_);
+  if (!list)
+    throw Error("cannot publish the body directory of " + std::to_string(bodies_.size()) +
+                " bodies: shared memory is exhausted, or they list more joint names than a "
+                "catalog holds (" +
+                std::to_string(kMaxCatalogJointRefs) +
+                "); give the hub a larger pool (`afhub hub --pool BYTES:COUNT`)");
   writer_.publish(list);
 }
 
@@ -140,16 +185,16 @@ std::vector<std::string> CatalogReader::channels() {
   return names;
 }
 
-BodyInfo CatalogReader::resolve(std::string_view query) {
+BodyEntry CatalogReader::resolve(std::string_view query) {
   std::string channel = resolve_body(query, channels());
   const BodyList& list = latest();
   for (std::uint32_t i = 0; i < list.body_count; ++i)
-    if (name_of(list.bodies[i].channel) == channel) return list.bodies[i];
+    if (name_of(list.bodies[i].channel) == channel) return entry_of(list, i);
   throw Error("body '" + channel + "' left the catalog while it was looked up");
 }
 
-BodyInfo wait_for_body(const std::string& query, const std::string& who, std::int64_t give_up_ns,
-                       const std::string& hint) {
+BodyEntry wait_for_body(const std::string& query, const std::string& who, std::int64_t give_up_ns,
+                        const std::string& hint) {
   CatalogReader catalog;
   catalog.wait(std::chrono::milliseconds(1000));
   bool said = false;

@@ -53,8 +53,8 @@ bool CatalogBuilder::merge(bool directories_changed) {
   // Rate probes follow the body set. A body whose probe cannot open is dropped,
   // said once: one bad entry never stops the hub.
   std::map<std::string, RateProbe> probes;
-  std::erase_if(bodies_, [&](const BodyInfo& body) {
-    std::string channel(name_of(body.channel));
+  std::erase_if(bodies_, [&](const BodyEntry& body) {
+    std::string channel(name_of(body.info.channel));
     auto old = rates_.find(channel);
     if (old != rates_.end()) {
       probes[channel] = std::move(old->second);
@@ -66,7 +66,7 @@ bool CatalogBuilder::merge(bool directories_changed) {
       return false;
     } catch (const std::exception& error) {
       probes.erase(channel);
-      tell_once("body " + channel + " of " + std::string(name_of(body.owner)) +
+      tell_once("body " + channel + " of " + std::string(name_of(body.info.owner)) +
                 " is not listed: " + error.what());
       return true;
     }
@@ -111,17 +111,15 @@ void CatalogBuilder::start_rate_samples() {
 }
 
 void CatalogBuilder::publish() {
-  auto* list = static_cast<BodyList*>(writer_.loan(body_list_bytes(bodies_.size())));
+  BodyList* list = loan_body_list(writer_, bodies_);
   if (!list) {
-    std::fprintf(stderr, "afhub hub: shared memory exhausted, catalog not published\n");
+    tell_once("the catalog of " + std::to_string(bodies_.size()) +
+              " bodies is not published: shared memory is exhausted, or its joint names "
+              "exceed a catalog's; give the hub a larger pool (--pool BYTES:COUNT)");
     return;
   }
-  list->header = PayloadHeader{};
-  list->body_count = static_cast<std::uint32_t>(bodies_.size());
-  for (std::size_t i = 0; i < bodies_.size(); ++i) {
-    list->bodies[i] = bodies_[i];
-    list->bodies[i].publish_rate_hz = rates_[std::string(name_of(bodies_[i].channel))].rate_hz;
-  }
+  for (std::size_t i = 0; i < bodies_.size(); ++i)
+    list->bodies[i].publish_rate_hz = rates_[std::string(name_of(bodies_[i].info.channel))].rate_hz;
   writer_.publish(list);
 }
 

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "afhub/hub/bodies.hpp"
 #include "afhub/hub/channel.hpp"
 #include "afhub/hub/channel_discovery.hpp"
 #include "afhub/shm_layout/body_state.hpp"
@@ -51,7 +52,7 @@ class CatalogBuilder {
   ChannelDiscovery discovery_;
   std::map<std::string, std::unique_ptr<RawLatestReader>> directories_;  // by owner instance
   std::map<std::string, RateProbe> rates_;                               // by body channel
-  std::vector<BodyInfo> bodies_;
+  std::vector<BodyEntry> bodies_;
   std::set<std::string> told_;
   RawWriter writer_;
   std::chrono::steady_clock::time_point last_publish_;

@@ -17,14 +17,14 @@ std::string body_info_problem(const BodyInfo& body) {
   return {};
 }
 
-std::vector<BodyInfo> merge_directories(const std::vector<BodyInfo>& listed,
-                                        const std::vector<OfferedDirectory>& directories,
-                                        std::vector<std::string>& messages) {
+std::vector<BodyEntry> merge_directories(const std::vector<BodyEntry>& listed,
+                                         const std::vector<OfferedDirectory>& directories,
+                                         std::vector<std::string>& messages) {
   std::map<std::string, std::uint32_t> listed_owner;
-  for (const BodyInfo& body : listed)
-    listed_owner[std::string(name_of(body.channel))] = body.owner_pid;
+  for (const BodyEntry& body : listed)
+    listed_owner[std::string(name_of(body.info.channel))] = body.info.owner_pid;
   // What the valid directories offer, in their order.
-  std::vector<BodyInfo> offered;
+  std::vector<BodyEntry> offered;
   std::map<std::string, std::size_t> offered_at;
   for (const OfferedDirectory& directory : directories) {
     if (!directory.list) continue;
@@ -45,21 +45,21 @@ std::vector<BodyInfo> merge_directories(const std::vector<BodyInfo>& listed,
       std::string channel(name_of(body.channel));
       const auto [at, added] = offered_at.emplace(channel, offered.size());
       if (added) {
-        offered.push_back(body);
+        offered.push_back(entry_of(list, i));
         continue;
       }
       messages.push_back("body " + channel + " is claimed by two processes; keeping the first");
       const auto owner = listed_owner.find(channel);
       if (owner != listed_owner.end() && owner->second == body.owner_pid)
-        offered[at->second] = body;
+        offered[at->second] = entry_of(list, i);
     }
   }
   // First come, first served: bodies the catalog lists keep their place, new ones
   // join while there is room. Their owner sees the refused ones missing and says so.
-  std::vector<BodyInfo> merged;
+  std::vector<BodyEntry> merged;
   std::vector<bool> taken(offered.size(), false);
-  for (const BodyInfo& body : listed) {
-    const auto at = offered_at.find(std::string(name_of(body.channel)));
+  for (const BodyEntry& body : listed) {
+    const auto at = offered_at.find(std::string(name_of(body.info.channel)));
     if (at == offered_at.end() || taken[at->second]) continue;
     merged.push_back(offered[at->second]);
     taken[at->second] = true;
@@ -68,8 +68,8 @@ std::vector<BodyInfo> merge_directories(const std::vector<BodyInfo>& listed,
     if (taken[k]) continue;
     if (merged.size() == kMaxBodies) {
       messages.push_back("the catalog is full (" + std::to_string(kMaxBodies) + " bodies); " +
-                         std::string(name_of(offered[k].channel)) + " of " +
-                         std::string(name_of(offered[k].owner)) + " is refused");
+                         std::string(name_of(offered[k].info.channel)) + " of " +
+                         std::string(name_of(offered[k].info.owner)) + " is refused");
       continue;
     }
     merged.push_back(offered[k]);

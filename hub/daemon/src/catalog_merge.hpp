@@ -8,6 +8,7 @@
 #include <string_view>
 #include <vector>
 
+#include "afhub/hub/bodies.hpp"
 #include "afhub/shm_layout/catalog.hpp"
 
 namespace afhub {
@@ -26,8 +27,8 @@ std::string body_info_problem(const BodyInfo& body);
 // processes offer goes to the one the catalog already lists, else to the first;
 // bodies listed keep their place, new ones join while there is room (kMaxBodies).
 // What was refused, and why, is appended to `messages`, one line each.
-std::vector<BodyInfo> merge_directories(const std::vector<BodyInfo>& listed,
-                                        const std::vector<OfferedDirectory>& directories,
-                                        std::vector<std::string>& messages);
+std::vector<BodyEntry> merge_directories(const std::vector<BodyEntry>& listed,
+                                         const std::vector<OfferedDirectory>& directories,
+                                         std::vector<std::string>& messages);
 
 }  // namespace afhub

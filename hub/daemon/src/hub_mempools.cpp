@@ -51,20 +51,33 @@ std::string parse_pool(const std::string& text, MempoolSpec& pool) {
 }  // namespace
 
 std::vector<MempoolSpec> default_mempools() {
-  // Chunk counts: each active body holds up to eight state and eight command chunks
-  // (publisher history, a loan, and per reader a queued, a held and a retired
-  // sample, for the hub's rate probe and a controller or two), for up to kMaxBodies
-  // bodies with a margin.
+  // Body states, body commands and catalogs are loaned at their real size, and
+  // iceoryx takes a chunk from the smallest pool that fits it, whatever its type: the
+  // body payloads share four tiers by size, most chunks where most bodies are (up to
+  // 64 joints). Chunk counts: each active body holds up to eight state and eight
+  // command chunks (a loan, and per reader a queued, a held and a retired sample,
+  // for the hub's rate probe and a controller or two), for up to kMaxBodies bodies in
+  // the first tiers, fewer for bodies with hundreds of joints below them (a rope or
+  // chain whose every link is active). Catalogs and directories: each holds a chunk
+  // in its writer's history, and three in each reader.
   std::vector<MempoolSpec> pools = {
       {128, 512, "world commands, small iceoryx samples"},
-      {round_up8(sizeof(BodyCommand)), 3072, "body commands"},
+      {round_up8(body_command_bytes(64)), 4096,
+       "body commands of up to 64 joints, states of up to 31"},
+      {round_up8(body_state_bytes(64)), 4096, "body states of up to 64 joints"},
+      {round_up8(body_state_bytes(256)), 1024, "body states and commands of up to 256 joints"},
+      {round_up8(body_state_bytes(kMaxJointsPerBody)), 256,
+       "body states and commands of up to kMaxJointsPerBody joints"},
       {round_up8(sizeof(WorldState)), 64, "world state"},
-      {round_up8(sizeof(BodyState)), 3072, "body states"},
       {round_up8(sizeof(Health)), 128, "hub health"},
       {round_up8(sizeof(LoopStats)), 256, "loop stats"},
-      {round_up8(body_list_bytes(7)), 128, "catalogs and directories of up to 7 bodies"},
-      {round_up8(body_list_bytes(60)), 32, "catalogs and directories of up to 60 bodies"},
-      {round_up8(sizeof(BodyList)), 12, "catalogs and directories of up to kMaxBodies bodies"},
+      {round_up8(body_list_bytes(8, 64, 256)), 128,
+       "catalogs and directories of up to 8 bodies (64 joint names, 256 joint references)"},
+      {round_up8(body_list_bytes(64, 512, 2048)), 32,
+       "catalogs and directories of up to 64 bodies (512 joint names, 2048 references)"},
+      {round_up8(body_list_bytes(kMaxBodies, 4096, 65536)), 24,
+       "catalogs and directories of up to kMaxBodies bodies (4096 joint names, 65536 "
+       "references)"},
   };
   sort_by_size(pools);
   return pools;

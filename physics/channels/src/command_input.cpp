@@ -21,8 +21,8 @@ void to_input(const BodyCommand& command, BodyInput& input) noexcept {
   input.joint_count = command.joint_count;
   const std::size_t joints = std::min<std::size_t>(command.joint_count, kBodyJointCapacity);
   for (std::size_t j = 0; j < joints; ++j) {
-    input.joint_modes[j] = static_cast<JointMode>(command.joint_types[j]);
-    input.joint_values[j] = command.joint_values[j];
+    input.joint_modes[j] = static_cast<JointMode>(command.joints[j].type);
+    input.joint_values[j] = command.joints[j].value;
   }
   input.actuator_count = command.actuator_count;
   const std::size_t actuators =

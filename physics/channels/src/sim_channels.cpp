@@ -26,19 +26,18 @@ std::string format_seconds(double seconds) {
 // The wire and the core agree on capacities, so a copy never truncates what fits.
 static_assert(kBodyRayCapacity == kMaxSensorRaysPerBody);
 
-// A reading into a loaned state (its header is the caller's).
+// A reading into a loaned state (its header is the caller's), within the joints
+// it was loaned for.
 void to_state(const BodyReading& reading, BodyState& state) noexcept {
   state.pose = reading.pose;
   state.twist = reading.twist;
   state.wrench = reading.wrench;
   state.mass_kg = reading.mass_kg;
   state.principal_inertia_kgm2 = reading.principal_inertia_kgm2;
-  state.joint_count = reading.joint_count;
-  for (std::uint32_t j = 0; j < reading.joint_count; ++j) {
-    state.joint_positions[j] = reading.joint_positions[j];
-    state.joint_velocities[j] = reading.joint_velocities[j];
-    state.joint_efforts[j] = reading.joint_efforts[j];
-  }
+  state.joint_count = std::min(state.joint_count, reading.joint_count);
+  for (std::uint32_t j = 0; j < state.joint_count; ++j)
+    state.joints[j] = {reading.joint_positions[j], reading.joint_velocities[j],
+                       reading.joint_efforts[j]};
   state.sensor_ray_count = reading.ray_count;
   for (std::uint32_t r = 0; r < reading.ray_count; ++r)
     state.sensor_distances_m[r] = reading.ray_distances_m[r];
@@ -79,7 +78,7 @@ SimChannels::SimChannels(Simulation& sim, double watchdog_s, std::string_view na
       throw Error(body.where.str() + ": error: '" + body.name + "' has " +
                   std::to_string(joint_names.size()) +
                   " joints below it; a state carries at most " + std::to_string(kMaxJointsPerBody));
-    directory_.add(make_body_info(body.channel, joint_names));
+    directory_.add(make_body_entry(body.channel, joint_names));
     Channel channel;
     channel.index = b;
     channel.publisher = std::make_unique<BodyPublisher>(body.channel);
@@ -90,7 +89,7 @@ SimChannels::SimChannels(Simulation& sim, double watchdog_s, std::string_view na
     channels_.push_back(std::move(channel));
   }
   for (std::size_t s = 0; s < model.soft_bodies.size(); ++s) {
-    directory_.add(make_body_info(model.soft_bodies[s].channel, {}));
+    directory_.add(make_body_entry(model.soft_bodies[s].channel, {}));
     Channel channel;
     channel.index = s;
     channel.soft = true;
@@ -423,7 +422,7 @@ void SimChannels::publish(double wall_time_s, double achieved_rate_hz, bool paus
     }
   }
   for (Channel& channel : channels_) {
-    BodyState* state = channel.publisher->loan_state();
+    BodyState* state = channel.publisher->loan_state(channel.joint_count);
     if (!state) continue;  // shared memory exhausted: skip this step, never block
     state->header.sim_step = step;
     state->header.sim_time_s = time_s;

@@ -8,13 +8,14 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <vector>
 
 #include "afhub/shm_layout/geometry.hpp"
 
 namespace afhub::physics {
 
 // Capacities of one body's inputs and readings.
-inline constexpr std::size_t kBodyJointCapacity = 64;    // descendant joints
+inline constexpr std::size_t kBodyJointCapacity = 1024;  // descendant joints
 inline constexpr std::size_t kBodyRayCapacity = 32;      // proximity-sensor rays
 inline constexpr std::size_t kBodyActuatorCapacity = 8;  // constraint actuators
 
@@ -62,7 +63,8 @@ struct InputBounds {
   double workspace_m = 0.0;
   double force_n = 0.0, torque_nm = 0.0;
   double linear_mps = 0.0, angular_radps = 0.0;
-  std::array<double, kBodyJointCapacity> joint_effort{}, joint_velocity{}, joint_position{};
+  // One entry per descendant joint, sized when the simulation is built.
+  std::vector<double> joint_effort, joint_velocity, joint_position;
 };
 
 // nullptr when `input` can be applied to a body with `joint_count` joints and

@@ -1,9 +1,12 @@
 // BodyCommand: what a controller writes into one body's command slot
-// (AMBF's afCommand: a Cartesian command and per-joint commands).
+// (AMBF's afCommand: a Cartesian command and per-joint commands). The joints come
+// last and a command is loaned at its real size, body_command_bytes(joint_count).
 #pragma once
 
 #include <array>
+#include <cstddef>
 #include <cstdint>
+#include <cstring>
 
 #include "afhub/shm_layout/geometry.hpp"
 #include "afhub/shm_layout/header.hpp"
@@ -16,6 +19,12 @@ enum class CartesianCommandType : std::uint8_t { kForce = 0, kPosition = 1, kVel
 
 enum class JointCommandType : std::uint8_t { kEffort = 0, kPosition = 1, kVelocity = 2 };
 
+struct JointCommand {
+  double value{0.0};  // N m or N, rad or m, rad/s or m/s, by type
+  JointCommandType type{JointCommandType::kEffort};
+  std::array<std::uint8_t, 7> reserved{};
+};
+
 struct BodyCommand {
   static constexpr PayloadKind kKind = PayloadKind::kBodyCommand;
   PayloadHeader header;
@@ -25,17 +34,28 @@ struct BodyCommand {
   std::uint8_t lockstep{0};
   std::array<std::uint8_t, 2> reserved{};
   // Joint command i drives the i-th joint of the body's state; entries
-  // [0, joint_count) are valid and the list may be shorter than the body's joints.
+  // [0, joint_count) are valid, the only ones in the chunk, and the list may be
+  // shorter than the body's joints.
   std::uint32_t joint_count{0};
   Pose pose;      // target for kPosition
   Wrench wrench;  // applied for kForce, world frame
   Twist twist;    // target for kVelocity
-  std::array<double, kMaxJointsPerBody> joint_values{};
-  std::array<JointCommandType, kMaxJointsPerBody> joint_types{};
   // The body's constraint actuators in file order: 1 holds whatever body touches the
   // actuator, 0 lets go; entries [0, actuator_count) are valid.
   std::uint32_t actuator_count{0};
   std::array<std::uint8_t, kMaxActuatorsPerBody> actuate{};
+  std::array<JointCommand, kMaxJointsPerBody> joints{};  // last: sized by joint_count
 };
+
+// Bytes of a BodyCommand with `joints` joint commands: what is loaned and published.
+constexpr std::size_t body_command_bytes(std::size_t joints) {
+  return offsetof(BodyCommand, joints) + joints * sizeof(JointCommand);
+}
+
+// Copies a command at its real size (see copy_body_state); `to` holds at least
+// from.joint_count joint commands.
+inline void copy_body_command(const BodyCommand& from, BodyCommand& to) noexcept {
+  std::memcpy(&to, &from, body_command_bytes(from.joint_count));
+}
 
 }  // namespace afhub

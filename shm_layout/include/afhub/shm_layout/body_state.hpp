@@ -1,15 +1,25 @@
 // BodyState: what the physics process publishes for one body every step
 // (AMBF's afState: pose, twist, wrench, inertia and the body's descendant joints).
+// The joints come last and a state is loaned at its real size, body_state_bytes(
+// joint_count): only entries [0, joint_count) exist in the chunk.
 #pragma once
 
 #include <array>
+#include <cstddef>
 #include <cstdint>
+#include <cstring>
 
 #include "afhub/shm_layout/geometry.hpp"
 #include "afhub/shm_layout/header.hpp"
 #include "afhub/shm_layout/limits.hpp"
 
 namespace afhub {
+
+struct JointSample {
+  double position{0.0};  // rad or m
+  double velocity{0.0};  // rad/s or m/s
+  double effort{0.0};    // N m or N
+};
 
 struct BodyState {
   static constexpr PayloadKind kKind = PayloadKind::kBodyState;
@@ -19,7 +29,8 @@ struct BodyState {
   Wrench wrench;  // the wrench applied to the body in the last step
   double mass_kg{0.0};
   Vec3 principal_inertia_kgm2;
-  // Descendant joints in the catalog's order; entries [0, joint_count) are valid.
+  // Descendant joints in the catalog's order; entries [0, joint_count) are valid
+  // and the only ones in the chunk.
   std::uint32_t joint_count{0};
   // This body's command timeliness, as the physics counts it since it started
   // (modulo 2^32): steps taken under command, and those whose command answered the
@@ -27,15 +38,24 @@ struct BodyState {
   // controller reports the growth of commanded - answered as its late commands, so
   // that `afhub top` and `afhub status` show the physics' one count.
   std::uint32_t commanded_steps{0};
-  std::array<double, kMaxJointsPerBody> joint_positions{};   // rad or m
-  std::array<double, kMaxJointsPerBody> joint_velocities{};  // rad/s or m/s
-  std::array<double, kMaxJointsPerBody> joint_efforts{};     // N m or N
   // Proximity sensors on this body, their rays in file order; entries
   // [0, sensor_ray_count) are valid. Distance to the first hit, or -1 when nothing
   // is within the sensor's range.
   std::uint32_t sensor_ray_count{0};
   std::uint32_t answered_steps{0};  // see commanded_steps
   std::array<double, kMaxSensorRaysPerBody> sensor_distances_m{};
+  std::array<JointSample, kMaxJointsPerBody> joints{};  // last: sized by joint_count
 };
+
+// Bytes of a BodyState with `joints` joints: what is loaned and published.
+constexpr std::size_t body_state_bytes(std::size_t joints) {
+  return offsetof(BodyState, joints) + joints * sizeof(JointSample);
+}
+
+// Copies a state at its real size: a chunk holds no joints past its joint_count, so
+// `*to = from` would read or write past it. `to` holds at least from.joint_count joints.
+inline void copy_body_state(const BodyState& from, BodyState& to) noexcept {
+  std::memcpy(&to, &from, body_state_bytes(from.joint_count));
+}
 
 }  // namespace afhub

@@ -1,7 +1,9 @@
 // The catalog: names travel here once, never in the per-step payloads.
 // A process that owns bodies publishes a BodyDirectory of them; the hub merges
-// every live directory into the Catalog. Both share one shape and are published
-// with only their first body_count entries, so a small directory uses a small chunk.
+// every live directory into the Catalog. Both share one shape and are loaned at
+// their real size, body_list_bytes(): the first body_count entries of `bodies`,
+// then the joint names (each distinct name once), then the joint references (per
+// body, its joint_count indices into the names, from first_joint_ref on).
 #pragma once
 
 #include <array>
@@ -13,26 +15,56 @@
 
 namespace afhub {
 
+using JointName = std::array<char, kJointNameBufferSize>;  // NUL-terminated
+
 struct BodyInfo {
   std::array<char, kChannelNameBufferSize> channel{};  // "<namespace>/<body>", NUL-terminated
   std::array<char, kProcessNameBufferSize> owner{};    // iceoryx runtime name of the publisher
   std::uint32_t owner_pid{0};
   std::uint32_t joint_count{0};
   double publish_rate_hz{0.0};  // measured by the hub; 0 in a directory
-  std::array<std::array<char, kJointNameBufferSize>, kMaxJointsPerBody> joint_names{};
+  // Its joints, in state order, are names[refs[first_joint_ref + i]] for i < joint_count.
+  std::uint32_t first_joint_ref{0};
+  std::uint32_t reserved{0};
 };
 
 struct BodyList {
   // No kKind: a BodyList is a kBodyDirectory or a kCatalog, named by its channel.
   PayloadHeader header;
   std::uint32_t body_count{0};
+  std::uint32_t joint_name_count{0};
+  std::uint32_t joint_ref_count{0};
   std::uint32_t reserved{0};
+  // Only the first body_count entries are in the chunk; the names and refs follow them.
   std::array<BodyInfo, kMaxBodies> bodies{};
 };
 
-// Bytes of a BodyList holding `count` bodies: what is loaned and published.
-constexpr std::size_t body_list_bytes(std::size_t count) {
-  return offsetof(BodyList, bodies) + count * sizeof(BodyInfo);
+// Bytes of a BodyList holding `count` bodies, `names` joint names and `refs` joint
+// references: what is loaned and published.
+constexpr std::size_t body_list_bytes(std::size_t count, std::size_t names = 0,
+                                      std::size_t refs = 0) {
+  return offsetof(BodyList, bodies) + count * sizeof(BodyInfo) + names * sizeof(JointName) +
+         refs * sizeof(std::uint32_t);
+}
+
+// The joint names and references of a list whose counts are set (and, when read,
+// checked by check_payload against the chunk's size).
+inline JointName* joint_names_in(BodyList& list) {
+  return reinterpret_cast<JointName*>(reinterpret_cast<char*>(&list) +
+                                      body_list_bytes(list.body_count));
+}
+inline const JointName* joint_names_in(const BodyList& list) {
+  return reinterpret_cast<const JointName*>(reinterpret_cast<const char*>(&list) +
+                                            body_list_bytes(list.body_count));
+}
+inline std::uint32_t* joint_refs_in(BodyList& list) {
+  return reinterpret_cast<std::uint32_t*>(reinterpret_cast<char*>(&list) +
+                                          body_list_bytes(list.body_count, list.joint_name_count));
+}
+inline const std::uint32_t* joint_refs_in(const BodyList& list) {
+  return reinterpret_cast<const std::uint32_t*>(
+      reinterpret_cast<const char*>(&list) +
+      body_list_bytes(list.body_count, list.joint_name_count));
 }
 
 }  // namespace afhub

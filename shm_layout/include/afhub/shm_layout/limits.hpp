@@ -1,6 +1,8 @@
-// Fixed capacities of every payload. Payloads live in shared memory mapped at a
-// different address in each process, so nothing in them may grow: each bound is
-// chosen here once, with the reason beside it.
+// Capacities of every payload. Payloads live in shared memory mapped at a different
+// address in each process, so nothing in them may grow once loaned: each bound is
+// chosen here once, with the reason beside it. Body states, body commands and the
+// catalog are loaned at their real size (their variable arrays come last and only
+// the counted entries are sent), so a large bound costs nothing until a model uses it.
 #pragma once
 
 #include <cstddef>
@@ -8,10 +10,11 @@
 
 namespace afhub {
 
-// Descendant joints reported by one body. AMBF reports every joint below a body;
-// the largest seed models (da Vinci PSM with its parallel linkage: about 15, a
-// humanoid root: about 40) fit with room to spare, and a state stays under 2 KB.
-inline constexpr std::size_t kMaxJointsPerBody = 64;
+// Descendant joints reported by one body. AMBF reports every joint below a body and
+// has no limit: its rope environment has 72 joints below the root, and generated
+// chains have hundreds. A state is loaned at its real size (about 24 bytes per
+// joint), so this bound is far beyond real models: a state of 1024 joints is 25 KB.
+inline constexpr std::size_t kMaxJointsPerBody = 1024;
 
 // A body's channel name "<namespace>/<body>" is an iceoryx instance string,
 // which holds at most 100 characters. The buffer keeps a terminating NUL.
@@ -26,9 +29,18 @@ inline constexpr std::size_t kJointNameBufferSize = 64;
 // Process (iceoryx runtime) names are limited to 100 characters by iceoryx.
 inline constexpr std::size_t kProcessNameBufferSize = 104;
 
-// Bodies in the catalog. iceoryx 2.0 allows 512 publishers in the whole system and
-// every active body needs a state publisher and at least one command publisher.
-inline constexpr std::size_t kMaxBodies = 256;
+// Bodies in the catalog. iceoryx 2.0 allows 512 publishers in the whole system
+// (6 its own) and every active body needs a state publisher; a command publisher
+// is made only by a process that commands the body. Below the ports by a margin:
+// processes that claim bodies at once open their publishers before the catalog
+// refuses one of them, and that must never run iceoryx out of ports (it aborts).
+inline constexpr std::size_t kMaxBodies = 450;
+
+// Joint names in the catalog: every distinct name once, and per body a list of
+// indices into them (a chain of N links, every link active, lists N^2/2 indices but
+// N names). Loaned at the real size, so these bound only what a faulty writer claims.
+inline constexpr std::size_t kMaxCatalogJointNames = 1 << 16;
+inline constexpr std::size_t kMaxCatalogJointRefs = 1 << 20;
 
 // Proximity-sensor rays reported in one body's state (AMBF's parametric sensors
 // are resolution^2 rays; 32 covers a 5x5 grid and several small arrays).

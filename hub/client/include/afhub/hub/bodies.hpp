@@ -1,4 +1,5 @@
 // One body's two channels, from either side, and the body catalog.
+//   BodyEntry: a catalog entry with its joint names, in this process's memory.
 //   BodyPublisher (the physics side): publishes state, reads the command slot.
 //   BodyClient (controllers, drivers, tools): reads state, writes commands.
 //   DirectoryPublisher: the bodies a process owns, announced once for the catalog.
@@ -24,8 +25,13 @@ class BodyPublisher {
  public:
   explicit BodyPublisher(std::string_view body_channel);
 
-  // Zero-initialised state in shared memory to fill, or nullptr when memory is exhausted.
-  BodyState* loan_state() noexcept { return state_.loan(); }
+  // A default state of `joints` joints (joint_count set) in shared memory, loaned at
+  // its real size (body_state_bytes), or nullptr when memory is exhausted.
+  BodyState* loan_state(std::uint32_t joints) noexcept {
+    BodyState* state = state_.loan(body_state_bytes(joints));
+    if (state) state->joint_count = joints;
+    return state;
+  }
   void publish_state(BodyState* state) noexcept { state_.publish(state); }
   bool has_state_readers() const noexcept { return state_.raw().has_readers(); }
   // The newest command, or nullptr before the first; read in place.
@@ -42,19 +48,25 @@ class BodyPublisher {
   LatestReader<BodyCommand> command_;
 };
 
+// A body as the catalog lists it, with its joint names in state order.
+struct BodyEntry {
+  BodyInfo info;
+  std::vector<std::string> joint_names;
+};
+
 class BodyClient {
  public:
   // `body_channel` is a full channel name as listed in the catalog.
   explicit BodyClient(std::string_view body_channel);
   // From the body's catalog entry (CatalogReader::resolve): its joint names come along.
-  explicit BodyClient(const BodyInfo& info);
+  explicit BodyClient(const BodyEntry& entry);
 
   // The body's joint names, in the order of its state's and command's joint arrays.
   // Constructed from a channel name, the client looks them up in the catalog on the
   // first call (not real-time safe: call it before the loop).
   const std::vector<std::string>& joint_names();
   // The index of joint `name` in the body's state and command, e.g.
-  //   command.joint_values[body.joint_index("link1-link2")] = 0.3;
+  //   command.joints[body.joint_index("link1-link2")].value = 0.3;
   // Throws afhub::Error listing the body's joint names when it has no such joint.
   std::size_t joint_index(std::string_view name);
 
@@ -66,8 +78,13 @@ class BodyClient {
   std::uint64_t refused_states() { return state_.raw().refused_count(); }
   // The state reader, to wait on (SampleWaiter).
   RawLatestReader& state_reader() noexcept { return state_.raw(); }
-  // A zero-initialised command in shared memory to fill, then publish_command().
-  BodyCommand* loan_command() noexcept { return command_.loan(); }
+  // A default command of `joints` joint commands (joint_count set) in shared memory,
+  // loaned at its real size (body_command_bytes), to fill, then publish_command().
+  BodyCommand* loan_command(std::uint32_t joints) noexcept {
+    BodyCommand* command = command_.loan(body_command_bytes(joints));
+    if (command) command->joint_count = joints;
+    return command;
+  }
   void publish_command(BodyCommand* command) noexcept { command_.publish(command); }
   const std::string& channel() const { return channel_; }
 
@@ -79,21 +96,29 @@ class BodyClient {
   bool joint_names_known_ = false;
 };
 
-// The joint names of a catalog entry, in state order.
-std::vector<std::string> joint_names_of(const BodyInfo& info);
+// The joint names of `body`, an entry of `list` (checked by check_payload), in state order.
+std::vector<std::string> joint_names_of(const BodyList& list, const BodyInfo& body);
+// Entry `index` of `list` with its joint names.
+BodyEntry entry_of(const BodyList& list, std::uint32_t index);
 
 // A catalog entry for a body this process owns; throws afhub::Error on a bad name.
-BodyInfo make_body_info(std::string_view body_channel, const std::vector<std::string>& joint_names);
+BodyEntry make_body_entry(std::string_view body_channel,
+                          const std::vector<std::string>& joint_names);
+
+// A BodyList of `entries` loaned from `writer` at its real size (body_list_bytes),
+// each distinct joint name once; nullptr when shared memory is exhausted or the
+// entries exceed a catalog's capacity. Not real-time safe.
+BodyList* loan_body_list(RawWriter& writer, const std::vector<BodyEntry>& entries);
 
 class DirectoryPublisher {
  public:
   DirectoryPublisher();  // on {"afhub", "<runtime name>", "directory"}; needs connect_to_hub()
   // Announces a body; publish() sends the directory.
-  void add(const BodyInfo& body);
+  void add(const BodyEntry& body);
   void publish();
 
  private:
-  std::vector<BodyInfo> bodies_;
+  std::vector<BodyEntry> bodies_;
   RawWriter writer_;
 };
 
@@ -107,7 +132,7 @@ class CatalogReader {
   const BodyList& latest() noexcept;
   std::vector<std::string> channels() noexcept(false);
   // Resolves an exact name or unique suffix; throws afhub::Error listing candidates.
-  BodyInfo resolve(std::string_view query);
+  BodyEntry resolve(std::string_view query);
 
  private:
   RawLatestReader reader_;
@@ -119,8 +144,8 @@ class CatalogReader {
 // until `give_up_ns` (CLOCK_MONOTONIC; INT64_MAX: until it comes), saying so once on
 // stderr as `who`. Throws afhub::Error when it is still missing then (adding `hint`
 // to the message when it waited), or on Ctrl-C.
-BodyInfo wait_for_body(const std::string& query, const std::string& who, std::int64_t give_up_ns,
-                       const std::string& hint = "");
+BodyEntry wait_for_body(const std::string& query, const std::string& who, std::int64_t give_up_ns,
+                        const std::string& hint = "");
 
 // Writes `text` into a fixed name buffer, cut to fit, NUL-terminated.
 template <std::size_t N>

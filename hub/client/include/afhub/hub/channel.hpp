@@ -7,6 +7,7 @@
 #pragma once
 
 #include <cstdint>
+#include <cstring>
 #include <memory>
 #include <new>
 #include <string>
@@ -109,10 +110,17 @@ class Writer {
  public:
   explicit Writer(const ChannelId& channel, History history = history_of(T::kKind))
       : raw_(channel, T::kKind, history) {}
-  // A zero-initialised payload in shared memory, or nullptr when memory is exhausted.
-  T* loan() noexcept {
-    void* chunk = raw_.loan(sizeof(T));
-    return chunk ? new (chunk) T{} : nullptr;
+  // A default-initialised payload in shared memory, or nullptr when memory is exhausted.
+  T* loan() noexcept { return loan(sizeof(T)); }
+  // The first `bytes` bytes of a default-initialised payload: for payloads sent at
+  // their real size (body_state_bytes, body_command_bytes), whose entries past their
+  // count are not in the chunk. `bytes` is at most sizeof(T).
+  T* loan(std::size_t bytes) noexcept {
+    static const T kDefault{};  // static storage: no heap, made on the first loan
+    void* chunk = raw_.loan(static_cast<std::uint32_t>(bytes));
+    if (!chunk) return nullptr;
+    std::memcpy(chunk, &kDefault, bytes);
+    return static_cast<T*>(chunk);
   }
   void publish(T* payload) noexcept { raw_.publish(payload); }
   RawWriter& raw() { return raw_; }
