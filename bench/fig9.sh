@@ -1,0 +1,97 @@
+#!/usr/bin/env bash
+# The seed paper's Fig. 9 (issue 18): several closed-loop robots in one world, each
+# commanded in position mode by its own `afhub ctl sine` process at 1 kHz. Runs the scene
+# free-running (physics and controllers each on their own 1 ms grid), in lockstep paced at
+# 1 kHz, and in lockstep as fast as it goes, and prints the physics step's p50 and p99, the
+# achieved rate and the largest loop-joint gap, from each run's `afhub run --report`.
+#
+#   bench/fig9.sh [STEPS] [BUILD_DIR]     (defaults: 10000 steps, build/dev)
+#
+# The scene: with ../shared/ambf_models, the da Vinci ECM twice, the project's RCM arm and
+# the KUKA; without it, the project's 7-DOF arm and its RCM arm twice. A second copy of a
+# model is moved aside (place_copy, into a temporary file) so that the copies do not
+# overlap. As root it runs in a private mount namespace (its own /tmp, /dev/shm, /run),
+# so that its hub cannot meet another.
+set -euo pipefail
+
+steps=${1:-10000}
+root=$(cd "$(dirname "$0")/.." && pwd)
+build=$(cd "${2:-$root/build/dev}" && pwd)
+afhub=$build/bin/afhub
+place_copy=$build/bin/place_copy
+for tool in "$afhub" "$place_copy"; do
+  [[ -x $tool ]] || { echo "fig9.sh: $tool is missing: build it (ninja -C $build afhub place_copy)" >&2; exit 1; }
+done
+
+if [[ $(id -u) == 0 && -z ${AFHUB_FIG9_PRIVATE:-} ]]; then
+  exec env AFHUB_FIG9_PRIVATE=1 unshare -m bash -c \
+    'mount -t tmpfs tmpfs /tmp && mount -t tmpfs tmpfs /dev/shm && mount -t tmpfs tmpfs /run && exec "$0" "$@"' \
+    "$0" "$steps" "$build"
+fi
+
+work=$(mktemp -d)
+pids=()
+cleanup() {
+  for pid in "${pids[@]}"; do kill "$pid" 2>/dev/null || true; done
+  wait 2>/dev/null || true
+  rm -rf "$work"
+}
+trap cleanup EXIT
+
+shared=$root/../shared/ambf_models/descriptions/multi-bodies/robots
+examples=$root/examples/models
+# Each robot: its root body, and an amplitude (rad or m) inside its joints' limits.
+if [[ -d $shared ]]; then
+  "$place_copy" "$shared/blender-ecm.yaml" 1.5 0 0 > "$work/ecm copy.yaml"
+  files=("$shared/blender-ecm.yaml" "$work/ecm copy.yaml" "$examples/rcm.yaml" "$shared/blender-kuka.yaml")
+  bodies=(ambf/env/ecm/baselink ambf/env/ecm/baselink1 afhub/rcm/base ambf/env/base)
+  amplitudes=(0.1 0.1 0.2 0.2)
+  scene="ECM x2 (../shared), RCM, KUKA"
+else
+  "$place_copy" "$examples/rcm.yaml" 0 2 0 > "$work/rcm copy.yaml"
+  files=("$examples/arm7.yaml" "$examples/rcm.yaml" "$work/rcm copy.yaml")
+  bodies=(afhub/arm/base afhub/rcm/base afhub/rcm/base1)
+  amplitudes=(0.3 0.2 0.2)
+  scene="arm7, RCM x2 (the project's own models)"
+fi
+robots=${#bodies[@]}
+
+"$afhub" hub > "$work/hub.log" 2>&1 &
+pids+=($!)
+for _ in $(seq 100); do "$afhub" status > /dev/null 2>&1 && break; sleep 0.1; done
+
+# run MODE REPORT [afhub run options...]: the physics with one controller per robot.
+run() {
+  local mode=$1 report=$2
+  shift 2
+  local controllers=()
+  for i in "${!bodies[@]}"; do
+    local extra=()
+    [[ $mode == lockstep ]] && extra=(--lockstep)
+    "$afhub" ctl sine "${bodies[$i]}" --amplitude "${amplitudes[$i]}" --period 4 --wait 60 \
+      "${extra[@]}" > "$work/ctl$i.log" 2>&1 &
+    controllers+=($!)
+  done
+  pids+=("${controllers[@]}")
+  "$afhub" run "${files[@]}" --steps "$steps" --report "$report" "$@" > "$work/run.log" 2>&1 ||
+    { echo "fig9.sh: afhub run failed:" >&2; tail -5 "$work/run.log" >&2; exit 1; }
+  for pid in "${controllers[@]}"; do kill "$pid" 2>/dev/null || true; wait "$pid" 2>/dev/null || true; done
+}
+
+run free "$work/free.json"
+run lockstep "$work/lockstep.json" --lockstep --wait-for "$robots" --wait-timeout 60
+run lockstep "$work/fast.json" --lockstep --wait-for "$robots" --wait-timeout 60 --fast
+
+echo "Fig. 9: $scene, $robots robots, one 'afhub ctl sine' process each at 1 kHz, $steps steps"
+printf '| %-36s | %9s | %9s | %15s | %15s |\n' "run" "step p50" "step p99" "rate (steps/s)" "max joint error"
+printf '| %-36s | %9s | %9s | %15s | %15s |\n' "---" "---" "---" "---" "---"
+for entry in "free-running, real time:free" "lockstep, real time:lockstep" "lockstep, --fast:fast"; do
+  python3 - "${entry%%:*}" "$work/${entry##*:}.json" <<'PY'
+import json, sys
+report = json.load(open(sys.argv[2]))
+step = report["step_time_us"]
+print("| %-36s | %6.0f us | %6.0f us | %15.0f | %12.4f mm |" % (
+    sys.argv[1], step["p50"], step["p99"], report["steps"] / report["wall_time_s"],
+    report["max_joint_error_m"] * 1e3))
+PY
+done
