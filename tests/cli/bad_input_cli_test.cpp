@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "afhub/shm_layout/limits.hpp"
 #include "afhub_process.hpp"
 #include "model_files.hpp"
 
@@ -85,14 +86,16 @@ TEST(BadInputCli, AnUnreadableModelOrADirectoryIsSaidSo) {
 
 TEST(BadInputCli, CheckRefusesWhatRunWouldRefuse) {
   afhub::testing::ModelFolder folder;
+  const std::size_t bodies = kMaxBodies + 50;
   std::string text = "bodies: [";
-  for (int i = 0; i < 300; ++i) text += (i ? ", BODY b" : "BODY b") + std::to_string(i);
+  for (std::size_t i = 0; i < bodies; ++i) text += (i ? ", BODY b" : "BODY b") + std::to_string(i);
   text += "]\n";
-  for (int i = 0; i < 300; ++i)
+  for (std::size_t i = 0; i < bodies; ++i)
     text += "BODY b" + std::to_string(i) + ":\n  name: b" + std::to_string(i) + "\n  mass: 1\n";
   RunResult check = run_afhub({"check", folder.write("many.yaml", text)});
   EXPECT_EQ(check.exit_code, 1) << check.out;
-  EXPECT_TRUE(contains(check.err, "is published body number 257; the hub holds at most 256"))
+  EXPECT_TRUE(contains(check.err, "is published body number " + std::to_string(kMaxBodies + 1) +
+                                      "; the hub holds at most " + std::to_string(kMaxBodies)))
       << check.err;
 }
 

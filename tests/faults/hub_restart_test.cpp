@@ -139,9 +139,10 @@ constexpr std::uint32_t kInFlightChunks = 4;
 // kInFlightChunks over those.
 bool same_usage(const PoolUsage& baseline, const PoolUsage& usage) {
   if (usage.size() != baseline.size() || usage.empty()) return false;
-  // (Sent at their real size: the arm's states and commands are in the smallest tiers.)
-  const std::uint32_t streaming[] = {pool_of(baseline, body_command_bytes(0)),
-                                     pool_of(baseline, body_state_bytes(64)),
+  // (Sent at their real size: the arm's states and commands, of 0 to 7 joints, are in
+  // the tiers that hold 7.)
+  const std::uint32_t streaming[] = {pool_of(baseline, body_command_bytes(7)),
+                                     pool_of(baseline, body_state_bytes(7)),
                                      pool_of(baseline, sizeof(WorldState))};
   long long streaming_difference = 0;
   for (const auto& [bytes, used] : baseline) {

@@ -17,6 +17,7 @@
 #include "afhub/physics/scene_loader.hpp"
 #include "afhub/physics/simulation.hpp"
 #include "afhub/shm_layout/error.hpp"
+#include "afhub/shm_layout/limits.hpp"
 #include "model_files.hpp"
 
 namespace afhub::physics {
@@ -187,17 +188,17 @@ TEST_F(BadInput, LoadingIsLinearInTheBodies) {
 }
 
 TEST_F(BadInput, MoreBodiesThanTheHubHoldsAreRefusedAtOnce) {
-  std::string text = many_bodies(300);
-  // Passive bodies publish nothing: 300 of them load.
+  std::string text = many_bodies(kMaxBodies + 50);
+  // Passive bodies publish nothing: any number of them load.
   EXPECT_EQ(error_of({folder_.write("passive.yaml", text)}, false), "");
   std::string active;
   for (std::size_t at = 0; (at = text.find("  passive: true\n")) != std::string::npos;)
     text.erase(at, 16);
   const std::string message = error_of({folder_.write("active.yaml", text)}, false);
   EXPECT_TRUE(contains(message, "active.yaml:"));
-  EXPECT_TRUE(contains(message,
-                       "'BODY b256' is published body number 257; the hub holds at most "
-                       "256"))
+  EXPECT_TRUE(contains(message, "'BODY b" + std::to_string(kMaxBodies) +
+                                    "' is published body number " + std::to_string(kMaxBodies + 1) +
+                                    "; the hub holds at most " + std::to_string(kMaxBodies)))
       << message;
 }
 
@@ -306,13 +307,16 @@ TEST_F(BadInput, EveryPerBodyCapacityIsEnforcedWithItsLocation) {
   EXPECT_TRUE(contains(message, "parametric.yaml:10:28: error: 'parametric.resolution' must be"))
       << message;
 
+  const int links = static_cast<int>(kMaxJointsPerBody) + 1;
   std::string chain = "bodies: [BODY b0";
-  for (int i = 1; i <= 65; ++i) chain += ", BODY b" + std::to_string(i);
+  for (int i = 1; i <= links; ++i) chain += ", BODY b" + std::to_string(i);
   chain += "]\njoints: [JOINT j1";
-  for (int i = 2; i <= 65; ++i) chain += ", JOINT j" + std::to_string(i);
+  for (int i = 2; i <= links; ++i) chain += ", JOINT j" + std::to_string(i);
   chain += "]\n";
-  for (int i = 0; i <= 65; ++i) chain += body("b" + std::to_string(i));
-  for (int i = 1; i <= 65; ++i)
+  // The links publish nothing (passive): the joints below the root are what is counted.
+  chain += body("b0");
+  for (int i = 1; i <= links; ++i) chain += body("b" + std::to_string(i)) + "  passive: true\n";
+  for (int i = 1; i <= links; ++i)
     chain += "JOINT j" + std::to_string(i) + ":\n  name: j" + std::to_string(i) +
              "\n  parent: BODY b" + std::to_string(i - 1) + "\n  child: BODY b" +
              std::to_string(i) +
@@ -320,7 +324,8 @@ TEST_F(BadInput, EveryPerBodyCapacityIsEnforcedWithItsLocation) {
              "  parent axis: {x: 0, y: 0, z: 1}\n  child axis: {x: 0, y: 0, z: 1}\n"
              "  type: revolute\n";
   message = error_of({folder_.write("chain.yaml", chain)}, false);
-  EXPECT_TRUE(contains(message, "chain.yaml:4:3: error: body 'BODY b0' has 65 joints below it"))
+  EXPECT_TRUE(contains(message, "chain.yaml:4:3: error: body 'BODY b0' has " +
+                                    std::to_string(links) + " joints below it"))
       << message;
 
   std::string world = "lights: [";
