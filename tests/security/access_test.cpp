@@ -99,7 +99,7 @@ TEST_F(Access, IceoryxLockTakenByAnotherUserIsRefusedWithoutLeavingMemory) {
   ScopedProcess holder = fork();
   if (holder.pid == 0) {
     execlp("setpriv", "setpriv", "--reuid", "65534", "--regid", "65534", "--clear-groups", "flock",
-           "/tmp/roudi.lock", "sleep", "30", nullptr);
+           "--no-fork", "/tmp/roudi.lock", "sleep", "30", nullptr);  // stopped as one process
     _exit(127);
   }
   ASSERT_TRUE(wait_until([] { return access("/tmp/roudi.lock", F_OK) == 0; }, 5s));

@@ -203,7 +203,10 @@ void remove_shared_memory(const std::string& group) {
 
 // Lets `group` use what RouDi made for its own group: its management segment and its
 // socket (the payload segment has the group in its ACL, from the config).
+// RouDi makes its socket in a thread of its own: waited for, up to 2 s.
 bool open_to_group(gid_t gid) {
+  for (int tries = 0; access("/tmp/roudi", F_OK) != 0 && tries < 200; ++tries)
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
   for (const char* path : {"/dev/shm/iceoryx_mgmt", "/tmp/roudi"})
     if (chown(path, static_cast<uid_t>(-1), gid) != 0 || chmod(path, 0660) != 0) {
       std::fprintf(stderr, "afhub hub: cannot give %s to the hub's group: %s\n", path,
@@ -261,8 +264,9 @@ int run_hub_daemon(const HubOptions& options) {
   install_stop_signal_handlers();
   quiet_iceoryx_logs();
 
-  // RouDi's socket and management segment take the group they are made with (0660):
-  // made under `gid`, no member is ever refused by a moment of the wrong group.
+  // RouDi's socket and management segment take the group they are made with (0660),
+  // and RouDi makes its socket in a thread of its own: the hub keeps `gid` as its
+  // effective group for good (root may), else gives them the group once they exist.
   const gid_t own_gid = getegid();
   const bool made_in_group = gid != own_gid && setegid(gid) == 0;
   double pool_mib = 0.0;
@@ -280,11 +284,7 @@ int run_hub_daemon(const HubOptions& options) {
   AfhubRouDi roudi(components.rouDiMemoryManager, components.portManager);
   iox::runtime::PoshRuntimeSingleProcess runtime(kHubRuntimeName);
   starting.reset();
-  if (made_in_group) {
-    if (setegid(own_gid) != 0) return 1;
-  } else if (gid != own_gid && !open_to_group(gid)) {
-    return 1;
-  }
+  if (gid != own_gid && !made_in_group && !open_to_group(gid)) return 1;
   std::fprintf(stderr,
                "afhub hub: running (pid %d, %zu payload mempools, %.1f MiB, group '%s'). Ctrl-C "
                "stops it.\n",
