@@ -164,12 +164,13 @@ std::uint64_t hub_instance_now() noexcept {
   }
 }
 
-// The hub this process attached to is gone, or is going: its socket refuses, or the
-// hub lock is held by another instance or by none.
+// The hub this process attached to is gone, or is going: its socket refuses, or
+// another instance holds the hub lock. (A lock held by none, or unreadable for a
+// moment, says nothing: a hub that died also refuses on its socket.)
 bool hub_gone() noexcept {
   if (probe_roudi() != RoudiPresence::kRunning) return true;
-  const std::uint64_t attached = g_attached_hub;
-  return attached != 0 && hub_instance_now() != attached;
+  const std::uint64_t attached = g_attached_hub, now = hub_instance_now();
+  return attached != 0 && now != 0 && now != attached;
 }
 
 std::vector<std::string> own_arguments() {
@@ -334,15 +335,17 @@ void wait_for_new_hub(const std::string& who) {
 
 RoudiPresence probe_roudi() noexcept {
   int fd = socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0);
-  if (fd < 0) return RoudiPresence::kAbsent;
+  if (fd < 0) return RoudiPresence::kRunning;  // out of descriptors: nothing known of RouDi
   sockaddr_un address{};
   address.sun_family = AF_UNIX;
   std::strncpy(address.sun_path, kRoudiSocketPath, sizeof address.sun_path - 1);
   int rc = connect(fd, reinterpret_cast<sockaddr*>(&address), sizeof address);
   const int error = errno;
   close(fd);
-  // EACCES: a hub runs, but this user may not use it (connect_to_hub says so).
-  return rc == 0 || error == EACCES ? RoudiPresence::kRunning : RoudiPresence::kAbsent;
+  // Only "no socket" and "nobody listens" say that no RouDi runs. EACCES: a hub runs,
+  // but this user may not use it (connect_to_hub says so); any other error says nothing.
+  return rc != 0 && (error == ENOENT || error == ECONNREFUSED) ? RoudiPresence::kAbsent
+                                                               : RoudiPresence::kRunning;
 }
 
 std::optional<HubIdentity> running_hub() {
