@@ -311,6 +311,10 @@ TEST_P(HubRestart, EveryClientOutlivesTheHubAndReattachesWithin2s) {
 TEST(HubLoss, MakeSafeHooksRunBeforeTheReexec) {
   const std::string hub_log = "/tmp/afhub-test-hub.log", out = "/tmp/afhub-fault-hooked.out",
                     err = "/tmp/afhub-fault-hooked.err";
+  // An earlier run's files would say "attached 0" and "hook ran" before this probe
+  // writes a line.
+  unlink(out.c_str());
+  unlink(err.c_str());
   ScopedProcess hub = spawn_afhub({"hub"}, hub_log);
   ASSERT_TRUE(wait_until([] { return probe_roudi() == RoudiPresence::kRunning; }, 10s));
   ScopedProcess hooked = fork();
@@ -324,7 +328,9 @@ TEST(HubLoss, MakeSafeHooksRunBeforeTheReexec) {
   }
   ASSERT_TRUE(wait_until([&] { return contains(read_file(out), "attached 0"); }, 10s))
       << read_file(err);
-  EXPECT_FALSE(contains(read_file(err), "hook ran"));
+  EXPECT_FALSE(contains(read_file(err), "hook ran")) << "with the hub up; the probe said:\n"
+                                                     << read_file(err) << "the hub said:\n"
+                                                     << read_file(hub_log);
 
   for (int round = 1; round <= 2; ++round) {
     ASSERT_EQ(run_afhub({"hub", "stop", "--force"}).exit_code, 0);

@@ -304,15 +304,17 @@ void require_hub_access() {
                 std::to_string(socket_info.st_uid) + ", not to the hub's user (uid " +
                 std::to_string(identity.st_uid) +
                 "): another user planted it. Remove it as root, and restart the hub.");
-  struct stat memory {};
-  if (access(kManagementSegment, R_OK | W_OK) != 0 && errno == EACCES &&
-      stat(kManagementSegment, &memory) == 0)
-    throw Error("permission denied: the hub (uid " + std::to_string(memory.st_uid) +
-                ") lets only the group '" + group_name(memory.st_gid) +
-                "' use its shared memory. Join that group (`sudo usermod -aG " +
-                group_name(memory.st_gid) +
-                " $USER`, then log in again), or have the hub started with `afhub hub --group "
-                "GROUP` for a group of yours.");
+  // iceoryx would wait forever on a socket it may not write to.
+  for (const char* path : {kManagementSegment, kRoudiSocketPath}) {
+    struct stat info {};
+    if (access(path, R_OK | W_OK) != 0 && errno == EACCES && stat(path, &info) == 0)
+      throw Error("permission denied on " + std::string(path) + ": the hub (uid " +
+                  std::to_string(info.st_uid) + ") lets only the group '" +
+                  group_name(info.st_gid) + "' use it. Join that group (`sudo usermod -aG " +
+                  group_name(info.st_gid) +
+                  " $USER`, then log in again), or have the hub started with `afhub hub --group "
+                  "GROUP` for a group of yours.");
+  }
 }
 
 // After a re-exec: waits for a hub other than the one lost, never starting one.

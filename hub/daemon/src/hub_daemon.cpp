@@ -268,6 +268,11 @@ int run_hub_daemon(const HubOptions& options) {
   // and RouDi makes its socket in a thread of its own: the hub keeps `gid` as its
   // effective group for good (root may), else gives them the group once they exist.
   const gid_t own_gid = getegid();
+  // iceoryx sets the process umask to 0117 around each bind and then puts the old one
+  // back, from RouDi's thread and from the hub's own runtime at once: interleaved, the
+  // two left /tmp/roudi 0640 in about 1 start in 10, and members were refused. With the
+  // hub's umask already 0117, every such change is a no-op.
+  umask(0117);
   const bool made_in_group = gid != own_gid && setegid(gid) == 0;
   double pool_mib = 0.0;
   // A fatal error while RouDi starts would abort with its shared memory left in /dev/shm.
