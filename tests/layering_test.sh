@@ -2,7 +2,7 @@
 # The dependency rule of the folders (README, "Architecture"): shm_layout at the
 # bottom; hub/client on it, hub/daemon on the client; rt on hub/client; the physics
 # core on shm_layout alone; physics/channels and controllers on rt; bench on those;
-# cli on everything. Fails, naming the file, when a layer includes one above it, or
+# device_drivers on rt (not physics or controllers); cli on everything. Fails, naming the file, when a layer includes one above it, or
 # when the physics core's test binary links iceoryx.
 set -euo pipefail
 source_dir=$1
@@ -21,19 +21,20 @@ forbid() {
   done
 }
 
-forbid shm_layout 'hub|rt|physics|controllers|bench'
-forbid hub 'rt|physics|controllers|bench'
-forbid rt 'physics|controllers|bench'
-forbid physics/src 'hub|rt|controllers|bench'
-forbid physics/include 'hub|rt|controllers|bench'
-forbid physics/channels 'controllers|bench'
+forbid shm_layout 'hub|rt|physics|controllers|devices|bench'
+forbid hub 'rt|physics|controllers|devices|bench'
+forbid rt 'physics|controllers|devices|bench'
+forbid physics/src 'hub|rt|controllers|devices|bench'
+forbid physics/include 'hub|rt|controllers|devices|bench'
+forbid physics/channels 'controllers|devices|bench'
 forbid controllers 'physics|bench'
+forbid device_drivers 'physics|controllers|bench'
 forbid bench '(cli)'
 if grep -rn '#include "afhub/hub/hub_daemon.hpp"' "$source_dir/hub/client"; then
   echo "layering: hub/client must not include the daemon" >&2
   status=1
 fi
-if grep -rn '#include "commands.hpp"\|#include "format.hpp"' "$source_dir"/{shm_layout,hub,rt,physics,controllers,bench}; then
+if grep -rn '#include "commands.hpp"\|#include "format.hpp"' "$source_dir"/{shm_layout,hub,rt,physics,controllers,device_drivers,bench}; then
   echo "layering: only cli/ includes the command line's headers" >&2
   status=1
 fi

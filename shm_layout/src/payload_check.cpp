@@ -1,6 +1,7 @@
 // Validation of received payloads (see payload_check.hpp).
 #include "afhub/shm_layout/payload_check.hpp"
 
+#include <cmath>
 #include <cstring>
 
 #include "afhub/shm_layout/layout_id.hpp"
@@ -25,6 +26,10 @@ std::size_t fixed_size_of(PayloadKind kind) noexcept {
       return sizeof(LoopStats);
     case PayloadKind::kBenchSample:
       return sizeof(BenchSample);
+    case PayloadKind::kDeviceState:
+      return sizeof(DeviceState);
+    case PayloadKind::kDeviceCommand:
+      return sizeof(DeviceCommand);
     case PayloadKind::kBodyDirectory:
     case PayloadKind::kCatalog:
       return body_list_bytes(0);
@@ -87,6 +92,20 @@ const char* count_beyond_capacity(const char* at, std::size_t bytes, PayloadKind
       const auto* health = reinterpret_cast<const Health*>(at);
       if (health->process_count > kMaxHealthProcesses) return "Health.process_count";
       if (health->mempool_count > kMaxMempools) return "Health.mempool_count";
+      return nullptr;
+    }
+    case PayloadKind::kDeviceState:
+      if (reinterpret_cast<const DeviceState*>(at)->gate > ForceGate::kStopping)
+        return "DeviceState.gate";
+      return nullptr;
+    case PayloadKind::kDeviceCommand: {
+      const auto* command = reinterpret_cast<const DeviceCommand*>(at);
+      const Wrench& w = command->wrench;
+      for (double v : {w.force_n.x, w.force_n.y, w.force_n.z})
+        if (!std::isfinite(v)) return "DeviceCommand.wrench.force_n";
+      for (double v : {w.torque_nm.x, w.torque_nm.y, w.torque_nm.z})
+        if (!std::isfinite(v)) return "DeviceCommand.wrench.torque_nm";
+      if (!std::isfinite(command->gripper_force_n)) return "DeviceCommand.gripper_force_n";
       return nullptr;
     }
     case PayloadKind::kWorldCommand:

@@ -19,6 +19,8 @@ enum class PayloadKind : std::uint32_t {
   kHealth = 7,
   kLoopStats = 8,    // a periodic loop's timing
   kBenchSample = 9,  // `afhub bench` pings and pongs
+  kDeviceState = 10,
+  kDeviceCommand = 11,
 };
 
 struct PayloadHeader {

@@ -13,6 +13,7 @@
 #include "afhub/shm_layout/body_command.hpp"
 #include "afhub/shm_layout/body_state.hpp"
 #include "afhub/shm_layout/catalog.hpp"
+#include "afhub/shm_layout/device.hpp"
 #include "afhub/shm_layout/health.hpp"
 #include "afhub/shm_layout/loop_stats.hpp"
 #include "afhub/shm_layout/world.hpp"
@@ -98,6 +99,31 @@ inline constexpr std::uint64_t kLayoutId = layout_detail::mix({
     offsetof(JointCommand, type),
     AFHUB_OFF(BodyCommand, actuator_count),
     AFHUB_OFF(BodyCommand, actuate),
+    sizeof(DeviceSpec),
+    AFHUB_OFF(DeviceSpec, serial),
+    AFHUB_OFF(DeviceSpec, max_force_n),
+    AFHUB_OFF(DeviceSpec, max_torque_nm),
+    AFHUB_OFF(DeviceSpec, max_gripper_force_n),
+    AFHUB_OFF(DeviceSpec, max_stiffness_npm),
+    AFHUB_OFF(DeviceSpec, workspace_radius_m),
+    AFHUB_OFF(DeviceSpec, sensed),
+    AFHUB_OFF(DeviceSpec, actuated),
+    AFHUB_OFF(DeviceSpec, button_count),
+    sizeof(DeviceState),
+    AFHUB_OFF(DeviceState, spec),
+    AFHUB_OFF(DeviceState, pose),
+    AFHUB_OFF(DeviceState, velocity),
+    AFHUB_OFF(DeviceState, gripper_angle_rad),
+    AFHUB_OFF(DeviceState, buttons),
+    AFHUB_OFF(DeviceState, gate),
+    AFHUB_OFF(DeviceState, applied),
+    AFHUB_OFF(DeviceState, applied_gripper_force_n),
+    AFHUB_OFF(DeviceState, command_sequence),
+    AFHUB_OFF(DeviceState, command_stamp_ns),
+    sizeof(DeviceCommand),
+    AFHUB_OFF(DeviceCommand, wrench),
+    AFHUB_OFF(DeviceCommand, gripper_force_n),
+    AFHUB_OFF(DeviceCommand, enable),
     sizeof(WorldState),
     AFHUB_OFF(WorldState, wall_time_s),
     AFHUB_OFF(WorldState, achieved_rate_hz),
@@ -178,5 +204,7 @@ static_assert(layout_detail::is_shm_payload<BodyList>);
 static_assert(layout_detail::is_shm_payload<Health>);
 static_assert(layout_detail::is_shm_payload<LoopStats>);
 static_assert(layout_detail::is_shm_payload<BenchSample>);
+static_assert(layout_detail::is_shm_payload<DeviceState>);
+static_assert(layout_detail::is_shm_payload<DeviceCommand>);
 
 }  // namespace afhub
