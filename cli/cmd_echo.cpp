@@ -26,6 +26,35 @@ struct EchoOptions {
   double rate_hz = 0.0;  // 0: every new state
 };
 
+// Prints each new payload `reader` receives with `render`, at most one per min_gap_ns
+// of publish stamps, until a stop or options.count lines.
+template <class T, class Render>
+void print_each(LatestReader<T>& reader, const std::string& channel, const EchoOptions& options,
+                std::int64_t min_gap_ns, const Render& render) {
+  std::uint64_t printed = 0;
+  std::int64_t last_sample_ns = monotonic_ns();
+  std::int64_t last_printed_stamp_ns = 0;
+  while (!stop_requested() && (options.count == 0 || printed < options.count)) {
+    const T* payload = reader.latest();
+    if (payload && reader.updated()) {
+      last_sample_ns = monotonic_ns();
+      if (printed > 0 && payload->header.publish_stamp_ns - last_printed_stamp_ns < min_gap_ns) {
+        sleep_until_ns(monotonic_ns() + 200'000);
+        continue;
+      }
+      last_printed_stamp_ns = payload->header.publish_stamp_ns;
+      std::printf("%s\n", render(*payload).c_str());
+      std::fflush(stdout);
+      ++printed;
+    } else if (options.count != 0 && monotonic_ns() - last_sample_ns >
+                                         static_cast<std::int64_t>(options.timeout_s * 1e9)) {
+      throw Error("no state from " + channel + " for " + std::to_string(options.timeout_s) +
+                  " s; is its publisher paused or gone?");
+    }
+    sleep_until_ns(monotonic_ns() + 200'000);
+  }
+}
+
 int run_echo(const EchoOptions& options) {
   if (options.rate_hz < 0.0 || !std::isfinite(options.rate_hz))
     throw Error("--rate takes a rate in Hz above 0");
@@ -42,31 +71,21 @@ int run_echo(const EchoOptions& options) {
   const BodyEntry entry =
       wait_for_body(options.body, "afhub echo",
                     reattach_count() > 0 ? std::numeric_limits<std::int64_t>::max() : 0);
-  BodyClient body(name_of(entry.info.channel));
-  std::uint64_t printed = 0;
-  std::int64_t last_sample_ns = monotonic_ns();
-  std::int64_t last_printed_stamp_ns = 0;
-  while (!stop_requested() && (options.count == 0 || printed < options.count)) {
-    const BodyState* state = body.latest_state();
-    if (state && body.state_updated()) {
-      last_sample_ns = monotonic_ns();
-      if (printed > 0 && state->header.publish_stamp_ns - last_printed_stamp_ns < min_gap_ns) {
-        sleep_until_ns(monotonic_ns() + 200'000);
-        continue;
-      }
-      last_printed_stamp_ns = state->header.publish_stamp_ns;
-      std::string line =
-          options.json ? state_json(entry, *state, fields) : state_text(entry, *state, fields);
-      std::printf("%s\n", line.c_str());
-      std::fflush(stdout);
-      ++printed;
-    } else if (options.count != 0 && monotonic_ns() - last_sample_ns >
-                                         static_cast<std::int64_t>(options.timeout_s * 1e9)) {
-      throw Error("no state from " + std::string(name_of(entry.info.channel)) + " for " +
-                  std::to_string(options.timeout_s) + " s; is its publisher paused or gone?");
-    }
-    sleep_until_ns(monotonic_ns() + 200'000);
+  const std::string channel(name_of(entry.info.channel));
+  if (entry.info.kind == ChannelKind::kDevice) {
+    if (!options.fields.empty())
+      throw Error("--fields chooses among a body's fields; " + channel +
+                  " is a device, whose state is printed whole");
+    LatestReader<DeviceState> device(body_state_channel(channel));
+    print_each(device, channel, options, min_gap_ns, [&](const DeviceState& state) {
+      return options.json ? device_state_json(entry, state) : device_state_text(entry, state);
+    });
+    return 0;
   }
+  LatestReader<BodyState> states(body_state_channel(channel));
+  print_each(states, channel, options, min_gap_ns, [&](const BodyState& state) {
+    return options.json ? state_json(entry, state, fields) : state_text(entry, state, fields);
+  });
   return 0;
 }
 

@@ -223,3 +223,74 @@ std::vector<std::string> split_commas(const std::string& text) {
 }
 
 }  // namespace afhub::cli
+
+namespace afhub::cli {
+namespace {
+
+const char* gate_name(ForceGate gate) {
+  switch (gate) {
+    case ForceGate::kApplying:
+      return "applying";
+    case ForceGate::kDisabled:
+      return "disabled";
+    case ForceGate::kNoCommand:
+      return "no command";
+    case ForceGate::kWatchdog:
+      return "watchdog";
+    case ForceGate::kStopping:
+      return "stopping";
+  }
+  return "?";
+}
+
+}  // namespace
+
+std::string device_state_json(const BodyEntry& entry, const DeviceState& state) {
+  JsonWriter json;
+  json.begin_object();
+  json.key("device").value(name_of(entry.info.channel));
+  json.key("model").value(name_of(state.spec.model));
+  json.key("sequence").value(static_cast<long long>(state.header.sequence));
+  json.key("stamp_ns").value(static_cast<long long>(state.header.publish_stamp_ns));
+  json.key("position");
+  vec3(json, state.pose.position_m);
+  const Quaternion& q = state.pose.orientation;
+  json.key("orientation_xyzw")
+      .begin_array()
+      .value(q.x)
+      .value(q.y)
+      .value(q.z)
+      .value(q.w)
+      .end_array();
+  json.key("linear_velocity");
+  vec3(json, state.velocity.linear_mps);
+  json.key("angular_velocity");
+  vec3(json, state.velocity.angular_radps);
+  json.key("gripper_angle").value(state.gripper_angle_rad);
+  json.key("buttons").value(static_cast<long long>(state.buttons));
+  json.key("force_gate").value(gate_name(state.gate));
+  json.key("applied_force");
+  vec3(json, state.applied.force_n);
+  json.key("applied_torque");
+  vec3(json, state.applied.torque_nm);
+  json.key("applied_gripper_force").value(state.applied_gripper_force_n);
+  json.key("max_force").value(state.spec.max_force_n);
+  json.end_object();
+  return json.str();
+}
+
+std::string device_state_text(const BodyEntry& entry, const DeviceState& state) {
+  char line[256];
+  std::snprintf(line, sizeof line, "%s seq %llu buttons 0x%x gripper %.4f force %s",
+                std::string(name_of(entry.info.channel)).c_str(),
+                static_cast<unsigned long long>(state.header.sequence), state.buttons,
+                state.gripper_angle_rad, gate_name(state.gate));
+  std::string out = line;
+  const auto v3 = [](const Vec3& v) { return std::array<double, 3>{v.x, v.y, v.z}; };
+  append(out, "pos", v3(state.pose.position_m).data(), 3);
+  append(out, "lin_vel", v3(state.velocity.linear_mps).data(), 3);
+  append(out, "applied_force", v3(state.applied.force_n).data(), 3);
+  return out;
+}
+
+}  // namespace afhub::cli

@@ -8,6 +8,7 @@
 #include "afhub/hub/bodies.hpp"
 #include "afhub/shm_layout/body_state.hpp"
 #include "afhub/shm_layout/catalog.hpp"
+#include "afhub/shm_layout/device.hpp"
 
 namespace afhub::cli {
 
@@ -36,6 +37,11 @@ std::string state_json(const BodyEntry& entry, const BodyState& state,
 // One human-readable line for a body state.
 std::string state_text(const BodyEntry& entry, const BodyState& state,
                        const StateFields& fields = default_text_fields());
+
+// One JSON line, or one human-readable line, for a device's state: pose, velocity,
+// gripper, buttons, and the force the driver applies now with why (the gate).
+std::string device_state_json(const BodyEntry& entry, const DeviceState& state);
+std::string device_state_text(const BodyEntry& entry, const DeviceState& state);
 
 // A measured rate for a table: "-" when there is no measurement yet (0 or less).
 std::string rate_text(double rate_hz);

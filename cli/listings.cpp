@@ -32,8 +32,11 @@ std::string ls_text(const BodyList& catalog) {
   appendf(out, "%-40s %10s %6s  %s\n", "BODY", "RATE_HZ", "JOINTS", "OWNER");
   for (std::uint32_t i = 0; i < catalog.body_count; ++i) {
     const BodyInfo& body = catalog.bodies[i];
-    appendf(out, "%-40s %10s %6u  %s (pid %u)\n", std::string(name_of(body.channel)).c_str(),
-            rate_text(body.publish_rate_hz).c_str(), body.joint_count,
+    // A device has no joints: the column says what it is instead.
+    const std::string joints =
+        body.kind == ChannelKind::kDevice ? "device" : std::to_string(body.joint_count);
+    appendf(out, "%-40s %10s %6s  %s (pid %u)\n", std::string(name_of(body.channel)).c_str(),
+            rate_text(body.publish_rate_hz).c_str(), joints.c_str(),
             std::string(name_of(body.owner)).c_str(), body.owner_pid);
   }
   return out;
@@ -46,6 +49,7 @@ std::string ls_json(const BodyList& catalog) {
     const BodyInfo& body = catalog.bodies[i];
     json.begin_object();
     json.key("body").value(name_of(body.channel));
+    json.key("kind").value(body.kind == ChannelKind::kDevice ? "device" : "body");
     // null until the hub has measured the rate (its first seconds).
     json.key("rate_hz");
     if (rate_measured(body.publish_rate_hz))

@@ -35,6 +35,7 @@ int main(int argc, char** argv) {
   afhub::cli::register_ctl(app, selected);
   afhub::cli::register_top(app, selected);
   afhub::cli::register_bench(app, selected);
+  afhub::cli::register_device(app, selected);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {

@@ -68,6 +68,15 @@ std::string world_instance(std::string_view name_space) {
                             : body_channel_name(name_space, kWorldInstance);
 }
 
+std::string device_channel_name(std::string_view device_name) {
+  if (device_name.empty() || device_name.find('/') != std::string_view::npos)
+    throw Error("device name '" + std::string(device_name) +
+                "' must be one word without '/' (its channel is device/<name>)");
+  std::string channel = "device/" + std::string(device_name);
+  require_valid_channel_name(channel);
+  return channel;
+}
+
 ChannelId body_state_channel(std::string_view body_channel) {
   require_valid_channel_name(body_channel);
   return {std::string(kService), std::string(body_channel), std::string(kStateEvent)};

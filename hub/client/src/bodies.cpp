@@ -134,6 +134,12 @@ BodyEntry make_body_entry(std::string_view body_channel,
   return entry;
 }
 
+BodyEntry make_device_entry(std::string_view device_name) {
+  BodyEntry entry = make_body_entry(device_channel_name(device_name), {});
+  entry.info.kind = ChannelKind::kDevice;
+  return entry;
+}
+
 DirectoryPublisher::DirectoryPublisher()
     : writer_({std::string(kService), runtime_name(), std::string(kDirectoryEvent)},
               PayloadKind::kBodyDirectory) {

@@ -61,8 +61,10 @@ bool CatalogBuilder::merge(bool directories_changed) {
       return false;
     }
     try {
-      probes[channel].reader =
-          std::make_unique<LatestReader<BodyState>>(body_state_channel(channel));
+      probes[channel].reader = std::make_unique<RawLatestReader>(
+          body_state_channel(channel), body.info.kind == ChannelKind::kDevice
+                                           ? PayloadKind::kDeviceState
+                                           : PayloadKind::kBodyState);
       return false;
     } catch (const std::exception& error) {
       probes.erase(channel);
@@ -84,10 +86,10 @@ void CatalogBuilder::tell_once(const std::string& message) {
 void CatalogBuilder::take_rate_samples() {
   for (auto& [channel, probe] : rates_) {
     if (!probe.sampling) continue;
-    const BodyState* state = probe.reader->latest();
+    const auto* header = static_cast<const PayloadHeader*>(probe.reader->latest());
     if (!probe.reader->updated()) continue;
-    const std::uint64_t sequence = state->header.sequence;
-    const std::int64_t stamp_ns = state->header.publish_stamp_ns;
+    const std::uint64_t sequence = header->sequence;
+    const std::int64_t stamp_ns = header->publish_stamp_ns;
     if (probe.last_sequence != 0 && sequence >= probe.last_sequence &&
         stamp_ns > probe.last_stamp_ns)
       probe.rate_hz = static_cast<double>(sequence - probe.last_sequence) * 1e9 /
@@ -95,7 +97,7 @@ void CatalogBuilder::take_rate_samples() {
     probe.last_sequence = sequence;
     probe.last_stamp_ns = stamp_ns;
     probe.sampling = false;
-    probe.reader->raw().unsubscribe();
+    probe.reader->unsubscribe();
   }
 }
 
@@ -106,7 +108,7 @@ void CatalogBuilder::start_rate_samples() {
       continue;
     }
     probe.sampling = true;
-    probe.reader->raw().subscribe();
+    probe.reader->subscribe();
   }
 }
 

@@ -31,7 +31,8 @@ class CatalogBuilder {
 
  private:
   struct RateProbe {
-    std::unique_ptr<LatestReader<BodyState>> reader;  // subscribed while sampling
+    std::unique_ptr<RawLatestReader>
+        reader;  // a body's or a device's state; subscribed while sampling
     bool sampling = true;
     std::uint64_t last_sequence = 0;
     std::int64_t last_stamp_ns = 0;

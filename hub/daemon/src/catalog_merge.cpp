@@ -11,6 +11,9 @@ namespace afhub {
 std::string body_info_problem(const BodyInfo& body) {
   if (std::string problem = channel_name_problem(name_of(body.channel)); !problem.empty())
     return "BodyInfo.channel: " + problem;
+  if (body.kind != ChannelKind::kBody && body.kind != ChannelKind::kDevice)
+    return "BodyInfo.kind: " + std::to_string(static_cast<std::uint32_t>(body.kind)) +
+           " is neither a body (0) nor a device (1)";
   if (body.joint_count > kMaxJointsPerBody)
     return "BodyInfo.joint_count: " + std::to_string(body.joint_count) +
            " joints; a body carries at most " + std::to_string(kMaxJointsPerBody);

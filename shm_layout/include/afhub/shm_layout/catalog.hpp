@@ -17,6 +17,10 @@ namespace afhub {
 
 using JointName = std::array<char, kJointNameBufferSize>;  // NUL-terminated
 
+// What a catalog entry's channels carry: a body's BodyState and BodyCommand, or a
+// device's DeviceState and DeviceCommand (a driver process, "device/<name>").
+enum class ChannelKind : std::uint32_t { kBody = 0, kDevice = 1 };
+
 struct BodyInfo {
   std::array<char, kChannelNameBufferSize> channel{};  // "<namespace>/<body>", NUL-terminated
   std::array<char, kProcessNameBufferSize> owner{};    // iceoryx runtime name of the publisher
@@ -25,7 +29,7 @@ struct BodyInfo {
   double publish_rate_hz{0.0};  // measured by the hub; 0 in a directory
   // Its joints, in state order, are names[refs[first_joint_ref + i]] for i < joint_count.
   std::uint32_t first_joint_ref{0};
-  std::uint32_t reserved{0};
+  ChannelKind kind{ChannelKind::kBody};
 };
 
 struct BodyList {

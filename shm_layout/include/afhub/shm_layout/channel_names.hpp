@@ -41,6 +41,11 @@ void require_valid_channel_name(std::string_view name);
 // under a namespace (`afhub run --namespace`), whose world is its own.
 std::string world_instance(std::string_view name_space = {});
 
+// A device driver's channel instance: "device/<name>". Throws afhub::Error when
+// the name cannot be one.
+std::string device_channel_name(std::string_view device_name);
+
+// A body's (or a device's) state and command channels.
 ChannelId body_state_channel(std::string_view body_channel);
 ChannelId body_command_channel(std::string_view body_channel);
 

@@ -156,6 +156,7 @@ inline constexpr std::uint64_t kLayoutId = layout_detail::mix({
     AFHUB_OFF(BodyInfo, joint_count),
     AFHUB_OFF(BodyInfo, publish_rate_hz),
     AFHUB_OFF(BodyInfo, first_joint_ref),
+    AFHUB_OFF(BodyInfo, kind),
     sizeof(JointName),
     sizeof(BodyList),
     AFHUB_OFF(BodyList, body_count),

@@ -105,6 +105,9 @@ BodyEntry entry_of(const BodyList& list, std::uint32_t index);
 BodyEntry make_body_entry(std::string_view body_channel,
                           const std::vector<std::string>& joint_names);
 
+// A catalog entry for a device this process drives ("device/<name>": DeviceState
+// and DeviceCommand); throws afhub::Error on a bad name.
+BodyEntry make_device_entry(std::string_view device_name);
 // A BodyList of `entries` loaned from `writer` at its real size (body_list_bytes),
 // each distinct joint name once; nullptr when shared memory is exhausted or the
 // entries exceed a catalog's capacity. Not real-time safe.

@@ -1,0 +1,167 @@
+// The virtual haptic device (see virtual_device.hpp).
+#include "afhub/devices/virtual_device.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <numbers>
+#include <sstream>
+
+#include "afhub/shm_layout/error.hpp"
+
+namespace afhub::devices {
+namespace {
+
+Vec3 lerp(const Vec3& a, const Vec3& b, double f) {
+  return {a.x + (b.x - a.x) * f, a.y + (b.y - a.y) * f, a.z + (b.z - a.z) * f};
+}
+
+}  // namespace
+
+std::vector<TrajectoryPoint> read_trajectory_csv(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw Error(path + ": cannot read the trajectory (missing or unreadable)");
+  std::vector<TrajectoryPoint> points;
+  std::string line;
+  for (int number = 1; std::getline(in, line); ++number) {
+    line = line.substr(0, line.find('#'));
+    if (line.find_first_not_of(" \t\r,") == std::string::npos) continue;
+    std::replace(line.begin(), line.end(), ',', ' ');
+    std::istringstream fields(line);
+    std::vector<double> values;
+    std::string field;
+    bool numeric = true;
+    while (fields >> field) {
+      char* end = nullptr;
+      const double value = std::strtod(field.c_str(), &end);
+      numeric = numeric && *end == '\0' && std::isfinite(value);
+      values.push_back(value);
+    }
+    const std::string where = path + ":" + std::to_string(number) + ": ";
+    if (!numeric) {
+      if (points.empty() && number == 1) continue;  // a line of column names
+      throw Error(where + "expected numbers (t, x, y, z[, buttons[, gripper]]), found '" + line +
+                  "'");
+    }
+    if (values.size() < 4 || values.size() > 6)
+      throw Error(where + "expected 4 to 6 values (t, x, y, z[, buttons[, gripper]]), found " +
+                  std::to_string(values.size()));
+    TrajectoryPoint point;
+    point.t_s = values[0];
+    point.position = {values[1], values[2], values[3]};
+    if (values.size() > 4) {
+      if (values[4] < 0 || values[4] > 0xffffffff || values[4] != std::floor(values[4]))
+        throw Error(where + "buttons must be a bit mask (a whole number from 0), found " +
+                    std::to_string(values[4]));
+      point.buttons = static_cast<std::uint32_t>(values[4]);
+    }
+    if (values.size() > 5) point.gripper_angle_rad = values[5];
+    if (!points.empty() && point.t_s <= points.back().t_s)
+      throw Error(where + "time " + std::to_string(point.t_s) +
+                  " s does not come after the line before's " + std::to_string(points.back().t_s) +
+                  " s");
+    points.push_back(point);
+  }
+  if (points.empty()) throw Error(path + ": the trajectory has no points");
+  return points;
+}
+
+std::vector<TrajectoryPoint> circle_trajectory(double radius_m, double period_s) {
+  if (!(radius_m >= 0.0 && radius_m < 10.0) || !(period_s > 0.0 && period_s < 1e6))
+    throw Error("a circle needs a radius from 0 to 10 m and a period above 0 s");
+  std::vector<TrajectoryPoint> points;
+  constexpr int kPoints = 400;
+  for (int i = 0; i <= kPoints; ++i) {
+    const double angle = 2.0 * std::numbers::pi * i / kPoints;
+    TrajectoryPoint point;
+    point.t_s = period_s * i / kPoints;
+    point.position = {radius_m * std::cos(angle), radius_m * std::sin(angle), 0.0};
+    points.push_back(point);
+  }
+  return points;
+}
+
+DeviceSpec VirtualDevice::default_spec(double max_force_n) {
+  DeviceSpec spec;
+  const std::string model = "virtual";
+  std::copy(model.begin(), model.end(), spec.model.begin());
+  spec.max_force_n = max_force_n;
+  spec.max_stiffness_npm = 3000.0;
+  spec.workspace_radius_m = 0.1;
+  spec.sensed = kDeviceTranslation | kDeviceGripper;
+  spec.actuated = kDeviceTranslation;
+  spec.button_count = 4;
+  return spec;
+}
+
+VirtualDevice::VirtualDevice(std::vector<TrajectoryPoint> trajectory, bool loop,
+                             const DeviceSpec& spec, const VirtualHand& hand)
+    : trajectory_(std::move(trajectory)), loop_(loop), spec_(spec), hand_(hand) {
+  if (trajectory_.empty()) trajectory_.push_back({});
+  position_ = trajectory_.front().position;
+}
+
+const TrajectoryPoint& VirtualDevice::point_at(double t_s, Vec3& target,
+                                               Vec3& target_velocity) noexcept {
+  const double span = trajectory_.back().t_s - trajectory_.front().t_s;
+  double t = t_s + trajectory_.front().t_s;
+  if (loop_ && span > 0.0) t = trajectory_.front().t_s + std::fmod(t_s, span);
+  // The last point at or before t (binary search: no allocation).
+  auto after = std::upper_bound(trajectory_.begin(), trajectory_.end(), t,
+                                [](double time, const TrajectoryPoint& p) { return time < p.t_s; });
+  if (after == trajectory_.begin()) {
+    target = trajectory_.front().position;
+    target_velocity = {};
+    return trajectory_.front();
+  }
+  const TrajectoryPoint& before = *(after - 1);
+  if (after == trajectory_.end()) {
+    target = before.position;
+    target_velocity = {};
+    return before;
+  }
+  const double dt = after->t_s - before.t_s;
+  target = lerp(before.position, after->position, (t - before.t_s) / dt);
+  target_velocity = {(after->position.x - before.position.x) / dt,
+                     (after->position.y - before.position.y) / dt,
+                     (after->position.z - before.position.z) / dt};
+  return before;
+}
+
+DeviceSample VirtualDevice::step(const DeviceOutput& output, double t_s) noexcept {
+  Vec3 target, target_velocity;
+  const TrajectoryPoint& point = point_at(t_s, target, target_velocity);
+  // The hand moves by semi-implicit Euler in steps of at most 1 ms, over at most
+  // 50 ms (a paused process resumes where it was, not with a jump).
+  double remaining = last_t_s_ < 0.0 ? 0.0 : std::clamp(t_s - last_t_s_, 0.0, 0.05);
+  last_t_s_ = t_s;
+  const Vec3& force = output.wrench.force_n;
+  while (remaining > 1e-12) {
+    const double dt = std::min(remaining, 1e-3);
+    remaining -= dt;
+    const auto accelerate = [&](double& v, double x, double goal, double goal_v, double f) {
+      v += dt * (hand_.stiffness_npm * (goal - x) + hand_.damping_nspm * (goal_v - v) + f) /
+           hand_.mass_kg;
+    };
+    accelerate(velocity_.x, position_.x, target.x, target_velocity.x, force.x);
+    accelerate(velocity_.y, position_.y, target.y, target_velocity.y, force.y);
+    accelerate(velocity_.z, position_.z, target.z, target_velocity.z, force.z);
+    position_.x += dt * velocity_.x;
+    position_.y += dt * velocity_.y;
+    position_.z += dt * velocity_.z;
+  }
+  DeviceSample sample;
+  sample.pose.position_m = position_;
+  sample.velocity.linear_mps = velocity_;
+  sample.buttons = point.buttons;
+  sample.gripper_angle_rad = point.gripper_angle_rad;
+  return sample;
+}
+
+DeviceSample VirtualDevice::exchange(const DeviceOutput& output) {
+  const std::int64_t now = monotonic_ns();
+  if (start_ns_ < 0) start_ns_ = now;
+  return step(output, static_cast<double>(now - start_ns_) * 1e-9);
+}
+
+}  // namespace afhub::devices
