@@ -1,6 +1,7 @@
 // `afhub check FILES...`: loads AMBF descriptions without simulating and reports
-// bodies, joints by type, closed loops, total mass, the effective gravity, joint
-// gains the stability cap lowers, and warnings. It reads every mesh too, so that
+// bodies, joints by type, closed loops, total mass, the effective gravity, the
+// joints left on AMBF's default gains, joint gains the stability cap lowers, and
+// warnings. It reads every mesh too, so that
 // what `afhub run` would refuse is refused here.
 #include <cstdio>
 #include <map>
@@ -12,6 +13,7 @@
 #include "afhub/shm_layout/error.hpp"
 #include "commands.hpp"
 #include "format.hpp"
+#include "gain_options.hpp"
 
 namespace afhub::cli {
 namespace {
@@ -20,6 +22,7 @@ struct CheckOptions {
   std::vector<std::string> files;
   std::string world_file, gravity;
   double dt_s = 0.001;
+  GainOptions gains;
 };
 
 std::string vec3_text(const Vec3& v) {
@@ -41,6 +44,22 @@ void print_gravity(const physics::Model& model, const std::string& source) {
         "  %d bodies fall under %s m/s^2: their file's or their own `gravity`, which "
         "wins over the world's (--gravity overrides both)\n",
         count, gravity.c_str());
+}
+
+// The joints a position command can drive whose file gives no `controller`: they
+// take AMBF's default gains, which barely move a real arm.
+void print_default_gains(const physics::Model& model) {
+  std::vector<const physics::JointSpec*> defaulted;
+  for (const auto& joint : model.joints)
+    if (joint.gains_from == physics::GainSource::kAmbfDefault && !joint.passive &&
+        physics::has_joint_axis(joint.type))
+      defaulted.push_back(&joint);
+  std::printf(
+      "joints on AMBF's default gains (P 10, I 0, D 1: their file gives no `controller`; "
+      "`afhub run --default-gains P,I,D` sets theirs): %zu\n",
+      defaulted.size());
+  for (const auto* joint : defaulted)
+    std::printf("  %-40s %s\n", joint->channel.c_str(), joint->where.str().c_str());
 }
 
 int run_check(const CheckOptions& options) {
@@ -79,6 +98,8 @@ int run_check(const CheckOptions& options) {
   std::printf("closed loops: %d\n", model.closed_loop_count);
   std::printf("meshes read: %zu\n", meshes);
   print_gravity(model, gravity_source);
+  apply_gain_options(model, options.gains);
+  print_default_gains(model);
   // The gains in use need the bodies' inertias: the world is built, not stepped.
   try {
     const physics::Simulation sim(model, options.dt_s);
@@ -106,6 +127,7 @@ void register_check(CLI::App& app, Runner& selected) {
                     "x,y,z in m/s^2: the gravity `afhub run --gravity` would use");
   check->add_option("--dt", options->dt_s,
                     "The step the joint gains are checked for (default 0.001 s, as `afhub run`)");
+  add_gain_options(check, options->gains);
   check->callback([&selected, options] { selected = [options] { return run_check(*options); }; });
 }
 

@@ -14,6 +14,7 @@
 #include "commands.hpp"
 #include "count_option.hpp"
 #include "format.hpp"
+#include "gain_options.hpp"
 
 namespace afhub::cli {
 namespace {
@@ -40,6 +41,7 @@ struct RunCliOptions {
   bool stop_on_nan = false;
   std::string overrun = "catch-up";
   double max_catch_up_ms = 100.0;
+  GainOptions gains;
 };
 
 int run_run(const RunCliOptions& options) {
@@ -104,6 +106,7 @@ int run_run(const RunCliOptions& options) {
     return 1;
   }
   for (const auto& warning : model.warnings) std::fprintf(stderr, "%s\n", warning.c_str());
+  apply_gain_options(model, options.gains);  // names as the files give them: before --namespace
   if (!options.name_space.empty()) physics::prefix_channels(model, options.name_space);
   if (!options.gravity.empty()) {
     const std::vector<double> g = parse_numbers(options.gravity, "--gravity", 3);
@@ -197,6 +200,7 @@ void register_run(CLI::App& app, Runner& selected) {
   run->add_option("--gravity", options->gravity,
                   "x,y,z in m/s^2 for the world and every body, over the world file's and the "
                   "model files' `gravity` (by AMBF's rule a file's gravity wins over the world's)");
+  add_gain_options(run, options->gains);
   run->add_option("--dt", options->dt_s, "Fixed step in seconds (default 0.001)");
   run->add_flag("--fast", options->fast, "Step as fast as possible instead of in real time");
   add_count_option(run, "--steps", options->steps,

@@ -33,6 +33,13 @@ class JointModel {
   // Control for the coming step; stays until replaced or released.
   void command(JointMode type, double value) noexcept;
   void release() noexcept;  // zero effort, motor off, PID state cleared
+  // The position the joint is commanded to (rad or m, with `joint offset`, as
+  // position()), or false when it has no position command.
+  bool position_target(double& target) const noexcept {
+    if (!commanded_ || command_type_ != JointMode::kPosition) return false;
+    target = command_value_;
+    return true;
+  }
   void apply_control() noexcept;
   // Reads position, velocity and effort after a step.
   void update_readings() noexcept;

@@ -137,8 +137,10 @@ PendingJoint read_joint(const FileReader& file, const YAML::Node& block,
   if (YAML::Node motor = block["enable motor"]) {
     file.flag(motor, "enable motor");  // checked; motors are enabled by velocity commands
   }
-  if (YAML::Node controller = block["controller"])
+  if (YAML::Node controller = block["controller"]) {
     joint.controller = read_pid(file, controller, "controller");
+    joint.gains_from = GainSource::kFile;
+  }
   if (YAML::Node output = block["controller output type"])
     joint.controller_output = read_output_type(file, output);
   return pending;

@@ -75,6 +75,9 @@ double Simulation::joint_velocity(std::size_t joint) const noexcept {
 double Simulation::joint_pivot_gap_m(std::size_t joint) const noexcept {
   return data_->joints[joint]->pivot_gap_m();
 }
+bool Simulation::joint_position_target(std::size_t joint, double& target) const noexcept {
+  return data_->joints[joint]->position_target(target);
+}
 
 bool Simulation::all_finite() const noexcept {
   for (const BodyData& body : data_->bodies) {

@@ -114,6 +114,54 @@ TEST(Cli, CheckAndRunSayTheGravityAndTheLoweredGains) {
   EXPECT_GT(sag({"--gravity", "0,0,-9.81"}), 0.05) << "--gravity: the arm sags";
 }
 
+// Joint gains from outside the model files: `check` lists the joints on AMBF's default
+// gains and takes the options as `run` does; bad values and names are errors naming
+// the option, before anything runs.
+TEST(Cli, GainsFromTheCommandLine) {
+  const std::string rcm = AFHUB_EXAMPLE_MODELS "/rcm.yaml";
+  RunResult own = run_afhub({"check", rcm});
+  EXPECT_EQ(own.exit_code, 0) << own.err;
+  EXPECT_TRUE(contains(own.out, "joints on AMBF's default gains")) << own.out;
+  EXPECT_TRUE(contains(own.out, "sets theirs): 0")) << own.out;  // the RCM's file gives its own
+  RunResult unknown = run_afhub({"check", rcm, "--gains", "x=1,0,0"});
+  EXPECT_EQ(unknown.exit_code, 1);
+  EXPECT_TRUE(contains(unknown.err, "--gains: no joint or body is named 'x'")) << unknown.err;
+  EXPECT_TRUE(contains(unknown.err, "afhub/rcm/base-yaw_link")) << unknown.err;  // candidates
+  for (const std::vector<std::string>& bad :
+       std::vector<std::vector<std::string>>{{"--default-gains", "1000,0"},
+                                             {"--default-gains", "1000,-1,10"},
+                                             {"--default-gains", "nan,0,10"},
+                                             {"--default-gains", "1000,0,1e999"},
+                                             {"--gains", "rcm/base=1000,0,x"}}) {
+    std::vector<std::string> args = {"run", rcm, "--offline", "--steps", "1"};
+    args.insert(args.end(), bad.begin(), bad.end());
+    RunResult result = run_afhub(args, 30s);
+    EXPECT_EQ(result.exit_code, 1) << bad[1];
+    EXPECT_TRUE(contains(result.err, bad[0] + " takes P,I,D: three finite numbers, none negative"))
+        << result.err;
+  }
+  RunResult unnamed = run_afhub({"run", rcm, "--offline", "--steps", "1", "--gains", "1,0,1"}, 30s);
+  EXPECT_EQ(unnamed.exit_code, 1);
+  EXPECT_TRUE(contains(unnamed.err, "--gains takes NAME=P,I,D")) << unnamed.err;
+}
+
+// The ECM's file gives its joints no gains: `check` names them, and none is left on
+// AMBF's default with --default-gains, whose P the cap lowers for the light tool link.
+TEST(Cli, CheckNamesTheEcmsJointsOnDefaultGains) {
+  SKIP_WITHOUT_SHARED_MODELS();
+  const std::string ecm = AFHUB_SHARED_MODELS "/descriptions/multi-bodies/robots/blender-ecm.yaml";
+  RunResult check = run_afhub({"check", ecm});
+  EXPECT_EQ(check.exit_code, 0) << check.err;
+  EXPECT_TRUE(contains(check.out, "sets theirs): 4")) << check.out;
+  EXPECT_TRUE(contains(check.out, "ambf/env/ecm/baselink-yawlink")) << check.out;
+  EXPECT_TRUE(contains(check.out, "blender-ecm.yaml:586:3")) << check.out;
+  RunResult given = run_afhub({"check", ecm, "--default-gains", "1000,0,10"});
+  EXPECT_EQ(given.exit_code, 0) << given.err;
+  EXPECT_TRUE(contains(given.out, "sets theirs): 0")) << given.out;
+  EXPECT_TRUE(contains(given.out, "'main insertion link-tool link': P 1000 lowered to"))
+      << given.out;
+}
+
 TEST(Cli, LookingToolsWithoutAHubFailFastAndSayHowToStartOne) {
   expect_no_hub();
   for (auto args : std::vector<std::vector<std::string>>{

@@ -4,6 +4,7 @@
 #include "afhub/physics/rate_meter.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <map>
 #include <memory>
@@ -26,6 +27,21 @@ double largest_pivot_gap(const Simulation& sim) noexcept {
   return largest;
 }
 
+// Each joint under a position command: how far the step left it from its target.
+void record_tracking(const Simulation& sim, RunReport& report) noexcept {
+  for (std::size_t j = 0; j < report.tracking.size(); ++j) {
+    double target = 0.0;
+    if (!sim.joint_position_target(j, target)) continue;
+    JointTracking& tracking = report.tracking[j];
+    const double error = sim.joint_position(j) - target;
+    ++tracking.steps;
+    tracking.max_error = std::max(tracking.max_error, std::abs(error));
+    tracking.sum_squared_error += error * error;
+    tracking.last_target = target;
+    tracking.last_error = error;
+  }
+}
+
 }  // namespace
 
 void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
@@ -37,6 +53,7 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
   double achieved_rate_hz = 0.0;
   std::uint64_t late_counted = 0;
   report.max_joint_error_m = std::max(report.max_joint_error_m, largest_pivot_gap(sim));
+  report.tracking.resize(sim.model().joints.size());
   // The physics loop's own timing, on its stats channel like every loop (`afhub top`).
   std::unique_ptr<LoopStatsPublisher> stats;
   if (channels)
@@ -85,6 +102,7 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
     if (stepping) {
       sim.step();
       ++report.steps;
+      record_tracking(sim, report);
       report.max_joint_error_m = std::max(report.max_joint_error_m, largest_pivot_gap(sim));
       if (options.stop_on_nan && sim.nan_recoveries().count > 0) {
         report.nan_detected = true;  // said after the loop
@@ -151,8 +169,21 @@ std::string report_json(const RunReport& report, const Simulation& sim) {
   }
   json.end_object();
   json.key("joints").begin_object();
-  for (const auto& [name, j] : joints)
-    json.key(name).begin_object().key("position").value(sim.joint_position(j)).end_object();
+  for (const auto& [name, j] : joints) {
+    json.key(name).begin_object().key("position").value(sim.joint_position(j));
+    if (j < report.tracking.size() && report.tracking[j].steps > 0) {
+      const JointTracking& tracking = report.tracking[j];
+      json.key("tracking").begin_object();
+      json.key("last_error").value(tracking.last_error);
+      json.key("last_target").value(tracking.last_target);
+      json.key("max_error").value(tracking.max_error);
+      json.key("rms_error")
+          .value(std::sqrt(tracking.sum_squared_error / static_cast<double>(tracking.steps)));
+      json.key("steps").value(static_cast<unsigned long long>(tracking.steps));
+      json.end_object();
+    }
+    json.end_object();
+  }
   json.end_object();
   json.key("max_joint_error_m").value(report.max_joint_error_m);
   json.key("nan_detected").value(report.nan_detected);

@@ -51,6 +51,10 @@ struct Pid {
 
 enum class ControllerOutput { kForce, kVelocity };
 
+// Where a joint's PID gains come from: AMBF's default (its file gives no
+// `controller`), its file, or `afhub run --default-gains` / `--gains`.
+enum class GainSource { kAmbfDefault, kFile, kCommandLine };
+
 struct BodySpec {
   std::string identifier;  // "BODY base": the key joints refer to
   // "<namespace>/<identifier>" ("/ambf/env/BODY base"): how other files may name it.
@@ -134,6 +138,7 @@ struct JointSpec {
   bool enable_feedback = false;
   bool passive = false;            // out of every body's joint list: not reported, not commanded
   Pid controller{10.0, 0.0, 1.0};  // joint PID for position commands
+  GainSource gains_from = GainSource::kAmbfDefault;
   ControllerOutput controller_output = ControllerOutput::kForce;
 };
 

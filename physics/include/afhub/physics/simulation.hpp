@@ -87,6 +87,9 @@ class Simulation {
   double joint_position(std::size_t joint) const noexcept;
   double joint_velocity(std::size_t joint) const noexcept;
   double joint_pivot_gap_m(std::size_t joint) const noexcept;
+  // The position joint `joint` is commanded to (as joint_position), or false when
+  // it has no position command now.
+  bool joint_position_target(std::size_t joint, double& target) const noexcept;
   // The joint PID gains and damping in use (the file's, or lower where the file's
   // cannot be stable at this dt), and one note per joint whose gains were lowered.
   const Pid& joint_gains(std::size_t joint) const noexcept;

@@ -10,6 +10,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "afhub/physics/sim_channels.hpp"
 #include "afhub/physics/simulation.hpp"
@@ -33,6 +34,15 @@ struct RunOptions {
   LoopClock* clock = nullptr;  // the loop's pacing clock; null: the real one (tests inject theirs)
 };
 
+// How one joint followed its position commands: over the steps it had one, the gap
+// between the commanded position and the position the step left it at.
+struct JointTracking {
+  std::uint64_t steps = 0;
+  double max_error = 0.0;  // rad or m
+  double sum_squared_error = 0.0;
+  double last_target = 0.0, last_error = 0.0;  // the last such step's
+};
+
 struct RunReport {
   std::uint64_t steps = 0;
   double wall_time_s = 0.0;
@@ -40,6 +50,7 @@ struct RunReport {
   LoopTiming timing;               // wake-up lateness, work time, overruns, late lockstep answers
   bool nan_detected = false;       // with stop_on_nan: the loop stopped on a NaN
   double max_joint_error_m = 0.0;  // the largest pivot gap seen, over all joints and steps
+  std::vector<JointTracking> tracking;  // per joint, sized before the first step
 };
 
 // Runs until options.steps, a stop signal, or with options.stop_on_nan a NaN (then
@@ -47,7 +58,8 @@ struct RunReport {
 void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options, RunReport& report);
 
 // The --report JSON: steps, times, step-time percentiles, NaN flag and recoveries,
-// largest pivot gap, final body poses and joint positions. Keys are sorted.
+// largest pivot gap, final body poses and joint positions, and each position-commanded
+// joint's tracking (steps, max and RMS error, last target and error). Keys are sorted.
 std::string report_json(const RunReport& report, const Simulation& sim);
 
 // "2 bodies put back after a step made them NaN or infinite; first: arm/link3 at
