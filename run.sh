@@ -18,6 +18,8 @@ PACKAGES=(
   # afhub bench: the transports it compares with, the machine's floor, the plot
   cyclonedds-dev cyclonedds-tools libroscpp-dev libstd-msgs-dev python3-rosmaster
   rt-tests gnuplot-nox
+  # device drivers: evdev input devices, USB (Falcon), and their emulation in tests
+  libevdev-dev libusb-1.0-0-dev umockdev libumockdev-dev
 )
 
 install_packages() {
