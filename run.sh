@@ -13,8 +13,6 @@ PACKAGES=(
   iceoryx libiceoryx-posh-dev libiceoryx-hoofs-dev libacl1-dev
   libcli11-dev libyaml-cpp-dev libbullet-dev libassimp-dev libeigen3-dev
   libgtest-dev libgmock-dev libbenchmark-dev clang-format
-  # device drivers: the Falcon over libusb, tested against umockdev's emulated USB
-  libusb-1.0-0-dev umockdev libumockdev-dev
   # afhub bench: the transports it compares with, the machine's floor, the plot
   cyclonedds-dev cyclonedds-tools libroscpp-dev libstd-msgs-dev python3-rosmaster
   rt-tests gnuplot-nox

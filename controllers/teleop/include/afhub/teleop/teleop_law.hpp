@@ -1,0 +1,87 @@
+// The teleoperation law of one device and its simulated body, one cycle at a time,
+// as AMBF's haptic loop does it:
+//
+//   target  = origin + scale * M (p_device - p_anchor)          (M: the device frame's
+//   R_target = M (R_device R_anchor^T) M^T R_origin               rotation in the world)
+//   body wrench  = P (target - body) + D (target velocity - body velocity)   (world frame)
+//   device force = M^T haptic_gain (body - target)        (pulls the hand to the body)
+//
+// The anchor is the first device sample, so the body starts at the origin (the
+// location) whatever the device's pose. While the clutch is held the target holds and
+// the device gets no force; on release the anchor moves to the device's pose then, so
+// the target continues from where it held. The device force is shrunk by the deadband
+// (continuous, so it does not chatter at the threshold), clamped to the max force and
+// rate-limited by max jerk. step() allocates nothing and never throws.
+#pragma once
+
+#include <cstdint>
+
+#include "afhub/shm_layout/device.hpp"
+#include "afhub/shm_layout/geometry.hpp"
+#include "afhub/teleop/input_device_spec.hpp"
+
+namespace afhub::teleop {
+
+// AMBF's modes that afhub has: the default one (a1 clutches, a2 moves the camera) and
+// the gripper jaw one (a1 opens, a2 closes). Next/prev mode buttons cycle through them.
+enum class TeleopMode : std::uint8_t { kClutchCamera = 0, kGripperJaw = 1 };
+
+// The law's parameters, resolved: the spec's values with the body's own gains where the
+// spec has none.
+struct TeleopParams {
+  double workspace_scale{10.0};
+  Pose location;                  // the device frame in the world; the first target
+  Quaternion orientation_offset;  // the device's axes, turned before mapping
+  CartesianGains body_gains;
+  double haptic_gain_linear{0.0};
+  double haptic_gain_angular{0.0};
+  double deadband_n{0.0};
+  double max_force_n{0.0};        // 0: none (the device's own maximum still applies)
+  double max_jerk_n_per_ms{0.0};  // 0: none
+  ButtonMapping buttons;
+};
+
+// `body_gains` are the root body's own controller gains, used when the spec has no
+// "controller gain" (as AMBF does).
+TeleopParams teleop_params(const InputDeviceSpec& spec, const CartesianGains& body_gains);
+
+struct TeleopOutput {
+  Wrench body_wrench;       // world frame, at the body's origin: a BodyCommand kForce wrench
+  Pose body_target;         // the device's proxy: where the law drives the body
+  Wrench device_wrench;     // device frame: a DeviceCommand's wrench
+  double gripper{0.5};      // 0 closed .. 1 open, over the gripper joints' limits
+  bool grasp{false};        // gripper < 0.5: the gripper's constraint actuators hold
+  bool clutched{false};     // the target holds and the device gets no force
+  bool camera_held{false};  // a2 in the default mode: the viewer moves the paired camera
+  TeleopMode mode{TeleopMode::kClutchCamera};
+};
+
+class TeleopLaw {
+ public:
+  explicit TeleopLaw(const TeleopParams& params);
+
+  // One cycle: the newest device sample, the body's newest pose and twist (world), and
+  // the time since the previous cycle.
+  void step(const DeviceState& device, const Pose& body_pose, const Twist& body_twist, double dt_s,
+            TeleopOutput& out) noexcept;
+
+  // The target's origin for the next first cycle (default: the location), for a body
+  // that should be driven from where it is; clears the anchor.
+  void restart_from(const Pose& origin) noexcept;
+
+ private:
+  TeleopParams params_;
+  bool anchored_{false};
+  bool was_clutched_{false};
+  std::uint32_t previous_buttons_{0};
+  TeleopMode mode_{TeleopMode::kClutchCamera};
+  double jaw_{0.5};
+  // Kept as plain values so that the header needs no Eigen.
+  Pose origin_;  // the target at the anchor
+  Pose anchor_;  // the device's pose (mapped into the world's axes) at the anchor
+  Pose target_;  // the previous cycle's target
+  bool have_target_{false};
+  Wrench device_wrench_;  // the previous cycle's device wrench (for the jerk limit)
+};
+
+}  // namespace afhub::teleop
