@@ -3,11 +3,19 @@
 #include <cmath>
 #include <memory>
 
+#include "afhub/devices/device_finder.hpp"
 #include "afhub/devices/driver_loop.hpp"
+#include "afhub/devices/evdev_device.hpp"
+#include "afhub/devices/falcon_device.hpp"
 #include "afhub/devices/virtual_device.hpp"
+#include "afhub/hub/bodies.hpp"
+#include "afhub/hub/hub_presence.hpp"
+#include "afhub/hub/stop_signal.hpp"
+#include "afhub/rt/periodic_loop.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "commands.hpp"
 #include "count_option.hpp"
+#include "format.hpp"
 
 namespace afhub::cli {
 namespace {
@@ -28,7 +36,63 @@ struct DeviceRunOptions {
   std::vector<double> circle;
   bool loop = false;
   double max_force_n = 10.0;
+  // falcon
+  std::string serial, firmware;
+  double home_timeout_s = 30.0;
+  // spacemouse, gamepad
+  std::string path;
+  bool velocity = false;
 };
+
+// The first device of `kind` that this user can open, for a driver given no path.
+std::string first_device_path(const std::string& kind) {
+  const devices::DeviceScan scan = devices::find_devices();
+  std::string refused;
+  for (const devices::FoundDevice& found : scan.devices) {
+    if (found.kind != kind) continue;
+    if (found.problem.empty()) return found.path;
+    refused = found.problem;
+  }
+  if (!refused.empty()) throw Error(refused);
+  throw Error("no " + kind + " is plugged in (`afhub device list` shows what is)");
+}
+
+// `afhub device force`: commands a device's force every period until Ctrl-C.
+struct ForceOptions {
+  std::string name;
+  std::string force = "0,0,0", torque = "0,0,0";
+  double gripper_n = 0.0;
+  bool disable = false;
+  double rate_hz = 1000.0;
+  std::uint64_t cycles = 0;
+};
+
+int run_force(const ForceOptions& options) {
+  const std::vector<double> force = parse_numbers(options.force, "--force", 3);
+  const std::vector<double> torque = parse_numbers(options.torque, "--torque", 3);
+  if (!std::isfinite(options.gripper_n)) throw Error("--gripper must be a finite number");
+  if (!(options.rate_hz > 0.0 && options.rate_hz <= 100'000.0))
+    throw Error("--rate must be between 0 and 100000 Hz");
+  const std::string channel = device_channel_name(options.name);
+  install_stop_signal_handlers();
+  connect_to_hub("device-force", HubPolicy::kRequire);
+  Writer<DeviceCommand> commands(body_command_channel(channel));
+  LoopOptions loop;
+  loop.period_ns = static_cast<std::int64_t>(std::llround(1e9 / options.rate_hz));
+  loop.max_cycles = options.cycles;
+  LoopTiming timing;
+  run_periodic(loop, timing, [&] {
+    DeviceCommand* command = commands.loan();
+    if (!command) return true;
+    command->wrench.force_n = {force[0], force[1], force[2]};
+    command->wrench.torque_nm = {torque[0], torque[1], torque[2]};
+    command->gripper_force_n = options.gripper_n;
+    command->enable = options.disable ? 0 : 1;
+    commands.publish(command);
+    return true;
+  });
+  return 0;
+}
 
 devices::DriverOptions driver_options(const DeviceRunOptions& options) {
   if (!(options.rate_hz > 0.0 && options.rate_hz <= 100'000.0))
@@ -98,6 +162,39 @@ void register_device(CLI::App& app, Runner& selected) {
   auto* device = app.add_subcommand(
       "device", "Haptic and input devices, each driven by its own process (device/<name>).");
   device->require_subcommand(1);
+
+  auto json = std::make_shared<bool>(false);
+  auto* list = device->add_subcommand(
+      "list",
+      "The supported devices plugged in (Novint Falcon on USB; SpaceMouse and gamepads on "
+      "evdev), and what keeps this user from opening one.");
+  list->add_flag("--json", *json, "Print JSON instead of a table.");
+  list->callback([&selected, json] {
+    selected = [json] {
+      const devices::DeviceScan scan = devices::find_devices();
+      std::printf("%s", (*json ? devices::render_devices_json(scan) + "\n"
+                               : devices::render_devices_text(scan))
+                            .c_str());
+      return 0;
+    };
+  });
+
+  auto force = std::make_shared<ForceOptions>();
+  auto* force_command = device->add_subcommand(
+      "force",
+      "Command a device's force every period until Ctrl-C (to try a device or its safety: "
+      "the driver clamps it, ramps it in, and zeroes it 10 ms after the last command).");
+  force_command
+      ->add_option("name", force->name, "The device's name (its channels are device/<name>)")
+      ->required();
+  force_command->add_option("--force", force->force, "fx,fy,fz in N, device frame (default 0,0,0)");
+  force_command->add_option("--torque", force->torque, "tx,ty,tz in N m (default 0,0,0)");
+  force_command->add_option("--gripper", force->gripper_n, "Gripper force in N (default 0)");
+  force_command->add_flag("--disable", force->disable, "Send the commands with force disabled");
+  force_command->add_option("--rate", force->rate_hz, "Commands per second (default 1000)");
+  add_count_option(force_command, "--cycles", force->cycles,
+                   "Stop after this many commands (default: Ctrl-C)");
+  force_command->callback([&selected, force] { selected = [force] { return run_force(*force); }; });
   auto* run = device->add_subcommand("run", "Run a device's driver.");
   run->require_subcommand(1);
 
@@ -118,6 +215,75 @@ void register_device(CLI::App& app, Runner& selected) {
   virtual_command->add_flag("--loop", virt->loop, "Repeat the trajectory from its start");
   virtual_command->add_option("--max-force", virt->max_force_n,
                               "The most force it applies, in N (default 10)");
+  auto falcon = std::make_shared<DeviceRunOptions>();
+  auto* falcon_command = run->add_subcommand(
+      "falcon",
+      "A Novint Falcon on USB (libusb, no vendor SDK). Move its grip all the way out "
+      "and back in to home it when it starts.");
+  add_driver_options(falcon_command, *falcon, "falcon");
+  falcon_command->add_option("--serial", falcon->serial,
+                             "The Falcon's serial (default: the first)");
+  falcon_command->add_option(
+      "--firmware", falcon->firmware,
+      "Novint's firmware image to load (a Falcon needs it once after power-up; afhub does "
+      "not ship it)");
+  falcon_command->add_option("--home-timeout", falcon->home_timeout_s,
+                             "Seconds to wait for the homing (default 30)");
+  falcon_command->callback([&selected, falcon] {
+    selected = [falcon] {
+      if (!(falcon->home_timeout_s > 0.0 && falcon->home_timeout_s <= 3600.0))
+        throw Error("--home-timeout takes seconds from 0 to 3600");
+      const devices::DriverOptions driver = driver_options(*falcon);
+      devices::falcon::UsbOptions usb;
+      usb.serial = falcon->serial;
+      usb.firmware_path = falcon->firmware;
+      const int home_cycles = static_cast<int>(falcon->home_timeout_s * 1000.0);
+      bool first = true;
+      return devices::run_driver(
+          [usb, home_cycles, first]() mutable -> std::unique_ptr<devices::Device> {
+            // The firmware stays loaded until power-off: only the first open loads it.
+            devices::falcon::UsbOptions options = usb;
+            if (!first) options.firmware_path.clear();
+            first = false;
+            auto falcon_device = devices::falcon::FalconDevice::open_usb(options);
+            std::fprintf(stderr,
+                         "afhub device falcon: homing: move the grip all the way out "
+                         "and back in\n");
+            if (!falcon_device->home(home_cycles))
+              throw Error("the Falcon did not home within --home-timeout");
+            return falcon_device;
+          },
+          driver);
+    };
+  });
+
+  for (const char* kind : {"spacemouse", "gamepad"}) {
+    auto evdev = std::make_shared<DeviceRunOptions>();
+    const std::string what = kind;
+    auto* evdev_command = run->add_subcommand(
+        kind, what == "spacemouse"
+                  ? "A 3Dconnexion SpaceMouse over evdev: its six axes drive a pose (or a "
+                    "velocity), its buttons are buttons"
+                  : "A gamepad over evdev (the Linux gamepad layout): sticks and triggers drive "
+                    "a pose (or a velocity), its buttons are buttons");
+    add_driver_options(evdev_command, *evdev, kind);
+    evdev_command->add_option("--path", evdev->path,
+                              "Its /dev/input/eventN node (default: the first found)");
+    evdev_command->add_flag("--velocity", evdev->velocity,
+                            "Publish the axes as a velocity, not an integrated pose");
+    evdev_command->callback([&selected, evdev, what] {
+      selected = [evdev, what] {
+        const devices::DriverOptions driver = driver_options(*evdev);
+        const std::string path = evdev->path.empty() ? first_device_path(what) : evdev->path;
+        devices::EvdevOptions options;
+        if (evdev->velocity) options.mode = devices::EvdevAxisMode::kVelocity;
+        return devices::run_driver(
+            [path, options] { return std::make_unique<devices::EvdevDevice>(path, options); },
+            driver);
+      };
+    });
+  }
+
   virtual_command->callback([&selected, virt] {
     selected = [virt] {
       if (!(virt->max_force_n >= 0.0 && virt->max_force_n <= 1000.0))

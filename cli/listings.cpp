@@ -49,7 +49,6 @@ std::string ls_json(const BodyList& catalog) {
     const BodyInfo& body = catalog.bodies[i];
     json.begin_object();
     json.key("body").value(name_of(body.channel));
-    json.key("kind").value(body.kind == ChannelKind::kDevice ? "device" : "body");
     // null until the hub has measured the rate (its first seconds).
     json.key("rate_hz");
     if (rate_measured(body.publish_rate_hz))
@@ -58,6 +57,7 @@ std::string ls_json(const BodyList& catalog) {
       json.null();
     json.key("owner").value(name_of(body.owner));
     json.key("owner_pid").value(static_cast<long long>(body.owner_pid));
+    json.key("kind").value(body.kind == ChannelKind::kDevice ? "device" : "body");
     json.key("joints").begin_array();
     for (const std::string& name : joint_names_of(catalog, body)) json.value(name);
     json.end_array().end_object();

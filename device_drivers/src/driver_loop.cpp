@@ -24,7 +24,9 @@ std::string drive(Device& device, const DriverOptions& options, Writer<DeviceSta
                   LatestReader<DeviceCommand>& commands, LoopStatsPublisher& stats,
                   LoopTiming& timing) {
   const DeviceSpec spec = device.spec();
-  ForceSafety safety(spec, options.safety);
+  SafetyLimits limits = options.safety;
+  limits.cycle_ns = options.loop.period_ns;
+  ForceSafety safety(spec, limits);
   std::string gone;
   // One cycle: the output decided from the newest command, the device exchanged with,
   // its state published. Returns false when the device went away.

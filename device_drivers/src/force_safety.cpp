@@ -9,7 +9,7 @@ namespace {
 
 // `v` scaled down to at most `limit` in length: the direction is kept.
 Vec3 clamp_length(const Vec3& v, double limit) noexcept {
-  const double length = std::sqrt(v.x * v.x + v.y * v.y + v.z * v.z);
+  const double length = std::hypot(v.x, v.y, v.z);  // no overflow for huge components
   if (!std::isfinite(length) || limit <= 0.0) return {};
   const double scale = length > limit ? limit / length : 1.0;
   return {v.x * scale, v.y * scale, v.z * scale};
@@ -29,7 +29,8 @@ DeviceOutput ForceSafety::apply(const DeviceCommand* command, std::int64_t now_n
   // A stamp from the future is no fresher than a stale one: the same clock runs in
   // every process, so only a faulty writer makes one.
   const std::int64_t age_ns = command ? now_ns - command->header.publish_stamp_ns : 0;
-  const bool fresh = age_ns <= limits_.watchdog_ns && age_ns >= -limits_.watchdog_ns;
+  const bool fresh =
+      age_ns + limits_.cycle_ns <= limits_.watchdog_ns && age_ns >= -limits_.watchdog_ns;
   gate = stopped_           ? ForceGate::kStopping
          : !command         ? ForceGate::kNoCommand
          : !fresh           ? ForceGate::kWatchdog

@@ -12,8 +12,11 @@
 namespace afhub::devices {
 
 struct SafetyLimits {
-  std::int64_t watchdog_ns = 10'000'000;  // a command older than this gives zero force
+  std::int64_t watchdog_ns = 10'000'000;  // no command this long: the force is zero by then
   double ramp_s = 0.2;                    // from zero to full force once enabled
+  // The driver's period: a command that will be past the watchdog before the next
+  // cycle is already stale, so the force is zero within watchdog_ns, not a cycle later.
+  std::int64_t cycle_ns = 0;
 };
 
 class ForceSafety {

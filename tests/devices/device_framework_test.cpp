@@ -1,0 +1,238 @@
+// The rules every device driver enforces (ForceSafety) and the virtual device, without
+// a hub: the watchdog, the clamp that keeps the direction, the ramp, and a hand that
+// follows its trajectory and gives way to the applied force. A cycle of either
+// allocates nothing.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <new>
+
+#include "afhub/devices/force_safety.hpp"
+#include "afhub/devices/virtual_device.hpp"
+#include "afhub/shm_layout/error.hpp"
+
+// The replacements below pair malloc with free on purpose; GCC cannot see that.
+#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
+
+namespace {
+std::atomic<long> g_allocations{0};
+}  // namespace
+
+// Counts every C++ allocation of this test binary.
+void* operator new(std::size_t size) {
+  g_allocations.fetch_add(1, std::memory_order_relaxed);
+  if (void* p = std::malloc(size ? size : 1)) return p;
+  throw std::bad_alloc();
+}
+void operator delete(void* p) noexcept {
+  std::free(p);
+}
+void operator delete(void* p, std::size_t) noexcept {
+  std::free(p);
+}
+
+namespace afhub::devices {
+namespace {
+
+constexpr std::int64_t kMs = 1'000'000;
+
+double length(const Vec3& v) {
+  return std::hypot(v.x, v.y, v.z);
+}
+
+DeviceCommand command_at(std::int64_t stamp_ns, Vec3 force, bool enable = true) {
+  DeviceCommand command;
+  command.header.publish_stamp_ns = stamp_ns;
+  command.wrench.force_n = force;
+  command.enable = enable ? 1 : 0;
+  return command;
+}
+
+class Safety : public ::testing::Test {
+ protected:
+  DeviceSpec spec_ = [] {
+    DeviceSpec spec = VirtualDevice::default_spec(8.0);
+    spec.max_torque_nm = 0.5;
+    spec.max_gripper_force_n = 2.0;
+    return spec;
+  }();
+  SafetyLimits limits_{10 * kMs, 0.1};
+  ForceSafety safety_{spec_, limits_};
+  ForceGate gate_ = ForceGate::kApplying;
+};
+
+TEST_F(Safety, NoCommandGivesNoForce) {
+  const DeviceOutput out = safety_.apply(nullptr, 5 * kMs, gate_);
+  EXPECT_EQ(gate_, ForceGate::kNoCommand);
+  EXPECT_EQ(length(out.wrench.force_n), 0.0);
+}
+
+TEST_F(Safety, ForceRampsInOverTheRampTime) {
+  std::int64_t now = 1000 * kMs;
+  const DeviceCommand command = command_at(now, {2.0, 0.0, 0.0});
+  EXPECT_NEAR(safety_.apply(&command, now, gate_).wrench.force_n.x, 0.0, 1e-12);
+  EXPECT_EQ(gate_, ForceGate::kApplying);
+  // Half the ramp (50 ms) later, with a fresh command: half the force.
+  now += 50 * kMs;
+  DeviceCommand fresh = command_at(now, {2.0, 0.0, 0.0});
+  EXPECT_NEAR(safety_.apply(&fresh, now, gate_).wrench.force_n.x, 1.0, 1e-9);
+  now += 60 * kMs;
+  fresh = command_at(now, {2.0, 0.0, 0.0});
+  EXPECT_NEAR(safety_.apply(&fresh, now, gate_).wrench.force_n.x, 2.0, 1e-12);
+}
+
+TEST_F(Safety, ClampKeepsTheDirection) {
+  const std::int64_t now = 1000 * kMs;
+  const DeviceCommand command = command_at(now - 200 * kMs, {100.0, -200.0, 200.0});
+  safety_.apply(&command, now - 200 * kMs, gate_);  // the ramp starts here
+  const DeviceCommand fresh = command_at(now, {100.0, -200.0, 200.0});
+  const DeviceOutput out = safety_.apply(&fresh, now, gate_);
+  EXPECT_NEAR(length(out.wrench.force_n), spec_.max_force_n, 1e-9);
+  EXPECT_NEAR(out.wrench.force_n.x / out.wrench.force_n.z, 0.5, 1e-12);
+  EXPECT_NEAR(out.wrench.force_n.y / out.wrench.force_n.z, -1.0, 1e-12);
+}
+
+TEST_F(Safety, TorqueAndGripperAreClampedToo) {
+  DeviceCommand command = command_at(0, {});
+  command.wrench.torque_nm = {0.0, 3.0, 4.0};
+  command.gripper_force_n = -50.0;
+  safety_.apply(&command, 0, gate_);
+  command.header.publish_stamp_ns = 200 * kMs;
+  const DeviceOutput out = safety_.apply(&command, 200 * kMs, gate_);
+  EXPECT_NEAR(length(out.wrench.torque_nm), 0.5, 1e-12);
+  EXPECT_NEAR(out.gripper_force_n, -2.0, 1e-12);
+}
+
+TEST_F(Safety, AStaleCommandGivesZeroAndTheRampStartsOver) {
+  std::int64_t now = 1000 * kMs;
+  DeviceCommand command = command_at(now, {1.0, 0.0, 0.0});
+  for (int i = 0; i < 200; ++i, now += kMs) {
+    command.header.publish_stamp_ns = now;
+    safety_.apply(&command, now, gate_);
+  }
+  ASSERT_NEAR(safety_.apply(&command, now, gate_).wrench.force_n.x, 1.0, 1e-9);
+  // The writer stops: 10 ms later it still applies, 1 ns beyond it is zero.
+  const std::int64_t last = command.header.publish_stamp_ns;
+  EXPECT_GT(safety_.apply(&command, last + limits_.watchdog_ns, gate_).wrench.force_n.x, 0.0);
+  EXPECT_EQ(safety_.apply(&command, last + limits_.watchdog_ns + 1, gate_).wrench.force_n.x, 0.0);
+  EXPECT_EQ(gate_, ForceGate::kWatchdog);
+  // The writer comes back: the force ramps in again from zero.
+  now = last + 500 * kMs;
+  command.header.publish_stamp_ns = now;
+  EXPECT_NEAR(safety_.apply(&command, now, gate_).wrench.force_n.x, 0.0, 1e-12);
+}
+
+TEST_F(Safety, TheForceIsZeroWithinTheWatchdogNotACycleLater) {
+  ForceSafety safety(spec_, {10 * kMs, 0.0, kMs});  // a 1 kHz driver
+  const DeviceCommand command = command_at(0, {1.0, 0.0, 0.0});
+  EXPECT_EQ(safety.apply(&command, 9 * kMs, gate_).wrench.force_n.x, 1.0);
+  // At 9.5 ms the next cycle would come past 10 ms: zero now.
+  EXPECT_EQ(safety.apply(&command, 9 * kMs + kMs / 2, gate_).wrench.force_n.x, 0.0);
+  EXPECT_EQ(gate_, ForceGate::kWatchdog);
+}
+
+TEST_F(Safety, AStampFromTheFutureIsNotFresh) {
+  const DeviceCommand command = command_at(1000 * kMs, {1.0, 0.0, 0.0});
+  EXPECT_EQ(safety_.apply(&command, 500 * kMs, gate_).wrench.force_n.x, 0.0);
+  EXPECT_EQ(gate_, ForceGate::kWatchdog);
+}
+
+TEST_F(Safety, DisabledAndStoppingGiveZero) {
+  const DeviceCommand off = command_at(0, {1.0, 0.0, 0.0}, false);
+  EXPECT_EQ(safety_.apply(&off, 0, gate_).wrench.force_n.x, 0.0);
+  EXPECT_EQ(gate_, ForceGate::kDisabled);
+  const DeviceCommand on = command_at(0, {1.0, 0.0, 0.0});
+  safety_.stop();
+  EXPECT_EQ(safety_.apply(&on, 0, gate_).wrench.force_n.x, 0.0);
+  EXPECT_EQ(gate_, ForceGate::kStopping);
+}
+
+std::string write_file(const std::string& name, const std::string& text) {
+  const std::string path = ::testing::TempDir() + name;
+  std::ofstream(path) << text;
+  return path;
+}
+
+TEST(VirtualHandTest, FollowsItsTrajectory) {
+  // 2 cm along x over 2 s, then held: the hand settles on it.
+  VirtualDevice device({{0.0, {0, 0, 0}, 0, 0}, {2.0, {0.02, 0, 0}, 0, 0}}, false,
+                       VirtualDevice::default_spec());
+  DeviceSample sample;
+  double worst_lag = 0.0;
+  for (int ms = 0; ms <= 4000; ++ms) {
+    sample = device.step({}, ms * 1e-3);
+    if (ms > 500 && ms < 2000)
+      worst_lag = std::max(worst_lag, std::abs(sample.pose.position_m.x - 0.01 * ms * 1e-3));
+  }
+  EXPECT_LT(worst_lag, 5e-4) << "the hand lags its trajectory by more than 0.5 mm";
+  EXPECT_NEAR(sample.pose.position_m.x, 0.02, 1e-5);
+  EXPECT_NEAR(sample.velocity.linear_mps.x, 0.0, 1e-4);
+}
+
+TEST(VirtualHandTest, GivesWayToTheAppliedForce) {
+  VirtualHand hand;
+  VirtualDevice device({TrajectoryPoint{}}, false, VirtualDevice::default_spec(), hand);
+  DeviceOutput push;
+  push.wrench.force_n = {0.0, 0.0, -2.0};
+  DeviceSample sample;
+  for (int ms = 0; ms <= 3000; ++ms) sample = device.step(push, ms * 1e-3);
+  // At rest the arm's spring balances the force: z = F / k.
+  EXPECT_NEAR(sample.pose.position_m.z, -2.0 / hand.stiffness_npm, 1e-5);
+}
+
+TEST(VirtualHandTest, ButtonsAndGripperComeFromTheScript) {
+  const std::string path = write_file("buttons.csv",
+                                      "t,x,y,z,buttons,gripper\n"
+                                      "0, 0, 0, 0, 0, 0.1\n"
+                                      "1, 0, 0, 0, 5, 0.4  # clutch and another\n");
+  VirtualDevice device(read_trajectory_csv(path), false, VirtualDevice::default_spec());
+  EXPECT_EQ(device.step({}, 0.5).buttons, 0u);
+  const DeviceSample later = device.step({}, 1.2);
+  EXPECT_EQ(later.buttons, 5u);
+  EXPECT_DOUBLE_EQ(later.gripper_angle_rad, 0.4);
+}
+
+TEST(VirtualHandTest, ALoopedTrajectoryStartsOver) {
+  VirtualDevice device({{0.0, {0, 0, 0}, 1, 0}, {1.0, {0, 0, 0}, 2, 0}}, true,
+                       VirtualDevice::default_spec());
+  EXPECT_EQ(device.step({}, 0.5).buttons, 1u);
+  EXPECT_EQ(device.step({}, 1.5).buttons, 1u);
+}
+
+TEST(TrajectoryCsvTest, BadLinesAreLocated) {
+  const auto error_of = [](const std::string& text) -> std::string {
+    try {
+      read_trajectory_csv(write_file("bad.csv", text));
+    } catch (const Error& error) {
+      return error.what();
+    }
+    return "no error";
+  };
+  EXPECT_NE(error_of("0,0,0,0\n0,1,1,1\n").find("bad.csv:2: time 0"), std::string::npos)
+      << error_of("0,0,0,0\n0,1,1,1\n");
+  EXPECT_NE(error_of("0,0,0\n").find("bad.csv:1: expected 4 to 6 values"), std::string::npos);
+  EXPECT_NE(error_of("0,0,0,0\n1,0,x,0\n").find("bad.csv:2: expected numbers"), std::string::npos);
+  EXPECT_NE(error_of("0,0,0,0,-1\n").find("buttons must be a bit mask"), std::string::npos);
+  EXPECT_NE(error_of("# nothing\n").find("has no points"), std::string::npos);
+  EXPECT_NE(error_of("0,0,0,0,1.5\n").find("buttons must be a bit mask"), std::string::npos);
+}
+
+TEST(DeviceCycleTest, AllocatesNothing) {
+  VirtualDevice device(circle_trajectory(0.02, 1.0), true, VirtualDevice::default_spec());
+  ForceSafety safety(device.spec(), {});
+  DeviceCommand command = command_at(0, {1.0, 2.0, 3.0});
+  ForceGate gate{};
+  device.step({}, 0.0);
+  const long before = g_allocations.load();
+  for (int ms = 1; ms < 5000; ++ms) {
+    command.header.publish_stamp_ns = ms * kMs;
+    device.step(safety.apply(&command, ms * kMs, gate), ms * 1e-3);
+  }
+  EXPECT_EQ(g_allocations.load() - before, 0);
+}
+
+}  // namespace
+}  // namespace afhub::devices

@@ -1,0 +1,141 @@
+// A device driver's safety, caused for real on a hub: the process commanding a force is
+// SIGKILLed, over and over, and the driver's applied force must go to zero (its
+// watchdog); the time from the kill to the first state at zero force is measured from
+// the driver's own DeviceState stamps and printed (p50, p99, max). Whatever is
+// commanded (far above the device's maximum, not a number) the applied force never
+// exceeds the maximum.
+#include <gtest/gtest.h>
+#include <signal.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "afhub/hub/bodies.hpp"
+#include "afhub/hub/channel.hpp"
+#include "afhub/shm_layout/device.hpp"
+#include "afhub_process.hpp"
+
+namespace afhub::test {
+namespace {
+
+using namespace std::chrono_literals;
+
+double length(const Vec3& v) {
+  return std::hypot(v.x, v.y, v.z);
+}
+
+class DeviceSafety : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    driver_.pid = spawn_afhub({"device", "run", "virtual", "--name", "safe", "--max-force", "8",
+                               "--ramp", "0", "--watchdog", "10"},
+                              "/tmp/afhub-device-safe.log");
+    ASSERT_TRUE(wait_until([&] { return states_.latest() != nullptr; }, 10s))
+        << read_file("/tmp/afhub-device-safe.log");
+  }
+  // Reads every state (polled every 0.1 ms; the driver publishes one per ms) until
+  // `done` says so or `timeout`; returns whether it did.
+  template <class Done>
+  bool watch(Done done, std::chrono::milliseconds timeout) {
+    const std::int64_t deadline = monotonic_ns() + timeout.count() * 1'000'000;
+    while (monotonic_ns() < deadline) {
+      const DeviceState* state = states_.latest();
+      if (state && states_.updated()) {
+        max_applied_ = std::max(max_applied_, length(state->applied.force_n));
+        if (done(*state)) return true;
+      }
+      std::this_thread::sleep_for(100us);
+    }
+    return false;
+  }
+  ScopedProcess driver_{0};
+  LatestReader<DeviceState> states_{body_state_channel("device/safe")};
+  double max_applied_ = 0.0;
+};
+
+TEST_F(DeviceSafety, ForceGoesToZeroWhenTheCommandingProcessIsKilled) {
+  constexpr int kKills = 30;
+  std::vector<double> kill_to_zero_ms;
+  for (int kill_round = 0; kill_round < kKills; ++kill_round) {
+    ScopedProcess commander =
+        spawn_afhub({"device", "force", "safe", "--force", "0,0,5"}, "/tmp/afhub-force.log");
+    ASSERT_TRUE(watch(
+        [](const DeviceState& s) {
+          return s.gate == ForceGate::kApplying && std::abs(s.applied.force_n.z - 5.0) < 1e-9;
+        },
+        10s))
+        << "round " << kill_round << ": the force was never applied; the commander said: "
+        << read_file("/tmp/afhub-force.log");
+    const std::int64_t killed_at = monotonic_ns();
+    kill(commander.pid, SIGKILL);
+    std::int64_t zero_stamp = 0;
+    ASSERT_TRUE(watch(
+        [&](const DeviceState& s) {
+          if (s.gate != ForceGate::kWatchdog || length(s.applied.force_n) != 0.0) return false;
+          zero_stamp = s.header.publish_stamp_ns;
+          return true;
+        },
+        5s))
+        << "round " << kill_round << ": the force stayed on after its commander was killed";
+    kill_to_zero_ms.push_back(static_cast<double>(zero_stamp - killed_at) * 1e-6);
+    commander.stop();
+  }
+  std::sort(kill_to_zero_ms.begin(), kill_to_zero_ms.end());
+  const auto at = [&](double q) {
+    return kill_to_zero_ms[static_cast<std::size_t>(q * (kill_to_zero_ms.size() - 1))];
+  };
+  std::printf(
+      "SIGKILL of the commanding process to zero force (10 ms watchdog, 1 kHz driver, %d "
+      "kills): p50 %.2f ms, p99 %.2f ms, max %.2f ms\n",
+      kKills, at(0.5), at(0.99), kill_to_zero_ms.back());
+  EXPECT_LE(max_applied_, 8.0 + 1e-9);
+}
+
+TEST_F(DeviceSafety, ForceNeverExceedsTheMaximumWhateverIsCommanded) {
+  for (const char* ask : {"1000,0,0", "-1e300,1e300,5", "0,0,7.9"}) {
+    ScopedProcess commander =
+        spawn_afhub({"device", "force", "safe", "--force", ask}, "/tmp/afhub-force.log");
+    std::vector<double> wanted = {0, 0, 0};
+    std::sscanf(ask, "%lf,%lf,%lf", &wanted[0], &wanted[1], &wanted[2]);
+    const double expected = std::min(8.0, std::hypot(wanted[0], wanted[1], wanted[2]));
+    // 300 ms of states while it commands: the force applied is the clamped one.
+    int applied = 0;
+    watch(
+        [&](const DeviceState& s) {
+          if (s.gate == ForceGate::kApplying) {
+            EXPECT_NEAR(length(s.applied.force_n), expected, 1e-9) << ask;
+            ++applied;
+          }
+          return false;
+        },
+        300ms);
+    EXPECT_GT(applied, 100) << ask << ": " << read_file("/tmp/afhub-force.log");
+    commander.stop();
+  }
+  // Not a number: the driver's reader refuses it (naming the field), the last valid
+  // command goes stale and the force is zero.
+  Writer<DeviceCommand> commands(body_command_channel("device/safe"));
+  for (int ms = 0; ms < 100; ++ms) {
+    DeviceCommand* command = commands.loan();
+    ASSERT_NE(command, nullptr);
+    command->wrench.force_n = {std::numeric_limits<double>::quiet_NaN(), 0.0, 1.0};
+    command->enable = 1;
+    commands.publish(command);
+    std::this_thread::sleep_for(1ms);
+  }
+  ASSERT_TRUE(watch([](const DeviceState&) { return true; }, 1s)) << "the driver stopped";
+  const DeviceState* state = states_.latest();
+  EXPECT_NE(state->gate, ForceGate::kApplying);
+  EXPECT_EQ(length(state->applied.force_n), 0.0);
+  EXPECT_LE(max_applied_, 8.0 + 1e-9);
+  EXPECT_TRUE(contains(read_file("/tmp/afhub-device-safe.log"), "DeviceCommand.wrench.force_n"))
+      << read_file("/tmp/afhub-device-safe.log");
+}
+
+}  // namespace
+}  // namespace afhub::test
