@@ -13,25 +13,7 @@
 #include <numbers>
 #include <random>
 
-// The replacements below pair malloc with free on purpose; GCC cannot see that.
-#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
-
-namespace {
-std::atomic<long> g_allocations{0};
-}  // namespace
-
-// Counts every C++ allocation of this test binary.
-void* operator new(std::size_t size) {
-  g_allocations.fetch_add(1, std::memory_order_relaxed);
-  if (void* p = std::malloc(size ? size : 1)) return p;
-  throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept {
-  std::free(p);
-}
-void operator delete(void* p, std::size_t) noexcept {
-  std::free(p);
-}
+#include "heap_counter.hpp"
 
 namespace afhub::teleop {
 namespace {
@@ -327,14 +309,14 @@ TEST(TeleopLaw, ACycleAllocatesNothing) {
   params.max_jerk_n_per_ms = 0.2;
   TeleopLaw law(params);
   TeleopOutput out;
-  const long before = g_allocations.load();
+  const long before = test::heap_allocations();
   for (int i = 0; i < 1000; ++i) {
     const double angle = 2 * kPi * i / 1000;
     law.step(device_at(v3(0.02 * std::cos(angle), 0.02 * std::sin(angle), 0),
                        (i / 100) % 2 ? 1U : 0U, about_z(angle)),
              pose_at(v3(0.1, 0, 0), about_z(-angle)), {}, kDt, out);
   }
-  EXPECT_EQ(g_allocations.load() - before, 0);
+  EXPECT_EQ(test::heap_allocations() - before, 0);
 }
 
 }  // namespace

@@ -13,26 +13,7 @@
 #include "afhub/devices/force_safety.hpp"
 #include "afhub/devices/virtual_device.hpp"
 #include "afhub/shm_layout/error.hpp"
-
-// The replacements below pair malloc with free on purpose; GCC cannot see that.
-#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
-
-namespace {
-std::atomic<long> g_allocations{0};
-}  // namespace
-
-// Counts every C++ allocation of this test binary.
-void* operator new(std::size_t size) {
-  g_allocations.fetch_add(1, std::memory_order_relaxed);
-  if (void* p = std::malloc(size ? size : 1)) return p;
-  throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept {
-  std::free(p);
-}
-void operator delete(void* p, std::size_t) noexcept {
-  std::free(p);
-}
+#include "heap_counter.hpp"
 
 namespace afhub::devices {
 namespace {
@@ -226,12 +207,12 @@ TEST(DeviceCycleTest, AllocatesNothing) {
   DeviceCommand command = command_at(0, {1.0, 2.0, 3.0});
   ForceGate gate{};
   device.step({}, 0.0);
-  const long before = g_allocations.load();
+  const long before = test::heap_allocations();
   for (int ms = 1; ms < 5000; ++ms) {
     command.header.publish_stamp_ns = ms * kMs;
     device.step(safety.apply(&command, ms * kMs, gate), ms * 1e-3);
   }
-  EXPECT_EQ(g_allocations.load() - before, 0);
+  EXPECT_EQ(test::heap_allocations() - before, 0);
 }
 
 }  // namespace

@@ -12,26 +12,7 @@
 #include <string>
 
 #include "emulated_devices.hpp"
-
-// C++ heap allocations while counting is on (exchange() must make none). GCC sees
-// the replaced operators inlined and warns that free() meets new; they match.
-#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
-namespace {
-std::atomic<bool> counting{false};
-std::atomic<int> allocations{0};
-}  // namespace
-
-void* operator new(std::size_t size) {
-  if (counting.load()) allocations.fetch_add(1);
-  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
-  throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept {
-  std::free(p);
-}
-void operator delete(void* p, std::size_t) noexcept {
-  std::free(p);
-}
+#include "heap_counter.hpp"
 
 namespace afhub::devices {
 namespace {
@@ -228,17 +209,18 @@ TEST(EvdevDevice, ExchangeDoesNotAllocate) {
   options.mode = EvdevAxisMode::kPose;
   EvdevDevice device(pad.path(), options);
   double sum = 0.0;
+  long allocations = 0;
   for (int i = 0; i < 50; ++i) {
     pad.send(EV_ABS, ABS_X, 1000 * i);
     pad.send(EV_KEY, BTN_SOUTH, i % 2);
     pad.sync();
     fake_now_ns += 1'000'000;
-    counting = true;
+    const long before = test::heap_allocations();
     sum += device.exchange({}).velocity.linear_mps.x;
-    counting = false;
+    allocations += test::heap_allocations() - before;
   }
   EXPECT_GT(sum, 0.0);
-  EXPECT_EQ(allocations.load(), 0);
+  EXPECT_EQ(allocations, 0);
 }
 
 TEST(EvdevDevice, UnpluggingThrowsDeviceGone) {
