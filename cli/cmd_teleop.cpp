@@ -1,0 +1,190 @@
+// `afhub teleop INPUT_DEVICES.yaml [-d 0,1] [--device NAME ...]`: AMBF's input device
+// file, each selected device bound to the root body of its simulated multibody (see
+// controllers/teleop/). The multibody's description is read here to find that body,
+// its gains and its gripper joints; the physics (`afhub run`) simulates it.
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+
+#include "afhub/physics/adf_loader.hpp"
+#include "afhub/shm_layout/channel_names.hpp"
+#include "afhub/shm_layout/error.hpp"
+#include "afhub/teleop/input_devices_reader.hpp"
+#include "afhub/teleop/teleop_process.hpp"
+#include "commands.hpp"
+#include "count_option.hpp"
+
+namespace afhub::cli {
+namespace {
+
+struct TeleopCliOptions {
+  std::string file;
+  std::string selection;
+  std::vector<std::string> devices;
+  double rate_hz = 1000.0;
+  int fifo_priority = 0;
+  int cpu = -1;
+  bool lock_memory = false;
+  std::uint64_t cycles = 0;
+  double wait_s = 10.0;
+  std::uint64_t latency_samples = 0;
+};
+
+// The driver name a hardware name maps to when no --device is given: lower case,
+// every run of other characters than letters and digits one '_' ("Falcon" -> "falcon",
+// "PHANTOM Omni" -> "phantom_omni").
+std::string driver_name_of(const std::string& hardware_name) {
+  std::string name;
+  for (char c : hardware_name) {
+    if (std::isalnum(static_cast<unsigned char>(c)))
+      name += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    else if (!name.empty() && name.back() != '_')
+      name += '_';
+  }
+  while (!name.empty() && name.back() == '_') name.pop_back();
+  return name;
+}
+
+std::string quoted(const std::string& path) {
+  return path.find_first_of(" '\"") == std::string::npos ? path : "'" + path + "'";
+}
+
+// The body the device drives: "root link" (a body's name, "BODY name", its qualified
+// identifier or its channel) or else the first body that is no joint's child.
+std::size_t root_body(const physics::Model& model, const teleop::InputDeviceSpec& spec) {
+  if (!spec.root_link.empty()) {
+    for (std::size_t b = 0; b < model.bodies.size(); ++b) {
+      const physics::BodySpec& body = model.bodies[b];
+      if (spec.root_link == body.name || spec.root_link == body.identifier ||
+          spec.root_link == body.qualified_identifier || spec.root_link == body.channel ||
+          spec.root_link == "/" + body.channel)
+        return b;
+    }
+    std::string names;
+    for (const physics::BodySpec& body : model.bodies) names += " '" + body.name + "'";
+    throw Error(spec.where + ": error: root link '" + spec.root_link + "' is no body of " +
+                spec.simulated_multibody + "; its bodies are" + names);
+  }
+  std::vector<bool> is_child(model.bodies.size(), false);
+  for (const physics::JointSpec& joint : model.joints)
+    if (joint.child >= 0) is_child[static_cast<std::size_t>(joint.child)] = true;
+  for (std::size_t b = 0; b < model.bodies.size(); ++b)
+    if (!is_child[b]) return b;
+  throw Error(spec.simulated_multibody_where + ": error: " + spec.simulated_multibody +
+              " has no root body (every body is a joint's child): give a \"root link\"");
+}
+
+teleop::TeleopBinding bind_device(const teleop::InputDeviceSpec& spec,
+                                  const std::string& device_name) {
+  device_channel_name(device_name);  // a bad name fails here, naming it
+  const physics::Model model = physics::load_adf_files({spec.simulated_multibody});
+  const std::size_t root = root_body(model, spec);
+  const physics::BodySpec& body = model.bodies[root];
+  teleop::TeleopBinding binding;
+  binding.spec = spec;
+  binding.device_name = device_name;
+  binding.body = body.channel;
+  binding.body_gains.linear = {body.linear_controller.p, body.linear_controller.d};
+  binding.body_gains.angular = {body.angular_controller.p, body.angular_controller.d};
+  for (int j : model.descendant_joints[root]) {
+    const physics::JointSpec& joint = model.joints[static_cast<std::size_t>(j)];
+    binding.gripper_joints.push_back(
+        {joint.limit_low.value_or(0.0), joint.limit_high.value_or(0.0)});
+  }
+  for (const physics::ActuatorSpec& actuator : model.actuators)
+    if (actuator.parent == static_cast<int>(root)) ++binding.actuator_count;
+  binding.load_hint = "the physics simulates it: start it with `afhub run " +
+                      quoted(spec.simulated_multibody) + "`";
+  return binding;
+}
+
+teleop::TeleopOptions teleop_options(const TeleopCliOptions& options) {
+  if (!(options.rate_hz > 0.0 && options.rate_hz <= 100'000.0))
+    throw Error("--rate must be between 0 and 100000 Hz");
+  if (options.fifo_priority < 0 || options.fifo_priority > 99)
+    throw Error("--fifo takes a SCHED_FIFO priority from 1 to 99");
+  if (!(options.wait_s >= 0.0 && options.wait_s <= 1e6))
+    throw Error("--wait takes a number of seconds from 0 to 1e6");
+  const teleop::InputDevicesFile file = teleop::read_input_devices(options.file);
+  for (const std::string& warning : file.warnings) std::fprintf(stderr, "%s\n", warning.c_str());
+  const std::vector<teleop::InputDeviceSpec> selected =
+      teleop::select_devices(file, options.selection);
+  if (!options.devices.empty() && options.devices.size() != selected.size())
+    throw Error("--device names " + std::to_string(options.devices.size()) + " device(s) but " +
+                std::to_string(selected.size()) +
+                " are selected: give one --device NAME per selected device, in the order of -d");
+  teleop::TeleopOptions teleop;
+  for (std::size_t i = 0; i < selected.size(); ++i)
+    teleop.bindings.push_back(
+        bind_device(selected[i], options.devices.empty() ? driver_name_of(selected[i].hardware_name)
+                                                         : options.devices[i]));
+  teleop.loop.period_ns = static_cast<std::int64_t>(std::llround(1e9 / options.rate_hz));
+  teleop.loop.fifo_priority = options.fifo_priority;
+  teleop.loop.cpu = options.cpu;
+  teleop.loop.lock_memory = options.lock_memory;
+  teleop.loop.max_cycles = options.cycles;
+  teleop.wait_s = options.wait_s;
+  teleop.latency_samples = options.latency_samples;
+  return teleop;
+}
+
+void print_latency(const char* what, std::vector<std::int64_t>& samples) {
+  std::printf("%s: %zu samples, p50 %.1f us, p99 %.1f us, max %.1f us\n", what, samples.size(),
+              static_cast<double>(teleop::quantile(samples, 0.5)) * 1e-3,
+              static_cast<double>(teleop::quantile(samples, 0.99)) * 1e-3,
+              static_cast<double>(teleop::quantile(samples, 1.0)) * 1e-3);
+}
+
+}  // namespace
+
+void register_teleop(CLI::App& app, Runner& selected) {
+  auto options = std::make_shared<TeleopCliOptions>();
+  auto* teleop = app.add_subcommand(
+      "teleop",
+      "Teleoperation with force feedback, from AMBF's input device file: each selected "
+      "device's driver (device/<name>, `afhub device run ...`) moves the root body of its "
+      "\"simulated multibody\" through a Cartesian PD wrench, and gets the haptic gain times "
+      "the body's lag behind the device's proxy as force (clutch, gripper and mode buttons "
+      "as AMBF maps them). The physics simulates the multibody: start it with `afhub run "
+      "<the simulated multibody file>` (it waits for it, printing that command). Device "
+      "channels: by default the \"hardware name\" in lower case, other characters as '_' "
+      "(Falcon -> device/falcon, PHANTOM Omni -> device/phantom_omni); --device NAME "
+      "overrides it, one per selected device.");
+  teleop->add_option("file", options->file, "AMBF input device file (input_devices.yaml)")
+      ->required();
+  teleop->add_option("-d,--devices", options->selection,
+                     "Devices to use, by index in the file's \"input devices\" list: 0,1 "
+                     "(default: all)");
+  teleop->add_option("--device", options->devices,
+                     "The driver (its --name) of each selected device, in the order of -d; "
+                     "repeat it, e.g. --device virtual --device falcon2");
+  teleop->add_option("--rate", options->rate_hz, "Loop rate in Hz (default 1000)");
+  teleop->add_option("--fifo", options->fifo_priority,
+                     "Run under SCHED_FIFO at this priority (1-99); says so if refused");
+  teleop->add_option("--cpu", options->cpu, "Pin the loop to this CPU");
+  teleop->add_flag("--lock-memory", options->lock_memory,
+                   "mlockall and pre-fault, so the loop takes no page faults");
+  add_count_option(teleop, "--cycles", options->cycles,
+                   "Stop after this many cycles (default: Ctrl-C)");
+  teleop->add_option("--wait", options->wait_s,
+                     "Wait this many seconds for the hub, then each device and body, before "
+                     "failing (default 10; 0 fails at once)");
+  add_count_option(teleop, "--latency", options->latency_samples,
+                   "Record this many latencies (device sample -> body command, device sample "
+                   "-> the device force answering it) and print p50/p99/max at the end");
+  teleop->callback([&selected, options] {
+    selected = [options] {
+      const teleop::TeleopOptions run = teleop_options(*options);
+      teleop::TeleopLatency latency;
+      const int code = teleop::run_teleop(run, options->latency_samples > 0 ? &latency : nullptr);
+      if (options->latency_samples > 0) {
+        print_latency("device sample -> body command", latency.to_body_command);
+        print_latency("device sample -> device force", latency.to_device_force);
+      }
+      return code;
+    };
+  });
+}
+
+}  // namespace afhub::cli

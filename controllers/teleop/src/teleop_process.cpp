@@ -1,0 +1,161 @@
+// The teleoperation process (see teleop_process.hpp).
+#include "afhub/teleop/teleop_process.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cstdio>
+#include <limits>
+#include <memory>
+
+#include "afhub/hub/bodies.hpp"
+#include "afhub/hub/hub_loss.hpp"
+#include "afhub/hub/hub_presence.hpp"
+#include "afhub/hub/stop_signal.hpp"
+#include "afhub/rt/clock.hpp"
+#include "afhub/rt/loop_stats_publisher.hpp"
+#include "afhub/shm_layout/error.hpp"
+#include "afhub/teleop/teleop_law.hpp"
+
+namespace afhub::teleop {
+namespace {
+
+// Device commands in flight: which device sample each answered, by its sequence, so
+// that a DeviceState reporting the command's force gives the sample-to-force latency.
+constexpr std::size_t kInFlight = 256;
+
+// One device bound to one body, with everything its cycle needs made beforehand.
+struct Link {
+  Link(const TeleopBinding& b, const BodyEntry& entry)
+      : binding(&b),
+        law(teleop_params(b.spec, b.body_gains)),
+        device_state(body_state_channel(device_channel_name(b.device_name))),
+        device_command(body_command_channel(device_channel_name(b.device_name))),
+        body(entry) {
+    if (!b.spec.enable_joint_control) joints = 0;
+  }
+  const TeleopBinding* binding;
+  TeleopLaw law;
+  LatestReader<DeviceState> device_state;
+  Writer<DeviceCommand> device_command;
+  BodyClient body;
+  TeleopOutput out;
+  std::size_t joints{std::numeric_limits<std::size_t>::max()};  // capped below
+  std::int64_t last_cycle_ns{0};
+  std::uint64_t commands_sent{0};  // = the sequence of our last DeviceCommand
+  std::uint64_t last_reported_command{0};
+  std::array<std::int64_t, kInFlight> sample_stamp_of{};  // by command sequence % kInFlight
+};
+
+// Waits for the driver of `device_name` to publish, until give_up_ns.
+void wait_for_device(Link& link, const std::string& who, std::int64_t give_up_ns) {
+  const std::string& name = link.binding->device_name;
+  bool said = false;
+  while (!link.device_state.latest()) {
+    if (stop_requested()) throw Error(who + ": stopped while waiting for device/" + name);
+    const std::int64_t now = monotonic_ns();
+    if (now >= give_up_ns)
+      throw Error("no device '" + name + "' (channel device/" + name + ") for " +
+                  link.binding->spec.identifier + ": start its driver, e.g. `afhub device run " +
+                  "virtual --name " + name +
+                  "`, or give --device NAME, or wait longer with --wait");
+    if (!said) {
+      std::fprintf(stderr, "%s: waiting for device/%s (%s)\n", who.c_str(), name.c_str(),
+                   link.binding->spec.identifier.c_str());
+      said = true;
+    }
+    sleep_until_ns(now + 10'000'000);
+  }
+}
+
+// One cycle of one link: newest samples in, the two commands out.
+void cycle(Link& link, std::int64_t now, TeleopLatency* latency, std::size_t most) {
+  const DeviceState* device = link.device_state.latest();
+  const BodyState* state = link.body.latest_state();
+  if (!device || !state || hub_lost()) return;  // the driver's watchdog zeroes the force
+  if (latency && device->command_sequence > link.last_reported_command &&
+      device->command_sequence <= link.commands_sent &&
+      device->command_sequence + kInFlight > link.commands_sent) {
+    // The first report of each command's force.
+    link.last_reported_command = device->command_sequence;
+    const std::int64_t sample = link.sample_stamp_of[device->command_sequence % kInFlight];
+    if (latency->to_device_force.size() < most)
+      latency->to_device_force.push_back(device->header.publish_stamp_ns - sample);
+  }
+  const double dt = link.last_cycle_ns ? static_cast<double>(now - link.last_cycle_ns) * 1e-9 : 0.0;
+  link.last_cycle_ns = now;
+  link.law.step(*device, state->pose, state->twist, dt, link.out);
+
+  const std::size_t joints =
+      std::min<std::size_t>({link.joints, link.binding->gripper_joints.size(), state->joint_count});
+  if (BodyCommand* command = link.body.loan_command(static_cast<std::uint32_t>(joints))) {
+    fill_body_command(link.out, {link.binding->gripper_joints.data(), joints},
+                      link.binding->actuator_count, *command);
+    command->header.sim_step = state->header.sim_step;
+    command->header.sim_time_s = state->header.sim_time_s;
+    link.body.publish_command(command);
+    if (latency && latency->to_body_command.size() < most)
+      latency->to_body_command.push_back(monotonic_ns() - device->header.publish_stamp_ns);
+  }
+  if (DeviceCommand* command = link.device_command.loan()) {
+    fill_device_command(link.out, *command);
+    link.device_command.publish(command);
+    ++link.commands_sent;
+    link.sample_stamp_of[link.commands_sent % kInFlight] = device->header.publish_stamp_ns;
+  }
+}
+
+}  // namespace
+
+std::int64_t quantile(std::vector<std::int64_t>& samples, double p) {
+  if (samples.empty()) return 0;
+  std::sort(samples.begin(), samples.end());
+  const auto index = static_cast<std::size_t>(p * static_cast<double>(samples.size() - 1) + 0.5);
+  return samples[std::min(index, samples.size() - 1)];
+}
+
+int run_teleop(const TeleopOptions& options, TeleopLatency* latency) {
+  install_stop_signal_handlers();
+  if (options.bindings.empty()) throw Error("afhub teleop: no device selected");
+  if (!(options.wait_s >= 0.0 && options.wait_s <= 1e6))
+    throw Error(
+        "the wait for the hub, the devices and the bodies must be 0 to 1e6 seconds (--wait)");
+  const std::string who = "afhub teleop";
+  if (options.survive_hub_loss) survive_hub_loss(who);
+  const std::int64_t give_up_ns =
+      reattach_count() > 0 ? std::numeric_limits<std::int64_t>::max()
+                           : monotonic_ns() + static_cast<std::int64_t>(options.wait_s * 1e9);
+  connect_to_hub("teleop", HubPolicy::kRequire,
+                 std::chrono::milliseconds(static_cast<std::int64_t>(options.wait_s * 1e3)));
+
+  std::vector<std::unique_ptr<Link>> links;
+  for (const TeleopBinding& binding : options.bindings) {
+    const BodyEntry entry = wait_for_body(binding.body, who, give_up_ns,
+                                          binding.load_hint + ", or wait longer with --wait");
+    links.push_back(std::make_unique<Link>(binding, entry));
+    wait_for_device(*links.back(), who, give_up_ns);
+    std::fprintf(stderr, "%s: %s: device/%s drives %s\n", who.c_str(),
+                 binding.spec.identifier.c_str(), binding.device_name.c_str(),
+                 binding.body.c_str());
+  }
+  const std::size_t most = latency ? options.latency_samples : 0;
+  if (latency) {
+    latency->to_body_command.reserve(most);
+    latency->to_device_force.reserve(most);
+  }
+
+  LoopTiming timing;
+  const RealtimeGrant grant = apply_realtime(options.loop, who.c_str());
+  LoopStatsPublisher stats("teleop", options.bindings.front().body, options.loop.period_ns, false,
+                           grant);
+  run_periodic(
+      options.loop, timing,
+      [&] {
+        const std::int64_t now = monotonic_ns();
+        for (auto& link : links) cycle(*link, now, latency, most);
+        return true;
+      },
+      [&](std::int64_t now) { stats.maybe_publish(now, timing); });
+  return 0;
+}
+
+}  // namespace afhub::teleop
