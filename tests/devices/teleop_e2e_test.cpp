@@ -5,11 +5,13 @@
 // holds the palm and lets go with no jump; pushing the palm into the floor gives an
 // opposing force on the device, bounded by the file's max force.
 #include <gtest/gtest.h>
+#include <signal.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <thread>
+#include <vector>
 
 #include "afhub/hub/channel.hpp"
 #include "afhub/shm_layout/body_state.hpp"
@@ -56,6 +58,7 @@ class Teleop {
  public:
   Teleop(const std::string& device, const std::vector<std::string>& trajectory_args)
       : devices_file_(folder_.write("input_devices.yaml", input_devices_file())),
+        device_name_(device),
         log_((folder_.dir() / "log").string()),
         physics_(spawn_afhub({"run", kGripper, kFloor, "--no-autostart"}, log_ + ".run")),
         teleop_(spawn_afhub({"teleop", devices_file_, "--device", device}, log_ + ".teleop")),
@@ -74,6 +77,18 @@ class Teleop {
         },
         20s);
   }
+  // SIGKILLs the teleoperation process, and starts another.
+  void kill_teleop() { kill(teleop_.pid, SIGKILL); }
+  void restart_teleop() {
+    teleop_.stop();
+    teleop_.pid =
+        spawn_afhub({"teleop", devices_file_, "--device", device_name_}, log_ + ".teleop");
+  }
+  // The newest device state not seen before, or nullptr.
+  const DeviceState* new_device_state() {
+    const DeviceState* d = device_.latest();
+    return d && device_.updated() ? d : nullptr;
+  }
   const BodyState& palm() { return *palm_.latest(); }
   const DeviceState& device() { return *device_.latest(); }
   std::string logs() {
@@ -84,7 +99,7 @@ class Teleop {
 
  private:
   afhub::testing::ModelFolder folder_;
-  std::string devices_file_, log_;
+  std::string devices_file_, device_name_, log_;
   ScopedProcess physics_, teleop_;
   std::unique_ptr<ScopedProcess> driver_;
   LatestReader<BodyState> palm_;
@@ -203,6 +218,46 @@ TEST(TeleopEndToEnd, PushingIntoTheFloorGivesAnOpposingBoundedForce) {
   EXPECT_GT(lowest_palm, 0.015) << "the palm went through the floor";
   EXPECT_GT(mean_up, 0.8 * kMaxForce) << "the device got no force opposing the push";
   EXPECT_LE(most_force, kMaxForce + 1e-9) << "the device got more than the max force";
+}
+
+// The teleoperation process SIGKILLed while the device pushes into the floor: the
+// driver's watchdog takes the force to zero. The time from each kill to the driver's
+// first state at zero force is read from its state stamps and printed.
+TEST(TeleopEndToEnd, KillingTeleopWhileItPushesZeroesTheForce) {
+  afhub::testing::ModelFolder scripts;
+  const std::string csv = scripts.write("push.csv", "0,0,0,0\n1,0,0,-0.2\n");
+  Teleop teleop("kill", {"--trajectory", csv});
+  constexpr int kKills = 30;
+  std::vector<double> kill_to_zero_ms;
+  for (int round = 0; round < kKills; ++round) {
+    ASSERT_TRUE(wait_until(
+        [&] {
+          const DeviceState* d = teleop.new_device_state();
+          return d && d->gate == ForceGate::kApplying &&
+                 std::hypot(d->applied.force_n.x, d->applied.force_n.y, d->applied.force_n.z) > 0.1;
+        },
+        20s))
+        << "round " << round << ": no force applied" << teleop.logs();
+    const std::int64_t killed_at = monotonic_ns();
+    teleop.kill_teleop();
+    std::int64_t zero_stamp = 0;
+    for (const std::int64_t give_up = killed_at + 5'000'000'000LL;
+         zero_stamp == 0 && monotonic_ns() < give_up;
+         std::this_thread::sleep_for(std::chrono::microseconds(100))) {
+      const DeviceState* d = teleop.new_device_state();
+      if (d && d->gate == ForceGate::kWatchdog && d->applied.force_n.z == 0.0)
+        zero_stamp = d->header.publish_stamp_ns;
+    }
+    ASSERT_NE(zero_stamp, 0) << "round " << round << ": the force stayed on" << teleop.logs();
+    kill_to_zero_ms.push_back(static_cast<double>(zero_stamp - killed_at) * 1e-6);
+    teleop.restart_teleop();
+  }
+  std::sort(kill_to_zero_ms.begin(), kill_to_zero_ms.end());
+  std::printf(
+      "SIGKILL of afhub teleop to zero device force (%d kills): p50 %.2f ms, p99 %.2f ms, max "
+      "%.2f ms\n",
+      kKills, kill_to_zero_ms[kKills / 2], kill_to_zero_ms[(kKills - 1) * 99 / 100],
+      kill_to_zero_ms.back());
 }
 
 }  // namespace
