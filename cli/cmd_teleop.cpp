@@ -2,6 +2,7 @@
 // file, each selected device bound to the root body of its simulated multibody (see
 // controllers/teleop/). The multibody's description is read here to find that body,
 // its gains and its gripper joints; the physics (`afhub run`) simulates it.
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdio>
@@ -94,6 +95,13 @@ teleop::TeleopBinding bind_device(const teleop::InputDeviceSpec& spec,
   }
   for (const physics::ActuatorSpec& actuator : model.actuators)
     if (actuator.parent == static_cast<int>(root)) ++binding.actuator_count;
+  // The physics bounds a body's force at 100 g times the mass it carries, and its
+  // torque at that force times at least 1 m (physics/src/sim_bounds.cpp); a command
+  // past them is refused whole. The whole multibody's mass stands for the root's.
+  double mass_kg = 0.0;
+  for (const physics::BodySpec& each : model.bodies) mass_kg += each.mass_kg;
+  binding.body_limit.force_n = 0.99 * std::max(1.0, mass_kg) * 100.0 * 9.81;
+  binding.body_limit.torque_nm = binding.body_limit.force_n;
   binding.load_hint = "the physics simulates it: start it with `afhub run " +
                       quoted(spec.simulated_multibody) + "`";
   return binding;

@@ -52,6 +52,19 @@ TEST(TeleopCommands, CountsStayWithinThePayloadsCapacity) {
   EXPECT_EQ(command->actuator_count, kMaxActuatorsPerBody);
 }
 
+TEST(TeleopCommands, TheBodysWrenchIsLimitedKeepingItsDirection) {
+  Wrench wrench{{300.0, 0.0, 400.0}, {0.0, -30.0, 0.0}};
+  limit_wrench(wrench, {100.0, 10.0});
+  EXPECT_NEAR(wrench.force_n.x, 60.0, 1e-12);
+  EXPECT_NEAR(wrench.force_n.z, 80.0, 1e-12);
+  EXPECT_NEAR(wrench.torque_nm.y, -10.0, 1e-12);
+  Wrench small{{1.0, 2.0, 2.0}, {0.5, 0.0, 0.0}};
+  limit_wrench(small, {100.0, 10.0});
+  EXPECT_EQ(small.force_n.z, 2.0);
+  limit_wrench(small, {});  // no limit
+  EXPECT_EQ(small.torque_nm.x, 0.5);
+}
+
 TEST(TeleopCommands, TheDeviceGetsTheForceEnabled) {
   DeviceCommand command;
   command.gripper_force_n = 3;

@@ -2,6 +2,7 @@
 #include "afhub/teleop/teleop_commands.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 namespace afhub::teleop {
 
@@ -21,6 +22,22 @@ void fill_body_command(const TeleopOutput& out, std::span<const JointRange> grip
   command.actuator_count =
       std::min(actuator_count, static_cast<std::uint32_t>(kMaxActuatorsPerBody));
   for (std::uint32_t a = 0; a < command.actuator_count; ++a) command.actuate[a] = out.grasp;
+}
+
+namespace {
+
+void limit_length(Vec3& v, double limit) noexcept {
+  const double length = std::hypot(v.x, v.y, v.z);
+  if (limit <= 0.0 || !(length > limit)) return;
+  const double scale = limit / length;
+  v = {v.x * scale, v.y * scale, v.z * scale};
+}
+
+}  // namespace
+
+void limit_wrench(Wrench& wrench, const WrenchLimit& limit) noexcept {
+  limit_length(wrench.force_n, limit.force_n);
+  limit_length(wrench.torque_nm, limit.torque_nm);
 }
 
 void fill_device_command(const TeleopOutput& out, DeviceCommand& command) noexcept {

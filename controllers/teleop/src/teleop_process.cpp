@@ -90,6 +90,7 @@ void cycle(Link& link, std::int64_t now, TeleopLatency* latency, std::size_t mos
   if (BodyCommand* command = link.body.loan_command(static_cast<std::uint32_t>(joints))) {
     fill_body_command(link.out, {link.binding->gripper_joints.data(), joints},
                       link.binding->actuator_count, *command);
+    limit_wrench(command->wrench, link.binding->body_limit);
     command->header.sim_step = state->header.sim_step;
     command->header.sim_time_s = state->header.sim_time_s;
     link.body.publish_command(command);

@@ -27,6 +27,16 @@ struct JointRange {
 void fill_body_command(const TeleopOutput& out, std::span<const JointRange> gripper_joints,
                        std::uint32_t actuator_count, BodyCommand& command) noexcept;
 
+// The most force and torque a body takes (the physics refuses a command beyond its
+// bounds, and the body would then fall free); 0: no limit.
+struct WrenchLimit {
+  double force_n{0.0};
+  double torque_nm{0.0};
+};
+
+// Scales the wrench's force and torque down to `limit`, each keeping its direction.
+void limit_wrench(Wrench& wrench, const WrenchLimit& limit) noexcept;
+
 // The device command: the law's force and torque (device frame), no gripper force,
 // force enabled.
 void fill_device_command(const TeleopOutput& out, DeviceCommand& command) noexcept;

@@ -26,7 +26,8 @@ struct TeleopBinding {
   CartesianGains body_gains;               // the root body's own controller gains (AMBF's fallback)
   std::vector<JointRange> gripper_joints;  // the root's descendant joints, command order
   std::uint32_t actuator_count{0};
-  std::string load_hint;  // how to load the multibody, shown while the body is missing
+  WrenchLimit body_limit;  // what the physics accepts for the root body
+  std::string load_hint;   // how to load the multibody, shown while the body is missing
 };
 
 // Latency of the loop's outputs, from the device sample they answer (its publish
