@@ -74,10 +74,12 @@ int run_driver(const DeviceOpener& open, const DriverOptions& options) {
   install_stop_signal_handlers();
   const std::string who = "afhub device " + options.name;
   const std::string channel = device_channel_name(options.name);
-  survive_hub_loss(who);
-  on_hub_lost([] {
-    if (Device* device = g_device.load()) device->make_safe();
-  });
+  if (options.survive_hub_loss) {
+    survive_hub_loss(who);
+    on_hub_lost([] {
+      if (Device* device = g_device.load()) device->make_safe();
+    });
+  }
   std::unique_ptr<Device> device = open();
   connect_to_hub("device", HubPolicy::kRequire,
                  std::chrono::milliseconds(static_cast<std::int64_t>(options.wait_s * 1e3)));

@@ -22,6 +22,9 @@ struct DriverOptions {
   SafetyLimits safety;
   double wait_s = 10.0;    // for the hub
   bool reconnect = false;  // when the device goes away, wait for it instead of exiting
+  // Outlive the hub: make the device safe, re-execute and re-attach (hub_loss.hpp).
+  // false: the process ends with its hub (a driver run inside a test binary).
+  bool survive_hub_loss = true;
 };
 
 // Opens the device (throws afhub::Error, or DeviceGone when it is absent).

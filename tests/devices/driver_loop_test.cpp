@@ -1,0 +1,110 @@
+// The driver loop on a hub, with a device that goes away: the driver says so and exits
+// 1, or with `reconnect` waits until the device opens again and carries on; on a stop
+// its last state is published at zero force and the device is made safe.
+#include "afhub/devices/driver_loop.hpp"
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <memory>
+
+#include "afhub/hub/channel.hpp"
+#include "afhub/shm_layout/channel_names.hpp"
+
+namespace afhub::devices {
+namespace {
+
+// A device that goes away after `lifetime` exchanges (never, when 0), and counts.
+struct Counts {
+  std::atomic<int> opens{0}, exchanges{0}, made_safe{0};
+};
+
+class FleetingDevice : public Device {
+ public:
+  FleetingDevice(Counts& counts, int lifetime) : counts_(counts), lifetime_(lifetime) {}
+  DeviceSpec spec() const override {
+    DeviceSpec spec;
+    spec.max_force_n = 5.0;
+    return spec;
+  }
+  DeviceSample exchange(const DeviceOutput&) override {
+    if (lifetime_ > 0 && ++exchanged_ > lifetime_) throw DeviceGone("unplugged (test)");
+    ++counts_.exchanges;
+    return {};
+  }
+  void make_safe() noexcept override { ++counts_.made_safe; }
+
+ private:
+  Counts& counts_;
+  int lifetime_;
+  int exchanged_ = 0;
+};
+
+DriverOptions options_for(const std::string& name) {
+  DriverOptions options;
+  options.name = name;
+  options.survive_hub_loss = false;
+  options.wait_s = 0.0;
+  return options;
+}
+
+TEST(DriverLoop, ADeviceThatGoesAwayEndsTheDriverWithExitCode1) {
+  Counts counts;
+  const int code = run_driver(
+      [&] {
+        ++counts.opens;
+        return std::make_unique<FleetingDevice>(counts, 50);
+      },
+      options_for("fleeting"));
+  EXPECT_EQ(code, 1);
+  EXPECT_EQ(counts.opens, 1);
+  EXPECT_EQ(counts.exchanges, 50);
+  EXPECT_EQ(counts.made_safe, 1);
+}
+
+TEST(DriverLoop, WithReconnectItWaitsForTheDeviceAndCarriesOn) {
+  Counts counts;
+  DriverOptions options = options_for("returning");
+  options.reconnect = true;
+  options.loop.max_cycles = 200;  // per opened device: the second one ends the run
+  const int code = run_driver(
+      [&]() -> std::unique_ptr<Device> {
+        const int open = ++counts.opens;
+        if (open == 2 || open == 3) throw DeviceGone("still unplugged (test)");
+        return std::make_unique<FleetingDevice>(counts, open == 1 ? 20 : 0);
+      },
+      options);
+  EXPECT_EQ(code, 0);
+  EXPECT_EQ(counts.opens, 4);
+  EXPECT_EQ(counts.exchanges, 20 + 200 + 1);  // the last one at zero force, on the stop
+}
+
+TEST(DriverLoop, OnAStopTheLastStateIsAtZeroForce) {
+  Counts counts;
+  LatestReader<DeviceState> states(body_state_channel(device_channel_name("stopping")));
+  Writer<DeviceCommand> commands(body_command_channel(device_channel_name("stopping")));
+  DriverOptions options = options_for("stopping");
+  options.loop.max_cycles = 300;
+  options.safety.ramp_s = 0.0;
+  options.safety.watchdog_ns = 1'000'000'000;  // the one command below stays fresh
+  DeviceCommand* command = commands.loan();
+  ASSERT_NE(command, nullptr);
+  command->wrench.force_n = {0.0, 0.0, 3.0};
+  command->enable = 1;
+  commands.publish(command);
+  const int code = run_driver(
+      [&] {
+        ++counts.opens;
+        return std::make_unique<FleetingDevice>(counts, 0);
+      },
+      options);
+  EXPECT_EQ(code, 0);
+  EXPECT_EQ(counts.made_safe, 1);
+  const DeviceState* last = states.latest();
+  ASSERT_NE(last, nullptr);
+  EXPECT_EQ(last->gate, ForceGate::kStopping);
+  EXPECT_EQ(last->applied.force_n.z, 0.0);
+}
+
+}  // namespace
+}  // namespace afhub::devices
