@@ -18,6 +18,8 @@ PACKAGES=(
   rt-tests gnuplot-nox
   # device drivers: evdev input devices, USB (Falcon), and their emulation in tests
   libevdev-dev libusb-1.0-0-dev umockdev libumockdev-dev
+  # afhub view: its web server, three.js, and the browser and image checks of its tests
+  libcivetweb-dev libjs-three chromium python3-pil
 )
 
 install_packages() {
@@ -68,7 +70,7 @@ case "${1:-}" in
   test)
     install_packages
     # The code follows .clang-format.
-    find shm_layout hub rt physics controllers device_drivers bench cli tests examples -name '*.[ch]pp' -print0 | xargs -0 clang-format --dry-run --Werror
+    find shm_layout hub rt physics controllers device_drivers bench viewer cli tests examples -name '*.[ch]pp' -print0 | xargs -0 clang-format --dry-run --Werror
     build build/release -DCMAKE_BUILD_TYPE=RelWithDebInfo
     run_tests build/release
     build build/sanitize -DCMAKE_BUILD_TYPE=Debug -DAFHUB_SANITIZE=ON

@@ -25,5 +25,6 @@ void register_bench(CLI::App& app, Runner& selected);
 void register_world(CLI::App& app, Runner& selected);
 void register_device(CLI::App& app, Runner& selected);
 void register_teleop(CLI::App& app, Runner& selected);
+void register_view(CLI::App& app, Runner& selected);
 
 }  // namespace afhub::cli

@@ -30,6 +30,7 @@ forbid physics/channels 'controllers|devices|bench'
 forbid controllers 'physics|bench'
 forbid device_drivers 'physics|controllers|bench'
 forbid bench '(cli)'
+forbid viewer 'rt|physics|controllers|devices|bench'
 if grep -rn '#include "afhub/hub/hub_daemon.hpp"' "$source_dir/hub/client"; then
   echo "layering: hub/client must not include the daemon" >&2
   status=1

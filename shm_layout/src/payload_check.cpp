@@ -33,6 +33,8 @@ std::size_t fixed_size_of(PayloadKind kind) noexcept {
     case PayloadKind::kBodyDirectory:
     case PayloadKind::kCatalog:
       return body_list_bytes(0);
+    case PayloadKind::kSceneDescription:
+      return scene_description_bytes(0);
   }
   return 0;
 }
@@ -57,6 +59,31 @@ const char* body_list_problem(const BodyList& list, std::size_t bytes) noexcept 
   const std::uint32_t* refs = joint_refs_in(list);
   for (std::uint32_t r = 0; r < list.joint_ref_count; ++r)
     if (refs[r] >= list.joint_name_count) return "BodyList joint reference";
+  return nullptr;
+}
+
+template <std::size_t N>
+bool terminated(const std::array<char, N>& text) noexcept {
+  return std::memchr(text.data(), '\0', N) != nullptr;
+}
+
+// A scene's counts within capacity and the chunk, and every name and path
+// NUL-terminated (a viewer opens the paths). nullptr when all hold.
+const char* scene_problem(const SceneDescription& scene, std::size_t bytes) noexcept {
+  if (scene.light_count > kMaxWorldObjects) return "SceneDescription.light_count";
+  if (scene.camera_count > kMaxWorldObjects) return "SceneDescription.camera_count";
+  for (std::uint32_t i = 0; i < scene.light_count; ++i)
+    if (!terminated(scene.lights[i].name)) return "SceneView.name";
+  for (std::uint32_t i = 0; i < scene.camera_count; ++i)
+    if (!terminated(scene.cameras[i].name)) return "SceneView.name";
+  if (scene.body_count > kMaxSceneBodies || bytes < scene_description_bytes(scene.body_count))
+    return "SceneDescription.body_count";
+  for (std::uint32_t b = 0; b < scene.body_count; ++b) {
+    const SceneBody& body = scene.bodies[b];
+    if (!terminated(body.channel)) return "SceneBody.channel";
+    if (!terminated(body.mesh)) return "SceneBody.mesh";
+    if (body.shape_count > kMaxSceneShapesPerBody) return "SceneBody.shape_count";
+  }
   return nullptr;
 }
 
@@ -108,6 +135,8 @@ const char* count_beyond_capacity(const char* at, std::size_t bytes, PayloadKind
       if (!std::isfinite(command->gripper_force_n)) return "DeviceCommand.gripper_force_n";
       return nullptr;
     }
+    case PayloadKind::kSceneDescription:
+      return scene_problem(*reinterpret_cast<const SceneDescription*>(at), bytes);
     case PayloadKind::kWorldCommand:
     case PayloadKind::kLoopStats:
     case PayloadKind::kBenchSample:

@@ -327,6 +327,7 @@ class Fuzzer {
         break;  // its fields are stamps and a round number, read as numbers
       case PayloadKind::kDeviceState:
       case PayloadKind::kDeviceCommand:
+      case PayloadKind::kSceneDescription:
         break;  // not yet fuzzed: no seed
     }
     sink_ += sink;

@@ -161,6 +161,49 @@ TEST(PayloadCheck, RefusesABodyListWhoseBodyCountsTooManyJoints) {
   }
 }
 
+TEST(PayloadCheck, SceneDescriptionsHoldTheirBodiesAndTerminateTheirPaths) {
+  auto scene = std::make_unique<SceneDescription>();
+  scene->header = PayloadHeader{kLayoutId, PayloadKind::kSceneDescription};
+  scene->body_count = 2;
+  std::size_t bytes = scene_description_bytes(2);
+  const char* field = nullptr;
+  EXPECT_EQ(check_payload(scene.get(), bytes, PayloadKind::kSceneDescription), PayloadError::kNone);
+  // More bodies than the chunk holds, or than any scene may.
+  EXPECT_EQ(check_payload(scene.get(), bytes - 1, PayloadKind::kSceneDescription, &field),
+            PayloadError::kCountTooLarge);
+  EXPECT_STREQ(field, "SceneDescription.body_count");
+  scene->body_count = kMaxSceneBodies + 1;
+  EXPECT_EQ(check_payload(scene.get(), sizeof *scene, PayloadKind::kSceneDescription, &field),
+            PayloadError::kCountTooLarge);
+  EXPECT_STREQ(field, "SceneDescription.body_count");
+  scene->body_count = 2;
+  // A path a viewer would read past: no terminating NUL.
+  scene->bodies[1].mesh.fill('a');
+  EXPECT_EQ(check_payload(scene.get(), bytes, PayloadKind::kSceneDescription, &field),
+            PayloadError::kCountTooLarge);
+  EXPECT_STREQ(field, "SceneBody.mesh");
+  scene->bodies[1].mesh.fill('\0');
+  scene->bodies[0].channel.fill('x');
+  EXPECT_EQ(check_payload(scene.get(), bytes, PayloadKind::kSceneDescription, &field),
+            PayloadError::kCountTooLarge);
+  EXPECT_STREQ(field, "SceneBody.channel");
+  scene->bodies[0].channel.fill('\0');
+  scene->bodies[0].shape_count = kMaxSceneShapesPerBody + 1;
+  EXPECT_EQ(check_payload(scene.get(), bytes, PayloadKind::kSceneDescription, &field),
+            PayloadError::kCountTooLarge);
+  EXPECT_STREQ(field, "SceneBody.shape_count");
+  scene->bodies[0].shape_count = 0;
+  scene->camera_count = kMaxWorldObjects + 1;
+  EXPECT_EQ(check_payload(scene.get(), bytes, PayloadKind::kSceneDescription, &field),
+            PayloadError::kCountTooLarge);
+  EXPECT_STREQ(field, "SceneDescription.camera_count");
+  scene->camera_count = 1;
+  scene->cameras[0].name.fill('c');
+  EXPECT_EQ(check_payload(scene.get(), bytes, PayloadKind::kSceneDescription, &field),
+            PayloadError::kCountTooLarge);
+  EXPECT_STREQ(field, "SceneView.name");
+}
+
 TEST(PayloadCheck, EveryErrorHasAnExplanation) {
   for (auto error : {PayloadError::kTooSmall, PayloadError::kForeignLayout,
                      PayloadError::kWrongKind, PayloadError::kCountTooLarge})
@@ -175,6 +218,8 @@ TEST(Layout, PayloadsFitTheirMempoolsAndStaySmall) {
   EXPECT_EQ(body_state_bytes(kMaxJointsPerBody), sizeof(BodyState));
   EXPECT_LE(body_command_bytes(kMaxJointsPerBody), body_state_bytes(kMaxJointsPerBody));
   EXPECT_EQ(sizeof(PayloadHeader), 48u);
+  // The largest scene description stays under 1 MB (hub_mempools.cpp holds it).
+  EXPECT_LE(sizeof(SceneDescription), 1u << 20);
 }
 
 }  // namespace

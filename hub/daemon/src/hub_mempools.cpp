@@ -13,6 +13,7 @@
 #include "afhub/shm_layout/error.hpp"
 #include "afhub/shm_layout/health.hpp"
 #include "afhub/shm_layout/loop_stats.hpp"
+#include "afhub/shm_layout/scene.hpp"
 #include "afhub/shm_layout/world.hpp"
 
 namespace afhub {
@@ -78,6 +79,11 @@ std::vector<MempoolSpec> default_mempools() {
       {round_up8(body_list_bytes(kMaxBodies, 4096, 65536)), 24,
        "catalogs and directories of up to kMaxBodies bodies (4096 joint names, 65536 "
        "references)"},
+      // The physics' scene description keeps one chunk in its history, and three in
+      // each viewer.
+      {round_up8(scene_description_bytes(64)), 32, "scene descriptions of up to 64 bodies"},
+      {round_up8(scene_description_bytes(kMaxSceneBodies)), 8,
+       "scene descriptions of up to kMaxSceneBodies bodies"},
   };
   sort_by_size(pools);
   return pools;

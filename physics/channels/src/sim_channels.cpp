@@ -13,6 +13,7 @@
 #include "afhub/shm_layout/channel_names.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "command_input.hpp"
+#include "scene_description.hpp"
 
 namespace afhub::physics {
 namespace {
@@ -45,7 +46,8 @@ void to_state(const BodyReading& reading, BodyState& state) noexcept {
 
 // The bodies the model publishes (passive ones publish nothing), checked with the hub
 // before this process opens a publisher: one publisher per body, and room for them.
-// A state publisher per body, the world's, the directory's and the loop stats'.
+// A state publisher per body, the world's, the scene's, the directory's and the loop
+// stats'.
 std::vector<std::string> claim_bodies(const Model& model) {
   std::vector<std::string> claimed;
   for (const BodySpec& body : model.bodies)
@@ -54,7 +56,7 @@ std::vector<std::string> claim_bodies(const Model& model) {
   if (claimed.size() > kMaxBodies)
     throw Error("the model publishes " + std::to_string(claimed.size()) +
                 " bodies; the hub holds " + std::to_string(kMaxBodies));
-  check_room_for_bodies(claimed, claimed.size() + 3);
+  check_room_for_bodies(claimed, claimed.size() + 4);
   return claimed;
 }
 
@@ -64,6 +66,7 @@ SimChannels::SimChannels(Simulation& sim, double watchdog_s, std::string_view na
     : sim_(sim),
       claimed_(claim_bodies(sim.model())),
       world_({std::string(kService), world_instance(name_space), std::string(kStateEvent)}),
+      scene_({std::string(kService), world_instance(name_space), std::string(kSceneEvent)}),
       world_commands_(std::make_unique<WorldCommandQueue>(world_instance(name_space))) {
   if (!(watchdog_s >= kMinWatchdogS && watchdog_s <= kMaxWatchdogS))
     throw Error("the watchdog period must be 0.002 to 3600 s, got " + std::to_string(watchdog_s));
@@ -97,11 +100,25 @@ SimChannels::SimChannels(Simulation& sim, double watchdog_s, std::string_view na
     channels_.push_back(std::move(channel));
   }
   lockstep_pids_.reserve(channels_.size());
+  publish_scene();
   directory_.publish();
   confirm_body_claims(claimed_, std::chrono::seconds(2));
 }
 
 SimChannels::~SimChannels() = default;
+
+void SimChannels::publish_scene() {
+  const std::size_t count = scene_body_count(sim_.model());
+  SceneDescription* scene = scene_.loan(scene_description_bytes(count));
+  if (!scene)
+    throw Error("no shared memory for the scene description of " + std::to_string(count) +
+                " bodies; see `afhub status` for the mempools");
+  std::vector<std::string> warnings;
+  fill_scene(sim_, *scene, warnings);
+  for (const std::string& warning : warnings)
+    std::fprintf(stderr, "afhub run: %s\n", warning.c_str());
+  scene_.publish(scene);
+}
 
 void SimChannels::apply_commands(std::int64_t now_ns) noexcept {
   for (Channel& channel : channels_) {

@@ -17,6 +17,7 @@ inline constexpr std::string_view kWorldInstance = "world";
 inline constexpr std::string_view kHubInstance = "hub";
 inline constexpr std::string_view kCatalogEvent = "catalog";
 inline constexpr std::string_view kHealthEvent = "health";
+inline constexpr std::string_view kSceneEvent = "scene";  // {"afhub", <world instance>, "scene"}
 inline constexpr std::string_view kStatsEvent = "stats";  // {"afhub", <runtime name>, "stats"}
 
 // A channel's three iceoryx strings.

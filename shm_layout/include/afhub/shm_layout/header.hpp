@@ -21,6 +21,7 @@ enum class PayloadKind : std::uint32_t {
   kBenchSample = 9,  // `afhub bench` pings and pongs
   kDeviceState = 10,
   kDeviceCommand = 11,
+  kSceneDescription = 12,  // what a viewer draws, published once by the physics
 };
 
 struct PayloadHeader {

@@ -16,6 +16,7 @@
 #include "afhub/shm_layout/device.hpp"
 #include "afhub/shm_layout/health.hpp"
 #include "afhub/shm_layout/loop_stats.hpp"
+#include "afhub/shm_layout/scene.hpp"
 #include "afhub/shm_layout/world.hpp"
 
 namespace afhub {
@@ -192,6 +193,35 @@ inline constexpr std::uint64_t kLayoutId = layout_detail::mix({
     sizeof(BenchSample),
     AFHUB_OFF(BenchSample, round),
     AFHUB_OFF(BenchSample, peer_receive_ns),
+    kMaxSceneBodies,
+    kMaxSceneShapesPerBody,
+    kScenePathBufferSize,
+    sizeof(SceneShape),
+    AFHUB_OFF(SceneShape, kind),
+    AFHUB_OFF(SceneShape, axis),
+    AFHUB_OFF(SceneShape, size_m),
+    AFHUB_OFF(SceneShape, offset),
+    sizeof(SceneBody),
+    AFHUB_OFF(SceneBody, channel),
+    AFHUB_OFF(SceneBody, mesh),
+    AFHUB_OFF(SceneBody, color_rgba),
+    AFHUB_OFF(SceneBody, scale),
+    AFHUB_OFF(SceneBody, pose),
+    AFHUB_OFF(SceneBody, publishes),
+    AFHUB_OFF(SceneBody, shape_count),
+    AFHUB_OFF(SceneBody, shapes),
+    sizeof(SceneView),
+    AFHUB_OFF(SceneView, name),
+    AFHUB_OFF(SceneView, position_m),
+    AFHUB_OFF(SceneView, direction),
+    AFHUB_OFF(SceneView, up),
+    sizeof(SceneDescription),
+    AFHUB_OFF(SceneDescription, light_count),
+    AFHUB_OFF(SceneDescription, camera_count),
+    AFHUB_OFF(SceneDescription, lights),
+    AFHUB_OFF(SceneDescription, cameras),
+    AFHUB_OFF(SceneDescription, body_count),
+    AFHUB_OFF(SceneDescription, bodies),
 });
 #undef AFHUB_OFF
 
@@ -207,5 +237,6 @@ static_assert(layout_detail::is_shm_payload<LoopStats>);
 static_assert(layout_detail::is_shm_payload<BenchSample>);
 static_assert(layout_detail::is_shm_payload<DeviceState>);
 static_assert(layout_detail::is_shm_payload<DeviceCommand>);
+static_assert(layout_detail::is_shm_payload<SceneDescription>);
 
 }  // namespace afhub

@@ -36,6 +36,11 @@ inline constexpr std::size_t kProcessNameBufferSize = 104;
 // refuses one of them, and that must never run iceoryx out of ports (it aborts).
 inline constexpr std::size_t kMaxBodies = 450;
 
+// Bodies in a scene description (passive ones too, which publish no state): a body
+// entry is about 1.4 KB, so the largest scene is under 1 MB. Bodies past it are
+// left out of the scene (not drawn) and said once by the physics.
+inline constexpr std::size_t kMaxSceneBodies = 512;
+
 // Joint names in the catalog: every distinct name once, and per body a list of
 // indices into them (a chain of N links, every link active, lists N^2/2 indices but
 // N names). Loaned at the real size, so these bound only what a faulty writer claims.

@@ -38,6 +38,7 @@
 #include "afhub/physics/simulation.hpp"
 #include "afhub/shm_layout/body_command.hpp"
 #include "afhub/shm_layout/body_state.hpp"
+#include "afhub/shm_layout/scene.hpp"
 #include "afhub/shm_layout/world.hpp"
 
 namespace afhub {
@@ -119,6 +120,8 @@ class SimChannels {
   int report_events(std::FILE* out);
 
  private:
+  // Publishes the scene description once, keeping it for viewers that join later.
+  void publish_scene();
   // An event to say from outside the loop. Refusals, stale commands and expiries are
   // said once per body (a short watchdog may fire every few ms); joins and drops each time.
   enum Event { kStale, kRejected, kAxisless, kExpired, kJoined, kDropped, kEventKinds };
@@ -190,6 +193,7 @@ class SimChannels {
   BodyReading reading_;  // a body's readings on their way into its state
   DirectoryPublisher directory_;
   Writer<WorldState> world_;
+  Writer<SceneDescription> scene_;  // published once: what a viewer draws
   std::unique_ptr<WorldCommandQueue> world_commands_;
   std::uint64_t rejected_ = 0, expiries_ = 0, stale_ = 0;
   bool lockstep_ = false;

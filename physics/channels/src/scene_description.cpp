@@ -1,0 +1,117 @@
+// The scene description (see scene_description.hpp).
+#include "scene_description.hpp"
+
+#include <algorithm>
+#include <cstring>
+#include <filesystem>
+
+namespace afhub::physics {
+namespace {
+
+template <std::size_t N>
+bool copy_text(const std::string& text, std::array<char, N>& out) {
+  if (text.size() >= N) return false;
+  std::memcpy(out.data(), text.c_str(), text.size() + 1);
+  return true;
+}
+
+SceneShape to_scene_shape(const ShapeSpec& shape) {
+  SceneShape out;
+  out.kind = static_cast<SceneShapeKind>(shape.kind);
+  out.axis = static_cast<std::uint32_t>(shape.axis);
+  out.offset = {shape.offset.position_m, rpy_to_quaternion(shape.offset.rpy_rad)};
+  switch (shape.kind) {
+    case ShapeKind::kBox:
+      out.size_m = shape.box_size_m;
+      break;
+    case ShapeKind::kPlane:
+      // A plane: its normal, and its point nearest the body's origin.
+      out.size_m = shape.plane_normal;
+      out.offset.position_m = {shape.plane_normal.x * shape.plane_offset_m,
+                               shape.plane_normal.y * shape.plane_offset_m,
+                               shape.plane_normal.z * shape.plane_offset_m};
+      break;
+    default:
+      out.size_m = {shape.radius_m, shape.height_m, 0.0};
+      break;
+  }
+  return out;
+}
+
+// `v` turned by the unit quaternion `q`.
+Vec3 rotate(const Quaternion& q, const Vec3& v) {
+  // t = 2 q.xyz x v; v' = v + w t + q.xyz x t
+  const Vec3 t{2 * (q.y * v.z - q.z * v.y), 2 * (q.z * v.x - q.x * v.z),
+               2 * (q.x * v.y - q.y * v.x)};
+  return {v.x + q.w * t.x + (q.y * t.z - q.z * t.y), v.y + q.w * t.y + (q.z * t.x - q.x * t.z),
+          v.z + q.w * t.z + (q.x * t.y - q.y * t.x)};
+}
+
+// A light or camera where it is now, in the world frame (carried by its parent body
+// when it has one): it looks along its x axis, with z up.
+void fill_view(const WorldObjectSpec& spec, const Pose& pose, SceneView& view) {
+  // Names are channel-sized in the model already; a longer one is cut.
+  const std::size_t length = std::min(spec.name.size(), view.name.size() - 1);
+  std::memcpy(view.name.data(), spec.name.data(), length);
+  view.name[length] = '\0';
+  view.position_m = pose.position_m;
+  view.direction = rotate(pose.orientation, {1.0, 0.0, 0.0});
+  view.up = rotate(pose.orientation, {0.0, 0.0, 1.0});
+}
+
+}  // namespace
+
+static_assert(static_cast<int>(ShapeKind::kPlane) == static_cast<int>(SceneShapeKind::kPlane));
+static_assert(static_cast<int>(ShapeKind::kCone) == static_cast<int>(SceneShapeKind::kCone));
+
+std::size_t scene_body_count(const Model& model) {
+  return std::min(model.bodies.size(), kMaxSceneBodies);
+}
+
+void fill_scene(const Simulation& sim, SceneDescription& scene,
+                std::vector<std::string>& warnings) {
+  const Model& model = sim.model();
+  scene.light_count =
+      static_cast<std::uint32_t>(std::min(model.world.lights.size(), kMaxWorldObjects));
+  scene.camera_count =
+      static_cast<std::uint32_t>(std::min(model.world.cameras.size(), kMaxWorldObjects));
+  for (std::uint32_t i = 0; i < scene.light_count; ++i)
+    fill_view(model.world.lights[i], sim.light_pose(i), scene.lights[i]);
+  for (std::uint32_t i = 0; i < scene.camera_count; ++i)
+    fill_view(model.world.cameras[i], sim.camera_pose(i), scene.cameras[i]);
+  const std::size_t count = scene_body_count(model);
+  if (count < model.bodies.size())
+    warnings.push_back("the scene description holds " + std::to_string(kMaxSceneBodies) +
+                       " bodies; a viewer does not draw the other " +
+                       std::to_string(model.bodies.size() - count));
+  scene.body_count = static_cast<std::uint32_t>(count);
+  for (std::size_t b = 0; b < count; ++b) {
+    const BodySpec& spec = model.bodies[b];
+    SceneBody& body = scene.bodies[b];
+    body = SceneBody{};
+    copy_text(spec.channel, body.channel);  // checked at load to fit a channel
+    if (!spec.visual_mesh.empty()) {
+      std::error_code ignored;
+      const std::string path = std::filesystem::absolute(spec.visual_mesh, ignored).string();
+      if (!copy_text(path, body.mesh))
+        warnings.push_back(spec.where.str() + ": warning: '" + spec.name +
+                           "': its mesh path is longer than a viewer takes (" +
+                           std::to_string(kScenePathBufferSize - 1) +
+                           " characters); a viewer draws the body as a marker");
+    }
+    if (spec.color_rgba)
+      for (int c = 0; c < 4; ++c) body.color_rgba[c] = static_cast<float>((*spec.color_rgba)[c]);
+    body.scale = spec.scale;
+    body.pose = sim.body_pose(b);
+    body.publishes = spec.passive ? 0 : 1;
+    const std::size_t shapes = std::min(spec.visual_shapes.size(), kMaxSceneShapesPerBody);
+    if (shapes < spec.visual_shapes.size())
+      warnings.push_back(spec.where.str() + ": warning: '" + spec.name + "': a viewer draws " +
+                         std::to_string(shapes) + " of its " +
+                         std::to_string(spec.visual_shapes.size()) + " shapes");
+    body.shape_count = static_cast<std::uint32_t>(shapes);
+    for (std::size_t s = 0; s < shapes; ++s) body.shapes[s] = to_scene_shape(spec.visual_shapes[s]);
+  }
+}
+
+}  // namespace afhub::physics

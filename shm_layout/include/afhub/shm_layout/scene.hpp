@@ -1,0 +1,83 @@
+// SceneDescription: what a viewer needs to draw a world, published once by the
+// physics (keep-last history, as the directory), on {"afhub", <world instance>,
+// "scene"}: per body its channel, visual mesh (an absolute path) or primitive
+// shapes, scale and colour; the world's lights and cameras. Poses travel in the
+// body states and the world state, never here. Loaned at its real size,
+// scene_description_bytes(body_count): only the first body_count entries exist.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+
+#include "afhub/shm_layout/geometry.hpp"
+#include "afhub/shm_layout/header.hpp"
+#include "afhub/shm_layout/limits.hpp"
+
+namespace afhub {
+
+// An absolute mesh path. Linux allows 4096, but model trees are shallow: 512 keeps a
+// body entry near 1 KB. A longer path is left out of the scene (the body is then
+// drawn as a marker) and said once by the physics.
+inline constexpr std::size_t kScenePathBufferSize = 512;
+
+// Primitive shapes drawn for one body (a compound shape lists several); AMBF's
+// models use one, generated ones a few.
+inline constexpr std::size_t kMaxSceneShapesPerBody = 8;
+
+enum class SceneShapeKind : std::uint32_t {
+  kBox = 0,
+  kSphere = 1,
+  kCylinder = 2,
+  kCapsule = 3,
+  kCone = 4,
+  kPlane = 5
+};
+
+struct SceneShape {
+  SceneShapeKind kind{SceneShapeKind::kBox};
+  std::uint32_t axis{2};  // 0, 1, 2 = X, Y, Z: cylinder, capsule, cone
+  Vec3 size_m;            // box: full sizes; others: x = radius, y = height
+  Pose offset;            // in the body's mesh frame
+};
+
+struct SceneBody {
+  std::array<char, kChannelNameBufferSize> channel{};  // its state's channel; NUL-terminated
+  std::array<char, kScenePathBufferSize> mesh{};       // absolute path, or "" for shapes
+  std::array<float, 4> color_rgba{0.7F, 0.7F, 0.7F, 1.0F};
+  double scale{1.0};
+  Pose pose;  // where it was loaded: the pose of a body that publishes no state (passive)
+  std::uint8_t publishes{1};  // 0: passive, drawn at `pose`
+  std::uint8_t reserved[3]{};
+  std::uint32_t shape_count{0};  // entries [0, shape_count) of `shapes`
+  std::array<SceneShape, kMaxSceneShapesPerBody> shapes{};
+};
+
+// A world file's light or camera: where it is and where it looks, in the world
+// frame when the scene was published (one carried by a body moves with it: its live
+// pose is in the world state).
+struct SceneView {
+  std::array<char, kChannelNameBufferSize> name{};
+  Vec3 position_m;
+  Vec3 direction;  // where it looks or shines, a unit vector
+  Vec3 up{0.0, 0.0, 1.0};
+};
+
+struct SceneDescription {
+  static constexpr PayloadKind kKind = PayloadKind::kSceneDescription;
+  PayloadHeader header;
+  std::uint32_t light_count{0};
+  std::uint32_t camera_count{0};
+  std::array<SceneView, kMaxWorldObjects> lights{};
+  std::array<SceneView, kMaxWorldObjects> cameras{};
+  std::uint32_t body_count{0};
+  std::uint32_t reserved{0};
+  std::array<SceneBody, kMaxSceneBodies> bodies{};  // last: sized by body_count
+};
+
+// Bytes of a SceneDescription holding `bodies` bodies: what is loaned and published.
+constexpr std::size_t scene_description_bytes(std::size_t bodies) {
+  return offsetof(SceneDescription, bodies) + bodies * sizeof(SceneBody);
+}
+
+}  // namespace afhub

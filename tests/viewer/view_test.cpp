@@ -1,0 +1,353 @@
+// `afhub view` beside `afhub run` of the project's arm and a mesh body: what the
+// server serves and refuses, the binary pose frames over its WebSocket, joint
+// commands only with --allow-commands, and headless Chromium drawing the arm.
+#include <gtest/gtest.h>
+#include <stdlib.h>
+
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <memory>
+#include <regex>
+#include <thread>
+
+#include "afhub/hub/bodies.hpp"
+#include "afhub/hub/hub_presence.hpp"
+#include "afhub_process.hpp"
+#include "web_client.hpp"
+
+namespace afhub::test {
+namespace {
+
+// A 0.1 m cube as an ASCII STL.
+std::string cube_stl() {
+  const double h = 0.05;
+  const double v[8][3] = {{-h, -h, -h}, {h, -h, -h}, {h, h, -h}, {-h, h, -h},
+                          {-h, -h, h},  {h, -h, h},  {h, h, h},  {-h, h, h}};
+  const int faces[12][3] = {{0, 2, 1}, {0, 3, 2}, {4, 5, 6}, {4, 6, 7}, {0, 1, 5}, {0, 5, 4},
+                            {1, 2, 6}, {1, 6, 5}, {2, 3, 7}, {2, 7, 6}, {3, 0, 4}, {3, 4, 7}};
+  std::string stl = "solid cube\n";
+  for (const auto& f : faces) {
+    stl += " facet normal 0 0 0\n  outer loop\n";
+    for (int i : f)
+      stl += "   vertex " + std::to_string(v[i][0]) + " " + std::to_string(v[i][1]) + " " +
+             std::to_string(v[i][2]) + "\n";
+    stl += "  endloop\n endfacet\n";
+  }
+  return stl + "endsolid cube\n";
+}
+
+const char* kCubeModel = R"(adf version: '1.0'
+bodies: [BODY cube]
+namespace: /afhub/cube/
+BODY cube:
+  name: cube
+  mass: 0.0
+  location:
+    position: {x: 0.5, y: 0.3, z: 0.05}
+    orientation: {r: 0.0, p: 0.0, y: 0.0}
+  mesh: cube.STL
+  collision shape: BOX
+  collision geometry: {x: 0.1, y: 0.1, z: 0.1}
+  color rgba: {r: 0.2, g: 0.5, b: 0.9, a: 1.0}
+)";
+
+void write_file(const std::string& path, const std::string& text) {
+  std::ofstream(path) << text;
+}
+
+struct View {
+  std::unique_ptr<ScopedProcess> process;
+  int port = 0;
+  std::string log;
+};
+
+class ViewTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    char pattern[] = "/tmp/afhub_view_test_XXXXXX";
+    ASSERT_NE(mkdtemp(pattern), nullptr);
+    dir_ = pattern;
+    stl_ = cube_stl();
+    write_file(dir_ + "/cube.STL", stl_);
+    write_file(dir_ + "/cube.yaml", kCubeModel);
+    physics_ = std::make_unique<ScopedProcess>(
+        spawn_afhub({"run", std::string(AFHUB_EXAMPLE_MODELS) + "/arm7.yaml", dir_ + "/cube.yaml"},
+                    dir_ + "/run.log"));
+    connect_to_hub("viewtest", HubPolicy::kRequire);
+    catalog_ = std::make_unique<CatalogReader>();
+    catalog_->wait(std::chrono::seconds(2));
+    // The arm's 8 active bodies (its mount is passive) and the cube.
+    ASSERT_TRUE(wait_until([] { return catalog_bodies() >= 9; }, std::chrono::seconds(20)))
+        << read_file(dir_ + "/run.log");
+  }
+  static void TearDownTestSuite() {
+    physics_.reset();
+    catalog_.reset();
+  }
+
+  // Bodies (not devices) the hub's catalog lists.
+  static std::uint32_t catalog_bodies() {
+    const BodyList& list = catalog_->latest();
+    std::uint32_t count = 0;
+    for (std::uint32_t i = 0; i < list.body_count; ++i)
+      if (list.bodies[i].kind == ChannelKind::kBody) ++count;
+    return count;
+  }
+
+  // `afhub view --port 0 extra...`, once it says its URL.
+  static View start_view(const std::vector<std::string>& extra = {}) {
+    View view;
+    static int started = 0;
+    view.log = dir_ + "/view" + std::to_string(++started) + ".log";
+    std::vector<std::string> args = {"view", "--port", "0"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    view.process = std::make_unique<ScopedProcess>(spawn_afhub(args, view.log));
+    const std::regex url("http://127\\.0\\.0\\.1:([0-9]+)/");
+    wait_until(
+        [&] {
+          std::smatch match;
+          const std::string text = read_file(view.log);
+          if (!std::regex_search(text, match, url)) return false;
+          view.port = std::stoi(match[1]);
+          return true;
+        },
+        std::chrono::seconds(10));
+    return view;
+  }
+
+  static inline std::string dir_, stl_;
+  static inline std::unique_ptr<ScopedProcess> physics_;
+  static inline std::unique_ptr<CatalogReader> catalog_;
+};
+
+// The index of `channel` among the scene's bodies in /scene.json, or -1.
+int scene_index(const std::string& json, const std::string& channel) {
+  int index = 0;
+  for (std::size_t at = json.find("\"channel\":"); at != std::string::npos;
+       at = json.find("\"channel\":", at + 1), ++index)
+    if (json.compare(at + 11, channel.size() + 1, channel + "\"") == 0) return index;
+  return -1;
+}
+
+TEST_F(ViewTest, ServesThePageThreeJsAndExactlyTheListedMeshes) {
+  View view = start_view();
+  ASSERT_GT(view.port, 0) << read_file(view.log);
+  const HttpReply page = http_request(view.port, "GET", "/");
+  EXPECT_EQ(page.status, 200);
+  EXPECT_TRUE(contains(page.body, "/viewer.js"));
+  EXPECT_EQ(http_request(view.port, "GET", "/viewer.js").status, 200);
+  const HttpReply three = http_request(view.port, "GET", "/three/three.min.js");
+  EXPECT_EQ(three.status, 200);
+  EXPECT_GT(three.body.size(), 100'000U);
+  EXPECT_EQ(http_request(view.port, "GET", "/three/OrbitControls.js").status, 200);
+  EXPECT_EQ(http_request(view.port, "GET", "/three/STLLoader.js").status, 200);
+
+  HttpReply scene;
+  ASSERT_TRUE(wait_until(
+      [&] {
+        scene = http_request(view.port, "GET", "/scene.json");
+        return scene_index(scene.body, "afhub/cube/cube") >= 0;
+      },
+      std::chrono::seconds(5)))
+      << scene.body;
+  const int cube = scene_index(scene.body, "afhub/cube/cube");
+  const int mount = scene_index(scene.body, "afhub/arm/mount");  // shapes, no mesh
+  ASSERT_GE(mount, 0);
+  EXPECT_FALSE(contains(scene.body, dir_)) << "the page is told no path of this machine";
+
+  const HttpReply mesh = http_request(view.port, "GET", "/mesh/" + std::to_string(cube));
+  EXPECT_EQ(mesh.status, 200);
+  EXPECT_EQ(mesh.body, stl_);
+
+  // Refused: anything that is not a listed mesh, however it is spelt.
+  for (const std::string& target :
+       {"/mesh/" + std::to_string(mount), std::string("/mesh/9999"), std::string("/mesh/-1"),
+        std::string("/mesh/../../etc/passwd"), std::string("/mesh/%2e%2e/%2e%2e/etc/passwd"),
+        std::string("/mesh/") + std::to_string(cube) + "/../../../etc/passwd",
+        "/mesh/" + dir_ + "/cube.STL", std::string("/etc/passwd"),
+        std::string("/three/../../../../etc/passwd"), std::string("/three/three.module.js"),
+        std::string("/../../etc/passwd")}) {
+    const HttpReply reply = http_request(view.port, "GET", target);
+    EXPECT_TRUE(reply.status == 404 || reply.status == 403) << target << ": " << reply.status;
+    EXPECT_FALSE(contains(reply.body, "root:")) << target;
+    EXPECT_FALSE(contains(reply.body, "solid cube")) << target;
+  }
+  // The sliders' joint names, from the catalog.
+  HttpReply joints;
+  EXPECT_TRUE(wait_until(
+      [&] {
+        joints = http_request(view.port, "GET", "/joints.json");
+        return contains(joints.body, R"("afhub/arm/base":["base-link1")");
+      },
+      std::chrono::seconds(5)))
+      << joints.body;
+  // Read-only without --allow-commands.
+  EXPECT_EQ(http_request(view.port, "GET", "/options.json").body, R"({"commands":false})");
+  const HttpReply command =
+      http_request(view.port, "POST", "/command?body=afhub/arm/base&joint=0&value=0.5");
+  EXPECT_EQ(command.status, 403);
+  EXPECT_TRUE(contains(command.body, "--allow-commands"));
+}
+
+TEST_F(ViewTest, StreamsBinaryPoseFramesOfEveryCatalogBodyAtDisplayRate) {
+  View view = start_view();
+  ASSERT_GT(view.port, 0) << read_file(view.log);
+  FrameCounter frames(view.port);
+  ASSERT_TRUE(frames.connected());
+  ASSERT_TRUE(wait_until([&] { return frames.binary_frames() > 0; }, std::chrono::seconds(5)));
+  const std::uint64_t before = frames.binary_frames();
+  const auto start = std::chrono::steady_clock::now();
+  std::this_thread::sleep_for(std::chrono::seconds(2));
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double rate = static_cast<double>(frames.binary_frames() - before) / seconds;
+  std::printf("pose frames: %.1f per second\n", rate);
+  EXPECT_GE(rate, 30.0);
+  EXPECT_EQ(frames.text_frames(), 0U) << "poses travel in binary frames, never as text";
+
+  const std::vector<std::uint8_t> frame = frames.last_frame();
+  ASSERT_GE(frame.size(), 32U);
+  std::uint32_t magic = 0, entries = 0, listed = 0;
+  std::memcpy(&magic, frame.data(), 4);
+  std::memcpy(&entries, frame.data() + 8, 4);
+  std::memcpy(&listed, frame.data() + 24, 4);
+  EXPECT_EQ(magic, 0x31564641U);
+  EXPECT_EQ(frame.size(), 32U + 32U * entries);
+  EXPECT_EQ(entries, catalog_bodies());
+  EXPECT_EQ(listed, catalog_bodies());
+  for (std::uint32_t e = 0; e < entries; ++e) {
+    float w = 0;
+    std::memcpy(&w, frame.data() + 32 + 32 * e + 28, 4);
+    float x = 0, y = 0, z = 0;
+    std::memcpy(&x, frame.data() + 32 + 32 * e + 16, 4);
+    std::memcpy(&y, frame.data() + 32 + 32 * e + 20, 4);
+    std::memcpy(&z, frame.data() + 32 + 32 * e + 24, 4);
+    EXPECT_NEAR(x * x + y * y + z * z + w * w, 1.0, 1e-3) << "entry " << e;
+  }
+}
+
+TEST_F(ViewTest, AJointCommandMovesTheJointOnlyWithAllowCommands) {
+  View view = start_view({"--allow-commands"});
+  ASSERT_GT(view.port, 0) << read_file(view.log);
+  EXPECT_TRUE(contains(read_file(view.log), "commands allowed"));
+  EXPECT_EQ(http_request(view.port, "GET", "/options.json").body, R"({"commands":true})");
+  EXPECT_EQ(
+      http_request(view.port, "POST", "/command?body=afhub/arm/base&joint=99&value=0.5").status,
+      400);
+  EXPECT_EQ(
+      http_request(view.port, "POST", "/command?body=afhub/arm/base&joint=0&value=nan").status,
+      400);
+  EXPECT_EQ(http_request(view.port, "GET", "/command?body=afhub/arm/base&joint=0&value=0.5").status,
+            405);
+  BodyClient base("afhub/arm/base");
+  const double target = 0.6;
+  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(3);
+  while (std::chrono::steady_clock::now() < until) {
+    ASSERT_EQ(http_request(view.port, "POST",
+                           "/command?body=afhub/arm/base&joint=0&value=" + std::to_string(target))
+                  .status,
+              200);
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  const BodyState* state = nullptr;
+  ASSERT_TRUE(wait_until([&] { return (state = base.latest_state()) != nullptr; },
+                         std::chrono::seconds(2)));
+  EXPECT_NEAR(state->joints[0].position, target, 0.05);
+}
+
+// Runs headless Chromium on `url`; returns its stderr (console messages included).
+std::string screenshot(const std::string& url, const std::string& file) {
+  const RunResult result = run_command(
+      {"chromium", "--headless=new", "--no-sandbox", "--use-gl=swiftshader",
+       "--enable-unsafe-swiftshader", "--window-size=800,600", "--virtual-time-budget=4000",
+       "--enable-logging=stderr", "--v=0", "--screenshot=" + file, url},
+      std::chrono::seconds(90));
+  EXPECT_EQ(result.exit_code, 0) << result.err;
+  return result.err;
+}
+
+long pixels(const std::vector<std::string>& args) {
+  std::vector<std::string> argv = {"/usr/bin/python3", AFHUB_VIEWER_PIXELS_SCRIPT};
+  argv.insert(argv.end(), args.begin(), args.end());
+  const RunResult result = run_command(argv);
+  EXPECT_EQ(result.exit_code, 0) << result.err;
+  return std::atol(result.out.c_str());
+}
+
+TEST_F(ViewTest, ChromiumDrawsTheArmAndItsMotion) {
+  View view = start_view();
+  ASSERT_GT(view.port, 0) << read_file(view.log);
+  ScopedProcess sine(spawn_afhub({"ctl", "sine", "arm/base", "--amplitude", "0.8", "--period", "2"},
+                                 dir_ + "/sine.log"));
+  const std::string url = "http://127.0.0.1:" + std::to_string(view.port) + "/";
+  const std::string first = dir_ + "/first.png", second = dir_ + "/second.png";
+  const std::string console = screenshot(url, first);
+  EXPECT_FALSE(contains(console, "Uncaught")) << console;
+  EXPECT_FALSE(contains(console, "Failed to load resource")) << console;
+  // The page's scene holds every body the hub lists (its status line counts them).
+  const RunResult dom =
+      run_command({"chromium", "--headless=new", "--no-sandbox", "--use-gl=swiftshader",
+                   "--enable-unsafe-swiftshader", "--window-size=800,600",
+                   "--virtual-time-budget=4000", "--dump-dom", url},
+                  std::chrono::seconds(90));
+  EXPECT_TRUE(contains(dom.out, ", " + std::to_string(catalog_bodies()) + " live bodies"))
+      << dom.out;
+  std::this_thread::sleep_for(std::chrono::seconds(1));
+  screenshot(url, second);
+  const long drawn = pixels({"count", first});
+  std::printf("arm pixels: %ld of 480000; ", drawn);
+  EXPECT_GT(drawn, 3000) << "the arm is not drawn";
+  const long moved = pixels({"differ", first, second});
+  std::printf("pixels changed a second later: %ld\n", moved);
+  // The status line's clock changes a few hundred pixels; the arm's motion thousands.
+  EXPECT_GT(moved, 2000) << "the arm did not move between the screenshots";
+
+  // Paused, the same controller moves nothing: the screenshots stay the same.
+  ASSERT_EQ(run_afhub({"world", "pause"}).exit_code, 0);
+  const std::string third = dir_ + "/third.png", fourth = dir_ + "/fourth.png";
+  screenshot(url, third);
+  std::this_thread::sleep_for(std::chrono::seconds(1));
+  screenshot(url, fourth);
+  EXPECT_EQ(run_afhub({"world", "resume"}).exit_code, 0);
+  const long paused_change = pixels({"differ", third, fourth});
+  std::printf("pixels changed a second later, paused: %ld\n", paused_change);
+  EXPECT_LT(paused_change, 100) << "the scene changed while the world was paused";
+}
+
+std::uint32_t frame_word(const std::vector<std::uint8_t>& frame, std::size_t at) {
+  std::uint32_t word = 0;
+  if (frame.size() >= at + 4) std::memcpy(&word, frame.data() + at, 4);
+  return word;
+}
+
+// Last: it leaves another physics run (the arm alone) behind.
+TEST_F(ViewTest, BodiesGoWithTheirPhysicsAndComeBackWithANewScene) {
+  View view = start_view();
+  ASSERT_GT(view.port, 0) << read_file(view.log);
+  FrameCounter frames(view.port);
+  ASSERT_TRUE(frames.connected());
+  ASSERT_TRUE(
+      wait_until([&] { return frame_word(frames.last_frame(), 8) == 9; }, std::chrono::seconds(5)));
+  const std::uint32_t generation = frame_word(frames.last_frame(), 4);
+  physics_.reset();
+  EXPECT_TRUE(
+      wait_until([&] { return frame_word(frames.last_frame(), 8) == 0; }, std::chrono::seconds(10)))
+      << "the stopped physics' bodies are still in the frames";
+  physics_ = std::make_unique<ScopedProcess>(
+      spawn_afhub({"run", std::string(AFHUB_EXAMPLE_MODELS) + "/arm7.yaml"}, dir_ + "/run2.log"));
+  EXPECT_TRUE(wait_until(
+      [&] {
+        const std::vector<std::uint8_t> frame = frames.last_frame();
+        return frame_word(frame, 4) != generation && frame_word(frame, 8) == 8;
+      },
+      std::chrono::seconds(20)))
+      << "generation " << frame_word(frames.last_frame(), 4) << ", "
+      << frame_word(frames.last_frame(), 8) << " bodies";
+  const HttpReply scene = http_request(view.port, "GET", "/scene.json");
+  EXPECT_LT(scene_index(scene.body, "afhub/cube/cube"), 0) << "the new scene has no cube";
+  EXPECT_GE(scene_index(scene.body, "afhub/arm/link7"), 0);
+}
+
+}  // namespace
+}  // namespace afhub::test

@@ -1,0 +1,85 @@
+// The tests' HTTP and WebSocket clients (see web_client.hpp).
+#include "web_client.hpp"
+
+#include <arpa/inet.h>
+#include <civetweb.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <cstdlib>
+
+namespace afhub::test {
+
+HttpReply http_request(int port, const std::string& method, const std::string& target) {
+  HttpReply reply;
+  const int fd = socket(AF_INET, SOCK_STREAM, 0);
+  if (fd < 0) return reply;
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_port = htons(static_cast<std::uint16_t>(port));
+  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  timeval timeout{5, 0};
+  setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &timeout, sizeof timeout);
+  if (connect(fd, reinterpret_cast<sockaddr*>(&address), sizeof address) != 0) {
+    close(fd);
+    return reply;
+  }
+  const std::string request = method + " " + target +
+                              " HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Length: 0\r\n"
+                              "Connection: close\r\n\r\n";
+  if (write(fd, request.data(), request.size()) != static_cast<ssize_t>(request.size())) {
+    close(fd);
+    return reply;
+  }
+  std::string raw;
+  char buffer[65536];
+  for (ssize_t n; (n = read(fd, buffer, sizeof buffer)) > 0;) raw.append(buffer, n);
+  close(fd);
+  // "HTTP/1.1 200 OK\r\n...\r\n\r\nbody"
+  if (raw.rfind("HTTP/1.", 0) != 0 || raw.size() < 12) return reply;
+  reply.status = std::atoi(raw.c_str() + 9);
+  const std::size_t body = raw.find("\r\n\r\n");
+  if (body != std::string::npos) reply.body = raw.substr(body + 4);
+  return reply;
+}
+
+namespace {
+
+int on_data(mg_connection*, int flags, char* data, size_t length, void* counter) {
+  static_cast<FrameCounter*>(counter)->on_frame(flags & 0x0f, data, length);
+  return 1;
+}
+
+void on_close(const mg_connection*, void*) {}
+
+}  // namespace
+
+FrameCounter::FrameCounter(int port) {
+  mg_init_library(0);
+  char error[256] = "";
+  connection_ = mg_connect_websocket_client("127.0.0.1", port, 0, error, sizeof error, "/ws",
+                                            nullptr, on_data, on_close, this);
+}
+
+FrameCounter::~FrameCounter() {
+  if (connection_) mg_close_connection(connection_);
+  mg_exit_library();
+}
+
+void FrameCounter::on_frame(int opcode, const char* data, std::size_t length) {
+  if (opcode == MG_WEBSOCKET_OPCODE_BINARY) {
+    std::lock_guard lock(mutex_);
+    last_.assign(data, data + length);
+    ++binary_;
+  } else if (opcode == MG_WEBSOCKET_OPCODE_TEXT) {
+    ++text_;
+  }
+}
+
+std::vector<std::uint8_t> FrameCounter::last_frame() {
+  std::lock_guard lock(mutex_);
+  return last_;
+}
+
+}  // namespace afhub::test

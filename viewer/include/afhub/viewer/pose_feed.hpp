@@ -1,0 +1,61 @@
+// What the viewer reads through the hub, at display rate: the scene description,
+// the catalog, and the newest state of every scene body the catalog lists, packed
+// into one binary pose frame per tick (never JSON per frame). Bodies that appear
+// or vanish in the catalog come and go in the next frame; a new scene description
+// (physics restarted, another model) gets a new generation, and the page reloads it.
+//
+// Frame, little-endian:
+//   u32 magic 'AFV1' (0x31564641), u32 scene generation (the viewer counts the scenes),
+//   u32 entry count, u32 flags (bit 0: paused), f64 simulation time,
+//   u32 bodies in the catalog, u32 reserved;
+//   then per entry (a scene body with a live state): u32 scene index,
+//   f32 position x y z, f32 orientation x y z w.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "afhub/hub/bodies.hpp"
+#include "afhub/hub/channel.hpp"
+#include "afhub/shm_layout/world.hpp"
+#include "afhub/viewer/view_scene.hpp"
+
+namespace afhub::viewer {
+
+inline constexpr std::uint32_t kFrameMagic = 0x31564641;
+inline constexpr std::size_t kFrameHeaderBytes = 32;
+inline constexpr std::size_t kFrameEntryBytes = 32;
+
+class PoseFeed {
+ public:
+  // Needs connect_to_hub(); `world` is the world's channel instance (world_instance()).
+  explicit PoseFeed(const std::string& world);
+
+  // Reads what is new and writes the frame; returns the scene when it changed
+  // (nullptr otherwise).
+  std::shared_ptr<const ViewScene> update(std::vector<std::uint8_t>& frame);
+  // The joint names of every body the catalog lists, {"CHANNEL": ["joint", ...]}, as
+  // of the last update(); joints_changed() says whether that update changed them.
+  const std::string& joints_json() const { return joints_json_; }
+  bool joints_changed() const { return joints_changed_; }
+
+ private:
+  void refresh_readers(const BodyList& catalog);
+
+  LatestReader<SceneDescription> scene_reader_;
+  LatestReader<WorldState> world_reader_;
+  CatalogReader catalog_;
+  std::shared_ptr<const ViewScene> scene_;
+  std::uint64_t catalog_sequence_ = 0;
+  std::uint32_t catalog_bodies_ = 0;
+  // Per scene body, its state reader while the catalog lists it.
+  std::vector<std::unique_ptr<LatestReader<BodyState>>> states_;
+  std::string joints_json_ = "{}";
+  bool joints_changed_ = false;
+  double sim_time_s_ = 0.0;
+  bool paused_ = false;
+};
+
+}  // namespace afhub::viewer

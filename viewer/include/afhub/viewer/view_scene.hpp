@@ -1,0 +1,28 @@
+// The viewer's copy of a scene description (shm_layout/scene.hpp): what the page
+// draws, as JSON, and the mesh files it may serve (exactly those the scene lists).
+#pragma once
+
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "afhub/shm_layout/scene.hpp"
+
+namespace afhub::viewer {
+
+struct ViewScene {
+  std::uint32_t generation = 0;       // counts the descriptions the viewer read: a new one, reload
+  std::vector<std::string> channels;  // per body, its state channel
+  std::vector<std::string> meshes;    // per body, its mesh's absolute path or ""
+  std::string json;                   // what /scene.json serves
+};
+
+// Copies a checked description (check_payload passed) into a ViewScene.
+ViewScene view_scene_of(const SceneDescription& scene, std::uint32_t generation);
+
+// The mesh file body `index` lists, or nothing (an index out of range, a body
+// drawn from shapes): the only files the viewer reads from disk besides three.js.
+std::optional<std::string> listed_mesh(const ViewScene& scene, std::string_view index_text);
+
+}  // namespace afhub::viewer

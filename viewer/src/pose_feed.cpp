@@ -1,0 +1,99 @@
+// The viewer's reading of the hub (see pose_feed.hpp).
+#include "afhub/viewer/pose_feed.hpp"
+
+#include <cstring>
+#include <unordered_set>
+
+#include "afhub/hub/json_writer.hpp"
+#include "afhub/shm_layout/channel_names.hpp"
+
+namespace afhub::viewer {
+namespace {
+
+template <class T>
+void put(std::vector<std::uint8_t>& out, T value) {
+  const std::size_t at = out.size();
+  out.resize(at + sizeof value);
+  std::memcpy(out.data() + at, &value, sizeof value);  // x86 and ARM Linux: little-endian
+}
+
+}  // namespace
+
+PoseFeed::PoseFeed(const std::string& world)
+    : scene_reader_({std::string(kService), world, std::string(kSceneEvent)}),
+      world_reader_({std::string(kService), world, std::string(kStateEvent)}),
+      scene_(std::make_shared<ViewScene>()) {
+  catalog_.wait(std::chrono::milliseconds(2000));
+}
+
+void PoseFeed::refresh_readers(const BodyList& catalog) {
+  std::unordered_set<std::string> listed;
+  catalog_bodies_ = 0;
+  JsonWriter joints;
+  joints.begin_object();
+  for (std::uint32_t i = 0; i < catalog.body_count; ++i) {
+    if (catalog.bodies[i].kind != ChannelKind::kBody) continue;
+    ++catalog_bodies_;
+    listed.insert(catalog.bodies[i].channel.data());
+    joints.key(catalog.bodies[i].channel.data()).begin_array();
+    for (const std::string& name : joint_names_of(catalog, catalog.bodies[i])) joints.value(name);
+    joints.end_array();
+  }
+  joints.end_object();
+  joints_changed_ = joints.str() != joints_json_;
+  joints_json_ = joints.str();
+  states_.resize(scene_->channels.size());
+  for (std::size_t b = 0; b < states_.size(); ++b) {
+    const bool live = listed.count(scene_->channels[b]) != 0;
+    if (live && !states_[b])
+      states_[b] =
+          std::make_unique<LatestReader<BodyState>>(body_state_channel(scene_->channels[b]));
+    else if (!live)
+      states_[b].reset();
+  }
+}
+
+std::shared_ptr<const ViewScene> PoseFeed::update(std::vector<std::uint8_t>& frame) {
+  std::shared_ptr<const ViewScene> changed;
+  joints_changed_ = false;
+  if (const SceneDescription* scene = scene_reader_.latest(); scene && scene_reader_.updated()) {
+    // A restarted physics starts its sequence again: the viewer counts instead.
+    scene_ = std::make_shared<const ViewScene>(view_scene_of(*scene, scene_->generation + 1));
+    states_.clear();
+    catalog_sequence_ = 0;  // readers for the new scene's bodies
+    changed = scene_;
+  }
+  const BodyList& catalog = catalog_.latest();
+  if (catalog.header.sequence != catalog_sequence_) {
+    catalog_sequence_ = catalog.header.sequence;
+    refresh_readers(catalog);
+  }
+  if (const WorldState* world = world_reader_.latest()) {
+    sim_time_s_ = world->header.sim_time_s;
+    paused_ = world->paused != 0;
+  }
+  frame.clear();
+  put(frame, kFrameMagic);
+  put(frame, scene_->generation);
+  put(frame, std::uint32_t{0});  // the entry count, set below
+  put(frame, std::uint32_t{paused_ ? 1U : 0U});
+  put(frame, sim_time_s_);
+  put(frame, catalog_bodies_);
+  put(frame, std::uint32_t{0});
+  std::uint32_t entries = 0;
+  for (std::size_t b = 0; b < states_.size(); ++b) {
+    if (!states_[b]) continue;
+    const BodyState* state = states_[b]->latest();
+    if (!state) continue;
+    const Pose& pose = state->pose;
+    put(frame, static_cast<std::uint32_t>(b));
+    for (double v : {pose.position_m.x, pose.position_m.y, pose.position_m.z, pose.orientation.x,
+                     pose.orientation.y, pose.orientation.z, pose.orientation.w})
+      put(frame, static_cast<float>(v));
+    ++entries;
+  }
+  std::memcpy(frame.data() + 8, &entries, sizeof entries);
+  return changed;
+}
+
+}  // namespace afhub::viewer

@@ -1,0 +1,105 @@
+// The viewer's scene (see view_scene.hpp).
+#include "afhub/viewer/view_scene.hpp"
+
+#include <charconv>
+#include <filesystem>
+
+#include "afhub/hub/json_writer.hpp"
+
+namespace afhub::viewer {
+namespace {
+
+void vec3(JsonWriter& json, const Vec3& v) {
+  json.begin_array().value(v.x).value(v.y).value(v.z).end_array();
+}
+
+void pose(JsonWriter& json, const Pose& p) {
+  json.key("position");
+  vec3(json, p.position_m);
+  const Quaternion& q = p.orientation;
+  json.key("orientation").begin_array().value(q.x).value(q.y).value(q.z).value(q.w).end_array();
+}
+
+void views(JsonWriter& json, const char* name, const std::array<SceneView, kMaxWorldObjects>& list,
+           std::uint32_t count) {
+  json.key(name).begin_array();
+  for (std::uint32_t i = 0; i < count; ++i) {
+    const SceneView& view = list[i];
+    json.begin_object().key("name").value(view.name.data()).key("position");
+    vec3(json, view.position_m);
+    json.key("direction");
+    vec3(json, view.direction);
+    json.key("up");
+    vec3(json, view.up);
+    json.end_object();
+  }
+  json.end_array();
+}
+
+const char* shape_name(SceneShapeKind kind) {
+  switch (kind) {
+    case SceneShapeKind::kBox:
+      return "box";
+    case SceneShapeKind::kSphere:
+      return "sphere";
+    case SceneShapeKind::kCylinder:
+      return "cylinder";
+    case SceneShapeKind::kCapsule:
+      return "capsule";
+    case SceneShapeKind::kCone:
+      return "cone";
+    case SceneShapeKind::kPlane:
+      return "plane";
+  }
+  return "box";
+}
+
+}  // namespace
+
+ViewScene view_scene_of(const SceneDescription& scene, std::uint32_t generation) {
+  ViewScene out;
+  out.generation = generation;
+  JsonWriter json;
+  json.begin_object().key("generation").value(static_cast<unsigned long long>(out.generation));
+  views(json, "lights", scene.lights, scene.light_count);
+  views(json, "cameras", scene.cameras, scene.camera_count);
+  json.key("bodies").begin_array();
+  for (std::uint32_t b = 0; b < scene.body_count; ++b) {
+    const SceneBody& body = scene.bodies[b];
+    out.channels.emplace_back(body.channel.data());
+    out.meshes.emplace_back(body.mesh.data());
+    json.begin_object().key("channel").value(body.channel.data());
+    // The page learns a mesh's format and name, never its path on this machine.
+    const std::filesystem::path mesh(body.mesh.data());
+    json.key("mesh").value(mesh.filename().string());
+    json.key("format").value(mesh.extension().string());
+    json.key("color").numbers(body.color_rgba, 4);
+    json.key("scale").value(body.scale);
+    json.key("publishes").value(body.publishes != 0);
+    pose(json, body.pose);
+    json.key("shapes").begin_array();
+    for (std::uint32_t s = 0; s < body.shape_count; ++s) {
+      const SceneShape& shape = body.shapes[s];
+      json.begin_object().key("kind").value(shape_name(shape.kind));
+      json.key("axis").value(static_cast<long long>(shape.axis)).key("size");
+      vec3(json, shape.size_m);
+      pose(json, shape.offset);
+      json.end_object();
+    }
+    json.end_array().end_object();
+  }
+  json.end_array().end_object();
+  out.json = json.str();
+  return out;
+}
+
+std::optional<std::string> listed_mesh(const ViewScene& scene, std::string_view index_text) {
+  std::size_t index = 0;
+  const char* end = index_text.data() + index_text.size();
+  const auto [at, error] = std::from_chars(index_text.data(), end, index);
+  if (index_text.empty() || error != std::errc() || at != end) return std::nullopt;
+  if (index >= scene.meshes.size() || scene.meshes[index].empty()) return std::nullopt;
+  return scene.meshes[index];
+}
+
+}  // namespace afhub::viewer
