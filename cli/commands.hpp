@@ -24,5 +24,6 @@ void register_top(CLI::App& app, Runner& selected);
 void register_bench(CLI::App& app, Runner& selected);
 void register_world(CLI::App& app, Runner& selected);
 void register_device(CLI::App& app, Runner& selected);
+void register_bridge(CLI::App& app, Runner& selected);
 
 }  // namespace afhub::cli

@@ -36,6 +36,7 @@ int main(int argc, char** argv) {
   afhub::cli::register_top(app, selected);
   afhub::cli::register_bench(app, selected);
   afhub::cli::register_device(app, selected);
+  afhub::cli::register_bridge(app, selected);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {
