@@ -70,7 +70,7 @@ case "${1:-}" in
   test)
     install_packages
     # The code follows .clang-format.
-    find shm_layout hub rt physics controllers device_drivers bench viewer cli tests examples -name '*.[ch]pp' -print0 | xargs -0 clang-format --dry-run --Werror
+    find shm_layout hub rt physics controllers device_drivers bench viewer bridges cli tests examples -name '*.[ch]pp' -print0 | xargs -0 clang-format --dry-run --Werror
     build build/release -DCMAKE_BUILD_TYPE=RelWithDebInfo
     run_tests build/release
     build build/sanitize -DCMAKE_BUILD_TYPE=Debug -DAFHUB_SANITIZE=ON

@@ -26,5 +26,6 @@ void register_world(CLI::App& app, Runner& selected);
 void register_device(CLI::App& app, Runner& selected);
 void register_teleop(CLI::App& app, Runner& selected);
 void register_view(CLI::App& app, Runner& selected);
+void register_bridge(CLI::App& app, Runner& selected);
 
 }  // namespace afhub::cli

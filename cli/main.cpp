@@ -38,6 +38,7 @@ int main(int argc, char** argv) {
   afhub::cli::register_device(app, selected);
   afhub::cli::register_teleop(app, selected);
   afhub::cli::register_view(app, selected);
+  afhub::cli::register_bridge(app, selected);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {

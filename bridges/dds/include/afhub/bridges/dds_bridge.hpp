@@ -1,0 +1,36 @@
+// `afhub bridge dds`: the hub's bodies over Cyclone DDS (afhub's own IDL types).
+//   Export: the states of local bodies matching a glob become DDS samples of topic
+//   "afhub/body_state" (keyed by channel name), their joint names "afhub/body_info";
+//   with accept_commands, "afhub/body_command" samples go into local command slots.
+//   Mirror: bodies seen on DDS are published into this hub as if local, and the
+//   commands written to them here go back out over DDS.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace afhub::bridges {
+
+struct DdsBridgeOptions {
+  std::uint32_t domain = 0;
+  std::vector<std::string> body_globs{"*"};  // fnmatch patterns over channel names
+  bool export_bodies = false;
+  bool mirror = false;
+  bool accept_commands = false;
+  double rate_hz = 1000.0;          // the bridge's loop: each body at most once per cycle
+  bool reliable = false;            // default best effort, keep last 1
+  double max_command_age_s = 0.05;  // older (by DDS source timestamp): dropped
+  // Report the age of mirrored states by their source's CLOCK_MONOTONIC stamp: only
+  // meaningful where both sides share that clock (namespaces on one host).
+  bool latency = false;
+  double seconds = 0.0;  // 0: until SIGINT/SIGTERM
+};
+
+// Throws afhub::Error on bad options or when DDS cannot start; returns the exit code.
+int run_dds_bridge(const DdsBridgeOptions& options);
+
+// Whether `channel` matches any of `globs` (fnmatch, '*' crosses '/').
+bool matches_any(const std::string& channel, const std::vector<std::string>& globs);
+
+}  // namespace afhub::bridges

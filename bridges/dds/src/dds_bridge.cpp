@@ -1,0 +1,438 @@
+// `afhub bridge dds` (see dds_bridge.hpp): one loop at --rate that exports local
+// bodies and mirrors remote ones. In steady state nothing here allocates: samples are
+// made once with full-capacity sequences, bodies are looked up in vectors made when
+// they appear, and the catalog is rescanned for new bodies once a second (which may
+// allocate; it is not per message).
+#include "afhub/bridges/dds_bridge.hpp"
+
+#include <dds/dds.h>
+#include <fnmatch.h>
+#include <signal.h>
+#include <unistd.h>
+
+#include <array>
+#include <cstdio>
+#include <memory>
+
+#include "afhub/hub/bodies.hpp"
+#include "afhub/hub/body_claims.hpp"
+#include "afhub/hub/hub_presence.hpp"
+#include "afhub/hub/sample_waiter.hpp"
+#include "afhub/hub/stop_signal.hpp"
+#include "afhub/rt/clock.hpp"
+#include "afhub/shm_layout/error.hpp"
+#include "age_histogram.hpp"
+#include "dds_convert.hpp"
+
+namespace afhub::bridges {
+namespace {
+
+constexpr const char* kStateTopic = "afhub/body_state";
+constexpr const char* kCommandTopic = "afhub/body_command";
+constexpr const char* kInfoTopic = "afhub/body_info";
+
+void check(dds_return_t result, const char* what) {
+  if (result < 0)
+    throw Error(std::string("DDS: ") + what + ": " + dds_strretcode(result) +
+                " (check CYCLONEDDS_URI and the --domain)");
+}
+
+// A DDS entity deleted with its owner.
+struct Entity {
+  dds_entity_t id = 0;
+  Entity() = default;
+  Entity(dds_entity_t entity, const char* what) : id(entity) { check(entity, what); }
+  Entity(const Entity&) = delete;
+  Entity& operator=(const Entity&) = delete;
+  ~Entity() {
+    if (id > 0) dds_delete(id);
+  }
+};
+
+struct Qos {
+  dds_qos_t* qos = dds_create_qos();
+  ~Qos() { dds_delete_qos(qos); }
+};
+
+// States and commands: newest wins (keep last 1 per body); best effort unless asked.
+void set_stream_qos(dds_qos_t* qos, bool reliable) {
+  if (reliable)
+    dds_qset_reliability(qos, DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
+  else
+    dds_qset_reliability(qos, DDS_RELIABILITY_BEST_EFFORT, 0);
+  dds_qset_history(qos, DDS_HISTORY_KEEP_LAST, 1);
+}
+
+// Joint names: reliable and transient local, so a late mirror learns every body.
+void set_info_qos(dds_qos_t* qos) {
+  dds_qset_reliability(qos, DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
+  dds_qset_durability(qos, DDS_DURABILITY_TRANSIENT_LOCAL);
+  dds_qset_history(qos, DDS_HISTORY_KEEP_LAST, 1);
+}
+
+// SIGUSR1: print the counters now (tests read them at a moment they choose).
+volatile sig_atomic_t report_requested = 0;
+void request_report(int) {
+  report_requested = 1;
+}
+
+struct Counters {
+  std::uint64_t states_out = 0, states_in = 0, commands_out = 0, commands_in = 0;
+  std::uint64_t stale_commands = 0, bad_commands = 0, unknown_bodies = 0;
+};
+
+// A local body whose state goes out.
+struct ExportedBody {
+  std::string channel;
+  std::unique_ptr<BodyClient> client;
+};
+
+// A remote body published into this hub.
+struct MirroredBody {
+  std::string channel;
+  std::uint32_t joints = 0;
+  std::unique_ptr<BodyPublisher> publisher;
+};
+
+class Bridge {
+ public:
+  explicit Bridge(const DdsBridgeOptions& options) : options_(options) {
+    participant_ = std::make_unique<Entity>(
+        dds_create_participant(options.domain, nullptr, nullptr), "creating the participant");
+    const dds_entity_t p = participant_->id;
+    state_topic_ = std::make_unique<Entity>(
+        dds_create_topic(p, &afhub_dds_BodyState_desc, kStateTopic, nullptr, nullptr),
+        "creating the state topic");
+    command_topic_ = std::make_unique<Entity>(
+        dds_create_topic(p, &afhub_dds_BodyCommand_desc, kCommandTopic, nullptr, nullptr),
+        "creating the command topic");
+    info_topic_ = std::make_unique<Entity>(
+        dds_create_topic(p, &afhub_dds_BodyInfo_desc, kInfoTopic, nullptr, nullptr),
+        "creating the body info topic");
+    Qos stream, info;
+    set_stream_qos(stream.qos, options.reliable);
+    set_info_qos(info.qos);
+    if (options.export_bodies) {
+      state_writer_ =
+          make(dds_create_writer(p, state_topic_->id, stream.qos, nullptr), "state writer");
+      info_writer_ = make(dds_create_writer(p, info_topic_->id, info.qos, nullptr), "info writer");
+      if (options.accept_commands)
+        command_reader_ =
+            make(dds_create_reader(p, command_topic_->id, stream.qos, nullptr), "command reader");
+    }
+    if (options.mirror) {
+      state_reader_ =
+          make(dds_create_reader(p, state_topic_->id, stream.qos, nullptr), "state reader");
+      info_reader_ = make(dds_create_reader(p, info_topic_->id, info.qos, nullptr), "info reader");
+      command_writer_ =
+          make(dds_create_writer(p, command_topic_->id, stream.qos, nullptr), "command writer");
+      directory_ = std::make_unique<DirectoryPublisher>();
+      waitset_ = make(dds_create_waitset(p), "waitset");
+      state_arrived_ =
+          make(dds_create_readcondition(state_reader_->id, DDS_ANY_STATE), "read condition");
+      check(dds_waitset_attach(waitset_->id, state_arrived_->id, 0), "attaching to the waitset");
+    }
+    make_state_sample(state_sample_);
+    make_command_sample(command_sample_);
+  }
+
+  ~Bridge() {
+    free_state_sample(state_sample_);
+    free_command_sample(command_sample_);
+  }
+
+  Bridge(const Bridge&) = delete;
+  Bridge& operator=(const Bridge&) = delete;
+
+  int run() {
+    std::unique_ptr<CatalogReader> catalog;
+    if (options_.export_bodies) {
+      catalog = std::make_unique<CatalogReader>();
+      catalog->wait(std::chrono::milliseconds(2000));
+    }
+    const auto period_ns = static_cast<std::int64_t>(1e9 / options_.rate_hz);
+    const std::int64_t start_ns = monotonic_ns();
+    std::int64_t next_ns = start_ns, next_scan_ns = start_ns,
+                 next_report_ns = start_ns + 5'000'000'000;
+    while (!stop_requested()) {
+      const std::int64_t now_ns = monotonic_ns();
+      if (catalog && now_ns >= next_scan_ns) {
+        scan_catalog(*catalog);
+        next_scan_ns = now_ns + 1'000'000'000;
+      }
+      if (options_.export_bodies) {
+        export_states();
+        if (options_.accept_commands) import_commands();
+      }
+      if (options_.mirror) {
+        mirror_infos();
+        mirror_states();
+        export_mirrored_commands();
+      }
+      if (now_ns >= next_report_ns || report_requested) {
+        report_requested = 0;
+        report();
+        next_report_ns = now_ns + 5'000'000'000;
+      }
+      if (options_.seconds > 0.0 &&
+          static_cast<double>(now_ns - start_ns) * 1e-9 >= options_.seconds)
+        break;
+      next_ns += period_ns;
+      if (next_ns < now_ns) next_ns = now_ns;  // after a stall: no burst of catch-up cycles
+      wait_until(next_ns);
+    }
+    report();
+    return 0;
+  }
+
+ private:
+  // Until `deadline_ns`; a mirror publishes remote states here as they arrive, so they
+  // wait for no cycle.
+  // An exporter alone forwards local states as they arrive (an iceoryx WaitSet), and
+  // network commands with them.
+  void wait_until(std::int64_t deadline_ns) {
+    if (options_.mirror && options_.export_bodies) {
+      sleep_until_ns(deadline_ns);
+      return;
+    }
+    if (options_.export_bodies) {
+      for (std::int64_t now_ns = monotonic_ns(); now_ns < deadline_ns && !stop_requested();
+           now_ns = monotonic_ns()) {
+        state_arrival_.wait(deadline_ns - now_ns);
+        export_states();
+        if (options_.accept_commands) import_commands();
+      }
+      return;
+    }
+    for (std::int64_t now_ns = monotonic_ns(); now_ns < deadline_ns && !stop_requested();
+         now_ns = monotonic_ns()) {
+      dds_waitset_wait(waitset_->id, nullptr, 0, deadline_ns - now_ns);
+      mirror_states();
+    }
+  }
+
+  static std::unique_ptr<Entity> make(dds_entity_t entity, const char* what) {
+    return std::make_unique<Entity>(entity, what);
+  }
+
+  void report() {
+    std::fprintf(stderr,
+                 "afhub bridge dds: exported %zu bodies, mirrored %zu; states out %llu in %llu, "
+                 "commands out %llu in %llu, stale commands dropped %llu, bad %llu\n",
+                 exported_.size(), mirrored_.size(),
+                 static_cast<unsigned long long>(counters_.states_out),
+                 static_cast<unsigned long long>(counters_.states_in),
+                 static_cast<unsigned long long>(counters_.commands_out),
+                 static_cast<unsigned long long>(counters_.commands_in),
+                 static_cast<unsigned long long>(counters_.stale_commands),
+                 static_cast<unsigned long long>(counters_.bad_commands));
+    if (options_.latency && state_ages_.count() > 0)
+      std::fprintf(stderr,
+                   "afhub bridge dds: mirrored state age (source publish to publish here, "
+                   "%llu states): p50 %lld us, p99 %lld us, max %lld us\n",
+                   static_cast<unsigned long long>(state_ages_.count()),
+                   static_cast<long long>(state_ages_.quantile_us(0.5)),
+                   static_cast<long long>(state_ages_.quantile_us(0.99)),
+                   static_cast<long long>(state_ages_.max_us()));
+  }
+
+  bool is_mirrored(std::string_view channel) const {
+    for (const MirroredBody& body : mirrored_)
+      if (body.channel == channel) return true;
+    return false;
+  }
+
+  // New local bodies matching the globs (not those this bridge mirrors itself).
+  void scan_catalog(CatalogReader& catalog) {
+    const BodyList& list = catalog.latest();
+    for (std::uint32_t i = 0; i < list.body_count; ++i) {
+      const std::string channel(name_of(list.bodies[i].channel));
+      if (!matches_any(channel, options_.body_globs) || is_mirrored(channel)) continue;
+      bool known = false;
+      for (const ExportedBody& body : exported_) known = known || body.channel == channel;
+      if (known) continue;
+      const BodyEntry entry = entry_of(list, i);
+      if (entry.info.kind != ChannelKind::kBody) continue;
+      ExportedBody body{channel, std::make_unique<BodyClient>(entry)};
+      state_arrival_.attach(body.client->state_reader());  // when full: by the cycle alone
+      exported_.push_back(std::move(body));
+      // Its joint names, once, for mirrors (transient local: late ones too).
+      afhub_dds_BodyInfo info{};
+      std::snprintf(info.body, sizeof info.body, "%s", channel.c_str());
+      std::vector<std::array<char, 64>> names(entry.joint_names.size());
+      for (std::size_t j = 0; j < entry.joint_names.size(); ++j)
+        set_name(names[j], entry.joint_names[j]);
+      info.joint_names._buffer = reinterpret_cast<char(*)[64]>(names.data());
+      info.joint_names._length = info.joint_names._maximum =
+          static_cast<std::uint32_t>(names.size());
+      info.joint_names._release = false;
+      check(dds_write(info_writer_->id, &info), "writing a body's info");
+      std::fprintf(stderr, "afhub bridge dds: exporting %s (%zu joints)\n", channel.c_str(),
+                   entry.joint_names.size());
+    }
+  }
+
+  void export_states() {
+    for (ExportedBody& body : exported_) {
+      const BodyState* state = body.client->latest_state();
+      if (!state || !body.client->state_updated()) continue;
+      to_dds(body.channel, *state, state_sample_);
+      if (dds_write(state_writer_->id, &state_sample_) >= 0) ++counters_.states_out;
+    }
+  }
+
+  // Commands from the network, only with --accept-commands; a command older than the
+  // bound by its DDS source timestamp is dropped, never applied late.
+  void import_commands() {
+    void* samples[1] = {&command_sample_};
+    dds_sample_info_t info;
+    const auto max_age_ns = static_cast<std::int64_t>(options_.max_command_age_s * 1e9);
+    while (dds_take(command_reader_->id, samples, &info, 1, 1) > 0) {
+      if (!info.valid_data) continue;
+      const std::int64_t age_ns = dds_time() - info.source_timestamp;
+      if (age_ns > max_age_ns) {
+        ++counters_.stale_commands;
+        continue;
+      }
+      ExportedBody* body = find_exported(command_sample_.body);
+      if (!body) {
+        ++counters_.unknown_bodies;
+        continue;
+      }
+      BodyCommand* command = body->client->loan_command(
+          std::min<std::uint32_t>(command_sample_.joints._length, kMaxJointsPerBody));
+      if (!command) continue;
+      if (!from_dds(command_sample_, *command)) {
+        ++counters_.bad_commands;
+        // A loaned chunk must go somewhere: an empty command holds nothing new.
+        command->joint_count = 0;
+        continue;
+      }
+      body->client->publish_command(command);
+      ++counters_.commands_in;
+    }
+  }
+
+  ExportedBody* find_exported(const char* channel) {
+    for (ExportedBody& body : exported_)
+      if (body.channel == channel) return &body;
+    return nullptr;
+  }
+
+  MirroredBody* find_mirrored(const char* channel) {
+    for (MirroredBody& body : mirrored_)
+      if (body.channel == channel) return &body;
+    return nullptr;
+  }
+
+  // Remote bodies announced on DDS become this hub's bodies, owned by this process.
+  void mirror_infos() {
+    void* samples[1] = {nullptr};  // loaned from the reader: joint name lists vary
+    dds_sample_info_t info;
+    while (dds_take(info_reader_->id, samples, &info, 1, 1) > 0) {
+      const auto* body_info = static_cast<const afhub_dds_BodyInfo*>(samples[0]);
+      if (info.valid_data && matches_any(body_info->body, options_.body_globs) &&
+          !find_mirrored(body_info->body))
+        add_mirrored(*body_info);
+      dds_return_loan(info_reader_->id, samples, 1);
+      samples[0] = nullptr;
+    }
+  }
+
+  void add_mirrored(const afhub_dds_BodyInfo& info) {
+    const std::string channel(info.body);
+    std::vector<std::string> joint_names;
+    for (std::uint32_t j = 0; j < info.joint_names._length; ++j)
+      joint_names.emplace_back(info.joint_names._buffer[j]);
+    try {
+      check_room_for_bodies({channel}, 1);
+      MirroredBody body{channel, static_cast<std::uint32_t>(joint_names.size()),
+                        std::make_unique<BodyPublisher>(channel)};
+      directory_->add(make_body_entry(channel, joint_names));
+      directory_->publish();
+      mirrored_.push_back(std::move(body));
+      std::fprintf(stderr, "afhub bridge dds: mirroring %s (%zu joints)\n", channel.c_str(),
+                   joint_names.size());
+    } catch (const Error& error) {
+      std::fprintf(stderr, "afhub bridge dds: not mirroring %s: %s\n", channel.c_str(),
+                   error.what());
+      refused_.push_back(channel);
+    }
+  }
+
+  void mirror_states() {
+    void* samples[1] = {&state_sample_};
+    dds_sample_info_t info;
+    while (dds_take(state_reader_->id, samples, &info, 1, 1) > 0) {
+      if (!info.valid_data) continue;
+      MirroredBody* body = find_mirrored(state_sample_.body);
+      if (!body) continue;  // its info has not come yet
+      BodyState* state = body->publisher->loan_state(body->joints);
+      if (!state) continue;
+      from_dds(state_sample_, *state);
+      body->publisher->publish_state(state);
+      if (options_.latency)
+        state_ages_.record(monotonic_ns() - state_sample_.header.source_stamp_ns);
+      ++counters_.states_in;
+    }
+  }
+
+  // Commands written here to mirrored bodies go to their owner, stamped with their
+  // age: the DDS source timestamp is when the local controller published.
+  void export_mirrored_commands() {
+    for (MirroredBody& body : mirrored_) {
+      const BodyCommand* command = body.publisher->latest_command();
+      if (!command || !body.publisher->command_updated()) continue;
+      to_dds(body.channel, *command, command_sample_);
+      const std::int64_t age_ns =
+          std::max<std::int64_t>(0, monotonic_ns() - command->header.publish_stamp_ns);
+      if (dds_write_ts(command_writer_->id, &command_sample_, dds_time() - age_ns) >= 0)
+        ++counters_.commands_out;
+    }
+  }
+
+  const DdsBridgeOptions& options_;
+  std::unique_ptr<Entity> participant_, state_topic_, command_topic_, info_topic_;
+  std::unique_ptr<Entity> state_writer_, info_writer_, command_reader_;
+  std::unique_ptr<Entity> state_reader_, info_reader_, command_writer_;
+  std::unique_ptr<Entity> waitset_, state_arrived_;
+  afhub_dds_BodyState state_sample_{};
+  afhub_dds_BodyCommand command_sample_{};
+  SampleWaiter state_arrival_;  // before exported_: destroyed after their readers
+  std::vector<ExportedBody> exported_;
+  std::vector<MirroredBody> mirrored_;
+  std::vector<std::string> refused_;
+  std::unique_ptr<DirectoryPublisher> directory_;  // the mirrored bodies, for the catalog
+  Counters counters_;
+  AgeHistogram state_ages_;  // --latency: source publish to mirror publish
+};
+
+}  // namespace
+
+bool matches_any(const std::string& channel, const std::vector<std::string>& globs) {
+  for (const std::string& glob : globs)
+    if (fnmatch(glob.c_str(), channel.c_str(), 0) == 0) return true;
+  return false;
+}
+
+int run_dds_bridge(const DdsBridgeOptions& options) {
+  if (!options.export_bodies && !options.mirror)
+    throw Error(
+        "say what to bridge: --export (this hub's bodies out), --mirror (remote "
+        "bodies in), or both");
+  if (options.accept_commands && !options.export_bodies)
+    throw Error("--accept-commands applies commands to exported bodies: add --export");
+  if (!(options.rate_hz > 0.0 && options.rate_hz <= 100'000.0))
+    throw Error("--rate must be between 0 and 100000 Hz");
+  if (!(options.max_command_age_s > 0.0 && options.max_command_age_s <= 10.0))
+    throw Error("--max-command-age must be between 0 and 10 s");
+  if (options.domain > 232) throw Error("--domain must be 0 to 232 (DDS domain ids)");
+  if (options.body_globs.empty()) throw Error("--bodies needs at least one glob");
+  install_stop_signal_handlers();
+  signal(SIGUSR1, request_report);
+  connect_to_hub("bridge-dds", HubPolicy::kRequire);
+  Bridge bridge(options);
+  return bridge.run();
+}
+
+}  // namespace afhub::bridges
