@@ -29,20 +29,8 @@ for tool in "$afhub" "$place_copy"; do
   [[ -x $tool ]] || { echo "fig9.sh: $tool is missing: build it (ninja -C $build afhub place_copy)" >&2; exit 1; }
 done
 
-if [[ $(id -u) == 0 && -z ${AFHUB_FIG9_PRIVATE:-} ]]; then
-  exec env AFHUB_FIG9_PRIVATE=1 unshare -m bash -c \
-    'mount -t tmpfs tmpfs /tmp && mount -t tmpfs tmpfs /dev/shm && mount -t tmpfs tmpfs /run && exec "$0" "$@"' \
-    "$0" "$steps" "$build"
-fi
-
-work=$(mktemp -d)
-pids=()
-cleanup() {
-  for pid in "${pids[@]}"; do kill "$pid" 2>/dev/null || true; done
-  wait 2>/dev/null || true
-  rm -rf "$work"
-}
-trap cleanup EXIT
+source "$root/bench/scene_script.sh"
+private_namespace "$0" "$steps" "$build"
 
 shared=$root/../shared/ambf_models/descriptions/multi-bodies/robots
 examples=$root/examples/models

@@ -22,20 +22,8 @@ build=$(cd "${2:-$root/build/dev}" && pwd)
 afhub=$build/bin/afhub
 [[ -x $afhub ]] || { echo "teleop_latency.sh: $afhub is missing: build it (ninja -C $build afhub)" >&2; exit 1; }
 
-if [[ $(id -u) == 0 && -z ${AFHUB_TELEOP_BENCH_PRIVATE:-} ]]; then
-  exec env AFHUB_TELEOP_BENCH_PRIVATE=1 unshare -m bash -c \
-    'mount -t tmpfs tmpfs /tmp && mount -t tmpfs tmpfs /dev/shm && mount -t tmpfs tmpfs /run && exec "$0" "$@"' \
-    "$0" "$samples" "$build"
-fi
-
-work=$(mktemp -d)
-pids=()
-cleanup() {
-  for pid in "${pids[@]}"; do kill "$pid" 2>/dev/null || true; done
-  wait 2>/dev/null || true
-  rm -rf "$work"
-}
-trap cleanup EXIT
+source "$root/bench/scene_script.sh"
+private_namespace "$0" "$samples" "$build"
 
 models=$root/examples/models
 cat > "$work/input_devices.yaml" <<YAML

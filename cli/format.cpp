@@ -20,6 +20,10 @@ void vec3(JsonWriter& json, const Vec3& v) {
   json.begin_array().value(v.x).value(v.y).value(v.z).end_array();
 }
 
+void quaternion(JsonWriter& json, const Quaternion& q) {
+  json.begin_array().value(q.x).value(q.y).value(q.z).value(q.w).end_array();
+}
+
 }  // namespace
 
 StateFields parse_state_fields(const std::string& text) {
@@ -71,14 +75,8 @@ std::string state_json(const BodyEntry& entry, const BodyState& state, const Sta
   if (fields.pose) {
     json.key("position_m");
     vec3(json, state.pose.position_m);
-    const Quaternion& q = state.pose.orientation;
-    json.key("orientation_xyzw")
-        .begin_array()
-        .value(q.x)
-        .value(q.y)
-        .value(q.z)
-        .value(q.w)
-        .end_array();
+    json.key("orientation_xyzw");
+    quaternion(json, state.pose.orientation);
   }
   if (fields.twist) {
     json.key("linear_velocity_mps");
@@ -254,14 +252,8 @@ std::string device_state_json(const BodyEntry& entry, const DeviceState& state) 
   json.key("stamp_ns").value(static_cast<long long>(state.header.publish_stamp_ns));
   json.key("position");
   vec3(json, state.pose.position_m);
-  const Quaternion& q = state.pose.orientation;
-  json.key("orientation_xyzw")
-      .begin_array()
-      .value(q.x)
-      .value(q.y)
-      .value(q.z)
-      .value(q.w)
-      .end_array();
+  json.key("orientation_xyzw");
+  quaternion(json, state.pose.orientation);
   json.key("linear_velocity");
   vec3(json, state.velocity.linear_mps);
   json.key("angular_velocity");

@@ -1,0 +1,22 @@
+# Sourced by the bench scripts that start a hub and a scene (fig9.sh, teleop_latency.sh).
+#   private_namespace "$0" "$@"   as root, re-runs the calling script in a private mount
+#                                 namespace (its own /tmp, /dev/shm and /run), so that its
+#                                 hub cannot meet another
+#   then: $work, a scratch folder, and $pids, the processes to stop, both cleaned on exit.
+
+private_namespace() {
+  if [[ $(id -u) == 0 && -z ${AFHUB_BENCH_PRIVATE:-} ]]; then
+    exec env AFHUB_BENCH_PRIVATE=1 unshare -m bash -c \
+      'mount -t tmpfs tmpfs /tmp && mount -t tmpfs tmpfs /dev/shm && mount -t tmpfs tmpfs /run && exec "$0" "$@"' \
+      "$@"
+  fi
+  work=$(mktemp -d)
+  pids=()
+  trap cleanup EXIT
+}
+
+cleanup() {
+  for pid in "${pids[@]}"; do kill "$pid" 2>/dev/null || true; done
+  wait 2>/dev/null || true
+  rm -rf "$work"
+}
