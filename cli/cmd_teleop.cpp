@@ -29,6 +29,7 @@ struct TeleopCliOptions {
   bool lock_memory = false;
   std::uint64_t cycles = 0;
   double wait_s = 10.0;
+  double stale_ms = 50.0;
   std::uint64_t latency_samples = 0;
 };
 
@@ -114,6 +115,8 @@ teleop::TeleopOptions teleop_options(const TeleopCliOptions& options) {
     throw Error("--fifo takes a SCHED_FIFO priority from 1 to 99");
   if (!(options.wait_s >= 0.0 && options.wait_s <= 1e6))
     throw Error("--wait takes a number of seconds from 0 to 1e6");
+  if (!(options.stale_ms > 0.0 && options.stale_ms <= 60'000.0))
+    throw Error("--stale takes milliseconds from 0 (excluded) to 60000");
   const teleop::InputDevicesFile file = teleop::read_input_devices(options.file);
   for (const std::string& warning : file.warnings) std::fprintf(stderr, "%s\n", warning.c_str());
   const std::vector<teleop::InputDeviceSpec> selected =
@@ -133,6 +136,7 @@ teleop::TeleopOptions teleop_options(const TeleopCliOptions& options) {
   teleop.loop.lock_memory = options.lock_memory;
   teleop.loop.max_cycles = options.cycles;
   teleop.wait_s = options.wait_s;
+  teleop.device_stale_ns = std::llround(options.stale_ms * 1e6);
   teleop.latency_samples = options.latency_samples;
   return teleop;
 }
@@ -178,6 +182,10 @@ void register_teleop(CLI::App& app, Runner& selected) {
   teleop->add_option("--wait", options->wait_s,
                      "Wait this many seconds for the hub, then each device and body, before "
                      "failing (default 10; 0 fails at once)");
+  teleop->add_option("--stale", options->stale_ms,
+                     "A device with no new sample for this many ms (its driver stopped) "
+                     "releases its body: held where it is, no force, until samples come back "
+                     "(default 50)");
   add_count_option(teleop, "--latency", options->latency_samples,
                    "Record this many latencies (device sample -> body command, device sample "
                    "-> the device force answering it) and print p50/p99/max at the end");

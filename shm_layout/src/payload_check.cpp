@@ -121,10 +121,22 @@ const char* count_beyond_capacity(const char* at, std::size_t bytes, PayloadKind
       if (health->mempool_count > kMaxMempools) return "Health.mempool_count";
       return nullptr;
     }
-    case PayloadKind::kDeviceState:
-      if (reinterpret_cast<const DeviceState*>(at)->gate > ForceGate::kStopping)
-        return "DeviceState.gate";
+    case PayloadKind::kDeviceState: {
+      const auto* state = reinterpret_cast<const DeviceState*>(at);
+      if (state->gate > ForceGate::kStopping) return "DeviceState.gate";
+      // Readers (teleop's law, renderings) take the pose as numbers: a NaN would stay
+      // in a law's anchor for good.
+      const Pose& p = state->pose;
+      for (double v : {p.position_m.x, p.position_m.y, p.position_m.z, p.orientation.x,
+                       p.orientation.y, p.orientation.z, p.orientation.w})
+        if (!std::isfinite(v)) return "DeviceState.pose";
+      const Twist& t = state->velocity;
+      for (double v : {t.linear_mps.x, t.linear_mps.y, t.linear_mps.z, t.angular_radps.x,
+                       t.angular_radps.y, t.angular_radps.z})
+        if (!std::isfinite(v)) return "DeviceState.velocity";
+      if (!std::isfinite(state->gripper_angle_rad)) return "DeviceState.gripper_angle_rad";
       return nullptr;
+    }
     case PayloadKind::kDeviceCommand: {
       const auto* command = reinterpret_cast<const DeviceCommand*>(at);
       const Wrench& w = command->wrench;

@@ -291,6 +291,30 @@ TEST(TeleopLaw, GripperFromTheButtonTheDeviceAngleOrTheJawMode) {
   EXPECT_TRUE(out.camera_held);
 }
 
+// hold(): a device whose samples went stale (its driver died). The target holds, the
+// device gets no force, and when it is let go with the hand elsewhere (a new driver's
+// hand at its start) the target continues from where it held.
+TEST(TeleopLaw, HoldKeepsTheTargetAndLettingGoReanchorsWithoutAJump) {
+  TeleopParams params = plain_params();
+  params.buttons.clutch = -1;  // no clutch button: hold() alone holds
+  TeleopLaw law(params);
+  TeleopOutput out;
+  law.step(device_at(v3(0, 0, 0)), pose_at(v3(0, 0, 0)), {}, kDt, out);
+  law.step(device_at(v3(0.02, 0, 0)), pose_at(v3(0, 0, 0)), {}, kDt, out);
+  const Vec3 held = out.body_target.position_m;
+  EXPECT_GT(norm(out.device_wrench.force_n), 0.0);
+  law.hold(true);
+  law.step(device_at(v3(0.02, 0, 0)), pose_at(v3(0, 0, 0)), {}, kDt, out);
+  EXPECT_TRUE(out.clutched);
+  EXPECT_TRUE(near(out.body_target.position_m, held, 1e-15));
+  EXPECT_EQ(norm(out.device_wrench.force_n), 0.0);
+  law.hold(false);
+  law.step(device_at(v3(-0.01, 0, 0)), pose_at(v3(0, 0, 0)), {}, kDt, out);
+  EXPECT_TRUE(near(out.body_target.position_m, held, 1e-15)) << "a jump on letting go";
+  law.step(device_at(v3(0.0, 0, 0)), pose_at(v3(0, 0, 0)), {}, kDt, out);
+  EXPECT_NEAR(out.body_target.position_m.x, held.x + params.workspace_scale * 0.01, 1e-12);
+}
+
 TEST(TeleopLaw, RestartFromDrivesTheBodyFromWhereItIs) {
   TeleopLaw law(plain_params());
   TeleopOutput out;

@@ -13,12 +13,7 @@
 #include <thread>
 #include <vector>
 
-#include "afhub/hub/channel.hpp"
-#include "afhub/shm_layout/body_state.hpp"
-#include "afhub/shm_layout/channel_names.hpp"
-#include "afhub/shm_layout/device.hpp"
-#include "afhub_process.hpp"
-#include "model_files.hpp"
+#include "teleop_session.hpp"
 
 namespace afhub::test {
 namespace {
@@ -47,100 +42,39 @@ std::string input_devices_file() {
          "  button mapping: {a1: 0, a2: 1, next mode: 2, prev mode: 3}\n";
 }
 
-void pause_ms(int ms) {
-  std::this_thread::sleep_for(std::chrono::milliseconds(ms));
-}
-
-// The hub (this binary's), the physics, the virtual device named `device` with the
-// driver arguments given, and the teleoperation process, with readers of the palm
-// and the device.
-class Teleop {
+// The project's gripper and the floor under `afhub teleop` with the virtual device
+// named `device` following the driver arguments given.
+class Teleop : public TeleopSession {
  public:
-  Teleop(const std::string& device, const std::vector<std::string>& trajectory_args)
-      : devices_file_(folder_.write("input_devices.yaml", input_devices_file())),
-        device_name_(device),
-        log_((folder_.dir() / "log").string()),
-        physics_(spawn_afhub({"run", kGripper, kFloor, "--no-autostart"}, log_ + ".run")),
-        teleop_(spawn_afhub({"teleop", devices_file_, "--device", device}, log_ + ".teleop")),
-        palm_(body_state_channel("afhub/gripper/palm")),
-        device_(body_state_channel(device_channel_name(device))) {
-    driver_args_ = {"device", "run", "virtual", "--name", device};
-    driver_args_.insert(driver_args_.end(), trajectory_args.begin(), trajectory_args.end());
-    driver_ = std::make_unique<ScopedProcess>(spawn_afhub(driver_args_, log_ + ".device"));
-  }
-  // Waits until the device applies a command's force (teleop is in the loop).
-  bool wait_running() {
-    return wait_until(
-        [&] {
-          const DeviceState* d = device_.latest();
-          return palm_.latest() && d && d->gate == ForceGate::kApplying;
-        },
-        20s);
-  }
-  // SIGKILLs the teleoperation process.
-  void kill_teleop() { kill(teleop_.pid, SIGKILL); }
-  // A new device driver (its trajectory from its start) and a new teleoperation process.
-  void restart_device_and_teleop() {
-    teleop_.stop();
-    driver_->stop();
-    driver_->pid = spawn_afhub(driver_args_, log_ + ".device");
-    teleop_.pid =
-        spawn_afhub({"teleop", devices_file_, "--device", device_name_}, log_ + ".teleop");
-  }
-  // The newest device state not seen before, or nullptr.
-  const DeviceState* new_device_state() {
-    const DeviceState* d = device_.latest();
-    return d && device_.updated() ? d : nullptr;
-  }
-  const BodyState& palm() { return *palm_.latest(); }
-  const DeviceState& device() { return *device_.latest(); }
-  std::string logs() {
-    return "run: " + read_file(log_ + ".run") + "\nteleop: " + read_file(log_ + ".teleop") +
-           "\ndevice: " + read_file(log_ + ".device");
-  }
-  afhub::testing::ModelFolder& folder() { return folder_; }
+  Teleop(const std::string& device, const std::vector<std::string>& driver_args,
+         const std::vector<std::string>& teleop_extra = {})
+      : TeleopSession(setup(device, driver_args, teleop_extra)) {}
+  const BodyState& palm() { return body(); }
 
  private:
-  afhub::testing::ModelFolder folder_;
-  std::string devices_file_, device_name_, log_;
-  std::vector<std::string> driver_args_;
-  ScopedProcess physics_, teleop_;
-  std::unique_ptr<ScopedProcess> driver_;
-  LatestReader<BodyState> palm_;
-  LatestReader<DeviceState> device_;
+  static TeleopSetup setup(const std::string& device, const std::vector<std::string>& driver_args,
+                           const std::vector<std::string>& teleop_extra) {
+    static afhub::testing::ModelFolder folder;
+    TeleopSetup s;
+    s.models = {kGripper, kFloor};
+    s.devices_file = folder.write("input_devices.yaml", input_devices_file());
+    s.teleop_args = {"--device", device};
+    s.teleop_args.insert(s.teleop_args.end(), teleop_extra.begin(), teleop_extra.end());
+    s.body = "afhub/gripper/palm";
+    s.device = device;
+    s.driver_args = driver_args;
+    s.log = (folder.dir() / ("log-" + device)).string();
+    return s;
+  }
 };
 
 TEST(TeleopEndToEnd, TheGripperFollowsTheDevicesCircleScaled) {
   Teleop teleop("circle", {"--circle", "0.02,2"});  // 2 cm, 2 s: 10 cm in the world
   ASSERT_TRUE(teleop.wait_running()) << teleop.logs();
   pause_ms(2000);  // past the force ramp and the start transient
-  struct Pair {
-    Vec3 body, device;
-  };
-  std::vector<Pair> pairs;
-  for (int i = 0; i < 1000; ++i) {  // about two turns, every 2 ms
-    pairs.push_back({teleop.palm().pose.position_m, teleop.device().pose.position_m});
-    pause_ms(2);
-  }
-  Vec3 body_mean, device_mean;
-  for (const Pair& p : pairs) {
-    body_mean = {body_mean.x + p.body.x, body_mean.y + p.body.y, body_mean.z + p.body.z};
-    device_mean = {device_mean.x + p.device.x, device_mean.y + p.device.y,
-                   device_mean.z + p.device.z};
-  }
-  const double n = static_cast<double>(pairs.size());
-  body_mean = {body_mean.x / n, body_mean.y / n, body_mean.z / n};
-  device_mean = {device_mean.x / n, device_mean.y / n, device_mean.z / n};
-  double worst = 0.0, radius = 0.0, square_sum = 0.0;
-  for (const Pair& p : pairs) {
-    const double ex = (p.body.x - body_mean.x) - kScale * (p.device.x - device_mean.x);
-    const double ey = (p.body.y - body_mean.y) - kScale * (p.device.y - device_mean.y);
-    const double ez = (p.body.z - body_mean.z) - kScale * (p.device.z - device_mean.z);
-    worst = std::max(worst, std::sqrt(ex * ex + ey * ey + ez * ez));
-    square_sum += ex * ex + ey * ey + ez * ez;
-    radius += std::hypot(p.body.x - body_mean.x, p.body.y - body_mean.y) / n;
-  }
-  const double rms = std::sqrt(square_sum / n);
+  const Following f = measure_following(teleop, kScale, 1000);  // about two turns
+  const Vec3& body_mean = f.body_mean;
+  const double radius = f.body_radius, rms = f.rms, worst = f.worst;
   std::printf(
       "circle: palm radius %.4f m (device's x5: 0.1 m), deviation RMS %.4f m, worst %.4f m\n",
       radius, rms, worst);
@@ -222,6 +156,50 @@ TEST(TeleopEndToEnd, PushingIntoTheFloorGivesAnOpposingBoundedForce) {
   EXPECT_GT(lowest_palm, 0.015) << "the palm went through the floor";
   EXPECT_GT(mean_up, 0.8 * kMaxForce) << "the device got no force opposing the push";
   EXPECT_LE(most_force, kMaxForce + 1e-9) << "the device got more than the max force";
+}
+
+// The driver SIGKILLed with the palm 10 cm out: teleop says so once, holds the palm
+// where it is, and when a new driver publishes (its hand back at the trajectory's
+// start, 2 cm from where the old one was) the palm continues from where it was held,
+// with no jump (without re-anchoring it would go 10 cm back), and follows again.
+TEST(TeleopEndToEnd, WhenTheDriverDiesThePalmIsHeldAndResumesWithNoJump) {
+  afhub::testing::ModelFolder scripts;
+  // Still for 1 s, out 2 cm in 1 s, then still.
+  const std::string csv = scripts.write("out.csv", "0,0,0,0\n1,0,0,0\n2,0.02,0,0\n");
+  Teleop teleop("dies", {"--trajectory", csv});
+  ASSERT_TRUE(teleop.wait_running()) << teleop.logs();
+  ASSERT_TRUE(wait_until([&] { return teleop.device().pose.position_m.x > 0.0195; }, 20s));
+  pause_ms(500);
+  const double out = teleop.palm().pose.position_m.x;
+  EXPECT_NEAR(out, kX0 + kScale * 0.02, 0.01) << teleop.logs();
+  const std::int64_t killed_at = monotonic_ns();
+  teleop.kill_driver();
+  const char* said = "no sample from device/dies";
+  ASSERT_TRUE(wait_until([&] { return contains(teleop.teleop_log(), said); }, 5s)) << teleop.logs();
+  double held_drift = 0.0;
+  for (int i = 0; i < 250; ++i) {
+    held_drift = std::max(held_drift, std::abs(teleop.palm().pose.position_m.x - out));
+    pause_ms(2);
+  }
+  EXPECT_LT(held_drift, 0.005) << "the palm moved while the device was gone";
+  EXPECT_EQ(occurrences(teleop.teleop_log(), said), 1) << teleop.teleop_log();
+
+  teleop.start_driver();  // its hand at x = 0 for 1 s
+  ASSERT_TRUE(wait_until([&] { return teleop.device().header.publish_stamp_ns > killed_at; }, 20s));
+  double jump = 0.0;
+  for (int i = 0; i < 300; ++i) {  // about 0.6 s, while the new hand stays at 0
+    jump = std::max(jump, std::abs(teleop.palm().pose.position_m.x - out));
+    pause_ms(2);
+  }
+  std::printf(
+      "driver killed: palm drift while held %.2e m, largest move after it came back %.2e m\n",
+      held_drift, jump);
+  EXPECT_LT(jump, 0.005) << "the palm jumped when the device came back" << teleop.logs();
+  EXPECT_TRUE(contains(teleop.teleop_log(), "device/dies is back")) << teleop.teleop_log();
+  // Motion resumes from there: the new hand's 2 cm are 10 cm more of palm.
+  ASSERT_TRUE(wait_until([&] { return teleop.device().pose.position_m.x > 0.0195; }, 20s));
+  pause_ms(500);
+  EXPECT_NEAR(teleop.palm().pose.position_m.x, out + kScale * 0.02, 0.01) << teleop.logs();
 }
 
 // The teleoperation process SIGKILLed while the device pushes into the floor (more

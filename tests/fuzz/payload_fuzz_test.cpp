@@ -9,20 +9,24 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <limits>
 #include <memory>
 #include <random>
 #include <string>
 #include <vector>
 
+#include "afhub/devices/force_safety.hpp"
 #include "afhub/hub/bodies.hpp"
 #include "afhub/physics/adf_loader.hpp"
 #include "afhub/physics/simulation.hpp"
 #include "afhub/shm_layout/layout_id.hpp"
 #include "afhub/shm_layout/payload_check.hpp"
 #include "afhub/shm_layout/world_control.hpp"
+#include "afhub/teleop/teleop_law.hpp"
 #include "catalog_merge.hpp"
 #include "command_input.hpp"
 #include "format.hpp"
@@ -36,7 +40,8 @@ namespace {
 constexpr std::array kKinds{
     PayloadKind::kBodyState,    PayloadKind::kBodyCommand,   PayloadKind::kWorldState,
     PayloadKind::kWorldCommand, PayloadKind::kBodyDirectory, PayloadKind::kCatalog,
-    PayloadKind::kHealth,       PayloadKind::kLoopStats,     PayloadKind::kBenchSample};
+    PayloadKind::kHealth,       PayloadKind::kLoopStats,     PayloadKind::kBenchSample,
+    PayloadKind::kDeviceState,  PayloadKind::kDeviceCommand};
 
 std::uint64_t env_number(const char* name, std::uint64_t fallback) {
   const char* text = std::getenv(name);
@@ -46,7 +51,8 @@ std::uint64_t env_number(const char* name, std::uint64_t fallback) {
 // A valid payload of each kind, with its counts in use: the mutations' starting points.
 struct Seed {
   std::vector<unsigned char> bytes;
-  std::vector<std::size_t> count_offsets;  // where its counts are, to hit them often
+  std::vector<std::size_t> count_offsets;   // where its counts are, to hit them often
+  std::vector<std::size_t> number_offsets;  // doubles to set to NaN, infinities, extremes
 };
 
 // `bytes`: the payload's real size (states and commands are sent with their counted
@@ -104,7 +110,7 @@ Seed body_list_seed(PayloadKind kind) {
     set_name(joint_names_in(*list)[n], "joint" + std::to_string(n));
   counts.push_back(body_list_bytes(kBodies, kNames));  // the first joint reference
   bytes.resize(body_list_bytes(kBodies, kNames, kRefs));
-  return {std::move(bytes), std::move(counts)};
+  return {std::move(bytes), std::move(counts), {}};
 }
 
 std::vector<Seed> make_seeds() {
@@ -129,6 +135,31 @@ std::vector<Seed> make_seeds() {
   set_name(loop.name, "ctl sine");
   set_name(loop.body, "arm/base");
   auto bench = stamped<BenchSample>();
+  auto device = stamped<DeviceState>();
+  device.spec.max_force_n = 10.0;
+  device.spec.max_stiffness_npm = 3000.0;
+  device.spec.sensed = kDeviceTranslation | kDeviceGripper;
+  device.spec.button_count = 4;
+  set_name(device.spec.model, "virtual");
+  device.pose.position_m = {0.01, -0.02, 0.03};
+  device.gripper_angle_rad = 0.4;
+  device.gate = ForceGate::kApplying;
+  device.applied.force_n = {1.0, 0.0, -1.0};
+  auto device_command = stamped<DeviceCommand>();
+  device_command.wrench.force_n = {1.0, 2.0, 3.0};
+  device_command.gripper_force_n = 0.5;
+  device_command.enable = 1;
+  Seed device_seed = seed_of(device, {offsetof(DeviceState, gate)});
+  for (std::size_t at = offsetof(DeviceState, pose); at < offsetof(DeviceState, buttons);
+       at += sizeof(double))
+    device_seed.number_offsets.push_back(at);  // pose, velocity, gripper angle
+  for (std::size_t at = offsetof(DeviceState, spec) + offsetof(DeviceSpec, max_force_n);
+       at < offsetof(DeviceState, spec) + offsetof(DeviceSpec, sensed); at += sizeof(double))
+    device_seed.number_offsets.push_back(at);  // the spec's maxima
+  Seed command_seed = seed_of(device_command, {});
+  for (std::size_t at = offsetof(DeviceCommand, wrench); at < offsetof(DeviceCommand, enable);
+       at += sizeof(double))
+    command_seed.number_offsets.push_back(at);  // force, torque, gripper force
   return {
       seed_of(state, {offsetof(BodyState, joint_count), offsetof(BodyState, sensor_ray_count)},
               body_state_bytes(state.joint_count)),
@@ -142,6 +173,8 @@ std::vector<Seed> make_seeds() {
       seed_of(health, {offsetof(Health, process_count), offsetof(Health, mempool_count)}),
       seed_of(loop, {}),
       seed_of(bench, {}),
+      device_seed,
+      command_seed,
   };
 }
 
@@ -239,6 +272,11 @@ class Fuzzer {
           const std::uint32_t value = interesting_count();
           std::memcpy(bytes.data() + at, &value, sizeof value);
         }
+        if (!seed.number_offsets.empty() && random_() % 2 == 0) {
+          const std::size_t at = seed.number_offsets[random_() % seed.number_offsets.size()];
+          const double value = interesting_number();
+          std::memcpy(bytes.data() + at, &value, sizeof value);
+        }
         if (random_() % 8 == 0) bytes.resize(random_() % bytes.size());
         return bytes;
       }
@@ -253,6 +291,83 @@ class Fuzzer {
         1024, 1025, 1028, 1029, 65535, 65536, 65537, 0x7fffffff, 0xffffffff};
     return random_() % 3 ? kEdges[random_() % std::size(kEdges)]
                          : static_cast<std::uint32_t>(random_());
+  }
+
+  // Non-finite, extreme and ordinary doubles.
+  double interesting_number() {
+    static constexpr double kEdges[] = {std::numeric_limits<double>::quiet_NaN(),
+                                        -std::numeric_limits<double>::quiet_NaN(),
+                                        std::numeric_limits<double>::infinity(),
+                                        -std::numeric_limits<double>::infinity(),
+                                        std::numeric_limits<double>::max(),
+                                        -std::numeric_limits<double>::max(),
+                                        std::numeric_limits<double>::denorm_min(),
+                                        1e154,
+                                        -1e154,
+                                        0.0,
+                                        -0.0,
+                                        1.0,
+                                        -1.0,
+                                        1e-9};
+    return kEdges[random_() % std::size(kEdges)];
+  }
+
+  // A DeviceState check_payload accepted: its gate names one, its numbers are finite
+  // (what the readers rely on); then as `afhub echo` renders it and as the teleop law
+  // reads it, whose device force stays finite and within the max force.
+  void consume_device_state(const DeviceState& state, std::size_t& sink) {
+    EXPECT_LE(state.gate, ForceGate::kStopping) << "check_payload let a bad gate through";
+    const Pose& p = state.pose;
+    const Twist& v = state.velocity;
+    for (double x :
+         {p.position_m.x, p.position_m.y, p.position_m.z, p.orientation.x, p.orientation.y,
+          p.orientation.z, p.orientation.w, v.linear_mps.x, v.linear_mps.y, v.linear_mps.z,
+          v.angular_radps.x, v.angular_radps.y, v.angular_radps.z, state.gripper_angle_rad})
+      EXPECT_TRUE(std::isfinite(x)) << "check_payload let a non-finite device pose through";
+    if (::testing::Test::HasFailure()) return;
+    sink += cli::device_state_json(info_, state).size();
+    sink += cli::device_state_text(info_, state).size();
+    teleop::TeleopOutput out;
+    law_.step(state, {}, {}, 0.001, out);
+    const Vec3& f = out.device_wrench.force_n;
+    const double force = std::hypot(f.x, f.y, f.z);
+    EXPECT_TRUE(std::isfinite(force));
+    EXPECT_LE(force, kLawMaxForce * (1 + 1e-12));
+  }
+
+  // A DeviceCommand check_payload accepted: finite, and a driver's safety rules apply it
+  // within the device's maxima.
+  void consume_device_command(const DeviceCommand& command, std::size_t& sink) {
+    const Wrench& w = command.wrench;
+    for (double x : {w.force_n.x, w.force_n.y, w.force_n.z, w.torque_nm.x, w.torque_nm.y,
+                     w.torque_nm.z, command.gripper_force_n})
+      EXPECT_TRUE(std::isfinite(x)) << "check_payload let a non-finite force through";
+    ForceGate gate{};
+    const devices::DeviceOutput output =
+        safety_.apply(&command, command.header.publish_stamp_ns, gate);
+    const Vec3& f = output.wrench.force_n;
+    EXPECT_LE(std::hypot(f.x, f.y, f.z), safety_spec().max_force_n * (1 + 1e-12));
+    EXPECT_LE(std::abs(output.gripper_force_n), safety_spec().max_gripper_force_n);
+    sink += gate == ForceGate::kApplying;
+  }
+
+  static DeviceSpec safety_spec() {
+    DeviceSpec spec;
+    spec.max_force_n = 8.0;
+    spec.max_torque_nm = 1.0;
+    spec.max_gripper_force_n = 2.0;
+    return spec;
+  }
+  static constexpr double kLawMaxForce = 4.0;
+  static teleop::TeleopParams law_params() {
+    teleop::TeleopParams params;
+    params.haptic_gain_linear = 50.0;
+    params.haptic_gain_angular = 1.0;
+    params.max_force_n = kLawMaxForce;
+    params.deadband_n = 0.01;
+    params.body_gains.linear = {200.0, 10.0};
+    params.body_gains.angular = {1.0, 0.1};
+    return params;
   }
 
   void consume(PayloadKind kind, const unsigned char* data) {
@@ -326,7 +441,11 @@ class Fuzzer {
       case PayloadKind::kBenchSample:
         break;  // its fields are stamps and a round number, read as numbers
       case PayloadKind::kDeviceState:
+        consume_device_state(*reinterpret_cast<const DeviceState*>(data), sink);
+        break;
       case PayloadKind::kDeviceCommand:
+        consume_device_command(*reinterpret_cast<const DeviceCommand*>(data), sink);
+        break;
       case PayloadKind::kSceneDescription:
         break;  // not yet fuzzed: no seed
     }
@@ -359,6 +478,9 @@ class Fuzzer {
   std::vector<unsigned char> catalog_, health_, world_;
   BodyEntry info_{};
   CommandTarget target_;
+  teleop::TeleopLaw law_{law_params()};
+  // No ramp, a watchdog that never fires (commands are applied at their own stamp).
+  devices::ForceSafety safety_{safety_spec(), {1'000'000'000, 0.0, 0}};
   std::array<Tally, kKinds.size()> tallies_{};
   std::uint64_t applied_ = 0, steps_ = 0;
   std::size_t sink_ = 0;

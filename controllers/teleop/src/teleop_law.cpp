@@ -131,7 +131,7 @@ void TeleopLaw::step(const DeviceState& device, const Pose& body_pose, const Twi
   else if (map.gripper >= 0)
     gripper = pressed(buttons, map.gripper) ? 0.0 : 1.0;
   const bool camera_held = clutch_mode && pressed(buttons, map.camera);
-  const bool clutched = clutch_mode && (pressed(buttons, map.clutch) || camera_held);
+  const bool clutched = held_ || (clutch_mode && (pressed(buttons, map.clutch) || camera_held));
 
   // The device's pose with its axes turned into the world's (M = location * offset).
   const Quaterniond frame =

@@ -41,6 +41,8 @@ struct Link {
   TeleopOutput out;
   std::size_t joints{std::numeric_limits<std::size_t>::max()};  // capped below
   std::int64_t last_cycle_ns{0};
+  std::int64_t stale_ns{0};        // TeleopOptions::device_stale_ns
+  bool held{false};                // the device's samples are stale: the body is held
   std::uint64_t commands_sent{0};  // = the sequence of our last DeviceCommand
   std::uint64_t last_reported_command{0};
   std::array<std::int64_t, kInFlight> sample_stamp_of{};  // by command sequence % kInFlight
@@ -83,6 +85,22 @@ void cycle(Link& link, std::int64_t now, TeleopLatency* latency, std::size_t mos
   }
   const double dt = link.last_cycle_ns ? static_cast<double>(now - link.last_cycle_ns) * 1e-9 : 0.0;
   link.last_cycle_ns = now;
+  if (const bool stale = now - device->header.publish_stamp_ns > link.stale_ns;
+      stale != link.held) {
+    link.held = stale;
+    link.law.hold(stale);
+    const char* name = link.binding->device_name.c_str();
+    const char* body = link.binding->body.c_str();
+    if (stale)
+      std::fprintf(stderr,
+                   "afhub teleop: no sample from device/%s for %.0f ms (its driver stopped?): "
+                   "holding %s where it is, with no force on the device, until samples come "
+                   "back\n",
+                   name, static_cast<double>(link.stale_ns) * 1e-6, body);
+    else
+      std::fprintf(stderr, "afhub teleop: device/%s is back: %s moves on from where it was held\n",
+                   name, body);
+  }
   link.law.step(*device, state->pose, state->twist, dt, link.out);
 
   const std::size_t joints =
@@ -133,6 +151,7 @@ int run_teleop(const TeleopOptions& options, TeleopLatency* latency) {
     const BodyEntry entry = wait_for_body(binding.body, who, give_up_ns,
                                           binding.load_hint + ", or wait longer with --wait");
     links.push_back(std::make_unique<Link>(binding, entry));
+    links.back()->stale_ns = options.device_stale_ns;
     wait_for_device(*links.back(), who, give_up_ns);
     std::fprintf(stderr, "%s: %s: device/%s drives %s\n", who.c_str(),
                  binding.spec.identifier.c_str(), binding.device_name.c_str(),

@@ -69,10 +69,16 @@ class TeleopLaw {
   // that should be driven from where it is; clears the anchor.
   void restart_from(const Pose& origin) noexcept;
 
+  // While held (the device's samples are stale: its driver stopped), the law acts as
+  // under the clutch: the target holds, the device gets no force, and once let go it
+  // re-anchors, so the body continues from where it was held with no jump.
+  void hold(bool held) noexcept { held_ = held; }
+
  private:
   TeleopParams params_;
   bool anchored_{false};
   bool was_clutched_{false};
+  bool held_{false};
   std::uint32_t previous_buttons_{0};
   TeleopMode mode_{TeleopMode::kClutchCamera};
   double jaw_{0.5};

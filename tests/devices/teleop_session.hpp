@@ -1,0 +1,157 @@
+// A teleoperation session for end-to-end tests, with no hardware: `afhub run` of the
+// models, `afhub device run virtual` following a scripted trajectory, and `afhub teleop`
+// binding the two, on the test binary's hub; with readers of the driven body and the
+// device. Used with the project's own gripper and with AMBF's PR2 gripper.
+#pragma once
+
+#include <signal.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "afhub/hub/channel.hpp"
+#include "afhub/shm_layout/body_state.hpp"
+#include "afhub/shm_layout/channel_names.hpp"
+#include "afhub/shm_layout/device.hpp"
+#include "afhub_process.hpp"
+#include "model_files.hpp"
+
+namespace afhub::test {
+
+struct TeleopSetup {
+  std::vector<std::string> models;       // what `afhub run` loads
+  std::string devices_file;              // the input device file
+  std::vector<std::string> teleop_args;  // after the file: "-d 5", "--device NAME", ...
+  std::string body;                      // the driven root body's channel
+  std::string device;                    // the driver's --name
+  std::vector<std::string> driver_args;  // after `--name NAME`: the trajectory
+  std::string log;                       // log files' prefix
+};
+
+inline void pause_ms(int ms) {
+  std::this_thread::sleep_for(std::chrono::milliseconds(ms));
+}
+
+class TeleopSession {
+ public:
+  explicit TeleopSession(TeleopSetup setup)
+      : setup_(std::move(setup)),
+        physics_(spawn_afhub(run_args(), setup_.log + ".run")),
+        teleop_(spawn_afhub(teleop_args(), setup_.log + ".teleop")),
+        body_(body_state_channel(setup_.body)),
+        device_(body_state_channel(device_channel_name(setup_.device))) {
+    start_driver();
+  }
+  // Waits until the device applies a command's force (teleop is in the loop).
+  bool wait_running() {
+    using namespace std::chrono_literals;
+    return wait_until(
+        [&] {
+          const DeviceState* d = device_.latest();
+          return body_.latest() && d && d->gate == ForceGate::kApplying;
+        },
+        20s);
+  }
+  void kill_teleop() { kill(teleop_.pid, SIGKILL); }
+  // SIGKILLs the driver (its readers keep its last state).
+  void kill_driver() {
+    kill(driver_->pid, SIGKILL);
+    driver_->stop();
+  }
+  // A new driver: its trajectory from its start.
+  void start_driver() {
+    std::vector<std::string> args = {"device", "run", "virtual", "--name", setup_.device};
+    args.insert(args.end(), setup_.driver_args.begin(), setup_.driver_args.end());
+    driver_ = std::make_unique<ScopedProcess>(spawn_afhub(args, setup_.log + ".device"));
+  }
+  // A new device driver (its trajectory from its start) and a new teleoperation process.
+  void restart_device_and_teleop() {
+    teleop_.stop();
+    driver_->stop();
+    start_driver();
+    teleop_.pid = spawn_afhub(teleop_args(), setup_.log + ".teleop");
+  }
+  // The newest device state not seen before, or nullptr.
+  const DeviceState* new_device_state() {
+    const DeviceState* d = device_.latest();
+    return d && device_.updated() ? d : nullptr;
+  }
+  const BodyState& body() { return *body_.latest(); }
+  const DeviceState& device() { return *device_.latest(); }
+  std::string teleop_log() { return read_file(setup_.log + ".teleop"); }
+  std::string logs() {
+    return "run: " + read_file(setup_.log + ".run") + "\nteleop: " + teleop_log() +
+           "\ndevice: " + read_file(setup_.log + ".device");
+  }
+
+ private:
+  std::vector<std::string> run_args() const {
+    std::vector<std::string> args = {"run"};
+    args.insert(args.end(), setup_.models.begin(), setup_.models.end());
+    args.push_back("--no-autostart");
+    return args;
+  }
+  std::vector<std::string> teleop_args() const {
+    std::vector<std::string> args = {"teleop", setup_.devices_file};
+    args.insert(args.end(), setup_.teleop_args.begin(), setup_.teleop_args.end());
+    return args;
+  }
+
+  TeleopSetup setup_;
+  ScopedProcess physics_, teleop_;
+  std::unique_ptr<ScopedProcess> driver_;
+  LatestReader<BodyState> body_;
+  LatestReader<DeviceState> device_;
+};
+
+// Where the body went against where the scaled device went, over pairs of samples.
+struct Following {
+  Vec3 body_mean, device_mean;
+  double body_radius{0.0};      // mean horizontal distance from body_mean
+  double rms{0.0}, worst{0.0};  // of body - body_mean - scale (device - device_mean)
+  double median{0.0};           // of the same
+};
+
+// Samples the body and the device every 2 ms `count` times and compares them.
+inline Following measure_following(TeleopSession& session, double scale, int count) {
+  struct Pair {
+    Vec3 body, device;
+  };
+  std::vector<Pair> pairs;
+  for (int i = 0; i < count; ++i) {
+    pairs.push_back({session.body().pose.position_m, session.device().pose.position_m});
+    pause_ms(2);
+  }
+  Following f;
+  for (const Pair& p : pairs) {
+    f.body_mean = {f.body_mean.x + p.body.x, f.body_mean.y + p.body.y, f.body_mean.z + p.body.z};
+    f.device_mean = {f.device_mean.x + p.device.x, f.device_mean.y + p.device.y,
+                     f.device_mean.z + p.device.z};
+  }
+  const double n = static_cast<double>(pairs.size());
+  f.body_mean = {f.body_mean.x / n, f.body_mean.y / n, f.body_mean.z / n};
+  f.device_mean = {f.device_mean.x / n, f.device_mean.y / n, f.device_mean.z / n};
+  double square_sum = 0.0;
+  std::vector<double> errors;
+  for (const Pair& p : pairs) {
+    const double ex = (p.body.x - f.body_mean.x) - scale * (p.device.x - f.device_mean.x);
+    const double ey = (p.body.y - f.body_mean.y) - scale * (p.device.y - f.device_mean.y);
+    const double ez = (p.body.z - f.body_mean.z) - scale * (p.device.z - f.device_mean.z);
+    const double e2 = ex * ex + ey * ey + ez * ez;
+    f.worst = std::max(f.worst, std::sqrt(e2));
+    errors.push_back(std::sqrt(e2));
+    square_sum += e2;
+    f.body_radius += std::hypot(p.body.x - f.body_mean.x, p.body.y - f.body_mean.y) / n;
+  }
+  f.rms = std::sqrt(square_sum / n);
+  std::nth_element(errors.begin(), errors.begin() + errors.size() / 2, errors.end());
+  f.median = errors[errors.size() / 2];
+  return f;
+}
+
+}  // namespace afhub::test
