@@ -35,6 +35,18 @@ void register_bridge(CLI::App& app, Runner& selected) {
   dds->add_flag("--latency", options->latency,
                 "Report mirrored states' age from their source's publish (p50, p99, max); "
                 "only meaningful when both sides share a monotonic clock (one host)");
+  dds->add_option("--profile", options->profile,
+                  "ros2: also publish exported bodies as ROS 2 topics rt/<prefix>/<body>/"
+                  "{joint_states,pose,twist,wrench} (sensor_msgs/JointState, geometry_msgs/"
+                  "*Stamped; sim-time stamps) and, with --accept-commands, take "
+                  "sensor_msgs/JointState on rt/<prefix>/<body>/joint_command");
+  dds->add_option("--ros2-prefix", options->ros2_prefix,
+                  "With --profile ros2: a namespace before the body's channel name in ROS 2 "
+                  "topic names (default none: rt/<body channel>/...)");
+  dds->add_option("--security", options->security_dir,
+                  "DDS Security: a directory holding identity_ca.pem, identity_certificate.pem, "
+                  "identity_private_key.pem, permissions_ca.pem, governance.p7s and "
+                  "permissions.p7s (bridges/dds/security/make_credentials.sh makes them)");
   dds->add_option("--seconds", options->seconds, "Stop after this many seconds (default: never)");
   dds->callback(
       [&selected, options] { selected = [options] { return bridges::run_dds_bridge(*options); }; });

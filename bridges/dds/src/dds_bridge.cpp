@@ -23,6 +23,8 @@
 #include "afhub/shm_layout/error.hpp"
 #include "age_histogram.hpp"
 #include "dds_convert.hpp"
+#include "dds_security.hpp"
+#include "ros2_profile.hpp"
 
 namespace afhub::bridges {
 namespace {
@@ -97,9 +99,19 @@ struct MirroredBody {
 class Bridge {
  public:
   explicit Bridge(const DdsBridgeOptions& options) : options_(options) {
+    Qos participant;
+    if (!options.security_dir.empty())
+      add_security_properties(participant.qos, options.security_dir);
     participant_ = std::make_unique<Entity>(
-        dds_create_participant(options.domain, nullptr, nullptr), "creating the participant");
+        dds_create_participant(options.domain, participant.qos, nullptr),
+        options.security_dir.empty()
+            ? "creating the participant"
+            : "creating a secure participant (are the --security files valid: the "
+              "certificate signed by identity_ca.pem, the .p7s signed by permissions_ca.pem?)");
     const dds_entity_t p = participant_->id;
+    if (options.profile == "ros2" && options.export_bodies)
+      ros2_ = std::make_unique<Ros2Profile>(p, options.ros2_prefix, options.accept_commands,
+                                            options.max_command_age_s);
     state_topic_ = std::make_unique<Entity>(
         dds_create_topic(p, &afhub_dds_BodyState_desc, kStateTopic, nullptr, nullptr),
         "creating the state topic");
@@ -163,6 +175,7 @@ class Bridge {
       if (options_.export_bodies) {
         export_states();
         if (options_.accept_commands) import_commands();
+        if (ros2_ && options_.accept_commands) ros2_->import_commands();
       }
       if (options_.mirror) {
         mirror_infos();
@@ -201,6 +214,7 @@ class Bridge {
         state_arrival_.wait(deadline_ns - now_ns);
         export_states();
         if (options_.accept_commands) import_commands();
+        if (ros2_ && options_.accept_commands) ros2_->import_commands();
       }
       return;
     }
@@ -226,6 +240,7 @@ class Bridge {
                  static_cast<unsigned long long>(counters_.commands_in),
                  static_cast<unsigned long long>(counters_.stale_commands),
                  static_cast<unsigned long long>(counters_.bad_commands));
+    if (ros2_) ros2_->report();
     if (options_.latency && state_ages_.count() > 0)
       std::fprintf(stderr,
                    "afhub bridge dds: mirrored state age (source publish to publish here, "
@@ -255,6 +270,7 @@ class Bridge {
       if (entry.info.kind != ChannelKind::kBody) continue;
       ExportedBody body{channel, std::make_unique<BodyClient>(entry)};
       state_arrival_.attach(body.client->state_reader());  // when full: by the cycle alone
+      if (ros2_) ros2_->add_body(*body.client);
       exported_.push_back(std::move(body));
       // Its joint names, once, for mirrors (transient local: late ones too).
       afhub_dds_BodyInfo info{};
@@ -273,11 +289,13 @@ class Bridge {
   }
 
   void export_states() {
-    for (ExportedBody& body : exported_) {
+    for (std::size_t i = 0; i < exported_.size(); ++i) {
+      ExportedBody& body = exported_[i];
       const BodyState* state = body.client->latest_state();
       if (!state || !body.client->state_updated()) continue;
       to_dds(body.channel, *state, state_sample_);
       if (dds_write(state_writer_->id, &state_sample_) >= 0) ++counters_.states_out;
+      if (ros2_) ros2_->publish(i, *state);
     }
   }
 
@@ -396,6 +414,7 @@ class Bridge {
   std::unique_ptr<Entity> state_writer_, info_writer_, command_reader_;
   std::unique_ptr<Entity> state_reader_, info_reader_, command_writer_;
   std::unique_ptr<Entity> waitset_, state_arrived_;
+  std::unique_ptr<Ros2Profile> ros2_;  // --profile ros2; deleted before the participant
   afhub_dds_BodyState state_sample_{};
   afhub_dds_BodyCommand command_sample_{};
   SampleWaiter state_arrival_;  // before exported_: destroyed after their readers
@@ -428,6 +447,15 @@ int run_dds_bridge(const DdsBridgeOptions& options) {
     throw Error("--max-command-age must be between 0 and 10 s");
   if (options.domain > 232) throw Error("--domain must be 0 to 232 (DDS domain ids)");
   if (options.body_globs.empty()) throw Error("--bodies needs at least one glob");
+  if (!options.profile.empty() && options.profile != "ros2")
+    throw Error("--profile " + options.profile +
+                ": unknown; the one profile is ros2 (afhub's own types are always published)");
+  if (options.profile == "ros2" && !options.export_bodies)
+    throw Error("--profile ros2 publishes exported bodies as ROS 2 topics: add --export");
+  if (!options.security_dir.empty()) {
+    Qos checked;  // the files, before anything starts
+    add_security_properties(checked.qos, options.security_dir);
+  }
   install_stop_signal_handlers();
   signal(SIGUSR1, request_report);
   connect_to_hub("bridge-dds", HubPolicy::kRequire);

@@ -25,6 +25,12 @@ struct DdsBridgeOptions {
   // meaningful where both sides share that clock (namespaces on one host).
   bool latency = false;
   double seconds = 0.0;  // 0: until SIGINT/SIGTERM
+  // "ros2": exported bodies also as ROS 2 topics rt/<ros2_prefix>/<channel>/... (see
+  // bridges/dds/src/ros2_profile.hpp), joint commands in with accept_commands.
+  std::string profile;
+  std::string ros2_prefix;
+  // DDS Security credentials (see bridges/dds/src/dds_security.hpp); empty: none.
+  std::string security_dir;
 };
 
 // Throws afhub::Error on bad options or when DDS cannot start; returns the exit code.
