@@ -317,15 +317,14 @@ class Bridge {
         ++counters_.unknown_bodies;
         continue;
       }
+      if (!valid_dds_command(command_sample_)) {
+        ++counters_.bad_commands;
+        continue;
+      }
       BodyCommand* command = body->client->loan_command(
           std::min<std::uint32_t>(command_sample_.joints._length, kMaxJointsPerBody));
       if (!command) continue;
-      if (!from_dds(command_sample_, *command)) {
-        ++counters_.bad_commands;
-        // A loaned chunk must go somewhere: an empty command holds nothing new.
-        command->joint_count = 0;
-        continue;
-      }
+      from_dds(command_sample_, *command);
       body->client->publish_command(command);
       ++counters_.commands_in;
     }

@@ -140,10 +140,15 @@ void from_dds(const afhub_dds_BodyState& sample, BodyState& state) noexcept {
                        sample.joints._buffer[j].effort};
 }
 
-bool from_dds(const afhub_dds_BodyCommand& sample, BodyCommand& command) noexcept {
+bool valid_dds_command(const afhub_dds_BodyCommand& sample) noexcept {
   if (sample.cartesian_type > 2 || sample.actuate._length > kMaxActuatorsPerBody) return false;
   for (std::uint32_t j = 0; j < sample.joints._length; ++j)
     if (sample.joints._buffer[j].type > 2) return false;
+  return true;
+}
+
+bool from_dds(const afhub_dds_BodyCommand& sample, BodyCommand& command) noexcept {
+  if (!valid_dds_command(sample)) return false;
   command.header.sim_step = sample.header.sim_step;
   command.header.sim_time_s = sample.header.sim_time_s;
   command.cartesian_type = static_cast<CartesianCommandType>(sample.cartesian_type);

@@ -24,8 +24,10 @@ void to_dds(std::string_view channel, const BodyCommand& command,
 // copied (joint_count set accordingly). The header's sim step and time are copied;
 // the hub's writer stamps the rest on publish.
 void from_dds(const afhub_dds_BodyState& sample, BodyState& state) noexcept;
-// False (command untouched past its joints) when a type is out of range: a
-// network command is untrusted.
+// False when a type or count is out of range: a network command is untrusted.
+// Checked before loaning, so that a refused command holds no chunk.
+bool valid_dds_command(const afhub_dds_BodyCommand& sample) noexcept;
+// False (command untouched) when !valid_dds_command(sample).
 bool from_dds(const afhub_dds_BodyCommand& sample, BodyCommand& command) noexcept;
 
 }  // namespace afhub::bridges
