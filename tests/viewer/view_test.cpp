@@ -188,6 +188,9 @@ TEST_F(ViewTest, ServesThePageThreeJsAndExactlyTheListedMeshes) {
       http_request(view.port, "POST", "/command?body=afhub/arm/base&joint=0&value=0.5");
   EXPECT_EQ(command.status, 403);
   EXPECT_TRUE(contains(command.body, "--allow-commands"));
+  const HttpReply world = http_request(view.port, "POST", "/world?action=pause");
+  EXPECT_EQ(world.status, 403);
+  EXPECT_TRUE(contains(world.body, "--allow-commands"));
 }
 
 TEST_F(ViewTest, StreamsBinaryPoseFramesOfEveryCatalogBodyAtDisplayRate) {
@@ -208,12 +211,25 @@ TEST_F(ViewTest, StreamsBinaryPoseFramesOfEveryCatalogBodyAtDisplayRate) {
 
   const std::vector<std::uint8_t> frame = frames.last_frame();
   ASSERT_GE(frame.size(), 32U);
-  std::uint32_t magic = 0, entries = 0, listed = 0;
+  std::uint32_t magic = 0, entries = 0, listed = 0, blocks = 0;
   std::memcpy(&magic, frame.data(), 4);
   std::memcpy(&entries, frame.data() + 8, 4);
   std::memcpy(&listed, frame.data() + 24, 4);
+  std::memcpy(&blocks, frame.data() + 28, 4);
   EXPECT_EQ(magic, 0x31564641U);
-  EXPECT_EQ(frame.size(), 32U + 32U * entries);
+  // After the entries, the joint blocks: u16 scene index, u16 count, count x f32.
+  // The arm's base carries its 7 joints, link1 6, ... link6 1; the cube none.
+  std::size_t at = 32U + 32U * entries;
+  std::uint32_t joints = 0;
+  for (std::uint32_t b = 0; b < blocks && at + 4 <= frame.size(); ++b) {
+    std::uint16_t count = 0;
+    std::memcpy(&count, frame.data() + at + 2, 2);
+    joints += count;
+    at += 4U + 4U * count;
+  }
+  EXPECT_EQ(blocks, 7U);
+  EXPECT_EQ(joints, 7U + 6U + 5U + 4U + 3U + 2U + 1U);
+  EXPECT_EQ(frame.size(), at) << "the frame is its header, entries and joint blocks";
   EXPECT_EQ(entries, catalog_bodies());
   EXPECT_EQ(listed, catalog_bodies());
   for (std::uint32_t e = 0; e < entries; ++e) {
@@ -240,6 +256,14 @@ TEST_F(ViewTest, AJointCommandMovesTheJointOnlyWithAllowCommands) {
       400);
   EXPECT_EQ(http_request(view.port, "GET", "/command?body=afhub/arm/base&joint=0&value=0.5").status,
             405);
+  // World commands: a known action, and a step only while paused.
+  const HttpReply unknown = http_request(view.port, "POST", "/world?action=fly");
+  EXPECT_EQ(unknown.status, 400);
+  EXPECT_TRUE(contains(unknown.body, "pause, resume, step, reset")) << unknown.body;
+  const HttpReply step = http_request(view.port, "POST", "/world?action=step");
+  EXPECT_EQ(step.status, 400);
+  EXPECT_TRUE(contains(step.body, "pause it first")) << step.body;
+  EXPECT_EQ(http_request(view.port, "GET", "/world?action=pause").status, 405);
   BodyClient base("afhub/arm/base");
   const double target = 0.6;
   const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(3);

@@ -7,6 +7,7 @@ namespace afhub::viewer {
 const std::string& page_html() {
   static const std::string html = R"(<!DOCTYPE html>
 <html><head><meta charset="utf-8"><title>afhub view</title>
+<link rel="icon" href="data:,">
 <style>
 body { margin: 0; overflow: hidden; background: #20262e; font: 13px sans-serif; color: #ddd; }
 #info { position: absolute; top: 6px; left: 8px; background: rgba(0,0,0,0.4); padding: 4px 8px; }
@@ -15,10 +16,18 @@ body { margin: 0; overflow: hidden; background: #20262e; font: 13px sans-serif; 
            padding: 4px 8px; white-space: pre; font-family: monospace; }
 #drive { position: absolute; top: 36px; right: 8px; background: rgba(0,0,0,0.5); padding: 4px 8px; }
 #drive label { display: block; }
-#drive:empty, #inspect:empty { display: none; }
+#drive:empty, #joints:empty, #message:empty { display: none; }
+#inspect[hidden] { display: none; }
+#plot { display: block; margin-top: 4px; }
+#message { position: absolute; top: 36px; left: 8px; background: #7a2b2b; padding: 4px 8px; }
+#cameras .current { font-weight: bold; }
+#cameras .paired { color: #fc6; }
+#world button { margin-right: 4px; }
 </style></head>
 <body><div id="info">afhub view <span id="status">connecting</span>
-<span id="cameras"></span></div><div id="inspect"></div><div id="drive"></div>
+<span id="cameras"></span><span id="world"></span></div><div id="message"></div>
+<div id="inspect" hidden><div id="pose"></div><div id="joints"></div>
+<canvas id="plot" width="320" height="120"></canvas></div><div id="drive"></div>
 <script src="/three/three.min.js"></script>
 <script src="/three/OrbitControls.js"></script>
 <script src="/three/STLLoader.js"></script>
@@ -97,12 +106,26 @@ function meshGeometry(index, body, material, group) {
   }
 }
 
+// Input devices' paired cameras (`afhub view --input-devices FILE`): {camera: [device]}.
+let paired = {};
+const pairedLoaded = fetch('/paired.json').then((r) => r.json()).then((p) => { paired = p; });
+
+// A world camera's short name: "afhub/world/cameras/overview" -> "overview".
+function shortName(name) { return name.slice(name.lastIndexOf('/') + 1); }
+
 function chooseCamera(cameras) {
   const wanted = params.get('camera');
-  let chosen = cameras[0];
+  let chosen = null;
+  const message = document.getElementById('message');
+  message.textContent = '';
   if (wanted) {
-    const found = cameras.find((c) => c.name === wanted || c.name.endsWith('/' + wanted));
-    if (found) chosen = found;
+    chosen = cameras.find((c) => c.name === wanted || shortName(c.name) === wanted) || null;
+    if (!chosen)
+      message.textContent = 'No camera named "' + wanted + '" in this world; ' +
+          (cameras.length ? 'its cameras: ' + cameras.map((c) => shortName(c.name)).join(', ') :
+                            'it has no cameras') + '. Showing the default view.';
+  } else {
+    chosen = cameras[0] || null;
   }
   if (chosen) {
     camera.position.copy(vec(chosen.position));
@@ -110,15 +133,43 @@ function chooseCamera(cameras) {
     controls.target.copy(vec(chosen.position).add(vec(chosen.direction)));
   } else {
     camera.position.set(2.0, 1.6, 1.4);
+    camera.up.set(0, 0, 1);
     controls.target.set(0, 0, 0.5);
   }
   controls.update();
-  document.getElementById('cameras').innerHTML = cameras.map((c) =>
-      '<a href="/?camera=' + encodeURIComponent(c.name) + '">' + c.name + '</a>').join('');
+  window.afhub.camera = chosen ? chosen.name : '';
+  const list = document.getElementById('cameras');
+  list.textContent = '';
+  for (const c of cameras) {
+    const link = document.createElement('a');
+    link.href = '/?camera=' + encodeURIComponent(shortName(c.name));
+    link.textContent = shortName(c.name);
+    if (c === chosen) link.className = 'current';
+    // A device pairs a camera by its name in the world file (full or short).
+    const devices = paired[c.name] || paired[shortName(c.name)];
+    if (devices) {
+      link.className += ' paired';
+      link.textContent += ' [paired: ' + devices.join(', ') + ']';
+      link.title = 'input devices paired with this camera: ' + devices.join(', ');
+    }
+    list.appendChild(link);
+  }
+  // Pairings that name no camera of this world are said, not dropped.
+  const named = new Set(cameras.flatMap((c) => [c.name, shortName(c.name)]));
+  const unmatched = Object.keys(paired).filter((name) => !named.has(name));
+  if (unmatched.length) {
+    const note = document.createElement('span');
+    note.className = 'paired';
+    note.textContent = unmatched.map((name) => name + ' (paired by ' + paired[name].join(', ') +
+        ') is not a camera name of this world').join('; ');
+    list.appendChild(note);
+  }
 }
 
 async function loadScene() {
   loading = true;
+  jointNames = await (await fetch('/joints.json', {cache: 'no-store'})).json();
+  joints = [];
   const response = await fetch('/scene.json', {cache: 'no-store'});
   const info = await response.json();
   if (root) world.remove(root);
@@ -155,6 +206,7 @@ async function loadScene() {
   sceneInfo = info;
   generation = info.generation >>> 0;
   window.afhub.sceneBodies = bodies.length;
+  await pairedLoaded;
   chooseCamera(info.cameras);
   loading = false;
 }
@@ -186,20 +238,117 @@ function applyFrame(buffer) {
     body.quaternion.set(view.getFloat32(at + 16, true), view.getFloat32(at + 20, true),
                         view.getFloat32(at + 24, true), view.getFloat32(at + 28, true));
   }
+  // The joint blocks: per body with joints, its joint positions.
+  let at = 32 + count * 32;
+  const blocks = view.getUint32(28, true);
+  for (let k = 0; k < blocks; k++) {
+    const index = view.getUint16(at, true), n = view.getUint16(at + 2, true);
+    if (!joints[index] || joints[index].length !== n) joints[index] = new Float32Array(n);
+    for (let j = 0; j < n; j++) joints[index][j] = view.getFloat32(at + 4 + 4 * j, true);
+    at += 4 + 4 * n;
+  }
+  window.afhub.simTime = time;
+  window.afhub.paused = paused;
   // A live body the catalog no longer lists is gone.
   bodies.forEach((body, i) => { if (sceneInfo.bodies[i].publishes && !seen[i]) body.visible = false; });
   document.getElementById('status').textContent =
       (paused ? 'paused' : 'running') + ' t=' + time.toFixed(2) + ' s, ' + count + ' live bodies';
+  const pause = document.getElementById('pause');
+  if (pause) pause.textContent = paused ? 'resume' : 'pause';
+  recordPlot(time);
   showInspected();
 }
 
+// Inspect: the clicked body's live pose and joint positions, and a plot of its
+// ticked joints over the last seconds of simulation time.
 let inspected = null;
+let jointNames = {};   // channel -> joint names (from /joints.json)
+let joints = [];       // per scene body: its newest joint positions (Float32Array)
+const plotColors = ['#ff6b6b', '#6bcB77', '#4d96ff', '#ffd93d', '#c77dff', '#ff9f45', '#2ec4b6'];
+const plotSeconds = 5;
+let plotHistory = [];  // {t, values} of the inspected body, oldest first
+let plotted = [];      // per joint of the inspected body: ticked
+
+function inspectedJoints() { return inspected ? joints[inspected.userData.index] : undefined; }
+
 function showInspected() {
   if (!inspected) return;
   const p = inspected.position, q = inspected.quaternion;
-  document.getElementById('inspect').textContent = inspected.userData.channel +
+  document.getElementById('pose').textContent = inspected.userData.channel +
       '\nposition ' + [p.x, p.y, p.z].map((v) => v.toFixed(3)).join(' ') +
       '\norientation ' + [q.x, q.y, q.z, q.w].map((v) => v.toFixed(3)).join(' ');
+  const values = inspectedJoints();
+  document.querySelectorAll('#joints .value').forEach((cell, j) => {
+    cell.textContent = values && j < values.length ? values[j].toFixed(4) : '-';
+  });
+  drawPlot();
+}
+
+function recordPlot(time) {
+  const values = inspectedJoints();
+  if (!values) return;
+  const last = plotHistory[plotHistory.length - 1];
+  if (last && time < last.t) plotHistory = [];  // the world was reset
+  if (last && time === last.t) return;          // paused: nothing new
+  plotHistory.push({t: time, values: Array.from(values)});
+  while (plotHistory.length && plotHistory[0].t < time - plotSeconds) plotHistory.shift();
+}
+
+function drawPlot() {
+  const canvas = document.getElementById('plot');
+  const g = canvas.getContext('2d');
+  g.fillStyle = '#10151b';
+  g.fillRect(0, 0, canvas.width, canvas.height);
+  if (plotHistory.length < 2) return;
+  const end = plotHistory[plotHistory.length - 1].t;
+  let low = Infinity, high = -Infinity;
+  for (const sample of plotHistory)
+    sample.values.forEach((v, j) => { if (plotted[j]) { low = Math.min(low, v); high = Math.max(high, v); } });
+  if (low === Infinity) return;
+  if (high - low < 0.02) { low -= 0.01; high += 0.01; }  // a still joint: a flat line mid-plot
+  const x = (t) => (t - (end - plotSeconds)) / plotSeconds * canvas.width;
+  const y = (v) => canvas.height - 12 - (v - low) / (high - low) * (canvas.height - 24);
+  g.lineWidth = 2;
+  plotted.forEach((on, j) => {
+    if (!on) return;
+    g.strokeStyle = plotColors[j % plotColors.length];
+    g.beginPath();
+    plotHistory.forEach((sample, i) => {
+      if (i === 0) g.moveTo(x(sample.t), y(sample.values[j]));
+      else g.lineTo(x(sample.t), y(sample.values[j]));
+    });
+    g.stroke();
+  });
+  g.fillStyle = '#aab';
+  g.font = '10px sans-serif';
+  g.fillText(high.toFixed(3), 2, 10);
+  g.fillText(low.toFixed(3) + '   last ' + plotSeconds + ' s', 2, canvas.height - 2);
+}
+
+async function inspect(body) {
+  if (body) jointNames = await (await fetch('/joints.json', {cache: 'no-store'})).json();
+  inspected = body;
+  plotHistory = [];
+  const panel = document.getElementById('inspect');
+  const list = document.getElementById('joints');
+  list.textContent = '';
+  panel.hidden = !body;
+  if (!body) return;
+  const names = jointNames[body.userData.channel] || [];
+  plotted = names.map(() => true);
+  names.forEach((name, j) => {
+    const row = document.createElement('label');
+    row.style.display = 'block';
+    row.style.color = plotColors[j % plotColors.length];
+    const tick = document.createElement('input');
+    Object.assign(tick, {type: 'checkbox', checked: true, title: 'plot this joint'});
+    tick.addEventListener('change', () => { plotted[j] = tick.checked; });
+    const value = document.createElement('span');
+    value.className = 'value';
+    row.append(tick, name + ' ', value);
+    list.appendChild(row);
+  });
+  showInspected();
 }
 
 const raycaster = new THREE.Raycaster();
@@ -208,42 +357,45 @@ renderer.domElement.addEventListener('click', (event) => {
                                     -(event.clientY / innerHeight) * 2 + 1);
   raycaster.setFromCamera(pointer, camera);
   const hits = raycaster.intersectObjects(bodies, true);
-  inspected = null;
+  let found = null;
   for (const hit of hits) {
     let o = hit.object;
     while (o && o.userData.channel === undefined) o = o.parent;
-    if (o) { inspected = o; break; }
+    if (o) { found = o; break; }
   }
-  document.getElementById('inspect').textContent = '';
-  showInspected();
-  showDrive();
+  inspect(found).then(showDrive);
 });
 
-// Joint sliders (only when `afhub view --allow-commands`): a moved slider sends a
-// position command, repeated while the panel is open (the physics' watchdog
-// releases the joints half a second after the last).
+// Drive (only with `afhub view --allow-commands`; the server refuses otherwise):
+// joint sliders for the inspected body, whose moved slider sends a position command,
+// repeated while the panel is open (the physics' watchdog releases the joints half
+// a second after the last); and the world's pause, step and reset.
 let commandsAllowed = false;
-let jointNames = {};
 let driving = null;  // {channel, joint, value}
-fetch('/options.json').then((r) => r.json()).then((o) => { commandsAllowed = o.commands; });
+const optionsLoaded = fetch('/options.json').then((r) => r.json()).then((o) => {
+  commandsAllowed = o.commands;
+  if (commandsAllowed) showWorldButtons();
+});
 function sendDrive() {
   if (!driving) return;
   fetch('/command?body=' + encodeURIComponent(driving.channel) + '&joint=' + driving.joint +
         '&value=' + driving.value, {method: 'POST'});
 }
 setInterval(sendDrive, 200);
-async function showDrive() {
+function showDrive() {
   const panel = document.getElementById('drive');
-  panel.innerHTML = '';
+  panel.textContent = '';
   driving = null;
   if (!commandsAllowed || !inspected) return;
-  jointNames = await (await fetch('/joints.json', {cache: 'no-store'})).json();
   const channel = inspected.userData.channel;
+  const values = inspectedJoints();
   (jointNames[channel] || []).forEach((name, joint) => {
     const label = document.createElement('label');
     label.textContent = name + ' ';
     const slider = document.createElement('input');
-    Object.assign(slider, {type: 'range', min: -3.14, max: 3.14, step: 0.01, value: 0});
+    const now = values && joint < values.length ? values[joint] : 0;
+    Object.assign(slider, {type: 'range', min: -3.14, max: 3.14, step: 0.01, value: now});
+    slider.dataset.joint = joint;
     slider.addEventListener('input', () => {
       driving = {channel: channel, joint: joint, value: slider.value};
       sendDrive();
@@ -251,6 +403,24 @@ async function showDrive() {
     label.appendChild(slider);
     panel.appendChild(label);
   });
+}
+function worldCommand(action) {
+  fetch('/world?action=' + action, {method: 'POST'}).then(async (r) => {
+    document.getElementById('message').textContent = r.ok ? '' : await r.text();
+  });
+}
+function showWorldButtons() {
+  const bar = document.getElementById('world');
+  for (const [id, title] of [['pause', 'pause or resume the simulation'],
+                             ['step', 'while paused: advance one step'],
+                             ['reset', 'put every body back where the model starts it']]) {
+    const button = document.createElement('button');
+    Object.assign(button, {id: id, textContent: id, title: title});
+    button.addEventListener('click', () => {
+      worldCommand(id === 'pause' ? (window.afhub.paused ? 'resume' : 'pause') : id);
+    });
+    bar.appendChild(button);
+  }
 }
 
 function connect() {

@@ -17,6 +17,9 @@ void put(std::vector<std::uint8_t>& out, T value) {
   std::memcpy(out.data() + at, &value, sizeof value);  // x86 and ARM Linux: little-endian
 }
 
+static_assert(kMaxSceneBodies <= 65535 && kMaxJointsPerBody <= 65535,
+              "a joint block's index and count are 16 bits");
+
 }  // namespace
 
 PoseFeed::PoseFeed(const std::string& world)
@@ -79,8 +82,9 @@ std::shared_ptr<const ViewScene> PoseFeed::update(std::vector<std::uint8_t>& fra
   put(frame, std::uint32_t{paused_ ? 1U : 0U});
   put(frame, sim_time_s_);
   put(frame, catalog_bodies_);
-  put(frame, std::uint32_t{0});
-  std::uint32_t entries = 0;
+  put(frame, std::uint32_t{0});  // the joint block count, set below
+  std::uint32_t entries = 0, blocks = 0;
+  joint_blocks_.clear();
   for (std::size_t b = 0; b < states_.size(); ++b) {
     if (!states_[b]) continue;
     const BodyState* state = states_[b]->latest();
@@ -91,8 +95,17 @@ std::shared_ptr<const ViewScene> PoseFeed::update(std::vector<std::uint8_t>& fra
                      pose.orientation.y, pose.orientation.z, pose.orientation.w})
       put(frame, static_cast<float>(v));
     ++entries;
+    if (state->joint_count == 0) continue;
+    // Scene bodies (kMaxSceneBodies) and joints (kMaxJointsPerBody) fit 16 bits.
+    put(joint_blocks_, static_cast<std::uint16_t>(b));
+    put(joint_blocks_, static_cast<std::uint16_t>(state->joint_count));
+    for (std::uint32_t j = 0; j < state->joint_count; ++j)
+      put(joint_blocks_, static_cast<float>(state->joints[j].position));
+    ++blocks;
   }
+  frame.insert(frame.end(), joint_blocks_.begin(), joint_blocks_.end());
   std::memcpy(frame.data() + 8, &entries, sizeof entries);
+  std::memcpy(frame.data() + 28, &blocks, sizeof blocks);
   return changed;
 }
 

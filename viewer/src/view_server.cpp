@@ -126,18 +126,19 @@ int ViewServer::handle_request(mg_connection* connection) {
   // The URI as sent (decoded, not cleaned): every route below is an exact match.
   const std::string_view uri = request->local_uri_raw ? request->local_uri_raw : "";
   const std::string_view method = request->request_method ? request->request_method : "";
-  if (uri == "/command") {
-    if (!options_.allow_commands || !options_.run_command) {
+  if (uri == "/command" || uri == "/world") {
+    const auto& run = uri == "/command" ? options_.run_command : options_.run_world;
+    if (!options_.allow_commands || !run) {
       send_text(connection, 403, "text/plain",
-                "commands are off: start `afhub view --allow-commands` to drive joints\n");
+                "commands are off: start `afhub view --allow-commands` to drive joints and "
+                "pause, step or reset the world\n");
       return 1;
     }
     if (method != "POST") {
       send_text(connection, 405, "text/plain", "POST a command\n");
       return 1;
     }
-    const std::string problem =
-        options_.run_command(request->query_string ? request->query_string : "");
+    const std::string problem = run(request->query_string ? request->query_string : "");
     send_text(connection, problem.empty() ? 200 : 400, "text/plain",
               problem.empty() ? "ok\n" : problem + "\n");
     return 1;
@@ -162,6 +163,8 @@ int ViewServer::handle_request(mg_connection* connection) {
   } else if (uri == "/options.json") {
     send_text(connection, 200, "application/json",
               options_.allow_commands ? R"({"commands":true})" : R"({"commands":false})");
+  } else if (uri == "/paired.json") {
+    send_text(connection, 200, "application/json", options_.paired_cameras_json);
   } else if (uri.starts_with("/three/")) {
     const auto file = three_files().find(uri.substr(7));
     if (file == three_files().end()) {

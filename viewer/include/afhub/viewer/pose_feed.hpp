@@ -7,9 +7,13 @@
 // Frame, little-endian:
 //   u32 magic 'AFV1' (0x31564641), u32 scene generation (the viewer counts the scenes),
 //   u32 entry count, u32 flags (bit 0: paused), f64 simulation time,
-//   u32 bodies in the catalog, u32 reserved;
+//   u32 bodies in the catalog, u32 joint blocks;
 //   then per entry (a scene body with a live state): u32 scene index,
-//   f32 position x y z, f32 orientation x y z w.
+//   f32 position x y z, f32 orientation x y z w;
+//   then per joint block (an entry whose body has joints, in the entries' order):
+//   u16 scene index, u16 joint count N, N x f32 joint position (rad or m).
+// The arm's 7 joints add 32 bytes: every body's joints travel, so the page can
+// inspect and plot any body without asking the server for it.
 #pragma once
 
 #include <cstdint>
@@ -52,6 +56,7 @@ class PoseFeed {
   std::uint32_t catalog_bodies_ = 0;
   // Per scene body, its state reader while the catalog lists it.
   std::vector<std::unique_ptr<LatestReader<BodyState>>> states_;
+  std::vector<std::uint8_t> joint_blocks_;  // reused: no allocation once grown
   std::string joints_json_ = "{}";
   bool joints_changed_ = false;
   double sim_time_s_ = 0.0;

@@ -4,11 +4,13 @@
 //   /scene.json    the scene: bodies, meshes by index, lights, cameras
 //   /joints.json   each live body's joint names (for the sliders)
 //   /options.json  {"commands": true|false}
+//   /paired.json   input devices' paired cameras, {"CAMERA": ["DEVICE", ...]} (--input-devices)
 //   /three/FILE    three.js and the few example files the page uses, from Debian's
 //                  libjs-three (/usr/share/javascript/three), by a fixed list
 //   /mesh/N        the mesh file scene body N lists, and no other file
 //   /ws            a WebSocket: binary pose frames (pose_feed.hpp), pushed by broadcast()
-//   /command       POST: refused (403) unless the server allows commands
+//   /command       POST: a joint command; refused (403) unless the server allows commands
+//   /world         POST action=pause|resume|step|reset; refused (403) the same way
 // Anything else is 404; nothing else is read from the disk.
 #pragma once
 
@@ -34,6 +36,9 @@ struct ServerOptions {
   // With allow_commands: runs a command's query string ("body=3&joint=1&value=0.5"),
   // returning "" when done or what is wrong.
   std::function<std::string(const std::string&)> run_command;
+  // With allow_commands: runs a world command's query string ("action=pause"), the same way.
+  std::function<std::string(const std::string&)> run_world;
+  std::string paired_cameras_json = "{}";  // what /paired.json serves
 };
 
 class ViewServer {

@@ -1,0 +1,334 @@
+// The viewer's page in headless Chromium, driven over the DevTools protocol, beside
+// `afhub run` of the example scene (the arm, the floor and the world file's three
+// cameras): inspect a clicked body's joint positions and plot them, move a joint with
+// a slider (only with --allow-commands), pause, step and reset with the buttons, open
+// a camera's viewport by name, and mark the cameras input devices pair.
+#include <gtest/gtest.h>
+#include <stdlib.h>
+
+#include <cmath>
+#include <fstream>
+#include <memory>
+#include <regex>
+#include <thread>
+
+#include "afhub/hub/bodies.hpp"
+#include "afhub/hub/hub_presence.hpp"
+#include "afhub_process.hpp"
+#include "devtools_client.hpp"
+#include "web_client.hpp"
+#include "world_reader.hpp"
+
+namespace afhub::test {
+namespace {
+
+const std::string kModels = AFHUB_EXAMPLE_MODELS;
+
+// An input device file pairing the world's camera "rcm_close" (by its name).
+std::string paired_devices() {
+  return "input devices: [Test Touch]\n"
+         "Test Touch:\n"
+         "  hardware name: PHANTOM Omni\n"
+         "  haptic gain: {linear: 0.0, angular: 0.0}\n"
+         "  simulated multibody: " +
+         kModels +
+         "/gripper.yaml\n"
+         "  root link: /afhub/gripper/BODY palm\n"
+         "  pair cameras: [rcm_close]\n";
+}
+
+struct View {
+  std::unique_ptr<ScopedProcess> process;
+  std::string url;  // http://127.0.0.1:PORT
+  int port = 0;
+};
+
+class ViewPageTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    char pattern[] = "/tmp/afhub_view_page_test_XXXXXX";
+    ASSERT_NE(mkdtemp(pattern), nullptr);
+    dir_ = pattern;
+    std::ofstream(dir_ + "/input_devices.yaml") << paired_devices();
+    physics_ = std::make_unique<ScopedProcess>(
+        spawn_afhub({"run", "--launch", kModels + "/launch.yaml", "-l", "0"}, dir_ + "/run.log"));
+    connect_to_hub("viewpagetest", HubPolicy::kRequire);
+    base_ = std::make_unique<BodyClient>("afhub/arm/base");
+    ASSERT_TRUE(
+        wait_until([] { return base_->latest_state() != nullptr; }, std::chrono::seconds(20)))
+        << read_file(dir_ + "/run.log");
+    read_only_ = start_view({"--input-devices", dir_ + "/input_devices.yaml"});
+    commands_ = start_view({"--allow-commands"});
+    browser_ = std::make_unique<Browser>(dir_);
+    ASSERT_TRUE(browser_->ready()) << browser_->problem();
+  }
+  static void TearDownTestSuite() {
+    browser_.reset();
+    read_only_.process.reset();
+    commands_.process.reset();
+    base_.reset();
+    physics_.reset();
+  }
+
+  static View start_view(const std::vector<std::string>& extra) {
+    View view;
+    static int started = 0;
+    const std::string log = dir_ + "/view" + std::to_string(++started) + ".log";
+    std::vector<std::string> args = {"view", "--port", "0"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    view.process = std::make_unique<ScopedProcess>(spawn_afhub(args, log));
+    const std::regex url("http://127\\.0\\.0\\.1:([0-9]+)/");
+    wait_until(
+        [&] {
+          std::smatch match;
+          const std::string text = read_file(log);
+          if (!std::regex_search(text, match, url)) return false;
+          view.port = std::stoi(match[1]);
+          return true;
+        },
+        std::chrono::seconds(10));
+    view.url = "http://127.0.0.1:" + std::to_string(view.port);
+    EXPECT_GT(view.port, 0) << read_file(log);
+    return view;
+  }
+
+  // Opens `url` and waits until the page draws live poses.
+  static void open(const std::string& url) {
+    browser_->clear_console();
+    ASSERT_TRUE(browser_->navigate(url)) << browser_->problem();
+    ASSERT_TRUE(wait_until([] { return browser_->evaluate("window.afhub.frames > 10").boolean; },
+                           std::chrono::seconds(30)))
+        << browser_->problem();
+  }
+
+  // No uncaught exception, console error or failed load since open().
+  static void expect_clean_console() {
+    for (const std::string& message : browser_->console()) {
+      EXPECT_FALSE(contains(message, "exceptionThrown")) << message;
+      EXPECT_FALSE(contains(message, "\"level\":\"error\"")) << message;
+    }
+  }
+
+  // Clicks where `channel`'s body is drawn (the centre of its bounding box).
+  static void click_body(const std::string& channel) {
+    const JsonValue at = browser_->evaluate(
+        "(() => { const b = bodies.find((b) => b.userData.channel === '" + channel +
+        "'); const c = new THREE.Box3().setFromObject(b).getCenter(new "
+        "THREE.Vector3()).project(camera); return [(c.x + 1) / 2 * innerWidth, (1 - c.y) / 2 "
+        "* innerHeight]; })()");
+    ASSERT_EQ(at.items.size(), 2U) << browser_->problem();
+    browser_->click(at.items[0].number, at.items[1].number);
+  }
+
+  // Clicks the page element `id` (a real mouse click at its centre).
+  static void click_element(const std::string& id) {
+    const JsonValue at = browser_->evaluate(
+        "(() => { const r = document.getElementById('" + id +
+        "').getBoundingClientRect(); return [r.x + r.width / 2, r.y + r.height / 2]; })()");
+    ASSERT_EQ(at.items.size(), 2U) << browser_->problem();
+    browser_->click(at.items[0].number, at.items[1].number);
+  }
+
+  static std::string text_of(const std::string& selector) {
+    return browser_->evaluate("document.querySelector('" + selector + "').textContent").text;
+  }
+
+  static double base_joint(std::size_t joint) {
+    const BodyState* state = base_->latest_state();
+    return state && joint < state->joint_count ? state->joints[joint].position : NAN;
+  }
+
+  static inline std::string dir_;
+  static inline std::unique_ptr<ScopedProcess> physics_;
+  static inline std::unique_ptr<BodyClient> base_;
+  static inline View read_only_, commands_;
+  static inline std::unique_ptr<Browser> browser_;
+};
+
+long pixels(const std::vector<std::string>& args) {
+  std::vector<std::string> argv = {"/usr/bin/python3", AFHUB_VIEWER_PIXELS_SCRIPT};
+  argv.insert(argv.end(), args.begin(), args.end());
+  const RunResult result = run_command(argv);
+  EXPECT_EQ(result.exit_code, 0) << result.err;
+  return std::atol(result.out.c_str());
+}
+
+TEST_F(ViewPageTest, AClickedBodyShowsItsJointPositionsAndPlotsThem) {
+  ScopedProcess sine(spawn_afhub({"ctl", "sine", "arm/base", "--amplitude", "0.8", "--period", "2"},
+                                 dir_ + "/sine_inspect.log"));
+  open(read_only_.url + "/");
+  click_body("afhub/arm/base");
+  ASSERT_TRUE(wait_until([] { return contains(text_of("#pose"), "afhub/arm/base"); },
+                         std::chrono::seconds(5)))
+      << "the inspect panel shows: " << text_of("#inspect");
+  // The joint names from the catalog, and each joint's live position: compared
+  // paused, so that the page and the test read the same state.
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));  // the sine under way
+  ASSERT_EQ(run_afhub({"world", "pause"}).exit_code, 0);
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  const std::string joints = text_of("#joints");
+  EXPECT_TRUE(contains(joints, "base-link1")) << joints;
+  EXPECT_TRUE(contains(joints, "link6-link7")) << joints;
+  const std::string shown = text_of("#joints .value");
+  char* end = nullptr;
+  const double value = std::strtod(shown.c_str(), &end);
+  EXPECT_TRUE(!shown.empty() && *end == '\0') << "joint 0's value: '" << shown << "'";
+  EXPECT_GT(std::abs(base_joint(0)), 0.01) << "the sine moved joint 0";
+  EXPECT_NEAR(value, base_joint(0), 1e-3) << joints;
+  const std::string pose = text_of("#pose");
+  EXPECT_TRUE(contains(pose, "position ") && contains(pose, "orientation ")) << pose;
+  ASSERT_EQ(run_afhub({"world", "resume"}).exit_code, 0);
+
+  // The plot: its traces' colours drawn in its canvas a second later (still joints
+  // draw flat lines over each other, so any trace's colour counts).
+  std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+  browser_->screenshot(dir_ + "/inspect.png");  // left for a look
+  const JsonValue drawn = browser_->evaluate(R"((() => {
+      const c = document.getElementById('plot');
+      const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+      const colours = plotColors.map((h) => [1, 3, 5].map((i) => parseInt(h.substr(i, 2), 16)));
+      let traced = 0, background = 0;
+      for (let i = 0; i < d.length; i += 4) {
+        if (colours.some((c) => c.every((v, k) => Math.abs(d[i + k] - v) < 24))) traced++;
+        if (d[i] === 0x10 && d[i + 1] === 0x15 && d[i + 2] === 0x1b) background++;
+      }
+      return [traced, d.length / 4 - background];
+    })())");
+  ASSERT_EQ(drawn.items.size(), 2U) << browser_->problem();
+  std::printf("plot: %.0f pixels of the joints' traces, %.0f not background\n",
+              drawn.items[0].number, drawn.items[1].number);
+  EXPECT_GT(drawn.items[0].number, 100) << "no joint's trace is drawn";
+  EXPECT_GT(drawn.items[1].number, 500);
+  expect_clean_console();
+}
+
+TEST_F(ViewPageTest, ASliderMovesTheJointOnlyWithAllowCommands) {
+  open(commands_.url + "/");
+  click_body("afhub/arm/base");
+  ASSERT_TRUE(wait_until(
+      [] {
+        return browser_->evaluate("document.querySelectorAll('#drive input').length").number >= 7;
+      },
+      std::chrono::seconds(5)))
+      << "no sliders: " << text_of("#drive");
+  const double target = base_joint(0) > 0.3 ? -0.5 : 0.6;
+  EXPECT_EQ(browser_
+                ->evaluate("(() => { const s = document.querySelector('#drive "
+                           "input[data-joint=\"0\"]'); s.value = " +
+                           std::to_string(target) +
+                           "; s.dispatchEvent(new Event('input')); return 'moved'; })()")
+                .text,
+            "moved")
+      << browser_->problem();
+  EXPECT_TRUE(
+      wait_until([&] { return std::abs(base_joint(0) - target) < 0.05; }, std::chrono::seconds(5)))
+      << "joint 0 is at " << base_joint(0) << ", the slider asked " << target;
+  expect_clean_console();
+
+  // Read-only: no sliders nor world buttons, and the same request is refused.
+  open(read_only_.url + "/");
+  click_body("afhub/arm/base");
+  ASSERT_TRUE(wait_until([] { return contains(text_of("#pose"), "afhub/arm/base"); },
+                         std::chrono::seconds(5)));
+  EXPECT_EQ(
+      browser_->evaluate("document.querySelectorAll('#drive input, #world button').length").number,
+      0);
+  const double refused_target = -target;
+  const std::string post =
+      "fetch('/command?body=afhub/arm/base&joint=0&value=" + std::to_string(refused_target) +
+      "', {method: 'POST'}).then((r) => r.status)";
+  EXPECT_EQ(browser_->evaluate(post).number, 403);
+  EXPECT_EQ(browser_
+                ->evaluate("fetch('/world?action=pause', {method: 'POST'}).then((r) => "
+                           "r.status)")
+                .number,
+            403);
+  std::this_thread::sleep_for(std::chrono::seconds(1));
+  EXPECT_GT(std::abs(base_joint(0) - refused_target), 0.3) << "a read-only page moved the joint";
+}
+
+TEST_F(ViewPageTest, PauseStepAndResetButtonsDriveTheWorld) {
+  ScopedProcess sine(spawn_afhub({"ctl", "sine", "arm/base", "--amplitude", "0.8", "--period", "2"},
+                                 dir_ + "/sine.log"));
+  open(commands_.url + "/");
+  LatestReader<WorldState> world = world_reader();
+  ASSERT_TRUE(wait_until([&] { return world.latest() != nullptr; }, std::chrono::seconds(5)));
+  ASSERT_FALSE(world.latest()->paused);
+  const std::string shots[4] = {dir_ + "/running1.png", dir_ + "/running2.png",
+                                dir_ + "/paused1.png", dir_ + "/paused2.png"};
+  // Running, the controller moves the arm: screenshots a second apart differ.
+  ASSERT_TRUE(browser_->screenshot(shots[0]));
+  std::this_thread::sleep_for(std::chrono::seconds(1));
+  ASSERT_TRUE(browser_->screenshot(shots[1]));
+  const long running = pixels({"differ", shots[0], shots[1]});
+
+  click_element("pause");
+  ASSERT_TRUE(wait_until([&] { return world.latest()->paused != 0; }, std::chrono::seconds(5)))
+      << "the pause button did not pause the world";
+  ASSERT_TRUE(wait_until([] { return text_of("#pause") == "resume"; }, std::chrono::seconds(5)));
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));  // the last frames drawn
+  ASSERT_TRUE(browser_->screenshot(shots[2]));
+  std::this_thread::sleep_for(std::chrono::seconds(1));
+  ASSERT_TRUE(browser_->screenshot(shots[3]));
+  const long paused = pixels({"differ", shots[2], shots[3]});
+  std::printf("pixels changed a second later: running %ld, paused %ld\n", running, paused);
+  EXPECT_GT(running, 500) << "the arm did not move while running";
+  EXPECT_EQ(paused, 0) << "the page changed while the world was paused";
+
+  // Step: one step, and the world stays paused.
+  const std::uint64_t before = world.latest()->header.sim_step;
+  click_element("step");
+  EXPECT_TRUE(wait_until([&] { return world.latest()->header.sim_step != before; },
+                         std::chrono::seconds(5)));
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  EXPECT_EQ(world.latest()->header.sim_step, before + 1);
+  EXPECT_TRUE(world.latest()->paused);
+
+  // Reset: the step count goes back to 0.
+  click_element("reset");
+  EXPECT_TRUE(
+      wait_until([&] { return world.latest()->header.sim_step < before; }, std::chrono::seconds(5)))
+      << "still at step " << world.latest()->header.sim_step;
+
+  click_element("pause");  // now "resume"
+  EXPECT_TRUE(wait_until([&] { return world.latest()->paused == 0; }, std::chrono::seconds(5)));
+  expect_clean_console();
+}
+
+TEST_F(ViewPageTest, ACameraNameOpensItsViewportAndPairedCamerasAreMarked) {
+  // The world file's cameras, as the scene lists them.
+  const JsonValue scene = parse_json(http_request(read_only_.port, "GET", "/scene.json").body);
+  const JsonValue* rcm = nullptr;
+  for (const JsonValue& camera : scene.at("cameras").items)
+    if (camera.at("name").text.ends_with("/rcm_close")) rcm = &camera;
+  ASSERT_NE(rcm, nullptr) << "the example world has a camera named rcm_close";
+
+  open(read_only_.url + "/?camera=rcm_close");
+  EXPECT_EQ(browser_->evaluate("window.afhub.camera").text, rcm->at("name").text);
+  const JsonValue position =
+      browser_->evaluate("[camera.position.x, camera.position.y, camera.position.z]");
+  ASSERT_EQ(position.items.size(), 3U) << browser_->problem();
+  for (int i = 0; i < 3; ++i)
+    EXPECT_NEAR(position.items[i].number, rcm->at("position").items[i].number, 1e-6) << i;
+  EXPECT_EQ(text_of("#cameras .current"), "rcm_close [paired: Test Touch]");
+  EXPECT_EQ(browser_->evaluate("document.querySelectorAll('#cameras .paired').length").number, 1);
+  EXPECT_EQ(text_of("#message"), "");
+  expect_clean_console();
+
+  // Another camera: another pose.
+  open(read_only_.url + "/?camera=overview");
+  EXPECT_TRUE(contains(browser_->evaluate("window.afhub.camera").text, "overview"));
+  EXPECT_GT(std::abs(browser_->evaluate("camera.position.x").number -
+                     rcm->at("position").items[0].number),
+            0.5);
+
+  // An unknown name: said on the page, with the cameras there are.
+  open(read_only_.url + "/?camera=nosuch");
+  const std::string message = text_of("#message");
+  EXPECT_TRUE(contains(message, "No camera named \"nosuch\"")) << message;
+  EXPECT_TRUE(contains(message, "overview, rcm_close, flange")) << message;
+  expect_clean_console();
+}
+
+}  // namespace
+}  // namespace afhub::test

@@ -1,0 +1,44 @@
+// The page's world commands (see world_commander.hpp).
+#include "afhub/viewer/world_commander.hpp"
+
+#include <civetweb.h>
+
+#include "afhub/rt/clock.hpp"
+#include "afhub/shm_layout/channel_names.hpp"
+
+namespace afhub::viewer {
+
+WorldCommander::WorldCommander(const std::string& world)
+    : writer_({std::string(kService), world, std::string(kCommandEvent)}),
+      state_({std::string(kService), world, std::string(kStateEvent)}) {
+  // The simulation acts on each (pid, sequence) once: start past any number an
+  // earlier viewer with this pid could have used, as `afhub world` does.
+  writer_.raw().continue_sequence_after(static_cast<std::uint64_t>(monotonic_ns()));
+}
+
+std::string WorldCommander::run(const std::string& query) {
+  char text[16];
+  const int length = mg_get_var(query.c_str(), query.size(), "action", text, sizeof text);
+  const std::string action = length < 0 ? std::string() : std::string(text);
+  WorldAction chosen = WorldAction::kNone;
+  if (action == "pause") chosen = WorldAction::kPause;
+  if (action == "resume") chosen = WorldAction::kResume;
+  if (action == "step") chosen = WorldAction::kStep;
+  if (action == "reset") chosen = WorldAction::kReset;
+  if (chosen == WorldAction::kNone)
+    return "action: one of pause, resume, step, reset; got '" + action + "'";
+
+  std::lock_guard lock(mutex_);
+  const WorldState* state = state_.latest();
+  if (!state) return "no simulation is running: nothing publishes the world state";
+  if (chosen == WorldAction::kStep && !state->paused)
+    return "the world is running, so there is nothing to step: pause it first";
+  WorldCommand* command = writer_.loan();
+  if (!command) return "no shared memory for a world command";
+  command->action = chosen;
+  command->step_count = 1;
+  writer_.publish(command);
+  return "";
+}
+
+}  // namespace afhub::viewer
