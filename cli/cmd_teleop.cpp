@@ -31,7 +31,15 @@ struct TeleopCliOptions {
   double wait_s = 10.0;
   double stale_ms = 50.0;
   std::uint64_t latency_samples = 0;
+  std::string feedback = "proxy";
 };
+
+teleop::FeedbackSource feedback_source(const std::string& name) {
+  if (name == "proxy") return teleop::FeedbackSource::kProxy;
+  if (name == "contact") return teleop::FeedbackSource::kContact;
+  if (name == "both") return teleop::FeedbackSource::kBoth;
+  throw Error("--feedback: no feedback '" + name + "'; give proxy, contact or both");
+}
 
 // The driver name a hardware name maps to when no --device is given: lower case,
 // every run of other characters than letters and digits one '_' ("Falcon" -> "falcon",
@@ -117,6 +125,7 @@ teleop::TeleopOptions teleop_options(const TeleopCliOptions& options) {
     throw Error("--wait takes a number of seconds from 0 to 1e6");
   if (!(options.stale_ms > 0.0 && options.stale_ms <= 60'000.0))
     throw Error("--stale takes milliseconds from 0 (excluded) to 60000");
+  const teleop::FeedbackSource feedback = feedback_source(options.feedback);
   const teleop::InputDevicesFile file = teleop::read_input_devices(options.file);
   for (const std::string& warning : file.warnings) std::fprintf(stderr, "%s\n", warning.c_str());
   const std::vector<teleop::InputDeviceSpec> selected =
@@ -126,10 +135,12 @@ teleop::TeleopOptions teleop_options(const TeleopCliOptions& options) {
                 std::to_string(selected.size()) +
                 " are selected: give one --device NAME per selected device, in the order of -d");
   teleop::TeleopOptions teleop;
-  for (std::size_t i = 0; i < selected.size(); ++i)
+  for (std::size_t i = 0; i < selected.size(); ++i) {
     teleop.bindings.push_back(
         bind_device(selected[i], options.devices.empty() ? driver_name_of(selected[i].hardware_name)
                                                          : options.devices[i]));
+    teleop.bindings.back().feedback = feedback;
+  }
   teleop.loop.period_ns = static_cast<std::int64_t>(std::llround(1e9 / options.rate_hz));
   teleop.loop.fifo_priority = options.fifo_priority;
   teleop.loop.cpu = options.cpu;
@@ -158,7 +169,8 @@ void register_teleop(CLI::App& app, Runner& selected) {
       "device's driver (device/<name>, `afhub device run ...`) moves the root body of its "
       "\"simulated multibody\" through a Cartesian PD wrench, and gets the haptic gain times "
       "the body's lag behind the device's proxy as force (clutch, gripper and mode buttons "
-      "as AMBF maps them). The physics simulates the multibody: start it with `afhub run "
+      "as AMBF maps them), or with --feedback contact the body's contact force. The physics "
+      "simulates the multibody: start it with `afhub run "
       "<the simulated multibody file>` (it waits for it, printing that command). Device "
       "channels: by default the \"hardware name\" in lower case, other characters as '_' "
       "(Falcon -> device/falcon, PHANTOM Omni -> device/phantom_omni); --device NAME "
@@ -186,6 +198,14 @@ void register_teleop(CLI::App& app, Runner& selected) {
                      "A device with no new sample for this many ms (its driver stopped) "
                      "releases its body: held where it is, no force, until samples come back "
                      "(default 50)");
+  teleop->add_option(
+      "--feedback", options->feedback,
+      "What the device's force renders: proxy (default, as AMBF: the haptic gain times the "
+      "body's lag behind the device's proxy), contact (the force the body's contacts push it "
+      "with, from the physics' contact wrench, times haptic gain / the linear controller gain "
+      "P, so that a steady press feels as with proxy; nothing while the body touches "
+      "nothing), or both (their sum). The torque alike with the angular gains. Either way "
+      "through the file's deadband, max force and max jerk, in the device's frame");
   add_count_option(teleop, "--latency", options->latency_samples,
                    "Record this many latencies (device sample -> body command, device sample "
                    "-> the device force answering it) and print p50/p99/max at the end");

@@ -27,7 +27,7 @@ void quaternion(JsonWriter& json, const Quaternion& q) {
 }  // namespace
 
 StateFields parse_state_fields(const std::string& text) {
-  StateFields fields{false, false, false, false, false, false, false};
+  StateFields fields{false, false, false, false, false, false, false, false};
   const std::vector<std::string> names = split_commas(text);
   if (names.empty())
     throw Error(std::string("--fields takes a comma-separated list of: ") + kStateFieldNames);
@@ -38,6 +38,8 @@ StateFields parse_state_fields(const std::string& text) {
       fields.twist = true;
     } else if (name == "wrench") {
       fields.wrench = true;
+    } else if (name == "contact") {
+      fields.contact = true;
     } else if (name == "joints") {
       fields.joints = true;
     } else if (name == "joint_velocities") {
@@ -57,7 +59,8 @@ StateFields parse_state_fields(const std::string& text) {
 
 StateFields default_text_fields() {
   StateFields fields;
-  fields.wrench = fields.joint_velocities = fields.joint_efforts = fields.mass = false;
+  fields.wrench = fields.contact = fields.joint_velocities = fields.joint_efforts = fields.mass =
+      false;
   return fields;
 }
 
@@ -89,6 +92,13 @@ std::string state_json(const BodyEntry& entry, const BodyState& state, const Sta
     vec3(json, state.wrench.force_n);
     json.key("torque_nm");
     vec3(json, state.wrench.torque_nm);
+  }
+  if (fields.contact) {
+    json.key("contact_force_n");
+    vec3(json, state.contact_wrench.force_n);
+    json.key("contact_torque_nm");
+    vec3(json, state.contact_wrench.torque_nm);
+    json.key("contact_count").value(static_cast<unsigned long long>(state.contact_count));
   }
   if (fields.mass) {
     json.key("mass_kg").value(state.mass_kg);
@@ -162,6 +172,11 @@ std::string state_text(const BodyEntry& entry, const BodyState& state, const Sta
   if (fields.wrench) {
     append(out, "force", v3(state.wrench.force_n).data(), 3);
     append(out, "torque", v3(state.wrench.torque_nm).data(), 3);
+  }
+  if (fields.contact) {
+    append(out, "contact_force", v3(state.contact_wrench.force_n).data(), 3);
+    append(out, "contact_torque", v3(state.contact_wrench.torque_nm).data(), 3);
+    out += " contacts " + std::to_string(state.contact_count);
   }
   if (fields.mass) {
     append(out, "mass", &state.mass_kg, 1);

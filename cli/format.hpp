@@ -14,17 +14,18 @@ namespace afhub::cli {
 
 // The parts of a body state to show (`afhub echo --fields`).
 struct StateFields {
-  bool pose = true;    // position and orientation
-  bool twist = true;   // linear and angular velocity
-  bool wrench = true;  // applied force and torque
-  bool joints = true;  // joint positions (with their names in JSON)
+  bool pose = true;     // position and orientation
+  bool twist = true;    // linear and angular velocity
+  bool wrench = true;   // applied force and torque
+  bool contact = true;  // contact force and torque, and the contact points' count
+  bool joints = true;   // joint positions (with their names in JSON)
   bool joint_velocities = true;
   bool joint_efforts = true;
   bool mass = true;  // mass and principal inertia
 };
 // What `--fields` takes, comma-separated.
 inline constexpr const char* kStateFieldNames =
-    "pose, twist, wrench, joints, joint_velocities, joint_efforts, mass, all";
+    "pose, twist, wrench, contact, joints, joint_velocities, joint_efforts, mass, all";
 // Parses "pose,twist,joints": the fields named; throws afhub::Error listing the valid ones.
 StateFields parse_state_fields(const std::string& text);
 // What the text form shows unless told otherwise.

@@ -1,7 +1,7 @@
-// State: the readings after a step. A body's mesh-frame pose, twist, applied wrench,
-// inertia, its descendant joints and its sensor rays; a soft body's centre and mean
-// velocity; the lights' and cameras' poses; joint positions and pivot gaps; whether
-// everything is still finite.
+// State: the readings after a step. A body's mesh-frame pose, twist, applied and
+// contact wrenches, inertia, its descendant joints and its sensor rays; a soft body's
+// centre and mean velocity; the lights' and cameras' poses; joint positions and pivot
+// gaps; whether everything is still finite.
 #include "simulation_data.hpp"
 
 namespace afhub::physics {
@@ -13,6 +13,11 @@ void Simulation::read_body(std::size_t index, BodyReading& reading) const noexce
   reading.pose = to_pose(rb.getWorldTransform() * body.com_from_mesh);
   reading.twist = {from_bt(rb.getLinearVelocity()), from_bt(rb.getAngularVelocity())};
   reading.wrench = body.applied;
+  // The contact moment about the world origin, moved to the mesh frame's origin.
+  const btVector3 origin = (rb.getWorldTransform() * body.com_from_mesh).getOrigin();
+  reading.contact_wrench = {from_bt(body.contact_force), from_bt(body.contact_moment_at_origin -
+                                                                 origin.cross(body.contact_force))};
+  reading.contact_count = body.contact_count;
   reading.mass_kg = d.model.bodies[index].mass_kg;
   reading.principal_inertia_kgm2 =
       rb.getInvMass() > 0 ? Vec3{1.0 / std::max(rb.getInvInertiaDiagLocal().x(), 1e-300),

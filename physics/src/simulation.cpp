@@ -1,6 +1,7 @@
 // The simulation (see simulation.hpp): built once (sim_build.cpp), then each step
 // applies the inputs (sim_control.cpp), steps Bullet at the fixed dt, and updates
-// the joints' and sensors' readings (sim_state.cpp, sim_sensors_actuators.cpp).
+// the contacts', joints' and sensors' readings (sim_contacts.cpp, sim_state.cpp,
+// sim_sensors_actuators.cpp).
 #include "afhub/physics/simulation.hpp"
 
 #include "simulation_data.hpp"
@@ -85,6 +86,7 @@ void Simulation::step() noexcept {
   d.world.stepSimulation(d.dt_s, 1, d.dt_s);
   ++d.steps;
   d.recover_non_finite();
+  d.sum_contacts();
   for (auto& joint : d.joints) joint->update_readings();
   d.read_sensors();
 }
@@ -98,6 +100,9 @@ void Simulation::reset() noexcept {
     rb.setLinearVelocity(btVector3(0, 0, 0));
     rb.setAngularVelocity(btVector3(0, 0, 0));
     rb.clearForces();
+    body.contact_force.setZero();
+    body.contact_moment_at_origin.setZero();
+    body.contact_count = 0;
   }
   for (std::size_t b = 0; b < d.bodies.size(); ++b) clear_input(b);
   for (auto& joint : d.joints) joint->release();

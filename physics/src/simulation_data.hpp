@@ -4,6 +4,7 @@
 //   sim_build.cpp              the Bullet objects, made once from the Model
 //   sim_control.cpp            inputs: checked, then applied before each step
 //   sim_sensors_actuators.cpp  proximity rays and constraint actuators
+//   sim_contacts.cpp           each body's net contact wrench after a step
 //   sim_state.cpp              the readings after a step
 //   sim_recovery.cpp           bodies put back after a step made them NaN
 //   simulation.cpp             construction, the step, reset
@@ -60,6 +61,10 @@ struct BodyData {
   btVector3 previous_linear_error{0, 0, 0}, previous_angular_error{0, 0, 0};
   bool has_previous_error = false;
   Wrench applied;
+  // The last step's contacts on this body (sim_contacts.cpp): the net force, its
+  // moment about the world's origin, and the points that pushed.
+  btVector3 contact_force{0, 0, 0}, contact_moment_at_origin{0, 0, 0};
+  std::uint32_t contact_count = 0;
   std::size_t first_ray = 0, ray_count = 0;  // into Data::rays
   std::vector<int> actuators;                // into Data::actuators, file order
   btTransform good_pose;                     // after the last step that left it finite
@@ -208,6 +213,7 @@ struct Simulation::Data {
   void apply_cartesian(BodyData& body) noexcept;
   void read_sensors() noexcept;
   void recover_non_finite() noexcept;
+  void sum_contacts() noexcept;
   void keep_good_state() noexcept;
   Pose world_object_pose(const WorldObjectData& object) const noexcept;
 };

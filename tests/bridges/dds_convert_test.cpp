@@ -26,6 +26,8 @@ TEST(DdsConvert, StateRoundTripsEveryField) {
   from->pose = {{1, 2, 3}, {0.1, 0.2, 0.3, 0.9}};
   from->twist = {{4, 5, 6}, {7, 8, 9}};
   from->wrench = {{10, 11, 12}, {13, 14, 15}};
+  from->contact_wrench = {{16, 17, 18}, {19, 20, 21}};
+  from->contact_count = 5;
   from->mass_kg = 2.5;
   from->principal_inertia_kgm2 = {0.1, 0.2, 0.3};
   from->commanded_steps = 77;
@@ -75,6 +77,9 @@ TEST(DdsConvert, StateRoundTripsEveryField) {
   EXPECT_EQ(to->pose.orientation.w, 0.9);
   EXPECT_EQ(to->twist.angular_radps.x, 7);
   EXPECT_EQ(to->wrench.torque_nm.z, 15);
+  EXPECT_EQ(to->contact_wrench.force_n.x, 16);
+  EXPECT_EQ(to->contact_wrench.torque_nm.z, 21);
+  EXPECT_EQ(to->contact_count, 5u);
   EXPECT_EQ(to->mass_kg, 2.5);
   EXPECT_EQ(to->principal_inertia_kgm2.y, 0.2);
   EXPECT_EQ(to->commanded_steps, 77u);

@@ -194,6 +194,51 @@ TEST(TeleopLaw, TheDeviceForceOpposesTheBodyToProxyDifferenceAndIsBounded) {
   }
 }
 
+// --feedback contact: the device gets the body's contact force times haptic gain / P
+// (10 / 100 here), in the device's frame, through the same limits; none with no contact
+// whatever the lag. --feedback both: the sum of the two.
+TEST(TeleopLaw, ContactFeedbackRendersTheBodysContactForce) {
+  TeleopParams params = plain_params();
+  params.max_force_n = 2.0;
+  params.location.orientation = about_z(kPi / 2);
+  params.feedback = FeedbackSource::kContact;
+  TeleopLaw law(params);
+  TeleopOutput out;
+  const Wrench floor_push{v3(0, 0, 5.0), v3(0, 0, 0)};
+  law.step(device_at(v3(0, 0, 0)), pose_at(v3(0, 0, 0)), {}, kDt, out, floor_push);
+  EXPECT_TRUE(near(out.device_wrench.force_n, v3(0, 0, 0.5), 1e-12));
+  // World x is device -y; and the 0.3 m lag gives nothing in contact mode.
+  law.step(device_at(v3(0, 0, 0)), pose_at(v3(0.3, 0, 0)), {}, kDt, out,
+           {v3(10.0, 0, 0), v3(0, 0, 0)});
+  EXPECT_TRUE(near(out.device_wrench.force_n, v3(0, -1.0, 0), 1e-12));
+  law.step(device_at(v3(0, 0, 0)), pose_at(v3(0.3, 0, 0)), {}, kDt, out);
+  EXPECT_EQ(norm(out.device_wrench.force_n), 0.0);
+  // Bounded by the max force.
+  law.step(device_at(v3(0, 0, 0)), pose_at(v3(0, 0, 0)), {}, kDt, out,
+           {v3(0, 0, 1000.0), v3(0, 0, 0)});
+  EXPECT_TRUE(near(out.device_wrench.force_n, v3(0, 0, 2.0), 1e-12));
+  // The torque alike: angular haptic gain 0.5 over angular P 5.
+  params.haptic_gain_angular = 0.5;
+  params.max_force_n = 0.0;
+  TeleopLaw turning(params);
+  turning.step(device_at(v3(0, 0, 0)), pose_at(v3(0, 0, 0)), {}, kDt, out,
+               {v3(0, 0, 0), v3(0, 0, 2.0)});
+  EXPECT_TRUE(near(out.device_wrench.torque_nm, v3(0, 0, 0.2), 1e-12));
+
+  params.feedback = FeedbackSource::kBoth;
+  params.location.orientation = {};
+  TeleopLaw both(params);
+  both.step(device_at(v3(0, 0, 0)), pose_at(v3(0.05, 0, 0)), {}, kDt, out,
+            {v3(0, 0, 3.0), v3(0, 0, 0)});
+  EXPECT_TRUE(near(out.device_wrench.force_n, v3(0.5, 0, 0.3), 1e-12));
+  // The default, proxy, ignores contacts.
+  params.feedback = FeedbackSource::kProxy;
+  TeleopLaw proxy(params);
+  proxy.step(device_at(v3(0, 0, 0)), pose_at(v3(0, 0, 0)), {}, kDt, out,
+             {v3(0, 0, 3.0), v3(0, 0, 0)});
+  EXPECT_EQ(norm(out.device_wrench.force_n), 0.0);
+}
+
 TEST(TeleopLaw, TheDevicesOwnLimitsApplyToo) {
   TeleopParams params = plain_params();
   params.max_force_n = 10.0;

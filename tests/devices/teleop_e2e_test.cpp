@@ -3,7 +3,8 @@
 // `afhub device run virtual` following a scripted trajectory, and `afhub teleop`
 // binding the two. The device's motion is followed by the palm, scaled; the clutch
 // holds the palm and lets go with no jump; pushing the palm into the floor gives an
-// opposing force on the device, bounded by the file's max force.
+// opposing force on the device, bounded by the file's max force, from the proxy or (with
+// --feedback contact) from the palm's contact force.
 #include <gtest/gtest.h>
 #include <signal.h>
 
@@ -200,6 +201,55 @@ TEST(TeleopEndToEnd, WhenTheDriverDiesThePalmIsHeldAndResumesWithNoJump) {
   ASSERT_TRUE(wait_until([&] { return teleop.device().pose.position_m.x > 0.0195; }, 20s));
   pause_ms(500);
   EXPECT_NEAR(teleop.palm().pose.position_m.x, out + kScale * 0.02, 0.01) << teleop.logs();
+}
+
+// --feedback contact: the device renders the palm's contact force (the physics'
+// BodyState.contact_wrench), so moving through the air gives no force at all, and
+// pushing the palm into the floor an upward force, bounded by the max force.
+TEST(TeleopEndToEnd, ContactFeedbackIsZeroInTheAirAndPushesBackOnTheFloor) {
+  afhub::testing::ModelFolder scripts;
+  // 1 to 2 s: 3 cm along x and 5 cm down in the air (15 cm and 25 cm of palm, still
+  // 35 cm above the floor); 3 to 5 s: down 20 cm in all (the proxy 40 cm into the floor).
+  const std::string csv =
+      scripts.write("contact.csv",
+                    "0,0,0,0\n1,0,0,0\n2,0.03,0,-0.05\n3,0.03,0,-0.05\n5,0.03,0,-0.2\n"
+                    "9,0.03,0,-0.2\n");
+  Teleop teleop("contact", {"--trajectory", csv}, {"--feedback", "contact"});
+  ASSERT_TRUE(teleop.wait_running()) << teleop.logs();
+  double air_most = 0.0, most_force = 0.0, up_force_sum = 0.0, palm_up_sum = 0.0;
+  std::uint32_t air_contacts = 0;
+  int in_air = 0, pressing = 0;
+  for (int i = 0; i < 3500; ++i) {  // about 7 s, every 2 ms
+    const DeviceState& device = teleop.device();
+    const BodyState& palm = teleop.palm();
+    const Vec3& f = device.applied.force_n;
+    const double force = std::sqrt(f.x * f.x + f.y * f.y + f.z * f.z);
+    most_force = std::max(most_force, force);
+    if (device.pose.position_m.z > -0.06) {  // the palm 30 cm or more above the floor
+      air_most = std::max(air_most, force);
+      air_contacts = std::max(air_contacts, palm.contact_count);
+      ++in_air;
+    } else if (device.pose.position_m.z < -0.15) {  // the palm on the floor, pushed on
+      up_force_sum += f.z;
+      palm_up_sum += palm.contact_wrench.force_n.z;
+      ++pressing;
+    }
+    pause_ms(2);
+  }
+  const double mean_up = pressing ? up_force_sum / pressing : 0.0;
+  std::printf(
+      "contact feedback: largest force in the air %.3g N (%d samples, at most %u contacts); "
+      "pressing: palm contact force up %.2f N, device force up %.3f N (%d samples), largest "
+      "%.3f N (max force %.1f N)\n",
+      air_most, in_air, air_contacts, pressing ? palm_up_sum / pressing : 0.0, mean_up, pressing,
+      most_force, kMaxForce);
+  ASSERT_GT(in_air, 500) << teleop.logs();
+  ASSERT_GT(pressing, 100) << "the hand never pushed down" << teleop.logs();
+  EXPECT_EQ(air_contacts, 0u);
+  EXPECT_LT(air_most, 1e-3) << "a force with nothing touched" << teleop.logs();
+  EXPECT_GT(palm_up_sum / pressing, 10.0) << "the physics reported no floor contact";
+  EXPECT_GT(mean_up, 0.8 * kMaxForce) << "the device got no force opposing the push";
+  EXPECT_LE(most_force, kMaxForce + 1e-9) << "the device got more than the max force";
 }
 
 // The teleoperation process SIGKILLed while the device pushes into the floor (more

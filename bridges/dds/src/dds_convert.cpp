@@ -86,10 +86,12 @@ void to_dds(std::string_view channel, const BodyState& state,
   sample.pose = to_dds(state.pose);
   sample.twist = to_dds(state.twist);
   sample.wrench = to_dds(state.wrench);
+  sample.contact_wrench = to_dds(state.contact_wrench);
   sample.mass_kg = state.mass_kg;
   sample.principal_inertia_kgm2 = to_dds(state.principal_inertia_kgm2);
   sample.commanded_steps = state.commanded_steps;
   sample.answered_steps = state.answered_steps;
+  sample.contact_count = state.contact_count;
   const std::uint32_t rays = std::min<std::uint32_t>(state.sensor_ray_count, kMaxSensorRaysPerBody);
   std::copy_n(state.sensor_distances_m.data(), rays, sample.sensor_distances_m._buffer);
   sample.sensor_distances_m._length = rays;
@@ -126,10 +128,12 @@ void from_dds(const afhub_dds_BodyState& sample, BodyState& state) noexcept {
   state.pose = from_dds(sample.pose);
   state.twist = from_dds(sample.twist);
   state.wrench = from_dds(sample.wrench);
+  state.contact_wrench = from_dds(sample.contact_wrench);
   state.mass_kg = sample.mass_kg;
   state.principal_inertia_kgm2 = from_dds(sample.principal_inertia_kgm2);
   state.commanded_steps = sample.commanded_steps;
   state.answered_steps = sample.answered_steps;
+  state.contact_count = sample.contact_count;
   state.sensor_ray_count =
       std::min<std::uint32_t>(sample.sensor_distances_m._length, kMaxSensorRaysPerBody);
   std::copy_n(sample.sensor_distances_m._buffer, state.sensor_ray_count,

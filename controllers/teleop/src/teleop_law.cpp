@@ -105,7 +105,7 @@ void TeleopLaw::restart_from(const Pose& origin) noexcept {
 }
 
 void TeleopLaw::step(const DeviceState& device, const Pose& body_pose, const Twist& body_twist,
-                     double dt_s, TeleopOutput& out) noexcept {
+                     double dt_s, TeleopOutput& out, const Wrench& body_contact) noexcept {
   const bool timed = dt_s > 0.0 && std::isfinite(dt_s);
   const ButtonMapping& map = params_.buttons;
   const std::uint32_t buttons = device.buttons;
@@ -188,10 +188,23 @@ void TeleopLaw::step(const DeviceState& device, const Pose& body_pose, const Twi
     double stiffness = params_.haptic_gain_linear;
     if (device.spec.max_stiffness_npm > 0.0)
       stiffness = std::min(stiffness, device.spec.max_stiffness_npm / params_.workspace_scale);
+    Vector3d force_world = Vector3d::Zero();
+    Vector3d torque_world = Vector3d::Zero();
+    if (params_.feedback != FeedbackSource::kContact) {
+      force_world = stiffness * (body_position - target_position);
+      torque_world =
+          params_.haptic_gain_angular * rotation_vector(body_rotation * target_rotation.inverse());
+    }
+    if (params_.feedback != FeedbackSource::kProxy) {
+      // Per newton of contact, what the proxy gives per newton of the body's controller.
+      const double linear_scale = linear.p > 0.0 ? stiffness / linear.p : 0.0;
+      const double angular_scale = angular.p > 0.0 ? params_.haptic_gain_angular / angular.p : 0.0;
+      force_world += linear_scale * to_eigen(body_contact.force_n);
+      torque_world += angular_scale * to_eigen(body_contact.torque_nm);
+    }
     const Quaterniond to_device = frame.inverse();
-    device_force = to_device * (stiffness * (body_position - target_position));
-    device_torque = to_device * (params_.haptic_gain_angular *
-                                 rotation_vector(body_rotation * target_rotation.inverse()));
+    device_force = to_device * force_world;
+    device_torque = to_device * torque_world;
   }
   device_force = clamp_length(deadband(device_force, params_.deadband_n),
                               tighter(params_.max_force_n, device.spec.max_force_n));

@@ -14,7 +14,6 @@
 #include "afhub/rt/clock.hpp"
 #include "afhub/rt/loop_stats_publisher.hpp"
 #include "afhub/shm_layout/error.hpp"
-#include "afhub/teleop/teleop_law.hpp"
 
 namespace afhub::teleop {
 namespace {
@@ -23,11 +22,17 @@ namespace {
 // that a DeviceState reporting the command's force gives the sample-to-force latency.
 constexpr std::size_t kInFlight = 256;
 
+TeleopParams params_of(const TeleopBinding& binding) {
+  TeleopParams params = teleop_params(binding.spec, binding.body_gains);
+  params.feedback = binding.feedback;
+  return params;
+}
+
 // One device bound to one body, with everything its cycle needs made beforehand.
 struct Link {
   Link(const TeleopBinding& b, const BodyEntry& entry)
       : binding(&b),
-        law(teleop_params(b.spec, b.body_gains)),
+        law(params_of(b)),
         device_state(body_state_channel(device_channel_name(b.device_name))),
         device_command(body_command_channel(device_channel_name(b.device_name))),
         body(entry) {
@@ -101,7 +106,7 @@ void cycle(Link& link, std::int64_t now, TeleopLatency* latency, std::size_t mos
       std::fprintf(stderr, "afhub teleop: device/%s is back: %s moves on from where it was held\n",
                    name, body);
   }
-  link.law.step(*device, state->pose, state->twist, dt, link.out);
+  link.law.step(*device, state->pose, state->twist, dt, link.out, state->contact_wrench);
 
   const std::size_t joints =
       std::min<std::size_t>({link.joints, link.binding->gripper_joints.size(), state->joint_count});

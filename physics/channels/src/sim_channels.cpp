@@ -33,6 +33,8 @@ void to_state(const BodyReading& reading, BodyState& state) noexcept {
   state.pose = reading.pose;
   state.twist = reading.twist;
   state.wrench = reading.wrench;
+  state.contact_wrench = reading.contact_wrench;
+  state.contact_count = reading.contact_count;
   state.mass_kg = reading.mass_kg;
   state.principal_inertia_kgm2 = reading.principal_inertia_kgm2;
   state.joint_count = std::min(state.joint_count, reading.joint_count);

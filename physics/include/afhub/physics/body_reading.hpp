@@ -14,6 +14,11 @@ struct BodyReading {
   Pose pose;  // the body's mesh frame in the world (a soft body: its nodes' centre)
   Twist twist;
   Wrench wrench;  // applied in the last step
+  // The net force of the last step's contacts on the body (world frame), and its
+  // torque about the body's mesh frame origin (`pose`'s position); zero for a soft
+  // body. contact_count: the contact points that pushed on it.
+  Wrench contact_wrench;
+  std::uint32_t contact_count = 0;
   double mass_kg = 0.0;
   Vec3 principal_inertia_kgm2;  // zero for a static body
   // Descendant joints in file order; entries [0, joint_count) are valid.

@@ -1,5 +1,6 @@
 // BodyState: what the physics process publishes for one body every step
-// (AMBF's afState: pose, twist, wrench, inertia and the body's descendant joints).
+// (AMBF's afState: pose, twist, wrench, inertia and the body's descendant joints;
+// and the contact wrench, which AMBF does not publish).
 // The joints come last and a state is loaned at its real size, body_state_bytes(
 // joint_count): only entries [0, joint_count) exist in the chunk.
 #pragma once
@@ -27,6 +28,11 @@ struct BodyState {
   Pose pose;  // the body's mesh frame in the world
   Twist twist;
   Wrench wrench;  // the wrench applied to the body in the last step
+  // The net wrench of the last step's contacts on the body (rigid bodies, from the
+  // physics' contact manifolds: normal and friction impulses over the step), world
+  // frame; its torque is about the mesh frame's origin (pose.position_m). Zero with
+  // no contact, and for a soft body.
+  Wrench contact_wrench;
   double mass_kg{0.0};
   Vec3 principal_inertia_kgm2;
   // Descendant joints in the catalog's order; entries [0, joint_count) are valid
@@ -43,6 +49,7 @@ struct BodyState {
   // is within the sensor's range.
   std::uint32_t sensor_ray_count{0};
   std::uint32_t answered_steps{0};  // see commanded_steps
+  std::uint32_t contact_count{0};   // contact points that pushed on the body in the last step
   std::array<double, kMaxSensorRaysPerBody> sensor_distances_m{};
   std::array<JointSample, kMaxJointsPerBody> joints{};  // last: sized by joint_count
 };

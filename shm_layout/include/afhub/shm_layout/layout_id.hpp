@@ -74,6 +74,8 @@ inline constexpr std::uint64_t kLayoutId = layout_detail::mix({
     AFHUB_OFF(BodyState, pose),
     AFHUB_OFF(BodyState, twist),
     AFHUB_OFF(BodyState, wrench),
+    AFHUB_OFF(BodyState, contact_wrench),
+    AFHUB_OFF(BodyState, contact_count),
     AFHUB_OFF(BodyState, mass_kg),
     AFHUB_OFF(BodyState, principal_inertia_kgm2),
     AFHUB_OFF(BodyState, joint_count),

@@ -6,6 +6,12 @@
 //   body wrench  = P (target - body) + D (target velocity - body velocity)   (world frame)
 //   device force = M^T haptic_gain (body - target)        (pulls the hand to the body)
 //
+// or, with contact feedback, what the body's contacts push it with (the physics'
+// BodyState.contact_wrench), scaled so that a steady press feels as the proxy does:
+//   device force = M^T (haptic_gain / P) contact force      (P: the body's linear gain)
+// (the body pressing still on a surface has P (target - body) = -contact force). With
+// both, the sum.
+//
 // The anchor is the first device sample, so the body starts at the origin (the
 // location) whatever the device's pose. While the clutch is held the target holds and
 // the device gets no force; on release the anchor moves to the device's pose then, so
@@ -26,6 +32,10 @@ namespace afhub::teleop {
 // the gripper jaw one (a1 opens, a2 closes). Next/prev mode buttons cycle through them.
 enum class TeleopMode : std::uint8_t { kClutchCamera = 0, kGripperJaw = 1 };
 
+// What the device's force renders: the body's lag behind the proxy (AMBF's), the
+// body's contact wrench, or the sum of the two.
+enum class FeedbackSource : std::uint8_t { kProxy = 0, kContact = 1, kBoth = 2 };
+
 // The law's parameters, resolved: the spec's values with the body's own gains where the
 // spec has none.
 struct TeleopParams {
@@ -39,6 +49,7 @@ struct TeleopParams {
   double max_force_n{0.0};        // 0: none (the device's own maximum still applies)
   double max_jerk_n_per_ms{0.0};  // 0: none
   ButtonMapping buttons;
+  FeedbackSource feedback{FeedbackSource::kProxy};
 };
 
 // `body_gains` are the root body's own controller gains, used when the spec has no
@@ -60,10 +71,11 @@ class TeleopLaw {
  public:
   explicit TeleopLaw(const TeleopParams& params);
 
-  // One cycle: the newest device sample, the body's newest pose and twist (world), and
-  // the time since the previous cycle.
+  // One cycle: the newest device sample, the body's newest pose and twist (world), the
+  // time since the previous cycle, and the body's contact wrench (world frame, torque
+  // about the body's origin: BodyState.contact_wrench) for contact feedback.
   void step(const DeviceState& device, const Pose& body_pose, const Twist& body_twist, double dt_s,
-            TeleopOutput& out) noexcept;
+            TeleopOutput& out, const Wrench& body_contact = {}) noexcept;
 
   // The target's origin for the next first cycle (default: the location), for a body
   // that should be driven from where it is; clears the anchor.

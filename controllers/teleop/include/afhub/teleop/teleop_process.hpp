@@ -14,6 +14,7 @@
 #include "afhub/rt/periodic_loop.hpp"
 #include "afhub/teleop/input_device_spec.hpp"
 #include "afhub/teleop/teleop_commands.hpp"
+#include "afhub/teleop/teleop_law.hpp"
 
 namespace afhub::teleop {
 
@@ -28,6 +29,7 @@ struct TeleopBinding {
   std::uint32_t actuator_count{0};
   WrenchLimit body_limit;  // what the physics accepts for the root body
   std::string load_hint;   // how to load the multibody, shown while the body is missing
+  FeedbackSource feedback{FeedbackSource::kProxy};  // what the device's force renders
 };
 
 // Latency of the loop's outputs, from the device sample they answer (its publish
