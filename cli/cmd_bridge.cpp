@@ -1,40 +1,118 @@
-// `afhub bridge dds`: the hub's bodies over Cyclone DDS (bridges/dds).
+// `afhub bridge dds`: the hub's bodies, devices and world over Cyclone DDS (bridges/dds).
+// Settings come from --config FILE, then the flags given on the command line over it.
+#include <cstdio>
 #include <memory>
 
 #include "afhub/bridges/dds_bridge.hpp"
+#include "afhub/bridges/dds_bridge_config.hpp"
 #include "commands.hpp"
 
 namespace afhub::cli {
+namespace {
+
+struct BridgeCliOptions {
+  std::string config;
+  bool best_effort = false;
+  bool check = false;
+  bridges::DdsBridgeOptions flags;
+};
+
+// The file's settings, then each flag given on the command line over them.
+bridges::DdsBridgeOptions merged(CLI::App& dds, const BridgeCliOptions& cli) {
+  if (cli.config.empty()) {
+    bridges::DdsBridgeOptions options = cli.flags;
+    if (cli.best_effort) options.reliable = false;
+    return options;
+  }
+  bridges::DdsBridgeOptions options = bridges::read_dds_bridge_config(cli.config);
+  const bridges::DdsBridgeOptions& f = cli.flags;
+  const auto given = [&dds](const char* flag) { return dds.count(flag) > 0; };
+  if (given("--domain")) options.domain = f.domain;
+  if (given("--interface")) options.interface = f.interface;
+  if (given("--bodies")) options.body_globs = f.body_globs;
+  if (given("--devices")) options.device_globs = f.device_globs;
+  if (given("--world")) options.world = true;
+  if (given("--export")) options.export_bodies = true;
+  if (given("--mirror")) options.mirror = true;
+  if (given("--accept-commands")) options.accept_commands = true;
+  if (given("--rate")) options.rate_hz = f.rate_hz;
+  if (given("--body-rate")) options.body_rate_hz = f.body_rate_hz;
+  if (given("--device-rate")) options.device_rate_hz = f.device_rate_hz;
+  if (given("--world-rate")) options.world_rate_hz = f.world_rate_hz;
+  if (given("--reliable")) options.reliable = true;
+  if (given("--best-effort")) options.reliable = false;
+  if (given("--max-command-age")) options.max_command_age_s = f.max_command_age_s;
+  if (given("--profile")) options.profile = f.profile;
+  if (given("--ros2-prefix")) options.ros2_prefix = f.ros2_prefix;
+  if (given("--security")) options.security_dir = f.security_dir;
+  options.latency = f.latency;
+  options.seconds = f.seconds;
+  return options;
+}
+
+}  // namespace
 
 void register_bridge(CLI::App& app, Runner& selected) {
   auto* bridge = app.add_subcommand("bridge", "Bridge this hub to other networks.");
   bridge->require_subcommand(1);
-  auto options = std::make_shared<bridges::DdsBridgeOptions>();
+  auto cli = std::make_shared<BridgeCliOptions>();
+  bridges::DdsBridgeOptions* options = &cli->flags;
   auto* dds = bridge->add_subcommand(
       "dds",
-      "Bridge bodies over Cyclone DDS (topics afhub/body_state, afhub/body_command, "
-      "afhub/body_info). Select the network interface with CYCLONEDDS_URI.");
+      "Bridge bodies, devices and the world over Cyclone DDS (topics afhub/body_state, "
+      "afhub/body_command, afhub/body_info, afhub/device_state, afhub/device_command, "
+      "afhub/world_state, afhub/world_command). Settings come from --config FILE (YAML, "
+      "keys named as the flags: domain, interface, export, mirror, accept-commands, bodies, "
+      "devices, world, qos: best-effort|reliable, rate, rate-limits: {bodies, devices, "
+      "world}, max-command-age, profile, ros2-prefix, security), and the flags given here override the file's.");
+  dds->add_option("--config", cli->config,
+                  "YAML file of settings (see above); flags given here override it")
+      ->check(CLI::ExistingFile);
   dds->add_option("--domain", options->domain, "DDS domain id (default 0)");
+  dds->add_option("--interface", options->interface,
+                  "Bind DDS to this network interface (default: CYCLONEDDS_URI's or Cyclone's "
+                  "choice); it replaces CYCLONEDDS_URI's inline interfaces, whose other "
+                  "settings (peers) still apply");
   dds->add_option("--bodies", options->body_globs,
                   "Globs over body channel names, e.g. 'ambf/env/*' (default '*')");
+  dds->add_option("--devices", options->device_globs,
+                  "Globs over device names (channels device/<name>) to bridge, e.g. 'falcon*' "
+                  "(default: none). A mirrored device is listed as a device here; its "
+                  "DeviceCommand (force) goes back only to a bridge with --accept-commands");
+  dds->add_flag("--world", options->world,
+                "Bridge the world: its state out (export) or in (mirror); world commands "
+                "(pause, resume, step, reset) from the network are applied only with "
+                "--accept-commands, under --max-command-age");
   dds->add_flag("--export", options->export_bodies,
-                "Publish this hub's matching bodies' states on DDS");
+                "Publish this hub's matching bodies' (and devices', world's) states on DDS");
   dds->add_flag("--mirror", options->mirror,
-                "Publish remote bodies seen on DDS into this hub, and send the commands "
-                "written to them here back over DDS");
+                "Publish remote bodies (devices, world) seen on DDS into this hub, and send "
+                "the commands written to them here back over DDS");
   dds->add_flag("--accept-commands", options->accept_commands,
-                "With --export: apply commands from the network to local bodies");
+                "With --export: apply commands from the network to local bodies, devices and "
+                "the world");
   dds->add_option("--rate", options->rate_hz,
                   "Bridge loop rate: each body crosses at most once per cycle, newest wins "
                   "(default 1000 Hz)");
+  dds->add_option("--body-rate", options->body_rate_hz,
+                  "Send each body's state at most this often, newest wins (Hz; default 0: "
+                  "every new state)");
+  dds->add_option("--device-rate", options->device_rate_hz,
+                  "The same for each device's state (Hz; default 0: every new state)");
+  dds->add_option("--world-rate", options->world_rate_hz,
+                  "The same for the world state (Hz; default 0: every new state)");
   dds->add_flag("--reliable", options->reliable,
-                "Reliable states and commands (default best effort, keep last 1)");
+                "Reliable states and commands (default best effort; keep last 1 either way)");
+  dds->add_flag("--best-effort", cli->best_effort,
+                "Best-effort states and commands (overrides a config file's qos: reliable)");
   dds->add_option("--max-command-age", options->max_command_age_s,
                   "Drop network commands older than this by their DDS source timestamp "
                   "(default 0.05 s)");
   dds->add_flag("--latency", options->latency,
-                "Report mirrored states' age from their source's publish (p50, p99, max); "
-                "only meaningful when both sides share a monotonic clock (one host)");
+                "Report mirrored states' age from their source's publish (p50, p99, max), "
+                "and on an exporter the applied commands' age by their DDS source timestamp; "
+                "states' ages are only meaningful where both sides share a monotonic clock "
+                "(one host), commands' where their wall clocks agree");
   dds->add_option("--profile", options->profile,
                   "ros2: also publish exported bodies as ROS 2 topics rt/<prefix>/<body>/"
                   "{joint_states,pose,twist,wrench} (sensor_msgs/JointState, geometry_msgs/"
@@ -48,8 +126,18 @@ void register_bridge(CLI::App& app, Runner& selected) {
                   "identity_private_key.pem, permissions_ca.pem, governance.p7s and "
                   "permissions.p7s (bridges/dds/security/make_credentials.sh makes them)");
   dds->add_option("--seconds", options->seconds, "Stop after this many seconds (default: never)");
-  dds->callback(
-      [&selected, options] { selected = [options] { return bridges::run_dds_bridge(*options); }; });
+  dds->add_flag("--check", cli->check,
+                "Print the settings (--config FILE's, the flags over them) in the file's "
+                "format, check them, and exit");
+  dds->callback([&selected, cli, dds] {
+    selected = [cli, dds] {
+      const bridges::DdsBridgeOptions settings = merged(*dds, *cli);
+      if (!cli->check) return bridges::run_dds_bridge(settings);
+      std::printf("%s", bridges::render_dds_bridge_config(settings).c_str());
+      bridges::check_dds_bridge_options(settings);
+      return 0;
+    };
+  });
 }
 
 }  // namespace afhub::cli

@@ -14,6 +14,7 @@
 #include <cstdio>
 #include <memory>
 
+#include "afhub/bridges/dds_bridge_config.hpp"
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/body_claims.hpp"
 #include "afhub/hub/hub_presence.hpp"
@@ -25,6 +26,7 @@
 #include "dds_convert.hpp"
 #include "dds_security.hpp"
 #include "ros2_profile.hpp"
+#include "dds_device_world.hpp"
 
 namespace afhub::bridges {
 namespace {
@@ -87,6 +89,7 @@ struct Counters {
 struct ExportedBody {
   std::string channel;
   std::unique_ptr<BodyClient> client;
+  std::int64_t last_out_ns = 0;  // for --body-rate
 };
 
 // A remote body published into this hub.
@@ -99,6 +102,9 @@ struct MirroredBody {
 class Bridge {
  public:
   explicit Bridge(const DdsBridgeOptions& options) : options_(options) {
+    if (!options.interface.empty())
+      domain_ = make(dds_create_domain(options.domain, interface_config(options.interface).c_str()),
+                     "binding the domain to the --interface");
     Qos participant;
     if (!options.security_dir.empty())
       add_security_properties(participant.qos, options.security_dir);
@@ -124,6 +130,9 @@ class Bridge {
     Qos stream, info;
     set_stream_qos(stream.qos, options.reliable);
     set_info_qos(info.qos);
+    // This bridge's own samples never come back to it (export and mirror in one process).
+    dds_qset_ignorelocal(stream.qos, DDS_IGNORELOCAL_PARTICIPANT);
+    dds_qset_ignorelocal(info.qos, DDS_IGNORELOCAL_PARTICIPANT);
     if (options.export_bodies) {
       state_writer_ =
           make(dds_create_writer(p, state_topic_->id, stream.qos, nullptr), "state writer");
@@ -144,6 +153,7 @@ class Bridge {
           make(dds_create_readcondition(state_reader_->id, DDS_ANY_STATE), "read condition");
       check(dds_waitset_attach(waitset_->id, state_arrived_->id, 0), "attaching to the waitset");
     }
+    devices_and_world_ = std::make_unique<DeviceWorldBridge>(p, options, directory_.get());
     make_state_sample(state_sample_);
     make_command_sample(command_sample_);
   }
@@ -170,17 +180,23 @@ class Bridge {
       const std::int64_t now_ns = monotonic_ns();
       if (catalog && now_ns >= next_scan_ns) {
         scan_catalog(*catalog);
+        devices_and_world_->scan(catalog->latest());
         next_scan_ns = now_ns + 1'000'000'000;
       }
       if (options_.export_bodies) {
         export_states();
-        if (options_.accept_commands) import_commands();
-        if (ros2_ && options_.accept_commands) ros2_->import_commands();
+        devices_and_world_->export_states(now_ns);
+        if (options_.accept_commands) {
+          import_commands();
+          if (ros2_) ros2_->import_commands();
+          devices_and_world_->import_commands();
+        }
       }
       if (options_.mirror) {
         mirror_infos();
         mirror_states();
         export_mirrored_commands();
+        devices_and_world_->mirror();
       }
       if (now_ns >= next_report_ns || report_requested) {
         report_requested = 0;
@@ -241,6 +257,19 @@ class Bridge {
                  static_cast<unsigned long long>(counters_.stale_commands),
                  static_cast<unsigned long long>(counters_.bad_commands));
     if (ros2_) ros2_->report();
+    const DeviceWorldCounters& extra = devices_and_world_->counters();
+    if (!options_.device_globs.empty() || options_.world)
+      std::fprintf(stderr,
+                   "afhub bridge dds: devices exported %zu, mirrored %zu; device and world "
+                   "samples out %llu in %llu, commands out %llu in %llu, stale dropped %llu, "
+                   "bad %llu\n",
+                   devices_and_world_->exported_devices(), devices_and_world_->mirrored_devices(),
+                   static_cast<unsigned long long>(extra.states_out),
+                   static_cast<unsigned long long>(extra.states_in),
+                   static_cast<unsigned long long>(extra.commands_out),
+                   static_cast<unsigned long long>(extra.commands_in),
+                   static_cast<unsigned long long>(extra.stale_commands),
+                   static_cast<unsigned long long>(extra.bad_samples));
     if (options_.latency && state_ages_.count() > 0)
       std::fprintf(stderr,
                    "afhub bridge dds: mirrored state age (source publish to publish here, "
@@ -249,6 +278,15 @@ class Bridge {
                    static_cast<long long>(state_ages_.quantile_us(0.5)),
                    static_cast<long long>(state_ages_.quantile_us(0.99)),
                    static_cast<long long>(state_ages_.max_us()));
+    if (options_.latency && command_ages_.count() > 0)
+      std::fprintf(stderr,
+                   "afhub bridge dds: applied command age (the commander's publish to applied "
+                   "here, by the DDS source timestamp, %llu commands): p50 %lld us, p99 %lld us, "
+                   "max %lld us\n",
+                   static_cast<unsigned long long>(command_ages_.count()),
+                   static_cast<long long>(command_ages_.quantile_us(0.5)),
+                   static_cast<long long>(command_ages_.quantile_us(0.99)),
+                   static_cast<long long>(command_ages_.max_us()));
   }
 
   bool is_mirrored(std::string_view channel) const {
@@ -262,7 +300,9 @@ class Bridge {
     const BodyList& list = catalog.latest();
     for (std::uint32_t i = 0; i < list.body_count; ++i) {
       const std::string channel(name_of(list.bodies[i].channel));
-      if (!matches_any(channel, options_.body_globs) || is_mirrored(channel)) continue;
+      if (!matches_any(channel, options_.body_globs) || is_mirrored(channel) ||
+          devices_and_world_->mirrors(channel))
+        continue;
       bool known = false;
       for (const ExportedBody& body : exported_) known = known || body.channel == channel;
       if (known) continue;
@@ -289,10 +329,15 @@ class Bridge {
   }
 
   void export_states() {
+    const std::int64_t now_ns = options_.body_rate_hz > 0.0 ? monotonic_ns() : 0;
     for (std::size_t i = 0; i < exported_.size(); ++i) {
       ExportedBody& body = exported_[i];
       const BodyState* state = body.client->latest_state();
       if (!state || !body.client->state_updated()) continue;
+      if (options_.body_rate_hz > 0.0) {  // newest wins: the states in between stay here
+        if (static_cast<double>(now_ns - body.last_out_ns) < 1e9 / options_.body_rate_hz) continue;
+        body.last_out_ns = now_ns;
+      }
       to_dds(body.channel, *state, state_sample_);
       if (dds_write(state_writer_->id, &state_sample_) >= 0) ++counters_.states_out;
       if (ros2_) ros2_->publish(i, *state);
@@ -312,6 +357,7 @@ class Bridge {
         ++counters_.stale_commands;
         continue;
       }
+      if (options_.latency) command_ages_.record(age_ns);
       ExportedBody* body = find_exported(command_sample_.body);
       if (!body) {
         ++counters_.unknown_bodies;
@@ -409,6 +455,7 @@ class Bridge {
   }
 
   const DdsBridgeOptions& options_;
+  std::unique_ptr<Entity> domain_;  // --interface: the domain made with that binding
   std::unique_ptr<Entity> participant_, state_topic_, command_topic_, info_topic_;
   std::unique_ptr<Entity> state_writer_, info_writer_, command_reader_;
   std::unique_ptr<Entity> state_reader_, info_reader_, command_writer_;
@@ -420,9 +467,11 @@ class Bridge {
   std::vector<ExportedBody> exported_;
   std::vector<MirroredBody> mirrored_;
   std::vector<std::string> refused_;
-  std::unique_ptr<DirectoryPublisher> directory_;  // the mirrored bodies, for the catalog
+  std::unique_ptr<DirectoryPublisher> directory_;         // the mirrored bodies, for the catalog
+  std::unique_ptr<DeviceWorldBridge> devices_and_world_;  // --devices, --world
   Counters counters_;
-  AgeHistogram state_ages_;  // --latency: source publish to mirror publish
+  AgeHistogram state_ages_;    // --latency: source publish to mirror publish
+  AgeHistogram command_ages_;  // --latency: commander's publish to applied here
 };
 
 }  // namespace
@@ -433,7 +482,7 @@ bool matches_any(const std::string& channel, const std::vector<std::string>& glo
   return false;
 }
 
-int run_dds_bridge(const DdsBridgeOptions& options) {
+void check_dds_bridge_options(const DdsBridgeOptions& options) {
   if (!options.export_bodies && !options.mirror)
     throw Error(
         "say what to bridge: --export (this hub's bodies out), --mirror (remote "
@@ -455,6 +504,18 @@ int run_dds_bridge(const DdsBridgeOptions& options) {
     Qos checked;  // the files, before anything starts
     add_security_properties(checked.qos, options.security_dir);
   }
+  for (const double rate : {options.body_rate_hz, options.device_rate_hz, options.world_rate_hz})
+    if (!(rate >= 0.0 && rate <= 100'000.0))
+      throw Error("--body-rate, --device-rate and --world-rate must be 0 (no limit) to 100000 Hz");
+  if (options.world && options.export_bodies && options.mirror)
+    throw Error(
+        "--world with both --export and --mirror: a hub has one world, either its own or a "
+        "remote one; run one bridge per direction");
+  check_interface_name(options.interface);
+}
+
+int run_dds_bridge(const DdsBridgeOptions& options) {
+  check_dds_bridge_options(options);
   install_stop_signal_handlers();
   signal(SIGUSR1, request_report);
   connect_to_hub("bridge-dds", HubPolicy::kRequire);

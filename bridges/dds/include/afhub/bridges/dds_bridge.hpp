@@ -2,6 +2,7 @@
 //   Export: the states of local bodies matching a glob become DDS samples of topic
 //   "afhub/body_state" (keyed by channel name), their joint names "afhub/body_info";
 //   with accept_commands, "afhub/body_command" samples go into local command slots.
+//   Devices (--devices) and the world (--world) cross the same way: dds_device_world.hpp.
 //   Mirror: bodies seen on DDS are published into this hub as if local, and the
 //   commands written to them here go back out over DDS.
 #pragma once
@@ -14,11 +15,17 @@ namespace afhub::bridges {
 
 struct DdsBridgeOptions {
   std::uint32_t domain = 0;
+  std::string interface;  // bind DDS to this network interface (empty: Cyclone's choice)
   std::vector<std::string> body_globs{"*"};  // fnmatch patterns over channel names
+  std::vector<std::string> device_globs;     // over device names (device/<name>); none
+  bool world = false;                        // the world's state out, its commands in
   bool export_bodies = false;
   bool mirror = false;
   bool accept_commands = false;
-  double rate_hz = 1000.0;          // the bridge's loop: each body at most once per cycle
+  double rate_hz = 1000.0;  // the bridge's loop: each body at most once per cycle
+  // Per-topic rate limits of exported states, in Hz (0: every new state, at most once
+  // per cycle): newest wins, the states in between are not sent.
+  double body_rate_hz = 0.0, device_rate_hz = 0.0, world_rate_hz = 0.0;
   bool reliable = false;            // default best effort, keep last 1
   double max_command_age_s = 0.05;  // older (by DDS source timestamp): dropped
   // Report the age of mirrored states by their source's CLOCK_MONOTONIC stamp: only
@@ -32,6 +39,9 @@ struct DdsBridgeOptions {
   // DDS Security credentials (see bridges/dds/src/dds_security.hpp); empty: none.
   std::string security_dir;
 };
+
+// Throws afhub::Error naming the option when a value is out of range.
+void check_dds_bridge_options(const DdsBridgeOptions& options);
 
 // Throws afhub::Error on bad options or when DDS cannot start; returns the exit code.
 int run_dds_bridge(const DdsBridgeOptions& options);

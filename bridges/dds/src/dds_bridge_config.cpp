@@ -1,0 +1,255 @@
+// Reading `afhub bridge dds --config FILE` (see dds_bridge_config.hpp): every value is
+// checked where it is written, and every problem names the file, line and column.
+#include "afhub/bridges/dds_bridge_config.hpp"
+
+#include <net/if.h>
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+
+#include "afhub/shm_layout/error.hpp"
+
+namespace afhub::bridges {
+namespace {
+
+const char* const kKeys =
+    "domain, interface, export, mirror, accept-commands, bodies, devices, world, qos, rate, "
+    "rate-limits, max-command-age, profile, ros2-prefix, security";
+
+class Reader {
+ public:
+  explicit Reader(std::string path) : path_(std::move(path)) {}
+
+  [[noreturn]] void fail(const YAML::Node& node, const std::string& what) const {
+    const YAML::Mark mark = node.Mark();
+    throw Error(path_ + ":" + std::to_string(mark.line + 1) + ":" +
+                std::to_string(mark.column + 1) + ": error: " + what);
+  }
+
+  double number(const YAML::Node& node, const std::string& key, double low, double high) const {
+    double value = 0.0;
+    if (!node.IsScalar() || !YAML::convert<double>::decode(node, value) || !std::isfinite(value))
+      fail(node, "'" + key + "' must be a number");
+    if (value < low || value > high)
+      fail(node, "'" + key + "' is " + node.Scalar() + "; write a value from " + text(low) +
+                     " to " + text(high));
+    return value;
+  }
+
+  bool flag(const YAML::Node& node, const std::string& key) const {
+    bool value = false;
+    if (!node.IsScalar() || !YAML::convert<bool>::decode(node, value))
+      fail(node, "'" + key + "' must be true or false");
+    return value;
+  }
+
+  std::string word(const YAML::Node& node, const std::string& key) const {
+    if (!node.IsScalar() || node.Scalar().empty()) fail(node, "'" + key + "' must be a name");
+    return node.Scalar();
+  }
+
+  // A glob or a list of globs.
+  std::vector<std::string> globs(const YAML::Node& node, const std::string& key) const {
+    if (node.IsScalar()) return {word(node, key)};
+    if (!node.IsSequence())
+      fail(node, "'" + key + "' must be a glob or a list of globs, e.g. [\"ambf/env/*\"]");
+    std::vector<std::string> out;
+    for (const YAML::Node& item : node) out.push_back(word(item, key));
+    return out;
+  }
+
+ private:
+  static std::string text(double value) {
+    std::ostringstream out;
+    out << value;
+    return out.str();
+  }
+  std::string path_;
+};
+
+void read_rate_limits(const Reader& reader, const YAML::Node& node, DdsBridgeOptions& options) {
+  if (!node.IsMap())
+    reader.fail(node, "'rate-limits' must be a map, e.g. {bodies: 200, devices: 1000, world: 50}");
+  for (const auto& entry : node) {
+    const std::string key = entry.first.Scalar();
+    const double rate = reader.number(entry.second, "rate-limits: " + key, 0.0, 100'000.0);
+    if (key == "bodies")
+      options.body_rate_hz = rate;
+    else if (key == "devices")
+      options.device_rate_hz = rate;
+    else if (key == "world")
+      options.world_rate_hz = rate;
+    else
+      reader.fail(entry.first, "unknown topic '" + key +
+                                   "' in 'rate-limits'; the topics are bodies, devices and world "
+                                   "(in Hz, 0 for no limit)");
+  }
+}
+
+}  // namespace
+
+DdsBridgeOptions read_dds_bridge_config(const std::string& path, const DdsBridgeOptions& defaults) {
+  std::ifstream in(path);
+  if (!in) throw Error(path + ": error: cannot read it; give the path of a bridge config file");
+  std::stringstream text;
+  text << in.rdbuf();
+  YAML::Node root;
+  try {
+    root = YAML::Load(text.str());
+  } catch (const YAML::Exception& error) {
+    throw Error(path + ":" + std::to_string(error.mark.line + 1) + ":" +
+                std::to_string(error.mark.column + 1) + ": error: not valid YAML: " + error.msg);
+  }
+  const Reader reader(path);
+  DdsBridgeOptions options = defaults;
+  if (root.IsNull()) return options;  // an empty file sets nothing
+  if (!root.IsMap())
+    reader.fail(root, "a bridge config is a map of settings: " + std::string(kKeys));
+  for (const auto& entry : root) {
+    const std::string key = entry.first.Scalar();
+    const YAML::Node& value = entry.second;
+    if (key == "domain") {
+      const double domain = reader.number(value, key, 0, 232);
+      if (std::floor(domain) != domain)
+        reader.fail(value, "'domain' must be a whole number from 0 to 232");
+      options.domain = static_cast<std::uint32_t>(domain);
+    } else if (key == "interface") {
+      options.interface = reader.word(value, key);
+      try {
+        check_interface_name(options.interface);
+      } catch (const Error& error) {
+        reader.fail(value, error.what());
+      }
+    } else if (key == "export") {
+      options.export_bodies = reader.flag(value, key);
+    } else if (key == "mirror") {
+      options.mirror = reader.flag(value, key);
+    } else if (key == "accept-commands") {
+      options.accept_commands = reader.flag(value, key);
+    } else if (key == "bodies") {
+      options.body_globs = reader.globs(value, key);
+      if (options.body_globs.empty()) reader.fail(value, "'bodies' needs at least one glob");
+    } else if (key == "devices") {
+      options.device_globs = reader.globs(value, key);
+    } else if (key == "world") {
+      options.world = reader.flag(value, key);
+    } else if (key == "qos") {
+      const std::string qos = value.IsScalar() ? value.Scalar() : "";
+      if (qos != "best-effort" && qos != "reliable")
+        reader.fail(value, "'qos' must be best-effort or reliable (states keep the last 1)");
+      options.reliable = qos == "reliable";
+    } else if (key == "rate") {
+      options.rate_hz = reader.number(value, key, 1e-3, 100'000.0);
+    } else if (key == "rate-limits") {
+      read_rate_limits(reader, value, options);
+    } else if (key == "max-command-age") {
+      options.max_command_age_s = reader.number(value, key, 1e-9, 10.0);
+    } else if (key == "profile") {
+      options.profile = reader.word(value, key);
+      if (options.profile != "ros2") reader.fail(value, "'profile' must be ros2");
+    } else if (key == "ros2-prefix") {
+      options.ros2_prefix = reader.word(value, key);
+    } else if (key == "security") {
+      options.security_dir = reader.word(value, key);
+    } else {
+      reader.fail(entry.first, "unknown key '" + key + "'; the keys are " + kKeys +
+                                   " (as the flags of `afhub bridge dds --help`)");
+    }
+  }
+  return options;
+}
+
+namespace {
+
+// The shortest text that reads back as `value`.
+std::string number_text(double value) {
+  char text[32];
+  for (int digits = 6; digits <= 17; ++digits) {
+    std::snprintf(text, sizeof text, "%.*g", digits, value);
+    if (std::strtod(text, nullptr) == value) break;
+  }
+  return text;
+}
+
+std::string quoted_list(const std::vector<std::string>& globs) {
+  std::string out = "[";
+  for (std::size_t i = 0; i < globs.size(); ++i)
+    out += (i ? ", " : "") + std::string("\"") + globs[i] + "\"";
+  return out + "]";
+}
+
+}  // namespace
+
+std::string render_dds_bridge_config(const DdsBridgeOptions& options) {
+  std::ostringstream out;
+  const auto flag = [](bool value) { return value ? "true" : "false"; };
+  out << "domain: " << options.domain << "\n";
+  if (!options.interface.empty()) out << "interface: " << options.interface << "\n";
+  out << "export: " << flag(options.export_bodies) << "\n"
+      << "mirror: " << flag(options.mirror) << "\n"
+      << "accept-commands: " << flag(options.accept_commands) << "\n"
+      << "bodies: " << quoted_list(options.body_globs) << "\n"
+      << "devices: " << quoted_list(options.device_globs) << "\n"
+      << "world: " << flag(options.world) << "\n"
+      << "qos: " << (options.reliable ? "reliable" : "best-effort") << "\n"
+      << "rate: " << number_text(options.rate_hz) << "\n"
+      << "rate-limits: {bodies: " << number_text(options.body_rate_hz)
+      << ", devices: " << number_text(options.device_rate_hz)
+      << ", world: " << number_text(options.world_rate_hz) << "}\n"
+      << "max-command-age: " << number_text(options.max_command_age_s) << "\n";
+  if (!options.profile.empty()) out << "profile: " << options.profile << "\n";
+  if (!options.ros2_prefix.empty()) out << "ros2-prefix: " << options.ros2_prefix << "\n";
+  if (!options.security_dir.empty()) out << "security: " << options.security_dir << "\n";
+  return out.str();
+}
+
+void check_interface_name(const std::string& name) {
+  if (name.empty()) return;
+  if (name.size() >= IF_NAMESIZE)
+    throw Error("interface '" + name + "' is longer than a network interface's name (" +
+                std::to_string(IF_NAMESIZE - 1) + " characters); see `ip link`");
+  for (const char c : name)
+    if (c == '<' || c == '>' || c == '&' || c == '"' || c == '\'' || c == '/' || c == ' ' ||
+        c == ',')
+      throw Error("interface '" + name +
+                  "' is not a network interface's name; see `ip link` for this machine's");
+}
+
+namespace {
+
+// `text` without its elements <tag>...</tag>.
+std::string without_element(std::string text, const std::string& tag) {
+  const std::string open = "<" + tag + ">", close = "</" + tag + ">";
+  for (std::size_t start = text.find(open); start != std::string::npos; start = text.find(open)) {
+    const std::size_t end = text.find(close, start);
+    if (end == std::string::npos) break;
+    text.erase(start, end + close.size() - start);
+  }
+  return text;
+}
+
+}  // namespace
+
+std::string cyclone_config_with_interface(const std::string& uri, const std::string& name) {
+  // Cyclone adds up the interfaces of every part, and refuses one given twice: the
+  // flag's interface replaces those written inline in the URI.
+  std::string config;
+  if (!uri.empty())
+    config = without_element(without_element(uri, "Interfaces"), "NetworkInterfaceAddress") + ",";
+  return config + "<General><Interfaces><NetworkInterface name=\"" + name +
+         "\"/></Interfaces></General>";
+}
+
+std::string interface_config(const std::string& name) {
+  if (if_nametoindex(name.c_str()) == 0)
+    throw Error("--interface " + name +
+                ": this machine has no such network interface; see `ip link`");
+  const char* uri = std::getenv("CYCLONEDDS_URI");
+  return cyclone_config_with_interface(uri ? uri : "", name);
+}
+
+}  // namespace afhub::bridges

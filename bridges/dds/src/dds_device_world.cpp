@@ -1,0 +1,324 @@
+// Device and world channels over DDS (see dds_device_world.hpp). As for bodies, the
+// steady state allocates nothing here: samples are made once, devices are looked up
+// in vectors made when they appear.
+#include "dds_device_world.hpp"
+
+#include <cstdio>
+#include <cstring>
+
+#include "afhub/hub/body_claims.hpp"
+#include "afhub/shm_layout/error.hpp"
+#include "dds_convert_device_world.hpp"
+
+namespace afhub::bridges {
+namespace {
+
+constexpr const char* kDeviceStateTopic = "afhub/device_state";
+constexpr const char* kDeviceCommandTopic = "afhub/device_command";
+constexpr const char* kWorldStateTopic = "afhub/world_state";
+constexpr const char* kWorldCommandTopic = "afhub/world_command";
+constexpr std::string_view kDevicePrefix = "device/";
+// World commands queued on the way: more than anyone types between two bridge cycles.
+constexpr int kWorldCommandDepth = 16;
+
+dds_entity_t checked(dds_entity_t entity, const char* what) {
+  if (entity < 0)
+    throw Error(std::string("DDS: ") + what + ": " + dds_strretcode(entity) +
+                " (check CYCLONEDDS_URI and the --domain)");
+  return entity;
+}
+
+struct Qos {
+  dds_qos_t* qos = dds_create_qos();
+  ~Qos() { dds_delete_qos(qos); }
+};
+
+// A device's name as the globs see it: "device/<name>" without "device/".
+std::string_view device_name_of(std::string_view channel) {
+  return channel.substr(kDevicePrefix.size());
+}
+
+// Whether a sample may go out now under a per-topic rate limit (0: no limit).
+bool rate_allows(std::int64_t now_ns, std::int64_t& last_ns, double rate_hz) {
+  if (rate_hz > 0.0 && static_cast<double>(now_ns - last_ns) < 1e9 / rate_hz) return false;
+  last_ns = now_ns;
+  return true;
+}
+
+}  // namespace
+
+DeviceWorldBridge::DeviceWorldBridge(dds_entity_t participant, const DdsBridgeOptions& options,
+                                     DirectoryPublisher* directory)
+    : options_(options), directory_(directory), world_(world_instance()) {
+  const bool devices = !options.device_globs.empty();
+  Qos stream, commands;
+  if (options.reliable)
+    dds_qset_reliability(stream.qos, DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
+  else
+    dds_qset_reliability(stream.qos, DDS_RELIABILITY_BEST_EFFORT, 0);
+  dds_qset_history(stream.qos, DDS_HISTORY_KEEP_LAST, 1);
+  // This bridge's own samples never come back to it (export and mirror in one process).
+  dds_qset_ignorelocal(stream.qos, DDS_IGNORELOCAL_PARTICIPANT);
+  dds_qset_reliability(commands.qos, DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
+  dds_qset_history(commands.qos, DDS_HISTORY_KEEP_LAST, kWorldCommandDepth);
+  dds_qset_ignorelocal(commands.qos, DDS_IGNORELOCAL_PARTICIPANT);
+  if (devices) {
+    device_state_topic_ = checked(dds_create_topic(participant, &afhub_dds_DeviceState_desc,
+                                                   kDeviceStateTopic, nullptr, nullptr),
+                                  "creating the device state topic");
+    device_command_topic_ = checked(dds_create_topic(participant, &afhub_dds_DeviceCommand_desc,
+                                                     kDeviceCommandTopic, nullptr, nullptr),
+                                    "creating the device command topic");
+  }
+  if (options.world) {
+    world_state_topic_ = checked(dds_create_topic(participant, &afhub_dds_WorldState_desc,
+                                                  kWorldStateTopic, nullptr, nullptr),
+                                 "creating the world state topic");
+    world_command_topic_ = checked(dds_create_topic(participant, &afhub_dds_WorldCommand_desc,
+                                                    kWorldCommandTopic, nullptr, nullptr),
+                                   "creating the world command topic");
+  }
+  if (options.export_bodies) {
+    if (devices) {
+      device_state_writer_ =
+          checked(dds_create_writer(participant, device_state_topic_, stream.qos, nullptr),
+                  "device state writer");
+      if (options.accept_commands)
+        device_command_reader_ =
+            checked(dds_create_reader(participant, device_command_topic_, stream.qos, nullptr),
+                    "device command reader");
+    }
+    if (options.world) {
+      world_state_writer_ =
+          checked(dds_create_writer(participant, world_state_topic_, stream.qos, nullptr),
+                  "world state writer");
+      world_state_in_ = std::make_unique<LatestReader<WorldState>>(
+          ChannelId{std::string(kService), world_, std::string(kStateEvent)});
+      if (options.accept_commands) {
+        world_command_reader_ =
+            checked(dds_create_reader(participant, world_command_topic_, commands.qos, nullptr),
+                    "world command reader");
+        world_command_out_ = std::make_unique<Writer<WorldCommand>>(
+            ChannelId{std::string(kService), world_, std::string(kCommandEvent)});
+        // World commands are acted on once per (pid, sequence): start past any number
+        // an earlier bridge of this pid could have used.
+        world_command_out_->raw().continue_sequence_after(
+            static_cast<std::uint64_t>(monotonic_ns()));
+      }
+    }
+  }
+  if (options.mirror) {
+    if (devices) {
+      device_state_reader_ =
+          checked(dds_create_reader(participant, device_state_topic_, stream.qos, nullptr),
+                  "device state reader");
+      device_command_writer_ =
+          checked(dds_create_writer(participant, device_command_topic_, stream.qos, nullptr),
+                  "device command writer");
+    }
+    if (options.world) {
+      world_state_reader_ =
+          checked(dds_create_reader(participant, world_state_topic_, stream.qos, nullptr),
+                  "world state reader");
+      world_command_writer_ =
+          checked(dds_create_writer(participant, world_command_topic_, commands.qos, nullptr),
+                  "world command writer");
+      world_state_out_ = std::make_unique<Writer<WorldState>>(
+          ChannelId{std::string(kService), world_, std::string(kStateEvent)});
+      world_commands_ = std::make_unique<WorldCommandQueue>(world_);
+    }
+  }
+  make_world_state_sample(world_state_sample_);
+}
+
+DeviceWorldBridge::~DeviceWorldBridge() {
+  free_world_state_sample(world_state_sample_);
+}
+
+bool DeviceWorldBridge::mirrors(std::string_view channel) const noexcept {
+  for (const MirroredDevice& device : mirrored_)
+    if (device.channel == channel) return true;
+  return false;
+}
+
+DeviceWorldBridge::ExportedDevice* DeviceWorldBridge::find_exported(const char* channel) noexcept {
+  for (ExportedDevice& device : exported_)
+    if (device.channel == channel) return &device;
+  return nullptr;
+}
+
+DeviceWorldBridge::MirroredDevice* DeviceWorldBridge::find_mirrored(const char* channel) noexcept {
+  for (MirroredDevice& device : mirrored_)
+    if (device.channel == channel) return &device;
+  return nullptr;
+}
+
+void DeviceWorldBridge::scan(const BodyList& catalog) {
+  if (!device_state_writer_) return;
+  for (std::uint32_t i = 0; i < catalog.body_count; ++i) {
+    const BodyInfo& info = catalog.bodies[i];
+    if (info.kind != ChannelKind::kDevice) continue;
+    const std::string channel(name_of(info.channel));
+    if (channel.rfind(kDevicePrefix, 0) != 0 || mirrors(channel) ||
+        find_exported(channel.c_str()) ||
+        !matches_any(std::string(device_name_of(channel)), options_.device_globs))
+      continue;
+    ExportedDevice device{channel,
+                          std::make_unique<LatestReader<DeviceState>>(body_state_channel(channel)),
+                          std::make_unique<Writer<DeviceCommand>>(body_command_channel(channel))};
+    exported_.push_back(std::move(device));
+    std::fprintf(stderr, "afhub bridge dds: exporting device %s\n", channel.c_str());
+  }
+}
+
+void DeviceWorldBridge::export_states(std::int64_t now_ns) noexcept {
+  for (ExportedDevice& device : exported_) {
+    const DeviceState* state = device.state->latest();
+    if (!state || !device.state->updated() ||
+        !rate_allows(now_ns, device.last_out_ns, options_.device_rate_hz))
+      continue;
+    to_dds(device.channel, *state, device_state_sample_);
+    if (dds_write(device_state_writer_, &device_state_sample_) >= 0) ++counters_.states_out;
+  }
+  if (world_state_in_) {
+    const WorldState* state = world_state_in_->latest();
+    if (state && world_state_in_->updated() &&
+        rate_allows(now_ns, world_last_out_ns_, options_.world_rate_hz)) {
+      to_dds(world_, *state, world_state_sample_);
+      if (dds_write(world_state_writer_, &world_state_sample_) >= 0) ++counters_.states_out;
+    }
+  }
+}
+
+// Only with accept_commands; a command older than the bound by its DDS source
+// timestamp is dropped, never applied late.
+void DeviceWorldBridge::import_commands() noexcept {
+  dds_sample_info_t info;
+  if (device_command_reader_) {
+    void* samples[1] = {&device_command_sample_};
+    while (dds_take(device_command_reader_, samples, &info, 1, 1) > 0) {
+      if (!info.valid_data) continue;
+      if (too_old(info.source_timestamp, options_.max_command_age_s)) {
+        ++counters_.stale_commands;
+        continue;
+      }
+      ExportedDevice* device = find_exported(device_command_sample_.device);
+      if (!device) continue;
+      DeviceCommand* command = device->command->loan();
+      if (!command) continue;
+      from_dds(device_command_sample_, *command);
+      device->command->publish(command);
+      ++counters_.commands_in;
+    }
+  }
+  if (world_command_reader_) {
+    void* samples[1] = {&world_command_sample_};
+    while (dds_take(world_command_reader_, samples, &info, 1, 1) > 0) {
+      if (!info.valid_data || world_ != world_command_sample_.world) continue;
+      if (too_old(info.source_timestamp, options_.max_command_age_s)) {
+        ++counters_.stale_commands;
+        continue;
+      }
+      WorldCommand* command = world_command_out_->loan();
+      if (!command) continue;
+      if (!from_dds(world_command_sample_, *command)) {
+        ++counters_.bad_samples;
+        command->action = WorldAction::kNone;  // a loaned chunk goes out doing nothing
+      } else {
+        ++counters_.commands_in;
+      }
+      world_command_out_->publish(command);
+    }
+  }
+}
+
+void DeviceWorldBridge::add_mirrored_device(const char* channel) {
+  const std::string name(device_name_of(channel));
+  try {
+    check_room_for_bodies({channel}, 1);
+    MirroredDevice device{
+        channel, std::make_unique<Writer<DeviceState>>(body_state_channel(channel)),
+        std::make_unique<LatestReader<DeviceCommand>>(body_command_channel(channel))};
+    directory_->add(make_device_entry(name));
+    directory_->publish();
+    mirrored_.push_back(std::move(device));
+    std::fprintf(stderr, "afhub bridge dds: mirroring device %s\n", channel);
+  } catch (const Error& error) {
+    std::fprintf(stderr, "afhub bridge dds: not mirroring device %s: %s\n", channel, error.what());
+    refused_.emplace_back(channel);
+  }
+}
+
+void DeviceWorldBridge::mirror_devices() noexcept {
+  dds_sample_info_t info;
+  void* samples[1] = {&device_state_sample_};
+  while (dds_take(device_state_reader_, samples, &info, 1, 1) > 0) {
+    if (!info.valid_data) continue;
+    const char* channel = device_state_sample_.device;
+    MirroredDevice* device = find_mirrored(channel);
+    if (!device) {
+      // A new remote device (its spec comes in every state): once, not per message.
+      const std::string_view text(channel);
+      if (text.rfind(kDevicePrefix, 0) != 0 ||
+          !matches_any(std::string(device_name_of(text)), options_.device_globs))
+        continue;
+      bool refused = false;
+      for (const std::string& name : refused_) refused = refused || name == text;
+      if (refused) continue;
+      try {
+        add_mirrored_device(channel);
+      } catch (const std::exception&) {
+        continue;  // out of memory: tried again with the next state
+      }
+      device = find_mirrored(channel);
+      if (!device) continue;
+    }
+    DeviceState* state = device->state->loan();
+    if (!state) continue;
+    if (!from_dds(device_state_sample_, *state)) {
+      ++counters_.bad_samples;
+      state->gate = ForceGate::kNoCommand;  // a loaned chunk must go somewhere
+    }
+    device->state->publish(state);
+    ++counters_.states_in;
+  }
+  // Commands written here to mirrored devices go to their driver, stamped with their
+  // age: the DDS source timestamp is when the local writer published.
+  for (MirroredDevice& device : mirrored_) {
+    const DeviceCommand* command = device.command->latest();
+    if (!command || !device.command->updated()) continue;
+    to_dds(device.channel, *command, device_command_sample_);
+    const std::int64_t age_ns =
+        std::max<std::int64_t>(0, monotonic_ns() - command->header.publish_stamp_ns);
+    if (dds_write_ts(device_command_writer_, &device_command_sample_, dds_time() - age_ns) >= 0)
+      ++counters_.commands_out;
+  }
+}
+
+void DeviceWorldBridge::mirror_world() noexcept {
+  dds_sample_info_t info;
+  void* samples[1] = {&world_state_sample_};
+  while (dds_take(world_state_reader_, samples, &info, 1, 1) > 0) {
+    if (!info.valid_data || world_ != world_state_sample_.world) continue;
+    WorldState* state = world_state_out_->loan();
+    if (!state) continue;
+    from_dds(world_state_sample_, *state);
+    world_state_out_->publish(state);
+    ++counters_.states_in;
+  }
+  WorldCommand command;
+  while (world_commands_->next(command)) {
+    to_dds(world_, command, world_command_sample_);
+    const std::int64_t age_ns =
+        std::max<std::int64_t>(0, monotonic_ns() - command.header.publish_stamp_ns);
+    if (dds_write_ts(world_command_writer_, &world_command_sample_, dds_time() - age_ns) >= 0)
+      ++counters_.commands_out;
+  }
+}
+
+void DeviceWorldBridge::mirror() noexcept {
+  if (device_state_reader_) mirror_devices();
+  if (world_state_reader_) mirror_world();
+}
+
+}  // namespace afhub::bridges
