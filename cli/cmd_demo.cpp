@@ -2,7 +2,10 @@
 // example scene in Bullet (the 7-DOF arm, the remote-centre-of-motion arm and the
 // gripper, with the world's floor, lights and cameras), a 200 Hz loop moving their
 // joints through position commands, and a live view of every body read through
-// zero-copy channels. `--model FILE` simulates another model and waves its root.
+// zero-copy channels; beside it `afhub view` serves the scene to a browser, at the URL
+// the demo prints (`--no-view`: no viewer). `--model FILE` simulates another model
+// and waves its root.
+#include <poll.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -11,6 +14,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <regex>
 #include <string>
 #include <thread>
 #include <vector>
@@ -28,6 +32,8 @@ namespace {
 struct DemoOptions {
   double seconds = 0.0;  // 0: until Ctrl-C
   std::string model;     // empty: the example scene
+  bool view = true;
+  int view_port = 8080;
 };
 
 // One commanded joint of the example scene: center + amplitude * sin(2 pi t / period + phase).
@@ -58,19 +64,67 @@ const std::vector<BodyMotion>& example_scene_motions() {
   return motions;
 }
 
-pid_t spawn_physics(const std::vector<std::string>& run_arguments) {
+// Starts `afhub arguments...`; its stdout goes to `stdout_fd` when that is not -1.
+pid_t spawn_afhub(const std::vector<std::string>& arguments, int stdout_fd = -1) {
   pid_t pid = fork();
-  if (pid < 0) throw Error("cannot start the simulation: fork failed");
+  if (pid < 0) throw Error("cannot start afhub " + arguments.front() + ": fork failed");
   if (pid == 0) {
-    std::vector<const char*> argv{"afhub", "run"};
-    for (const std::string& argument : run_arguments) argv.push_back(argument.c_str());
-    argv.push_back("--no-autostart");
+    if (stdout_fd >= 0) dup2(stdout_fd, STDOUT_FILENO);
+    std::vector<const char*> argv{"afhub"};
+    for (const std::string& argument : arguments) argv.push_back(argument.c_str());
     argv.push_back(nullptr);
     execv("/proc/self/exe", const_cast<char* const*>(argv.data()));
-    std::perror("afhub demo: cannot run afhub run");
+    std::perror(("afhub demo: cannot run afhub " + arguments.front()).c_str());
     _exit(127);
   }
   return pid;
+}
+
+pid_t spawn_physics(const std::vector<std::string>& run_arguments) {
+  std::vector<std::string> arguments{"run"};
+  arguments.insert(arguments.end(), run_arguments.begin(), run_arguments.end());
+  arguments.push_back("--no-autostart");
+  return spawn_afhub(arguments);
+}
+
+// `afhub view` beside the demo, and the URL it serves (what it prints first).
+struct Viewer {
+  pid_t pid = -1;
+  int output = -1;  // kept open: the viewer's stdout must not break
+  std::string url;
+};
+
+Viewer start_viewer(int port) {
+  Viewer viewer;
+  int pipe_ends[2];
+  if (pipe(pipe_ends) != 0) throw Error("cannot start the viewer: pipe failed");
+  viewer.pid = spawn_afhub({"view", "--port", std::to_string(port)}, pipe_ends[1]);
+  close(pipe_ends[1]);
+  viewer.output = pipe_ends[0];
+  // Its first line names the URL; it comes within a second unless the viewer failed
+  // (then its error is on the shared stderr).
+  std::string said;
+  const std::regex url("http://[^ ]+/");
+  std::smatch match;
+  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  while (!std::regex_search(said, match, url) && std::chrono::steady_clock::now() < until) {
+    pollfd ready{viewer.output, POLLIN, 0};
+    if (poll(&ready, 1, 100) <= 0) continue;
+    char text[256];
+    const ssize_t n = read(viewer.output, text, sizeof text);
+    if (n <= 0) break;  // the viewer exited
+    said.append(text, static_cast<std::size_t>(n));
+  }
+  if (std::regex_search(said, match, url)) viewer.url = match[0];
+  return viewer;
+}
+
+void stop_viewer(Viewer& viewer) {
+  if (viewer.pid <= 0) return;
+  kill(viewer.pid, SIGTERM);
+  waitpid(viewer.pid, nullptr, 0);
+  close(viewer.output);
+  viewer.pid = -1;
 }
 
 // Position commands for a body's first joints, following `motion`.
@@ -93,12 +147,14 @@ std::vector<JointMotion> wave_every_joint(std::uint32_t joint_count) {
   return motion;
 }
 
-void draw(CatalogReader& catalog, std::vector<std::unique_ptr<BodyClient>>& clients, bool tty) {
+void draw(CatalogReader& catalog, std::vector<std::unique_ptr<BodyClient>>& clients, bool tty,
+          const std::string& url) {
   const BodyList& list = catalog.latest();
   std::string screen = tty ? "\033[H\033[2J" : "";
   screen +=
       "afhub demo: simulated live (Ctrl-C stops; try `afhub ls`, `afhub echo arm/link7`, "
       "`afhub status` in another shell)\n";
+  if (!url.empty()) screen += "afhub demo: see it in a browser: " + url + "\n";
   char line[256];
   std::snprintf(line, sizeof line, "%-28s %9s %9s %9s  %-26s %s\n", "BODY", "RATE_HZ", "STEP",
                 "SIM_S", "POSITION_M", "JOINTS_RAD");
@@ -136,6 +192,17 @@ int run_demo(const DemoOptions& options) {
   }
   connect_to_hub("demo", HubPolicy::kAutostart);
   const pid_t physics = spawn_physics(run_arguments);
+  Viewer viewer;
+  if (options.view) {
+    viewer = start_viewer(options.view_port);
+    if (viewer.url.empty())
+      std::fprintf(stderr,
+                   "afhub demo: the viewer did not start (see above); the demo goes on without "
+                   "it. Try another --view-port, or --no-view.\n");
+    else
+      std::printf("afhub demo: the viewer: %s\n", viewer.url.c_str());
+    std::fflush(stdout);
+  }
   CatalogReader catalog;
   catalog.wait(std::chrono::milliseconds(1000));
   // The bodies the demo moves, opened once they are in the catalog.
@@ -153,6 +220,7 @@ int run_demo(const DemoOptions& options) {
     int status = 0;
     if (waitpid(physics, &status, WNOHANG) == physics) {
       std::fprintf(stderr, "afhub demo: the simulation exited unexpectedly\n");
+      stop_viewer(viewer);
       return 1;
     }
     const BodyList& list = catalog.latest();
@@ -173,11 +241,12 @@ int run_demo(const DemoOptions& options) {
     // Drawn at the refresh rate, and at once when bodies come or go.
     if (now >= next_draw || list.body_count != drawn_bodies) {
       drawn_bodies = list.body_count;
-      draw(catalog, clients, tty);
+      draw(catalog, clients, tty, viewer.url);
       next_draw = now + refresh;
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }
+  stop_viewer(viewer);
   kill(physics, SIGTERM);
   waitpid(physics, nullptr, 0);
   std::fprintf(stderr, "afhub demo: done. The hub keeps running; stop it with `afhub hub stop`.\n");
@@ -191,13 +260,18 @@ void register_demo(CLI::App& app, Runner& selected) {
   auto* demo = app.add_subcommand(
       "demo",
       "Run the demo: a hub, the example scene (a 7-DOF arm, a remote-centre-of-motion arm "
-      "and a gripper) simulated in Bullet at 1 kHz with their joints moving, and a live view "
-      "of their bodies.");
+      "and a gripper) simulated in Bullet at 1 kHz with their joints moving, a live table "
+      "of their bodies, and `afhub view` serving the 3D scene to a browser (its URL is "
+      "printed).");
   demo->add_option("--model", options->model,
                    "ADF file to simulate instead, its root body's joints waving (default: the "
                    "example scene, examples/models/launch.yaml)");
   demo->add_option("--seconds", options->seconds,
                    "Stop after this many seconds (default: until Ctrl-C)");
+  demo->add_flag("!--no-view", options->view, "Do not start the browser viewer");
+  demo->add_option("--view-port", options->view_port,
+                   "The viewer's TCP port (0: any free one; the URL printed says which)")
+      ->capture_default_str();
   demo->callback([&selected, options] { selected = [options] { return run_demo(*options); }; });
 }
 

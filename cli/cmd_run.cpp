@@ -21,7 +21,8 @@ namespace {
 
 struct RunCliOptions {
   std::vector<std::string> files;
-  std::string launch_file, indices, adf_list, world_file, report_file, watchdog_hold, name_space;
+  std::string launch_file, indices, adf_list, world_file, report_file, step_log_file, watchdog_hold,
+      name_space;
   std::string gravity;                       // "x,y,z": over the world's and every file's
   std::vector<std::string> watchdog_bodies;  // "BODY=SECONDS"
   double dt_s = 0.001;
@@ -67,6 +68,8 @@ int run_run(const RunCliOptions& options) {
   if (!(options.max_catch_up_ms >= 0.0 && options.max_catch_up_ms <= 10'000.0))
     throw Error("--max-catch-up must be 0 to 10000 ms, got " +
                 std::to_string(options.max_catch_up_ms));
+  if (!options.step_log_file.empty() && (options.steps == 0 || options.steps > 100'000'000))
+    throw Error("--step-log needs --steps N (at most 1e8): the log is sized before the first step");
   if (options.fifo_priority < 0 || options.fifo_priority > 99)
     throw Error("--fifo takes a SCHED_FIFO priority from 1 to 99");
   if (options.offline &&
@@ -158,6 +161,7 @@ int run_run(const RunCliOptions& options) {
   realtime.lock_memory = options.lock_memory;
   run.grant = apply_realtime(realtime, "afhub run");
   physics::RunReport report;
+  if (!options.step_log_file.empty()) report.step_log.reserve(options.steps);
   physics::run_loop(sim, channels.get(), run, report);
   if (const std::string nan = physics::nan_summary(sim); !nan.empty()) {
     if (report.nan_detected)
@@ -173,6 +177,13 @@ int run_run(const RunCliOptions& options) {
     std::ofstream out(options.report_file);
     out << physics::report_json(report, sim);
     if (!out) throw Error("cannot write the report to " + options.report_file);
+  }
+  if (!options.step_log_file.empty()) {
+    std::ofstream out(options.step_log_file);
+    out << "begin_ns step_us\n";
+    for (const physics::StepSample& sample : report.step_log)
+      out << sample.begin_ns << ' ' << sample.duration_us << '\n';
+    if (!out) throw Error("cannot write the step log to " + options.step_log_file);
   }
   return report.nan_detected ? 1 : 0;
 }
@@ -245,6 +256,9 @@ void register_run(CLI::App& app, Runner& selected) {
                 "mlockall and pre-fault, so the physics loop takes no page faults");
   run->add_option("--report", options->report_file,
                   "Write a JSON report at the end (steps, step times, poses, joints)");
+  run->add_option("--step-log", options->step_log_file,
+                  "Write each step's start (CLOCK_MONOTONIC ns) and duration (us) at the end, "
+                  "one line a step (with --steps: the log is sized before the first step)");
   run->add_flag("--offline", options->offline,
                 "Simulate without a hub: no channels (for reports and measurements)");
   run->add_flag("--no-autostart", options->no_autostart,

@@ -5,6 +5,8 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <regex>
+#include <sstream>
 
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/shm_layout/body_state.hpp"
@@ -13,6 +15,7 @@
 #include "json_tree.hpp"
 #include "model_files.hpp"
 #include "shared_models.hpp"
+#include "web_client.hpp"
 
 namespace afhub::test {
 namespace {
@@ -48,14 +51,79 @@ TEST(Cli, AnUnexpectedExceptionIsAnErrorNotACrash) {
 
 TEST(Cli, DemoSimulatesTheExampleSceneLive) {
   expect_no_hub();
-  RunResult demo = run_afhub({"demo", "--seconds", "3"}, 30s);
+  RunResult demo = run_afhub({"demo", "--seconds", "3", "--no-view"}, 30s);
   EXPECT_EQ(demo.exit_code, 0) << demo.err;
   EXPECT_TRUE(contains(demo.err, "no hub was running; started one")) << demo.err;
   // The example scene: the arm, the remote-centre-of-motion arm and the gripper.
   EXPECT_TRUE(contains(demo.err, "afhub run: 19 bodies, 19 joints on channels")) << demo.err;
   for (const char* body : {"afhub/arm/link7", "afhub/rcm/insertion_link", "afhub/gripper/palm"})
     EXPECT_TRUE(contains(demo.out, body)) << body << " missing:\n" << demo.out;
+  EXPECT_FALSE(contains(demo.out, "http://")) << "--no-view starts no viewer";
   EXPECT_EQ(run_afhub({"hub", "stop"}).exit_code, 0);
+}
+
+// The demo starts `afhub view` beside it and prints its URL, which serves the page
+// and the example scene; the viewer stops with the demo.
+TEST(Cli, DemoPrintsTheViewersUrlWhichServesTheScene) {
+  expect_no_hub();
+  char pattern[] = "/tmp/afhub_demo_view_XXXXXX";
+  ASSERT_NE(mkdtemp(pattern), nullptr);
+  const std::string log = std::string(pattern) + "/demo.log";
+  ScopedProcess demo(spawn_afhub({"demo", "--seconds", "60", "--view-port", "0"}, log));
+  const std::regex said("the viewer: http://127\\.0\\.0\\.1:([0-9]+)/");
+  int port = 0;
+  ASSERT_TRUE(wait_until(
+      [&] {
+        std::smatch match;
+        const std::string text = read_file(log);
+        if (!std::regex_search(text, match, said)) return false;
+        port = std::stoi(match[1]);
+        return true;
+      },
+      20s))
+      << read_file(log);
+  const HttpReply page = http_request(port, "GET", "/");
+  EXPECT_EQ(page.status, 200);
+  EXPECT_TRUE(contains(page.body, "/viewer.js")) << page.body;
+  HttpReply scene;
+  EXPECT_TRUE(wait_until(
+      [&] {
+        scene = http_request(port, "GET", "/scene.json");
+        return contains(scene.body, "afhub/arm/link7") && contains(scene.body, "afhub/rcm/");
+      },
+      10s))
+      << scene.body;
+  EXPECT_EQ(demo.stop(), 0) << read_file(log);
+  EXPECT_EQ(http_request(port, "GET", "/").status, 0) << "the viewer outlived the demo";
+  EXPECT_EQ(run_afhub({"hub", "stop"}).exit_code, 0);
+}
+
+// --step-log: one line per step, its start and duration, for measurements in windows
+// of one run (bench/viewer_cost.sh); it needs --steps, which sizes it.
+TEST(Cli, RunWritesAStepLog) {
+  char pattern[] = "/tmp/afhub_step_log_XXXXXX";
+  ASSERT_NE(mkdtemp(pattern), nullptr);
+  const std::string log = std::string(pattern) + "/steps.txt";
+  const std::string arm = AFHUB_EXAMPLE_MODELS "/arm7.yaml";
+  RunResult run = run_afhub({"run", arm, "--offline", "--steps", "300", "--step-log", log}, 30s);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  std::istringstream lines(read_file(log));
+  std::string header;
+  std::getline(lines, header);
+  EXPECT_EQ(header, "begin_ns step_us");
+  long long begin = 0, previous = 0;
+  double duration = 0.0;
+  int steps = 0;
+  while (lines >> begin >> duration) {
+    EXPECT_GT(begin, previous) << "line " << steps + 2;
+    EXPECT_GT(duration, 0.0) << "line " << steps + 2;
+    previous = begin;
+    ++steps;
+  }
+  EXPECT_EQ(steps, 300);
+  RunResult unbounded = run_afhub({"run", arm, "--offline", "--step-log", log});
+  EXPECT_EQ(unbounded.exit_code, 1);
+  EXPECT_TRUE(contains(unbounded.err, "--step-log needs --steps N")) << unbounded.err;
 }
 
 TEST(Cli, CheckReportsAModelOrWhereItIsWrong) {

@@ -280,6 +280,43 @@ TEST_F(ViewTest, AJointCommandMovesTheJointOnlyWithAllowCommands) {
   EXPECT_NEAR(state->joints[0].position, target, 0.05);
 }
 
+// The resident memory of a process, in kB (0 when unknown).
+long resident_kb(pid_t pid) {
+  const std::string status = read_file("/proc/" + std::to_string(pid) + "/status");
+  const std::size_t at = status.find("VmRSS:");
+  return at == std::string::npos ? 0 : std::atol(status.c_str() + at + 6);
+}
+
+// A page that stops reading (a socket with a tiny receive buffer that never reads)
+// neither stalls the frames to the other pages nor makes the viewer hoard frames
+// for it: it is dropped.
+TEST_F(ViewTest, APageThatStopsReadingDelaysNoOtherAndIsDropped) {
+  View view = start_view();
+  ASSERT_GT(view.port, 0) << read_file(view.log);
+  StuckSocket stuck(view.port);
+  ASSERT_TRUE(stuck.connected());
+  FrameCounter frames(view.port);
+  ASSERT_TRUE(frames.connected());
+  // About 20 kB of frames a second fill the stuck socket's buffers within seconds;
+  // from then on a write to it blocks.
+  std::this_thread::sleep_for(std::chrono::seconds(5));
+  const long memory_before = resident_kb(view.process->pid);
+  const std::uint64_t before = frames.binary_frames();
+  const auto start = std::chrono::steady_clock::now();
+  std::this_thread::sleep_for(std::chrono::seconds(3));
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double rate = static_cast<double>(frames.binary_frames() - before) / seconds;
+  std::printf("pose frames to the reading page beside a stuck one: %.1f per second\n", rate);
+  EXPECT_GE(rate, 30.0);
+  // Dropped: its pings went unanswered, or a write to it failed.
+  EXPECT_TRUE(wait_until([&] { return stuck.closed_by_server(); }, std::chrono::seconds(10)))
+      << "the stuck page's connection is still open";
+  const long grown = resident_kb(view.process->pid) - memory_before;
+  std::printf("the viewer's memory grew by %ld kB\n", grown);
+  EXPECT_LT(grown, 2048);
+}
+
 // Runs headless Chromium on `url`; returns its stderr (console messages included).
 std::string screenshot(const std::string& url, const std::string& file) {
   const RunResult result = run_command(

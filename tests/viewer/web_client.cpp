@@ -7,6 +7,7 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <cstdlib>
 
 namespace afhub::test {
@@ -44,6 +45,38 @@ HttpReply http_request(int port, const std::string& method, const std::string& t
   return reply;
 }
 
+StuckSocket::StuckSocket(int port) {
+  fd_ = socket(AF_INET, SOCK_STREAM, 0);
+  if (fd_ < 0) return;
+  const int smallest = 1;  // the kernel rounds it up to its minimum
+  setsockopt(fd_, SOL_SOCKET, SO_RCVBUF, &smallest, sizeof smallest);
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_port = htons(static_cast<std::uint16_t>(port));
+  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  const std::string upgrade =
+      "GET /ws HTTP/1.1\r\nHost: 127.0.0.1\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
+      "Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n\r\n";
+  if (connect(fd_, reinterpret_cast<sockaddr*>(&address), sizeof address) != 0 ||
+      write(fd_, upgrade.data(), upgrade.size()) != static_cast<ssize_t>(upgrade.size())) {
+    close(fd_);
+    fd_ = -1;
+  }
+}
+
+StuckSocket::~StuckSocket() {
+  if (fd_ >= 0) close(fd_);
+}
+
+bool StuckSocket::closed_by_server() {
+  char buffer[65536];
+  for (;;) {
+    const ssize_t n = recv(fd_, buffer, sizeof buffer, MSG_DONTWAIT);
+    if (n == 0) return true;
+    if (n < 0) return errno != EAGAIN && errno != EWOULDBLOCK;
+  }
+}
+
 namespace {
 
 int on_data(mg_connection*, int flags, char* data, size_t length, void* counter) {
@@ -68,7 +101,11 @@ FrameCounter::~FrameCounter() {
 }
 
 void FrameCounter::on_frame(int opcode, const char* data, std::size_t length) {
-  if (opcode == MG_WEBSOCKET_OPCODE_BINARY) {
+  if (opcode == MG_WEBSOCKET_OPCODE_PING) {
+    // Answered as browsers do: the server drops a page that leaves pings unanswered.
+    ++pings_;
+    mg_websocket_client_write(connection_, MG_WEBSOCKET_OPCODE_PONG, data, length);
+  } else if (opcode == MG_WEBSOCKET_OPCODE_BINARY) {
     std::lock_guard lock(mutex_);
     last_.assign(data, data + length);
     ++binary_;

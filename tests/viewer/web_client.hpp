@@ -20,6 +20,22 @@ struct HttpReply {
 
 HttpReply http_request(int port, const std::string& method, const std::string& target);
 
+// A WebSocket client that stops reading at once: it opens /ws with the smallest
+// receive buffer the kernel allows and never reads, as a stalled page would.
+class StuckSocket {
+ public:
+  explicit StuckSocket(int port);
+  ~StuckSocket();
+  StuckSocket(const StuckSocket&) = delete;
+  StuckSocket& operator=(const StuckSocket&) = delete;
+  bool connected() const { return fd_ >= 0; }
+  // Whether the server closed the connection (it reads what is buffered to find out).
+  bool closed_by_server();
+
+ private:
+  int fd_ = -1;
+};
+
 class FrameCounter {
  public:
   // Connects to ws://127.0.0.1:port/ws; check connected().
@@ -28,13 +44,14 @@ class FrameCounter {
   bool connected() const { return connection_ != nullptr; }
   std::uint64_t binary_frames() const { return binary_; }
   std::uint64_t text_frames() const { return text_; }
+  std::uint64_t pings() const { return pings_; }
   std::vector<std::uint8_t> last_frame();
 
   void on_frame(int opcode, const char* data, std::size_t length);
 
  private:
   mg_connection* connection_ = nullptr;
-  std::atomic<std::uint64_t> binary_{0}, text_{0};
+  std::atomic<std::uint64_t> binary_{0}, text_{0}, pings_{0};
   std::mutex mutex_;
   std::vector<std::uint8_t> last_;
 };

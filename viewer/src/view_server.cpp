@@ -3,6 +3,7 @@
 
 #include <civetweb.h>
 
+#include <cstdio>
 #include <cstring>
 #include <map>
 #include <string_view>
@@ -60,8 +61,23 @@ ViewServer::ViewServer(ServerOptions options)
   mg_init_library(0);
   const std::string listen = options_.bind + ":" + std::to_string(options_.port);
   // No document root: civetweb serves no file by itself, only what the handler sends.
-  const char* settings[] = {"listening_ports",          listen.c_str(), "num_threads", "16",
-                            "enable_directory_listing", "no",           nullptr};
+  // A page is pinged after a second without a message from it and disconnected
+  // when it leaves pings unanswered: a page that stopped reading, whose frames
+  // would pile up in the kernel's socket buffer. A write makes no progress for at
+  // most 5 s (it then fails and the page is dropped).
+  const char* settings[] = {"listening_ports",
+                            listen.c_str(),
+                            "num_threads",
+                            "16",
+                            "enable_directory_listing",
+                            "no",
+                            "enable_websocket_ping_pong",
+                            "yes",
+                            "websocket_timeout_ms",
+                            "1000",
+                            "request_timeout_ms",
+                            "5000",
+                            nullptr};
   mg_callbacks callbacks{};
   context_ = mg_start(&callbacks, this, settings);
   if (!context_)
@@ -98,27 +114,45 @@ std::shared_ptr<const ViewScene> ViewServer::scene() {
 
 int ViewServer::broadcast(const std::vector<std::uint8_t>& frame) {
   std::lock_guard lock(mutex_);
-  int sent = 0;
-  for (mg_connection* socket : sockets_)
-    if (mg_websocket_write(socket, MG_WEBSOCKET_OPCODE_BINARY,
-                           reinterpret_cast<const char*>(frame.data()), frame.size()) > 0)
-      ++sent;
-  return sent;
+  int taken = 0;
+  for (auto& [connection, sender] : senders_)
+    if (sender->offer(frame)) ++taken;
+  return taken;
 }
 
 int ViewServer::connections() {
   std::lock_guard lock(mutex_);
-  return static_cast<int>(sockets_.size());
+  return static_cast<int>(senders_.size());
 }
 
 void ViewServer::add_socket(mg_connection* connection) {
+  auto sender =
+      std::make_unique<FrameSender>([connection](const std::uint8_t* data, std::size_t size) {
+        const int written = mg_websocket_write(connection, MG_WEBSOCKET_OPCODE_BINARY,
+                                               reinterpret_cast<const char*>(data), size);
+        // A write that timed out part-way returns what it wrote: the stream is broken then.
+        if (written >= static_cast<int>(size)) return true;
+        std::fprintf(stderr,
+                     "afhub view: dropped a page that stopped reading (a frame could not be sent "
+                     "in 5 s)\n");
+        return false;
+      });
   std::lock_guard lock(mutex_);
-  sockets_.insert(connection);
+  senders_[connection] = std::move(sender);
 }
 
 void ViewServer::remove_socket(const mg_connection* connection) {
-  std::lock_guard lock(mutex_);
-  sockets_.erase(const_cast<mg_connection*>(connection));
+  std::unique_ptr<FrameSender> sender;
+  {
+    std::lock_guard lock(mutex_);
+    const auto found = senders_.find(connection);
+    if (found == senders_.end()) return;
+    sender = std::move(found->second);
+    senders_.erase(found);
+  }
+  // Waits, without the lock, for a write in progress: civetweb frees the connection
+  // once this returns.
+  sender.reset();
 }
 
 int ViewServer::handle_request(mg_connection* connection) {

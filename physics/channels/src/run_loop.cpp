@@ -112,7 +112,12 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
     if (channels)
       channels->publish(static_cast<double>(clock_ns() - start_ns) * 1e-9, achieved_rate_hz,
                         control.paused);
-    if (stepping) report.step_time.record(static_cast<double>(monotonic_ns() - begin_ns) * 1e-3);
+    if (stepping) {
+      const double duration_us = static_cast<double>(monotonic_ns() - begin_ns) * 1e-3;
+      report.step_time.record(duration_us);
+      if (report.step_log.size() < report.step_log.capacity())
+        report.step_log.push_back({begin_ns, static_cast<float>(duration_us)});
+    }
     return options.steps == 0 || report.steps < options.steps;
   };
   // The loop's statistics, and the achieved rate over each second.

@@ -8,7 +8,9 @@
 //   /three/FILE    three.js and the few example files the page uses, from Debian's
 //                  libjs-three (/usr/share/javascript/three), by a fixed list
 //   /mesh/N        the mesh file scene body N lists, and no other file
-//   /ws            a WebSocket: binary pose frames (pose_feed.hpp), pushed by broadcast()
+//   /ws            a WebSocket: binary pose frames (pose_feed.hpp), pushed by broadcast();
+//                  each page has its own sender (frame_sender.hpp), and a page that stops
+//                  reading (no answer to pings for a few seconds) is disconnected
 //   /command       POST: a joint command; refused (403) unless the server allows commands
 //   /world         POST action=pause|resume|step|reset; refused (403) the same way
 // Anything else is 404; nothing else is read from the disk.
@@ -16,12 +18,13 @@
 
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <memory>
 #include <mutex>
-#include <set>
 #include <string>
 #include <vector>
 
+#include "afhub/viewer/frame_sender.hpp"
 #include "afhub/viewer/view_scene.hpp"
 
 struct mg_context;
@@ -52,7 +55,8 @@ class ViewServer {
   int port() const { return port_; }
   void set_scene(std::shared_ptr<const ViewScene> scene);
   void set_joints(const std::string& json);
-  // Sends one binary frame to every connected page; returns how many got it.
+  // Hands one binary frame to every connected page's sender; never waits for a
+  // page. Returns how many pages take it.
   int broadcast(const std::vector<std::uint8_t>& frame);
   int connections();
 
@@ -66,10 +70,10 @@ class ViewServer {
   ServerOptions options_;
   mg_context* context_ = nullptr;
   int port_ = 0;
-  std::mutex mutex_;  // guards scene_, joints_json_ and sockets_
+  std::mutex mutex_;  // guards scene_, joints_json_ and senders_
   std::shared_ptr<const ViewScene> scene_;
   std::string joints_json_ = "{}";
-  std::set<mg_connection*> sockets_;
+  std::map<const mg_connection*, std::unique_ptr<FrameSender>> senders_;
 };
 
 // The page and its script (page.cpp).

@@ -43,6 +43,13 @@ struct JointTracking {
   double last_target = 0.0, last_error = 0.0;  // the last such step's
 };
 
+// One step of the step log: when it began (CLOCK_MONOTONIC ns) and how long the
+// loop iteration took (the step_time histogram's measure).
+struct StepSample {
+  std::int64_t begin_ns = 0;
+  float duration_us = 0.0F;
+};
+
 struct RunReport {
   std::uint64_t steps = 0;
   double wall_time_s = 0.0;
@@ -51,6 +58,9 @@ struct RunReport {
   bool nan_detected = false;       // with stop_on_nan: the loop stopped on a NaN
   double max_joint_error_m = 0.0;  // the largest pivot gap seen, over all joints and steps
   std::vector<JointTracking> tracking;  // per joint, sized before the first step
+  // Each step's sample, up to the capacity the caller reserved before the loop (none
+  // by default): the loop never grows it, so it never allocates.
+  std::vector<StepSample> step_log;
 };
 
 // Runs until options.steps, a stop signal, or with options.stop_on_nan a NaN (then
