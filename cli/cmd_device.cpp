@@ -36,6 +36,7 @@ struct DeviceRunOptions {
   std::vector<double> circle;
   bool loop = false;
   double max_force_n = 10.0;
+  std::string force_log;
   // falcon
   std::string serial, firmware;
   double home_timeout_s = 30.0;
@@ -215,6 +216,10 @@ void register_device(CLI::App& app, Runner& selected) {
   virtual_command->add_flag("--loop", virt->loop, "Repeat the trajectory from its start");
   virtual_command->add_option("--max-force", virt->max_force_n,
                               "The most force it applies, in N (default 10)");
+  virtual_command->add_option(
+      "--force-log", virt->force_log,
+      "Append a stamped line (monotonic ns) to this file whenever the applied force turns "
+      "non-zero or zero, and when the device is made safe (to watch its force in tests)");
   auto falcon = std::make_shared<DeviceRunOptions>();
   auto* falcon_command = run->add_subcommand(
       "falcon",
@@ -292,9 +297,12 @@ void register_device(CLI::App& app, Runner& selected) {
       auto trajectory = virtual_trajectory(*virt);
       const bool loop = virt->loop || !virt->circle.empty();
       const DeviceSpec spec = devices::VirtualDevice::default_spec(virt->max_force_n);
+      const std::string force_log = virt->force_log;
       return devices::run_driver(
-          [trajectory, loop, spec] {
-            return std::make_unique<devices::VirtualDevice>(trajectory, loop, spec);
+          [trajectory, loop, spec, force_log] {
+            auto hand = std::make_unique<devices::VirtualDevice>(trajectory, loop, spec);
+            if (!force_log.empty()) hand->log_force_to(force_log);
+            return hand;
           },
           driver);
     };

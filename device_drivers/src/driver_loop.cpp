@@ -1,10 +1,11 @@
 // The device driver's loop (see driver_loop.hpp).
 #include "afhub/devices/driver_loop.hpp"
 
-#include <atomic>
+#include <algorithm>
 #include <cstdio>
 #include <thread>
 
+#include "afhub/devices/safe_request.hpp"
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/hub_loss.hpp"
 #include "afhub/hub/hub_presence.hpp"
@@ -15,8 +16,18 @@
 namespace afhub::devices {
 namespace {
 
-// The device the hub-loss hook makes safe: set while the loop runs.
-std::atomic<Device*> g_device{nullptr};
+// The hub-loss hook's way to the device: the loop makes it safe when asked (see
+// safe_request.hpp). Never destroyed: the hook may run while the process exits.
+SafeRequest& safe_request() {
+  static SafeRequest* request = new SafeRequest;
+  return *request;
+}
+
+// How long the hook waits for the loop: a few periods, and at least 20 ms (a loop
+// descheduled on a busy machine still answers, rather than racing the hook).
+std::int64_t safe_request_timeout_ns(const LoopOptions& loop) {
+  return std::max<std::int64_t>(20'000'000, 10 * loop.period_ns);
+}
 
 // Runs the loop on an open device until a stop, the cycle limit or the device's
 // loss. Returns what DeviceGone said, empty on a stop.
@@ -31,6 +42,7 @@ std::string drive(Device& device, const DriverOptions& options, Writer<DeviceSta
   // One cycle: the output decided from the newest command, the device exchanged with,
   // its state published. Returns false when the device went away.
   const auto cycle = [&](bool stopping) {
+    if (safe_request().serve()) return true;  // made safe for the hub's loss: hands off
     const DeviceCommand* command = commands.latest();
     if (stopping || hub_lost()) safety.stop();
     ForceGate gate = ForceGate::kNoCommand;
@@ -76,8 +88,18 @@ int run_driver(const DeviceOpener& open, const DriverOptions& options) {
   const std::string channel = device_channel_name(options.name);
   if (options.survive_hub_loss) {
     survive_hub_loss(who);
-    on_hub_lost([] {
-      if (Device* device = g_device.load()) device->make_safe();
+    const std::int64_t timeout_ns = safe_request_timeout_ns(options.loop);
+    on_hub_lost([who, timeout_ns] {
+      const std::int64_t asked = monotonic_ns();
+      const MadeSafeBy by = safe_request().request(timeout_ns);
+      if (by == MadeSafeBy::kRequester)
+        std::fprintf(stderr,
+                     "%s: the device's loop did not answer within %.0f ms (stuck in an "
+                     "exchange?): made the device safe from the thread that saw the loss\n",
+                     who.c_str(), static_cast<double>(timeout_ns) * 1e-6);
+      else if (by == MadeSafeBy::kLoop)
+        std::fprintf(stderr, "%s: the device's loop made it safe, %.1f ms after it was asked\n",
+                     who.c_str(), static_cast<double>(monotonic_ns() - asked) * 1e-6);
     });
   }
   std::unique_ptr<Device> device = open();
@@ -97,9 +119,9 @@ int run_driver(const DeviceOpener& open, const DriverOptions& options) {
                channel.c_str(), 1e9 / static_cast<double>(options.loop.period_ns),
                static_cast<double>(options.safety.watchdog_ns) * 1e-6, spec.max_force_n);
   for (;;) {
-    g_device = device.get();
+    safe_request().attach(device.get());
     const std::string gone = drive(*device, options, states, commands, stats, timing);
-    g_device = nullptr;
+    safe_request().attach(nullptr);
     if (gone.empty()) return 0;
     device.reset();
     std::fprintf(stderr, "%s: the device went away (%s); its force is zero\n", who.c_str(),

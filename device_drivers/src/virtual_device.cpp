@@ -1,8 +1,14 @@
 // The virtual haptic device (see virtual_device.hpp).
 #include "afhub/devices/virtual_device.hpp"
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
+#include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <numbers>
 #include <sstream>
@@ -11,6 +17,18 @@
 
 namespace afhub::devices {
 namespace {
+
+// One line to the force log: write(2) of a line formatted on the stack, no allocation.
+template <class... Values>
+void log_line(int fd, const char* format, Values... values) noexcept {
+  if (fd < 0) return;
+  char line[160];
+  const int n = std::snprintf(line, sizeof line, format, values...);
+  const std::size_t length = std::min(static_cast<std::size_t>(std::max(n, 0)), sizeof line - 1);
+  if (write(fd, line, length) < 0) {
+    // a log line lost (a full disk) costs the device nothing
+  }
+}
 
 Vec3 lerp(const Vec3& a, const Vec3& b, double f) {
   return {a.x + (b.x - a.x) * f, a.y + (b.y - a.y) * f, a.z + (b.z - a.z) * f};
@@ -158,10 +176,39 @@ DeviceSample VirtualDevice::step(const DeviceOutput& output, double t_s) noexcep
   return sample;
 }
 
+VirtualDevice::~VirtualDevice() {
+  if (force_log_ >= 0) close(force_log_);
+}
+
+void VirtualDevice::log_force_to(const std::string& path) {
+  const int fd = open(path.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
+  if (fd < 0)
+    throw Error(path + ": cannot open the force log: " + std::strerror(errno) +
+                " (--force-log names a file to append to, in a folder that exists)");
+  if (force_log_ >= 0) close(force_log_);
+  force_log_ = fd;
+  log_line(force_log_, "%lld open pid %d\n", static_cast<long long>(monotonic_ns()),
+           static_cast<int>(getpid()));
+}
+
 DeviceSample VirtualDevice::exchange(const DeviceOutput& output) {
   const std::int64_t now = monotonic_ns();
   if (start_ns_ < 0) start_ns_ = now;
+  const Vec3& f = output.wrench.force_n;
+  if (const bool applying = f.x != 0.0 || f.y != 0.0 || f.z != 0.0; applying != applying_) {
+    applying_ = applying;
+    if (applying)
+      log_line(force_log_, "%lld force %.4f %.4f %.4f\n", static_cast<long long>(now), f.x, f.y,
+               f.z);
+    else
+      log_line(force_log_, "%lld zero\n", static_cast<long long>(now));
+  }
   return step(output, static_cast<double>(now - start_ns_) * 1e-9);
+}
+
+void VirtualDevice::make_safe() noexcept {
+  applying_ = false;
+  log_line(force_log_, "%lld made safe\n", static_cast<long long>(monotonic_ns()));
 }
 
 }  // namespace afhub::devices

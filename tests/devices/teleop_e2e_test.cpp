@@ -43,6 +43,9 @@ std::string input_devices_file() {
          "  button mapping: {a1: 0, a2: 1, next mode: 2, prev mode: 3}\n";
 }
 
+// Teleoperation that holds the palm only after 0.5 s without device samples.
+const std::vector<std::string> kPatientTeleop = {"--stale", "500"};
+
 // The project's gripper and the floor under `afhub teleop` with the virtual device
 // named `device` following the driver arguments given.
 class Teleop : public TeleopSession {
@@ -70,15 +73,21 @@ class Teleop : public TeleopSession {
 };
 
 TEST(TeleopEndToEnd, TheGripperFollowsTheDevicesCircleScaled) {
-  Teleop teleop("circle", {"--circle", "0.02,2"});  // 2 cm, 2 s: 10 cm in the world
+  // 2 cm, 2 s: 10 cm in the world. A driver descheduled for over 50 ms on a busy machine
+  // would have the palm held and re-anchored (tested below): not this test's case.
+  Teleop teleop("circle", {"--circle", "0.02,2"}, kPatientTeleop);
   ASSERT_TRUE(teleop.wait_running()) << teleop.logs();
   pause_ms(2000);  // past the force ramp and the start transient
-  const Following f = measure_following(teleop, kScale, 1000);  // about two turns
+  const Following f = measure_following(teleop, kScale, 2000);  // about four turns
   const Vec3& body_mean = f.body_mean;
   const double radius = f.body_radius, rms = f.rms, worst = f.worst;
   std::printf(
-      "circle: palm radius %.4f m (device's x5: 0.1 m), deviation RMS %.4f m, worst %.4f m\n",
-      radius, rms, worst);
+      "circle: palm radius %.4f m (device's x5: 0.1 m), deviation RMS %.4f m, worst %.4f m; "
+      "%d pairs judged, %d left out (stalest state read %.1f ms old)\n",
+      radius, rms, worst, f.judged, f.left_out, f.stalest_ms);
+  ASSERT_GE(f.judged, 1000) << "the machine was too busy to judge the following: the physics "
+                               "or the driver kept missing its period\n"
+                            << teleop.logs();
   // The palm goes round a 10 cm circle, as the device does x5, in the location's plane
   // (its centre is where the device's was, relative to its first sample)...
   EXPECT_NEAR(radius, 0.1, 0.01) << teleop.logs();
@@ -86,7 +95,9 @@ TEST(TeleopEndToEnd, TheGripperFollowsTheDevicesCircleScaled) {
   EXPECT_LT(std::hypot(body_mean.x - kX0, body_mean.y - kY0), 0.1 + 0.01);
   // ... and where the scaled device was: within 3 mm RMS and 1 cm at worst (measured:
   // RMS 1.6 mm, worst 1.9 to 4.3 mm, the palm's lag behind a proxy moving at 0.31 m/s
-  // and the test's two reads of the channels, which a busy machine can delay).
+  // and the test's two reads of the channels, which a busy machine can delay; before
+  // the reads were judged on the states' stamps, a physics descheduled for 76 ms at
+  // load 10 gave 7.8 mm RMS and 3.8 cm at worst).
   EXPECT_LT(rms, 0.003) << teleop.logs();
   EXPECT_LT(worst, 0.01) << teleop.logs();
 }
@@ -99,7 +110,7 @@ TEST(TeleopEndToEnd, ClutchHoldsTheGripperAndReleasingItGivesNoJump) {
                                         "0,0,0,0,0\n1,0,0,0,0\n2,0.02,0,0,0\n2.5,0.02,0,0,1\n"
                                         "3.5,0,0,0,1\n4.5,0,0,0,0\n5.5,0,0,0,0\n6.5,0.01,0,0,0\n"
                                         "8,0.01,0,0,0\n");
-  Teleop teleop("clutch", {"--trajectory", csv});
+  Teleop teleop("clutch", {"--trajectory", csv}, kPatientTeleop);
   ASSERT_TRUE(teleop.wait_running()) << teleop.logs();
   ASSERT_TRUE(wait_until([&] { return (teleop.device().buttons & 1U) != 0; }, 20s));
   const double before_clutch = teleop.palm().pose.position_m.x;
@@ -133,7 +144,7 @@ TEST(TeleopEndToEnd, PushingIntoTheFloorGivesAnOpposingBoundedForce) {
   afhub::testing::ModelFolder scripts;
   // Down 20 cm: the proxy goes 1 m down, 40 cm below the floor's top (z 0).
   const std::string csv = scripts.write("push.csv", "0,0,0,0\n1,0,0,0\n3,0,0,-0.2\n8,0,0,-0.2\n");
-  Teleop teleop("push", {"--trajectory", csv});
+  Teleop teleop("push", {"--trajectory", csv}, kPatientTeleop);
   ASSERT_TRUE(teleop.wait_running()) << teleop.logs();
   double most_force = 0.0, lowest_palm = 1.0, up_force_sum = 0.0;
   int pressing = 0;
@@ -142,7 +153,9 @@ TEST(TeleopEndToEnd, PushingIntoTheFloorGivesAnOpposingBoundedForce) {
     const Vec3& f = device.applied.force_n;
     most_force = std::max(most_force, std::sqrt(f.x * f.x + f.y * f.y + f.z * f.z));
     lowest_palm = std::min(lowest_palm, teleop.palm().pose.position_m.z);
-    if (device.pose.position_m.z < -0.15) {  // the palm is on the floor, the hand pushes on
+    // The palm is on the floor and the hand pushes on, with the teleoperation's commands
+    // arriving (on a busy machine a late one has the driver's watchdog zero the force).
+    if (device.pose.position_m.z < -0.15 && device.gate == ForceGate::kApplying) {
       up_force_sum += f.z;
       ++pressing;
     }
@@ -153,7 +166,8 @@ TEST(TeleopEndToEnd, PushingIntoTheFloorGivesAnOpposingBoundedForce) {
       "push: palm lowest at z %.4f m, mean force up %.3f N while pressing (%d samples), "
       "largest force %.3f N (max force %.1f N)\n",
       lowest_palm, mean_up, pressing, most_force, kMaxForce);
-  ASSERT_GT(pressing, 100) << "the hand never pushed down" << teleop.logs();
+  ASSERT_GT(pressing, 100) << "the hand never pushed down with the teleoperation commanding"
+                           << teleop.logs();
   EXPECT_GT(lowest_palm, 0.015) << "the palm went through the floor";
   EXPECT_GT(mean_up, 0.8 * kMaxForce) << "the device got no force opposing the push";
   EXPECT_LE(most_force, kMaxForce + 1e-9) << "the device got more than the max force";

@@ -71,6 +71,9 @@ TEST(TeleopPr2, ThePalmFollowsTheFalconsCircleScaledFromTheLocation) {
       "(%.4f m from the device circle's centre), deviation median %.4f m, RMS %.4f m, worst "
       "%.4f m\n",
       f.body_radius, ax, ay, az, std::hypot(ax, ay), f.median, f.rms, f.worst);
+  ASSERT_GE(f.judged, 1000) << "the machine was too busy to judge the following: the physics "
+                               "or the driver kept missing its period\n"
+                            << teleop.logs();
   EXPECT_NEAR(f.body_radius, 0.2, 0.02) << teleop.logs();
   // The anchor is a point of the device's path (its 2 cm circle at height 0): the palm's
   // path is the location plus the scaled device's motion from there, 5 cm lower.

@@ -110,12 +110,24 @@ class TeleopSession {
 };
 
 // Where the body went against where the scaled device went, over pairs of samples.
+// Judged only while the system runs: a pair is left out when the body's or the
+// device's state was stale as it was read (the physics or the driver descheduled on a
+// busy machine: the body then lags the device for real, and is not teleoperation's
+// error), and so is every pair for kSettleReads reads after one, while the body
+// catches up.
 struct Following {
   Vec3 body_mean, device_mean;
   double body_radius{0.0};      // mean horizontal distance from body_mean
   double rms{0.0}, worst{0.0};  // of body - body_mean - scale (device - device_mean)
   double median{0.0};           // of the same
+  int judged{0}, left_out{0};   // pairs
+  double stalest_ms{0.0};       // the oldest state read, body or device
 };
+
+// A state older than this as it is read was not published on time (1 kHz publishers;
+// a 20 ms lag of the palm moving at 0.31 m/s is 6 mm of deviation, within the bounds).
+constexpr std::int64_t kLateStateNs = 20'000'000;
+constexpr int kSettleReads = 150;  // 300 ms
 
 // Samples the body and the device every 2 ms `count` times and compares them.
 inline Following measure_following(TeleopSession& session, double scale, int count) {
@@ -123,11 +135,24 @@ inline Following measure_following(TeleopSession& session, double scale, int cou
     Vec3 body, device;
   };
   std::vector<Pair> pairs;
+  Following f;
+  int settling = 0;
   for (int i = 0; i < count; ++i) {
-    pairs.push_back({session.body().pose.position_m, session.device().pose.position_m});
+    const BodyState& body = session.body();
+    const DeviceState& device = session.device();
+    const std::int64_t now = monotonic_ns();
+    const std::int64_t age =
+        std::max(now - body.header.publish_stamp_ns, now - device.header.publish_stamp_ns);
+    f.stalest_ms = std::max(f.stalest_ms, static_cast<double>(age) * 1e-6);
+    settling = age > kLateStateNs ? kSettleReads : std::max(settling - 1, 0);
+    if (settling > 0)
+      ++f.left_out;
+    else
+      pairs.push_back({body.pose.position_m, device.pose.position_m});
     pause_ms(2);
   }
-  Following f;
+  f.judged = static_cast<int>(pairs.size());
+  if (pairs.empty()) return f;
   for (const Pair& p : pairs) {
     f.body_mean = {f.body_mean.x + p.body.x, f.body_mean.y + p.body.y, f.body_mean.z + p.body.z};
     f.device_mean = {f.device_mean.x + p.device.x, f.device_mean.y + p.device.y,

@@ -6,18 +6,25 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstdlib>
+#include <memory>
 #include <new>
 #include <string>
+#include <thread>
 
 #include "afhub/controllers/joint_targets.hpp"
+#include "afhub/devices/driver_loop.hpp"
+#include "afhub/devices/virtual_device.hpp"
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/stop_signal.hpp"
 #include "afhub/physics/adf_loader.hpp"
 #include "afhub/physics/sim_channels.hpp"
+#include "afhub/rt/clock.hpp"
 #include "afhub/rt/loop_stats_publisher.hpp"
+#include "afhub/teleop/teleop_process.hpp"
 #include "afhub_process.hpp"
 #include "model_files.hpp"
 #include "shared_models.hpp"
@@ -29,9 +36,15 @@ namespace {
 // Only the thread running the loop counts: iceoryx and sanitizer threads run beside it.
 thread_local bool g_counting = false;
 std::atomic<long> g_allocations{0};
+// A loop run on a thread of its own (a process's loop run in-process) counts into its
+// own counter, named by that thread, while the test thread sets g_threads_counting.
+thread_local std::atomic<long>* g_thread_counter = nullptr;
+std::atomic<bool> g_threads_counting{false};
 
 void note_allocation() {
   if (g_counting) g_allocations.fetch_add(1, std::memory_order_relaxed);
+  if (g_thread_counter && g_threads_counting.load(std::memory_order_relaxed))
+    g_thread_counter->fetch_add(1, std::memory_order_relaxed);
 }
 }  // namespace
 
@@ -407,6 +420,130 @@ TEST(HotPath, LockstepControllerLoopDoesNotAllocate) {
   EXPECT_EQ(g_allocations.load(), 0) << "heap allocations in " << kCycles << " lockstep cycles";
   EXPECT_EQ(channels.late_answers(), 0u);
   EXPECT_EQ(timing.cycles(), static_cast<std::uint64_t>(kCycles + 501));
+}
+
+// The gripper's palm bound to a virtual device, as `afhub teleop` binds them from an
+// input device file (cli/cmd_teleop.cpp).
+teleop::TeleopBinding palm_binding(const std::string& device) {
+  const physics::Model model = physics::load_adf_files({AFHUB_EXAMPLE_MODELS "/gripper.yaml"});
+  std::vector<bool> is_child(model.bodies.size(), false);
+  for (const physics::JointSpec& joint : model.joints)
+    if (joint.child >= 0) is_child[static_cast<std::size_t>(joint.child)] = true;
+  const std::size_t root = static_cast<std::size_t>(
+      std::find(is_child.begin(), is_child.end(), false) - is_child.begin());
+  teleop::TeleopBinding binding;
+  binding.spec.identifier = "Test Hand";
+  binding.spec.hardware_name = "Virtual";
+  binding.spec.haptic_gain_linear = 20.0;
+  binding.spec.controller_gain = teleop::CartesianGains{{200.0, 16.0}, {1.0, 0.04}};
+  binding.spec.workspace_scale = 5.0;
+  binding.spec.max_force_n = 3.0;
+  binding.spec.location.position_m = {0.6, 0.8, 0.6};
+  binding.spec.location_given = true;
+  binding.device_name = device;
+  binding.body = model.bodies[root].channel;
+  for (int j : model.descendant_joints[root]) {
+    const physics::JointSpec& joint = model.joints[static_cast<std::size_t>(j)];
+    binding.gripper_joints.push_back(
+        {joint.limit_low.value_or(0.0), joint.limit_high.value_or(0.0)});
+  }
+  // What the physics accepts (physics/src/sim_bounds.cpp), as cmd_teleop.cpp bounds it.
+  double mass_kg = 0.0;
+  for (const physics::BodySpec& body : model.bodies) mass_kg += body.mass_kg;
+  binding.body_limit.force_n = 0.99 * std::max(1.0, mass_kg) * 100.0 * 9.81;
+  binding.body_limit.torque_nm = binding.body_limit.force_n;
+  return binding;
+}
+
+// The whole teleoperation cycle, as `afhub teleop` runs it (run_teleop, its stats and
+// latency recording included): on its own thread, against the physics simulating the
+// gripper on the floor and the virtual device's driver (each on a thread of its own),
+// with the device's hand on a circle, so that the palm moves and force comes back.
+// Once the loop is steady, 2000 of its cycles must not allocate, nor the driver's.
+TEST(HotPath, TeleopLoopDoesNotAllocate) {
+  const std::string device = "hot_path_hand";
+  const physics::Model model = physics::load_adf_files(
+      {AFHUB_EXAMPLE_MODELS "/gripper.yaml", AFHUB_EXAMPLE_MODELS "/floor.yaml"});
+  physics::Simulation sim(model, 0.001);
+  physics::SimChannels channels(sim, 0.5);
+  std::atomic<bool> done{false};
+  std::thread physics_thread([&] {
+    for (std::int64_t next = monotonic_ns(); !done; next += 1'000'000) {
+      channels.apply_commands(monotonic_ns());
+      sim.step();
+      channels.publish(0.0, 0.0, false);
+      sleep_until_ns(next);
+    }
+  });
+
+  // Each loop ends on its own: the teleop's after kTeleopCycles, the driver's well after.
+  constexpr std::uint64_t kTeleopCycles = 6000, kMeasured = 2000;
+  std::atomic<long> driver_allocations{0}, teleop_allocations{0};
+  std::thread driver_thread([&] {
+    g_thread_counter = &driver_allocations;
+    devices::DriverOptions options;
+    options.name = device;
+    options.survive_hub_loss = false;
+    options.loop.max_cycles = kTeleopCycles + 3000;
+    const DeviceSpec spec = devices::VirtualDevice::default_spec(3.0);
+    devices::run_driver(
+        [&] {
+          return std::make_unique<devices::VirtualDevice>(devices::circle_trajectory(0.02, 2.0),
+                                                          true, spec);
+        },
+        options);
+  });
+  teleop::TeleopOptions options;
+  options.bindings.push_back(palm_binding(device));
+  options.loop.max_cycles = kTeleopCycles;
+  options.survive_hub_loss = false;
+  options.device_stale_ns = 1'000'000'000;  // a starved driver is not this test's case
+  options.latency_samples = 2 * kTeleopCycles;
+  teleop::TeleopLatency latency;
+  std::thread teleop_thread([&] {
+    g_thread_counter = &teleop_allocations;
+    teleop::run_teleop(options, &latency);
+  });
+
+  // Steady: the device applies the teleop's force, then a second more for first
+  // contacts and the force's ramp. The cycles are counted by the teleop's commands.
+  LatestReader<DeviceState> device_state(body_state_channel(device_channel_name(device)));
+  LatestReader<DeviceCommand> teleop_commands(body_command_channel(device_channel_name(device)));
+  const auto sequence = [&] {
+    const DeviceCommand* command = teleop_commands.latest();
+    return command ? command->header.sequence : 0;
+  };
+  const bool applying = test::wait_until(
+      [&] {
+        const DeviceState* state = device_state.latest();
+        return state && state->gate == ForceGate::kApplying && sequence() > 0;
+      },
+      20s);
+  EXPECT_TRUE(applying) << "the device never applied the teleoperation's force";
+  const std::uint64_t warm = sequence() + 1000;
+  EXPECT_TRUE(test::wait_until([&] { return sequence() >= warm; }, 20s));
+  g_threads_counting = true;
+  const std::uint64_t first = sequence();
+  const bool measured = test::wait_until([&] { return sequence() >= first + kMeasured; }, 30s);
+  g_threads_counting = false;
+  const std::uint64_t last = sequence();
+  const DeviceState* state = device_state.latest();
+  const bool device_live = state && state->gate == ForceGate::kApplying &&
+                           monotonic_ns() - state->header.publish_stamp_ns < 100'000'000;
+
+  teleop_thread.join();
+  driver_thread.join();
+  done = true;
+  physics_thread.join();
+  ASSERT_TRUE(applying && measured)
+      << "the teleoperation did not run " << kMeasured << " cycles after its warm-up";
+  EXPECT_TRUE(device_live) << "the driver stopped applying force while the cycles were counted";
+  EXPECT_EQ(teleop_allocations.load(), 0)
+      << "heap allocations in " << last - first << " steady-state teleoperation cycles";
+  EXPECT_EQ(driver_allocations.load(), 0)
+      << "heap allocations in the driver's loop over " << last - first << " teleoperation cycles";
+  EXPECT_GT(latency.to_device_force.size(), static_cast<std::size_t>(kMeasured));
+  EXPECT_EQ(channels.rejected_commands(), 0u);
 }
 
 }  // namespace

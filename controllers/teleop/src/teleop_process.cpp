@@ -14,6 +14,8 @@
 #include "afhub/rt/clock.hpp"
 #include "afhub/rt/loop_stats_publisher.hpp"
 #include "afhub/shm_layout/error.hpp"
+#include "afhub/teleop/device_freshness.hpp"
+#include "afhub/teleop/teleop_law.hpp"
 
 namespace afhub::teleop {
 namespace {
@@ -30,8 +32,10 @@ TeleopParams params_of(const TeleopBinding& binding) {
 
 // One device bound to one body, with everything its cycle needs made beforehand.
 struct Link {
-  Link(const TeleopBinding& b, const BodyEntry& entry)
+  Link(const TeleopBinding& b, const BodyEntry& entry, const TeleopOptions& options)
       : binding(&b),
+        freshness(options.device_stale_ns, options.loop.period_ns),
+        stale_ns(options.device_stale_ns),
         law(params_of(b)),
         device_state(body_state_channel(device_channel_name(b.device_name))),
         device_command(body_command_channel(device_channel_name(b.device_name))),
@@ -39,6 +43,8 @@ struct Link {
     if (!b.spec.enable_joint_control) joints = 0;
   }
   const TeleopBinding* binding;
+  DeviceFreshness freshness;
+  std::int64_t stale_ns;  // TeleopOptions::device_stale_ns
   TeleopLaw law;
   LatestReader<DeviceState> device_state;
   Writer<DeviceCommand> device_command;
@@ -46,7 +52,6 @@ struct Link {
   TeleopOutput out;
   std::size_t joints{std::numeric_limits<std::size_t>::max()};  // capped below
   std::int64_t last_cycle_ns{0};
-  std::int64_t stale_ns{0};        // TeleopOptions::device_stale_ns
   bool held{false};                // the device's samples are stale: the body is held
   std::uint64_t commands_sent{0};  // = the sequence of our last DeviceCommand
   std::uint64_t last_reported_command{0};
@@ -90,7 +95,7 @@ void cycle(Link& link, std::int64_t now, TeleopLatency* latency, std::size_t mos
   }
   const double dt = link.last_cycle_ns ? static_cast<double>(now - link.last_cycle_ns) * 1e-9 : 0.0;
   link.last_cycle_ns = now;
-  if (const bool stale = now - device->header.publish_stamp_ns > link.stale_ns;
+  if (const bool stale = link.freshness.stale(device->header.publish_stamp_ns, now);
       stale != link.held) {
     link.held = stale;
     link.law.hold(stale);
@@ -155,8 +160,7 @@ int run_teleop(const TeleopOptions& options, TeleopLatency* latency) {
   for (const TeleopBinding& binding : options.bindings) {
     const BodyEntry entry = wait_for_body(binding.body, who, give_up_ns,
                                           binding.load_hint + ", or wait longer with --wait");
-    links.push_back(std::make_unique<Link>(binding, entry));
-    links.back()->stale_ns = options.device_stale_ns;
+    links.push_back(std::make_unique<Link>(binding, entry, options));
     wait_for_device(*links.back(), who, give_up_ns);
     std::fprintf(stderr, "%s: %s: device/%s drives %s\n", who.c_str(),
                  binding.spec.identifier.c_str(), binding.device_name.c_str(),

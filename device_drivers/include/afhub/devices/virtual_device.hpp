@@ -40,10 +40,21 @@ class VirtualDevice : public Device {
   VirtualDevice(std::vector<TrajectoryPoint> trajectory, bool loop, const DeviceSpec& spec,
                 const VirtualHand& hand = {});
 
+  ~VirtualDevice() override;
+  VirtualDevice(const VirtualDevice&) = delete;
+  VirtualDevice& operator=(const VirtualDevice&) = delete;
+
   DeviceSpec spec() const override { return spec_; }
   // On the monotonic clock: the trajectory's time 0 is the first call.
   DeviceSample exchange(const DeviceOutput& output) override;
-  void make_safe() noexcept override {}  // it applies nothing after its last exchange
+  // It applies nothing after its last exchange; noted in the force log.
+  void make_safe() noexcept override;
+
+  // Appends to `path` a line when the applied force turns non-zero or zero and when the
+  // device is made safe, each stamped with monotonic_ns(), what a test of a real
+  // device's force would watch: "<ns> force FX FY FZ", "<ns> zero", "<ns> made safe",
+  // and "<ns> open pid PID" now. Throws afhub::Error when the file cannot be opened.
+  void log_force_to(const std::string& path);
 
   // The same at trajectory time t_s (tests drive the clock themselves).
   DeviceSample step(const DeviceOutput& output, double t_s) noexcept;
@@ -62,6 +73,8 @@ class VirtualDevice : public Device {
   Vec3 position_, velocity_;
   double last_t_s_ = -1.0;
   std::int64_t start_ns_ = -1;
+  int force_log_ = -1;  // the force log's descriptor, -1: none
+  bool applying_ = false;
 };
 
 }  // namespace afhub::devices

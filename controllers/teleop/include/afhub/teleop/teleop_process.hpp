@@ -46,9 +46,10 @@ struct TeleopOptions {
   LoopOptions loop;      // period, SCHED_FIFO, CPU, memory locking, max cycles
   double wait_s = 10.0;  // for the hub, then each device and body; 0 fails at once
   bool survive_hub_loss = true;
-  // A device with no new sample for this long (its driver stopped or hangs) releases its
-  // body: the body is held where it is and the device gets no force; once samples come
-  // back the body continues from there with no jump, as after a clutch.
+  // A device with no new sample for this long, over as long of this loop's own cycles
+  // (its driver stopped or hangs: device_freshness.hpp), releases its body: the body is held where
+  // it is and the device gets no force; once samples come back the body continues from there with
+  // no jump, as after a clutch.
   std::int64_t device_stale_ns = 50'000'000;
   std::size_t latency_samples = 0;  // per kind; 0: no latency recording
 };

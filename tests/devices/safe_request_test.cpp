@@ -1,0 +1,107 @@
+// Making a device safe from another thread than its loop's (safe_request.hpp): the loop
+// does it between two exchanges and never exchanges again; a loop stuck in an exchange
+// leaves it to the requester; a request on the loop's own thread does not wait.
+#include "afhub/devices/safe_request.hpp"
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <thread>
+
+namespace afhub::devices {
+namespace {
+
+// Records which thread made it safe, and whether that overlapped an exchange.
+class WatchedDevice : public Device {
+ public:
+  DeviceSpec spec() const override { return {}; }
+  DeviceSample exchange(const DeviceOutput&) override {
+    ++inside;
+    while (stuck) std::this_thread::yield();
+    if (made_safe > 0) ++exchanges_after_safe;
+    --inside;
+    ++exchanges;
+    return {};
+  }
+  void make_safe() noexcept override {
+    if (inside > 0) ++overlaps;
+    safe_thread = std::this_thread::get_id();
+    ++made_safe;
+  }
+  std::atomic<int> inside{0}, exchanges{0}, made_safe{0}, overlaps{0}, exchanges_after_safe{0};
+  std::atomic<bool> stuck{false};
+  std::thread::id safe_thread;
+};
+
+// A driver's loop in miniature: serve, then exchange, until `done`.
+void loop(SafeRequest& request, WatchedDevice& device, std::atomic<bool>& done,
+          std::thread::id& loop_thread) {
+  loop_thread = std::this_thread::get_id();
+  while (!done) {
+    if (!request.serve()) device.exchange({});
+    std::this_thread::yield();
+  }
+}
+
+constexpr std::int64_t kTimeoutNs = 5'000'000'000;  // far more than a running loop needs
+
+TEST(SafeRequest, TheLoopMakesTheDeviceSafeBetweenExchangesAndStops) {
+  WatchedDevice device;
+  SafeRequest request;
+  request.attach(&device);
+  std::atomic<bool> done{false};
+  std::thread::id loop_thread;
+  std::thread looping([&] { loop(request, device, done, loop_thread); });
+  while (device.exchanges < 100) std::this_thread::yield();
+  EXPECT_EQ(request.request(kTimeoutNs), MadeSafeBy::kLoop);
+  const int exchanges = device.exchanges;
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));  // the loop goes on serving
+  done = true;
+  looping.join();
+  EXPECT_EQ(device.made_safe, 1);
+  EXPECT_EQ(device.safe_thread, loop_thread);
+  EXPECT_EQ(device.overlaps, 0);
+  EXPECT_EQ(device.exchanges_after_safe, 0);
+  EXPECT_EQ(device.exchanges, exchanges);
+}
+
+TEST(SafeRequest, ALoopStuckInAnExchangeLeavesItToTheRequester) {
+  WatchedDevice device;
+  SafeRequest request;
+  request.attach(&device);
+  std::atomic<bool> done{false};
+  std::thread::id loop_thread;
+  std::thread looping([&] { loop(request, device, done, loop_thread); });
+  while (device.exchanges < 10) std::this_thread::yield();
+  device.stuck = true;
+  while (device.inside == 0) std::this_thread::yield();
+  EXPECT_EQ(request.request(20'000'000), MadeSafeBy::kRequester);
+  EXPECT_EQ(device.made_safe, 1);
+  EXPECT_EQ(device.safe_thread, std::this_thread::get_id());
+  const int exchanges = device.exchanges;
+  device.stuck = false;  // the exchange under way ends; no other one starts
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  done = true;
+  looping.join();
+  EXPECT_EQ(device.exchanges, exchanges + 1);
+  EXPECT_EQ(device.made_safe, 1);
+}
+
+TEST(SafeRequest, ARequestOnTheLoopsOwnThreadDoesNotWait) {
+  WatchedDevice device;
+  SafeRequest request;
+  request.attach(&device);
+  EXPECT_FALSE(request.serve());  // this thread is the loop's
+  EXPECT_EQ(request.request(kTimeoutNs), MadeSafeBy::kRequesterOnLoopThread);
+  EXPECT_EQ(device.made_safe, 1);
+  EXPECT_TRUE(request.serve());  // and the loop leaves the device alone from then on
+  EXPECT_EQ(device.made_safe, 1);
+}
+
+TEST(SafeRequest, WithNoDeviceARequestDoesNothing) {
+  SafeRequest request;
+  EXPECT_EQ(request.request(kTimeoutNs), MadeSafeBy::kNoDevice);
+}
+
+}  // namespace
+}  // namespace afhub::devices
