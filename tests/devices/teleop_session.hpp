@@ -119,7 +119,7 @@ struct Following {
   Vec3 body_mean, device_mean;
   double body_radius{0.0};      // mean horizontal distance from body_mean
   double rms{0.0}, worst{0.0};  // of body - body_mean - scale (device - device_mean)
-  double median{0.0};           // of the same
+  double median{0.0}, p99{0.0};  // of the same
   int judged{0}, left_out{0};   // pairs
   double stalest_ms{0.0};       // the oldest state read, body or device
 };
@@ -174,8 +174,9 @@ inline Following measure_following(TeleopSession& session, double scale, int cou
     f.body_radius += std::hypot(p.body.x - f.body_mean.x, p.body.y - f.body_mean.y) / n;
   }
   f.rms = std::sqrt(square_sum / n);
-  std::nth_element(errors.begin(), errors.begin() + errors.size() / 2, errors.end());
+  std::sort(errors.begin(), errors.end());
   f.median = errors[errors.size() / 2];
+  f.p99 = errors[errors.size() * 99 / 100];
   return f;
 }
 

@@ -3,7 +3,7 @@
 
 #include <civetweb.h>
 
-#include "afhub/rt/clock.hpp"
+#include "afhub/shm_layout/header.hpp"
 #include "afhub/shm_layout/channel_names.hpp"
 
 namespace afhub::viewer {
