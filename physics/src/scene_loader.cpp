@@ -39,6 +39,7 @@ WorldObjectSpec read_world_object(const FileReader& file, const YAML::Node& bloc
   if (YAML::Node given = block["namespace"])
     ns = resolve_namespace(name_space, file.text(given, "namespace"));
   const std::string name = block["name"] ? file.text(block["name"], "name") : identifier;
+  object.key = identifier;
   object.name = body_channel_name(ns, name);
   if (YAML::Node location = block["location"])
     object.position_m = file.position(location, "location");

@@ -39,6 +39,33 @@ void Simulation::read_body(std::size_t index, BodyReading& reading) const noexce
     reading.ray_distances_m[r] = d.rays[body.first_ray + r].distance_m;
 }
 
+std::size_t Simulation::soft_body_node_count(std::size_t soft) const noexcept {
+  return static_cast<std::size_t>(data_->soft_bodies[soft].body->m_nodes.size());
+}
+
+std::vector<std::array<std::uint32_t, 3>> Simulation::soft_body_faces(std::size_t soft) const {
+  const btSoftBody& body = *data_->soft_bodies[soft].body;
+  std::vector<std::array<std::uint32_t, 3>> faces;
+  if (body.m_faces.size() == 0) return faces;
+  const btSoftBody::Node* first = &body.m_nodes[0];
+  faces.reserve(static_cast<std::size_t>(body.m_faces.size()));
+  for (int f = 0; f < body.m_faces.size(); ++f) {
+    const btSoftBody::Face& face = body.m_faces[f];
+    faces.push_back({static_cast<std::uint32_t>(face.m_n[0] - first),
+                     static_cast<std::uint32_t>(face.m_n[1] - first),
+                     static_cast<std::uint32_t>(face.m_n[2] - first)});
+  }
+  return faces;
+}
+
+void Simulation::read_soft_body_nodes(std::size_t soft, std::array<float, 3>* xyz) const noexcept {
+  const btSoftBody& body = *data_->soft_bodies[soft].body;
+  for (int n = 0; n < body.m_nodes.size(); ++n) {
+    const btVector3& p = body.m_nodes[n].m_x;
+    xyz[n] = {static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z())};
+  }
+}
+
 void Simulation::read_soft_body(std::size_t index, BodyReading& reading) const noexcept {
   reading = BodyReading{};
   const btSoftBody& soft = *data_->soft_bodies[index].body;

@@ -35,6 +35,8 @@ std::size_t fixed_size_of(PayloadKind kind) noexcept {
       return body_list_bytes(0);
     case PayloadKind::kSceneDescription:
       return scene_description_bytes(0);
+    case PayloadKind::kSoftBodyMesh:
+      return soft_body_mesh_bytes(0);
   }
   return 0;
 }
@@ -72,10 +74,17 @@ bool terminated(const std::array<char, N>& text) noexcept {
 const char* scene_problem(const SceneDescription& scene, std::size_t bytes) noexcept {
   if (scene.light_count > kMaxWorldObjects) return "SceneDescription.light_count";
   if (scene.camera_count > kMaxWorldObjects) return "SceneDescription.camera_count";
-  for (std::uint32_t i = 0; i < scene.light_count; ++i)
+  for (std::uint32_t i = 0; i < scene.light_count; ++i) {
     if (!terminated(scene.lights[i].name)) return "SceneView.name";
-  for (std::uint32_t i = 0; i < scene.camera_count; ++i)
+    if (!terminated(scene.lights[i].key)) return "SceneView.key";
+  }
+  for (std::uint32_t i = 0; i < scene.camera_count; ++i) {
     if (!terminated(scene.cameras[i].name)) return "SceneView.name";
+    if (!terminated(scene.cameras[i].key)) return "SceneView.key";
+  }
+  if (scene.soft_body_count > kMaxSceneSoftBodies) return "SceneDescription.soft_body_count";
+  for (std::uint32_t i = 0; i < scene.soft_body_count; ++i)
+    if (!terminated(scene.soft_bodies[i].channel)) return "SceneSoftBody.channel";
   if (scene.body_count > kMaxSceneBodies || bytes < scene_description_bytes(scene.body_count))
     return "SceneDescription.body_count";
   for (std::uint32_t b = 0; b < scene.body_count; ++b) {
@@ -84,6 +93,18 @@ const char* scene_problem(const SceneDescription& scene, std::size_t bytes) noex
     if (!terminated(body.mesh)) return "SceneBody.mesh";
     if (body.shape_count > kMaxSceneShapesPerBody) return "SceneBody.shape_count";
   }
+  return nullptr;
+}
+
+// A soft body's counts within capacity and the chunk, and every face's nodes among
+// its nodes (a viewer indexes them). nullptr when all hold.
+const char* soft_body_problem(const SoftBodyMesh& mesh, std::size_t bytes) noexcept {
+  if (mesh.node_count > kMaxSoftBodyNodes) return "SoftBodyMesh.node_count";
+  if (mesh.face_count > kMaxSoftBodyFaces || bytes < soft_body_mesh_bytes(mesh.face_count))
+    return "SoftBodyMesh.face_count";
+  for (std::uint32_t f = 0; f < mesh.face_count; ++f)
+    for (std::uint32_t node : mesh.faces[f])
+      if (node >= mesh.node_count) return "SoftBodyMesh.faces";
   return nullptr;
 }
 
@@ -149,6 +170,8 @@ const char* count_beyond_capacity(const char* at, std::size_t bytes, PayloadKind
     }
     case PayloadKind::kSceneDescription:
       return scene_problem(*reinterpret_cast<const SceneDescription*>(at), bytes);
+    case PayloadKind::kSoftBodyMesh:
+      return soft_body_problem(*reinterpret_cast<const SoftBodyMesh*>(at), bytes);
     case PayloadKind::kWorldCommand:
     case PayloadKind::kLoopStats:
     case PayloadKind::kBenchSample:

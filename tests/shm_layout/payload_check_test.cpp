@@ -202,6 +202,53 @@ TEST(PayloadCheck, SceneDescriptionsHoldTheirBodiesAndTerminateTheirPaths) {
   EXPECT_EQ(check_payload(scene.get(), bytes, PayloadKind::kSceneDescription, &field),
             PayloadError::kCountTooLarge);
   EXPECT_STREQ(field, "SceneView.name");
+  scene->cameras[0].name.fill('\0');
+  scene->cameras[0].key.fill('k');
+  EXPECT_EQ(check_payload(scene.get(), bytes, PayloadKind::kSceneDescription, &field),
+            PayloadError::kCountTooLarge);
+  EXPECT_STREQ(field, "SceneView.key");
+  scene->cameras[0].key.fill('\0');
+  scene->soft_body_count = kMaxSceneSoftBodies + 1;
+  EXPECT_EQ(check_payload(scene.get(), bytes, PayloadKind::kSceneDescription, &field),
+            PayloadError::kCountTooLarge);
+  EXPECT_STREQ(field, "SceneDescription.soft_body_count");
+  scene->soft_body_count = 1;
+  scene->soft_bodies[0].channel.fill('s');
+  EXPECT_EQ(check_payload(scene.get(), bytes, PayloadKind::kSceneDescription, &field),
+            PayloadError::kCountTooLarge);
+  EXPECT_STREQ(field, "SceneSoftBody.channel");
+}
+
+TEST(PayloadCheck, SoftBodyMeshesHoldTheirNodesAndFaces) {
+  auto mesh = std::make_unique<SoftBodyMesh>();
+  mesh->header = PayloadHeader{kLayoutId, PayloadKind::kSoftBodyMesh};
+  mesh->node_count = 3;
+  mesh->face_count = 1;
+  mesh->faces[0] = {0, 1, 2};
+  const std::size_t bytes = soft_body_mesh_bytes(1);
+  const char* field = nullptr;
+  EXPECT_EQ(check_payload(mesh.get(), bytes, PayloadKind::kSoftBodyMesh, &field),
+            PayloadError::kNone);
+  // More nodes than a soft body may have.
+  mesh->node_count = kMaxSoftBodyNodes + 1;
+  EXPECT_EQ(check_payload(mesh.get(), bytes, PayloadKind::kSoftBodyMesh, &field),
+            PayloadError::kCountTooLarge);
+  EXPECT_STREQ(field, "SoftBodyMesh.node_count");
+  mesh->node_count = 3;
+  // More faces than the chunk holds, or than any soft body may.
+  EXPECT_EQ(check_payload(mesh.get(), bytes - 1, PayloadKind::kSoftBodyMesh, &field),
+            PayloadError::kCountTooLarge);
+  EXPECT_STREQ(field, "SoftBodyMesh.face_count");
+  mesh->face_count = kMaxSoftBodyFaces + 1;
+  EXPECT_EQ(check_payload(mesh.get(), sizeof *mesh, PayloadKind::kSoftBodyMesh, &field),
+            PayloadError::kCountTooLarge);
+  EXPECT_STREQ(field, "SoftBodyMesh.face_count");
+  mesh->face_count = 1;
+  // A face naming a node the mesh does not have: a viewer would index past them.
+  mesh->faces[0] = {0, 1, 3};
+  EXPECT_EQ(check_payload(mesh.get(), bytes, PayloadKind::kSoftBodyMesh, &field),
+            PayloadError::kCountTooLarge);
+  EXPECT_STREQ(field, "SoftBodyMesh.faces");
 }
 
 TEST(PayloadCheck, EveryErrorHasAnExplanation) {

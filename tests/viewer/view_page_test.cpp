@@ -16,6 +16,7 @@
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub_process.hpp"
 #include "devtools_client.hpp"
+#include "shared_models.hpp"
 #include "web_client.hpp"
 #include "world_reader.hpp"
 
@@ -24,9 +25,10 @@ namespace {
 
 const std::string kModels = AFHUB_EXAMPLE_MODELS;
 
-// An input device file pairing the world's camera "rcm_close" (by its name).
+// An input device file pairing the world's camera "rcm_close" by its name, and
+// "overview" by its block key in the world file, as AMBF's files do.
 std::string paired_devices() {
-  return "input devices: [Test Touch]\n"
+  return "input devices: [Test Touch, Key Touch]\n"
          "Test Touch:\n"
          "  hardware name: PHANTOM Omni\n"
          "  haptic gain: {linear: 0.0, angular: 0.0}\n"
@@ -34,7 +36,15 @@ std::string paired_devices() {
          kModels +
          "/gripper.yaml\n"
          "  root link: /afhub/gripper/BODY palm\n"
-         "  pair cameras: [rcm_close]\n";
+         "  pair cameras: [rcm_close]\n"
+         "Key Touch:\n"
+         "  hardware name: PHANTOM Omni\n"
+         "  haptic gain: {linear: 0.0, angular: 0.0}\n"
+         "  simulated multibody: " +
+         kModels +
+         "/gripper.yaml\n"
+         "  root link: /afhub/gripper/BODY palm\n"
+         "  pair cameras: [camera_overview]\n";
 }
 
 struct View {
@@ -311,7 +321,9 @@ TEST_F(ViewPageTest, ACameraNameOpensItsViewportAndPairedCamerasAreMarked) {
   for (int i = 0; i < 3; ++i)
     EXPECT_NEAR(position.items[i].number, rcm->at("position").items[i].number, 1e-6) << i;
   EXPECT_EQ(text_of("#cameras .current"), "rcm_close [paired: Test Touch]");
-  EXPECT_EQ(browser_->evaluate("document.querySelectorAll('#cameras .paired').length").number, 1);
+  // Paired by its block key "camera_overview" (its name is "overview").
+  EXPECT_EQ(text_of("#cameras a[href=\"/?camera=overview\"]"), "overview [paired: Key Touch]");
+  EXPECT_EQ(browser_->evaluate("document.querySelectorAll('#cameras .paired').length").number, 2);
   EXPECT_EQ(text_of("#message"), "");
   expect_clean_console();
 
@@ -327,6 +339,121 @@ TEST_F(ViewPageTest, ACameraNameOpensItsViewportAndPairedCamerasAreMarked) {
   const std::string message = text_of("#message");
   EXPECT_TRUE(contains(message, "No camera named \"nosuch\"")) << message;
   EXPECT_TRUE(contains(message, "overview, rcm_close, flange")) << message;
+  expect_clean_console();
+}
+
+// The example cloth (examples/models/cloth.yaml, a Bullet soft body) drawn by the
+// page: its faces from the scene, its node positions from the frames.
+class ViewSoftBodyTest : public ViewPageTest {
+ protected:
+  static void SetUpTestSuite() {
+    char pattern[] = "/tmp/afhub_view_soft_test_XXXXXX";
+    ASSERT_NE(mkdtemp(pattern), nullptr);
+    dir_ = pattern;
+    physics_ = std::make_unique<ScopedProcess>(
+        spawn_afhub({"run", "--launch", kModels + "/launch.yaml", "-l", "3"}, dir_ + "/run.log"));
+    connect_to_hub("viewsofttest", HubPolicy::kRequire);
+    base_ = std::make_unique<BodyClient>("afhub/cloth/cloth");
+    ASSERT_TRUE(
+        wait_until([] { return base_->latest_state() != nullptr; }, std::chrono::seconds(20)))
+        << read_file(dir_ + "/run.log");
+    commands_ = start_view({"--allow-commands"});
+    browser_ = std::make_unique<Browser>(dir_);
+    ASSERT_TRUE(browser_->ready()) << browser_->problem();
+  }
+  static double centre_z() {
+    const JsonValue centre = browser_->evaluate("window.afhub.softCentres[0] || []");
+    return centre.items.size() == 3 ? centre.items[2].number : NAN;
+  }
+};
+
+TEST_F(ViewSoftBodyTest, TheClothIsDrawnAndItsNodesMoveAsItFalls) {
+  const JsonValue scene = parse_json(http_request(commands_.port, "GET", "/scene.json").body);
+  ASSERT_EQ(scene.at("soft_bodies").items.size(), 1U);
+  const JsonValue& cloth = scene.at("soft_bodies").items[0];
+  EXPECT_EQ(cloth.at("channel").text, "afhub/cloth/cloth");
+  EXPECT_EQ(cloth.at("nodes").number, 169);                 // 13 x 13
+  EXPECT_EQ(cloth.at("faces").items.size(), 2U * 144 * 3);  // two triangles per cell
+
+  open(commands_.url + "/");
+  ASSERT_TRUE(wait_until([] { return browser_->evaluate("window.afhub.softBodies").number == 1; },
+                         std::chrono::seconds(10)))
+      << "the page drew no soft body";
+  // Paused and reset, the cloth is back at 1 m; resumed, it falls, and the frames
+  // carry its nodes down.
+  ASSERT_EQ(run_afhub({"world", "pause"}).exit_code, 0);
+  ASSERT_EQ(run_afhub({"world", "reset"}).exit_code, 0);
+  ASSERT_TRUE(wait_until([] { return centre_z() > 0.9; }, std::chrono::seconds(5)))
+      << "the cloth's nodes did not come back to 1 m: centre z " << centre_z();
+  const double start = centre_z();
+  ASSERT_EQ(run_afhub({"world", "resume"}).exit_code, 0);
+  ASSERT_TRUE(wait_until([] { return centre_z() < 0.3; }, std::chrono::seconds(5)))
+      << "the cloth's nodes did not fall: centre z " << centre_z();
+  std::printf("cloth centre z in the frames: %.3f, then %.3f\n", start, centre_z());
+
+  // Drawn: the pixels that change when the cloth is hidden, around where it is.
+  ASSERT_EQ(run_afhub({"world", "pause"}).exit_code, 0);
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  const JsonValue drawn = browser_->evaluate(R"((() => {
+      const mesh = softBodies[0];
+      const read = () => {
+        renderer.render(world, camera);
+        const gl = renderer.getContext();
+        const w = gl.drawingBufferWidth, h = gl.drawingBufferHeight;
+        const pixels = new Uint8Array(w * h * 4);
+        gl.readPixels(0, 0, w, h, gl.RGBA, gl.UNSIGNED_BYTE, pixels);
+        return pixels;
+      };
+      const shown = read();
+      mesh.visible = false;
+      const hidden = read();
+      mesh.visible = true;
+      let changed = 0;
+      for (let i = 0; i < shown.length; i += 4)
+        if (Math.abs(shown[i] - hidden[i]) + Math.abs(shown[i + 1] - hidden[i + 1]) +
+            Math.abs(shown[i + 2] - hidden[i + 2]) > 30) changed++;
+      return changed;
+    })())");
+  ASSERT_EQ(run_afhub({"world", "resume"}).exit_code, 0);
+  std::printf("cloth: %.0f pixels drawn\n", drawn.number);
+  EXPECT_GT(drawn.number, 300) << "the cloth is not drawn";
+  browser_->screenshot(dir_ + "/cloth.png");  // left for a look
+  expect_clean_console();
+}
+
+// AMBF's own world file and input_devices.yaml (../shared/ambf_models): its devices
+// pair "camera1", the world file's block key of the camera named "default_camera".
+class ViewAmbfPairingTest : public ViewPageTest {
+ protected:
+  static void SetUpTestSuite() {
+    if (!::afhub::testing::shared_models_present()) return;
+    char pattern[] = "/tmp/afhub_view_ambf_test_XXXXXX";
+    ASSERT_NE(mkdtemp(pattern), nullptr);
+    dir_ = pattern;
+    const std::string descriptions = ::afhub::testing::kSharedModels + "/descriptions";
+    physics_ = std::make_unique<ScopedProcess>(
+        spawn_afhub({"run", "--world", descriptions + "/world/world.yaml", kModels + "/arm7.yaml"},
+                    dir_ + "/run.log"));
+    connect_to_hub("viewambftest", HubPolicy::kRequire);
+    base_ = std::make_unique<BodyClient>("afhub/arm/base");
+    ASSERT_TRUE(
+        wait_until([] { return base_->latest_state() != nullptr; }, std::chrono::seconds(20)))
+        << read_file(dir_ + "/run.log");
+    read_only_ =
+        start_view({"--input-devices", descriptions + "/input_devices/input_devices.yaml"});
+    browser_ = std::make_unique<Browser>(dir_);
+    ASSERT_TRUE(browser_->ready()) << browser_->problem();
+  }
+};
+
+TEST_F(ViewAmbfPairingTest, ACameraPairedByItsBlockKeyIsMarked) {
+  SKIP_WITHOUT_SHARED_MODELS();
+  const JsonValue scene = parse_json(http_request(read_only_.port, "GET", "/scene.json").body);
+  ASSERT_EQ(scene.at("cameras").items.size(), 1U);
+  EXPECT_EQ(scene.at("cameras").items[0].at("key").text, "camera1");
+  open(read_only_.url + "/");
+  const std::string marked = text_of("#cameras a.paired");
+  EXPECT_TRUE(marked.starts_with("default_camera [paired: ")) << marked;
   expect_clean_console();
 }
 

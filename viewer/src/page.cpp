@@ -53,10 +53,12 @@ camera.up.set(0, 0, 1);  // AMBF worlds are z-up
 const controls = new THREE.OrbitControls(camera, renderer.domElement);
 let root = null;          // everything of the current scene
 let bodies = [];          // per scene body: its Object3D
+let softBodies = [];      // per scene soft body: its Mesh (positions from the frames), or null
 let sceneInfo = null;
 let generation = -1;
 let loading = false;
-window.afhub = {frames: 0, bodiesInFrame: 0, catalogBodies: 0, meshesLoaded: 0, sceneBodies: 0};
+window.afhub = {frames: 0, bodiesInFrame: 0, catalogBodies: 0, meshesLoaded: 0, sceneBodies: 0,
+                softBodies: 0, softCentres: []};
 
 function vec(a) { return new THREE.Vector3(a[0], a[1], a[2]); }
 
@@ -145,9 +147,10 @@ function chooseCamera(cameras) {
     link.href = '/?camera=' + encodeURIComponent(shortName(c.name));
     link.textContent = shortName(c.name);
     if (c === chosen) link.className = 'current';
-    // A device pairs a camera by its name in the world file (full or short).
-    const devices = paired[c.name] || paired[shortName(c.name)];
-    if (devices) {
+    // AMBF's devices pair a camera by its block key in the world file ("camera1");
+    // its name (full or short) is accepted too.
+    const devices = [...new Set([c.key, c.name, shortName(c.name)].flatMap((n) => paired[n] || []))];
+    if (devices.length) {
       link.className += ' paired';
       link.textContent += ' [paired: ' + devices.join(', ') + ']';
       link.title = 'input devices paired with this camera: ' + devices.join(', ');
@@ -155,13 +158,13 @@ function chooseCamera(cameras) {
     list.appendChild(link);
   }
   // Pairings that name no camera of this world are said, not dropped.
-  const named = new Set(cameras.flatMap((c) => [c.name, shortName(c.name)]));
+  const named = new Set(cameras.flatMap((c) => [c.key, c.name, shortName(c.name)]));
   const unmatched = Object.keys(paired).filter((name) => !named.has(name));
   if (unmatched.length) {
     const note = document.createElement('span');
     note.className = 'paired';
     note.textContent = unmatched.map((name) => name + ' (paired by ' + paired[name].join(', ') +
-        ') is not a camera name of this world').join('; ');
+        ') is not a camera key or name of this world').join('; ');
     list.appendChild(note);
   }
 }
@@ -203,6 +206,22 @@ async function loadScene() {
     root.add(group);
     return group;
   });
+  // Soft bodies: their faces once from the scene, their node positions in every frame.
+  softBodies = info.soft_bodies.map((soft) => {
+    if (!soft.faces.length) return null;  // faces not read yet: the next scene has them
+    const geometry = new THREE.BufferGeometry();
+    geometry.setAttribute('position',
+        new THREE.BufferAttribute(new Float32Array(soft.nodes * 3), 3));
+    geometry.setIndex(soft.faces);
+    const mesh = new THREE.Mesh(geometry, new THREE.MeshPhongMaterial(
+        {color: 0xe0803a, side: THREE.DoubleSide}));
+    mesh.frustumCulled = false;  // its bounds move with its nodes
+    mesh.visible = false;        // until its first nodes come
+    mesh.userData = {channel: soft.channel};
+    root.add(mesh);
+    return mesh;
+  });
+  window.afhub.softBodies = softBodies.filter((s) => s).length;
   sceneInfo = info;
   generation = info.generation >>> 0;
   window.afhub.sceneBodies = bodies.length;
@@ -246,6 +265,25 @@ function applyFrame(buffer) {
     if (!joints[index] || joints[index].length !== n) joints[index] = new Float32Array(n);
     for (let j = 0; j < n; j++) joints[index][j] = view.getFloat32(at + 4 + 4 * j, true);
     at += 4 + 4 * n;
+  }
+  // The soft-body blocks: per soft body, its node positions.
+  const softCount = at + 4 <= view.byteLength ? view.getUint32(at, true) : 0;
+  at += 4;
+  for (let k = 0; k < softCount; k++) {
+    const index = view.getUint32(at, true), n = view.getUint32(at + 4, true);
+    at += 8;
+    const mesh = softBodies[index];
+    if (mesh && mesh.geometry.attributes.position.count === n) {
+      const positions = mesh.geometry.attributes.position;
+      positions.array.set(new Float32Array(buffer.slice(at, at + 12 * n)));
+      positions.needsUpdate = true;
+      mesh.geometry.computeVertexNormals();
+      mesh.visible = true;
+      const centre = [0, 0, 0];
+      for (let i = 0; i < 3 * n; i++) centre[i % 3] += positions.array[i] / n;
+      window.afhub.softCentres[index] = centre;
+    }
+    at += 12 * n;
   }
   window.afhub.simTime = time;
   window.afhub.paused = paused;

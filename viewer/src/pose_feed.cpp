@@ -59,9 +59,28 @@ void PoseFeed::refresh_readers(const BodyList& catalog) {
 std::shared_ptr<const ViewScene> PoseFeed::update(std::vector<std::uint8_t>& frame) {
   std::shared_ptr<const ViewScene> changed;
   joints_changed_ = false;
-  if (const SceneDescription* scene = scene_reader_.latest(); scene && scene_reader_.updated()) {
+  const SceneDescription* scene = scene_reader_.latest();
+  bool rebuild = scene && scene_reader_.updated();
+  if (rebuild) {
+    soft_.clear();
+    for (std::uint32_t s = 0; s < scene->soft_body_count; ++s) {
+      const std::string channel = scene->soft_bodies[s].channel.data();
+      soft_.push_back({std::make_unique<LatestReader<SoftBodyMesh>>(
+                           ChannelId{std::string(kService), channel, std::string(kSoftFacesEvent)}),
+                       std::make_unique<LatestReader<SoftBodyMesh>>(ChannelId{
+                           std::string(kService), channel, std::string(kSoftNodesEvent)})});
+    }
+  }
+  // A soft body's faces come on their own channel, after the scene: a new scene then.
+  std::vector<const SoftBodyMesh*> faces;
+  for (SoftReaders& soft : soft_) {
+    faces.push_back(soft.faces->latest());
+    rebuild = rebuild || (faces.back() && soft.faces->updated());
+  }
+  if (rebuild) {
     // A restarted physics starts its sequence again: the viewer counts instead.
-    scene_ = std::make_shared<const ViewScene>(view_scene_of(*scene, scene_->generation + 1));
+    scene_ =
+        std::make_shared<const ViewScene>(view_scene_of(*scene, scene_->generation + 1, faces));
     states_.clear();
     catalog_sequence_ = 0;  // readers for the new scene's bodies
     changed = scene_;
@@ -106,6 +125,20 @@ std::shared_ptr<const ViewScene> PoseFeed::update(std::vector<std::uint8_t>& fra
   frame.insert(frame.end(), joint_blocks_.begin(), joint_blocks_.end());
   std::memcpy(frame.data() + 8, &entries, sizeof entries);
   std::memcpy(frame.data() + 28, &blocks, sizeof blocks);
+  const std::size_t soft_count_at = frame.size();
+  put(frame, std::uint32_t{0});  // the soft-body block count, set below
+  std::uint32_t soft_blocks = 0;
+  for (std::size_t s = 0; s < soft_.size(); ++s) {
+    const SoftBodyMesh* nodes = soft_[s].nodes->latest();
+    if (!nodes) continue;
+    put(frame, static_cast<std::uint32_t>(s));
+    put(frame, nodes->node_count);
+    const std::size_t at = frame.size();
+    frame.resize(at + nodes->node_count * sizeof nodes->nodes[0]);
+    std::memcpy(frame.data() + at, nodes->nodes.data(), nodes->node_count * sizeof nodes->nodes[0]);
+    ++soft_blocks;
+  }
+  std::memcpy(frame.data() + soft_count_at, &soft_blocks, sizeof soft_blocks);
   return changed;
 }
 

@@ -25,7 +25,8 @@ void views(JsonWriter& json, const char* name, const std::array<SceneView, kMaxW
   json.key(name).begin_array();
   for (std::uint32_t i = 0; i < count; ++i) {
     const SceneView& view = list[i];
-    json.begin_object().key("name").value(view.name.data()).key("position");
+    json.begin_object().key("name").value(view.name.data()).key("key").value(view.key.data());
+    json.key("position");
     vec3(json, view.position_m);
     json.key("direction");
     vec3(json, view.direction);
@@ -56,7 +57,8 @@ const char* shape_name(SceneShapeKind kind) {
 
 }  // namespace
 
-ViewScene view_scene_of(const SceneDescription& scene, std::uint32_t generation) {
+ViewScene view_scene_of(const SceneDescription& scene, std::uint32_t generation,
+                        const std::vector<const SoftBodyMesh*>& soft_faces) {
   ViewScene out;
   out.generation = generation;
   JsonWriter json;
@@ -86,6 +88,18 @@ ViewScene view_scene_of(const SceneDescription& scene, std::uint32_t generation)
       pose(json, shape.offset);
       json.end_object();
     }
+    json.end_array().end_object();
+  }
+  json.end_array();
+  json.key("soft_bodies").begin_array();
+  for (std::uint32_t s = 0; s < scene.soft_body_count; ++s) {
+    out.soft_channels.emplace_back(scene.soft_bodies[s].channel.data());
+    const SoftBodyMesh* faces = s < soft_faces.size() ? soft_faces[s] : nullptr;
+    json.begin_object().key("channel").value(scene.soft_bodies[s].channel.data());
+    json.key("nodes").value(static_cast<unsigned long long>(faces ? faces->node_count : 0));
+    json.key("faces").begin_array();
+    for (std::uint32_t f = 0; faces && f < faces->face_count; ++f)
+      for (std::uint32_t node : faces->faces[f]) json.value(static_cast<unsigned long long>(node));
     json.end_array().end_object();
   }
   json.end_array().end_object();

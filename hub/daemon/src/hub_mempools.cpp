@@ -14,6 +14,7 @@
 #include "afhub/shm_layout/health.hpp"
 #include "afhub/shm_layout/loop_stats.hpp"
 #include "afhub/shm_layout/scene.hpp"
+#include "afhub/shm_layout/soft_body.hpp"
 #include "afhub/shm_layout/world.hpp"
 
 namespace afhub {
@@ -84,6 +85,10 @@ std::vector<MempoolSpec> default_mempools() {
       {round_up8(scene_description_bytes(64)), 32, "scene descriptions of up to 64 bodies"},
       {round_up8(scene_description_bytes(kMaxSceneBodies)), 8,
        "scene descriptions of up to kMaxSceneBodies bodies"},
+      // Per soft body a node chunk in the writer's history, a loan, and three in
+      // each viewer; its faces once, kept the same way.
+      {round_up8(soft_body_mesh_bytes(0)), 64, "soft body node positions"},
+      {round_up8(soft_body_mesh_bytes(kMaxSoftBodyFaces)), 32, "soft body faces"},
   };
   sort_by_size(pools);
   return pools;

@@ -49,11 +49,17 @@ Vec3 rotate(const Quaternion& q, const Vec3& v) {
 
 // A light or camera where it is now, in the world frame (carried by its parent body
 // when it has one): it looks along its x axis, with z up.
+template <std::size_t N>
+void copy_cut(const std::string& text, std::array<char, N>& out) {
+  const std::size_t length = std::min(text.size(), N - 1);
+  std::memcpy(out.data(), text.data(), length);
+  out[length] = '\0';
+}
+
 void fill_view(const WorldObjectSpec& spec, const Pose& pose, SceneView& view) {
-  // Names are channel-sized in the model already; a longer one is cut.
-  const std::size_t length = std::min(spec.name.size(), view.name.size() - 1);
-  std::memcpy(view.name.data(), spec.name.data(), length);
-  view.name[length] = '\0';
+  // Names are channel-sized in the model already; a longer one (or key) is cut.
+  copy_cut(spec.name, view.name);
+  copy_cut(spec.key, view.key);
   view.position_m = pose.position_m;
   view.direction = rotate(pose.orientation, {1.0, 0.0, 0.0});
   view.up = rotate(pose.orientation, {0.0, 0.0, 1.0});
@@ -79,6 +85,14 @@ void fill_scene(const Simulation& sim, SceneDescription& scene,
     fill_view(model.world.lights[i], sim.light_pose(i), scene.lights[i]);
   for (std::uint32_t i = 0; i < scene.camera_count; ++i)
     fill_view(model.world.cameras[i], sim.camera_pose(i), scene.cameras[i]);
+  const std::size_t soft = std::min(model.soft_bodies.size(), kMaxSceneSoftBodies);
+  if (soft < model.soft_bodies.size())
+    warnings.push_back("the scene description holds " + std::to_string(kMaxSceneSoftBodies) +
+                       " soft bodies; a viewer does not draw the other " +
+                       std::to_string(model.soft_bodies.size() - soft));
+  scene.soft_body_count = static_cast<std::uint32_t>(soft);
+  for (std::size_t s = 0; s < soft; ++s)
+    copy_text(model.soft_bodies[s].channel, scene.soft_bodies[s].channel);  // fits: checked
   const std::size_t count = scene_body_count(model);
   if (count < model.bodies.size())
     warnings.push_back("the scene description holds " + std::to_string(kMaxSceneBodies) +

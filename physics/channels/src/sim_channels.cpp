@@ -4,6 +4,7 @@
 #include <sched.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 
 #include "afhub/hub/body_claims.hpp"
@@ -100,9 +101,21 @@ SimChannels::SimChannels(Simulation& sim, double watchdog_s, std::string_view na
     channel.soft = true;
     channel.publisher = std::make_unique<BodyPublisher>(model.soft_bodies[s].channel);
     channels_.push_back(std::move(channel));
+    if (s >= kMaxSceneSoftBodies) continue;  // not in the scene: fill_scene says so
+    const std::string& name = model.soft_bodies[s].channel;
+    SoftSurface surface;
+    surface.index = s;
+    surface.faces = std::make_unique<Writer<SoftBodyMesh>>(
+        ChannelId{std::string(kService), name, std::string(kSoftFacesEvent)});
+    surface.nodes = std::make_unique<Writer<SoftBodyMesh>>(
+        ChannelId{std::string(kService), name, std::string(kSoftNodesEvent)});
+    soft_surfaces_.push_back(std::move(surface));
   }
+  soft_nodes_every_ = std::max<std::uint64_t>(
+      1, static_cast<std::uint64_t>(std::lround(1.0 / (kSoftNodesRateHz * sim.dt_s()))));
   lockstep_pids_.reserve(channels_.size());
   publish_scene();
+  publish_soft_faces();
   directory_.publish();
   confirm_body_claims(claimed_, std::chrono::seconds(2));
 }
@@ -424,6 +437,40 @@ void SimChannels::fill_objects(std::array<WorldObjectPose, kMaxWorldObjects>& ou
   }
 }
 
+void SimChannels::publish_soft_faces() {
+  for (SoftSurface& surface : soft_surfaces_) {
+    const auto faces = sim_.soft_body_faces(surface.index);  // within bounds: checked at load
+    SoftBodyMesh* mesh = surface.faces->loan(soft_body_mesh_bytes(faces.size()));
+    if (!mesh)
+      throw Error("no shared memory for the faces of soft body '" +
+                  sim_.model().soft_bodies[surface.index].channel +
+                  "'; see `afhub status` for the mempools");
+    mesh->node_count = static_cast<std::uint32_t>(sim_.soft_body_node_count(surface.index));
+    mesh->face_count = static_cast<std::uint32_t>(faces.size());
+    sim_.read_soft_body_nodes(surface.index, mesh->nodes.data());
+    std::copy(faces.begin(), faces.end(), mesh->faces.begin());
+    surface.faces->publish(mesh);
+  }
+}
+
+void SimChannels::publish_soft_nodes(std::uint64_t step, double time_s) noexcept {
+  // A restarted or reset world starts its steps again.
+  if (step < soft_nodes_next_ && soft_nodes_next_ - step <= soft_nodes_every_) return;
+  soft_nodes_next_ = step + soft_nodes_every_;
+  for (SoftSurface& surface : soft_surfaces_) {
+    // Kept for a viewer that joins later: published once without readers, then for them.
+    if (surface.nodes_published && !surface.nodes->raw().has_readers()) continue;
+    SoftBodyMesh* mesh = surface.nodes->loan(soft_body_mesh_bytes(0));
+    if (!mesh) continue;  // shared memory exhausted: skip, never block
+    mesh->header.sim_step = step;
+    mesh->header.sim_time_s = time_s;
+    mesh->node_count = static_cast<std::uint32_t>(sim_.soft_body_node_count(surface.index));
+    sim_.read_soft_body_nodes(surface.index, mesh->nodes.data());
+    surface.nodes->publish(mesh);
+    surface.nodes_published = true;
+  }
+}
+
 void SimChannels::publish(double wall_time_s, double achieved_rate_hz, bool paused) noexcept {
   last_published_ = {wall_time_s, achieved_rate_hz, paused};
   const std::uint64_t step = sim_.step_count();
@@ -454,6 +501,7 @@ void SimChannels::publish(double wall_time_s, double achieved_rate_hz, bool paus
     state->answered_steps = static_cast<std::uint32_t>(channel.answered_steps);
     channel.publisher->publish_state(state);
   }
+  publish_soft_nodes(step, time_s);
   if (WorldState* world = world_.loan()) {
     world->header.sim_step = step;
     world->header.sim_time_s = time_s;

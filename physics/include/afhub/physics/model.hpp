@@ -177,6 +177,7 @@ struct ActuatorSpec {
 
 // A world file's light or camera: its pose is published in the world state.
 struct WorldObjectSpec {
+  std::string key;   // its block key in the world file ("camera1"): input devices pair by it
   std::string name;  // "<namespace>/<name>"
   Vec3 position_m;
   Vec3 direction;  // light direction, or camera look-at minus location

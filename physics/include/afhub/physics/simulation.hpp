@@ -5,6 +5,7 @@
 // transport (the channel adapter, sim_channels.hpp, does).
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -78,6 +79,11 @@ class Simulation {
   // Readings of body `body` (an index into model().bodies) and of soft body `soft`.
   void read_body(std::size_t body, BodyReading& reading) const noexcept;
   void read_soft_body(std::size_t soft, BodyReading& reading) const noexcept;
+  // A soft body's surface for a viewer: its node count, its triangles (node indices,
+  // fixed at load), and its node positions written to `xyz` (node_count entries).
+  std::size_t soft_body_node_count(std::size_t soft) const noexcept;
+  std::vector<std::array<std::uint32_t, 3>> soft_body_faces(std::size_t soft) const;
+  void read_soft_body_nodes(std::size_t soft, std::array<float, 3>* xyz) const noexcept;
   Pose body_pose(std::size_t body) const noexcept;  // the mesh frame, as `location`
   // The world file's lights and cameras (indices into model().world.lights and
   // .cameras): looking along their direction, with `up` as their z axis, carried

@@ -18,6 +18,9 @@ inline constexpr std::string_view kHubInstance = "hub";
 inline constexpr std::string_view kCatalogEvent = "catalog";
 inline constexpr std::string_view kHealthEvent = "health";
 inline constexpr std::string_view kSceneEvent = "scene";  // {"afhub", <world instance>, "scene"}
+// {"afhub", <soft body channel>, "soft_faces" | "soft_nodes"}: shm_layout/soft_body.hpp
+inline constexpr std::string_view kSoftFacesEvent = "soft_faces";
+inline constexpr std::string_view kSoftNodesEvent = "soft_nodes";
 inline constexpr std::string_view kStatsEvent = "stats";  // {"afhub", <runtime name>, "stats"}
 
 // A channel's three iceoryx strings.

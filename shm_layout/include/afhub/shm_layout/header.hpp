@@ -22,6 +22,7 @@ enum class PayloadKind : std::uint32_t {
   kDeviceState = 10,
   kDeviceCommand = 11,
   kSceneDescription = 12,  // what a viewer draws, published once by the physics
+  kSoftBodyMesh = 13,      // a soft body's faces (once) or node positions (display rate)
 };
 
 struct PayloadHeader {

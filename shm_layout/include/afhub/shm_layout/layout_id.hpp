@@ -17,6 +17,7 @@
 #include "afhub/shm_layout/health.hpp"
 #include "afhub/shm_layout/loop_stats.hpp"
 #include "afhub/shm_layout/scene.hpp"
+#include "afhub/shm_layout/soft_body.hpp"
 #include "afhub/shm_layout/world.hpp"
 
 namespace afhub {
@@ -214,6 +215,7 @@ inline constexpr std::uint64_t kLayoutId = layout_detail::mix({
     AFHUB_OFF(SceneBody, shapes),
     sizeof(SceneView),
     AFHUB_OFF(SceneView, name),
+    AFHUB_OFF(SceneView, key),
     AFHUB_OFF(SceneView, position_m),
     AFHUB_OFF(SceneView, direction),
     AFHUB_OFF(SceneView, up),
@@ -224,6 +226,17 @@ inline constexpr std::uint64_t kLayoutId = layout_detail::mix({
     AFHUB_OFF(SceneDescription, cameras),
     AFHUB_OFF(SceneDescription, body_count),
     AFHUB_OFF(SceneDescription, bodies),
+    kMaxSceneSoftBodies,
+    sizeof(SceneSoftBody),
+    AFHUB_OFF(SceneDescription, soft_body_count),
+    AFHUB_OFF(SceneDescription, soft_bodies),
+    kMaxSoftBodyNodes,
+    kMaxSoftBodyFaces,
+    sizeof(SoftBodyMesh),
+    AFHUB_OFF(SoftBodyMesh, node_count),
+    AFHUB_OFF(SoftBodyMesh, face_count),
+    AFHUB_OFF(SoftBodyMesh, nodes),
+    AFHUB_OFF(SoftBodyMesh, faces),
 });
 #undef AFHUB_OFF
 
@@ -240,5 +253,6 @@ static_assert(layout_detail::is_shm_payload<BenchSample>);
 static_assert(layout_detail::is_shm_payload<DeviceState>);
 static_assert(layout_detail::is_shm_payload<DeviceCommand>);
 static_assert(layout_detail::is_shm_payload<SceneDescription>);
+static_assert(layout_detail::is_shm_payload<SoftBodyMesh>);
 
 }  // namespace afhub

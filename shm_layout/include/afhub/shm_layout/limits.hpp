@@ -41,6 +41,15 @@ inline constexpr std::size_t kMaxBodies = 450;
 // left out of the scene (not drawn) and said once by the physics.
 inline constexpr std::size_t kMaxSceneBodies = 512;
 
+// Soft bodies a scene description lists (AMBF's models have none to a few).
+inline constexpr std::size_t kMaxSceneSoftBodies = 16;
+
+// Nodes and faces of one soft body a viewer draws. A node travels at display rate as
+// 12 bytes, so 4096 nodes are a 48 KB chunk; a closed surface has about twice as many
+// faces as nodes. A soft body with more is refused at load, naming its file.
+inline constexpr std::size_t kMaxSoftBodyNodes = 4096;
+inline constexpr std::size_t kMaxSoftBodyFaces = 8192;
+
 // Joint names in the catalog: every distinct name once, and per body a list of
 // indices into them (a chain of N links, every link active, lists N^2/2 indices but
 // N names). Loaned at the real size, so these bound only what a faulty writer claims.

@@ -58,9 +58,17 @@ struct SceneBody {
 // pose is in the world state).
 struct SceneView {
   std::array<char, kChannelNameBufferSize> name{};
+  // Its block key in the world file ("camera1"): AMBF's input devices pair cameras
+  // by it. Cut at the buffer like the name.
+  std::array<char, kChannelNameBufferSize> key{};
   Vec3 position_m;
   Vec3 direction;  // where it looks or shines, a unit vector
   Vec3 up{0.0, 0.0, 1.0};
+};
+
+// A soft body: its surface travels on its own channels (shm_layout/soft_body.hpp).
+struct SceneSoftBody {
+  std::array<char, kChannelNameBufferSize> channel{};  // NUL-terminated
 };
 
 struct SceneDescription {
@@ -70,6 +78,9 @@ struct SceneDescription {
   std::uint32_t camera_count{0};
   std::array<SceneView, kMaxWorldObjects> lights{};
   std::array<SceneView, kMaxWorldObjects> cameras{};
+  std::uint32_t soft_body_count{0};  // entries [0, soft_body_count) of `soft_bodies`
+  std::uint32_t reserved_soft{0};
+  std::array<SceneSoftBody, kMaxSceneSoftBodies> soft_bodies{};
   std::uint32_t body_count{0};
   std::uint32_t reserved{0};
   std::array<SceneBody, kMaxSceneBodies> bodies{};  // last: sized by body_count

@@ -11,7 +11,9 @@
 //   then per entry (a scene body with a live state): u32 scene index,
 //   f32 position x y z, f32 orientation x y z w;
 //   then per joint block (an entry whose body has joints, in the entries' order):
-//   u16 scene index, u16 joint count N, N x f32 joint position (rad or m).
+//   u16 scene index, u16 joint count N, N x f32 joint position (rad or m);
+//   then u32 soft-body blocks, and per block (a scene soft body with node positions):
+//   u32 soft-body index, u32 node count N, N x f32 x y z (world frame, m).
 // The arm's 7 joints add 32 bytes: every body's joints travel, so the page can
 // inspect and plot any body without asking the server for it.
 #pragma once
@@ -23,6 +25,7 @@
 
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/channel.hpp"
+#include "afhub/shm_layout/soft_body.hpp"
 #include "afhub/shm_layout/world.hpp"
 #include "afhub/viewer/view_scene.hpp"
 
@@ -56,6 +59,11 @@ class PoseFeed {
   std::uint32_t catalog_bodies_ = 0;
   // Per scene body, its state reader while the catalog lists it.
   std::vector<std::unique_ptr<LatestReader<BodyState>>> states_;
+  // Per scene soft body, its faces (read once per scene) and its node positions.
+  struct SoftReaders {
+    std::unique_ptr<LatestReader<SoftBodyMesh>> faces, nodes;
+  };
+  std::vector<SoftReaders> soft_;
   std::vector<std::uint8_t> joint_blocks_;  // reused: no allocation once grown
   std::string joints_json_ = "{}";
   bool joints_changed_ = false;

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "afhub/shm_layout/scene.hpp"
+#include "afhub/shm_layout/soft_body.hpp"
 
 namespace afhub::viewer {
 
@@ -15,11 +16,14 @@ struct ViewScene {
   std::uint32_t generation = 0;       // counts the descriptions the viewer read: a new one, reload
   std::vector<std::string> channels;  // per body, its state channel
   std::vector<std::string> meshes;    // per body, its mesh's absolute path or ""
-  std::string json;                   // what /scene.json serves
+  std::vector<std::string> soft_channels;  // per soft body, its channel
+  std::string json;                        // what /scene.json serves
 };
 
-// Copies a checked description (check_payload passed) into a ViewScene.
-ViewScene view_scene_of(const SceneDescription& scene, std::uint32_t generation);
+// Copies a checked description (check_payload passed) into a ViewScene, with per
+// soft body its checked faces (`soft_faces[i]`, nullptr: not read yet, none listed).
+ViewScene view_scene_of(const SceneDescription& scene, std::uint32_t generation,
+                        const std::vector<const SoftBodyMesh*>& soft_faces = {});
 
 // The mesh file body `index` lists, or nothing (an index out of range, a body
 // drawn from shapes): the only files the viewer reads from disk besides three.js.

@@ -39,6 +39,7 @@
 #include "afhub/shm_layout/body_command.hpp"
 #include "afhub/shm_layout/body_state.hpp"
 #include "afhub/shm_layout/scene.hpp"
+#include "afhub/shm_layout/soft_body.hpp"
 #include "afhub/shm_layout/world.hpp"
 
 namespace afhub {
@@ -122,6 +123,12 @@ class SimChannels {
  private:
   // Publishes the scene description once, keeping it for viewers that join later.
   void publish_scene();
+  // Publishes each soft body's faces once, keeping them for viewers that join later.
+  void publish_soft_faces();
+  // Each soft body's node positions, at most kSoftNodesRateHz (a viewer's display
+  // rate, not the step rate) and only while a viewer reads them.
+  void publish_soft_nodes(std::uint64_t step, double time_s) noexcept;
+  static constexpr double kSoftNodesRateHz = 60.0;
   // An event to say from outside the loop. Refusals, stale commands and expiries are
   // said once per body (a short watchdog may fire every few ms); joins and drops each time.
   enum Event { kStale, kRejected, kAxisless, kExpired, kJoined, kDropped, kEventKinds };
@@ -207,6 +214,15 @@ class SimChannels {
   // Steps taken under command, and those whose command answered the newest state.
   std::uint64_t commanded_steps_ = 0, answered_steps_ = 0, timeliness_step_ = 0;
   WorldClock last_published_;
+  // Per soft body (up to kMaxSceneSoftBodies) its surface's two channels.
+  struct SoftSurface {
+    std::size_t index = 0;  // into model soft bodies
+    std::unique_ptr<Writer<SoftBodyMesh>> faces, nodes;
+    bool nodes_published = false;
+  };
+  std::vector<SoftSurface> soft_surfaces_;
+  std::uint64_t soft_nodes_every_ = 1;  // steps between node publishes
+  std::uint64_t soft_nodes_next_ = 0;   // the step of the next one
 };
 
 }  // namespace afhub::physics
