@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "afhub/physics/adf_loader.hpp"
+#include "afhub/shm_layout/error.hpp"
 #include "model_files.hpp"
 #include "shared_models.hpp"
 
@@ -391,7 +392,7 @@ TEST(Simulation, ASoftBodyWithMoreNodesThanAViewerTakesIsRefusedAtLoad) {
   try {
     Simulation sim(model, 0.001);
     FAIL() << "a soft body of 4225 nodes loaded";
-  } catch (const Error& error) {
+  } catch (const afhub::Error& error) {
     const std::string message = error.what();
     EXPECT_NE(message.find("big.yaml:"), std::string::npos) << message;
     EXPECT_NE(message.find("has 4225 nodes"), std::string::npos) << message;
