@@ -64,7 +64,8 @@ void register_bridge(CLI::App& app, Runner& selected) {
       "afhub/world_state, afhub/world_command). Settings come from --config FILE (YAML, "
       "keys named as the flags: domain, interface, export, mirror, accept-commands, bodies, "
       "devices, world, qos: best-effort|reliable, rate, rate-limits: {bodies, devices, "
-      "world}, max-command-age, profile, ros2-prefix, security), and the flags given here override the file's.");
+      "world}, max-command-age, profile, ros2-prefix, security), and the flags given here override "
+      "the file's.");
   dds->add_option("--config", cli->config,
                   "YAML file of settings (see above); flags given here override it")
       ->check(CLI::ExistingFile);

@@ -117,11 +117,11 @@ class TeleopSession {
 // catches up.
 struct Following {
   Vec3 body_mean, device_mean;
-  double body_radius{0.0};      // mean horizontal distance from body_mean
-  double rms{0.0}, worst{0.0};  // of body - body_mean - scale (device - device_mean)
+  double body_radius{0.0};       // mean horizontal distance from body_mean
+  double rms{0.0}, worst{0.0};   // of body - body_mean - scale (device - device_mean)
   double median{0.0}, p99{0.0};  // of the same
-  int judged{0}, left_out{0};   // pairs
-  double stalest_ms{0.0};       // the oldest state read, body or device
+  int judged{0}, left_out{0};    // pairs
+  double stalest_ms{0.0};        // the oldest state read, body or device
 };
 
 // A state older than this as it is read was not published on time (1 kHz publishers;

@@ -383,8 +383,8 @@ TEST(Simulation, ASoftBodyWithMoreNodesThanAViewerTakesIsRefusedAtLoad) {
     for (int j = 0; j + 1 < n; ++j) {
       const int a = i * n + j + 1, b = a + 1, c = a + n;  // OBJ is 1-based
       obj += "f " + std::to_string(a) + " " + std::to_string(b) + " " + std::to_string(c) + "\n";
-      obj += "f " + std::to_string(b) + " " + std::to_string(c + 1) + " " + std::to_string(c) +
-             "\n";
+      obj +=
+          "f " + std::to_string(b) + " " + std::to_string(c + 1) + " " + std::to_string(c) + "\n";
     }
   folder.write("big.obj", obj);
   const Model model =

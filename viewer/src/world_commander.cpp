@@ -3,8 +3,8 @@
 
 #include <civetweb.h>
 
-#include "afhub/shm_layout/header.hpp"
 #include "afhub/shm_layout/channel_names.hpp"
+#include "afhub/shm_layout/header.hpp"
 
 namespace afhub::viewer {
 

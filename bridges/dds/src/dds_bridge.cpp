@@ -24,9 +24,9 @@
 #include "afhub/shm_layout/error.hpp"
 #include "age_histogram.hpp"
 #include "dds_convert.hpp"
+#include "dds_device_world.hpp"
 #include "dds_security.hpp"
 #include "ros2_profile.hpp"
-#include "dds_device_world.hpp"
 
 namespace afhub::bridges {
 namespace {
