@@ -5,6 +5,7 @@
 // zero-copy channels; beside it `afhub view` serves the scene to a browser, at the URL
 // the demo prints (`--no-view`: no viewer). `--model FILE` simulates another model
 // and waves its root.
+#include <fcntl.h>
 #include <poll.h>
 #include <signal.h>
 #include <sys/wait.h>
@@ -12,6 +13,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <memory>
 #include <regex>
@@ -33,6 +35,7 @@ struct DemoOptions {
   double seconds = 0.0;  // 0: until Ctrl-C
   std::string model;     // empty: the example scene
   bool view = true;
+  bool open_browser = true;
   int view_port = 8080;
 };
 
@@ -119,6 +122,25 @@ Viewer start_viewer(int port) {
   return viewer;
 }
 
+// At a desktop (a display and xdg-open), the user's browser on `url`; elsewhere (ssh,
+// CI) the printed URL is the way in.
+void open_browser(const std::string& url) {
+  if (!std::getenv("DISPLAY") && !std::getenv("WAYLAND_DISPLAY")) return;
+  const pid_t pid = fork();
+  if (pid > 0) waitpid(pid, nullptr, 0);
+  if (pid != 0) return;
+  // A grandchild opens it, so that no zombie is left however long the browser takes.
+  if (fork() != 0) _exit(0);
+  setsid();
+  const int null = open("/dev/null", O_RDWR);
+  if (null >= 0) {
+    dup2(null, STDOUT_FILENO);
+    dup2(null, STDERR_FILENO);
+  }
+  execlp("xdg-open", "xdg-open", url.c_str(), static_cast<char*>(nullptr));
+  _exit(127);  // no xdg-open: nothing is opened
+}
+
 void stop_viewer(Viewer& viewer) {
   if (viewer.pid <= 0) return;
   kill(viewer.pid, SIGTERM);
@@ -201,6 +223,7 @@ int run_demo(const DemoOptions& options) {
                    "it. Try another --view-port, or --no-view.\n");
     else
       std::printf("afhub demo: the viewer: %s\n", viewer.url.c_str());
+    if (!viewer.url.empty() && options.open_browser) open_browser(viewer.url);
     std::fflush(stdout);
   }
   CatalogReader catalog;
@@ -269,6 +292,9 @@ void register_demo(CLI::App& app, Runner& selected) {
   demo->add_option("--seconds", options->seconds,
                    "Stop after this many seconds (default: until Ctrl-C)");
   demo->add_flag("!--no-view", options->view, "Do not start the browser viewer");
+  demo->add_flag("!--no-browser", options->open_browser,
+                 "Do not open the viewer's URL in your browser (it is opened with xdg-open "
+                 "when a display is set)");
   demo->add_option("--view-port", options->view_port,
                    "The viewer's TCP port (0: any free one; the URL printed says which)")
       ->capture_default_str();

@@ -2,9 +2,11 @@
 // hub, and ls / echo / cmd / status against synthetic bodies.
 #include <gtest/gtest.h>
 #include <signal.h>
+#include <sys/stat.h>
 
 #include <cmath>
 #include <cstdlib>
+#include <fstream>
 #include <regex>
 #include <sstream>
 
@@ -68,8 +70,16 @@ TEST(Cli, DemoPrintsTheViewersUrlWhichServesTheScene) {
   expect_no_hub();
   char pattern[] = "/tmp/afhub_demo_view_XXXXXX";
   ASSERT_NE(mkdtemp(pattern), nullptr);
-  const std::string log = std::string(pattern) + "/demo.log";
+  const std::string dir = pattern, log = dir + "/demo.log", opened = dir + "/opened";
+  // At a desktop the demo opens the URL with xdg-open: a stand-in records what it got.
+  std::ofstream(dir + "/xdg-open") << "#!/bin/sh\necho \"$1\" > " << opened << "\n";
+  chmod((dir + "/xdg-open").c_str(), 0755);
+  const std::string path = std::getenv("PATH");
+  setenv("PATH", (dir + ":" + path).c_str(), 1);
+  setenv("DISPLAY", ":99", 1);
   ScopedProcess demo(spawn_afhub({"demo", "--seconds", "60", "--view-port", "0"}, log));
+  setenv("PATH", path.c_str(), 1);
+  unsetenv("DISPLAY");
   const std::regex said("the viewer: http://127\\.0\\.0\\.1:([0-9]+)/");
   int port = 0;
   ASSERT_TRUE(wait_until(
@@ -93,6 +103,9 @@ TEST(Cli, DemoPrintsTheViewersUrlWhichServesTheScene) {
       },
       10s))
       << scene.body;
+  EXPECT_TRUE(wait_until(
+      [&] { return contains(read_file(opened), ":" + std::to_string(port) + "/"); }, 10s))
+      << "the browser was not opened on the viewer's URL: '" << read_file(opened) << "'";
   EXPECT_EQ(demo.stop(), 0) << read_file(log);
   EXPECT_EQ(http_request(port, "GET", "/").status, 0) << "the viewer outlived the demo";
   EXPECT_EQ(run_afhub({"hub", "stop"}).exit_code, 0);
