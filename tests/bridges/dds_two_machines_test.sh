@@ -7,9 +7,14 @@
 # Checks: B lists A's bodies; B's sine moves A's joint (seen on A); a bridge with a
 # command-age bound smaller than the link's delay applies nothing; the link down for
 # 2 s, either bridge SIGKILLed and restarted, A's physics SIGKILLed and restarted: the
-# system recovers by itself.
-# Last, the bridges' heap allocations per message in steady state are counted
+# system recovers by itself, and nothing crashes (the same hub pids at the end, bridges
+# that stop cleanly) or leaks chunks: at the end, with everything stopped but the hubs,
+# each hub has as many payload chunks in use (`afhub status`) as B's hub had alone
+# before anything ran (a killed process whose chunks were not released would leave one
+# or more per channel it had: 8 bodies here).
+# Then the bridges' heap allocations per message in steady state are counted
 # (MALLOC_COUNT_LIB, an LD_PRELOAD library; not under AddressSanitizer, which owns malloc).
+# Last, an exporter of 300 bodies (no commands) runs: it takes no publisher port per body.
 # Usage: dds_two_machines_test.sh AFHUB_BINARY ARM_MODEL MALLOC_COUNT_LIB. Needs root.
 set -euo pipefail
 afhub=$(realpath "$1")
@@ -60,6 +65,8 @@ trap cleanup EXIT INT TERM
 
 fail() {
   echo "dds_two_machines_test: FAIL: $*" >&2
+  echo "== A's hub log (started by the physics)" >&2
+  on a tail -20 /run/afhub/hub.log >&2 || true
   exit 1
 }
 
@@ -118,6 +125,27 @@ physics=$spawned
 spawn b hub "$afhub" hub
 for _ in $(seq 100); do on a "$afhub" ls 2>/dev/null | grep -q "$body" && break; sleep 0.1; done
 on a "$afhub" ls | grep -q "$body" || fail "the physics on A did not list $body"
+
+# chunks SIDE: "CHUNKS HUB_PID": the fewest payload chunks in use on that side's hub
+# over 12 readings 0.25 s apart (a reading may catch a sample in flight), and the hub's
+# pid. A hub's first health, in its first second, has no mempools yet: not a reading.
+chunks() {
+  local fewest=1000000000 used hub readings=0
+  for _ in $(seq 40); do
+    read -r used hub < <(on "$1" "$afhub" status --json |
+      jq -r '"\([.mempools[] | select(.segment > 0) | .used] | add // -1) \(.hub_pid)"')
+    if ((used >= 0)); then
+      ((used < fewest)) && fewest=$used
+      ((++readings == 12)) && break
+    fi
+    sleep 0.25
+  done
+  echo "$fewest $hub"
+}
+# Body channels are no measure while they run: subscriber queues hold a varying number.
+read -r hub_alone_chunks hub_b < <(chunks b)
+hub_a=$(on a "$afhub" status --json | jq .hub_pid)
+echo "0. payload chunks in use on a hub alone (B): $hub_alone_chunks"
 
 start_export() { spawn a bridge_a env "$preload" "$afhub" bridge dds --export --accept-commands --bodies 'afhub/arm/*' "$@"; bridge_a=$spawned; }
 start_mirror() { spawn b bridge_b env "$preload" "$afhub" bridge dds --mirror --latency "$@"; bridge_b=$spawned; }
@@ -234,7 +262,39 @@ if [[ $preload == LD_PRELOAD=* ]]; then
 else
   echo "7. allocations: not counted under AddressSanitizer"
 fi
-kill -TERM "$bridge_b"
-wait "$bridge_b" || true
+kill -0 "$bridge_a" || fail "A's bridge died"
+kill -0 "$bridge_b" || fail "B's bridge died"
+kill -TERM "$bridge_a" "$bridge_b"
+wait "$bridge_a" || fail "A's bridge did not stop cleanly"
+wait "$bridge_b" || fail "B's bridge did not stop cleanly"
 grep "mirrored state age" "$work/bridge_b.log" | tail -1
+
+echo "8. no chunks leaked: everything stopped but the hubs"
+kill -TERM "$sine" "$physics"
+wait "$sine" || true
+wait "$physics" || fail "the physics on A did not stop cleanly"
+sleep 2
+declare -A hub_pid=([a]=$hub_a [b]=$hub_b)
+for side in a b; do
+  read -r now hub_now < <(chunks "$side")
+  echo "  payload chunks in use on ${side^^}: $now"
+  [[ $hub_now == "${hub_pid[$side]}" ]] ||
+    fail "${side^^}'s hub changed pid (${hub_pid[$side]} -> $hub_now): it crashed"
+  ((now <= hub_alone_chunks)) ||
+    fail "${side^^}'s hub leaked chunks over the faults: $now in use, $hub_alone_chunks on a hub alone"
+done
+echo "9. an exporter of 300 bodies that takes no commands takes no publisher port per body"
+# (iceoryx has 512: 300 bodies' states and 300 command writers would not fit.)
+spawn a synth "$afhub" synth --namespace load --bodies 300 --joints 2 --rate 100 --no-autostart
+synth=$spawned
+for _ in $(seq 100); do on a "$afhub" ls 2>/dev/null | grep -q load/body299 && break; sleep 0.1; done
+spawn a bridge_load "$afhub" bridge dds --export --bodies 'load/*'
+bridge_load=$spawned
+for _ in $(seq 100); do grep -q "exporting load/body299" "$work/bridge_load.log" && break; sleep 0.1; done
+sleep 1
+kill -0 "$bridge_load" || fail "the bridge exporting 300 bodies died"
+[[ $(grep -c "^afhub bridge dds: exporting load/" "$work/bridge_load.log") == 300 ]] ||
+  fail "the bridge did not export the 300 bodies"
+kill -TERM "$bridge_load" "$synth"
+wait "$bridge_load" || fail "the bridge exporting 300 bodies did not stop cleanly"
 echo "dds_two_machines_test: PASS"

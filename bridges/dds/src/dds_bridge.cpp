@@ -13,6 +13,7 @@
 #include <array>
 #include <cstdio>
 #include <memory>
+#include <mutex>
 
 #include "afhub/bridges/dds_bridge_config.hpp"
 #include "afhub/hub/bodies.hpp"
@@ -21,6 +22,7 @@
 #include "afhub/hub/sample_waiter.hpp"
 #include "afhub/hub/stop_signal.hpp"
 #include "afhub/rt/clock.hpp"
+#include "afhub/shm_layout/channel_names.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "age_histogram.hpp"
 #include "dds_convert.hpp"
@@ -85,10 +87,14 @@ struct Counters {
   std::uint64_t stale_commands = 0, bad_commands = 0, unknown_bodies = 0;
 };
 
-// A local body whose state goes out.
+// A local body whose state goes out. Its command writer is made at the first network
+// command: a writer takes one of iceoryx's 512 publisher ports, and an exporter of
+// hundreds of bodies that takes no commands must not take hundreds of ports.
 struct ExportedBody {
   std::string channel;
-  std::unique_ptr<BodyClient> client;
+  std::unique_ptr<LatestReader<BodyState>> state;
+  std::unique_ptr<Writer<BodyCommand>> command;
+  bool command_refused = false;
   std::int64_t last_out_ns = 0;  // for --body-rate
 };
 
@@ -148,17 +154,18 @@ class Bridge {
       command_writer_ =
           make(dds_create_writer(p, command_topic_->id, stream.qos, nullptr), "command writer");
       directory_ = std::make_unique<DirectoryPublisher>();
-      waitset_ = make(dds_create_waitset(p), "waitset");
-      state_arrived_ =
-          make(dds_create_readcondition(state_reader_->id, DDS_ANY_STATE), "read condition");
-      check(dds_waitset_attach(waitset_->id, state_arrived_->id, 0), "attaching to the waitset");
     }
     devices_and_world_ = std::make_unique<DeviceWorldBridge>(p, options, directory_.get());
     make_state_sample(state_sample_);
     make_command_sample(command_sample_);
+    if (command_reader_) forward_on_data(command_reader_->id);
+    if (state_reader_) forward_on_data(state_reader_->id);
   }
 
   ~Bridge() {
+    // Returns once a running callback is done: none touches this bridge after this.
+    if (command_reader_) dds_set_listener(command_reader_->id, nullptr);
+    if (state_reader_) dds_set_listener(state_reader_->id, nullptr);
     free_state_sample(state_sample_);
     free_command_sample(command_sample_);
   }
@@ -178,26 +185,14 @@ class Bridge {
                  next_report_ns = start_ns + 5'000'000'000;
     while (!stop_requested()) {
       const std::int64_t now_ns = monotonic_ns();
+      std::unique_lock lock(mutex_);
       if (catalog && now_ns >= next_scan_ns) {
         scan_catalog(*catalog);
         devices_and_world_->scan(catalog->latest());
         next_scan_ns = now_ns + 1'000'000'000;
       }
-      if (options_.export_bodies) {
-        export_states();
-        devices_and_world_->export_states(now_ns);
-        if (options_.accept_commands) {
-          import_commands();
-          if (ros2_) ros2_->import_commands();
-          devices_and_world_->import_commands();
-        }
-      }
-      if (options_.mirror) {
-        mirror_infos();
-        mirror_states();
-        export_mirrored_commands();
-        devices_and_world_->mirror();
-      }
+      if (options_.mirror) mirror_infos();
+      forward();
       if (now_ns >= next_report_ns || report_requested) {
         report_requested = 0;
         report();
@@ -206,6 +201,7 @@ class Bridge {
       if (options_.seconds > 0.0 &&
           static_cast<double>(now_ns - start_ns) * 1e-9 >= options_.seconds)
         break;
+      lock.unlock();
       next_ns += period_ns;
       if (next_ns < now_ns) next_ns = now_ns;  // after a stall: no burst of catch-up cycles
       wait_until(next_ns);
@@ -215,30 +211,51 @@ class Bridge {
   }
 
  private:
-  // Until `deadline_ns`; a mirror publishes remote states here as they arrive, so they
-  // wait for no cycle.
-  // An exporter alone forwards local states as they arrive (an iceoryx WaitSet), and
-  // network commands with them.
+  // Until `deadline_ns`, forwarding whatever arrives as it arrives, so that nothing
+  // waits for a cycle: local states and commands written to mirrored bodies wake the
+  // iceoryx WaitSet; DDS states and commands are forwarded by Cyclone's thread that
+  // receives them (forward_on_data), one wake-up fewer. Each forward takes the newest
+  // sample of each body.
   void wait_until(std::int64_t deadline_ns) {
-    if (options_.mirror && options_.export_bodies) {
-      sleep_until_ns(deadline_ns);
-      return;
-    }
-    if (options_.export_bodies) {
-      for (std::int64_t now_ns = monotonic_ns(); now_ns < deadline_ns && !stop_requested();
-           now_ns = monotonic_ns()) {
-        state_arrival_.wait(deadline_ns - now_ns);
-        export_states();
-        if (options_.accept_commands) import_commands();
-        if (ros2_ && options_.accept_commands) ros2_->import_commands();
-      }
-      return;
-    }
     for (std::int64_t now_ns = monotonic_ns(); now_ns < deadline_ns && !stop_requested();
          now_ns = monotonic_ns()) {
-      dds_waitset_wait(waitset_->id, nullptr, 0, deadline_ns - now_ns);
-      mirror_states();
+      state_arrival_.wait(deadline_ns - now_ns);
+      const std::lock_guard lock(mutex_);
+      forward();
     }
+  }
+
+  void forward() {
+    if (options_.export_bodies) {
+      export_states();
+      devices_and_world_->export_states(monotonic_ns());
+      if (options_.accept_commands) {
+        import_commands();
+        if (ros2_) ros2_->import_commands();
+        devices_and_world_->import_commands();
+      }
+    }
+    if (options_.mirror) {
+      mirror_states();
+      export_mirrored_commands();
+      devices_and_world_->mirror();
+    }
+  }
+
+  // In Cyclone's receive thread, under the mutex that the loop holds while it works.
+  static void on_data(dds_entity_t reader, void* self) {
+    auto* bridge = static_cast<Bridge*>(self);
+    const std::lock_guard lock(bridge->mutex_);
+    if (bridge->command_reader_ && reader == bridge->command_reader_->id) bridge->import_commands();
+    if (bridge->state_reader_ && reader == bridge->state_reader_->id) bridge->mirror_states();
+  }
+
+  void forward_on_data(dds_entity_t reader) {
+    dds_listener_t* listener = dds_create_listener(this);
+    dds_lset_data_available(listener, on_data);
+    const dds_return_t result = dds_set_listener(reader, listener);
+    dds_delete_listener(listener);
+    check(result, "setting a reader's listener");
   }
 
   static std::unique_ptr<Entity> make(dds_entity_t entity, const char* what) {
@@ -308,9 +325,10 @@ class Bridge {
       if (known) continue;
       const BodyEntry entry = entry_of(list, i);
       if (entry.info.kind != ChannelKind::kBody) continue;
-      ExportedBody body{channel, std::make_unique<BodyClient>(entry)};
-      state_arrival_.attach(body.client->state_reader());  // when full: by the cycle alone
-      if (ros2_) ros2_->add_body(*body.client);
+      ExportedBody body{
+          channel, std::make_unique<LatestReader<BodyState>>(body_state_channel(channel)), nullptr};
+      state_arrival_.attach(body.state->raw());  // when full: by the cycle alone
+      if (ros2_) ros2_->add_body(channel, entry.joint_names, *body.state);
       exported_.push_back(std::move(body));
       // Its joint names, once, for mirrors (transient local: late ones too).
       afhub_dds_BodyInfo info{};
@@ -332,8 +350,8 @@ class Bridge {
     const std::int64_t now_ns = options_.body_rate_hz > 0.0 ? monotonic_ns() : 0;
     for (std::size_t i = 0; i < exported_.size(); ++i) {
       ExportedBody& body = exported_[i];
-      const BodyState* state = body.client->latest_state();
-      if (!state || !body.client->state_updated()) continue;
+      const BodyState* state = body.state->latest();
+      if (!state || !body.state->updated()) continue;
       if (options_.body_rate_hz > 0.0) {  // newest wins: the states in between stay here
         if (static_cast<double>(now_ns - body.last_out_ns) < 1e9 / options_.body_rate_hz) continue;
         body.last_out_ns = now_ns;
@@ -367,12 +385,30 @@ class Bridge {
         ++counters_.bad_commands;
         continue;
       }
-      BodyCommand* command = body->client->loan_command(
-          std::min<std::uint32_t>(command_sample_.joints._length, kMaxJointsPerBody));
+      if (!body->command && !open_command_writer(*body)) continue;
+      const std::uint32_t joints =
+          std::min<std::uint32_t>(command_sample_.joints._length, kMaxJointsPerBody);
+      BodyCommand* command = body->command->loan(body_command_bytes(joints));
       if (!command) continue;
+      command->joint_count = joints;
       from_dds(command_sample_, *command);
-      body->client->publish_command(command);
+      body->command->publish(command);
       ++counters_.commands_in;
+    }
+  }
+
+  // False (said once) when iceoryx has no publisher port left for it.
+  bool open_command_writer(ExportedBody& body) {
+    try {
+      body.command = std::make_unique<Writer<BodyCommand>>(body_command_channel(body.channel));
+      return true;
+    } catch (const Error& error) {
+      ++counters_.bad_commands;
+      if (!body.command_refused)
+        std::fprintf(stderr, "afhub bridge dds: no commands for %s: %s\n", body.channel.c_str(),
+                     error.what());
+      body.command_refused = true;
+      return false;
     }
   }
 
@@ -413,6 +449,7 @@ class Bridge {
                         std::make_unique<BodyPublisher>(channel)};
       directory_->add(make_body_entry(channel, joint_names));
       directory_->publish();
+      state_arrival_.attach(body.publisher->command_reader());  // when full: by the cycle
       mirrored_.push_back(std::move(body));
       std::fprintf(stderr, "afhub bridge dds: mirroring %s (%zu joints)\n", channel.c_str(),
                    joint_names.size());
@@ -459,11 +496,13 @@ class Bridge {
   std::unique_ptr<Entity> participant_, state_topic_, command_topic_, info_topic_;
   std::unique_ptr<Entity> state_writer_, info_writer_, command_reader_;
   std::unique_ptr<Entity> state_reader_, info_reader_, command_writer_;
-  std::unique_ptr<Entity> waitset_, state_arrived_;
   std::unique_ptr<Ros2Profile> ros2_;  // --profile ros2; deleted before the participant
   afhub_dds_BodyState state_sample_{};
   afhub_dds_BodyCommand command_sample_{};
-  SampleWaiter state_arrival_;  // before exported_: destroyed after their readers
+  // Local states and commands to mirrored bodies. Before exported_ and mirrored_:
+  // destroyed after their readers.
+  SampleWaiter state_arrival_;
+  std::mutex mutex_;  // between the loop and Cyclone's thread (on_data)
   std::vector<ExportedBody> exported_;
   std::vector<MirroredBody> mirrored_;
   std::vector<std::string> refused_;

@@ -122,7 +122,9 @@ std::string ros2_joint_command(const Ros2JointState& joint_state,
 }
 
 struct Ros2Profile::Body {
-  BodyClient* client;
+  std::string channel;
+  LatestReader<BodyState>* state;
+  std::unique_ptr<Writer<BodyCommand>> command_writer;  // at the first good command
   std::string joint_states_topic, command_topic_name;
   std::vector<std::string> names;
   std::vector<char*> name_pointers;
@@ -173,11 +175,13 @@ Ros2Profile::~Ros2Profile() {
   dds_delete_qos(reader_qos_);
 }
 
-void Ros2Profile::add_body(BodyClient& client) {
+void Ros2Profile::add_body(const std::string& channel,
+                           const std::vector<std::string>& joint_names,
+                           LatestReader<BodyState>& state) {
   auto body = std::make_unique<Body>();
-  body->client = &client;
-  const std::string& channel = client.channel();
-  body->names = client.joint_names();
+  body->channel = channel;
+  body->state = &state;
+  body->names = joint_names;
   for (std::string& name : body->names) body->name_pointers.push_back(name.data());
   const std::size_t joints = body->names.size();
   body->positions.assign(joints, 0.0);
@@ -280,7 +284,7 @@ void Ros2Profile::import_commands() noexcept {
           {in.position._buffer, in.velocity._buffer, in.effort._buffer},
           {in.position._length, in.velocity._length, in.effort._length}};
       // After a second without commands the holds restart from where the joints are.
-      const BodyState* state = body.client->latest_state();
+      const BodyState* state = body.state->latest();
       const std::int64_t now_ns = dds_time();
       if ((!body.holding || now_ns - body.last_command_ns > 1'000'000'000) && state &&
           state->joint_count >= body.hold.size()) {
@@ -299,16 +303,31 @@ void Ros2Profile::import_commands() noexcept {
         }
         continue;
       }
-      BodyCommand* command =
-          body.client->loan_command(static_cast<std::uint32_t>(body.names.size()));
+      if (!body.command_writer) {
+        try {
+          body.command_writer =
+              std::make_unique<Writer<BodyCommand>>(body_command_channel(body.channel));
+        } catch (const Error& refused) {  // no iceoryx publisher port left
+          ++bad_commands_;
+          if (errors_printed_ < 3) {
+            ++errors_printed_;
+            std::fprintf(stderr, "afhub bridge dds: %s: command dropped: %s\n",
+                         body.command_topic_name.c_str(), refused.what());
+          }
+          continue;
+        }
+      }
+      const auto joints = static_cast<std::uint32_t>(body.names.size());
+      BodyCommand* command = body.command_writer->loan(body_command_bytes(joints));
       if (!command) continue;
+      command->joint_count = joints;
       ros2_joint_command(joint_state, body.names, hold, command);
       for (std::uint32_t j = 0; j < command->joint_count; ++j)
         body.hold[j] = command->joints[j].type == JointCommandType::kPosition
                            ? command->joints[j].value
                            : (state && j < state->joint_count ? state->joints[j].position : 0.0);
       body.last_command_ns = now_ns;
-      body.client->publish_command(command);
+      body.command_writer->publish(command);
       ++commands_in_;
     }
   }

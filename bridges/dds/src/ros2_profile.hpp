@@ -51,7 +51,10 @@ class Ros2Profile {
   Ros2Profile& operator=(const Ros2Profile&) = delete;
 
   // A new exported body (before the loop sees it): its topics, writers, reader.
-  void add_body(BodyClient& client);
+  // `state` (the bridge's reader of the body's states) must outlive this profile; the
+  // body's command writer is opened at its first good command.
+  void add_body(const std::string& channel, const std::vector<std::string>& joint_names,
+                LatestReader<BodyState>& state);
   // Body `index` (in add_body order) has a new state. Allocates nothing of its own.
   void publish(std::size_t index, const BodyState& state) noexcept;
   // Joint commands from the network into the bodies' command slots.
