@@ -93,7 +93,8 @@ void register_bridge(CLI::App& app, Runner& selected) {
                 "With --export: apply commands from the network to local bodies, devices and "
                 "the world");
   dds->add_option("--rate", options->rate_hz,
-                  "Bridge loop rate: each body crosses at most once per cycle, newest wins "
+                  "The bridge's cycle for what does not wake it (devices, the world, the "
+                  "catalog); bodies' states and commands cross as they arrive, newest wins "
                   "(default 1000 Hz)");
   dds->add_option("--body-rate", options->body_rate_hz,
                   "Send each body's state at most this often, newest wins (Hz; default 0: "
