@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # `afhub bridge dds` measured between two "machines" (issue 16), in one run. Needs root
-# (network and mount namespaces, tc). See bench/two_machines.sh for the set-up.
+# (network and mount namespaces, tc). See tests/bridges/two_machines.sh for the set-up.
 #
 #   bench/dds_bridge.sh [--quick] [BUILD_DIR] [OUT_DIR]   (defaults: build/dev, ./dds-bench)
 #   afhub bench dds [--quick] [--out OUT_DIR]              (the same, from a build tree)
@@ -58,8 +58,8 @@ if [[ $EUID -ne 0 ]]; then
 fi
 rm -f "$out"/raw_rtt_ns.txt "$out"/bridge_rtt_ns.txt "$out"/load_*.jsonl
 
-source "$root/bench/two_machines.sh"
-two_machines_up
+test_name="afhub bench dds"
+source "$root/tests/bridges/two_machines.sh"
 
 spawn a hub_a "$afhub" hub
 spawn b hub_b "$afhub" hub

@@ -1,11 +1,13 @@
-# Two "machines" on one host, sourced by the DDS bridge tests: network namespaces
+# Two "machines" on one host, sourced by the DDS bridge tests and bench/dds_bridge.sh: network namespaces
 # $ns_a and $ns_b joined by a veth pair, each side in its own mount namespace with a
 # private /tmp, /dev/shm and /run, so each has its own hub. DDS stays on the veth
 # (unicast peers, no multicast). Gives:
 #   on SIDE COMMAND...          run COMMAND on that "machine" (a or b)
 #   spawn SIDE NAME COMMAND...  in the background, logging to $work/NAME.log; sets
 #                               $spawned, the command's own pid
-#   fail MESSAGE                exit 1, printing the logs
+#   stop PID                    SIGTERM and wait (a process that reports as it goes)
+#   fail MESSAGE                exit 1, printing A's hub log and every log
+#   $veth_a, $ns_a              A's interface and network namespace (for tc)
 # and cleans everything up on exit. Set test_name before sourcing. Needs root.
 if [[ $EUID -ne 0 ]]; then
   echo "$test_name: needs root for ip netns and mounts" >&2
@@ -49,6 +51,8 @@ trap cleanup EXIT INT TERM
 
 fail() {
   echo "$test_name: FAIL: $*" >&2
+  echo "== A's hub log" >&2
+  on a tail -20 /run/afhub/hub.log >&2 || true
   exit 1
 }
 
@@ -63,7 +67,7 @@ ip -n "$ns_b" link set "$veth_b" up
 
 # Cyclone on the veth alone: unicast discovery to both addresses.
 cyclone_uri() {
-  echo "<CycloneDDS><Domain id=\"any\"><General><Interfaces><NetworkInterface name=\"$1\"/></Interfaces><AllowMulticast>false</AllowMulticast></General><Discovery><ParticipantIndex>auto</ParticipantIndex><MaxAutoParticipantIndex>20</MaxAutoParticipantIndex><Peers><Peer address=\"$ip_a\"/><Peer address=\"$ip_b\"/></Peers></Discovery></Domain></CycloneDDS>"
+  echo "<CycloneDDS><Domain id=\"any\"><General><Interfaces><NetworkInterface name=\"$1\"/></Interfaces><AllowMulticast>false</AllowMulticast></General><Discovery><ParticipantIndex>auto</ParticipantIndex><MaxAutoParticipantIndex>20</MaxAutoParticipantIndex><Peers><Peer address=\"$ip_a\"/><Peer address=\"$ip_b\"/></Peers></Discovery><Tracing><Verbosity>none</Verbosity></Tracing></Domain></CycloneDDS>"
 }
 declare -A uri=([a]="$(cyclone_uri "$veth_a")" [b]="$(cyclone_uri "$veth_b")")
 declare -A netns=([a]=$ns_a [b]=$ns_b)
@@ -87,4 +91,8 @@ spawn() {
     >"$work/$name.log" 2>&1 &
   spawned=$!
   started+=("$spawned")
+}
+stop() {
+  kill -TERM "$1" 2>/dev/null || true
+  wait "$1" 2>/dev/null || true
 }
