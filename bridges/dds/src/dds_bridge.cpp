@@ -14,6 +14,7 @@
 #include <cstdio>
 #include <memory>
 #include <mutex>
+#include <set>
 
 #include "afhub/bridges/dds_bridge_config.hpp"
 #include "afhub/hub/bodies.hpp"
@@ -312,9 +313,12 @@ class Bridge {
     return false;
   }
 
-  // New local bodies matching the globs (not those this bridge mirrors itself).
+  // New local bodies matching the globs (not those this bridge mirrors itself). A body
+  // whose state reader finds no iceoryx subscriber port left is not exported, said once;
+  // the next scan tries again (after the first refusal, a scan tries no more).
   void scan_catalog(CatalogReader& catalog) {
     const BodyList& list = catalog.latest();
+    std::string refusal;
     for (std::uint32_t i = 0; i < list.body_count; ++i) {
       const std::string channel(name_of(list.bodies[i].channel));
       if (!matches_any(channel, options_.body_globs) || is_mirrored(channel) ||
@@ -325,8 +329,24 @@ class Bridge {
       if (known) continue;
       const BodyEntry entry = entry_of(list, i);
       if (entry.info.kind != ChannelKind::kBody) continue;
-      ExportedBody body{
-          channel, std::make_unique<LatestReader<BodyState>>(body_state_channel(channel)), nullptr};
+      ExportedBody body{channel, nullptr, nullptr};
+      if (refusal.empty()) {
+        try {
+          body.state = std::make_unique<LatestReader<BodyState>>(body_state_channel(channel));
+        } catch (const Error& error) {
+          refusal = error.what();
+        }
+      } else if (refusal.find("(as for ") == std::string::npos) {
+        refusal = "no iceoryx subscriber port left (as for the body above)";
+      }
+      if (!body.state) {
+        if (not_exported_.insert(channel).second)
+          std::fprintf(stderr, "afhub bridge dds: not exporting %s (tried again each second): %s\n",
+                       channel.c_str(), refusal.c_str());
+        continue;
+      }
+      if (not_exported_.erase(channel))
+        std::fprintf(stderr, "afhub bridge dds: exporting %s now\n", channel.c_str());
       state_arrival_.attach(body.state->raw());  // when full: by the cycle alone
       if (ros2_) ros2_->add_body(channel, entry.joint_names, *body.state);
       exported_.push_back(std::move(body));
@@ -506,6 +526,7 @@ class Bridge {
   std::vector<ExportedBody> exported_;
   std::vector<MirroredBody> mirrored_;
   std::vector<std::string> refused_;
+  std::set<std::string> not_exported_;  // no subscriber port for their state reader, said once
   std::unique_ptr<DirectoryPublisher> directory_;         // the mirrored bodies, for the catalog
   std::unique_ptr<DeviceWorldBridge> devices_and_world_;  // --devices, --world
   Counters counters_;

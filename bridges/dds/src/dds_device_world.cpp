@@ -163,10 +163,18 @@ void DeviceWorldBridge::scan(const BodyList& catalog) {
         find_exported(channel.c_str()) ||
         !matches_any(std::string(device_name_of(channel)), options_.device_globs))
       continue;
-    ExportedDevice device{channel,
-                          std::make_unique<LatestReader<DeviceState>>(body_state_channel(channel)),
-                          std::make_unique<Writer<DeviceCommand>>(body_command_channel(channel))};
-    exported_.push_back(std::move(device));
+    // No iceoryx port left for it: said once, tried again on the next scan.
+    try {
+      ExportedDevice device{
+          channel, std::make_unique<LatestReader<DeviceState>>(body_state_channel(channel)),
+          std::make_unique<Writer<DeviceCommand>>(body_command_channel(channel))};
+      exported_.push_back(std::move(device));
+    } catch (const Error& error) {
+      if (not_exported_.insert(channel).second)
+        std::fprintf(stderr, "afhub bridge dds: not exporting device %s: %s\n", channel.c_str(),
+                     error.what());
+      continue;
+    }
     std::fprintf(stderr, "afhub bridge dds: exporting device %s\n", channel.c_str());
   }
 }

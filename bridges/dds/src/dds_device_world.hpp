@@ -14,6 +14,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <set>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -91,6 +92,7 @@ class DeviceWorldBridge {
   afhub_dds_WorldState world_state_sample_{};
   afhub_dds_WorldCommand world_command_sample_{};
   std::vector<ExportedDevice> exported_;
+  std::set<std::string> not_exported_;  // refused a port, said once
   std::vector<MirroredDevice> mirrored_;
   std::vector<std::string> refused_;
   // Export: the local world's state and command channels; mirror: the remote world's.

@@ -60,9 +60,10 @@ void check_room_for_bodies(const std::vector<std::string>& channels, std::size_t
                 std::to_string(channels.size()) + "; it holds at most " +
                 std::to_string(kMaxBodies) + " (iceoryx's 512 publisher ports allow no more)");
   // Counted afresh: other processes may have taken ports since this one connected.
-  count_publisher_ports_from(free_publisher_ports(std::chrono::milliseconds(1500)));
-  require_publisher_ports(publishers,
-                          "simulating these " + std::to_string(channels.size()) + " bodies");
+  count_ports_from(free_ports(std::chrono::milliseconds(1500)));
+  const std::string what = "simulating these " + std::to_string(channels.size()) + " bodies";
+  require_publisher_ports(publishers, what);
+  require_subscriber_ports(channels.size(), what);  // a command reader each
 }
 
 void confirm_body_claims(const std::vector<std::string>& channels,

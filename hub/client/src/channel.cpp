@@ -88,10 +88,13 @@ RawLatestReader::Port::Port(const ChannelId& channel, History history)
 RawLatestReader::RawLatestReader(const ChannelId& channel, PayloadKind kind)
     : channel_(channel), kind_(kind) {
   require_fits(channel);
+  require_subscriber_ports(1, "reading '" + channel.to_string() + "'");
   port_ = std::make_unique<Port>(channel, history_of(kind));
+  took_subscriber_port();
 }
 
 RawLatestReader::~RawLatestReader() {
+  gave_back_subscriber_port();
   if (held_) port_->subscriber.release(held_);
   if (retired_) port_->subscriber.release(retired_);
 }

@@ -1,15 +1,22 @@
 // Service discovery (see channel_discovery.hpp).
 #include "afhub/hub/channel_discovery.hpp"
 
+#include "afhub/hub/hub_health.hpp"
 #include "afhub/shm_layout/channel_names.hpp"
 #include "iceoryx_posh/runtime/service_discovery.hpp"
 
 namespace afhub {
 
-ChannelDiscovery::ChannelDiscovery()
-    : discovery_(std::make_unique<iox::runtime::ServiceDiscovery>()) {}
+// iceoryx's service discovery reads its registry with a subscriber of its own.
+ChannelDiscovery::ChannelDiscovery() {
+  require_subscriber_ports(1, "finding live channels");
+  discovery_ = std::make_unique<iox::runtime::ServiceDiscovery>();
+  took_subscriber_port();
+}
 
-ChannelDiscovery::~ChannelDiscovery() = default;
+ChannelDiscovery::~ChannelDiscovery() {
+  gave_back_subscriber_port();
+}
 
 std::set<std::string> ChannelDiscovery::live_instances(std::string_view event) {
   const std::string service_name(kService), event_name(event);

@@ -1,58 +1,153 @@
-// The publisher ports left (see hub_health.hpp).
+// The iceoryx ports left (see hub_health.hpp).
 #include "afhub/hub/hub_health.hpp"
 
+#include <algorithm>
 #include <atomic>
+#include <memory>
+#include <mutex>
 #include <thread>
 
 #include "afhub/hub/channel.hpp"
 #include "afhub/shm_layout/channel_names.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "afhub/shm_layout/health.hpp"
+#include "iceoryx_posh/iceoryx_posh_types.hpp"
 
 namespace afhub {
 namespace {
 
-std::atomic<std::int64_t> g_ports_left{-1};  // -1: not counted
+std::atomic<std::int64_t> g_publishers_left{-1};  // -1: not counted
+std::atomic<std::int64_t> g_subscribers_left{-1};
+std::atomic<std::int64_t> g_last_taken_ns{0};  // this process's last port taken
 constexpr std::int64_t kRecountBelow = 32;
+// Set while this thread reads the Health to count afresh: that reader uses the reserve.
+thread_local bool t_recounting = false;
 
-std::string ports_message(std::size_t count, std::int64_t left, const std::string& what) {
+std::string publishers_message(std::size_t count, std::int64_t left, const std::string& what) {
   return what + " needs " + std::to_string(count) + " iceoryx publisher port" +
-         (count == 1 ? "" : "s") + " and the hub has " + std::to_string(left) +
-         " left of 512 (one per body state, per command writer, per loop's stats). Stop "
-         "another afhub process, or simulate fewer bodies";
+         (count == 1 ? "" : "s") + " and the hub has " + std::to_string(left) + " left of " +
+         std::to_string(iox::MAX_PUBLISHERS) +
+         " (one per body state, per command writer, per loop's stats). Stop another afhub "
+         "process, or simulate fewer bodies";
+}
+
+std::string subscribers_message(std::size_t count, std::int64_t left, const std::string& what) {
+  return what + " needs " + std::to_string(count) + " iceoryx subscriber port" +
+         (count == 1 ? "" : "s") + " and the hub has " + std::to_string(left) + " left of " +
+         std::to_string(iox::MAX_SUBSCRIBERS) + " (" + std::to_string(kReservedSubscriberPorts) +
+         " of them kept for reading the hub's health; one per body's command slot, per state "
+         "a controller, bridge or tool reads). Stop another afhub process or bridge, or have "
+         "it read fewer bodies";
+}
+
+// The ports a Health read through `health` (made at `opened_ns`) says are free, less the
+// reader's own port when that Health was published before it: a port given back is
+// free again only once RouDi gets to it.
+std::optional<FreePorts> read_free_ports(LatestReader<Health>& health, std::int64_t opened_ns,
+                                         std::chrono::milliseconds timeout) {
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  while (!health.latest() && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  const Health* latest = health.latest();
+  if (!latest) return std::nullopt;
+  const std::uint32_t own = latest->header.publish_stamp_ns < opened_ns ? 1 : 0;
+  return FreePorts{latest->free_publisher_ports,
+                   latest->free_subscriber_ports > own ? latest->free_subscriber_ports - own : 0};
+}
+
+std::unique_ptr<LatestReader<Health>> open_health_reader() {
+  struct Recounting {
+    Recounting() { t_recounting = true; }
+    ~Recounting() { t_recounting = false; }
+  } recounting;
+  return std::make_unique<LatestReader<Health>>(
+      ChannelId{std::string(kService), std::string(kHubInstance), std::string(kHealthEvent)});
+}
+
+// Near the end, counted afresh through a reader kept from then on: a reader made for
+// each count would take a port each time until RouDi gives it back.
+void recount() {
+  static std::mutex mutex;
+  static std::unique_ptr<LatestReader<Health>> health;
+  static std::int64_t opened_ns = 0;
+  const std::lock_guard lock(mutex);
+  if (!health) {
+    opened_ns = monotonic_ns();
+    health = open_health_reader();
+  }
+  std::optional<FreePorts> free =
+      read_free_ports(*health, opened_ns, std::chrono::milliseconds(500));
+  // A Health older than this process's last port does not count it yet.
+  if (free && health->latest()->header.publish_stamp_ns < g_last_taken_ns) {
+    if (g_publishers_left >= 0)
+      free->publishers =
+          std::min(free->publishers, static_cast<std::uint32_t>(g_publishers_left.load()));
+    if (g_subscribers_left >= 0)
+      free->subscribers =
+          std::min(free->subscribers, static_cast<std::uint32_t>(g_subscribers_left.load()));
+  }
+  count_ports_from(free);
 }
 
 }  // namespace
 
+std::optional<FreePorts> free_ports(std::chrono::milliseconds timeout) {
+  const std::int64_t opened_ns = monotonic_ns();
+  const std::unique_ptr<LatestReader<Health>> health = open_health_reader();
+  return read_free_ports(*health, opened_ns, timeout);
+}
+
 std::optional<std::uint32_t> free_publisher_ports(std::chrono::milliseconds timeout) {
-  LatestReader<Health> health(
-      {std::string(kService), std::string(kHubInstance), std::string(kHealthEvent)});
-  const auto deadline = std::chrono::steady_clock::now() + timeout;
-  while (!health.latest() && std::chrono::steady_clock::now() < deadline)
-    std::this_thread::sleep_for(std::chrono::milliseconds(2));
-  if (!health.latest()) return std::nullopt;
-  return health.latest()->free_publisher_ports;
+  const std::optional<FreePorts> free = free_ports(timeout);
+  if (!free) return std::nullopt;
+  return free->publishers;
+}
+
+void count_ports_from(std::optional<FreePorts> free) {
+  count_publisher_ports_from(free ? std::optional(free->publishers) : std::nullopt);
+  count_subscriber_ports_from(free ? std::optional(free->subscribers) : std::nullopt);
 }
 
 void count_publisher_ports_from(std::optional<std::uint32_t> free) {
-  g_ports_left = free ? static_cast<std::int64_t>(*free) : -1;
+  g_publishers_left = free ? static_cast<std::int64_t>(*free) : -1;
+}
+
+void count_subscriber_ports_from(std::optional<std::uint32_t> free) {
+  g_subscribers_left = free ? static_cast<std::int64_t>(*free) : -1;
 }
 
 void require_publisher_ports(std::size_t count, const std::string& what) {
   const auto wanted = static_cast<std::int64_t>(count);
   // Near the end, counted afresh: other processes take and give back ports too.
-  if (g_ports_left >= 0 && g_ports_left < wanted + kRecountBelow)
-    count_publisher_ports_from(free_publisher_ports(std::chrono::milliseconds(500)));
-  const std::int64_t left = g_ports_left;
-  if (left >= 0 && left < wanted) throw Error(ports_message(count, left, what));
+  if (g_publishers_left >= 0 && g_publishers_left < wanted + kRecountBelow) recount();
+  const std::int64_t left = g_publishers_left;
+  if (left >= 0 && left < wanted) throw Error(publishers_message(count, left, what));
+}
+
+void require_subscriber_ports(std::size_t count, const std::string& what) {
+  if (t_recounting) return;
+  const auto wanted = static_cast<std::int64_t>(count) + kReservedSubscriberPorts;
+  if (g_subscribers_left >= 0 && g_subscribers_left < wanted + kRecountBelow) recount();
+  const std::int64_t left = g_subscribers_left;
+  if (left >= 0 && left < wanted) throw Error(subscribers_message(count, left, what));
 }
 
 void took_publisher_port() noexcept {
-  if (g_ports_left > 0) --g_ports_left;
+  g_last_taken_ns = monotonic_ns();
+  if (g_publishers_left > 0) --g_publishers_left;
 }
 
 void gave_back_publisher_port() noexcept {
-  if (g_ports_left >= 0) ++g_ports_left;
+  if (g_publishers_left >= 0) ++g_publishers_left;
+}
+
+void took_subscriber_port() noexcept {
+  g_last_taken_ns = monotonic_ns();
+  if (g_subscribers_left > 0) --g_subscribers_left;
+}
+
+void gave_back_subscriber_port() noexcept {
+  if (g_subscribers_left >= 0) ++g_subscribers_left;
 }
 
 }  // namespace afhub

@@ -442,7 +442,7 @@ void connect_to_hub(const std::string& role, HubPolicy policy, std::chrono::mill
     iox::runtime::PoshRuntime::initRuntime(iox::RuntimeName_t(iox::cxx::TruncateToCapacity, name));
   }
   runtime_name_storage() = name;
-  count_publisher_ports_from(free_publisher_ports(std::chrono::milliseconds(500)));
+  count_ports_from(free_ports(std::chrono::milliseconds(500)));
   if (!g_armed) return;
   // Registered after the runtime, so that it runs before the runtime's destructor.
   std::atexit([] { g_exiting = true; });

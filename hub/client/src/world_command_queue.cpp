@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <cstring>
 
+#include "afhub/hub/hub_health.hpp"
 #include "afhub/shm_layout/channel_names.hpp"
 #include "afhub/shm_layout/header.hpp"
 #include "afhub/shm_layout/payload_check.hpp"
@@ -35,9 +36,15 @@ struct WorldCommandQueue::Port {
 static_assert(WorldCommandQueue::kCapacity <= iox::MAX_SUBSCRIBER_QUEUE_CAPACITY);
 
 WorldCommandQueue::WorldCommandQueue(const std::string& world_instance)
-    : port_(std::make_unique<Port>(world_instance)), created_ns_(monotonic_ns()) {}
+    : created_ns_(monotonic_ns()) {
+  require_subscriber_ports(1, "reading the world commands of '" + world_instance + "'");
+  port_ = std::make_unique<Port>(world_instance);
+  took_subscriber_port();
+}
 
-WorldCommandQueue::~WorldCommandQueue() = default;
+WorldCommandQueue::~WorldCommandQueue() {
+  gave_back_subscriber_port();
+}
 
 bool WorldCommandQueue::seen(const PayloadHeader& header) noexcept {
   for (Writer& writer : writers_) {

@@ -12,6 +12,7 @@ namespace afhub {
 namespace {
 
 constexpr auto kPublishPeriod = std::chrono::seconds(1);
+constexpr auto kSubscriberPeriod = std::chrono::milliseconds(100);
 
 template <class Topic>
 iox::popo::SubscriberOptions latest_only() {
@@ -55,24 +56,30 @@ HealthReporter::HealthReporter()
 HealthReporter::~HealthReporter() = default;
 
 void HealthReporter::poll(std::chrono::steady_clock::time_point now, std::uint32_t body_count,
-                          std::uint32_t free_publisher_ports) {
+                          FreePorts free_ports) {
   const auto* processes = introspection_->processes.latest();
   const auto* mempools = introspection_->mempools.latest();
   // At once on start (processes and mempools follow with RouDi's introspection),
   // then once a second.
-  // Also at once when the bodies or the free ports change: writers check the ports.
-  const bool changed = body_count != last_body_count_ || free_publisher_ports != last_free_ports_;
-  if (last_publish_ != std::chrono::steady_clock::time_point{} && !changed &&
+  // Also at once when the bodies or the free publisher ports change (writers check
+  // them), and within kSubscriberPeriod when the free subscriber ports do (readers
+  // check them; the rate probes of many bodies come and go all the time).
+  const bool changed =
+      body_count != last_body_count_ || free_ports.publishers != last_free_ports_.publishers;
+  const bool readers_changed = free_ports.subscribers != last_free_ports_.subscribers &&
+                               now - last_publish_ >= kSubscriberPeriod;
+  if (last_publish_ != std::chrono::steady_clock::time_point{} && !changed && !readers_changed &&
       now - last_publish_ < kPublishPeriod)
     return;
   Health* health = writer_.loan();
   if (!health) return;
   last_publish_ = now;
   last_body_count_ = body_count;
-  last_free_ports_ = free_publisher_ports;
+  last_free_ports_ = free_ports;
   health->hub_uptime_s = std::chrono::duration<double>(now - started_).count();
   health->body_count = body_count;
-  health->free_publisher_ports = free_publisher_ports;
+  health->free_publisher_ports = free_ports.publishers;
+  health->free_subscriber_ports = free_ports.subscribers;
   if (processes) {
     for (const auto& process : processes->m_processList) {
       if (health->process_count == kMaxHealthProcesses) break;

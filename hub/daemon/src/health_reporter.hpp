@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "afhub/hub/channel.hpp"
+#include "afhub/hub/hub_health.hpp"
 #include "afhub/shm_layout/health.hpp"
 
 namespace afhub {
@@ -21,7 +22,7 @@ class HealthReporter {
   HealthReporter();
   ~HealthReporter();
   void poll(std::chrono::steady_clock::time_point now, std::uint32_t body_count,
-            std::uint32_t free_publisher_ports);
+            FreePorts free_ports);
   // The processes RouDi has registered, as its introspection last said: (name, pid).
   std::vector<std::pair<std::string, pid_t>> registered_processes();
 
@@ -31,7 +32,8 @@ class HealthReporter {
   Writer<Health> writer_;
   std::chrono::steady_clock::time_point started_;
   std::chrono::steady_clock::time_point last_publish_;
-  std::uint32_t last_body_count_ = 0, last_free_ports_ = 0;
+  std::uint32_t last_body_count_ = 0;
+  FreePorts last_free_ports_;
 };
 
 }  // namespace afhub

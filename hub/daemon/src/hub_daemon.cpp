@@ -154,6 +154,11 @@ void serve_until_stopped(AfhubRouDi& roudi, iox::roudi::PortPool& ports) {
         std::fprintf(stderr, "afhub hub: removed the files %s left in /tmp\n", name.c_str());
       next_file_sweep = now + std::chrono::seconds(1);
     }
+    // The hub's own readers (rate probes, directories) check this count, as any
+    // process's do: iceoryx would abort the hub, and RouDi with it, at the last port.
+    const auto free_subscribers =
+        static_cast<std::uint32_t>(iox::MAX_SUBSCRIBERS - ports.getSubscriberPortDataList().size());
+    count_subscriber_ports_from(free_subscribers);
     // What other processes publish must never stop the hub (and RouDi with it).
     try {
       catalog.poll(now);
@@ -164,7 +169,9 @@ void serve_until_stopped(AfhubRouDi& roudi, iox::roudi::PortPool& ports) {
       catalog_failed = true;
     }
     const auto publishers = static_cast<std::uint32_t>(ports.getPublisherPortDataList().size());
-    health.poll(now, catalog.body_count(), iox::MAX_PUBLISHERS - publishers);
+    const auto subscribers = static_cast<std::uint32_t>(ports.getSubscriberPortDataList().size());
+    health.poll(now, catalog.body_count(),
+                {iox::MAX_PUBLISHERS - publishers, iox::MAX_SUBSCRIBERS - subscribers});
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
 }

@@ -33,6 +33,9 @@ struct Health {
   // iceoryx publisher ports left in the whole system (one per body state, per
   // command writer, per loop's stats): a process checks before it asks for more.
   std::uint32_t free_publisher_ports{0};
+  // iceoryx subscriber ports left (one per reader: a command slot, a state read by
+  // a controller, a bridge or the hub's rate probe): checked the same way.
+  std::uint32_t free_subscriber_ports{0};
   std::array<ProcessEntry, kMaxHealthProcesses> processes{};
   std::array<MempoolUsage, kMaxMempools> mempools{};
 };

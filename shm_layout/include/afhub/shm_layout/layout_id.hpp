@@ -173,6 +173,7 @@ inline constexpr std::uint64_t kLayoutId = layout_detail::mix({
     AFHUB_OFF(Health, mempool_count),
     AFHUB_OFF(Health, body_count),
     AFHUB_OFF(Health, free_publisher_ports),
+    AFHUB_OFF(Health, free_subscriber_ports),
     AFHUB_OFF(Health, processes),
     AFHUB_OFF(Health, mempools),
     sizeof(ProcessEntry),

@@ -23,7 +23,8 @@ class ChannelDiscovery {
   std::set<std::string> live_instances(std::string_view event);
 
   // Keeps `readers` to one per live instance of `event`: drops the vanished ones,
-  // opens the new ones with make(instance). True when the set changed.
+  // opens the new ones with make(instance), which may give nullptr (not opened now:
+  // tried again on the next call). True when the set changed.
   template <class Reader, class Make>
   bool follow(std::string_view event, std::map<std::string, std::unique_ptr<Reader>>& readers,
               Make make) {
@@ -32,9 +33,10 @@ class ChannelDiscovery {
         std::erase_if(readers, [&](const auto& entry) { return !live.count(entry.first); });
     bool changed = dropped > 0;
     for (const std::string& instance : live) {
-      auto& reader = readers[instance];
-      if (reader) continue;
-      reader = make(instance);
+      if (readers.count(instance)) continue;
+      auto reader = make(instance);
+      if (!reader) continue;
+      readers[instance] = std::move(reader);
       changed = true;
     }
     return changed;

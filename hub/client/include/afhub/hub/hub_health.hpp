@@ -1,6 +1,6 @@
-// The publisher ports iceoryx has left, as the hub's Health counts them: every new
-// writer checks them before it asks iceoryx for a port, which would otherwise abort
-// the process when none is left.
+// The iceoryx ports left, as the hub's Health counts them: every new writer checks
+// the publisher ports, and every new reader the subscriber ports, before it asks
+// iceoryx for one, which would otherwise abort the process when none is left.
 #pragma once
 
 #include <chrono>
@@ -11,22 +11,40 @@
 
 namespace afhub {
 
-// The free publisher ports in the hub's latest Health, waiting up to `timeout` for it
-// (a reader made for the call: none stays subscribed, holding a chunk); nullopt when
+struct FreePorts {
+  std::uint32_t publishers = 0;
+  std::uint32_t subscribers = 0;
+};
+
+// The subscriber ports no afhub reader takes: a process reads the hub's Health with
+// them (a reader of its own for a moment) when it connects or counts afresh.
+constexpr std::uint32_t kReservedSubscriberPorts = 4;
+
+// The free ports in the hub's latest Health, waiting up to `timeout` for it (a
+// reader made for the call: none stays subscribed, holding a chunk); nullopt when
 // no Health came. Needs connect_to_hub() first.
+std::optional<FreePorts> free_ports(std::chrono::milliseconds timeout);
 std::optional<std::uint32_t> free_publisher_ports(std::chrono::milliseconds timeout);
 
-// Counts from `free` ports (connect_to_hub() calls it with free_publisher_ports());
-// before it, or with nullopt, require_publisher_ports() checks nothing.
+// Counts from `free` ports (connect_to_hub() calls it with free_ports()); before it,
+// or with nullopt, require_publisher_ports() and require_subscriber_ports() check
+// nothing.
+void count_ports_from(std::optional<FreePorts> free);
 void count_publisher_ports_from(std::optional<std::uint32_t> free);
+// The hub itself counts its own port pool: it has no need to read its Health.
+void count_subscriber_ports_from(std::optional<std::uint32_t> free);
 
-// Throws afhub::Error, naming `what` and saying what to do, when fewer than `count`
+// Throw afhub::Error, naming `what` and saying what to do, when fewer than `count`
 // ports are left by the count: the ports free at connect_to_hub(), less those this
-// process took since.
+// process took since. Readers leave kReservedSubscriberPorts free.
 void require_publisher_ports(std::size_t count, const std::string& what);
+void require_subscriber_ports(std::size_t count, const std::string& what);
 
-// Takes a port from the count, or gives one back: this process opened or closed a writer.
+// Takes a port from the count, or gives one back: this process opened or closed a
+// writer (publisher) or a reader (subscriber).
 void took_publisher_port() noexcept;
 void gave_back_publisher_port() noexcept;
+void took_subscriber_port() noexcept;
+void gave_back_subscriber_port() noexcept;
 
 }  // namespace afhub
