@@ -175,8 +175,7 @@ Ros2Profile::~Ros2Profile() {
   dds_delete_qos(reader_qos_);
 }
 
-void Ros2Profile::add_body(const std::string& channel,
-                           const std::vector<std::string>& joint_names,
+void Ros2Profile::add_body(const std::string& channel, const std::vector<std::string>& joint_names,
                            LatestReader<BodyState>& state) {
   auto body = std::make_unique<Body>();
   body->channel = channel;
