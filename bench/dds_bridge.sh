@@ -11,14 +11,15 @@
 #      bridge: afhub on A -> bridge A -> DDS -> bridge B -> afhub on B, whose pong answers
 #              with a command on the mirrored body -> bridge B -> DDS -> bridge A -> A.
 #    Round trips: p50, p99, max of each, and what the bridge pair adds at p50.
-# 2. 300 bodies (7 joints) at 1 kHz from `afhub synth` on A, exported by a bridge on A,
-#    read on B by a DDS reader that prints, each second, how many states came and how
-#    old they were. Over a window: the bridge's CPU per 1000 states sent (utime+stime
-#    from /proc/PID/stat), its heap allocations per state (the tests' LD_PRELOAD
-#    counter, when built), beside those of a plain Cyclone writer of the same samples
-#    (afhub-dds-bench writes), and its resident memory. Then overload: reliable QoS, a reader that takes every 100 ms, and
-#    A's link limited to 20 Mbit/s (tc tbf): the bridge's memory stays flat and the
-#    states that arrive stay young (newest wins; nothing queues).
+# 2. 400 bodies (AFHUB_BENCH_BODIES; 7 joints) at 1 kHz from `afhub synth` on A,
+#    exported by a bridge on A, read on B by a DDS reader that prints, each second, how
+#    many states came and how old they were. Over a window: the bridge's CPU per 1000
+#    states sent (utime+stime from /proc/PID/stat), its heap allocations per state (the
+#    tests' LD_PRELOAD counter, when built), beside those of a plain Cyclone writer of
+#    the same samples (afhub-dds-bench writes), and its resident memory. Then overload:
+#    reliable QoS, a reader that takes every 100 ms, and A's link limited to 20 Mbit/s
+#    (tc tbf): the bridge's memory stays flat and the states that arrive stay young
+#    (newest wins; nothing queues).
 # Writes OUT_DIR/raw_rtt_ns.txt, bridge_rtt_ns.txt (one round trip a line),
 # load_normal.jsonl, load_overload.jsonl (the reader's seconds), and summary.txt.
 # bench/dds_bridge_plot.sh OUT_DIR PNG draws them.
@@ -27,9 +28,9 @@ set -euo pipefail
 rounds=5
 pings=2000
 window=10
-# Not 400: iceoryx 2.0.3 has 1024 subscriber ports in all, and each body takes three
-# here (the physics' command reader, the hub's rate probe, the bridge's state reader).
-bodies=300
+# Each body takes two of iceoryx 2.0.3's 1024 subscriber ports here (the synth's
+# command reader, the bridge's state reader; the hub's rate probes take 32 in all).
+bodies=${AFHUB_BENCH_BODIES:-400}
 if [[ ${1:-} == --quick ]]; then
   rounds=2
   pings=1000

@@ -7,7 +7,7 @@
 //     (CLOCK_MONOTONIC) as each first holds; exit 0 when all hold, 1 at the timeout.
 //   fault_probe chunks
 //     Prints "BYTES:USED" for every payload mempool (its chunks' payload size, its
-//     chunks in use), once two health samples agree.
+//     chunks in use), once two health samples over a second apart agree.
 //   fault_probe hooked
 //     Outlives the hub like a device driver: its make-safe hook prints "hook ran" on
 //     stderr. Prints "attached N" (N: its re-attach count) on stdout, then waits for
@@ -101,9 +101,12 @@ std::vector<std::string> chunks_in_use(afhub::LatestReader<afhub::Health>& healt
 
 int chunks() {
   afhub::LatestReader<afhub::Health> health({"afhub", "hub", "health"});
+  // RouDi's introspection counts the pools once a second, while the hub may publish
+  // Health more often (when ports change): samples compared are over a second apart,
+  // or two copies of one stale count would agree.
   std::vector<std::string> previous = chunks_in_use(health, now_ns());
   for (int attempt = 0; attempt < 5; ++attempt) {
-    std::vector<std::string> current = chunks_in_use(health, now_ns());
+    std::vector<std::string> current = chunks_in_use(health, now_ns() + 1'100'000'000);
     if (current == previous) break;
     previous = current;
   }
