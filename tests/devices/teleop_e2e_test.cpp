@@ -105,40 +105,22 @@ TEST(TeleopEndToEnd, TheGripperFollowsTheDevicesCircleScaled) {
 
 TEST(TeleopEndToEnd, ClutchHoldsTheGripperAndReleasingItGivesNoJump) {
   afhub::testing::ModelFolder scripts;
-  // x: out 2 cm; clutch (button 0) held while the hand goes back to 0; released; then
-  // 1 cm out again. Columns t, x, y, z, buttons.
-  const std::string csv = scripts.write("clutch.csv",
-                                        "0,0,0,0,0\n1,0,0,0,0\n2,0.02,0,0,0\n2.5,0.02,0,0,1\n"
-                                        "3.5,0,0,0,1\n4.5,0,0,0,0\n5.5,0,0,0,0\n6.5,0.01,0,0,0\n"
-                                        "8,0.01,0,0,0\n");
+  const std::string csv = scripts.write("clutch.csv", kClutchTrajectory);
   Teleop teleop("clutch", {"--trajectory", csv}, kPatientTeleop);
   ASSERT_TRUE(teleop.wait_running()) << teleop.logs();
-  ASSERT_TRUE(wait_until([&] { return (teleop.device().buttons & 1U) != 0; }, 20s));
-  const double before_clutch = teleop.palm().pose.position_m.x;
-  EXPECT_NEAR(before_clutch, kX0 + kScale * 0.02, 0.01) << teleop.logs();
+  ClutchRun run;
+  ASSERT_TRUE(run_clutch(teleop, run)) << teleop.logs();
+  std::printf("clutch: drift while held %.2e m, largest move after release %.2e m\n",
+              run.held_drift, run.jump);
+  EXPECT_NEAR(run.before_clutch, kX0 + kScale * 0.02, 0.01) << teleop.logs();
   // While held, the hand goes back 2 cm: the palm stays.
-  double held_drift = 0.0;
-  while (teleop.device().buttons & 1U) {
-    held_drift = std::max(held_drift, std::abs(teleop.palm().pose.position_m.x - before_clutch));
-    pause_ms(2);
-  }
-  EXPECT_LT(held_drift, 0.005) << "the palm moved while clutched";
-  EXPECT_LT(teleop.device().pose.position_m.x, 0.003) << "the hand came back while clutched";
+  EXPECT_LT(run.held_drift, 0.005) << "the palm moved while clutched";
+  EXPECT_LT(run.hand_at_release, 0.003) << "the hand came back while clutched";
   // Released with the hand 2 cm from where it was clutched: no jump (without
-  // re-anchoring, the palm would go 10 cm back).
-  const double released = teleop.palm().pose.position_m.x;
-  double jump = 0.0;
-  for (int i = 0; i < 400; ++i) {
-    jump = std::max(jump, std::abs(teleop.palm().pose.position_m.x - released));
-    pause_ms(2);
-  }
-  std::printf("clutch: drift while held %.2e m, largest move after release %.2e m\n", held_drift,
-              jump);
-  EXPECT_LT(jump, 0.005) << teleop.logs();
-  // Motion resumes from there: the hand's next 1 cm is 5 cm of palm.
-  ASSERT_TRUE(wait_until([&] { return teleop.device().pose.position_m.x > 0.0099; }, 20s));
-  pause_ms(500);
-  EXPECT_NEAR(teleop.palm().pose.position_m.x, released + kScale * 0.01, 0.006) << teleop.logs();
+  // re-anchoring, the palm would go 10 cm back); motion resumes from there: the hand's
+  // next 1 cm is 5 cm of palm.
+  EXPECT_LT(run.jump, 0.005) << teleop.logs();
+  EXPECT_NEAR(run.after, run.released + kScale * 0.01, 0.006) << teleop.logs();
 }
 
 TEST(TeleopEndToEnd, PushingIntoTheFloorGivesAnOpposingBoundedForce) {

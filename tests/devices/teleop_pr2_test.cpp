@@ -91,35 +91,18 @@ TEST(TeleopPr2, ThePalmFollowsTheFalconsCircleScaledFromTheLocation) {
 TEST(TeleopPr2, ClutchHoldsThePalmAndReleasingItGivesNoJump) {
   SKIP_WITHOUT_SHARED_MODELS();
   afhub::testing::ModelFolder folder;
-  // x: out 2 cm; clutch held while the hand goes back to 0; released; 1 cm out again.
-  const std::string csv = folder.write("clutch.csv",
-                                       "0,0,0,0,0\n1,0,0,0,0\n2,0.02,0,0,0\n2.5,0.02,0,0,1\n"
-                                       "3.5,0,0,0,1\n4.5,0,0,0,0\n5.5,0,0,0,0\n6.5,0.01,0,0,0\n"
-                                       "8,0.01,0,0,0\n");
+  const std::string csv = folder.write("clutch.csv", kClutchTrajectory);
   TeleopSession teleop(pr2_setup(folder, {"--trajectory", csv}));
   ASSERT_TRUE(teleop.wait_running()) << teleop.logs();
-  ASSERT_TRUE(wait_until([&] { return (teleop.device().buttons & 1U) != 0; }, 20s));
-  const double before_clutch = teleop.body().pose.position_m.x;
-  EXPECT_NEAR(before_clutch, kLx + kScale * 0.02, 0.01) << teleop.logs();
-  double held_drift = 0.0;
-  while (teleop.device().buttons & 1U) {
-    held_drift = std::max(held_drift, std::abs(teleop.body().pose.position_m.x - before_clutch));
-    pause_ms(2);
-  }
-  EXPECT_LT(held_drift, 0.005) << "the palm moved while clutched";
-  const double released = teleop.body().pose.position_m.x;
-  double jump = 0.0;
-  for (int i = 0; i < 400; ++i) {
-    jump = std::max(jump, std::abs(teleop.body().pose.position_m.x - released));
-    pause_ms(2);
-  }
+  ClutchRun run;
+  ASSERT_TRUE(run_clutch(teleop, run)) << teleop.logs();
   std::printf("pr2 clutch: drift while held %.2e m, largest move after release %.2e m\n",
-              held_drift, jump);
+              run.held_drift, run.jump);
+  EXPECT_NEAR(run.before_clutch, kLx + kScale * 0.02, 0.01) << teleop.logs();
+  EXPECT_LT(run.held_drift, 0.005) << "the palm moved while clutched";
   // Without re-anchoring the palm would go 20 cm back.
-  EXPECT_LT(jump, 0.005) << teleop.logs();
-  ASSERT_TRUE(wait_until([&] { return teleop.device().pose.position_m.x > 0.0099; }, 20s));
-  pause_ms(500);
-  EXPECT_NEAR(teleop.body().pose.position_m.x, released + kScale * 0.01, 0.01) << teleop.logs();
+  EXPECT_LT(run.jump, 0.005) << teleop.logs();
+  EXPECT_NEAR(run.after, run.released + kScale * 0.01, 0.01) << teleop.logs();
 }
 
 // A floor (the test's own, top at z = -0.7 m: the gripper's file starts it at z = -0.5)

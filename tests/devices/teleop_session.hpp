@@ -180,4 +180,43 @@ inline Following measure_following(TeleopSession& session, double scale, int cou
   return f;
 }
 
+// The clutch trajectory (rows t, x, y, z, buttons): out 2 cm; button 0 held while the
+// hand goes back to 0; released; then 1 cm out again.
+inline const char* const kClutchTrajectory =
+    "0,0,0,0,0\n1,0,0,0,0\n2,0.02,0,0,0\n2.5,0.02,0,0,1\n3.5,0,0,0,1\n4.5,0,0,0,0\n"
+    "5.5,0,0,0,0\n6.5,0.01,0,0,0\n8,0.01,0,0,0\n";
+
+// The body's x along that trajectory.
+struct ClutchRun {
+  double before_clutch{0.0};    // as the clutch is pressed
+  double held_drift{0.0};       // largest move from there while it is held
+  double hand_at_release{0.0};  // the device's x as it is let go
+  double released{0.0};         // the body's x then
+  double jump{0.0};             // largest move from there over the next 0.8 s
+  double after{0.0};            // 0.5 s after the hand has gone 1 cm out again
+};
+
+// Runs a session started on kClutchTrajectory through it; false when the clutch was
+// never pressed or the hand never went out again.
+inline bool run_clutch(TeleopSession& session, ClutchRun& run) {
+  using namespace std::chrono_literals;
+  if (!wait_until([&] { return (session.device().buttons & 1U) != 0; }, 20s)) return false;
+  run.before_clutch = session.body().pose.position_m.x;
+  while (session.device().buttons & 1U) {
+    run.held_drift =
+        std::max(run.held_drift, std::abs(session.body().pose.position_m.x - run.before_clutch));
+    pause_ms(2);
+  }
+  run.hand_at_release = session.device().pose.position_m.x;
+  run.released = session.body().pose.position_m.x;
+  for (int i = 0; i < 400; ++i) {
+    run.jump = std::max(run.jump, std::abs(session.body().pose.position_m.x - run.released));
+    pause_ms(2);
+  }
+  if (!wait_until([&] { return session.device().pose.position_m.x > 0.0099; }, 20s)) return false;
+  pause_ms(500);
+  run.after = session.body().pose.position_m.x;
+  return true;
+}
+
 }  // namespace afhub::test
