@@ -19,9 +19,11 @@ body=afhub/arm/base
 base=rt/$body
 
 echo "1. the reader is Cyclone and the ROS 2 types only"
-if nm --defined-only "$reader" | grep -qi afhub; then fail "ros2_reader defines afhub symbols"; fi
-if ldd "$reader" | grep -qi afhub; then fail "ros2_reader links an afhub library"; fi
-nm --defined-only "$reader" | grep -q sensor_msgs_msg_dds__JointState__desc ||
+# Read whole, not piped into grep -q: grep leaving early would SIGPIPE nm (pipefail).
+symbols=$(nm --defined-only "$reader")
+if grep -qi afhub <<<"$symbols"; then fail "ros2_reader defines afhub symbols"; fi
+if ldd "$reader" | grep -i afhub >/dev/null; then fail "ros2_reader links an afhub library"; fi
+grep -q sensor_msgs_msg_dds__JointState__desc <<<"$symbols" ||
   fail "ros2_reader lacks the ROS 2 JointState type"
 
 spawn physics "$afhub" run "$model"
