@@ -39,11 +39,11 @@ TEST(Pause, KilledProcessesAreCleanedUpFilesIncluded) {
   ScopedProcess hub(start_test_hub());
   ASSERT_GT(hub.pid, 0);
   for (int round = 0; round < 10; ++round) {
-    const pid_t top = spawn_afhub({"top"});
-    const std::string lock = "/tmp/afhub-top-" + std::to_string(top) + ".lock";
+    ScopedProcess top = spawn_afhub({"top"});
+    const std::string lock = "/tmp/afhub-top-" + std::to_string(top.pid) + ".lock";
     ASSERT_TRUE(wait_until([&] { return std::filesystem::exists(lock); }, 10s)) << lock;
-    kill(top, SIGKILL);
-    waitpid(top, nullptr, 0);
+    stop_process(top.pid, SIGKILL);
+    top.pid = -1;
   }
   // Each killed runtime left a socket and a lock; the hub removes them.
   EXPECT_TRUE(wait_until([] { return files_starting_with("afhub-top-") == 0; }, 15s))

@@ -9,7 +9,9 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
@@ -148,6 +150,29 @@ int ScopedProcess::stop() {
   int code = stop_process(pid, SIGTERM);
   pid = -1;
   return code;
+}
+
+std::vector<std::string> stop_leftover_children() {
+  std::vector<std::string> left;
+  std::vector<pid_t> children;
+  for (const auto& entry : std::filesystem::directory_iterator("/proc")) {
+    const std::string name = entry.path().filename().string();
+    if (name.find_first_not_of("0123456789") != std::string::npos) continue;
+    // /proc/PID/stat: "pid (command) state ppid ..."; the command may hold spaces.
+    const std::string stat = read_file(entry.path().string() + "/stat");
+    const std::size_t close = stat.rfind(')');
+    if (close == std::string::npos) continue;
+    char state = 0;
+    int parent = 0;
+    if (std::sscanf(stat.c_str() + close + 1, " %c %d", &state, &parent) != 2) continue;
+    if (parent != getpid() || state == 'Z') continue;
+    std::string command = read_file(entry.path().string() + "/cmdline");
+    for (char& c : command) c = c ? c : ' ';
+    left.push_back(name + ": " + command);
+    children.push_back(std::stoi(name));
+  }
+  for (pid_t child : children) stop_process(child, SIGTERM);
+  return left;
 }
 
 bool contains(const std::string& text, const std::string& part) {

@@ -36,6 +36,11 @@ pid_t spawn_wrapped_afhub(const std::vector<std::string>& wrapper,
 int stop_process(pid_t pid, int signal,
                  std::chrono::milliseconds timeout = std::chrono::seconds(5));
 
+// Stops (SIGTERM, then SIGKILL) every child of this process still running and
+// describes each ("pid: command line"). A test binary calls it last: a client left
+// running would attach to the next binary's hub and break its tests.
+std::vector<std::string> stop_leftover_children();
+
 // A process that is stopped (SIGTERM, then SIGKILL) when the test leaves its scope,
 // however it leaves: a failed assertion never leaves a hub running.
 struct ScopedProcess {

@@ -32,6 +32,9 @@ void HubEnvironment::TearDown() {
   if (hub_ > 0) {
     EXPECT_EQ(stop_process(hub_, SIGTERM), 0) << "the hub did not stop cleanly";
   }
+  // A client left running would attach to the next binary's hub.
+  for (const std::string& child : stop_leftover_children())
+    ADD_FAILURE() << "a child process was left running; stopped it: " << child;
 }
 
 }  // namespace afhub::test
