@@ -64,6 +64,19 @@ dds_qos_t* stream_qos() {
   return qos;
 }
 
+// A reader or a writer of the bridge's body state topic, with its stream QoS.
+dds_entity_t body_state_endpoint(dds_entity_t participant, bool writes) {
+  const dds_entity_t topic = check(dds_create_topic(participant, &afhub_dds_BodyState_desc,
+                                                    "afhub/body_state", nullptr, nullptr),
+                                   "state topic");
+  dds_qos_t* qos = stream_qos();
+  const dds_entity_t endpoint =
+      writes ? check(dds_create_writer(participant, topic, qos, nullptr), "writer")
+             : check(dds_create_reader(participant, topic, qos, nullptr), "reader");
+  dds_delete_qos(qos);
+  return endpoint;
+}
+
 // One participant with a state and a command topic, a writer on one and a reader on
 // the other, and a waitset woken by the reader's data.
 struct RawEndpoint {
@@ -276,12 +289,7 @@ double quantile_us(const std::vector<std::int64_t>& sorted, double q) {
 int sink(double seconds) {
   dds_entity_t participant =
       check(dds_create_participant(DDS_DOMAIN_DEFAULT, nullptr, nullptr), "participant");
-  const dds_entity_t topic = check(dds_create_topic(participant, &afhub_dds_BodyState_desc,
-                                                    "afhub/body_state", nullptr, nullptr),
-                                   "state topic");
-  dds_qos_t* qos = stream_qos();
-  const dds_entity_t reader = check(dds_create_reader(participant, topic, qos, nullptr), "reader");
-  dds_delete_qos(qos);
+  const dds_entity_t reader = body_state_endpoint(participant, false);
   const char* slow = std::getenv("AFHUB_DDS_BENCH_SLOW_MS");
   const std::int64_t pause_ns = slow ? std::atoll(slow) * 1'000'000 : 1'000'000;
   afhub_dds_BodyState state{};
@@ -314,12 +322,7 @@ int sink(double seconds) {
 int writes(std::uint32_t bodies, std::uint64_t count) {
   dds_entity_t participant =
       check(dds_create_participant(DDS_DOMAIN_DEFAULT, nullptr, nullptr), "participant");
-  const dds_entity_t topic = check(dds_create_topic(participant, &afhub_dds_BodyState_desc,
-                                                    "afhub/body_state", nullptr, nullptr),
-                                   "state topic");
-  dds_qos_t* qos = stream_qos();
-  const dds_entity_t writer = check(dds_create_writer(participant, topic, qos, nullptr), "writer");
-  dds_delete_qos(qos);
+  const dds_entity_t writer = body_state_endpoint(participant, true);
   afhub_dds_BodyState state{};
   bridges::make_state_sample(state);
   state.joints._length = 7;

@@ -11,6 +11,7 @@
 #include <memory>
 
 #include "dds_convert_device_world.hpp"
+#include "through_cyclone.hpp"
 
 namespace afhub::bridges {
 namespace {
@@ -32,29 +33,6 @@ template <std::size_t N>
 void set_text(std::array<char, N>& field, const char* text) {
   field.fill('\0');
   std::strncpy(field.data(), text, N - 1);
-}
-
-// A sample written and taken through Cyclone's serializer, as on the wire.
-template <typename Sample>
-void through_cyclone(const dds_topic_descriptor_t* type, const Sample& sample, Sample& received) {
-  const dds_entity_t participant = dds_create_participant(97, nullptr, nullptr);
-  ASSERT_GT(participant, 0);
-  const dds_entity_t topic =
-      dds_create_topic(participant, type, "device_world_convert_test", nullptr, nullptr);
-  ASSERT_GT(topic, 0);
-  dds_qos_t* qos = dds_create_qos();
-  dds_qset_reliability(qos, DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
-  const dds_entity_t reader = dds_create_reader(participant, topic, qos, nullptr);
-  const dds_entity_t writer = dds_create_writer(participant, topic, qos, nullptr);
-  dds_delete_qos(qos);
-  ASSERT_GT(reader, 0);
-  ASSERT_GT(writer, 0);
-  ASSERT_EQ(dds_write(writer, &sample), DDS_RETCODE_OK);
-  void* samples[1] = {&received};
-  dds_sample_info_t info;
-  ASSERT_EQ(dds_take(reader, samples, &info, 1, 1), 1);
-  ASSERT_TRUE(info.valid_data);
-  dds_delete(participant);
 }
 
 // What from_dds sets of a header (the hub's writer stamps the rest).
@@ -94,7 +72,7 @@ TEST(DdsConvertDeviceWorld, DeviceStateRoundTripsEveryField) {
   to_dds("device/falcon", *from, sample);
   EXPECT_STREQ(sample.device, "device/falcon");
   expect_header_on_sample(from->header, sample);
-  through_cyclone(&afhub_dds_DeviceState_desc, sample, received);
+  ASSERT_NO_FATAL_FAILURE(through_cyclone(&afhub_dds_DeviceState_desc, sample, received));
   auto to = std::make_unique<DeviceState>();
   zero(*to);
   ASSERT_TRUE(from_dds(received, *to));
@@ -114,7 +92,7 @@ TEST(DdsConvertDeviceWorld, DeviceCommandRoundTripsEveryField) {
   to_dds("device/falcon", from, sample);
   EXPECT_STREQ(sample.device, "device/falcon");
   expect_header_on_sample(from.header, sample);
-  through_cyclone(&afhub_dds_DeviceCommand_desc, sample, received);
+  ASSERT_NO_FATAL_FAILURE(through_cyclone(&afhub_dds_DeviceCommand_desc, sample, received));
   DeviceCommand to;
   zero(to);
   from_dds(received, to);
@@ -142,7 +120,7 @@ TEST(DdsConvertDeviceWorld, WorldStateRoundTripsEveryField) {
   to_dds("world", *from, sample);
   EXPECT_STREQ(sample.world, "world");
   expect_header_on_sample(from->header, sample);
-  through_cyclone(&afhub_dds_WorldState_desc, sample, received);
+  ASSERT_NO_FATAL_FAILURE(through_cyclone(&afhub_dds_WorldState_desc, sample, received));
   // Taken into the sample's own buffers, not reallocated ones.
   EXPECT_EQ(received.lights._maximum, kMaxWorldObjects);
   auto to = std::make_unique<WorldState>();
@@ -162,7 +140,7 @@ TEST(DdsConvertDeviceWorld, WorldCommandRoundTripsAndUnknownActionsAreRefused) {
   afhub_dds_WorldCommand sample{}, received{};
   to_dds("world", from, sample);
   expect_header_on_sample(from.header, sample);
-  through_cyclone(&afhub_dds_WorldCommand_desc, sample, received);
+  ASSERT_NO_FATAL_FAILURE(through_cyclone(&afhub_dds_WorldCommand_desc, sample, received));
   WorldCommand to;
   zero(to);
   ASSERT_TRUE(from_dds(received, to));

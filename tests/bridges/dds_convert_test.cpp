@@ -10,6 +10,7 @@
 
 #include "afhub/bridges/dds_bridge.hpp"
 #include "dds_convert.hpp"
+#include "through_cyclone.hpp"
 
 namespace afhub::bridges {
 namespace {
@@ -46,28 +47,9 @@ TEST(DdsConvert, StateRoundTripsEveryField) {
   EXPECT_EQ(sample.header.source_stamp_ns, 987654321);
   EXPECT_EQ(sample.header.publisher_pid, 1234u);
 
-  // Through Cyclone's serializer, as on the wire.
-  dds_entity_t participant =
-      dds_create_participant(97, nullptr, nullptr);  // its own domain: tests run in parallel
-  ASSERT_GT(participant, 0);
-  dds_entity_t topic =
-      dds_create_topic(participant, &afhub_dds_BodyState_desc, "convert_test", nullptr, nullptr);
-  ASSERT_GT(topic, 0);
-  dds_qos_t* qos = dds_create_qos();
-  dds_qset_reliability(qos, DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
-  dds_entity_t reader = dds_create_reader(participant, topic, qos, nullptr);
-  dds_entity_t writer = dds_create_writer(participant, topic, qos, nullptr);
-  dds_delete_qos(qos);
-  ASSERT_GT(reader, 0);
-  ASSERT_GT(writer, 0);
-  ASSERT_EQ(dds_write(writer, &sample), DDS_RETCODE_OK);
-  void* samples[1] = {&received};
-  dds_sample_info_t info;
-  ASSERT_EQ(dds_take(reader, samples, &info, 1, 1), 1);
-  ASSERT_TRUE(info.valid_data);
+  ASSERT_NO_FATAL_FAILURE(through_cyclone(&afhub_dds_BodyState_desc, sample, received));
   // Taken into the sample's own full-capacity buffers, not reallocated ones.
   EXPECT_EQ(received.joints._maximum, kMaxJointsPerBody);
-  dds_delete(participant);
 
   std::unique_ptr<BodyState, decltype(&std::free)> to(make_state(7), &std::free);
   from_dds(received, *to);

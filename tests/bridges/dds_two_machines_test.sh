@@ -193,8 +193,13 @@ for side in a b; do
   echo "  payload chunks in use on ${side^^}: $now"
   [[ $hub_now == "${hub_pid[$side]}" ]] ||
     fail "${side^^}'s hub changed pid (${hub_pid[$side]} -> $hub_now): it crashed"
-  ((now <= hub_alone_chunks)) ||
+  # One chunk over: iceoryx 2.0.3 loses a reference when a reader is SIGKILLed between
+  # the two steps of a take (see kIceoryxKillWindowChunks in tests/hub/resilience_test.cpp);
+  # a leak per message still shows, and so does one per kill on A (two readers killed).
+  ((now <= hub_alone_chunks + 1)) ||
     fail "${side^^}'s hub leaked chunks over the faults: $now in use, $hub_alone_chunks on a hub alone"
+  ((now <= hub_alone_chunks)) ||
+    echo "  (one chunk over a hub alone: a reader killed mid-take, iceoryx's own window)"
 done
 echo "9. an exporter of 300 bodies that takes no commands takes no publisher port per body"
 # (iceoryx has 512: 300 bodies' states and 300 command writers would not fit.)

@@ -33,56 +33,63 @@ class WatchedDevice : public Device {
   std::thread::id safe_thread;
 };
 
-// A driver's loop in miniature: serve, then exchange, until `done`.
-void loop(SafeRequest& request, WatchedDevice& device, std::atomic<bool>& done,
-          std::thread::id& loop_thread) {
-  loop_thread = std::this_thread::get_id();
-  while (!done) {
-    if (!request.serve()) device.exchange({});
-    std::this_thread::yield();
+// A device and its request, with a driver's loop in miniature on its own thread:
+// serve, then exchange, until stopped.
+struct RunningLoop {
+  WatchedDevice device;
+  SafeRequest request;
+  std::atomic<bool> done{false};
+  std::thread::id loop_thread;
+  std::thread looping;
+
+  RunningLoop() {
+    request.attach(&device);
+    looping = std::thread([this] {
+      loop_thread = std::this_thread::get_id();
+      while (!done) {
+        if (!request.serve()) device.exchange({});
+        std::this_thread::yield();
+      }
+    });
   }
-}
+  ~RunningLoop() { stop(); }
+  void stop() {
+    device.stuck = false;
+    done = true;
+    if (looping.joinable()) looping.join();
+  }
+};
 
 constexpr std::int64_t kTimeoutNs = 5'000'000'000;  // far more than a running loop needs
 
 TEST(SafeRequest, TheLoopMakesTheDeviceSafeBetweenExchangesAndStops) {
-  WatchedDevice device;
-  SafeRequest request;
-  request.attach(&device);
-  std::atomic<bool> done{false};
-  std::thread::id loop_thread;
-  std::thread looping([&] { loop(request, device, done, loop_thread); });
+  RunningLoop running;
+  WatchedDevice& device = running.device;
   while (device.exchanges < 100) std::this_thread::yield();
-  EXPECT_EQ(request.request(kTimeoutNs), MadeSafeBy::kLoop);
+  EXPECT_EQ(running.request.request(kTimeoutNs), MadeSafeBy::kLoop);
   const int exchanges = device.exchanges;
   std::this_thread::sleep_for(std::chrono::milliseconds(20));  // the loop goes on serving
-  done = true;
-  looping.join();
+  running.stop();
   EXPECT_EQ(device.made_safe, 1);
-  EXPECT_EQ(device.safe_thread, loop_thread);
+  EXPECT_EQ(device.safe_thread, running.loop_thread);
   EXPECT_EQ(device.overlaps, 0);
   EXPECT_EQ(device.exchanges_after_safe, 0);
   EXPECT_EQ(device.exchanges, exchanges);
 }
 
 TEST(SafeRequest, ALoopStuckInAnExchangeLeavesItToTheRequester) {
-  WatchedDevice device;
-  SafeRequest request;
-  request.attach(&device);
-  std::atomic<bool> done{false};
-  std::thread::id loop_thread;
-  std::thread looping([&] { loop(request, device, done, loop_thread); });
+  RunningLoop running;
+  WatchedDevice& device = running.device;
   while (device.exchanges < 10) std::this_thread::yield();
   device.stuck = true;
   while (device.inside == 0) std::this_thread::yield();
-  EXPECT_EQ(request.request(20'000'000), MadeSafeBy::kRequester);
+  EXPECT_EQ(running.request.request(20'000'000), MadeSafeBy::kRequester);
   EXPECT_EQ(device.made_safe, 1);
   EXPECT_EQ(device.safe_thread, std::this_thread::get_id());
   const int exchanges = device.exchanges;
   device.stuck = false;  // the exchange under way ends; no other one starts
   std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  done = true;
-  looping.join();
+  running.stop();
   EXPECT_EQ(device.exchanges, exchanges + 1);
   EXPECT_EQ(device.made_safe, 1);
 }

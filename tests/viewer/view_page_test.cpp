@@ -56,21 +56,26 @@ struct View {
 class ViewPageTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    char pattern[] = "/tmp/afhub_view_page_test_XXXXXX";
-    ASSERT_NE(mkdtemp(pattern), nullptr);
-    dir_ = pattern;
+    ASSERT_NO_FATAL_FAILURE(start_physics("0", "afhub/arm/base"));
     std::ofstream(dir_ + "/input_devices.yaml") << paired_devices();
-    physics_ = std::make_unique<ScopedProcess>(
-        spawn_afhub({"run", "--launch", kModels + "/launch.yaml", "-l", "0"}, dir_ + "/run.log"));
-    connect_to_hub("viewpagetest", HubPolicy::kRequire);
-    base_ = std::make_unique<BodyClient>("afhub/arm/base");
-    ASSERT_TRUE(
-        wait_until([] { return base_->latest_state() != nullptr; }, std::chrono::seconds(20)))
-        << read_file(dir_ + "/run.log");
     read_only_ = start_view({"--input-devices", dir_ + "/input_devices.yaml"});
     commands_ = start_view({"--allow-commands"});
     browser_ = std::make_unique<Browser>(dir_);
     ASSERT_TRUE(browser_->ready()) << browser_->problem();
+  }
+  // A scratch directory, and `afhub run` of the example launch file's config
+  // `launch_index` until `body` publishes.
+  static void start_physics(const std::string& launch_index, const std::string& body) {
+    char pattern[] = "/tmp/afhub_view_page_test_XXXXXX";
+    ASSERT_NE(mkdtemp(pattern), nullptr);
+    dir_ = pattern;
+    physics_ = std::make_unique<ScopedProcess>(spawn_afhub(
+        {"run", "--launch", kModels + "/launch.yaml", "-l", launch_index}, dir_ + "/run.log"));
+    connect_to_hub("viewpagetest", HubPolicy::kRequire);
+    base_ = std::make_unique<BodyClient>(body);
+    ASSERT_TRUE(
+        wait_until([] { return base_->latest_state() != nullptr; }, std::chrono::seconds(20)))
+        << read_file(dir_ + "/run.log");
   }
   static void TearDownTestSuite() {
     browser_.reset();
@@ -347,16 +352,7 @@ TEST_F(ViewPageTest, ACameraNameOpensItsViewportAndPairedCamerasAreMarked) {
 class ViewSoftBodyTest : public ViewPageTest {
  protected:
   static void SetUpTestSuite() {
-    char pattern[] = "/tmp/afhub_view_soft_test_XXXXXX";
-    ASSERT_NE(mkdtemp(pattern), nullptr);
-    dir_ = pattern;
-    physics_ = std::make_unique<ScopedProcess>(
-        spawn_afhub({"run", "--launch", kModels + "/launch.yaml", "-l", "3"}, dir_ + "/run.log"));
-    connect_to_hub("viewsofttest", HubPolicy::kRequire);
-    base_ = std::make_unique<BodyClient>("afhub/cloth/cloth");
-    ASSERT_TRUE(
-        wait_until([] { return base_->latest_state() != nullptr; }, std::chrono::seconds(20)))
-        << read_file(dir_ + "/run.log");
+    ASSERT_NO_FATAL_FAILURE(start_physics("3", "afhub/cloth/cloth"));
     commands_ = start_view({"--allow-commands"});
     browser_ = std::make_unique<Browser>(dir_);
     ASSERT_TRUE(browser_->ready()) << browser_->problem();

@@ -28,6 +28,11 @@ dds_entity_t checked(dds_entity_t entity, const char* what) {
   return entity;
 }
 
+dds_entity_t topic(dds_entity_t participant, const dds_topic_descriptor_t& type, const char* name) {
+  return checked(dds_create_topic(participant, &type, name, nullptr, nullptr),
+                 (std::string("creating the topic ") + name).c_str());
+}
+
 struct Qos {
   dds_qos_t* qos = dds_create_qos();
   ~Qos() { dds_delete_qos(qos); }
@@ -63,20 +68,12 @@ DeviceWorldBridge::DeviceWorldBridge(dds_entity_t participant, const DdsBridgeOp
   dds_qset_history(commands.qos, DDS_HISTORY_KEEP_LAST, kWorldCommandDepth);
   dds_qset_ignorelocal(commands.qos, DDS_IGNORELOCAL_PARTICIPANT);
   if (devices) {
-    device_state_topic_ = checked(dds_create_topic(participant, &afhub_dds_DeviceState_desc,
-                                                   kDeviceStateTopic, nullptr, nullptr),
-                                  "creating the device state topic");
-    device_command_topic_ = checked(dds_create_topic(participant, &afhub_dds_DeviceCommand_desc,
-                                                     kDeviceCommandTopic, nullptr, nullptr),
-                                    "creating the device command topic");
+    device_state_topic_ = topic(participant, afhub_dds_DeviceState_desc, kDeviceStateTopic);
+    device_command_topic_ = topic(participant, afhub_dds_DeviceCommand_desc, kDeviceCommandTopic);
   }
   if (options.world) {
-    world_state_topic_ = checked(dds_create_topic(participant, &afhub_dds_WorldState_desc,
-                                                  kWorldStateTopic, nullptr, nullptr),
-                                 "creating the world state topic");
-    world_command_topic_ = checked(dds_create_topic(participant, &afhub_dds_WorldCommand_desc,
-                                                    kWorldCommandTopic, nullptr, nullptr),
-                                   "creating the world command topic");
+    world_state_topic_ = topic(participant, afhub_dds_WorldState_desc, kWorldStateTopic);
+    world_command_topic_ = topic(participant, afhub_dds_WorldCommand_desc, kWorldCommandTopic);
   }
   if (options.export_bodies) {
     if (devices) {
