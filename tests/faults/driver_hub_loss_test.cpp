@@ -60,14 +60,9 @@ std::string log_text() {
 }
 
 TEST(DriverHubLoss, ForceGoesToZeroBeforeTheDriverReattachesAndPublishesAgain) {
-  pid_t hub = start_test_hub();
-  ASSERT_GT(hub, 0);
-  struct HubGuard {
-    pid_t& pid;
-    ~HubGuard() {
-      if (pid > 0) stop_process(pid, SIGTERM);
-    }
-  } hub_guard{hub};
+  // Whatever happens below, the hub of the moment is stopped at the end.
+  ScopedProcess hub(start_test_hub());
+  ASSERT_GT(hub.pid, 0);
   std::remove(kForceLog.c_str());
 
   ScopedProcess driver =
@@ -79,8 +74,8 @@ TEST(DriverHubLoss, ForceGoesToZeroBeforeTheDriverReattachesAndPublishesAgain) {
   ASSERT_TRUE(wait_until([] { return find(force_log(), "force") >= 0; }, 20s)) << log_text();
 
   const std::int64_t killed_ns = monotonic_ns();
-  stop_process(hub, SIGKILL);
-  hub = -1;
+  stop_process(hub.pid, SIGKILL);
+  hub.pid = -1;
   // The driver re-executes: its new image opens the device again.
   ASSERT_TRUE(wait_until([] { return find(force_log(), "open", 1) >= 0; }, 10s)) << log_text();
   const std::vector<LogLine> lines = force_log();
@@ -107,8 +102,8 @@ TEST(DriverHubLoss, ForceGoesToZeroBeforeTheDriverReattachesAndPublishesAgain) {
   EXPECT_TRUE(contains(read_file(kDriverLog), "the device's loop made it safe")) << log_text();
 
   // A new hub: the driver re-attaches, publishes its state, and applies a new client's force.
-  hub = start_test_hub();
-  ASSERT_GT(hub, 0);
+  hub.pid = start_test_hub();
+  ASSERT_GT(hub.pid, 0);
   force.stop();
   ScopedProcess new_force = spawn_afhub({"device", "force", "safe_hand", "--force", "0,0,2"},
                                         "/tmp/afhub-safe-hand-force.log");

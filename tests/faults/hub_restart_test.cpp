@@ -160,15 +160,9 @@ class HubRestart : public ::testing::TestWithParam<bool> {};
 
 TEST_P(HubRestart, EveryClientOutlivesTheHubAndReattachesWithin2s) {
   const bool sigkill = GetParam();
-  pid_t hub = start_test_hub();
-  ASSERT_GT(hub, 0);
   // Whatever happens below, the hub of the moment is stopped at the end.
-  struct HubGuard {
-    pid_t& pid;
-    ~HubGuard() {
-      if (pid > 0) stop_process(pid, SIGTERM);
-    }
-  } hub_guard{hub};
+  ScopedProcess hub(start_test_hub());
+  ASSERT_GT(hub.pid, 0);
 
   // What the hub itself holds, before any client: what the last hub holds again once
   // every client has stopped.
@@ -224,21 +218,21 @@ TEST_P(HubRestart, EveryClientOutlivesTheHubAndReattachesWithin2s) {
   for (int round = 0; round < kRounds; ++round) {
     // The loss.
     if (sigkill) {
-      kill(hub, SIGKILL);
-      waitpid(hub, nullptr, 0);
+      kill(hub.pid, SIGKILL);
+      waitpid(hub.pid, nullptr, 0);
     } else {
       RunResult stop = run_afhub({"hub", "stop", "--force"});
       ASSERT_EQ(stop.exit_code, 0) << stop.err;
-      waitpid(hub, nullptr, 0);
+      waitpid(hub.pid, nullptr, 0);
     }
-    hub = -1;
+    hub.pid = -1;
     // Clients aborted within about 20 ms of the hub's stop before they outlived it.
     std::this_thread::sleep_for(500ms);
     ASSERT_TRUE(all_alive(round, "after the hub went away"));
     const std::size_t echo_lines = line_count("/tmp/afhub-fault-echo.log");
 
     // A new hub.
-    hub = spawn_afhub({"hub"}, "/tmp/afhub-test-hub.log");
+    hub.pid = spawn_afhub({"hub"}, "/tmp/afhub-test-hub.log");
     ASSERT_TRUE(wait_until(
         [] { return probe_roudi() == RoudiPresence::kRunning && running_hub_pid().has_value(); },
         10s))

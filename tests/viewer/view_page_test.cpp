@@ -16,6 +16,7 @@
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub_process.hpp"
 #include "devtools_client.hpp"
+#include "pixels.hpp"
 #include "shared_models.hpp"
 #include "web_client.hpp"
 #include "world_reader.hpp"
@@ -28,23 +29,13 @@ const std::string kModels = AFHUB_EXAMPLE_MODELS;
 // An input device file pairing the world's camera "rcm_close" by its name, and
 // "overview" by its block key in the world file, as AMBF's files do.
 std::string paired_devices() {
-  return "input devices: [Test Touch, Key Touch]\n"
-         "Test Touch:\n"
-         "  hardware name: PHANTOM Omni\n"
-         "  haptic gain: {linear: 0.0, angular: 0.0}\n"
-         "  simulated multibody: " +
-         kModels +
-         "/gripper.yaml\n"
-         "  root link: /afhub/gripper/BODY palm\n"
-         "  pair cameras: [rcm_close]\n"
-         "Key Touch:\n"
-         "  hardware name: PHANTOM Omni\n"
-         "  haptic gain: {linear: 0.0, angular: 0.0}\n"
-         "  simulated multibody: " +
-         kModels +
-         "/gripper.yaml\n"
-         "  root link: /afhub/gripper/BODY palm\n"
-         "  pair cameras: [camera_overview]\n";
+  const auto device = [](const std::string& name, const std::string& camera) {
+    return name + ":\n  hardware name: PHANTOM Omni\n  haptic gain: {linear: 0.0, angular: 0.0}\n" +
+           "  simulated multibody: " + kModels + "/gripper.yaml\n" +
+           "  root link: /afhub/gripper/BODY palm\n  pair cameras: [" + camera + "]\n";
+  };
+  return "input devices: [Test Touch, Key Touch]\n" + device("Test Touch", "rcm_close") +
+         device("Key Touch", "camera_overview");
 }
 
 struct View {
@@ -159,14 +150,6 @@ class ViewPageTest : public ::testing::Test {
   static inline View read_only_, commands_;
   static inline std::unique_ptr<Browser> browser_;
 };
-
-long pixels(const std::vector<std::string>& args) {
-  std::vector<std::string> argv = {"/usr/bin/python3", AFHUB_VIEWER_PIXELS_SCRIPT};
-  argv.insert(argv.end(), args.begin(), args.end());
-  const RunResult result = run_command(argv);
-  EXPECT_EQ(result.exit_code, 0) << result.err;
-  return std::atol(result.out.c_str());
-}
 
 TEST_F(ViewPageTest, AClickedBodyShowsItsJointPositionsAndPlotsThem) {
   ScopedProcess sine(spawn_afhub({"ctl", "sine", "arm/base", "--amplitude", "0.8", "--period", "2"},

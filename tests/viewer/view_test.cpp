@@ -14,6 +14,7 @@
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub_process.hpp"
+#include "pixels.hpp"
 #include "web_client.hpp"
 
 namespace afhub::test {
@@ -331,14 +332,6 @@ std::string screenshot(const std::string& url, const std::string& file) {
       std::chrono::seconds(90));
   EXPECT_EQ(result.exit_code, 0) << result.err;
   return result.err;
-}
-
-long pixels(const std::vector<std::string>& args) {
-  std::vector<std::string> argv = {"/usr/bin/python3", AFHUB_VIEWER_PIXELS_SCRIPT};
-  argv.insert(argv.end(), args.begin(), args.end());
-  const RunResult result = run_command(argv);
-  EXPECT_EQ(result.exit_code, 0) << result.err;
-  return std::atol(result.out.c_str());
 }
 
 TEST_F(ViewTest, ChromiumDrawsTheArmAndItsMotion) {
