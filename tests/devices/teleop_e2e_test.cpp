@@ -14,6 +14,7 @@
 #include <thread>
 #include <vector>
 
+#include "real_time.hpp"
 #include "teleop_session.hpp"
 
 namespace afhub::test {
@@ -85,6 +86,7 @@ TEST(TeleopEndToEnd, TheGripperFollowsTheDevicesCircleScaled) {
       "circle: palm radius %.4f m (device's x5: 0.1 m), deviation RMS %.4f m, p99 %.4f m, "
       "worst %.4f m; %d pairs judged, %d left out (stalest state read %.1f ms old)\n",
       radius, rms, f.p99, worst, f.judged, f.left_out, f.stalest_ms);
+  SKIP_REAL_TIME_BOUNDS_IN_SANITIZED_BUILD();
   ASSERT_GE(f.judged, 1000) << "the machine was too busy to judge the following: the physics "
                                "or the driver kept missing its period\n"
                             << teleop.logs();
@@ -114,6 +116,7 @@ TEST(TeleopEndToEnd, ClutchHoldsTheGripperAndReleasingItGivesNoJump) {
   ASSERT_TRUE(run_clutch(teleop, run)) << teleop.logs();
   std::printf("clutch: drift while held %.2e m, largest move after release %.2e m\n",
               run.held_drift, run.jump);
+  SKIP_REAL_TIME_BOUNDS_IN_SANITIZED_BUILD();
   EXPECT_NEAR(run.before_clutch, kX0 + kScale * 0.02, 0.01) << teleop.logs();
   // While held, the hand goes back 2 cm: the palm stays.
   EXPECT_LT(run.held_drift, 0.005) << "the palm moved while clutched";
@@ -153,9 +156,10 @@ TEST(TeleopEndToEnd, PushingIntoTheFloorGivesAnOpposingBoundedForce) {
       lowest_palm, mean_up, pressing, most_force, kMaxForce);
   ASSERT_GT(pressing, 100) << "the hand never pushed down with the teleoperation commanding"
                            << teleop.logs();
-  EXPECT_GT(lowest_palm, 0.015) << "the palm went through the floor";
-  EXPECT_GT(mean_up, 0.8 * kMaxForce) << "the device got no force opposing the push";
   EXPECT_LE(most_force, kMaxForce + 1e-9) << "the device got more than the max force";
+  EXPECT_GT(lowest_palm, 0.015) << "the palm went through the floor";
+  SKIP_REAL_TIME_BOUNDS_IN_SANITIZED_BUILD();
+  EXPECT_GT(mean_up, 0.8 * kMaxForce) << "the device got no force opposing the push";
 }
 
 // The driver SIGKILLed with the palm 10 cm out: teleop says so once, holds the palm
@@ -194,8 +198,9 @@ TEST(TeleopEndToEnd, WhenTheDriverDiesThePalmIsHeldAndResumesWithNoJump) {
   std::printf(
       "driver killed: palm drift while held %.2e m, largest move after it came back %.2e m\n",
       held_drift, jump);
-  EXPECT_LT(jump, 0.005) << "the palm jumped when the device came back" << teleop.logs();
   EXPECT_TRUE(contains(teleop.teleop_log(), "device/dies is back")) << teleop.teleop_log();
+  SKIP_REAL_TIME_BOUNDS_IN_SANITIZED_BUILD();
+  EXPECT_LT(jump, 0.005) << "the palm jumped when the device came back" << teleop.logs();
   // Motion resumes from there: the new hand's 2 cm are 10 cm more of palm.
   ASSERT_TRUE(wait_until([&] { return teleop.device().pose.position_m.x > 0.0195; }, 20s));
   pause_ms(500);
@@ -247,8 +252,9 @@ TEST(TeleopEndToEnd, ContactFeedbackIsZeroInTheAirAndPushesBackOnTheFloor) {
   EXPECT_EQ(air_contacts, 0u);
   EXPECT_LT(air_most, 1e-3) << "a force with nothing touched" << teleop.logs();
   EXPECT_GT(palm_up_sum / pressing, 10.0) << "the physics reported no floor contact";
-  EXPECT_GT(mean_up, 0.8 * kMaxForce) << "the device got no force opposing the push";
   EXPECT_LE(most_force, kMaxForce + 1e-9) << "the device got more than the max force";
+  SKIP_REAL_TIME_BOUNDS_IN_SANITIZED_BUILD();
+  EXPECT_GT(mean_up, 0.8 * kMaxForce) << "the device got no force opposing the push";
 }
 
 // The teleoperation process SIGKILLed while the device pushes into the floor (more
