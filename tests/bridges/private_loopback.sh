@@ -25,6 +25,14 @@ cleanup() {
   local status=$?
   set +e
   for pid in "${started[@]}"; do kill -9 "$pid" 2>/dev/null; done
+  # And whatever else runs in this network namespace: the hub `afhub run` started in
+  # the background, which would outlive the test.
+  local own_net proc
+  own_net=$(readlink /proc/self/ns/net)
+  for proc in /proc/[0-9]*; do
+    [[ ${proc#/proc/} == "$$" ]] && continue
+    [[ $(readlink "$proc/ns/net" 2>/dev/null) == "$own_net" ]] && kill -9 "${proc#/proc/}" 2>/dev/null
+  done
   wait 2>/dev/null
   if [[ $status -ne 0 ]]; then
     for log in "$work"/*.log; do echo "== $log" >&2; tail -20 "$log" >&2; done
