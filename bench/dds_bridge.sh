@@ -138,7 +138,7 @@ window() {
 
 echo "2. $bodies bodies at 1 kHz exported"
 spawn a synth "$afhub" synth --namespace load --bodies "$bodies" --joints 7 --rate 1000 --no-autostart
-for _ in $(seq 100); do on a "$afhub" ls 2>/dev/null | grep -q "load/body$((bodies - 1))" && break; sleep 0.1; done
+for _ in $(seq 100); do on a "$afhub" ls 2>/dev/null | grep "load/body$((bodies - 1))" >/dev/null && break; sleep 0.1; done
 spawn a bridge_load env "$preload" "$afhub" bridge dds --export --bodies 'load/*'
 bridge=$spawned
 sleep 4  # the catalog scan, discovery, warm caches

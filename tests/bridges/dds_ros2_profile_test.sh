@@ -27,8 +27,8 @@ grep -q sensor_msgs_msg_dds__JointState__desc <<<"$symbols" ||
   fail "ros2_reader lacks the ROS 2 JointState type"
 
 spawn physics "$afhub" run "$model"
-for _ in $(seq 100); do "$afhub" ls 2>/dev/null | grep -q "$body" && break; sleep 0.1; done
-"$afhub" ls | grep -q "$body" || fail "the physics did not list $body"
+for _ in $(seq 100); do "$afhub" ls 2>/dev/null | grep "$body" >/dev/null && break; sleep 0.1; done
+"$afhub" ls | grep "$body" >/dev/null || fail "the physics did not list $body"
 start_bridge() {
   spawn bridge "$afhub" bridge dds --export --profile ros2 --bodies 'afhub/arm/*' "$@"
   bridge=$spawned

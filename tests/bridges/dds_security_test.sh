@@ -33,8 +33,8 @@ cat "$work/missing.txt"
 grep -q "permissions.p7s" "$work/missing.txt" || fail "the error does not name permissions.p7s"
 
 spawn physics "$afhub" run "$model"
-for _ in $(seq 100); do "$afhub" ls 2>/dev/null | grep -q "$body" && break; sleep 0.1; done
-"$afhub" ls | grep -q "$body" || fail "the physics did not list $body"
+for _ in $(seq 100); do "$afhub" ls 2>/dev/null | grep "$body" >/dev/null && break; sleep 0.1; done
+"$afhub" ls | grep "$body" >/dev/null || fail "the physics did not list $body"
 spawn bridge "$afhub" bridge dds --export --accept-commands --profile ros2 --bodies "$body" \
   --security "$work/trusted/bridge"
 bridge=$spawned

@@ -58,8 +58,8 @@ rt="chrt -f 20"
 palm=afhub/gripper/palm
 spawn a physics $rt "$afhub" run "$gripper" "$floor"
 spawn b hub "$afhub" hub
-for _ in $(seq 100); do on a "$afhub" ls 2>/dev/null | grep -q "$palm" && break; sleep 0.1; done
-on a "$afhub" ls | grep -q "$palm" || fail "the physics on A did not list $palm"
+for _ in $(seq 100); do on a "$afhub" ls 2>/dev/null | grep "$palm" >/dev/null && break; sleep 0.1; done
+on a "$afhub" ls | grep "$palm" >/dev/null || fail "the physics on A did not list $palm"
 
 for _ in $(seq 100); do on b "$afhub" ls >/dev/null 2>&1 && break; sleep 0.1; done
 spawn a bridge_a $rt "$afhub" bridge dds --export --accept-commands --bodies 'afhub/gripper/*' --world --latency
@@ -74,8 +74,8 @@ qos: best-effort
 YAML
 spawn b bridge_b $rt "$afhub" bridge dds --config /tmp/console.yaml --latency
 bridge_b=$spawned
-for _ in $(seq 200); do on b "$afhub" ls 2>/dev/null | grep -q "$palm" && break; sleep 0.1; done
-on b "$afhub" ls | grep -q "$palm" || fail "B does not list A's $palm"
+for _ in $(seq 200); do on b "$afhub" ls 2>/dev/null | grep "$palm" >/dev/null && break; sleep 0.1; done
+on b "$afhub" ls | grep "$palm" >/dev/null || fail "B does not list A's $palm"
 
 spawn b teleop $rt "$afhub" teleop /tmp/input_devices.yaml --device hand --wait 30
 teleop=$spawned

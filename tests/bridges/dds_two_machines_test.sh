@@ -21,7 +21,7 @@ afhub=$(realpath "$1")
 model=$(realpath "$2")
 malloc_count=$(realpath "$3")
 preload=LD_PRELOAD=$malloc_count
-if ldd "$afhub" | grep -q libasan; then preload=AFHUB_SANITIZED=1; fi
+if ldd "$afhub" | grep libasan >/dev/null; then preload=AFHUB_SANITIZED=1; fi
 test_name=dds_two_machines_test
 source "$(dirname "$0")/two_machines.sh"
 
@@ -36,8 +36,8 @@ body=afhub/arm/base
 spawn a physics "$afhub" run "$model"
 physics=$spawned
 spawn b hub "$afhub" hub
-for _ in $(seq 100); do on a "$afhub" ls 2>/dev/null | grep -q "$body" && break; sleep 0.1; done
-on a "$afhub" ls | grep -q "$body" || fail "the physics on A did not list $body"
+for _ in $(seq 100); do on a "$afhub" ls 2>/dev/null | grep "$body" >/dev/null && break; sleep 0.1; done
+on a "$afhub" ls | grep "$body" >/dev/null || fail "the physics on A did not list $body"
 
 # chunks SIDE: "CHUNKS HUB_PID": the fewest payload chunks in use on that side's hub
 # over 12 readings 0.25 s apart (a reading may catch a sample in flight), and the hub's
@@ -205,7 +205,7 @@ echo "9. an exporter of 300 bodies that takes no commands takes no publisher por
 # (iceoryx has 512: 300 bodies' states and 300 command writers would not fit.)
 spawn a synth "$afhub" synth --namespace load --bodies 300 --joints 2 --rate 100 --no-autostart
 synth=$spawned
-for _ in $(seq 100); do on a "$afhub" ls 2>/dev/null | grep -q load/body299 && break; sleep 0.1; done
+for _ in $(seq 100); do on a "$afhub" ls 2>/dev/null | grep load/body299 >/dev/null && break; sleep 0.1; done
 spawn a bridge_load "$afhub" bridge dds --export --bodies 'load/*'
 bridge_load=$spawned
 for _ in $(seq 100); do grep -q "exporting load/body299" "$work/bridge_load.log" && break; sleep 0.1; done
