@@ -1,13 +1,14 @@
 #!/usr/bin/env bash
 # Draws what bench/dds_bridge.sh wrote into OUT_DIR: the 1 KiB round trips' CDFs (raw
 # Cyclone DDS and afhub through two bridges) and, second by second, the age of the
-# states a DDS reader received from a bridge exporting 300 bodies at 1 kHz, normally
+# states a DDS reader received from a bridge exporting its bodies at 1 kHz, normally
 # and under overload. Needs gnuplot.
 #   bench/dds_bridge_plot.sh OUT_DIR PNG
 set -euo pipefail
 out=$1
 png=$2
 command -v gnuplot >/dev/null || { echo "dds_bridge_plot.sh: needs gnuplot (apt-get install gnuplot-nox)" >&2; exit 1; }
+bodies=$(grep -o '^[0-9]* bodies at 1 kHz' "$out/summary.txt" | cut -d' ' -f1)
 data=$(mktemp -d)
 trap 'rm -rf "$data"' EXIT
 # cdf FILE: "microseconds fraction" per sorted round trip.
@@ -31,7 +32,7 @@ set grid
 plot "$data/raw" using 1:2 with lines lw 2 title "Cyclone DDS alone", \
      "$data/bridge" using 1:2 with lines lw 2 title "afhub -> bridge -> DDS -> bridge -> afhub"
 unset logscale x
-set title "300 bodies at 1 kHz exported: age of the states a DDS reader gets"
+set title "$bodies bodies at 1 kHz exported: age of the states a DDS reader gets"
 set xlabel "second of the window"
 set ylabel "age at the reader (ms)"
 set logscale y
