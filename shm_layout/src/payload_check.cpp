@@ -37,6 +37,8 @@ std::size_t fixed_size_of(PayloadKind kind) noexcept {
       return scene_description_bytes(0);
     case PayloadKind::kSoftBodyMesh:
       return soft_body_mesh_bytes(0);
+    case PayloadKind::kScenePoses:
+      return scene_poses_bytes(0);  // an empty scene's
   }
   return 0;
 }
@@ -108,6 +110,21 @@ const char* soft_body_problem(const SoftBodyMesh& mesh, std::size_t bytes) noexc
   return nullptr;
 }
 
+const char* scene_poses_problem(const ScenePoses& poses, std::size_t bytes) noexcept {
+  if (poses.body_count > kMaxSceneBodies || bytes < scene_poses_bytes(poses.body_count))
+    return "ScenePoses.body_count";
+  if (poses.joint_value_count > kMaxSceneJointValues ||
+      bytes < scene_poses_bytes(poses.body_count, poses.joint_value_count))
+    return "ScenePoses.joint_value_count";
+  for (std::uint32_t b = 0; b < poses.body_count; ++b) {
+    const ScenePose& body = poses.bodies[b];
+    if (body.joint_count > kMaxJointsPerBody ||
+        std::uint64_t{body.first_joint} + body.joint_count > poses.joint_value_count)
+      return "ScenePose.first_joint";
+  }
+  return nullptr;
+}
+
 // The first count beyond its capacity or the chunk's `bytes`, named; nullptr when
 // every count fits. The chunk holds at least the kind's fixed size.
 const char* count_beyond_capacity(const char* at, std::size_t bytes, PayloadKind kind) noexcept {
@@ -172,6 +189,8 @@ const char* count_beyond_capacity(const char* at, std::size_t bytes, PayloadKind
       return scene_problem(*reinterpret_cast<const SceneDescription*>(at), bytes);
     case PayloadKind::kSoftBodyMesh:
       return soft_body_problem(*reinterpret_cast<const SoftBodyMesh*>(at), bytes);
+    case PayloadKind::kScenePoses:
+      return scene_poses_problem(*reinterpret_cast<const ScenePoses*>(at), bytes);
     case PayloadKind::kWorldCommand:
     case PayloadKind::kLoopStats:
     case PayloadKind::kBenchSample:

@@ -448,6 +448,7 @@ class Fuzzer {
         break;
       case PayloadKind::kSceneDescription:
       case PayloadKind::kSoftBodyMesh:
+      case PayloadKind::kScenePoses:
         break;  // not yet fuzzed: no seed
     }
     sink_ += sink;

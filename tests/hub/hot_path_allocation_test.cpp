@@ -24,6 +24,7 @@
 #include "afhub/physics/sim_channels.hpp"
 #include "afhub/rt/clock.hpp"
 #include "afhub/rt/loop_stats_publisher.hpp"
+#include "afhub/shm_layout/channel_names.hpp"
 #include "afhub/teleop/teleop_process.hpp"
 #include "afhub_process.hpp"
 #include "model_files.hpp"
@@ -169,10 +170,17 @@ void expect_physics_loop_allocation_free(const std::vector<std::string>& files,
   physics::Simulation sim(model, 0.001);
   physics::SimChannels channels(sim, 0.5);
   BodyClient controller(body);
+  // A viewer reading the pose feed, which then goes out every ~17 cycles of 1 ms.
+  LatestReader<ScenePoses> viewer(
+      {std::string(kService), world_instance(), std::string(kScenePosesEvent)});
+  int cycle = 0;
+  std::uint64_t viewer_updates = 0;
   auto one_cycle = [&]() {
     channels.apply_commands(monotonic_ns());
     sim.step();
     channels.publish(0.0, 0.0, false);
+    channels.publish_scene_poses(std::int64_t{++cycle} * 1'000'000);
+    if (viewer.latest() && viewer.updated()) ++viewer_updates;
     const BodyState* state = controller.latest_state();
     BodyCommand* command = controller.loan_command(kMaxJointsPerBody);
     if (!state || !command) return false;
@@ -190,8 +198,10 @@ void expect_physics_loop_allocation_free(const std::vector<std::string>& files,
   for (int i = 0; i < 6300; ++i) ASSERT_TRUE(one_cycle());
 
   constexpr int kCycles = 5000;
+  const std::uint64_t updates_before = viewer_updates;
   EXPECT_TRUE(count_allocations(kCycles, one_cycle));
   EXPECT_EQ(g_allocations.load(), 0) << "heap allocations in " << kCycles << " physics cycles";
+  EXPECT_GE(viewer_updates - updates_before, 290u) << "the pose feed went out at 60 Hz";
   EXPECT_TRUE(sim.all_finite());
   EXPECT_EQ(channels.rejected_commands(), 0u);
 }

@@ -251,6 +251,45 @@ TEST(PayloadCheck, SoftBodyMeshesHoldTheirNodesAndFaces) {
   EXPECT_STREQ(field, "SoftBodyMesh.faces");
 }
 
+TEST(PayloadCheck, ScenePosesHoldTheirBodiesAndJointValues) {
+  auto poses = std::make_unique<ScenePoses>();
+  poses->header = PayloadHeader{kLayoutId, PayloadKind::kScenePoses};
+  poses->body_count = 2;
+  poses->joint_value_count = 3;
+  poses->bodies[0] = {{}, {0, 0, 0, 1}, 0, 3};
+  poses->bodies[1] = {{}, {0, 0, 0, 1}, 3, 0};
+  const std::size_t bytes = scene_poses_bytes(2, 3);
+  const char* field = nullptr;
+  EXPECT_EQ(check_payload(poses.get(), bytes, PayloadKind::kScenePoses, &field),
+            PayloadError::kNone);
+  // More bodies than the chunk holds, or than any scene may.
+  EXPECT_EQ(check_payload(poses.get(), scene_poses_bytes(1), PayloadKind::kScenePoses, &field),
+            PayloadError::kCountTooLarge);
+  EXPECT_STREQ(field, "ScenePoses.body_count");
+  poses->body_count = kMaxSceneBodies + 1;
+  EXPECT_EQ(check_payload(poses.get(), sizeof *poses, PayloadKind::kScenePoses, &field),
+            PayloadError::kCountTooLarge);
+  EXPECT_STREQ(field, "ScenePoses.body_count");
+  poses->body_count = 2;
+  // More joint values than the chunk holds, or than any feed may.
+  EXPECT_EQ(check_payload(poses.get(), bytes - 1, PayloadKind::kScenePoses, &field),
+            PayloadError::kCountTooLarge);
+  EXPECT_STREQ(field, "ScenePoses.joint_value_count");
+  poses->joint_value_count = kMaxSceneJointValues + 1;
+  EXPECT_EQ(check_payload(poses.get(), sizeof *poses, PayloadKind::kScenePoses, &field),
+            PayloadError::kCountTooLarge);
+  EXPECT_STREQ(field, "ScenePoses.joint_value_count");
+  poses->joint_value_count = 3;
+  // A body's joints past the values: a viewer would read beyond them.
+  poses->bodies[1] = {{}, {0, 0, 0, 1}, 2, 2};
+  EXPECT_EQ(check_payload(poses.get(), bytes, PayloadKind::kScenePoses, &field),
+            PayloadError::kCountTooLarge);
+  EXPECT_STREQ(field, "ScenePose.first_joint");
+  poses->bodies[1] = {{}, {0, 0, 0, 1}, 0xFFFFFFFFU, 2};  // no wrap-around
+  EXPECT_EQ(check_payload(poses.get(), bytes, PayloadKind::kScenePoses, &field),
+            PayloadError::kCountTooLarge);
+}
+
 TEST(PayloadCheck, EveryErrorHasAnExplanation) {
   for (auto error : {PayloadError::kTooSmall, PayloadError::kForeignLayout,
                      PayloadError::kWrongKind, PayloadError::kCountTooLarge})

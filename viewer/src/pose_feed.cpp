@@ -1,6 +1,7 @@
 // The viewer's reading of the hub (see pose_feed.hpp).
 #include "afhub/viewer/pose_feed.hpp"
 
+#include <algorithm>
 #include <cstring>
 #include <unordered_set>
 
@@ -25,11 +26,12 @@ static_assert(kMaxSceneBodies <= 65535 && kMaxJointsPerBody <= 65535,
 PoseFeed::PoseFeed(const std::string& world)
     : scene_reader_({std::string(kService), world, std::string(kSceneEvent)}),
       world_reader_({std::string(kService), world, std::string(kStateEvent)}),
+      poses_reader_({std::string(kService), world, std::string(kScenePosesEvent)}),
       scene_(std::make_shared<ViewScene>()) {
   catalog_.wait(std::chrono::milliseconds(2000));
 }
 
-void PoseFeed::refresh_readers(const BodyList& catalog) {
+void PoseFeed::refresh_live(const BodyList& catalog) {
   std::unordered_set<std::string> listed;
   catalog_bodies_ = 0;
   JsonWriter joints;
@@ -45,15 +47,8 @@ void PoseFeed::refresh_readers(const BodyList& catalog) {
   joints.end_object();
   joints_changed_ = joints.str() != joints_json_;
   joints_json_ = joints.str();
-  states_.resize(scene_->channels.size());
-  for (std::size_t b = 0; b < states_.size(); ++b) {
-    const bool live = listed.count(scene_->channels[b]) != 0;
-    if (live && !states_[b])
-      states_[b] =
-          std::make_unique<LatestReader<BodyState>>(body_state_channel(scene_->channels[b]));
-    else if (!live)
-      states_[b].reset();
-  }
+  live_.assign(scene_->channels.size(), false);
+  for (std::size_t b = 0; b < live_.size(); ++b) live_[b] = listed.count(scene_->channels[b]) != 0;
 }
 
 std::shared_ptr<const ViewScene> PoseFeed::update(std::vector<std::uint8_t>& frame) {
@@ -81,14 +76,14 @@ std::shared_ptr<const ViewScene> PoseFeed::update(std::vector<std::uint8_t>& fra
     // A restarted physics starts its sequence again: the viewer counts instead.
     scene_ =
         std::make_shared<const ViewScene>(view_scene_of(*scene, scene_->generation + 1, faces));
-    states_.clear();
-    catalog_sequence_ = 0;  // readers for the new scene's bodies
+    scene_pid_ = scene->header.publisher_pid;
+    catalog_sequence_ = 0;  // which of the new scene's bodies are live
     changed = scene_;
   }
   const BodyList& catalog = catalog_.latest();
   if (catalog.header.sequence != catalog_sequence_) {
     catalog_sequence_ = catalog.header.sequence;
-    refresh_readers(catalog);
+    refresh_live(catalog);
   }
   if (const WorldState* world = world_reader_.latest()) {
     sim_time_s_ = world->header.sim_time_s;
@@ -104,22 +99,26 @@ std::shared_ptr<const ViewScene> PoseFeed::update(std::vector<std::uint8_t>& fra
   put(frame, std::uint32_t{0});  // the joint block count, set below
   std::uint32_t entries = 0, blocks = 0;
   joint_blocks_.clear();
-  for (std::size_t b = 0; b < states_.size(); ++b) {
-    if (!states_[b]) continue;
-    const BodyState* state = states_[b]->latest();
-    if (!state) continue;
-    const Pose& pose = state->pose;
-    put(frame, static_cast<std::uint32_t>(b));
-    for (double v : {pose.position_m.x, pose.position_m.y, pose.position_m.z, pose.orientation.x,
-                     pose.orientation.y, pose.orientation.z, pose.orientation.w})
-      put(frame, static_cast<float>(v));
+  // The newest poses of the physics that published the scene (a restarted one's
+  // last sample stays readable until the new one publishes).
+  const ScenePoses* poses = poses_reader_.latest();
+  if (poses && poses->header.publisher_pid != scene_pid_) poses = nullptr;
+  const std::uint32_t count =
+      poses ? std::min<std::uint32_t>(poses->body_count, static_cast<std::uint32_t>(live_.size()))
+            : 0;
+  for (std::uint32_t b = 0; b < count; ++b) {
+    if (!live_[b]) continue;
+    const ScenePose& pose = poses->bodies[b];
+    put(frame, b);
+    for (float v : pose.position_m) put(frame, v);
+    for (float v : pose.orientation_xyzw) put(frame, v);
     ++entries;
-    if (state->joint_count == 0) continue;
+    if (pose.joint_count == 0) continue;
     // Scene bodies (kMaxSceneBodies) and joints (kMaxJointsPerBody) fit 16 bits.
     put(joint_blocks_, static_cast<std::uint16_t>(b));
-    put(joint_blocks_, static_cast<std::uint16_t>(state->joint_count));
-    for (std::uint32_t j = 0; j < state->joint_count; ++j)
-      put(joint_blocks_, static_cast<float>(state->joints[j].position));
+    put(joint_blocks_, static_cast<std::uint16_t>(pose.joint_count));
+    for (std::uint32_t j = 0; j < pose.joint_count; ++j)
+      put(joint_blocks_, joint_positions_in(*poses)[pose.first_joint + j]);
     ++blocks;
   }
   frame.insert(frame.end(), joint_blocks_.begin(), joint_blocks_.end());

@@ -14,6 +14,7 @@
 #include "afhub/shm_layout/health.hpp"
 #include "afhub/shm_layout/loop_stats.hpp"
 #include "afhub/shm_layout/scene.hpp"
+#include "afhub/shm_layout/scene_poses.hpp"
 #include "afhub/shm_layout/soft_body.hpp"
 #include "afhub/shm_layout/world.hpp"
 
@@ -85,6 +86,12 @@ std::vector<MempoolSpec> default_mempools() {
       {round_up8(scene_description_bytes(64)), 32, "scene descriptions of up to 64 bodies"},
       {round_up8(scene_description_bytes(kMaxSceneBodies)), 8,
        "scene descriptions of up to kMaxSceneBodies bodies"},
+      // A viewer's pose feed: per physics a chunk in the writer's history and a loan,
+      // three in each viewer.
+      {round_up8(scene_poses_bytes(64, 512)), 32,
+       "viewer pose feeds of up to 64 bodies (512 joint values)"},
+      {round_up8(scene_poses_bytes(kMaxSceneBodies, kMaxSceneJointValues)), 8,
+       "viewer pose feeds of up to kMaxSceneBodies bodies (kMaxSceneJointValues joint values)"},
       // Per soft body a node chunk in the writer's history, a loan, and three in
       // each viewer; its faces once, kept the same way.
       {round_up8(soft_body_mesh_bytes(0)), 64, "soft body node positions"},

@@ -126,6 +126,7 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
       report.timing.count_late(channels->late_answers() - late_counted);
       late_counted = channels->late_answers();
       stats->maybe_publish(now_ns, report.timing);
+      channels->publish_scene_poses(now_ns);
     }
     rate.update(now_ns, report.steps, !control.paused);
     achieved_rate_hz = rate.rate_hz();

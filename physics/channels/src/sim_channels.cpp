@@ -70,6 +70,8 @@ SimChannels::SimChannels(Simulation& sim, double watchdog_s, std::string_view na
       claimed_(claim_bodies(sim.model())),
       world_({std::string(kService), world_instance(name_space), std::string(kStateEvent)}),
       scene_({std::string(kService), world_instance(name_space), std::string(kSceneEvent)}),
+      scene_poses_(
+          {std::string(kService), world_instance(name_space), std::string(kScenePosesEvent)}),
       world_commands_(std::make_unique<WorldCommandQueue>(world_instance(name_space))) {
   if (!(watchdog_s >= kMinWatchdogS && watchdog_s <= kMaxWatchdogS))
     throw Error("the watchdog period must be 0.002 to 3600 s, got " + std::to_string(watchdog_s));
@@ -111,6 +113,16 @@ SimChannels::SimChannels(Simulation& sim, double watchdog_s, std::string_view na
         ChannelId{std::string(kService), name, std::string(kSoftNodesEvent)});
     soft_surfaces_.push_back(std::move(surface));
   }
+  std::size_t joint_values = 0;
+  for (std::size_t b = 0; b < scene_body_count(model); ++b)
+    if (!model.bodies[b].passive)
+      joint_values += std::min(model.descendant_joints[b].size(), kBodyJointCapacity);
+  if (joint_values > kMaxSceneJointValues)
+    std::fprintf(stderr,
+                 "afhub run: a viewer's pose feed holds %zu joint positions and this model's "
+                 "bodies have %zu below them: a viewer shows no joints for the bodies past it\n",
+                 kMaxSceneJointValues, joint_values);
+  scene_joint_values_ = static_cast<std::uint32_t>(std::min(joint_values, kMaxSceneJointValues));
   soft_nodes_every_ = std::max<std::uint64_t>(
       1, static_cast<std::uint64_t>(std::lround(1.0 / (kSoftNodesRateHz * sim.dt_s()))));
   lockstep_pids_.reserve(channels_.size());
@@ -469,6 +481,44 @@ void SimChannels::publish_soft_nodes(std::uint64_t step, double time_s) noexcept
     surface.nodes->publish(mesh);
     surface.nodes_published = true;
   }
+}
+
+void SimChannels::publish_scene_poses(std::int64_t now_ns) noexcept {
+  if (now_ns < scene_poses_next_ns_) return;
+  if (scene_poses_published_ && !scene_poses_.raw().has_readers()) return;
+  scene_poses_next_ns_ = now_ns + static_cast<std::int64_t>(1e9 / kScenePosesRateHz);
+  const Model& model = sim_.model();
+  const auto bodies = static_cast<std::uint32_t>(scene_body_count(model));
+  auto* poses = static_cast<ScenePoses*>(
+      scene_poses_.raw().loan(scene_poses_bytes(bodies, scene_joint_values_)));
+  if (!poses) return;  // shared memory exhausted: skip, never block
+  poses->header = PayloadHeader{};
+  poses->header.sim_step = sim_.step_count();
+  poses->header.sim_time_s = sim_.time_s();
+  poses->body_count = bodies;
+  float* joint_positions = joint_positions_in(*poses);
+  std::uint32_t values = 0;
+  for (std::uint32_t b = 0; b < poses->body_count; ++b) {
+    const Pose pose = sim_.body_pose(b);
+    ScenePose& out = poses->bodies[b];
+    out.first_joint = out.joint_count = 0;
+    out.position_m = {static_cast<float>(pose.position_m.x), static_cast<float>(pose.position_m.y),
+                      static_cast<float>(pose.position_m.z)};
+    out.orientation_xyzw = {
+        static_cast<float>(pose.orientation.x), static_cast<float>(pose.orientation.y),
+        static_cast<float>(pose.orientation.z), static_cast<float>(pose.orientation.w)};
+    if (model.bodies[b].passive) continue;  // no state: no joints to show
+    const std::vector<int>& below = model.descendant_joints[b];
+    const auto count = static_cast<std::uint32_t>(std::min(below.size(), kBodyJointCapacity));
+    if (values + count > scene_joint_values_) continue;  // past the feed's capacity: said once
+    out.first_joint = values;
+    out.joint_count = count;
+    for (std::uint32_t j = 0; j < count; ++j)
+      joint_positions[values++] = static_cast<float>(sim_.joint_position(below[j]));
+  }
+  poses->joint_value_count = values;
+  scene_poses_.publish(poses);
+  scene_poses_published_ = true;
 }
 
 void SimChannels::publish(double wall_time_s, double achieved_rate_hz, bool paused) noexcept {

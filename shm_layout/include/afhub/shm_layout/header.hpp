@@ -23,6 +23,7 @@ enum class PayloadKind : std::uint32_t {
   kDeviceCommand = 11,
   kSceneDescription = 12,  // what a viewer draws, published once by the physics
   kSoftBodyMesh = 13,      // a soft body's faces (once) or node positions (display rate)
+  kScenePoses = 14,        // every body's pose for a viewer, at display rate
 };
 
 struct PayloadHeader {

@@ -17,6 +17,7 @@
 #include "afhub/shm_layout/health.hpp"
 #include "afhub/shm_layout/loop_stats.hpp"
 #include "afhub/shm_layout/scene.hpp"
+#include "afhub/shm_layout/scene_poses.hpp"
 #include "afhub/shm_layout/soft_body.hpp"
 #include "afhub/shm_layout/world.hpp"
 
@@ -238,6 +239,16 @@ inline constexpr std::uint64_t kLayoutId = layout_detail::mix({
     AFHUB_OFF(SoftBodyMesh, face_count),
     AFHUB_OFF(SoftBodyMesh, nodes),
     AFHUB_OFF(SoftBodyMesh, faces),
+    kMaxSceneJointValues,
+    sizeof(ScenePose),
+    AFHUB_OFF(ScenePose, position_m),
+    AFHUB_OFF(ScenePose, orientation_xyzw),
+    AFHUB_OFF(ScenePose, first_joint),
+    AFHUB_OFF(ScenePose, joint_count),
+    sizeof(ScenePoses),
+    AFHUB_OFF(ScenePoses, body_count),
+    AFHUB_OFF(ScenePoses, joint_value_count),
+    AFHUB_OFF(ScenePoses, bodies),
 });
 #undef AFHUB_OFF
 
@@ -255,5 +266,6 @@ static_assert(layout_detail::is_shm_payload<DeviceState>);
 static_assert(layout_detail::is_shm_payload<DeviceCommand>);
 static_assert(layout_detail::is_shm_payload<SceneDescription>);
 static_assert(layout_detail::is_shm_payload<SoftBodyMesh>);
+static_assert(layout_detail::is_shm_payload<ScenePoses>);
 
 }  // namespace afhub

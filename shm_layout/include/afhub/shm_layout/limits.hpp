@@ -41,6 +41,10 @@ inline constexpr std::size_t kMaxBodies = 450;
 // left out of the scene (not drawn) and said once by the physics.
 inline constexpr std::size_t kMaxSceneBodies = 512;
 
+// Joint positions a viewer's pose feed carries (ScenePoses): each body's joints below
+// it, so a chain of n links carries about n^2/2. Bodies past it show no joints.
+inline constexpr std::size_t kMaxSceneJointValues = 16384;
+
 // Soft bodies a scene description lists (AMBF's models have none to a few).
 inline constexpr std::size_t kMaxSceneSoftBodies = 16;
 

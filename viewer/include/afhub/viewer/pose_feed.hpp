@@ -1,6 +1,8 @@
 // What the viewer reads through the hub, at display rate: the scene description,
-// the catalog, and the newest state of every scene body the catalog lists, packed
-// into one binary pose frame per tick (never JSON per frame). Bodies that appear
+// the catalog, and the physics' pose feed (ScenePoses: every body's pose and joints
+// in one payload, published at display rate only while read, so that a viewer adds
+// no reader to any 1 kHz state channel), packed into one binary pose frame per tick
+// for the scene bodies the catalog lists (never JSON per frame). Bodies that appear
 // or vanish in the catalog come and go in the next frame; a new scene description
 // (physics restarted, another model) gets a new generation, and the page reloads it.
 //
@@ -8,7 +10,7 @@
 //   u32 magic 'AFV1' (0x31564641), u32 scene generation (the viewer counts the scenes),
 //   u32 entry count, u32 flags (bit 0: paused), f64 simulation time,
 //   u32 bodies in the catalog, u32 joint blocks;
-//   then per entry (a scene body with a live state): u32 scene index,
+//   then per entry (a scene body the catalog lists): u32 scene index,
 //   f32 position x y z, f32 orientation x y z w;
 //   then per joint block (an entry whose body has joints, in the entries' order):
 //   u16 scene index, u16 joint count N, N x f32 joint position (rad or m);
@@ -25,6 +27,7 @@
 
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/channel.hpp"
+#include "afhub/shm_layout/scene_poses.hpp"
 #include "afhub/shm_layout/soft_body.hpp"
 #include "afhub/shm_layout/world.hpp"
 #include "afhub/viewer/view_scene.hpp"
@@ -49,16 +52,18 @@ class PoseFeed {
   bool joints_changed() const { return joints_changed_; }
 
  private:
-  void refresh_readers(const BodyList& catalog);
+  void refresh_live(const BodyList& catalog);
 
   LatestReader<SceneDescription> scene_reader_;
   LatestReader<WorldState> world_reader_;
+  LatestReader<ScenePoses> poses_reader_;
   CatalogReader catalog_;
   std::shared_ptr<const ViewScene> scene_;
+  std::uint32_t scene_pid_ = 0;  // the physics that published it: its poses only
   std::uint64_t catalog_sequence_ = 0;
   std::uint32_t catalog_bodies_ = 0;
-  // Per scene body, its state reader while the catalog lists it.
-  std::vector<std::unique_ptr<LatestReader<BodyState>>> states_;
+  // Per scene body: the catalog lists it (a live body: drawn at its pose).
+  std::vector<bool> live_;
   // Per scene soft body, its faces (read once per scene) and its node positions.
   struct SoftReaders {
     std::unique_ptr<LatestReader<SoftBodyMesh>> faces, nodes;

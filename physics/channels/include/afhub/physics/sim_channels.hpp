@@ -39,6 +39,7 @@
 #include "afhub/shm_layout/body_command.hpp"
 #include "afhub/shm_layout/body_state.hpp"
 #include "afhub/shm_layout/scene.hpp"
+#include "afhub/shm_layout/scene_poses.hpp"
 #include "afhub/shm_layout/soft_body.hpp"
 #include "afhub/shm_layout/world.hpp"
 
@@ -99,6 +100,12 @@ class SimChannels {
   void apply_commands(std::int64_t now_ns) noexcept;
   // Publishes every body's state and the world state.
   void publish(double wall_time_s, double achieved_rate_hz, bool paused) noexcept;
+  // For a viewer: every scene body's pose and joints in one payload (ScenePoses), at
+  // most kScenePosesRateHz of `now_ns` (CLOCK_MONOTONIC), paused too, and only while
+  // something reads it (once without, for a viewer that joins later). Called outside
+  // the loop's timed step (run_loop: the cycle's `after`, with the loop statistics):
+  // the states are out by then, and no controller waits for it.
+  void publish_scene_poses(std::int64_t now_ns) noexcept;
   // The next world command not acted on before, oldest first, copied into `out`;
   // false when none waits. Commands published before this SimChannels existed (a
   // live writer's history seen by a restarted physics) are skipped.
@@ -200,7 +207,11 @@ class SimChannels {
   BodyReading reading_;  // a body's readings on their way into its state
   DirectoryPublisher directory_;
   Writer<WorldState> world_;
-  Writer<SceneDescription> scene_;  // published once: what a viewer draws
+  Writer<SceneDescription> scene_;        // published once: what a viewer draws
+  Writer<ScenePoses> scene_poses_;        // where it is, at display rate
+  std::uint32_t scene_joint_values_ = 0;  // joint positions per ScenePoses: fixed by the model
+  bool scene_poses_published_ = false;
+  std::int64_t scene_poses_next_ns_ = 0;  // when the next one is due
   std::unique_ptr<WorldCommandQueue> world_commands_;
   std::uint64_t rejected_ = 0, expiries_ = 0, stale_ = 0;
   bool lockstep_ = false;
