@@ -1,22 +1,27 @@
 #!/usr/bin/env bash
-# The browser viewer's cost to the physics loop (issue 17), in ONE physics run: the
-# example scene runs in real time at 1 kHz (`afhub run --cpu 0 --step-log`), and
-# windows of WINDOW seconds alternate between no viewer at all and a viewer with two
+# The browser viewer's cost to the physics loop (issue 17), in ONE run of two identical
+# physics processes: the example scene twice (the second under `--namespace twin`),
+# both pinned to CPU 0 at 1 kHz, each writing its step log. Windows of WINDOW seconds
+# alternate between no viewer at all and a viewer watching the FIRST one with two
 # clients: two WebSocket readers (bench/ws_reader.py, the cheap variant), two headless
 # Chromium pages (software WebGL, SwiftShader), and two Chromium pages pinned to the
-# other CPU (taskset). Each window starts once its clients are connected and settled.
-# For each window: the step time's p50 and p99 from the physics' own step log, the
-# p99's ratio to the mean of the windows without a viewer around it, the viewer's CPU
-# (utime + stime from /proc/PID/stat) and the clients' CPU, as % of one core.
+# other CPU (taskset). The twin is the control: it runs in the same windows, on the same
+# CPU, through the same load, with no viewer, so the machine's noise (which moves a
+# window's p99 by tens of %) divides out.
+# For each window: both loops' step time p50 and p99 (as `afhub run` times a step:
+# commands in, step, states out), in wall time and in the thread's CPU time (which a
+# step preempted, or stolen by the hypervisor, does not inflate), the p99 ratio
+# watched / twin, and that ratio over the same ratio in the no-viewer windows around
+# it (1.000: the viewer costs nothing measurable); the viewer's CPU (utime + stime
+# from /proc/PID/stat) and its clients', as % of one core.
 #
 #   bench/viewer_cost.sh [WINDOW_S] [ROUNDS] [BUILD_DIR] [FIFO]
 #                        (defaults: 10, 2, build/dev, 0)
-# FIFO > 0 runs the physics loop at that SCHED_FIFO priority with its memory locked
+# FIFO > 0 runs both physics loops at that SCHED_FIFO priority with their memory locked
 # (`afhub run --fifo FIFO --lock-memory`, as root), as a real-time deployment would.
 #
 # As root it runs in a private mount namespace (its own /tmp, /dev/shm, /run), so that
-# its hub cannot meet another. Needs chromium. A measurement, not a test: on a shared
-# machine other loads move the figures.
+# its hub cannot meet another. Needs chromium. A measurement, not a test.
 set -euo pipefail
 
 window=${1:-10}
@@ -57,10 +62,16 @@ clients_connected() { ss -Htn state established "( sport = :$port )" | wc -l; }
 "$afhub" hub > "$work/hub.log" 2>&1 &
 pids+=($!)
 for _ in $(seq 100); do "$afhub" status > /dev/null 2>&1 && break; sleep 0.1; done
-"$afhub" run --launch "$root/examples/models/launch.yaml" -l 0,1,2 --no-autostart --cpu 0 \
-  "${realtime[@]}" --steps "$steps" --step-log "$work/steps.txt" > "$work/run.log" 2>&1 &
-physics=$!
-pids+=($physics)
+physics=()
+for twin in watched twin; do
+  name_space=()
+  [[ $twin == twin ]] && name_space=(--namespace twin)
+  "$afhub" run --launch "$root/examples/models/launch.yaml" -l 0,1,2 --no-autostart --cpu 0 \
+    "${name_space[@]}" "${realtime[@]}" --steps "$steps" --step-log "$work/steps-$twin.txt" \
+    > "$work/run-$twin.log" 2>&1 &
+  physics+=($!)
+  pids+=($!)
+done
 sleep 3
 
 view=""
@@ -118,21 +129,21 @@ for round in $(seq "$rounds"); do
     stop_condition
   done
 done
-kill -TERM "$physics"
-wait "$physics" || true
+kill -TERM "${physics[@]}"
+wait "${physics[@]}" || true
 readers=$(cat "$work"/reader*.log 2>/dev/null | tr '\n' ' ')
 
-grep -i "fifo\|lock" "$work/run.log" || true
-python3 - "$work/steps.txt" "$work/windows.txt" "$tick" "$window" "$readers" <<'PY'
+grep -ih "fifo\|lock" "$work"/run-*.log || true
+python3 - "$work/steps-watched.txt" "$work/steps-twin.txt" "$work/windows.txt" "$tick" "$window" \
+  "$readers" <<'PY'
 import sys
-steps_file, windows_file, tick, window, readers = sys.argv[1:]
+watched_file, twin_file, windows_file, tick, window, readers = sys.argv[1:]
 tick = float(tick)
-samples = []
-with open(steps_file) as f:
-    next(f)
-    for line in f:
-        begin, us = line.split()
-        samples.append((int(begin), float(us)))
+def steps(path):
+    with open(path) as f:
+        next(f)
+        return [(int(begin), float(wall), float(cpu)) for begin, wall, cpu in (l.split() for l in f)]
+watched, twin = steps(watched_file), steps(twin_file)
 def percentile(values, q):
     values = sorted(values)
     return values[min(len(values) - 1, int(q * len(values)))] if values else float("nan")
@@ -140,24 +151,51 @@ windows = []
 for line in open(windows_file):
     name, begin, end, view_ticks, client_ticks, connected = line.split()
     begin, end = int(begin), int(end)
-    times = [us for t, us in samples if begin <= t < end]
     seconds = (end - begin) * 1e-9
-    windows.append(dict(name=name, seconds=seconds, steps=len(times), p50=percentile(times, 0.5),
-                        p99=percentile(times, 0.99), view=100 * int(view_ticks) / tick / seconds,
-                        clients=100 * int(client_ticks) / tick / seconds, connected=int(connected)))
-print("one physics run, %s s windows; step time (us) from its step log" % window)
-print("%-16s %5s %6s %8s %8s %9s %9s %10s %8s" % ("window", "s", "steps", "p50", "p99", "p99/base",
-                                              "view CPU", "client CPU", "clients"))
+    w = dict(name=name, begin=begin, end=end, seconds=seconds, view=100 * int(view_ticks) / tick / seconds,
+             clients=100 * int(client_ticks) / tick / seconds, connected=int(connected))
+    for key, samples in (("w", watched), ("t", twin)):
+        inside = [(wall, cpu) for t, wall, cpu in samples if begin <= t < end]
+        w[key + "steps"] = len(inside)
+        w[key + "p50"] = percentile([wall for wall, _ in inside], 0.5)
+        w[key + "p99"] = percentile([wall for wall, _ in inside], 0.99)
+        w[key + "cpu99"] = percentile([cpu for _, cpu in inside], 0.99)
+    w["ratio"] = w["wp99"] / w["tp99"]
+    w["cpu_ratio"] = w["wcpu99"] / w["tcpu99"]
+    windows.append(w)
+print("one run of two identical physics loops on CPU 0, %s s windows; step times (us) from "
+      "their step logs (wall time, and the thread's CPU time); the viewer watches the first"
+      % window)
+print("%-16s %6s %7s %7s %8s %8s %8s %7s %7s %9s %9s %10s %7s" % (
+    "window", "steps", "p50", "p99", "CPU p99", "twin p99", "twin CPU", "ratio", "CPU rt",
+    "ratio/base", "CPU/base", "view CPU", "client CPU"))
+def relative(i, key):
+    around = [windows[j][key] for j in (i - 1, i + 1)
+              if 0 <= j < len(windows) and windows[j]["name"] == "none"]
+    return "%.3f" % (windows[i][key] / (sum(around) / len(around))) if around else ""
 for i, w in enumerate(windows):
-    ratio = ""
-    if w["name"] != "none":
-        around = [windows[j]["p99"] for j in (i - 1, i + 1)
-                  if 0 <= j < len(windows) and windows[j]["name"] == "none"]
-        if around:
-            ratio = "%.3f" % (w["p99"] / (sum(around) / len(around)))
-    print("%-16s %5.1f %6d %8.1f %8.1f %9s %8.1f%% %9.1f%% %8s" % (
-        w["name"], w["seconds"], w["steps"], w["p50"], w["p99"], ratio, w["view"], w["clients"],
-        w["connected"] if w["name"] != "none" else "-"))
+    viewed = w["name"] != "none"
+    print("%-16s %6d %7.1f %7.1f %8.1f %8.1f %8.1f %7.3f %7.3f %9s %9s %9.1f%% %9.1f%%" % (
+        w["name"], w["wsteps"], w["wp50"], w["wp99"], w["wcpu99"], w["tp99"], w["tcpu99"],
+        w["ratio"], w["cpu_ratio"], relative(i, "ratio") if viewed else "",
+        relative(i, "cpu_ratio") if viewed else "", w["view"], w["clients"]))
+print("pooled over all windows of a kind (the same seconds for both loops):")
+for kind in ("none", "websockets", "browsers", "browsers-pinned"):
+    spans = [(w["begin"], w["end"]) for w in windows if w["name"] == kind]
+    if not spans:
+        continue
+    pooled = {}
+    for key, samples in (("w", watched), ("t", twin)):
+        inside = [(wall, cpu) for t, wall, cpu in samples if any(b <= t < e for b, e in spans)]
+        pooled[key] = (percentile([wall for wall, _ in inside], 0.99),
+                       percentile([cpu for _, cpu in inside], 0.99), len(inside))
+    print("  %-16s %6d steps: p99 %.1f us, twin %.1f us, ratio %.3f; CPU p99 %.1f us, twin %.1f "
+          "us, ratio %.3f" % (kind, pooled["w"][2], pooled["w"][0], pooled["t"][0],
+                              pooled["w"][0] / pooled["t"][0], pooled["w"][1], pooled["t"][1],
+                              pooled["w"][1] / pooled["t"][1]))
+print("ratio: p99 of the watched loop / p99 of its twin; /base: over the same ratio in the "
+      "no-viewer windows beside it. Clients connected: " +
+      " ".join(str(w["connected"]) for w in windows if w["name"] != "none"))
 if readers.strip():
     print("ws_reader.py clients received: " + readers.strip())
 PY

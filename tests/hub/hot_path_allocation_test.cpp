@@ -179,7 +179,7 @@ void expect_physics_loop_allocation_free(const std::vector<std::string>& files,
     channels.apply_commands(monotonic_ns());
     sim.step();
     channels.publish(0.0, 0.0, false);
-    channels.publish_scene_poses(std::int64_t{++cycle} * 1'000'000);
+    channels.publish_view(std::int64_t{++cycle} * 1'000'000);
     if (viewer.latest() && viewer.updated()) ++viewer_updates;
     const BodyState* state = controller.latest_state();
     BodyCommand* command = controller.loan_command(kMaxJointsPerBody);

@@ -75,7 +75,7 @@ void BM_Step(benchmark::State& state, const std::string& file, bool publish, boo
     if (channels) channels->publish(0.0, 0.0, false);
     if (step_us.size() < step_us.capacity())
       step_us.push_back(static_cast<float>(monotonic_ns() - begin_ns) * 1e-3F);
-    if (channels) channels->publish_scene_poses(clock_ns += 1'000'000);
+    if (channels) channels->publish_view(clock_ns += 1'000'000);
   }
   state.counters["bodies"] = static_cast<double>(model.bodies.size());
   std::sort(step_us.begin(), step_us.end());

@@ -123,8 +123,6 @@ SimChannels::SimChannels(Simulation& sim, double watchdog_s, std::string_view na
                  "bodies have %zu below them: a viewer shows no joints for the bodies past it\n",
                  kMaxSceneJointValues, joint_values);
   scene_joint_values_ = static_cast<std::uint32_t>(std::min(joint_values, kMaxSceneJointValues));
-  soft_nodes_every_ = std::max<std::uint64_t>(
-      1, static_cast<std::uint64_t>(std::lround(1.0 / (kSoftNodesRateHz * sim.dt_s()))));
   lockstep_pids_.reserve(channels_.size());
   publish_scene();
   publish_soft_faces();
@@ -465,17 +463,21 @@ void SimChannels::publish_soft_faces() {
   }
 }
 
-void SimChannels::publish_soft_nodes(std::uint64_t step, double time_s) noexcept {
-  // A restarted or reset world starts its steps again.
-  if (step < soft_nodes_next_ && soft_nodes_next_ - step <= soft_nodes_every_) return;
-  soft_nodes_next_ = step + soft_nodes_every_;
+void SimChannels::publish_view(std::int64_t now_ns) noexcept {
+  if (now_ns < view_next_ns_) return;
+  view_next_ns_ = now_ns + static_cast<std::int64_t>(1e9 / kViewerRateHz);
+  publish_scene_poses();
+  publish_soft_nodes();
+}
+
+void SimChannels::publish_soft_nodes() noexcept {
   for (SoftSurface& surface : soft_surfaces_) {
     // Kept for a viewer that joins later: published once without readers, then for them.
     if (surface.nodes_published && !surface.nodes->raw().has_readers()) continue;
     SoftBodyMesh* mesh = surface.nodes->loan(soft_body_mesh_bytes(0));
     if (!mesh) continue;  // shared memory exhausted: skip, never block
-    mesh->header.sim_step = step;
-    mesh->header.sim_time_s = time_s;
+    mesh->header.sim_step = sim_.step_count();
+    mesh->header.sim_time_s = sim_.time_s();
     mesh->node_count = static_cast<std::uint32_t>(sim_.soft_body_node_count(surface.index));
     sim_.read_soft_body_nodes(surface.index, mesh->nodes.data());
     surface.nodes->publish(mesh);
@@ -483,10 +485,8 @@ void SimChannels::publish_soft_nodes(std::uint64_t step, double time_s) noexcept
   }
 }
 
-void SimChannels::publish_scene_poses(std::int64_t now_ns) noexcept {
-  if (now_ns < scene_poses_next_ns_) return;
+void SimChannels::publish_scene_poses() noexcept {
   if (scene_poses_published_ && !scene_poses_.raw().has_readers()) return;
-  scene_poses_next_ns_ = now_ns + static_cast<std::int64_t>(1e9 / kScenePosesRateHz);
   const Model& model = sim_.model();
   const auto bodies = static_cast<std::uint32_t>(scene_body_count(model));
   auto* poses = static_cast<ScenePoses*>(
@@ -551,7 +551,6 @@ void SimChannels::publish(double wall_time_s, double achieved_rate_hz, bool paus
     state->answered_steps = static_cast<std::uint32_t>(channel.answered_steps);
     channel.publisher->publish_state(state);
   }
-  publish_soft_nodes(step, time_s);
   if (WorldState* world = world_.loan()) {
     world->header.sim_step = step;
     world->header.sim_time_s = time_s;

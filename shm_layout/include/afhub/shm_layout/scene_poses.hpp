@@ -1,6 +1,6 @@
 // ScenePoses: every body's pose and joint positions in one payload, for a viewer,
 // on {"afhub", <world instance>, "scene_poses"}. The physics publishes it at display
-// rate (kScenePosesRateHz, not the step rate) and only while something reads it, so
+// rate (kViewerRateHz, not the step rate) and only while something reads it, so
 // that a viewer costs the real-time loop one small publish every few steps instead
 // of one more reader on every body's 1 kHz state channel. Bodies are in the scene
 // description's order (entry b is SceneDescription.bodies[b]); passive bodies too.
@@ -16,8 +16,9 @@
 
 namespace afhub {
 
-// A viewer draws at 30-60 Hz: a faster feed would be read by no one.
-inline constexpr double kScenePosesRateHz = 60.0;
+// A viewer draws at 30-60 Hz: the physics publishes what it reads (this, and soft
+// bodies' nodes) at this rate; a faster feed would be read by no one.
+inline constexpr double kViewerRateHz = 60.0;
 
 struct ScenePose {
   std::array<float, 3> position_m{};                     // the mesh frame, world frame

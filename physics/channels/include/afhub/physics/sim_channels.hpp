@@ -100,12 +100,13 @@ class SimChannels {
   void apply_commands(std::int64_t now_ns) noexcept;
   // Publishes every body's state and the world state.
   void publish(double wall_time_s, double achieved_rate_hz, bool paused) noexcept;
-  // For a viewer: every scene body's pose and joints in one payload (ScenePoses), at
-  // most kScenePosesRateHz of `now_ns` (CLOCK_MONOTONIC), paused too, and only while
-  // something reads it (once without, for a viewer that joins later). Called outside
-  // the loop's timed step (run_loop: the cycle's `after`, with the loop statistics):
-  // the states are out by then, and no controller waits for it.
-  void publish_scene_poses(std::int64_t now_ns) noexcept;
+  // What a viewer reads, at most kViewerRateHz of `now_ns` (CLOCK_MONOTONIC), paused
+  // too, each only while something reads it (once without, for a viewer that joins
+  // later): every scene body's pose and joints in one payload (ScenePoses), and each
+  // soft body's node positions. Called outside the loop's timed step (run_loop: the
+  // cycle's `after`, with the loop statistics): the states are out by then, and no
+  // controller waits for it.
+  void publish_view(std::int64_t now_ns) noexcept;
   // The next world command not acted on before, oldest first, copied into `out`;
   // false when none waits. Commands published before this SimChannels existed (a
   // live writer's history seen by a restarted physics) are skipped.
@@ -132,10 +133,9 @@ class SimChannels {
   void publish_scene();
   // Publishes each soft body's faces once, keeping them for viewers that join later.
   void publish_soft_faces();
-  // Each soft body's node positions, at most kSoftNodesRateHz (a viewer's display
-  // rate, not the step rate) and only while a viewer reads them.
-  void publish_soft_nodes(std::uint64_t step, double time_s) noexcept;
-  static constexpr double kSoftNodesRateHz = 60.0;
+  // publish_view's two parts.
+  void publish_scene_poses() noexcept;
+  void publish_soft_nodes() noexcept;
   // An event to say from outside the loop. Refusals, stale commands and expiries are
   // said once per body (a short watchdog may fire every few ms); joins and drops each time.
   enum Event { kStale, kRejected, kAxisless, kExpired, kJoined, kDropped, kEventKinds };
@@ -211,7 +211,7 @@ class SimChannels {
   Writer<ScenePoses> scene_poses_;        // where it is, at display rate
   std::uint32_t scene_joint_values_ = 0;  // joint positions per ScenePoses: fixed by the model
   bool scene_poses_published_ = false;
-  std::int64_t scene_poses_next_ns_ = 0;  // when the next one is due
+  std::int64_t view_next_ns_ = 0;  // when publish_view is due next
   std::unique_ptr<WorldCommandQueue> world_commands_;
   std::uint64_t rejected_ = 0, expiries_ = 0, stale_ = 0;
   bool lockstep_ = false;
@@ -232,8 +232,6 @@ class SimChannels {
     bool nodes_published = false;
   };
   std::vector<SoftSurface> soft_surfaces_;
-  std::uint64_t soft_nodes_every_ = 1;  // steps between node publishes
-  std::uint64_t soft_nodes_next_ = 0;   // the step of the next one
 };
 
 }  // namespace afhub::physics
