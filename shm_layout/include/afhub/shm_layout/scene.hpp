@@ -2,7 +2,8 @@
 // physics (keep-last history, as the directory), on {"afhub", <world instance>,
 // "scene"}: per body its channel, visual mesh (an absolute path) or primitive
 // shapes, scale and colour; the world's lights and cameras. Poses travel in the
-// body states and the world state, never here. Loaned at its real size,
+// body states, the world state and the viewer's pose feed (scene_poses.hpp), never
+// here. Loaned at its real size,
 // scene_description_bytes(body_count): only the first body_count entries exist.
 #pragma once
 
