@@ -10,7 +10,8 @@
 #      raw:    Cyclone DDS ping on A, pong on B (afhub-dds-bench raw-ping/raw-pong);
 #      bridge: afhub on A -> bridge A -> DDS -> bridge B -> afhub on B, whose pong answers
 #              with a command on the mirrored body -> bridge B -> DDS -> bridge A -> A.
-#    Round trips: p50, p99, max of each, and what the bridge pair adds at p50.
+#    Round trips: p50, p99, max of each, and what the bridge pair adds at p50; then
+#    the same with both bridges polling (--spin) instead of sleeping.
 # 2. 400 bodies (AFHUB_BENCH_BODIES; 7 joints) at 1 kHz from `afhub synth` on A,
 #    exported by a bridge on A, read on B by a DDS reader that prints, each second, how
 #    many states came and how old they were. Over a window: the bridge's CPU per 1000
@@ -57,7 +58,7 @@ if [[ $EUID -ne 0 ]]; then
   echo "dds_bridge.sh: needs root (ip netns, mount namespaces, tc)" >&2
   exit 1
 fi
-rm -f "$out"/raw_rtt_ns.txt "$out"/bridge_rtt_ns.txt "$out"/load_*.jsonl
+rm -f "$out"/raw_rtt_ns*.txt "$out"/bridge_rtt_ns*.txt "$out"/load_*.jsonl
 
 test_name="afhub bench dds"
 source "$root/tests/bridges/two_machines.sh"
@@ -75,21 +76,34 @@ quantiles() {
 }
 
 echo "1. latency: $rounds rounds of $pings pings, raw DDS and through the bridges"
-spawn a bridge_a "$afhub" bridge dds --export --accept-commands --bodies 'bench/*'
-bridge_a=$spawned
-spawn b bridge_b "$afhub" bridge dds --mirror --bodies 'bench/*'
-bridge_b=$spawned
-spawn b raw_pong "$bench" raw-pong
-raw_pong=$spawned
-spawn b hub_pong "$bench" hub-pong
-hub_pong=$spawned
-for round in $(seq "$rounds"); do
-  on a "$bench" raw-ping "$pings" "$out/raw_rtt_ns.txt"
-  on a "$bench" hub-ping "$pings" "$out/bridge_rtt_ns.txt"
-done
-for pid in "$hub_pong" "$raw_pong" "$bridge_b" "$bridge_a"; do stop "$pid"; done
+# latency SUFFIX [BRIDGE FLAGS]: interleaved rounds of raw and bridged pings, into
+# raw_rtt_nsSUFFIX.txt and bridge_rtt_nsSUFFIX.txt.
+latency() {
+  local suffix=$1
+  shift
+  spawn a bridge_a "$afhub" bridge dds --export --accept-commands --bodies 'bench/*' "$@"
+  local bridge_a=$spawned
+  spawn b bridge_b "$afhub" bridge dds --mirror --bodies 'bench/*' "$@"
+  local bridge_b=$spawned
+  spawn b raw_pong "$bench" raw-pong
+  local raw_pong=$spawned
+  spawn b hub_pong "$bench" hub-pong
+  local hub_pong=$spawned
+  for round in $(seq "$rounds"); do
+    on a "$bench" raw-ping "$pings" "$out/raw_rtt_ns$suffix.txt"
+    on a "$bench" hub-ping "$pings" "$out/bridge_rtt_ns$suffix.txt"
+  done
+  for pid in "$hub_pong" "$raw_pong" "$bridge_b" "$bridge_a"; do stop "$pid"; done
+}
+latency ""
 read -r raw50 raw99 rawmax rawn <<<"$(quantiles "$out/raw_rtt_ns.txt")"
 read -r hub50 hub99 hubmax hubn <<<"$(quantiles "$out/bridge_rtt_ns.txt")"
+# The same with both bridges polling (--spin): each takes a core, which also keeps the
+# machine's cores awake for the raw pings, so raw DDS is measured again beside them.
+echo "   again with both bridges polling (--spin)"
+latency _spin --spin
+read -r sraw50 sraw99 srawmax srawn <<<"$(quantiles "$out/raw_rtt_ns_spin.txt")"
+read -r shub50 shub99 shubmax shubn <<<"$(quantiles "$out/bridge_rtt_ns_spin.txt")"
 
 # cpu_ticks PID: utime + stime (clock ticks).
 cpu_ticks() { awk '{print $14 + $15}' "/proc/$1/stat"; }
@@ -181,6 +195,10 @@ stop "$bridge"
   printf "raw Cyclone DDS      %8s %8s %8s %6s\n" "$raw50" "$raw99" "$rawmax" "$rawn"
   printf "afhub via 2 bridges  %8s %8s %8s %6s\n" "$hub50" "$hub99" "$hubmax" "$hubn"
   echo "bridge pair adds at p50: $(jq -rn "$hub50 - $raw50 | . * 10 | round / 10") us"
+  printf "with both bridges polling (--spin):\n"
+  printf "raw Cyclone DDS      %8s %8s %8s %6s\n" "$sraw50" "$sraw99" "$srawmax" "$srawn"
+  printf "afhub via 2 bridges  %8s %8s %8s %6s\n" "$shub50" "$shub99" "$shubmax" "$shubn"
+  echo "bridge pair adds at p50: $(jq -rn "$shub50 - $sraw50 | . * 10 | round / 10") us"
   echo "$bodies bodies at 1 kHz: $normal"
   echo "overload: $overload"
 } | tee "$out/summary.txt"

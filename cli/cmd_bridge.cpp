@@ -36,6 +36,7 @@ bridges::DdsBridgeOptions merged(CLI::App& dds, const BridgeCliOptions& cli) {
   if (given("--mirror")) options.mirror = true;
   if (given("--accept-commands")) options.accept_commands = true;
   if (given("--rate")) options.rate_hz = f.rate_hz;
+  if (given("--spin")) options.spin = true;
   if (given("--body-rate")) options.body_rate_hz = f.body_rate_hz;
   if (given("--device-rate")) options.device_rate_hz = f.device_rate_hz;
   if (given("--world-rate")) options.world_rate_hz = f.world_rate_hz;
@@ -63,7 +64,7 @@ void register_bridge(CLI::App& app, Runner& selected) {
       "afhub/body_command, afhub/body_info, afhub/device_state, afhub/device_command, "
       "afhub/world_state, afhub/world_command). Settings come from --config FILE (YAML, "
       "keys named as the flags: domain, interface, export, mirror, accept-commands, bodies, "
-      "devices, world, qos: best-effort|reliable, rate, rate-limits: {bodies, devices, "
+      "devices, world, qos: best-effort|reliable, rate, spin, rate-limits: {bodies, devices, "
       "world}, max-command-age, profile, ros2-prefix, security), and the flags given here override "
       "the file's.");
   dds->add_option("--config", cli->config,
@@ -96,6 +97,10 @@ void register_bridge(CLI::App& app, Runner& selected) {
                   "The bridge's cycle for what does not wake it (devices, the world, the "
                   "catalog); bodies' states and commands cross as they arrive, newest wins "
                   "(default 1000 Hz)");
+  dds->add_flag("--spin", options->spin,
+                "Poll for this hub's states and commands instead of sleeping until one comes: "
+                "about half the latency the bridges add, for a bridge given a core of its own "
+                "(it takes that core)");
   dds->add_option("--body-rate", options->body_rate_hz,
                   "Send each body's state at most this often, newest wins (Hz; default 0: "
                   "every new state)");

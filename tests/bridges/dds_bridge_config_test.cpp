@@ -37,6 +37,7 @@ TEST(DdsBridgeConfig, ReadsEverySetting) {
                                         "world: true\n"
                                         "qos: reliable\n"
                                         "rate: 500\n"
+                                        "spin: true\n"
                                         "rate-limits: {bodies: 200, devices: 1000, world: 50}\n"
                                         "max-command-age: 0.02\n");
   const DdsBridgeOptions options = read_dds_bridge_config(path);
@@ -50,6 +51,7 @@ TEST(DdsBridgeConfig, ReadsEverySetting) {
   EXPECT_TRUE(options.world);
   EXPECT_TRUE(options.reliable);
   EXPECT_EQ(options.rate_hz, 500.0);
+  EXPECT_TRUE(options.spin);
   EXPECT_EQ(options.body_rate_hz, 200.0);
   EXPECT_EQ(options.device_rate_hz, 1000.0);
   EXPECT_EQ(options.world_rate_hz, 50.0);
@@ -64,6 +66,7 @@ TEST(DdsBridgeConfig, KeysNotInTheFileKeepTheirDefaults) {
       read_dds_bridge_config(folder.write("bridge.yaml", "qos: best-effort\n"), defaults);
   EXPECT_EQ(options.domain, 4u);
   EXPECT_FALSE(options.reliable);
+  EXPECT_FALSE(options.spin);
   EXPECT_EQ(options.body_globs, (std::vector<std::string>{"*"}));
   EXPECT_TRUE(options.device_globs.empty());
 }

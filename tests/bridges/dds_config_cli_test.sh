@@ -27,7 +27,7 @@ YAML
 # The file alone.
 out=$("$afhub" bridge dds --config "$work/bridge.yaml" --check)
 for line in 'domain: 3' 'export: true' 'accept-commands: true' 'bodies: ["afhub/arm/*"]' \
-  'devices: ["falcon*"]' 'world: true' 'qos: reliable' \
+  'devices: ["falcon*"]' 'world: true' 'qos: reliable' 'spin: false' \
   'rate-limits: {bodies: 200, devices: 0, world: 50}' 'max-command-age: 0.02'; do
   grep -qxF "$line" <<<"$out" || fail "the file's '$line' is not in the settings:
 $out"
@@ -35,8 +35,8 @@ done
 
 # Flags override the file; what neither sets keeps its default.
 out=$("$afhub" bridge dds --config "$work/bridge.yaml" --check --domain 5 --best-effort \
-  --bodies 'ambf/env/*' --world-rate 10 --max-command-age 0.1)
-for line in 'domain: 5' 'qos: best-effort' 'bodies: ["ambf/env/*"]' \
+  --bodies 'ambf/env/*' --world-rate 10 --max-command-age 0.1 --spin)
+for line in 'domain: 5' 'qos: best-effort' 'bodies: ["ambf/env/*"]' 'spin: true' \
   'rate-limits: {bodies: 200, devices: 0, world: 10}' 'max-command-age: 0.1' \
   'export: true' 'mirror: false' 'rate: 1000'; do
   grep -qxF "$line" <<<"$out" || fail "'$line' is not in the settings with flags:

@@ -122,13 +122,13 @@ start_export
 sleep 3
 moves || fail "no recovery after A's bridge restarted"
 
-echo "5. B's bridge SIGKILLed and restarted"
+echo "5. B's bridge SIGKILLed and restarted, polling (--spin) from now on"
 kill -9 "$bridge_b"
 sleep 2
-start_mirror
+start_mirror --spin
 wait_listed
 sleep 3
-moves || fail "no recovery after B's bridge restarted"
+moves || fail "no recovery after B's bridge restarted (with --spin, B's commands cross polled)"
 
 echo "6. A's physics SIGKILLed and restarted under the running bridges"
 kill -0 "$physics" || fail "the physics on A died"

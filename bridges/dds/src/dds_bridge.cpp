@@ -7,6 +7,7 @@
 
 #include <dds/dds.h>
 #include <fnmatch.h>
+#include <sched.h>
 #include <signal.h>
 #include <unistd.h>
 
@@ -214,13 +215,16 @@ class Bridge {
  private:
   // Until `deadline_ns`, forwarding whatever arrives as it arrives, so that nothing
   // waits for a cycle: local states and commands written to mirrored bodies wake the
-  // iceoryx WaitSet; DDS states and commands are forwarded by Cyclone's thread that
-  // receives them (forward_on_data), one wake-up fewer. Each forward takes the newest
-  // sample of each body.
+  // iceoryx WaitSet (or, with spin, are polled for); DDS states and commands are
+  // forwarded by Cyclone's thread that receives them (forward_on_data), one wake-up
+  // fewer. Each forward takes the newest sample of each body.
   void wait_until(std::int64_t deadline_ns) {
     for (std::int64_t now_ns = monotonic_ns(); now_ns < deadline_ns && !stop_requested();
          now_ns = monotonic_ns()) {
-      state_arrival_.wait(deadline_ns - now_ns);
+      if (options_.spin)
+        sched_yield();
+      else
+        state_arrival_.wait(deadline_ns - now_ns);
       const std::lock_guard lock(mutex_);
       forward();
     }

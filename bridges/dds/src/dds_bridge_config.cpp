@@ -17,7 +17,7 @@ namespace afhub::bridges {
 namespace {
 
 const char* const kKeys =
-    "domain, interface, export, mirror, accept-commands, bodies, devices, world, qos, rate, "
+    "domain, interface, export, mirror, accept-commands, bodies, devices, world, qos, rate, spin, "
     "rate-limits, max-command-age, profile, ros2-prefix, security";
 
 class Reader {
@@ -144,6 +144,8 @@ DdsBridgeOptions read_dds_bridge_config(const std::string& path, const DdsBridge
       options.reliable = qos == "reliable";
     } else if (key == "rate") {
       options.rate_hz = reader.number(value, key, 1e-3, 100'000.0);
+    } else if (key == "spin") {
+      options.spin = reader.flag(value, key);
     } else if (key == "rate-limits") {
       read_rate_limits(reader, value, options);
     } else if (key == "max-command-age") {
@@ -197,6 +199,7 @@ std::string render_dds_bridge_config(const DdsBridgeOptions& options) {
       << "world: " << flag(options.world) << "\n"
       << "qos: " << (options.reliable ? "reliable" : "best-effort") << "\n"
       << "rate: " << number_text(options.rate_hz) << "\n"
+      << "spin: " << flag(options.spin) << "\n"
       << "rate-limits: {bodies: " << number_text(options.body_rate_hz)
       << ", devices: " << number_text(options.device_rate_hz)
       << ", world: " << number_text(options.world_rate_hz) << "}\n"

@@ -23,6 +23,10 @@ struct DdsBridgeOptions {
   bool mirror = false;
   bool accept_commands = false;
   double rate_hz = 1000.0;  // the bridge's loop: each body at most once per cycle
+  // Poll for local states and commands (sched_yield between polls) instead of sleeping
+  // until one comes: no wake-up on the way out, for a bridge given a core of its own
+  // (it takes that core's CPU time, left to any other runnable thread on each poll).
+  bool spin = false;
   // Per-topic rate limits of exported states, in Hz (0: every new state, at most once
   // per cycle): newest wins, the states in between are not sent.
   double body_rate_hz = 0.0, device_rate_hz = 0.0, world_rate_hz = 0.0;
