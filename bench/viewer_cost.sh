@@ -9,11 +9,10 @@
 # CPU, through the same load, with no viewer, so the machine's noise (which moves a
 # window's p99 by tens of %) divides out.
 # For each window: both loops' step time p50 and p99 (as `afhub run` times a step:
-# commands in, step, states out), in wall time and in the thread's CPU time (which a
-# step preempted, or stolen by the hypervisor, does not inflate), the p99 ratio
-# watched / twin, and that ratio over the same ratio in the no-viewer windows around
-# it (1.000: the viewer costs nothing measurable); the viewer's CPU (utime + stime
-# from /proc/PID/stat) and its clients', as % of one core.
+# commands in, step, states out), the p99 ratio watched / twin, and that ratio over
+# the same ratio in the no-viewer windows around it (1.000: the viewer costs nothing
+# measurable); the viewer's CPU (utime + stime from /proc/PID/stat) and its clients',
+# as % of one core. Then each kind of window pooled.
 #
 #   bench/viewer_cost.sh [WINDOW_S] [ROUNDS] [BUILD_DIR] [FIFO]
 #                        (defaults: 10, 2, build/dev, 0)
@@ -142,57 +141,51 @@ tick = float(tick)
 def steps(path):
     with open(path) as f:
         next(f)
-        return [(int(begin), float(wall), float(cpu)) for begin, wall, cpu in (l.split() for l in f)]
+        return [(int(begin), float(us)) for begin, us in (line.split() for line in f)]
 watched, twin = steps(watched_file), steps(twin_file)
 def percentile(values, q):
     values = sorted(values)
     return values[min(len(values) - 1, int(q * len(values)))] if values else float("nan")
+def inside(samples, spans):
+    return [us for t, us in samples if any(b <= t < e for b, e in spans)]
 windows = []
 for line in open(windows_file):
     name, begin, end, view_ticks, client_ticks, connected = line.split()
     begin, end = int(begin), int(end)
     seconds = (end - begin) * 1e-9
-    w = dict(name=name, begin=begin, end=end, seconds=seconds, view=100 * int(view_ticks) / tick / seconds,
+    w = dict(name=name, begin=begin, end=end, seconds=seconds,
+             view=100 * int(view_ticks) / tick / seconds,
              clients=100 * int(client_ticks) / tick / seconds, connected=int(connected))
     for key, samples in (("w", watched), ("t", twin)):
-        inside = [(wall, cpu) for t, wall, cpu in samples if begin <= t < end]
-        w[key + "steps"] = len(inside)
-        w[key + "p50"] = percentile([wall for wall, _ in inside], 0.5)
-        w[key + "p99"] = percentile([wall for wall, _ in inside], 0.99)
-        w[key + "cpu99"] = percentile([cpu for _, cpu in inside], 0.99)
+        times = inside(samples, [(begin, end)])
+        w[key + "steps"], w[key + "p50"], w[key + "p99"] = (
+            len(times), percentile(times, 0.5), percentile(times, 0.99))
     w["ratio"] = w["wp99"] / w["tp99"]
-    w["cpu_ratio"] = w["wcpu99"] / w["tcpu99"]
     windows.append(w)
 print("one run of two identical physics loops on CPU 0, %s s windows; step times (us) from "
-      "their step logs (wall time, and the thread's CPU time); the viewer watches the first"
-      % window)
-print("%-16s %6s %7s %7s %8s %8s %8s %7s %7s %9s %9s %10s %7s" % (
-    "window", "steps", "p50", "p99", "CPU p99", "twin p99", "twin CPU", "ratio", "CPU rt",
-    "ratio/base", "CPU/base", "view CPU", "client CPU"))
-def relative(i, key):
-    around = [windows[j][key] for j in (i - 1, i + 1)
-              if 0 <= j < len(windows) and windows[j]["name"] == "none"]
-    return "%.3f" % (windows[i][key] / (sum(around) / len(around))) if around else ""
+      "their step logs; the viewer watches the first" % window)
+print("%-16s %6s %7s %7s %8s %8s %7s %10s %9s %10s" % (
+    "window", "steps", "p50", "p99", "twin p50", "twin p99", "ratio", "ratio/base", "view CPU",
+    "client CPU"))
 for i, w in enumerate(windows):
-    viewed = w["name"] != "none"
-    print("%-16s %6d %7.1f %7.1f %8.1f %8.1f %8.1f %7.3f %7.3f %9s %9s %9.1f%% %9.1f%%" % (
-        w["name"], w["wsteps"], w["wp50"], w["wp99"], w["wcpu99"], w["tp99"], w["tcpu99"],
-        w["ratio"], w["cpu_ratio"], relative(i, "ratio") if viewed else "",
-        relative(i, "cpu_ratio") if viewed else "", w["view"], w["clients"]))
+    relative = ""
+    if w["name"] != "none":
+        around = [windows[j]["ratio"] for j in (i - 1, i + 1)
+                  if 0 <= j < len(windows) and windows[j]["name"] == "none"]
+        if around:
+            relative = "%.3f" % (w["ratio"] / (sum(around) / len(around)))
+    print("%-16s %6d %7.1f %7.1f %8.1f %8.1f %7.3f %10s %8.1f%% %9.1f%%" % (
+        w["name"], w["wsteps"], w["wp50"], w["wp99"], w["tp50"], w["tp99"], w["ratio"], relative,
+        w["view"], w["clients"]))
 print("pooled over all windows of a kind (the same seconds for both loops):")
 for kind in ("none", "websockets", "browsers", "browsers-pinned"):
     spans = [(w["begin"], w["end"]) for w in windows if w["name"] == kind]
     if not spans:
         continue
-    pooled = {}
-    for key, samples in (("w", watched), ("t", twin)):
-        inside = [(wall, cpu) for t, wall, cpu in samples if any(b <= t < e for b, e in spans)]
-        pooled[key] = (percentile([wall for wall, _ in inside], 0.99),
-                       percentile([cpu for _, cpu in inside], 0.99), len(inside))
-    print("  %-16s %6d steps: p99 %.1f us, twin %.1f us, ratio %.3f; CPU p99 %.1f us, twin %.1f "
-          "us, ratio %.3f" % (kind, pooled["w"][2], pooled["w"][0], pooled["t"][0],
-                              pooled["w"][0] / pooled["t"][0], pooled["w"][1], pooled["t"][1],
-                              pooled["w"][1] / pooled["t"][1]))
+    mine, other = inside(watched, spans), inside(twin, spans)
+    print("  %-16s %6d steps: p99 %.1f us, twin %.1f us, ratio %.3f" % (
+        kind, len(mine), percentile(mine, 0.99), percentile(other, 0.99),
+        percentile(mine, 0.99) / percentile(other, 0.99)))
 print("ratio: p99 of the watched loop / p99 of its twin; /base: over the same ratio in the "
       "no-viewer windows beside it. Clients connected: " +
       " ".join(str(w["connected"]) for w in windows if w["name"] != "none"))

@@ -180,9 +180,9 @@ int run_run(const RunCliOptions& options) {
   }
   if (!options.step_log_file.empty()) {
     std::ofstream out(options.step_log_file);
-    out << "begin_ns step_us cpu_us\n";
+    out << "begin_ns step_us\n";
     for (const physics::StepSample& sample : report.step_log)
-      out << sample.begin_ns << ' ' << sample.duration_us << ' ' << sample.cpu_us << '\n';
+      out << sample.begin_ns << ' ' << sample.duration_us << '\n';
     if (!out) throw Error("cannot write the step log to " + options.step_log_file);
   }
   return report.nan_detected ? 1 : 0;
@@ -256,10 +256,9 @@ void register_run(CLI::App& app, Runner& selected) {
                 "mlockall and pre-fault, so the physics loop takes no page faults");
   run->add_option("--report", options->report_file,
                   "Write a JSON report at the end (steps, step times, poses, joints)");
-  run->add_option(
-      "--step-log", options->step_log_file,
-      "Write each step's start (CLOCK_MONOTONIC ns), duration and CPU time (us) at "
-      "the end, one line a step (with --steps: the log is sized before the first step)");
+  run->add_option("--step-log", options->step_log_file,
+                  "Write each step's start (CLOCK_MONOTONIC ns) and duration (us) at the end, "
+                  "one line a step (with --steps: the log is sized before the first step)");
   run->add_flag("--offline", options->offline,
                 "Simulate without a hub: no channels (for reports and measurements)");
   run->add_flag("--no-autostart", options->no_autostart,

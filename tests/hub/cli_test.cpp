@@ -111,7 +111,7 @@ TEST(Cli, DemoPrintsTheViewersUrlWhichServesTheScene) {
   EXPECT_EQ(run_afhub({"hub", "stop"}).exit_code, 0);
 }
 
-// --step-log: one line per step, its start, duration and CPU time, for measurements in windows
+// --step-log: one line per step, its start and duration, for measurements in windows
 // of one run (bench/viewer_cost.sh); it needs --steps, which sizes it.
 TEST(Cli, RunWritesAStepLog) {
   char pattern[] = "/tmp/afhub_step_log_XXXXXX";
@@ -123,16 +123,13 @@ TEST(Cli, RunWritesAStepLog) {
   std::istringstream lines(read_file(log));
   std::string header;
   std::getline(lines, header);
-  EXPECT_EQ(header, "begin_ns step_us cpu_us");
+  EXPECT_EQ(header, "begin_ns step_us");
   long long begin = 0, previous = 0;
-  double duration = 0.0, cpu = 0.0;
+  double duration = 0.0;
   int steps = 0;
-  while (lines >> begin >> duration >> cpu) {
+  while (lines >> begin >> duration) {
     EXPECT_GT(begin, previous) << "line " << steps + 2;
     EXPECT_GT(duration, 0.0) << "line " << steps + 2;
-    EXPECT_GT(cpu, 0.0) << "line " << steps + 2;
-    // CPU time within wall time, but for the clocks' granularity (1 us at most).
-    EXPECT_LE(cpu, duration + 1.0) << "line " << steps + 2;
     previous = begin;
     ++steps;
   }

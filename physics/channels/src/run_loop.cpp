@@ -3,8 +3,6 @@
 
 #include "afhub/physics/rate_meter.hpp"
 
-#include <time.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -21,12 +19,6 @@
 
 namespace afhub::physics {
 namespace {
-
-std::int64_t thread_cpu_ns() noexcept {
-  timespec now{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &now);
-  return static_cast<std::int64_t>(now.tv_sec) * 1'000'000'000 + now.tv_nsec;
-}
 
 double largest_pivot_gap(const Simulation& sim) noexcept {
   double largest = 0.0;
@@ -106,10 +98,6 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
     // The hub is gone: hold, neither stepping nor publishing, until the re-exec.
     if (channels && hub_lost()) return true;
     const std::int64_t begin_ns = monotonic_ns();
-    // The step log also holds each step's CPU time, which a preempted or stolen
-    // (virtual machine) step does not inflate: read only while logging (a system call).
-    const bool logging = report.step_log.size() < report.step_log.capacity();
-    const std::int64_t begin_cpu_ns = logging ? thread_cpu_ns() : 0;
     const bool stepping = control.take_step();
     if (stepping) {
       sim.step();
@@ -127,10 +115,8 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
     if (stepping) {
       const double duration_us = static_cast<double>(monotonic_ns() - begin_ns) * 1e-3;
       report.step_time.record(duration_us);
-      if (logging)
-        report.step_log.push_back(
-            {begin_ns, static_cast<float>(duration_us),
-             static_cast<float>(static_cast<double>(thread_cpu_ns() - begin_cpu_ns) * 1e-3)});
+      if (report.step_log.size() < report.step_log.capacity())
+        report.step_log.push_back({begin_ns, static_cast<float>(duration_us)});
     }
     return options.steps == 0 || report.steps < options.steps;
   };

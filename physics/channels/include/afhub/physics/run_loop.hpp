@@ -47,8 +47,7 @@ struct JointTracking {
 // loop iteration took (the step_time histogram's measure).
 struct StepSample {
   std::int64_t begin_ns = 0;
-  float duration_us = 0.0F;  // wall time
-  float cpu_us = 0.0F;       // the thread's CPU time in it
+  float duration_us = 0.0F;
 };
 
 struct RunReport {
