@@ -2,12 +2,14 @@
 // 1 kHz loop against the real physics beside cyclictest, the JSON and the plot.
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <filesystem>
 
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub_process.hpp"
 #include "json_tree.hpp"
 #include "model_files.hpp"
+#include "real_time.hpp"
 
 namespace afhub::test {
 namespace {
@@ -56,7 +58,7 @@ TEST(Bench, ShortRunMeasuresEveryTransportAndTheLoop) {
   EXPECT_GT(jitter.at("afhub_us").at("p50").number, 0.0);
   EXPECT_GT(jitter.at("cyclictest_us").at("p50").number, 0.0);
   const double ratio = json.at("loop_deadline_hit_ratio").number;
-  EXPECT_GT(ratio, 0.0);
+  EXPECT_GE(ratio, 0.0);
   EXPECT_LE(ratio, 1.0);
   EXPECT_GT(json.at("loop_steps").number, 2000.0);
 
@@ -64,6 +66,12 @@ TEST(Bench, ShortRunMeasuresEveryTransportAndTheLoop) {
   ASSERT_TRUE(std::filesystem::exists(plot_path));
   EXPECT_EQ(read_file(plot_path).substr(1, 3), "PNG");
   EXPECT_GT(std::filesystem::file_size(plot_path), 20'000u);
+
+  // The controller answering steps in time needs real time: in a sanitized build beside
+  // the two-machine teleop test's SCHED_FIFO loops it once answered none of 2000.
+  std::printf("loop deadline hit ratio: %.3f\n", ratio);
+  SKIP_REAL_TIME_BOUNDS_IN_SANITIZED_BUILD();
+  EXPECT_GT(ratio, 0.0);
 }
 
 TEST(Bench, RunningHubWithoutBenchPoolsIsRefusedSayingWhatToDo) {
