@@ -125,11 +125,11 @@ struct SteadyClient {
 };
 
 // A client that dies holding iceoryx's port locks, as one killed inside publish()
-// does (hub/src/port_lock_repair.hpp). Without the hub's repair synth blocks on its
-// next state publish, and RouDi on the cleanup after the dead client, so `ls` can
-// no longer even register. Only child processes here: this process's iceoryx
-// runtime belongs to the next test's hub.
-TEST(Resilience, ClientDeadHoldingPortLocksDoesNotWedgeTheHub) {
+// does (hub/src/port_lock_repair.hpp), `linger` seconds after it connected. Without
+// the hub's repair synth blocks on its next state publish, and RouDi on the cleanup
+// after the dead client, so `ls` can no longer even register. Only child processes
+// here: this process's iceoryx runtime belongs to the next test's hub.
+void expect_hub_survives_client_dead_holding_port_locks(const char* linger) {
   ScopedProcess hub(start_test_hub());
   ASSERT_GT(hub.pid, 0);
   ScopedProcess synth = spawn_afhub({"synth", "--bodies", "1", "--joints", "1", "--no-autostart"},
@@ -142,7 +142,7 @@ TEST(Resilience, ClientDeadHoldingPortLocksDoesNotWedgeTheHub) {
 
   const pid_t holder = fork();
   if (holder == 0) {
-    execl(AFHUB_PORT_LOCK_HOLDER, AFHUB_PORT_LOCK_HOLDER, nullptr);
+    execl(AFHUB_PORT_LOCK_HOLDER, AFHUB_PORT_LOCK_HOLDER, linger, nullptr);
     _exit(127);
   }
   int status = 0;
@@ -169,6 +169,19 @@ TEST(Resilience, ClientDeadHoldingPortLocksDoesNotWedgeTheHub) {
 
   EXPECT_EQ(synth.stop(), 0);
   EXPECT_EQ(hub.stop(), 0);
+}
+
+// Dead before the hub listed it: RouDi's keep-alive monitor removes it, blocking on
+// the locks until the hub's loop releases them.
+TEST(Resilience, ClientDeadHoldingPortLocksAtOnceDoesNotWedgeTheHub) {
+  expect_hub_survives_client_dead_holding_port_locks("0");
+}
+
+// Dead after the hub listed it: the hub's own loop sees it gone and has RouDi remove
+// it, which takes the dead client's publisher lock; the loop must release the locks
+// first, or it waits on them forever (the physics killed mid-publish under a bridge).
+TEST(Resilience, ListedClientDeadHoldingPortLocksDoesNotWedgeTheHub) {
+  expect_hub_survives_client_dead_holding_port_locks("3");
 }
 
 TEST(Resilience, KilledClientRestartsWhileOthersKeepWorking) {

@@ -2,11 +2,13 @@
 // publisher's lock (on synth/body0's command channel, which synth reads) and its
 // subscriber queue's lock (on synth/body0's state, which synth writes every
 // millisecond). Exits 2 if it cannot get there within 5 s; otherwise it never
-// returns, it SIGKILLs itself.
+// returns, it SIGKILLs itself: at once, or after the seconds given as its argument
+// (long enough for the hub to have listed it).
 #include <signal.h>
 
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <thread>
 
 #include "afhub/hub/hub_presence.hpp"
@@ -28,7 +30,7 @@ iox::capro::ServiceDescription describe(const afhub::ChannelId& channel) {
 
 }  // namespace
 
-int main() {
+int main(int argc, char** argv) {
   afhub::connect_to_hub("lock-holder", afhub::HubPolicy::kRequire);
   auto& runtime = iox::runtime::PoshRuntime::getInstance();
   auto* publisher_data =
@@ -48,6 +50,7 @@ int main() {
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
+  if (argc > 1) std::this_thread::sleep_for(std::chrono::duration<double>(std::atof(argv[1])));
   pthread_mutex_lock(&afhub::native_mutex(publisher_data->m_chunkSenderData));
   pthread_mutex_lock(&afhub::native_mutex(subscriber_data->m_chunkReceiverData));
   raise(SIGKILL);

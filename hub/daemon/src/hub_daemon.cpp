@@ -113,20 +113,21 @@ struct Registered {
 };
 
 // Unregisters every process whose runtime lock is free: gone, in whatever pid
-// namespace it ran. Returns whether every registered process is in the hub's pid
-// namespace, where the thread ids in iceoryx's port locks mean what they say.
-bool remove_dead_processes(AfhubRouDi& roudi, HealthReporter& health, Registered& registered) {
-  std::set<std::string> listed;
-  for (const auto& [name, pid] : health.registered_processes()) {
+// namespace it ran. Port locks its threads died holding are released first: RouDi
+// takes them to delete its ports, and would wait on them forever. Returns whether
+// every registered process is in the hub's pid namespace, where the thread ids in
+// iceoryx's port locks mean what they say (no lock is repaired otherwise).
+bool remove_dead_processes(AfhubRouDi& roudi, iox::roudi::PortPool& ports, HealthReporter& health,
+                           Registered& registered) {
+  const auto processes = health.registered_processes();
+  std::set<std::string> listed, gone;
+  for (const auto& [name, pid] : processes) {
     listed.insert(name);
     // RouDi's and the hub's own entries: a pid alone cannot tell them, since a client in
     // another pid namespace may have the hub's pid.
     if (name == "roudi" || name == kHubRuntimeName || registered.removed.count(name)) continue;
     if (runtime_is_gone(name)) {
-      registered.removed.insert(name);
-      if (roudi.remove_process(name))
-        std::fprintf(stderr, "afhub hub: %s (pid %d) is gone; removed its ports and chunks\n",
-                     name.c_str(), static_cast<int>(pid));
+      gone.insert(name);
     } else if (!runtime_in_hub_pid_namespace(name, pid) && registered.foreign.insert(name).second) {
       std::fprintf(stderr,
                    "afhub hub: %s runs in another pid namespace; while it is attached, the hub "
@@ -137,7 +138,16 @@ bool remove_dead_processes(AfhubRouDi& roudi, HealthReporter& health, Registered
   const auto unlisted = [&](const std::string& name) { return !listed.count(name); };
   std::erase_if(registered.removed, unlisted);
   std::erase_if(registered.foreign, unlisted);
-  return registered.foreign.empty();
+  const bool locks_repairable = registered.foreign.empty();
+  if (!gone.empty() && locks_repairable) release_port_locks_of_dead_threads(ports);
+  for (const auto& [name, pid] : processes) {
+    if (!gone.count(name)) continue;
+    registered.removed.insert(name);
+    if (roudi.remove_process(name))
+      std::fprintf(stderr, "afhub hub: %s (pid %d) is gone; removed its ports and chunks\n",
+                   name.c_str(), static_cast<int>(pid));
+  }
+  return locks_repairable;
 }
 
 void serve_until_stopped(AfhubRouDi& roudi, iox::roudi::PortPool& ports) {
@@ -148,7 +158,10 @@ void serve_until_stopped(AfhubRouDi& roudi, iox::roudi::PortPool& ports) {
   auto next_file_sweep = std::chrono::steady_clock::now();
   while (!stop_requested()) {
     auto now = std::chrono::steady_clock::now();
-    if (remove_dead_processes(roudi, health, registered)) release_port_locks_of_dead_threads(ports);
+    // Also each cycle: a publisher blocks on a queue's lock left by a dead thread before
+    // its process is seen gone.
+    if (remove_dead_processes(roudi, ports, health, registered))
+      release_port_locks_of_dead_threads(ports);
     if (now >= next_file_sweep) {
       for (const std::string& name : remove_stale_runtime_files())
         std::fprintf(stderr, "afhub hub: removed the files %s left in /tmp\n", name.c_str());
