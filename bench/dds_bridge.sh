@@ -10,8 +10,9 @@
 #      raw:    Cyclone DDS ping on A, pong on B (afhub-dds-bench raw-ping/raw-pong);
 #      bridge: afhub on A -> bridge A -> DDS -> bridge B -> afhub on B, whose pong answers
 #              with a command on the mirrored body -> bridge B -> DDS -> bridge A -> A.
-#    Round trips: p50, p99, max of each, and what the bridge pair adds at p50; then
-#    the same with both bridges polling (--spin) instead of sleeping.
+#    Round trips: p50, p99, max of each, and what the bridge pair adds at p50; then the
+#    same with idle CPUs kept polling (both bridges --cpu-wake-latency 0), and with both
+#    bridges polling (--spin) instead of sleeping.
 # 2. 400 bodies (AFHUB_BENCH_BODIES; 7 joints) at 1 kHz from `afhub synth` on A,
 #    exported by a bridge on A, read on B by a DDS reader that prints, each second, how
 #    many states came and how old they were. Over a window: the bridge's CPU per 1000
@@ -98,8 +99,12 @@ latency() {
 latency ""
 read -r raw50 raw99 rawmax rawn <<<"$(quantiles "$out/raw_rtt_ns.txt")"
 read -r hub50 hub99 hubmax hubn <<<"$(quantiles "$out/bridge_rtt_ns.txt")"
-# The same with both bridges polling (--spin): each takes a core, which also keeps the
-# machine's cores awake for the raw pings, so raw DDS is measured again beside them.
+# Each variant changes the machine for raw DDS too (the wake-up limit is the host's;
+# polling bridges take the cores), so raw DDS is measured again beside it.
+echo "   again with idle CPUs polling (--cpu-wake-latency 0)"
+latency _wake --cpu-wake-latency 0
+read -r wraw50 wraw99 wrawmax wrawn <<<"$(quantiles "$out/raw_rtt_ns_wake.txt")"
+read -r whub50 whub99 whubmax whubn <<<"$(quantiles "$out/bridge_rtt_ns_wake.txt")"
 echo "   again with both bridges polling (--spin)"
 latency _spin --spin
 read -r sraw50 sraw99 srawmax srawn <<<"$(quantiles "$out/raw_rtt_ns_spin.txt")"
@@ -195,6 +200,10 @@ stop "$bridge"
   printf "raw Cyclone DDS      %8s %8s %8s %6s\n" "$raw50" "$raw99" "$rawmax" "$rawn"
   printf "afhub via 2 bridges  %8s %8s %8s %6s\n" "$hub50" "$hub99" "$hubmax" "$hubn"
   echo "bridge pair adds at p50: $(jq -rn "$hub50 - $raw50 | . * 10 | round / 10") us"
+  printf "with idle CPUs polling (both bridges --cpu-wake-latency 0):\n"
+  printf "raw Cyclone DDS      %8s %8s %8s %6s\n" "$wraw50" "$wraw99" "$wrawmax" "$wrawn"
+  printf "afhub via 2 bridges  %8s %8s %8s %6s\n" "$whub50" "$whub99" "$whubmax" "$whubn"
+  echo "bridge pair adds at p50: $(jq -rn "$whub50 - $wraw50 | . * 10 | round / 10") us"
   printf "with both bridges polling (--spin):\n"
   printf "raw Cyclone DDS      %8s %8s %8s %6s\n" "$sraw50" "$sraw99" "$srawmax" "$srawn"
   printf "afhub via 2 bridges  %8s %8s %8s %6s\n" "$shub50" "$shub99" "$shubmax" "$shubn"

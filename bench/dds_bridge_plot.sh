@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Draws what bench/dds_bridge.sh wrote into OUT_DIR: the 1 KiB round trips' CDFs (raw
-# Cyclone DDS and afhub through two bridges, asleep and polling) and, second by second, the age of the
-# states a DDS reader received from a bridge exporting its bodies at 1 kHz, normally
-# and under overload. Needs gnuplot.
+# Cyclone DDS and afhub through two bridges: asleep, with idle CPUs polling, and with
+# the bridges polling) and, second by second, the age of the states a DDS reader
+# received from a bridge exporting its bodies at 1 kHz, normally and under overload.
+# Needs gnuplot.
 #   bench/dds_bridge_plot.sh OUT_DIR PNG
 set -euo pipefail
 out=$1
@@ -15,6 +16,8 @@ trap 'rm -rf "$data"' EXIT
 cdf() { sort -n "$1" | awk '{v[NR] = $1} END {for (i = 1; i <= NR; i++) print v[i] / 1e3, i / NR}'; }
 cdf "$out/raw_rtt_ns.txt" >"$data/raw"
 cdf "$out/bridge_rtt_ns.txt" >"$data/bridge"
+cdf "$out/raw_rtt_ns_wake.txt" >"$data/raw_wake"
+cdf "$out/bridge_rtt_ns_wake.txt" >"$data/bridge_wake"
 cdf "$out/raw_rtt_ns_spin.txt" >"$data/raw_spin"
 cdf "$out/bridge_rtt_ns_spin.txt" >"$data/bridge_spin"
 for name in normal overload; do
@@ -33,6 +36,8 @@ set key bottom right
 set grid
 plot "$data/raw" using 1:2 with lines lw 2 title "Cyclone DDS alone", \
      "$data/bridge" using 1:2 with lines lw 2 title "afhub -> bridge -> DDS -> bridge -> afhub", \
+     "$data/raw_wake" using 1:2 with lines lw 2 dt 3 title "Cyclone DDS alone, idle CPUs polling", \
+     "$data/bridge_wake" using 1:2 with lines lw 2 dt 3 title "afhub via two bridges --cpu-wake-latency 0", \
      "$data/raw_spin" using 1:2 with lines lw 2 dt 2 title "Cyclone DDS alone, beside polling bridges", \
      "$data/bridge_spin" using 1:2 with lines lw 2 dt 2 title "afhub via two bridges --spin"
 unset logscale x

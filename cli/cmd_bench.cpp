@@ -122,8 +122,8 @@ void register_bench(CLI::App& app, Runner& selected) {
   auto* dds = bench->add_subcommand(
       "dds",
       "The DDS bridge between two network namespaces joined by a veth (needs root: ip netns, "
-      "mount namespaces, tc): 1 KiB round trips through two bridges (asleep, then polling "
-      "with --spin) beside Cyclone DDS alone, "
+      "mount namespaces, tc): 1 KiB round trips through two bridges (asleep, with idle CPUs "
+      "polling by --cpu-wake-latency 0, and polling with --spin) beside Cyclone DDS alone, "
       "and 400 bodies at 1 kHz exported (CPU per 1000 states, allocations, overload). Runs "
       "bench/dds_bridge.sh of the source tree; from a build tree only.");
   dds->add_flag("--quick", dds_options->quick, "A shorter run: about 40 s instead of 1.5 min");

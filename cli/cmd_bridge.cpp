@@ -37,6 +37,7 @@ bridges::DdsBridgeOptions merged(CLI::App& dds, const BridgeCliOptions& cli) {
   if (given("--accept-commands")) options.accept_commands = true;
   if (given("--rate")) options.rate_hz = f.rate_hz;
   if (given("--spin")) options.spin = true;
+  if (given("--cpu-wake-latency")) options.cpu_wake_latency_us = f.cpu_wake_latency_us;
   if (given("--body-rate")) options.body_rate_hz = f.body_rate_hz;
   if (given("--device-rate")) options.device_rate_hz = f.device_rate_hz;
   if (given("--world-rate")) options.world_rate_hz = f.world_rate_hz;
@@ -64,9 +65,9 @@ void register_bridge(CLI::App& app, Runner& selected) {
       "afhub/body_command, afhub/body_info, afhub/device_state, afhub/device_command, "
       "afhub/world_state, afhub/world_command). Settings come from --config FILE (YAML, "
       "keys named as the flags: domain, interface, export, mirror, accept-commands, bodies, "
-      "devices, world, qos: best-effort|reliable, rate, spin, rate-limits: {bodies, devices, "
-      "world}, max-command-age, profile, ros2-prefix, security), and the flags given here override "
-      "the file's.");
+      "devices, world, qos: best-effort|reliable, rate, spin, cpu-wake-latency, rate-limits: "
+      "{bodies, devices, world}, max-command-age, profile, ros2-prefix, security), and the "
+      "flags given here override the file's.");
   dds->add_option("--config", cli->config,
                   "YAML file of settings (see above); flags given here override it")
       ->check(CLI::ExistingFile);
@@ -99,8 +100,14 @@ void register_bridge(CLI::App& app, Runner& selected) {
                   "(default 1000 Hz)");
   dds->add_flag("--spin", options->spin,
                 "Poll for this hub's states and commands instead of sleeping until one comes: "
-                "about half the latency the bridges add, for a bridge given a core of its own "
-                "(it takes that core)");
+                "no wake-up on the way out, for a bridge given a core of its own (it takes that "
+                "core)");
+  dds->add_option("--cpu-wake-latency", options->cpu_wake_latency_us,
+                  "Hold idle CPUs to wake within this many microseconds while the bridge runs "
+                  "(/dev/cpu_dma_latency, as cyclictest does; root): 0 keeps them polling "
+                  "instead of sleeping, so that each message wakes its reader at once, for an "
+                  "idle core's power; on a VM, where a sleeping vCPU wakes in tens of us, it "
+                  "brings the bridges' cost near raw DDS's (default: leave them)");
   dds->add_option("--body-rate", options->body_rate_hz,
                   "Send each body's state at most this often, newest wins (Hz; default 0: "
                   "every new state)");

@@ -38,6 +38,7 @@ TEST(DdsBridgeConfig, ReadsEverySetting) {
                                         "qos: reliable\n"
                                         "rate: 500\n"
                                         "spin: true\n"
+                                        "cpu-wake-latency: 0\n"
                                         "rate-limits: {bodies: 200, devices: 1000, world: 50}\n"
                                         "max-command-age: 0.02\n");
   const DdsBridgeOptions options = read_dds_bridge_config(path);
@@ -52,6 +53,7 @@ TEST(DdsBridgeConfig, ReadsEverySetting) {
   EXPECT_TRUE(options.reliable);
   EXPECT_EQ(options.rate_hz, 500.0);
   EXPECT_TRUE(options.spin);
+  EXPECT_EQ(options.cpu_wake_latency_us, 0);
   EXPECT_EQ(options.body_rate_hz, 200.0);
   EXPECT_EQ(options.device_rate_hz, 1000.0);
   EXPECT_EQ(options.world_rate_hz, 50.0);
@@ -67,6 +69,7 @@ TEST(DdsBridgeConfig, KeysNotInTheFileKeepTheirDefaults) {
   EXPECT_EQ(options.domain, 4u);
   EXPECT_FALSE(options.reliable);
   EXPECT_FALSE(options.spin);
+  EXPECT_EQ(options.cpu_wake_latency_us, -1);  // the CPUs left as they are
   EXPECT_EQ(options.body_globs, (std::vector<std::string>{"*"}));
   EXPECT_TRUE(options.device_globs.empty());
 }
@@ -86,6 +89,10 @@ TEST(DdsBridgeConfig, RefusesUnknownKeysAndBadValuesWithTheirLine) {
             ":1:22: error: 'rate-limits: world' is -1; write a value from 0 to 100000");
   EXPECT_EQ(error_of("max-command-age: 0\n"),
             ":1:18: error: 'max-command-age' is 0; write a value from 1e-09 to 10");
+  EXPECT_EQ(error_of("cpu-wake-latency: 2.5\n"),
+            ":1:19: error: 'cpu-wake-latency' is whole microseconds");
+  EXPECT_EQ(error_of("cpu-wake-latency: 5000\n"),
+            ":1:19: error: 'cpu-wake-latency' is 5000; write a value from 0 to 1000");
   EXPECT_EQ(error_of("bodies: {a: 1}\n"),
             ":1:9: error: 'bodies' must be a glob or a list of globs, e.g. [\"ambf/env/*\"]");
   EXPECT_NE(error_of("interface: \"eth0<x>\"\n").find(":1:12: error: interface 'eth0<x>'"),
@@ -109,6 +116,7 @@ TEST(DdsBridgeConfig, WhatCheckPrintsReadsBackTheSame) {
   options.device_rate_hz = 100;
   options.world_rate_hz = 10;
   options.max_command_age_s = 0.125;
+  options.cpu_wake_latency_us = 20;
   afhub::testing::ModelFolder folder;
   const DdsBridgeOptions back =
       read_dds_bridge_config(folder.write("bridge.yaml", render_dds_bridge_config(options)));
@@ -118,6 +126,7 @@ TEST(DdsBridgeConfig, WhatCheckPrintsReadsBackTheSame) {
   EXPECT_EQ(back.device_globs, options.device_globs);
   EXPECT_EQ(back.body_rate_hz, 0.5);
   EXPECT_EQ(back.max_command_age_s, 0.125);
+  EXPECT_EQ(back.cpu_wake_latency_us, 20);
 }
 
 TEST(DdsBridgeConfig, TheInterfaceReplacesTheUrisOwn) {

@@ -32,11 +32,12 @@ for line in 'domain: 3' 'export: true' 'accept-commands: true' 'bodies: ["afhub/
   grep -qxF "$line" <<<"$out" || fail "the file's '$line' is not in the settings:
 $out"
 done
+if grep -q cpu-wake-latency <<<"$out"; then fail "cpu-wake-latency set with no one asking"; fi
 
 # Flags override the file; what neither sets keeps its default.
 out=$("$afhub" bridge dds --config "$work/bridge.yaml" --check --domain 5 --best-effort \
-  --bodies 'ambf/env/*' --world-rate 10 --max-command-age 0.1 --spin)
-for line in 'domain: 5' 'qos: best-effort' 'bodies: ["ambf/env/*"]' 'spin: true' \
+  --bodies 'ambf/env/*' --world-rate 10 --max-command-age 0.1 --spin --cpu-wake-latency 0)
+for line in 'domain: 5' 'qos: best-effort' 'bodies: ["ambf/env/*"]' 'spin: true' 'cpu-wake-latency: 0' \
   'rate-limits: {bodies: 200, devices: 0, world: 10}' 'max-command-age: 0.1' \
   'export: true' 'mirror: false' 'rate: 1000'; do
   grep -qxF "$line" <<<"$out" || fail "'$line' is not in the settings with flags:
@@ -55,6 +56,12 @@ expect_refused $'export: true\nmirorr: true' "2:1: error: unknown key 'mirorr'; 
 expect_refused $'export: true\nqos: fastest' "2:6: error: 'qos' must be best-effort or reliable"
 expect_refused 'domain: 999' "1:9: error: 'domain' is 999; write a value from 0 to 232"
 expect_refused $'export: true\nrate-limits: {bodies: fast}' "2:23: error: 'rate-limits: bodies' must be a number"
+
+if "$afhub" bridge dds --export --cpu-wake-latency 5000 --check >/dev/null 2>"$work/err"; then
+  fail "--cpu-wake-latency 5000 was accepted"
+fi
+grep -qF -- "--cpu-wake-latency must be 0 to 1000 microseconds" "$work/err" ||
+  fail "unexpected message: $(cat "$work/err")"
 
 # Settings that are each fine but wrong together are refused by --check too.
 printf 'world: true\nexport: true\nmirror: true\n' >"$work/both.yaml"

@@ -103,10 +103,14 @@ wait "$bridge_a" || true
 grep -q "stale commands dropped [1-9]" "$work/bridge_a.log" ||
   fail "A's bridge did not count the stale commands it dropped"
 
-echo "2. B's afhub ls lists A's bodies and B's ctl sine moves A's arm"
-start_export
+echo "2. B's afhub ls lists A's bodies and B's ctl sine moves A's arm (A's bridge holding idle CPUs awake)"
+# The kernel's CPU wake-up latency limit (one for the host: namespaces do not have their own).
+wake_limit() { od -An -td4 -N4 /dev/cpu_dma_latency | tr -d ' '; }
+limit_before=$(wake_limit)
+start_export --cpu-wake-latency 0
 sleep 2
 moves || fail "B's sine does not move A's joint"
+[[ $(wake_limit) == 0 ]] || fail "the limit is $(wake_limit) us while A's bridge holds it at 0"
 
 echo "3. the link down for 2 s and up again"
 ip -n "$ns_a" link set "$veth_a" down
@@ -118,6 +122,8 @@ moves || fail "no recovery after the link came back"
 echo "4. A's bridge SIGKILLed and restarted"
 kill -9 "$bridge_a"
 sleep 2
+[[ $(wake_limit) == "$limit_before" ]] ||
+  fail "the wake-up latency limit is $(wake_limit) us after A's bridge was killed, not $limit_before"
 start_export
 sleep 3
 moves || fail "no recovery after A's bridge restarted"

@@ -24,6 +24,7 @@
 #include "afhub/hub/sample_waiter.hpp"
 #include "afhub/hub/stop_signal.hpp"
 #include "afhub/rt/clock.hpp"
+#include "afhub/rt/cpu_wake_latency.hpp"
 #include "afhub/shm_layout/channel_names.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "age_histogram.hpp"
@@ -158,8 +159,9 @@ class Bridge {
       directory_ = std::make_unique<DirectoryPublisher>();
     }
     devices_and_world_ = std::make_unique<DeviceWorldBridge>(p, options, directory_.get());
-    make_state_sample(state_sample_);
-    make_command_sample(command_sample_);
+    for (afhub_dds_BodyState* sample : {&state_out_, &state_in_}) make_state_sample(*sample);
+    for (afhub_dds_BodyCommand* sample : {&command_out_, &command_in_})
+      make_command_sample(*sample);
     if (command_reader_) forward_on_data(command_reader_->id);
     if (state_reader_) forward_on_data(state_reader_->id);
   }
@@ -168,8 +170,9 @@ class Bridge {
     // Returns once a running callback is done: none touches this bridge after this.
     if (command_reader_) dds_set_listener(command_reader_->id, nullptr);
     if (state_reader_) dds_set_listener(state_reader_->id, nullptr);
-    free_state_sample(state_sample_);
-    free_command_sample(command_sample_);
+    for (afhub_dds_BodyState* sample : {&state_out_, &state_in_}) free_state_sample(*sample);
+    for (afhub_dds_BodyCommand* sample : {&command_out_, &command_in_})
+      free_command_sample(*sample);
   }
 
   Bridge(const Bridge&) = delete;
@@ -187,37 +190,38 @@ class Bridge {
                  next_report_ns = start_ns + 5'000'000'000;
     while (!stop_requested()) {
       const std::int64_t now_ns = monotonic_ns();
-      std::unique_lock lock(mutex_);
-      if (catalog && now_ns >= next_scan_ns) {
-        scan_catalog(*catalog);
-        devices_and_world_->scan(catalog->latest());
-        next_scan_ns = now_ns + 1'000'000'000;
+      {
+        const std::lock_guard lock(mutex_);  // exported_ and mirrored_ grow here
+        if (catalog && now_ns >= next_scan_ns) {
+          scan_catalog(*catalog);
+          devices_and_world_->scan(catalog->latest());
+          next_scan_ns = now_ns + 1'000'000'000;
+        }
+        if (options_.mirror) mirror_infos();
+        if (now_ns >= next_report_ns || report_requested) {
+          report_requested = 0;
+          report();
+          next_report_ns = now_ns + 5'000'000'000;
+        }
       }
-      if (options_.mirror) mirror_infos();
-      forward();
-      if (now_ns >= next_report_ns || report_requested) {
-        report_requested = 0;
-        report();
-        next_report_ns = now_ns + 5'000'000'000;
-      }
+      forward_local();
       if (options_.seconds > 0.0 &&
           static_cast<double>(now_ns - start_ns) * 1e-9 >= options_.seconds)
         break;
-      lock.unlock();
       next_ns += period_ns;
       if (next_ns < now_ns) next_ns = now_ns;  // after a stall: no burst of catch-up cycles
       wait_until(next_ns);
     }
+    const std::lock_guard lock(mutex_);
     report();
     return 0;
   }
 
  private:
-  // Until `deadline_ns`, forwarding whatever arrives as it arrives, so that nothing
-  // waits for a cycle: local states and commands written to mirrored bodies wake the
-  // iceoryx WaitSet (or, with spin, are polled for); DDS states and commands are
-  // forwarded by Cyclone's thread that receives them (forward_on_data), one wake-up
-  // fewer. Each forward takes the newest sample of each body.
+  // Until `deadline_ns`, forwarding local states and commands to mirrored bodies as they
+  // come: they wake the iceoryx WaitSet (or, with spin, are polled for). DDS states and
+  // commands never wait for this loop: Cyclone's thread that receives them publishes
+  // them into the hub (on_data), as raw DDS would wake a reader.
   void wait_until(std::int64_t deadline_ns) {
     for (std::int64_t now_ns = monotonic_ns(); now_ns < deadline_ns && !stop_requested();
          now_ns = monotonic_ns()) {
@@ -225,29 +229,32 @@ class Bridge {
         sched_yield();
       else
         state_arrival_.wait(deadline_ns - now_ns);
-      const std::lock_guard lock(mutex_);
-      forward();
+      forward_local();
     }
   }
 
-  void forward() {
+  // This hub's side, on the loop's thread and without the mutex (so that on_data never
+  // waits for a DDS write here): exported states, commands written to mirrored bodies,
+  // and the inputs polled rather than heard (ROS 2 commands, devices, the world).
+  // exported_ and mirrored_ only grow on this thread.
+  void forward_local() {
     if (options_.export_bodies) {
       export_states();
       devices_and_world_->export_states(monotonic_ns());
       if (options_.accept_commands) {
-        import_commands();
         if (ros2_) ros2_->import_commands();
         devices_and_world_->import_commands();
       }
     }
     if (options_.mirror) {
-      mirror_states();
       export_mirrored_commands();
       devices_and_world_->mirror();
     }
   }
 
-  // In Cyclone's receive thread, under the mutex that the loop holds while it works.
+  // In Cyclone's receive thread, under the mutex that the loop holds while the bodies
+  // change. Touches only what the loop's forward_local() does not write (a body's
+  // command writer, its publisher's state side, the incoming samples and counters).
   static void on_data(dds_entity_t reader, void* self) {
     auto* bridge = static_cast<Bridge*>(self);
     const std::lock_guard lock(bridge->mutex_);
@@ -380,8 +387,8 @@ class Bridge {
         if (static_cast<double>(now_ns - body.last_out_ns) < 1e9 / options_.body_rate_hz) continue;
         body.last_out_ns = now_ns;
       }
-      to_dds(body.channel, *state, state_sample_);
-      if (dds_write(state_writer_->id, &state_sample_) >= 0) ++counters_.states_out;
+      to_dds(body.channel, *state, state_out_);
+      if (dds_write(state_writer_->id, &state_out_) >= 0) ++counters_.states_out;
       if (ros2_) ros2_->publish(i, *state);
     }
   }
@@ -389,7 +396,7 @@ class Bridge {
   // Commands from the network, only with --accept-commands; a command older than the
   // bound by its DDS source timestamp is dropped, never applied late.
   void import_commands() {
-    void* samples[1] = {&command_sample_};
+    void* samples[1] = {&command_in_};
     dds_sample_info_t info;
     const auto max_age_ns = static_cast<std::int64_t>(options_.max_command_age_s * 1e9);
     while (dds_take(command_reader_->id, samples, &info, 1, 1) > 0) {
@@ -400,22 +407,22 @@ class Bridge {
         continue;
       }
       if (options_.latency) command_ages_.record(age_ns);
-      ExportedBody* body = find_exported(command_sample_.body);
+      ExportedBody* body = find_exported(command_in_.body);
       if (!body) {
         ++counters_.unknown_bodies;
         continue;
       }
-      if (!valid_dds_command(command_sample_)) {
+      if (!valid_dds_command(command_in_)) {
         ++counters_.bad_commands;
         continue;
       }
       if (!body->command && !open_command_writer(*body)) continue;
       const std::uint32_t joints =
-          std::min<std::uint32_t>(command_sample_.joints._length, kMaxJointsPerBody);
+          std::min<std::uint32_t>(command_in_.joints._length, kMaxJointsPerBody);
       BodyCommand* command = body->command->loan(body_command_bytes(joints));
       if (!command) continue;
       command->joint_count = joints;
-      from_dds(command_sample_, *command);
+      from_dds(command_in_, *command);
       body->command->publish(command);
       ++counters_.commands_in;
     }
@@ -485,18 +492,17 @@ class Bridge {
   }
 
   void mirror_states() {
-    void* samples[1] = {&state_sample_};
+    void* samples[1] = {&state_in_};
     dds_sample_info_t info;
     while (dds_take(state_reader_->id, samples, &info, 1, 1) > 0) {
       if (!info.valid_data) continue;
-      MirroredBody* body = find_mirrored(state_sample_.body);
+      MirroredBody* body = find_mirrored(state_in_.body);
       if (!body) continue;  // its info has not come yet
       BodyState* state = body->publisher->loan_state(body->joints);
       if (!state) continue;
-      from_dds(state_sample_, *state);
+      from_dds(state_in_, *state);
       body->publisher->publish_state(state);
-      if (options_.latency)
-        state_ages_.record(monotonic_ns() - state_sample_.header.source_stamp_ns);
+      if (options_.latency) state_ages_.record(monotonic_ns() - state_in_.header.source_stamp_ns);
       ++counters_.states_in;
     }
   }
@@ -507,10 +513,10 @@ class Bridge {
     for (MirroredBody& body : mirrored_) {
       const BodyCommand* command = body.publisher->latest_command();
       if (!command || !body.publisher->command_updated()) continue;
-      to_dds(body.channel, *command, command_sample_);
+      to_dds(body.channel, *command, command_out_);
       const std::int64_t age_ns =
           std::max<std::int64_t>(0, monotonic_ns() - command->header.publish_stamp_ns);
-      if (dds_write_ts(command_writer_->id, &command_sample_, dds_time() - age_ns) >= 0)
+      if (dds_write_ts(command_writer_->id, &command_out_, dds_time() - age_ns) >= 0)
         ++counters_.commands_out;
     }
   }
@@ -521,12 +527,13 @@ class Bridge {
   std::unique_ptr<Entity> state_writer_, info_writer_, command_reader_;
   std::unique_ptr<Entity> state_reader_, info_reader_, command_writer_;
   std::unique_ptr<Ros2Profile> ros2_;  // --profile ros2; deleted before the participant
-  afhub_dds_BodyState state_sample_{};
-  afhub_dds_BodyCommand command_sample_{};
+  // Out: written on the loop's thread; in: taken on Cyclone's (on_data).
+  afhub_dds_BodyState state_out_{}, state_in_{};
+  afhub_dds_BodyCommand command_out_{}, command_in_{};
   // Local states and commands to mirrored bodies. Before exported_ and mirrored_:
   // destroyed after their readers.
   SampleWaiter state_arrival_;
-  std::mutex mutex_;  // between the loop and Cyclone's thread (on_data)
+  std::mutex mutex_;  // the bodies' lists, between the loop and Cyclone's thread (on_data)
   std::vector<ExportedBody> exported_;
   std::vector<MirroredBody> mirrored_;
   std::vector<std::string> refused_;
@@ -557,6 +564,9 @@ void check_dds_bridge_options(const DdsBridgeOptions& options) {
     throw Error("--rate must be between 0 and 100000 Hz");
   if (!(options.max_command_age_s > 0.0 && options.max_command_age_s <= 10.0))
     throw Error("--max-command-age must be between 0 and 10 s");
+  if (options.cpu_wake_latency_us < -1 || options.cpu_wake_latency_us > kMaxWakeLatencyUs)
+    throw Error("--cpu-wake-latency must be 0 to " + std::to_string(kMaxWakeLatencyUs) +
+                " microseconds");
   if (options.domain > 232) throw Error("--domain must be 0 to 232 (DDS domain ids)");
   if (options.body_globs.empty()) throw Error("--bodies needs at least one glob");
   if (!options.profile.empty() && options.profile != "ros2")
@@ -582,6 +592,8 @@ int run_dds_bridge(const DdsBridgeOptions& options) {
   check_dds_bridge_options(options);
   install_stop_signal_handlers();
   signal(SIGUSR1, request_report);
+  if (options.cpu_wake_latency_us >= 0)
+    hold_cpu_wake_latency(options.cpu_wake_latency_us, "afhub bridge dds");
   connect_to_hub("bridge-dds", HubPolicy::kRequire);
   Bridge bridge(options);
   return bridge.run();

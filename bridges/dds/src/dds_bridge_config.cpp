@@ -18,7 +18,7 @@ namespace {
 
 const char* const kKeys =
     "domain, interface, export, mirror, accept-commands, bodies, devices, world, qos, rate, spin, "
-    "rate-limits, max-command-age, profile, ros2-prefix, security";
+    "cpu-wake-latency, rate-limits, max-command-age, profile, ros2-prefix, security";
 
 class Reader {
  public:
@@ -38,6 +38,12 @@ class Reader {
       fail(node, "'" + key + "' is " + node.Scalar() + "; write a value from " + text(low) +
                      " to " + text(high));
     return value;
+  }
+
+  int microseconds(const YAML::Node& node, const std::string& key, int high) const {
+    const double value = number(node, key, 0, high);
+    if (value != std::floor(value)) fail(node, "'" + key + "' is whole microseconds");
+    return static_cast<int>(value);
   }
 
   bool flag(const YAML::Node& node, const std::string& key) const {
@@ -146,6 +152,8 @@ DdsBridgeOptions read_dds_bridge_config(const std::string& path, const DdsBridge
       options.rate_hz = reader.number(value, key, 1e-3, 100'000.0);
     } else if (key == "spin") {
       options.spin = reader.flag(value, key);
+    } else if (key == "cpu-wake-latency") {
+      options.cpu_wake_latency_us = reader.microseconds(value, key, kMaxWakeLatencyUs);
     } else if (key == "rate-limits") {
       read_rate_limits(reader, value, options);
     } else if (key == "max-command-age") {
@@ -199,8 +207,10 @@ std::string render_dds_bridge_config(const DdsBridgeOptions& options) {
       << "world: " << flag(options.world) << "\n"
       << "qos: " << (options.reliable ? "reliable" : "best-effort") << "\n"
       << "rate: " << number_text(options.rate_hz) << "\n"
-      << "spin: " << flag(options.spin) << "\n"
-      << "rate-limits: {bodies: " << number_text(options.body_rate_hz)
+      << "spin: " << flag(options.spin) << "\n";
+  if (options.cpu_wake_latency_us >= 0)
+    out << "cpu-wake-latency: " << options.cpu_wake_latency_us << "\n";
+  out << "rate-limits: {bodies: " << number_text(options.body_rate_hz)
       << ", devices: " << number_text(options.device_rate_hz)
       << ", world: " << number_text(options.world_rate_hz) << "}\n"
       << "max-command-age: " << number_text(options.max_command_age_s) << "\n";

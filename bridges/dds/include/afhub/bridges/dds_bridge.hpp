@@ -13,6 +13,9 @@
 
 namespace afhub::bridges {
 
+// --cpu-wake-latency's largest value (us): past a millisecond it no longer serves a 1 kHz loop.
+constexpr int kMaxWakeLatencyUs = 1000;
+
 struct DdsBridgeOptions {
   std::uint32_t domain = 0;
   std::string interface;  // bind DDS to this network interface (empty: Cyclone's choice)
@@ -27,6 +30,9 @@ struct DdsBridgeOptions {
   // until one comes: no wake-up on the way out, for a bridge given a core of its own
   // (it takes that core's CPU time, left to any other runnable thread on each poll).
   bool spin = false;
+  // Hold idle CPUs to wake within this many microseconds while the bridge runs
+  // (rt/cpu_wake_latency.hpp; 0: they poll, the lowest latency); -1: leave them.
+  int cpu_wake_latency_us = -1;
   // Per-topic rate limits of exported states, in Hz (0: every new state, at most once
   // per cycle): newest wins, the states in between are not sent.
   double body_rate_hz = 0.0, device_rate_hz = 0.0, world_rate_hz = 0.0;
