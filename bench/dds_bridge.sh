@@ -27,15 +27,18 @@
 # bench/dds_bridge_plot.sh OUT_DIR PNG draws them.
 set -euo pipefail
 
-rounds=5
-pings=2000
+# Short rounds, many of them: the scheduler's placement of the threads on this VM's
+# cores changes the round trips by tens of us from one minute to the next, and each
+# path must see as many of those placements as the other.
+rounds=20
+pings=500
 window=10
 # Each body takes two of iceoryx 2.0.3's 1024 subscriber ports here (the synth's
 # command reader, the bridge's state reader; the hub's rate probes take 32 in all).
 bodies=${AFHUB_BENCH_BODIES:-400}
 if [[ ${1:-} == --quick ]]; then
-  rounds=2
-  pings=1000
+  rounds=8
+  pings=250
   window=5
   shift
 fi

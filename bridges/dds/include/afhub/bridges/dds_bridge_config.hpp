@@ -9,6 +9,7 @@
 //   world: true
 //   qos: best-effort          # or reliable; states keep the last 1 either way
 //   rate: 1000                # the bridge's loop
+//   cpu-wake-latency: 0       # optional: idle CPUs poll while it runs
 //   rate-limits: {bodies: 200, devices: 1000, world: 50}
 //   max-command-age: 0.05
 #pragma once
