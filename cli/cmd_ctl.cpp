@@ -7,6 +7,7 @@
 #include "afhub/shm_layout/error.hpp"
 #include "commands.hpp"
 #include "count_option.hpp"
+#include "realtime_options.hpp"
 
 namespace afhub::cli {
 namespace {
@@ -17,9 +18,7 @@ struct CtlOptions {
   double period_s = 4.0;
   std::vector<int> joints;
   double rate_hz = 1000.0;
-  int fifo_priority = 0;
-  int cpu = -1;
-  bool lock_memory = false;
+  RealtimeOptions realtime;
   bool lockstep = false;
   bool spin = false;
   std::uint64_t cycles = 0;
@@ -30,8 +29,6 @@ struct CtlOptions {
 ControllerOptions controller_options(const CtlOptions& options, const std::string& name) {
   if (!(options.rate_hz > 0.0 && options.rate_hz <= 100'000.0))
     throw Error("--rate must be between 0 and 100000 Hz");
-  if (options.fifo_priority < 0 || options.fifo_priority > 99)
-    throw Error("--fifo takes a SCHED_FIFO priority from 1 to 99");
   if (!(options.wait_s >= 0.0 && options.wait_s <= 1e6))
     throw Error("--wait takes a number of seconds from 0 to 1e6");
   ControllerOptions controller;
@@ -43,9 +40,7 @@ ControllerOptions controller_options(const CtlOptions& options, const std::strin
     throw Error("--spin needs --lockstep: it is how a lockstep client waits for a step");
   controller.spin = options.spin;
   controller.loop.period_ns = static_cast<std::int64_t>(std::llround(1e9 / options.rate_hz));
-  controller.loop.fifo_priority = options.fifo_priority;
-  controller.loop.cpu = options.cpu;
-  controller.loop.lock_memory = options.lock_memory;
+  set_realtime_options(options.realtime, controller.loop);
   controller.loop.max_cycles = options.cycles;
   if (options.after_step_us >= 0.0) {
     if (options.lockstep) throw Error("--after-step is for free-running loops, not --lockstep");
@@ -61,11 +56,7 @@ void add_loop_options(CLI::App* command, CtlOptions& options) {
   command->add_option("body", options.body, "Body channel name or a unique suffix of it")
       ->required();
   command->add_option("--rate", options.rate_hz, "Loop rate in Hz (default 1000)");
-  command->add_option("--fifo", options.fifo_priority,
-                      "Run under SCHED_FIFO at this priority (1-99); says so if refused");
-  command->add_option("--cpu", options.cpu, "Pin the loop to this CPU");
-  command->add_flag("--lock-memory", options.lock_memory,
-                    "mlockall and pre-fault, so the loop takes no page faults");
+  add_realtime_options(command, options.realtime, "the loop");
   command->add_flag("--lockstep", options.lockstep,
                     "Answer every physics step (with `afhub run --lockstep`) instead of a clock");
   command->add_flag("--spin", options.spin,

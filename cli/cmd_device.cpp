@@ -16,6 +16,7 @@
 #include "commands.hpp"
 #include "count_option.hpp"
 #include "format.hpp"
+#include "realtime_options.hpp"
 
 namespace afhub::cli {
 namespace {
@@ -23,9 +24,7 @@ namespace {
 struct DeviceRunOptions {
   std::string name;
   double rate_hz = 1000.0;
-  int fifo_priority = 0;
-  int cpu = -1;
-  bool lock_memory = false;
+  RealtimeOptions realtime;
   std::uint64_t cycles = 0;
   double watchdog_ms = 10.0;
   double ramp_s = 0.2;
@@ -98,8 +97,6 @@ int run_force(const ForceOptions& options) {
 devices::DriverOptions driver_options(const DeviceRunOptions& options) {
   if (!(options.rate_hz > 0.0 && options.rate_hz <= 100'000.0))
     throw Error("--rate must be between 0 and 100000 Hz");
-  if (options.fifo_priority < 0 || options.fifo_priority > 99)
-    throw Error("--fifo takes a SCHED_FIFO priority from 1 to 99");
   if (!(options.watchdog_ms > 0.0 && options.watchdog_ms <= 1000.0))
     throw Error("--watchdog takes milliseconds from 0 (excluded) to 1000");
   if (!(options.ramp_s >= 0.0 && options.ramp_s <= 10.0))
@@ -110,9 +107,7 @@ devices::DriverOptions driver_options(const DeviceRunOptions& options) {
   driver.name = options.name;
   device_channel_name(driver.name);  // a bad name fails here, before the device opens
   driver.loop.period_ns = static_cast<std::int64_t>(std::llround(1e9 / options.rate_hz));
-  driver.loop.fifo_priority = options.fifo_priority;
-  driver.loop.cpu = options.cpu;
-  driver.loop.lock_memory = options.lock_memory;
+  set_realtime_options(options.realtime, driver.loop);
   driver.loop.max_cycles = options.cycles;
   driver.safety.watchdog_ns = std::llround(options.watchdog_ms * 1e6);
   driver.safety.ramp_s = options.ramp_s;
@@ -127,11 +122,7 @@ void add_driver_options(CLI::App* command, DeviceRunOptions& options, const std:
   command->add_option("--name", options.name,
                       "The device's name: its channels are device/<name> (default " + name + ")");
   command->add_option("--rate", options.rate_hz, "Loop rate in Hz (default 1000)");
-  command->add_option("--fifo", options.fifo_priority,
-                      "Run under SCHED_FIFO at this priority (1-99); says so if refused");
-  command->add_option("--cpu", options.cpu, "Pin the loop to this CPU");
-  command->add_flag("--lock-memory", options.lock_memory,
-                    "mlockall and pre-fault, so the loop takes no page faults");
+  add_realtime_options(command, options.realtime, "the loop");
   add_count_option(command, "--cycles", options.cycles,
                    "Stop after this many cycles (default: Ctrl-C)");
   command->add_option("--watchdog", options.watchdog_ms,

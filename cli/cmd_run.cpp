@@ -15,6 +15,7 @@
 #include "count_option.hpp"
 #include "format.hpp"
 #include "gain_options.hpp"
+#include "realtime_options.hpp"
 
 namespace afhub::cli {
 namespace {
@@ -36,9 +37,7 @@ struct RunCliOptions {
   std::uint32_t wait_for = 0;
   double wait_timeout_s = 0.0;
   double client_timeout_ms = 100.0;
-  int fifo_priority = 0;
-  int cpu = -1;
-  bool lock_memory = false;
+  RealtimeOptions realtime;
   bool stop_on_nan = false;
   std::string overrun = "catch-up";
   double max_catch_up_ms = 100.0;
@@ -70,8 +69,8 @@ int run_run(const RunCliOptions& options) {
                 std::to_string(options.max_catch_up_ms));
   if (!options.step_log_file.empty() && (options.steps == 0 || options.steps > 100'000'000))
     throw Error("--step-log needs --steps N (at most 1e8): the log is sized before the first step");
-  if (options.fifo_priority < 0 || options.fifo_priority > 99)
-    throw Error("--fifo takes a SCHED_FIFO priority from 1 to 99");
+  LoopOptions realtime;
+  set_realtime_options(options.realtime, realtime);
   if (options.offline &&
       (options.lockstep || !options.watchdog_hold.empty() || !options.watchdog_bodies.empty()))
     throw Error(
@@ -155,10 +154,6 @@ int run_run(const RunCliOptions& options) {
   run.stop_on_nan = options.stop_on_nan;
   run.overrun = options.overrun == "skip" ? OverrunPolicy::kSkip : OverrunPolicy::kCatchUp;
   run.max_catch_up_ns = static_cast<std::int64_t>(options.max_catch_up_ms * 1e6);
-  LoopOptions realtime;
-  realtime.fifo_priority = options.fifo_priority;
-  realtime.cpu = options.cpu;
-  realtime.lock_memory = options.lock_memory;
   run.grant = apply_realtime(realtime, "afhub run");
   physics::RunReport report;
   if (!options.step_log_file.empty()) report.step_log.reserve(options.steps);
@@ -249,11 +244,7 @@ void register_run(CLI::App& app, Runner& selected) {
   run->add_option("--max-catch-up", options->max_catch_up_ms,
                   "With --overrun catch-up: the most simulated time, in ms, made up after a "
                   "stall (default 100; 0 to 10000); a longer stall is skipped");
-  run->add_option("--fifo", options->fifo_priority,
-                  "Step under SCHED_FIFO at this priority (1-99); says so if refused");
-  run->add_option("--cpu", options->cpu, "Pin the physics loop to this CPU");
-  run->add_flag("--lock-memory", options->lock_memory,
-                "mlockall and pre-fault, so the physics loop takes no page faults");
+  add_realtime_options(run, options->realtime, "the physics loop");
   run->add_option("--report", options->report_file,
                   "Write a JSON report at the end (steps, step times, poses, joints)");
   run->add_option("--step-log", options->step_log_file,

@@ -15,6 +15,7 @@
 #include "afhub/teleop/teleop_process.hpp"
 #include "commands.hpp"
 #include "count_option.hpp"
+#include "realtime_options.hpp"
 
 namespace afhub::cli {
 namespace {
@@ -24,9 +25,7 @@ struct TeleopCliOptions {
   std::string selection;
   std::vector<std::string> devices;
   double rate_hz = 1000.0;
-  int fifo_priority = 0;
-  int cpu = -1;
-  bool lock_memory = false;
+  RealtimeOptions realtime;
   std::uint64_t cycles = 0;
   double wait_s = 10.0;
   double stale_ms = 50.0;
@@ -119,8 +118,6 @@ teleop::TeleopBinding bind_device(const teleop::InputDeviceSpec& spec,
 teleop::TeleopOptions teleop_options(const TeleopCliOptions& options) {
   if (!(options.rate_hz > 0.0 && options.rate_hz <= 100'000.0))
     throw Error("--rate must be between 0 and 100000 Hz");
-  if (options.fifo_priority < 0 || options.fifo_priority > 99)
-    throw Error("--fifo takes a SCHED_FIFO priority from 1 to 99");
   if (!(options.wait_s >= 0.0 && options.wait_s <= 1e6))
     throw Error("--wait takes a number of seconds from 0 to 1e6");
   if (!(options.stale_ms > 0.0 && options.stale_ms <= 60'000.0))
@@ -142,9 +139,7 @@ teleop::TeleopOptions teleop_options(const TeleopCliOptions& options) {
     teleop.bindings.back().feedback = feedback;
   }
   teleop.loop.period_ns = static_cast<std::int64_t>(std::llround(1e9 / options.rate_hz));
-  teleop.loop.fifo_priority = options.fifo_priority;
-  teleop.loop.cpu = options.cpu;
-  teleop.loop.lock_memory = options.lock_memory;
+  set_realtime_options(options.realtime, teleop.loop);
   teleop.loop.max_cycles = options.cycles;
   teleop.wait_s = options.wait_s;
   teleop.device_stale_ns = std::llround(options.stale_ms * 1e6);
@@ -184,11 +179,7 @@ void register_teleop(CLI::App& app, Runner& selected) {
                      "The driver (its --name) of each selected device, in the order of -d; "
                      "repeat it, e.g. --device virtual --device falcon2");
   teleop->add_option("--rate", options->rate_hz, "Loop rate in Hz (default 1000)");
-  teleop->add_option("--fifo", options->fifo_priority,
-                     "Run under SCHED_FIFO at this priority (1-99); says so if refused");
-  teleop->add_option("--cpu", options->cpu, "Pin the loop to this CPU");
-  teleop->add_flag("--lock-memory", options->lock_memory,
-                   "mlockall and pre-fault, so the loop takes no page faults");
+  add_realtime_options(teleop, options->realtime, "the loop");
   add_count_option(teleop, "--cycles", options->cycles,
                    "Stop after this many cycles (default: Ctrl-C)");
   teleop->add_option("--wait", options->wait_s,

@@ -13,6 +13,9 @@ std::string realtime_flags(const LoopStats& stats) {
   if (stats.realtime) flags += flags.empty() ? "fifo" : ",fifo";
   if (stats.memory_locked) flags += flags.empty() ? "mlock" : ",mlock";
   if (stats.cpu >= 0) flags += (flags.empty() ? "cpu" : ",cpu") + std::to_string(stats.cpu);
+  if (stats.cpu_wake_latency_us >= 0)
+    flags +=
+        (flags.empty() ? "wake<=" : ",wake<=") + std::to_string(stats.cpu_wake_latency_us) + "us";
   return flags.empty() ? "-" : flags;
 }
 
@@ -63,6 +66,7 @@ void loop_json(JsonWriter& json, const std::vector<LoopStats>& loops) {
     json.key("memory_locked").value(s.memory_locked != 0);
     json.key("lockstep").value(s.lockstep != 0);
     json.key("cpu").value(static_cast<long long>(s.cpu));
+    json.key("cpu_wake_latency_us").value(static_cast<long long>(s.cpu_wake_latency_us));
     json.end_object();
   }
   json.end_array();

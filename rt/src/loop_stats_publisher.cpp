@@ -17,6 +17,7 @@ LoopStatsPublisher::LoopStatsPublisher(const std::string& name, const std::strin
   identity_.realtime = grant.realtime;
   identity_.memory_locked = grant.memory_locked;
   identity_.cpu = grant.cpu;
+  identity_.cpu_wake_latency_us = grant.cpu_wake_latency_us;
 }
 
 void LoopStatsPublisher::maybe_publish(std::int64_t now_ns, const LoopTiming& timing) noexcept {

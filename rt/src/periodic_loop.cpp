@@ -4,6 +4,7 @@
 #include <pthread.h>
 #include <sched.h>
 #include <sys/mman.h>
+#include <sys/prctl.h>
 
 #include <cerrno>
 #include <cstdio>
@@ -11,6 +12,7 @@
 
 #include "afhub/hub/stop_signal.hpp"
 #include "afhub/rt/clock.hpp"
+#include "afhub/rt/cpu_wake_latency.hpp"
 
 namespace afhub {
 namespace {
@@ -49,6 +51,10 @@ RealtimeGrant apply_realtime(const LoopOptions& options, const char* who) {
       std::fprintf(stderr, "%s: cannot pin to CPU %d (%s); running on any CPU\n", who, options.cpu,
                    std::strerror(error));
   }
+  // Per thread; 0 restores the kernel's default.
+  prctl(PR_SET_TIMERSLACK, static_cast<unsigned long>(options.timer_slack_ns));
+  if (options.cpu_wake_latency_us >= 0 && hold_cpu_wake_latency(options.cpu_wake_latency_us, who))
+    grant.cpu_wake_latency_us = options.cpu_wake_latency_us;
   if (options.fifo_priority > 0) {
     sched_param param{};
     param.sched_priority = options.fifo_priority;

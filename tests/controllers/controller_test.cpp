@@ -5,11 +5,14 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <cmath>
+#include <fstream>
 #include <thread>
 
 #include "afhub/hub/bodies.hpp"
+#include "afhub/rt/cpu_wake_latency.hpp"
 #include "afhub/shm_layout/channel_names.hpp"
 #include "afhub/shm_layout/world.hpp"
 #include "afhub_process.hpp"
@@ -146,8 +149,10 @@ TEST(Controllers, KilledControllerTripsTheHoldWatchdogAndARestartTakesOver) {
   for (int j = 0; j < 7; ++j)
     EXPECT_NEAR(later.joints[j].position, held.joints[j].position, 0.005) << "joint " << j;
 
-  // A restarted controller takes over: its commands arrive and none is refused.
-  ScopedProcess hold(spawn_afhub({"ctl", "hold", "base"}));
+  // A restarted controller takes over: its commands arrive and none is refused. It
+  // holds the machine's CPU wake-up latency limit at 0 while it runs (needs root).
+  const bool can_hold_limit = geteuid() == 0 && access(kCpuWakeLatencyDevice, W_OK) == 0;
+  ScopedProcess hold(spawn_afhub({"ctl", "hold", "base", "--cpu-wake-latency", "0"}));
   ASSERT_TRUE(wait_until(
       [&] {
         const BodyCommand* command = commands.latest();
@@ -171,6 +176,14 @@ TEST(Controllers, KilledControllerTripsTheHoldWatchdogAndARestartTakesOver) {
   RunResult status = run_afhub({"status"});
   EXPECT_TRUE(contains(status.out, "loops:")) << status.out;
   EXPECT_TRUE(contains(status.out, "ctl hold")) << status.out;
+  if (can_hold_limit) {
+    EXPECT_TRUE(contains(top.out, "\"cpu_wake_latency_us\":0")) << top.out;  // the physics: -1
+    EXPECT_TRUE(contains(status.out, "wake<=0us")) << status.out;
+    std::int32_t limit = -1;
+    std::ifstream(kCpuWakeLatencyDevice, std::ios::binary)
+        .read(reinterpret_cast<char*>(&limit), sizeof limit);
+    EXPECT_EQ(limit, 0) << "the kernel's limit while `ctl hold --cpu-wake-latency 0` runs";
+  }
 
   EXPECT_EQ(physics.stop(), 0);
   EXPECT_TRUE(contains(read_file(log), "its joints hold their positions")) << read_file(log);
@@ -224,6 +237,11 @@ TEST(Controllers, BadArgumentsGetClearErrors) {
   RunResult bad_fifo = run_afhub({"run", kArm, "--offline", "--steps", "1", "--fifo", "120"});
   EXPECT_EQ(bad_fifo.exit_code, 1);
   EXPECT_TRUE(contains(bad_fifo.err, "--fifo takes a SCHED_FIFO priority")) << bad_fifo.err;
+  RunResult bad_wake =
+      run_afhub({"run", kArm, "--offline", "--steps", "1", "--cpu-wake-latency", "5000"});
+  EXPECT_EQ(bad_wake.exit_code, 1);
+  EXPECT_TRUE(contains(bad_wake.err, "--cpu-wake-latency takes microseconds from 0 to 1000"))
+      << bad_wake.err;
   RunResult bad_hold =
       run_afhub({"run", kArm, "--offline", "--steps", "1", "--watchdog-hold", "x"});
   EXPECT_EQ(bad_hold.exit_code, 1);

@@ -11,6 +11,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "afhub/rt/cpu_wake_latency.hpp"
 #include "afhub/shm_layout/error.hpp"
 
 namespace afhub::bridges {
@@ -153,7 +154,7 @@ DdsBridgeOptions read_dds_bridge_config(const std::string& path, const DdsBridge
     } else if (key == "spin") {
       options.spin = reader.flag(value, key);
     } else if (key == "cpu-wake-latency") {
-      options.cpu_wake_latency_us = reader.microseconds(value, key, kMaxWakeLatencyUs);
+      options.cpu_wake_latency_us = reader.microseconds(value, key, kMaxCpuWakeLatencyUs);
     } else if (key == "rate-limits") {
       read_rate_limits(reader, value, options);
     } else if (key == "max-command-age") {

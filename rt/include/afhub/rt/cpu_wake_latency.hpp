@@ -9,6 +9,9 @@
 namespace afhub {
 
 constexpr const char* kCpuWakeLatencyDevice = "/dev/cpu_dma_latency";
+// The largest limit a program here asks for: beyond 1 ms it changes nothing a
+// 1 kHz loop would notice.
+constexpr int kMaxCpuWakeLatencyUs = 1000;
 
 // Asks for wake-ups within `microseconds` until this process exits (the kernel drops
 // the request when the file closes, however the process ends). False, said on stderr

@@ -15,6 +15,7 @@ struct RealtimeGrant {
   bool realtime = false;
   bool memory_locked = false;
   int cpu = -1;
+  int cpu_wake_latency_us = -1;  // the wake-up latency limit held, or -1
 };
 
 class LoopStatsPublisher {

@@ -40,9 +40,17 @@ class LoopClock {
 struct LoopOptions {
   std::int64_t period_ns = 1'000'000;  // 0: as fast as possible (no sleeping, no overruns)
   OverrunPolicy overrun = OverrunPolicy::kSkip;
-  int fifo_priority = 0;         // 1..99: SCHED_FIFO at this priority; 0: the normal scheduler
-  int cpu = -1;                  // pin the loop's thread to this CPU; -1: any
-  bool lock_memory = false;      // mlockall and pre-fault the stack: no page faults in the loop
+  int fifo_priority = 0;     // 1..99: SCHED_FIFO at this priority; 0: the normal scheduler
+  int cpu = -1;              // pin the loop's thread to this CPU; -1: any
+  bool lock_memory = false;  // mlockall and pre-fault the stack: no page faults in the loop
+  // 0..kMaxCpuWakeLatencyUs: hold the machine's CPU wake-up latency limit at this while the
+  // process runs (cpu_wake_latency.hpp; 0: idle CPUs poll, so the loop wakes on time); -1:
+  // leave the CPUs as they are.
+  int cpu_wake_latency_us = -1;
+  // How late the kernel may end the loop's timed sleeps to merge timer wake-ups (its
+  // "timer slack"). Linux gives a thread 50 us, which lands on every wake-up of a loop
+  // under the normal scheduler (SCHED_FIFO ignores it); 0 keeps the kernel's.
+  std::int64_t timer_slack_ns = 1;
   std::uint64_t max_cycles = 0;  // stop after this many cycles; 0: until a stop signal
   // A point of the grid (CLOCK_MONOTONIC ns): cycles wake at grid_origin_ns + k * period.
   // 0: the grid starts one period from now.

@@ -194,6 +194,7 @@ inline constexpr std::uint64_t kLayoutId = layout_detail::mix({
     AFHUB_OFF(LoopStats, memory_locked),
     AFHUB_OFF(LoopStats, lockstep),
     AFHUB_OFF(LoopStats, cpu),
+    AFHUB_OFF(LoopStats, cpu_wake_latency_us),
     sizeof(DurationPercentiles),
     sizeof(BenchSample),
     AFHUB_OFF(BenchSample, round),

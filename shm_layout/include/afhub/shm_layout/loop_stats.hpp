@@ -36,7 +36,8 @@ struct LoopStats {
   std::uint8_t memory_locked{0};     // mlockall succeeded
   std::uint8_t lockstep{0};
   std::uint8_t reserved{0};
-  std::int32_t cpu{-1};  // pinned CPU, or -1
+  std::int32_t cpu{-1};                  // pinned CPU, or -1
+  std::int32_t cpu_wake_latency_us{-1};  // the CPU wake-up latency limit it holds, or -1
 };
 
 }  // namespace afhub

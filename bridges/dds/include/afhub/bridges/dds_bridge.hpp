@@ -13,9 +13,6 @@
 
 namespace afhub::bridges {
 
-// --cpu-wake-latency's largest value (us): past a millisecond it no longer serves a 1 kHz loop.
-constexpr int kMaxWakeLatencyUs = 1000;
-
 struct DdsBridgeOptions {
   std::uint32_t domain = 0;
   std::string interface;  // bind DDS to this network interface (empty: Cyclone's choice)
