@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "afhub/bench/bench.hpp"
+#include "afhub/bench/wake_bench.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "commands.hpp"
 #include "count_option.hpp"
@@ -92,6 +93,24 @@ int run_dds_bench(const DdsBenchOptions& options) {
   throw Error("cannot run /bin/bash");
 }
 
+struct WakeBenchOptions {
+  bool quick = false;
+  std::uint32_t rounds = 0;
+  double seconds = 1.0;
+  int peer = -1;  // the bench's own loop processes
+};
+
+int run_wake_bench(const WakeBenchOptions& cli) {
+  if (!(cli.seconds >= 0.1 && cli.seconds <= 3600.0))
+    throw Error("--seconds takes 0.1 to 3600 seconds per setting and round");
+  if (cli.peer >= 0) return bench::run_wake_peer(static_cast<std::size_t>(cli.peer), cli.seconds);
+  bench::WakeOptions options;
+  options.seconds = cli.seconds;
+  options.rounds = cli.rounds > 0 ? cli.rounds : cli.quick ? 3 : 10;
+  std::printf("%s", bench::wake_table(bench::run_wake_bench(options)).c_str());
+  return 0;
+}
+
 }  // namespace
 
 void register_bench(CLI::App& app, Runner& selected) {
@@ -133,8 +152,23 @@ void register_bench(CLI::App& app, Runner& selected) {
   dds->callback([&selected, dds_options] {
     selected = [dds_options] { return run_dds_bench(*dds_options); };
   });
-  bench->callback([&selected, options, dds] {
-    if (dds->parsed()) return;  // CLI11 runs the parent's callback after the subcommand's
+  auto wake_options = std::make_shared<WakeBenchOptions>();
+  auto* wake = bench->add_subcommand(
+      "wake",
+      "A 1 kHz loop's wake-up latency under each real-time setting of run, ctl, teleop and "
+      "device run: the normal scheduler with the kernel's timer slack and with afhub's, "
+      "--cpu-wake-latency 0, --fifo 80, and both; each in its own process, in interleaved "
+      "rounds. SCHED_FIFO and the wake-up limit need root (refused settings are said).");
+  wake->add_flag("--quick", wake_options->quick, "3 rounds instead of 10");
+  add_count_option(wake, "--rounds", wake_options->rounds, "Interleaved rounds (default 10)");
+  wake->add_option("--seconds", wake_options->seconds, "Seconds per setting and round (default 1)");
+  wake->add_option("--peer", wake_options->peer)->group("");
+  wake->callback([&selected, wake_options] {
+    selected = [wake_options] { return run_wake_bench(*wake_options); };
+  });
+  bench->callback([&selected, options, dds, wake] {
+    if (dds->parsed() || wake->parsed())
+      return;  // CLI11 runs the parent's callback after the subcommand's
     selected = [options] { return run_bench(*options); };
   });
 }

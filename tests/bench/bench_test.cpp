@@ -1,8 +1,12 @@
 // `afhub bench` end to end, briefly: every transport with real peer processes, the
-// 1 kHz loop against the real physics beside cyclictest, the JSON and the plot.
+// 1 kHz loop against the real physics beside cyclictest, the JSON and the plot;
+// `afhub bench wake`, the loop's wake-up latency by real-time setting.
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 
 #include "afhub/hub/hub_presence.hpp"
@@ -83,6 +87,39 @@ TEST(Bench, RunningHubWithoutBenchPoolsIsRefusedSayingWhatToDo) {
   EXPECT_TRUE(contains(run.err, "free chunks for 1048576 byte samples; the bench needs 16"))
       << run.err;
   EXPECT_TRUE(contains(run.err, "afhub hub --bench-pools")) << run.err;
+}
+
+// Each setting's loop ran its 1000 cycles in a process of its own, and its figures
+// are a distribution (their size is this machine's: no bound is asserted).
+TEST(Bench, WakeMeasuresEveryRealTimeSetting) {
+  const RunResult run = run_afhub({"bench", "wake", "--rounds", "2", "--seconds", "0.5"}, 120s);
+  ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
+  EXPECT_TRUE(contains(run.err, "round 2 of 2")) << run.err;
+  const bool root = geteuid() == 0;
+  for (const char* setting :
+       {"normal scheduler, the kernel's timer slack", "normal scheduler (afhub: 1 ns timer slack)",
+        "normal scheduler, --cpu-wake-latency 0", "--fifo 80", "--fifo 80 --cpu-wake-latency 0"}) {
+    const std::size_t at = run.out.find(std::string(setting) + "  ");
+    ASSERT_NE(at, std::string::npos) << setting << " missing:\n" << run.out;
+    const std::size_t from = at + std::strlen(setting);
+    const std::string line = run.out.substr(from, run.out.find('\n', from) - from);
+    const bool needs_root = contains(setting, "fifo") || contains(setting, "wake-latency");
+    if (needs_root && !root) {
+      EXPECT_TRUE(contains(line, "refused (needs root")) << line;
+      continue;
+    }
+    double p50 = 0, p99 = 0, p999 = 0, max = 0, cycles = 0;
+    ASSERT_EQ(std::sscanf(line.c_str(), "%lf %lf %lf %lf %lf", &p50, &p99, &p999, &max, &cycles), 5)
+        << setting << ": " << line;
+    EXPECT_EQ(cycles, 1000.0) << setting;  // 2 rounds of 500 cycles at 1 kHz
+    EXPECT_GT(p50, 0.0) << setting;
+    EXPECT_LE(p50, p99) << setting;
+    EXPECT_LE(p99, p999) << setting;
+    EXPECT_LE(p999, max + 1.0) << setting;  // percentiles are 1 us bins' upper edges
+  }
+  RunResult bad = run_afhub({"bench", "wake", "--seconds", "0"});
+  EXPECT_EQ(bad.exit_code, 1);
+  EXPECT_TRUE(contains(bad.err, "--seconds takes 0.1 to 3600 seconds")) << bad.err;
 }
 
 TEST(Bench, BadArgumentsAreRefusedClearly) {
