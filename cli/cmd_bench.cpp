@@ -156,7 +156,7 @@ void register_bench(CLI::App& app, Runner& selected) {
   auto* wake = bench->add_subcommand(
       "wake",
       "A 1 kHz loop's wake-up latency under each real-time setting of run, ctl, teleop and "
-      "device run: the normal scheduler with the kernel's timer slack and with afhub's, "
+      "device run: the normal scheduler with the default timer slack and with afhub's, "
       "--cpu-wake-latency 0, --fifo 80, and both; each in its own process, in interleaved "
       "rounds. SCHED_FIFO and the wake-up limit need root (refused settings are said).");
   wake->add_flag("--quick", wake_options->quick, "3 rounds instead of 10");

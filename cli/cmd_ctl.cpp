@@ -32,6 +32,7 @@ ControllerOptions controller_options(const CtlOptions& options, const std::strin
   if (!(options.wait_s >= 0.0 && options.wait_s <= 1e6))
     throw Error("--wait takes a number of seconds from 0 to 1e6");
   ControllerOptions controller;
+  set_realtime_options(options.realtime, controller.loop);
   controller.name = name;
   controller.wait_s = options.wait_s;
   controller.body = options.body;
@@ -40,7 +41,6 @@ ControllerOptions controller_options(const CtlOptions& options, const std::strin
     throw Error("--spin needs --lockstep: it is how a lockstep client waits for a step");
   controller.spin = options.spin;
   controller.loop.period_ns = static_cast<std::int64_t>(std::llround(1e9 / options.rate_hz));
-  set_realtime_options(options.realtime, controller.loop);
   controller.loop.max_cycles = options.cycles;
   if (options.after_step_us >= 0.0) {
     if (options.lockstep) throw Error("--after-step is for free-running loops, not --lockstep");

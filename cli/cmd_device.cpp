@@ -104,10 +104,10 @@ devices::DriverOptions driver_options(const DeviceRunOptions& options) {
   if (!(options.wait_s >= 0.0 && options.wait_s <= 1e6))
     throw Error("--wait takes a number of seconds from 0 to 1e6");
   devices::DriverOptions driver;
+  set_realtime_options(options.realtime, driver.loop);
   driver.name = options.name;
   device_channel_name(driver.name);  // a bad name fails here, before the device opens
   driver.loop.period_ns = static_cast<std::int64_t>(std::llround(1e9 / options.rate_hz));
-  set_realtime_options(options.realtime, driver.loop);
   driver.loop.max_cycles = options.cycles;
   driver.safety.watchdog_ns = std::llround(options.watchdog_ms * 1e6);
   driver.safety.ramp_s = options.ramp_s;

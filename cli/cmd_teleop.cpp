@@ -122,6 +122,8 @@ teleop::TeleopOptions teleop_options(const TeleopCliOptions& options) {
     throw Error("--wait takes a number of seconds from 0 to 1e6");
   if (!(options.stale_ms > 0.0 && options.stale_ms <= 60'000.0))
     throw Error("--stale takes milliseconds from 0 (excluded) to 60000");
+  teleop::TeleopOptions teleop;
+  set_realtime_options(options.realtime, teleop.loop);  // before the file is read
   const teleop::FeedbackSource feedback = feedback_source(options.feedback);
   const teleop::InputDevicesFile file = teleop::read_input_devices(options.file);
   for (const std::string& warning : file.warnings) std::fprintf(stderr, "%s\n", warning.c_str());
@@ -131,7 +133,6 @@ teleop::TeleopOptions teleop_options(const TeleopCliOptions& options) {
     throw Error("--device names " + std::to_string(options.devices.size()) + " device(s) but " +
                 std::to_string(selected.size()) +
                 " are selected: give one --device NAME per selected device, in the order of -d");
-  teleop::TeleopOptions teleop;
   for (std::size_t i = 0; i < selected.size(); ++i) {
     teleop.bindings.push_back(
         bind_device(selected[i], options.devices.empty() ? driver_name_of(selected[i].hardware_name)
@@ -139,7 +140,6 @@ teleop::TeleopOptions teleop_options(const TeleopCliOptions& options) {
     teleop.bindings.back().feedback = feedback;
   }
   teleop.loop.period_ns = static_cast<std::int64_t>(std::llround(1e9 / options.rate_hz));
-  set_realtime_options(options.realtime, teleop.loop);
   teleop.loop.max_cycles = options.cycles;
   teleop.wait_s = options.wait_s;
   teleop.device_stale_ns = std::llround(options.stale_ms * 1e6);

@@ -25,9 +25,7 @@ void add_realtime_options(CLI::App* command, RealtimeOptions& options, const std
 void set_realtime_options(const RealtimeOptions& options, LoopOptions& loop) {
   if (options.fifo_priority < 0 || options.fifo_priority > 99)
     throw Error("--fifo takes a SCHED_FIFO priority from 1 to 99");
-  if (options.cpu_wake_latency_us < -1 || options.cpu_wake_latency_us > kMaxCpuWakeLatencyUs)
-    throw Error("--cpu-wake-latency takes microseconds from 0 to " +
-                std::to_string(kMaxCpuWakeLatencyUs));
+  check_cpu_wake_latency_option(options.cpu_wake_latency_us);
   loop.fifo_priority = options.fifo_priority;
   loop.cpu = options.cpu;
   loop.lock_memory = options.lock_memory;

@@ -4,9 +4,12 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
+#include <iterator>
 
 #include "afhub/rt/cpu_wake_latency.hpp"
 #include "afhub/rt/periodic_loop.hpp"
@@ -31,7 +34,7 @@ std::int32_t machine_limit_us() {
 
 const std::vector<WakeSetting>& wake_settings() {
   static const std::vector<WakeSetting> settings = {
-      {"normal scheduler, the kernel's timer slack", 0, -1, 0},
+      {"normal scheduler, the default timer slack", 0, -1, 0},
       {"normal scheduler (afhub: 1 ns timer slack)", 0, -1, 1},
       {"normal scheduler, --cpu-wake-latency 0", 0, 0, 1},
       {"--fifo 80", kFifoPriority, -1, 1},
@@ -49,17 +52,18 @@ int run_wake_peer(std::size_t setting, double seconds) {
   loop.fifo_priority = wanted.fifo_priority;
   loop.cpu_wake_latency_us = wanted.cpu_wake_latency_us;
   loop.timer_slack_ns = wanted.timer_slack_ns;
-  loop.lock_memory = true;
   loop.max_cycles = static_cast<std::uint64_t>(std::llround(seconds * 1e9 / kPeriodNs));
   const RealtimeGrant grant = apply_realtime(loop, "afhub bench wake");
-  if ((wanted.fifo_priority > 0 && !grant.realtime) ||
-      (wanted.cpu_wake_latency_us >= 0 && grant.cpu_wake_latency_us < 0)) {
-    std::printf("refused\n");
+  if (wanted.fifo_priority > 0 && !grant.realtime) {
+    std::printf("refused: SCHED_FIFO needs root, CAP_SYS_NICE or `ulimit -r`\n");
+    return 0;
+  }
+  if (wanted.cpu_wake_latency_us >= 0 && grant.cpu_wake_latency_us < 0) {
+    std::printf("refused: %s needs root\n", kCpuWakeLatencyDevice);
     return 0;
   }
   LoopTiming timing;
   run_periodic(loop, timing, [] { return true; });
-  // The histogram's 1 us bins, and the exact maximum.
   const LatencyHistogram& wake = timing.wake_latency();
   std::printf("max %.3f\n", wake.max_us());
   for (std::size_t bin = 0; bin < LatencyHistogram::kBins; ++bin)
@@ -68,6 +72,59 @@ int run_wake_peer(std::size_t setting, double seconds) {
   return 0;
 }
 
+namespace {
+
+// A file of this process's own for the loops' output, removed however the bench ends.
+class OutputFile {
+ public:
+  OutputFile() {
+    char path[] = "/tmp/afhub-bench-wake-XXXXXX";
+    const int file = mkstemp(path);
+    if (file < 0) throw Error(std::string("cannot create a file in /tmp: ") + std::strerror(errno));
+    close(file);
+    path_ = path;
+  }
+  ~OutputFile() { std::remove(path_.c_str()); }
+  OutputFile(const OutputFile&) = delete;
+  OutputFile& operator=(const OutputFile&) = delete;
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+};
+
+std::string text_of(const std::string& path) {
+  std::ifstream in(path);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+// Reads one loop's output into `result` (refused) or `pooled` and `max_us`.
+void read_loop_output(const std::string& path, WakeResult& result, LatencyHistogram& pooled,
+                      double& max_us) {
+  std::ifstream in(path);
+  bool ran = false;
+  for (std::string line; std::getline(in, line);) {
+    unsigned long long bin = 0, count = 0;
+    double max = 0.0;
+    if (line.rfind("refused: ", 0) == 0) {
+      result.skipped = "refused: " + line.substr(9);
+      return;
+    }
+    if (std::sscanf(line.c_str(), "max %lf", &max) == 1) {
+      max_us = std::max(max_us, max);
+      ran = true;
+    } else if (std::sscanf(line.c_str(), "%llu %llu", &bin, &count) == 2) {
+      for (unsigned long long k = 0; k < count; ++k)
+        pooled.record(static_cast<double>(bin) + 0.5);  // the bin's middle
+    }
+  }
+  if (!ran)
+    throw Error("afhub bench wake: the loop of \"" + result.setting.name +
+                "\" printed no latencies; see " + path);
+}
+
+}  // namespace
+
 WakeResults run_wake_bench(const WakeOptions& options) {
   const std::vector<WakeSetting>& settings = wake_settings();
   std::vector<LatencyHistogram> pooled(settings.size());
@@ -75,7 +132,9 @@ WakeResults run_wake_bench(const WakeOptions& options) {
   WakeResults results;
   results.options = options;
   for (const WakeSetting& setting : settings) results.settings.push_back({setting, {}, {}});
-  const std::string output = "/tmp/afhub-bench-wake-" + std::to_string(getpid()) + ".txt";
+  const OutputFile output;
+  char seconds[32];
+  std::snprintf(seconds, sizeof seconds, "%g", options.seconds);
   for (std::uint32_t round = 1; round <= options.rounds; ++round) {
     std::fprintf(stderr, "afhub bench wake: round %u of %u\n", round, options.rounds);
     bool foreign_limit = false;
@@ -83,36 +142,34 @@ WakeResults run_wake_bench(const WakeOptions& options) {
       if (!results.settings[i].skipped.empty()) continue;
       if (settings[i].cpu_wake_latency_us < 0) {
         const std::int32_t limit = machine_limit_us();
-        if (limit >= 0 && limit < 1000) foreign_limit = true;
-      }
-      ChildProcess peer({self_executable(), "bench", "wake", "--peer", std::to_string(i),
-                         "--seconds", std::to_string(options.seconds)},
-                        output);
-      const int timeout_ms = static_cast<int>(options.seconds * 1000.0) + 10'000;
-      if (const int code = peer.wait(timeout_ms); code != 0)
-        throw Error("afhub bench wake: the loop of \"" + settings[i].name + "\" ended with " +
-                    std::to_string(code) + "; see " + output);
-      std::ifstream in(output);
-      std::string line;
-      while (std::getline(in, line)) {
-        unsigned long long bin = 0, count = 0;
-        double max = 0.0;
-        if (line.rfind("refused", 0) == 0) {
-          results.settings[i].skipped = "refused (needs root: SCHED_FIFO, /dev/cpu_dma_latency)";
-        } else if (std::sscanf(line.c_str(), "max %lf", &max) == 1) {
-          max_us[i] = std::max(max_us[i], max);
-        } else if (std::sscanf(line.c_str(), "%llu %llu", &bin, &count) == 2) {
-          for (unsigned long long k = 0; k < count; ++k)
-            pooled[i].record(static_cast<double>(bin) + 0.5);
+        if (limit >= 0 && limit <= kMaxCpuWakeLatencyUs) {
+          foreign_limit = true;
+          results.foreign_limit_us =
+              std::min(results.foreign_limit_us < 0 ? limit : results.foreign_limit_us, limit);
         }
       }
+      ChildProcess loop(
+          {self_executable(), "bench", "wake", "--peer", std::to_string(i), "--seconds", seconds},
+          output.path());
+      const int timeout_ms = static_cast<int>(options.seconds * 1000.0) + 10'000;
+      const int code = loop.wait(timeout_ms);
+      if (code == -1)
+        throw Error("afhub bench wake: the loop of \"" + settings[i].name +
+                    "\" did not finish within " + std::to_string(timeout_ms / 1000) + " s");
+      if (code != 0)
+        throw Error("afhub bench wake: the loop of \"" + settings[i].name + "\" exited with " +
+                    std::to_string(code) + ": " + text_of(output.path()));
+      read_loop_output(output.path(), results.settings[i], pooled[i], max_us[i]);
     }
     if (foreign_limit) ++results.rounds_with_foreign_limit;
   }
-  std::remove(output.c_str());
   for (std::size_t i = 0; i < settings.size(); ++i) {
-    results.settings[i].wake = summarize(pooled[i]);
-    results.settings[i].wake.max_us = max_us[i];
+    Distribution& wake = results.settings[i].wake;
+    wake = summarize(pooled[i]);
+    // Percentiles are bins' upper edges; none is above the exact maximum.
+    wake.max_us = max_us[i];
+    for (double* p : {&wake.p50_us, &wake.p90_us, &wake.p99_us, &wake.p999_us})
+      *p = std::min(*p, wake.max_us);
   }
   return results;
 }
@@ -120,7 +177,7 @@ WakeResults run_wake_bench(const WakeOptions& options) {
 std::string wake_table(const WakeResults& results) {
   char line[256];
   std::snprintf(line, sizeof line,
-                "1 kHz loop wake-up latency (us): %u rounds of %.0f s per setting, interleaved\n"
+                "1 kHz loop wake-up latency (us): %u round(s) of %g s per setting, interleaved\n"
                 "%-44s %8s %8s %8s %8s %8s\n",
                 results.options.rounds, results.options.seconds, "setting", "p50", "p99", "p99.9",
                 "max", "cycles");
@@ -138,9 +195,11 @@ std::string wake_table(const WakeResults& results) {
     out += line;
   }
   if (results.rounds_with_foreign_limit > 0)
-    out += "note: in " + std::to_string(results.rounds_with_foreign_limit) +
-           " rounds another process held the machine's CPU wake-up latency limit: the "
-           "settings without --cpu-wake-latency ran on polling CPUs then\n";
+    out += "note: when " + std::to_string(results.rounds_with_foreign_limit) +
+           " of the rounds began, another process held the machine's CPU wake-up latency "
+           "limit (at " +
+           std::to_string(results.foreign_limit_us) +
+           " us or less): the settings without --cpu-wake-latency ran under it\n";
   return out;
 }
 

@@ -8,8 +8,17 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <string>
+
+#include "afhub/shm_layout/error.hpp"
 
 namespace afhub {
+
+void check_cpu_wake_latency_option(int microseconds) {
+  if (microseconds < -1 || microseconds > kMaxCpuWakeLatencyUs)
+    throw Error("--cpu-wake-latency must be 0 to " + std::to_string(kMaxCpuWakeLatencyUs) +
+                " microseconds");
+}
 
 bool hold_cpu_wake_latency(int microseconds, const char* who, const char* device) {
   // Left open on purpose: the request lasts as long as the file stays open.

@@ -51,7 +51,7 @@ RealtimeGrant apply_realtime(const LoopOptions& options, const char* who) {
       std::fprintf(stderr, "%s: cannot pin to CPU %d (%s); running on any CPU\n", who, options.cpu,
                    std::strerror(error));
   }
-  // Per thread; 0 restores the kernel's default.
+  // Per thread; 0 restores the thread's default.
   prctl(PR_SET_TIMERSLACK, static_cast<unsigned long>(options.timer_slack_ns));
   if (options.cpu_wake_latency_us >= 0 && hold_cpu_wake_latency(options.cpu_wake_latency_us, who))
     grant.cpu_wake_latency_us = options.cpu_wake_latency_us;

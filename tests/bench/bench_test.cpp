@@ -10,6 +10,7 @@
 #include <filesystem>
 
 #include "afhub/hub/hub_presence.hpp"
+#include "afhub/rt/cpu_wake_latency.hpp"
 #include "afhub_process.hpp"
 #include "json_tree.hpp"
 #include "model_files.hpp"
@@ -90,22 +91,24 @@ TEST(Bench, RunningHubWithoutBenchPoolsIsRefusedSayingWhatToDo) {
 }
 
 // Each setting's loop ran its 1000 cycles in a process of its own, and its figures
-// are a distribution (their size is this machine's: no bound is asserted).
+// are a distribution (their size is this machine's: no bound is asserted). The settings
+// that need privileges may be refused, saying why; the normal scheduler's never are.
 TEST(Bench, WakeMeasuresEveryRealTimeSetting) {
   const RunResult run = run_afhub({"bench", "wake", "--rounds", "2", "--seconds", "0.5"}, 120s);
   ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
   EXPECT_TRUE(contains(run.err, "round 2 of 2")) << run.err;
-  const bool root = geteuid() == 0;
+  EXPECT_TRUE(contains(run.out, "2 round(s) of 0.5 s per setting")) << run.out;
+  const bool root = geteuid() == 0 && access(kCpuWakeLatencyDevice, W_OK) == 0;
   for (const char* setting :
-       {"normal scheduler, the kernel's timer slack", "normal scheduler (afhub: 1 ns timer slack)",
+       {"normal scheduler, the default timer slack", "normal scheduler (afhub: 1 ns timer slack)",
         "normal scheduler, --cpu-wake-latency 0", "--fifo 80", "--fifo 80 --cpu-wake-latency 0"}) {
     const std::size_t at = run.out.find(std::string(setting) + "  ");
     ASSERT_NE(at, std::string::npos) << setting << " missing:\n" << run.out;
     const std::size_t from = at + std::strlen(setting);
     const std::string line = run.out.substr(from, run.out.find('\n', from) - from);
-    const bool needs_root = contains(setting, "fifo") || contains(setting, "wake-latency");
-    if (needs_root && !root) {
-      EXPECT_TRUE(contains(line, "refused (needs root")) << line;
+    const bool privileged = contains(setting, "fifo") || contains(setting, "wake-latency");
+    if (contains(line, "refused: ")) {
+      EXPECT_TRUE(privileged && !root) << setting << ": " << line;
       continue;
     }
     double p50 = 0, p99 = 0, p999 = 0, max = 0, cycles = 0;
@@ -115,7 +118,7 @@ TEST(Bench, WakeMeasuresEveryRealTimeSetting) {
     EXPECT_GT(p50, 0.0) << setting;
     EXPECT_LE(p50, p99) << setting;
     EXPECT_LE(p99, p999) << setting;
-    EXPECT_LE(p999, max + 1.0) << setting;  // percentiles are 1 us bins' upper edges
+    EXPECT_LE(p999, max) << setting;
   }
   RunResult bad = run_afhub({"bench", "wake", "--seconds", "0"});
   EXPECT_EQ(bad.exit_code, 1);

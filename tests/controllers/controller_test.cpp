@@ -240,7 +240,7 @@ TEST(Controllers, BadArgumentsGetClearErrors) {
   RunResult bad_wake =
       run_afhub({"run", kArm, "--offline", "--steps", "1", "--cpu-wake-latency", "5000"});
   EXPECT_EQ(bad_wake.exit_code, 1);
-  EXPECT_TRUE(contains(bad_wake.err, "--cpu-wake-latency takes microseconds from 0 to 1000"))
+  EXPECT_TRUE(contains(bad_wake.err, "--cpu-wake-latency must be 0 to 1000 microseconds"))
       << bad_wake.err;
   RunResult bad_hold =
       run_afhub({"run", kArm, "--offline", "--steps", "1", "--watchdog-hold", "x"});

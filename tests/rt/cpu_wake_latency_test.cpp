@@ -64,8 +64,8 @@ TEST(CpuWakeLatency, TheKernelHoldsTheLimitUntilTheProcessEnds) {
   EXPECT_EQ(read_limit(kCpuWakeLatencyDevice), 0);
   kill(child, SIGKILL);
   waitpid(child, nullptr, 0);
-  // Another process on this host (a bridge test) may hold it for a while: up to 2 s.
-  for (int i = 0; i < 20 && read_limit(kCpuWakeLatencyDevice) != before; ++i) usleep(100'000);
+  // Another process on this host (a bridge or controller test) may hold it for a while.
+  for (int i = 0; i < 300 && read_limit(kCpuWakeLatencyDevice) != before; ++i) usleep(100'000);
   EXPECT_EQ(read_limit(kCpuWakeLatencyDevice), before);
   close(ready[0]);
   close(ready[1]);

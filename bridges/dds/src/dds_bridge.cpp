@@ -564,9 +564,7 @@ void check_dds_bridge_options(const DdsBridgeOptions& options) {
     throw Error("--rate must be between 0 and 100000 Hz");
   if (!(options.max_command_age_s > 0.0 && options.max_command_age_s <= 10.0))
     throw Error("--max-command-age must be between 0 and 10 s");
-  if (options.cpu_wake_latency_us < -1 || options.cpu_wake_latency_us > kMaxCpuWakeLatencyUs)
-    throw Error("--cpu-wake-latency must be 0 to " + std::to_string(kMaxCpuWakeLatencyUs) +
-                " microseconds");
+  check_cpu_wake_latency_option(options.cpu_wake_latency_us);
   if (options.domain > 232) throw Error("--domain must be 0 to 232 (DDS domain ids)");
   if (options.body_globs.empty()) throw Error("--bodies needs at least one glob");
   if (!options.profile.empty() && options.profile != "ros2")

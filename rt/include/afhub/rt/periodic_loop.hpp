@@ -49,7 +49,8 @@ struct LoopOptions {
   int cpu_wake_latency_us = -1;
   // How late the kernel may end the loop's timed sleeps to merge timer wake-ups (its
   // "timer slack"). Linux gives a thread 50 us, which lands on every wake-up of a loop
-  // under the normal scheduler (SCHED_FIFO ignores it); 0 keeps the kernel's.
+  // under the normal scheduler (SCHED_FIFO ignores it); 0: the thread's default (its
+  // creator's slack when it was made, 50 us unless something changed it).
   std::int64_t timer_slack_ns = 1;
   std::uint64_t max_cycles = 0;  // stop after this many cycles; 0: until a stop signal
   // A point of the grid (CLOCK_MONOTONIC ns): cycles wake at grid_origin_ns + k * period.
