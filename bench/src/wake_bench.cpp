@@ -74,6 +74,11 @@ int run_wake_peer(std::size_t setting, double seconds) {
 
 namespace {
 
+std::string text_of(const std::string& path) {
+  std::ifstream in(path);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
 // A file of this process's own for the loops' output, removed however the bench ends.
 class OutputFile {
  public:
@@ -92,11 +97,6 @@ class OutputFile {
  private:
   std::string path_;
 };
-
-std::string text_of(const std::string& path) {
-  std::ifstream in(path);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
 
 // Reads one loop's output into `result` (refused) or `pooled` and `max_us`.
 void read_loop_output(const std::string& path, WakeResult& result, LatencyHistogram& pooled,
@@ -120,7 +120,7 @@ void read_loop_output(const std::string& path, WakeResult& result, LatencyHistog
   }
   if (!ran)
     throw Error("afhub bench wake: the loop of \"" + result.setting.name +
-                "\" printed no latencies; see " + path);
+                "\" printed no latencies: " + text_of(path));
 }
 
 }  // namespace

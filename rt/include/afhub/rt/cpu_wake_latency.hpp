@@ -13,14 +13,14 @@ constexpr const char* kCpuWakeLatencyDevice = "/dev/cpu_dma_latency";
 // 1 kHz loop would notice.
 constexpr int kMaxCpuWakeLatencyUs = 1000;
 
-// Asks for wake-ups within `microseconds` until this process exits (the kernel drops
-// the request when the file closes, however the process ends). False, said on stderr
-// naming `who` and what to do, when refused; the process then runs without it.
-// `device` is for tests.
 // The option's value: afhub::Error unless -1 (leave the CPUs as they are) or 0 to
 // kMaxCpuWakeLatencyUs.
 void check_cpu_wake_latency_option(int microseconds);
 
+// Asks for wake-ups within `microseconds` until this process exits (the kernel drops
+// the request when the file closes, however the process ends). False, said on stderr
+// naming `who` and what to do, when refused; the process then runs without it.
+// `device` is for tests.
 bool hold_cpu_wake_latency(int microseconds, const char* who,
                            const char* device = kCpuWakeLatencyDevice);
 
