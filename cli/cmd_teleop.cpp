@@ -142,7 +142,7 @@ teleop::TeleopOptions teleop_options(const TeleopCliOptions& options) {
   teleop.loop.period_ns = static_cast<std::int64_t>(std::llround(1e9 / options.rate_hz));
   teleop.loop.max_cycles = options.cycles;
   teleop.wait_s = options.wait_s;
-  teleop.device_stale_ns = std::llround(options.stale_ms * 1e6);
+  teleop.stale_ns = std::llround(options.stale_ms * 1e6);
   teleop.latency_samples = options.latency_samples;
   return teleop;
 }
@@ -187,8 +187,9 @@ void register_teleop(CLI::App& app, Runner& selected) {
                      "failing (default 10; 0 fails at once)");
   teleop->add_option("--stale", options->stale_ms,
                      "A device with no new sample for this many ms (its driver stopped) "
-                     "releases its body: held where it is, no force, until samples come back "
-                     "(default 50)");
+                     "releases its body: held where it is, no force, until samples come back; "
+                     "a body with no new state for this long (its physics stopped or died) "
+                     "gets no force on the device until states come back (default 50)");
   teleop->add_option(
       "--feedback", options->feedback,
       "What the device's force renders: proxy (default, as AMBF: the haptic gain times the "

@@ -68,12 +68,18 @@ TEST(TeleopCommands, TheBodysWrenchIsLimitedKeepingItsDirection) {
 TEST(TeleopCommands, TheDeviceGetsTheForceEnabled) {
   DeviceCommand command;
   command.gripper_force_n = 3;
-  fill_device_command(grasping_output(), command);
+  fill_device_command(grasping_output(), true, command);
   EXPECT_EQ(command.wrench.force_n.x, -1);
   EXPECT_EQ(command.wrench.force_n.z, 0.5);
   EXPECT_EQ(command.wrench.torque_nm.y, 0.1);
   EXPECT_EQ(command.gripper_force_n, 0);
   EXPECT_EQ(command.enable, 1);
+}
+
+TEST(TeleopCommands, TheForceIsDisabledWhileTheBodysStatesAreStale) {
+  DeviceCommand command;
+  fill_device_command(grasping_output(), false, command);
+  EXPECT_EQ(command.enable, 0);
 }
 
 }  // namespace

@@ -299,5 +299,95 @@ TEST(TeleopEndToEnd, KillingTeleopWhileItPushesZeroesTheForce) {
       kill_to_zero_ms.back());
 }
 
+// The physics stopped (SIGSTOP), then SIGKILLed, while the device pushes into the floor:
+// the palm's states stop, and teleop disables the device's force. Each time, the first
+// device state with zero force comes within the staleness bound (teleop's default 50 ms)
+// plus one watchdog period of the driver (10 ms), and every later state has zero force
+// for as long as the physics is gone. Resumed, the force ramps back in from zero.
+constexpr double kStaleMs = 50.0, kWatchdogMs = 10.0;
+
+struct Frozen {
+  double to_zero_ms{-1.0};  // from the signal to the first device state at zero force
+  int states{0};            // device states read after that one
+  int pushing{0};           // of those, with a force
+};
+
+// Reads the device's states for `ms` after `signalled_at`.
+Frozen watch_force(TeleopSession& teleop, std::int64_t signalled_at, int ms) {
+  Frozen frozen;
+  for (const std::int64_t until = signalled_at + ms * 1'000'000LL; monotonic_ns() < until;
+       std::this_thread::sleep_for(std::chrono::microseconds(200))) {
+    const DeviceState* d = teleop.new_device_state();
+    if (!d) continue;
+    const bool zero =
+        d->applied.force_n.x == 0.0 && d->applied.force_n.y == 0.0 && d->applied.force_n.z == 0.0;
+    if (frozen.to_zero_ms < 0.0) {
+      if (zero)
+        frozen.to_zero_ms = static_cast<double>(d->header.publish_stamp_ns - signalled_at) * 1e-6;
+      continue;
+    }
+    ++frozen.states;
+    if (!zero) ++frozen.pushing;
+  }
+  return frozen;
+}
+
+bool pushing_up(TeleopSession& teleop) {
+  const DeviceState* d = teleop.new_device_state();
+  return d && d->gate == ForceGate::kApplying && d->applied.force_n.z > 1.0;
+}
+
+TEST(TeleopEndToEnd, ADeviceNeverPushesOnAStoppedOrDeadPhysics) {
+  afhub::testing::ModelFolder scripts;
+  const std::string csv = scripts.write("push.csv", "0,0,0,0\n1,0,0,-0.2\n");
+  Teleop teleop("frozen", {"--trajectory", csv});
+  ASSERT_TRUE(wait_until([&] { return pushing_up(teleop); }, 20s)) << teleop.logs();
+
+  const std::int64_t stopped_at = monotonic_ns();
+  teleop.signal_physics(SIGSTOP);
+  const Frozen stopped = watch_force(teleop, stopped_at, 3000);
+  teleop.signal_physics(SIGCONT);
+  const std::string said = "no state from afhub/gripper/palm";
+  EXPECT_EQ(occurrences(teleop.teleop_log(), said), 1) << teleop.teleop_log();
+
+  // Back: teleop says so, and the driver ramps the force in from zero (0.2 s to full).
+  ASSERT_TRUE(wait_until(
+      [&] { return contains(teleop.teleop_log(), "afhub/gripper/palm's states are back"); }, 5s))
+      << teleop.logs();
+  double first_force = -1.0;
+  ASSERT_TRUE(wait_until(
+      [&] {
+        const DeviceState* d = teleop.new_device_state();
+        if (d && d->gate == ForceGate::kApplying && first_force < 0.0)
+          first_force =
+              std::hypot(d->applied.force_n.x, d->applied.force_n.y, d->applied.force_n.z);
+        return first_force >= 0.0;
+      },
+      5s))
+      << teleop.logs();
+  ASSERT_TRUE(wait_until([&] { return pushing_up(teleop); }, 20s)) << teleop.logs();
+
+  const std::int64_t killed_at = monotonic_ns();
+  teleop.signal_physics(SIGKILL);
+  const Frozen killed = watch_force(teleop, killed_at, 3000);
+  EXPECT_EQ(occurrences(teleop.teleop_log(), said), 2) << teleop.teleop_log();
+
+  std::printf(
+      "physics stopped: force zero %.1f ms after SIGSTOP, then %d of %d device states with a "
+      "force; resumed: first force %.3f N; physics killed: zero %.1f ms after SIGKILL, then %d "
+      "of %d with a force\n",
+      stopped.to_zero_ms, stopped.pushing, stopped.states, first_force, killed.to_zero_ms,
+      killed.pushing, killed.states);
+  for (const Frozen& frozen : {stopped, killed}) {
+    ASSERT_GE(frozen.to_zero_ms, 0.0) << "the device kept pushing" << teleop.logs();
+    EXPECT_GT(frozen.states, 300) << "the driver stopped publishing" << teleop.logs();
+    EXPECT_EQ(frozen.pushing, 0) << "the device pushed again on a gone physics" << teleop.logs();
+  }
+  EXPECT_LT(first_force, 0.5) << "the force came back at once, not ramped in";
+  SKIP_REAL_TIME_BOUNDS_IN_SANITIZED_BUILD();
+  EXPECT_LE(stopped.to_zero_ms, kStaleMs + kWatchdogMs) << teleop.logs();
+  EXPECT_LE(killed.to_zero_ms, kStaleMs + kWatchdogMs) << teleop.logs();
+}
+
 }  // namespace
 }  // namespace afhub::test

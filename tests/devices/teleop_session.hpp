@@ -58,6 +58,8 @@ class TeleopSession {
         20s);
   }
   void kill_teleop() { kill(teleop_.pid, SIGKILL); }
+  // SIGSTOP, SIGCONT or SIGKILL to the physics.
+  void signal_physics(int signal) { kill(physics_.pid, signal); }
   // SIGKILLs the driver (its readers keep its last state).
   void kill_driver() {
     kill(driver_->pid, SIGKILL);

@@ -514,7 +514,7 @@ TEST(HotPath, TeleopLoopDoesNotAllocate) {
   options.bindings.push_back(palm_binding(device));
   options.loop.max_cycles = kTeleopCycles;
   options.survive_hub_loss = false;
-  options.device_stale_ns = 1'000'000'000;  // a starved driver is not this test's case
+  options.stale_ns = 1'000'000'000;  // a starved driver is not this test's case
   options.latency_samples = 2 * kTeleopCycles;
   options.wait_s = 60.0;  // for the palm: the physics starts slowly under the sanitizers
   teleop::TeleopLatency latency;

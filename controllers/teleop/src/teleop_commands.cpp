@@ -40,10 +40,10 @@ void limit_wrench(Wrench& wrench, const WrenchLimit& limit) noexcept {
   limit_length(wrench.torque_nm, limit.torque_nm);
 }
 
-void fill_device_command(const TeleopOutput& out, DeviceCommand& command) noexcept {
+void fill_device_command(const TeleopOutput& out, bool body_live, DeviceCommand& command) noexcept {
   command.wrench = out.device_wrench;
   command.gripper_force_n = 0.0;
-  command.enable = 1;
+  command.enable = body_live ? 1 : 0;
 }
 
 }  // namespace afhub::teleop

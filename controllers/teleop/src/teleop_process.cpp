@@ -15,6 +15,7 @@
 #include "afhub/rt/loop_stats_publisher.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "afhub/teleop/device_freshness.hpp"
+#include "afhub/teleop/state_freshness.hpp"
 #include "afhub/teleop/teleop_law.hpp"
 
 namespace afhub::teleop {
@@ -34,8 +35,9 @@ TeleopParams params_of(const TeleopBinding& binding) {
 struct Link {
   Link(const TeleopBinding& b, const BodyEntry& entry, const TeleopOptions& options)
       : binding(&b),
-        freshness(options.device_stale_ns, options.loop.period_ns),
-        stale_ns(options.device_stale_ns),
+        freshness(options.stale_ns, options.loop.period_ns),
+        state_freshness(options.stale_ns),
+        stale_ns(options.stale_ns),
         law(params_of(b)),
         device_state(body_state_channel(device_channel_name(b.device_name))),
         device_command(body_command_channel(device_channel_name(b.device_name))),
@@ -44,7 +46,8 @@ struct Link {
   }
   const TeleopBinding* binding;
   DeviceFreshness freshness;
-  std::int64_t stale_ns;  // TeleopOptions::device_stale_ns
+  StateFreshness state_freshness;
+  std::int64_t stale_ns;  // TeleopOptions::stale_ns
   TeleopLaw law;
   LatestReader<DeviceState> device_state;
   Writer<DeviceCommand> device_command;
@@ -52,7 +55,9 @@ struct Link {
   TeleopOutput out;
   std::size_t joints{std::numeric_limits<std::size_t>::max()};  // capped below
   std::int64_t last_cycle_ns{0};
-  bool held{false};                // the device's samples are stale: the body is held
+  bool held{false};  // the device's samples are stale: the body is held
+  bool seen_state{false};
+  bool body_stale{false};          // the body's states are stale: the device gets no force
   std::uint64_t commands_sent{0};  // = the sequence of our last DeviceCommand
   std::uint64_t last_reported_command{0};
   std::array<std::int64_t, kInFlight> sample_stamp_of{};  // by command sequence % kInFlight
@@ -79,11 +84,34 @@ void wait_for_device(Link& link, const std::string& who, std::int64_t give_up_ns
   }
 }
 
+// Whether the body's states still come (its newest, or none once there was one: a
+// dead physics' channel can go away), said once each way.
+void judge_body(Link& link, const BodyState* state, std::int64_t now) {
+  if (state) link.seen_state = true;
+  const bool stale = state ? link.state_freshness.stale(state->header.sequence,
+                                                        state->header.publish_stamp_ns, now)
+                           : link.seen_state;
+  if (stale == link.body_stale) return;
+  link.body_stale = stale;
+  const char* name = link.binding->device_name.c_str();
+  const char* body = link.binding->body.c_str();
+  if (stale)
+    std::fprintf(stderr,
+                 "afhub teleop: no state from %s for %.0f ms (its physics stopped or died?): "
+                 "no force on device/%s until states come back\n",
+                 body, static_cast<double>(link.stale_ns) * 1e-6, name);
+  else
+    std::fprintf(stderr, "afhub teleop: %s's states are back: force on device/%s ramps in\n", body,
+                 name);
+}
+
 // One cycle of one link: newest samples in, the two commands out.
 void cycle(Link& link, std::int64_t now, TeleopLatency* latency, std::size_t most) {
   const DeviceState* device = link.device_state.latest();
   const BodyState* state = link.body.latest_state();
-  if (!device || !state || hub_lost()) return;  // the driver's watchdog zeroes the force
+  if (hub_lost()) return;  // the driver's watchdog zeroes the force
+  judge_body(link, state, now);
+  if (!device || !state) return;  // the same
   if (latency && device->command_sequence > link.last_reported_command &&
       device->command_sequence <= link.commands_sent &&
       device->command_sequence + kInFlight > link.commands_sent) {
@@ -126,7 +154,7 @@ void cycle(Link& link, std::int64_t now, TeleopLatency* latency, std::size_t mos
       latency->to_body_command.push_back(monotonic_ns() - device->header.publish_stamp_ns);
   }
   if (DeviceCommand* command = link.device_command.loan()) {
-    fill_device_command(link.out, *command);
+    fill_device_command(link.out, !link.body_stale, *command);
     link.device_command.publish(command);
     ++link.commands_sent;
     link.sample_stamp_of[link.commands_sent % kInFlight] = device->header.publish_stamp_ns;

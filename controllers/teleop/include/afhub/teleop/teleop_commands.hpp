@@ -38,7 +38,8 @@ struct WrenchLimit {
 void limit_wrench(Wrench& wrench, const WrenchLimit& limit) noexcept;
 
 // The device command: the law's force and torque (device frame), no gripper force,
-// force enabled.
-void fill_device_command(const TeleopOutput& out, DeviceCommand& command) noexcept;
+// force enabled only while `body_live` (the body's states are fresh: the driver then
+// applies no force, and ramps it in again once enabled).
+void fill_device_command(const TeleopOutput& out, bool body_live, DeviceCommand& command) noexcept;
 
 }  // namespace afhub::teleop

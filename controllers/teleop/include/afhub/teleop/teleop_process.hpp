@@ -3,7 +3,8 @@
 // physics' body channels). Every cycle (1 kHz by default), for each binding: the
 // newest DeviceState and body state go through the TeleopLaw, and a BodyCommand (a
 // kForce wrench and the gripper joints) and a DeviceCommand (force, enabled) go out.
-// The loop allocates nothing. When the hub goes away it stops commanding (the
+// The device pushes only while the body's states are fresh. The loop allocates
+// nothing. When the hub goes away it stops commanding (the
 // driver's watchdog then zeroes the force) and re-attaches to the next hub.
 #pragma once
 
@@ -49,8 +50,10 @@ struct TeleopOptions {
   // A device with no new sample for this long, over as long of this loop's own cycles
   // (its driver stopped or hangs: device_freshness.hpp), releases its body: the body is held where
   // it is and the device gets no force; once samples come back the body continues from there with
-  // no jump, as after a clutch.
-  std::int64_t device_stale_ns = 50'000'000;
+  // no jump, as after a clutch. A body with no new state for this long (its physics stopped or
+  // died: state_freshness.hpp) gets the device's force disabled; the driver ramps it in again
+  // once states come back.
+  std::int64_t stale_ns = 50'000'000;
   std::size_t latency_samples = 0;  // per kind; 0: no latency recording
 };
 
