@@ -1,9 +1,13 @@
 #!/usr/bin/env bash
 # afhub's one entry point for a Debian 12 machine (run as root, or with sudo for apt):
 #   ./run.sh demo   install what is missing, build, run the demo
-#   ./run.sh test   install what is missing, build, run every test, then again under
-#                   AddressSanitizer and UndefinedBehaviorSanitizer
+#   ./run.sh test   install what is missing, build, run every test; then the unit, fuzz
+#                   and a chosen set of integration tests again under AddressSanitizer
+#                   and UndefinedBehaviorSanitizer (labels: see tests/CMakeLists.txt)
+#   ./run.sh sanitize  every test under the sanitizers
 #   ./run.sh build  install what is missing and build (build/release/bin/afhub)
+# The tests need root: each hub test runs in private mount and network namespaces, so
+# they run in parallel and never meet a hub the demo left running.
 # Each step is skipped when nothing changed, so a second run is quick.
 set -euo pipefail
 cd "$(dirname "$0")"
@@ -22,6 +26,8 @@ PACKAGES=(
   libcivetweb-dev libjs-three chromium python3-pil
   # afhub bridge dds: its tests' JSON checks, and the DDS Security credentials
   jq openssl
+  # the tests' private namespaces and their documentation check
+  util-linux iproute2 python3
 )
 
 install_packages() {
@@ -38,20 +44,29 @@ install_packages() {
   DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
 }
 
-# build DIR [cmake options...]
+# The two builds: optimised with line tables (enough for a backtrace, a third cheaper to
+# compile than full debug information), and the sanitizers' at -O1.
+RELEASE=(build/release -DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O2 -g1 -DNDEBUG")
+SANITIZE=(build/sanitize -DCMAKE_BUILD_TYPE=Debug -DAFHUB_SANITIZE=ON "-DCMAKE_CXX_FLAGS_DEBUG=-O1 -g1")
+
+# build DIR [cmake options...] [-- targets...]
 build() {
-  local dir=$1
+  local dir=$1 options=() targets=()
   shift
+  while [ $# -gt 0 ] && [ "$1" != "--" ]; do options+=("$1"); shift; done
+  [ $# -gt 0 ] && shift && targets=(--target "$@")
   if [ ! -f "$dir/build.ninja" ]; then
-    cmake -S . -B "$dir" -G Ninja -DAFHUB_WARNINGS_AS_ERRORS=ON "$@"
+    cmake -S . -B "$dir" -G Ninja -DAFHUB_WARNINGS_AS_ERRORS=ON "${options[@]}"
   fi
-  cmake --build "$dir" --parallel "$(nproc)"
+  cmake --build "$dir" --parallel "$(nproc)" "${targets[@]}"
 }
 
+# run_tests DIR [ctest options...]: hub tests wait more than they compute, so twice as
+# many run as there are cores; tests with real-time bounds take every slot.
 run_tests() {
   local dir=$1
-  # Hub tests hold the iceoryx_roudi resource lock; the others run in parallel.
-  ctest --test-dir "$dir" --output-on-failure --parallel "$(nproc)"
+  shift
+  ctest --test-dir "$dir" --output-on-failure --parallel "$((2 * $(nproc)))" "$@"
   # Tests skip only for a reason they print (the AMBF corpus beside the project is
   # missing, say): say how many, and why.
   local log="$dir/Testing/Temporary/LastTest.log" skipped
@@ -63,27 +78,50 @@ run_tests() {
   fi
 }
 
+# phase NAME COMMAND...: runs it and keeps its time, printed when the script ends.
+PHASES=()
+phase() {
+  local name=$1 start=$SECONDS
+  shift
+  "$@"
+  PHASES+=("$(printf '%-16s %4d s' "$name" $((SECONDS - start)))")
+}
+print_phases() {
+  local status=$?
+  [ ${#PHASES[@]} -gt 0 ] && printf 'run.sh: %s\n' "${PHASES[@]}" "$(printf '%-16s %4d s' total $SECONDS)"
+  exit $status
+}
+trap print_phases EXIT
+
+check_format() {
+  find shm_layout hub rt physics controllers device_drivers bench viewer bridges cli tests examples -name '*.[ch]pp' -print0 | xargs -0 clang-format --dry-run --Werror
+}
+
 case "${1:-}" in
   demo)
     install_packages
-    build build/release -DCMAKE_BUILD_TYPE=RelWithDebInfo
+    build "${RELEASE[@]}"
     exec build/release/bin/afhub demo "${@:2}"
     ;;
   test)
-    install_packages
-    # The code follows .clang-format.
-    find shm_layout hub rt physics controllers device_drivers bench viewer bridges cli tests examples -name '*.[ch]pp' -print0 | xargs -0 clang-format --dry-run --Werror
-    build build/release -DCMAKE_BUILD_TYPE=RelWithDebInfo
-    run_tests build/release
-    build build/sanitize -DCMAKE_BUILD_TYPE=Debug -DAFHUB_SANITIZE=ON
-    run_tests build/sanitize
+    phase packages install_packages
+    phase format check_format
+    phase build build "${RELEASE[@]}"
+    phase tests run_tests build/release
+    phase sanitize-build build "${SANITIZE[@]}" -- sanitize_selection
+    phase sanitize-tests run_tests build/sanitize -L 'unit|fuzz|sanitize'
+    ;;
+  sanitize)
+    phase packages install_packages
+    phase sanitize-build build "${SANITIZE[@]}"
+    phase sanitize-tests run_tests build/sanitize
     ;;
   build)
     install_packages
-    build build/release -DCMAKE_BUILD_TYPE=RelWithDebInfo
+    build "${RELEASE[@]}"
     ;;
   *)
-    echo "usage: ./run.sh demo|test|build" >&2
+    echo "usage: ./run.sh demo|test|sanitize|build" >&2
     exit 2
     ;;
 esac

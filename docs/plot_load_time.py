@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Plots scene_benchmark's load times against the number of robots (Fig. 10).
 
-    build/dev/bin/scene_benchmark --benchmark_out=load.json --benchmark_out_format=json
+    build/release/bin/scene_benchmark --benchmark_out=load.json --benchmark_out_format=json
     docs/plot_load_time.py load.json docs/load_time.png
 
 Reads Google Benchmark's JSON (standard library only) and draws with gnuplot

@@ -22,14 +22,18 @@ int main(int argc, char** argv) {
   try {
     return afhub::run_controller(
         options, [&](const afhub::BodyState& state, afhub::BodyCommand& command) {
-          if (!started) start = state, started = true;
+          if (!started) {
+            // The state in shared memory holds only its own joints: copy that much.
+            afhub::copy_body_state(state, start);
+            started = true;
+          }
           const double t = state.header.sim_time_s - start.header.sim_time_s;
-          command.joint_count = state.joint_count;
-          for (std::uint32_t j = 0; j < state.joint_count; ++j) {
+          for (std::uint32_t j = 0; j < command.joint_count; ++j) {
             command.joints[j].type = afhub::JointCommandType::kPosition;
             command.joints[j].value = start.joints[j].position;
           }
-          command.joints[0].value += 0.5 * std::sin(std::numbers::pi * t);
+          if (command.joint_count > 0)
+            command.joints[0].value += 0.5 * std::sin(std::numbers::pi * t);
         });
   } catch (const std::exception& error) {  // afhub::Error, and any other
     std::fprintf(stderr, "wave_controller: error: %s\n", error.what());

@@ -1,0 +1,1 @@
+// An empty source: afhub_test_pch exists to build the tests' precompiled header.
