@@ -12,6 +12,7 @@
 #include "afhub/rt/clock.hpp"
 #include "afhub/shm_layout/channel_names.hpp"
 #include "afhub/shm_layout/error.hpp"
+#include "afhub/shm_layout/limits.hpp"
 #include "afhub/shm_layout/world.hpp"
 #include "commands.hpp"
 #include "count_option.hpp"
@@ -52,8 +53,11 @@ void print_state(const char* what, const WorldState& state) {
 int run_world(WorldAction action, const WorldOptions& options) {
   if (!(options.timeout_s > 0.0 && options.timeout_s <= 3600.0))
     throw Error("--timeout takes a number of seconds from 0 to 3600");
-  if (action == WorldAction::kStep && options.steps == 0)
-    throw Error("step takes a number of steps of 1 or more");
+  if (action == WorldAction::kStep &&
+      (options.steps == 0 || options.steps > kMaxWorldStepsPerCommand))
+    throw Error("step takes a number of steps from 1 to " +
+                std::to_string(kMaxWorldStepsPerCommand) +
+                " (1000 s at 1 kHz); to run on, `afhub world resume`");
   install_stop_signal_handlers();
   connect_to_hub("world", HubPolicy::kRequire);
   LatestReader<WorldState> reader(world_channel(options, kStateEvent));

@@ -17,6 +17,7 @@
 #include "afhub/shm_layout/error.hpp"
 #include "body_scope.hpp"
 #include "loaded_copies.hpp"
+#include "path_kind.hpp"
 
 namespace afhub::physics {
 namespace adf {
@@ -40,16 +41,17 @@ std::string resolve_mesh(const FileReader& file, const YAML::Node& node, const s
   } else {
     tried.push_back(fs::path(folder) / name);
   }
-  // The error_code forms: a name too long for the file system is "not found", not a throw.
-  std::error_code error;
-  for (const auto& candidate : tried)
-    if (fs::is_regular_file(candidate, error)) {
+  std::string searched;
+  for (const auto& candidate : tried) {
+    const std::string why = not_a_regular_file(candidate);
+    if (why.empty()) {
+      std::error_code error;
       const fs::path canonical = fs::weakly_canonical(candidate, error);
       return (error ? candidate : canonical).string();
     }
-  std::string searched;
-  for (const auto& candidate : tried) searched += " " + candidate.lexically_normal().string();
-  fail(file.at(node), "mesh '" + name + "' not found; searched:" + searched +
+    searched += " " + candidate.lexically_normal().string() + " (" + why + ")";
+  }
+  fail(file.at(node), "mesh '" + name + "' is not a readable file:" + searched +
                           ". Fix the name or the 'high resolution path' / 'low resolution path'");
 }
 

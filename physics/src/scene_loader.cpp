@@ -10,6 +10,7 @@
 #include "afhub/physics/adf_loader.hpp"
 #include "afhub/shm_layout/channel_names.hpp"
 #include "afhub/shm_layout/limits.hpp"
+#include "path_kind.hpp"
 #include "yaml_reader.hpp"
 
 namespace afhub::physics {
@@ -22,11 +23,10 @@ std::string existing_path(const FileReader& file, const YAML::Node& node, const 
   const fs::path written(file.text(node, what));
   const fs::path resolved =
       written.is_absolute() ? written : fs::path(file.path()).parent_path() / written;
-  std::error_code error;  // a name too long for the file system is "not found", not a throw
-  if (!fs::is_regular_file(resolved, error))
-    fail(file.at(node), what + " '" + written.string() + "' not found (looked for " +
-                            resolved.lexically_normal().string() +
-                            "); fix the path, relative to this file");
+  if (const std::string why = not_a_regular_file(resolved); !why.empty())
+    fail(file.at(node), what + " '" + written.string() +
+                            "': " + resolved.lexically_normal().string() + " " + why +
+                            "; fix the path, relative to this file");
   return resolved.lexically_normal().string();
 }
 

@@ -191,7 +191,13 @@ const char* count_beyond_capacity(const char* at, std::size_t bytes, PayloadKind
       return soft_body_problem(*reinterpret_cast<const SoftBodyMesh*>(at), bytes);
     case PayloadKind::kScenePoses:
       return scene_poses_problem(*reinterpret_cast<const ScenePoses*>(at), bytes);
-    case PayloadKind::kWorldCommand:
+    case PayloadKind::kWorldCommand: {
+      const auto* command = reinterpret_cast<const WorldCommand*>(at);
+      if (command->action == WorldAction::kStep &&
+          (command->step_count == 0 || command->step_count > kMaxWorldStepsPerCommand))
+        return "WorldCommand.step_count";
+      return nullptr;
+    }
     case PayloadKind::kLoopStats:
     case PayloadKind::kBenchSample:
       return nullptr;

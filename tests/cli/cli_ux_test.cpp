@@ -96,6 +96,41 @@ TEST(World, PauseStepResumeAndResetTheSimulation) {
   EXPECT_EQ(physics.stop(), 0);
 }
 
+// A step count beyond the bound is refused; a long step runs with the world saying it
+// is not paused, and `world pause` stops it where it is.
+TEST(World, ALongStepSaysItRunsAndPauseStopsIt) {
+  afhub::testing::ModelFolder folder;
+  const std::string log = (folder.dir() / "run.log").string();
+  ScopedProcess physics(spawn_afhub({"run", kArm, "--no-autostart"}, log));
+  LatestReader<WorldState> world = world_reader();
+  ASSERT_TRUE(wait_until([&] { return world.latest() != nullptr; }, 10s)) << read_file(log);
+  ASSERT_EQ(run_afhub({"world", "pause"}).exit_code, 0);
+
+  RunResult absurd = run_afhub({"world", "step", "4294967295"});
+  EXPECT_EQ(absurd.exit_code, 1);
+  EXPECT_TRUE(contains(absurd.err, "from 1 to 1000000")) << absurd.err;
+
+  const std::uint64_t paused_at = world.latest()->header.sim_step;
+  ScopedProcess stepping(spawn_afhub({"world", "step", "1000000"}));
+  ASSERT_TRUE(wait_until(
+      [&] {
+        const WorldState* w = world.latest();
+        return w->header.sim_step > paused_at + 20 && w->paused == 0;
+      },
+      10s))
+      << "the world did not step, or said it was paused while it stepped";
+  RunResult pause = run_afhub({"world", "pause"});
+  ASSERT_EQ(pause.exit_code, 0) << pause.err;
+  EXPECT_TRUE(contains(pause.out, "paused at step")) << pause.out;
+  ASSERT_TRUE(wait_until([&] { return world.latest()->paused == 1; }, 2s));
+  const std::uint64_t stopped_at = world.latest()->header.sim_step;
+  // Still for as many of the world's own publishes as 100 steps would take.
+  std::uint64_t seen = world.latest()->header.sequence;
+  ASSERT_TRUE(wait_until([&] { return world.latest()->header.sequence > seen + 100; }, 5s));
+  EXPECT_EQ(world.latest()->header.sim_step, stopped_at) << "the pause did not stop the steps";
+  EXPECT_EQ(physics.stop(), 0);
+}
+
 // Synthetic bodies: synth/body0 and synth/body1, joints "bodyN-jointJ". Uncommanded,
 // their joints follow a sinusoid; a position target pulls a joint to it.
 class WithSynth : public ::testing::Test {

@@ -7,12 +7,17 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <thread>
+
+#include <unistd.h>
 
 #include "afhub/hub/bodies.hpp"
 #include "afhub/shm_layout/channel_names.hpp"
+#include "afhub/shm_layout/layout_id.hpp"
 #include "afhub/shm_layout/world.hpp"
 #include "afhub_process.hpp"
+#include "iceoryx_posh/popo/untyped_publisher.hpp"
 #include "model_files.hpp"
 
 namespace afhub::test {
@@ -204,6 +209,47 @@ TEST(FaultsCommands, ARestartedPhysicsIgnoresALiveWritersOldCommand) {
   EXPECT_EQ(second.physics->stop(), 0);
   const std::string output = read_file(second.log);
   EXPECT_TRUE(contains(output, "ignored a command for afhub/arm/base from pid")) << output;
+}
+
+// A command stamped an hour ahead (written with iceoryx directly, as a forger or a
+// writer on another clock would: afhub's own writers stamp at publish) is ignored and
+// counted as stale, said once; it does not move the arm.
+TEST(FaultsCommands, ACommandStampedInTheFutureIsIgnored) {
+  ArmRun run;
+  ASSERT_TRUE(run.ready()) << read_file(run.log);
+  const ChannelId channel = body_command_channel("afhub/arm/base");
+  using iox::capro::IdString_t;
+  iox::popo::UntypedPublisher forger({IdString_t(iox::cxx::TruncateToCapacity, channel.service),
+                                      IdString_t(iox::cxx::TruncateToCapacity, channel.instance),
+                                      IdString_t(iox::cxx::TruncateToCapacity, channel.event)});
+  BodyClient base("afhub/arm/base");
+  ASSERT_TRUE(wait_until([&] { return base.latest_state() != nullptr; }, 5s));
+  for (std::uint64_t sequence = 1; sequence <= 50; ++sequence) {
+    auto loaned =
+        forger.loan(static_cast<std::uint32_t>(body_command_bytes(1)), alignof(PayloadHeader));
+    ASSERT_FALSE(loaned.has_error());
+    // Sized for one joint: only that much is written.
+    std::memset(loaned.value(), 0, body_command_bytes(1));
+    auto* command = static_cast<BodyCommand*>(loaned.value());
+    command->header.layout_id = kLayoutId;
+    command->header.kind = PayloadKind::kBodyCommand;
+    command->header.publisher_pid = static_cast<std::uint32_t>(getpid());
+    command->header.sequence = sequence;
+    command->header.publish_stamp_ns = monotonic_ns() + 3'600'000'000'000LL;
+    command->joint_count = 1;
+    command->joints[0].type = JointCommandType::kPosition;
+    command->joints[0].value = 1.0;
+    forger.publish(command);
+    std::this_thread::sleep_for(10ms);
+  }
+  ASSERT_TRUE(wait_until([&] { return run.now().stale_commands >= 1; }, 5s)) << read_file(run.log);
+  EXPECT_LT(std::abs(base.latest_state()->joints[0].position), 0.05)
+      << "the command from the future moved the arm";
+  EXPECT_EQ(run.physics->stop(), 0);
+  const std::string output = read_file(run.log);
+  EXPECT_EQ(occurrences(output, "s in the future"), 1) << output;
+  // An hour ahead, less the moments between the stamp and the read.
+  EXPECT_TRUE(contains(output, "stamped 3599.9") || contains(output, "stamped 3600.0")) << output;
 }
 
 TEST(FaultsCommands, APerBodyWatchdogOfTwoMillisecondsFiresForThatBodyAlone) {

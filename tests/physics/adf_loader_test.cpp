@@ -109,7 +109,7 @@ TEST_F(BrokenFiles, EachProblemIsLocatedAndExplained) {
       {"bodies: [BODY a]\nBODY a:\n  name: a\n  mass: 1\n  scale: 0\n",
        "model.yaml:5:10: error: 'scale' must be positive"},
       {"bodies: [BODY a]\nBODY a:\n  name: a\n  mass: 1\n  mesh: nothere.STL\n",
-       "model.yaml:5:9: error: mesh 'nothere.STL' not found; searched:"},
+       "model.yaml:5:9: error: mesh 'nothere.STL' is not a readable file:"},
       {"bodies: [BODY a]\nBODY a:\n  name: a\n  mass: 1\n  shape: blob\n  geometry: {}\n",
        "model.yaml:5:10: error: unknown shape 'blob'"},
       {"bodies: [BODY a]\nBODY a:\n  name: a\n  mass: 1\n  location: {position: {x: 1, y: 2}}\n",

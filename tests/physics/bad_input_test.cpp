@@ -3,6 +3,7 @@
 // linear in the bodies, the hub's limits and every per-body capacity, duplicate
 // and reserved names, and physically absurd values.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -135,10 +136,12 @@ TEST_F(BadInput, AnUnreadableMeshOrModelSaysPermissionDenied) {
   EXPECT_EQ(code, 0) << "1: the mesh, 2: the model file were not refused as unreadable";
 }
 
-TEST_F(BadInput, AMeshNameTooLongForTheFileSystemIsNotFound) {
+TEST_F(BadInput, AMeshNameTooLongForTheFileSystemSaysSo) {
   const std::string name = std::string(300, 'm') + ".STL";
   const std::string message = error_of({model_with_mesh(name)}, false);
-  EXPECT_TRUE(contains(message, "model.yaml:5:9: error: mesh '" + name + "' not found")) << message;
+  EXPECT_TRUE(contains(message, "model.yaml:5:9: error: mesh '" + name + "' is not a readable"))
+      << message;
+  EXPECT_TRUE(contains(message, "(is a name too long for the file system)")) << message;
   SceneRequest request;
   request.world_file = folder_.write("world.yaml", "environment: " + name + "\n");
   request.adf_files = {model_with_mesh("")};
@@ -147,6 +150,31 @@ TEST_F(BadInput, AMeshNameTooLongForTheFileSystemIsNotFound) {
     ADD_FAILURE() << "loaded a world whose environment cannot exist";
   } catch (const Error& error) {
     EXPECT_TRUE(contains(error.what(), "world.yaml:1:14: error: environment")) << error.what();
+  }
+}
+
+// A mesh path that is not a file says what it is, not "not found".
+TEST_F(BadInput, AMeshThatIsADirectoryAFifoADeviceOrASymlinkLoopSaysWhatItIs) {
+  fs::create_directory(folder_.dir() / "folder.STL");
+  ASSERT_EQ(mkfifo((folder_.dir() / "pipe.STL").c_str(), 0600), 0);
+  fs::create_symlink("loop-b.STL", folder_.dir() / "loop-a.STL");
+  fs::create_symlink("loop-a.STL", folder_.dir() / "loop-b.STL");
+  fs::create_symlink("gone.STL", folder_.dir() / "dangling.STL");
+  const struct {
+    std::string mesh, expected;
+  } cases[] = {
+      {"folder.STL", "(is a directory)"},
+      {"pipe.STL", "(is a FIFO)"},
+      {"/dev/zero", "/dev/zero (is a character device)"},
+      {"loop-a.STL", "(is a symlink loop)"},
+      {"dangling.STL", "(is a broken symlink to 'gone.STL')"},
+      {"nothere.STL", "(does not exist)"},
+  };
+  for (const auto& c : cases) {
+    const std::string message = error_of({model_with_mesh(c.mesh)}, false);
+    EXPECT_TRUE(contains(message, "model.yaml:5:9: error: mesh '" + c.mesh + "' is not a readable"))
+        << message;
+    EXPECT_TRUE(contains(message, c.expected)) << c.mesh << ": " << message;
   }
 }
 

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "afhub/shm_layout/layout_id.hpp"
+#include "afhub/shm_layout/world_control.hpp"
 
 namespace afhub {
 namespace {
@@ -128,6 +129,51 @@ TEST(PayloadCheck, RefusesEveryCountBeyondItsArray) {
                        kMaxHealthProcesses, "Health.process_count");
   expect_count_refused(stamped<Health>(PayloadKind::kHealth), &Health::mempool_count, kMaxMempools,
                        "Health.mempool_count");
+}
+
+TEST(PayloadCheck, RefusesAWorldStepOfNoneOrBeyondTheBound) {
+  auto command = stamped<WorldCommand>(PayloadKind::kWorldCommand);
+  command.action = WorldAction::kStep;
+  const char* field = "unset";
+  for (const std::uint32_t steps : {1u, kMaxWorldStepsPerCommand}) {
+    command.step_count = steps;
+    EXPECT_EQ(check_payload(&command, sizeof command, PayloadKind::kWorldCommand),
+              PayloadError::kNone)
+        << steps;
+  }
+  for (const std::uint32_t steps : {0u, kMaxWorldStepsPerCommand + 1, 0xffffffffu}) {
+    command.step_count = steps;
+    EXPECT_NE(check_payload(&command, sizeof command, PayloadKind::kWorldCommand, &field),
+              PayloadError::kNone)
+        << steps;
+    EXPECT_STREQ(field, "WorldCommand.step_count");
+  }
+  command.action = WorldAction::kPause;  // the count means nothing to a pause
+  EXPECT_EQ(check_payload(&command, sizeof command, PayloadKind::kWorldCommand),
+            PayloadError::kNone);
+}
+
+TEST(WorldControl, PauseEndsTheStepsStillToRunAndStepsAreBounded) {
+  WorldControl control;
+  WorldCommand command;
+  command.action = WorldAction::kPause;
+  control.apply(command);
+  EXPECT_TRUE(control.halted());
+  command.action = WorldAction::kStep;
+  command.step_count = 3;
+  control.apply(command);
+  EXPECT_FALSE(control.halted()) << "a world running its steps is not standing still";
+  EXPECT_TRUE(control.take_step());
+  command.action = WorldAction::kPause;
+  control.apply(command);
+  EXPECT_TRUE(control.halted());
+  EXPECT_FALSE(control.take_step()) << "the pause did not stop the steps in progress";
+  // Steps asked for one after another never add up past the bound.
+  command.action = WorldAction::kStep;
+  command.step_count = kMaxWorldStepsPerCommand;
+  control.apply(command);
+  control.apply(command);
+  EXPECT_EQ(control.steps_to_run, kMaxWorldStepsPerCommand);
 }
 
 TEST(PayloadCheck, RefusesABodyListWhoseBodyCountsTooManyJoints) {

@@ -85,6 +85,34 @@ int open_own_file(const std::string& path, int flags, mode_t mode) {
   return fd;
 }
 
+void claim_runtime_lock_file(const std::string& path) {
+  for (int attempt = 0; attempt < 3; ++attempt) {
+    const int fd = open(path.c_str(), O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC | O_WRONLY, 0600);
+    if (fd >= 0) {
+      close(fd);
+      return;
+    }
+    if (errno != EEXIST)
+      throw Error("cannot create iceoryx's lock file " + path + ": " + std::strerror(errno));
+    struct stat info {};
+    if (lstat(path.c_str(), &info) != 0) continue;  // gone meanwhile: create it again
+    // Left by an earlier process of this user with the same pid: iceoryx takes it over.
+    if (S_ISREG(info.st_mode) && info.st_uid == geteuid() && info.st_nlink == 1) return;
+    const char* what = S_ISLNK(info.st_mode)   ? "a symlink"
+                       : S_ISDIR(info.st_mode) ? "a directory"
+                       : S_ISREG(info.st_mode) ? "a file"
+                                               : "a special file";
+    const std::string found = what + std::string(" owned by uid ") + std::to_string(info.st_uid);
+    if (unlink(path.c_str()) != 0 && rmdir(path.c_str()) != 0)
+      throw Error(path + " is " + found + ", where this process's iceoryx lock file goes, and " +
+                  "it cannot be removed (" + std::strerror(errno) + "): remove it, or ask its " +
+                  "owner to");
+    std::fprintf(stderr, "afhub: removed %s: %s, where this process's iceoryx lock file goes\n",
+                 path.c_str(), found.c_str());
+  }
+  throw Error("cannot create iceoryx's lock file " + path + ": something keeps replacing it");
+}
+
 std::optional<pid_t> flock_holder(const std::string& path) {
   struct stat info {};
   if (stat(path.c_str(), &info) != 0) return std::nullopt;

@@ -437,6 +437,7 @@ void connect_to_hub(const std::string& role, HubPolicy policy, std::chrono::mill
   // (iceoryx would, with a warning).
   if (reattaching) unlink(("/tmp/" + name).c_str());
   require_hub_access();
+  claim_runtime_lock_file("/tmp/" + name + ".lock");
   {
     const StopEndsBlockingCall stoppable;
     iox::runtime::PoshRuntime::initRuntime(iox::RuntimeName_t(iox::cxx::TruncateToCapacity, name));

@@ -111,7 +111,7 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
     }
     if (channels)
       channels->publish(static_cast<double>(clock_ns() - start_ns) * 1e-9, achieved_rate_hz,
-                        control.paused);
+                        control.halted());
     if (stepping) {
       const double duration_us = static_cast<double>(monotonic_ns() - begin_ns) * 1e-3;
       report.step_time.record(duration_us);
@@ -128,7 +128,7 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
       stats->maybe_publish(now_ns, report.timing);
       channels->publish_view(now_ns);
     }
-    rate.update(now_ns, report.steps, !control.paused);
+    rate.update(now_ns, report.steps, !control.halted());
     achieved_rate_hz = rate.rate_hz();
     if (channels && now_ns >= next_report_ns) {
       channels->report_events(stderr);

@@ -155,10 +155,12 @@ void SimChannels::apply_commands(std::int64_t now_ns) noexcept {
       const Answer answer{command->header.sim_step, command->header.publisher_pid,
                           command->lockstep != 0};
       // Its age by its publish stamp (the same monotonic clock in every process),
-      // not by when this process first saw it.
-      const std::int64_t stamp_ns = std::min(command->header.publish_stamp_ns, now_ns);
+      // not by when this process first saw it. A stamp from the future (a forged or
+      // broken writer) is no fresher than an old one: past a small allowance it is
+      // ignored too, or it would hold the watchdog off for as long as it is ahead.
+      const std::int64_t stamp_ns = command->header.publish_stamp_ns;
       const std::int64_t age_ns = now_ns - stamp_ns;
-      if (age_ns > channel.watchdog_ns) {
+      if (age_ns > channel.watchdog_ns || age_ns < -kFutureStampAllowanceNs) {
         ++stale_;
         if (Notice* notice = note(channel, kStale, answer.pid))
           notice->seconds = static_cast<double>(age_ns) * 1e-9;
@@ -174,7 +176,7 @@ void SimChannels::apply_commands(std::int64_t now_ns) noexcept {
         if (lockstep_ && answer.lockstep) note_lockstep_answer(channel, answer);
         channel.applied_answer_step = answer.step;
         sim_.set_input(channel.index, input_);
-        channel.last_command_ns = stamp_ns;
+        channel.last_command_ns = std::min(stamp_ns, now_ns);
         channel.commanded = true;
       }
     }
@@ -211,10 +213,17 @@ int SimChannels::report_events(std::FILE* out) {
       ++lines;
       switch (event) {
         case kStale:
-          std::fprintf(out,
-                       "afhub run: ignored a command for %s from pid %u: published %.3f s ago, "
-                       "older than the body's watchdog of %.3f s (counted in `afhub status`)\n",
-                       body, n.pid, n.seconds, static_cast<double>(channel.watchdog_ns) * 1e-9);
+          if (n.seconds < 0.0)
+            std::fprintf(out,
+                         "afhub run: ignored a command for %s from pid %u: stamped %.3f s in the "
+                         "future (a forged stamp, or a writer on another clock; counted in "
+                         "`afhub status`)\n",
+                         body, n.pid, -n.seconds);
+          else
+            std::fprintf(out,
+                         "afhub run: ignored a command for %s from pid %u: published %.3f s ago, "
+                         "older than the body's watchdog of %.3f s (counted in `afhub status`)\n",
+                         body, n.pid, n.seconds, static_cast<double>(channel.watchdog_ns) * 1e-9);
           break;
         case kRejected:
           std::fprintf(out,

@@ -67,6 +67,10 @@ inline constexpr std::size_t kMaxSensorRaysPerBody = 32;
 // Constraint actuators one body command can drive.
 inline constexpr std::size_t kMaxActuatorsPerBody = 8;
 
+// Steps one `world step N` may ask for while paused: 1000 s at 1 kHz. Longer runs are
+// a resume; a world that steps for hours while it says "paused" misleads every reader.
+inline constexpr std::uint32_t kMaxWorldStepsPerCommand = 1'000'000;
+
 // Lights and cameras whose poses the world state carries.
 inline constexpr std::size_t kMaxWorldObjects = 8;
 

@@ -2,8 +2,10 @@
 // steps while paused, and reset (which the caller carries out on its own state).
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 
+#include "afhub/shm_layout/limits.hpp"
 #include "afhub/shm_layout/world.hpp"
 
 namespace afhub {
@@ -15,8 +17,9 @@ struct WorldControl {
   // Returns true when the command asks for a reset.
   bool apply(const WorldCommand& command) noexcept {
     switch (command.action) {
-      case WorldAction::kPause:
+      case WorldAction::kPause:  // also ends single steps still to run
         paused = true;
+        steps_to_run = 0;
         break;
       case WorldAction::kResume:
         paused = false;
@@ -25,7 +28,10 @@ struct WorldControl {
       case WorldAction::kStep:
         // Only while paused: steps asked for while running would otherwise pile up
         // and all run at the next pause.
-        if (paused) steps_to_run += command.step_count;
+        if (paused)
+          steps_to_run = std::min<std::uint64_t>(
+              steps_to_run + std::min(command.step_count, kMaxWorldStepsPerCommand),
+              kMaxWorldStepsPerCommand);
         break;
       case WorldAction::kReset:
         steps_to_run = 0;
@@ -35,6 +41,10 @@ struct WorldControl {
     }
     return false;
   }
+
+  // What the world state says: paused only while no single steps are left to run (a
+  // world running `world step N` is not standing still).
+  bool halted() const noexcept { return paused && steps_to_run == 0; }
 
   // Whether to advance this cycle; a single step asked for while paused is used up.
   bool take_step() noexcept {

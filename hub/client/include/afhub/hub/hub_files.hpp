@@ -29,6 +29,14 @@ std::string hub_log_path(const std::string& directory);
 // another user than this process's (or root's). Returns -1 with errno set.
 int open_own_file(const std::string& path, int flags, mode_t mode = 0600);
 
+// iceoryx's runtime opens /tmp/<runtime name>.lock with O_CREAT and follows a symlink
+// there: one planted by another user (where fs.protected_symlinks is 0) would have this
+// process create or lock a file of that user's choosing. So the file is made first,
+// here, with O_EXCL and O_NOFOLLOW. Something else found at the path (a symlink, a
+// directory, another user's file) is removed, and said on stderr; throws afhub::Error
+// when it cannot be (this user may not remove it).
+void claim_runtime_lock_file(const std::string& path);
+
 // The pid, in this process's pid namespace, of the process holding a flock on `path`
 // (from /proc/locks); nullopt when none is held, or the holder is in a pid namespace
 // this process cannot see.

@@ -138,12 +138,15 @@ class SimChannels {
   void publish_soft_nodes() noexcept;
   // An event to say from outside the loop. Refusals, stale commands and expiries are
   // said once per body (a short watchdog may fire every few ms); joins and drops each time.
+  // How far ahead of this process's clock a command's stamp may be: every process
+  // reads the same CLOCK_MONOTONIC, so only a read racing the publish on another core.
+  static constexpr std::int64_t kFutureStampAllowanceNs = 1'000'000;
   enum Event { kStale, kRejected, kAxisless, kExpired, kJoined, kDropped, kEventKinds };
   struct Notice {
     bool pending = false;  // noted since the last report
     bool said = false;
     std::uint32_t pid = 0;
-    double seconds = 0.0;         // kStale: the command's age
+    double seconds = 0.0;         // kStale: the command's age (< 0: from the future)
     std::uint64_t step = 0;       // kJoined: the step it joined at
     int misses = 0;               // kDropped: late steps in a row
     std::array<char, 160> why{};  // kRejected, kAxisless: the problem
