@@ -14,6 +14,27 @@ std::string command(const CLI::App& app) {
   return chosen.empty() ? std::string() : chosen.front()->get_name();
 }
 
+// CLI11 says only "A subcommand is required" (for `afhub world bogus` too): name the
+// command and the subcommands it has, and what was given instead.
+int missing_subcommand(const CLI::App& app) {
+  const CLI::App* at = &app;
+  std::string path = "afhub";
+  for (auto chosen = at->get_subcommands(); !chosen.empty(); chosen = at->get_subcommands()) {
+    at = chosen.front();
+    path += " " + at->get_name();
+  }
+  std::string choices;
+  for (const CLI::App* sub : at->get_subcommands({}))
+    choices += (choices.empty() ? "" : ", ") + sub->get_name();
+  std::string given;
+  for (const std::string& word : at->remaining()) given += (given.empty() ? "" : " ") + word;
+  std::fprintf(
+      stderr, "%s: %s; choose one of: %s (see `%s --help`)\n", path.c_str(),
+      given.empty() ? "a subcommand is required" : ("unknown subcommand '" + given + "'").c_str(),
+      choices.c_str(), path.c_str());
+  return 2;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -21,6 +42,7 @@ int main(int argc, char** argv) {
       "afhub: a shared-memory, zero-copy co-simulation hub for robots.\n"
       "Run `afhub <command> --help` for a command's options."};
   app.require_subcommand(1);
+  app.set_version_flag("--version", "afhub " AFHUB_VERSION);
   afhub::cli::Runner selected;
   afhub::cli::register_hub(app, selected);
   afhub::cli::register_ls(app, selected);
@@ -41,6 +63,10 @@ int main(int argc, char** argv) {
   afhub::cli::register_bridge(app, selected);
   try {
     app.parse(argc, argv);
+  } catch (const CLI::RequiredError& error) {
+    if (std::string(error.what()).find("subcommand is required") != std::string::npos)
+      return missing_subcommand(app);
+    return app.exit(error);
   } catch (const CLI::ParseError& error) {
     return app.exit(error);
   }

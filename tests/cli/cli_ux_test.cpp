@@ -37,6 +37,21 @@ TEST(World, HelpOnEverySubcommand) {
   EXPECT_TRUE(contains(run_afhub({"world", "step", "--help"}).out, "While paused"));
 }
 
+TEST(Cli, AnUnknownOrMissingSubcommandNamesTheChoices) {
+  RunResult bogus = run_afhub({"world", "bogus"});
+  EXPECT_EQ(bogus.exit_code, 2);
+  EXPECT_TRUE(contains(bogus.err, "afhub world: unknown subcommand 'bogus'; choose one of: "
+                                  "pause, resume, step, reset"))
+      << bogus.err;
+  RunResult none = run_afhub({"device"});
+  EXPECT_EQ(none.exit_code, 2);
+  EXPECT_TRUE(contains(none.err, "afhub device: a subcommand is required; choose one of: list"))
+      << none.err;
+  RunResult version = run_afhub({"--version"});
+  EXPECT_EQ(version.exit_code, 0);
+  EXPECT_TRUE(contains(version.out, "afhub 0.")) << version.out;
+}
+
 TEST(World, WithoutASimulationItSaysSo) {
   RunResult pause = run_afhub({"world", "pause"});
   EXPECT_EQ(pause.exit_code, 1);
