@@ -17,6 +17,8 @@ PACKAGES=(
   iceoryx libiceoryx-posh-dev libiceoryx-hoofs-dev libacl1-dev
   libcli11-dev libyaml-cpp-dev libbullet-dev libassimp-dev libeigen3-dev
   libgtest-dev libgmock-dev libbenchmark-dev clang-format
+  # the tests' strict JSON reader (tests only)
+  nlohmann-json3-dev
   # afhub bench: the transports it compares with, the machine's floor, the plot
   cyclonedds-dev cyclonedds-tools libroscpp-dev libstd-msgs-dev python3-rosmaster
   rt-tests gnuplot-nox

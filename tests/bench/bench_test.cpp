@@ -12,9 +12,9 @@
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/rt/cpu_wake_latency.hpp"
 #include "afhub_process.hpp"
-#include "json_tree.hpp"
 #include "model_files.hpp"
 #include "real_time.hpp"
+#include "strict_json.hpp"
 
 namespace afhub::test {
 namespace {
@@ -38,34 +38,34 @@ TEST(Bench, ShortRunMeasuresEveryTransportAndTheLoop) {
   EXPECT_TRUE(contains(run.out, "Goals")) << run.out;
   EXPECT_TRUE(contains(run.err, "latency round 2 of 2")) << run.err;  // progress
 
-  const JsonValue json = parse_json(read_file(json_path));
-  const JsonValue& transports = json.at("transports");
+  const nlohmann::json json = parse_json(read_file(json_path));
+  const nlohmann::json& transports = json.at("transports");
   for (const char* name : {"afhub", "dds", "uds", "ros1"}) {
-    ASSERT_TRUE(transports.has(name)) << name << " missing: " << read_file(json_path);
+    ASSERT_TRUE(transports.contains(name)) << name << " missing: " << read_file(json_path);
     for (const char* bytes : {"64", "1024", "16384", "262144", "1048576"}) {
-      const JsonValue& one_way = transports.at(name).at(bytes);
-      const JsonValue& round_trip = json.at("round_trip").at(name).at(bytes);
+      const nlohmann::json& one_way = transports.at(name).at(bytes);
+      const nlohmann::json& round_trip = json.at("round_trip").at(name).at(bytes);
       // 2 rounds x 25 pings, each giving two one-way samples and one round trip.
-      EXPECT_EQ(one_way.at("samples").number, 100.0) << name << " " << bytes;
-      EXPECT_EQ(round_trip.at("samples").number, 50.0) << name << " " << bytes;
-      const double p50 = one_way.at("p50_us").number;
+      EXPECT_EQ(one_way.at("samples"), 100) << name << " " << bytes;
+      EXPECT_EQ(round_trip.at("samples"), 50) << name << " " << bytes;
+      const double p50 = one_way.at("p50_us").get<double>();
       EXPECT_GT(p50, 0.0) << name << " " << bytes;
-      EXPECT_LE(p50, one_way.at("p99_us").number);
-      EXPECT_LE(one_way.at("p99_us").number, one_way.at("max_us").number);
+      EXPECT_LE(p50, one_way.at("p99_us").get<double>());
+      EXPECT_LE(one_way.at("p99_us").get<double>(), one_way.at("max_us").get<double>());
       // Each way is part of the round trip.
-      EXPECT_LT(p50, round_trip.at("p50_us").number) << name << " " << bytes;
+      EXPECT_LT(p50, round_trip.at("p50_us").get<double>()) << name << " " << bytes;
     }
   }
   // The loop ran 3 s at 1 kHz, and so did cyclictest.
-  const JsonValue& jitter = json.at("loop_jitter");
-  EXPECT_EQ(jitter.at("afhub_us").at("samples").number, 3000.0);
-  EXPECT_EQ(jitter.at("cyclictest_us").at("samples").number, 3000.0);
-  EXPECT_GT(jitter.at("afhub_us").at("p50").number, 0.0);
-  EXPECT_GT(jitter.at("cyclictest_us").at("p50").number, 0.0);
-  const double ratio = json.at("loop_deadline_hit_ratio").number;
+  const nlohmann::json& jitter = json.at("loop_jitter");
+  EXPECT_EQ(jitter.at("afhub_us").at("samples"), 3000);
+  EXPECT_EQ(jitter.at("cyclictest_us").at("samples"), 3000);
+  EXPECT_GT(jitter.at("afhub_us").at("p50").get<double>(), 0.0);
+  EXPECT_GT(jitter.at("cyclictest_us").at("p50").get<double>(), 0.0);
+  const double ratio = json.at("loop_deadline_hit_ratio").get<double>();
   EXPECT_GE(ratio, 0.0);
   EXPECT_LE(ratio, 1.0);
-  EXPECT_GT(json.at("loop_steps").number, 2000.0);
+  EXPECT_GT(json.at("loop_steps").get<double>(), 2000.0);
 
   // A PNG came out.
   ASSERT_TRUE(std::filesystem::exists(plot_path));

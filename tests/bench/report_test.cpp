@@ -3,12 +3,12 @@
 #include <gtest/gtest.h>
 
 #include "afhub/bench/bench.hpp"
-#include "json_tree.hpp"
+#include "strict_json.hpp"
 
 namespace afhub::bench {
 namespace {
 
-using test::JsonValue;
+using nlohmann::json;
 
 bool contains(const std::string& text, const std::string& part) {
   return text.find(part) != std::string::npos;
@@ -46,49 +46,49 @@ BenchResults known_results() {
 }
 
 TEST(BenchReport, JsonHasTheDocumentedShape) {
-  const JsonValue json = test::parse_json(results_json(known_results()));
-  EXPECT_EQ(json.at("machine").at("cpu").text, "Test CPU");
-  EXPECT_EQ(json.at("machine").at("cores").number, 2.0);
+  const json document = test::parse_json(results_json(known_results()));
+  EXPECT_EQ(document.at("machine").at("cpu"), "Test CPU");
+  EXPECT_EQ(document.at("machine").at("cores"), 2);
 
-  const JsonValue& transports = json.at("transports");
-  EXPECT_EQ(transports.members.size(), 3u);  // ros1 was skipped
-  EXPECT_FALSE(transports.has("ros1"));
-  EXPECT_EQ(json.at("skipped").at("ros1").text, "not built");
+  const json& transports = document.at("transports");
+  EXPECT_EQ(transports.size(), 3u);  // ros1 was skipped
+  EXPECT_FALSE(transports.contains("ros1"));
+  EXPECT_EQ(document.at("skipped").at("ros1"), "not built");
   for (const char* name : {"afhub", "dds", "uds"}) {
-    const JsonValue& sizes = transports.at(name);
-    ASSERT_EQ(sizes.members.size(), kPayloadSizes.size()) << name;
+    const json& sizes = transports.at(name);
+    ASSERT_EQ(sizes.size(), kPayloadSizes.size()) << name;
     for (std::uint32_t bytes : kPayloadSizes) {
-      const JsonValue& d = sizes.at(std::to_string(bytes));  // byte counts as strings
+      const json& d = sizes.at(std::to_string(bytes));  // byte counts as strings
       for (const char* key : {"p50_us", "p90_us", "p99_us", "p999_us", "max_us", "samples"})
-        EXPECT_EQ(d.at(key).type, JsonValue::Type::kNumber) << name << " " << bytes << " " << key;
-      EXPECT_EQ(d.members.size(), 6u);
-      EXPECT_EQ(d.at("samples").number, 100.0);
+        EXPECT_TRUE(d.at(key).is_number()) << name << " " << bytes << " " << key;
+      EXPECT_EQ(d.size(), 6u);
+      EXPECT_EQ(d.at("samples"), 100);
     }
   }
-  const JsonValue& dds_1k = transports.at("dds").at("1024");
-  EXPECT_DOUBLE_EQ(dds_1k.at("p50_us").number, 500.0);
-  EXPECT_DOUBLE_EQ(dds_1k.at("p90_us").number, 900.0);
-  EXPECT_DOUBLE_EQ(dds_1k.at("max_us").number, 1000.0);
-  EXPECT_EQ(json.at("round_trip").at("afhub").at("64").at("samples").number, 50.0);
+  const json& dds_1k = transports.at("dds").at("1024");
+  EXPECT_DOUBLE_EQ(dds_1k.at("p50_us").get<double>(), 500.0);
+  EXPECT_DOUBLE_EQ(dds_1k.at("p90_us").get<double>(), 900.0);
+  EXPECT_DOUBLE_EQ(dds_1k.at("max_us").get<double>(), 1000.0);
+  EXPECT_EQ(document.at("round_trip").at("afhub").at("64").at("samples"), 50);
 
-  const JsonValue& jitter = json.at("loop_jitter");
+  const json& jitter = document.at("loop_jitter");
   for (const char* who : {"afhub_us", "cyclictest_us"})
     for (const char* key : {"p50", "p99", "p999", "max"})
-      EXPECT_EQ(jitter.at(who).at(key).type, JsonValue::Type::kNumber) << who << " " << key;
-  EXPECT_DOUBLE_EQ(jitter.at("afhub_us").at("p50").number, 21.0);
-  EXPECT_DOUBLE_EQ(jitter.at("afhub_us").at("p99").number, 21.0);
-  EXPECT_DOUBLE_EQ(jitter.at("afhub_us").at("max").number, 70.5);
-  EXPECT_DOUBLE_EQ(jitter.at("cyclictest_us").at("max").number, 30.0);
-  EXPECT_DOUBLE_EQ(json.at("loop_deadline_hit_ratio").number, 0.9995);
+      EXPECT_TRUE(jitter.at(who).at(key).is_number()) << who << " " << key;
+  EXPECT_DOUBLE_EQ(jitter.at("afhub_us").at("p50").get<double>(), 21.0);
+  EXPECT_DOUBLE_EQ(jitter.at("afhub_us").at("p99").get<double>(), 21.0);
+  EXPECT_DOUBLE_EQ(jitter.at("afhub_us").at("max").get<double>(), 70.5);
+  EXPECT_DOUBLE_EQ(jitter.at("cyclictest_us").at("max").get<double>(), 30.0);
+  EXPECT_DOUBLE_EQ(document.at("loop_deadline_hit_ratio").get<double>(), 0.9995);
 }
 
 TEST(BenchReport, JsonSaysNullForALoopThatDidNotRun) {
   BenchResults results = known_results();
   results.loop.skipped = "--loop-seconds 0";
-  const JsonValue json = test::parse_json(results_json(results));
-  EXPECT_EQ(json.at("loop_jitter").at("afhub_us").type, JsonValue::Type::kNull);
-  EXPECT_EQ(json.at("loop_deadline_hit_ratio").type, JsonValue::Type::kNull);
-  EXPECT_EQ(json.at("skipped").at("loop").text, "--loop-seconds 0");
+  const json document = test::parse_json(results_json(results));
+  EXPECT_TRUE(document.at("loop_jitter").at("afhub_us").is_null());
+  EXPECT_TRUE(document.at("loop_deadline_hit_ratio").is_null());
+  EXPECT_EQ(document.at("skipped").at("loop"), "--loop-seconds 0");
 }
 
 TEST(BenchReport, TableGivesRatiosToAfhubAndTheGoalsVerdicts) {

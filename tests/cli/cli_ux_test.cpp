@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <sstream>
 #include <thread>
 
 #include "afhub/hub/bodies.hpp"
@@ -15,6 +16,7 @@
 #include "afhub/shm_layout/world.hpp"
 #include "afhub_process.hpp"
 #include "model_files.hpp"
+#include "strict_json.hpp"
 #include "world_reader.hpp"
 
 namespace afhub::test {
@@ -279,10 +281,11 @@ TEST_F(WithSynth, EchoShowsOrientationAndTwistAndPicksFields) {
 
   RunResult json = run_afhub({"echo", "body1", "-n", "1", "--json", "--fields", "joints,wrench"});
   ASSERT_EQ(json.exit_code, 0) << json.err;
-  EXPECT_TRUE(contains(json.out, "\"joint_positions\":[")) << json.out;
-  EXPECT_TRUE(contains(json.out, "\"force_n\":[")) << json.out;
-  EXPECT_FALSE(contains(json.out, "\"position_m\"")) << json.out;
-  EXPECT_FALSE(contains(json.out, "\"joint_velocities\"")) << json.out;
+  const nlohmann::json state = parse_json(json.out);
+  EXPECT_TRUE(state.at("joint_positions").is_array()) << json.out;
+  EXPECT_EQ(state.at("force_n").size(), 3u) << json.out;
+  EXPECT_FALSE(state.contains("position_m")) << json.out;
+  EXPECT_FALSE(state.contains("joint_velocities")) << json.out;
 
   RunResult bad = run_afhub({"echo", "body1", "--fields", "pose,colour"});
   EXPECT_EQ(bad.exit_code, 1);
@@ -292,10 +295,10 @@ TEST_F(WithSynth, EchoShowsOrientationAndTwistAndPicksFields) {
 TEST_F(WithSynth, EchoRateLimitsByThePublishStamps) {
   RunResult limited = run_afhub({"echo", "body0", "-n", "3", "--json", "--rate", "5"});
   ASSERT_EQ(limited.exit_code, 0) << limited.err;
-  std::vector<double> stamps;
-  for (std::size_t at = 0;
-       (at = limited.out.find("\"publish_stamp_ns\":", at)) != std::string::npos; ++at)
-    stamps.push_back(std::strtod(limited.out.c_str() + at + 19, nullptr));
+  std::vector<double> stamps;  // one JSON document a line
+  std::istringstream lines(limited.out);
+  for (std::string line; std::getline(lines, line);)
+    stamps.push_back(parse_json(line).at("publish_stamp_ns").get<double>());
   ASSERT_EQ(stamps.size(), 3u) << limited.out;
   // At most 5 a second: the states printed were published at least 0.2 s apart
   // (at 1 kHz, every state would be about 1 ms after the last).
@@ -320,7 +323,10 @@ TEST(Ls, ARateNotMeasuredYetShowsAsADash) {
   EXPECT_TRUE(contains(row.substr(0, row.find('\n')), " - ")) << ls.out;
   EXPECT_FALSE(contains(row.substr(0, row.find('\n')), "0.0")) << ls.out;
   RunResult json = run_afhub({"ls", "--json"});
-  EXPECT_TRUE(contains(json.out, "{\"body\":\"test/silent\",\"rate_hz\":null,")) << json.out;
+  const nlohmann::json bodies = parse_json(json.out);
+  const nlohmann::json* silent = find_element(bodies, "body", "test/silent");
+  ASSERT_NE(silent, nullptr) << json.out;
+  EXPECT_TRUE(silent->at("rate_hz").is_null()) << json.out;
   RunResult help = run_afhub({"ls", "--help"});
   EXPECT_TRUE(contains(help.out, "'-' until")) << help.out;
 }

@@ -17,6 +17,7 @@
 #include "afhub/shm_layout/world.hpp"
 #include "afhub_process.hpp"
 #include "model_files.hpp"
+#include "strict_json.hpp"
 #include "world_reader.hpp"
 
 namespace afhub::test {
@@ -55,7 +56,8 @@ TEST(Lockstep, SameModelSameControllerGivesBitIdenticalRuns) {
   EXPECT_EQ(trajectory(first), trajectory(second));
   // And the controller did drive the arm: joint 2 is 0.4 sin(2 pi 3 + pi/7 * ...) away
   // from where it started, which is far from zero.
-  const double q1 = json_number(first, "afhub/arm/link1-link2\":{\"position");
+  const double q1 =
+      parse_json(first).at("joints").at("afhub/arm/link1-link2").at("position").get<double>();
   EXPECT_GT(std::abs(q1), 0.05) << first;
 }
 
@@ -164,20 +166,24 @@ TEST(Controllers, KilledControllerTripsTheHoldWatchdogAndARestartTakesOver) {
   // Its loop shows in `afhub top` and `afhub status` once it has run a second.
   std::this_thread::sleep_for(1200ms);
   RunResult top = run_afhub({"top", "--json"});
-  EXPECT_EQ(top.exit_code, 0) << top.err;
-  EXPECT_TRUE(contains(top.out, "\"name\":\"ctl hold\"")) << top.out;
-  EXPECT_TRUE(contains(top.out, "\"body\":\"afhub/arm/base\"")) << top.out;
-  EXPECT_TRUE(contains(top.out, "\"name\":\"run\"")) << "the physics loop is listed too\n"
-                                                     << top.out;
+  ASSERT_EQ(top.exit_code, 0) << top.err;
+  const nlohmann::json loops = parse_json(top.out).at("loops");
+  // The controller's own entry, never the physics' loop (also 1 kHz, also on the arm).
+  const nlohmann::json* loop = find_element(loops, "name", "ctl hold");
+  ASSERT_NE(loop, nullptr) << "no loop named \"ctl hold\" in\n" << top.out;
+  EXPECT_EQ(loop->at("pid"), hold.pid) << top.out;
+  EXPECT_EQ(loop->at("body"), "afhub/arm/base") << top.out;
+  EXPECT_NE(find_element(loops, "name", "run"), nullptr) << "the physics loop is listed too\n"
+                                                         << top.out;
   // Its period, and that it ran (its measured rate depends on this machine's load).
-  EXPECT_EQ(json_number(top.out, "period_s"), 0.001) << top.out;
-  EXPECT_GT(json_number(top.out, "rate_hz"), 0.0) << top.out;
-  EXPECT_GT(json_number(top.out, "cycles"), 500.0) << top.out;
+  EXPECT_EQ(loop->at("period_s").get<double>(), 0.001) << top.out;
+  EXPECT_GT(loop->at("rate_hz").get<double>(), 0.0) << top.out;
+  EXPECT_GT(loop->at("cycles").get<double>(), 500.0) << top.out;
   RunResult status = run_afhub({"status"});
   EXPECT_TRUE(contains(status.out, "loops:")) << status.out;
   EXPECT_TRUE(contains(status.out, "ctl hold")) << status.out;
   if (can_hold_limit) {
-    EXPECT_TRUE(contains(top.out, "\"cpu_wake_latency_us\":0")) << top.out;  // the physics: -1
+    EXPECT_EQ(loop->at("cpu_wake_latency_us"), 0) << top.out;  // the physics: -1
     EXPECT_TRUE(contains(status.out, "wake<=0us")) << status.out;
     std::int32_t limit = -1;
     std::ifstream(kCpuWakeLatencyDevice, std::ios::binary)

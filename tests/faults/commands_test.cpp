@@ -19,6 +19,7 @@
 #include "afhub_process.hpp"
 #include "iceoryx_posh/popo/untyped_publisher.hpp"
 #include "model_files.hpp"
+#include "strict_json.hpp"
 
 namespace afhub::test {
 namespace {
@@ -73,7 +74,7 @@ TEST(FaultsCommands, FiniteExtremeCommandsAreRefusedAndCountedWhileTheWorldRunsO
   EXPECT_TRUE(wait_until([&] { return run.now().header.sim_step > step + 100; }, 5s));
   EXPECT_EQ(wait_for_exit(*run.physics, 0ms), -1) << read_file(run.log);
   RunResult status = run_afhub({"status", "--json"});
-  EXPECT_TRUE(contains(status.out, "\"rejected_commands\":4")) << status.out;
+  EXPECT_EQ(parse_json(status.out).at("world").at("rejected_commands"), 4) << status.out;
   EXPECT_EQ(run.physics->stop(), 0);
   const std::string output = read_file(run.log);
   // Said once for the body, naming the field, the value and the bound.
@@ -205,7 +206,7 @@ TEST(FaultsCommands, ARestartedPhysicsIgnoresALiveWritersOldCommand) {
       << "the old command moved the new physics' arm";
   EXPECT_EQ(second.now().rejected_commands, 0u);
   RunResult status = run_afhub({"status", "--json"});
-  EXPECT_TRUE(contains(status.out, "\"stale_commands\":1")) << status.out;
+  EXPECT_EQ(parse_json(status.out).at("world").at("stale_commands"), 1) << status.out;
   EXPECT_EQ(second.physics->stop(), 0);
   const std::string output = read_file(second.log);
   EXPECT_TRUE(contains(output, "ignored a command for afhub/arm/base from pid")) << output;
@@ -300,19 +301,20 @@ TEST(FaultsCommands, LateCommandsAreOneCountInTheWorldStatusAndTop) {
   std::this_thread::sleep_for(1500ms);  // the controller publishes its stats every second
   RunResult top = run_afhub({"top", "--json"});
   const std::uint64_t late_after = run.now().commanded_steps - run.now().answered_steps;
-  const double loop_late = json_number(top.out, "late_commands");  // the first loop with it
-  ASSERT_TRUE(contains(top.out, "\"name\":\"ctl hold\"")) << top.out;
+  ASSERT_EQ(top.exit_code, 0) << top.err;
+  const nlohmann::json loops = parse_json(top.out).at("loops");
+  const nlohmann::json* loop = find_element(loops, "name", "ctl hold");
+  ASSERT_NE(loop, nullptr) << "no loop named \"ctl hold\" in\n" << top.out;
+  EXPECT_EQ(loop->at("pid"), controller.pid) << top.out;
   // The controller's late count is the physics' count for its body, as of its last
   // stats: between the world's counts before and after.
-  std::size_t at = top.out.find("\"name\":\"ctl hold\"");
-  std::size_t object = top.out.rfind('{', at);
-  const double controller_late = json_number(top.out.substr(object), "late_commands");
-  (void)loop_late;
+  const double controller_late = loop->at("late_commands").get<double>();
   EXPECT_GE(controller_late, static_cast<double>(late_before)) << top.out;
   EXPECT_LE(controller_late, static_cast<double>(late_after)) << top.out;
   RunResult status = run_afhub({"status", "--json"});
-  EXPECT_TRUE(contains(status.out, "\"late_steps\":")) << status.out;
-  EXPECT_TRUE(contains(status.out, "\"commanded_steps\":")) << status.out;
+  const nlohmann::json world = parse_json(status.out).at("world");
+  EXPECT_TRUE(world.at("late_steps").is_number()) << status.out;
+  EXPECT_TRUE(world.at("commanded_steps").is_number()) << status.out;
   controller.stop();
   EXPECT_EQ(run.physics->stop(), 0);
 }

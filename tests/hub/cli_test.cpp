@@ -4,6 +4,7 @@
 #include <signal.h>
 #include <sys/stat.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
@@ -14,9 +15,9 @@
 #include "afhub/shm_layout/body_state.hpp"
 #include "afhub_process.hpp"
 #include "hub_environment.hpp"
-#include "json_tree.hpp"
 #include "model_files.hpp"
 #include "shared_models.hpp"
+#include "strict_json.hpp"
 #include "web_client.hpp"
 
 namespace afhub::test {
@@ -188,8 +189,8 @@ TEST(Cli, CheckAndRunSayTheGravityAndTheLoweredGains) {
     RunResult result = run_afhub(args, 60s);
     EXPECT_EQ(result.exit_code, 0) << result.err;
     EXPECT_TRUE(contains(result.err, "lowered to")) << result.err;
-    const JsonValue json = parse_json(read_file(report));
-    return std::abs(json.at("joints").at("ambf/env/link1-link2").at("position").number);
+    const nlohmann::json json = parse_json(read_file(report));
+    return std::abs(json.at("joints").at("ambf/env/link1-link2").at("position").get<double>());
   };
   EXPECT_LT(sag({}), 1e-3) << "gravity 0 from the file: the arm stays";
   EXPECT_GT(sag({"--gravity", "0,0,-9.81"}), 0.05) << "--gravity: the arm sags";
@@ -312,18 +313,25 @@ class CliWithBodies : public ::testing::Test {
 
 TEST_F(CliWithBodies, LsListsBodiesJointsOwnerAndRate) {
   RunResult json = run_afhub({"ls", "--json"});
-  EXPECT_EQ(json.exit_code, 0) << json.err;
-  EXPECT_TRUE(contains(json.out, "\"body\":\"synth/body0\"")) << json.out;
-  EXPECT_TRUE(contains(json.out, "\"joints\":[\"body1-joint0\",\"body1-joint1\",\"body1-joint2\"]"))
+  ASSERT_EQ(json.exit_code, 0) << json.err;
+  const nlohmann::json bodies = parse_json(json.out);
+  const nlohmann::json* body0 = find_element(bodies, "body", "synth/body0");
+  const nlohmann::json* body1 = find_element(bodies, "body", "synth/body1");
+  ASSERT_TRUE(body0 && body1) << json.out;
+  EXPECT_EQ(body1->at("joints"), nlohmann::json({"body1-joint0", "body1-joint1", "body1-joint2"}))
       << json.out;
-  EXPECT_TRUE(contains(json.out, "\"owner_pid\":" + std::to_string(synth_.pid))) << json.out;
+  EXPECT_EQ(body0->at("owner_pid"), synth_.pid) << json.out;
+  EXPECT_EQ(body1->at("owner_pid"), synth_.pid) << json.out;
   // The hub measures rates over a second; synth publishes at 1 kHz.
   RunResult ls;
   EXPECT_TRUE(wait_until(
       [&] {
         ls = run_afhub({"ls", "--json"});
-        auto rates = numbers_after(ls.out, "\"rate_hz\":");
-        return !rates.empty() && std::abs(rates[0] - 1000.0) < 20.0;
+        if (ls.exit_code != 0) return false;
+        const nlohmann::json listed = parse_json(ls.out);
+        const nlohmann::json* body = find_element(listed, "body", "synth/body0");
+        return body && body->at("rate_hz").is_number() &&  // null until measured
+               std::abs(body->at("rate_hz").get<double>() - 1000.0) < 20.0;
       },
       5s))
       << ls.out;
@@ -332,12 +340,15 @@ TEST_F(CliWithBodies, LsListsBodiesJointsOwnerAndRate) {
 TEST_F(CliWithBodies, EchoPrintsJsonLines) {
   RunResult echo = run_afhub({"echo", "body1", "--count", "3", "--json"});
   EXPECT_EQ(echo.exit_code, 0) << echo.err;
-  int lines = 0;
-  for (std::size_t at = 0;
-       (at = echo.out.find("{\"body\":\"synth/body1\"", at)) != std::string::npos; ++at)
-    ++lines;
-  EXPECT_EQ(lines, 3) << echo.out;
-  EXPECT_TRUE(contains(echo.out, "\"joint_names\":[\"body1-joint0\"")) << echo.out;
+  // One JSON document a line.
+  std::istringstream lines(echo.out);
+  int count = 0;
+  for (std::string line; std::getline(lines, line); ++count) {
+    const nlohmann::json state = parse_json(line);
+    EXPECT_EQ(state.at("body"), "synth/body1") << line;
+    EXPECT_EQ(state.at("joint_names").at(0), "body1-joint0") << line;
+  }
+  EXPECT_EQ(count, 3) << echo.out;
 }
 
 TEST_F(CliWithBodies, CmdDrivesTheJointsOfABody) {
@@ -346,10 +357,11 @@ TEST_F(CliWithBodies, CmdDrivesTheJointsOfABody) {
   // synth's joints converge on a position target within a few hundred steps.
   bool converged = wait_until(
       [] {
-        std::string line = run_afhub({"echo", "synth/body0", "-n", "1", "--json"}).out;
-        auto positions = numbers_after(line, "\"joint_positions\":[");
-        return positions.size() == 3 && std::abs(positions[0] - 0.3) < 1e-3 &&
-               std::abs(positions[1] + 0.2) < 1e-3;
+        const RunResult echo = run_afhub({"echo", "synth/body0", "-n", "1", "--json"});
+        if (echo.exit_code != 0) return false;
+        const nlohmann::json positions = parse_json(echo.out).at("joint_positions");
+        return positions.size() == 3 && std::abs(positions.at(0).get<double>() - 0.3) < 1e-3 &&
+               std::abs(positions.at(1).get<double>() + 0.2) < 1e-3;
       },
       5s);
   EXPECT_TRUE(converged) << run_afhub({"echo", "synth/body0", "-n", "1", "--json"}).out;
@@ -383,21 +395,26 @@ TEST_F(CliWithBodies, CmdExplainsBadInput) {
 TEST_F(CliWithBodies, StatusShowsProcessesAndMempools) {
   // Health comes once a second: wait for one that has seen synth.
   RunResult status;
+  nlohmann::json health;
   EXPECT_TRUE(wait_until(
       [&] {
         status = run_afhub({"status", "--json"});
-        return contains(status.out,
-                        "\"name\":\"afhub-synth-" + std::to_string(synth_.pid) + "\"") &&
-               contains(status.out, "\"body_count\":2");
+        if (status.exit_code != 0) return false;
+        health = parse_json(status.out);
+        const std::string synth = "afhub-synth-" + std::to_string(synth_.pid);
+        return find_element(health.at("processes"), "name", synth) && health.at("body_count") == 2;
       },
       5s))
       << status.out;
-  EXPECT_EQ(status.exit_code, 0) << status.err;
-  EXPECT_TRUE(
-      contains(status.out, "\"chunk_payload_bytes\":" + std::to_string(body_state_bytes(64))))
-      << status.out;
-  EXPECT_TRUE(contains(status.out, "\"body_count\":2")) << status.out;
-  EXPECT_TRUE(contains(status.out, "{\"body\":\"synth/body1\",\"rate_hz\":")) << status.out;
+  ASSERT_EQ(status.exit_code, 0) << status.err;
+  // Several segments may hold pools of one size: any of them.
+  const nlohmann::json& pools = health.at("mempools");
+  EXPECT_TRUE(std::any_of(pools.begin(), pools.end(), [](const nlohmann::json& pool) {
+    return pool.at("chunk_payload_bytes") == body_state_bytes(64);
+  })) << status.out;
+  const nlohmann::json* body1 = find_element(health.at("bodies"), "body", "synth/body1");
+  ASSERT_NE(body1, nullptr) << status.out;
+  EXPECT_TRUE(body1->contains("rate_hz")) << status.out;
 }
 
 }  // namespace

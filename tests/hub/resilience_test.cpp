@@ -22,6 +22,7 @@
 #include "afhub/shm_layout/health.hpp"
 #include "afhub_process.hpp"
 #include "hub_environment.hpp"
+#include "strict_json.hpp"
 
 namespace afhub::test {
 namespace {
@@ -157,7 +158,11 @@ void expect_hub_survives_client_dead_holding_port_locks(const char* linger) {
   const bool served = wait_until(
       [&] {
         ls = run_afhub({"ls", "--json"}, 3s);
-        return ls.exit_code == 0 && json_number(ls.out, "rate_hz") > 900.0;
+        if (ls.exit_code != 0) return false;
+        const nlohmann::json bodies = parse_json(ls.out);
+        const nlohmann::json* body = find_element(bodies, "body", "synth/body0");
+        return body && body->at("rate_hz").is_number() &&  // null until measured
+               body->at("rate_hz").get<double>() > 900.0;
       },
       10s);
   const std::string hub_log = read_file("/tmp/afhub-test-hub.log");

@@ -16,10 +16,10 @@
 #include <vector>
 
 #include "afhub_process.hpp"
-#include "json_tree.hpp"
 #include "model_files.hpp"
 #include "placed_copy.hpp"
 #include "shared_models.hpp"
+#include "strict_json.hpp"
 
 namespace afhub::test {
 namespace {
@@ -103,42 +103,42 @@ void run_scene(const std::vector<std::string>& files, const std::vector<Controll
                const std::vector<std::string>& options, double loop_bound_m,
                double tracking_bound) {
   afhub::testing::ModelFolder folder;
-  const JsonValue commanded =
+  const nlohmann::json commanded =
       parse_json(report_of(files, robots, options, (folder.dir() / "commanded.json").string()));
-  const JsonValue alone =
+  const nlohmann::json alone =
       parse_json(report_of(files, {}, options, (folder.dir() / "alone.json").string()));
 
-  EXPECT_EQ(commanded.at("steps").number, kSteps);
-  EXPECT_FALSE(commanded.at("nan_detected").boolean);
-  EXPECT_EQ(commanded.at("nan_recoveries").number, 0);
-  const double loops = commanded.at("max_joint_error_m").number;
+  EXPECT_EQ(commanded.at("steps"), kSteps);
+  EXPECT_EQ(commanded.at("nan_detected"), false);
+  EXPECT_EQ(commanded.at("nan_recoveries"), 0);
+  const double loops = commanded.at("max_joint_error_m").get<double>();
   EXPECT_LT(loops, loop_bound_m);
   for (const Controlled& robot : robots) {
-    const double moved = commanded.at("joints").at(robot.first_joint).at("position").number -
-                         alone.at("joints").at(robot.first_joint).at("position").number;
+    const double moved = commanded.at("joints").at(robot.first_joint).at("position").get<double>() -
+                         alone.at("joints").at(robot.first_joint).at("position").get<double>();
     // Its commands arrived: the joint is not where the same world left alone puts it.
     EXPECT_GT(std::abs(moved), robot.amplitude / 20)
         << robot.body << " (" << robot.first_joint << ")";
     // It tracks: every step had its command (lockstep), and the step at the crest and
     // the run as a whole leave it near its target.
-    const JsonValue& tracking = commanded.at("joints").at(robot.first_joint).at("tracking");
-    EXPECT_EQ(tracking.at("steps").number, kSteps) << robot.first_joint;
-    const double crest = std::abs(tracking.at("last_error").number);
-    const double rms = tracking.at("rms_error").number;
+    const nlohmann::json& tracking = commanded.at("joints").at(robot.first_joint).at("tracking");
+    EXPECT_EQ(tracking.at("steps"), kSteps) << robot.first_joint;
+    const double crest = std::abs(tracking.at("last_error").get<double>());
+    const double rms = tracking.at("rms_error").get<double>();
     EXPECT_LT(crest, tracking_bound * robot.amplitude) << robot.first_joint << " at the crest";
     EXPECT_LT(rms, tracking_bound * robot.amplitude) << robot.first_joint << " RMS";
     std::printf(
         "%s: joint %s %+.4f from the world left alone (amplitude %.2f); error at the crest "
         "%.4f, RMS %.4f, max %.4f\n",
         robot.body.c_str(), robot.first_joint.c_str(), moved, robot.amplitude, crest, rms,
-        tracking.at("max_error").number);
+        tracking.at("max_error").get<double>());
   }
-  const JsonValue& step = commanded.at("step_time_us");
+  const nlohmann::json& step = commanded.at("step_time_us");
   std::printf(
       "%zu robots, %d steps in lockstep: step p50 %.0f us, p99 %.0f us, %.0f steps/s, "
       "max joint error %.4f mm\n",
-      robots.size(), kSteps, step.at("p50").number, step.at("p99").number,
-      kSteps / commanded.at("wall_time_s").number, loops * 1e3);
+      robots.size(), kSteps, step.at("p50").get<double>(), step.at("p99").get<double>(),
+      kSteps / commanded.at("wall_time_s").get<double>(), loops * 1e3);
 }
 
 // The project's own models: the 7-DOF arm and the RCM mechanism twice (the copy moved

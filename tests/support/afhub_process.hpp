@@ -79,10 +79,8 @@ std::string afhub_executable();
 bool contains(const std::string& text, const std::string& part);
 // How many times `part` occurs in `text` (overlaps counted).
 int occurrences(const std::string& text, const std::string& part);
-// The number after "key": in a JSON text (the first occurrence), or NaN.
-double json_number(const std::string& json, const std::string& key);
 // The comma-separated numbers that follow `key` in `text` (searched from `from`), up
-// to the closing ']'.
+// to the closing ']'. For text output only: JSON is read with parse_json (strict_json.hpp).
 std::vector<double> numbers_after(const std::string& text, const std::string& key,
                                   std::size_t from = 0);
 std::string read_file(const std::string& path);

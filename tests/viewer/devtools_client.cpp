@@ -8,7 +8,6 @@
 #include <unistd.h>
 
 #include <chrono>
-#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -55,22 +54,7 @@ std::vector<std::uint8_t> base64_decode(const std::string& text) {
 }  // namespace
 
 std::string json_quote(const std::string& text) {
-  std::string out = "\"";
-  for (char c : text) {
-    if (c == '"' || c == '\\') {
-      out += '\\';
-      out += c;
-    } else if (c == '\n') {
-      out += "\\n";
-    } else if (static_cast<unsigned char>(c) < 0x20) {
-      char code[8];
-      std::snprintf(code, sizeof code, "\\u%04x", c);
-      out += code;
-    } else {
-      out += c;
-    }
-  }
-  return out + "\"";
+  return nlohmann::json(text).dump();
 }
 
 Browser::Browser(const std::string& dir) {
@@ -109,14 +93,16 @@ Browser::Browser(const std::string& dir) {
   wait_until(
       [&] {
         list = http_request(port, "GET", "/json/list");
-        // The first target is the page chromium opened; its URL's host is what the
-        // request's Host header said, so only its path is taken.
-        const std::size_t url = list.body.find("\"webSocketDebuggerUrl\"");
-        const std::size_t start = list.body.find("/devtools/page/", url);
-        if (url == std::string::npos || start == std::string::npos ||
-            list.body.find("\"page\"") == std::string::npos)
-          return false;
-        path = list.body.substr(start, list.body.find('"', start) - start);
+        if (list.status != 200) return false;
+        // The page chromium opened; its URL's host is what the request's Host header
+        // said, so only its path is taken.
+        const nlohmann::json targets = parse_json(list.body);
+        const nlohmann::json* page = find_element(targets, "type", "page");
+        if (!page || !page->contains("webSocketDebuggerUrl")) return false;
+        const std::string url = page->at("webSocketDebuggerUrl").get<std::string>();
+        const std::size_t start = url.find("/devtools/page/");
+        if (start == std::string::npos) return false;
+        path = url.substr(start);
         return true;
       },
       std::chrono::seconds(20));
@@ -135,7 +121,7 @@ Browser::Browser(const std::string& dir) {
     return;
   }
   for (const char* domain : {"Page.enable", "Runtime.enable", "Log.enable"})
-    if (call(domain, "{}").type == JsonValue::Type::kNull) {
+    if (call(domain, "{}").is_null()) {
       problem_ = std::string(domain) + " got no answer";
       mg_close_connection(connection_);
       connection_ = nullptr;
@@ -160,20 +146,20 @@ Browser::~Browser() {
 
 void Browser::on_message(const char* data, std::size_t length) {
   const std::string text(data, length);
-  JsonValue message;
+  nlohmann::json message;
   try {
     message = parse_json(text);
   } catch (const std::exception&) {
     return;
   }
   std::lock_guard lock(mutex_);
-  if (message.has("id")) {
-    answers_[static_cast<int>(message.at("id").number)] = text;
+  if (message.contains("id")) {
+    answers_[message.at("id").get<int>()] = text;
     answered_.notify_all();
     return;
   }
-  if (!message.has("method")) return;
-  const std::string& method = message.at("method").text;
+  if (!message.contains("method")) return;
+  const std::string method = message.at("method").get<std::string>();
   if (method == "Page.loadEventFired") {
     loaded_ = true;
     answered_.notify_all();
@@ -183,7 +169,7 @@ void Browser::on_message(const char* data, std::size_t length) {
   }
 }
 
-JsonValue Browser::call(const std::string& method, const std::string& params_json) {
+nlohmann::json Browser::call(const std::string& method, const std::string& params_json) {
   if (!connection_) return {};
   int id = 0;
   {
@@ -198,10 +184,12 @@ JsonValue Browser::call(const std::string& method, const std::string& params_jso
     problem_ = method + ": no answer from chromium";
     return {};
   }
-  const JsonValue answer = parse_json(answers_[id]);
+  const nlohmann::json answer = parse_json(answers_[id]);
   answers_.erase(id);
-  if (!answer.has("result")) {
-    problem_ = method + ": " + (answer.has("error") ? answer.at("error").at("message").text : "");
+  if (!answer.contains("result")) {
+    problem_ =
+        method + ": " +
+        (answer.contains("error") ? answer.at("error").at("message").get<std::string>() : "");
     return {};
   }
   return answer.at("result");
@@ -212,27 +200,26 @@ bool Browser::navigate(const std::string& url) {
     std::lock_guard lock(mutex_);
     loaded_ = false;
   }
-  if (call("Page.navigate", "{\"url\":" + json_quote(url) + "}").type == JsonValue::Type::kNull)
-    return false;
+  if (call("Page.navigate", "{\"url\":" + json_quote(url) + "}").is_null()) return false;
   std::unique_lock lock(mutex_);
   return answered_.wait_for(lock, kAnswerTimeout, [&] { return loaded_; });
 }
 
-JsonValue Browser::evaluate(const std::string& expression) {
-  const JsonValue result =
+nlohmann::json Browser::evaluate(const std::string& expression) {
+  const nlohmann::json result =
       call("Runtime.evaluate", "{\"expression\":" + json_quote(expression) +
                                    ",\"returnByValue\":true,\"awaitPromise\":true}");
-  if (result.type == JsonValue::Type::kNull) return {};
-  if (result.has("exceptionDetails")) {
-    const JsonValue& details = result.at("exceptionDetails");
+  if (result.is_null()) return {};
+  if (result.contains("exceptionDetails")) {
+    const nlohmann::json& details = result.at("exceptionDetails");
     problem_ = expression + " threw: " +
-               (details.has("exception") && details.at("exception").has("description")
-                    ? details.at("exception").at("description").text
-                    : details.at("text").text);
+               (details.contains("exception") && details.at("exception").contains("description")
+                    ? details.at("exception").at("description").get<std::string>()
+                    : details.at("text").get<std::string>());
     return {};
   }
-  const JsonValue& value = result.at("result");
-  return value.has("value") ? value.at("value") : JsonValue{};
+  const nlohmann::json& value = result.at("result");
+  return value.contains("value") ? value.at("value") : nlohmann::json();
 }
 
 void Browser::click(double x, double y) {
@@ -245,9 +232,9 @@ void Browser::click(double x, double y) {
 }
 
 bool Browser::screenshot(const std::string& path) {
-  const JsonValue result = call("Page.captureScreenshot", R"({"format":"png"})");
-  if (result.type == JsonValue::Type::kNull) return false;
-  const std::vector<std::uint8_t> png = base64_decode(result.at("data").text);
+  const nlohmann::json result = call("Page.captureScreenshot", R"({"format":"png"})");
+  if (result.is_null()) return false;
+  const std::vector<std::uint8_t> png = base64_decode(result.at("data").get<std::string>());
   std::ofstream(path, std::ios::binary)
       .write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
   return !png.empty();

@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "json_tree.hpp"
+#include "strict_json.hpp"
 
 struct mg_connection;
 
@@ -33,8 +33,8 @@ class Browser {
   // Loads `url` and waits until its load event.
   bool navigate(const std::string& url);
   // Runs `expression` in the page (promises awaited); returns its value (by value),
-  // or a kNull value with problem() set when it threw.
-  JsonValue evaluate(const std::string& expression);
+  // or null with problem() set when it threw.
+  nlohmann::json evaluate(const std::string& expression);
   // A left click at the page's CSS pixel (x, y).
   void click(double x, double y);
   // The page as a PNG file at `path`.
@@ -46,8 +46,8 @@ class Browser {
   void on_message(const char* data, std::size_t length);
 
  private:
-  // Sends one command and waits for its answer's "result" (kNull on error or timeout).
-  JsonValue call(const std::string& method, const std::string& params_json);
+  // Sends one command and waits for its answer's "result" (null on error or timeout).
+  nlohmann::json call(const std::string& method, const std::string& params_json);
 
   pid_t pid_ = -1;
   mg_connection* connection_ = nullptr;

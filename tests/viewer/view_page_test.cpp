@@ -38,6 +38,14 @@ std::string paired_devices() {
          device("Key Touch", "camera_overview");
 }
 
+// A value the page returned: NaN, or "", when it returned none (problem() says why).
+double number_of(const nlohmann::json& value) {
+  return value.is_number() ? value.get<double>() : NAN;
+}
+std::string string_of(const nlohmann::json& value) {
+  return value.is_string() ? value.get<std::string>() : "";
+}
+
 struct View {
   std::unique_ptr<ScopedProcess> process;
   std::string url;  // http://127.0.0.1:PORT
@@ -102,7 +110,7 @@ class ViewPageTest : public ::testing::Test {
   static void open(const std::string& url) {
     browser_->clear_console();
     ASSERT_TRUE(browser_->navigate(url)) << browser_->problem();
-    ASSERT_TRUE(wait_until([] { return browser_->evaluate("window.afhub.frames > 10").boolean; },
+    ASSERT_TRUE(wait_until([] { return browser_->evaluate("window.afhub.frames > 10") == true; },
                            std::chrono::seconds(30)))
         << browser_->problem();
   }
@@ -117,26 +125,26 @@ class ViewPageTest : public ::testing::Test {
 
   // Clicks where `channel`'s body is drawn (the centre of its bounding box).
   static void click_body(const std::string& channel) {
-    const JsonValue at = browser_->evaluate(
+    const nlohmann::json at = browser_->evaluate(
         "(() => { const b = bodies.find((b) => b.userData.channel === '" + channel +
         "'); const c = new THREE.Box3().setFromObject(b).getCenter(new "
         "THREE.Vector3()).project(camera); return [(c.x + 1) / 2 * innerWidth, (1 - c.y) / 2 "
         "* innerHeight]; })()");
-    ASSERT_EQ(at.items.size(), 2U) << browser_->problem();
-    browser_->click(at.items[0].number, at.items[1].number);
+    ASSERT_EQ(at.size(), 2U) << browser_->problem();
+    browser_->click(at.at(0).get<double>(), at.at(1).get<double>());
   }
 
   // Clicks the page element `id` (a real mouse click at its centre).
   static void click_element(const std::string& id) {
-    const JsonValue at = browser_->evaluate(
+    const nlohmann::json at = browser_->evaluate(
         "(() => { const r = document.getElementById('" + id +
         "').getBoundingClientRect(); return [r.x + r.width / 2, r.y + r.height / 2]; })()");
-    ASSERT_EQ(at.items.size(), 2U) << browser_->problem();
-    browser_->click(at.items[0].number, at.items[1].number);
+    ASSERT_EQ(at.size(), 2U) << browser_->problem();
+    browser_->click(at.at(0).get<double>(), at.at(1).get<double>());
   }
 
   static std::string text_of(const std::string& selector) {
-    return browser_->evaluate("document.querySelector('" + selector + "').textContent").text;
+    return string_of(browser_->evaluate("document.querySelector('" + selector + "').textContent"));
   }
 
   static double base_joint(std::size_t joint) {
@@ -181,7 +189,7 @@ TEST_F(ViewPageTest, AClickedBodyShowsItsJointPositionsAndPlotsThem) {
   // draw flat lines over each other, so any trace's colour counts).
   std::this_thread::sleep_for(std::chrono::milliseconds(1500));
   browser_->screenshot(dir_ + "/inspect.png");  // left for a look
-  const JsonValue drawn = browser_->evaluate(R"((() => {
+  const nlohmann::json drawn = browser_->evaluate(R"((() => {
       const c = document.getElementById('plot');
       const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
       const colours = plotColors.map((h) => [1, 3, 5].map((i) => parseInt(h.substr(i, 2), 16)));
@@ -192,11 +200,12 @@ TEST_F(ViewPageTest, AClickedBodyShowsItsJointPositionsAndPlotsThem) {
       }
       return [traced, d.length / 4 - background];
     })())");
-  ASSERT_EQ(drawn.items.size(), 2U) << browser_->problem();
-  std::printf("plot: %.0f pixels of the joints' traces, %.0f not background\n",
-              drawn.items[0].number, drawn.items[1].number);
-  EXPECT_GT(drawn.items[0].number, 100) << "no joint's trace is drawn";
-  EXPECT_GT(drawn.items[1].number, 500);
+  ASSERT_EQ(drawn.size(), 2U) << browser_->problem();
+  const double traced = drawn.at(0).get<double>(), not_background = drawn.at(1).get<double>();
+  std::printf("plot: %.0f pixels of the joints' traces, %.0f not background\n", traced,
+              not_background);
+  EXPECT_GT(traced, 100) << "no joint's trace is drawn";
+  EXPECT_GT(not_background, 500);
   expect_clean_console();
 }
 
@@ -205,17 +214,16 @@ TEST_F(ViewPageTest, ASliderMovesTheJointOnlyWithAllowCommands) {
   click_body("afhub/arm/base");
   ASSERT_TRUE(wait_until(
       [] {
-        return browser_->evaluate("document.querySelectorAll('#drive input').length").number >= 7;
+        return number_of(browser_->evaluate("document.querySelectorAll('#drive input').length")) >=
+               7;
       },
       std::chrono::seconds(5)))
       << "no sliders: " << text_of("#drive");
   const double target = base_joint(0) > 0.3 ? -0.5 : 0.6;
-  EXPECT_EQ(browser_
-                ->evaluate("(() => { const s = document.querySelector('#drive "
-                           "input[data-joint=\"0\"]'); s.value = " +
-                           std::to_string(target) +
-                           "; s.dispatchEvent(new Event('input')); return 'moved'; })()")
-                .text,
+  EXPECT_EQ(browser_->evaluate("(() => { const s = document.querySelector('#drive "
+                               "input[data-joint=\"0\"]'); s.value = " +
+                               std::to_string(target) +
+                               "; s.dispatchEvent(new Event('input')); return 'moved'; })()"),
             "moved")
       << browser_->problem();
   EXPECT_TRUE(
@@ -228,19 +236,16 @@ TEST_F(ViewPageTest, ASliderMovesTheJointOnlyWithAllowCommands) {
   click_body("afhub/arm/base");
   ASSERT_TRUE(wait_until([] { return contains(text_of("#pose"), "afhub/arm/base"); },
                          std::chrono::seconds(5)));
-  EXPECT_EQ(
-      browser_->evaluate("document.querySelectorAll('#drive input, #world button').length").number,
-      0);
+  EXPECT_EQ(browser_->evaluate("document.querySelectorAll('#drive input, #world button').length"),
+            0);
   const double refused_target = -target;
   const std::string post =
       "fetch('/command?body=afhub/arm/base&joint=0&value=" + std::to_string(refused_target) +
       "', {method: 'POST'}).then((r) => r.status)";
-  EXPECT_EQ(browser_->evaluate(post).number, 403);
-  EXPECT_EQ(browser_
-                ->evaluate("fetch('/world?action=pause', {method: 'POST'}).then((r) => "
-                           "r.status)")
-                .number,
-            403);
+  EXPECT_EQ(browser_->evaluate(post), 403);
+  EXPECT_EQ(
+      browser_->evaluate("fetch('/world?action=pause', {method: 'POST'}).then((r) => r.status)"),
+      403);
   std::this_thread::sleep_for(std::chrono::seconds(1));
   EXPECT_GT(std::abs(base_joint(0) - refused_target), 0.3) << "a read-only page moved the joint";
 }
@@ -295,31 +300,34 @@ TEST_F(ViewPageTest, PauseStepAndResetButtonsDriveTheWorld) {
 
 TEST_F(ViewPageTest, ACameraNameOpensItsViewportAndPairedCamerasAreMarked) {
   // The world file's cameras, as the scene lists them.
-  const JsonValue scene = parse_json(http_request(read_only_.port, "GET", "/scene.json").body);
-  const JsonValue* rcm = nullptr;
-  for (const JsonValue& camera : scene.at("cameras").items)
-    if (camera.at("name").text.ends_with("/rcm_close")) rcm = &camera;
+  const nlohmann::json scene = parse_json(http_request(read_only_.port, "GET", "/scene.json").body);
+  const nlohmann::json* rcm = nullptr;
+  for (const nlohmann::json& camera : scene.at("cameras")) {
+    if (!camera.at("name").get<std::string>().ends_with("/rcm_close")) continue;
+    ASSERT_EQ(rcm, nullptr) << "two cameras named rcm_close";
+    rcm = &camera;
+  }
   ASSERT_NE(rcm, nullptr) << "the example world has a camera named rcm_close";
 
   open(read_only_.url + "/?camera=rcm_close");
-  EXPECT_EQ(browser_->evaluate("window.afhub.camera").text, rcm->at("name").text);
-  const JsonValue position =
+  EXPECT_EQ(browser_->evaluate("window.afhub.camera"), rcm->at("name"));
+  const nlohmann::json position =
       browser_->evaluate("[camera.position.x, camera.position.y, camera.position.z]");
-  ASSERT_EQ(position.items.size(), 3U) << browser_->problem();
-  for (int i = 0; i < 3; ++i)
-    EXPECT_NEAR(position.items[i].number, rcm->at("position").items[i].number, 1e-6) << i;
+  ASSERT_EQ(position.size(), 3U) << browser_->problem();
+  for (std::size_t i = 0; i < 3; ++i)
+    EXPECT_NEAR(position.at(i).get<double>(), rcm->at("position").at(i).get<double>(), 1e-6) << i;
   EXPECT_EQ(text_of("#cameras .current"), "rcm_close [paired: Test Touch]");
   // Paired by its block key "camera_overview" (its name is "overview").
   EXPECT_EQ(text_of("#cameras a[href=\"/?camera=overview\"]"), "overview [paired: Key Touch]");
-  EXPECT_EQ(browser_->evaluate("document.querySelectorAll('#cameras .paired').length").number, 2);
+  EXPECT_EQ(browser_->evaluate("document.querySelectorAll('#cameras .paired').length"), 2);
   EXPECT_EQ(text_of("#message"), "");
   expect_clean_console();
 
   // Another camera: another pose.
   open(read_only_.url + "/?camera=overview");
-  EXPECT_TRUE(contains(browser_->evaluate("window.afhub.camera").text, "overview"));
-  EXPECT_GT(std::abs(browser_->evaluate("camera.position.x").number -
-                     rcm->at("position").items[0].number),
+  EXPECT_TRUE(contains(string_of(browser_->evaluate("window.afhub.camera")), "overview"));
+  EXPECT_GT(std::abs(number_of(browser_->evaluate("camera.position.x")) -
+                     rcm->at("position").at(0).get<double>()),
             0.5);
 
   // An unknown name: said on the page, with the cameras there are.
@@ -341,21 +349,21 @@ class ViewSoftBodyTest : public ViewPageTest {
     ASSERT_TRUE(browser_->ready()) << browser_->problem();
   }
   static double centre_z() {
-    const JsonValue centre = browser_->evaluate("window.afhub.softCentres[0] || []");
-    return centre.items.size() == 3 ? centre.items[2].number : NAN;
+    const nlohmann::json centre = browser_->evaluate("window.afhub.softCentres[0] || []");
+    return centre.size() == 3 ? number_of(centre.at(2)) : NAN;
   }
 };
 
 TEST_F(ViewSoftBodyTest, TheClothIsDrawnAndItsNodesMoveAsItFalls) {
-  const JsonValue scene = parse_json(http_request(commands_.port, "GET", "/scene.json").body);
-  ASSERT_EQ(scene.at("soft_bodies").items.size(), 1U);
-  const JsonValue& cloth = scene.at("soft_bodies").items[0];
-  EXPECT_EQ(cloth.at("channel").text, "afhub/cloth/cloth");
-  EXPECT_EQ(cloth.at("nodes").number, 169);                 // 13 x 13
-  EXPECT_EQ(cloth.at("faces").items.size(), 2U * 144 * 3);  // two triangles per cell
+  const nlohmann::json scene = parse_json(http_request(commands_.port, "GET", "/scene.json").body);
+  ASSERT_EQ(scene.at("soft_bodies").size(), 1U);
+  const nlohmann::json& cloth = scene.at("soft_bodies").at(0);
+  EXPECT_EQ(cloth.at("channel"), "afhub/cloth/cloth");
+  EXPECT_EQ(cloth.at("nodes"), 169);                  // 13 x 13
+  EXPECT_EQ(cloth.at("faces").size(), 2U * 144 * 3);  // two triangles per cell
 
   open(commands_.url + "/");
-  ASSERT_TRUE(wait_until([] { return browser_->evaluate("window.afhub.softBodies").number == 1; },
+  ASSERT_TRUE(wait_until([] { return browser_->evaluate("window.afhub.softBodies") == 1; },
                          std::chrono::seconds(10)))
       << "the page drew no soft body";
   // Paused and reset, the cloth is back at 1 m; resumed, it falls, and the frames
@@ -373,7 +381,7 @@ TEST_F(ViewSoftBodyTest, TheClothIsDrawnAndItsNodesMoveAsItFalls) {
   // Drawn: the pixels that change when the cloth is hidden, around where it is.
   ASSERT_EQ(run_afhub({"world", "pause"}).exit_code, 0);
   std::this_thread::sleep_for(std::chrono::milliseconds(300));
-  const JsonValue drawn = browser_->evaluate(R"((() => {
+  const nlohmann::json drawn = browser_->evaluate(R"((() => {
       const mesh = softBodies[0];
       const read = () => {
         renderer.render(world, camera);
@@ -394,8 +402,8 @@ TEST_F(ViewSoftBodyTest, TheClothIsDrawnAndItsNodesMoveAsItFalls) {
       return changed;
     })())");
   ASSERT_EQ(run_afhub({"world", "resume"}).exit_code, 0);
-  std::printf("cloth: %.0f pixels drawn\n", drawn.number);
-  EXPECT_GT(drawn.number, 300) << "the cloth is not drawn";
+  std::printf("cloth: %.0f pixels drawn\n", number_of(drawn));
+  EXPECT_GT(number_of(drawn), 300) << "the cloth is not drawn";
   browser_->screenshot(dir_ + "/cloth.png");  // left for a look
   expect_clean_console();
 }
@@ -427,9 +435,9 @@ class ViewAmbfPairingTest : public ViewPageTest {
 
 TEST_F(ViewAmbfPairingTest, ACameraPairedByItsBlockKeyIsMarked) {
   SKIP_WITHOUT_SHARED_MODELS();
-  const JsonValue scene = parse_json(http_request(read_only_.port, "GET", "/scene.json").body);
-  ASSERT_EQ(scene.at("cameras").items.size(), 1U);
-  EXPECT_EQ(scene.at("cameras").items[0].at("key").text, "camera1");
+  const nlohmann::json scene = parse_json(http_request(read_only_.port, "GET", "/scene.json").body);
+  ASSERT_EQ(scene.at("cameras").size(), 1U);
+  EXPECT_EQ(scene.at("cameras").at(0).at("key"), "camera1");
   open(read_only_.url + "/");
   const std::string marked = text_of("#cameras a.paired");
   EXPECT_TRUE(marked.starts_with("default_camera [paired: ")) << marked;
