@@ -76,6 +76,9 @@ int run_force(const ForceOptions& options) {
   const std::string channel = device_channel_name(options.name);
   install_stop_signal_handlers();
   connect_to_hub("device-force", HubPolicy::kRequire);
+  // Commands to a device no driver serves would go nowhere, silently.
+  if (wait_for_body(channel, "afhub device force", 0).info.kind != ChannelKind::kDevice)
+    throw Error(channel + " is a body, not a device");
   Writer<DeviceCommand> commands(body_command_channel(channel));
   LoopOptions loop;
   loop.period_ns = static_cast<std::int64_t>(std::llround(1e9 / options.rate_hz));

@@ -1,4 +1,5 @@
 // `afhub echo BODY`: prints each new state of a body, as text or JSON lines.
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -22,6 +23,7 @@ struct EchoOptions {
   std::uint64_t count = 0;  // 0: until Ctrl-C
   bool json = false;
   double timeout_s = 5.0;
+  double wait_s = 0.0;   // for the hub and the body to appear (a script racing a start)
   std::string fields;    // empty: all in JSON, pose, twist and joints in text
   double rate_hz = 0.0;  // 0: every new state
 };
@@ -64,13 +66,17 @@ int run_echo(const EchoOptions& options) {
   // Rate limited by the states' publish stamps: printed states are at least a period apart.
   const std::int64_t min_gap_ns =
       options.rate_hz > 0.0 ? static_cast<std::int64_t>(1e9 / options.rate_hz) : 0;
+  if (!(options.wait_s >= 0.0 && options.wait_s <= 1e6))
+    throw Error("--wait takes seconds from 0 to 1e6");
   install_stop_signal_handlers();
   survive_hub_loss("afhub echo");
-  connect_to_hub("echo", HubPolicy::kRequire);
+  const std::int64_t wait_ns = static_cast<std::int64_t>(options.wait_s * 1e9);
+  connect_to_hub("echo", HubPolicy::kRequire, std::chrono::milliseconds(wait_ns / 1'000'000));
   // Re-attached after a hub loss, the body's physics may come back after this process.
   const BodyEntry entry =
       wait_for_body(options.body, "afhub echo",
-                    reattach_count() > 0 ? std::numeric_limits<std::int64_t>::max() : 0);
+                    reattach_count() > 0 ? std::numeric_limits<std::int64_t>::max()
+                                         : (wait_ns > 0 ? monotonic_ns() + wait_ns : 0));
   const std::string channel(name_of(entry.info.channel));
   if (entry.info.kind == ChannelKind::kDevice) {
     if (!options.fields.empty())
@@ -110,6 +116,9 @@ void register_echo(CLI::App& app, Runner& selected) {
   echo->add_option("--rate", options->rate_hz,
                    "Print at most this many states per second (by their publish stamps; default: "
                    "every new state)");
+  echo->add_option("--wait", options->wait_s,
+                   "Wait up to this many seconds for the hub and the body to appear, for a "
+                   "script that starts them together (default 0: fail at once)");
   echo->add_option(
       "--timeout", options->timeout_s,
       "With --count: fail when no new state arrives for this many seconds (default 5)");

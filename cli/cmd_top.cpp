@@ -1,5 +1,7 @@
 // `afhub top`: a live table of every loop (controllers, the physics) with its rate,
 // wake-up jitter percentiles, compute time, overruns and late commands.
+#include <unistd.h>
+
 #include <cstdio>
 #include <memory>
 #include <thread>
@@ -39,7 +41,8 @@ int run_top(const TopOptions& options) {
       json.end_object();
       std::printf("%s\n", json.str().c_str());
     } else {
-      if (!options.once) std::printf("\x1b[H\x1b[2J");  // clear the terminal
+      // Clear the terminal; into a pipe or a file, one table after another.
+      if (!options.once && isatty(STDOUT_FILENO)) std::printf("\x1b[H\x1b[2J");
       std::printf("%zu loops%s\n%s", loops.size(), options.once ? "" : " (Ctrl-C to quit)",
                   loop_table(loops).c_str());
     }

@@ -42,8 +42,9 @@ TEST(World, HelpOnEverySubcommand) {
 TEST(Cli, AnUnknownOrMissingSubcommandNamesTheChoices) {
   RunResult bogus = run_afhub({"world", "bogus"});
   EXPECT_EQ(bogus.exit_code, 2);
-  EXPECT_TRUE(contains(bogus.err, "afhub world: unknown subcommand 'bogus'; choose one of: "
-                                  "pause, resume, step, reset"))
+  EXPECT_TRUE(contains(bogus.err,
+                       "afhub world: unknown subcommand 'bogus'; choose one of: "
+                       "pause, resume, step, reset"))
       << bogus.err;
   RunResult none = run_afhub({"device"});
   EXPECT_EQ(none.exit_code, 2);
@@ -52,6 +53,29 @@ TEST(Cli, AnUnknownOrMissingSubcommandNamesTheChoices) {
   RunResult version = run_afhub({"--version"});
   EXPECT_EQ(version.exit_code, 0);
   EXPECT_TRUE(contains(version.out, "afhub 0.")) << version.out;
+}
+
+// Mistakes a script makes are loud: a device no driver serves, a body that is not
+// there yet (echo --wait waits for it), and top into a pipe writes no terminal codes.
+TEST(Cli, ScriptsGetErrorsWaitsAndPlainText) {
+  RunResult device = run_afhub({"device", "force", "nosuch", "--force", "0,0,1", "--cycles", "5"});
+  EXPECT_EQ(device.exit_code, 1);
+  EXPECT_TRUE(contains(device.err, "device/nosuch")) << device.err;
+
+  ScopedProcess echo(spawn_afhub({"echo", "synth/body0", "-n", "1", "--wait", "20"},
+                                 "/tmp/afhub-test-echo-wait.log"));
+  ScopedProcess synth(spawn_afhub({"synth", "--bodies", "1", "--no-autostart"}));
+  EXPECT_EQ(wait_for_exit(echo, 20s), 0) << read_file("/tmp/afhub-test-echo-wait.log");
+  EXPECT_TRUE(contains(read_file("/tmp/afhub-test-echo-wait.log"), "synth/body0 step "));
+
+  RunResult top = run_afhub({"top", "--once"});
+  EXPECT_EQ(top.exit_code, 0) << top.err;
+  ScopedProcess live_top(spawn_afhub({"top"}, "/tmp/afhub-test-top.log"));
+  ASSERT_TRUE(
+      wait_until([] { return contains(read_file("/tmp/afhub-test-top.log"), "loops"); }, 10s));
+  EXPECT_FALSE(contains(read_file("/tmp/afhub-test-top.log"), "\x1b["))
+      << "terminal codes written into a file";
+  EXPECT_EQ(synth.stop(), 0);
 }
 
 TEST(World, WithoutASimulationItSaysSo) {
