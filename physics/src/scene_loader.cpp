@@ -148,6 +148,17 @@ Model load_scene(const SceneRequest& request) {
     if (configs && !configs.IsSequence())
       fail(file.at(configs), "'multibody configs' must be a list of ADF paths");
     const int count = configs ? static_cast<int>(configs.size()) : 0;
+    // A launch file alone would load its world and nothing else: say what there is to pick.
+    if (request.launch_indices.empty() && request.adf_files.empty() && count > 0) {
+      std::string listed;
+      for (int index = 0; index < count; ++index)
+        listed += "\n  " + std::to_string(index) + ": " +
+                  (configs[index].IsScalar() ? configs[index].Scalar() : std::string("?"));
+      fail(file.at(configs),
+           "no model picked from 'multibody configs': give -l with their indices, "
+           "e.g. -l 0 or -l 0,2; the configs are:" +
+               listed);
+    }
     for (int index : request.launch_indices) {
       if (index >= count)
         fail(file.at(configs ? configs : root), "model index " + std::to_string(index) +

@@ -265,13 +265,21 @@ TEST(Run, MissingModelOfALaunchFileIsReportedWhereItIsListed) {
   EXPECT_EQ(run.exit_code, 1);
   EXPECT_TRUE(contains(run.err,
                        "launch.yaml:10:5: error: multibody config #3 "
-                       "'./multi-bodies/robots/blender-raven2.yaml' not found"))
+                       "'./multi-bodies/robots/blender-raven2.yaml': "))
       << run.err;
+  EXPECT_TRUE(contains(run.err, "blender-raven2.yaml does not exist")) << run.err;
   RunResult beyond =
       run_afhub({"run", "--launch", kDescriptions + "launch.yaml", "-l", "40", "--offline"});
   EXPECT_EQ(beyond.exit_code, 1);
   EXPECT_TRUE(contains(beyond.err, "model index 40 (-l) is beyond 'multibody configs'"))
       << beyond.err;
+  // A launch file with no -l would load its world alone: refused, listing what to pick.
+  RunResult unpicked = run_afhub({"run", "--launch", kDescriptions + "launch.yaml", "--offline"});
+  EXPECT_EQ(unpicked.exit_code, 1);
+  EXPECT_TRUE(contains(unpicked.err, "no model picked from 'multibody configs': give -l"))
+      << unpicked.err;
+  EXPECT_TRUE(contains(unpicked.err, "\n  3: ./multi-bodies/robots/blender-raven2.yaml"))
+      << unpicked.err;
   RunResult no_model = run_afhub({"run", "--offline"});
   EXPECT_EQ(no_model.exit_code, 1);
   EXPECT_TRUE(contains(no_model.err, "nothing to simulate")) << no_model.err;
