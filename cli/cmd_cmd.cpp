@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <limits>
 #include <map>
 #include <memory>
@@ -106,7 +107,12 @@ std::map<std::size_t, double> named_joint_targets(const CmdOptions& options, con
                   (names.empty() ? std::string("shoulder") : names.front()) + "=0.3; got '" + item +
                   "'");
     const std::string joint = item.substr(0, equals);
-    const double value = parse_numbers(item.substr(equals + 1), "--joint " + joint, 1)[0];
+    char* end = nullptr;
+    const std::string text = item.substr(equals + 1);
+    const double value = std::strtod(text.c_str(), &end);
+    if (text.empty() || *end != '\0' || !std::isfinite(value))
+      throw Error("--joint " + item + ": '" + text + "' is not a finite number; e.g. --joint " +
+                  joint + "=0.3");
     std::size_t index = 0;
     if (joint.find_first_not_of("0123456789") == std::string::npos) {
       index = joint.size() < 6 ? std::stoul(joint) : names.size();

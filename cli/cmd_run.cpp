@@ -201,7 +201,7 @@ void register_run(CLI::App& app, Runner& selected) {
   run->add_option(
       "--namespace", options->name_space,
       "Put every body's channels under this prefix (copy/afhub/arm/base), and the world's "
-      "(copy/world: `afhub world --namespace copy`), to run a second copy of a model "
+      "(copy/world: `afhub world pause --namespace copy`), to run a second copy of a model "
       "beside the first: a live body has one publisher");
   run->add_option("--gravity", options->gravity,
                   "x,y,z in m/s^2 for the world and every body, over the world file's and the "

@@ -256,7 +256,10 @@ TEST_F(WithSynth, CmdExplainsBadJoints) {
            {{"cmd", "body0", "--joint", "3=0.3"}, "indices 0 to 2"},
            {{"cmd", "body0", "--joint", "99999999999999999999=0.3"}, "indices 0 to 2"},
            {{"cmd", "body0", "--joint", "0.3"}, "--joint takes NAME=VALUE"},
-           {{"cmd", "body0", "--joint", "0=x"}, "'x' is not a finite number"},
+           {{"cmd", "body0", "--joint", "0=x"}, "'x' is not a finite number; e.g. --joint 0=0.3"},
+           {{"cmd", "body0", "--joint", "body0-joint1=abc"},
+            "--joint body0-joint1=abc: 'abc' is not a finite number; e.g. --joint "
+            "body0-joint1=0.3"},
            {{"cmd", "body0", "--joint", "0=1", "--joint", "body0-joint0=2"}, "twice"},
            {{"cmd", "body0", "--joint", "0=1", "--joint-pos", "1"}, "give one"},
            {{"cmd", "body0", "--joint", "0=1", "--others", "drop"}, "--others takes hold"},
