@@ -29,20 +29,9 @@ constexpr double kMaxForce = 3.0;
 // The palm's start, and the device frame's place in the world.
 constexpr double kX0 = 0.6, kY0 = 0.8, kZ0 = 0.6;
 
-std::string input_devices_file() {
-  return "input devices: [Test Hand]\n"
-         "Test Hand:\n"
-         "  hardware name: Virtual\n"
-         "  haptic gain: {linear: 20.0, angular: 0.0}\n"
-         "  controller gain: {linear: {P: 200, D: 16}, angular: {P: 1, D: 0.04}}\n"
-         "  workspace scaling: 5\n"
-         "  max force: 3\n"
-         "  simulated multibody: " +
-         kGripper +
-         "\n"
-         "  location: {position: {x: 0.6, y: 0.8, z: 0.6}, orientation: {r: 0, p: 0, y: 0}}\n"
-         "  button mapping: {a1: 0, a2: 1, next mode: 2, prev mode: 3}\n";
-}
+// The shipped input devices file of the virtual device (examples/models/virtual_hand.yaml):
+// the tests bind it to drivers of their own names with --device.
+const std::string kVirtualHand = AFHUB_EXAMPLE_MODELS "/virtual_hand.yaml";
 
 // Teleoperation that holds the palm only after 0.5 s without device samples.
 const std::vector<std::string> kPatientTeleop = {"--stale", "500"};
@@ -62,7 +51,7 @@ class Teleop : public TeleopSession {
     static afhub::testing::ModelFolder folder;
     TeleopSetup s;
     s.models = {kGripper, kFloor};
-    s.devices_file = folder.write("input_devices.yaml", input_devices_file());
+    s.devices_file = kVirtualHand;
     s.teleop_args = {"--device", device};
     s.teleop_args.insert(s.teleop_args.end(), teleop_extra.begin(), teleop_extra.end());
     s.body = "afhub/gripper/palm";
