@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The dependency rule of the folders (README, "Architecture"): shm_layout at the
-# bottom; hub/client on it, hub/daemon on the client; rt on hub/client; the physics
-# core on shm_layout alone; physics/channels and controllers on rt; bench on those;
+# bottom; hub/client on it, hub/daemon on the client; rt on hub/client; rt/yaml (the
+# located YAML reader) on shm_layout alone; the physics core on shm_layout and
+# rt/yaml; physics/channels and controllers on rt; bench on those;
 # device_drivers on rt (not physics or controllers); cli on everything. Fails, naming the file, when a layer includes one above it, or
 # when the physics core's test binary links iceoryx.
 set -euo pipefail
@@ -21,9 +22,10 @@ forbid() {
   done
 }
 
-forbid shm_layout 'hub|rt|physics|controllers|devices|bench'
+forbid shm_layout 'hub|rt|yaml|physics|controllers|devices|bench'
 forbid hub 'rt|physics|controllers|devices|bench'
 forbid rt 'physics|controllers|devices|bench'
+forbid rt/yaml 'hub|rt|physics|controllers|devices|bench'
 forbid physics/src 'hub|rt|controllers|devices|bench'
 forbid physics/include 'hub|rt|controllers|devices|bench'
 forbid physics/channels 'controllers|devices|bench'

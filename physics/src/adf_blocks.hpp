@@ -13,7 +13,7 @@
 
 #include "afhub/physics/model.hpp"
 #include "body_scope.hpp"
-#include "yaml_reader.hpp"
+#include "file_reader.hpp"
 
 namespace afhub::physics::adf {
 

@@ -63,9 +63,7 @@ std::string mesh_folder(const FileReader& file, const YAML::Node& value, const f
 
 double positive(const FileReader& file, const YAML::Node& node, const std::string& what) {
   if (!node) fail(file.at(node), "missing '" + what + "'");
-  const double value = file.number(node, what);
-  if (value <= 0.0) fail(file.at(node), "'" + what + "' must be positive, got " + node.Scalar());
-  return value;
+  return file.positive(node, what);
 }
 
 Pid read_pid(const FileReader& file, const YAML::Node& node, const std::string& what) {
@@ -108,7 +106,7 @@ struct Unresolved {
 
 void load_file(const std::string& path, const YAML::Node& root, Model& model, Unresolved& pending) {
   FileReader file(path, model);
-  const MapIndex index(file, root);
+  const yaml::MapIndex index(file, root);
   auto key = [&](const char* name) { return index.find(name); };
 
   FileContext context;
@@ -168,7 +166,8 @@ void load_adf_files_into(const std::vector<std::string>& paths, Model& model) {
   LoadedChannels channels;
   std::vector<std::string> copy_suffix;  // per body: the index a copy's name got
   for (const std::string& path : paths) {
-    YAML::Node root = parse_file(path, "an ADF file (a map with 'bodies' and 'joints' lists)");
+    YAML::Node root = yaml::load_map(path, kMaxDescriptionFileBytes,
+                                     "an ADF file (a map with 'bodies' and 'joints' lists)");
     const FileSpan span{path, model.bodies.size(), model.soft_bodies.size(), pending.joints.size()};
     try {
       load_file(path, root, model, pending);

@@ -98,7 +98,7 @@ BodySpec read_body(const FileReader& file, const YAML::Node& block, const std::s
   body.mass_kg = file.non_negative(mass, "mass");
   if (body.mass_kg > kMaxMassKg)
     fail(file.at(mass), "'mass' is " + mass.Scalar() + " kg, beyond the bound of " +
-                            FileReader::bound_text(kMaxMassKg) + " kg for a model");
+                            yaml::number_text(kMaxMassKg) + " kg for a model");
   if (YAML::Node inertia = block["inertia"]) {
     Vec3 value = file.vec3(inertia, "inertia", "ix", "iy", "iz");
     if (value.x < 0 || value.y < 0 || value.z < 0)
@@ -113,7 +113,7 @@ BodySpec read_body(const FileReader& file, const YAML::Node& block, const std::s
     if (body.scale <= 0) fail(file.at(scale), "'scale' must be positive, got " + scale.Scalar());
     if (body.scale > kMaxScale)
       fail(file.at(scale), "'scale' is " + scale.Scalar() + ", beyond the bound of " +
-                               FileReader::bound_text(kMaxScale) + " for a model");
+                               yaml::number_text(kMaxScale) + " for a model");
   }
   file.optional_flag(block, "passive", body.passive);
   if (YAML::Node friction = block["friction"]) {

@@ -3,7 +3,7 @@
 // reference and lists them, since which one was meant is a guess.
 #include "body_scope.hpp"
 
-#include "yaml_reader.hpp"
+#include "file_reader.hpp"
 
 namespace afhub::physics::adf {
 namespace {

@@ -13,7 +13,7 @@
 #include <set>
 
 #include "afhub/shm_layout/error.hpp"
-#include "input_file.hpp"
+#include "afhub/yaml/input_file.hpp"
 
 namespace afhub::physics {
 namespace {
@@ -34,7 +34,7 @@ auto for_block(const SourceLocation& where, const std::string& owner, Load load)
 }  // namespace
 
 TriangleMesh load_mesh(const std::string& path, double scale) {
-  check_input_file(path, kMaxMeshFileBytes, "a mesh (STL, OBJ, DAE, ...)");
+  yaml::check_input_file(path, kMaxMeshFileBytes, "a mesh (STL, OBJ, DAE, ...)");
   Assimp::Importer importer;
   const aiScene* scene =
       importer.ReadFile(path, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |

@@ -10,8 +10,8 @@
 #include "afhub/physics/adf_loader.hpp"
 #include "afhub/shm_layout/channel_names.hpp"
 #include "afhub/shm_layout/limits.hpp"
+#include "file_reader.hpp"
 #include "path_kind.hpp"
-#include "yaml_reader.hpp"
 
 namespace afhub::physics {
 namespace {
@@ -60,7 +60,8 @@ WorldObjectSpec read_world_object(const FileReader& file, const YAML::Node& bloc
 
 // Reads the world file into model.world; returns its environment ADF, if any.
 std::string load_world(const std::string& path, Model& model) {
-  const YAML::Node root = parse_file(path, "a world file (enclosure, lights, cameras, ...)");
+  const YAML::Node root = yaml::load_map(path, kMaxDescriptionFileBytes,
+                                         "a world file (enclosure, lights, cameras, ...)");
   FileReader file(path, model);
   WorldSpec& world = model.world;
   world.file = path;
@@ -76,7 +77,7 @@ std::string load_world(const std::string& path, Model& model) {
       fail(file.at(iterations), "'max iterations' must be an integer from 1 to 1000");
     world.max_iterations = static_cast<int>(value);
   }
-  const MapIndex index(file, root);
+  const yaml::MapIndex index(file, root);
   for (const char* kind : {"lights", "cameras"}) {
     const bool camera = std::string(kind) == "cameras";
     auto& objects = camera ? world.cameras : world.lights;
@@ -97,9 +98,10 @@ std::string load_world(const std::string& path, Model& model) {
 
 // Named colors (r, g, b, a from 0 to 255) for bodies that say `color: <name>`.
 void apply_colors(const std::string& path, Model& model) {
-  const YAML::Node root = parse_file(path, "a color file (name: {r, g, b, a})");
+  const YAML::Node root =
+      yaml::load_map(path, kMaxDescriptionFileBytes, "a color file (name: {r, g, b, a})");
   FileReader file(path, model);
-  const MapIndex index(file, root);
+  const yaml::MapIndex index(file, root);
   for (BodySpec& body : model.bodies) {
     if (body.color_name.empty() || body.color_rgba) continue;
     const YAML::Node* found = index.find(body.color_name);
@@ -135,8 +137,8 @@ Model load_scene(const SceneRequest& request) {
   std::vector<std::string> adf_files;
   std::string world_file = request.world_file, color_file;
   if (!request.launch_file.empty()) {
-    const YAML::Node root =
-        parse_file(request.launch_file, "a launch file ('world config', 'multibody configs')");
+    const YAML::Node root = yaml::load_map(request.launch_file, kMaxDescriptionFileBytes,
+                                           "a launch file ('world config', 'multibody configs')");
     FileReader file(request.launch_file, model);
     if (YAML::Node world = root["world config"]; world && world_file.empty())
       world_file = existing_path(file, world, "world config");

@@ -34,7 +34,7 @@ int count(const FileReader& file, const YAML::Node& node, const std::string& wha
   const double value = file.non_negative(node, what);
   if (value != std::floor(value) || value > kMaxSoftBodyCount)
     fail(file.at(node), "'" + what + "' must be an integer from 0 to " +
-                            FileReader::bound_text(kMaxSoftBodyCount) + ", got " + node.Scalar());
+                            yaml::number_text(kMaxSoftBodyCount) + ", got " + node.Scalar());
   return static_cast<int>(value);
 }
 
@@ -51,7 +51,7 @@ SoftBodySpec read_soft_body(const FileReader& file, const YAML::Node& block,
   soft.mass_kg = positive(file, mass, "mass");
   if (soft.mass_kg > kMaxMassKg)
     fail(file.at(mass), "'mass' is " + mass.Scalar() + " kg, beyond the bound of " +
-                            FileReader::bound_text(kMaxMassKg) + " kg for a model");
+                            yaml::number_text(kMaxMassKg) + " kg for a model");
   if (YAML::Node location = block["location"]) soft.location = file.placement(location, "location");
   if (YAML::Node scale = block["scale"]) {
     positive(file, scale, "scale");

@@ -174,11 +174,11 @@ TEST_F(BadInputDevices, BadValuesGiveLocatedErrors) {
     std::string what;
   };
   const Case cases[] = {
-      {"  workspace scaling: -2\n", ":5:22:", "'workspace scaling' must be greater than 0"},
+      {"  workspace scaling: -2\n", ":5:22:", "'workspace scaling' must be positive"},
       {"  workspace scaling: lots\n", ":5:22:", "must be a number, got 'lots'"},
       {"  haptic gain: [1, 2]\n", ":5:16:", "'haptic gain' must be a map"},
       {"  haptic gain: {linear: -1}\n", ":5:25:", "'haptic gain.linear' must not be negative"},
-      {"  max force: 0\n", ":5:14:", "'max force' must be greater than 0"},
+      {"  max force: 0\n", ":5:14:", "'max force' must be positive"},
       {"  max force: .nan\n", ":5:14:", "must be finite"},
       {"  deadband: 1e300\n", ":5:13:", "beyond any physical value"},
       {"  button mapping: {a1: 1.5}\n", ":5:24:", "must be a button index"},
@@ -224,9 +224,10 @@ TEST_F(BadInputDevices, AMissingFileOrDirectoryIsNamed) {
     read_input_devices(missing);
     FAIL() << "no error";
   } catch (const Error& error) {
-    EXPECT_EQ(std::string(error.what()), missing +
-                                             ": error: no such file; expected an input device file "
-                                             "(input_devices.yaml)");
+    EXPECT_EQ(std::string(error.what()),
+              missing +
+                  ": error: no such file; expected an input device file (input_devices.yaml: a "
+                  "map with an 'input devices' list)");
   }
   EXPECT_THROW(read_input_devices(dir_.string()), Error);
 }

@@ -1,6 +1,7 @@
 // The steady-state loop (publish state, read command; read state, write command;
 // and the physics step between them) must not touch the heap. Every operator new and, outside
-// sanitizer builds, every malloc in this binary is counted while the loop runs.
+// sanitizer builds, every malloc of the loop's thread is counted while the loop runs
+// (support/heap_counter.cpp, support/malloc_counter.cpp).
 #include <gtest/gtest.h>
 
 #include <fcntl.h>
@@ -27,94 +28,24 @@
 #include "afhub/shm_layout/channel_names.hpp"
 #include "afhub/teleop/teleop_process.hpp"
 #include "afhub_process.hpp"
+#include "heap_counter.hpp"
 #include "model_files.hpp"
 #include "shared_models.hpp"
-
-// The replacements below pair malloc with free on purpose; GCC cannot see that.
-#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
-
-namespace {
-// Only the thread running the loop counts: iceoryx and sanitizer threads run beside it.
-thread_local bool g_counting = false;
-std::atomic<long> g_allocations{0};
-// A loop run on a thread of its own (a process's loop run in-process) counts into its
-// own counter, named by that thread, while the test thread sets g_threads_counting.
-thread_local std::atomic<long>* g_thread_counter = nullptr;
-std::atomic<bool> g_threads_counting{false};
-
-void note_allocation() {
-  if (g_counting) g_allocations.fetch_add(1, std::memory_order_relaxed);
-  if (g_thread_counter && g_threads_counting.load(std::memory_order_relaxed))
-    g_thread_counter->fetch_add(1, std::memory_order_relaxed);
-}
-}  // namespace
-
-#if defined(AFHUB_SANITIZED)
-// The sanitizers own malloc: count C++ allocations only.
-void* raw_malloc(std::size_t size) {
-  return std::malloc(size);
-}
-#else
-// glibc's allocator under its internal names; the public ones are counted below.
-extern "C" void* __libc_malloc(std::size_t);
-extern "C" void* __libc_calloc(std::size_t, std::size_t);
-extern "C" void* __libc_realloc(void*, std::size_t);
-void* raw_malloc(std::size_t size) {
-  return __libc_malloc(size);
-}
-extern "C" void* malloc(std::size_t size) {
-  note_allocation();
-  return __libc_malloc(size);
-}
-extern "C" void* calloc(std::size_t count, std::size_t size) {
-  note_allocation();
-  return __libc_calloc(count, size);
-}
-extern "C" void* realloc(void* p, std::size_t size) {
-  note_allocation();
-  return __libc_realloc(p, size);
-}
-#endif
-
-void* operator new(std::size_t size) {
-  note_allocation();
-  if (void* p = raw_malloc(size ? size : 1)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t size) {
-  return operator new(size);
-}
-void* operator new(std::size_t size, const std::nothrow_t&) noexcept {
-  note_allocation();
-  return raw_malloc(size ? size : 1);
-}
-void* operator new[](std::size_t size, const std::nothrow_t& tag) noexcept {
-  return operator new(size, tag);
-}
-void operator delete(void* p) noexcept {
-  std::free(p);
-}
-void operator delete[](void* p) noexcept {
-  std::free(p);
-}
-void operator delete(void* p, std::size_t) noexcept {
-  std::free(p);
-}
-void operator delete[](void* p, std::size_t) noexcept {
-  std::free(p);
-}
 
 namespace afhub {
 namespace {
 
+// This thread's heap allocations in the last count_allocations: iceoryx and sanitizer
+// threads run beside it.
+long g_allocations = 0;
+
 // Runs `cycle` `count` times counting heap allocations; false if a cycle failed.
 template <class Cycle>
 bool count_allocations(int count, Cycle&& cycle) {
-  g_allocations = 0;
-  g_counting = true;
+  const long before = test::thread_heap_allocations();
   bool all_ok = true;
   for (int i = 0; i < count; ++i) all_ok = cycle() && all_ok;
-  g_counting = false;
+  g_allocations = test::thread_heap_allocations() - before;
   return all_ok;
 }
 
@@ -123,12 +54,20 @@ using namespace std::chrono_literals;
 TEST(HotPath, CountsAllocationsWhenThereAreSome) {
   // The counter itself must see an allocation, or a zero below would prove nothing.
   // (A direct call: the compiler may elide a new-expression, not this.)
-  g_allocations = 0;
-  g_counting = true;
+  long before = test::thread_heap_allocations();
   void* probe = ::operator new(16);
-  g_counting = false;
+  const long counted = test::thread_heap_allocations() - before;
   ::operator delete(probe);
-  EXPECT_EQ(g_allocations.load(), 1);
+  EXPECT_EQ(counted, 1);
+#if !defined(AFHUB_SANITIZED)
+  // And malloc, through a pointer the compiler cannot see through.
+  void* (*volatile allocate)(std::size_t) = std::malloc;
+  before = test::thread_heap_allocations();
+  void* block = allocate(16);
+  const long counted_malloc = test::thread_heap_allocations() - before;
+  std::free(block);
+  EXPECT_EQ(counted_malloc, 1);
+#endif
 }
 
 TEST(HotPath, SteadyStateLoopDoesNotAllocate) {
@@ -157,7 +96,7 @@ TEST(HotPath, SteadyStateLoopDoesNotAllocate) {
   constexpr int kCycles = 10000;
   std::uint64_t step = 100;
   EXPECT_TRUE(count_allocations(kCycles, [&] { return one_cycle(step++); }));
-  EXPECT_EQ(g_allocations.load(), 0) << "heap allocations in " << kCycles << " steady-state cycles";
+  EXPECT_EQ(g_allocations, 0) << "heap allocations in " << kCycles << " steady-state cycles";
   EXPECT_EQ(physics.latest_command()->joints[6].value, static_cast<double>(100 + kCycles - 1));
 }
 
@@ -200,7 +139,7 @@ void expect_physics_loop_allocation_free(const std::vector<std::string>& files,
   constexpr int kCycles = 5000;
   const std::uint64_t updates_before = viewer_updates;
   EXPECT_TRUE(count_allocations(kCycles, one_cycle));
-  EXPECT_EQ(g_allocations.load(), 0) << "heap allocations in " << kCycles << " physics cycles";
+  EXPECT_EQ(g_allocations, 0) << "heap allocations in " << kCycles << " physics cycles";
   EXPECT_GE(viewer_updates - updates_before, 290u) << "the pose feed went out at 60 Hz";
   EXPECT_TRUE(sim.all_finite());
   EXPECT_EQ(channels.rejected_commands(), 0u);
@@ -250,7 +189,7 @@ TEST(HotPath, NanRecoveryDoesNotAllocate) {
 
   constexpr int kCycles = 5000;
   EXPECT_TRUE(count_allocations(kCycles, one_cycle));
-  EXPECT_EQ(g_allocations.load(), 0) << "heap allocations in " << kCycles << " cycles with NaNs";
+  EXPECT_EQ(g_allocations, 0) << "heap allocations in " << kCycles << " cycles with NaNs";
   EXPECT_GE(sim.nan_recoveries().count, before + kCycles / 100);
   ASSERT_TRUE(test::wait_until(
       [&] {
@@ -308,8 +247,8 @@ TEST(HotPath, ActuatorsAndSensorsDoNotAllocate) {
   changes = 0;
   constexpr int kCycles = 5000;
   EXPECT_TRUE(count_allocations(kCycles, one_cycle));
-  EXPECT_EQ(g_allocations.load(), 0)
-      << "heap allocations in " << kCycles << " cycles engaging and releasing an actuator";
+  EXPECT_EQ(g_allocations, 0) << "heap allocations in " << kCycles
+                              << " cycles engaging and releasing an actuator";
   EXPECT_GE(changes, kCycles / 50 - 2);
   EXPECT_NEAR(distance, 0.2 - (0.05 - 0.045), 0.002);  // the ray meets the ball's top
   EXPECT_EQ(channels.rejected_commands(), 0u);
@@ -376,7 +315,7 @@ TEST(HotPath, EventsAreSaidOutsideTheLoopOnly) {
   close(pipe_fds[1]);
 
   EXPECT_TRUE(ok);
-  EXPECT_EQ(g_allocations.load(), 0) << "heap allocations in " << kCycles << " eventful cycles";
+  EXPECT_EQ(g_allocations, 0) << "heap allocations in " << kCycles << " eventful cycles";
   EXPECT_LE(written_in_loop, 0) << "the loop wrote to stderr: "
                                 << std::string(buffer, std::max<ssize_t>(written_in_loop, 0));
   EXPECT_GE(channels.dropped_clients(), dropped + kCycles / 4);
@@ -427,7 +366,7 @@ TEST(HotPath, LockstepControllerLoopDoesNotAllocate) {
 
   constexpr int kCycles = 5000;
   EXPECT_TRUE(count_allocations(kCycles, one_cycle));
-  EXPECT_EQ(g_allocations.load(), 0) << "heap allocations in " << kCycles << " lockstep cycles";
+  EXPECT_EQ(g_allocations, 0) << "heap allocations in " << kCycles << " lockstep cycles";
   EXPECT_EQ(channels.late_answers(), 0u);
   EXPECT_EQ(timing.cycles(), static_cast<std::uint64_t>(kCycles + 501));
 }
@@ -493,7 +432,7 @@ TEST(HotPath, TeleopLoopDoesNotAllocate) {
   // exception leaving a thread would abort the test binary and leave its hub running).
   std::string driver_error, teleop_error;
   std::thread driver_thread([&] {
-    g_thread_counter = &driver_allocations;
+    test::count_thread_allocations_into(&driver_allocations);
     devices::DriverOptions options;
     options.name = device;
     options.survive_hub_loss = false;
@@ -519,7 +458,7 @@ TEST(HotPath, TeleopLoopDoesNotAllocate) {
   options.wait_s = 60.0;  // for the palm: the physics starts slowly under the sanitizers
   teleop::TeleopLatency latency;
   std::thread teleop_thread([&] {
-    g_thread_counter = &teleop_allocations;
+    test::count_thread_allocations_into(&teleop_allocations);
     try {
       teleop::run_teleop(options, &latency);
     } catch (const std::exception& error) {
@@ -544,10 +483,11 @@ TEST(HotPath, TeleopLoopDoesNotAllocate) {
   EXPECT_TRUE(applying) << "the device never applied the teleoperation's force";
   const std::uint64_t warm = sequence() + 1000;
   EXPECT_TRUE(test::wait_until([&] { return sequence() >= warm; }, 20s));
-  g_threads_counting = true;
+  const long driver_before = driver_allocations, teleop_before = teleop_allocations;
   const std::uint64_t first = sequence();
   const bool measured = test::wait_until([&] { return sequence() >= first + kMeasured; }, 30s);
-  g_threads_counting = false;
+  const long driver_counted = driver_allocations - driver_before;
+  const long teleop_counted = teleop_allocations - teleop_before;
   const std::uint64_t last = sequence();
   const DeviceState* state = device_state.latest();
   const bool device_live = state && state->gate == ForceGate::kApplying &&
@@ -561,10 +501,10 @@ TEST(HotPath, TeleopLoopDoesNotAllocate) {
       << "the teleoperation did not run " << kMeasured << " cycles after its warm-up"
       << "; teleop: " << teleop_error << "; driver: " << driver_error;
   EXPECT_TRUE(device_live) << "the driver stopped applying force while the cycles were counted";
-  EXPECT_EQ(teleop_allocations.load(), 0)
-      << "heap allocations in " << last - first << " steady-state teleoperation cycles";
-  EXPECT_EQ(driver_allocations.load(), 0)
-      << "heap allocations in the driver's loop over " << last - first << " teleoperation cycles";
+  EXPECT_EQ(teleop_counted, 0) << "heap allocations in " << last - first
+                               << " steady-state teleoperation cycles";
+  EXPECT_EQ(driver_counted, 0) << "heap allocations in the driver's loop over " << last - first
+                               << " teleoperation cycles";
   EXPECT_GT(latency.to_device_force.size(), static_cast<std::size_t>(kMeasured));
   EXPECT_EQ(channels.rejected_commands(), 0u);
 }

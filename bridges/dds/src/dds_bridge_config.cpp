@@ -3,87 +3,57 @@
 #include "afhub/bridges/dds_bridge_config.hpp"
 
 #include <net/if.h>
-#include <yaml-cpp/yaml.h>
 
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <fstream>
 #include <sstream>
 
 #include "afhub/rt/cpu_wake_latency.hpp"
 #include "afhub/shm_layout/error.hpp"
+#include "afhub/yaml/input_file.hpp"
+#include "afhub/yaml/yaml_reader.hpp"
 
 namespace afhub::bridges {
 namespace {
+
+using yaml::Reader;
 
 const char* const kKeys =
     "domain, interface, export, mirror, accept-commands, bodies, devices, world, qos, rate, spin, "
     "cpu-wake-latency, rate-limits, max-command-age, profile, ros2-prefix, security";
 
-class Reader {
- public:
-  explicit Reader(std::string path) : path_(std::move(path)) {}
+// A bridge config is a few lines; this refuses a wrong file named by mistake.
+constexpr std::uintmax_t kMaxFileBytes = 16u << 20;
 
-  [[noreturn]] void fail(const YAML::Node& node, const std::string& what) const {
-    const YAML::Mark mark = node.Mark();
-    throw Error(path_ + ":" + std::to_string(mark.line + 1) + ":" +
-                std::to_string(mark.column + 1) + ": error: " + what);
-  }
+int microseconds(const Reader& reader, const YAML::Node& node, const std::string& key, int high) {
+  const double value = reader.in_range(node, key, 0, high);
+  if (value != std::floor(value)) reader.fail(node, "'" + key + "' is whole microseconds");
+  return static_cast<int>(value);
+}
 
-  double number(const YAML::Node& node, const std::string& key, double low, double high) const {
-    double value = 0.0;
-    if (!node.IsScalar() || !YAML::convert<double>::decode(node, value) || !std::isfinite(value))
-      fail(node, "'" + key + "' must be a number");
-    if (value < low || value > high)
-      fail(node, "'" + key + "' is " + node.Scalar() + "; write a value from " + text(low) +
-                     " to " + text(high));
-    return value;
-  }
+std::string word(const Reader& reader, const YAML::Node& node, const std::string& key) {
+  if (!node.IsScalar() || node.Scalar().empty()) reader.fail(node, "'" + key + "' must be a name");
+  return node.Scalar();
+}
 
-  int microseconds(const YAML::Node& node, const std::string& key, int high) const {
-    const double value = number(node, key, 0, high);
-    if (value != std::floor(value)) fail(node, "'" + key + "' is whole microseconds");
-    return static_cast<int>(value);
-  }
-
-  bool flag(const YAML::Node& node, const std::string& key) const {
-    bool value = false;
-    if (!node.IsScalar() || !YAML::convert<bool>::decode(node, value))
-      fail(node, "'" + key + "' must be true or false");
-    return value;
-  }
-
-  std::string word(const YAML::Node& node, const std::string& key) const {
-    if (!node.IsScalar() || node.Scalar().empty()) fail(node, "'" + key + "' must be a name");
-    return node.Scalar();
-  }
-
-  // A glob or a list of globs.
-  std::vector<std::string> globs(const YAML::Node& node, const std::string& key) const {
-    if (node.IsScalar()) return {word(node, key)};
-    if (!node.IsSequence())
-      fail(node, "'" + key + "' must be a glob or a list of globs, e.g. [\"ambf/env/*\"]");
-    std::vector<std::string> out;
-    for (const YAML::Node& item : node) out.push_back(word(item, key));
-    return out;
-  }
-
- private:
-  static std::string text(double value) {
-    std::ostringstream out;
-    out << value;
-    return out.str();
-  }
-  std::string path_;
-};
+// A glob or a list of globs.
+std::vector<std::string> globs(const Reader& reader, const YAML::Node& node,
+                               const std::string& key) {
+  if (node.IsScalar()) return {word(reader, node, key)};
+  if (!node.IsSequence())
+    reader.fail(node, "'" + key + "' must be a glob or a list of globs, e.g. [\"ambf/env/*\"]");
+  std::vector<std::string> out;
+  for (const YAML::Node& item : node) out.push_back(word(reader, item, key));
+  return out;
+}
 
 void read_rate_limits(const Reader& reader, const YAML::Node& node, DdsBridgeOptions& options) {
   if (!node.IsMap())
     reader.fail(node, "'rate-limits' must be a map, e.g. {bodies: 200, devices: 1000, world: 50}");
   for (const auto& entry : node) {
     const std::string key = entry.first.Scalar();
-    const double rate = reader.number(entry.second, "rate-limits: " + key, 0.0, 100'000.0);
+    const double rate = reader.in_range(entry.second, "rate-limits: " + key, 0.0, 100'000.0);
     if (key == "bodies")
       options.body_rate_hz = rate;
     else if (key == "devices")
@@ -100,17 +70,8 @@ void read_rate_limits(const Reader& reader, const YAML::Node& node, DdsBridgeOpt
 }  // namespace
 
 DdsBridgeOptions read_dds_bridge_config(const std::string& path, const DdsBridgeOptions& defaults) {
-  std::ifstream in(path);
-  if (!in) throw Error(path + ": error: cannot read it; give the path of a bridge config file");
-  std::stringstream text;
-  text << in.rdbuf();
-  YAML::Node root;
-  try {
-    root = YAML::Load(text.str());
-  } catch (const YAML::Exception& error) {
-    throw Error(path + ":" + std::to_string(error.mark.line + 1) + ":" +
-                std::to_string(error.mark.column + 1) + ": error: not valid YAML: " + error.msg);
-  }
+  const YAML::Node root =
+      yaml::parse(path, yaml::read_input_file(path, kMaxFileBytes, "a bridge config file"));
   const Reader reader(path);
   DdsBridgeOptions options = defaults;
   if (root.IsNull()) return options;  // an empty file sets nothing
@@ -120,12 +81,12 @@ DdsBridgeOptions read_dds_bridge_config(const std::string& path, const DdsBridge
     const std::string key = entry.first.Scalar();
     const YAML::Node& value = entry.second;
     if (key == "domain") {
-      const double domain = reader.number(value, key, 0, 232);
+      const double domain = reader.in_range(value, key, 0, 232);
       if (std::floor(domain) != domain)
         reader.fail(value, "'domain' must be a whole number from 0 to 232");
       options.domain = static_cast<std::uint32_t>(domain);
     } else if (key == "interface") {
-      options.interface = reader.word(value, key);
+      options.interface = word(reader, value, key);
       try {
         check_interface_name(options.interface);
       } catch (const Error& error) {
@@ -138,10 +99,10 @@ DdsBridgeOptions read_dds_bridge_config(const std::string& path, const DdsBridge
     } else if (key == "accept-commands") {
       options.accept_commands = reader.flag(value, key);
     } else if (key == "bodies") {
-      options.body_globs = reader.globs(value, key);
+      options.body_globs = globs(reader, value, key);
       if (options.body_globs.empty()) reader.fail(value, "'bodies' needs at least one glob");
     } else if (key == "devices") {
-      options.device_globs = reader.globs(value, key);
+      options.device_globs = globs(reader, value, key);
     } else if (key == "world") {
       options.world = reader.flag(value, key);
     } else if (key == "qos") {
@@ -150,22 +111,22 @@ DdsBridgeOptions read_dds_bridge_config(const std::string& path, const DdsBridge
         reader.fail(value, "'qos' must be best-effort or reliable (states keep the last 1)");
       options.reliable = qos == "reliable";
     } else if (key == "rate") {
-      options.rate_hz = reader.number(value, key, 1e-3, 100'000.0);
+      options.rate_hz = reader.in_range(value, key, 1e-3, 100'000.0);
     } else if (key == "spin") {
       options.spin = reader.flag(value, key);
     } else if (key == "cpu-wake-latency") {
-      options.cpu_wake_latency_us = reader.microseconds(value, key, kMaxCpuWakeLatencyUs);
+      options.cpu_wake_latency_us = microseconds(reader, value, key, kMaxCpuWakeLatencyUs);
     } else if (key == "rate-limits") {
       read_rate_limits(reader, value, options);
     } else if (key == "max-command-age") {
-      options.max_command_age_s = reader.number(value, key, 1e-9, 10.0);
+      options.max_command_age_s = reader.in_range(value, key, 1e-9, 10.0);
     } else if (key == "profile") {
-      options.profile = reader.word(value, key);
+      options.profile = word(reader, value, key);
       if (options.profile != "ros2") reader.fail(value, "'profile' must be ros2");
     } else if (key == "ros2-prefix") {
-      options.ros2_prefix = reader.word(value, key);
+      options.ros2_prefix = word(reader, value, key);
     } else if (key == "security") {
-      options.security_dir = reader.word(value, key);
+      options.security_dir = word(reader, value, key);
     } else {
       reader.fail(entry.first, "unknown key '" + key + "'; the keys are " + kKeys +
                                    " (as the flags of `afhub bridge dds --help`)");

@@ -2,226 +2,57 @@
 // problem names its file, line and column (see input_devices_reader.hpp).
 #include "afhub/teleop/input_devices_reader.hpp"
 
-#include <yaml-cpp/yaml.h>
-
-#include <cerrno>
 #include <cmath>
-#include <cstdio>
-#include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <set>
 #include <sstream>
-#include <unordered_map>
 
 #include "afhub/shm_layout/error.hpp"
+#include "afhub/yaml/yaml_reader.hpp"
 
 namespace afhub::teleop {
 namespace {
 
 namespace fs = std::filesystem;
+using yaml::Reader;
 
 // An input device file is a few kilobytes; this refuses a wrong file named by mistake.
 constexpr std::uintmax_t kMaxFileBytes = 16u << 20;
-// No gain, scale or force of a device comes near this; it keeps the arithmetic finite.
-constexpr double kMaxMagnitude = 1e9;
+const char* const kWhat =
+    "an input device file (input_devices.yaml: a map with an 'input devices' list)";
 constexpr double kMaxLengthM = 1e5;
 // DeviceState::buttons has 32 bits.
 constexpr int kMaxButton = 31;
 
-std::string text_of(double value) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%g", value);
-  return text;
+int button(const Reader& reader, const YAML::Node& node, const std::string& what) {
+  int value = 0;
+  if (!node.IsScalar() || !YAML::convert<int>::decode(node, value))
+    reader.fail(
+        node, "'" + what + "' must be a button index (an integer, -1 for none), got " +
+                  (node.IsScalar() ? "'" + node.Scalar() + "'" : std::string(yaml::kind_of(node))));
+  if (value < -1 || value > kMaxButton)
+    reader.fail(node, "'" + what + "' is " + node.Scalar() + "; a button index is 0 to " +
+                          std::to_string(kMaxButton) + ", or -1 for none");
+  return value;
 }
 
-std::string read_text(const std::string& path) {
-  std::error_code error;
-  const fs::file_status status = fs::status(path, error);
-  if (error || !fs::exists(status))
-    throw Error(path + ": error: no such file; expected an input device file (input_devices.yaml)");
-  if (fs::is_directory(status))
-    throw Error(path + ": error: this is a directory; expected an input device file");
-  if (!fs::is_regular_file(status))
-    throw Error(path + ": error: this is not a regular file; expected an input device file");
-  const std::uintmax_t size = fs::file_size(path, error);
-  if (!error && size > kMaxFileBytes)
-    throw Error(path + ": error: the file is " + std::to_string(size >> 20) +
-                " MB, larger than any input device file; is it the right file?");
-  std::ifstream in(path, std::ios::binary);
-  if (!in)
-    throw Error(path + ": error: cannot read it: " + std::strerror(errno) +
-                "; check that you may read this file");
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
-const char* kind_of(const YAML::Node& node) {
-  switch (node.Type()) {
-    case YAML::NodeType::Map:
-      return "a map";
-    case YAML::NodeType::Sequence:
-      return "a list";
-    case YAML::NodeType::Scalar:
-      return "a value";
-    default:
-      return "nothing";
+// {a, b, c} of numbers, every component required.
+Vec3 vec3(const Reader& reader, const YAML::Node& node, const std::string& what, const char* a,
+          const char* b, const char* c, double bound) {
+  reader.require_map(node, what, std::string("{") + a + ": 0, " + b + ": 0, " + c + ": 0}");
+  reader.warn_unknown_keys(node, {a, b, c}, "'" + what + "'");
+  Vec3 out;
+  double* slots[3] = {&out.x, &out.y, &out.z};
+  const char* keys[3] = {a, b, c};
+  for (int i = 0; i < 3; ++i) {
+    const YAML::Node component = node[keys[i]];
+    if (!component) reader.fail(node, "'" + what + "' is missing '" + keys[i] + "'");
+    *slots[i] = reader.number(component, what + "." + keys[i]);
+    if (std::abs(*slots[i]) > bound)
+      reader.fail(component, "'" + what + "." + keys[i] + "' is " + component.Scalar() +
+                                 ", beyond the bound of " + yaml::number_text(bound));
   }
-}
-
-// Reads the nodes of one file, with their locations.
-class Reader {
- public:
-  Reader(std::string path, std::vector<std::string>& warnings)
-      : path_(std::move(path)), warnings_(warnings) {}
-
-  std::string at(const YAML::Node& node) const {
-    const YAML::Mark mark = node.Mark();
-    return path_ + ":" + std::to_string(mark.line + 1) + ":" + std::to_string(mark.column + 1);
-  }
-
-  [[noreturn]] void fail(const YAML::Node& node, const std::string& what) const {
-    throw Error(at(node) + ": error: " + what);
-  }
-
-  void warn(const YAML::Node& node, const std::string& what) const {
-    warnings_.push_back(at(node) + ": warning: " + what);
-  }
-
-  void warn_unknown_keys(const YAML::Node& map, const std::set<std::string>& known,
-                         const std::string& owner) const {
-    for (const auto& entry : map) {
-      const std::string key = entry.first.Scalar();
-      if (!known.count(key))
-        warn(entry.first, "unknown key '" + key + "' in " + owner + " is ignored");
-    }
-  }
-
-  double number(const YAML::Node& node, const std::string& what) const {
-    if (!node.IsScalar()) fail(node, "'" + what + "' must be a number, not " + kind_of(node));
-    double value = 0.0;
-    if (!YAML::convert<double>::decode(node, value))
-      fail(node, "'" + what + "' must be a number, got '" + node.Scalar() + "'");
-    if (!std::isfinite(value))
-      fail(node, "'" + what + "' must be finite, got '" + node.Scalar() + "'");
-    if (std::abs(value) > kMaxMagnitude)
-      fail(node, "'" + what + "' is " + node.Scalar() + ", beyond any physical value (at most " +
-                     text_of(kMaxMagnitude) + " in magnitude)");
-    return value;
-  }
-
-  double non_negative(const YAML::Node& node, const std::string& what) const {
-    const double value = number(node, what);
-    if (value < 0.0) fail(node, "'" + what + "' must not be negative, got " + node.Scalar());
-    return value;
-  }
-
-  double positive(const YAML::Node& node, const std::string& what) const {
-    const double value = number(node, what);
-    if (value <= 0.0) fail(node, "'" + what + "' must be greater than 0, got " + node.Scalar());
-    return value;
-  }
-
-  int button(const YAML::Node& node, const std::string& what) const {
-    int value = 0;
-    if (!node.IsScalar() || !YAML::convert<int>::decode(node, value))
-      fail(node, "'" + what + "' must be a button index (an integer, -1 for none), got " +
-                     (node.IsScalar() ? "'" + node.Scalar() + "'" : std::string(kind_of(node))));
-    if (value < -1 || value > kMaxButton)
-      fail(node, "'" + what + "' is " + node.Scalar() + "; a button index is 0 to " +
-                     std::to_string(kMaxButton) + ", or -1 for none");
-    return value;
-  }
-
-  bool flag(const YAML::Node& node, const std::string& what) const {
-    bool value = false;
-    if (!node.IsScalar() || !YAML::convert<bool>::decode(node, value))
-      fail(node, "'" + what + "' must be true or false");
-    return value;
-  }
-
-  std::string text(const YAML::Node& node, const std::string& what) const {
-    if (!node.IsScalar()) fail(node, "'" + what + "' must be text, not " + kind_of(node));
-    return node.Scalar();
-  }
-
-  void require_map(const YAML::Node& node, const std::string& what,
-                   const std::string& example) const {
-    if (!node.IsMap())
-      fail(node, "'" + what + "' must be a map such as " + example + ", not " + kind_of(node));
-  }
-
-  // {a, b, c} of numbers, every component required.
-  Vec3 vec3(const YAML::Node& node, const std::string& what, const char* a, const char* b,
-            const char* c, double bound) const {
-    require_map(node, what, std::string("{") + a + ": 0, " + b + ": 0, " + c + ": 0}");
-    warn_unknown_keys(node, {a, b, c}, "'" + what + "'");
-    Vec3 out;
-    double* slots[3] = {&out.x, &out.y, &out.z};
-    const char* keys[3] = {a, b, c};
-    for (int i = 0; i < 3; ++i) {
-      const YAML::Node component = node[keys[i]];
-      if (!component) fail(node, "'" + what + "' is missing '" + keys[i] + "'");
-      *slots[i] = number(component, what + "." + keys[i]);
-      if (std::abs(*slots[i]) > bound)
-        fail(component, "'" + what + "." + keys[i] + "' is " + component.Scalar() +
-                            ", beyond the bound of " + text_of(bound));
-    }
-    return out;
-  }
-
- private:
-  std::string path_;
-  std::vector<std::string>& warnings_;
-};
-
-// A map's entries by key; a key written twice is refused (which one is meant is a guess).
-class MapIndex {
- public:
-  MapIndex(const Reader& reader, const YAML::Node& map) {
-    for (const auto& entry : map) {
-      const YAML::Node& key = entry.first;
-      if (!key.IsScalar()) continue;
-      auto [found, added] = entries_.try_emplace(key.Scalar(), Entry{key, entry.second});
-      if (!added)
-        reader.fail(key, "'" + key.Scalar() + "' is written twice in this map (first at " +
-                             reader.at(found->second.key) + "); keep one");
-    }
-  }
-  const YAML::Node* find(const std::string& key) const {
-    auto found = entries_.find(key);
-    return found == entries_.end() ? nullptr : &found->second.value;
-  }
-
- private:
-  struct Entry {
-    YAML::Node key, value;
-  };
-  std::unordered_map<std::string, Entry> entries_;
-};
-
-YAML::Node parse(const std::string& path) {
-  const std::string text = read_text(path);
-  YAML::Node root;
-  try {
-    root = YAML::Load(text);
-  } catch (const YAML::ParserException& error) {
-    throw Error(path + ":" + std::to_string(error.mark.line + 1) + ":" +
-                std::to_string(error.mark.column + 1) + ": error: YAML syntax: " + error.msg);
-  } catch (const YAML::Exception& error) {
-    throw Error(path + ": error: YAML: " + error.msg);
-  }
-  if (root.IsNull())
-    throw Error(path +
-                ":1:1: error: the file is empty; expected an input device file with "
-                "an 'input devices' list");
-  if (!root.IsMap())
-    throw Error(path +
-                ":1:1: error: expected an input device file (a map with an 'input "
-                "devices' list), not " +
-                kind_of(root));
-  return root;
+  return out;
 }
 
 Gains read_gains(const Reader& reader, const YAML::Node& node, const std::string& what) {
@@ -259,10 +90,10 @@ void read_location(const Reader& reader, const YAML::Node& node, InputDeviceSpec
   reader.warn_unknown_keys(node, {"position", "orientation"}, "'location'");
   if (const YAML::Node position = node["position"])
     spec.location.position_m =
-        reader.vec3(position, "location.position", "x", "y", "z", kMaxLengthM);
+        vec3(reader, position, "location.position", "x", "y", "z", kMaxLengthM);
   if (const YAML::Node orientation = node["orientation"])
     spec.location.rpy_rad =
-        reader.vec3(orientation, "location.orientation", "r", "p", "y", kMaxMagnitude);
+        vec3(reader, orientation, "location.orientation", "r", "p", "y", yaml::kMaxMagnitude);
   spec.location_given = true;
 }
 
@@ -276,13 +107,13 @@ void read_buttons(const Reader& reader, const YAML::Node& node, ButtonMapping& b
                                                {"prev mode", &buttons.prev_mode}};
   for (const auto& [key, slot] : keys)
     if (const YAML::Node value = node[key])
-      *slot = reader.button(value, std::string("button mapping.") + key);
+      *slot = button(reader, value, std::string("button mapping.") + key);
 }
 
 std::vector<std::string> read_cameras(const Reader& reader, const YAML::Node& node) {
   if (!node.IsSequence())
     reader.fail(node, "'pair cameras' must be a list of camera names, e.g. [camera1], not " +
-                          std::string(kind_of(node)));
+                          std::string(yaml::kind_of(node)));
   std::vector<std::string> cameras;
   for (const auto& item : node) cameras.push_back(reader.text(item, "pair cameras entry"));
   return cameras;
@@ -313,12 +144,12 @@ InputDeviceSpec read_device(const Reader& reader, const fs::path& folder,
     reader.fail(block, "the device '" + identifier +
                            "' must be a map of keys such as "
                            "'hardware name', not " +
-                           kind_of(block));
-  MapIndex index(reader, block);  // refuses a key written twice
+                           yaml::kind_of(block));
+  yaml::MapIndex index(reader, block);  // refuses a key written twice
   reader.warn_unknown_keys(block, kDeviceKeys, "the device '" + identifier + "'");
   InputDeviceSpec spec;
   spec.identifier = identifier;
-  spec.where = reader.at(block);
+  spec.where = reader.where(block);
 
   const YAML::Node* hardware = index.find("hardware name");
   if (!hardware)
@@ -334,7 +165,7 @@ InputDeviceSpec read_device(const Reader& reader, const fs::path& folder,
   if (const YAML::Node* node = index.find("location")) read_location(reader, *node, spec);
   if (const YAML::Node* node = index.find("orientation offset"))
     spec.orientation_offset_rpy =
-        reader.vec3(*node, "orientation offset", "r", "p", "y", kMaxMagnitude);
+        vec3(reader, *node, "orientation offset", "r", "p", "y", yaml::kMaxMagnitude);
   if (const YAML::Node* node = index.find("controller gain"))
     spec.controller_gain = read_controller_gain(reader, *node);
   if (const YAML::Node* node = index.find("deadband"))
@@ -352,7 +183,7 @@ InputDeviceSpec read_device(const Reader& reader, const fs::path& folder,
     if (given.empty())
       reader.fail(*node, "'simulated multibody' is empty; name an ADF file, or remove the key");
     spec.simulated_multibody = (folder / given).lexically_normal().string();
-    spec.simulated_multibody_where = reader.at(*node);
+    spec.simulated_multibody_where = reader.where(*node);
   }
   if (const YAML::Node* node = index.find("enable joint control"))
     spec.enable_joint_control = reader.flag(*node, "enable joint control");
@@ -376,9 +207,9 @@ InputDeviceSpec read_device(const Reader& reader, const fs::path& folder,
 InputDevicesFile read_input_devices(const std::string& path) {
   InputDevicesFile file;
   file.path = path;
-  const YAML::Node root = parse(path);
-  const Reader reader(path, file.warnings);
-  const MapIndex index(reader, root);
+  const YAML::Node root = yaml::load_map(path, kMaxFileBytes, kWhat);
+  const Reader reader(path, &file.warnings);
+  const yaml::MapIndex index(reader, root);
   const YAML::Node* list = index.find("input devices");
   if (!list)
     throw Error(path +

@@ -1,5 +1,5 @@
 // Input files checked before parsing (see input_file.hpp).
-#include "input_file.hpp"
+#include "afhub/yaml/input_file.hpp"
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -10,7 +10,7 @@
 
 #include "afhub/shm_layout/error.hpp"
 
-namespace afhub::physics {
+namespace afhub::yaml {
 namespace {
 
 [[noreturn]] void refuse(const std::string& path, const std::string& what) {
@@ -48,7 +48,7 @@ std::uintmax_t open_checked(const std::string& path, std::uintmax_t max_bytes,
   const auto size = static_cast<std::uintmax_t>(status.st_size);
   if (size > max_bytes)
     refuse(path, "the file is " + megabytes(size) + ", larger than the " + megabytes(max_bytes) +
-                     " afhub reads for " + what);
+                     " afhub reads for " + what + "; is it the right file?");
   return size;
 }
 
@@ -77,4 +77,4 @@ std::string read_input_file(const std::string& path, std::uintmax_t max_bytes,
   return text;
 }
 
-}  // namespace afhub::physics
+}  // namespace afhub::yaml

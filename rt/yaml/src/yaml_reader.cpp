@@ -1,0 +1,145 @@
+// Located YAML reading (see yaml_reader.hpp).
+#include "afhub/yaml/yaml_reader.hpp"
+
+#include <cmath>
+#include <cstdio>
+
+#include "afhub/shm_layout/error.hpp"
+#include "afhub/yaml/input_file.hpp"
+
+namespace afhub::yaml {
+
+const char* kind_of(const YAML::Node& node) {
+  switch (node.Type()) {
+    case YAML::NodeType::Map:
+      return "a map";
+    case YAML::NodeType::Sequence:
+      return "a list";
+    case YAML::NodeType::Scalar:
+      return "a value";
+    default:
+      return "nothing";
+  }
+}
+
+std::string number_text(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", value);
+  return text;
+}
+
+YAML::Node parse(const std::string& path, const std::string& text) {
+  try {
+    return YAML::Load(text);
+  } catch (const YAML::ParserException& error) {
+    throw Error(path + ":" + std::to_string(error.mark.line + 1) + ":" +
+                std::to_string(error.mark.column + 1) + ": error: YAML syntax: " + error.msg);
+  } catch (const YAML::Exception& error) {
+    throw Error(path + ": error: YAML: " + error.msg);
+  }
+}
+
+YAML::Node load_map(const std::string& path, std::uintmax_t max_bytes, const std::string& what) {
+  const YAML::Node root = parse(path, read_input_file(path, max_bytes, what));
+  if (root.IsNull()) throw Error(path + ":1:1: error: the file is empty; expected " + what);
+  if (!root.IsMap()) throw Error(path + ":1:1: error: expected " + what + ", not " + kind_of(root));
+  return root;
+}
+
+std::string Reader::where(const YAML::Node& node) const {
+  const YAML::Mark mark = node.Mark();
+  return path_ + ":" + std::to_string(mark.line + 1) + ":" + std::to_string(mark.column + 1);
+}
+
+void Reader::fail(const YAML::Node& node, const std::string& what) const {
+  throw Error(where(node) + ": error: " + what);
+}
+
+void Reader::warn(const YAML::Node& node, const std::string& what) const {
+  if (!warnings_) fail(node, what);
+  warnings_->push_back(where(node) + ": warning: " + what);
+}
+
+void Reader::warn_unknown_keys(const YAML::Node& map, const std::set<std::string>& known,
+                               const std::string& owner) const {
+  for (const auto& entry : map) {
+    const std::string key = entry.first.Scalar();
+    if (!known.count(key))
+      warn(entry.first, "unknown key '" + key + "' in " + owner + " is ignored");
+  }
+}
+
+double Reader::finite(const YAML::Node& node, const std::string& what) const {
+  if (!node.IsScalar()) fail(node, "'" + what + "' must be a number, not " + kind_of(node));
+  double value = 0.0;
+  if (!YAML::convert<double>::decode(node, value))
+    fail(node, "'" + what + "' must be a number, got '" + node.Scalar() + "'");
+  if (!std::isfinite(value))
+    fail(node, "'" + what + "' must be finite, got '" + node.Scalar() + "'");
+  return value;
+}
+
+double Reader::number(const YAML::Node& node, const std::string& what) const {
+  const double value = finite(node, what);
+  if (std::abs(value) > kMaxMagnitude)
+    fail(node, "'" + what + "' is " + node.Scalar() + ", beyond any physical value (at most " +
+                   number_text(kMaxMagnitude) + " in magnitude)");
+  return value;
+}
+
+double Reader::in_range(const YAML::Node& node, const std::string& what, double low,
+                        double high) const {
+  const double value = finite(node, what);
+  if (value < low || value > high)
+    fail(node, "'" + what + "' is " + node.Scalar() + "; write a value from " + number_text(low) +
+                   " to " + number_text(high));
+  return value;
+}
+
+double Reader::non_negative(const YAML::Node& node, const std::string& what) const {
+  const double value = number(node, what);
+  if (value < 0.0) fail(node, "'" + what + "' must not be negative, got " + node.Scalar());
+  return value;
+}
+
+double Reader::positive(const YAML::Node& node, const std::string& what) const {
+  const double value = number(node, what);
+  if (value <= 0.0) fail(node, "'" + what + "' must be positive, got " + node.Scalar());
+  return value;
+}
+
+bool Reader::flag(const YAML::Node& node, const std::string& what) const {
+  bool value = false;
+  if (!node.IsScalar() || !YAML::convert<bool>::decode(node, value))
+    fail(node, "'" + what + "' must be true or false");
+  return value;
+}
+
+std::string Reader::text(const YAML::Node& node, const std::string& what) const {
+  if (!node.IsScalar()) fail(node, "'" + what + "' must be text, not " + kind_of(node));
+  return node.Scalar();
+}
+
+void Reader::require_map(const YAML::Node& node, const std::string& what,
+                         const std::string& example) const {
+  if (!node.IsMap())
+    fail(node, "'" + what + "' must be a map such as " + example + ", not " + kind_of(node));
+}
+
+MapIndex::MapIndex(const Reader& reader, const YAML::Node& map) {
+  for (const auto& entry : map) {
+    const YAML::Node& key = entry.first;
+    if (!key.IsScalar()) continue;  // no name to look it up by
+    auto [found, added] = entries_.try_emplace(key.Scalar(), Entry{key, entry.second});
+    if (!added)
+      reader.fail(key, "'" + key.Scalar() + "' is written twice in this map (first at " +
+                           reader.where(found->second.key) + "); keep one");
+  }
+}
+
+const YAML::Node* MapIndex::find(const std::string& key) const {
+  auto found = entries_.find(key);
+  return found == entries_.end() ? nullptr : &found->second.value;
+}
+
+}  // namespace afhub::yaml
