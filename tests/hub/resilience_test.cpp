@@ -216,6 +216,7 @@ TEST(Resilience, KilledClientRestartsWhileOthersKeepWorking) {
     LatestReader<BodyCommand> commands(body_command_channel("synth/body0"));
     for (int round = 0; round < 50; ++round) {
       const auto spawned = std::chrono::steady_clock::now();
+      const std::uint64_t fresh_at_start = steady.fresh_states;
       // Scoped: a failed assertion must not leave it running (cmd re-attaches to
       // whatever hub comes next, which would be the next test's).
       const std::string client_log = "/tmp/afhub-test-client.log";
@@ -245,15 +246,20 @@ TEST(Resilience, KilledClientRestartsWhileOthersKeepWorking) {
       }
       stop_process(client.pid, SIGKILL);
       client.pid = -1;
+      // The other client gets fresh states through every round: counted, not timed
+      // (the wait only bounds a stall of the state stream).
+      ASSERT_TRUE(wait_until([&] { return steady.fresh_states > fresh_at_start; }, 5s))
+          << "round " << round << ": the steady client went without fresh state";
     }
   }
   std::printf("slowest reattach: %.3f s\n", slowest_reattach_s);
+  std::printf("the steady client's longest wait for fresh state: %.3f s\n",
+              static_cast<double>(steady.longest_gap_ns.load()) * 1e-9);
 
   // The other client kept getting fresh states, and its commands kept arriving.
   const std::uint64_t fresh_before = steady.fresh_states;
-  std::this_thread::sleep_for(300ms);
-  EXPECT_GT(steady.fresh_states, fresh_before);
-  EXPECT_LT(steady.longest_gap_ns, 500'000'000) << "the steady client went without fresh state";
+  EXPECT_TRUE(wait_until([&] { return steady.fresh_states > fresh_before; }, 5s))
+      << "the steady client went without fresh state";
   steady_thread.request_stop();
   steady_thread.join();
   EXPECT_NEAR(steady.last_joint0, 0.4, 1e-3) << "the steady client's commands stopped arriving";

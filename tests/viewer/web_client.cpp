@@ -9,6 +9,7 @@
 
 #include <cerrno>
 #include <cstdlib>
+#include <cstring>
 
 namespace afhub::test {
 
@@ -107,11 +108,27 @@ void FrameCounter::on_frame(int opcode, const char* data, std::size_t length) {
     mg_websocket_client_write(connection_, MG_WEBSOCKET_OPCODE_PONG, data, length);
   } else if (opcode == MG_WEBSOCKET_OPCODE_BINARY) {
     std::lock_guard lock(mutex_);
+    if (length >= 24 && last_.size() >= 24) {
+      std::uint32_t generation = 0, last_generation = 0;
+      double sim_time_s = 0.0, last_sim_time_s = 0.0;
+      std::memcpy(&generation, data + 4, 4);
+      std::memcpy(&last_generation, last_.data() + 4, 4);
+      std::memcpy(&sim_time_s, data + 16, 8);
+      std::memcpy(&last_sim_time_s, last_.data() + 16, 8);
+      if (generation == last_generation && sim_time_s < last_sim_time_s) ++reversals_;
+    }
     last_.assign(data, data + length);
     ++binary_;
   } else if (opcode == MG_WEBSOCKET_OPCODE_TEXT) {
     ++text_;
   }
+}
+
+double FrameCounter::last_sim_time_s() {
+  std::lock_guard lock(mutex_);
+  double sim_time_s = 0.0;
+  if (last_.size() >= 24) std::memcpy(&sim_time_s, last_.data() + 16, 8);
+  return sim_time_s;
 }
 
 std::vector<std::uint8_t> FrameCounter::last_frame() {

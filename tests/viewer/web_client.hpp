@@ -46,12 +46,17 @@ class FrameCounter {
   std::uint64_t text_frames() const { return text_; }
   std::uint64_t pings() const { return pings_; }
   std::vector<std::uint8_t> last_frame();
+  // From the binary frames' headers (see afhub/viewer/pose_feed.hpp): the newest
+  // frame's simulation time, and how many frames went back in simulation time from
+  // the frame before them in the same scene generation (0 when the feed is in order).
+  double last_sim_time_s();
+  std::uint64_t sim_time_reversals() const { return reversals_; }
 
   void on_frame(int opcode, const char* data, std::size_t length);
 
  private:
   mg_connection* connection_ = nullptr;
-  std::atomic<std::uint64_t> binary_{0}, text_{0}, pings_{0};
+  std::atomic<std::uint64_t> binary_{0}, text_{0}, pings_{0}, reversals_{0};
   std::mutex mutex_;
   std::vector<std::uint8_t> last_;
 };
