@@ -1,5 +1,6 @@
 // `afhub device run virtual|...`: a device driver as its own process on the device's
 // channels (see device_drivers/).
+#include <chrono>
 #include <cmath>
 #include <memory>
 
@@ -65,6 +66,7 @@ struct ForceOptions {
   bool disable = false;
   double rate_hz = 1000.0;
   std::uint64_t cycles = 0;
+  double wait_s = 0.0;  // for the hub and the device's driver
 };
 
 int run_force(const ForceOptions& options) {
@@ -75,9 +77,14 @@ int run_force(const ForceOptions& options) {
     throw Error("--rate must be between 0 and 100000 Hz");
   const std::string channel = device_channel_name(options.name);
   install_stop_signal_handlers();
-  connect_to_hub("device-force", HubPolicy::kRequire);
+  if (!(options.wait_s >= 0.0 && options.wait_s <= 1e6))
+    throw Error("--wait takes a number of seconds from 0 to 1e6");
+  const auto wait_ns = static_cast<std::int64_t>(options.wait_s * 1e9);
+  connect_to_hub("device-force", HubPolicy::kRequire,
+                 std::chrono::milliseconds(wait_ns / 1'000'000));
   // Commands to a device no driver serves would go nowhere, silently.
-  if (wait_for_body(channel, "afhub device force", 0).info.kind != ChannelKind::kDevice)
+  if (wait_for_body(channel, "afhub device force", wait_ns > 0 ? monotonic_ns() + wait_ns : 0)
+          .info.kind != ChannelKind::kDevice)
     throw Error(channel + " is a body, not a device");
   Writer<DeviceCommand> commands(body_command_channel(channel));
   LoopOptions loop;
@@ -187,6 +194,9 @@ void register_device(CLI::App& app, Runner& selected) {
   force_command->add_option("--gripper", force->gripper_n, "Gripper force in N (default 0)");
   force_command->add_flag("--disable", force->disable, "Send the commands with force disabled");
   force_command->add_option("--rate", force->rate_hz, "Commands per second (default 1000)");
+  force_command->add_option("--wait", force->wait_s,
+                            "Wait up to this many seconds for the hub and the device's driver "
+                            "(default 0: fail at once)");
   add_count_option(force_command, "--cycles", force->cycles,
                    "Stop after this many commands (default: Ctrl-C)");
   force_command->callback([&selected, force] { selected = [force] { return run_force(*force); }; });

@@ -202,7 +202,7 @@ done
 [[ $(on a "$afhub" ls --json | jq -r '.[] | select(.body == "device/probe") | .kind') == device ]] ||
   fail "A's hub does not list B's device/probe as a device"
 on a "$afhub" ls | grep "device/probe"
-spawn a force $rt "$afhub" device force probe --force 0,0,1.5
+spawn a force $rt "$afhub" device force probe --force 0,0,1.5 --wait 10
 force=$spawned
 # applying_on_b: B's device applies the force commanded on A (after the ramp).
 applying_on_b() {

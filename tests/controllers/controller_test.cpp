@@ -32,9 +32,13 @@ const std::string kArm = AFHUB_EXAMPLE_MODELS "/arm7.yaml";
 std::string lockstep_sine_run(const afhub::testing::ModelFolder& folder, int run) {
   const std::string report = (folder.dir() / ("report" + std::to_string(run) + ".json")).string();
   const std::string log = (folder.dir() / "run.log").string();
-  ScopedProcess physics(spawn_afhub({"run", kArm, "--no-autostart", "--lockstep", "--wait-for", "1",
-                                     "--fast", "--steps", "3000", "--report", report},
-                                    log));
+  // A client that misses a step's deadline is dropped for that step (100 ms by default):
+  // on a loaded machine that would make the runs differ for a reason that is not the
+  // physics', so the deadline here is a minute.
+  ScopedProcess physics(
+      spawn_afhub({"run", kArm, "--no-autostart", "--lockstep", "--wait-for", "1",
+                   "--client-timeout", "60000", "--fast", "--steps", "3000", "--report", report},
+                  log));
   BodyClient base("afhub/arm/base");
   EXPECT_TRUE(wait_until([&] { return base.latest_state() != nullptr; }, 10s)) << read_file(log);
   ScopedProcess controller(

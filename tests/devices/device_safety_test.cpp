@@ -62,8 +62,8 @@ TEST_F(DeviceSafety, ForceGoesToZeroWhenTheCommandingProcessIsKilled) {
   constexpr int kKills = 30;
   std::vector<double> kill_to_zero_ms;
   for (int kill_round = 0; kill_round < kKills; ++kill_round) {
-    ScopedProcess commander =
-        spawn_afhub({"device", "force", "safe", "--force", "0,0,5"}, "/tmp/afhub-force.log");
+    ScopedProcess commander = spawn_afhub(
+        {"device", "force", "safe", "--force", "0,0,5", "--wait", "10"}, "/tmp/afhub-force.log");
     ASSERT_TRUE(watch(
         [](const DeviceState& s) {
           return s.gate == ForceGate::kApplying && std::abs(s.applied.force_n.z - 5.0) < 1e-9;
@@ -98,8 +98,8 @@ TEST_F(DeviceSafety, ForceGoesToZeroWhenTheCommandingProcessIsKilled) {
 
 TEST_F(DeviceSafety, ForceNeverExceedsTheMaximumWhateverIsCommanded) {
   for (const char* ask : {"1000,0,0", "-1e300,1e300,5", "0,0,7.9"}) {
-    ScopedProcess commander =
-        spawn_afhub({"device", "force", "safe", "--force", ask}, "/tmp/afhub-force.log");
+    ScopedProcess commander = spawn_afhub(
+        {"device", "force", "safe", "--force", ask, "--wait", "10"}, "/tmp/afhub-force.log");
     std::vector<double> wanted = {0, 0, 0};
     std::sscanf(ask, "%lf,%lf,%lf", &wanted[0], &wanted[1], &wanted[2]);
     const double expected = std::min(8.0, std::hypot(wanted[0], wanted[1], wanted[2]));
@@ -137,6 +137,30 @@ TEST_F(DeviceSafety, ForceNeverExceedsTheMaximumWhateverIsCommanded) {
   EXPECT_LE(max_applied_, 8.0 + 1e-9);
   EXPECT_TRUE(contains(read_file("/tmp/afhub-device-safe.log"), "DeviceCommand.wrench.force_n"))
       << read_file("/tmp/afhub-device-safe.log");
+}
+
+// A driver whose terminal closes (SIGHUP) or that gets Ctrl-\ (SIGQUIT) while it applies
+// a force stops as on Ctrl-C: its last force is zero and the device is made safe (the
+// virtual device's force log says so), and it exits 0 instead of dying of the signal.
+TEST(DeviceStop, AHangupOrQuitZeroesTheForceAndMakesTheDeviceSafe) {
+  for (const int signal : {SIGHUP, SIGQUIT}) {
+    const std::string log = "/tmp/afhub-device-hup-" + std::to_string(signal) + ".log";
+    const std::string force_log = log + ".force";
+    ScopedProcess driver = spawn_afhub(
+        {"device", "run", "virtual", "--name", "hup", "--ramp", "0", "--force-log", force_log},
+        log);
+    ScopedProcess commander =
+        spawn_afhub({"device", "force", "hup", "--force", "0,0,5", "--wait", "10"});
+    ASSERT_TRUE(wait_until([&] { return contains(read_file(force_log), " force "); }, 20s))
+        << read_file(log);
+    kill(driver.pid, signal);
+    EXPECT_EQ(wait_for_exit(driver, 10s), 0) << "signal " << signal << ": " << read_file(log);
+    const std::string forces = read_file(force_log);
+    const std::size_t last_force = forces.rfind(" force ");
+    const std::size_t zero = forces.rfind(" zero");
+    EXPECT_TRUE(zero != std::string::npos && zero > last_force) << forces;
+    EXPECT_GT(forces.rfind(" made safe"), zero) << forces;
+  }
 }
 
 }  // namespace

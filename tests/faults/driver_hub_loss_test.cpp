@@ -66,8 +66,9 @@ TEST(DriverHubLoss, ForceGoesToZeroBeforeTheDriverReattachesAndPublishesAgain) {
       spawn_afhub({"device", "run", "virtual", "--name", "safe_hand", "--force-log", kForceLog,
                    "--ramp", "0", "--watchdog", "1000"},
                   kDriverLog);
-  ScopedProcess force = spawn_afhub({"device", "force", "safe_hand", "--force", "0,0,2"},
-                                    "/tmp/afhub-safe-hand-force.log");
+  ScopedProcess force =
+      spawn_afhub({"device", "force", "safe_hand", "--force", "0,0,2", "--wait", "10"},
+                  "/tmp/afhub-safe-hand-force.log");
   ASSERT_TRUE(wait_until([] { return find(force_log(), "force") >= 0; }, 20s)) << log_text();
 
   const std::int64_t killed_ns = monotonic_ns();
@@ -105,8 +106,9 @@ TEST(DriverHubLoss, ForceGoesToZeroBeforeTheDriverReattachesAndPublishesAgain) {
   hub.pid = start_test_hub();
   ASSERT_GT(hub.pid, 0);
   force.stop();
-  ScopedProcess new_force = spawn_afhub({"device", "force", "safe_hand", "--force", "0,0,2"},
-                                        "/tmp/afhub-safe-hand-force.log");
+  ScopedProcess new_force =
+      spawn_afhub({"device", "force", "safe_hand", "--force", "0,0,2", "--wait", "10"},
+                  "/tmp/afhub-safe-hand-force.log");
   EXPECT_TRUE(wait_until([&] { return find(force_log(), "force", reopened) >= 0; }, 20s))
       << "the driver applies no force after the new hub came\n"
       << log_text();

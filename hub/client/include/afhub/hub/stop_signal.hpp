@@ -1,4 +1,4 @@
-// SIGINT and SIGTERM for long-running processes: a flag their loops poll.
+// SIGINT, SIGTERM, SIGHUP and SIGQUIT for long-running processes: a flag their loops poll.
 #pragma once
 
 namespace afhub {
