@@ -63,12 +63,12 @@ build() {
   cmake --build "$dir" --parallel "$(nproc)" "${targets[@]}"
 }
 
-# run_tests DIR [ctest options...]: hub tests wait more than they compute, so twice as
-# many run as there are cores; tests with real-time bounds take every slot.
+# run_tests DIR [ctest options...]: hub tests wait more than they compute, so one more
+# runs than there are cores; tests with real-time bounds take every slot.
 run_tests() {
   local dir=$1
   shift
-  ctest --test-dir "$dir" --output-on-failure --parallel "$((2 * $(nproc)))" "$@"
+  ctest --test-dir "$dir" --output-on-failure --parallel "$(($(nproc) + 1))" "$@"
   # Tests skip only for a reason they print (the AMBF corpus beside the project is
   # missing, say): say how many, and why.
   local log="$dir/Testing/Temporary/LastTest.log" skipped
