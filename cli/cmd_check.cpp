@@ -20,7 +20,7 @@ namespace {
 
 struct CheckOptions {
   std::vector<std::string> files;
-  std::string world_file, gravity;
+  std::string launch_file, indices, world_file, gravity;
   double dt_s = 0.001;
   GainOptions gains;
 };
@@ -69,6 +69,9 @@ int run_check(const CheckOptions& options) {
   std::size_t meshes = 0;
   try {
     physics::SceneRequest request;
+    request.launch_file = options.launch_file;
+    if (!options.indices.empty())
+      request.launch_indices = physics::parse_index_list(options.indices);
     request.adf_files = options.files;
     request.world_file = options.world_file;
     model = physics::load_scene(request);
@@ -121,7 +124,12 @@ void register_check(CLI::App& app, Runner& selected) {
   auto* check = app.add_subcommand(
       "check",
       "Validate AMBF description files without simulating: bodies, joints, loops, mass, warnings.");
-  check->add_option("files", options->files, "ADF files, loaded together")->required();
+  check->add_option("files", options->files, "ADF files, loaded together");
+  check->add_option("--launch", options->launch_file,
+                    "A launch file: its world config, colors, and the models picked with -l "
+                    "(as `afhub run --launch`)");
+  check->add_option("-l", options->indices,
+                    "Indices into the launch file's multibody configs: 0,3");
   check->add_option("--world", options->world_file, "A world file (its gravity, as `afhub run`)");
   check->add_option("--gravity", options->gravity,
                     "x,y,z in m/s^2: the gravity `afhub run --gravity` would use");

@@ -250,6 +250,24 @@ TEST(Run, ANanBodyIsPutBackUnlessStopOnNan) {
   }
 }
 
+// The project's own launch file: check takes it as run does, and neither loads the world
+// alone when no model is picked.
+TEST(Run, CheckAndRunTakeALaunchFileAndRefuseItWithNoModelPicked) {
+  const std::string launch = AFHUB_EXAMPLE_MODELS "/launch.yaml";
+  RunResult picked = run_afhub({"check", "--launch", launch, "-l", "0,2"}, 60s);
+  EXPECT_EQ(picked.exit_code, 0) << picked.err;
+  EXPECT_TRUE(contains(picked.out + picked.err, "arm")) << picked.out;
+  for (const std::vector<std::string>& args :
+       {std::vector<std::string>{"check", "--launch", launch},
+        std::vector<std::string>{"run", "--launch", launch, "--offline"}}) {
+    RunResult unpicked = run_afhub(args, 60s);
+    EXPECT_EQ(unpicked.exit_code, 1) << args[0];
+    EXPECT_TRUE(contains(unpicked.err, "no model picked from 'multibody configs': give -l"))
+        << unpicked.err;
+    EXPECT_TRUE(contains(unpicked.err, "  2: ./gripper.yaml")) << unpicked.err;
+  }
+}
+
 TEST(Run, LaunchFileWithIndexRunsRealTimeAndReports) {
   SKIP_WITHOUT_SHARED_MODELS();
   afhub::testing::ModelFolder folder;
