@@ -90,8 +90,34 @@ phase() {
   "$@"
   PHASES+=("$(printf '%-16s %4d s' "$name" $((SECONDS - start)))")
 }
+# background_phase NAME LOG COMMAND...: the same, started in the background with its
+# output in LOG; `finish_background_phase` waits for it, and shows LOG if it failed.
+background_phase() {
+  local name=$1 log=$2
+  shift 2
+  BACKGROUND_NAME=$name BACKGROUND_LOG=$log BACKGROUND_START=$SECONDS
+  "$@" >"$log" 2>&1 &
+  BACKGROUND_PID=$!
+}
+finish_background_phase() {
+  local status=0
+  wait "$BACKGROUND_PID" || status=$?
+  BACKGROUND_PID=""
+  if [ $status -ne 0 ]; then
+    cat "$BACKGROUND_LOG"
+    echo "run.sh: $BACKGROUND_NAME failed (its output is above)" >&2
+    return $status
+  fi
+  PHASES+=("$(printf '%-16s %4d s (beside the phases before it)' "$BACKGROUND_NAME" $((SECONDS - BACKGROUND_START)))")
+}
+BACKGROUND_PID=""
+at_lowest_priority() {
+  renice -n 19 -p "$BASHPID" >/dev/null
+  "$@"
+}
 print_phases() {
   local status=$?
+  [ -n "$BACKGROUND_PID" ] && kill "$BACKGROUND_PID" 2>/dev/null
   [ ${#PHASES[@]} -gt 0 ] && printf 'run.sh: %s\n' "${PHASES[@]}" "$(printf '%-16s %4d s' total $SECONDS)"
   exit $status
 }
@@ -111,8 +137,13 @@ case "${1:-}" in
     phase packages install_packages
     phase format check_format
     phase build build "${RELEASE[@]}"
-    phase tests run_tests build/release
-    phase sanitize-build build "${SANITIZE[@]}" -- sanitize_selection
+    phase real-time-tests run_tests build/release -L real-time
+    # The other tests wait more than they compute: the sanitizer build takes the CPU
+    # they leave, at the lowest priority, so that it never delays them.
+    background_phase sanitize-build build/sanitize-build.log \
+      at_lowest_priority build "${SANITIZE[@]}" -- sanitize_selection
+    phase tests run_tests build/release -LE real-time
+    finish_background_phase
     phase sanitize-tests run_tests build/sanitize -L 'unit|fuzz|sanitize'
     ;;
   sanitize)

@@ -29,6 +29,8 @@ declare -a started=() # every background process, killed on exit
 cleanup() {
   local status=$?
   set +e # clean up everything, whatever fails
+  # (bash reports each process killed below as "Killed": noise after a success)
+  [[ $status -eq 0 ]] && exec 2>/dev/null
   for pid in "${started[@]}"; do kill -9 "$pid" 2>/dev/null || true; done
   for ns in "$ns_a" "$ns_b"; do
     for pid in $(ip netns pids "$ns" 2>/dev/null); do kill -9 "$pid" 2>/dev/null || true; done

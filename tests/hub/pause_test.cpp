@@ -74,6 +74,32 @@ TEST(Pause, HubStopListsAttachedProcessesAndAsksForForce) {
   hub.pid = -1;
 }
 
+// A lock file removed from under a live process (a tmp cleaner, an `rm`) says nothing
+// of the process: the hub decides by the pid it registered, and keeps its ports.
+TEST(Pause, ALiveProcessWhoseLockFileWasRemovedKeepsItsPorts) {
+  ScopedProcess hub(start_test_hub());
+  ASSERT_GT(hub.pid, 0);
+  ScopedProcess top(spawn_afhub({"top"}));
+  const std::string name = "afhub-top-" + std::to_string(top.pid);
+  ASSERT_TRUE(wait_until([&] { return contains(run_afhub({"status"}).out, name); }, 10s));
+  ASSERT_TRUE(std::filesystem::remove("/tmp/" + name + ".lock"));
+  std::this_thread::sleep_for(2s);  // a hundred of the hub's liveness rounds
+  const std::string gone = name + " (pid " + std::to_string(top.pid) + ") is gone";
+  EXPECT_FALSE(contains(read_file("/tmp/afhub-test-hub.log"), gone))
+      << read_file("/tmp/afhub-test-hub.log");
+  EXPECT_TRUE(contains(run_afhub({"status"}).out, name));
+  EXPECT_TRUE(still_running(top.pid));
+
+  // Killed, it is removed all the same: by its pid.
+  stop_process(top.pid, SIGKILL);
+  top.pid = -1;
+  EXPECT_TRUE(wait_until([&] { return contains(read_file("/tmp/afhub-test-hub.log"), gone); }, 5s))
+      << read_file("/tmp/afhub-test-hub.log");
+  EXPECT_EQ(run_afhub({"hub", "stop"}).exit_code, 0);
+  EXPECT_EQ(stop_process(hub.pid, 0), 0);
+  hub.pid = -1;
+}
+
 // Last: this test attaches itself to the hub (an iceoryx runtime lives as long as
 // the process), which the tests above must not see.
 TEST(Pause, StoppedProcessesCarryOnWhenResumed) {

@@ -65,5 +65,16 @@ TEST(RuntimeLockFile, ADirectoryOrAFifoThereIsReplaced) {
   EXPECT_TRUE(fs::is_regular_file(as_fifo));
 }
 
+// A FIFO swapped in where a lock file was (another user may write /tmp) is not opened
+// for reading, which would wait for a writer forever: the hub's liveness loop would hang.
+TEST(RuntimeLockFile, AFifoInPlaceOfALockNeverHangsItsReader) {
+  Scratch scratch;
+  const std::string fifo = scratch.dir + "/afhub-run-2.lock";
+  ASSERT_EQ(mkfifo(fifo.c_str(), 0666), 0);
+  EXPECT_EQ(open_regular_file(fifo), -1);
+  EXPECT_EQ(errno, EINVAL);
+  EXPECT_FALSE(flock_held(fifo));
+}
+
 }  // namespace
 }  // namespace afhub

@@ -85,6 +85,18 @@ int open_own_file(const std::string& path, int flags, mode_t mode) {
   return fd;
 }
 
+int open_regular_file(const std::string& path) {
+  const int fd = open(path.c_str(), O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) return -1;
+  struct stat info {};
+  if (fstat(fd, &info) != 0 || !S_ISREG(info.st_mode)) {
+    close(fd);
+    errno = EINVAL;
+    return -1;
+  }
+  return fd;
+}
+
 void claim_runtime_lock_file(const std::string& path) {
   for (int attempt = 0; attempt < 3; ++attempt) {
     const int fd = open(path.c_str(), O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC | O_WRONLY, 0600);
@@ -137,7 +149,7 @@ std::optional<pid_t> flock_holder(const std::string& path) {
 }
 
 bool flock_held(const std::string& path) {
-  const int fd = open(path.c_str(), O_RDONLY | O_NOFOLLOW | O_CLOEXEC);
+  const int fd = open_regular_file(path);
   if (fd < 0) return errno != ENOENT && flock_holder(path).has_value();
   const bool held = flock(fd, LOCK_SH | LOCK_NB) != 0 && errno == EWOULDBLOCK;
   close(fd);

@@ -33,12 +33,12 @@ void CatalogBuilder::poll(std::chrono::steady_clock::time_point now) {
 bool CatalogBuilder::refresh_directories() {
   return discovery_.follow(kDirectoryEvent, directories_, [this](const std::string& instance) {
     try {
-      return std::make_unique<RawLatestReader>(
+      return std::make_unique<CopyingReader>(
           ChannelId{std::string(kService), instance, std::string(kDirectoryEvent)},
           PayloadKind::kBodyDirectory);
     } catch (const Error& error) {  // no subscriber port left: tried again on the next poll
       tell_once("the bodies of " + instance + " are not listed yet: " + error.what());
-      return std::unique_ptr<RawLatestReader>();
+      return std::unique_ptr<CopyingReader>();
     }
   });
 }
@@ -47,7 +47,7 @@ bool CatalogBuilder::merge(bool directories_changed) {
   bool any_update = directories_changed;
   std::vector<OfferedDirectory> offered;
   for (auto& [instance, reader] : directories_) {
-    // Checked by the reader (check_payload): every count fits its chunk.
+    // A checked copy: every count fits, whatever its writer does meanwhile.
     offered.push_back({instance, static_cast<const BodyList*>(reader->latest())});
     any_update = any_update || reader->updated();
   }

@@ -18,6 +18,7 @@
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/channel.hpp"
 #include "afhub/hub/channel_discovery.hpp"
+#include "afhub/hub/copying_reader.hpp"
 #include "afhub/shm_layout/body_state.hpp"
 #include "afhub/shm_layout/catalog.hpp"
 
@@ -60,7 +61,7 @@ class CatalogBuilder {
   void tell_once(const std::string& message);
 
   ChannelDiscovery discovery_;
-  std::map<std::string, std::unique_ptr<RawLatestReader>> directories_;  // by owner instance
+  std::map<std::string, std::unique_ptr<CopyingReader>> directories_;  // by owner instance
   std::map<std::string, RateProbe> rates_;                               // by body channel
   std::string next_probe_;  // where start_rate_samples() goes on round the bodies
   std::vector<BodyEntry> bodies_;

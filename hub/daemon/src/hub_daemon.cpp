@@ -126,7 +126,7 @@ bool remove_dead_processes(AfhubRouDi& roudi, iox::roudi::PortPool& ports, Healt
     // RouDi's and the hub's own entries: a pid alone cannot tell them, since a client in
     // another pid namespace may have the hub's pid.
     if (name == "roudi" || name == kHubRuntimeName || registered.removed.count(name)) continue;
-    if (runtime_is_gone(name)) {
+    if (runtime_is_gone(name, pid)) {
       gone.insert(name);
     } else if (!runtime_in_hub_pid_namespace(name, pid) && registered.foreign.insert(name).second) {
       std::fprintf(stderr,

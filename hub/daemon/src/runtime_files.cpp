@@ -43,7 +43,7 @@ enum class LockState { kHeld, kFree, kUnreadable };
 // Whether a live process holds the lock at `path`. When it is free and `remove`,
 // the lock and the socket beside it are removed while this process holds the lock.
 LockState probe_lock(const fs::path& path, bool remove) {
-  const int fd = open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  const int fd = open_regular_file(path.string());
   if (fd < 0) return LockState::kUnreadable;
   LockState state = LockState::kHeld;
   if (flock(fd, LOCK_EX | LOCK_NB) == 0) {
@@ -82,8 +82,13 @@ std::vector<AttachedProcess> attached_processes() {
   return attached;
 }
 
-bool runtime_is_gone(const std::string& name) {
-  return !flock_held((kRuntimeDir / (name + ".lock")).string());
+bool runtime_is_gone(const std::string& name, pid_t pid) {
+  const fs::path lock = kRuntimeDir / (name + ".lock");
+  // A lock file removed from under a live process (a tmp cleaner, an `rm`) says nothing
+  // of the process: the pid RouDi registered does.
+  std::error_code error;
+  if (!fs::exists(fs::symlink_status(lock, error))) return task_is_gone(pid);
+  return !flock_held(lock.string());
 }
 
 bool runtime_in_hub_pid_namespace(const std::string& name, pid_t pid) {

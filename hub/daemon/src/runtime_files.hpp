@@ -16,9 +16,10 @@ struct AttachedProcess {
   pid_t pid = 0;     // the holder of its lock, in the hub's pid namespace; 0 when unseen
 };
 
-// Whether the runtime `name` is gone: its lock is free, or missing. True in any pid
-// namespace, unlike a pid: the kernel frees a flock when its holder dies.
-bool runtime_is_gone(const std::string& name);
+// Whether the runtime `name`, registered with `pid`, is gone: its lock is free. True in
+// any pid namespace, unlike a pid: the kernel frees a flock when its holder dies. When
+// its lock file is missing (removed by hand or by a tmp cleaner), by `pid`.
+bool runtime_is_gone(const std::string& name, pid_t pid);
 
 // Whether the runtime `name`, registered with `pid` (its own getpid()), runs in the
 // hub's pid namespace: its lock's holder is that same pid here.

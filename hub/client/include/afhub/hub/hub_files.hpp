@@ -29,6 +29,11 @@ std::string hub_log_path(const std::string& directory);
 // another user than this process's (or root's). Returns -1 with errno set.
 int open_own_file(const std::string& path, int flags, mode_t mode = 0600);
 
+// Opens `path` for reading only if it is a regular file: with O_NOFOLLOW, and with
+// O_NONBLOCK, so that a FIFO swapped in by another user cannot hang the caller (a plain
+// open of a FIFO waits for a writer). Returns -1 with errno set (EINVAL: not a regular file).
+int open_regular_file(const std::string& path);
+
 // iceoryx's runtime opens /tmp/<runtime name>.lock with O_CREAT and follows a symlink
 // there: one planted by another user (where fs.protected_symlinks is 0) would have this
 // process create or lock a file of that user's choosing. So the file is made first,
