@@ -29,18 +29,37 @@ std::int64_t safe_request_timeout_ns(const LoopOptions& loop) {
   return std::max<std::int64_t>(20'000'000, 10 * loop.period_ns);
 }
 
-// Runs the loop on an open device until a stop, the cycle limit or the device's
-// loss. Returns what DeviceGone said, empty on a stop.
-std::string drive(Device& device, const DriverOptions& options, Writer<DeviceState>& states,
-                  LatestReader<DeviceCommand>& commands, LoopStatsPublisher& stats,
-                  LoopTiming& timing) {
+// How a drive ended: a stop (or the cycle limit), the device's loss, or an error of any
+// other kind, with what it said.
+struct DriveEnd {
+  enum { kStopped, kGone, kFailed } how = kStopped;
+  std::string what;
+};
+
+// The device the hub-loss hook may make safe, for as long as this object lives: no
+// exception path leaves the hook a device that was freed.
+class HookAttachment {
+ public:
+  explicit HookAttachment(Device& device) { safe_request().attach(&device); }
+  ~HookAttachment() { safe_request().attach(nullptr); }
+  HookAttachment(const HookAttachment&) = delete;
+  HookAttachment& operator=(const HookAttachment&) = delete;
+};
+
+// Runs the loop on an open device until a stop, the cycle limit, the device's loss or
+// an error. Whatever ends it, the device's force was last set to zero (but when it is
+// gone) and it was made safe.
+DriveEnd drive(Device& device, const DriverOptions& options, Writer<DeviceState>& states,
+               LatestReader<DeviceCommand>& commands, LoopStatsPublisher& stats,
+               LoopTiming& timing) {
+  const HookAttachment attachment(device);
   const DeviceSpec spec = device.spec();
   SafetyLimits limits = options.safety;
   limits.cycle_ns = options.loop.period_ns;
   ForceSafety safety(spec, limits);
-  std::string gone;
+  DriveEnd end;
   // One cycle: the output decided from the newest command, the device exchanged with,
-  // its state published. Returns false when the device went away.
+  // its state published. Returns false when the device went away or failed.
   const auto cycle = [&](bool stopping) {
     if (safe_request().serve()) return true;  // made safe for the hub's loss: hands off
     const DeviceCommand* command = commands.latest();
@@ -51,7 +70,10 @@ std::string drive(Device& device, const DriverOptions& options, Writer<DeviceSta
     try {
       sample = device.exchange(output);
     } catch (const DeviceGone& error) {
-      gone = error.what();
+      end = {DriveEnd::kGone, error.what()};
+      return false;
+    } catch (const std::exception& error) {  // a transport error the device does not list
+      end = {DriveEnd::kFailed, error.what()};
       return false;
     }
     if (hub_lost()) return true;  // outputs safe: nothing into a hub that is gone
@@ -72,12 +94,26 @@ std::string drive(Device& device, const DriverOptions& options, Writer<DeviceSta
     states.publish(state);
     return true;
   };
-  run_periodic(
-      options.loop, timing, [&] { return cycle(false); },
-      [&](std::int64_t now) { stats.maybe_publish(now, timing); });
-  if (gone.empty()) cycle(true);  // stopping: one last cycle at zero force, published
+  try {
+    run_periodic(
+        options.loop, timing, [&] { return cycle(false); },
+        [&](std::int64_t now) { stats.maybe_publish(now, timing); });
+  } catch (const std::exception& error) {  // outside the exchange: the stats, the hub
+    end = {DriveEnd::kFailed, error.what()};
+  } catch (...) {
+    end = {DriveEnd::kFailed, "an unknown exception"};
+  }
+  // One last cycle at zero force, published; the first error stays the one reported.
+  if (end.how != DriveEnd::kGone) {
+    const DriveEnd first = end;
+    try {
+      cycle(true);
+    } catch (...) {
+    }
+    if (first.how == DriveEnd::kFailed) end = first;
+  }
   device.make_safe();
-  return gone;
+  return end;
 }
 
 }  // namespace
@@ -119,13 +155,17 @@ int run_driver(const DeviceOpener& open, const DriverOptions& options) {
                channel.c_str(), 1e9 / static_cast<double>(options.loop.period_ns),
                static_cast<double>(options.safety.watchdog_ns) * 1e-6, spec.max_force_n);
   for (;;) {
-    safe_request().attach(device.get());
-    const std::string gone = drive(*device, options, states, commands, stats, timing);
-    safe_request().attach(nullptr);
-    if (gone.empty()) return 0;
+    const DriveEnd end = drive(*device, options, states, commands, stats, timing);
+    if (end.how == DriveEnd::kStopped) return 0;
     device.reset();
-    std::fprintf(stderr, "%s: the device went away (%s); its force is zero\n", who.c_str(),
-                 gone.c_str());
+    if (end.how == DriveEnd::kGone)
+      std::fprintf(stderr, "%s: the device went away (%s); its force is zero\n", who.c_str(),
+                   end.what.c_str());
+    else
+      std::fprintf(stderr,
+                   "%s: the device failed (%s); its force was set to zero and it was made "
+                   "safe\n",
+                   who.c_str(), end.what.c_str());
     if (!options.reconnect) return 1;
     std::fprintf(stderr, "%s: waiting for the device to come back (--reconnect)\n", who.c_str());
     while (!device && !stop_requested()) {

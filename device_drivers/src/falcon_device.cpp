@@ -112,6 +112,10 @@ DeviceSample FalconDevice::exchange(const DeviceOutput& output) {
   return sample_;
 }
 
+FalconDevice::~FalconDevice() {
+  if (transport_) make_safe();
+}
+
 void FalconDevice::make_safe() noexcept {
   try {
     Command idle;

@@ -21,6 +21,9 @@ void pause_100us() noexcept {
 
 void SafeRequest::attach(Device* device) noexcept {
   device_ = device;
+  // Detached, the device may be freed next: a request that took it before finishes first.
+  if (!device)
+    while (requests_in_flight_.load() > 0) pause_100us();
 }
 
 bool SafeRequest::serve() noexcept {
@@ -35,6 +38,11 @@ bool SafeRequest::serve() noexcept {
 }
 
 MadeSafeBy SafeRequest::request(std::int64_t timeout_ns) noexcept {
+  struct InFlight {
+    std::atomic<int>& count;
+    explicit InFlight(std::atomic<int>& c) : count(c) { ++count; }
+    ~InFlight() { --count; }
+  } in_flight(requests_in_flight_);
   Device* device = device_.load();
   if (!device) return MadeSafeBy::kNoDevice;
   if (t_served == this) {

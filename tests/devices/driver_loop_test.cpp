@@ -5,8 +5,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
 #include <memory>
+#include <stdexcept>
 
 #include "afhub/hub/channel.hpp"
 #include "afhub/shm_layout/channel_names.hpp"
@@ -17,6 +19,8 @@ namespace {
 // A device that goes away after `lifetime` exchanges (never, when 0), and counts.
 struct Counts {
   std::atomic<int> opens{0}, exchanges{0}, made_safe{0};
+  double last_force_z = -1.0;  // of the last output the device received
+  double max_force_z = 0.0;
 };
 
 class FleetingDevice : public Device {
@@ -27,9 +31,11 @@ class FleetingDevice : public Device {
     spec.max_force_n = 5.0;
     return spec;
   }
-  DeviceSample exchange(const DeviceOutput&) override {
+  DeviceSample exchange(const DeviceOutput& output) override {
     if (lifetime_ > 0 && ++exchanged_ > lifetime_) throw DeviceGone("unplugged (test)");
     ++counts_.exchanges;
+    counts_.last_force_z = output.wrench.force_n.z;
+    counts_.max_force_z = std::max(counts_.max_force_z, output.wrench.force_n.z);
     return {};
   }
   void make_safe() noexcept override { ++counts_.made_safe; }
@@ -77,6 +83,55 @@ TEST(DriverLoop, WithReconnectItWaitsForTheDeviceAndCarriesOn) {
   EXPECT_EQ(code, 0);
   EXPECT_EQ(counts.opens, 4);
   EXPECT_EQ(counts.exchanges, 20 + 200 + 1);  // the last one at zero force, on the stop
+}
+
+// A device whose transport fails with an error it does not list (a libusb error other
+// than "gone") once, mid-cycle, while it pushes.
+class FailingDevice : public FleetingDevice {
+ public:
+  FailingDevice(Counts& counts, int fail_at) : FleetingDevice(counts, 0), fail_at_(fail_at) {}
+  DeviceSample exchange(const DeviceOutput& output) override {
+    if (++calls_ == fail_at_) throw std::runtime_error("LIBUSB_ERROR_OTHER (test)");
+    return FleetingDevice::exchange(output);
+  }
+
+ private:
+  int fail_at_;
+  int calls_ = 0;
+};
+
+// Commands `name`'s device to push 3 N up, fresh for a second, with no ramp.
+void push_3n(Writer<DeviceCommand>& commands, DriverOptions& options) {
+  options.safety.ramp_s = 0.0;
+  options.safety.watchdog_ns = 1'000'000'000;
+  DeviceCommand* command = commands.loan();
+  ASSERT_NE(command, nullptr);
+  command->wrench.force_n = {0.0, 0.0, 3.0};
+  command->enable = 1;
+  commands.publish(command);
+}
+
+TEST(DriverLoop, AnUnlistedDeviceErrorZeroesTheForceMakesSafeAndEndsWithExitCode1) {
+  Counts counts;
+  LatestReader<DeviceState> states(body_state_channel(device_channel_name("failing")));
+  Writer<DeviceCommand> commands(body_command_channel(device_channel_name("failing")));
+  DriverOptions options = options_for("failing");
+  push_3n(commands, options);
+  const int code = run_driver(
+      [&] {
+        ++counts.opens;
+        return std::make_unique<FailingDevice>(counts, 100);
+      },
+      options);
+  EXPECT_EQ(code, 1);
+  EXPECT_EQ(counts.max_force_z, 3.0);   // it was pushing
+  EXPECT_EQ(counts.exchanges, 99 + 1);  // and the last one, at zero force
+  EXPECT_EQ(counts.last_force_z, 0.0);
+  EXPECT_EQ(counts.made_safe, 1);
+  const DeviceState* last = states.latest();
+  ASSERT_NE(last, nullptr);
+  EXPECT_EQ(last->gate, ForceGate::kStopping);
+  EXPECT_EQ(last->applied.force_n.z, 0.0);
 }
 
 TEST(DriverLoop, OnAStopTheLastStateIsAtZeroForce) {

@@ -89,6 +89,23 @@ TEST_F(FalconDeviceTest, AForceUpDrivesTheMotorsThroughTheJacobian) {
   EXPECT_EQ(sent_.back().motors, (std::array<std::int16_t, 3>{0, 0, 0}));
 }
 
+// Destroyed without a make_safe (an exception unwinding past its owner), the Falcon still
+// gets a last packet at zero force.
+TEST_F(FalconDeviceTest, DestroyedItSendsAPacketAtZeroForce) {
+  const std::array<std::int16_t, 3> zero{0, 0, 0};
+  {
+    FalconDevice device = make();
+    replies_.push_back(at(kWorkspaceCentre));
+    replies_.push_back(at(kWorkspaceCentre));
+    device.exchange(DeviceOutput{});
+    DeviceOutput up;
+    up.wrench.force_n.z = 4.0;
+    device.exchange(up);
+    ASSERT_NE(sent_.back().motors, zero);
+  }
+  EXPECT_EQ(sent_.back().motors, zero);
+}
+
 TEST_F(FalconDeviceTest, HomingWaitsForAllThreeLegs) {
   FalconDevice device = make();
   replies_.push_back(at(kWorkspaceCentre, 0, 0b001));

@@ -26,6 +26,9 @@ class FalconDevice final : public Device {
  public:
   FalconDevice(std::unique_ptr<FalconTransport> transport, std::string serial,
                DeviceOptions options = {});
+  // Sends a last packet at zero force: however its owner ends (an exception unwinding
+  // past the driver's loop), the device is not left pushing.
+  ~FalconDevice() override;
   // Opens the Falcon over USB (firmware upload when asked); not homed yet.
   static std::unique_ptr<FalconDevice> open_usb(const UsbOptions& usb, DeviceOptions options = {});
 

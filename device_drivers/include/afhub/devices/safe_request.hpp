@@ -17,7 +17,8 @@ enum class MadeSafeBy { kLoop, kRequester, kRequesterOnLoopThread, kNoDevice };
 
 class SafeRequest {
  public:
-  // The device the loop drives (nullptr: none; a request then does nothing).
+  // The device the loop drives (nullptr: none; a request then does nothing). Detaching
+  // waits for a request under way to finish with the device, which may then be freed.
   void attach(Device* device) noexcept;
 
   // On the loop's thread, before each exchange: true once a request came and the device
@@ -33,6 +34,7 @@ class SafeRequest {
   enum State : int { kIdle, kRequested, kLoopMaking, kLoopDone, kTakenOver };
   std::atomic<Device*> device_{nullptr};
   std::atomic<int> state_{kIdle};
+  std::atomic<int> requests_in_flight_{0};
 };
 
 }  // namespace afhub::devices
