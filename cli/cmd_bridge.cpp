@@ -47,6 +47,7 @@ bridges::DdsBridgeOptions merged(CLI::App& dds, const BridgeCliOptions& cli) {
   if (given("--profile")) options.profile = f.profile;
   if (given("--ros2-prefix")) options.ros2_prefix = f.ros2_prefix;
   if (given("--security")) options.security_dir = f.security_dir;
+  if (given("--max-mirrored")) options.max_mirrored = f.max_mirrored;
   options.latency = f.latency;
   options.seconds = f.seconds;
   return options;
@@ -66,7 +67,8 @@ void register_bridge(CLI::App& app, Runner& selected) {
       "afhub/world_state, afhub/world_command). Settings come from --config FILE (YAML, "
       "keys named as the flags: domain, interface, export, mirror, accept-commands, bodies, "
       "devices, world, qos: best-effort|reliable, rate, spin, cpu-wake-latency, rate-limits: "
-      "{bodies, devices, world}, max-command-age, profile, ros2-prefix, security), and the "
+      "{bodies, devices, world}, max-command-age, max-mirrored, profile, ros2-prefix, security), "
+      "and the "
       "flags given here override the file's.");
   dds->add_option("--config", cli->config,
                   "YAML file of settings (see above); flags given here override it")
@@ -91,6 +93,11 @@ void register_bridge(CLI::App& app, Runner& selected) {
   dds->add_flag("--mirror", options->mirror,
                 "Publish remote bodies (devices, world) seen on DDS into this hub, and send "
                 "the commands written to them here back over DDS");
+  dds->add_option("--max-mirrored", options->max_mirrored,
+                  "With --mirror: mirror at most this many remote bodies and devices, so that "
+                  "this hub keeps room for its own (default 225, half of the 450 a hub lists); "
+                  "those past it, or whose joint names would not fit the hub's catalog, are "
+                  "refused and said once");
   dds->add_flag("--accept-commands", options->accept_commands,
                 "With --export: apply commands from the network to local bodies, devices and "
                 "the world");

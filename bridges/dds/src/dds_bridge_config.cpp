@@ -11,6 +11,7 @@
 
 #include "afhub/rt/cpu_wake_latency.hpp"
 #include "afhub/shm_layout/error.hpp"
+#include "afhub/shm_layout/limits.hpp"
 #include "afhub/yaml/input_file.hpp"
 #include "afhub/yaml/yaml_reader.hpp"
 
@@ -21,7 +22,7 @@ using yaml::Reader;
 
 const char* const kKeys =
     "domain, interface, export, mirror, accept-commands, bodies, devices, world, qos, rate, spin, "
-    "cpu-wake-latency, rate-limits, max-command-age, profile, ros2-prefix, security";
+    "cpu-wake-latency, rate-limits, max-command-age, max-mirrored, profile, ros2-prefix, security";
 
 // A bridge config is a few lines; this refuses a wrong file named by mistake.
 constexpr std::uintmax_t kMaxFileBytes = 16u << 20;
@@ -120,6 +121,11 @@ DdsBridgeOptions read_dds_bridge_config(const std::string& path, const DdsBridge
       read_rate_limits(reader, value, options);
     } else if (key == "max-command-age") {
       options.max_command_age_s = reader.in_range(value, key, 1e-9, 10.0);
+    } else if (key == "max-mirrored") {
+      const double most = reader.in_range(value, key, 1, static_cast<double>(kMaxBodies));
+      if (most != std::floor(most))
+        reader.fail(value, "'max-mirrored' is a whole number of bodies");
+      options.max_mirrored = static_cast<std::size_t>(most);
     } else if (key == "profile") {
       options.profile = word(reader, value, key);
       if (options.profile != "ros2") reader.fail(value, "'profile' must be ros2");
@@ -175,7 +181,8 @@ std::string render_dds_bridge_config(const DdsBridgeOptions& options) {
   out << "rate-limits: {bodies: " << number_text(options.body_rate_hz)
       << ", devices: " << number_text(options.device_rate_hz)
       << ", world: " << number_text(options.world_rate_hz) << "}\n"
-      << "max-command-age: " << number_text(options.max_command_age_s) << "\n";
+      << "max-command-age: " << number_text(options.max_command_age_s) << "\n"
+      << "max-mirrored: " << options.max_mirrored << "\n";
   if (!options.profile.empty()) out << "profile: " << options.profile << "\n";
   if (!options.ros2_prefix.empty()) out << "ros2-prefix: " << options.ros2_prefix << "\n";
   if (!options.security_dir.empty()) out << "security: " << options.security_dir << "\n";

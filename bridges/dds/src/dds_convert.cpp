@@ -3,61 +3,12 @@
 
 #include <algorithm>
 
-#include "afhub/hub/bodies.hpp"
+#include "dds_convert_parts.hpp"
 
 namespace afhub::bridges {
-namespace {
 
 // Layouts agree, so vectors copy field by field with no surprises.
 static_assert(sizeof(afhub_dds_JointSample) == sizeof(JointSample));
-
-afhub_dds_Vec3 to_dds(const Vec3& v) noexcept {
-  return {v.x, v.y, v.z};
-}
-Vec3 from_dds(const afhub_dds_Vec3& v) noexcept {
-  return {v.x, v.y, v.z};
-}
-afhub_dds_Pose to_dds(const Pose& p) noexcept {
-  return {to_dds(p.position_m),
-          {p.orientation.x, p.orientation.y, p.orientation.z, p.orientation.w}};
-}
-Pose from_dds(const afhub_dds_Pose& p) noexcept {
-  return {from_dds(p.position_m),
-          {p.orientation.x, p.orientation.y, p.orientation.z, p.orientation.w}};
-}
-afhub_dds_Twist to_dds(const Twist& t) noexcept {
-  return {to_dds(t.linear_mps), to_dds(t.angular_radps)};
-}
-Twist from_dds(const afhub_dds_Twist& t) noexcept {
-  return {from_dds(t.linear_mps), from_dds(t.angular_radps)};
-}
-afhub_dds_Wrench to_dds(const Wrench& w) noexcept {
-  return {to_dds(w.force_n), to_dds(w.torque_nm)};
-}
-Wrench from_dds(const afhub_dds_Wrench& w) noexcept {
-  return {from_dds(w.force_n), from_dds(w.torque_nm)};
-}
-
-afhub_dds_Header to_dds(const PayloadHeader& h) noexcept {
-  return {h.sequence, h.sim_step, h.sim_time_s, h.publish_stamp_ns, h.publisher_pid};
-}
-
-void set_body(std::string_view channel, char (&body)[101]) noexcept {
-  const std::size_t length = std::min(channel.size(), sizeof body - 1);
-  std::copy_n(channel.data(), length, body);
-  body[length] = '\0';
-}
-
-template <typename Sequence>
-void reserve(Sequence& sequence, std::uint32_t capacity) {
-  using Element = std::remove_pointer_t<decltype(sequence._buffer)>;
-  sequence._buffer = static_cast<Element*>(dds_alloc(sizeof(Element) * capacity));
-  sequence._maximum = capacity;
-  sequence._length = 0;
-  sequence._release = true;
-}
-
-}  // namespace
 
 void make_state_sample(afhub_dds_BodyState& sample) {
   sample = {};
@@ -81,7 +32,7 @@ void free_command_sample(afhub_dds_BodyCommand& sample) {
 
 void to_dds(std::string_view channel, const BodyState& state,
             afhub_dds_BodyState& sample) noexcept {
-  set_body(channel, sample.body);
+  copy_text(channel, sample.body);
   sample.header = to_dds(state.header);
   sample.pose = to_dds(state.pose);
   sample.twist = to_dds(state.twist);
@@ -104,7 +55,7 @@ void to_dds(std::string_view channel, const BodyState& state,
 
 void to_dds(std::string_view channel, const BodyCommand& command,
             afhub_dds_BodyCommand& sample) noexcept {
-  set_body(channel, sample.body);
+  copy_text(channel, sample.body);
   sample.header = to_dds(command.header);
   sample.cartesian_type = static_cast<std::uint8_t>(command.cartesian_type);
   sample.lockstep = command.lockstep;
@@ -123,8 +74,7 @@ void to_dds(std::string_view channel, const BodyCommand& command,
 }
 
 void from_dds(const afhub_dds_BodyState& sample, BodyState& state) noexcept {
-  state.header.sim_step = sample.header.sim_step;
-  state.header.sim_time_s = sample.header.sim_time_s;
+  from_dds(sample.header, state.header);
   state.pose = from_dds(sample.pose);
   state.twist = from_dds(sample.twist);
   state.wrench = from_dds(sample.wrench);
@@ -153,8 +103,7 @@ bool valid_dds_command(const afhub_dds_BodyCommand& sample) noexcept {
 
 bool from_dds(const afhub_dds_BodyCommand& sample, BodyCommand& command) noexcept {
   if (!valid_dds_command(sample)) return false;
-  command.header.sim_step = sample.header.sim_step;
-  command.header.sim_time_s = sample.header.sim_time_s;
+  from_dds(sample.header, command.header);
   command.cartesian_type = static_cast<CartesianCommandType>(sample.cartesian_type);
   command.lockstep = sample.lockstep;
   command.pose = from_dds(sample.pose);

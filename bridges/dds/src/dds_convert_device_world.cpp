@@ -2,67 +2,18 @@
 #include "dds_convert_device_world.hpp"
 
 #include <algorithm>
-#include <cstring>
+
+#include "dds_convert_parts.hpp"
 
 namespace afhub::bridges {
 namespace {
-
-afhub_dds_Vec3 out(const Vec3& v) noexcept {
-  return {v.x, v.y, v.z};
-}
-Vec3 in(const afhub_dds_Vec3& v) noexcept {
-  return {v.x, v.y, v.z};
-}
-afhub_dds_Pose out(const Pose& p) noexcept {
-  return {out(p.position_m), {p.orientation.x, p.orientation.y, p.orientation.z, p.orientation.w}};
-}
-Pose in(const afhub_dds_Pose& p) noexcept {
-  return {in(p.position_m), {p.orientation.x, p.orientation.y, p.orientation.z, p.orientation.w}};
-}
-afhub_dds_Twist out(const Twist& t) noexcept {
-  return {out(t.linear_mps), out(t.angular_radps)};
-}
-Twist in(const afhub_dds_Twist& t) noexcept {
-  return {in(t.linear_mps), in(t.angular_radps)};
-}
-afhub_dds_Wrench out(const Wrench& w) noexcept {
-  return {out(w.force_n), out(w.torque_nm)};
-}
-Wrench in(const afhub_dds_Wrench& w) noexcept {
-  return {in(w.force_n), in(w.torque_nm)};
-}
-afhub_dds_Header out(const PayloadHeader& h) noexcept {
-  return {h.sequence, h.sim_step, h.sim_time_s, h.publish_stamp_ns, h.publisher_pid};
-}
-void in(const afhub_dds_Header& sample, PayloadHeader& header) noexcept {
-  header.sim_step = sample.sim_step;
-  header.sim_time_s = sample.sim_time_s;
-}
-
-// A NUL-terminated text of `from` (at most N - 1 characters) into `to`.
-template <std::size_t N>
-void copy_text(const char* from, std::size_t from_size, char (&to)[N]) noexcept {
-  const std::size_t length = strnlen(from, std::min(from_size, N - 1));
-  std::memcpy(to, from, length);
-  to[length] = '\0';
-}
-template <std::size_t N, std::size_t M>
-void copy_text(const char (&from)[M], std::array<char, N>& to) noexcept {
-  const std::size_t length = strnlen(from, std::min(M, N - 1));
-  std::memcpy(to.data(), from, length);
-  to[length] = '\0';
-}
-template <std::size_t N>
-void copy_text(std::string_view from, char (&to)[N]) noexcept {
-  copy_text(from.data(), from.size(), to);
-}
 
 void poses_out(const std::array<WorldObjectPose, kMaxWorldObjects>& from, std::uint32_t count,
                dds_sequence_afhub_dds_WorldObjectPose& to) noexcept {
   to._length = std::min<std::uint32_t>({count, kMaxWorldObjects, to._maximum});
   for (std::uint32_t i = 0; i < to._length; ++i) {
     copy_text(from[i].name.data(), from[i].name.size(), to._buffer[i].name);
-    to._buffer[i].pose = out(from[i].pose);
+    to._buffer[i].pose = to_dds(from[i].pose);
   }
 }
 std::uint32_t poses_in(const dds_sequence_afhub_dds_WorldObjectPose& from,
@@ -70,19 +21,9 @@ std::uint32_t poses_in(const dds_sequence_afhub_dds_WorldObjectPose& from,
   const std::uint32_t count = std::min<std::uint32_t>(from._length, kMaxWorldObjects);
   for (std::uint32_t i = 0; i < count; ++i) {
     copy_text(from._buffer[i].name, to[i].name);
-    to[i].pose = in(from._buffer[i].pose);
+    to[i].pose = from_dds(from._buffer[i].pose);
   }
   return count;
-}
-
-template <typename Sequence>
-void reserve(Sequence& sequence, std::uint32_t capacity) {
-  using Element = std::remove_pointer_t<decltype(sequence._buffer)>;
-  sequence._buffer = static_cast<Element*>(dds_alloc(sizeof(Element) * capacity));
-  std::memset(sequence._buffer, 0, sizeof(Element) * capacity);
-  sequence._maximum = capacity;
-  sequence._length = 0;
-  sequence._release = true;
 }
 
 }  // namespace
@@ -100,7 +41,7 @@ void free_world_state_sample(afhub_dds_WorldState& sample) {
 void to_dds(std::string_view channel, const DeviceState& state,
             afhub_dds_DeviceState& sample) noexcept {
   copy_text(channel, sample.device);
-  sample.header = out(state.header);
+  sample.header = to_dds(state.header);
   copy_text(state.spec.model.data(), state.spec.model.size(), sample.spec.model);
   copy_text(state.spec.serial.data(), state.spec.serial.size(), sample.spec.serial);
   sample.spec.max_force_n = state.spec.max_force_n;
@@ -111,12 +52,12 @@ void to_dds(std::string_view channel, const DeviceState& state,
   sample.spec.sensed = state.spec.sensed;
   sample.spec.actuated = state.spec.actuated;
   sample.spec.button_count = state.spec.button_count;
-  sample.pose = out(state.pose);
-  sample.velocity = out(state.velocity);
+  sample.pose = to_dds(state.pose);
+  sample.velocity = to_dds(state.velocity);
   sample.gripper_angle_rad = state.gripper_angle_rad;
   sample.buttons = state.buttons;
   sample.gate = static_cast<std::uint8_t>(state.gate);
-  sample.applied = out(state.applied);
+  sample.applied = to_dds(state.applied);
   sample.applied_gripper_force_n = state.applied_gripper_force_n;
   sample.command_sequence = state.command_sequence;
   sample.command_stamp_ns = state.command_stamp_ns;
@@ -124,7 +65,7 @@ void to_dds(std::string_view channel, const DeviceState& state,
 
 bool from_dds(const afhub_dds_DeviceState& sample, DeviceState& state) noexcept {
   if (sample.gate > static_cast<std::uint8_t>(ForceGate::kStopping)) return false;
-  in(sample.header, state.header);
+  from_dds(sample.header, state.header);
   copy_text(sample.spec.model, state.spec.model);
   copy_text(sample.spec.serial, state.spec.serial);
   state.spec.max_force_n = sample.spec.max_force_n;
@@ -135,12 +76,12 @@ bool from_dds(const afhub_dds_DeviceState& sample, DeviceState& state) noexcept 
   state.spec.sensed = sample.spec.sensed;
   state.spec.actuated = sample.spec.actuated;
   state.spec.button_count = sample.spec.button_count;
-  state.pose = in(sample.pose);
-  state.velocity = in(sample.velocity);
+  state.pose = from_dds(sample.pose);
+  state.velocity = from_dds(sample.velocity);
   state.gripper_angle_rad = sample.gripper_angle_rad;
   state.buttons = sample.buttons;
   state.gate = static_cast<ForceGate>(sample.gate);
-  state.applied = in(sample.applied);
+  state.applied = from_dds(sample.applied);
   state.applied_gripper_force_n = sample.applied_gripper_force_n;
   state.command_sequence = sample.command_sequence;
   state.command_stamp_ns = sample.command_stamp_ns;
@@ -150,15 +91,15 @@ bool from_dds(const afhub_dds_DeviceState& sample, DeviceState& state) noexcept 
 void to_dds(std::string_view channel, const DeviceCommand& command,
             afhub_dds_DeviceCommand& sample) noexcept {
   copy_text(channel, sample.device);
-  sample.header = out(command.header);
-  sample.wrench = out(command.wrench);
+  sample.header = to_dds(command.header);
+  sample.wrench = to_dds(command.wrench);
   sample.gripper_force_n = command.gripper_force_n;
   sample.enable = command.enable;
 }
 
 void from_dds(const afhub_dds_DeviceCommand& sample, DeviceCommand& command) noexcept {
-  in(sample.header, command.header);
-  command.wrench = in(sample.wrench);
+  from_dds(sample.header, command.header);
+  command.wrench = from_dds(sample.wrench);
   command.gripper_force_n = sample.gripper_force_n;
   command.enable = sample.enable;  // the driver clamps the force whatever it says
 }
@@ -166,7 +107,7 @@ void from_dds(const afhub_dds_DeviceCommand& sample, DeviceCommand& command) noe
 void to_dds(std::string_view channel, const WorldState& state,
             afhub_dds_WorldState& sample) noexcept {
   copy_text(channel, sample.world);
-  sample.header = out(state.header);
+  sample.header = to_dds(state.header);
   sample.wall_time_s = state.wall_time_s;
   sample.achieved_rate_hz = state.achieved_rate_hz;
   sample.body_count = state.body_count;
@@ -188,7 +129,7 @@ void to_dds(std::string_view channel, const WorldState& state,
 }
 
 void from_dds(const afhub_dds_WorldState& sample, WorldState& state) noexcept {
-  in(sample.header, state.header);
+  from_dds(sample.header, state.header);
   state.wall_time_s = sample.wall_time_s;
   state.achieved_rate_hz = sample.achieved_rate_hz;
   state.body_count = sample.body_count;
@@ -212,14 +153,14 @@ void from_dds(const afhub_dds_WorldState& sample, WorldState& state) noexcept {
 void to_dds(std::string_view channel, const WorldCommand& command,
             afhub_dds_WorldCommand& sample) noexcept {
   copy_text(channel, sample.world);
-  sample.header = out(command.header);
+  sample.header = to_dds(command.header);
   sample.action = static_cast<std::uint32_t>(command.action);
   sample.step_count = command.step_count;
 }
 
 bool from_dds(const afhub_dds_WorldCommand& sample, WorldCommand& command) noexcept {
   if (sample.action > static_cast<std::uint32_t>(WorldAction::kReset)) return false;
-  in(sample.header, command.header);
+  from_dds(sample.header, command.header);
   command.action = static_cast<WorldAction>(sample.action);
   command.step_count = sample.step_count;
   return true;

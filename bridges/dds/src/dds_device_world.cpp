@@ -9,6 +9,7 @@
 #include "afhub/hub/body_claims.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "dds_convert_device_world.hpp"
+#include "dds_entity.hpp"
 
 namespace afhub::bridges {
 namespace {
@@ -21,22 +22,10 @@ constexpr std::string_view kDevicePrefix = "device/";
 // World commands queued on the way: more than anyone types between two bridge cycles.
 constexpr int kWorldCommandDepth = 16;
 
-dds_entity_t checked(dds_entity_t entity, const char* what) {
-  if (entity < 0)
-    throw Error(std::string("DDS: ") + what + ": " + dds_strretcode(entity) +
-                " (check CYCLONEDDS_URI and the --domain)");
-  return entity;
-}
-
 dds_entity_t topic(dds_entity_t participant, const dds_topic_descriptor_t& type, const char* name) {
   return checked(dds_create_topic(participant, &type, name, nullptr, nullptr),
                  (std::string("creating the topic ") + name).c_str());
 }
-
-struct Qos {
-  dds_qos_t* qos = dds_create_qos();
-  ~Qos() { dds_delete_qos(qos); }
-};
 
 // A device's name as the globs see it: "device/<name>" without "device/".
 std::string_view device_name_of(std::string_view channel) {
@@ -53,20 +42,14 @@ bool rate_allows(std::int64_t now_ns, std::int64_t& last_ns, double rate_hz) {
 }  // namespace
 
 DeviceWorldBridge::DeviceWorldBridge(dds_entity_t participant, const DdsBridgeOptions& options,
-                                     DirectoryPublisher* directory)
+                                     MirrorDirectory* directory)
     : options_(options), directory_(directory), world_(world_instance()) {
   const bool devices = !options.device_globs.empty();
-  Qos stream, commands;
-  if (options.reliable)
-    dds_qset_reliability(stream.qos, DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
-  else
-    dds_qset_reliability(stream.qos, DDS_RELIABILITY_BEST_EFFORT, 0);
-  dds_qset_history(stream.qos, DDS_HISTORY_KEEP_LAST, 1);
-  // This bridge's own samples never come back to it (export and mirror in one process).
-  dds_qset_ignorelocal(stream.qos, DDS_IGNORELOCAL_PARTICIPANT);
-  dds_qset_reliability(commands.qos, DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
-  dds_qset_history(commands.qos, DDS_HISTORY_KEEP_LAST, kWorldCommandDepth);
-  dds_qset_ignorelocal(commands.qos, DDS_IGNORELOCAL_PARTICIPANT);
+  const Qos stream, commands;
+  set_stream_qos(stream.get(), options.reliable);
+  set_ignore_own(stream.get());
+  set_queue_qos(commands.get(), kWorldCommandDepth);
+  set_ignore_own(commands.get());
   if (devices) {
     device_state_topic_ = topic(participant, afhub_dds_DeviceState_desc, kDeviceStateTopic);
     device_command_topic_ = topic(participant, afhub_dds_DeviceCommand_desc, kDeviceCommandTopic);
@@ -78,22 +61,22 @@ DeviceWorldBridge::DeviceWorldBridge(dds_entity_t participant, const DdsBridgeOp
   if (options.export_bodies) {
     if (devices) {
       device_state_writer_ =
-          checked(dds_create_writer(participant, device_state_topic_, stream.qos, nullptr),
+          checked(dds_create_writer(participant, device_state_topic_, stream.get(), nullptr),
                   "device state writer");
       if (options.accept_commands)
         device_command_reader_ =
-            checked(dds_create_reader(participant, device_command_topic_, stream.qos, nullptr),
+            checked(dds_create_reader(participant, device_command_topic_, stream.get(), nullptr),
                     "device command reader");
     }
     if (options.world) {
       world_state_writer_ =
-          checked(dds_create_writer(participant, world_state_topic_, stream.qos, nullptr),
+          checked(dds_create_writer(participant, world_state_topic_, stream.get(), nullptr),
                   "world state writer");
       world_state_in_ = std::make_unique<LatestReader<WorldState>>(
           ChannelId{std::string(kService), world_, std::string(kStateEvent)});
       if (options.accept_commands) {
         world_command_reader_ =
-            checked(dds_create_reader(participant, world_command_topic_, commands.qos, nullptr),
+            checked(dds_create_reader(participant, world_command_topic_, commands.get(), nullptr),
                     "world command reader");
         world_command_out_ = std::make_unique<Writer<WorldCommand>>(
             ChannelId{std::string(kService), world_, std::string(kCommandEvent)});
@@ -107,18 +90,18 @@ DeviceWorldBridge::DeviceWorldBridge(dds_entity_t participant, const DdsBridgeOp
   if (options.mirror) {
     if (devices) {
       device_state_reader_ =
-          checked(dds_create_reader(participant, device_state_topic_, stream.qos, nullptr),
+          checked(dds_create_reader(participant, device_state_topic_, stream.get(), nullptr),
                   "device state reader");
       device_command_writer_ =
-          checked(dds_create_writer(participant, device_command_topic_, stream.qos, nullptr),
+          checked(dds_create_writer(participant, device_command_topic_, stream.get(), nullptr),
                   "device command writer");
     }
     if (options.world) {
       world_state_reader_ =
-          checked(dds_create_reader(participant, world_state_topic_, stream.qos, nullptr),
+          checked(dds_create_reader(participant, world_state_topic_, stream.get(), nullptr),
                   "world state reader");
       world_command_writer_ =
-          checked(dds_create_writer(participant, world_command_topic_, commands.qos, nullptr),
+          checked(dds_create_writer(participant, world_command_topic_, commands.get(), nullptr),
                   "world command writer");
       world_state_out_ = std::make_unique<Writer<WorldState>>(
           ChannelId{std::string(kService), world_, std::string(kStateEvent)});
@@ -240,12 +223,13 @@ void DeviceWorldBridge::import_commands() noexcept {
 void DeviceWorldBridge::add_mirrored_device(const char* channel) {
   const std::string name(device_name_of(channel));
   try {
+    const BodyEntry entry = make_device_entry(name);
+    directory_->check_room(entry);
     check_room_for_bodies({channel}, 1);
     MirroredDevice device{
         channel, std::make_unique<Writer<DeviceState>>(body_state_channel(channel)),
         std::make_unique<LatestReader<DeviceCommand>>(body_command_channel(channel))};
-    directory_->add(make_device_entry(name));
-    directory_->publish();
+    directory_->add(entry);
     mirrored_.push_back(std::move(device));
     std::fprintf(stderr, "afhub bridge dds: mirroring device %s\n", channel);
   } catch (const Error& error) {

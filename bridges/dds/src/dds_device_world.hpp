@@ -26,6 +26,7 @@
 #include "afhub/shm_layout/device.hpp"
 #include "afhub/shm_layout/world.hpp"
 #include "afhub_dds.h"
+#include "mirror_directory.hpp"
 
 namespace afhub::bridges {
 
@@ -43,7 +44,7 @@ class DeviceWorldBridge {
  public:
   // `directory`: the mirror's directory of this process's channels (null when not mirroring).
   DeviceWorldBridge(dds_entity_t participant, const DdsBridgeOptions& options,
-                    DirectoryPublisher* directory);
+                    MirrorDirectory* directory);
   ~DeviceWorldBridge();
   DeviceWorldBridge(const DeviceWorldBridge&) = delete;
   DeviceWorldBridge& operator=(const DeviceWorldBridge&) = delete;
@@ -79,7 +80,7 @@ class DeviceWorldBridge {
   void mirror_world() noexcept;
 
   const DdsBridgeOptions& options_;
-  DirectoryPublisher* directory_;
+  MirrorDirectory* directory_;
   std::string world_;  // the world's channel instance
   dds_entity_t device_state_topic_ = 0, device_command_topic_ = 0;
   dds_entity_t world_state_topic_ = 0, world_command_topic_ = 0;

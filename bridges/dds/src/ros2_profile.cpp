@@ -38,8 +38,7 @@ geometry_msgs_msg_dds__Vector3_ ros_vector(const Vec3& v) noexcept {
 }
 
 dds_entity_t must(dds_entity_t entity, const std::string& what) {
-  if (entity < 0) throw Error("DDS (--profile ros2): " + what + ": " + dds_strretcode(entity));
-  return entity;
+  return checked(entity, ("--profile ros2: " + what).c_str());
 }
 
 }  // namespace
@@ -160,19 +159,13 @@ Ros2Profile::Ros2Profile(dds_entity_t participant, std::string prefix, bool acce
     : participant_(participant),
       prefix_(std::move(prefix)),
       accept_commands_(accept_commands),
-      max_command_age_ns_(static_cast<std::int64_t>(max_command_age_s * 1e9)),
-      writer_qos_(dds_create_qos()),
-      reader_qos_(dds_create_qos()) {
-  dds_qset_reliability(writer_qos_, DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
-  dds_qset_history(writer_qos_, DDS_HISTORY_KEEP_LAST, 1);
-  dds_qset_reliability(reader_qos_, DDS_RELIABILITY_BEST_EFFORT, 0);
-  dds_qset_history(reader_qos_, DDS_HISTORY_KEEP_LAST, 1);
+      max_command_age_ns_(static_cast<std::int64_t>(max_command_age_s * 1e9)) {
+  set_stream_qos(writer_qos_.get(), true);
+  set_stream_qos(reader_qos_.get(), false);
 }
 
 Ros2Profile::~Ros2Profile() {
   bodies_.clear();
-  dds_delete_qos(writer_qos_);
-  dds_delete_qos(reader_qos_);
 }
 
 void Ros2Profile::add_body(const std::string& channel, const std::vector<std::string>& joint_names,
@@ -204,7 +197,7 @@ void Ros2Profile::add_body(const std::string& channel, const std::vector<std::st
         must(dds_create_topic(participant_, endpoints[i].type, topic.c_str(), nullptr, nullptr),
              "creating topic " + topic);
     *endpoints[i].writer =
-        must(dds_create_writer(participant_, body->topics[i], writer_qos_, nullptr),
+        must(dds_create_writer(participant_, body->topics[i], writer_qos_.get(), nullptr),
              "creating a writer on " + topic);
   }
   body->joint_states_topic = ros2_topic(prefix_, channel, "joint_states");
@@ -214,7 +207,7 @@ void Ros2Profile::add_body(const std::string& channel, const std::vector<std::st
                                             body->command_topic_name.c_str(), nullptr, nullptr),
                            "creating topic " + body->command_topic_name);
     body->command_reader =
-        must(dds_create_reader(participant_, body->topics[4], reader_qos_, nullptr),
+        must(dds_create_reader(participant_, body->topics[4], reader_qos_.get(), nullptr),
              "creating a reader on " + body->command_topic_name);
   }
 

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "afhub/hub/bodies.hpp"
+#include "dds_entity.hpp"
 
 namespace afhub::bridges {
 
@@ -67,8 +68,7 @@ class Ros2Profile {
   std::string prefix_;
   bool accept_commands_;
   std::int64_t max_command_age_ns_;
-  dds_qos_t* writer_qos_;
-  dds_qos_t* reader_qos_;
+  Qos writer_qos_, reader_qos_;
   std::vector<std::unique_ptr<Body>> bodies_;
   std::uint64_t states_out_ = 0, commands_in_ = 0, stale_commands_ = 0, bad_commands_ = 0;
   std::uint32_t errors_printed_ = 0;

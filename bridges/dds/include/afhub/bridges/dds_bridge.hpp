@@ -3,10 +3,13 @@
 //   "afhub/body_state" (keyed by channel name), their joint names "afhub/body_info";
 //   with accept_commands, "afhub/body_command" samples go into local command slots.
 //   Devices (--devices) and the world (--world) cross the same way: dds_device_world.hpp.
-//   Mirror: bodies seen on DDS are published into this hub as if local, and the
-//   commands written to them here go back out over DDS.
+//   Mirror: bodies seen on DDS are published into this hub as if local (at most
+//   max_mirrored), and the commands written to them here go back out over DDS.
+// Like every afhub process, the bridge outlives its hub and re-attaches to the next
+// (afhub/hub/hub_loss.hpp).
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -45,6 +48,9 @@ struct DdsBridgeOptions {
   std::string ros2_prefix;
   // DDS Security credentials (see bridges/dds/src/dds_security.hpp); empty: none.
   std::string security_dir;
+  // Bodies and devices mirrored at most: half of a hub's 450 leaves the rest for its
+  // own, whatever a peer announces.
+  std::size_t max_mirrored = 225;
 };
 
 // Throws afhub::Error naming the option when a value is out of range.

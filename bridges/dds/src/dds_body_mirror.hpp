@@ -1,0 +1,83 @@
+// `afhub bridge dds --mirror`, for bodies: bodies announced on DDS ("afhub/body_info")
+// become this hub's bodies, owned by the bridge and listed in its directory (within
+// its bounds: mirror_directory.hpp); their "afhub/body_state" samples are published
+// into the hub as they arrive, and the commands written to them here go back out as
+// "afhub/body_command" samples, stamped with their age.
+// In steady state nothing here allocates: samples are made once with full-capacity
+// sequences, and bodies are looked up in a vector made when they appear.
+#pragma once
+
+#include <dds/dds.h>
+
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <set>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "afhub/bridges/dds_bridge.hpp"
+#include "afhub/hub/bodies.hpp"
+#include "afhub/hub/sample_waiter.hpp"
+#include "afhub_dds.h"
+#include "age_histogram.hpp"
+#include "dds_body_topics.hpp"
+#include "dds_entity.hpp"
+#include "mirror_directory.hpp"
+
+namespace afhub::bridges {
+
+struct MirrorCounters {
+  std::uint64_t states_in = 0, commands_out = 0;
+};
+
+class BodyMirror {
+ public:
+  // `arrivals` is woken by each command written here to a mirrored body, and
+  // `directory` lists the mirrored bodies; both must outlive this.
+  BodyMirror(dds_entity_t participant, const BodyTopics& topics, const DdsBridgeOptions& options,
+             SampleWaiter& arrivals, MirrorDirectory& directory);
+  ~BodyMirror();  // Cyclone's thread is done with this before anything goes
+  BodyMirror(const BodyMirror&) = delete;
+  BodyMirror& operator=(const BodyMirror&) = delete;
+
+  // On the loop's thread: bodies newly announced, and commands to mirrored bodies out.
+  void take_announcements();
+  void export_commands() noexcept;
+  // Whether this bridge mirrors `channel` (never exported back).
+  bool mirrors(std::string_view channel) const noexcept;
+
+  std::size_t size() const noexcept { return mirrored_.size(); }
+  MirrorCounters counters() const;
+  // With --latency, the mirrored states' ages.
+  void report() const;
+
+ private:
+  struct Body {
+    std::string channel;
+    std::uint32_t joints = 0;
+    std::unique_ptr<BodyPublisher> publisher;
+  };
+
+  static void on_states(dds_entity_t reader, void* self);
+  void mirror_states();
+  void add(const afhub_dds_BodyInfo& info);
+  Body* find(std::string_view channel) noexcept;
+
+  const DdsBridgeOptions& options_;
+  SampleWaiter& arrivals_;
+  MirrorDirectory& directory_;
+  Entity state_reader_, info_reader_, command_writer_;
+  afhub_dds_BodyState state_in_{};       // taken on Cyclone's thread (on_states)
+  afhub_dds_BodyCommand command_out_{};  // written on the loop's thread
+  // The bodies grow on the loop's thread under the mutex, which Cyclone's thread holds
+  // while it publishes states; the loop reads them without it.
+  mutable std::mutex mutex_;
+  std::vector<Body> mirrored_;
+  std::set<std::string> refused_;  // said once, not tried again
+  MirrorCounters counters_;
+  AgeHistogram state_ages_;  // --latency: source publish to publish here
+};
+
+}  // namespace afhub::bridges
