@@ -100,7 +100,7 @@ class FailingDevice : public FleetingDevice {
   int calls_ = 0;
 };
 
-// Commands `name`'s device to push 3 N up, fresh for a second, with no ramp.
+// Commands the device to push 3 N up, the command fresh for a second, with no ramp.
 void push_3n(Writer<DeviceCommand>& commands, DriverOptions& options) {
   options.safety.ramp_s = 0.0;
   options.safety.watchdog_ns = 1'000'000'000;
@@ -140,13 +140,7 @@ TEST(DriverLoop, OnAStopTheLastStateIsAtZeroForce) {
   Writer<DeviceCommand> commands(body_command_channel(device_channel_name("stopping")));
   DriverOptions options = options_for("stopping");
   options.loop.max_cycles = 300;
-  options.safety.ramp_s = 0.0;
-  options.safety.watchdog_ns = 1'000'000'000;  // the one command below stays fresh
-  DeviceCommand* command = commands.loan();
-  ASSERT_NE(command, nullptr);
-  command->wrench.force_n = {0.0, 0.0, 3.0};
-  command->enable = 1;
-  commands.publish(command);
+  push_3n(commands, options);
   const int code = run_driver(
       [&] {
         ++counts.opens;
