@@ -26,6 +26,8 @@ PACKAGES=(
   libevdev-dev libusb-1.0-0-dev umockdev libumockdev-dev
   # afhub view: its web server, three.js, and the browser and image checks of its tests
   libcivetweb-dev libjs-three chromium python3-pil
+  # the syntax check of the viewer page's JavaScript (tests only)
+  nodejs
   # afhub bridge dds: its tests' JSON checks, and the DDS Security credentials
   jq openssl
   # the tests' private namespaces and their documentation check

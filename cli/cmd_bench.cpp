@@ -2,7 +2,9 @@
 // sockets and ROS 1, and a 1 kHz loop beside cyclictest (see docs/bench.md).
 #include <unistd.h>
 
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <memory>
@@ -89,8 +91,10 @@ int run_dds_bench(const DdsBenchOptions& options) {
   std::vector<char*> argv;
   for (std::string& arg : args) argv.push_back(arg.data());
   argv.push_back(nullptr);
+  // The script becomes this process (its output, exit code and Ctrl-C are the
+  // command's): an exec, not a spawn, and this process has no hub threads yet.
   execv("/bin/bash", argv.data());
-  throw Error("cannot run /bin/bash");
+  throw Error(std::string("cannot run /bin/bash: ") + std::strerror(errno));
 }
 
 struct WakeBenchOptions {

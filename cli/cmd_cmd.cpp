@@ -1,5 +1,8 @@
 // `afhub cmd BODY ...`: writes a command into a body's command slot at a rate until
-// Ctrl-C (or once), joints by name or index, the joints left unnamed held.
+// Ctrl-C (or once), joints by name or index, the joints left unnamed held; stops
+// with the physics' reason when it refuses the command.
+#include <unistd.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -14,9 +17,9 @@
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/hub_loss.hpp"
 #include "afhub/hub/hub_presence.hpp"
-#include "afhub/hub/stop_signal.hpp"
 #include "afhub/physics/model.hpp"
 #include "afhub/rt/clock.hpp"
+#include "afhub/rt/stop_signal.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "commands.hpp"
 #include "format.hpp"
@@ -206,6 +209,61 @@ std::string complete_joints(const CmdOptions& options, const BodyEntry& entry, B
                                 : "");
 }
 
+// The physics' refusals of this process's commands, read back from the body's state
+// (BodyState::refused_commands): it refuses a command that it cannot apply, says why
+// on its own stderr, and counts it in the state with the sender's pid and reason.
+class RefusalWatch {
+ public:
+  explicit RefusalWatch(BodyClient& body)
+      : body_(body), pid_(static_cast<std::uint32_t>(getpid())) {
+    if (const BodyState* state = body.latest_state()) {
+      seen_ = state->refused_commands;
+      seen_any_ = true;
+    }
+  }
+  // The physics' reason when it refused one of this process's commands since the
+  // watch began, else empty.
+  std::string refusal() {
+    const BodyState* state = body_.latest_state();
+    if (!state) return "";
+    // A state before any seen: its refusals are new only when they name this process.
+    const bool new_refusal =
+        seen_any_ ? state->refused_commands != seen_ : state->refused_commands > 0;
+    seen_ = state->refused_commands;
+    seen_any_ = true;
+    if (!new_refusal || state->refused_command_pid != pid_) return "";
+    return std::string(name_of(state->refusal_reason));
+  }
+  // The sequence of the newest state (0: none yet), to wait for the physics' answer.
+  std::uint64_t state_sequence() {
+    const BodyState* state = body_.latest_state();
+    return state ? state->header.sequence : 0;
+  }
+
+ private:
+  BodyClient& body_;
+  std::uint32_t pid_;
+  std::uint32_t seen_ = 0;  // the count in the last state looked at
+  bool seen_any_ = false;
+};
+
+[[noreturn]] void refused(const std::string& channel, const std::string& reason) {
+  throw Error("the physics refused the command for " + channel + ": " + reason +
+              " (nothing of it was applied). Command values within the body's bounds; "
+              "`afhub echo " +
+              channel + "` shows its joints now");
+}
+
+// After --once: the physics' answer comes with the states it publishes after taking the
+// command in (the first one after it was sent may have been stepped before).
+void check_once(RefusalWatch& watch, const std::string& channel) {
+  const std::uint64_t sent_at = watch.state_sequence();
+  const std::int64_t give_up = monotonic_ns() + 1'000'000'000;  // paused or gone: no answer
+  while (watch.state_sequence() < sent_at + 2 && monotonic_ns() < give_up && !stop_requested())
+    sleep_until_ns(monotonic_ns() + 1'000'000);
+  if (const std::string reason = watch.refusal(); !reason.empty()) refused(channel, reason);
+}
+
 bool publish_once(BodyClient& body, const BodyCommand& prototype) {
   if (hub_lost()) return true;  // outputs safe: no command into a hub that is gone
   BodyCommand* command = body.loan_command(prototype.joint_count);
@@ -238,8 +296,10 @@ int run_cmd(const CmdOptions& options) {
   BodyClient body(entry);
   const std::string joints = complete_joints(options, entry, body, prototype);
   const std::string channel(name_of(entry.info.channel));
+  RefusalWatch watch(body);
   if (once) {
     if (!publish_once(body, prototype)) throw Error("shared memory exhausted: command not sent");
+    check_once(watch, channel);
     std::fprintf(stderr,
                  "afhub cmd: sent one command to %s%s%s.\nwarning: the physics' watchdog releases "
                  "it when no new command comes within its period (0.5 s unless `afhub run "
@@ -254,6 +314,7 @@ int run_cmd(const CmdOptions& options) {
   std::uint64_t failed = 0;
   while (!stop_requested()) {
     if (!publish_once(body, prototype)) ++failed;
+    if (const std::string reason = watch.refusal(); !reason.empty()) refused(channel, reason);
     next += period_ns;
     sleep_until_ns(next);
   }

@@ -23,7 +23,8 @@
 
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/hub_presence.hpp"
-#include "afhub/hub/stop_signal.hpp"
+#include "afhub/hub/process_spawn.hpp"
+#include "afhub/rt/stop_signal.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "commands.hpp"
 #include "example_models.hpp"
@@ -69,18 +70,11 @@ const std::vector<BodyMotion>& example_scene_motions() {
 
 // Starts `afhub arguments...`; its stdout goes to `stdout_fd` when that is not -1.
 pid_t spawn_afhub(const std::vector<std::string>& arguments, int stdout_fd = -1) {
-  pid_t pid = fork();
-  if (pid < 0) throw Error("cannot start afhub " + arguments.front() + ": fork failed");
-  if (pid == 0) {
-    if (stdout_fd >= 0) dup2(stdout_fd, STDOUT_FILENO);
-    std::vector<const char*> argv{"afhub"};
-    for (const std::string& argument : arguments) argv.push_back(argument.c_str());
-    argv.push_back(nullptr);
-    execv("/proc/self/exe", const_cast<char* const*>(argv.data()));
-    std::perror(("afhub demo: cannot run afhub " + arguments.front()).c_str());
-    _exit(127);
-  }
-  return pid;
+  std::vector<std::string> argv{this_executable()};
+  argv.insert(argv.end(), arguments.begin(), arguments.end());
+  SpawnOptions options;
+  options.stdout_fd = stdout_fd;
+  return spawn_process(argv, options);
 }
 
 pid_t spawn_physics(const std::vector<std::string>& run_arguments) {
@@ -100,7 +94,7 @@ struct Viewer {
 Viewer start_viewer(int port) {
   Viewer viewer;
   int pipe_ends[2];
-  if (pipe(pipe_ends) != 0) throw Error("cannot start the viewer: pipe failed");
+  if (pipe2(pipe_ends, O_CLOEXEC) != 0) throw Error("cannot start the viewer: pipe failed");
   viewer.pid = spawn_afhub({"view", "--port", std::to_string(port)}, pipe_ends[1]);
   close(pipe_ends[1]);
   viewer.output = pipe_ends[0];
@@ -126,19 +120,16 @@ Viewer start_viewer(int port) {
 // CI) the printed URL is the way in.
 void open_browser(const std::string& url) {
   if (!std::getenv("DISPLAY") && !std::getenv("WAYLAND_DISPLAY")) return;
-  const pid_t pid = fork();
-  if (pid > 0) waitpid(pid, nullptr, 0);
-  if (pid != 0) return;
-  // A grandchild opens it, so that no zombie is left however long the browser takes.
-  if (fork() != 0) _exit(0);
-  setsid();
-  const int null = open("/dev/null", O_RDWR);
-  if (null >= 0) {
-    dup2(null, STDOUT_FILENO);
-    dup2(null, STDERR_FILENO);
+  SpawnOptions options;
+  options.search_path = true;
+  options.detached = true;  // however long the browser takes, and whatever it says
+  options.output_path = "/dev/null";
+  try {
+    spawn_process({"xdg-open", url}, options);
+  } catch (const Error& error) {
+    std::fprintf(stderr, "afhub demo: cannot open a browser (%s); open the URL yourself\n",
+                 error.what());
   }
-  execlp("xdg-open", "xdg-open", url.c_str(), static_cast<char*>(nullptr));
-  _exit(127);  // no xdg-open: nothing is opened
 }
 
 void stop_viewer(Viewer& viewer) {

@@ -1,6 +1,5 @@
 // `afhub device run virtual|...`: a device driver as its own process on the device's
 // channels (see device_drivers/).
-#include <chrono>
 #include <cmath>
 #include <memory>
 
@@ -11,22 +10,21 @@
 #include "afhub/devices/virtual_device.hpp"
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/hub_presence.hpp"
-#include "afhub/hub/stop_signal.hpp"
+#include "afhub/hub/startup_wait.hpp"
 #include "afhub/rt/periodic_loop.hpp"
+#include "afhub/rt/stop_signal.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "commands.hpp"
-#include "count_option.hpp"
+#include "connection_options.hpp"
 #include "format.hpp"
-#include "realtime_options.hpp"
+#include "loop_options.hpp"
 
 namespace afhub::cli {
 namespace {
 
 struct DeviceRunOptions {
   std::string name;
-  double rate_hz = 1000.0;
-  RealtimeOptions realtime;
-  std::uint64_t cycles = 0;
+  LoopRateOptions pacing;
   double watchdog_ms = 10.0;
   double ramp_s = 0.2;
   double wait_s = 10.0;
@@ -64,8 +62,7 @@ struct ForceOptions {
   std::string force = "0,0,0", torque = "0,0,0";
   double gripper_n = 0.0;
   bool disable = false;
-  double rate_hz = 1000.0;
-  std::uint64_t cycles = 0;
+  LoopRateOptions pacing;
   double wait_s = 0.0;  // for the hub and the device's driver
 };
 
@@ -73,23 +70,16 @@ int run_force(const ForceOptions& options) {
   const std::vector<double> force = parse_numbers(options.force, "--force", 3);
   const std::vector<double> torque = parse_numbers(options.torque, "--torque", 3);
   if (!std::isfinite(options.gripper_n)) throw Error("--gripper must be a finite number");
-  if (!(options.rate_hz > 0.0 && options.rate_hz <= 100'000.0))
-    throw Error("--rate must be between 0 and 100000 Hz");
+  LoopOptions loop;
+  set_loop_rate_options(options.pacing, loop);
   const std::string channel = device_channel_name(options.name);
   install_stop_signal_handlers();
-  if (!(options.wait_s >= 0.0 && options.wait_s <= 1e6))
-    throw Error("--wait takes a number of seconds from 0 to 1e6");
-  const auto wait_ns = static_cast<std::int64_t>(options.wait_s * 1e9);
-  connect_to_hub("device-force", HubPolicy::kRequire,
-                 std::chrono::milliseconds(wait_ns / 1'000'000));
+  const StartupWait wait(options.wait_s);
+  wait.connect_to_hub("device-force");
   // Commands to a device no driver serves would go nowhere, silently.
-  if (wait_for_body(channel, "afhub device force", wait_ns > 0 ? monotonic_ns() + wait_ns : 0)
-          .info.kind != ChannelKind::kDevice)
+  if (wait.wait_for_body(channel, "afhub device force").info.kind != ChannelKind::kDevice)
     throw Error(channel + " is a body, not a device");
   Writer<DeviceCommand> commands(body_command_channel(channel));
-  LoopOptions loop;
-  loop.period_ns = static_cast<std::int64_t>(std::llround(1e9 / options.rate_hz));
-  loop.max_cycles = options.cycles;
   LoopTiming timing;
   run_periodic(loop, timing, [&] {
     DeviceCommand* command = commands.loan();
@@ -105,20 +95,14 @@ int run_force(const ForceOptions& options) {
 }
 
 devices::DriverOptions driver_options(const DeviceRunOptions& options) {
-  if (!(options.rate_hz > 0.0 && options.rate_hz <= 100'000.0))
-    throw Error("--rate must be between 0 and 100000 Hz");
   if (!(options.watchdog_ms > 0.0 && options.watchdog_ms <= 1000.0))
     throw Error("--watchdog takes milliseconds from 0 (excluded) to 1000");
   if (!(options.ramp_s >= 0.0 && options.ramp_s <= 10.0))
     throw Error("--ramp takes seconds from 0 to 10");
-  if (!(options.wait_s >= 0.0 && options.wait_s <= 1e6))
-    throw Error("--wait takes a number of seconds from 0 to 1e6");
   devices::DriverOptions driver;
-  set_realtime_options(options.realtime, driver.loop);
+  set_loop_rate_options(options.pacing, driver.loop);
   driver.name = options.name;
   device_channel_name(driver.name);  // a bad name fails here, before the device opens
-  driver.loop.period_ns = static_cast<std::int64_t>(std::llround(1e9 / options.rate_hz));
-  driver.loop.max_cycles = options.cycles;
   driver.safety.watchdog_ns = std::llround(options.watchdog_ms * 1e6);
   driver.safety.ramp_s = options.ramp_s;
   driver.wait_s = options.wait_s;
@@ -131,16 +115,12 @@ void add_driver_options(CLI::App* command, DeviceRunOptions& options, const std:
   options.name = name;
   command->add_option("--name", options.name,
                       "The device's name: its channels are device/<name> (default " + name + ")");
-  command->add_option("--rate", options.rate_hz, "Loop rate in Hz (default 1000)");
-  add_realtime_options(command, options.realtime, "the loop");
-  add_count_option(command, "--cycles", options.cycles,
-                   "Stop after this many cycles (default: Ctrl-C)");
+  add_loop_rate_options(command, options.pacing);
   command->add_option("--watchdog", options.watchdog_ms,
                       "Zero force when no command came within this many ms (default 10)");
   command->add_option("--ramp", options.ramp_s,
                       "Seconds for the force to ramp in once enabled (default 0.2)");
-  command->add_option("--wait", options.wait_s,
-                      "Wait this many seconds for the hub before failing (default 10)");
+  add_wait_option(command, options.wait_s, "");
   command->add_flag("--reconnect", options.reconnect,
                     "When the device goes away, wait for it to come back instead of exiting");
 }
@@ -193,12 +173,8 @@ void register_device(CLI::App& app, Runner& selected) {
   force_command->add_option("--torque", force->torque, "tx,ty,tz in N m (default 0,0,0)");
   force_command->add_option("--gripper", force->gripper_n, "Gripper force in N (default 0)");
   force_command->add_flag("--disable", force->disable, "Send the commands with force disabled");
-  force_command->add_option("--rate", force->rate_hz, "Commands per second (default 1000)");
-  force_command->add_option("--wait", force->wait_s,
-                            "Wait up to this many seconds for the hub and the device's driver "
-                            "(default 0: fail at once)");
-  add_count_option(force_command, "--cycles", force->cycles,
-                   "Stop after this many commands (default: Ctrl-C)");
+  add_loop_rate_options(force_command, force->pacing);
+  add_wait_option(force_command, force->wait_s, "the device's driver");
   force_command->callback([&selected, force] { selected = [force] { return run_force(*force); }; });
   auto* run = device->add_subcommand("run", "Run a device's driver.");
   run->require_subcommand(1);

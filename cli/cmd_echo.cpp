@@ -1,17 +1,17 @@
 // `afhub echo BODY`: prints each new state of a body, as text or JSON lines.
-#include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <limits>
 #include <memory>
 
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/hub_loss.hpp"
 #include "afhub/hub/hub_presence.hpp"
-#include "afhub/hub/stop_signal.hpp"
+#include "afhub/hub/startup_wait.hpp"
 #include "afhub/rt/clock.hpp"
+#include "afhub/rt/stop_signal.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "commands.hpp"
+#include "connection_options.hpp"
 #include "count_option.hpp"
 #include "format.hpp"
 
@@ -66,17 +66,11 @@ int run_echo(const EchoOptions& options) {
   // Rate limited by the states' publish stamps: printed states are at least a period apart.
   const std::int64_t min_gap_ns =
       options.rate_hz > 0.0 ? static_cast<std::int64_t>(1e9 / options.rate_hz) : 0;
-  if (!(options.wait_s >= 0.0 && options.wait_s <= 1e6))
-    throw Error("--wait takes seconds from 0 to 1e6");
   install_stop_signal_handlers();
   survive_hub_loss("afhub echo");
-  const std::int64_t wait_ns = static_cast<std::int64_t>(options.wait_s * 1e9);
-  connect_to_hub("echo", HubPolicy::kRequire, std::chrono::milliseconds(wait_ns / 1'000'000));
-  // Re-attached after a hub loss, the body's physics may come back after this process.
-  const BodyEntry entry =
-      wait_for_body(options.body, "afhub echo",
-                    reattach_count() > 0 ? std::numeric_limits<std::int64_t>::max()
-                                         : (wait_ns > 0 ? monotonic_ns() + wait_ns : 0));
+  const StartupWait wait(options.wait_s);
+  wait.connect_to_hub("echo");
+  const BodyEntry entry = wait.wait_for_body(options.body, "afhub echo");
   const std::string channel(name_of(entry.info.channel));
   if (entry.info.kind == ChannelKind::kDevice) {
     if (!options.fields.empty())
@@ -116,9 +110,7 @@ void register_echo(CLI::App& app, Runner& selected) {
   echo->add_option("--rate", options->rate_hz,
                    "Print at most this many states per second (by their publish stamps; default: "
                    "every new state)");
-  echo->add_option("--wait", options->wait_s,
-                   "Wait up to this many seconds for the hub and the body to appear, for a "
-                   "script that starts them together (default 0: fail at once)");
+  add_wait_option(echo, options->wait_s, "the body");
   echo->add_option(
       "--timeout", options->timeout_s,
       "With --count: fail when no new state arrives for this many seconds (default 5)");

@@ -6,12 +6,13 @@
 
 #include "afhub/hub/hub_loss.hpp"
 #include "afhub/hub/hub_presence.hpp"
-#include "afhub/hub/stop_signal.hpp"
 #include "afhub/physics/run_loop.hpp"
 #include "afhub/physics/scene_loader.hpp"
 #include "afhub/rt/periodic_loop.hpp"
+#include "afhub/rt/stop_signal.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "commands.hpp"
+#include "connection_options.hpp"
 #include "count_option.hpp"
 #include "format.hpp"
 #include "gain_options.hpp"
@@ -130,7 +131,7 @@ int run_run(const RunCliOptions& options) {
     // A lost hub: the loop holds (no step, no state out), then the process re-executes,
     // waits for a hub and starts its world again from the model (hub_loss.hpp).
     survive_hub_loss("afhub run");
-    connect_to_hub("physics", options.no_autostart ? HubPolicy::kRequire : HubPolicy::kAutostart);
+    connect_to_hub("physics", hub_policy(options.no_autostart));
     channels = std::make_unique<physics::SimChannels>(sim, options.watchdog_s, options.name_space);
     for (const std::string& body : split_commas(options.watchdog_hold))
       channels->hold_on_watchdog(body);
@@ -252,8 +253,7 @@ void register_run(CLI::App& app, Runner& selected) {
                   "one line a step (with --steps: the log is sized before the first step)");
   run->add_flag("--offline", options->offline,
                 "Simulate without a hub: no channels (for reports and measurements)");
-  run->add_flag("--no-autostart", options->no_autostart,
-                "Fail instead of starting a hub when none runs");
+  add_no_autostart_option(run, options->no_autostart);
   run->add_flag("--stop-on-nan", options->stop_on_nan,
                 "Stop (exit 1) at the first step that makes a body NaN or infinite, instead of "
                 "putting the body back at its last good pose with its commands released");

@@ -10,12 +10,13 @@
 #include "afhub/hub/body_claims.hpp"
 #include "afhub/hub/hub_loss.hpp"
 #include "afhub/hub/hub_presence.hpp"
-#include "afhub/hub/stop_signal.hpp"
 #include "afhub/hub/world_command_queue.hpp"
 #include "afhub/rt/clock.hpp"
+#include "afhub/rt/stop_signal.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "afhub/shm_layout/world_control.hpp"
 #include "commands.hpp"
+#include "connection_options.hpp"
 #include "count_option.hpp"
 
 namespace afhub::cli {
@@ -101,7 +102,7 @@ int run_synth(const SynthOptions& options) {
     throw Error("--rate must be between 0 and 100000 Hz");
   install_stop_signal_handlers();
   survive_hub_loss("afhub synth");
-  connect_to_hub("synth", options.no_autostart ? HubPolicy::kRequire : HubPolicy::kAutostart);
+  connect_to_hub("synth", hub_policy(options.no_autostart));
 
   std::vector<std::string> channels;
   for (unsigned i = 0; i < options.bodies; ++i)
@@ -189,8 +190,7 @@ void register_synth(CLI::App& app, Runner& selected) {
   synth->add_option("--rate", options->rate_hz, "Steps per second (default 1000)");
   synth->add_option("--seconds", options->seconds,
                     "Stop after this many seconds (default: until Ctrl-C)");
-  synth->add_flag("--no-autostart", options->no_autostart,
-                  "Fail instead of starting a hub when none runs");
+  add_no_autostart_option(synth, options->no_autostart);
   synth->callback([&selected, options] { selected = [options] { return run_synth(*options); }; });
 }
 

@@ -9,13 +9,15 @@
 #include <memory>
 
 #include "afhub/physics/adf_loader.hpp"
+#include "afhub/rt/percentile.hpp"
 #include "afhub/shm_layout/channel_names.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "afhub/teleop/input_devices_reader.hpp"
 #include "afhub/teleop/teleop_process.hpp"
 #include "commands.hpp"
+#include "connection_options.hpp"
 #include "count_option.hpp"
-#include "realtime_options.hpp"
+#include "loop_options.hpp"
 
 namespace afhub::cli {
 namespace {
@@ -24,9 +26,7 @@ struct TeleopCliOptions {
   std::string file;
   std::string selection;
   std::vector<std::string> devices;
-  double rate_hz = 1000.0;
-  RealtimeOptions realtime;
-  std::uint64_t cycles = 0;
+  LoopRateOptions pacing;
   double wait_s = 10.0;
   double stale_ms = 50.0;
   std::uint64_t latency_samples = 0;
@@ -116,14 +116,10 @@ teleop::TeleopBinding bind_device(const teleop::InputDeviceSpec& spec,
 }
 
 teleop::TeleopOptions teleop_options(const TeleopCliOptions& options) {
-  if (!(options.rate_hz > 0.0 && options.rate_hz <= 100'000.0))
-    throw Error("--rate must be between 0 and 100000 Hz");
-  if (!(options.wait_s >= 0.0 && options.wait_s <= 1e6))
-    throw Error("--wait takes a number of seconds from 0 to 1e6");
   if (!(options.stale_ms > 0.0 && options.stale_ms <= 60'000.0))
     throw Error("--stale takes milliseconds from 0 (excluded) to 60000");
   teleop::TeleopOptions teleop;
-  set_realtime_options(options.realtime, teleop.loop);  // before the file is read
+  set_loop_rate_options(options.pacing, teleop.loop);  // before the file is read
   const teleop::FeedbackSource feedback = feedback_source(options.feedback);
   const teleop::InputDevicesFile file = teleop::read_input_devices(options.file);
   for (const std::string& warning : file.warnings) std::fprintf(stderr, "%s\n", warning.c_str());
@@ -139,8 +135,6 @@ teleop::TeleopOptions teleop_options(const TeleopCliOptions& options) {
                                                          : options.devices[i]));
     teleop.bindings.back().feedback = feedback;
   }
-  teleop.loop.period_ns = static_cast<std::int64_t>(std::llround(1e9 / options.rate_hz));
-  teleop.loop.max_cycles = options.cycles;
   teleop.wait_s = options.wait_s;
   teleop.stale_ns = std::llround(options.stale_ms * 1e6);
   teleop.latency_samples = options.latency_samples;
@@ -148,10 +142,12 @@ teleop::TeleopOptions teleop_options(const TeleopCliOptions& options) {
 }
 
 void print_latency(const char* what, std::vector<std::int64_t>& samples) {
+  std::sort(samples.begin(), samples.end());
+  const auto us = [&](double q) {
+    return static_cast<double>(percentile_of_sorted<std::int64_t>(samples, q)) * 1e-3;
+  };
   std::printf("%s: %zu samples, p50 %.1f us, p99 %.1f us, max %.1f us\n", what, samples.size(),
-              static_cast<double>(teleop::quantile(samples, 0.5)) * 1e-3,
-              static_cast<double>(teleop::quantile(samples, 0.99)) * 1e-3,
-              static_cast<double>(teleop::quantile(samples, 1.0)) * 1e-3);
+              us(0.5), us(0.99), us(1.0));
 }
 
 }  // namespace
@@ -178,13 +174,8 @@ void register_teleop(CLI::App& app, Runner& selected) {
   teleop->add_option("--device", options->devices,
                      "The driver (its --name) of each selected device, in the order of -d; "
                      "repeat it, e.g. --device virtual --device falcon2");
-  teleop->add_option("--rate", options->rate_hz, "Loop rate in Hz (default 1000)");
-  add_realtime_options(teleop, options->realtime, "the loop");
-  add_count_option(teleop, "--cycles", options->cycles,
-                   "Stop after this many cycles (default: Ctrl-C)");
-  teleop->add_option("--wait", options->wait_s,
-                     "Wait this many seconds for the hub, then each device and body, before "
-                     "failing (default 10; 0 fails at once)");
+  add_loop_rate_options(teleop, options->pacing);
+  add_wait_option(teleop, options->wait_s, "each device and body");
   teleop->add_option("--stale", options->stale_ms,
                      "A device with no new sample for this many ms (its driver stopped) "
                      "releases its body: held where it is, no force, until samples come back; "

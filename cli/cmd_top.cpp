@@ -9,7 +9,7 @@
 #include "afhub/hub/hub_loss.hpp"
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/hub/loop_stats_reader.hpp"
-#include "afhub/hub/stop_signal.hpp"
+#include "afhub/rt/stop_signal.hpp"
 #include "commands.hpp"
 #include "loop_table.hpp"
 

@@ -1,13 +1,18 @@
 // `afhub view`: the live scene in a browser (see viewer/).
 #include <time.h>
 
+#include <atomic>
 #include <cstdio>
+#include <cstdlib>
 #include <map>
 #include <memory>
+#include <thread>
 
+#include "afhub/hub/hub_loss.hpp"
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/hub/json_writer.hpp"
-#include "afhub/hub/stop_signal.hpp"
+#include "afhub/rt/clock.hpp"
+#include "afhub/rt/stop_signal.hpp"
 #include "afhub/shm_layout/channel_names.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "afhub/teleop/input_devices_reader.hpp"
@@ -16,6 +21,7 @@
 #include "afhub/viewer/view_server.hpp"
 #include "afhub/viewer/world_commander.hpp"
 #include "commands.hpp"
+#include "connection_options.hpp"
 
 namespace afhub::cli {
 namespace {
@@ -48,6 +54,21 @@ std::string paired_cameras_json(const std::string& path) {
   return json.str();
 }
 
+// After a hub loss the viewer re-executes (hub_loss.hpp) and listens again on the port
+// it had, where its pages reconnect: a port picked with --port 0 is passed on here.
+constexpr const char* kKeptPortVariable = "AFHUB_VIEW_PORT";
+
+// Sends the hub-lost frame at display rate until `attached`: the pages say so while
+// connect_to_hub() waits for a hub to come back.
+void send_hub_lost_frames(viewer::ViewServer& server, std::int64_t period_ns,
+                          const std::atomic<bool>& attached) {
+  const std::vector<std::uint8_t> frame = viewer::hub_lost_frame();
+  while (!attached) {
+    server.broadcast(frame);
+    sleep_until_ns(monotonic_ns() + period_ns);
+  }
+}
+
 int run_view(const ViewOptions& options) {
   if (options.port < 0 || options.port > 65535) throw Error("--port takes 0 to 65535");
   if (!(options.rate_hz >= 1.0 && options.rate_hz <= 240.0))
@@ -56,32 +77,69 @@ int run_view(const ViewOptions& options) {
   if (!options.input_devices.empty())
     server_options.paired_cameras_json = paired_cameras_json(options.input_devices);
   install_stop_signal_handlers();
-  connect_to_hub("view", HubPolicy::kRequire);
-  viewer::PoseFeed feed(world_instance(options.name_space));
-  viewer::JointCommander commander;
-  viewer::WorldCommander world(world_instance(options.name_space));
   server_options.bind = options.bind;
   server_options.port = options.port;
-  server_options.allow_commands = options.allow_commands;
-  if (options.allow_commands) {
-    server_options.run_command = [&commander](const std::string& query) {
-      return commander.run(query);
-    };
-    server_options.run_world = [&world](const std::string& query) { return world.run(query); };
+  if (const char* kept = std::getenv(kKeptPortVariable)) {
+    server_options.port = std::atoi(kept);
+    unsetenv(kKeptPortVariable);
   }
+  server_options.allow_commands = options.allow_commands;
+  // The commanders need the hub: until it is attached (and once it is lost) a command
+  // is refused.
+  std::atomic<bool> attached{false};
+  std::unique_ptr<viewer::JointCommander> commander;
+  std::unique_ptr<viewer::WorldCommander> world;
+  const auto no_hub = [&attached] { return !attached || hub_lost(); };
+  const std::string no_hub_text = "the viewer has no hub; it re-attaches when one comes back";
+  if (options.allow_commands) {
+    server_options.run_command = [&](const std::string& query) {
+      return no_hub() ? no_hub_text : commander->run(query);
+    };
+    server_options.run_world = [&](const std::string& query) {
+      return no_hub() ? no_hub_text : world->run(query);
+    };
+  }
+  // Serving before the hub is attached: after a re-exec, pages reconnect at once and
+  // are told that the hub is lost.
   viewer::ViewServer server(server_options);
+  setenv(kKeptPortVariable, std::to_string(server.port()).c_str(), 1);
+  survive_hub_loss("afhub view");
+  const auto period_ns = static_cast<std::int64_t>(1e9 / options.rate_hz);
+  {
+    std::thread lost_frames;
+    if (reattach_count() > 0)
+      lost_frames =
+          std::thread(send_hub_lost_frames, std::ref(server), period_ns, std::cref(attached));
+    try {
+      connect_to_hub("view", HubPolicy::kRequire);
+    } catch (...) {
+      attached = true;  // ends the thread
+      if (lost_frames.joinable()) lost_frames.join();
+      throw;
+    }
+    commander = std::make_unique<viewer::JointCommander>();
+    world = std::make_unique<viewer::WorldCommander>(world_instance(options.name_space));
+    attached = true;
+    if (lost_frames.joinable()) lost_frames.join();
+  }
+  viewer::PoseFeed feed(world_instance(options.name_space));
   std::printf("afhub view: http://%s:%d/ (%s; Ctrl-C stops)\n", options.bind.c_str(), server.port(),
               options.allow_commands ? "commands allowed" : "read-only: no commands");
   std::fflush(stdout);
   // Display rate, by absolute deadlines: the viewer reads the hub this often, never
   // at the physics' rate.
-  const auto period_ns = static_cast<std::int64_t>(1e9 / options.rate_hz);
   std::int64_t deadline = monotonic_ns();
   std::vector<std::uint8_t> frame;
+  const std::vector<std::uint8_t> lost = viewer::hub_lost_frame();
   while (!stop_requested()) {
-    if (auto scene = feed.update(frame)) server.set_scene(std::move(scene));
-    if (feed.joints_changed()) server.set_joints(feed.joints_json());
-    server.broadcast(frame);
+    if (hub_lost()) {
+      // Until the re-exec: the last frame read is not sent again as if live.
+      server.broadcast(lost);
+    } else {
+      if (auto scene = feed.update(frame)) server.set_scene(std::move(scene));
+      if (feed.joints_changed()) server.set_joints(feed.joints_json());
+      server.broadcast(frame);
+    }
     deadline += period_ns;
     const std::int64_t now = monotonic_ns();
     if (deadline < now) deadline = now;  // after a stall, go on from now
@@ -109,8 +167,7 @@ void register_view(CLI::App& app, Runner& selected) {
                  "Let the page send joint position commands and pause, step and reset the "
                  "world (off: the page is read-only).");
   view->add_option("--rate", options->rate_hz, "Pose frames per second.")->capture_default_str();
-  view->add_option("--namespace", options->name_space,
-                   "The world of an `afhub run --namespace PREFIX`.");
+  add_world_namespace_option(view, options->name_space);
   view->add_option("--input-devices", options->input_devices,
                    "AMBF input_devices.yaml: mark the cameras its devices pair (\"pair "
                    "cameras\") in the page's viewport list.");

@@ -8,13 +8,14 @@
 
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/hub_presence.hpp"
-#include "afhub/hub/stop_signal.hpp"
 #include "afhub/rt/clock.hpp"
+#include "afhub/rt/stop_signal.hpp"
 #include "afhub/shm_layout/channel_names.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "afhub/shm_layout/limits.hpp"
 #include "afhub/shm_layout/world.hpp"
 #include "commands.hpp"
+#include "connection_options.hpp"
 #include "count_option.hpp"
 
 namespace afhub::cli {
@@ -157,8 +158,7 @@ void register_world(CLI::App& app, Runner& selected) {
     auto* command = world->add_subcommand(entry.name, entry.help);
     if (entry.action == WorldAction::kStep)
       add_count_option(command, "N", options->steps, "Number of steps (default 1)");
-    command->add_option("--namespace", options->name_space,
-                        "The world of a physics run with `afhub run --namespace NS`");
+    add_world_namespace_option(command, options->name_space);
     command->add_option("--timeout", options->timeout_s,
                         "Fail when the simulation has not acted within this many seconds "
                         "(default 5)");

@@ -1,13 +1,15 @@
 #!/usr/bin/env bash
-# The dependency rule of the folders (README, "Architecture"): shm_layout at the
-# bottom; hub/client on it, hub/daemon on the client; rt on hub/client; rt/yaml (the
-# located YAML reader) on shm_layout alone; the physics core on shm_layout and
-# rt/yaml; physics/channels and controllers on rt; bench on those;
-# device_drivers on rt (not physics or controllers); cli on everything. Fails, naming the file, when a layer includes one above it, or
-# when the physics core's test binary links iceoryx.
+# The dependency rule of the folders (docs/architecture.md, "Layers"): shm_layout at
+# the bottom; rt and rt/yaml (the located YAML reader) on shm_layout alone; hub/client
+# on rt, hub/daemon on the client; the physics core on shm_layout and rt/yaml;
+# physics/channels and controllers on hub/client; bench on those; device_drivers on
+# hub/client (not physics or controllers); cli on everything. Fails, naming the file,
+# when a layer includes one above it, or when the test binary of rt or of the physics
+# core links iceoryx.
 set -euo pipefail
 source_dir=$1
 physics_core_tests=$2
+rt_tests=$3
 status=0
 
 # forbid FOLDER PATTERN...: no file under FOLDER includes a header matching PATTERN.
@@ -23,8 +25,8 @@ forbid() {
 }
 
 forbid shm_layout 'hub|rt|yaml|physics|controllers|devices|bench'
-forbid hub 'rt|physics|controllers|devices|bench'
-forbid rt 'physics|controllers|devices|bench'
+forbid hub 'physics|controllers|devices|bench'
+forbid rt 'hub|physics|controllers|devices|bench'
 forbid rt/yaml 'hub|rt|physics|controllers|devices|bench'
 forbid physics/src 'hub|rt|controllers|devices|bench'
 forbid physics/include 'hub|rt|controllers|devices|bench'
@@ -43,12 +45,17 @@ if grep -rn '#include "commands.hpp"\|#include "format.hpp"' "$source_dir"/{shm_
   status=1
 fi
 
-if ldd "$physics_core_tests" | grep -i iceoryx; then
-  echo "layering: the physics core's tests link iceoryx" >&2
-  status=1
-fi
-if nm -C "$physics_core_tests" | grep "iox::" >/dev/null; then
-  echo "layering: the physics core's tests contain iceoryx symbols" >&2
-  status=1
-fi
+# no_iceoryx WHAT BINARY: BINARY (WHAT's tests, linking WHAT alone) has no iceoryx in it.
+no_iceoryx() {
+  if ldd "$2" | grep -i iceoryx; then
+    echo "layering: $1's tests link iceoryx" >&2
+    status=1
+  fi
+  if nm -C "$2" | grep "iox::" >/dev/null; then
+    echo "layering: $1's tests contain iceoryx symbols" >&2
+    status=1
+  fi
+}
+no_iceoryx "the physics core" "$physics_core_tests"
+no_iceoryx rt "$rt_tests"
 exit $status

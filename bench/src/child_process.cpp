@@ -1,35 +1,23 @@
 // Child processes of the bench (see child_process.hpp).
 #include "child_process.hpp"
 
-#include <fcntl.h>
 #include <signal.h>
-#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include <cerrno>
-#include <cstring>
-
-#include "afhub/shm_layout/error.hpp"
+#include "afhub/hub/process_spawn.hpp"
 
 namespace afhub::bench {
 
 ChildProcess::ChildProcess(const std::vector<std::string>& argv, const std::string& output_path) {
-  std::vector<char*> args;
-  for (const std::string& arg : argv) args.push_back(const_cast<char*>(arg.c_str()));
-  args.push_back(nullptr);
-  pid_ = fork();
-  if (pid_ < 0) throw Error(std::string("cannot start ") + argv[0] + ": " + std::strerror(errno));
-  if (pid_ == 0) {
-    prctl(PR_SET_PDEATHSIG, SIGTERM);
-    const int out = open(output_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    if (out >= 0) {
-      dup2(out, STDOUT_FILENO);
-      dup2(out, STDERR_FILENO);
-    }
-    execvp(args[0], args.data());
-    _exit(127);
-  }
+  // Through setpriv (util-linux), which sets the parent-death signal and then runs the
+  // program in its place: posix_spawn has no attribute for it.
+  std::vector<std::string> words{"setpriv", "--pdeathsig", "TERM", "--"};
+  words.insert(words.end(), argv.begin(), argv.end());
+  SpawnOptions options;
+  options.search_path = true;
+  options.output_path = output_path;
+  pid_ = spawn_process(words, options);
 }
 
 int ChildProcess::wait(int timeout_ms) {
@@ -56,13 +44,6 @@ int ChildProcess::stop() {
   if (wait(5000) != -1) return exit_code_;
   kill(pid_, SIGKILL);
   return wait(5000);
-}
-
-std::string self_executable() {
-  char path[4096];
-  const ssize_t n = readlink("/proc/self/exe", path, sizeof path - 1);
-  if (n <= 0) throw Error("cannot find this executable through /proc/self/exe");
-  return std::string(path, static_cast<std::size_t>(n));
 }
 
 }  // namespace afhub::bench

@@ -12,7 +12,8 @@ namespace afhub::bench {
 
 class ChildProcess {
  public:
-  // Runs argv[0] (searched in PATH) with stdout and stderr to `output_path`.
+  // Runs argv[0] (searched in PATH) with stdout and stderr to `output_path`; throws
+  // afhub::Error when it cannot. A program that is not found exits with 127.
   explicit ChildProcess(const std::vector<std::string>& argv,
                         const std::string& output_path = "/dev/null");
   ~ChildProcess() { stop(); }
@@ -30,8 +31,5 @@ class ChildProcess {
   pid_t pid_ = -1;
   int exit_code_ = -1;
 };
-
-// This executable, for starting `afhub` subcommands.
-std::string self_executable();
 
 }  // namespace afhub::bench

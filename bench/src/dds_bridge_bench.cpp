@@ -29,8 +29,9 @@
 #include "afhub/hub/body_claims.hpp"
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/hub/sample_waiter.hpp"
-#include "afhub/hub/stop_signal.hpp"
 #include "afhub/rt/clock.hpp"
+#include "afhub/rt/percentile.hpp"
+#include "afhub/rt/stop_signal.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "afhub_dds.h"
 #include "dds_convert.hpp"
@@ -281,9 +282,7 @@ int hub_pong() {
 
 // Percentile of sorted values, in microseconds.
 double quantile_us(const std::vector<std::int64_t>& sorted, double q) {
-  if (sorted.empty()) return 0.0;
-  const auto at = static_cast<std::size_t>(q * static_cast<double>(sorted.size() - 1));
-  return static_cast<double>(sorted[at]) * 1e-3;
+  return static_cast<double>(percentile_of_sorted<std::int64_t>(sorted, q)) * 1e-3;
 }
 
 int sink(double seconds) {

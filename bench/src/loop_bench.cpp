@@ -15,6 +15,7 @@
 #include "afhub/controllers/joint_targets.hpp"
 #include "afhub/hub/channel.hpp"
 #include "afhub/hub/hub_presence.hpp"
+#include "afhub/hub/process_spawn.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "afhub/shm_layout/world.hpp"
 #include "child_process.hpp"
@@ -29,20 +30,19 @@ constexpr std::int64_t kPeriodNs = 1'000'000;
 void read_cyclictest(const std::string& path, LoopResult& result) {
   std::ifstream in(path);
   std::uint64_t overflows = 0;
+  std::int64_t max_us = 0;
   for (std::string line; std::getline(in, line);) {
     unsigned long long bin = 0, count = 0;
     if (std::sscanf(line.c_str(), "%llu %llu", &bin, &count) == 2) {
-      for (unsigned long long i = 0; i < count; ++i)
-        result.cyclictest_wake.record(static_cast<double>(bin));
+      result.cyclictest_wake.record(static_cast<std::int64_t>(bin) * 1000, count);
     } else if (std::sscanf(line.c_str(), "# Max Latencies: %llu", &bin) == 1) {
-      result.cyclictest_max_us = static_cast<double>(bin);
+      max_us = static_cast<std::int64_t>(bin);
     } else if (std::sscanf(line.c_str(), "# Histogram Overflows: %llu", &count) == 1) {
       overflows = count;
     }
   }
-  // Samples beyond the histogram's range count at the maximum.
-  for (std::uint64_t i = 0; i < overflows; ++i)
-    result.cyclictest_wake.record(result.cyclictest_max_us);
+  // Samples beyond cyclictest's histogram count at its maximum, which is exact.
+  result.cyclictest_wake.record(max_us * 1000, overflows);
   if (result.cyclictest_wake.count() == 0)
     throw Error("cyclictest wrote no histogram to " + path + ": see that file");
 }
@@ -56,7 +56,7 @@ void run_loop_bench(const BenchOptions& options, LoopResult& result) {
   const std::string priority = std::to_string(options.fifo_priority);
   std::fprintf(stderr, "afhub bench: 1 kHz loop for %.0f s against %s\n", options.loop_seconds,
                options.model.c_str());
-  ChildProcess physics({self_executable(), "run", options.model, "--no-autostart", "--fifo",
+  ChildProcess physics({this_executable(), "run", options.model, "--no-autostart", "--fifo",
                         priority, "--lock-memory"},
                        prefix + "-physics.log");
 

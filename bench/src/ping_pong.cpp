@@ -11,7 +11,8 @@
 #include <memory>
 
 #include "afhub/bench/bench.hpp"
-#include "afhub/hub/stop_signal.hpp"
+#include "afhub/hub/process_spawn.hpp"
+#include "afhub/rt/stop_signal.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "child_process.hpp"
 #include "transport.hpp"
@@ -117,7 +118,7 @@ void run_ping_pong(const BenchOptions& options, BenchResults& results) {
     std::fprintf(stderr, "afhub bench: starting the %s peer\n", name.c_str());
     Peer peer{&result, *kind, open_transport(*kind, Side::kPing, session), nullptr};
     peer.process = std::make_unique<ChildProcess>(
-        std::vector<std::string>{self_executable(), "bench", "--peer", name, "--session", session,
+        std::vector<std::string>{this_executable(), "bench", "--peer", name, "--session", session,
                                  "--peer-cpu", std::to_string(pong_cpu())},
         "/tmp/afhub-bench-" + session + "-" + name + ".log");
     peer.end->connect(monotonic_ns() + kConnectTimeoutNs);

@@ -9,6 +9,7 @@
 
 #include "afhub/bench/bench.hpp"
 #include "afhub/hub/json_writer.hpp"
+#include "afhub/rt/percentile.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "child_process.hpp"
 
@@ -116,9 +117,7 @@ std::string results_json(const BenchResults& results) {
     json.null();
   json.key("cyclictest_us");
   if (loop_ran && results.loop.cyclictest_skipped.empty()) {
-    Distribution floor = summarize(results.loop.cyclictest_wake);
-    floor.max_us = results.loop.cyclictest_max_us;
-    write_distribution(json, floor, false, "");
+    write_distribution(json, summarize(results.loop.cyclictest_wake), false, "");
   } else {
     json.null();
   }
@@ -161,13 +160,13 @@ std::string results_table(const BenchResults& results) {
       for (std::uint32_t bytes : kPayloadSizes) {
         std::vector<double> sorted = transport.one_way_us.at(bytes);
         std::sort(sorted.begin(), sorted.end());
-        const double value = nearest_rank(sorted, quantile);
+        const double value = percentile_of_sorted<double>(sorted, quantile);
         const TransportResult* afhub = find(results, "afhub");
         std::string cell = format("%.1f", value);
         if (afhub && afhub != &transport) {
           std::vector<double> base = afhub->one_way_us.at(bytes);
           std::sort(base.begin(), base.end());
-          cell += format(" (%.1fx)", value / nearest_rank(base, quantile));
+          cell += format(" (%.1fx)", value / percentile_of_sorted<double>(base, quantile));
         }
         cells.push_back(cell);
       }
@@ -188,9 +187,7 @@ std::string results_table(const BenchResults& results) {
     };
     loop_row("afhub", summarize(loop.controller_wake));
     if (loop.cyclictest_skipped.empty()) {
-      Distribution floor = summarize(loop.cyclictest_wake);
-      floor.max_us = loop.cyclictest_max_us;
-      loop_row("cyclic", floor);
+      loop_row("cyclic", summarize(loop.cyclictest_wake));
     } else {
       out += "cyclictest skipped: " + loop.cyclictest_skipped + "\n";
     }
@@ -260,16 +257,19 @@ void write_plot(const BenchResults& results, const std::string& png_path) {
   // Wake-up histograms on a log-log scale, so that the tail shows beside the bulk.
   script << "set logscale xy\nset yrange [0.7:*]\nset key top right\n"
          << "set title '1 kHz loop wake-up latency'\nset xlabel 'wake-up latency (us)'\n"
-         << "set ylabel 'cycles'\n";
+         << "set ylabel 'cycles per bin'\n";
   if (loop.skipped.empty()) {
     const auto histogram = [&](const LatencyHistogram& h, const std::string& file,
                                const std::string& title) {
       const std::string data = dir + "/loop-" + file + ".dat";
       std::ofstream out(data);
-      // One line per 1 us bin up to the maximum, at the bin's upper edge.
-      const auto last = std::min(static_cast<std::size_t>(h.max_us()), LatencyHistogram::kBins - 1);
+      // One line per bin up to the maximum's, at the bin's upper edge. Above 256 ns a bin
+      // is 1/128 of a power of two: as wide on the log scale as its neighbours.
+      const std::size_t last =
+          std::min(LatencyHistogram::bin_of(h.max_ns()), LatencyHistogram::kBins - 1);
       for (std::size_t bin = 0; bin <= last; ++bin)
-        out << bin + 1 << " " << h.bin_count(bin) << "\n";
+        out << static_cast<double>(LatencyHistogram::highest_ns(bin) + 1) * 1e-3 << " "
+            << h.bin_count(bin) << "\n";
       return "'" + data + "' with steps lw 2 title '" + title + "'";
     };
     script << "plot " << histogram(loop.controller_wake, "afhub", "afhub controller");

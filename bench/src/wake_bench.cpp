@@ -11,6 +11,7 @@
 #include <fstream>
 #include <iterator>
 
+#include "afhub/hub/process_spawn.hpp"
 #include "afhub/rt/cpu_wake_latency.hpp"
 #include "afhub/rt/periodic_loop.hpp"
 #include "afhub/shm_layout/error.hpp"
@@ -65,10 +66,15 @@ int run_wake_peer(std::size_t setting, double seconds) {
   LoopTiming timing;
   run_periodic(loop, timing, [] { return true; });
   const LatencyHistogram& wake = timing.wake_latency();
-  std::printf("max %.3f\n", wake.max_us());
+  // The maximum, then "<a value of the bin, ns> <count>" per bin.
+  std::printf("max %lld\n", static_cast<long long>(wake.max_ns()));
   for (std::size_t bin = 0; bin < LatencyHistogram::kBins; ++bin)
     if (const std::uint64_t count = wake.bin_count(bin))
-      std::printf("%zu %llu\n", bin, static_cast<unsigned long long>(count));
+      std::printf("%lld %llu\n", static_cast<long long>(LatencyHistogram::lowest_ns(bin)),
+                  static_cast<unsigned long long>(count));
+  if (const std::uint64_t count = wake.overflow())
+    std::printf("%lld %llu\n", static_cast<long long>(wake.max_ns()),
+                static_cast<unsigned long long>(count));
   return 0;
 }
 
@@ -98,24 +104,22 @@ class OutputFile {
   std::string path_;
 };
 
-// Reads one loop's output into `result` (refused) or `pooled` and `max_us`.
-void read_loop_output(const std::string& path, WakeResult& result, LatencyHistogram& pooled,
-                      double& max_us) {
+// Reads one loop's output into `result` (refused) or `pooled`.
+void read_loop_output(const std::string& path, WakeResult& result, LatencyHistogram& pooled) {
   std::ifstream in(path);
   bool ran = false;
   for (std::string line; std::getline(in, line);) {
-    unsigned long long bin = 0, count = 0;
-    double max = 0.0;
+    long long ns = 0;
+    unsigned long long count = 0;
     if (line.rfind("refused: ", 0) == 0) {
       result.skipped = "refused: " + line.substr(9);
       return;
     }
-    if (std::sscanf(line.c_str(), "max %lf", &max) == 1) {
-      max_us = std::max(max_us, max);
+    if (std::sscanf(line.c_str(), "max %lld", &ns) == 1) {
+      pooled.record(ns, 0);  // no sample: only the exact maximum
       ran = true;
-    } else if (std::sscanf(line.c_str(), "%llu %llu", &bin, &count) == 2) {
-      for (unsigned long long k = 0; k < count; ++k)
-        pooled.record(static_cast<double>(bin) + 0.5);  // the bin's middle
+    } else if (std::sscanf(line.c_str(), "%lld %llu", &ns, &count) == 2) {
+      pooled.record(ns, count);  // into the same bin as in the loop
     }
   }
   if (!ran)
@@ -128,7 +132,6 @@ void read_loop_output(const std::string& path, WakeResult& result, LatencyHistog
 WakeResults run_wake_bench(const WakeOptions& options) {
   const std::vector<WakeSetting>& settings = wake_settings();
   std::vector<LatencyHistogram> pooled(settings.size());
-  std::vector<double> max_us(settings.size(), 0.0);
   WakeResults results;
   results.options = options;
   for (const WakeSetting& setting : settings) results.settings.push_back({setting, {}, {}});
@@ -149,7 +152,7 @@ WakeResults run_wake_bench(const WakeOptions& options) {
         }
       }
       ChildProcess loop(
-          {self_executable(), "bench", "wake", "--peer", std::to_string(i), "--seconds", seconds},
+          {this_executable(), "bench", "wake", "--peer", std::to_string(i), "--seconds", seconds},
           output.path());
       const int timeout_ms = static_cast<int>(options.seconds * 1000.0) + 10'000;
       const int code = loop.wait(timeout_ms);
@@ -159,18 +162,11 @@ WakeResults run_wake_bench(const WakeOptions& options) {
       if (code != 0)
         throw Error("afhub bench wake: the loop of \"" + settings[i].name + "\" exited with " +
                     std::to_string(code) + ": " + text_of(output.path()));
-      read_loop_output(output.path(), results.settings[i], pooled[i], max_us[i]);
+      read_loop_output(output.path(), results.settings[i], pooled[i]);
     }
     if (foreign_limit) ++results.rounds_with_foreign_limit;
   }
-  for (std::size_t i = 0; i < settings.size(); ++i) {
-    Distribution& wake = results.settings[i].wake;
-    wake = summarize(pooled[i]);
-    // Percentiles are bins' upper edges; none is above the exact maximum.
-    wake.max_us = max_us[i];
-    for (double* p : {&wake.p50_us, &wake.p90_us, &wake.p99_us, &wake.p999_us})
-      *p = std::min(*p, wake.max_us);
-  }
+  for (std::size_t i = 0; i < settings.size(); ++i) results.settings[i].wake = summarize(pooled[i]);
   return results;
 }
 

@@ -5,15 +5,15 @@
 #include <sched.h>
 
 #include <cstdio>
-#include <limits>
 #include <memory>
 
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/hub_loss.hpp"
 #include "afhub/hub/hub_presence.hpp"
+#include "afhub/hub/loop_stats_publisher.hpp"
 #include "afhub/hub/sample_waiter.hpp"
-#include "afhub/hub/stop_signal.hpp"
-#include "afhub/rt/loop_stats_publisher.hpp"
+#include "afhub/hub/startup_wait.hpp"
+#include "afhub/rt/stop_signal.hpp"
 #include "afhub/shm_layout/error.hpp"
 
 namespace afhub {
@@ -105,18 +105,11 @@ void run_lockstep(BodyClient& body, const ControllerOptions& options, const Cont
 int run_controller(const ControllerOptions& options, const ControllerCycle& cycle,
                    LoopTiming* timing_out) {
   install_stop_signal_handlers();
-  if (!(options.wait_s >= 0.0 && options.wait_s <= 1e6))
-    throw Error("the wait for the hub and the body must be 0 to 1e6 seconds (--wait)");
   const std::string who = "afhub " + options.name;
   if (options.survive_hub_loss) survive_hub_loss(who);
-  // One deadline for the hub and then the body: what a launch script waits at most.
-  // Re-attached after a hub loss, it waits for its body as long as it takes.
-  const std::int64_t give_up_ns =
-      reattach_count() > 0 ? std::numeric_limits<std::int64_t>::max()
-                           : monotonic_ns() + static_cast<std::int64_t>(options.wait_s * 1e9);
-  connect_to_hub("ctl", HubPolicy::kRequire,
-                 std::chrono::milliseconds(static_cast<std::int64_t>(options.wait_s * 1e3)));
-  const BodyEntry entry = wait_for_body(options.body, who, give_up_ns, "wait longer with --wait");
+  const StartupWait wait(options.wait_s);
+  wait.connect_to_hub("ctl");
+  const BodyEntry entry = wait.wait_for_body(options.body, who);
   const std::string channel(name_of(entry.info.channel));
   BodyClient body(entry);
   LoopTiming own_timing;  // preallocated before memory is locked and the loop starts

@@ -9,8 +9,9 @@
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/hub_loss.hpp"
 #include "afhub/hub/hub_presence.hpp"
-#include "afhub/hub/stop_signal.hpp"
-#include "afhub/rt/loop_stats_publisher.hpp"
+#include "afhub/hub/loop_stats_publisher.hpp"
+#include "afhub/hub/startup_wait.hpp"
+#include "afhub/rt/stop_signal.hpp"
 #include "afhub/shm_layout/error.hpp"
 
 namespace afhub::devices {
@@ -122,6 +123,7 @@ int run_driver(const DeviceOpener& open, const DriverOptions& options) {
   install_stop_signal_handlers();
   const std::string who = "afhub device " + options.name;
   const std::string channel = device_channel_name(options.name);
+  const StartupWait wait(options.wait_s);  // checked before the device opens
   if (options.survive_hub_loss) {
     survive_hub_loss(who);
     const std::int64_t timeout_ns = safe_request_timeout_ns(options.loop);
@@ -139,8 +141,7 @@ int run_driver(const DeviceOpener& open, const DriverOptions& options) {
     });
   }
   std::unique_ptr<Device> device = open();
-  connect_to_hub("device", HubPolicy::kRequire,
-                 std::chrono::milliseconds(static_cast<std::int64_t>(options.wait_s * 1e3)));
+  wait.connect_to_hub("device");
   Writer<DeviceState> states(body_state_channel(channel));
   LatestReader<DeviceCommand> commands(body_command_channel(channel));
   DirectoryPublisher directory;

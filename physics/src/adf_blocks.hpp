@@ -84,6 +84,9 @@ void scale_shapes(std::vector<ShapeSpec>& shapes, double scale);
 // The whole model's checks (model_checks.cpp): unique and unreserved channels, and
 // the per-body capacities of the hub's payloads.
 void check_model(const Model& model);
+// Refuses a model of more than kMaxModelBodies bodies with `count` listed so far,
+// `where` being the first of those a file lists, before any of them is read.
+void count_model_bodies(std::size_t count, const SourceLocation& where);
 // Counts a body that publishes; refuses the one past the hub's kMaxBodies.
 void count_published_body(const std::string& identifier, const SourceLocation& where,
                           std::size_t& published);

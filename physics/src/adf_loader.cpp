@@ -131,7 +131,10 @@ void load_file(const std::string& path, const YAML::Node& root, Model& model, Un
 
   // Block names are scoped per file (as in AMBF): another file may use the same ones.
   std::map<std::string, std::size_t> body_in_file;
-  for (const auto& [identifier, listed, block] : header_list(file, index, "bodies")) {
+  const std::vector<ListedBlock> bodies = header_list(file, index, "bodies");
+  if (!bodies.empty())
+    count_model_bodies(model.bodies.size() + bodies.size(), file.at(bodies.front().listed));
+  for (const auto& [identifier, listed, block] : bodies) {
     if (auto [first, added] = body_in_file.try_emplace(identifier, model.bodies.size()); !added)
       fail(file.at(listed), "'" + identifier + "' is listed twice (first defined at " +
                                 model.bodies[first->second].where.str() + ")");
@@ -139,7 +142,11 @@ void load_file(const std::string& path, const YAML::Node& root, Model& model, Un
     if (!model.bodies.back().passive)
       count_published_body(identifier, model.bodies.back().where, pending.published_bodies);
   }
-  for (const auto& [identifier, listed, block] : header_list(file, index, "soft bodies")) {
+  const std::vector<ListedBlock> soft_bodies = header_list(file, index, "soft bodies");
+  if (!soft_bodies.empty())
+    count_model_bodies(model.bodies.size() + model.soft_bodies.size() + soft_bodies.size(),
+                       file.at(soft_bodies.front().listed));
+  for (const auto& [identifier, listed, block] : soft_bodies) {
     model.soft_bodies.push_back(read_soft_body(file, block, identifier, context));
     count_published_body(identifier, model.soft_bodies.back().where, pending.published_bodies);
   }
@@ -166,8 +173,7 @@ void load_adf_files_into(const std::vector<std::string>& paths, Model& model) {
   LoadedChannels channels;
   std::vector<std::string> copy_suffix;  // per body: the index a copy's name got
   for (const std::string& path : paths) {
-    YAML::Node root = yaml::load_map(path, kMaxDescriptionFileBytes,
-                                     "an ADF file (a map with 'bodies' and 'joints' lists)");
+    YAML::Node root = yaml::load_map(path, "an ADF file (a map with 'bodies' and 'joints' lists)");
     const FileSpan span{path, model.bodies.size(), model.soft_bodies.size(), pending.joints.size()};
     try {
       load_file(path, root, model, pending);

@@ -160,7 +160,4 @@ inline std::vector<ListedBlock> header_list(const FileReader& file, const yaml::
   return out;
 }
 
-// Model and description files are read whole before parsing; none comes near this.
-inline constexpr std::uintmax_t kMaxDescriptionFileBytes = 64u << 20;
-
 }  // namespace afhub::physics

@@ -77,6 +77,13 @@ void check_model(const Model& model) {
                                std::to_string(kMaxActuatorsPerBody) + " (kMaxActuatorsPerBody)");
 }
 
+void count_model_bodies(std::size_t count, const SourceLocation& where) {
+  if (count > kMaxModelBodies)
+    fail(where, "the model lists " + std::to_string(count) + " bodies with this list; afhub " +
+                    "simulates at most " + std::to_string(kMaxModelBodies) +
+                    " (kMaxModelBodies): split the scene into several runs");
+}
+
 void count_published_body(const std::string& identifier, const SourceLocation& where,
                           std::size_t& published) {
   if (++published > kMaxBodies)

@@ -60,8 +60,7 @@ WorldObjectSpec read_world_object(const FileReader& file, const YAML::Node& bloc
 
 // Reads the world file into model.world; returns its environment ADF, if any.
 std::string load_world(const std::string& path, Model& model) {
-  const YAML::Node root = yaml::load_map(path, kMaxDescriptionFileBytes,
-                                         "a world file (enclosure, lights, cameras, ...)");
+  const YAML::Node root = yaml::load_map(path, "a world file (enclosure, lights, cameras, ...)");
   FileReader file(path, model);
   WorldSpec& world = model.world;
   world.file = path;
@@ -98,8 +97,7 @@ std::string load_world(const std::string& path, Model& model) {
 
 // Named colors (r, g, b, a from 0 to 255) for bodies that say `color: <name>`.
 void apply_colors(const std::string& path, Model& model) {
-  const YAML::Node root =
-      yaml::load_map(path, kMaxDescriptionFileBytes, "a color file (name: {r, g, b, a})");
+  const YAML::Node root = yaml::load_map(path, "a color file (name: {r, g, b, a})");
   FileReader file(path, model);
   const yaml::MapIndex index(file, root);
   for (BodySpec& body : model.bodies) {
@@ -137,8 +135,8 @@ Model load_scene(const SceneRequest& request) {
   std::vector<std::string> adf_files;
   std::string world_file = request.world_file, color_file;
   if (!request.launch_file.empty()) {
-    const YAML::Node root = yaml::load_map(request.launch_file, kMaxDescriptionFileBytes,
-                                           "a launch file ('world config', 'multibody configs')");
+    const YAML::Node root =
+        yaml::load_map(request.launch_file, "a launch file ('world config', 'multibody configs')");
     FileReader file(request.launch_file, model);
     if (YAML::Node world = root["world config"]; world && world_file.empty())
       world_file = existing_path(file, world, "world config");

@@ -5,7 +5,7 @@
 
 #include <cerrno>
 
-#include "afhub/hub/stop_signal.hpp"
+#include "afhub/rt/stop_signal.hpp"
 
 namespace afhub {
 

@@ -10,9 +10,9 @@
 #include <cstdio>
 #include <cstring>
 
-#include "afhub/hub/stop_signal.hpp"
 #include "afhub/rt/clock.hpp"
 #include "afhub/rt/cpu_wake_latency.hpp"
+#include "afhub/rt/stop_signal.hpp"
 
 namespace afhub {
 namespace {

@@ -125,8 +125,9 @@ const char* scene_poses_problem(const ScenePoses& poses, std::size_t bytes) noex
   return nullptr;
 }
 
-// The first count beyond its capacity or the chunk's `bytes`, named; nullptr when
-// every count fits. The chunk holds at least the kind's fixed size.
+// The first count beyond its capacity or the chunk's `bytes` (or a body state's
+// unterminated refusal reason), named; nullptr when every count fits. The chunk holds
+// at least the kind's fixed size.
 const char* count_beyond_capacity(const char* at, std::size_t bytes, PayloadKind kind) noexcept {
   switch (kind) {
     case PayloadKind::kBodyState: {
@@ -134,6 +135,7 @@ const char* count_beyond_capacity(const char* at, std::size_t bytes, PayloadKind
       if (state->joint_count > kMaxJointsPerBody || bytes < body_state_bytes(state->joint_count))
         return "BodyState.joint_count";
       if (state->sensor_ray_count > kMaxSensorRaysPerBody) return "BodyState.sensor_ray_count";
+      if (!terminated(state->refusal_reason)) return "BodyState.refusal_reason";
       return nullptr;
     }
     case PayloadKind::kBodyCommand: {

@@ -1,9 +1,8 @@
 // `afhub check` and `afhub run` on bad input (issue 13): a clear error and exit 1,
 // never a crash, an abort or a run that never ends. Needs no hub: `check` never
-// connects and `run` is refused before it would.
-#include <fcntl.h>
+// connects and `run` is refused before it would. And `afhub cmd` with values the
+// physics refuses (with a hub and the physics of its own).
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <filesystem>
@@ -11,6 +10,7 @@
 
 #include "afhub/shm_layout/limits.hpp"
 #include "afhub_process.hpp"
+#include "hub_environment.hpp"
 #include "model_files.hpp"
 
 namespace afhub::test {
@@ -18,33 +18,16 @@ namespace {
 
 namespace fs = std::filesystem;
 
-bool contains(const std::string& text, const std::string& part) {
-  return text.find(part) != std::string::npos;
-}
-
 const std::string kArm = AFHUB_EXAMPLE_MODELS "/arm7.yaml";
 
 // `afhub args...` as an unprivileged user (file modes apply even when the tests
-// run as root); returns its exit code, and its stderr in `err`.
-int run_unprivileged(const std::vector<std::string>& args, const std::string& err_path,
-                     std::string& err) {
-  const pid_t child = ::fork();
-  if (child == 0) {
-    const int fd = ::open(err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0666);
-    if (fd < 0 || ::dup2(fd, STDERR_FILENO) < 0) ::_exit(90);
-    if (::geteuid() == 0 && (::setgid(65534) != 0 || ::setuid(65534) != 0)) ::_exit(91);
-    std::vector<char*> argv;
-    std::string exe = afhub_executable();
-    argv.push_back(exe.data());
-    for (const auto& arg : args) argv.push_back(const_cast<char*>(arg.c_str()));
-    argv.push_back(nullptr);
-    ::execv(exe.c_str(), argv.data());
-    ::_exit(127);
-  }
-  int status = 0;
-  ::waitpid(child, &status, 0);
-  err = read_file(err_path);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+// run as root).
+RunResult run_unprivileged(const std::vector<std::string>& args) {
+  std::vector<std::string> argv;
+  if (geteuid() == 0) argv = {"setpriv", "--reuid", "65534", "--regid", "65534", "--clear-groups"};
+  argv.push_back(afhub_executable());
+  argv.insert(argv.end(), args.begin(), args.end());
+  return run_command(argv);
 }
 
 TEST(BadInputCli, ABrokenMeshIsAnErrorForCheckAndRunNotACrash) {
@@ -69,11 +52,11 @@ TEST(BadInputCli, AnUnreadableModelOrADirectoryIsSaidSo) {
   fs::permissions(model, fs::perms::none);
   fs::permissions(folder.dir(), fs::perms::all);
   for (const std::string command : {"check", "run"}) {
-    std::string err;
     std::vector<std::string> args = {command, model};
     if (command == "run") args.push_back("--offline");
-    const int code = run_unprivileged(args, (folder.dir() / "err.txt").string(), err);
-    EXPECT_EQ(code, 1) << command << ": " << err;
+    const RunResult unprivileged = run_unprivileged(args);
+    const std::string& err = unprivileged.err;
+    EXPECT_EQ(unprivileged.exit_code, 1) << command << ": " << err;
     EXPECT_TRUE(contains(err, "locked.yaml: error: permission denied")) << command << ": " << err;
     EXPECT_FALSE(contains(err, "terminate")) << err;
 
@@ -129,6 +112,40 @@ TEST(BadInputCli, NumericOptionsOutOfRangeAreRefused) {
   // In range, they are taken.
   RunResult ten = run_afhub({"run", kArm, "--offline", "--fast", "--steps", "10"});
   EXPECT_EQ(ten.exit_code, 0) << ten.err;
+}
+
+// `cmd arm/base --joint base-link1=1e9` used to say "commanding" and keep sending while
+// the physics refused every command on its own stderr: cmd reads the refusal back from
+// the body's state and stops with the physics' reason.
+TEST(BadInputCli, CmdStopsWithThePhysicsRefusalOfItsCommand) {
+  afhub::testing::ModelFolder folder;
+  const std::string log = (folder.dir() / "run.log").string();
+  ScopedProcess hub(start_test_hub());
+  ASSERT_GT(hub.pid, 0);
+  ScopedProcess physics(spawn_afhub({"run", kArm, "--no-autostart"}, log));
+  ASSERT_TRUE(wait_until(
+      [] {
+        return run_afhub({"echo", "arm/base", "-n", "1"}).exit_code == 0;
+      },
+      std::chrono::seconds(20)))
+      << read_file(log);
+  for (const std::vector<std::string>& args :
+       {std::vector<std::string>{"cmd", "arm/base", "--joint", "base-link1=1e9"},
+        {"cmd", "arm/base", "--joint", "base-link1=1e9", "--once"},
+        {"cmd", "arm/base", "--joint-effort", "1e12", "--others", "release"}}) {
+    const RunResult result = run_afhub(args, std::chrono::seconds(10));
+    EXPECT_EQ(result.exit_code, 1) << args.back() << ": " << result.err;
+    EXPECT_TRUE(contains(result.err,
+                         "the physics refused the command for afhub/arm/base: joint 0 "
+                         "(base-link1)"))
+        << result.err;
+    EXPECT_TRUE(contains(result.err, "is beyond its bound of")) << result.err;
+  }
+  // A command within the bounds is taken.
+  const RunResult taken = run_afhub({"cmd", "arm/base", "--joint", "base-link1=0.1", "--once"});
+  EXPECT_EQ(taken.exit_code, 0) << taken.err;
+  EXPECT_EQ(physics.stop(), 0) << read_file(log);
+  EXPECT_EQ(hub.stop(), 0);
 }
 
 }  // namespace

@@ -17,6 +17,7 @@
 
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/channel.hpp"
+#include "afhub/rt/percentile.hpp"
 #include "afhub/shm_layout/device.hpp"
 #include "afhub_process.hpp"
 
@@ -86,9 +87,7 @@ TEST_F(DeviceSafety, ForceGoesToZeroWhenTheCommandingProcessIsKilled) {
     commander.stop();
   }
   std::sort(kill_to_zero_ms.begin(), kill_to_zero_ms.end());
-  const auto at = [&](double q) {
-    return kill_to_zero_ms[static_cast<std::size_t>(q * (kill_to_zero_ms.size() - 1))];
-  };
+  const auto at = [&](double q) { return percentile_of_sorted<double>(kill_to_zero_ms, q); };
   std::printf(
       "SIGKILL of the commanding process to zero force (10 ms watchdog, 1 kHz driver, %d "
       "kills): p50 %.2f ms, p99 %.2f ms, max %.2f ms\n",

@@ -14,6 +14,7 @@
 #include <thread>
 #include <vector>
 
+#include "afhub/rt/percentile.hpp"
 #include "real_time.hpp"
 #include "teleop_session.hpp"
 
@@ -284,8 +285,8 @@ TEST(TeleopEndToEnd, KillingTeleopWhileItPushesZeroesTheForce) {
   std::printf(
       "SIGKILL of afhub teleop to zero device force (%d kills): p50 %.2f ms, p99 %.2f ms, max "
       "%.2f ms\n",
-      kKills, kill_to_zero_ms[kKills / 2], kill_to_zero_ms[(kKills - 1) * 99 / 100],
-      kill_to_zero_ms.back());
+      kKills, percentile_of_sorted<double>(kill_to_zero_ms, 0.5),
+      percentile_of_sorted<double>(kill_to_zero_ms, 0.99), kill_to_zero_ms.back());
 }
 
 // The physics stopped (SIGSTOP), then SIGKILLed, while the device pushes into the floor:

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "afhub/hub/channel.hpp"
+#include "afhub/rt/percentile.hpp"
 #include "afhub/shm_layout/body_state.hpp"
 #include "afhub/shm_layout/channel_names.hpp"
 #include "afhub/shm_layout/device.hpp"
@@ -177,8 +178,8 @@ inline Following measure_following(TeleopSession& session, double scale, int cou
   }
   f.rms = std::sqrt(square_sum / n);
   std::sort(errors.begin(), errors.end());
-  f.median = errors[errors.size() / 2];
-  f.p99 = errors[errors.size() * 99 / 100];
+  f.median = percentile_of_sorted<double>(errors, 0.5);
+  f.p99 = percentile_of_sorted<double>(errors, 0.99);
   return f;
 }
 

@@ -63,8 +63,11 @@ TEST(FaultsCommands, FiniteExtremeCommandsAreRefusedAndCountedWhileTheWorldRunsO
   for (const auto& extreme : extremes) {
     std::vector<std::string> args = {"cmd", "arm/base", "--once"};
     args.insert(args.end(), extreme.begin(), extreme.end());
+    // cmd reads the refusal back from the body's state and says it, exit 1.
     RunResult sent = run_afhub(args);
-    ASSERT_EQ(sent.exit_code, 0) << sent.err;
+    EXPECT_EQ(sent.exit_code, 1) << sent.err;
+    EXPECT_TRUE(contains(sent.err, "the physics refused the command for afhub/arm/base: "))
+        << sent.err;
     ++expected;
     ASSERT_TRUE(wait_until([&] { return run.now().rejected_commands >= expected; }, 5s))
         << extreme[0] << ": " << run.now().rejected_commands << " refused\n"

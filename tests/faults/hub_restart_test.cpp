@@ -6,6 +6,9 @@
 // the first hub (no chunk leak).
 // The re-attach times are printed, not asserted (docs/faults.md quotes them).
 //
+// `afhub view` is taken through a hub stop and a SIGKILL too: it tells its pages that
+// the hub is lost, then serves live frames again.
+//
 // The test process never joins a hub itself: iceoryx's runtime could not join the next
 // one. It looks through tests/faults/fault_probe, a process per look.
 #include <fcntl.h>
@@ -18,19 +21,24 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <iterator>
 #include <map>
+#include <memory>
+#include <regex>
 #include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "afhub/hub/hub_presence.hpp"
+#include "afhub/hub/process_spawn.hpp"
 #include "afhub/shm_layout/body_command.hpp"
 #include "afhub/shm_layout/body_state.hpp"
 #include "afhub/shm_layout/world.hpp"
 #include "afhub_process.hpp"
 #include "hub_environment.hpp"
+#include "web_client.hpp"
 
 namespace afhub::test {
 namespace {
@@ -68,23 +76,26 @@ std::string median_text(std::vector<double> values) {
   return text;
 }
 
+// Starts tests/faults/fault_probe with `args`, its stdout and stderr in two files.
+pid_t start_probe(const std::vector<std::string>& args, const std::string& out_path,
+                  const std::string& err_path) {
+  std::vector<std::string> argv{AFHUB_FAULT_PROBE};
+  argv.insert(argv.end(), args.begin(), args.end());
+  SpawnOptions options;
+  options.stdout_fd = open(out_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  options.stderr_fd = open(err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  const pid_t pid = spawn_process(argv, options);
+  close(options.stdout_fd);
+  close(options.stderr_fd);
+  return pid;
+}
+
 // Runs tests/faults/fault_probe with `args`, at most `timeout`.
 RunResult run_afhub_probe(const std::vector<std::string>& args,
                           std::chrono::milliseconds timeout = 20s) {
   const std::string out_path = "/tmp/afhub-fault-probe.out";
   const std::string err_path = "/tmp/afhub-fault-probe.err";
-  const pid_t pid = fork();
-  if (pid == 0) {
-    const int out = open(out_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    const int err = open(err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    dup2(out, STDOUT_FILENO);
-    dup2(err, STDERR_FILENO);
-    std::vector<char*> argv{const_cast<char*>(AFHUB_FAULT_PROBE)};
-    for (const std::string& arg : args) argv.push_back(const_cast<char*>(arg.c_str()));
-    argv.push_back(nullptr);
-    execv(AFHUB_FAULT_PROBE, argv.data());
-    _exit(127);
-  }
+  const pid_t pid = start_probe(args, out_path, err_path);
   RunResult result;
   int status = 0;
   if (wait_until([&] { return waitpid(pid, &status, WNOHANG) == pid; }, timeout)) {
@@ -308,15 +319,7 @@ TEST(HubLoss, MakeSafeHooksRunBeforeTheReexec) {
   unlink(err.c_str());
   ScopedProcess hub = spawn_afhub({"hub"}, hub_log);
   ASSERT_TRUE(wait_until([] { return probe_roudi() == RoudiPresence::kRunning; }, 10s));
-  ScopedProcess hooked = fork();
-  if (hooked.pid == 0) {
-    const int out_fd = open(out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    const int err_fd = open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    dup2(out_fd, STDOUT_FILENO);
-    dup2(err_fd, STDERR_FILENO);
-    execl(AFHUB_FAULT_PROBE, AFHUB_FAULT_PROBE, "hooked", nullptr);
-    _exit(127);
-  }
+  ScopedProcess hooked = start_probe({"hooked"}, out, err);
   ASSERT_TRUE(wait_until([&] { return contains(read_file(out), "attached 0"); }, 10s))
       << read_file(err);
   EXPECT_FALSE(contains(read_file(err), "hook ran")) << "with the hub up; the probe said:\n"
@@ -338,6 +341,94 @@ TEST(HubLoss, MakeSafeHooksRunBeforeTheReexec) {
   }
   EXPECT_EQ(hooked.stop(), 0) << read_file(err);
   EXPECT_EQ(hub.stop(), 0);
+}
+
+// The flags and catalog count of a viewer frame (viewer/include/afhub/viewer/pose_feed.hpp).
+std::uint32_t frame_word(const std::vector<std::uint8_t>& frame, std::size_t at) {
+  std::uint32_t word = 0;
+  if (frame.size() >= at + 4) std::memcpy(&word, frame.data() + at, 4);
+  return word;
+}
+bool says_hub_lost(const std::vector<std::uint8_t>& frame) {
+  return (frame_word(frame, 12) & 2) != 0;
+}
+
+// Live frames on `page`: the hub is not lost, bodies are listed, and the simulation
+// time moves on from one frame to a later one.
+bool live_frames(FrameCounter& page, std::chrono::milliseconds timeout) {
+  double seen = -1.0;
+  return wait_until(
+      [&] {
+        const std::vector<std::uint8_t> frame = page.last_frame();
+        if (frame.size() < 32 || says_hub_lost(frame) || frame_word(frame, 24) == 0) return false;
+        const double sim_time_s = page.last_sim_time_s();
+        if (seen >= 0.0 && sim_time_s > seen) return true;
+        seen = sim_time_s;
+        return false;
+      },
+      timeout);
+}
+
+// `afhub view` outlives its hub like every client (before, it served its last frame as
+// live forever). Meanwhile its pages are told the hub is lost; once a hub is back they
+// get live frames again, on the same port.
+TEST(HubLoss, TheViewerSaysTheHubIsLostThenServesLiveFramesAgain) {
+  const std::string view_log = "/tmp/afhub-fault-view.log",
+                    physics_log = "/tmp/afhub-fault-view-physics.log";
+  ScopedProcess hub(start_test_hub());
+  ASSERT_GT(hub.pid, 0);
+  ScopedProcess physics = spawn_afhub(
+      {"run", std::string(AFHUB_EXAMPLE_MODELS) + "/arm7.yaml", "--no-autostart"}, physics_log);
+  ScopedProcess view = spawn_afhub({"view", "--port", "0"}, view_log);
+  int port = 0;
+  const std::regex url("http://127\\.0\\.0\\.1:([0-9]+)/");
+  ASSERT_TRUE(wait_until(
+      [&] {
+        std::smatch match;
+        const std::string text = read_file(view_log);
+        if (!std::regex_search(text, match, url)) return false;
+        port = std::stoi(match[1]);
+        return true;
+      },
+      20s))
+      << read_file(view_log);
+  {
+    FrameCounter page(port);
+    ASSERT_TRUE(page.connected());
+    ASSERT_TRUE(live_frames(page, 20s)) << tail(read_file(view_log));
+  }
+  for (const bool sigkill : {false, true}) {
+    const char* loss = sigkill ? "a hub SIGKILL" : "`afhub hub stop --force`";
+    if (sigkill) {
+      kill(hub.pid, SIGKILL);
+    } else {
+      ASSERT_EQ(run_afhub({"hub", "stop", "--force"}).exit_code, 0);
+    }
+    waitpid(hub.pid, nullptr, 0);
+    hub.pid = -1;
+    // The viewer re-executes to re-attach: a page reconnects, as the page does (the first
+    // try may reach the viewer before it noticed), and is told that the hub is lost.
+    std::unique_ptr<FrameCounter> page;
+    ASSERT_TRUE(wait_until(
+        [&] {
+          if (!page || !page->connected() || page->closed())
+            page = std::make_unique<FrameCounter>(port);
+          return page->connected() && says_hub_lost(page->last_frame());
+        },
+        20s))
+        << "after " << loss << ":\n"
+        << tail(read_file(view_log));
+    EXPECT_EQ(exit_code_if_ended(view.pid), -1) << tail(read_file(view_log));
+
+    hub.pid = spawn_afhub({"hub"}, "/tmp/afhub-test-hub.log");
+    ASSERT_TRUE(wait_until([] { return probe_roudi() == RoudiPresence::kRunning; }, 10s));
+    // Live again on the connection opened while the hub was lost.
+    EXPECT_TRUE(live_frames(*page, 30s))
+        << "after " << loss << ":\nview: " << tail(read_file(view_log))
+        << "\nphysics: " << tail(read_file(physics_log));
+  }
+  EXPECT_EQ(view.stop(), 0) << tail(read_file(view_log));
+  EXPECT_EQ(physics.stop(), 0);
 }
 
 INSTANTIATE_TEST_SUITE_P(Faults, HubRestart, ::testing::Values(false, true),

@@ -100,11 +100,7 @@ TEST_F(PidNamespaceTest, KilledClientInAChildPidNamespaceIsCleanedUp) {
 TEST_F(PidNamespaceTest, HubStopSignalsTheLockHolderOnly) {
   ScopedProcess hub = spawn_afhub({"hub"}, hub_log_);
   ASSERT_TRUE(hub_up()) << read_file(hub_log_);
-  ScopedProcess bystander = fork();
-  if (bystander.pid == 0) {
-    execlp("sleep", "sleep", "30", nullptr);
-    _exit(127);
-  }
+  ScopedProcess bystander = spawn_command({"sleep", "30"});
   std::ofstream(hub_identity_path(hub_directory())) << bystander.pid << " 42\n";
 
   const RunResult stop = run_afhub({"hub", "stop"});

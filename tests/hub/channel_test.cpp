@@ -10,11 +10,13 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <memory>
+#include <string>
 #include <vector>
 
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/hub_presence.hpp"
-#include "afhub/hub/stop_signal.hpp"
+#include "afhub/rt/stop_signal.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "afhub_process.hpp"
 #include "iceoryx_posh/popo/untyped_publisher.hpp"
@@ -194,6 +196,29 @@ TEST(Catalog, ListsAnnouncedBodiesWithJointsAndOwnerUntilTheyGo) {
   }
   // The directory's publisher is gone: so is the body.
   EXPECT_TRUE(test::wait_until([&] { return catalog.channels().empty(); }, 3s));
+}
+
+// A process may own bodies through two directories (the physics and a device driver in
+// one test binary): the catalog lists the bodies of both, each until its own goes.
+TEST(Catalog, ListsTheBodiesOfEveryDirectoryOfAProcess) {
+  CatalogReader catalog;
+  catalog.wait(1s);
+  const auto listed = [&](const std::string& channel) {
+    const auto names = catalog.channels();
+    return std::find(names.begin(), names.end(), channel) != names.end();
+  };
+  auto physics = std::make_unique<DirectoryPublisher>();
+  physics->add(make_body_entry("test_ns/gripper/palm", {}));
+  physics->publish();
+  ASSERT_TRUE(test::wait_until([&] { return listed("test_ns/gripper/palm"); }, 2s));
+  DirectoryPublisher driver;
+  driver.add(make_device_entry("two_directories"));
+  driver.publish();
+  EXPECT_TRUE(test::wait_until([&] { return listed("device/two_directories"); }, 2s));
+  EXPECT_TRUE(listed("test_ns/gripper/palm")) << "the second directory hid the first's bodies";
+  physics.reset();
+  EXPECT_TRUE(test::wait_until([&] { return !listed("test_ns/gripper/palm"); }, 3s));
+  EXPECT_TRUE(listed("device/two_directories"));
 }
 
 // The hub measures each body's rate from one state sample a second: it is a reader

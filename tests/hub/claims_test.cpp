@@ -12,7 +12,10 @@
 #include <vector>
 
 #include "afhub/hub/bodies.hpp"
+#include "afhub/hub/channel.hpp"
 #include "afhub/hub/hub_presence.hpp"
+#include "afhub/shm_layout/channel_names.hpp"
+#include "afhub/shm_layout/error.hpp"
 #include "afhub/shm_layout/health.hpp"
 #include "afhub/shm_layout/limits.hpp"
 #include "afhub/shm_layout/world.hpp"
@@ -192,6 +195,29 @@ TEST(Claims, AControllerFindingNoPublisherPortLeftSaysSo) {
   EXPECT_EQ(ctl.exit_code, 1) << ctl.err;
   EXPECT_TRUE(contains(ctl.err, "iceoryx publisher port and the hub has 0 left of 512")) << ctl.err;
   EXPECT_EQ(synth.stop(), 0);
+}
+
+// Every client reads the hub's catalog, and iceoryx connects at most
+// kMaxReadersPerChannel readers to one channel: the client past them is told so (it
+// was told the hub is not an afhub hub).
+TEST(Claims, AClientPastTheCatalogsReadersIsToldTheLimit) {
+  const ChannelId catalog{std::string(kService), std::string(kHubInstance),
+                          std::string(kCatalogEvent)};
+  std::vector<std::unique_ptr<RawLatestReader>> readers;
+  for (std::size_t i = 0; i < kMaxReadersPerChannel; ++i)
+    readers.push_back(std::make_unique<RawLatestReader>(catalog, PayloadKind::kCatalog));
+  CatalogReader late;
+  try {
+    late.wait(3s);
+    FAIL() << "a reader past the limit got the catalog";
+  } catch (const Error& error) {
+    EXPECT_TRUE(contains(error.what(),
+                         "the hub has no room for another reader of its catalog: "
+                         "iceoryx connects at most " +
+                             std::to_string(kMaxReadersPerChannel) + " readers"))
+        << error.what();
+    EXPECT_TRUE(contains(error.what(), " afhub processes are attached")) << error.what();
+  }
 }
 
 }  // namespace

@@ -141,11 +141,7 @@ void expect_hub_survives_client_dead_holding_port_locks(const char* linger) {
       },
       5s));
 
-  const pid_t holder = fork();
-  if (holder == 0) {
-    execl(AFHUB_PORT_LOCK_HOLDER, AFHUB_PORT_LOCK_HOLDER, linger, nullptr);
-    _exit(127);
-  }
+  const pid_t holder = spawn_command({AFHUB_PORT_LOCK_HOLDER, linger});
   int status = 0;
   waitpid(holder, &status, 0);
   ASSERT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL)

@@ -3,7 +3,9 @@
 // The robots: the project's example arm, RCM arm and gripper in turn (no ../shared
 // needed), and the da Vinci ECM from ../shared loaded N times (each a copy with its
 // own channels). Run: build/release/bin/scene_benchmark, and
-// docs/plot_load_time.py --json FILE to plot (docs/load_time.png).
+// docs/plot_load_time.py --json FILE to plot (docs/load_time.png). Also N bodies
+// at one point, every pair of them overlapping, for N from 1000 to 8000: loading
+// must stay linear in N (it was cubic: 8000 took over 100 s).
 #include <benchmark/benchmark.h>
 
 #include <string>
@@ -11,6 +13,7 @@
 
 #include "afhub/physics/adf_loader.hpp"
 #include "afhub/physics/simulation.hpp"
+#include "model_files.hpp"
 #include "shared_models.hpp"
 
 namespace afhub::physics {
@@ -54,6 +57,26 @@ void BM_LoadEcms(benchmark::State& state) {
   load(state, std::vector<std::string>(static_cast<std::size_t>(state.range(0)), kEcm));
 }
 BENCHMARK(BM_LoadEcms)->ArgName("robots")->DenseRange(1, 8)->Arg(16)->Unit(benchmark::kMillisecond);
+
+// N passive spheres at the origin: N^2/2 overlapping pairs for the first step to meet.
+void BM_LoadOverlappingBodies(benchmark::State& state) {
+  const auto count = static_cast<int>(state.range(0));
+  std::string text = "bodies: [";
+  for (int i = 0; i < count; ++i) text += (i ? ", BODY b" : "BODY b") + std::to_string(i);
+  text += "]\n";
+  for (int i = 0; i < count; ++i)
+    text += "BODY b" + std::to_string(i) + ":\n  name: b" + std::to_string(i) +
+            "\n  mass: 1\n  passive: true\n  shape: sphere\n  geometry: {radius: 0.1}\n";
+  const afhub::testing::ModelFolder folder;
+  load(state, {folder.write("overlapping.yaml", text)});
+}
+BENCHMARK(BM_LoadOverlappingBodies)
+    ->ArgName("bodies")
+    ->Arg(1000)
+    ->Arg(2000)
+    ->Arg(4000)
+    ->Arg(8000)
+    ->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace afhub::physics

@@ -13,8 +13,8 @@
 #include <thread>
 #include <vector>
 
-#include "afhub/hub/stop_signal.hpp"
 #include "afhub/rt/clock.hpp"
+#include "afhub/rt/stop_signal.hpp"
 
 namespace afhub {
 namespace {
@@ -262,6 +262,13 @@ TEST(PeriodicLoop, TheCycleCanEndTheLoop) {
   EXPECT_EQ(cycles, 7);
 }
 
+// A percentile read from the histogram: never below the exact one (nearest rank of
+// the same samples), less than 1/128 above it (latency_histogram.hpp).
+void expect_near_exact(double read_us, double exact_us) {
+  EXPECT_GE(read_us, exact_us);
+  EXPECT_LT(read_us, exact_us * (1.0 + 1.0 / 128)) << "exact " << exact_us << " us";
+}
+
 TEST(LoopTiming, PercentilesOfKnownDurations) {
   LoopTiming timing;
   // Wake-up latencies 0.5, 1.5, ..., 999.5 us; compute 10 us except ten of 5 ms.
@@ -273,15 +280,14 @@ TEST(LoopTiming, PercentilesOfKnownDurations) {
   EXPECT_EQ(stats.cycles, 1000u);
   EXPECT_EQ(stats.overruns, 3u);
   EXPECT_EQ(stats.late_commands, 2u);
-  // Percentiles read as the upper edge of their 1 us bin.
-  EXPECT_DOUBLE_EQ(stats.wake_latency.p50_us, 500.0);
-  EXPECT_DOUBLE_EQ(stats.wake_latency.p99_us, 990.0);
-  EXPECT_DOUBLE_EQ(stats.wake_latency.p999_us, 999.0);
+  expect_near_exact(stats.wake_latency.p50_us, 499.5);  // the 500th of 1000
+  expect_near_exact(stats.wake_latency.p99_us, 989.5);
+  expect_near_exact(stats.wake_latency.p999_us, 998.5);
   EXPECT_DOUBLE_EQ(stats.wake_latency.max_us, 999.5);
   // 1% of the cycles are slow: p99 still falls among the fast ones, p99.9 does not.
-  EXPECT_DOUBLE_EQ(stats.compute.p50_us, 11.0);
-  EXPECT_DOUBLE_EQ(stats.compute.p99_us, 11.0);
-  EXPECT_DOUBLE_EQ(stats.compute.p999_us, 5000.0);
+  expect_near_exact(stats.compute.p50_us, 10.0);
+  expect_near_exact(stats.compute.p99_us, 10.0);
+  EXPECT_DOUBLE_EQ(stats.compute.p999_us, 5000.0);  // capped at the exact maximum
   EXPECT_DOUBLE_EQ(stats.compute.max_us, 5000.0);
 }
 
@@ -301,34 +307,6 @@ TEST(PeriodicLoop, TheTimeAfterTheWorkIsCounted) {
   EXPECT_EQ(timing.housekeeping_max_ns(), 400'000);
   EXPECT_EQ(timing.housekeeping_total_ns(), 9 * 20'000 + 400'000);
   EXPECT_EQ(timing.compute().max_us(), 0.0);
-}
-
-// Percentiles read through the block sums agree with a plain scan of every bin, for
-// samples spread over the whole range and piled at its edges.
-TEST(LoopTiming, PercentilesAgreeWithAFullScan) {
-  LatencyHistogram histogram;
-  std::vector<std::uint64_t> bins(LatencyHistogram::kBins, 0);
-  std::uint64_t state = 12345;
-  for (int i = 0; i < 20000; ++i) {
-    state = state * 6364136223846793005ULL + 1442695040888963407ULL;
-    const std::uint64_t r = state >> 33;
-    const double us = r % 4 == 0 ? static_cast<double>(r % 200'000)  // some past the last bin
-                                 : static_cast<double>(r % 50) + 0.5;
-    histogram.record(us);
-    ++bins[std::min(static_cast<std::size_t>(us), LatencyHistogram::kBins - 1)];
-  }
-  for (double q : {0.01, 0.25, 0.5, 0.74, 0.75, 0.76, 0.9, 0.99, 0.999, 1.0}) {
-    const auto rank =
-        static_cast<std::uint64_t>(q * static_cast<double>(histogram.count() - 1)) + 1;
-    std::uint64_t seen = 0;
-    double expected = histogram.max_us();
-    for (std::size_t bin = 0; bin < bins.size(); ++bin)
-      if ((seen += bins[bin]) >= rank) {
-        expected = std::min(static_cast<double>(bin + 1), histogram.max_us());
-        break;
-      }
-    EXPECT_DOUBLE_EQ(histogram.percentile_us(q), expected) << q;
-  }
 }
 
 TEST(LoopTiming, EmptyHistogramReadsZero) {

@@ -96,12 +96,9 @@ TEST_F(Access, SigtermEndsAClientWaitingOnAHubThatDoesNotAnswer) {
 // says why, and leaves no shared memory behind.
 TEST_F(Access, IceoryxLockTakenByAnotherUserIsRefusedWithoutLeavingMemory) {
   unlink("/tmp/roudi.lock");
-  ScopedProcess holder = fork();
-  if (holder.pid == 0) {
-    execlp("setpriv", "setpriv", "--reuid", "65534", "--regid", "65534", "--clear-groups", "flock",
-           "--no-fork", "/tmp/roudi.lock", "sleep", "30", nullptr);  // stopped as one process
-    _exit(127);
-  }
+  ScopedProcess holder =
+      spawn_command({"setpriv", "--reuid", "65534", "--regid", "65534", "--clear-groups", "flock",
+                     "--no-fork", "/tmp/roudi.lock", "sleep", "30"});  // stopped as one process
   ASSERT_TRUE(wait_until([] { return access("/tmp/roudi.lock", F_OK) == 0; }, 5s));
   const RunResult hub = run_afhub({"hub"}, 20s);
   EXPECT_EQ(hub.exit_code, 1) << hub.err;

@@ -15,20 +15,11 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "afhub/hub/process_spawn.hpp"
+#include "afhub/shm_layout/error.hpp"
+
 namespace afhub::test {
 namespace {
-
-[[noreturn]] void exec_afhub(const std::vector<std::string>& args,
-                             const std::vector<std::string>& wrapper = {}) {
-  std::vector<std::string> words = wrapper;
-  words.push_back(afhub_executable());
-  words.insert(words.end(), args.begin(), args.end());
-  std::vector<char*> argv;
-  for (std::string& word : words) argv.push_back(word.data());
-  argv.push_back(nullptr);
-  execvp(argv[0], argv.data());
-  _exit(127);
-}
 
 int exit_code_of(int status) {
   if (WIFEXITED(status)) return WEXITSTATUS(status);
@@ -66,16 +57,19 @@ RunResult run_command(const std::vector<std::string>& args, std::chrono::millise
   if (pipe2(out_pipe, O_CLOEXEC) != 0 || pipe2(err_pipe, O_CLOEXEC) != 0)
     throw std::runtime_error("pipe failed");
   auto start = std::chrono::steady_clock::now();
-  pid_t pid = fork();
-  if (pid == 0) {
-    dup2(out_pipe[1], STDOUT_FILENO);
-    dup2(err_pipe[1], STDERR_FILENO);
-    std::vector<std::string> words = args;
-    std::vector<char*> argv;
-    for (std::string& word : words) argv.push_back(word.data());
-    argv.push_back(nullptr);
-    execvp(argv[0], argv.data());
-    _exit(127);
+  SpawnOptions options;
+  options.search_path = true;
+  options.stdout_fd = out_pipe[1];
+  options.stderr_fd = err_pipe[1];
+  pid_t pid = -1;
+  try {
+    pid = spawn_process(args, options);
+  } catch (const Error& error) {
+    for (int fd : {out_pipe[0], out_pipe[1], err_pipe[0], err_pipe[1]}) close(fd);
+    RunResult result;
+    result.exit_code = 127;  // as a shell says it
+    result.err = error.what();
+    return result;
   }
   close(out_pipe[1]);
   close(err_pipe[1]);
@@ -119,18 +113,21 @@ pid_t spawn_afhub(const std::vector<std::string>& args, const std::string& log_p
   return spawn_wrapped_afhub({}, args, log_path);
 }
 
+pid_t spawn_command(const std::vector<std::string>& argv) {
+  SpawnOptions options;
+  options.search_path = true;
+  return spawn_process(argv, options);
+}
+
 pid_t spawn_wrapped_afhub(const std::vector<std::string>& wrapper,
                           const std::vector<std::string>& args, const std::string& log_path) {
-  pid_t pid = fork();
-  if (pid == 0) {
-    int log = open(log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    if (log >= 0) {
-      dup2(log, STDOUT_FILENO);
-      dup2(log, STDERR_FILENO);
-    }
-    exec_afhub(args, wrapper);
-  }
-  return pid;
+  std::vector<std::string> argv = wrapper;
+  argv.push_back(afhub_executable());
+  argv.insert(argv.end(), args.begin(), args.end());
+  SpawnOptions options;
+  options.search_path = true;
+  options.output_path = log_path;
+  return spawn_process(argv, options);
 }
 
 int stop_process(pid_t pid, int signal, std::chrono::milliseconds timeout) {

@@ -24,6 +24,8 @@ RunResult run_afhub(const std::vector<std::string>& args,
 RunResult run_command(const std::vector<std::string>& argv,
                       std::chrono::milliseconds timeout = std::chrono::seconds(20));
 
+// Starts `argv` (argv[0] found on PATH) in the background, its output shared with the test's.
+pid_t spawn_command(const std::vector<std::string>& argv);
 // Starts `afhub args...` in the background (stdout and stderr to `log_path`).
 pid_t spawn_afhub(const std::vector<std::string>& args, const std::string& log_path = "/dev/null");
 // The same, with `wrapper` before afhub, e.g. {"unshare", "--pid", "--fork"} (found on PATH).

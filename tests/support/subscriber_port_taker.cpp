@@ -13,7 +13,7 @@
 
 #include "afhub/hub/channel.hpp"
 #include "afhub/hub/hub_presence.hpp"
-#include "afhub/hub/stop_signal.hpp"
+#include "afhub/rt/stop_signal.hpp"
 #include "afhub/shm_layout/channel_names.hpp"
 #include "afhub/shm_layout/health.hpp"
 #include "iceoryx_posh/popo/untyped_subscriber.hpp"

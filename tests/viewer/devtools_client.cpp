@@ -2,7 +2,6 @@
 #include "devtools_client.hpp"
 
 #include <civetweb.h>
-#include <fcntl.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -13,6 +12,8 @@
 #include <sstream>
 #include <thread>
 
+#include "afhub/hub/process_spawn.hpp"
+#include "afhub/shm_layout/error.hpp"
 #include "afhub_process.hpp"
 #include "web_client.hpp"
 
@@ -60,21 +61,19 @@ std::string json_quote(const std::string& text) {
 Browser::Browser(const std::string& dir) {
   const std::string profile = dir + "/chromium-profile";
   std::filesystem::remove_all(profile);
-  pid_ = fork();
-  if (pid_ == 0) {
-    setpgid(0, 0);  // its own group: its renderer and GPU processes stop with it
-    const int log = open((dir + "/chromium.log").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    if (log >= 0) {
-      dup2(log, STDOUT_FILENO);
-      dup2(log, STDERR_FILENO);
-    }
-    const std::string user_data = "--user-data-dir=" + profile;
-    execlp("chromium", "chromium", "--headless=new", "--no-sandbox", "--use-gl=swiftshader",
-           "--enable-unsafe-swiftshader", "--window-size=800,600", "--no-first-run",
-           "--remote-debugging-port=0", user_data.c_str(), "about:blank", nullptr);
-    _exit(127);
+  SpawnOptions options;
+  options.search_path = true;
+  options.own_process_group = true;  // its renderer and GPU processes stop with it
+  options.output_path = dir + "/chromium.log";
+  try {
+    pid_ = spawn_process({"chromium", "--headless=new", "--no-sandbox", "--use-gl=swiftshader",
+                          "--enable-unsafe-swiftshader", "--window-size=800,600", "--no-first-run",
+                          "--remote-debugging-port=0", "--user-data-dir=" + profile, "about:blank"},
+                         options);
+  } catch (const Error& error) {
+    problem_ = error.what();
+    return;
   }
-  setpgid(pid_, pid_);
   // Chromium writes the port it chose, and its browser target's path, when it listens.
   int port = 0;
   wait_until(

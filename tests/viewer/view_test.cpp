@@ -141,7 +141,14 @@ TEST_F(ViewTest, ServesThePageThreeJsAndExactlyTheListedMeshes) {
   const HttpReply page = http_request(view.port, "GET", "/");
   EXPECT_EQ(page.status, 200);
   EXPECT_TRUE(contains(page.body, "/viewer.js"));
-  EXPECT_EQ(http_request(view.port, "GET", "/viewer.js").status, 200);
+  EXPECT_TRUE(contains(page.body, "/viewer.css"));
+  // The page's files are viewer/web's, as they were at build time.
+  EXPECT_EQ(page.body, read_file(std::string(AFHUB_VIEWER_WEB) + "/index.html"));
+  for (const std::string name : {"viewer.js", "viewer.css"}) {
+    const HttpReply file = http_request(view.port, "GET", "/" + name);
+    EXPECT_EQ(file.status, 200) << name;
+    EXPECT_EQ(file.body, read_file(std::string(AFHUB_VIEWER_WEB) + "/" + name)) << name;
+  }
   const HttpReply three = http_request(view.port, "GET", "/three/three.min.js");
   EXPECT_EQ(three.status, 200);
   EXPECT_GT(three.body.size(), 100'000U);

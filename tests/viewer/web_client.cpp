@@ -13,20 +13,31 @@
 
 namespace afhub::test {
 
-HttpReply http_request(int port, const std::string& method, const std::string& target) {
-  HttpReply reply;
+int connect_from(const std::string& from, int port) {
   const int fd = socket(AF_INET, SOCK_STREAM, 0);
-  if (fd < 0) return reply;
+  if (fd < 0) return -1;
+  sockaddr_in source{};
+  source.sin_family = AF_INET;
   sockaddr_in address{};
   address.sin_family = AF_INET;
   address.sin_port = htons(static_cast<std::uint16_t>(port));
   address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  if ((!from.empty() && (inet_pton(AF_INET, from.c_str(), &source.sin_addr) != 1 ||
+                         bind(fd, reinterpret_cast<sockaddr*>(&source), sizeof source) != 0)) ||
+      connect(fd, reinterpret_cast<sockaddr*>(&address), sizeof address) != 0) {
+    close(fd);
+    return -1;
+  }
+  return fd;
+}
+
+HttpReply http_request(int port, const std::string& method, const std::string& target,
+                       const std::string& from) {
+  HttpReply reply;
+  const int fd = connect_from(from, port);
+  if (fd < 0) return reply;
   timeval timeout{5, 0};
   setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &timeout, sizeof timeout);
-  if (connect(fd, reinterpret_cast<sockaddr*>(&address), sizeof address) != 0) {
-    close(fd);
-    return reply;
-  }
   const std::string request = method + " " + target +
                               " HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Length: 0\r\n"
                               "Connection: close\r\n\r\n";
@@ -85,7 +96,9 @@ int on_data(mg_connection*, int flags, char* data, size_t length, void* counter)
   return 1;
 }
 
-void on_close(const mg_connection*, void*) {}
+void on_close(const mg_connection*, void* counter) {
+  static_cast<FrameCounter*>(counter)->mark_closed();
+}
 
 }  // namespace
 

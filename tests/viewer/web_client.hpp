@@ -18,7 +18,13 @@ struct HttpReply {
   std::string body;
 };
 
-HttpReply http_request(int port, const std::string& method, const std::string& target);
+// From `from` (a loopback address such as "127.0.0.2"; empty: the default, 127.0.0.1).
+HttpReply http_request(int port, const std::string& method, const std::string& target,
+                       const std::string& from = "");
+
+// A TCP connection to 127.0.0.1:port from the address `from` ("127.0.0.2": any of
+// 127/8 is this machine), or -1.
+int connect_from(const std::string& from, int port);
 
 // A WebSocket client that stops reading at once: it opens /ws with the smallest
 // receive buffer the kernel allows and never reads, as a stalled page would.
@@ -42,6 +48,8 @@ class FrameCounter {
   explicit FrameCounter(int port);
   ~FrameCounter();
   bool connected() const { return connection_ != nullptr; }
+  // Whether the server closed the connection (a page would open another).
+  bool closed() const { return closed_; }
   std::uint64_t binary_frames() const { return binary_; }
   std::uint64_t text_frames() const { return text_; }
   std::uint64_t pings() const { return pings_; }
@@ -53,10 +61,12 @@ class FrameCounter {
   std::uint64_t sim_time_reversals() const { return reversals_; }
 
   void on_frame(int opcode, const char* data, std::size_t length);
+  void mark_closed() { closed_ = true; }
 
  private:
   mg_connection* connection_ = nullptr;
   std::atomic<std::uint64_t> binary_{0}, text_{0}, pings_{0}, reversals_{0};
+  std::atomic<bool> closed_{false};
   std::mutex mutex_;
   std::vector<std::uint8_t> last_;
 };

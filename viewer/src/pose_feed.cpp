@@ -23,6 +23,19 @@ static_assert(kMaxSceneBodies <= 65535 && kMaxJointsPerBody <= 65535,
 
 }  // namespace
 
+std::vector<std::uint8_t> hub_lost_frame() {
+  std::vector<std::uint8_t> frame;
+  put(frame, kFrameMagic);
+  put(frame, std::uint32_t{0});  // no scene
+  put(frame, std::uint32_t{0});  // no entries
+  put(frame, kFrameHubLost);
+  put(frame, 0.0);               // no simulation time
+  put(frame, std::uint32_t{0});  // no catalog
+  put(frame, std::uint32_t{0});  // no joint blocks
+  put(frame, std::uint32_t{0});  // no soft bodies
+  return frame;
+}
+
 PoseFeed::PoseFeed(const std::string& world)
     : scene_reader_({std::string(kService), world, std::string(kSceneEvent)}),
       world_reader_({std::string(kService), world, std::string(kStateEvent)}),
@@ -60,9 +73,9 @@ std::shared_ptr<const ViewScene> PoseFeed::update(std::vector<std::uint8_t>& fra
     soft_.clear();
     for (std::uint32_t s = 0; s < scene->soft_body_count; ++s) {
       const std::string channel = scene->soft_bodies[s].channel.data();
-      soft_.push_back({std::make_unique<LatestReader<SoftBodyMesh>>(
+      soft_.push_back({std::make_unique<CopiedReader<SoftBodyMesh>>(
                            ChannelId{std::string(kService), channel, std::string(kSoftFacesEvent)}),
-                       std::make_unique<LatestReader<SoftBodyMesh>>(ChannelId{
+                       std::make_unique<CopiedReader<SoftBodyMesh>>(ChannelId{
                            std::string(kService), channel, std::string(kSoftNodesEvent)})});
     }
   }
@@ -93,7 +106,7 @@ std::shared_ptr<const ViewScene> PoseFeed::update(std::vector<std::uint8_t>& fra
   put(frame, kFrameMagic);
   put(frame, scene_->generation);
   put(frame, std::uint32_t{0});  // the entry count, set below
-  put(frame, std::uint32_t{paused_ ? 1U : 0U});
+  put(frame, paused_ ? kFramePaused : 0U);
   put(frame, sim_time_s_);
   put(frame, catalog_bodies_);
   put(frame, std::uint32_t{0});  // the joint block count, set below

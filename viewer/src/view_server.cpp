@@ -2,13 +2,22 @@
 #include "afhub/viewer/view_server.hpp"
 
 #include <civetweb.h>
+#include <netinet/in.h>
+#include <netinet/tcp.h>
+#include <strings.h>
+#include <sys/socket.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstring>
 #include <map>
 #include <string_view>
 
 #include "afhub/shm_layout/error.hpp"
+#include "connection_socket.hpp"
+#include "page_socket.hpp"
+#include "web_files.hpp"
+#include "websocket_frames.hpp"
 
 namespace afhub::viewer {
 namespace {
@@ -26,7 +35,14 @@ const std::map<std::string_view, const char*>& three_files() {
   return files;
 }
 
-void send_text(mg_connection* connection, int status, const char* type, const std::string& body) {
+// The content type of an embedded page file, by its extension.
+const char* web_type(std::string_view name) {
+  if (name.ends_with(".html")) return "text/html; charset=utf-8";
+  if (name.ends_with(".css")) return "text/css";
+  return "text/javascript";
+}
+
+void send_text(mg_connection* connection, int status, const char* type, std::string_view body) {
   mg_printf(connection,
             "HTTP/1.1 %d %s\r\nContent-Type: %s\r\nContent-Length: %zu\r\n"
             "Cache-Control: no-store\r\nConnection: close\r\n\r\n",
@@ -38,20 +54,34 @@ int on_request(mg_connection* connection, void* server) {
   return static_cast<ViewServer*>(server)->handle_request(connection);
 }
 
-int on_socket_connect(const mg_connection*, void*) {
-  return 0;
-}  // accept
-
-void on_socket_ready(mg_connection* connection, void* server) {
-  static_cast<ViewServer*>(server)->add_socket(connection);
+ViewServer* server_of(const mg_connection* connection) {
+  return static_cast<ViewServer*>(mg_get_user_data(mg_get_context(connection)));
 }
 
-int on_socket_data(mg_connection*, int, char*, size_t, void*) {
-  return 1;
-}  // keep open
+// civetweb sends a WebSocket upgrade only to its own WebSocket handlers, never to a
+// request handler: /ws is taken here, before civetweb looks at it.
+int on_begin_request(mg_connection* connection) {
+  const mg_request_info* request = mg_get_request_info(connection);
+  if (!request->local_uri_raw || std::strcmp(request->local_uri_raw, "/ws") != 0) return 0;
+  return server_of(connection)->serve_page_socket(connection);
+}
 
-void on_socket_close(const mg_connection* connection, void* server) {
-  static_cast<ViewServer*>(server)->remove_socket(connection);
+int on_connection(const mg_connection* connection, void**) {
+  server_of(connection)->admit();
+  return 0;
+}
+
+// One unmasked frame to a page, whole, while no other thread writes to it.
+bool write_frame(mg_connection* connection, Opcode opcode, std::string_view payload) {
+  std::uint8_t header[10];
+  const std::size_t header_size = write_frame_header(header, opcode, payload.size());
+  mg_lock_connection(connection);
+  // mg_write returns what it wrote: less when a write made no progress for 5 s.
+  const bool whole = mg_write(connection, header, header_size) == static_cast<int>(header_size) &&
+                     (payload.empty() || mg_write(connection, payload.data(), payload.size()) ==
+                                             static_cast<int>(payload.size()));
+  mg_unlock_connection(connection);
+  return whole;
 }
 
 }  // namespace
@@ -61,38 +91,39 @@ ViewServer::ViewServer(ServerOptions options)
   mg_init_library(0);
   const std::string listen = options_.bind + ":" + std::to_string(options_.port);
   // No document root: civetweb serves no file by itself, only what the handler sends.
-  // A page is pinged after a second without a message from it and disconnected
-  // when it leaves pings unanswered: a page that stopped reading, whose frames
-  // would pile up in the kernel's socket buffer. A write makes no progress for at
-  // most 5 s (it then fails and the page is dropped).
+  // Each connection has a worker thread of its own (a page's WebSocket keeps its
+  // thread), so that an address may hold only kConnectionsPerAddress of them, and a
+  // request's headers must have come within 5 s: idle and slow connections from one
+  // address never keep the others' requests waiting. A write that makes no progress
+  // for 5 s fails (a page that stopped reading is dropped).
+  const std::string threads = std::to_string(kWorkerThreads);
   const char* settings[] = {"listening_ports",
                             listen.c_str(),
                             "num_threads",
-                            "16",
+                            threads.c_str(),
                             "enable_directory_listing",
                             "no",
-                            "enable_websocket_ping_pong",
-                            "yes",
-                            "websocket_timeout_ms",
-                            "1000",
+                            "enable_keep_alive",
+                            "no",
                             "request_timeout_ms",
                             "5000",
                             nullptr};
   mg_callbacks callbacks{};
+  callbacks.begin_request = on_begin_request;
+  callbacks.init_connection = on_connection;
   context_ = mg_start(&callbacks, this, settings);
   if (!context_)
     throw Error("cannot listen on " + listen +
                 ": the port is in use or the address is not this machine's; pick another "
                 "with --port or --bind");
   mg_set_request_handler(context_, "/", on_request, this);
-  mg_set_websocket_handler(context_, "/ws", on_socket_connect, on_socket_ready, on_socket_data,
-                           on_socket_close, this);
   mg_server_port ports[4]{};
   const int count = mg_get_server_ports(context_, 4, ports);
   port_ = count > 0 ? ports[0].port : options_.port;
 }
 
 ViewServer::~ViewServer() {
+  stopping_ = true;  // pages' WebSocket readers end, so that mg_stop's wait does
   if (context_) mg_stop(context_);
   mg_exit_library();
 }
@@ -128,10 +159,10 @@ int ViewServer::connections() {
 void ViewServer::add_socket(mg_connection* connection) {
   auto sender =
       std::make_unique<FrameSender>([connection](const std::uint8_t* data, std::size_t size) {
-        const int written = mg_websocket_write(connection, MG_WEBSOCKET_OPCODE_BINARY,
-                                               reinterpret_cast<const char*>(data), size);
-        // A write that timed out part-way returns what it wrote: the stream is broken then.
-        if (written >= static_cast<int>(size)) return true;
+        // A write that timed out part-way broke the stream.
+        if (write_frame(connection, Opcode::kBinary,
+                        std::string_view(reinterpret_cast<const char*>(data), size)))
+          return true;
         std::fprintf(stderr,
                      "afhub view: dropped a page that stopped reading (a frame could not be sent "
                      "in 5 s)\n");
@@ -153,6 +184,74 @@ void ViewServer::remove_socket(const mg_connection* connection) {
   // Waits, without the lock, for a write in progress: civetweb frees the connection
   // once this returns.
   sender.reset();
+}
+
+bool ViewServer::page_dropped(const mg_connection* connection) {
+  std::lock_guard lock(mutex_);
+  const auto found = senders_.find(connection);
+  return found == senders_.end() || found->second->dropped();
+}
+
+void ViewServer::admit() {
+  // civetweb says nothing of a connection before its request has come (its request
+  // info is empty until then), so the connections are counted from their sockets:
+  // those accepted and not yet closed, queued for a thread or served.
+  std::vector<ServerSocket> sockets = server_sockets(port_);
+  std::sort(sockets.begin(), sockets.end(), [](const ServerSocket& a, const ServerSocket& b) {
+    return a.peer != b.peer ? a.peer < b.peer : a.inode < b.inode;
+  });
+  // Per address, its oldest kConnectionsPerAddress stay; the newer are closed.
+  for (std::size_t first = 0, next = 0; first < sockets.size(); first = next) {
+    next = first;
+    while (next < sockets.size() && sockets[next].peer == sockets[first].peer) ++next;
+    if (next - first <= static_cast<std::size_t>(kConnectionsPerAddress)) continue;
+    for (std::size_t i = first + kConnectionsPerAddress; i < next; ++i) shut_down(sockets[i]);
+    std::lock_guard lock(mutex_);
+    if (refused_.insert(sockets[first].peer).second)
+      std::fprintf(stderr,
+                   "afhub view: %s opened more than %d connections, the most one address may "
+                   "have open; closing the newer ones (said once per address)\n",
+                   sockets[first].peer.c_str(), kConnectionsPerAddress);
+  }
+}
+
+int ViewServer::serve_page_socket(mg_connection* connection) {
+  const char* upgrade = mg_get_header(connection, "Upgrade");
+  const char* key = mg_get_header(connection, "Sec-WebSocket-Key");
+  const char* version = mg_get_header(connection, "Sec-WebSocket-Version");
+  if (!upgrade || strcasecmp(upgrade, "websocket") != 0 || !key || !version ||
+      std::strcmp(version, "13") != 0) {
+    send_text(connection, 400, "text/plain",
+              "/ws is a WebSocket (version 13): the page opens it\n");
+    return 400;
+  }
+  const int fd = connection_socket(connection, port_);
+  if (fd < 0) {
+    send_text(connection, 500, "text/plain", "the viewer lost this connection's socket\n");
+    return 500;
+  }
+  // A frame goes out as two writes (its header, its payload): sent at once, not held
+  // back for the first one's acknowledgement.
+  const int on = 1;
+  setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &on, sizeof on);
+  mg_printf(connection,
+            "HTTP/1.1 101 Switching Protocols\r\nUpgrade: websocket\r\nConnection: "
+            "Upgrade\r\nSec-WebSocket-Accept: %s\r\n\r\n",
+            websocket_accept(key).c_str());
+  add_socket(connection);
+  const PageEnd end = read_page_frames(
+      fd, [this, connection] { return !stopping_ && !page_dropped(connection); },
+      [connection](Opcode opcode, std::string_view payload) {
+        return write_frame(connection, opcode, payload);
+      });
+  remove_socket(connection);
+  if (end.refused) {
+    std::fprintf(stderr, "afhub view: closed a WebSocket from %s: %s\n",
+                 mg_get_request_info(connection)->remote_addr, end.why.c_str());
+    // What the page still sends is not read: civetweb's close then ends at once.
+    shutdown(fd, SHUT_RDWR);
+  }
+  return 101;
 }
 
 int ViewServer::handle_request(mg_connection* connection) {
@@ -181,10 +280,11 @@ int ViewServer::handle_request(mg_connection* connection) {
     send_text(connection, 405, "text/plain", "the viewer serves GET requests only\n");
     return 1;
   }
-  if (uri == "/" || uri == "/index.html") {
-    send_text(connection, 200, "text/html; charset=utf-8", page_html());
-  } else if (uri == "/viewer.js") {
-    send_text(connection, 200, "text/javascript", page_script());
+  const std::string_view page_name = uri == "/"             ? "index.html"
+                                     : uri.starts_with('/') ? uri.substr(1)
+                                                            : "";
+  if (const std::optional<std::string_view> page = web_file(page_name)) {
+    send_text(connection, 200, web_type(page_name), *page);
   } else if (uri == "/scene.json") {
     send_text(connection, 200, "application/json", scene()->json);
   } else if (uri == "/joints.json") {

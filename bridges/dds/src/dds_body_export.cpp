@@ -193,12 +193,11 @@ void BodyExport::report() const {
   if (options_.latency && command_ages_.count() > 0)
     std::fprintf(stderr,
                  "afhub bridge dds: applied command age (the commander's publish to applied "
-                 "here, by the DDS source timestamp, %llu commands): p50 %lld us, p99 %lld us, "
-                 "max %lld us\n",
+                 "here, by the DDS source timestamp, %llu commands): p50 %.1f us, p99 %.1f us, "
+                 "max %.1f us\n",
                  static_cast<unsigned long long>(command_ages_.count()),
-                 static_cast<long long>(command_ages_.quantile_us(0.5)),
-                 static_cast<long long>(command_ages_.quantile_us(0.99)),
-                 static_cast<long long>(command_ages_.max_us()));
+                 command_ages_.percentile_us(0.5), command_ages_.percentile_us(0.99),
+                 command_ages_.max_us());
 }
 
 }  // namespace afhub::bridges

@@ -21,8 +21,8 @@
 #include "afhub/bridges/dds_bridge.hpp"
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/sample_waiter.hpp"
+#include "afhub/rt/latency_histogram.hpp"
 #include "afhub_dds.h"
-#include "age_histogram.hpp"
 #include "dds_body_topics.hpp"
 #include "dds_entity.hpp"
 #include "ros2_profile.hpp"
@@ -84,7 +84,7 @@ class BodyExport {
   std::vector<Body> exported_;
   std::set<std::string> not_exported_;  // no subscriber port for their state reader, said once
   ExportCounters counters_;
-  AgeHistogram command_ages_;  // --latency: the commander's publish to applied here
+  LatencyHistogram command_ages_;  // --latency: the commander's publish to applied here
 };
 
 }  // namespace afhub::bridges

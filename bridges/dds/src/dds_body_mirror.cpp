@@ -152,11 +152,10 @@ void BodyMirror::report() const {
   if (options_.latency && state_ages_.count() > 0)
     std::fprintf(stderr,
                  "afhub bridge dds: mirrored state age (source publish to publish here, "
-                 "%llu states): p50 %lld us, p99 %lld us, max %lld us\n",
+                 "%llu states): p50 %.1f us, p99 %.1f us, max %.1f us\n",
                  static_cast<unsigned long long>(state_ages_.count()),
-                 static_cast<long long>(state_ages_.quantile_us(0.5)),
-                 static_cast<long long>(state_ages_.quantile_us(0.99)),
-                 static_cast<long long>(state_ages_.max_us()));
+                 state_ages_.percentile_us(0.5), state_ages_.percentile_us(0.99),
+                 state_ages_.max_us());
 }
 
 }  // namespace afhub::bridges

@@ -20,8 +20,8 @@
 #include "afhub/bridges/dds_bridge.hpp"
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/sample_waiter.hpp"
+#include "afhub/rt/latency_histogram.hpp"
 #include "afhub_dds.h"
-#include "age_histogram.hpp"
 #include "dds_body_topics.hpp"
 #include "dds_entity.hpp"
 #include "mirror_directory.hpp"
@@ -77,7 +77,7 @@ class BodyMirror {
   std::vector<Body> mirrored_;
   std::set<std::string> refused_;  // said once, not tried again
   MirrorCounters counters_;
-  AgeHistogram state_ages_;  // --latency: source publish to publish here
+  LatencyHistogram state_ages_;  // --latency: source publish to publish here
 };
 
 }  // namespace afhub::bridges

@@ -24,9 +24,6 @@ const char* const kKeys =
     "domain, interface, export, mirror, accept-commands, bodies, devices, world, qos, rate, spin, "
     "cpu-wake-latency, rate-limits, max-command-age, max-mirrored, profile, ros2-prefix, security";
 
-// A bridge config is a few lines; this refuses a wrong file named by mistake.
-constexpr std::uintmax_t kMaxFileBytes = 16u << 20;
-
 int microseconds(const Reader& reader, const YAML::Node& node, const std::string& key, int high) {
   const double value = reader.in_range(node, key, 0, high);
   if (value != std::floor(value)) reader.fail(node, "'" + key + "' is whole microseconds");
@@ -72,7 +69,7 @@ void read_rate_limits(const Reader& reader, const YAML::Node& node, DdsBridgeOpt
 
 DdsBridgeOptions read_dds_bridge_config(const std::string& path, const DdsBridgeOptions& defaults) {
   const YAML::Node root =
-      yaml::parse(path, yaml::read_input_file(path, kMaxFileBytes, "a bridge config file"));
+      yaml::parse(path, yaml::read_input_file(path, kMaxYamlFileBytes, "a bridge config file"));
   const Reader reader(path);
   DdsBridgeOptions options = defaults;
   if (root.IsNull()) return options;  // an empty file sets nothing

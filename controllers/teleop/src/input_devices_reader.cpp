@@ -16,8 +16,6 @@ namespace {
 namespace fs = std::filesystem;
 using yaml::Reader;
 
-// An input device file is a few kilobytes; this refuses a wrong file named by mistake.
-constexpr std::uintmax_t kMaxFileBytes = 16u << 20;
 const char* const kWhat =
     "an input device file (input_devices.yaml: a map with an 'input devices' list)";
 constexpr double kMaxLengthM = 1e5;
@@ -207,7 +205,7 @@ InputDeviceSpec read_device(const Reader& reader, const fs::path& folder,
 InputDevicesFile read_input_devices(const std::string& path) {
   InputDevicesFile file;
   file.path = path;
-  const YAML::Node root = yaml::load_map(path, kMaxFileBytes, kWhat);
+  const YAML::Node root = yaml::load_map(path, kWhat);
   const Reader reader(path, &file.warnings);
   const yaml::MapIndex index(reader, root);
   const YAML::Node* list = index.find("input devices");

@@ -10,9 +10,10 @@
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/hub_loss.hpp"
 #include "afhub/hub/hub_presence.hpp"
-#include "afhub/hub/stop_signal.hpp"
+#include "afhub/hub/loop_stats_publisher.hpp"
+#include "afhub/hub/startup_wait.hpp"
 #include "afhub/rt/clock.hpp"
-#include "afhub/rt/loop_stats_publisher.hpp"
+#include "afhub/rt/stop_signal.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "afhub/teleop/device_freshness.hpp"
 #include "afhub/teleop/state_freshness.hpp"
@@ -163,33 +164,20 @@ void cycle(Link& link, std::int64_t now, TeleopLatency* latency, std::size_t mos
 
 }  // namespace
 
-std::int64_t quantile(std::vector<std::int64_t>& samples, double p) {
-  if (samples.empty()) return 0;
-  std::sort(samples.begin(), samples.end());
-  const auto index = static_cast<std::size_t>(p * static_cast<double>(samples.size() - 1) + 0.5);
-  return samples[std::min(index, samples.size() - 1)];
-}
-
 int run_teleop(const TeleopOptions& options, TeleopLatency* latency) {
   install_stop_signal_handlers();
   if (options.bindings.empty()) throw Error("afhub teleop: no device selected");
-  if (!(options.wait_s >= 0.0 && options.wait_s <= 1e6))
-    throw Error(
-        "the wait for the hub, the devices and the bodies must be 0 to 1e6 seconds (--wait)");
   const std::string who = "afhub teleop";
   if (options.survive_hub_loss) survive_hub_loss(who);
-  const std::int64_t give_up_ns =
-      reattach_count() > 0 ? std::numeric_limits<std::int64_t>::max()
-                           : monotonic_ns() + static_cast<std::int64_t>(options.wait_s * 1e9);
-  connect_to_hub("teleop", HubPolicy::kRequire,
-                 std::chrono::milliseconds(static_cast<std::int64_t>(options.wait_s * 1e3)));
+  const StartupWait wait(options.wait_s);
+  wait.connect_to_hub("teleop");
 
   std::vector<std::unique_ptr<Link>> links;
   for (const TeleopBinding& binding : options.bindings) {
-    const BodyEntry entry = wait_for_body(binding.body, who, give_up_ns,
-                                          binding.load_hint + ", or wait longer with --wait");
+    const BodyEntry entry =
+        wait.wait_for_body(binding.body, who, binding.load_hint + ", or wait longer with --wait");
     links.push_back(std::make_unique<Link>(binding, entry, options));
-    wait_for_device(*links.back(), who, give_up_ns);
+    wait_for_device(*links.back(), who, wait.give_up_ns());
     std::fprintf(stderr, "%s: %s: device/%s drives %s\n", who.c_str(),
                  binding.spec.identifier.c_str(), binding.device_name.c_str(),
                  binding.body.c_str());

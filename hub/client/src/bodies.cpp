@@ -5,14 +5,17 @@
 
 #include <time.h>
 
+#include <atomic>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <limits>
 #include <thread>
 #include <unordered_map>
 
+#include "afhub/hub/hub_files.hpp"
 #include "afhub/hub/hub_presence.hpp"
-#include "afhub/hub/stop_signal.hpp"
+#include "afhub/rt/stop_signal.hpp"
 #include "afhub/shm_layout/error.hpp"
 
 namespace afhub {
@@ -82,7 +85,7 @@ BodyList* loan_body_list(RawWriter& writer, const std::vector<BodyEntry>& entrie
       refs.size() > kMaxCatalogJointRefs)
     return nullptr;
   auto* list = static_cast<BodyList*>(writer.loan(
-      static_cast<std::uint32_t>(body_list_bytes(entries.size(), names.size(), refs.size()))));
+      static_cast<std::uint32_t>(body_list_loan_bytes(entries.size(), names.size(), refs.size()))));
   if (!list) return nullptr;
   list->header = PayloadHeader{};
   list->body_count = static_cast<std::uint32_t>(entries.size());
@@ -114,6 +117,18 @@ void copy_name(std::array<char, N>& buffer, std::string_view text, std::string_v
   std::memcpy(buffer.data(), text.data(), text.size());
 }
 
+// afhub processes attached to the hub: each one's iceoryx runtime holds a lock on
+// /tmp/afhub-<role>-<pid>.lock (connect_to_hub names them so).
+std::size_t attached_processes() {
+  std::size_t count = 0;
+  std::error_code error;
+  for (const auto& entry : std::filesystem::directory_iterator("/tmp", error)) {
+    const std::string name = entry.path().filename().string();
+    if (name.starts_with("afhub-") && name.ends_with(".lock") && flock_held(entry.path())) ++count;
+  }
+  return count;
+}
+
 }  // namespace
 
 BodyEntry make_body_entry(std::string_view body_channel,
@@ -140,11 +155,22 @@ BodyEntry make_device_entry(std::string_view device_name) {
   return entry;
 }
 
-DirectoryPublisher::DirectoryPublisher()
-    : writer_({std::string(kService), runtime_name(), std::string(kDirectoryEvent)},
-              PayloadKind::kBodyDirectory) {
+namespace {
+
+// A channel of its own for each directory: a process may own bodies through several
+// (the physics and a device driver in one test binary), and the hub keeps the latest
+// sample of a channel only, so that on one channel each would hide the other's bodies.
+std::string next_directory_instance() {
   if (runtime_name().empty()) throw Error("DirectoryPublisher needs connect_to_hub() first");
+  static std::atomic<unsigned> count{0};
+  return runtime_name() + "/" + std::to_string(count++);
 }
+
+}  // namespace
+
+DirectoryPublisher::DirectoryPublisher()
+    : writer_({std::string(kService), next_directory_instance(), std::string(kDirectoryEvent)},
+              PayloadKind::kBodyDirectory) {}
 
 void DirectoryPublisher::add(const BodyEntry& body) {
   if (bodies_.size() >= kMaxBodies)
@@ -170,11 +196,21 @@ CatalogReader::CatalogReader()
 void CatalogReader::wait(std::chrono::milliseconds timeout) {
   auto deadline = std::chrono::steady_clock::now() + timeout;
   while (!(current_ = static_cast<const BodyList*>(reader_.latest()))) {
-    if (std::chrono::steady_clock::now() > deadline)
+    if (std::chrono::steady_clock::now() <= deadline) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+      continue;
+    }
+    // connect_to_hub checked that an afhub hub holds the RouDi's lock.
+    if (!reader_.subscribed())
       throw Error(
-          "a RouDi answers but publishes no afhub catalog: it is not an afhub hub (a plain "
-          "iox-roudi?). Stop it and start `afhub hub`.");
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+          "the hub has no room for another reader of its catalog: iceoryx connects at "
+          "most " +
+          std::to_string(kMaxReadersPerChannel) +
+          " readers to one channel (kMaxReadersPerChannel), and " +
+          std::to_string(attached_processes()) +
+          " afhub processes are attached. Stop some of them (`afhub status` lists "
+          "them)");
+    throw Error("the hub publishes no catalog: it is starting, or stuck; see its log");
   }
 }
 

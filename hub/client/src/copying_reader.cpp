@@ -18,13 +18,14 @@ const void* CopyingReader::latest() {
   const void* shared = reader_.latest();
   if (reader_.updated()) {
     const std::uint32_t bytes = reader_.latest_bytes();
-    std::vector<std::max_align_t> copy((bytes + sizeof(std::max_align_t) - 1) /
-                                       sizeof(std::max_align_t));
-    std::memcpy(copy.data(), shared, bytes);
+    // Into the spare buffer, which becomes the copy once checked (no allocation once
+    // both buffers have grown to the channel's payload size).
+    spare_.resize((bytes + sizeof(std::max_align_t) - 1) / sizeof(std::max_align_t));
+    std::memcpy(spare_.data(), shared, bytes);
     const char* field = "";
-    const PayloadError error = check_payload(copy.data(), bytes, kind_, &field);
+    const PayloadError error = check_payload(spare_.data(), bytes, kind_, &field);
     if (error == PayloadError::kNone) {
-      copy_ = std::move(copy);
+      copy_.swap(spare_);
       have_copy_ = true;
       updated_ = true;
     } else if (refused_++ == 0) {

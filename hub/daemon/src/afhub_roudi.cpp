@@ -13,4 +13,8 @@ bool AfhubRouDi::remove_process(const std::string& name) {
   return m_prcMgr->unregisterProcess(iox::RuntimeName_t(iox::cxx::TruncateToCapacity, name));
 }
 
+void AfhubRouDi::stop() {
+  shutdown();
+}
+
 }  // namespace afhub

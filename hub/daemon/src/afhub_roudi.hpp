@@ -20,6 +20,9 @@ class AfhubRouDi : public iox::roudi::RouDi {
   // Unregisters the process `name`: its ports, its chunks. False when RouDi does
   // not know it.
   bool remove_process(const std::string& name);
+
+  // Stops RouDi's threads (its socket goes with them), leaving its memory as it is.
+  void stop();
 };
 
 }  // namespace afhub

@@ -23,7 +23,7 @@
 
 #include "afhub/hub/hub_files.hpp"
 #include "afhub/hub/hub_presence.hpp"
-#include "afhub/hub/stop_signal.hpp"
+#include "afhub/rt/stop_signal.hpp"
 #include "afhub_roudi.hpp"
 #include "catalog_builder.hpp"
 #include "health_reporter.hpp"
@@ -110,25 +110,40 @@ int take_hub_lock(const std::string& directory) {
 struct Registered {
   std::set<std::string> removed;  // asked for; RouDi's introspection may list them a moment longer
   std::set<std::string> foreign;  // in another pid namespace than the hub's
+  // Listed, and in the hub's pid namespace (the hub among them): the thread ids in
+  // their port locks mean what they say here.
+  std::set<std::string> local;
 };
+
+// A runtime's thread ids can be judged in the hub's pid namespace when it runs there,
+// or is gone with all its threads. Its threads take port locks up to a second before
+// RouDi's introspection lists it: an afhub client is told by its name until then;
+// any other runtime is not judged.
+ThreadIdsAreLocal local_thread_ids(const Registered& registered) {
+  return [&registered](const std::string& runtime) {
+    return registered.local.count(runtime) > 0 || runtime_is_gone(runtime, 0) ||
+           client_in_hub_pid_namespace(runtime);
+  };
+}
 
 // Unregisters every process whose runtime lock is free: gone, in whatever pid
 // namespace it ran. Port locks its threads died holding are released first: RouDi
-// takes them to delete its ports, and would wait on them forever. Returns whether
-// every registered process is in the hub's pid namespace, where the thread ids in
-// iceoryx's port locks mean what they say (no lock is repaired otherwise).
-bool remove_dead_processes(AfhubRouDi& roudi, iox::roudi::PortPool& ports, HealthReporter& health,
+// takes them to delete its ports, and would wait on them forever.
+void remove_dead_processes(AfhubRouDi& roudi, iox::roudi::PortPool& ports, HealthReporter& health,
                            Registered& registered) {
   const auto processes = health.registered_processes();
   std::set<std::string> listed, gone;
+  registered.local = {"roudi", kHubRuntimeName};
   for (const auto& [name, pid] : processes) {
     listed.insert(name);
     // RouDi's and the hub's own entries: a pid alone cannot tell them, since a client in
     // another pid namespace may have the hub's pid.
-    if (name == "roudi" || name == kHubRuntimeName || registered.removed.count(name)) continue;
+    if (registered.local.count(name) || registered.removed.count(name)) continue;
     if (runtime_is_gone(name, pid)) {
       gone.insert(name);
-    } else if (!runtime_in_hub_pid_namespace(name, pid) && registered.foreign.insert(name).second) {
+    } else if (runtime_in_hub_pid_namespace(name, pid)) {
+      registered.local.insert(name);
+    } else if (registered.foreign.insert(name).second) {
       std::fprintf(stderr,
                    "afhub hub: %s runs in another pid namespace; while it is attached, the hub "
                    "cannot tell whose thread holds a port lock, and repairs none\n",
@@ -138,8 +153,7 @@ bool remove_dead_processes(AfhubRouDi& roudi, iox::roudi::PortPool& ports, Healt
   const auto unlisted = [&](const std::string& name) { return !listed.count(name); };
   std::erase_if(registered.removed, unlisted);
   std::erase_if(registered.foreign, unlisted);
-  const bool locks_repairable = registered.foreign.empty();
-  if (!gone.empty() && locks_repairable) release_port_locks_of_dead_threads(ports);
+  if (!gone.empty()) release_port_locks_of_dead_threads(ports, local_thread_ids(registered));
   for (const auto& [name, pid] : processes) {
     if (!gone.count(name)) continue;
     registered.removed.insert(name);
@@ -147,7 +161,6 @@ bool remove_dead_processes(AfhubRouDi& roudi, iox::roudi::PortPool& ports, Healt
       std::fprintf(stderr, "afhub hub: %s (pid %d) is gone; removed its ports and chunks\n",
                    name.c_str(), static_cast<int>(pid));
   }
-  return locks_repairable;
 }
 
 void serve_until_stopped(AfhubRouDi& roudi, iox::roudi::PortPool& ports) {
@@ -160,8 +173,8 @@ void serve_until_stopped(AfhubRouDi& roudi, iox::roudi::PortPool& ports) {
     auto now = std::chrono::steady_clock::now();
     // Also each cycle: a publisher blocks on a queue's lock left by a dead thread before
     // its process is seen gone.
-    if (remove_dead_processes(roudi, ports, health, registered))
-      release_port_locks_of_dead_threads(ports);
+    remove_dead_processes(roudi, ports, health, registered);
+    release_port_locks_of_dead_threads(ports, local_thread_ids(registered));
     if (now >= next_file_sweep) {
       for (const std::string& name : remove_stale_runtime_files())
         std::fprintf(stderr, "afhub hub: removed the files %s left in /tmp\n", name.c_str());
@@ -307,16 +320,25 @@ int run_hub_daemon(const HubOptions& options) {
       });
   iox::roudi::IceOryxRouDiComponents components(roudi_config(options.mempools, group, pool_mib));
   AfhubRouDi roudi(components.rouDiMemoryManager, components.portManager);
-  iox::runtime::PoshRuntimeSingleProcess runtime(kHubRuntimeName);
-  starting.reset();
-  if (gid != own_gid && !made_in_group && !open_to_group(gid)) return 1;
-  std::fprintf(stderr,
-               "afhub hub: running (pid %d, %zu payload mempools, %.1f MiB, group '%s'). Ctrl-C "
-               "stops it.\n",
-               static_cast<int>(getpid()), options.mempools.size(), pool_mib, group.c_str());
-  serve_until_stopped(roudi, *components.rouDiMemoryManager.portPool().value());
+  {
+    iox::runtime::PoshRuntimeSingleProcess runtime(kHubRuntimeName);
+    starting.reset();
+    if (gid != own_gid && !made_in_group && !open_to_group(gid)) return 1;
+    std::fprintf(stderr,
+                 "afhub hub: running (pid %d, %zu payload mempools, %.1f MiB, group '%s'). Ctrl-C "
+                 "stops it.\n",
+                 static_cast<int>(getpid()), options.mempools.size(), pool_mib, group.c_str());
+    serve_until_stopped(roudi, *components.rouDiMemoryManager.portPool().value());
+  }
+  roudi.stop();
+  remove_shared_memory(group);
   std::fprintf(stderr, "afhub hub: stopped\n");
-  return 0;
+  std::fflush(nullptr);
+  // Clients still attached publish until they see the hub gone, each publish inside
+  // its port's lock: RouDi's destructor would take the ports apart under them, and
+  // abort on a lock a client holds (pthread_mutex_destroy: EBUSY). Their memory is
+  // unlinked; the process ends without taking it apart.
+  _exit(0);
 }
 
 // Whether `pid` runs the afhub executable: a last check before signalling it.

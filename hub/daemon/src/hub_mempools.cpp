@@ -66,19 +66,24 @@ std::vector<MempoolSpec> default_mempools() {
   std::vector<MempoolSpec> pools = {
       {128, 512, "world commands, small iceoryx samples"},
       {round_up8(body_command_bytes(64)), 4096,
-       "body commands of up to 64 joints, states of up to 28"},
+       "body commands of up to 64 joints, states of up to 21"},
       {round_up8(body_state_bytes(64)), 4096, "body states of up to 64 joints"},
       {round_up8(body_state_bytes(256)), 1024, "body states and commands of up to 256 joints"},
       {round_up8(body_state_bytes(kMaxJointsPerBody)), 256,
        "body states and commands of up to kMaxJointsPerBody joints"},
-      {round_up8(sizeof(WorldState)), 64, "world state"},
+      // Each physics's world state: a chunk in its history and a loan, and three in
+      // each reader (`afhub status`, `afhub world`, a viewer).
+      {round_up8(sizeof(WorldState)), 2 * kMaxProcesses + 64, "world state"},
       {round_up8(sizeof(Health)), 128, "hub health"},
       {round_up8(sizeof(LoopStats)), 256, "loop stats"},
-      {round_up8(body_list_bytes(8, 64, 256)), 128,
+      // Each process's directory: a chunk in its history, a loan, and the hub's reader
+      // queues and holds up to three. Body lists are loaned at these sizes only
+      // (kBodyListTiers): no other kind's chunks are taken by them.
+      {round_up8(kBodyListTiers[0]), 5 * kMaxProcesses,
        "catalogs and directories of up to 8 bodies (64 joint names, 256 joint references)"},
-      {round_up8(body_list_bytes(64, 512, 2048)), 32,
+      {round_up8(kBodyListTiers[1]), 32,
        "catalogs and directories of up to 64 bodies (512 joint names, 2048 references)"},
-      {round_up8(body_list_bytes(kMaxBodies, 4096, 65536)), 24,
+      {round_up8(kBodyListTiers[2]), 24,
        "catalogs and directories of up to kMaxBodies bodies (4096 joint names, 65536 "
        "references)"},
       // The physics' scene description keeps one chunk in its history, and three in

@@ -10,7 +10,9 @@
 #include <climits>
 #include <cstdio>
 #include <cstring>
+#include <set>
 #include <type_traits>
+#include <vector>
 
 #include "iceoryx_posh/internal/popo/building_blocks/locking_policy.hpp"
 #include "iceoryx_posh/roudi/port_pool.hpp"
@@ -28,6 +30,13 @@ static_assert(std::is_standard_layout_v<ThreadSafePolicy> &&
                   sizeof(iox::posix::mutex) == sizeof(pthread_mutex_t),
               "iceoryx's ThreadSafePolicy is no longer a bare pthread mutex: revisit this repair");
 
+// The thread that holds `mutex`, when it no longer runs here; 0 when none does.
+pid_t dead_owner(pthread_mutex_t& mutex) {
+  if (std::atomic_ref<int>(mutex.__data.__lock).load() == 0) return 0;
+  const pid_t tid = std::atomic_ref<int>(mutex.__data.__owner).load();
+  return tid > 0 && task_is_gone(tid) ? tid : 0;
+}
+
 }  // namespace
 
 pthread_mutex_t& native_mutex(const ThreadSafePolicy& policy) {
@@ -41,9 +50,8 @@ pid_t release_if_owner_died(pthread_mutex_t& mutex) {
   auto& data = mutex.__data;
   std::atomic_ref<int> lock(data.__lock);
   std::atomic_ref<int> owner(data.__owner);
-  if (lock.load() == 0) return 0;
-  pid_t tid = owner.load();
-  if (tid <= 0 || !task_is_gone(tid)) return 0;
+  pid_t tid = dead_owner(mutex);
+  if (tid == 0) return 0;
   // Still that thread's: had it unlocked before dying, __owner would have changed.
   if (!owner.compare_exchange_strong(tid, 0)) return 0;
   // The rest of the unlock the owner never reached.
@@ -54,21 +62,40 @@ pid_t release_if_owner_died(pthread_mutex_t& mutex) {
   return tid;
 }
 
-std::size_t release_port_locks_of_dead_threads(iox::roudi::PortPool& ports) {
+std::size_t release_port_locks_of_dead_threads(iox::roudi::PortPool& ports,
+                                               const ThreadIdsAreLocal& ids_are_local) {
+  struct Held {
+    pthread_mutex_t* mutex;
+    const char* what;
+  };
+  std::vector<Held> held;
+  for (auto* publisher : ports.getPublisherPortDataList())
+    if (pthread_mutex_t& mutex = native_mutex(publisher->m_chunkSenderData); dead_owner(mutex))
+      held.push_back({&mutex, "publisher"});
+  for (auto* subscriber : ports.getSubscriberPortDataList())
+    if (pthread_mutex_t& mutex = native_mutex(subscriber->m_chunkReceiverData); dead_owner(mutex))
+      held.push_back({&mutex, "subscriber queue"});
+  if (held.empty()) return 0;
+  // Only ids were read: they are judged when every process with a port has ids of
+  // this pid namespace. Its ports looked at after the locks, a thread that held one
+  // had a port of its own process listed by then.
+  std::set<std::string> runtimes;
+  for (auto* publisher : ports.getPublisherPortDataList())
+    runtimes.insert(publisher->m_runtimeName.c_str());
+  for (auto* subscriber : ports.getSubscriberPortDataList())
+    runtimes.insert(subscriber->m_runtimeName.c_str());
+  for (const std::string& runtime : runtimes)
+    if (!ids_are_local(runtime)) return 0;
   std::size_t released = 0;
-  auto release = [&](const ThreadSafePolicy& policy, const char* what) {
-    if (pid_t tid = release_if_owner_died(native_mutex(policy))) {
+  for (const Held& lock : held) {
+    if (pid_t tid = release_if_owner_died(*lock.mutex)) {
       std::fprintf(stderr,
                    "afhub hub: thread %d died holding a %s lock inside iceoryx (a client killed "
                    "mid-publish); released it so the hub and the other clients keep running\n",
-                   static_cast<int>(tid), what);
+                   static_cast<int>(tid), lock.what);
       ++released;
     }
-  };
-  for (auto* publisher : ports.getPublisherPortDataList())
-    release(publisher->m_chunkSenderData, "publisher");
-  for (auto* subscriber : ports.getSubscriberPortDataList())
-    release(subscriber->m_chunkReceiverData, "subscriber queue");
+  }
   return released;
 }
 

@@ -87,7 +87,7 @@ bool runtime_is_gone(const std::string& name, pid_t pid) {
   // A lock file removed from under a live process (a tmp cleaner, an `rm`) says nothing
   // of the process: the pid RouDi registered does.
   std::error_code error;
-  if (!fs::exists(fs::symlink_status(lock, error))) return task_is_gone(pid);
+  if (!fs::exists(fs::symlink_status(lock, error))) return pid > 0 && task_is_gone(pid);
   return !flock_held(lock.string());
 }
 
@@ -97,6 +97,13 @@ bool runtime_in_hub_pid_namespace(const std::string& name, pid_t pid) {
   // Unlisted: held by a process this namespace cannot see, or just released (the
   // process is exiting, and is gone at the next look).
   return !flock_held(lock);
+}
+
+bool client_in_hub_pid_namespace(const std::string& name) {
+  const pid_t pid = is_client_lock(name) ? pid_suffix(name) : 0;
+  if (pid <= 0) return false;
+  const std::optional<pid_t> holder = flock_holder((kRuntimeDir / (name + ".lock")).string());
+  return holder && *holder == pid;
 }
 
 std::vector<std::string> remove_stale_runtime_files() {

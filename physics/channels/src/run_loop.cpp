@@ -11,10 +11,10 @@
 
 #include "afhub/hub/hub_loss.hpp"
 #include "afhub/hub/json_writer.hpp"
-#include "afhub/hub/stop_signal.hpp"
+#include "afhub/hub/loop_stats_publisher.hpp"
 #include "afhub/rt/clock.hpp"
-#include "afhub/rt/loop_stats_publisher.hpp"
 #include "afhub/rt/periodic_loop.hpp"
+#include "afhub/rt/stop_signal.hpp"
 #include "afhub/shm_layout/world_control.hpp"
 
 namespace afhub::physics {
@@ -113,10 +113,11 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
       channels->publish(static_cast<double>(clock_ns() - start_ns) * 1e-9, achieved_rate_hz,
                         control.halted());
     if (stepping) {
-      const double duration_us = static_cast<double>(monotonic_ns() - begin_ns) * 1e-3;
-      report.step_time.record(duration_us);
+      const std::int64_t duration_ns = monotonic_ns() - begin_ns;
+      report.step_time.record(duration_ns);
       if (report.step_log.size() < report.step_log.capacity())
-        report.step_log.push_back({begin_ns, static_cast<float>(duration_us)});
+        report.step_log.push_back(
+            {begin_ns, static_cast<float>(static_cast<double>(duration_ns) * 1e-3)});
     }
     return options.steps == 0 || report.steps < options.steps;
   };

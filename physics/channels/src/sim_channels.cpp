@@ -9,8 +9,8 @@
 
 #include "afhub/hub/body_claims.hpp"
 #include "afhub/hub/sample_waiter.hpp"
-#include "afhub/hub/stop_signal.hpp"
 #include "afhub/hub/world_command_queue.hpp"
+#include "afhub/rt/stop_signal.hpp"
 #include "afhub/shm_layout/channel_names.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "command_input.hpp"
@@ -166,6 +166,9 @@ void SimChannels::apply_commands(std::int64_t now_ns) noexcept {
           notice->seconds = static_cast<double>(age_ns) * 1e-9;
       } else if (const char* problem = sim_.input_problem(channel.index, input_)) {
         ++rejected_;
+        ++channel.refused;
+        channel.refused_pid = answer.pid;
+        set_name(channel.refusal_reason, problem);
         if (Notice* notice = note(channel, kRejected, answer.pid)) set_name(notice->why, problem);
       } else {
         // Entries for joints without an axis are refused and counted; the rest applies.
@@ -558,6 +561,9 @@ void SimChannels::publish(double wall_time_s, double achieved_rate_hz, bool paus
     to_state(reading_, *state);
     state->commanded_steps = static_cast<std::uint32_t>(channel.commanded_steps);
     state->answered_steps = static_cast<std::uint32_t>(channel.answered_steps);
+    state->refused_commands = channel.refused;
+    state->refused_command_pid = channel.refused_pid;
+    state->refusal_reason = channel.refusal_reason;
     channel.publisher->publish_state(state);
   }
   if (WorldState* world = world_.loan()) {

@@ -1,10 +1,14 @@
 // Located YAML reading (see yaml_reader.hpp).
 #include "afhub/yaml/yaml_reader.hpp"
 
+#include <yaml-cpp/eventhandler.h>
+
 #include <cmath>
 #include <cstdio>
+#include <sstream>
 
 #include "afhub/shm_layout/error.hpp"
+#include "afhub/shm_layout/limits.hpp"
 #include "afhub/yaml/input_file.hpp"
 
 namespace afhub::yaml {
@@ -28,8 +32,99 @@ std::string number_text(double value) {
   return text;
 }
 
+namespace {
+
+// A file's cost read from the parser's events, without building its tree: its nodes
+// (an alias counts the nodes it repeats, as every reader walks them again) and how
+// deep its lists and maps nest. Throws at the first node past a bound, naming it.
+class CostScan : public YAML::EventHandler {
+ public:
+  explicit CostScan(const std::string& path) : path_(path) {}
+
+  void OnDocumentStart(const YAML::Mark&) override {}
+  void OnDocumentEnd() override {}
+  void OnNull(const YAML::Mark& mark, YAML::anchor_t anchor) override { leaf(mark, anchor); }
+  void OnScalar(const YAML::Mark& mark, const std::string&, YAML::anchor_t anchor,
+                const std::string&) override {
+    leaf(mark, anchor);
+  }
+  void OnAlias(const YAML::Mark& mark, YAML::anchor_t anchor) override {
+    const std::size_t size = anchor < anchored_.size() ? anchored_[anchor] : 1;
+    if (size == kOpen)
+      refuse(mark,
+             "this alias names a list or map that contains it, which would repeat "
+             "without end; write the repeated part out");
+    add(mark, size);
+  }
+  void OnSequenceStart(const YAML::Mark& mark, const std::string&, YAML::anchor_t anchor,
+                       YAML::EmitterStyle::value) override {
+    open(mark, anchor);
+  }
+  void OnSequenceEnd() override { close(); }
+  void OnMapStart(const YAML::Mark& mark, const std::string&, YAML::anchor_t anchor,
+                  YAML::EmitterStyle::value) override {
+    open(mark, anchor);
+  }
+  void OnMapEnd() override { close(); }
+
+ private:
+  static constexpr std::size_t kOpen = 0;  // an anchored node not yet ended
+
+  struct Opened {
+    std::size_t nodes_before;
+    YAML::anchor_t anchor;
+  };
+
+  [[noreturn]] void refuse(const YAML::Mark& mark, const std::string& what) const {
+    throw Error(path_ + ":" + std::to_string(mark.line + 1) + ":" +
+                std::to_string(mark.column + 1) + ": error: " + what);
+  }
+  void add(const YAML::Mark& mark, std::size_t count) {
+    if (count > kMaxYamlNodes - nodes_)
+      refuse(mark, "the file has more than " + std::to_string(kMaxYamlNodes) +
+                       " values, lists and maps by here; afhub reads at most that many per file "
+                       "(kMaxYamlNodes), and real models have a few thousand: is it the right "
+                       "file? Split a generated model into several files");
+    nodes_ += count;
+  }
+  void note(YAML::anchor_t anchor, std::size_t size) {
+    if (anchor == YAML::NullAnchor) return;
+    if (anchored_.size() <= anchor) anchored_.resize(anchor + 1, 1);
+    anchored_[anchor] = size;
+  }
+  void leaf(const YAML::Mark& mark, YAML::anchor_t anchor) {
+    add(mark, 1);
+    note(anchor, 1);
+  }
+  void open(const YAML::Mark& mark, YAML::anchor_t anchor) {
+    if (opened_.size() == kMaxYamlDepth)
+      refuse(mark, "lists and maps nest more than " + std::to_string(kMaxYamlDepth) +
+                       " deep here; afhub reads at most that many levels (kMaxYamlDepth), and "
+                       "real models nest 5: is it the right file?");
+    add(mark, 1);
+    opened_.push_back({nodes_ - 1, anchor});
+    note(anchor, kOpen);
+  }
+  void close() {
+    const Opened done = opened_.back();
+    opened_.pop_back();
+    note(done.anchor, nodes_ - done.nodes_before);
+  }
+
+  const std::string& path_;
+  std::size_t nodes_ = 0;
+  std::vector<Opened> opened_;
+  std::vector<std::size_t> anchored_;  // by anchor: its node's size, kOpen until it ends
+};
+
+}  // namespace
+
 YAML::Node parse(const std::string& path, const std::string& text) {
   try {
+    std::istringstream stream(text);
+    YAML::Parser parser(stream);
+    CostScan cost(path);
+    parser.HandleNextDocument(cost);
     return YAML::Load(text);
   } catch (const YAML::ParserException& error) {
     throw Error(path + ":" + std::to_string(error.mark.line + 1) + ":" +
@@ -39,8 +134,8 @@ YAML::Node parse(const std::string& path, const std::string& text) {
   }
 }
 
-YAML::Node load_map(const std::string& path, std::uintmax_t max_bytes, const std::string& what) {
-  const YAML::Node root = parse(path, read_input_file(path, max_bytes, what));
+YAML::Node load_map(const std::string& path, const std::string& what) {
+  const YAML::Node root = parse(path, read_input_file(path, kMaxYamlFileBytes, what));
   if (root.IsNull()) throw Error(path + ":1:1: error: the file is empty; expected " + what);
   if (!root.IsMap()) throw Error(path + ":1:1: error: expected " + what + ", not " + kind_of(root));
   return root;

@@ -48,8 +48,7 @@ struct LoopResult {
   double seconds = 0.0;
   LatencyHistogram controller_wake;  // the afhub controller's wake-up latency
   std::string cyclictest_skipped;
-  LatencyHistogram cyclictest_wake;
-  double cyclictest_max_us = 0.0;  // exact, as cyclictest reports it
+  LatencyHistogram cyclictest_wake;  // its maximum exact, as cyclictest reports it
   std::uint64_t commanded_steps = 0, answered_steps = 0;
   double deadline_hit_ratio() const {
     return commanded_steps ? static_cast<double>(answered_steps) / commanded_steps : 0.0;

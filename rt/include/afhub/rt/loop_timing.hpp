@@ -1,5 +1,5 @@
 // What a loop measures about itself: wake-up latency and compute time per cycle in
-// preallocated histograms, and counts of cycles, overruns and late commands.
+// fixed-size histograms, and counts of cycles, overruns and late commands.
 // Recording is real-time safe (no allocation, no system call).
 #pragma once
 
@@ -13,8 +13,8 @@ namespace afhub {
 class LoopTiming {
  public:
   void record(std::int64_t wake_latency_ns, std::int64_t compute_ns) noexcept {
-    wake_latency_.record(static_cast<double>(wake_latency_ns) * 1e-3);
-    compute_.record(static_cast<double>(compute_ns) * 1e-3);
+    wake_latency_.record(wake_latency_ns);
+    compute_.record(compute_ns);
     ++cycles_;
   }
   void count_overruns(std::uint64_t periods) noexcept { overruns_ += periods; }

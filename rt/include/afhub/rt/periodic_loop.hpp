@@ -10,10 +10,17 @@
 #include <cstdint>
 #include <functional>
 
-#include "afhub/rt/loop_stats_publisher.hpp"
 #include "afhub/rt/loop_timing.hpp"
 
 namespace afhub {
+
+// What the system granted a loop's real-time requests (SCHED_FIFO, mlockall, CPU).
+struct RealtimeGrant {
+  bool realtime = false;
+  bool memory_locked = false;
+  int cpu = -1;
+  int cpu_wake_latency_us = -1;  // the wake-up latency limit held, or -1
+};
 
 enum class OverrunPolicy {
   // Stay on the grid: the periods a cycle ran past are skipped and counted as

@@ -16,6 +16,10 @@
 
 namespace afhub {
 
+// Bytes of the reason a body's state gives for the last command refused, its NUL
+// included (the physics' reasons name a joint and its bound in fewer).
+inline constexpr std::size_t kRefusalReasonSize = 160;
+
 struct JointSample {
   double position{0.0};  // rad or m
   double velocity{0.0};  // rad/s or m/s
@@ -50,6 +54,13 @@ struct BodyState {
   std::uint32_t sensor_ray_count{0};
   std::uint32_t answered_steps{0};  // see commanded_steps
   std::uint32_t contact_count{0};   // contact points that pushed on the body in the last step
+  // The commands for this body the physics refused (NaN or Inf, beyond the body's
+  // bounds, more joints than it has: never applied), counted since it started (modulo
+  // 2^32), and the last one's sender and reason (NUL-terminated), so that the sender
+  // can say why: `afhub cmd` stops with it.
+  std::uint32_t refused_commands{0};
+  std::uint32_t refused_command_pid{0};
+  std::array<char, kRefusalReasonSize> refusal_reason{};
   std::array<double, kMaxSensorRaysPerBody> sensor_distances_m{};
   std::array<JointSample, kMaxJointsPerBody> joints{};  // last: sized by joint_count
 };

@@ -51,6 +51,22 @@ constexpr std::size_t body_list_bytes(std::size_t count, std::size_t names = 0,
          refs * sizeof(std::uint32_t);
 }
 
+// The sizes body lists are loaned at, each the chunk size of one of the hub's pools
+// for them (hub_mempools.cpp). iceoryx takes a chunk from the smallest pool that fits,
+// whatever its kind: loaned at their real size, a directory of 8 bodies (2480 bytes)
+// took the world state's chunks, and 32 physics ran the world state out of them.
+inline constexpr std::array<std::size_t, 3> kBodyListTiers = {
+    body_list_bytes(8, 64, 256), body_list_bytes(64, 512, 2048),
+    body_list_bytes(kMaxBodies, 4096, 65536)};
+// The smallest tier that holds the list (its real size past the last tier).
+constexpr std::size_t body_list_loan_bytes(std::size_t count, std::size_t names = 0,
+                                           std::size_t refs = 0) {
+  const std::size_t bytes = body_list_bytes(count, names, refs);
+  for (std::size_t tier : kBodyListTiers)
+    if (bytes <= tier) return tier;
+  return bytes;
+}
+
 // The joint names and references of a list whose counts are set (and, when read,
 // checked by check_payload against the chunk's size).
 inline JointName* joint_names_in(BodyList& list) {

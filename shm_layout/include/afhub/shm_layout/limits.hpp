@@ -1,8 +1,9 @@
-// Capacities of every payload. Payloads live in shared memory mapped at a different
-// address in each process, so nothing in them may grow once loaned: each bound is
-// chosen here once, with the reason beside it. Body states, body commands and the
-// catalog are loaned at their real size (their variable arrays come last and only
-// the counted entries are sent), so a large bound costs nothing until a model uses it.
+// Capacities of every payload, and what one file a user writes may cost to read.
+// Payloads live in shared memory mapped at a different address in each process, so
+// nothing in them may grow once loaned: each bound is chosen here once, with the
+// reason beside it. Body states, body commands and the catalog are loaned at their
+// real size (their variable arrays come last and only the counted entries are sent),
+// so a large bound costs nothing until a model uses it.
 #pragma once
 
 #include <cstddef>
@@ -35,6 +36,13 @@ inline constexpr std::size_t kProcessNameBufferSize = 104;
 // processes that claim bodies at once open their publishers before the catalog
 // refuses one of them, and that must never run iceoryx out of ports (it aborts).
 inline constexpr std::size_t kMaxBodies = 450;
+
+// Bodies (rigid and soft, passive ones too) one physics simulates. Passive bodies use
+// no hub resource, so this bounds what a model costs to build and step: Bullet keeps
+// per body its shapes, pairs and manifolds, and a step visits every body. Twice the
+// largest scene measured (8000 bodies, tests/physics/scene_benchmark.cpp). Checked
+// from the files' body lists, before a body is read.
+inline constexpr std::size_t kMaxModelBodies = 16384;
 
 // Bodies in a scene description (passive ones too, which publish no state): a body
 // entry is about 1.4 KB, so the largest scene is under 1 MB. Bodies past it are
@@ -74,11 +82,33 @@ inline constexpr std::uint32_t kMaxWorldStepsPerCommand = 1'000'000;
 // Lights and cameras whose poses the world state carries.
 inline constexpr std::size_t kMaxWorldObjects = 8;
 
-// Processes listed in the hub's health. iceoryx allows 300 runtimes; a co-simulation
-// rarely has more than a few dozen, and the health payload stays small.
-inline constexpr std::size_t kMaxHealthProcesses = 64;
+// Processes attached to one hub: iceoryx 2.0 allows 300 runtimes (MAX_PROCESS_NUMBER),
+// the hub's among them. Each publishes a body directory: their pool is sized for all.
+inline constexpr std::size_t kMaxProcesses = 300;
+
+// Readers of one channel: iceoryx 2.0 connects at most 256 subscribers to a publisher
+// (IOX_MAX_SUBSCRIBERS_PER_PUBLISHER). Every client reads the hub's catalog, so the
+// 257th client finds no room; it is told so.
+inline constexpr std::size_t kMaxReadersPerChannel = 256;
+
+// Processes listed in the hub's health: all of them (112 bytes each).
+inline constexpr std::size_t kMaxHealthProcesses = kMaxProcesses;
 
 // iceoryx 2.0 supports at most 32 mempools per segment.
 inline constexpr std::size_t kMaxMempools = 32;
+
+// What one YAML file (a model, a world, an input device or bridge config) may cost.
+// yaml-cpp builds a whole file as a tree of about 450 bytes and 2 us per node: a
+// 50 MB file of 25 million values took 11 GB and 49 s. Files are scanned first,
+// without the tree, and refused at the first node past a bound. The largest real
+// AMBF models have 2300 nodes, nest 5 deep and weigh 16 KB; generated ones with the
+// hub's kMaxBodies active bodies and thousands of passive ones stay far below these.
+// A file's bytes: read whole before parsing, so this also bounds its copy in memory.
+inline constexpr std::uintmax_t kMaxYamlFileBytes = 16u << 20;
+// Values, lists and maps in one file (an alias counts the nodes it repeats): at most
+// about 0.5 GB and 2 s of yaml-cpp's tree (measured: 0.57 GB).
+inline constexpr std::size_t kMaxYamlNodes = 1'000'000;
+// Lists and maps inside each other: every reader walks them recursively.
+inline constexpr std::size_t kMaxYamlDepth = 64;
 
 }  // namespace afhub

@@ -8,7 +8,8 @@
 //
 // Frame, little-endian:
 //   u32 magic 'AFV1' (0x31564641), u32 scene generation (the viewer counts the scenes),
-//   u32 entry count, u32 flags (bit 0: paused), f64 simulation time,
+//   u32 entry count, u32 flags (bit 0: paused; bit 1: the hub is lost, and the viewer
+//   waits for it to come back: hub_lost_frame()), f64 simulation time,
 //   u32 bodies in the catalog, u32 joint blocks;
 //   then per entry (a scene body the catalog lists): u32 scene index,
 //   f32 position x y z, f32 orientation x y z w;
@@ -27,6 +28,7 @@
 
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/channel.hpp"
+#include "afhub/hub/copying_reader.hpp"
 #include "afhub/shm_layout/scene_poses.hpp"
 #include "afhub/shm_layout/soft_body.hpp"
 #include "afhub/shm_layout/world.hpp"
@@ -37,6 +39,11 @@ namespace afhub::viewer {
 inline constexpr std::uint32_t kFrameMagic = 0x31564641;
 inline constexpr std::size_t kFrameHeaderBytes = 32;
 inline constexpr std::size_t kFrameEntryBytes = 32;
+inline constexpr std::uint32_t kFramePaused = 1, kFrameHubLost = 2;
+
+// What the page is sent while the viewer has no hub (hub_loss.hpp): no bodies, the
+// hub-lost flag.
+std::vector<std::uint8_t> hub_lost_frame();
 
 class PoseFeed {
  public:
@@ -54,9 +61,11 @@ class PoseFeed {
  private:
   void refresh_live(const BodyList& catalog);
 
-  LatestReader<SceneDescription> scene_reader_;
-  LatestReader<WorldState> world_reader_;
-  LatestReader<ScenePoses> poses_reader_;
+  // What the physics wrote, copied before it is checked: any member of the hub's group
+  // can change a chunk after its check, and a count read twice must not differ.
+  CopiedReader<SceneDescription> scene_reader_;
+  CopiedReader<WorldState> world_reader_;
+  CopiedReader<ScenePoses> poses_reader_;
   CatalogReader catalog_;
   std::shared_ptr<const ViewScene> scene_;
   std::uint32_t scene_pid_ = 0;  // the physics that published it: its poses only
@@ -66,7 +75,7 @@ class PoseFeed {
   std::vector<bool> live_;
   // Per scene soft body, its faces (read once per scene) and its node positions.
   struct SoftReaders {
-    std::unique_ptr<LatestReader<SoftBodyMesh>> faces, nodes;
+    std::unique_ptr<CopiedReader<SoftBodyMesh>> faces, nodes;
   };
   std::vector<SoftReaders> soft_;
   std::vector<std::uint8_t> joint_blocks_;  // reused: no allocation once grown

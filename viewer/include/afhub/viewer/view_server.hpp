@@ -1,6 +1,7 @@
 // The viewer's web server, on civetweb (an embedded C HTTP and WebSocket server):
-//   /              the page (/?camera=NAME: that world camera's viewport)
-//   /viewer.js     its script
+//   /              the page (/?camera=NAME: that world camera's viewport), from viewer/web/,
+//                  embedded at build time (web_files.hpp)
+//   /viewer.js, /viewer.css   its script and style, the same way
 //   /scene.json    the scene: bodies, meshes by index, lights, cameras
 //   /joints.json   each live body's joint names (for the sliders)
 //   /options.json  {"commands": true|false}
@@ -10,17 +11,23 @@
 //   /mesh/N        the mesh file scene body N lists, and no other file
 //   /ws            a WebSocket: binary pose frames (pose_feed.hpp), pushed by broadcast();
 //                  each page has its own sender (frame_sender.hpp), and a page that stops
-//                  reading (no answer to pings for a few seconds) is disconnected
+//                  reading (no answer to pings for 5 s, or a write stuck for 5 s) is
+//                  disconnected, as is one that sends a frame longer than 16 KiB
+//                  (src/page_socket.hpp)
 //   /command       POST: a joint command; refused (403) unless the server allows commands
 //   /world         POST action=pause|resume|step|reset; refused (403) the same way
-// Anything else is 404; nothing else is read from the disk.
+// Anything else is 404; nothing else is read from the disk. One address may hold
+// kConnectionsPerAddress connections; more are closed at once. A request's headers
+// must come within 5 s.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 #include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -44,6 +51,11 @@ struct ServerOptions {
   std::string paired_cameras_json = "{}";  // what /paired.json serves
 };
 
+// Connections one address may hold open (a browser opens up to 6 at once to a server,
+// plus a WebSocket per page), and civetweb's worker threads (one per connection).
+inline constexpr int kConnectionsPerAddress = 16;
+inline constexpr int kWorkerThreads = 64;
+
 class ViewServer {
  public:
   // Starts listening; throws afhub::Error when it cannot (the port in use, say).
@@ -52,7 +64,7 @@ class ViewServer {
   ViewServer(const ViewServer&) = delete;
   ViewServer& operator=(const ViewServer&) = delete;
 
-  int port() const { return port_; }
+  int port() const { return port_.load(); }
   void set_scene(std::shared_ptr<const ViewScene> scene);
   void set_joints(const std::string& json);
   // Hands one binary frame to every connected page's sender; never waits for a
@@ -62,22 +74,28 @@ class ViewServer {
 
   // civetweb's callbacks (C functions reach the server through their user data).
   int handle_request(mg_connection* connection);
-  void add_socket(mg_connection* connection);
-  void remove_socket(const mg_connection* connection);
+  // /ws: the handshake, then the page's frames until it leaves (page_socket.hpp);
+  // returns the status for civetweb's log.
+  int serve_page_socket(mg_connection* connection);
+  // A connection is taken by a thread: an address's connections over its limit, the
+  // newest, are closed.
+  void admit();
 
  private:
   std::shared_ptr<const ViewScene> scene();
+  void add_socket(mg_connection* connection);
+  void remove_socket(const mg_connection* connection);
+  bool page_dropped(const mg_connection* connection);
+
   ServerOptions options_;
   mg_context* context_ = nullptr;
-  int port_ = 0;
-  std::mutex mutex_;  // guards scene_, joints_json_ and senders_
+  std::atomic<int> port_{0};
+  std::atomic<bool> stopping_{false};
+  std::mutex mutex_;  // guards scene_, joints_json_, senders_ and refused_
   std::shared_ptr<const ViewScene> scene_;
   std::string joints_json_ = "{}";
   std::map<const mg_connection*, std::unique_ptr<FrameSender>> senders_;
+  std::set<std::string> refused_;  // addresses told of their limit
 };
-
-// The page and its script (page.cpp).
-const std::string& page_html();
-const std::string& page_script();
 
 }  // namespace afhub::viewer

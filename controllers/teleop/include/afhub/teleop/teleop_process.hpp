@@ -62,7 +62,4 @@ struct TeleopOptions {
 // With `latency`, the figures recorded (options.latency_samples at most) are left there.
 int run_teleop(const TeleopOptions& options, TeleopLatency* latency = nullptr);
 
-// The p-quantile (0..1) of `samples` (sorted in place); 0 when empty.
-std::int64_t quantile(std::vector<std::int64_t>& samples, double p);
-
 }  // namespace afhub::teleop

@@ -115,7 +115,10 @@ BodyList* loan_body_list(RawWriter& writer, const std::vector<BodyEntry>& entrie
 
 class DirectoryPublisher {
  public:
-  DirectoryPublisher();  // on {"afhub", "<runtime name>", "directory"}; needs connect_to_hub()
+  // On {"afhub", "<runtime name>/<n>", "directory"}, n counting the publishers of this
+  // process (each its own channel: the hub keeps one sample per channel). Needs
+  // connect_to_hub().
+  DirectoryPublisher();
   // Announces a body; publish() sends the directory.
   void add(const BodyEntry& body);
   void publish();
@@ -128,8 +131,8 @@ class DirectoryPublisher {
 class CatalogReader {
  public:
   CatalogReader();
-  // Waits up to `timeout` for the hub's catalog. Throws afhub::Error if none comes:
-  // the RouDi that answered is then not an afhub hub.
+  // Waits up to `timeout` for the hub's catalog. Throws afhub::Error if none comes,
+  // saying why: no room for another reader (kMaxReadersPerChannel), or a hub silent.
   void wait(std::chrono::milliseconds timeout);
   // The newest catalog (after wait()); read in place.
   const BodyList& latest() noexcept;

@@ -29,10 +29,23 @@ class CopyingReader {
  private:
   RawLatestReader reader_;
   PayloadKind kind_;
-  std::vector<std::max_align_t> copy_;  // aligned for every payload struct
+  std::vector<std::max_align_t> copy_;   // aligned for every payload struct
+  std::vector<std::max_align_t> spare_;  // the next copy, until it is checked
   bool have_copy_ = false;
   bool updated_ = false;
   std::uint64_t refused_ = 0;
+};
+
+// A CopyingReader of one payload type.
+template <class T>
+class CopiedReader {
+ public:
+  explicit CopiedReader(const ChannelId& channel) : reader_(channel, T::kKind) {}
+  const T* latest() { return static_cast<const T*>(reader_.latest()); }
+  bool updated() const { return reader_.updated(); }
+
+ private:
+  CopyingReader reader_;
 };
 
 }  // namespace afhub

@@ -3,7 +3,7 @@
 //
 // iceoryx 2.0's runtime is a per-process singleton that cannot be re-initialised, so
 // the process re-executes itself: the same pid, executable, arguments and environment
-// (execv of /proc/self/exe), with AFHUB_REATTACH set. In order:
+// (execve of /proc/self/exe), with AFHUB_REATTACH set. In order:
 //   1. The loss is noticed by an iceoryx error handler (a fatal iceoryx error once the
 //      hub's memory is gone, as on `afhub hub stop`; a fatal error while the same hub
 //      stays up still terminates the process, as before) or by a watcher thread that

@@ -15,7 +15,6 @@
 #include "afhub/physics/sim_channels.hpp"
 #include "afhub/physics/simulation.hpp"
 #include "afhub/rt/latency_histogram.hpp"
-#include "afhub/rt/loop_stats_publisher.hpp"
 #include "afhub/rt/loop_timing.hpp"
 #include "afhub/rt/periodic_loop.hpp"
 

@@ -164,6 +164,10 @@ class SimChannels {
     // What report_events() says about this body; noted in the loop without allocating.
     std::array<Notice, kEventKinds> notices{};
     std::uint64_t commanded_steps = 0, answered_steps = 0;  // this body's timeliness
+    // The commands refused for this body, and the last one's sender and reason, as its
+    // state publishes them (BodyState::refused_commands).
+    std::uint32_t refused = 0, refused_pid = 0;
+    std::array<char, kRefusalReasonSize> refusal_reason{};
     std::uint32_t lockstep_pid = 0;         // the lockstep client answering for this body; 0: none
     std::uint64_t answered_step = 0;        // lockstep: the step this client answered last
     std::uint64_t applied_answer_step = 0;  // the step the command being applied answers

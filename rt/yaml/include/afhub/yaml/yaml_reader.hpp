@@ -24,12 +24,14 @@ const char* kind_of(const YAML::Node& node);
 // `value` as messages write bounds ("1e+09", "0.001").
 std::string number_text(double value);
 
-// Parses `text`, the contents of `path`; a syntax error says file:line:col.
+// Parses `text`, the contents of `path`; a syntax error says file:line:col. A file
+// past kMaxYamlNodes or kMaxYamlDepth (shm_layout/limits.hpp) is refused at the node
+// that passes the bound, before any tree is built.
 YAML::Node parse(const std::string& path, const std::string& text);
 
-// Reads `path` (at most `max_bytes`, see input_file.hpp) and parses it; the file
-// must hold a map. `what` names the kind of file: "an ADF file (a map with ...)".
-YAML::Node load_map(const std::string& path, std::uintmax_t max_bytes, const std::string& what);
+// Reads `path` (at most kMaxYamlFileBytes, see input_file.hpp) and parses it; the
+// file must hold a map. `what` names the kind of file: "an ADF file (a map with ...)".
+YAML::Node load_map(const std::string& path, const std::string& what);
 
 // One file's nodes, read with their locations.
 class Reader {

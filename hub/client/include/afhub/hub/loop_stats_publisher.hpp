@@ -7,16 +7,9 @@
 
 #include "afhub/hub/channel.hpp"
 #include "afhub/rt/loop_timing.hpp"
+#include "afhub/rt/periodic_loop.hpp"
 
 namespace afhub {
-
-// What the system granted a loop's real-time requests (SCHED_FIFO, mlockall, CPU).
-struct RealtimeGrant {
-  bool realtime = false;
-  bool memory_locked = false;
-  int cpu = -1;
-  int cpu_wake_latency_us = -1;  // the wake-up latency limit held, or -1
-};
 
 class LoopStatsPublisher {
  public:

@@ -1,5 +1,5 @@
 // The stop flag (see stop_signal.hpp).
-#include "afhub/hub/stop_signal.hpp"
+#include "afhub/rt/stop_signal.hpp"
 
 #include <signal.h>
 #include <unistd.h>

@@ -1,5 +1,5 @@
 // The stats channel of a loop (see loop_stats_publisher.hpp).
-#include "afhub/rt/loop_stats_publisher.hpp"
+#include "afhub/hub/loop_stats_publisher.hpp"
 
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/hub_presence.hpp"

@@ -1,0 +1,68 @@
+// Joining the hub (connect_to_hub, hub_presence.hpp): this process's iceoryx runtime.
+#include <unistd.h>
+
+#include <chrono>
+#include <string>
+
+#include "afhub/hub/hub_files.hpp"
+#include "afhub/hub/hub_health.hpp"
+#include "afhub/hub/hub_presence.hpp"
+#include "afhub/rt/stop_signal.hpp"
+#include "afhub/shm_layout/error.hpp"
+#include "afhub/shm_layout/header.hpp"
+#include "hub_access.hpp"
+#include "hub_reattach.hpp"
+#include "iceoryx_hoofs/log/logmanager.hpp"
+#include "iceoryx_posh/runtime/posh_runtime.hpp"
+
+namespace afhub {
+namespace {
+
+std::string& runtime_name_storage() {
+  static std::string name;
+  return name;
+}
+
+}  // namespace
+
+void connect_to_hub(const std::string& role, HubPolicy policy, std::chrono::milliseconds wait,
+                    const std::vector<std::string>& hub_options) {
+  if (!runtime_name_storage().empty()) return;
+  const bool reattaching = hub_loss::reattaching();
+  std::int64_t hub_seen_ns = 0;
+  if (reattaching) {
+    hub_loss::wait_for_new_hub();
+    hub_seen_ns = monotonic_ns();
+  } else {
+    ensure_hub(policy, wait, "afhub " + role, hub_options);
+  }
+  quiet_iceoryx_logs();
+  std::string name = "afhub-" + role + "-" + std::to_string(getpid());
+  if (name.size() > 100) throw Error("process role '" + role + "' is too long for iceoryx");
+  // The image before the re-exec had this name too: its socket is ours to remove
+  // (iceoryx would, with a warning).
+  if (reattaching) unlink(("/tmp/" + name).c_str());
+  require_hub_access();
+  claim_runtime_lock_file("/tmp/" + name + ".lock");
+  {
+    const StopEndsBlockingCall stoppable;
+    iox::runtime::PoshRuntime::initRuntime(iox::RuntimeName_t(iox::cxx::TruncateToCapacity, name));
+  }
+  runtime_name_storage() = name;
+  count_ports_from(free_ports(std::chrono::milliseconds(500)));
+  hub_loss::watch_attached_hub(hub_seen_ns);
+}
+
+// Fatal messages only: iceoryx logs an error at each failed loan ("unable to acquire a
+// chunk"), each step of a loop out of chunks; its errors reach on_iceoryx_error, which
+// says each kind once.
+void quiet_iceoryx_logs() {
+  iox::log::LogManager::GetLogManager().SetDefaultLogLevel(iox::log::LogLevel::kFatal,
+                                                           iox::log::LogLevelOutput::kHideLogLevel);
+}
+
+const std::string& runtime_name() {
+  return runtime_name_storage();
+}
+
+}  // namespace afhub

@@ -1,0 +1,47 @@
+// The hub's default pools by payload kind: iceoryx takes a chunk from the smallest
+// pool that fits it, whatever its kind, so a kind whose sizes fall into another's
+// pool uses that pool's chunks up. Body directories of a few bodies (2480 bytes for
+// 8) fell into the world state's pool of 64, and 32 physics ran it out.
+#include <gtest/gtest.h>
+
+#include "afhub/hub/hub_daemon.hpp"
+#include "afhub/shm_layout/catalog.hpp"
+#include "afhub/shm_layout/limits.hpp"
+#include "afhub/shm_layout/world.hpp"
+
+namespace afhub {
+namespace {
+
+// The pool iceoryx would take a chunk of `bytes` from.
+const MempoolSpec& pool_for(const std::vector<MempoolSpec>& pools, std::size_t bytes) {
+  for (const MempoolSpec& pool : pools)
+    if (pool.payload_bytes >= bytes) return pool;
+  return pools.back();
+}
+
+bool holds_body_lists(const MempoolSpec& pool) {
+  return pool.holds.find("catalogs and directories") != std::string::npos;
+}
+
+TEST(MempoolKinds, BodyListsTakeOnlyBodyListChunks) {
+  const std::vector<MempoolSpec> pools = default_mempools();
+  for (std::size_t bodies = 0; bodies <= kMaxBodies; ++bodies)
+    for (std::size_t joints : {std::size_t{0}, 4 * bodies}) {
+      const MempoolSpec& pool = pool_for(pools, body_list_loan_bytes(bodies, joints, joints));
+      ASSERT_TRUE(holds_body_lists(pool)) << "a list of " << bodies << " bodies and " << joints
+                                          << " joints goes to the pool of " << pool.holds;
+    }
+  EXPECT_EQ(pool_for(pools, sizeof(WorldState)).holds, "world state");
+}
+
+TEST(MempoolKinds, EveryProcessHasRoomForItsDirectoryAndWorldState) {
+  const std::vector<MempoolSpec> pools = default_mempools();
+  // A chunk in its history, a loan, and up to three in the hub's reader.
+  const MempoolSpec& directories = pool_for(pools, body_list_loan_bytes(1));
+  EXPECT_GE(directories.chunk_count, 5 * kMaxProcesses) << directories.holds;
+  // A chunk in its history and a loan: 32 physics used to run the pool of 64 out.
+  EXPECT_GE(pool_for(pools, sizeof(WorldState)).chunk_count, 2 * kMaxProcesses);
+}
+
+}  // namespace
+}  // namespace afhub
