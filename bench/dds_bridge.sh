@@ -85,7 +85,7 @@ echo "1. latency: $rounds rounds of $pings pings, raw DDS and through the bridge
 latency() {
   local suffix=$1
   shift
-  spawn a bridge_a "$afhub" bridge dds --export --accept-commands --bodies 'bench/*' "$@"
+  spawn a bridge_a "$afhub" bridge dds --export --insecure-accept-commands --bodies 'bench/*' "$@"
   local bridge_a=$spawned
   spawn b bridge_b "$afhub" bridge dds --mirror --bodies 'bench/*' "$@"
   local bridge_b=$spawned

@@ -22,6 +22,7 @@ bridges::DdsBridgeOptions merged(CLI::App& dds, const BridgeCliOptions& cli) {
   if (cli.config.empty()) {
     bridges::DdsBridgeOptions options = cli.flags;
     if (cli.best_effort) options.reliable = false;
+    options.accept_commands = options.accept_commands || options.insecure_accept_commands;
     return options;
   }
   bridges::DdsBridgeOptions options = bridges::read_dds_bridge_config(cli.config);
@@ -35,6 +36,7 @@ bridges::DdsBridgeOptions merged(CLI::App& dds, const BridgeCliOptions& cli) {
   if (given("--export")) options.export_bodies = true;
   if (given("--mirror")) options.mirror = true;
   if (given("--accept-commands")) options.accept_commands = true;
+  if (given("--insecure-accept-commands")) options.insecure_accept_commands = true;
   if (given("--rate")) options.rate_hz = f.rate_hz;
   if (given("--spin")) options.spin = true;
   if (given("--cpu-wake-latency")) options.cpu_wake_latency_us = f.cpu_wake_latency_us;
@@ -48,6 +50,7 @@ bridges::DdsBridgeOptions merged(CLI::App& dds, const BridgeCliOptions& cli) {
   if (given("--ros2-prefix")) options.ros2_prefix = f.ros2_prefix;
   if (given("--security")) options.security_dir = f.security_dir;
   if (given("--max-mirrored")) options.max_mirrored = f.max_mirrored;
+  options.accept_commands = options.accept_commands || options.insecure_accept_commands;
   options.latency = f.latency;
   options.seconds = f.seconds;
   return options;
@@ -65,7 +68,8 @@ void register_bridge(CLI::App& app, Runner& selected) {
       "Bridge bodies, devices and the world over Cyclone DDS (topics afhub/body_state, "
       "afhub/body_command, afhub/body_info, afhub/device_state, afhub/device_command, "
       "afhub/world_state, afhub/world_command). Settings come from --config FILE (YAML, "
-      "keys named as the flags: domain, interface, export, mirror, accept-commands, bodies, "
+      "keys named as the flags: domain, interface, export, mirror, accept-commands, "
+      "insecure-accept-commands, bodies, "
       "devices, world, qos: best-effort|reliable, rate, spin, cpu-wake-latency, rate-limits: "
       "{bodies, devices, world}, max-command-age, max-mirrored, profile, ros2-prefix, security), "
       "and the "
@@ -79,7 +83,9 @@ void register_bridge(CLI::App& app, Runner& selected) {
                   "choice); it replaces CYCLONEDDS_URI's inline interfaces, whose other "
                   "settings (peers) still apply");
   dds->add_option("--bodies", options->body_globs,
-                  "Globs over body channel names, e.g. 'ambf/env/*' (default '*')");
+                  "Globs over body channel names, e.g. 'ambf/env/*' (default '*'): the local "
+                  "bodies exported and the announced bodies mirrored (a mirror takes no other "
+                  "name, and at most --max-mirrored)");
   dds->add_option("--devices", options->device_globs,
                   "Globs over device names (channels device/<name>) to bridge, e.g. 'falcon*' "
                   "(default: none). A mirrored device is listed as a device here; its "
@@ -99,8 +105,12 @@ void register_bridge(CLI::App& app, Runner& selected) {
                   "those past it, or whose joint names would not fit the hub's catalog, are "
                   "refused and said once");
   dds->add_flag("--accept-commands", options->accept_commands,
-                "With --export: apply commands from the network to local bodies, devices and "
-                "the world");
+                "With --export and --security: apply commands from the network to local "
+                "bodies, devices and the world");
+  dds->add_flag("--insecure-accept-commands", options->insecure_accept_commands,
+                "--accept-commands without --security: any host on the DDS domain may command "
+                "this hub's bodies, devices and world (each status line says so); only on a "
+                "network that only trusted hosts reach");
   dds->add_option("--rate", options->rate_hz,
                   "The bridge's cycle for what does not wake it (devices, the world, the "
                   "catalog); bodies' states and commands cross as they arrive, newest wins "

@@ -28,7 +28,7 @@ for side in a b; do
   for _ in $(seq 100); do on $side "$afhub" status >/dev/null 2>&1 && break; sleep 0.1; done
 done
 spawn a physics "$afhub" run "$here/models/arm7.yaml"
-spawn a bridge_a "$afhub" bridge dds --export --accept-commands
+spawn a bridge_a "$afhub" bridge dds --export --insecure-accept-commands
 spawn b bridge_b "$afhub" bridge dds --mirror
 on b "$afhub" echo arm/base --count 1 --wait 30 >/dev/null || fail "B does not list A's arm"
 echo "two_machines.sh: machine B has A's bodies; A's arm follows B's commands" >&2

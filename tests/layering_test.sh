@@ -34,7 +34,7 @@ forbid physics/channels 'controllers|devices|bench'
 forbid controllers 'physics|bench'
 forbid device_drivers 'physics|controllers|bench'
 forbid bench '(cli)'
-forbid viewer 'rt|physics|controllers|devices|bench'
+forbid viewer 'physics|controllers|devices|bench'
 forbid bridges 'physics|controllers|devices|bench|viewer'
 if grep -rn '#include "afhub/hub/hub_daemon.hpp"' "$source_dir/hub/client"; then
   echo "layering: hub/client must not include the daemon" >&2

@@ -15,7 +15,7 @@ fail() {
 cat >"$work/bridge.yaml" <<'YAML'
 domain: 3
 export: true
-accept-commands: true
+insecure-accept-commands: true
 bodies: ["afhub/arm/*"]
 devices: falcon*
 world: true
@@ -26,7 +26,7 @@ YAML
 
 # The file alone.
 out=$("$afhub" bridge dds --config "$work/bridge.yaml" --check)
-for line in 'domain: 3' 'export: true' 'accept-commands: true' 'bodies: ["afhub/arm/*"]' \
+for line in 'domain: 3' 'export: true' 'accept-commands: true' 'insecure-accept-commands: true' 'bodies: ["afhub/arm/*"]' \
   'devices: ["falcon*"]' 'world: true' 'qos: reliable' 'spin: false' \
   'rate-limits: {bodies: 200, devices: 0, world: 50}' 'max-command-age: 0.02'; do
   grep -qxF "$line" <<<"$out" || fail "the file's '$line' is not in the settings:
@@ -69,4 +69,19 @@ if "$afhub" bridge dds --config "$work/both.yaml" --check >/dev/null 2>"$work/er
   fail "--world with --export and --mirror was accepted"
 fi
 grep -q "a hub has one world" "$work/err" || fail "unexpected message: $(cat "$work/err")"
+# Commands from the network without --security only when asked for by name.
+if "$afhub" bridge dds --export --accept-commands --check >/dev/null 2>"$work/err"; then
+  fail "--accept-commands without --security was accepted"
+fi
+grep -q "lets any host on DDS domain 0 command.*--insecure-accept-commands" "$work/err" ||
+  fail "unexpected message: $(cat "$work/err")"
+printf 'export: true\naccept-commands: true\n' >"$work/open.yaml"
+if "$afhub" bridge dds --config "$work/open.yaml" --check >/dev/null 2>"$work/err"; then
+  fail "a config's accept-commands without security was accepted"
+fi
+out=$("$afhub" bridge dds --export --insecure-accept-commands --check)
+for line in 'accept-commands: true' 'insecure-accept-commands: true'; do
+  grep -qxF "$line" <<<"$out" || fail "'$line' is not in the settings of --insecure-accept-commands:
+$out"
+done
 echo "dds_config_cli_test: PASS"

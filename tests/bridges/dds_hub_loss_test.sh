@@ -26,7 +26,7 @@ spawn physics "$afhub" run "$model"
 physics=$spawned
 for _ in $(seq 100); do "$afhub" ls 2>/dev/null | grep "$body" >/dev/null && break; sleep 0.1; done
 "$afhub" ls | grep "$body" >/dev/null || fail "the physics did not list $body"
-spawn exporter "$afhub" bridge dds --export --accept-commands --bodies 'afhub/arm/*' \
+spawn exporter "$afhub" bridge dds --export --insecure-accept-commands --bodies 'afhub/arm/*' \
   --max-command-age 1
 exporter=$spawned
 spawn mirror "$afhub" bridge dds --mirror --bodies 'peer/*'

@@ -37,7 +37,7 @@ stop_bridge() {
   kill -TERM "$bridge"
   wait "$bridge" || true
 }
-start_bridge --accept-commands
+start_bridge --insecure-accept-commands
 
 echo "2. JointState, PoseStamped, TwistStamped, WrenchStamped on $base/*"
 "$reader" read "$base" --seconds 10 >"$work/read.json" || fail "the reader did not get every topic"
@@ -82,7 +82,7 @@ grep -Eq "ros2 profile: .*bad [1-9]" "$work/bridge.log" || fail "the bad command
 stop_bridge
 
 echo "6. with a command-age bound below the loopback's latency, commands are dropped"
-start_bridge --accept-commands --max-command-age 0.000001
+start_bridge --insecure-accept-commands --max-command-age 0.000001
 "$reader" command "$base" base-link1=-0.6 --seconds 3 2>/dev/null
 position=$("$afhub" echo "$body" --json --count 1 | jq '.joint_positions[0]')
 echo "  base-link1 at $position after 3 s of stale commands to -0.6"

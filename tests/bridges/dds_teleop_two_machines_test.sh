@@ -62,7 +62,7 @@ for _ in $(seq 100); do on a "$afhub" ls 2>/dev/null | grep "$palm" >/dev/null &
 on a "$afhub" ls | grep "$palm" >/dev/null || fail "the physics on A did not list $palm"
 
 for _ in $(seq 100); do on b "$afhub" ls >/dev/null 2>&1 && break; sleep 0.1; done
-spawn a bridge_a $rt "$afhub" bridge dds --export --accept-commands --bodies 'afhub/gripper/*' --world --latency
+spawn a bridge_a $rt "$afhub" bridge dds --export --insecure-accept-commands --bodies 'afhub/gripper/*' --world --latency
 bridge_a=$spawned
 # B's bridge from a config file (the flags would do the same).
 on b tee /tmp/console.yaml >/dev/null <<YAML
@@ -168,7 +168,7 @@ echo "  paused at step $s1 from B, resumed"
 # World commands older than the bound are not applied.
 kill -TERM "$bridge_a"
 wait "$bridge_a" || true
-spawn a bridge_a2 "$afhub" bridge dds --export --accept-commands --bodies 'afhub/gripper/*' --world --max-command-age 0.000001
+spawn a bridge_a2 "$afhub" bridge dds --export --insecure-accept-commands --bodies 'afhub/gripper/*' --world --max-command-age 0.000001
 bridge_a=$spawned
 sleep 3
 # Up to three tries: under load, the new bridge's reader may not be matched yet at the
@@ -193,8 +193,8 @@ echo "  a world command older than the bound was dropped on A"
 echo "4. a device across: B's device in A's hub, its force from A"
 kill -TERM "$bridge_a" "$bridge_b"
 spawn b device2 $rt "$afhub" device run virtual --name probe
-spawn a bridge_a3 $rt "$afhub" bridge dds --export --mirror --accept-commands --bodies 'afhub/gripper/*' --devices 'probe'
-spawn b bridge_b3 $rt "$afhub" bridge dds --export --mirror --accept-commands --bodies 'afhub/gripper/*' --devices 'probe'
+spawn a bridge_a3 $rt "$afhub" bridge dds --export --mirror --insecure-accept-commands --bodies 'afhub/gripper/*' --devices 'probe'
+spawn b bridge_b3 $rt "$afhub" bridge dds --export --mirror --insecure-accept-commands --bodies 'afhub/gripper/*' --devices 'probe'
 for _ in $(seq 200); do
   [[ $(on a "$afhub" ls --json 2>/dev/null | jq -r '.[] | select(.body == "device/probe") | .kind') == device ]] && break
   sleep 0.1

@@ -2,7 +2,7 @@
 # Two "machines" on one host (issue 16): network namespaces A and B joined by a veth
 # pair, each side in its own mount namespace with a private /tmp, /dev/shm and /run,
 # so each has its own hub. DDS stays on the veth (unicast peers, no multicast).
-# A runs the physics (arm7) and `afhub bridge dds --export --accept-commands`; B runs
+# A runs the physics (arm7) and `afhub bridge dds --export --insecure-accept-commands`; B runs
 # `afhub bridge dds --mirror` and drives A's arm with `afhub ctl sine`.
 # Checks: B lists A's bodies; B's sine moves A's joint (seen on A); a bridge with a
 # command-age bound smaller than the link's delay applies nothing; the link down for
@@ -60,7 +60,7 @@ read -r hub_alone_chunks hub_b < <(chunks b)
 hub_a=$(on a "$afhub" status --json | jq .hub_pid)
 echo "0. payload chunks in use on a hub alone (B): $hub_alone_chunks"
 
-start_export() { spawn a bridge_a env "$preload" "$afhub" bridge dds --export --accept-commands --bodies 'afhub/arm/*' "$@"; bridge_a=$spawned; }
+start_export() { spawn a bridge_a env "$preload" "$afhub" bridge dds --export --insecure-accept-commands --bodies 'afhub/arm/*' "$@"; bridge_a=$spawned; }
 start_mirror() { spawn b bridge_b env "$preload" "$afhub" bridge dds --mirror --latency "$@"; bridge_b=$spawned; }
 
 # wait_listed: B's catalog lists every body A exports, within 20 s.
@@ -102,6 +102,10 @@ kill -TERM "$bridge_a"
 wait "$bridge_a" || true
 grep -q "stale commands dropped [1-9]" "$work/bridge_a.log" ||
   fail "A's bridge did not count the stale commands it dropped"
+# Taking commands without --security is said at start and in each status.
+[[ $(grep -c "INSECURE: applying commands from any host on DDS domain 0" "$work/bridge_a.log") -ge 2 ]] ||
+  fail "A's bridge, accepting commands without --security, did not say so in its status"
+if grep -q INSECURE "$work/bridge_b.log"; then fail "B's bridge, taking no commands, said INSECURE"; fi
 
 echo "2. B's afhub ls lists A's bodies and B's ctl sine moves A's arm (A's bridge holding idle CPUs awake)"
 # The kernel's CPU wake-up latency limit (one for the host: namespaces do not have their

@@ -77,6 +77,7 @@ class Bridge {
     };
     const auto period_ns = static_cast<std::int64_t>(1e9 / options_.rate_hz);
     const std::int64_t start_ns = monotonic_ns();
+    say_if_insecure();
     std::int64_t next_ns = start_ns, next_scan_ns = start_ns,
                  next_report_ns = start_ns + 5'000'000'000;
     while (!stop_requested()) {
@@ -139,7 +140,17 @@ class Bridge {
     }
   }
 
+  // At start and in each status: commands taken from anyone on the domain.
+  void say_if_insecure() const {
+    if (options_.accept_commands && options_.security_dir.empty())
+      std::fprintf(stderr,
+                   "afhub bridge dds: INSECURE: applying commands from any host on DDS domain %u "
+                   "(--insecure-accept-commands; --security DIR authenticates them)\n",
+                   static_cast<unsigned>(options_.domain));
+  }
+
   void report() {
+    say_if_insecure();
     const ExportCounters out = export_ ? export_->counters() : ExportCounters{};
     const MirrorCounters in = mirror_ ? mirror_->counters() : MirrorCounters{};
     std::fprintf(stderr,

@@ -21,8 +21,10 @@ namespace {
 using yaml::Reader;
 
 const char* const kKeys =
-    "domain, interface, export, mirror, accept-commands, bodies, devices, world, qos, rate, spin, "
-    "cpu-wake-latency, rate-limits, max-command-age, max-mirrored, profile, ros2-prefix, security";
+    "domain, interface, export, mirror, accept-commands, insecure-accept-commands, bodies, "
+    "devices, "
+    "world, qos, rate, spin, cpu-wake-latency, rate-limits, max-command-age, max-mirrored, "
+    "profile, ros2-prefix, security";
 
 int microseconds(const Reader& reader, const YAML::Node& node, const std::string& key, int high) {
   const double value = reader.in_range(node, key, 0, high);
@@ -96,6 +98,9 @@ DdsBridgeOptions read_dds_bridge_config(const std::string& path, const DdsBridge
       options.mirror = reader.flag(value, key);
     } else if (key == "accept-commands") {
       options.accept_commands = reader.flag(value, key);
+    } else if (key == "insecure-accept-commands") {
+      options.insecure_accept_commands = reader.flag(value, key);
+      options.accept_commands = options.accept_commands || options.insecure_accept_commands;
     } else if (key == "bodies") {
       options.body_globs = globs(reader, value, key);
       if (options.body_globs.empty()) reader.fail(value, "'bodies' needs at least one glob");
@@ -166,8 +171,9 @@ std::string render_dds_bridge_config(const DdsBridgeOptions& options) {
   if (!options.interface.empty()) out << "interface: " << options.interface << "\n";
   out << "export: " << flag(options.export_bodies) << "\n"
       << "mirror: " << flag(options.mirror) << "\n"
-      << "accept-commands: " << flag(options.accept_commands) << "\n"
-      << "bodies: " << quoted_list(options.body_globs) << "\n"
+      << "accept-commands: " << flag(options.accept_commands) << "\n";
+  if (options.insecure_accept_commands) out << "insecure-accept-commands: true\n";
+  out << "bodies: " << quoted_list(options.body_globs) << "\n"
       << "devices: " << quoted_list(options.device_globs) << "\n"
       << "world: " << flag(options.world) << "\n"
       << "qos: " << (options.reliable ? "reliable" : "best-effort") << "\n"

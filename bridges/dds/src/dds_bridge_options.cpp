@@ -24,6 +24,13 @@ void check_dds_bridge_options(const DdsBridgeOptions& options) {
         "bodies in), or both");
   if (options.accept_commands && !options.export_bodies)
     throw Error("--accept-commands applies commands to exported bodies: add --export");
+  if (options.accept_commands && options.security_dir.empty() && !options.insecure_accept_commands)
+    throw Error(
+        "--accept-commands without --security lets any host on DDS domain " +
+        std::to_string(options.domain) +
+        " command this hub's bodies, devices and world: give --security DIR (credentials from "
+        "bridges/dds/security/make_credentials.sh), or --insecure-accept-commands on a network "
+        "only trusted hosts reach");
   if (!(options.rate_hz > 0.0 && options.rate_hz <= 100'000.0))
     throw Error("--rate must be between 0 and 100000 Hz");
   if (!(options.max_command_age_s > 0.0 && options.max_command_age_s <= 10.0))

@@ -25,6 +25,9 @@ struct DdsBridgeOptions {
   bool export_bodies = false;
   bool mirror = false;
   bool accept_commands = false;
+  // Accept commands without security_dir: any host on the domain may command this hub.
+  // Refused unless asked for by name (--insecure-accept-commands), and said in each status.
+  bool insecure_accept_commands = false;
   double rate_hz = 1000.0;  // the bridge's loop: each body at most once per cycle
   // Poll for local states and commands (sched_yield between polls) instead of sleeping
   // until one comes: no wake-up on the way out, for a bridge given a core of its own
