@@ -62,7 +62,7 @@ class CatalogBuilder {
 
   ChannelDiscovery discovery_;
   std::map<std::string, std::unique_ptr<CopyingReader>> directories_;  // by owner instance
-  std::map<std::string, RateProbe> rates_;                               // by body channel
+  std::map<std::string, RateProbe> rates_;                             // by body channel
   std::string next_probe_;  // where start_rate_samples() goes on round the bodies
   std::vector<BodyEntry> bodies_;
   std::set<std::string> told_;
