@@ -302,7 +302,8 @@ class CliWithBodies : public ::testing::Test {
     hub_.pid = start_test_hub();
     synth_.pid = spawn_afhub({"synth", "--bodies", "2", "--joints", "3", "--no-autostart"},
                              "/tmp/afhub-test-synth.log");
-    ASSERT_TRUE(wait_until([] { return contains(run_afhub({"ls"}).out, "synth/body1"); }, 5s));
+    ASSERT_TRUE(wait_until([] { return contains(run_afhub({"ls"}).out, "synth/body1"); }, 20s))
+        << read_file("/tmp/afhub-test-synth.log");
   }
   void TearDown() override {
     EXPECT_EQ(synth_.stop(), 0);

@@ -200,17 +200,15 @@ void CatalogReader::wait(std::chrono::milliseconds timeout) {
       std::this_thread::sleep_for(std::chrono::milliseconds(5));
       continue;
     }
-    // connect_to_hub checked that an afhub hub holds the RouDi's lock.
-    if (!reader_.subscribed())
-      throw Error(
-          "the hub has no room for another reader of its catalog: iceoryx connects at "
-          "most " +
-          std::to_string(kMaxReadersPerChannel) +
-          " readers to one channel (kMaxReadersPerChannel), and " +
-          std::to_string(attached_processes()) +
-          " afhub processes are attached. Stop some of them (`afhub status` lists "
-          "them)");
-    throw Error("the hub publishes no catalog: it is starting, or stuck; see its log");
+    // connect_to_hub checked that an afhub hub holds the RouDi's lock. iceoryx 2.0.3
+    // does not tell a reader that the writer has no room for it: both causes are said.
+    throw Error(
+        "no catalog reached this process from the hub: either its catalog has all "
+        "the readers iceoryx connects to one channel (" +
+        std::to_string(kMaxReadersPerChannel) + ", kMaxReadersPerChannel; " +
+        std::to_string(attached_processes()) +
+        " afhub processes are attached: stop some, `afhub status` lists them), or "
+        "the hub is starting or stuck (see its log)");
   }
 }
 
