@@ -7,7 +7,7 @@
 //     (CLOCK_MONOTONIC) as each first holds; exit 0 when all hold, 1 at the timeout.
 //   fault_probe chunks
 //     Prints "BYTES:USED" for every payload mempool (its chunks' payload size, its
-//     chunks in use), once two health samples over a second apart agree.
+//     chunks in use), from a health sample counted after the probe started.
 //   fault_probe hooked
 //     Outlives the hub like a device driver: its make-safe hook prints "hook ran" on
 //     stderr. Prints "attached N" (N: its re-attach count) on stdout, then waits for
@@ -101,18 +101,13 @@ std::vector<std::string> chunks_in_use(afhub::LatestReader<afhub::Health>& healt
 
 int chunks() {
   afhub::LatestReader<afhub::Health> health({"afhub", "hub", "health"});
-  // RouDi's introspection counts the pools once a second, while the hub may publish
-  // Health more often (when ports change): samples compared are over a second apart,
-  // or two copies of one stale count would agree.
-  std::vector<std::string> previous = chunks_in_use(health, now_ns());
-  for (int attempt = 0; attempt < 5; ++attempt) {
-    std::vector<std::string> current = chunks_in_use(health, now_ns() + 1'100'000'000);
-    if (current == previous) break;
-    previous = current;
-  }
-  for (const std::string& used : previous) std::printf("%s ", used.c_str());
+  // RouDi's introspection counts the pools once a second and the hub publishes the
+  // latest count: a sample published over a second after the probe started was counted
+  // after it started. (Callers compare in a wait: a count may catch a chunk in flight.)
+  const std::vector<std::string> used = chunks_in_use(health, now_ns() + 1'100'000'000);
+  for (const std::string& pool : used) std::printf("%s ", pool.c_str());
   std::printf("\n");
-  return previous.empty() ? 1 : 0;
+  return used.empty() ? 1 : 0;
 }
 
 }  // namespace
