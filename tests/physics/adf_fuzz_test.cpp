@@ -5,7 +5,8 @@
 // stepped). Each must fail with an afhub::Error that carries a location
 // ("file[:line:col]: error: ..."), or load within the loader's bounds and the hub's
 // capacities; anything else, or a crash, is a finding.
-// AFHUB_FUZZ_CASES sets the number of cases (default 1000), AFHUB_FUZZ_SEED the seed.
+// AFHUB_FUZZ_CASES sets the number of cases (default 1000), AFHUB_FUZZ_FIRST the first
+// (default 0: ctest runs cases 0-499 and 500-999 as two entries), AFHUB_FUZZ_SEED the seed.
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -200,13 +201,14 @@ bool located(const std::string& message) {
 
 TEST(AdfFuzz, MutatedModelsLoadOrFailWithALocatedError) {
   const std::uint64_t cases = from_environment("AFHUB_FUZZ_CASES", 1000);
+  const std::uint64_t first = from_environment("AFHUB_FUZZ_FIRST", 0);
   const std::uint64_t seed = from_environment("AFHUB_FUZZ_SEED", 1);
   const std::vector<Seed> originals = seeds();
   ASSERT_FALSE(originals.empty());
   testing::ModelFolder folder;
   std::uint64_t loaded = 0, refused = 0, built = 0, findings = 0;
   const auto start = std::chrono::steady_clock::now();
-  for (std::uint64_t n = 0; n < cases; ++n) {
+  for (std::uint64_t n = first; n < first + cases; ++n) {
     std::mt19937_64 random(seed * 0x9E3779B97F4A7C15ull + n);
     const Seed& original = originals[random() % originals.size()];
     std::string text = original.text;
