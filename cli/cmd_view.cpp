@@ -17,6 +17,7 @@
 #include "afhub/shm_layout/error.hpp"
 #include "afhub/teleop/input_devices_reader.hpp"
 #include "afhub/viewer/joint_commander.hpp"
+#include "afhub/viewer/page_access.hpp"
 #include "afhub/viewer/pose_feed.hpp"
 #include "afhub/viewer/view_server.hpp"
 #include "afhub/viewer/world_commander.hpp"
@@ -30,6 +31,7 @@ struct ViewOptions {
   int port = 8080;
   std::string bind = "127.0.0.1";
   bool allow_commands = false;
+  bool insecure_remote_commands = false;  // --allow-commands on an address others reach
   double rate_hz = 60.0;
   std::string name_space;
   std::string input_devices;  // input_devices.yaml: its devices' paired cameras are marked
@@ -57,6 +59,16 @@ std::string paired_cameras_json(const std::string& path) {
 // After a hub loss the viewer re-executes (hub_loss.hpp) and listens again on the port
 // it had, where its pages reconnect: a port picked with --port 0 is passed on here.
 constexpr const char* kKeptPortVariable = "AFHUB_VIEW_PORT";
+// Its command token likewise, so that the pages' URLs stay good.
+constexpr const char* kKeptTokenVariable = "AFHUB_VIEW_TOKEN";
+
+// The command token: the one this viewer had before a re-exec, or a new one.
+std::string command_token() {
+  const char* kept = std::getenv(kKeptTokenVariable);
+  std::string token = kept ? kept : viewer::random_token();
+  setenv(kKeptTokenVariable, token.c_str(), 1);
+  return token;
+}
 
 // Sends the hub-lost frame at display rate until `attached`: the pages say so while
 // connect_to_hub() waits for a hub to come back.
@@ -73,6 +85,19 @@ int run_view(const ViewOptions& options) {
   if (options.port < 0 || options.port > 65535) throw Error("--port takes 0 to 65535");
   if (!(options.rate_hz >= 1.0 && options.rate_hz <= 240.0))
     throw Error("--rate takes 1 to 240 frames per second");
+  // Any machine that reaches the address could drive the robot (the token travels in
+  // clear text over HTTP): only on loopback, unless the user says otherwise.
+  const bool remote_commands = options.allow_commands && !viewer::is_loopback(options.bind);
+  if (remote_commands && !options.insecure_remote_commands)
+    throw Error("--allow-commands with --bind " + options.bind +
+                " would let other machines drive the robot over plain HTTP; bind to "
+                "127.0.0.1 (reach it from elsewhere through an SSH tunnel), or, on a network "
+                "only trusted hosts reach, add --insecure-remote-commands");
+  if (remote_commands)
+    std::fprintf(stderr,
+                 "afhub view: INSECURE: commands are allowed from other machines (--bind %s "
+                 "--insecure-remote-commands); the token travels unencrypted\n",
+                 options.bind.c_str());
   viewer::ServerOptions server_options;
   if (!options.input_devices.empty())
     server_options.paired_cameras_json = paired_cameras_json(options.input_devices);
@@ -84,6 +109,7 @@ int run_view(const ViewOptions& options) {
     unsetenv(kKeptPortVariable);
   }
   server_options.allow_commands = options.allow_commands;
+  if (options.allow_commands) server_options.token = command_token();
   // The commanders need the hub: until it is attached (and once it is lost) a command
   // is refused.
   std::atomic<bool> attached{false};
@@ -123,8 +149,13 @@ int run_view(const ViewOptions& options) {
     if (lost_frames.joinable()) lost_frames.join();
   }
   viewer::PoseFeed feed(world_instance(options.name_space));
-  std::printf("afhub view: http://%s:%d/ (%s; Ctrl-C stops)\n", options.bind.c_str(), server.port(),
-              options.allow_commands ? "commands allowed" : "read-only: no commands");
+  // With commands, the URL carries the token: only a page opened at it may command.
+  const std::string query = options.allow_commands ? "?token=" + server_options.token : "";
+  std::printf("afhub view: http://%s:%d/%s (%s; Ctrl-C stops)\n", options.bind.c_str(),
+              server.port(), query.c_str(),
+              !options.allow_commands ? "read-only: no commands"
+              : remote_commands       ? "commands allowed, INSECURE: from other machines too"
+                                      : "commands allowed from this URL only");
   std::fflush(stdout);
   // Display rate, by absolute deadlines: the viewer reads the hub this often, never
   // at the physics' rate.
@@ -137,7 +168,10 @@ int run_view(const ViewOptions& options) {
       server.broadcast(lost);
     } else {
       if (auto scene = feed.update(frame)) server.set_scene(std::move(scene));
-      if (feed.joints_changed()) server.set_joints(feed.joints_json());
+      if (feed.joints_changed()) {
+        server.set_joints(feed.joints_json());
+        commander->set_bodies(feed.catalog_channels());
+      }
       server.broadcast(frame);
     }
     deadline += period_ns;
@@ -165,7 +199,12 @@ void register_view(CLI::App& app, Runner& selected) {
       ->capture_default_str();
   view->add_flag("--allow-commands", options->allow_commands,
                  "Let the page send joint position commands and pause, step and reset the "
-                 "world (off: the page is read-only).");
+                 "world (off: the page is read-only); only a page opened at the URL printed, "
+                 "which carries a token, may.");
+  view->add_flag("--insecure-remote-commands", options->insecure_remote_commands,
+                 "With --allow-commands and a --bind address other machines reach: allow it "
+                 "(refused otherwise; the token travels unencrypted).")
+      ->needs("--allow-commands");
   view->add_option("--rate", options->rate_hz, "Pose frames per second.")->capture_default_str();
   add_world_namespace_option(view, options->name_space);
   view->add_option("--input-devices", options->input_devices,

@@ -87,6 +87,10 @@ const char* scene_problem(const SceneDescription& scene, std::size_t bytes) noex
   if (scene.soft_body_count > kMaxSceneSoftBodies) return "SceneDescription.soft_body_count";
   for (std::uint32_t i = 0; i < scene.soft_body_count; ++i)
     if (!terminated(scene.soft_bodies[i].channel)) return "SceneSoftBody.channel";
+  if (scene.model_folder_count > kMaxSceneModelFolders)
+    return "SceneDescription.model_folder_count";
+  for (std::uint32_t i = 0; i < scene.model_folder_count; ++i)
+    if (!terminated(scene.model_folders[i])) return "SceneDescription.model_folders";
   if (scene.body_count > kMaxSceneBodies || bytes < scene_description_bytes(scene.body_count))
     return "SceneDescription.body_count";
   for (std::uint32_t b = 0; b < scene.body_count; ++b) {

@@ -263,6 +263,17 @@ TEST(PayloadCheck, SceneDescriptionsHoldTheirBodiesAndTerminateTheirPaths) {
   EXPECT_EQ(check_payload(scene.get(), bytes, PayloadKind::kSceneDescription, &field),
             PayloadError::kCountTooLarge);
   EXPECT_STREQ(field, "SceneSoftBody.channel");
+  scene->soft_bodies[0].channel.fill('\0');
+  // The model folders a viewer serves meshes from.
+  scene->model_folder_count = kMaxSceneModelFolders + 1;
+  EXPECT_EQ(check_payload(scene.get(), bytes, PayloadKind::kSceneDescription, &field),
+            PayloadError::kCountTooLarge);
+  EXPECT_STREQ(field, "SceneDescription.model_folder_count");
+  scene->model_folder_count = 1;
+  scene->model_folders[0].fill('/');
+  EXPECT_EQ(check_payload(scene.get(), bytes, PayloadKind::kSceneDescription, &field),
+            PayloadError::kCountTooLarge);
+  EXPECT_STREQ(field, "SceneDescription.model_folders");
 }
 
 TEST(PayloadCheck, SoftBodyMeshesHoldTheirNodesAndFaces) {

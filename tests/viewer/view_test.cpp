@@ -4,15 +4,24 @@
 #include <gtest/gtest.h>
 #include <stdlib.h>
 
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <memory>
 #include <regex>
 #include <thread>
 
 #include "afhub/hub/bodies.hpp"
+#include "afhub/hub/channel.hpp"
+#include "afhub/hub/hub_health.hpp"
 #include "afhub/hub/hub_presence.hpp"
+#include "afhub/shm_layout/channel_names.hpp"
+#include "afhub/shm_layout/scene.hpp"
+#include "afhub/viewer/joint_commander.hpp"
 #include "afhub_process.hpp"
 #include "pixels.hpp"
 #include "strict_json.hpp"
@@ -61,7 +70,16 @@ void write_file(const std::string& path, const std::string& text) {
 struct View {
   std::unique_ptr<ScopedProcess> process;
   int port = 0;
+  std::string token;  // with --allow-commands: the command token in the URL printed
   std::string log;
+  // A request's headers: the viewer's Host, and the token when it has one.
+  std::string headers() const {
+    return "Host: 127.0.0.1:" + std::to_string(port) + "\r\n" +
+           (token.empty() ? "" : "X-Afhub-Token: " + token + "\r\n");
+  }
+  HttpReply post(const std::string& target) const {
+    return http_request(port, "POST", target, "", headers());
+  }
 };
 
 class ViewTest : public ::testing::Test {
@@ -105,13 +123,14 @@ class ViewTest : public ::testing::Test {
     std::vector<std::string> args = {"view", "--port", "0"};
     args.insert(args.end(), extra.begin(), extra.end());
     view.process = std::make_unique<ScopedProcess>(spawn_afhub(args, view.log));
-    const std::regex url("http://127\\.0\\.0\\.1:([0-9]+)/");
+    const std::regex url("http://127\\.0\\.0\\.1:([0-9]+)/(\\?token=([0-9a-f]+))?");
     wait_until(
         [&] {
           std::smatch match;
           const std::string text = read_file(view.log);
           if (!std::regex_search(text, match, url)) return false;
           view.port = std::stoi(match[1]);
+          view.token = match[3];
           return true;
         },
         std::chrono::seconds(10));
@@ -275,20 +294,17 @@ TEST_F(ViewTest, AJointCommandMovesTheJointOnlyWithAllowCommands) {
   View view = start_view({"--allow-commands"});
   ASSERT_GT(view.port, 0) << read_file(view.log);
   EXPECT_TRUE(contains(read_file(view.log), "commands allowed"));
+  EXPECT_EQ(view.token.size(), 32U) << "the URL printed carries the token: " << read_file(view.log);
   EXPECT_EQ(http_request(view.port, "GET", "/options.json").body, R"({"commands":true})");
-  EXPECT_EQ(
-      http_request(view.port, "POST", "/command?body=afhub/arm/base&joint=99&value=0.5").status,
-      400);
-  EXPECT_EQ(
-      http_request(view.port, "POST", "/command?body=afhub/arm/base&joint=0&value=nan").status,
-      400);
+  EXPECT_EQ(view.post("/command?body=afhub/arm/base&joint=99&value=0.5").status, 400);
+  EXPECT_EQ(view.post("/command?body=afhub/arm/base&joint=0&value=nan").status, 400);
   EXPECT_EQ(http_request(view.port, "GET", "/command?body=afhub/arm/base&joint=0&value=0.5").status,
             405);
   // World commands: a known action, and a step only while paused.
-  const HttpReply unknown = http_request(view.port, "POST", "/world?action=fly");
+  const HttpReply unknown = view.post("/world?action=fly");
   EXPECT_EQ(unknown.status, 400);
   EXPECT_TRUE(contains(unknown.body, "pause, resume, step, reset")) << unknown.body;
-  const HttpReply step = http_request(view.port, "POST", "/world?action=step");
+  const HttpReply step = view.post("/world?action=step");
   EXPECT_EQ(step.status, 400);
   EXPECT_TRUE(contains(step.body, "pause it first")) << step.body;
   EXPECT_EQ(http_request(view.port, "GET", "/world?action=pause").status, 405);
@@ -296,16 +312,212 @@ TEST_F(ViewTest, AJointCommandMovesTheJointOnlyWithAllowCommands) {
   const double target = 0.6;
   const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(3);
   while (std::chrono::steady_clock::now() < until) {
-    ASSERT_EQ(http_request(view.port, "POST",
-                           "/command?body=afhub/arm/base&joint=0&value=" + std::to_string(target))
-                  .status,
-              200);
+    ASSERT_EQ(
+        view.post("/command?body=afhub/arm/base&joint=0&value=" + std::to_string(target)).status,
+        200);
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
   }
   const BodyState* state = nullptr;
   ASSERT_TRUE(wait_until([&] { return (state = base.latest_state()) != nullptr; },
                          std::chrono::seconds(2)));
   EXPECT_NEAR(state->joints[0].position, target, 0.05);
+}
+
+// Another site's page in the operator's browser (a cross-site request, or DNS
+// rebinding: the attacker's name resolving to 127.0.0.1) can neither command nor read.
+TEST_F(ViewTest, CommandsNeedTheTokenAndEveryRequestTheViewersHostAndOrigin) {
+  View view = start_view({"--allow-commands"});
+  ASSERT_GT(view.port, 0) << read_file(view.log);
+  ASSERT_FALSE(view.token.empty()) << read_file(view.log);
+  const std::string port = std::to_string(view.port);
+  const std::string host = "Host: 127.0.0.1:" + port + "\r\n";
+  const std::string token = "X-Afhub-Token: " + view.token + "\r\n";
+  const std::string command = "/command?body=afhub/arm/base&joint=99&value=0.5";
+  // As a cross-site form or fetch sends them: no token, a guessed one.
+  for (const std::string& target : {command, std::string("/world?action=reset")}) {
+    const HttpReply none = http_request(view.port, "POST", target, "", host);
+    EXPECT_EQ(none.status, 403) << target;
+    EXPECT_TRUE(contains(none.body, "token")) << none.body;
+    EXPECT_EQ(http_request(view.port, "POST", target, "", host + "X-Afhub-Token: 0123\r\n").status,
+              403);
+    EXPECT_EQ(http_request(view.port, "POST", target + "&token=" + view.token, "", host).status,
+              403)
+        << "the token travels in its header only";
+  }
+  // DNS rebinding: the token is unknown to such a page, and its Host is its own name,
+  // refused for every request.
+  for (const std::string& target : {command, std::string("/"), std::string("/scene.json")}) {
+    const HttpReply rebound = http_request(view.port, target == command ? "POST" : "GET", target,
+                                           "", "Host: evil.example:" + port + "\r\n" + token);
+    EXPECT_EQ(rebound.status, 403) << target;
+    EXPECT_TRUE(contains(rebound.body, "evil.example")) << rebound.body;
+  }
+  // Another site's page, with the token somehow: its Origin gives it away.
+  const HttpReply other = http_request(view.port, "POST", command, "",
+                                       host + token + "Origin: http://evil.example\r\n");
+  EXPECT_EQ(other.status, 403);
+  EXPECT_TRUE(contains(other.body, "http://evil.example")) << other.body;
+  // The viewer's own page: its origin, by address or as localhost.
+  EXPECT_EQ(http_request(view.port, "POST", command, "",
+                         host + token + "Origin: http://127.0.0.1:" + port + "\r\n")
+                .status,
+            400)
+      << "served (a joint index out of range)";
+  EXPECT_EQ(http_request(view.port, "POST", command, "",
+                         "Host: localhost:" + port + "\r\n" + token +
+                             "Origin: http://localhost:" + port + "\r\n")
+                .status,
+            400);
+  // The WebSocket: another site's page is refused at the handshake.
+  const auto handshake = [&](const std::string& origin) {
+    const int fd = connect_from("", view.port);
+    if (fd < 0) return std::string("no connection");
+    const std::string upgrade = "GET /ws HTTP/1.1\r\n" + host +
+                                "Upgrade: websocket\r\nConnection: Upgrade\r\n"
+                                "Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\n"
+                                "Sec-WebSocket-Version: 13\r\nOrigin: " +
+                                origin + "\r\n\r\n";
+    std::string reply;
+    if (write(fd, upgrade.data(), upgrade.size()) == static_cast<ssize_t>(upgrade.size())) {
+      char byte;
+      while (reply.find("\r\n\r\n") == std::string::npos && read(fd, &byte, 1) == 1) reply += byte;
+    }
+    close(fd);
+    return reply;
+  };
+  EXPECT_TRUE(contains(handshake("http://evil.example"), " 403 "));
+  EXPECT_TRUE(contains(handshake("http://127.0.0.1:" + port), " 101 "));
+}
+
+// A loop of requests naming made-up bodies would take a BodyClient (iceoryx ports) each,
+// and all 512 publisher ports in the end: only catalog bodies are opened.
+TEST_F(ViewTest, MadeUpBodyNamesTakeNoPorts) {
+  View view = start_view({"--allow-commands"});
+  ASSERT_GT(view.port, 0) << read_file(view.log);
+  // The viewer's own ports, and a client for the base, taken.
+  ASSERT_EQ(view.post("/command?body=afhub/arm/base&joint=99&value=0").status, 400);
+  std::uint32_t before = 0;
+  ASSERT_TRUE(wait_until(
+      [&] {
+        const std::optional<std::uint32_t> first = free_publisher_ports(std::chrono::seconds(1));
+        std::this_thread::sleep_for(std::chrono::milliseconds(300));  // held still that long
+        const std::optional<std::uint32_t> second = free_publisher_ports(std::chrono::seconds(1));
+        before = second.value_or(0);
+        return first && second && *first == *second;
+      },
+      std::chrono::seconds(10)));
+  for (int i = 0; i < 40; ++i) {
+    const HttpReply reply =
+        view.post("/command?body=made/up/body" + std::to_string(i) + "&joint=0&value=0");
+    EXPECT_EQ(reply.status, 400);
+    EXPECT_TRUE(contains(reply.body, "not a body the catalog lists")) << reply.body;
+  }
+  // A catalog body's client, opened after them: once it is counted, so would they be.
+  ASSERT_EQ(view.post("/command?body=afhub/arm/link1&joint=99&value=0").status, 400);
+  std::uint32_t after = 0;
+  EXPECT_TRUE(wait_until(
+      [&] {
+        after = free_publisher_ports(std::chrono::seconds(1)).value_or(before);
+        return after < before;
+      },
+      std::chrono::seconds(10)));
+  std::printf("free publisher ports: %u before the made-up names, %u after\n", before, after);
+  EXPECT_GE(after + 3, before) << "the made-up names took ports";
+}
+
+// The commander keeps at most its cap of BodyClients, the least recently used closed.
+TEST_F(ViewTest, TheJointCommanderKeepsAtMostItsCapOfClients) {
+  viewer::JointCommander commander(2);
+  const std::vector<std::string> bodies = catalog_->channels();
+  commander.set_bodies(bodies);
+  const std::string made_up = commander.run("body=made/up&joint=0&value=0");
+  EXPECT_TRUE(contains(made_up, "not a body the catalog"))
+      << made_up << "; the catalog: " << ::testing::PrintToString(bodies);
+  EXPECT_EQ(commander.open_clients(), 0U);
+  std::size_t bodies_tried = 0;
+  for (const std::string& body : bodies) {
+    if (body.find("arm/") == std::string::npos) continue;
+    // A joint out of range: the body's client is opened, nothing is sent.
+    EXPECT_TRUE(contains(commander.run("body=" + body + "&joint=999&value=0"), "joint"));
+    EXPECT_LE(commander.open_clients(), 2U);
+    ++bodies_tried;
+  }
+  EXPECT_GE(bodies_tried, 7U);
+  EXPECT_EQ(commander.open_clients(), 2U);
+  commander.set_bodies({});
+  EXPECT_EQ(commander.open_clients(), 0U) << "bodies that left the catalog are closed";
+}
+
+// Other machines may command only when the user says so, and are told it is insecure.
+TEST_F(ViewTest, CommandsFromOtherMachinesNeedInsecureRemoteCommands) {
+  const RunResult refused = run_afhub(
+      {"view", "--port", "0", "--bind", "0.0.0.0", "--allow-commands"}, std::chrono::seconds(10));
+  EXPECT_EQ(refused.exit_code, 1) << "refused at once (-1: still running after 10 s)";
+  EXPECT_TRUE(contains(refused.err, "would let other machines drive the robot")) << refused.err;
+  EXPECT_TRUE(contains(refused.err, "add --insecure-remote-commands")) << refused.err;
+  const std::string log = dir_ + "/insecure.log";
+  ScopedProcess insecure(spawn_afhub({"view", "--port", "0", "--bind", "0.0.0.0",
+                                      "--allow-commands", "--insecure-remote-commands"},
+                                     log));
+  EXPECT_TRUE(wait_until([&] { return contains(read_file(log), "http://0.0.0.0:"); },
+                         std::chrono::seconds(10)))
+      << read_file(log);
+  EXPECT_TRUE(contains(read_file(log), "INSECURE")) << read_file(log);
+  // Read-only on every address is as before.
+  const std::string read_only = dir_ + "/read_only_remote.log";
+  ScopedProcess watching(spawn_afhub({"view", "--port", "0", "--bind", "0.0.0.0"}, read_only));
+  EXPECT_TRUE(wait_until([&] { return contains(read_file(read_only), "read-only"); },
+                         std::chrono::seconds(10)))
+      << read_file(read_only);
+}
+
+// A scene any member of the hub's group may publish (here on a world of its own) names
+// files: /mesh/N serves only regular mesh files within the model folders it lists.
+TEST_F(ViewTest, AScenesMeshesAreServedOnlyAsMeshFilesWithinItsModelFolders) {
+  namespace fs = std::filesystem;
+  const std::string model = dir_ + "/crafted_model", home = dir_ + "/crafted_home";
+  fs::create_directories(model + "/meshes");
+  fs::create_directories(home + "/.ssh");
+  write_file(model + "/meshes/part.stl", stl_);
+  write_file(home + "/.ssh/id_ed25519", "PRIVATE KEY");
+  write_file(home + "/photo.stl", "PHOTO BYTES");
+  fs::create_symlink(home + "/.ssh/id_ed25519", model + "/meshes/key.stl");
+  ASSERT_EQ(mkfifo((model + "/meshes/fifo.stl").c_str(), 0600), 0);
+  const std::vector<std::string> meshes = {model + "/meshes/part.stl", home + "/.ssh/id_ed25519",
+                                           home + "/photo.stl",        model + "/meshes/key.stl",
+                                           model + "/meshes/fifo.stl", "/etc/passwd"};
+  Writer<SceneDescription> writer(
+      {std::string(kService), world_instance("crafted"), std::string(kSceneEvent)});
+  SceneDescription* scene = writer.loan(scene_description_bytes(meshes.size()));
+  ASSERT_NE(scene, nullptr);
+  scene->body_count = static_cast<std::uint32_t>(meshes.size());
+  for (std::size_t b = 0; b < meshes.size(); ++b) {
+    set_name(scene->bodies[b].channel, "crafted/body" + std::to_string(b));
+    set_name(scene->bodies[b].mesh, meshes[b]);
+  }
+  scene->model_folder_count = 1;
+  set_name(scene->model_folders[0], model);
+  writer.publish(scene);
+
+  View view = start_view({"--namespace", "crafted"});
+  ASSERT_GT(view.port, 0) << read_file(view.log);
+  ASSERT_TRUE(wait_until(
+      [&] {
+        return scene_index(http_request(view.port, "GET", "/scene.json").body, "crafted/body5") ==
+               5;
+      },
+      std::chrono::seconds(10)));
+  const HttpReply part = http_request(view.port, "GET", "/mesh/0");
+  EXPECT_EQ(part.status, 200);
+  EXPECT_EQ(part.body, stl_);
+  for (std::size_t b = 1; b < meshes.size(); ++b) {
+    const HttpReply reply = http_request(view.port, "GET", "/mesh/" + std::to_string(b));
+    EXPECT_EQ(reply.status, 403) << meshes[b] << ": " << reply.body;
+    EXPECT_FALSE(contains(reply.body, "PRIVATE KEY")) << meshes[b];
+    EXPECT_FALSE(contains(reply.body, "PHOTO BYTES")) << meshes[b];
+    EXPECT_FALSE(contains(reply.body, "root:")) << meshes[b];
+    EXPECT_FALSE(contains(reply.body, dir_)) << "a reply names no path";
+  }
 }
 
 // The resident memory of a process, in kB (0 when unknown).

@@ -32,15 +32,14 @@ int connect_from(const std::string& from, int port) {
 }
 
 HttpReply http_request(int port, const std::string& method, const std::string& target,
-                       const std::string& from) {
+                       const std::string& from, const std::string& headers) {
   HttpReply reply;
   const int fd = connect_from(from, port);
   if (fd < 0) return reply;
   timeval timeout{5, 0};
   setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &timeout, sizeof timeout);
-  const std::string request = method + " " + target +
-                              " HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Length: 0\r\n"
-                              "Connection: close\r\n\r\n";
+  const std::string request = method + " " + target + " HTTP/1.1\r\n" + headers +
+                              "Content-Length: 0\r\nConnection: close\r\n\r\n";
   if (write(fd, request.data(), request.size()) != static_cast<ssize_t>(request.size())) {
     close(fd);
     return reply;

@@ -18,9 +18,11 @@ struct HttpReply {
   std::string body;
 };
 
-// From `from` (a loopback address such as "127.0.0.2"; empty: the default, 127.0.0.1).
+// From `from` (a loopback address such as "127.0.0.2"; empty: the default, 127.0.0.1),
+// with `headers` ("Name: value\r\n" each; they name the Host).
+inline constexpr const char* kLoopbackHost = "Host: 127.0.0.1\r\n";
 HttpReply http_request(int port, const std::string& method, const std::string& target,
-                       const std::string& from = "");
+                       const std::string& from = "", const std::string& headers = kLoopbackHost);
 
 // A TCP connection to 127.0.0.1:port from the address `from` ("127.0.0.2": any of
 // 127/8 is this machine), or -1.

@@ -2,6 +2,7 @@
 #include "afhub/viewer/joint_commander.hpp"
 
 #include <civetweb.h>
+#include <time.h>
 
 #include <cmath>
 #include <cstdlib>
@@ -20,6 +21,54 @@ std::string query_value(const std::string& query, const char* name) {
 
 }  // namespace
 
+void JointCommander::set_bodies(const std::vector<std::string>& bodies) {
+  std::set<std::string> listed(bodies.begin(), bodies.end());
+  std::list<std::pair<std::string, std::shared_ptr<Client>>> gone;
+  {
+    std::lock_guard lock(mutex_);
+    bodies_.swap(listed);
+    // A body that left the catalog gives its ports back.
+    for (auto at = clients_.begin(); at != clients_.end();) {
+      const auto next = std::next(at);
+      if (!bodies_.count(at->first)) gone.splice(gone.end(), clients_, at);
+      at = next;
+    }
+  }
+  // Closed here, without the lock.
+}
+
+std::size_t JointCommander::open_clients() {
+  std::lock_guard lock(mutex_);
+  return clients_.size();
+}
+
+std::shared_ptr<JointCommander::Client> JointCommander::client_for(const std::string& body) {
+  const auto find = [this, &body]() -> std::shared_ptr<Client> {
+    for (auto at = clients_.begin(); at != clients_.end(); ++at)
+      if (at->first == body) {
+        clients_.splice(clients_.begin(), clients_, at);
+        return clients_.front().second;
+      }
+    return nullptr;
+  };
+  {
+    std::lock_guard lock(mutex_);
+    if (!bodies_.count(body)) return nullptr;
+    if (std::shared_ptr<Client> open = find()) return open;
+  }
+  // Opened without the lock (it asks the hub for two ports).
+  auto made = std::make_shared<Client>(body);
+  std::shared_ptr<Client> evicted;  // closed once the lock is released
+  std::lock_guard lock(mutex_);
+  if (std::shared_ptr<Client> open = find()) return open;  // another request opened it
+  if (clients_.size() >= max_clients_) {
+    evicted = std::move(clients_.back().second);
+    clients_.pop_back();
+  }
+  clients_.emplace_front(body, made);
+  return made;
+}
+
 std::string JointCommander::run(const std::string& query) {
   const std::string body = query_value(query, "body");
   const std::string joint_text = query_value(query, "joint");
@@ -33,28 +82,34 @@ std::string JointCommander::run(const std::string& query) {
   const double value = std::strtod(value_text.c_str(), &end);
   if (*end != '\0' || !std::isfinite(value)) return "value: a finite number, got " + value_text;
 
-  std::lock_guard lock(mutex_);
-  std::unique_ptr<BodyClient>& client = clients_[body];
-  if (!client) client = std::make_unique<BodyClient>(body);
-  const BodyState* state = client->latest_state();
-  for (int tries = 0; !state && tries < 50; ++tries) {  // a new reader waits for a state
-    struct timespec pause {
-      0, 2'000'000
-    };
+  std::shared_ptr<Client> client;
+  try {
+    client = client_for(body);
+  } catch (const std::exception& error) {  // no ports left: said, not thrown into civetweb
+    return "cannot command " + body + ": " + error.what();
+  }
+  if (!client) return "body: " + body + " is not a body the catalog lists (afhub ls)";
+  std::unique_lock lock(client->mutex);
+  const BodyState* state = client->client.latest_state();
+  for (int tries = 0; !state && tries < 50; ++tries) {
+    // A new reader waits for a state; other requests, this body's too, go on meanwhile.
+    lock.unlock();
+    const timespec pause{0, 2'000'000};
     nanosleep(&pause, nullptr);
-    state = client->latest_state();
+    lock.lock();
+    state = client->client.latest_state();
   }
   if (!state) return "no state from " + body + ": is it a live body (afhub ls)?";
   if (joint >= state->joint_count)
     return "joint: " + body + " has " + std::to_string(state->joint_count) + " joints, got index " +
            joint_text;
-  BodyCommand* command = client->loan_command(state->joint_count);
+  BodyCommand* command = client->client.loan_command(state->joint_count);
   if (!command) return "no shared memory for a command";
   for (std::uint32_t j = 0; j < state->joint_count; ++j)
     command->joints[j] = {
         j == joint ? value : state->joints[j].position, JointCommandType::kPosition, {}};
   command->header.sim_step = state->header.sim_step;
-  client->publish_command(command);
+  client->client.publish_command(command);
   return "";
 }
 

@@ -47,12 +47,14 @@ PoseFeed::PoseFeed(const std::string& world)
 void PoseFeed::refresh_live(const BodyList& catalog) {
   std::unordered_set<std::string> listed;
   catalog_bodies_ = 0;
+  catalog_channels_.clear();
   JsonWriter joints;
   joints.begin_object();
   for (std::uint32_t i = 0; i < catalog.body_count; ++i) {
     if (catalog.bodies[i].kind != ChannelKind::kBody) continue;
     ++catalog_bodies_;
     listed.insert(catalog.bodies[i].channel.data());
+    catalog_channels_.emplace_back(catalog.bodies[i].channel.data());
     joints.key(catalog.bodies[i].channel.data()).begin_array();
     for (const std::string& name : joint_names_of(catalog, catalog.bodies[i])) joints.value(name);
     joints.end_array();

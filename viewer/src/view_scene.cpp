@@ -1,7 +1,6 @@
 // The viewer's scene (see view_scene.hpp).
 #include "afhub/viewer/view_scene.hpp"
 
-#include <charconv>
 #include <filesystem>
 
 #include "afhub/hub/json_writer.hpp"
@@ -91,6 +90,8 @@ ViewScene view_scene_of(const SceneDescription& scene, std::uint32_t generation,
     json.end_array().end_object();
   }
   json.end_array();
+  for (std::uint32_t f = 0; f < scene.model_folder_count; ++f)
+    out.model_folders.emplace_back(scene.model_folders[f].data());
   json.key("soft_bodies").begin_array();
   for (std::uint32_t s = 0; s < scene.soft_body_count; ++s) {
     out.soft_channels.emplace_back(scene.soft_bodies[s].channel.data());
@@ -105,15 +106,6 @@ ViewScene view_scene_of(const SceneDescription& scene, std::uint32_t generation,
   json.end_array().end_object();
   out.json = json.str();
   return out;
-}
-
-std::optional<std::string> listed_mesh(const ViewScene& scene, std::string_view index_text) {
-  std::size_t index = 0;
-  const char* end = index_text.data() + index_text.size();
-  const auto [at, error] = std::from_chars(index_text.data(), end, index);
-  if (index_text.empty() || error != std::errc() || at != end) return std::nullopt;
-  if (index >= scene.meshes.size() || scene.meshes[index].empty()) return std::nullopt;
-  return scene.meshes[index];
 }
 
 }  // namespace afhub::viewer

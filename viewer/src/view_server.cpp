@@ -6,6 +6,7 @@
 #include <netinet/tcp.h>
 #include <strings.h>
 #include <sys/socket.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cstdio>
@@ -14,7 +15,9 @@
 #include <string_view>
 
 #include "afhub/shm_layout/error.hpp"
+#include "afhub/viewer/page_access.hpp"
 #include "connection_socket.hpp"
+#include "mesh_file.hpp"
 #include "page_socket.hpp"
 #include "web_files.hpp"
 #include "websocket_frames.hpp"
@@ -50,6 +53,20 @@ void send_text(mg_connection* connection, int status, const char* type, std::str
   mg_write(connection, body.data(), body.size());
 }
 
+// The opened mesh, whole (a mesh that ends early is cut short: the page sees a broken mesh).
+void send_mesh(mg_connection* connection, const MeshFile& mesh) {
+  mg_printf(connection,
+            "HTTP/1.1 200 OK\r\nContent-Type: application/octet-stream\r\nContent-Length: "
+            "%zu\r\nCache-Control: no-store\r\nConnection: close\r\n\r\n",
+            mesh.size());
+  char buffer[8192];  // civetweb's threads have small stacks (100 kB in Debian's build)
+  for (std::size_t left = mesh.size(); left > 0;) {
+    const ssize_t n = read(mesh.fd(), buffer, std::min(sizeof buffer, left));
+    if (n <= 0 || mg_write(connection, buffer, static_cast<std::size_t>(n)) != n) return;
+    left -= static_cast<std::size_t>(n);
+  }
+}
+
 int on_request(mg_connection* connection, void* server) {
   return static_cast<ViewServer*>(server)->handle_request(connection);
 }
@@ -63,7 +80,8 @@ ViewServer* server_of(const mg_connection* connection) {
 int on_begin_request(mg_connection* connection) {
   const mg_request_info* request = mg_get_request_info(connection);
   if (!request->local_uri_raw || std::strcmp(request->local_uri_raw, "/ws") != 0) return 0;
-  return server_of(connection)->serve_page_socket(connection);
+  ViewServer* server = server_of(connection);
+  return server->refuse_other_origin(connection) ? 403 : server->serve_page_socket(connection);
 }
 
 int on_connection(const mg_connection* connection, void**) {
@@ -88,6 +106,8 @@ bool write_frame(mg_connection* connection, Opcode opcode, std::string_view payl
 
 ViewServer::ViewServer(ServerOptions options)
     : options_(std::move(options)), scene_(std::make_shared<ViewScene>()) {
+  if (options_.allow_commands && options_.token.empty())
+    throw Error("the viewer allows commands only with a command token");
   mg_init_library(0);
   const std::string listen = options_.bind + ":" + std::to_string(options_.port);
   // No document root: civetweb serves no file by itself, only what the handler sends.
@@ -254,7 +274,16 @@ int ViewServer::serve_page_socket(mg_connection* connection) {
   return 101;
 }
 
+bool ViewServer::refuse_other_origin(mg_connection* connection) {
+  const std::string problem = origin_problem(
+      options_.bind, port_, mg_get_header(connection, "Host"), mg_get_header(connection, "Origin"));
+  if (problem.empty()) return false;
+  send_text(connection, 403, "text/plain", problem + "\n");
+  return true;
+}
+
 int ViewServer::handle_request(mg_connection* connection) {
+  if (refuse_other_origin(connection)) return 1;
   const mg_request_info* request = mg_get_request_info(connection);
   // The URI as sent (decoded, not cleaned): every route below is an exact match.
   const std::string_view uri = request->local_uri_raw ? request->local_uri_raw : "";
@@ -269,6 +298,12 @@ int ViewServer::handle_request(mg_connection* connection) {
     }
     if (method != "POST") {
       send_text(connection, 405, "text/plain", "POST a command\n");
+      return 1;
+    }
+    const std::string wrong_token =
+        token_problem(options_.token, mg_get_header(connection, "X-Afhub-Token"));
+    if (!wrong_token.empty()) {
+      send_text(connection, 403, "text/plain", wrong_token + "\n");
       return 1;
     }
     const std::string problem = run(request->query_string ? request->query_string : "");
@@ -308,12 +343,11 @@ int ViewServer::handle_request(mg_connection* connection) {
     mg_send_mime_file(connection, (std::string(kThreeDir) + file->second).c_str(),
                       "text/javascript");
   } else if (uri.starts_with("/mesh/")) {
-    const std::optional<std::string> path = listed_mesh(*scene(), uri.substr(6));
-    if (!path) {
-      send_text(connection, 404, "text/plain", "not a mesh the scene lists\n");
-      return 1;
-    }
-    mg_send_mime_file(connection, path->c_str(), "application/octet-stream");
+    const MeshFile mesh(*scene(), uri.substr(6));
+    if (!mesh.problem().empty())
+      send_text(connection, mesh.status(), "text/plain", mesh.problem() + "\n");
+    else
+      send_mesh(connection, mesh);
   } else {
     send_text(connection, 404, "text/plain", "not found\n");
   }

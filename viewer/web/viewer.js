@@ -1,6 +1,7 @@
 'use strict';
 // afhub view: the scene from /scene.json, poses from /ws (binary frames).
 const params = new URLSearchParams(location.search);
+const token = params.get('token');  // commands' token (`afhub view --allow-commands`)
 const renderer = new THREE.WebGLRenderer({antialias: true, preserveDrawingBuffer: true});
 renderer.setPixelRatio(window.devicePixelRatio);
 renderer.setSize(innerWidth, innerHeight);
@@ -103,7 +104,8 @@ function chooseCamera(cameras) {
   list.textContent = '';
   for (const c of cameras) {
     const link = document.createElement('a');
-    link.href = '/?camera=' + encodeURIComponent(shortName(c.name));
+    link.href = '/?camera=' + encodeURIComponent(shortName(c.name)) +
+        (token ? '&token=' + encodeURIComponent(token) : '');
     link.textContent = shortName(c.name);
     if (c === chosen) link.className = 'current';
     // AMBF's devices pair a camera by its block key in the world file ("camera1");
@@ -374,17 +376,29 @@ renderer.domElement.addEventListener('click', (event) => {
 // Drive (only with `afhub view --allow-commands`; the server refuses otherwise):
 // joint sliders for the inspected body, whose moved slider sends a position command,
 // repeated while the panel is open (the physics' watchdog releases the joints half
-// a second after the last); and the world's pause, step and reset.
+// a second after the last); and the world's pause, step and reset. Each command
+// carries the token of the URL the viewer printed (/?token=...), which no other
+// site's page can know.
 let commandsAllowed = false;
 let driving = null;  // {channel, joint, value}
 const optionsLoaded = fetch('/options.json').then((r) => r.json()).then((o) => {
   commandsAllowed = o.commands;
   if (commandsAllowed) showWorldButtons();
+  if (commandsAllowed && !token) {
+    const note = document.createElement('span');
+    note.id = 'token-needed';
+    note.textContent = 'commands need the token: open the page at the URL `afhub view` ' +
+        'printed (/?token=...)';
+    document.getElementById('world').appendChild(note);
+  }
 });
+function command(path) {
+  return fetch(path, {method: 'POST', headers: {'X-Afhub-Token': token || ''}});
+}
 function sendDrive() {
   if (!driving) return;
-  fetch('/command?body=' + encodeURIComponent(driving.channel) + '&joint=' + driving.joint +
-        '&value=' + driving.value, {method: 'POST'});
+  command('/command?body=' + encodeURIComponent(driving.channel) + '&joint=' + driving.joint +
+          '&value=' + driving.value);
 }
 setInterval(sendDrive, 200);
 function showDrive() {
@@ -410,7 +424,7 @@ function showDrive() {
   });
 }
 function worldCommand(action) {
-  fetch('/world?action=' + action, {method: 'POST'}).then(async (r) => {
+  command('/world?action=' + action).then(async (r) => {
     document.getElementById('message').textContent = r.ok ? '' : await r.text();
   });
 }

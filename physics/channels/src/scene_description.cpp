@@ -65,6 +65,48 @@ void fill_view(const WorldObjectSpec& spec, const Pose& pose, SceneView& view) {
   view.up = rotate(pose.orientation, {0.0, 0.0, 1.0});
 }
 
+// The deepest folder holding both `model_file` and `mesh`: the model's tree, where a
+// viewer may serve its meshes from (AMBF's models keep theirs in ../../../meshes).
+std::filesystem::path model_folder(const std::string& model_file, const std::string& mesh) {
+  namespace fs = std::filesystem;
+  std::error_code ignored;
+  const fs::path a = fs::weakly_canonical(fs::absolute(model_file, ignored), ignored).parent_path();
+  const fs::path b = fs::path(mesh).parent_path();
+  fs::path common;
+  for (auto i = a.begin(), j = b.begin(); i != a.end() && j != b.end() && *i == *j; ++i, ++j)
+    common /= *i;
+  return common;
+}
+
+// Lists the model folders of the bodies' meshes, each once (none inside another).
+void fill_model_folders(const Model& model, SceneDescription& scene,
+                        std::vector<std::string>& warnings) {
+  std::vector<std::string> folders;
+  for (std::size_t b = 0; b < scene.body_count; ++b)
+    if (scene.bodies[b].mesh[0] != '\0')
+      folders.push_back(model_folder(model.bodies[b].where.file, scene.bodies[b].mesh.data()));
+  std::sort(folders.begin(), folders.end());
+  std::vector<std::string> listed;
+  scene.model_folder_count = 0;
+  for (const std::string& folder : folders) {
+    const bool inside =
+        !listed.empty() && (folder == listed.back() || folder.starts_with(listed.back() + "/") ||
+                            listed.back() == "/");
+    if (!inside) listed.push_back(folder);
+  }
+  for (const std::string& folder : listed) {
+    if (scene.model_folder_count == kMaxSceneModelFolders ||
+        !copy_text(folder, scene.model_folders[scene.model_folder_count])) {
+      warnings.push_back("a viewer serves no mesh under " + folder + ": the scene description " +
+                         "lists " + std::to_string(kMaxSceneModelFolders) +
+                         " model folders of at most " + std::to_string(kScenePathBufferSize - 1) +
+                         " characters");
+      continue;
+    }
+    ++scene.model_folder_count;
+  }
+}
+
 }  // namespace
 
 static_assert(static_cast<int>(ShapeKind::kPlane) == static_cast<int>(SceneShapeKind::kPlane));
@@ -126,6 +168,7 @@ void fill_scene(const Simulation& sim, SceneDescription& scene,
     body.shape_count = static_cast<std::uint32_t>(shapes);
     for (std::size_t s = 0; s < shapes; ++s) body.shapes[s] = to_scene_shape(spec.visual_shapes[s]);
   }
+  fill_model_folders(model, scene, warnings);
 }
 
 }  // namespace afhub::physics

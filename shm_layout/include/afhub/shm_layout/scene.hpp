@@ -1,7 +1,8 @@
 // SceneDescription: what a viewer needs to draw a world, published once by the
 // physics (keep-last history, as the directory), on {"afhub", <world instance>,
 // "scene"}: per body its channel, visual mesh (an absolute path) or primitive
-// shapes, scale and colour; the world's lights and cameras. Poses travel in the
+// shapes, scale and colour; the world's lights and cameras; the folders of the models
+// it loaded (a viewer serves no mesh outside them). Poses travel in the
 // body states, the world state and the viewer's pose feed (scene_poses.hpp), never
 // here. Loaned at its real size,
 // scene_description_bytes(body_count): only the first body_count entries exist.
@@ -21,6 +22,10 @@ namespace afhub {
 // body entry near 1 KB. A longer path is left out of the scene (the body is then
 // drawn as a marker) and said once by the physics.
 inline constexpr std::size_t kScenePathBufferSize = 512;
+
+// Model folders a scene lists: one per model tree (a model file and its meshes) the
+// physics loaded; `afhub run` of a launch file loads a few.
+inline constexpr std::size_t kMaxSceneModelFolders = 16;
 
 // Primitive shapes drawn for one body (a compound shape lists several); AMBF's
 // models use one, generated ones a few.
@@ -82,6 +87,11 @@ struct SceneDescription {
   std::uint32_t soft_body_count{0};  // entries [0, soft_body_count) of `soft_bodies`
   std::uint32_t reserved_soft{0};
   std::array<SceneSoftBody, kMaxSceneSoftBodies> soft_bodies{};
+  // Absolute folders, NUL-terminated: each the deepest folder holding both a loaded
+  // model file and a mesh it names. Entries [0, model_folder_count) exist.
+  std::uint32_t model_folder_count{0};
+  std::uint32_t reserved_folders{0};
+  std::array<std::array<char, kScenePathBufferSize>, kMaxSceneModelFolders> model_folders{};
   std::uint32_t body_count{0};
   std::uint32_t reserved{0};
   std::array<SceneBody, kMaxSceneBodies> bodies{};  // last: sized by body_count

@@ -57,6 +57,8 @@ class PoseFeed {
   // of the last update(); joints_changed() says whether that update changed them.
   const std::string& joints_json() const { return joints_json_; }
   bool joints_changed() const { return joints_changed_; }
+  // The bodies the catalog lists, as of the last update() (they change with the joints).
+  const std::vector<std::string>& catalog_channels() const { return catalog_channels_; }
 
  private:
   void refresh_live(const BodyList& catalog);
@@ -80,6 +82,7 @@ class PoseFeed {
   std::vector<SoftReaders> soft_;
   std::vector<std::uint8_t> joint_blocks_;  // reused: no allocation once grown
   std::string joints_json_ = "{}";
+  std::vector<std::string> catalog_channels_;
   bool joints_changed_ = false;
   double sim_time_s_ = 0.0;
   bool paused_ = false;

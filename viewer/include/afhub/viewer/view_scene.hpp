@@ -1,9 +1,9 @@
 // The viewer's copy of a scene description (shm_layout/scene.hpp): what the page
-// draws, as JSON, and the mesh files it may serve (exactly those the scene lists).
+// draws, as JSON, and the mesh files it may serve (those the scene lists, within the
+// model folders it lists: mesh_file.hpp).
 #pragma once
 
 #include <cstddef>
-#include <optional>
 #include <string>
 #include <vector>
 
@@ -16,6 +16,7 @@ struct ViewScene {
   std::uint32_t generation = 0;       // counts the descriptions the viewer read: a new one, reload
   std::vector<std::string> channels;  // per body, its state channel
   std::vector<std::string> meshes;    // per body, its mesh's absolute path or ""
+  std::vector<std::string> model_folders;  // the folders meshes may be served from
   std::vector<std::string> soft_channels;  // per soft body, its channel
   std::string json;                        // what /scene.json serves
 };
@@ -24,9 +25,5 @@ struct ViewScene {
 // soft body its checked faces (`soft_faces[i]`, nullptr: not read yet, none listed).
 ViewScene view_scene_of(const SceneDescription& scene, std::uint32_t generation,
                         const std::vector<const SoftBodyMesh*>& soft_faces = {});
-
-// The mesh file body `index` lists, or nothing (an index out of range, a body
-// drawn from shapes): the only files the viewer reads from disk besides three.js.
-std::optional<std::string> listed_mesh(const ViewScene& scene, std::string_view index_text);
 
 }  // namespace afhub::viewer

@@ -8,14 +8,18 @@
 //   /paired.json   input devices' paired cameras, {"CAMERA": ["DEVICE", ...]} (--input-devices)
 //   /three/FILE    three.js and the few example files the page uses, from Debian's
 //                  libjs-three (/usr/share/javascript/three), by a fixed list
-//   /mesh/N        the mesh file scene body N lists, and no other file
+//   /mesh/N        the mesh file scene body N lists, when it is a regular file of a
+//                  mesh format within a model folder the scene lists (mesh_file.hpp)
 //   /ws            a WebSocket: binary pose frames (pose_feed.hpp), pushed by broadcast();
 //                  each page has its own sender (frame_sender.hpp), and a page that stops
 //                  reading (no answer to pings for 5 s, or a write stuck for 5 s) is
 //                  disconnected, as is one that sends a frame longer than 16 KiB
 //                  (src/page_socket.hpp)
 //   /command       POST: a joint command; refused (403) unless the server allows commands
+//                  and the request carries the command token (X-Afhub-Token)
 //   /world         POST action=pause|resume|step|reset; refused (403) the same way
+// Every request, the WebSocket's included, must name the viewer in its Host header
+// and come from no other site's page (its Origin): page_access.hpp.
 // Anything else is 404; nothing else is read from the disk. One address may hold
 // kConnectionsPerAddress connections; more are closed at once. A request's headers
 // must come within 5 s.
@@ -43,6 +47,9 @@ struct ServerOptions {
   std::string bind = "127.0.0.1";
   int port = 8080;  // 0: any free port (see ViewServer::port)
   bool allow_commands = false;
+  // With allow_commands: what a command's X-Afhub-Token header must hold (random_token()
+  // in page_access.hpp; the page reads it from its URL, /?token=...).
+  std::string token;
   // With allow_commands: runs a command's query string ("body=3&joint=1&value=0.5"),
   // returning "" when done or what is wrong.
   std::function<std::string(const std::string&)> run_command;
@@ -77,6 +84,8 @@ class ViewServer {
   // /ws: the handshake, then the page's frames until it leaves (page_socket.hpp);
   // returns the status for civetweb's log.
   int serve_page_socket(mg_connection* connection);
+  // Answers 403 and returns true when the request's Host or Origin is not the viewer's.
+  bool refuse_other_origin(mg_connection* connection);
   // A connection is taken by a thread: an address's connections over its limit, the
   // newest, are closed.
   void admit();
