@@ -17,6 +17,8 @@ PACKAGES=(
   iceoryx libiceoryx-posh-dev libiceoryx-hoofs-dev libacl1-dev
   libcli11-dev libyaml-cpp-dev libbullet-dev libassimp-dev libeigen3-dev
   libgtest-dev libgmock-dev libbenchmark-dev clang-format
+  # URDF robots: liburdfdom parses them; Orocos KDL is the tests' independent reference
+  liburdfdom-dev liborocos-kdl-dev libkdl-parser-dev
   # the tests' strict JSON reader (tests only)
   nlohmann-json3-dev
   # afhub bench: the transports it compares with, the machine's floor, the plot
@@ -32,6 +34,8 @@ PACKAGES=(
   jq openssl
   # the tests' private namespaces and their documentation check
   util-linux iproute2 python3
+  # `import afhub` (pybind11 over the hub client; states as numpy arrays) and its tests
+  pybind11-dev python3-dev python3-numpy python3-pytest
 )
 
 install_packages() {

@@ -55,6 +55,7 @@ int run_bench(const BenchCliOptions& cli) {
   bench::BenchResults results;
   results.machine = bench::read_machine_info();
   results.options = options;
+  bench::start_bench_hub_if_none();
   bench::run_ping_pong(options, results);
   if (options.loop_seconds > 0.0)
     bench::run_loop_bench(options, results.loop);
@@ -66,7 +67,10 @@ int run_bench(const BenchCliOptions& cli) {
   std::printf("%s", bench::results_table(results).c_str());
   if (!cli.json_file.empty()) write_file(cli.json_file, bench::results_json(results));
   if (!cli.plot_file.empty()) bench::write_plot(results, cli.plot_file);
-  return 0;
+  const std::vector<std::string> failures = bench::failures(results);
+  for (const std::string& failure : failures)
+    std::fprintf(stderr, "afhub bench: FAILED: %s\n", failure.c_str());
+  return failures.empty() ? 0 : 1;
 }
 
 struct DdsBenchOptions {

@@ -14,6 +14,7 @@
 #include "commands.hpp"
 #include "format.hpp"
 #include "gain_options.hpp"
+#include "urdf_options.hpp"
 
 namespace afhub::cli {
 namespace {
@@ -23,6 +24,7 @@ struct CheckOptions {
   std::string launch_file, indices, world_file, gravity;
   double dt_s = 0.001;
   GainOptions gains;
+  physics::UrdfOptions urdf;
 };
 
 std::string vec3_text(const Vec3& v) {
@@ -74,6 +76,7 @@ int run_check(const CheckOptions& options) {
       request.launch_indices = physics::parse_index_list(options.indices);
     request.adf_files = options.files;
     request.world_file = options.world_file;
+    request.urdf = options.urdf;
     model = physics::load_scene(request);
     // The meshes too: `afhub run` reads them, and a broken one must show here first.
     meshes = physics::check_meshes(model);
@@ -99,6 +102,7 @@ int run_check(const CheckOptions& options) {
   std::printf("joints: %zu\n", model.joints.size());
   for (const auto& [type, count] : by_type) std::printf("  %-16s %d\n", type.c_str(), count);
   std::printf("closed loops: %d\n", model.closed_loop_count);
+  for (const std::string& note : model.notes) std::printf("%s\n", note.c_str());
   std::printf("meshes read: %zu\n", meshes);
   print_gravity(model, gravity_source);
   apply_gain_options(model, options.gains);
@@ -124,7 +128,7 @@ void register_check(CLI::App& app, Runner& selected) {
   auto* check = app.add_subcommand(
       "check",
       "Validate AMBF description files without simulating: bodies, joints, loops, mass, warnings.");
-  check->add_option("files", options->files, "ADF files, loaded together");
+  check->add_option("files", options->files, "ADF and URDF files, loaded together");
   check->add_option("--launch", options->launch_file,
                     "A launch file: its world config, colors, and the models picked with -l "
                     "(as `afhub run --launch`)");
@@ -136,6 +140,7 @@ void register_check(CLI::App& app, Runner& selected) {
   check->add_option("--dt", options->dt_s,
                     "The step the joint gains are checked for (default 0.001 s, as `afhub run`)");
   add_gain_options(check, options->gains);
+  add_urdf_options(check, options->urdf);
   check->callback([&selected, options] { selected = [options] { return run_check(*options); }; });
 }
 

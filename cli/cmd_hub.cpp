@@ -19,12 +19,12 @@ struct HubCliOptions {
 
 int run_hub(const HubCliOptions& cli) {
   std::vector<MempoolSpec> extra;
-  if (cli.bench_pools) extra = bench_mempools();
   if (!cli.mempool_file.empty())
     for (const MempoolSpec& pool : read_mempool_file(cli.mempool_file)) extra.push_back(pool);
   for (const std::string& text : cli.pools) extra.push_back(parse_mempool(text));
   HubOptions options;
-  options.mempools = merge_mempools(default_mempools(), extra);
+  options.mempools = merge_mempools(
+      cli.bench_pools ? with_bench_pools(default_mempools()) : default_mempools(), extra);
   options.group = cli.group;
   if (cli.dry_run) {
     std::printf("payload bytes  chunks  holds\n");

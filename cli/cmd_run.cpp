@@ -17,6 +17,7 @@
 #include "format.hpp"
 #include "gain_options.hpp"
 #include "realtime_options.hpp"
+#include "urdf_options.hpp"
 
 namespace afhub::cli {
 namespace {
@@ -43,6 +44,7 @@ struct RunCliOptions {
   std::string overrun = "catch-up";
   double max_catch_up_ms = 100.0;
   GainOptions gains;
+  physics::UrdfOptions urdf;
 };
 
 int run_run(const RunCliOptions& options) {
@@ -100,6 +102,7 @@ int run_run(const RunCliOptions& options) {
   request.adf_files = split_commas(options.adf_list);
   request.adf_files.insert(request.adf_files.end(), options.files.begin(), options.files.end());
   request.world_file = options.world_file;
+  request.urdf = options.urdf;
 
   physics::Model model;
   try {
@@ -192,7 +195,7 @@ void register_run(CLI::App& app, Runner& selected) {
       "run",
       "Simulate AMBF descriptions in Bullet; every active body publishes its state and reads "
       "its commands on the hub's channels.");
-  run->add_option("files", options->files, "ADF files, loaded together");
+  run->add_option("files", options->files, "ADF and URDF files, loaded together");
   run->add_option("--launch", options->launch_file,
                   "A launch file: its world config, colors, and the models picked with -l");
   run->add_option("-l", options->indices, "Indices into the launch file's multibody configs: 0,3");
@@ -208,6 +211,7 @@ void register_run(CLI::App& app, Runner& selected) {
                   "x,y,z in m/s^2 for the world and every body, over the world file's and the "
                   "model files' `gravity` (by AMBF's rule a file's gravity wins over the world's)");
   add_gain_options(run, options->gains);
+  add_urdf_options(run, options->urdf);
   run->add_option("--dt", options->dt_s, "Fixed step in seconds (default 0.001)");
   run->add_flag("--fast", options->fast, "Step as fast as possible instead of in real time");
   add_count_option(run, "--steps", options->steps,

@@ -1,13 +1,17 @@
 // `afhub world pause|resume|step N|reset`: controls the simulation's clock from the
 // command line. Each writes one WorldCommand, then reads the world state until the
 // simulation has acted on it, and says what happened.
+#include <unistd.h>
+
 #include <chrono>
 #include <cstdio>
 #include <memory>
+#include <optional>
 #include <thread>
 
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/hub_presence.hpp"
+#include "afhub/hub/world_command_queue.hpp"
 #include "afhub/rt/clock.hpp"
 #include "afhub/rt/stop_signal.hpp"
 #include "afhub/shm_layout/channel_names.hpp"
@@ -38,7 +42,8 @@ WorldState first_world_state(LatestReader<WorldState>& reader) {
   while (!reader.latest()) {
     if (monotonic_ns() > give_up || stop_requested())
       throw Error(
-          "no simulation is running: nothing has published the world state for 2 s. Start one "
+          "no simulation is running, or it is stalled: nothing has published the world state "
+          "for 2 s. Start one "
           "with `afhub run MODEL` (or `afhub synth`); a lockstep run waiting for its clients "
           "publishes nothing until they join");
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
@@ -50,6 +55,69 @@ void print_state(const char* what, const WorldState& state) {
   std::printf("%s at step %llu (t = %.3f s)\n", what,
               static_cast<unsigned long long>(state.header.sim_step), state.header.sim_time_s);
 }
+
+// Whether `later`, from another writer, undoes what `mine` did: the world can act on
+// both between two of its states, and then no state shows mine.
+bool undoes(WorldAction later, WorldAction mine) {
+  switch (mine) {
+    case WorldAction::kPause:
+      return later == WorldAction::kResume;
+    case WorldAction::kResume:
+      return later == WorldAction::kPause;
+    case WorldAction::kStep:
+      return later == WorldAction::kResume || later == WorldAction::kReset;
+    default:
+      return false;
+  }
+}
+
+const char* done(WorldAction action) {
+  switch (action) {
+    case WorldAction::kPause:
+      return "paused";
+    case WorldAction::kResume:
+      return "resumed";
+    case WorldAction::kStep:
+      return "stepped";
+    case WorldAction::kReset:
+      return "reset";
+    default:
+      return "acted";
+  }
+}
+
+// Another writer's command that came after this process's and undoes it, as the world's
+// command queue has them: the world acts on them in that order, so once it has published
+// two states after the later one, it has acted on both.
+class UndoneBy {
+ public:
+  UndoneBy(const WorldOptions& options, WorldAction mine)
+      : commands_(world_instance(options.name_space)), mine_(mine) {}
+  void sent(std::uint64_t sequence) { sequence_ = sequence; }
+  // Reads the commands that came; true once `state` is the second state published
+  // after an undoing command.
+  bool by_now(const WorldState& state) {
+    for (WorldCommand command; commands_.next(command);) {
+      if (command.header.publisher_pid == pid_ && command.header.sequence == sequence_)
+        mine_seen_ = true;
+      else if (mine_seen_ && !undone_ && undoes(command.action, mine_))
+        undone_ = command;
+    }
+    if (undone_ && state.header.publish_stamp_ns > undone_->header.publish_stamp_ns)
+      ++states_since_;
+    return states_since_ >= 2;
+  }
+  const WorldCommand& command() const { return *undone_; }
+
+ private:
+  WorldCommandQueue commands_;
+  WorldAction mine_;
+  std::uint32_t pid_ = static_cast<std::uint32_t>(getpid());
+  std::uint64_t sequence_ = 0;
+  bool mine_seen_ = false;
+  std::optional<WorldCommand> undone_;
+  int states_since_ = 0;
+};
 
 int run_world(WorldAction action, const WorldOptions& options) {
   if (!(options.timeout_s > 0.0 && options.timeout_s <= 3600.0))
@@ -68,15 +136,18 @@ int run_world(WorldAction action, const WorldOptions& options) {
         "the world is running, so there is nothing to step: pause it first (`afhub world "
         "pause`), then `afhub world step N`");
 
+  UndoneBy undone(options, action);  // made first: it reads this process's command too
   Writer<WorldCommand> writer(world_channel(options, kCommandEvent));
   // The simulation acts on each sequence number once: start past any number an
   // earlier `afhub world` could have used.
-  writer.raw().continue_sequence_after(static_cast<std::uint64_t>(monotonic_ns()));
+  const auto sequence = static_cast<std::uint64_t>(monotonic_ns());
+  writer.raw().continue_sequence_after(sequence);
   WorldCommand* command = writer.loan();
   if (!command) throw Error("shared memory is exhausted: the world command was not sent");
   command->action = action;
   command->step_count = options.steps;
   writer.publish(command);
+  undone.sent(sequence + 1);
 
   // Confirmed by the world state: the paused flag, or the step count.
   const std::uint64_t target_step = before.header.sim_step + options.steps;
@@ -120,6 +191,15 @@ int run_world(WorldAction action, const WorldOptions& options) {
           break;
         case WorldAction::kNone:
           return 0;
+      }
+      if (undone.by_now(*state)) {
+        std::printf(
+            "%s, and undone since by another process (pid %u: %s): now %s at step %llu "
+            "(t = %.3f s)\n",
+            done(action), undone.command().header.publisher_pid, done(undone.command().action),
+            state->paused ? "paused" : "running",
+            static_cast<unsigned long long>(state->header.sim_step), state->header.sim_time_s);
+        return 0;
       }
     }
     std::this_thread::sleep_for(std::chrono::microseconds(200));

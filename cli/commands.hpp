@@ -18,6 +18,7 @@ void register_status(CLI::App& app, Runner& selected);
 void register_synth(CLI::App& app, Runner& selected);
 void register_demo(CLI::App& app, Runner& selected);
 void register_check(CLI::App& app, Runner& selected);
+void register_convert(CLI::App& app, Runner& selected);
 void register_run(CLI::App& app, Runner& selected);
 void register_ctl(CLI::App& app, Runner& selected);
 void register_top(CLI::App& app, Runner& selected);

@@ -53,6 +53,7 @@ int main(int argc, char** argv) {
   afhub::cli::register_synth(app, selected);
   afhub::cli::register_demo(app, selected);
   afhub::cli::register_check(app, selected);
+  afhub::cli::register_convert(app, selected);
   afhub::cli::register_run(app, selected);
   afhub::cli::register_ctl(app, selected);
   afhub::cli::register_top(app, selected);

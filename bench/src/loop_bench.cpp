@@ -7,7 +7,9 @@
 #include <unistd.h>
 
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <memory>
 
 #include "afhub/bench/bench.hpp"
@@ -16,6 +18,7 @@
 #include "afhub/hub/channel.hpp"
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/hub/process_spawn.hpp"
+#include "afhub/rt/stop_signal.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "afhub/shm_layout/world.hpp"
 #include "child_process.hpp"
@@ -47,11 +50,24 @@ void read_cyclictest(const std::string& path, LoopResult& result) {
     throw Error("cyclictest wrote no histogram to " + path + ": see that file");
 }
 
+std::string read_text(const std::string& path) {
+  std::ifstream in(path);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+// The physics' line saying it could not publish (a pool out of chunks), or "".
+std::string dropped_line(const std::string& log_path) {
+  std::ifstream in(log_path);
+  for (std::string line; std::getline(in, line);)
+    if (line.find("shared memory exhausted") != std::string::npos) return line;
+  return "";
+}
+
 }  // namespace
 
 void run_loop_bench(const BenchOptions& options, LoopResult& result) {
   result.seconds = options.loop_seconds;
-  connect_to_hub("bench", HubPolicy::kAutostart, {}, {"--bench-pools"});
+  connect_to_hub("bench", HubPolicy::kRequire);
   const std::string prefix = "/tmp/afhub-bench-" + std::to_string(getpid());
   const std::string priority = std::to_string(options.fifo_priority);
   std::fprintf(stderr, "afhub bench: 1 kHz loop for %.0f s against %s\n", options.loop_seconds,
@@ -85,29 +101,39 @@ void run_loop_bench(const BenchOptions& options, LoopResult& result) {
   bool started = false;
   std::uint64_t commanded_before = 0, answered_before = 0;
   const ControllerCycle hold = joint_position_controller(hold_targets());
-  run_controller(
-      controller,
-      [&](const BodyState& state, BodyCommand& command) {
-        if (!started)
-          if (const WorldState* now = world.latest()) {
-            commanded_before = now->commanded_steps;
-            answered_before = now->answered_steps;
-            started = true;
-          }
-        hold(state, command);
-      },
-      &timing);
+  const auto cycle = [&](const BodyState& state, BodyCommand& command) {
+    if (!started)
+      if (const WorldState* now = world.latest()) {
+        commanded_before = now->commanded_steps;
+        answered_before = now->answered_steps;
+        started = true;
+      }
+    hold(state, command);
+  };
+  try {
+    run_controller(controller, cycle, &timing);
+  } catch (const Error& error) {
+    if (physics.running()) throw;
+    // Its body never came: what the physics said is the reason.
+    throw Error(std::string(error.what()) + "\nThe physics ended (exit code " +
+                std::to_string(physics.wait(0)) + "); it said:\n" +
+                read_text(prefix + "-physics.log"));
+  }
   if (const WorldState* now = world.latest()) {
     result.commanded_steps = now->commanded_steps - commanded_before;
     result.answered_steps = now->answered_steps - answered_before;
   }
+  if (stop_requested()) throw Error("interrupted");  // cyclictest runs on: not waited for
   result.controller_wake = timing.wake_latency();
   physics.stop();
+  result.physics_dropped = dropped_line(prefix + "-physics.log");
+  std::filesystem::remove(prefix + "-physics.log");
   if (cyclictest) {
     if (cyclictest->wait(10'000) == -1)
       throw Error("cyclictest did not finish 10 s after the loop; see " + prefix +
                   "-cyclictest.txt");
     read_cyclictest(prefix + "-cyclictest.txt", result);
+    std::filesystem::remove(prefix + "-cyclictest.txt");
   }
 }
 

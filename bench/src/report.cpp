@@ -211,6 +211,10 @@ std::string results_table(const BenchResults& results) {
     out += format("  zero copy: afhub median at 1 MiB is %.2fx its median at 1 KiB (goal <= 2): ",
                   afhub_1m / afhub_1k) +
            (afhub_1m / afhub_1k <= 2.0 ? "met\n" : "NOT met\n");
+  if (loop.skipped.empty())
+    out += format("  commands in time for the next step %.1f %% (goal >= %.0f %%): ",
+                  100.0 * loop.deadline_hit_ratio(), 100.0 * kMinInTimeRatio) +
+           (loop.deadline_hit_ratio() >= kMinInTimeRatio ? "met\n" : "NOT met\n");
   if (loop.skipped.empty() && loop.cyclictest_skipped.empty()) {
     const double mine = loop.controller_wake.percentile_us(0.99);
     const double floor = loop.cyclictest_wake.percentile_us(0.99);
@@ -219,6 +223,21 @@ std::string results_table(const BenchResults& results) {
            (mine <= 2.0 * floor ? "met\n" : "NOT met\n");
   }
   return out;
+}
+
+std::vector<std::string> failures(const BenchResults& results) {
+  const LoopResult& loop = results.loop;
+  std::vector<std::string> found;
+  if (!loop.skipped.empty()) return found;
+  if (!loop.physics_dropped.empty())
+    found.push_back("the physics did not publish every step's states: it said \"" +
+                    loop.physics_dropped + "\"");
+  if (loop.deadline_hit_ratio() < kMinInTimeRatio)
+    found.push_back(
+        format("%.1f %% of the commands came in time for the next step (below %.0f "
+               "%%): the loop's figures are not those of a working controller",
+               100.0 * loop.deadline_hit_ratio(), 100.0 * kMinInTimeRatio));
+  return found;
 }
 
 void write_plot(const BenchResults& results, const std::string& png_path) {

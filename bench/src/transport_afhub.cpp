@@ -57,8 +57,8 @@ class AfhubTransport : public Transport {
   RawLatestReader reader_;
 };
 
-// A production hub has no pools for samples this large; a hub the bench starts
-// gets them (`afhub hub --bench-pools`). Refuses, saying what to do, a running hub
+// A production hub has no pools for samples this large; the hub the bench starts
+// gets them (`afhub hub --bench-pools`, BenchHub). Refuses, saying what to do, a running hub
 // without them.
 void require_bench_pools() {
   LatestReader<Health> reader(
@@ -91,8 +91,8 @@ void require_bench_pools() {
 }  // namespace
 
 std::unique_ptr<Transport> open_afhub_transport(Side side, const std::string& session) {
-  connect_to_hub(side == Side::kPing ? "bench" : "bench-peer", HubPolicy::kAutostart, {},
-                 {"--bench-pools"});
+  // The hub is the bench's own (BenchHub) or one that already ran.
+  connect_to_hub(side == Side::kPing ? "bench" : "bench-peer", HubPolicy::kRequire);
   if (side == Side::kPing) require_bench_pools();
   return std::make_unique<AfhubTransport>(side, session);
 }

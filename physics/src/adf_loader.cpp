@@ -168,11 +168,19 @@ void load_file(const std::string& path, const YAML::Node& root, Model& model, Un
 
 }  // namespace
 
-void load_adf_files_into(const std::vector<std::string>& paths, Model& model) {
+void load_adf_files_into(const std::vector<std::string>& paths, Model& model,
+                         const UrdfOptions& urdf) {
   Unresolved pending;
   LoadedChannels channels;
   std::vector<std::string> copy_suffix;  // per body: the index a copy's name got
   for (const std::string& path : paths) {
+    if (is_urdf_path(path)) {
+      const FileSpan span{path, model.bodies.size(), model.soft_bodies.size(),
+                          pending.joints.size()};
+      load_urdf_into(path, urdf, model);
+      channels.load_as_copies(span, model, pending.joints, copy_suffix);
+      continue;
+    }
     YAML::Node root = yaml::load_map(path, "an ADF file (a map with 'bodies' and 'joints' lists)");
     const FileSpan span{path, model.bodies.size(), model.soft_bodies.size(), pending.joints.size()};
     try {

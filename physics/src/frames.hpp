@@ -4,6 +4,8 @@
 
 #include <btBulletDynamicsCommon.h>
 
+#include <cmath>
+
 #include "afhub/physics/model.hpp"
 
 namespace afhub::physics {
@@ -41,6 +43,29 @@ inline btQuaternion rotation_between(btVector3 from, btVector3 to) {
     return btQuaternion(perpendicular.normalized(), SIMD_PI);
   }
   return btQuaternion(normal.normalized(), btAcos(cosine));
+}
+
+// Fixed-axis roll, pitch, yaw of a rotation (the inverse of rpy_rotation). Roll is
+// taken from what is left once pitch and yaw are undone, so the three give the
+// rotation back to rounding even at pitch +-pi/2, where each alone is ill-defined.
+inline Vec3 rpy_of(const btMatrix3x3& r) {
+  const double pitch = std::atan2(-r[2][0], std::sqrt(r[0][0] * r[0][0] + r[1][0] * r[1][0]));
+  const double yaw = std::atan2(r[1][0], r[0][0]);
+  btMatrix3x3 undone;
+  undone.setEulerZYX(0, pitch, yaw);                // btMatrix3x3 takes x first
+  const btMatrix3x3 rest = undone.transpose() * r;  // a turn about x
+  return {std::atan2(rest[2][1], rest[1][1]), pitch, yaw};
+}
+
+// AMBF paper, Algorithm 3: the angle about `parent_axis` that, after the child axis
+// is taken onto the parent axis the short way (rotation_between), turns the child
+// to `child_in_parent` (which takes `child_axis` onto `parent_axis`).
+inline double joint_offset_about(const btQuaternion& child_in_parent, const btVector3& child_axis,
+                                 const btVector3& parent_axis) {
+  const btQuaternion rest = child_in_parent * rotation_between(child_axis, parent_axis).inverse();
+  const btVector3 about = parent_axis.normalized();
+  return 2.0 *
+         std::atan2(rest.x() * about.x() + rest.y() * about.y() + rest.z() * about.z(), rest.w());
 }
 
 }  // namespace afhub::physics

@@ -106,7 +106,11 @@ JointModel::JointModel(const JointSpec& spec, btRigidBody& parent, btRigidBody& 
     case JointType::kRevolute:
     case JointType::kContinuous: {
       auto hinge = std::make_unique<btHingeConstraint>(parent, child, a, b, true);
-      if (spec.type == JointType::kRevolute && spec.limit_low)
+      // Bullet wraps hinge limits into +-pi: a range of a turn or more (a UR arm's
+      // +-2 pi) would become a lock. Such a range is no limit to the hinge; position
+      // targets are still clamped to it.
+      if (spec.type == JointType::kRevolute && spec.limit_low &&
+          *spec.limit_high - *spec.limit_low < 2.0 * SIMD_PI)
         hinge->setLimit(*spec.limit_low, *spec.limit_high);
       constraint_ = std::move(hinge);
       break;

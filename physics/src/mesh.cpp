@@ -1,19 +1,20 @@
-// Mesh reading (assimp) and mass properties (see mesh.hpp).
+// Mesh reading (in afhub-mesh-reader, see mesh_reader.hpp) and mass properties (see mesh.hpp).
 #include "afhub/physics/mesh.hpp"
 
-#include <assimp/postprocess.h>
-#include <assimp/scene.h>
+#include <sys/stat.h>
 
 #include <Eigen/Eigenvalues>
 
 #include <algorithm>
-#include <assimp/Importer.hpp>
 #include <cmath>
-
+#include <map>
+#include <memory>
+#include <mutex>
 #include <set>
 
 #include "afhub/shm_layout/error.hpp"
 #include "afhub/yaml/input_file.hpp"
+#include "mesh_reader.hpp"
 
 namespace afhub::physics {
 namespace {
@@ -21,81 +22,176 @@ namespace {
 // A vertex farther than this from its mesh's origin is garbage, not a part.
 constexpr double kMaxVertexM = 1e5;
 
-// Runs `load` and prefixes its error with the block that names the mesh.
-template <class Load>
-auto for_block(const SourceLocation& where, const std::string& owner, Load load) {
-  try {
-    return load();
-  } catch (const Error& error) {
-    throw Error(where.str() + ": error: " + owner + ": its mesh cannot be used: " + error.what());
+// The error of the block that names a mesh: its location, then the mesh's own.
+Error block_error(const MeshRequest& request, const std::string& error) {
+  return Error(request.where.str() + ": error: " + request.owner +
+               ": its mesh cannot be used: " + error);
+}
+
+// `raw` scaled, every vertex checked.
+TriangleMesh scaled(const RawMesh& raw, const std::string& path, double scale) {
+  TriangleMesh mesh;
+  mesh.vertices.reserve(raw.xyz.size() / 3);
+  for (std::size_t v = 0; v < raw.xyz.size(); v += 3) {
+    const float* p = &raw.xyz[v];
+    const std::array<double, 3> point{p[0] * scale, p[1] * scale, p[2] * scale};
+    for (double component : point)
+      if (!std::isfinite(component) || std::abs(component) > kMaxVertexM)
+        throw Error(path + ": error: vertex " + std::to_string(v / 3) + " is (" +
+                    std::to_string(p[0]) + ", " + std::to_string(p[1]) + ", " +
+                    std::to_string(p[2]) +
+                    "): not a finite point within 100 km of the origin; repair the mesh");
+    mesh.vertices.push_back(point);
+  }
+  mesh.triangles.reserve(raw.triangles.size() / 3);
+  for (std::size_t t = 0; t < raw.triangles.size(); t += 3)
+    mesh.triangles.push_back({raw.triangles[t], raw.triangles[t + 1], raw.triangles[t + 2]});
+  if (mesh.triangles.empty())
+    throw Error(path + ": error: the mesh has no triangles; export it with faces");
+  return mesh;
+}
+
+// A file as it was when read: another file at its path, or a change, is read again.
+struct FileIdentity {
+  bool known = false;
+  dev_t device = 0;
+  ino_t inode = 0;
+  off_t size = 0;
+  std::int64_t modified_ns = 0, changed_ns = 0;
+  bool operator==(const FileIdentity&) const = default;
+};
+
+FileIdentity identity_of(const std::string& path) {
+  struct stat status {};
+  if (::stat(path.c_str(), &status) != 0) return {};
+  auto ns = [](const timespec& t) { return std::int64_t{t.tv_sec} * 1'000'000'000 + t.tv_nsec; };
+  return {true,           status.st_dev,      status.st_ino,
+          status.st_size, ns(status.st_mtim), ns(status.st_ctim)};
+}
+
+struct KeptMesh {
+  FileIdentity identity;
+  std::shared_ptr<const RawMesh> mesh;
+};
+
+// The meshes read last, kept while their files are unchanged: `afhub check` reads a
+// model's meshes, then builds its simulation, which reads the collision meshes again.
+// At most 64 MiB of them: the oldest batches are forgotten first.
+constexpr std::size_t kMaxKeptBytes = 64u << 20;
+std::mutex kept_mutex;
+std::map<std::string, KeptMesh> kept;
+std::size_t kept_bytes = 0;
+
+std::size_t bytes_of(const RawMesh& mesh) {
+  return mesh.xyz.size() * sizeof(float) + mesh.triangles.size() * sizeof(std::uint32_t);
+}
+
+std::shared_ptr<const RawMesh> kept_mesh(const std::string& path, const FileIdentity& identity) {
+  const std::lock_guard lock(kept_mutex);
+  const auto found = kept.find(path);
+  if (!identity.known || found == kept.end() || !(found->second.identity == identity))
+    return nullptr;
+  return found->second.mesh;
+}
+
+void keep_meshes(const std::map<std::string, KeptMesh>& batch) {
+  std::size_t bytes = 0;
+  for (const auto& [path, entry] : batch) bytes += bytes_of(*entry.mesh);
+  const std::lock_guard lock(kept_mutex);
+  if (kept_bytes + bytes > kMaxKeptBytes) {
+    kept.clear();
+    kept_bytes = 0;
+  }
+  if (bytes > kMaxKeptBytes) return;
+  for (const auto& [path, entry] : batch) {
+    if (!entry.identity.known) continue;
+    if (auto old = kept.find(path); old != kept.end()) {
+      kept_bytes -= bytes_of(*old->second.mesh);
+      kept.erase(old);
+    }
+    kept.emplace(path, entry);
+    kept_bytes += bytes_of(*entry.mesh);
   }
 }
 
 }  // namespace
 
 TriangleMesh load_mesh(const std::string& path, double scale) {
-  yaml::check_input_file(path, kMaxMeshFileBytes, "a mesh (STL, OBJ, DAE, ...)");
-  Assimp::Importer importer;
-  const aiScene* scene =
-      importer.ReadFile(path, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
-                                  aiProcess_PreTransformVertices);
-  if (!scene || !scene->mRootNode)
-    throw Error(path + ": error: cannot read this mesh: " + importer.GetErrorString());
-  TriangleMesh mesh;
-  for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
-    const aiMesh* part = scene->mMeshes[m];
-    const auto base = static_cast<unsigned>(mesh.vertices.size());
-    if (mesh.vertices.size() + part->mNumVertices > kMaxMeshVertices ||
-        mesh.triangles.size() + part->mNumFaces > kMaxMeshTriangles)
-      throw Error(path + ": error: the mesh has more than " + std::to_string(kMaxMeshTriangles) +
-                  " triangles or " + std::to_string(kMaxMeshVertices) +
-                  " vertices; simplify it (a collision mesh needs far fewer)");
-    for (unsigned v = 0; v < part->mNumVertices; ++v) {
-      const aiVector3D& p = part->mVertices[v];
-      const std::array<double, 3> scaled{p.x * scale, p.y * scale, p.z * scale};
-      for (double component : scaled)
-        if (!std::isfinite(component) || std::abs(component) > kMaxVertexM)
-          throw Error(path + ": error: vertex " + std::to_string(mesh.vertices.size()) + " is (" +
-                      std::to_string(p.x) + ", " + std::to_string(p.y) + ", " +
-                      std::to_string(p.z) +
-                      "): not a finite point within 100 km of the origin; repair the mesh");
-      mesh.vertices.push_back(scaled);
-    }
-    for (unsigned f = 0; f < part->mNumFaces; ++f) {
-      const aiFace& face = part->mFaces[f];
-      if (face.mNumIndices != 3) continue;  // points and lines have no volume
-      for (unsigned k = 0; k < 3; ++k)
-        if (face.mIndices[k] >= part->mNumVertices)
-          throw Error(path + ": error: face " + std::to_string(f) + " names a vertex beyond the " +
-                      std::to_string(part->mNumVertices) + " of its part; repair the mesh");
-      mesh.triangles.push_back(
-          {base + face.mIndices[0], base + face.mIndices[1], base + face.mIndices[2]});
-    }
-  }
-  if (mesh.triangles.empty())
-    throw Error(path + ": error: the mesh has no triangles; export it with faces");
-  return mesh;
+  return load_body_meshes({{path, scale, {}, ""}}).front();
 }
 
 TriangleMesh load_body_mesh(const std::string& path, double scale, const SourceLocation& where,
                             const std::string& owner) {
-  return for_block(where, owner, [&] { return load_mesh(path, scale); });
+  return load_body_meshes({{path, scale, where, owner}}).front();
+}
+
+std::vector<TriangleMesh> load_body_meshes(const std::vector<MeshRequest>& requests) {
+  // Each file checked here first (what it is, its size), then taken from the last
+  // batch's meshes or read once in the reader.
+  std::map<std::string, std::string> refused;  // path -> error
+  std::map<std::string, KeptMesh> found;       // path -> mesh
+  std::vector<std::string> files;
+  std::vector<FileIdentity> identities;
+  for (const MeshRequest& request : requests) {
+    const std::string& path = request.path;
+    if (refused.count(path) || found.count(path) ||
+        std::find(files.begin(), files.end(), path) != files.end())
+      continue;
+    try {
+      yaml::check_input_file(path, kMaxMeshFileBytes, "a mesh (STL, OBJ, DAE, ...)");
+    } catch (const Error& error) {
+      refused.emplace(path, error.what());
+      continue;
+    }
+    const FileIdentity identity = identity_of(path);
+    if (auto kept = kept_mesh(path, identity)) {
+      found.emplace(path, KeptMesh{identity, kept});
+      continue;
+    }
+    files.push_back(path);
+    identities.push_back(identity);
+  }
+  std::vector<MeshReadResult> read = read_mesh_files(files);
+  for (std::size_t i = 0; i < files.size(); ++i) {
+    if (!read[i].error.empty())
+      refused.emplace(files[i], read[i].error);
+    else
+      found.emplace(files[i], KeptMesh{identities[i],
+                                       std::make_shared<const RawMesh>(std::move(read[i].mesh))});
+  }
+  keep_meshes(found);
+  std::vector<TriangleMesh> meshes;
+  for (const MeshRequest& request : requests) {
+    // load_mesh's errors name the file alone; a block's say where it is named.
+    const bool located = !request.owner.empty();
+    try {
+      if (auto was_refused = refused.find(request.path); was_refused != refused.end())
+        throw Error(was_refused->second);
+      meshes.push_back(scaled(*found.at(request.path).mesh, request.path, request.scale));
+    } catch (const Error& error) {
+      if (located) throw block_error(request, error.what());
+      throw;
+    }
+  }
+  return meshes;
 }
 
 std::size_t check_meshes(const Model& model) {
-  std::set<std::pair<std::string, double>> read;
-  auto load = [&](const std::string& path, double scale, const SourceLocation& where,
-                  const std::string& owner) {
-    if (path.empty() || !read.emplace(path, scale).second) return;
-    load_body_mesh(path, scale, where, owner);
+  std::set<std::pair<std::string, double>> seen;
+  std::vector<MeshRequest> requests;
+  auto add = [&](const std::string& path, double scale, const SourceLocation& where,
+                 const std::string& owner) {
+    if (!path.empty() && seen.emplace(path, scale).second)
+      requests.push_back({path, scale, where, owner});
   };
   for (const BodySpec& body : model.bodies) {
-    load(body.collision_mesh, body.scale, body.where, "body '" + body.identifier + "'");
-    load(body.visual_mesh, body.scale, body.where, "body '" + body.identifier + "' (visual)");
+    add(body.collision_mesh, body.scale, body.where, "body '" + body.identifier + "'");
+    add(body.visual_mesh, body.scale, body.where, "body '" + body.identifier + "' (visual)");
   }
   for (const SoftBodySpec& soft : model.soft_bodies)
-    load(soft.mesh, soft.scale, soft.where, "soft body '" + soft.identifier + "'");
-  return read.size();
+    add(soft.mesh, soft.scale, soft.where, "soft body '" + soft.identifier + "'");
+  load_body_meshes(requests);
+  return requests.size();
 }
 
 MeshMassProperties mass_properties(const TriangleMesh& mesh) {

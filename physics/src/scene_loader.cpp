@@ -178,7 +178,7 @@ Model load_scene(const SceneRequest& request) {
   adf_files.insert(adf_files.end(), request.adf_files.begin(), request.adf_files.end());
   if (adf_files.empty())
     throw Error("nothing to simulate: give ADF files, or --launch FILE with -l indices");
-  load_adf_files_into(adf_files, model);
+  load_adf_files_into(adf_files, model, request.urdf);
   if (!color_file.empty()) apply_colors(color_file, model);
   return model;
 }

@@ -78,24 +78,23 @@ int find_parent(const Model& model, const std::string& parent) {
 }  // namespace
 
 void Simulation::Data::build_bodies() {
-  std::map<std::string, TriangleMesh> meshes;  // each file read once
-  auto mesh_of = [&](const BodySpec& spec) -> const TriangleMesh* {
-    const std::string& path = spec.collision_mesh;
-    if (path.empty()) return nullptr;
-    const std::string key = path + "@" + std::to_string(spec.scale);
-    auto found = meshes.find(key);
-    if (found == meshes.end())
-      found = meshes
-                  .emplace(key, load_body_mesh(path, spec.scale, spec.where,
-                                               "body '" + spec.identifier + "'"))
-                  .first;
-    return &found->second;
-  };
+  // Every collision mesh read at once (one reader process), each (file, scale) once.
+  std::map<std::pair<std::string, double>, std::size_t> mesh_index;
+  std::vector<MeshRequest> requests;
+  for (const BodySpec& spec : model.bodies)
+    if (!spec.collision_mesh.empty() &&
+        mesh_index.emplace(std::pair(spec.collision_mesh, spec.scale), requests.size()).second)
+      requests.push_back(
+          {spec.collision_mesh, spec.scale, spec.where, "body '" + spec.identifier + "'"});
+  const std::vector<TriangleMesh> meshes = load_body_meshes(requests);
   bodies.resize(model.bodies.size());
   for (std::size_t i = 0; i < model.bodies.size(); ++i) {
     const BodySpec& spec = model.bodies[i];
     BodyData& body = bodies[i];
-    const TriangleMesh* mesh = mesh_of(spec);
+    const TriangleMesh* mesh =
+        spec.collision_mesh.empty()
+            ? nullptr
+            : &meshes[mesh_index.at(std::pair(spec.collision_mesh, spec.scale))];
     body.dynamic = spec.mass_kg > 0.0;
     Placement inertial = spec.inertial_offset.value_or(Placement{});
     std::optional<MeshMassProperties> properties;

@@ -87,6 +87,11 @@ std::vector<std::string> Simulation::gain_notes() const {
 void Simulation::step() noexcept {
   Data& d = *data_;
   for (BodyData& body : d.bodies) d.apply_cartesian(body);
+  // A URDF <mimic> joint follows its leader's latest position, over any command.
+  for (auto& joint : d.joints)
+    if (const std::optional<Mimic>& mimic = joint->spec().mimic)
+      joint->command(JointMode::kPosition,
+                     mimic->multiplier * d.joints[mimic->joint]->position() + mimic->offset);
   for (auto& joint : d.joints) joint->apply_control();
   d.world.stepSimulation(d.dt_s, 1, d.dt_s);
   d.broadphase.m_deferedcollide = false;  // the first step met the initial overlaps

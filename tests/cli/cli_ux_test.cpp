@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <memory>
 #include <sstream>
 #include <thread>
 
@@ -76,6 +77,49 @@ TEST(Cli, ScriptsGetErrorsWaitsAndPlainText) {
   EXPECT_FALSE(contains(read_file("/tmp/afhub-test-top.log"), "\x1b["))
       << "terminal codes written into a file";
   EXPECT_EQ(synth.stop(), 0);
+}
+
+// Two processes, one only pausing and one only resuming: the world can act on a pause
+// and a resume between two of its states, and then none shows the pause. That is no
+// failure (1 call in 60 exited 1, "did not act ... is it stalled"): it is said, exit
+// 0. A world that is stopped (SIGSTOP) still fails the command.
+TEST(World, PausingAndResumingFromTwoProcessesAlwaysSucceeds) {
+  afhub::testing::ModelFolder folder;
+  const std::string log = (folder.dir() / "run.log").string();
+  ScopedProcess physics(spawn_afhub({"run", kArm, "--no-autostart"}, log));
+  LatestReader<WorldState> world = world_reader();
+  ASSERT_TRUE(wait_until([&] { return world.latest() != nullptr; }, 10s)) << read_file(log);
+  constexpr int kCalls = 100;  // each
+  const auto hammer = [&](const std::string& action) {
+    const std::string out = (folder.dir() / (action + ".txt")).string();
+    return std::pair{std::make_unique<ScopedProcess>(spawn_command(
+                         {"bash", "-c",
+                          "for i in $(seq " + std::to_string(kCalls) + "); do \"$0\" world " +
+                              action + " --timeout 3 || echo \"EXIT $?\"; done > " + out + " 2>&1",
+                          afhub_executable()})),
+                     out};
+  };
+  auto [pausing, pausing_out] = hammer("pause");
+  auto [resuming, resuming_out] = hammer("resume");
+  EXPECT_EQ(wait_for_exit(*pausing, 600s), 0);
+  EXPECT_EQ(wait_for_exit(*resuming, 600s), 0);
+  const std::string said = read_file(pausing_out) + read_file(resuming_out);
+  int lines = 0, undone = 0;
+  std::istringstream in(said);
+  for (std::string line; std::getline(in, line);) {
+    ++lines;
+    if (contains(line, "undone since by another process")) ++undone;
+  }
+  EXPECT_FALSE(contains(said, "EXIT ")) << said;
+  EXPECT_EQ(lines, 2 * kCalls) << said;
+  std::printf("%d calls, %d of them undone by the other process\n", lines, undone);
+
+  kill(physics.pid, SIGSTOP);
+  const RunResult stalled = run_afhub({"world", "pause", "--timeout", "1"});
+  kill(physics.pid, SIGCONT);
+  EXPECT_EQ(stalled.exit_code, 1) << stalled.out << stalled.err;
+  EXPECT_TRUE(contains(stalled.err, "stalled")) << stalled.err;
+  EXPECT_EQ(physics.stop(), 0) << read_file(log);
 }
 
 TEST(World, WithoutASimulationItSaysSo) {

@@ -197,6 +197,58 @@ TEST(Claims, AControllerFindingNoPublisherPortLeftSaysSo) {
   EXPECT_EQ(synth.stop(), 0);
 }
 
+// The world state's pool nearly full (taken here, by loans held): a new physics is
+// refused, naming the pool and its size, before it takes the chunks the running
+// physics publishes its world state with (with 32 physics the first lost its world
+// state, and every physics wrote iceoryx's complaint from its loop).
+TEST(Claims, ANewPhysicsIsRefusedBeforeItTakesTheLastChunks) {
+  const std::string arm = AFHUB_EXAMPLE_MODELS "/arm7.yaml";
+  ScopedProcess first(spawn_afhub({"run", arm, "--no-autostart"}, "/tmp/afhub-claims-first.log"));
+  LatestReader<WorldState> world(
+      {std::string(kService), std::string(kWorldInstance), std::string(kStateEvent)});
+  ASSERT_TRUE(wait_until([&] { return world.latest() != nullptr; }, 10s))
+      << read_file("/tmp/afhub-claims-first.log");
+  LatestReader<Health> health(
+      {std::string(kService), std::string(kHubInstance), std::string(kHealthEvent)});
+  const auto world_pool = [&]() -> const MempoolUsage* {
+    const Health* latest = health.latest();
+    if (!latest) return nullptr;
+    for (std::uint32_t i = latest->mempool_count; i-- > 0;)
+      if (latest->mempools[i].chunk_payload_bytes >= sizeof(WorldState) &&
+          (i == 0 || latest->mempools[i - 1].chunk_payload_bytes < sizeof(WorldState)))
+        return &latest->mempools[i];
+    return nullptr;
+  };
+  ASSERT_TRUE(wait_until([&] { return world_pool() != nullptr; }, 5s));
+  // Loans held, 8 per writer (iceoryx's most per publisher), leaving 6 free: room for a
+  // physics's two, but not for them and the spare.
+  const std::uint32_t total = world_pool()->chunk_count;
+  const std::uint32_t to_take = total - world_pool()->used_chunks - 6;
+  std::vector<std::unique_ptr<RawWriter>> writers;
+  std::uint32_t taken = 0;
+  while (taken < to_take) {
+    writers.push_back(std::make_unique<RawWriter>(
+        ChannelId{"afhub", "fill", "w" + std::to_string(writers.size())},
+        PayloadKind::kWorldState));
+    for (int i = 0; i < 8 && taken < to_take; ++i, ++taken)
+      ASSERT_NE(writers.back()->loan(sizeof(WorldState)), nullptr) << taken << " of " << to_take;
+  }
+  ASSERT_TRUE(
+      wait_until([&] { return world_pool()->chunk_count - world_pool()->used_chunks <= 8; }, 5s));
+  const RunResult second = run_afhub({"run", arm, "--namespace", "b", "--no-autostart"}, 30s);
+  EXPECT_EQ(second.exit_code, 1) << second.err;
+  EXPECT_TRUE(
+      contains(second.err, "chunks of the hub's pool of " + std::to_string(total) + " chunks of " +
+                               std::to_string(world_pool()->chunk_payload_bytes) + " bytes"))
+      << second.err;
+  // The first physics still publishes its world state, and never said it could not.
+  const std::uint64_t before = world.latest()->header.sim_step;
+  EXPECT_TRUE(wait_until([&] { return world.latest()->header.sim_step > before + 100; }, 5s));
+  EXPECT_EQ(first.stop(), 0);
+  EXPECT_FALSE(contains(read_file("/tmp/afhub-claims-first.log"), "exhausted"))
+      << read_file("/tmp/afhub-claims-first.log");
+}
+
 // Every client reads the hub's catalog, and iceoryx connects at most
 // kMaxReadersPerChannel readers to one channel: the client past them is told so (it
 // was told the hub is not an afhub hub).

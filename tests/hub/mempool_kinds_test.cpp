@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 
 #include "afhub/hub/hub_daemon.hpp"
+#include "afhub/shm_layout/body_command.hpp"
+#include "afhub/shm_layout/body_state.hpp"
 #include "afhub/shm_layout/catalog.hpp"
 #include "afhub/shm_layout/limits.hpp"
 #include "afhub/shm_layout/world.hpp"
@@ -41,6 +43,23 @@ TEST(MempoolKinds, EveryProcessHasRoomForItsDirectoryAndWorldState) {
   EXPECT_GE(directories.chunk_count, 5 * kMaxProcesses) << directories.holds;
   // A chunk in its history and a loan: 32 physics used to run the pool of 64 out.
   EXPECT_GE(pool_for(pools, sizeof(WorldState)).chunk_count, 2 * kMaxProcesses);
+}
+
+// `afhub hub --bench-pools` (the hub `afhub bench` starts) put a 1 KiB pool of 16
+// chunks below the body pools: every state of the example arm landed in it, and the
+// physics published one step in two at best.
+TEST(MempoolKinds, BenchPoolsLeaveTheBodiesTheirPools) {
+  const std::vector<MempoolSpec> plain = default_mempools();
+  const std::vector<MempoolSpec> bench = with_bench_pools(plain);
+  for (std::size_t joints = 0; joints <= kMaxJointsPerBody; ++joints)
+    for (std::size_t bytes : {body_state_bytes(joints), body_command_bytes(joints)}) {
+      const MempoolSpec& with = pool_for(bench, bytes);
+      const MempoolSpec& without = pool_for(plain, bytes);
+      ASSERT_EQ(with.payload_bytes, without.payload_bytes)
+          << bytes << " bytes (" << joints << " joints) go to the pool of " << with.holds;
+      ASSERT_GE(with.chunk_count, without.chunk_count) << with.holds;
+    }
+  EXPECT_EQ(pool_for(bench, 1u << 20).payload_bytes, 1u << 20);
 }
 
 }  // namespace

@@ -183,17 +183,6 @@ TEST_F(BadInput, ADirectoryGivenAsAModelSaysSo) {
   EXPECT_TRUE(contains(message, "this is a directory; expected an ADF file")) << message;
 }
 
-// `count` passive bodies (a passive body publishes nothing: the hub's limit is not hit).
-std::string many_bodies(int count) {
-  std::string text = "bodies: [";
-  for (int i = 0; i < count; ++i) text += (i ? ", BODY b" : "BODY b") + std::to_string(i);
-  text += "]\n";
-  for (int i = 0; i < count; ++i)
-    text += "BODY b" + std::to_string(i) + ":\n  name: b" + std::to_string(i) +
-            "\n  mass: 1\n  passive: true\n  shape: sphere\n  geometry: {radius: 0.1}\n";
-  return text;
-}
-
 // The fastest of three; with `build`, the simulation is built too.
 double cpu_seconds_to_load(const std::string& path, bool build = false) {
   double best = 1e9;
@@ -210,26 +199,27 @@ double cpu_seconds_to_load(const std::string& path, bool build = false) {
 // three: 8 times the bodies must cost about 8 times as much. Loading used to be
 // quadratic (over 30 times here); the bound leaves room for noise.
 TEST_F(BadInput, LoadingIsLinearInTheBodies) {
-  const std::string small = folder_.write("small.yaml", many_bodies(2000));
-  const std::string large = folder_.write("large.yaml", many_bodies(16000));
+  const std::string small = folder_.write("small.yaml", testing::passive_spheres_at_origin(2000));
+  const std::string large = folder_.write("large.yaml", testing::passive_spheres_at_origin(16000));
   const double ratio = cpu_seconds_to_load(large) / cpu_seconds_to_load(small);
   EXPECT_LT(ratio, 16.0) << "8x the bodies took " << ratio << "x the CPU time";
   std::printf("8x the bodies took %.1fx the CPU time\n", ratio);
 }
 
-// many_bodies puts every body at the origin: each pair overlaps. Bullet's broadphase
+// Every body is at the origin: each pair overlaps. Bullet's broadphase
 // met each added body's overlaps at once, which made building cubic (over 50 times
 // the CPU time here); now the first step meets them.
 TEST_F(BadInput, BuildingIsLinearInBodiesThatAllOverlap) {
-  const std::string small = folder_.write("small.yaml", many_bodies(500));
-  const std::string large = folder_.write("large.yaml", many_bodies(2000));
+  const std::string small = folder_.write("small.yaml", testing::passive_spheres_at_origin(500));
+  const std::string large = folder_.write("large.yaml", testing::passive_spheres_at_origin(2000));
   const double ratio = cpu_seconds_to_load(large, true) / cpu_seconds_to_load(small, true);
   EXPECT_LT(ratio, 8.0) << "4x the bodies took " << ratio << "x the CPU time";
   std::printf("4x the overlapping bodies took %.1fx the CPU time to build\n", ratio);
 }
 
 TEST_F(BadInput, MoreBodiesThanASimulationHoldsAreRefusedBeforeAnyIsRead) {
-  const std::string text = many_bodies(static_cast<int>(kMaxModelBodies) + 1);
+  const std::string text =
+      testing::passive_spheres_at_origin(static_cast<int>(kMaxModelBodies) + 1);
   const std::string message = error_of({folder_.write("many.yaml", text)}, false);
   EXPECT_TRUE(contains(message, "many.yaml:1:10: error: the model lists " +
                                     std::to_string(kMaxModelBodies + 1) +
@@ -237,7 +227,8 @@ TEST_F(BadInput, MoreBodiesThanASimulationHoldsAreRefusedBeforeAnyIsRead) {
                                     std::to_string(kMaxModelBodies) + " (kMaxModelBodies)"))
       << message;
   // Two files of half as many each: the second list passes the bound.
-  const std::string half = many_bodies(static_cast<int>(kMaxModelBodies / 2) + 1);
+  const std::string half =
+      testing::passive_spheres_at_origin(static_cast<int>(kMaxModelBodies / 2) + 1);
   const std::string first = folder_.write("first.yaml", half);
   std::string renamed = half;
   for (std::size_t at = 0; (at = renamed.find(" b", at)) != std::string::npos; at += 3)
@@ -248,7 +239,7 @@ TEST_F(BadInput, MoreBodiesThanASimulationHoldsAreRefusedBeforeAnyIsRead) {
 }
 
 TEST_F(BadInput, MoreBodiesThanTheHubHoldsAreRefusedAtOnce) {
-  std::string text = many_bodies(kMaxBodies + 50);
+  std::string text = testing::passive_spheres_at_origin(kMaxBodies + 50);
   // Passive bodies publish nothing: any number of them load.
   EXPECT_EQ(error_of({folder_.write("passive.yaml", text)}, false), "");
   std::string active;

@@ -60,15 +60,9 @@ BENCHMARK(BM_LoadEcms)->ArgName("robots")->DenseRange(1, 8)->Arg(16)->Unit(bench
 
 // N passive spheres at the origin: N^2/2 overlapping pairs for the first step to meet.
 void BM_LoadOverlappingBodies(benchmark::State& state) {
-  const auto count = static_cast<int>(state.range(0));
-  std::string text = "bodies: [";
-  for (int i = 0; i < count; ++i) text += (i ? ", BODY b" : "BODY b") + std::to_string(i);
-  text += "]\n";
-  for (int i = 0; i < count; ++i)
-    text += "BODY b" + std::to_string(i) + ":\n  name: b" + std::to_string(i) +
-            "\n  mass: 1\n  passive: true\n  shape: sphere\n  geometry: {radius: 0.1}\n";
   const afhub::testing::ModelFolder folder;
-  load(state, {folder.write("overlapping.yaml", text)});
+  const auto count = static_cast<int>(state.range(0));
+  load(state, {folder.write("overlapping.yaml", afhub::testing::passive_spheres_at_origin(count))});
 }
 BENCHMARK(BM_LoadOverlappingBodies)
     ->ArgName("bodies")

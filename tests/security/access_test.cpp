@@ -147,6 +147,46 @@ TEST_F(Access, OnlyTheHubsGroupIsLetIn) {
   }
 }
 
+// Members of the hub's group are trusted: they can write iceoryx's management segment
+// (garbage there aborts the hub), so nobody else may open it, nor the payload segment.
+// `dd` opens each as another user, for reading and for writing: an outsider is refused
+// (EACCES) and a member is not, so the refusal is the group's doing.
+TEST_F(Access, OnlyTheHubsGroupCanOpenItsSharedMemory) {
+  ASSERT_TRUE(users_group_with_root_and_nobody()) << std::strerror(errno);
+  ScopedProcess hub = spawn_afhub({"hub", "--group", "users"}, hub_log_);
+  ASSERT_TRUE(hub_up()) << read_file(hub_log_);
+  const auto open_as = [](uid_t uid, gid_t gid, const std::string& path, bool write) {
+    std::vector<std::string> argv = {"setpriv", "--reuid",           std::to_string(uid),
+                                     "--regid", std::to_string(gid), "--clear-groups",
+                                     "dd",      "count=1",           "status=none"};
+    if (write) {
+      argv.insert(argv.end(), {"if=/dev/zero", "of=" + path, "conv=notrunc", "seek=1000000"});
+    } else {
+      argv.insert(argv.end(), {"if=" + path, "of=/dev/null"});
+    }
+    return run_command(argv, 10s);
+  };
+  for (const std::string path : {"/dev/shm/iceoryx_mgmt", "/dev/shm/users"}) {
+    ASSERT_EQ(access(path.c_str(), F_OK), 0)
+        << path << " is not the hub's: " << read_file(hub_log_);
+    for (const bool write : {false, true}) {
+      const char* how = write ? " for writing" : " for reading";
+      const RunResult outsider = open_as(kOutsider, kNobody, path, write);
+      EXPECT_NE(outsider.exit_code, 0) << path << how << " by an outsider";
+      EXPECT_TRUE(contains(outsider.err, "Permission denied"))
+          << path << how << ": " << outsider.err;
+      if (!write) {  // a member reads it (writing would corrupt the hub: trusted, not tried)
+        const RunResult member = open_as(kNobody, kUsersGid, path, write);
+        EXPECT_EQ(member.exit_code, 0) << path << how << " by a member: " << member.err;
+      }
+    }
+  }
+  const RunResult ls = as_other_user(kOutsider, kNobody, {"ls"});
+  EXPECT_EQ(ls.exit_code, 1) << ls.err;
+  EXPECT_TRUE(contains(ls.err, "lets only the group 'users' use it")) << ls.err;
+  EXPECT_EQ(hub.stop(), 0);
+}
+
 // iceoryx sets the process umask around each bind, from two threads of the hub at
 // once: the socket must still come out 0660 in the hub's group at every start (it was
 // 0640 in about 1 start in 10, and members were refused).

@@ -1,4 +1,4 @@
-// Test models written on the fly into a private temporary folder.
+// Test models written on the fly into a private temporary folder, and a generated one.
 #pragma once
 
 #include <unistd.h>
@@ -32,5 +32,18 @@ class ModelFolder {
  private:
   std::filesystem::path dir_;
 };
+
+// A model of `count` passive spheres (BODY b0, b1, ...) all at the origin: every pair
+// of them overlaps. Passive bodies publish nothing: any number of them stay within the
+// hub's limit.
+inline std::string passive_spheres_at_origin(int count) {
+  std::string text = "bodies: [";
+  for (int i = 0; i < count; ++i) text += (i ? ", BODY b" : "BODY b") + std::to_string(i);
+  text += "]\n";
+  for (int i = 0; i < count; ++i)
+    text += "BODY b" + std::to_string(i) + ":\n  name: b" + std::to_string(i) +
+            "\n  mass: 1\n  passive: true\n  shape: sphere\n  geometry: {radius: 0.1}\n";
+  return text;
+}
 
 }  // namespace afhub::testing

@@ -26,6 +26,43 @@ std::uint32_t poses_in(const dds_sequence_afhub_dds_WorldObjectPose& from,
   return count;
 }
 
+// The fields named and typed alike in afhub's payload and its DDS type, copied either
+// way: one list for both directions, so that they cannot disagree.
+template <typename From, typename To>
+void copy_device_values(const From& from, To& to) noexcept {
+  to.spec.max_force_n = from.spec.max_force_n;
+  to.spec.max_torque_nm = from.spec.max_torque_nm;
+  to.spec.max_gripper_force_n = from.spec.max_gripper_force_n;
+  to.spec.max_stiffness_npm = from.spec.max_stiffness_npm;
+  to.spec.workspace_radius_m = from.spec.workspace_radius_m;
+  to.spec.sensed = from.spec.sensed;
+  to.spec.actuated = from.spec.actuated;
+  to.spec.button_count = from.spec.button_count;
+  to.gripper_angle_rad = from.gripper_angle_rad;
+  to.buttons = from.buttons;
+  to.applied_gripper_force_n = from.applied_gripper_force_n;
+  to.command_sequence = from.command_sequence;
+  to.command_stamp_ns = from.command_stamp_ns;
+}
+template <typename From, typename To>
+void copy_world_values(const From& from, To& to) noexcept {
+  to.wall_time_s = from.wall_time_s;
+  to.achieved_rate_hz = from.achieved_rate_hz;
+  to.body_count = from.body_count;
+  to.paused = from.paused;
+  to.lockstep = from.lockstep;
+  to.rejected_commands = from.rejected_commands;
+  to.watchdog_expiries = from.watchdog_expiries;
+  to.stale_commands = from.stale_commands;
+  to.lockstep_clients = from.lockstep_clients;
+  to.late_answers = from.late_answers;
+  to.dropped_clients = from.dropped_clients;
+  to.commanded_steps = from.commanded_steps;
+  to.answered_steps = from.answered_steps;
+  to.nan_recoveries = from.nan_recoveries;
+  to.last_nan_step = from.last_nan_step;
+}
+
 }  // namespace
 
 void make_world_state_sample(afhub_dds_WorldState& sample) {
@@ -44,23 +81,11 @@ void to_dds(std::string_view channel, const DeviceState& state,
   sample.header = to_dds(state.header);
   copy_text(state.spec.model.data(), state.spec.model.size(), sample.spec.model);
   copy_text(state.spec.serial.data(), state.spec.serial.size(), sample.spec.serial);
-  sample.spec.max_force_n = state.spec.max_force_n;
-  sample.spec.max_torque_nm = state.spec.max_torque_nm;
-  sample.spec.max_gripper_force_n = state.spec.max_gripper_force_n;
-  sample.spec.max_stiffness_npm = state.spec.max_stiffness_npm;
-  sample.spec.workspace_radius_m = state.spec.workspace_radius_m;
-  sample.spec.sensed = state.spec.sensed;
-  sample.spec.actuated = state.spec.actuated;
-  sample.spec.button_count = state.spec.button_count;
+  copy_device_values(state, sample);
   sample.pose = to_dds(state.pose);
   sample.velocity = to_dds(state.velocity);
-  sample.gripper_angle_rad = state.gripper_angle_rad;
-  sample.buttons = state.buttons;
   sample.gate = static_cast<std::uint8_t>(state.gate);
   sample.applied = to_dds(state.applied);
-  sample.applied_gripper_force_n = state.applied_gripper_force_n;
-  sample.command_sequence = state.command_sequence;
-  sample.command_stamp_ns = state.command_stamp_ns;
 }
 
 bool from_dds(const afhub_dds_DeviceState& sample, DeviceState& state) noexcept {
@@ -68,23 +93,11 @@ bool from_dds(const afhub_dds_DeviceState& sample, DeviceState& state) noexcept 
   from_dds(sample.header, state.header);
   copy_text(sample.spec.model, state.spec.model);
   copy_text(sample.spec.serial, state.spec.serial);
-  state.spec.max_force_n = sample.spec.max_force_n;
-  state.spec.max_torque_nm = sample.spec.max_torque_nm;
-  state.spec.max_gripper_force_n = sample.spec.max_gripper_force_n;
-  state.spec.max_stiffness_npm = sample.spec.max_stiffness_npm;
-  state.spec.workspace_radius_m = sample.spec.workspace_radius_m;
-  state.spec.sensed = sample.spec.sensed;
-  state.spec.actuated = sample.spec.actuated;
-  state.spec.button_count = sample.spec.button_count;
+  copy_device_values(sample, state);
   state.pose = from_dds(sample.pose);
   state.velocity = from_dds(sample.velocity);
-  state.gripper_angle_rad = sample.gripper_angle_rad;
-  state.buttons = sample.buttons;
   state.gate = static_cast<ForceGate>(sample.gate);
   state.applied = from_dds(sample.applied);
-  state.applied_gripper_force_n = sample.applied_gripper_force_n;
-  state.command_sequence = sample.command_sequence;
-  state.command_stamp_ns = sample.command_stamp_ns;
   return true;
 }
 
@@ -108,21 +121,7 @@ void to_dds(std::string_view channel, const WorldState& state,
             afhub_dds_WorldState& sample) noexcept {
   copy_text(channel, sample.world);
   sample.header = to_dds(state.header);
-  sample.wall_time_s = state.wall_time_s;
-  sample.achieved_rate_hz = state.achieved_rate_hz;
-  sample.body_count = state.body_count;
-  sample.paused = state.paused;
-  sample.lockstep = state.lockstep;
-  sample.rejected_commands = state.rejected_commands;
-  sample.watchdog_expiries = state.watchdog_expiries;
-  sample.stale_commands = state.stale_commands;
-  sample.lockstep_clients = state.lockstep_clients;
-  sample.late_answers = state.late_answers;
-  sample.dropped_clients = state.dropped_clients;
-  sample.commanded_steps = state.commanded_steps;
-  sample.answered_steps = state.answered_steps;
-  sample.nan_recoveries = state.nan_recoveries;
-  sample.last_nan_step = state.last_nan_step;
+  copy_world_values(state, sample);
   copy_text(state.last_nan_body.data(), state.last_nan_body.size(), sample.last_nan_body);
   poses_out(state.lights, state.light_count, sample.lights);
   poses_out(state.cameras, state.camera_count, sample.cameras);
@@ -130,21 +129,7 @@ void to_dds(std::string_view channel, const WorldState& state,
 
 void from_dds(const afhub_dds_WorldState& sample, WorldState& state) noexcept {
   from_dds(sample.header, state.header);
-  state.wall_time_s = sample.wall_time_s;
-  state.achieved_rate_hz = sample.achieved_rate_hz;
-  state.body_count = sample.body_count;
-  state.paused = sample.paused;
-  state.lockstep = sample.lockstep;
-  state.rejected_commands = sample.rejected_commands;
-  state.watchdog_expiries = sample.watchdog_expiries;
-  state.stale_commands = sample.stale_commands;
-  state.lockstep_clients = sample.lockstep_clients;
-  state.late_answers = sample.late_answers;
-  state.dropped_clients = sample.dropped_clients;
-  state.commanded_steps = sample.commanded_steps;
-  state.answered_steps = sample.answered_steps;
-  state.nan_recoveries = sample.nan_recoveries;
-  state.last_nan_step = sample.last_nan_step;
+  copy_world_values(sample, state);
   copy_text(sample.last_nan_body, state.last_nan_body);
   state.light_count = poses_in(sample.lights, state.lights);
   state.camera_count = poses_in(sample.cameras, state.cameras);

@@ -40,6 +40,25 @@ std::string subscribers_message(std::size_t count, std::int64_t left, const std:
          "it read fewer bodies";
 }
 
+// A process is refused while it would leave fewer free chunks than this in a pool:
+// those running take more as readers come and go.
+constexpr std::uint32_t kMinSpareChunks = 4;
+constexpr std::uint32_t kSpareChunksPerPool = 16;  // 1/16 of a pool, when more
+
+// The hub's payload pools, as the last Health read here said (empty before, or while
+// RouDi had not yet measured them). RouDi's own introspection pools come first.
+std::mutex g_pools_mutex;
+std::vector<MempoolUsage> g_pools;
+
+void remember_pools(const Health& health) {
+  const std::uint32_t count = std::min<std::uint32_t>(health.mempool_count, kMaxMempools);
+  const std::lock_guard lock(g_pools_mutex);
+  g_pools.clear();
+  for (std::uint32_t i = 0; i < count; ++i)
+    if (health.mempools[i].segment_id != health.mempools[0].segment_id)
+      g_pools.push_back(health.mempools[i]);
+}
+
 // The ports a Health read through `health` (made at `opened_ns`) says are free, less the
 // reader's own port when that Health was published before it: a port given back is
 // free again only once RouDi gets to it.
@@ -50,6 +69,7 @@ std::optional<FreePorts> read_free_ports(LatestReader<Health>& health, std::int6
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
   const Health* latest = health.latest();
   if (!latest) return std::nullopt;
+  remember_pools(*latest);
   const std::uint32_t own = latest->header.publish_stamp_ns < opened_ns ? 1 : 0;
   return FreePorts{latest->free_publisher_ports,
                    latest->free_subscriber_ports > own ? latest->free_subscriber_ports - own : 0};
@@ -101,6 +121,33 @@ std::optional<std::uint32_t> free_publisher_ports(std::chrono::milliseconds time
   const std::optional<FreePorts> free = free_ports(timeout);
   if (!free) return std::nullopt;
   return free->publishers;
+}
+
+void require_chunks(const std::vector<ChunkNeed>& needs, const std::string& what) {
+  const std::lock_guard lock(g_pools_mutex);
+  std::vector<std::uint32_t> needed(g_pools.size(), 0);  // pools sorted by size, as iceoryx's
+  for (const ChunkNeed& need : needs)
+    for (std::size_t i = 0; i < g_pools.size(); ++i)
+      if (g_pools[i].chunk_payload_bytes >= need.bytes) {
+        needed[i] += need.count;
+        break;
+      }
+  for (std::size_t i = 0; i < g_pools.size(); ++i) {
+    const MempoolUsage& pool = g_pools[i];
+    const std::uint32_t free = pool.chunk_count - std::min(pool.used_chunks, pool.chunk_count);
+    const std::uint32_t spare = std::max(kMinSpareChunks, pool.chunk_count / kSpareChunksPerPool);
+    if (needed[i] == 0 || free >= needed[i] + spare) continue;
+    const std::string bytes = std::to_string(pool.chunk_payload_bytes);
+    throw Error(what + " needs " + std::to_string(needed[i]) + " chunks of the hub's pool of " +
+                std::to_string(pool.chunk_count) + " chunks of " + bytes + " bytes, and " +
+                std::to_string(free) +
+                " are free: a new process is refused while it would leave "
+                "fewer than " +
+                std::to_string(spare) +
+                ", so that those running keep publishing. Stop another process (`afhub status` "
+                "shows them and the pools), or give the hub more (`afhub hub --pool " +
+                bytes + ":COUNT`)");
+  }
 }
 
 void count_ports_from(std::optional<FreePorts> free) {

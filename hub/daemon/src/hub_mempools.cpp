@@ -106,13 +106,27 @@ std::vector<MempoolSpec> default_mempools() {
   return pools;
 }
 
-std::vector<MempoolSpec> bench_mempools() {
+std::vector<MempoolSpec> with_bench_pools(std::vector<MempoolSpec> pools) {
   // A ping and a pong channel per payload size, each holding up to five chunks (a
-  // loan, the history, a queued, a held and a retired sample).
-  return {{1 << 10, 16, "bench samples of 1 KiB"},
-          {1 << 14, 16, "bench samples of 16 KiB"},
-          {1 << 18, 16, "bench samples of 256 KiB"},
-          {1 << 20, 16, "bench samples of 1 MiB"}};
+  // loan, the history, a queued, a held and a retired sample). Added to the pool each
+  // sample would be taken from anyway: a pool of their own between two of the body
+  // tiers would take the body states below it too (a 1 KiB pool of 16 chunks took
+  // every state of the example arm, and the physics dropped most of its steps).
+  constexpr std::uint32_t kBenchChunks = 16;
+  for (std::uint32_t bytes : {1u << 10, 1u << 14, 1u << 18, 1u << 20}) {
+    auto fits = std::find_if(pools.begin(), pools.end(), [bytes](const MempoolSpec& pool) {
+      return pool.payload_bytes >= bytes;
+    });
+    if (fits == pools.end()) {
+      pools.push_back(
+          {bytes, kBenchChunks, "bench samples of " + std::to_string(bytes >> 10) + " KiB"});
+      continue;
+    }
+    fits->chunk_count += kBenchChunks;
+    fits->holds += "; bench samples of " + std::to_string(bytes >> 10) + " KiB";
+  }
+  sort_by_size(pools);
+  return pools;
 }
 
 std::vector<MempoolSpec> read_mempool_file(const std::string& path) {

@@ -50,6 +50,9 @@ struct LoopResult {
   std::string cyclictest_skipped;
   LatencyHistogram cyclictest_wake;  // its maximum exact, as cyclictest reports it
   std::uint64_t commanded_steps = 0, answered_steps = 0;
+  // What the physics said when it could not publish a state (a pool out of chunks):
+  // empty when it published every step.
+  std::string physics_dropped;
   double deadline_hit_ratio() const {
     return commanded_steps ? static_cast<double>(answered_steps) / commanded_steps : 0.0;
   }
@@ -64,6 +67,12 @@ struct BenchResults {
 
 MachineInfo read_machine_info();
 
+// The hub the bench runs against. When none runs: `afhub hub --bench-pools`, stopped
+// when the bench exits, after its iceoryx runtime has left the hub (and by its
+// parent-death signal if the bench is killed): the next program the user runs must
+// not land on a hub with the bench's pools. A running hub is used as it is (the afhub
+// transport checks its pools). Call before anything connects to a hub.
+void start_bench_hub_if_none();
 // Runs everything, with progress on stderr. Throws afhub::Error.
 void run_ping_pong(const BenchOptions& options, BenchResults& results);
 void run_loop_bench(const BenchOptions& options, LoopResult& result);
@@ -74,6 +83,10 @@ int run_peer(const std::string& transport, const std::string& session, int cpu);
 // The outputs: the --json document, the table for stdout, the --plot PNG (gnuplot).
 std::string results_json(const BenchResults& results);
 std::string results_table(const BenchResults& results);
+// Why the run does not stand for afhub at work, one line each: the physics dropped
+// states, or fewer than kMinInTimeRatio of the commands came in time for the next step.
+inline constexpr double kMinInTimeRatio = 0.9;
+std::vector<std::string> failures(const BenchResults& results);
 void write_plot(const BenchResults& results, const std::string& png_path);
 
 }  // namespace afhub::bench

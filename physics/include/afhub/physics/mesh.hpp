@@ -25,15 +25,34 @@ inline constexpr std::size_t kMaxMeshTriangles = 10'000'000;
 inline constexpr std::size_t kMaxMeshVertices = 30'000'000;
 
 // Reads every mesh of the file into one, node transforms applied, scaled by `scale`.
-// Throws afhub::Error naming the file when it cannot be read (missing, unreadable,
-// past the bounds above), assimp cannot parse it, it has no triangles, or a vertex
-// is not finite.
+// Throws afhub::Error naming the file when it cannot be read (missing, not a regular
+// file, unreadable, past the bounds above), assimp cannot parse it, it has no
+// triangles, or a vertex is not finite. assimp parses in a child process
+// (afhub-mesh-reader, beside this program or on PATH) under limits on memory (2 GB),
+// CPU time (20 s a file) and time without progress (40 s): a file that crashes it,
+// hangs it or exceeds them is an error too, and opens only regular files, the ones
+// a mesh names (an OBJ's materials) included.
 TriangleMesh load_mesh(const std::string& path, double scale);
 
 // load_mesh for the block at `where` (`owner`: "body 'BODY base'"): its error
 // starts with that location.
 TriangleMesh load_body_mesh(const std::string& path, double scale, const SourceLocation& where,
                             const std::string& owner);
+
+// A mesh that a block of a model names.
+struct MeshRequest {
+  std::string path;
+  double scale = 1.0;
+  SourceLocation where;
+  std::string owner;  // "body 'BODY base'"
+};
+
+// load_body_mesh for each request, in their order, all read by one child process
+// (each file once, whatever its scales): what a model's loading costs is one process
+// start, not one per mesh. The meshes read last (up to 64 MiB) are kept while their
+// files are unchanged, for the next call (`afhub check` reads a model's meshes, then
+// builds its simulation). Throws the error of the first that cannot be used.
+std::vector<TriangleMesh> load_body_meshes(const std::vector<MeshRequest>& requests);
 
 // Reads every mesh the model names once (what `afhub check` does, so that it
 // finds the mesh problems `afhub run` would); returns how many were read.

@@ -116,6 +116,13 @@ struct SixDofLimits {
   Vec3 linear_low, linear_high, angular_low, angular_high;
 };
 
+// A URDF <mimic>: the joint is driven to multiplier * position(joint) + offset.
+struct Mimic {
+  int joint = -1;  // index into Model::joints
+  double multiplier = 1.0;
+  double offset = 0.0;
+};
+
 struct JointSpec {
   std::string identifier;
   std::string name;
@@ -140,6 +147,7 @@ struct JointSpec {
   Pid controller{10.0, 0.0, 1.0};  // joint PID for position commands
   GainSource gains_from = GainSource::kAmbfDefault;
   ControllerOutput controller_output = ControllerOutput::kForce;
+  std::optional<Mimic> mimic;  // its position commands come from the joint it mimics
 };
 
 // Soft body: a rigid body's placement and mass, its mesh, Bullet's btSoftBody config.
@@ -206,6 +214,8 @@ struct Model {
   // its state's joints and of its command's.
   std::vector<std::vector<int>> descendant_joints;
   std::vector<std::string> warnings;  // "file:line:col: warning: ..."
+  // What a loader chose that `afhub check` says ("file: root link 'base' is fixed ...").
+  std::vector<std::string> notes;
   // Independent closed kinematic loops (joints - bodies + connected groups).
   int closed_loop_count = 0;
 };

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "afhub/physics/model.hpp"
+#include "afhub/physics/urdf_loader.hpp"
 
 namespace afhub::physics {
 
@@ -15,6 +16,7 @@ struct SceneRequest {
   std::vector<int> launch_indices;     // into the launch file's `multibody configs`
   std::vector<std::string> adf_files;  // loaded after the launch file's models
   std::string world_file;              // overrides the launch file's `world config`
+  UrdfOptions urdf;                    // for URDF files among the models
 };
 
 // Throws afhub::Error "file:line:col: error: ..." for any problem.

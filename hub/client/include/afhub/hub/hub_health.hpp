@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace afhub {
 
@@ -39,6 +40,17 @@ void count_subscriber_ports_from(std::optional<std::uint32_t> free);
 // process took since. Readers leave kReservedSubscriberPorts free.
 void require_publisher_ports(std::size_t count, const std::string& what);
 void require_subscriber_ports(std::size_t count, const std::string& what);
+
+// Chunks a process will hold for as long as it runs (a writer publishing each step
+// keeps a loan, and one sample in flight), of payloads of `bytes`.
+struct ChunkNeed {
+  std::uint32_t bytes = 0;
+  std::uint32_t count = 0;
+};
+// Throws afhub::Error, naming `what`, the pool and its size, when taking `needs` would
+// leave a pool of the hub nearly empty (by the Health read at connect_to_hub()): a new
+// process is refused before it takes the chunks those running publish with.
+void require_chunks(const std::vector<ChunkNeed>& needs, const std::string& what);
 
 // Takes a port from the count, or gives one back: this process opened or closed a
 // writer (publisher) or a reader (subscriber).

@@ -19,8 +19,10 @@ struct MempoolSpec {
 // (shm_layout/limits.hpp), smallest first.
 std::vector<MempoolSpec> default_mempools();
 
-// The pools `afhub bench` needs on top: its ping and pong samples up to 1 MiB.
-std::vector<MempoolSpec> bench_mempools();
+// `pools` with the chunks `afhub bench` needs on top (its ping and pong samples up to
+// 1 MiB), added to the pools those samples fit: no pool is put below another's
+// payloads.
+std::vector<MempoolSpec> with_bench_pools(std::vector<MempoolSpec> pools);
 
 // A pool file: one pool per line, "<payload bytes> <chunk count>", '#' starts a
 // comment. Throws afhub::Error naming the file and line of a bad entry.

@@ -24,6 +24,10 @@
 // refused or stale, a watchdog expiry, a lockstep client joining or dropped) is
 // counted, kept in fixed storage, and said by report_events(), which the caller runs
 // outside the loop's timed part (run_loop: at most once a second, and at the end).
+//
+// Written in sim_channels.cpp (set-up, states, the world), sim_channels_commands.cpp
+// (commands, the watchdog, events), sim_channels_lockstep.cpp and sim_channels_view.cpp
+// (the scene and the viewers' feeds).
 #pragma once
 
 #include <array>

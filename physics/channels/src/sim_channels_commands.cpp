@@ -1,0 +1,170 @@
+// The simulation's channels: applying bodies' commands, the command watchdog, the
+// notices of refused, stale and expired commands and their text, forgetting commands.
+#include <algorithm>
+#include <cstdio>
+
+#include "afhub/physics/sim_channels.hpp"
+#include "afhub/shm_layout/error.hpp"
+#include "command_input.hpp"
+
+namespace afhub::physics {
+
+void SimChannels::apply_commands(std::int64_t now_ns) noexcept {
+  for (Channel& channel : channels_) {
+    if (channel.soft) continue;  // soft bodies take no commands
+    const BodyCommand* command = channel.publisher->latest_command();
+    if (command && channel.publisher->command_updated()) {
+      // Copied out of shared memory once, then checked, then applied.
+      to_input(*command, input_);
+      const Answer answer{command->header.sim_step, command->header.publisher_pid,
+                          command->lockstep != 0};
+      // Its age by its publish stamp (the same monotonic clock in every process),
+      // not by when this process first saw it. A stamp from the future (a forged or
+      // broken writer) is no fresher than an old one: past a small allowance it is
+      // ignored too, or it would hold the watchdog off for as long as it is ahead.
+      const std::int64_t stamp_ns = command->header.publish_stamp_ns;
+      const std::int64_t age_ns = now_ns - stamp_ns;
+      if (age_ns > channel.watchdog_ns || age_ns < -kFutureStampAllowanceNs) {
+        ++stale_;
+        if (Notice* notice = note(channel, kStale, answer.pid))
+          notice->seconds = static_cast<double>(age_ns) * 1e-9;
+      } else if (const char* problem = sim_.input_problem(channel.index, input_)) {
+        ++rejected_;
+        ++channel.refused;
+        channel.refused_pid = answer.pid;
+        set_name(channel.refusal_reason, problem);
+        if (Notice* notice = note(channel, kRejected, answer.pid)) set_name(notice->why, problem);
+      } else {
+        // Entries for joints without an axis are refused and counted; the rest applies.
+        if (const char* entry = sim_.axisless_entry(channel.index, input_)) {
+          ++rejected_;
+          if (Notice* notice = note(channel, kAxisless, answer.pid)) set_name(notice->why, entry);
+        }
+        if (lockstep_ && answer.lockstep) note_lockstep_answer(channel, answer);
+        channel.applied_answer_step = answer.step;
+        sim_.set_input(channel.index, input_);
+        channel.last_command_ns = std::min(stamp_ns, now_ns);
+        channel.commanded = true;
+      }
+    }
+    if (channel.commanded && now_ns - channel.last_command_ns > channel.watchdog_ns) {
+      if (channel.hold_on_watchdog)
+        sim_.hold_joints(channel.index);
+      else
+        sim_.clear_input(channel.index);
+      channel.commanded = false;
+      ++expiries_;
+      note(channel, kExpired, 0);
+    }
+  }
+}
+
+SimChannels::Notice* SimChannels::note(Channel& channel, Event event, std::uint32_t pid) noexcept {
+  Notice& notice = channel.notices[event];
+  // Said once: the first occurrence's details stay until reported, later ones are counts.
+  if (said_once(event) && (notice.said || notice.pending)) return nullptr;
+  notice.pending = true;
+  notice.pid = pid;
+  return &notice;
+}
+
+int SimChannels::report_events(std::FILE* out) {
+  int lines = 0;
+  for (Channel& channel : channels_) {
+    const char* body = channel.publisher->channel().c_str();
+    for (int event = 0; event < kEventKinds; ++event) {
+      Notice& n = channel.notices[event];
+      if (!n.pending) continue;
+      n.pending = false;
+      n.said = said_once(static_cast<Event>(event));
+      ++lines;
+      switch (event) {
+        case kStale:
+          if (n.seconds < 0.0)
+            std::fprintf(out,
+                         "afhub run: ignored a command for %s from pid %u: stamped %.3f s in the "
+                         "future (a forged stamp, or a writer on another clock; counted in "
+                         "`afhub status`)\n",
+                         body, n.pid, -n.seconds);
+          else
+            std::fprintf(out,
+                         "afhub run: ignored a command for %s from pid %u: published %.3f s ago, "
+                         "older than the body's watchdog of %.3f s (counted in `afhub status`)\n",
+                         body, n.pid, n.seconds, static_cast<double>(channel.watchdog_ns) * 1e-9);
+          break;
+        case kRejected:
+          std::fprintf(out,
+                       "afhub run: refused a command for %s: %s (from pid %u; counted in `afhub "
+                       "status`; said once per body)\n",
+                       body, n.why.data(), n.pid);
+          break;
+        case kAxisless:
+          std::fprintf(out,
+                       "afhub run: refused part of a command for %s: %s (from pid %u; counted "
+                       "in `afhub status`; said once per body)\n",
+                       body, n.why.data(), n.pid);
+          break;
+        case kExpired:
+          std::fprintf(out,
+                       "afhub run: no command for %s in %.3f s: %s until commands come again "
+                       "(said once; `afhub status` counts every expiry)\n",
+                       body, static_cast<double>(channel.watchdog_ns) * 1e-9,
+                       channel.hold_on_watchdog ? "its joints hold their positions"
+                                                : "its wrench and the efforts it drove are zero");
+          break;
+        case kJoined:
+          std::fprintf(out,
+                       "afhub run: lockstep client pid %u joined the barrier for %s at step %llu\n",
+                       n.pid, body, static_cast<unsigned long long>(n.step));
+          break;
+        case kDropped:
+          std::fprintf(out,
+                       "afhub run: lockstep client pid %u missed %d steps in a row for %s; dropped "
+                       "from the barrier (it rejoins by answering a current step)\n",
+                       n.pid, n.misses, body);
+          break;
+        default:
+          break;
+      }
+    }
+  }
+  return lines;
+}
+
+void SimChannels::forget_commands() noexcept {
+  for (Channel& channel : channels_) {
+    channel.commanded = false;
+    channel.answered_step = 0;
+    channel.applied_answer_step = 0;
+    channel.misses = 0;
+  }
+  timeliness_step_ = 0;
+}
+
+SimChannels::Channel& SimChannels::active_channel(const std::string& body, const char* option) {
+  std::vector<std::string> active;
+  for (const Channel& channel : channels_)
+    if (!channel.soft) active.push_back(channel.publisher->channel());
+  std::string name;
+  try {
+    name = resolve_body(body, active);
+  } catch (const Error& error) {
+    throw Error(std::string(option) + ": " + error.what());
+  }
+  for (Channel& channel : channels_)
+    if (!channel.soft && channel.publisher->channel() == name) return channel;
+  throw Error(std::string(option) + ": no active body " + name);
+}
+
+void SimChannels::hold_on_watchdog(const std::string& body) {
+  active_channel(body, "--watchdog-hold").hold_on_watchdog = true;
+}
+
+void SimChannels::set_watchdog(const std::string& body, double seconds) {
+  if (!(seconds >= kMinWatchdogS && seconds <= kMaxWatchdogS))
+    throw Error("--watchdog-body: the watchdog of '" + body + "' must be 0.002 to 3600 s, got " +
+                std::to_string(seconds));
+  active_channel(body, "--watchdog-body").watchdog_ns = static_cast<std::int64_t>(seconds * 1e9);
+}
+
+}  // namespace afhub::physics

@@ -1,0 +1,516 @@
+// URDF loader (see urdf_loader.hpp). liburdfdom parses the file and builds the tree
+// (refusing cycles, links with two parents, unknown links); this file turns each link
+// into a BodySpec and each joint into a JointSpec with the paper's Algorithm 3 offset.
+// Line numbers come from a scan of the text for each `<link`/`<joint` tag's name: a
+// located error, not a second XML parser.
+#include "afhub/physics/urdf_loader.hpp"
+
+#include <console_bridge/console.h>
+#include <urdf_parser/urdf_parser.h>
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <regex>
+#include <set>
+#include <sstream>
+
+#include "afhub/shm_layout/channel_names.hpp"
+#include "afhub/shm_layout/error.hpp"
+#include "file_reader.hpp"
+#include "frames.hpp"
+#include "path_kind.hpp"
+#include "urdf_packages.hpp"
+
+namespace afhub::physics {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A link without <inertial> (or of mass 0) is a frame to URDF tools. Bullet makes a body of
+// mass 0 static, which would pin whatever it is joined to; so a frame that moves
+// gets this token mass, small beside any real link.
+constexpr double kFrameMassKg = 1e-3;
+constexpr double kFrameInertiaKgm2 = 1e-7;
+
+// urdfdom's errors and warnings go through console_bridge: collected here while it
+// parses, to be said with the file's name instead of on stderr.
+class CollectedLog : public console_bridge::OutputHandler {
+ public:
+  CollectedLog() { console_bridge::useOutputHandler(this); }
+  ~CollectedLog() override { console_bridge::restorePreviousOutputHandler(); }
+  CollectedLog(const CollectedLog&) = delete;
+  CollectedLog& operator=(const CollectedLog&) = delete;
+  void log(const std::string& text, console_bridge::LogLevel level, const char*, int) override {
+    if (level >= console_bridge::CONSOLE_BRIDGE_LOG_WARN) messages.push_back(text);
+  }
+  std::vector<std::string> messages;
+};
+
+// Line of each `<link name=...>` and `<joint name=...>` tag (1-based), by name.
+struct TagLines {
+  std::map<std::string, int> links, joints;
+  int robot = 1;
+};
+
+TagLines scan_tags(const std::string& text) {
+  TagLines lines;
+  static const std::regex tag(R"(<(link|joint|robot)\b[^>]*?\bname\s*=\s*["']([^"']*)["'])");
+  int line = 1;
+  std::size_t counted = 0;
+  for (auto it = std::sregex_iterator(text.begin(), text.end(), tag); it != std::sregex_iterator();
+       ++it) {
+    const auto position = static_cast<std::size_t>(it->position(0));
+    line +=
+        static_cast<int>(std::count(text.begin() + static_cast<std::ptrdiff_t>(counted),
+                                    text.begin() + static_cast<std::ptrdiff_t>(position), '\n'));
+    counted = position;
+    const std::string kind = (*it)[1], name = (*it)[2];
+    if (kind == "robot") lines.robot = line;
+    auto& table = kind == "link" ? lines.links : lines.joints;
+    if (kind != "robot") table.try_emplace(name, line);
+  }
+  return lines;
+}
+
+std::string read_text(const std::string& path) {
+  if (const std::string why = not_a_regular_file(path); !why.empty())
+    throw Error(path + ":1:1: error: the URDF file " + why);
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream text;
+  text << in.rdbuf();
+  if (!in) throw Error(path + ":1:1: error: the URDF file cannot be read");
+  return text.str();
+}
+
+btTransform to_bt(const urdf::Pose& pose) {
+  return btTransform(
+      btQuaternion(pose.rotation.x, pose.rotation.y, pose.rotation.z, pose.rotation.w),
+      btVector3(pose.position.x, pose.position.y, pose.position.z));
+}
+
+Placement placement(const btTransform& transform) {
+  return {from_bt(transform.getOrigin()), rpy_of(transform.getBasis())};
+}
+
+bool is_identity(const urdf::Pose& pose) {
+  const btTransform t = to_bt(pose);
+  return t.getOrigin().length() < 1e-12 && std::abs(std::abs(t.getRotation().w()) - 1.0) < 1e-12;
+}
+
+class UrdfReader {
+ public:
+  UrdfReader(const std::string& path, const UrdfOptions& options, Model& model)
+      : path_(path),
+        dir_(fs::path(path).parent_path().string()),
+        options_(options),
+        model_(model) {}
+
+  void load() {
+    const std::string text = read_text(path_);
+    if (fs::path(path_).extension() == ".xacro" || text.find("<xacro:") != std::string::npos)
+      fail({path_, 1, 1},
+           "this is a xacro file (it uses <xacro:...> macros); expand it to a URDF first, "
+           "e.g. `xacro robot.urdf.xacro > robot.urdf` on a ROS machine (xacro is not in "
+           "Debian 12)");
+    lines_ = scan_tags(text);
+    {
+      CollectedLog log;
+      robot_ = urdf::parseURDF(text);
+      if (!robot_) {
+        std::string why = log.messages.empty() ? "not a URDF" : log.messages.front();
+        for (std::size_t i = 1; i < log.messages.size(); ++i) why += "; " + log.messages[i];
+        fail({path_, 1, 1}, "not a valid URDF: " + why);
+      }
+    }
+    for (const char* element : {"transmission", "gazebo"})
+      if (const std::size_t at = text.find(std::string("<") + element); at != std::string::npos)
+        warn(1 + static_cast<int>(std::count(text.begin(),
+                                             text.begin() + static_cast<std::ptrdiff_t>(at), '\n')),
+             std::string("<") + element +
+                 "> elements are ignored (afhub simulates the links and joints)");
+    name_space_ = "/ambf/env/" + robot_->getName() + "/";
+    model_.notes.push_back(path_ + ": robot '" + robot_->getName() +
+                           "': links joined by a joint do not collide with each other (URDF's "
+                           "convention)");
+    place_links();
+    read_links();
+    read_joints();
+    model_.file_ignores_inter_collision.push_back(false);
+  }
+
+ private:
+  SourceLocation link_at(const std::string& name) const {
+    auto found = lines_.links.find(name);
+    return {path_, found == lines_.links.end() ? lines_.robot : found->second, 1};
+  }
+  SourceLocation joint_at(const std::string& name) const {
+    auto found = lines_.joints.find(name);
+    return {path_, found == lines_.joints.end() ? lines_.robot : found->second, 1};
+  }
+  void warn(int line, const std::string& what) {
+    model_.warnings.push_back(path_ + ":" + std::to_string(line) + ":1: warning: " + what);
+  }
+  void warn_once(const std::string& key, int line, const std::string& what) {
+    if (warned_.insert(key).second) warn(line, what);
+  }
+
+  // Each link's world pose at the zero configuration, from the root down.
+  void place_links() {
+    std::vector<urdf::LinkConstSharedPtr> stack{robot_->getRoot()};
+    world_[robot_->getRoot()->name] = btTransform::getIdentity();
+    while (!stack.empty()) {
+      const urdf::LinkConstSharedPtr link = stack.back();
+      stack.pop_back();
+      for (const auto& joint : link->child_joints) {
+        world_[joint->child_link_name] =
+            world_[link->name] * to_bt(joint->parent_to_joint_origin_transform);
+        stack.push_back(robot_->getLink(joint->child_link_name));
+      }
+    }
+  }
+
+  std::string mesh_path(const urdf::Mesh& mesh, const std::string& link, const char* role) {
+    std::string looked;
+    std::string resolved =
+        urdf_files::resolve_uri(mesh.filename, dir_, options_.package_paths, looked);
+    if (resolved.empty())
+      fail(link_at(link), "link '" + link + "': " + role + " mesh '" + mesh.filename +
+                              "' was not found; looked in:" + looked +
+                              ". Give its package's folder with --package-path DIR");
+    return resolved;
+  }
+
+  double mesh_scale(const urdf::Mesh& mesh, const std::string& link) {
+    const urdf::Vector3& s = mesh.scale;
+    if (!(s.x > 0) || std::abs(s.x - s.y) > 1e-12 || std::abs(s.x - s.z) > 1e-12)
+      fail(link_at(link), "link '" + link + "': mesh '" + mesh.filename + "' has scale " +
+                              std::to_string(s.x) + " " + std::to_string(s.y) + " " +
+                              std::to_string(s.z) +
+                              "; afhub takes one positive scale for all three axes");
+    return s.x;
+  }
+
+  // A box, cylinder or sphere at `origin` in the link frame; false for a mesh.
+  static bool primitive(const urdf::Geometry& geometry, const urdf::Pose& origin,
+                        ShapeSpec& shape) {
+    shape.offset = placement(to_bt(origin));
+    switch (geometry.type) {
+      case urdf::Geometry::BOX: {
+        const auto& box = static_cast<const urdf::Box&>(geometry);
+        shape.kind = ShapeKind::kBox;
+        shape.box_size_m = {box.dim.x, box.dim.y, box.dim.z};
+        return true;
+      }
+      case urdf::Geometry::CYLINDER: {
+        const auto& cylinder = static_cast<const urdf::Cylinder&>(geometry);
+        shape.kind = ShapeKind::kCylinder;
+        shape.radius_m = cylinder.radius;
+        shape.height_m = cylinder.length;
+        shape.axis = 2;  // URDF cylinders lie along z
+        return true;
+      }
+      case urdf::Geometry::SPHERE:
+        shape.kind = ShapeKind::kSphere;
+        shape.radius_m = static_cast<const urdf::Sphere&>(geometry).radius;
+        return true;
+      default:
+        return false;
+    }
+  }
+
+  void read_geometry(const urdf::Link& link, BodySpec& body) {
+    std::optional<double> scale;
+    auto use_scale = [&](const urdf::Mesh& mesh) {
+      const double value = mesh_scale(mesh, link.name);
+      if (scale && std::abs(*scale - value) > 1e-12)
+        fail(link_at(link.name), "link '" + link.name +
+                                     "': its meshes have different scales; afhub takes one "
+                                     "scale per link");
+      scale = value;
+    };
+    for (const auto& visual : link.visual_array) {
+      if (!visual->geometry) continue;
+      if (visual->material && !body.color_rgba) {
+        const urdf::Color& c = visual->material->color;
+        body.color_rgba = std::array<double, 4>{c.r, c.g, c.b, c.a};
+      }
+      ShapeSpec shape;
+      if (primitive(*visual->geometry, visual->origin, shape)) {
+        body.visual_shapes.push_back(shape);
+        continue;
+      }
+      const auto& mesh = static_cast<const urdf::Mesh&>(*visual->geometry);
+      if (!body.visual_mesh.empty()) {
+        warn(link_at(link.name).line, "link '" + link.name + "': visual mesh '" + mesh.filename +
+                                          "' is not drawn: the viewer draws one mesh per link");
+        continue;
+      }
+      if (!is_identity(visual->origin))
+        warn(link_at(link.name).line, "link '" + link.name + "': the viewer draws visual mesh '" +
+                                          mesh.filename +
+                                          "' at the link frame, without its <origin>");
+      body.visual_mesh = mesh_path(mesh, link.name, "visual");
+      use_scale(mesh);
+    }
+    for (const auto& collision : link.collision_array) {
+      if (!collision->geometry) continue;
+      ShapeSpec shape;
+      if (primitive(*collision->geometry, collision->origin, shape)) {
+        body.collision_shapes.push_back(shape);
+        continue;
+      }
+      const auto& mesh = static_cast<const urdf::Mesh&>(*collision->geometry);
+      if (!body.collision_mesh.empty() || !is_identity(collision->origin))
+        fail(link_at(link.name),
+             "link '" + link.name + "': collision mesh '" + mesh.filename +
+                 "' is a second collision mesh or has an <origin>; afhub takes one collision "
+                 "mesh per link, at the link frame. Use boxes, cylinders and spheres for the rest");
+      body.collision_mesh = mesh_path(mesh, link.name, "collision");
+      use_scale(mesh);
+    }
+    if (!body.collision_mesh.empty() && !body.collision_shapes.empty())
+      fail(link_at(link.name), "link '" + link.name +
+                                   "' collides as a mesh and as primitive shapes; afhub takes "
+                                   "one or the other per link");
+    // Convex hulls for moving meshes, as ADF bodies; a static one keeps its triangles.
+    body.collision_mesh_type = CollisionMeshType::kTrimesh;
+    body.scale = scale.value_or(1.0);
+  }
+
+  // Mass and the full inertia tensor at the inertial origin, diagonalised: the
+  // inertial offset's rotation turns onto the principal axes.
+  void read_inertial(const urdf::Link& link, BodySpec& body) {
+    if (!link.inertial) {
+      body.mass_kg = 0.0;
+      return;
+    }
+    const urdf::Inertial& in = *link.inertial;
+    if (!(in.mass >= 0.0) || in.mass > kMaxMassKg)
+      fail(link_at(link.name), "link '" + link.name + "': mass " + std::to_string(in.mass) +
+                                   " kg; give a mass from 0 to 1e6 kg");
+    body.mass_kg = in.mass;
+    Eigen::Matrix3d tensor;
+    tensor << in.ixx, in.ixy, in.ixz, in.ixy, in.iyy, in.iyz, in.ixz, in.iyz, in.izz;
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(tensor);
+    Eigen::Matrix3d axes = solver.eigenvectors();
+    if (axes.determinant() < 0) axes.col(2) = -axes.col(2);
+    const Eigen::Vector3d moments = solver.eigenvalues();
+    const double largest = std::max(std::abs(moments.maxCoeff()), 1e-300);
+    if (moments.minCoeff() < -1e-9 * largest || !std::isfinite(moments.sum()))
+      fail(link_at(link.name), "link '" + link.name +
+                                   "': its <inertia> is not a physical inertia tensor (negative "
+                                   "principal moments); check ixx..izz and their signs");
+    const btMatrix3x3 principal(axes(0, 0), axes(0, 1), axes(0, 2), axes(1, 0), axes(1, 1),
+                                axes(1, 2), axes(2, 0), axes(2, 1), axes(2, 2));
+    const btTransform origin = to_bt(in.origin);
+    body.inertial_offset =
+        placement(btTransform(origin.getBasis() * principal, origin.getOrigin()));
+    body.inertia_kgm2 =
+        Vec3{std::max(moments[0], 0.0), std::max(moments[1], 0.0), std::max(moments[2], 0.0)};
+  }
+
+  void read_links() {
+    const std::string root = robot_->getRoot()->name;
+    std::vector<urdf::LinkSharedPtr> links;
+    robot_->getLinks(links);
+    // File order is lost in urdfdom's map: the tag lines give it back.
+    std::sort(links.begin(), links.end(), [&](const auto& a, const auto& b) {
+      return link_at(a->name).line < link_at(b->name).line;
+    });
+    for (const auto& link : links) {
+      BodySpec body;
+      body.identifier = "BODY " + link->name;
+      body.name = link->name;
+      std::erase(body.name, ' ');
+      body.channel = body_channel_name(name_space_, body.name);
+      body.qualified_identifier = name_space_ + body.identifier;
+      body.where = link_at(link->name);
+      body.file_index = static_cast<int>(model_.file_ignores_inter_collision.size());
+      if (auto problem = channel_name_problem(body.channel); !problem.empty())
+        fail(body.where, problem);
+      body.location = placement(world_.at(link->name));
+      read_inertial(*link, body);
+      read_geometry(*link, body);
+      if (link->name == root) {
+        place_root(*link, body);
+      } else if (body.mass_kg == 0.0) {
+        body.mass_kg = kFrameMassKg;
+        body.inertia_kgm2 = Vec3{kFrameInertiaKgm2, kFrameInertiaKgm2, kFrameInertiaKgm2};
+        frames_.push_back(link->name);
+      }
+      body_index_[link->name] = static_cast<int>(model_.bodies.size());
+      model_.bodies.push_back(std::move(body));
+    }
+    if (!frames_.empty()) {
+      std::string names;
+      for (const auto& name : frames_) names += (names.empty() ? "" : ", ") + name;
+      model_.notes.push_back(path_ + ": links without mass are frames, simulated with " +
+                             "a token mass of 1 g so they follow their joints: " + names);
+    }
+  }
+
+  void place_root(const urdf::Link& link, BodySpec& body) {
+    const std::string note = path_ + ": root link '" + link.name + "' ";
+    if (link.name == "world") {
+      body.mass_kg = 0.0;
+      model_.notes.push_back(note + "is fixed to the world (URDF's convention for `world`)");
+    } else if (options_.floating_base) {
+      if (!link.inertial) {
+        body.mass_kg = kFrameMassKg;
+        body.inertia_kgm2 = Vec3{kFrameInertiaKgm2, kFrameInertiaKgm2, kFrameInertiaKgm2};
+      }
+      model_.notes.push_back(note + "floats free (--floating-base)");
+    } else {
+      body.mass_kg = 0.0;
+      model_.notes.push_back(note +
+                             "is fixed to the world, as by default (--floating-base frees it)");
+    }
+  }
+
+  // Algorithm 3: the parent axis is the URDF axis turned by the joint origin, the
+  // child axis the URDF axis itself (the child frame is the joint frame), and the
+  // offset is the turn about the parent axis left after taking the child axis onto
+  // the parent axis the short way: with it the joint reads zero at the URDF's zero.
+  static void place_joint(const urdf::Joint& urdf_joint, JointSpec& joint) {
+    const btTransform origin = to_bt(urdf_joint.parent_to_joint_origin_transform);
+    btVector3 axis(urdf_joint.axis.x, urdf_joint.axis.y, urdf_joint.axis.z);
+    if (urdf_joint.type == urdf::Joint::FIXED || urdf_joint.type == urdf::Joint::FLOATING ||
+        axis.length() < 1e-12)
+      axis = btVector3(0, 0, 1);
+    axis.normalize();
+    const btVector3 parent_axis = origin.getBasis() * axis;
+    joint.parent_pivot_m = from_bt(origin.getOrigin());
+    joint.parent_axis = from_bt(parent_axis);
+    joint.child_pivot_m = {};
+    joint.child_axis = from_bt(axis);
+    joint.offset_rad = joint_offset_about(origin.getRotation(), axis, parent_axis);
+  }
+
+  void read_joints() {
+    std::vector<std::pair<int, urdf::JointSharedPtr>> joints;
+    for (const auto& [name, joint] : robot_->joints_)
+      joints.emplace_back(joint_at(name).line, joint);
+    std::sort(joints.begin(), joints.end(),
+              [](const auto& a, const auto& b) { return a.first < b.first; });
+    std::map<std::string, int> joint_index;
+    const std::size_t first = model_.joints.size();
+    for (const auto& [line, urdf_joint] : joints) {
+      JointSpec joint;
+      joint.identifier = "JOINT " + urdf_joint->name;
+      joint.name = urdf_joint->name;
+      joint.channel = body_channel_name(name_space_, joint.name);
+      joint.where = joint_at(urdf_joint->name);
+      joint.parent = body_index_.at(urdf_joint->parent_link_name);
+      joint.child = body_index_.at(urdf_joint->child_link_name);
+      read_type(*urdf_joint, joint);
+      place_joint(*urdf_joint, joint);
+      if (urdf_joint->dynamics) {
+        joint.damping = std::max(0.0, urdf_joint->dynamics->damping);
+        if (urdf_joint->dynamics->friction != 0.0)
+          warn_once("friction", line,
+                    "<dynamics friction> is ignored (afhub applies joint damping only)");
+      }
+      if (urdf_joint->safety) warn_once("safety", line, "<safety_controller> elements are ignored");
+      if (urdf_joint->calibration)
+        warn_once("calibration", line, "<calibration> elements are ignored");
+      joint_index[joint.name] = static_cast<int>(model_.joints.size());
+      model_.joints.push_back(std::move(joint));
+    }
+    for (const auto& [line, urdf_joint] : joints) {
+      if (!urdf_joint->mimic) continue;
+      JointSpec& joint = model_.joints[joint_index.at(urdf_joint->name)];
+      auto leader = joint_index.find(urdf_joint->mimic->joint_name);
+      if (leader == joint_index.end())
+        fail(joint.where, "joint '" + joint.name + "' mimics joint '" +
+                              urdf_joint->mimic->joint_name +
+                              "', which this URDF does not have; fix <mimic joint=...>");
+      if (!has_joint_axis(joint.type) || !has_joint_axis(model_.joints[leader->second].type))
+        fail(joint.where, "joint '" + joint.name +
+                              "': <mimic> needs a revolute, continuous or prismatic joint "
+                              "following another");
+      joint.mimic = Mimic{leader->second, urdf_joint->mimic->multiplier, urdf_joint->mimic->offset};
+    }
+    // A chain of mimics that comes back to itself would never settle.
+    for (std::size_t j = first; j < model_.joints.size(); ++j) {
+      std::size_t steps = 0;
+      for (const JointSpec* at = &model_.joints[j]; at->mimic;
+           at = &model_.joints[at->mimic->joint])
+        if (++steps > model_.joints.size())
+          fail(model_.joints[j].where,
+               "joint '" + model_.joints[j].name + "' is in a cycle of <mimic> joints");
+    }
+  }
+
+  void read_type(const urdf::Joint& urdf_joint, JointSpec& joint) {
+    const auto& limits = urdf_joint.limits;
+    switch (urdf_joint.type) {
+      case urdf::Joint::REVOLUTE:
+      case urdf::Joint::PRISMATIC:
+        joint.type =
+            urdf_joint.type == urdf::Joint::REVOLUTE ? JointType::kRevolute : JointType::kPrismatic;
+        if (limits) {
+          if (limits->lower > limits->upper)
+            fail(joint.where, "joint '" + joint.name + "': <limit> lower " +
+                                  std::to_string(limits->lower) + " is above upper " +
+                                  std::to_string(limits->upper) + "; swap them");
+          joint.limit_low = limits->lower;
+          joint.limit_high = limits->upper;
+        }
+        break;
+      case urdf::Joint::CONTINUOUS:
+        joint.type = JointType::kContinuous;
+        break;
+      case urdf::Joint::FIXED:
+        joint.type = JointType::kFixed;
+        break;
+      case urdf::Joint::FLOATING:
+        joint.type = JointType::kSixDof;  // no limits: every direction free
+        break;
+      case urdf::Joint::PLANAR: {
+        // Free along x and y of the joint frame (whose z is the URDF axis), and about
+        // z; lower above upper means free to Bullet.
+        joint.type = JointType::kSixDof;
+        SixDofLimits plane;
+        plane.linear_low = {1, 1, 0};
+        plane.linear_high = {-1, -1, 0};
+        plane.angular_low = {0, 0, 1};
+        plane.angular_high = {0, 0, -1};
+        joint.multi_limits = plane;
+        break;
+      }
+      default:
+        fail(joint.where, "joint '" + joint.name + "' has an unknown type");
+    }
+    // URDF's effort limit, as the motor's impulse per step at the default 1 kHz step.
+    if (limits && limits->effort > 0 && has_joint_axis(joint.type))
+      joint.max_motor_impulse = limits->effort * 1e-3;
+  }
+
+  const std::string path_, dir_;
+  const UrdfOptions& options_;
+  Model& model_;
+  TagLines lines_;
+  urdf::ModelInterfaceSharedPtr robot_;
+  std::string name_space_;
+  std::map<std::string, btTransform> world_;
+  std::map<std::string, int> body_index_;
+  std::vector<std::string> frames_;
+  std::set<std::string> warned_;
+};
+
+}  // namespace
+
+bool is_urdf_path(const std::string& path) {
+  const std::string extension = fs::path(path).extension().string();
+  return extension == ".urdf" || extension == ".URDF" || extension == ".xacro";
+}
+
+void load_urdf_into(const std::string& path, const UrdfOptions& options, Model& model) {
+  UrdfReader(path, options, model).load();
+}
+
+}  // namespace afhub::physics

@@ -1,0 +1,360 @@
+"""A rigid body's handle, as AMBF's ``RigidBody``: getters read the body's newest state
+from shared memory; setters change the command this handle holds, which is sent at once
+and then again at the client's publish rate by its background thread (so the physics'
+watchdog never releases it while the script sleeps or waits on input()). As in AMBF, a
+wrench not set again within ``time_out`` seconds is cleared: forces and torques must be
+refreshed; joint and pose commands hold."""
+
+import sys
+import threading
+import time
+
+import afhub
+
+from .geometry import (Point, Pose, Quaternion, Twist, Vector3, Wrench, quaternion_from_rpy,
+                       rpy_from_quaternion)
+
+_EFFORT, _POSITION, _VELOCITY = afhub.JointType.EFFORT, afhub.JointType.POSITION, \
+    afhub.JointType.VELOCITY
+
+
+def _unsupported(call, why):
+    def method(self, *args, **kwargs):
+        raise NotImplementedError(f'{call}: {why}')
+    method.__name__ = call
+    method.__doc__ = f'Not available on afhub: {why}.'
+    return method
+
+
+def _quaternion_szyx(roll, pitch, yaw):
+    """AMBF's pose_command rotation: static axes z, y, x by roll, pitch, yaw."""
+    # Rx(yaw) * Ry(pitch) * Rz(roll), as quaternions (x, y, z, w).
+    def multiply(a, b):
+        ax, ay, az, aw = a
+        bx, by, bz, bw = b
+        return (aw * bx + ax * bw + ay * bz - az * by,
+                aw * by - ax * bz + ay * bw + az * bx,
+                aw * bz + ax * by - ay * bx + az * bw,
+                aw * bw - ax * bx - ay * by - az * bz)
+    return multiply(multiply(quaternion_from_rpy(yaw, 0, 0), quaternion_from_rpy(0, pitch, 0)),
+                    quaternion_from_rpy(0, 0, roll))
+
+
+class RigidBody:
+    def __init__(self, name, body, time_out=0.1):
+        self._name = name
+        self._body = body
+        self._time_out = time_out
+        self._lock = threading.Lock()
+        self._joint_names = list(body.joint_names)
+        self._joint_cmds = []
+        self._joint_types = []
+        self._cartesian = 'force'
+        self._wrench = Wrench()
+        self._pose = None
+        self._twist = Twist()
+        self._pose_cmd_set = self._twist_cmd_set = self._wrench_cmd_set = False
+        self._active = False
+        self._last_command = 0.0
+        self._told_refusal = None
+        self._publish_flags = {'children': True, 'joint_names': True, 'joint_positions': True}
+
+    # ----- state -----
+    def _state(self):
+        with self._lock:  # the publisher thread uses the same afhub.Body
+            state = self._body.read(wait_s=1.0)
+        if state is None:
+            raise RuntimeError(f'{self._name}: no state came from {self._body.channel} in 1 s: '
+                               'is its simulation running?')
+        return state
+
+    def get_name(self):
+        return self._name
+
+    def is_active(self):
+        return self._active
+
+    def set_active(self):
+        self._active = True
+
+    def get_sim_step(self):
+        return self._state().step
+
+    def get_pos(self):
+        return Point(*self._state().position)
+
+    def get_rot(self):
+        """The orientation as a quaternion x, y, z, w (AMBF's order)."""
+        return Quaternion(*self._state().orientation)
+
+    def get_rpy(self):
+        """Fixed-axis roll, pitch, yaw (AMBF's 'sxyz')."""
+        return rpy_from_quaternion(*self._state().orientation)
+
+    def get_pose(self):
+        """[x, y, z, roll, pitch, yaw], as AMBF returns it."""
+        state = self._state()
+        return list(state.position) + list(rpy_from_quaternion(*state.orientation))
+
+    def get_linear_vel(self):
+        return Vector3(*self._state().linear_velocity)
+
+    def get_angular_vel(self):
+        return Vector3(*self._state().angular_velocity)
+
+    def get_inertia(self):
+        return Point(*self._state().inertia)
+
+    def get_mass(self):
+        return self._state().mass
+
+    def get_num_joints(self):
+        return len(self._joint_names)
+
+    def get_joint_names(self):
+        return list(self._joint_names)
+
+    def get_joint_idx_from_name(self, joint_name):
+        if joint_name in self._joint_names:
+            return self._joint_names.index(joint_name)
+        print(f'ERROR! Requested Joint "{joint_name}" not found in list of joints:')
+        print(self._joint_names)
+        return None
+
+    def get_joint_name_from_idx(self, joint_idx):
+        if self.is_joint_idx_valid(joint_idx):
+            return self._joint_names[joint_idx]
+        return None
+
+    def is_joint_idx_valid(self, joint_idx):
+        n = len(self._joint_names)
+        if isinstance(joint_idx, int) and 0 <= joint_idx < n:
+            return True
+        print(f'ERROR! Requested Joint Idx of "{joint_idx}" outside valid range [0 - {n - 1}]')
+        return False
+
+    def _index(self, joint_name_or_idx):
+        if isinstance(joint_name_or_idx, str):
+            idx = self.get_joint_idx_from_name(joint_name_or_idx)
+            return idx
+        return joint_name_or_idx if self.is_joint_idx_valid(joint_name_or_idx) else None
+
+    def _joint_value(self, joint_name_or_idx, field):
+        idx = self._index(joint_name_or_idx)
+        return None if idx is None else float(getattr(self._state(), field)[idx])
+
+    def get_joint_pos(self, joint_name_or_idx):
+        return self._joint_value(joint_name_or_idx, 'joint_positions')
+
+    def get_joint_vel(self, joint_name_or_idx):
+        return self._joint_value(joint_name_or_idx, 'joint_velocities')
+
+    def get_joint_effort(self, joint_name_or_idx):
+        return self._joint_value(joint_name_or_idx, 'joint_efforts')
+
+    def get_all_joint_pos(self):
+        return self._state().joint_positions.tolist()
+
+    def get_all_joint_vel(self):
+        return self._state().joint_velocities.tolist()
+
+    def get_all_joint_effort(self):
+        return self._state().joint_efforts.tolist()
+
+    # ----- what was commanded -----
+    def get_pos_command(self):
+        return Point(*self._pose.position) if self._pose_cmd_set else self.get_pos()
+
+    def get_rot_command(self):
+        return Quaternion(*self._pose.orientation) if self._pose_cmd_set else self.get_rot()
+
+    def get_force_command(self):
+        return Vector3(*self._wrench.force)
+
+    def get_torque_command(self):
+        return Vector3(*self._wrench.torque)
+
+    def get_linear_velocity_command(self):
+        return Vector3(*self._twist.linear) if self._twist_cmd_set else self.get_linear_vel()
+
+    def get_angular_velocity_command(self):
+        return Vector3(*self._twist.angular) if self._twist_cmd_set else self.get_angular_vel()
+
+    # afhub publishes every body's joint names and positions, always: these flags are kept
+    # for scripts that set them, and change nothing.
+    def get_publish_children_name_flag(self):
+        return self._publish_flags['children']
+
+    def get_publish_joint_names_flag(self):
+        return self._publish_flags['joint_names']
+
+    def get_publish_joint_positions_flag(self):
+        return self._publish_flags['joint_positions']
+
+    def set_publish_children_names_flag(self, state):
+        self._publish_flags['children'] = bool(state)
+
+    def set_publish_joint_names_flag(self, state):
+        self._publish_flags['joint_names'] = bool(state)
+
+    def set_publish_joint_positions_flag(self, state):
+        self._publish_flags['joint_positions'] = bool(state)
+
+    get_children_names = _unsupported(
+        'get_children_names', "afhub's catalog lists bodies and their descendant joints, not "
+        'the body tree; get_joint_names() names the joints')
+    get_num_of_children = _unsupported('get_num_of_children',
+                                       "afhub's catalog does not carry the body tree")
+    get_parent_name = _unsupported('get_parent_name',
+                                   "afhub's catalog does not carry the body tree")
+    get_identifier = _unsupported('get_identifier', 'afhub states carry no identifier')
+    get_msg_header = _unsupported('get_msg_header', 'afhub states are not ROS messages')
+    get_msg_time_stamp = _unsupported('get_msg_time_stamp',
+                                      'afhub states are not ROS messages (afhub.State.stamp_ns)')
+    get_msg_seq_num = _unsupported('get_msg_seq_num', 'afhub states are not ROS messages')
+    get_msg_frame_id = _unsupported('get_msg_frame_id', 'afhub states are not ROS messages')
+
+    # ----- commands -----
+    def _joints_for(self):
+        n = len(self._joint_names)
+        if len(self._joint_cmds) != n:
+            self._joint_cmds = [0.0] * n
+            self._joint_types = [_EFFORT] * n
+
+    def _set_joints(self, pairs, kind):
+        with self._lock:
+            self._joints_for()
+            for idx, value in pairs:
+                self._joint_cmds[idx] = float(value)
+                self._joint_types[idx] = kind
+        self._apply_command()
+
+    def _set_joint(self, joint_name_or_idx, value, kind):
+        idx = self._index(joint_name_or_idx)
+        if idx is not None:
+            self._set_joints([(idx, value)], kind)
+
+    def set_joint_pos(self, joint_name_or_idx, q):
+        self._set_joint(joint_name_or_idx, q, _POSITION)
+
+    def set_joint_vel(self, joint_name_or_idx, qd):
+        self._set_joint(joint_name_or_idx, qd, _VELOCITY)
+
+    def set_joint_effort(self, joint_name_or_idx, effort):
+        self._set_joint(joint_name_or_idx, effort, _EFFORT)
+
+    def _set_multiple(self, values, index_list, kind):
+        n = len(self._joint_names)
+        index_list = list(index_list or [])
+        if len(index_list) == 0 or len(values) != len(index_list):
+            index_list = list(range(n))
+        elif max(index_list) + 1 > n or min(index_list) < 0:
+            print(f'Requested Joint index is out of range with joints {n}')
+            return
+        self._set_joints(zip(index_list, values), kind)
+
+    def set_multiple_joint_pos(self, q_list, index_list=None):
+        self._set_multiple(q_list, index_list, _POSITION)
+
+    def set_multiple_joint_vel(self, qd_list, index_list=None):
+        self._set_multiple(qd_list, index_list, _VELOCITY)
+
+    def set_multiple_joint_effort(self, efforts, index_list=None):
+        self._set_multiple(efforts, index_list, _EFFORT)
+
+    def set_wrench(self, wrench):
+        with self._lock:
+            self._cartesian = 'force'
+            self._wrench = Wrench(Vector3(*_xyz(wrench.force)), Vector3(*_xyz(wrench.torque)))
+            self._wrench_cmd_set = True
+        self._apply_command()
+
+    def set_force(self, fx, fy, fz):
+        self.set_wrench(Wrench(Vector3(fx, fy, fz), self.get_torque_command()))
+
+    def set_torque(self, nx, ny, nz):
+        self.set_wrench(Wrench(self.get_force_command(), Vector3(nx, ny, nz)))
+
+    def wrench_command(self, fx, fy, fz, nx, ny, nz):
+        self.set_wrench(Wrench(Vector3(fx, fy, fz), Vector3(nx, ny, nz)))
+
+    def set_pose(self, pose):
+        with self._lock:
+            self._cartesian = 'position'
+            self._pose = Pose(Point(*_xyz(pose.position)),
+                              Quaternion(*_xyzw(pose.orientation)))
+            self._pose_cmd_set = True
+        self._apply_command()
+
+    def set_pos(self, px, py, pz):
+        self.set_pose(Pose(Point(px, py, pz), self.get_rot_command()))
+
+    def set_rot(self, quat):
+        """quat: x, y, z, w (a list, or an object with those attributes)."""
+        self.set_pose(Pose(self.get_pos_command(), Quaternion(*_xyzw(quat))))
+
+    def set_rpy(self, roll, pitch, yaw):
+        self.set_rot(quaternion_from_rpy(roll, pitch, yaw))
+
+    def pose_command(self, px, py, pz, roll, pitch, yaw, *jnt_cmds):
+        """A pose target (rotation as AMBF's pose_command computes it: static axes z, y, x);
+        jnt_cmds, when given, are position targets for joints 0, 1, ..."""
+        self.set_pose(Pose(Point(px, py, pz), Quaternion(*_quaternion_szyx(roll, pitch, yaw))))
+        if jnt_cmds:
+            self.set_multiple_joint_pos(list(jnt_cmds), list(range(len(jnt_cmds))))
+
+    def set_twist(self, twist):
+        with self._lock:
+            self._cartesian = 'velocity'
+            self._twist = Twist(Vector3(*_xyz(twist.linear)), Vector3(*_xyz(twist.angular)))
+            self._twist_cmd_set = True
+        self._apply_command()
+
+    def set_linear_vel(self, vx, vy, vz):
+        self.set_twist(Twist(Vector3(vx, vy, vz), self.get_angular_velocity_command()))
+
+    def set_angular_vel(self, ax, ay, az):
+        self.set_twist(Twist(self.get_linear_velocity_command(), Vector3(ax, ay, az)))
+
+    def velocity_command(self, vx, vy, vz, ax, ay, az):
+        self.set_twist(Twist(Vector3(vx, vy, vz), Vector3(ax, ay, az)))
+
+    def _apply_command(self):
+        # Every command feeds the wrench's watchdog, as in AMBF.
+        now = time.monotonic()
+        with self._lock:
+            self._active = True
+            self._last_command = now
+        self.run_publisher(now)
+
+    def run_publisher(self, now=None):
+        """Sends the command this handle holds (the client's thread calls it at its rate).
+        A wrench not refreshed within time_out is cleared first, as AMBF does."""
+        now = time.monotonic() if now is None else now
+        with self._lock:
+            if self._cartesian == 'force' and now - self._last_command > self._time_out:
+                self._wrench = Wrench()
+            kwargs = {}
+            if self._cartesian == 'force':
+                kwargs = {'force': tuple(self._wrench.force), 'torque': tuple(self._wrench.torque)}
+            elif self._cartesian == 'position':
+                kwargs = {'position': tuple(self._pose.position),
+                          'orientation': tuple(self._pose.orientation)}
+            else:
+                kwargs = {'linear_velocity': tuple(self._twist.linear),
+                          'angular_velocity': tuple(self._twist.angular)}
+            joints = (self._joint_cmds, self._joint_types) if self._joint_cmds else (None, None)
+            try:
+                self._body.command(joints[0], joints[1], **kwargs)
+            except afhub.CommandRefused as refusal:
+                if str(refusal) != self._told_refusal:
+                    print(f'ambf_client: {refusal}', file=sys.stderr)
+                    self._told_refusal = str(refusal)
+
+
+def _xyz(v):
+    return (v.x, v.y, v.z) if hasattr(v, 'x') else tuple(v)
+
+
+def _xyzw(q):
+    return (q.x, q.y, q.z, q.w) if hasattr(q, 'w') else tuple(q)

@@ -1,0 +1,41 @@
+// What the parts of the Python module share: the registration of each part, the
+// connection to the hub made on first use, and conversions between Python
+// sequences and afhub's geometric types.
+#pragma once
+
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+
+#include <optional>
+#include <string>
+
+#include "afhub/shm_layout/geometry.hpp"
+
+namespace afhub::python {
+
+namespace py = pybind11;
+
+void register_body(py::module_& module);
+void register_device(py::module_& module);
+void register_loop(py::module_& module);
+void register_world(py::module_& module);
+
+// Joins the hub once per process (as "afhub-python-<pid>"), waiting up to `wait_s` for
+// it; throws afhub::Error saying how to start one when none runs.
+void ensure_connected(double wait_s = 0.0);
+
+// Exactly `size` finite numbers from any Python sequence or array; ValueError naming
+// `what` otherwise.
+py::array_t<double> finite_values(const py::handle& values, const char* what,
+                                  std::optional<std::size_t> size = std::nullopt);
+Vec3 to_vec3(const py::handle& values, const char* what);
+Quaternion to_quaternion(const py::handle& values, const char* what);  // x, y, z, w
+
+// A read-only numpy view of `count` doubles from `first`, `stride` bytes apart, kept
+// alive by `owner`.
+py::array view(const double* first, std::size_t count, std::size_t stride, py::handle owner);
+
+// Seconds to a CLOCK_MONOTONIC deadline; ValueError unless 0 <= seconds <= 1e6.
+std::int64_t deadline_after(double seconds, const char* what);
+
+}  // namespace afhub::python

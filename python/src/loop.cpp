@@ -1,0 +1,201 @@
+// afhub.Loop: a Python function run on the project's periodic loop runner (rt/), free
+// or in lockstep with the physics, publishing its timing for `afhub top` as C++ loops
+// do. The loop holds the GIL only while the function runs.
+#include <pybind11/stl.h>
+#include <unistd.h>
+
+#include <algorithm>
+
+#include <atomic>
+#include <exception>
+#include <memory>
+#include <optional>
+
+#include "afhub/hub/loop_stats_publisher.hpp"
+#include "afhub/hub/sample_waiter.hpp"
+#include "afhub/rt/clock.hpp"
+#include "afhub/rt/loop_timing.hpp"
+#include "afhub/rt/periodic_loop.hpp"
+#include "afhub/shm_layout/error.hpp"
+#include "body.hpp"
+#include "errors.hpp"
+
+namespace afhub::python {
+namespace {
+
+class Loop {
+ public:
+  Loop(double rate_hz, py::function callback, std::optional<Body*> body, bool lockstep,
+       std::string name, int fifo_priority, int cpu, bool lock_memory)
+      : callback_(std::move(callback)),
+        body_(body.value_or(nullptr)),
+        lockstep_(lockstep),
+        name_(std::move(name)) {
+    if (lockstep && !body_)
+      throw py::value_error("a lockstep loop answers a body's steps: give body=afhub.Body(...)");
+    if (!lockstep && !(rate_hz > 0.0 && rate_hz <= 100'000.0))
+      throw py::value_error("rate_hz takes a rate above 0 and at most 100000 Hz");
+    if (fifo_priority < 0 || fifo_priority > 99)
+      throw py::value_error("fifo_priority takes 0 (the normal scheduler) to 99");
+    options_.period_ns = lockstep ? 0 : static_cast<std::int64_t>(1e9 / rate_hz);
+    options_.fifo_priority = fifo_priority;
+    options_.cpu = cpu;
+    options_.lock_memory = lock_memory;
+  }
+
+  py::dict run(std::uint64_t cycles, double seconds) {
+    ensure_connected();
+    const std::int64_t end_ns = seconds > 0.0 ? deadline_after(seconds, "seconds") : 0;
+    stop_ = false;
+    error_ = nullptr;
+    LoopTiming timing;
+    LoopStats final_stats;
+    const std::int64_t start_ns = monotonic_ns();
+    if (body_) body_->set_lockstep(lockstep_);
+    {
+      py::gil_scoped_release release;
+      const std::string who = "afhub python " + name_;
+      const RealtimeGrant grant = apply_realtime(options_, who.c_str());
+      LoopStatsPublisher stats(name_, body_ ? body_->channel() : "", options_.period_ns, lockstep_,
+                               grant);
+      if (lockstep_)
+        run_lockstep(cycles, end_ns, timing, stats);
+      else
+        run_free(cycles, end_ns, timing, stats);
+      timing.fill(final_stats);
+      final_stats.rate_hz =
+          static_cast<double>(timing.cycles()) * 1e9 /
+          static_cast<double>(std::max<std::int64_t>(1, monotonic_ns() - start_ns));
+    }
+    if (body_) body_->set_lockstep(false);
+    if (error_) std::rethrow_exception(error_);
+    set_name(final_stats.name, name_);
+    if (body_) set_name(final_stats.body, body_->channel());
+    final_stats.period_s = static_cast<double>(options_.period_ns) * 1e-9;
+    final_stats.lockstep = lockstep_;
+    final_stats.header.publisher_pid = static_cast<std::uint32_t>(getpid());
+    return loop_stats_dict(final_stats);
+  }
+
+  void stop() { stop_ = true; }
+
+ private:
+  // Runs the callback under the GIL; false ends the loop (it returned False, stop()
+  // was called, or it raised: the exception is raised again by run()).
+  bool call(const BodyState* state) {
+    py::gil_scoped_acquire acquire;
+    try {
+      const py::object result = state ? callback_(State(*state)) : callback_();
+      if (result.is(py::bool_(false))) return false;
+    } catch (...) {
+      error_ = std::current_exception();
+      return false;
+    }
+    return !stop_;
+  }
+
+  // Between cycles that run no Python: Ctrl-C still reaches the loop.
+  bool signals_pending() {
+    py::gil_scoped_acquire acquire;
+    if (PyErr_CheckSignals() == 0) return false;
+    error_ = std::make_exception_ptr(py::error_already_set());
+    return true;
+  }
+
+  void run_free(std::uint64_t cycles, std::int64_t end_ns, LoopTiming& timing,
+                LoopStatsPublisher& stats) {
+    LoopOptions options = options_;
+    options.max_cycles = cycles;
+    // Late commands as the physics counts them for the body (see controller.cpp).
+    std::uint32_t physics_late = 0, physics_pid = 0;
+    run_periodic(
+        options, timing,
+        [&] {
+          if (end_ns && monotonic_ns() >= end_ns) return false;
+          if (!body_) return call(nullptr);
+          const BodyState* state = body_->client().latest_state();
+          if (!state) return !signals_pending();
+          const std::uint32_t late = state->commanded_steps - state->answered_steps;
+          if (state->header.publisher_pid == physics_pid)
+            timing.count_late(static_cast<std::uint32_t>(late - physics_late));
+          physics_pid = state->header.publisher_pid;
+          physics_late = late;
+          return call(state);
+        },
+        [&](std::int64_t now) { stats.maybe_publish(now, timing); });
+  }
+
+  // Each new step's state in, the callback's command out, as soon as the state
+  // arrives; asleep on the state channel in between (see controller.cpp).
+  void run_lockstep(std::uint64_t cycles, std::int64_t end_ns, LoopTiming& timing,
+                    LoopStatsPublisher& stats) {
+    SampleWaiter waiter;
+    waiter.attach(body_->client().state_reader());
+    bool answered_any = false;
+    std::uint64_t last_step = 0;
+    for (std::uint64_t done = 0; cycles == 0 || done < cycles;) {
+      const BodyState* state = body_->client().latest_state();
+      const std::int64_t now = monotonic_ns();
+      if (end_ns && now >= end_ns) return;
+      stats.maybe_publish(now, timing);
+      if (!state || (answered_any && state->header.sim_step == last_step)) {
+        waiter.wait(10'000'000);
+        if (stop_ || signals_pending()) return;
+        continue;
+      }
+      const std::uint64_t step = state->header.sim_step;
+      if (answered_any && step > last_step + 1) timing.count_late(step - last_step - 1);
+      const bool go_on = call(state);
+      timing.record(0, monotonic_ns() - now);
+      answered_any = true;
+      last_step = step;
+      ++done;
+      if (!go_on) return;
+    }
+  }
+
+  py::function callback_;
+  Body* body_;
+  bool lockstep_;
+  std::string name_;
+  LoopOptions options_;
+  std::atomic<bool> stop_{false};  // stop() may come from another thread
+  std::exception_ptr error_;
+};
+
+}  // namespace
+
+void register_loop(py::module_& module) {
+  py::class_<Loop>(
+      module, "Loop",
+      "A Python function run periodically on afhub's real-time loop runner, as C++ "
+      "controllers run: absolute deadlines (no drift), periods a late cycle ran past "
+      "skipped and counted, optional SCHED_FIFO, CPU pinning and locked memory. The loop "
+      "holds the GIL only while the function runs, and publishes its timing once a second "
+      "for `afhub top` (name, wake-up latency, compute time, overruns, late commands).\n\n"
+      "Loop(rate_hz, callback, body=None, lockstep=False, name='python', fifo_priority=0, "
+      "cpu=-1, lock_memory=False)\n"
+      "  without a body: callback() every period;\n"
+      "  with body=afhub.Body(...): callback(state) every period with the body's newest "
+      "state (afhub.State), once it has one;\n"
+      "  lockstep=True (with a body; rate_hz is ignored): callback(state) once per physics "
+      "step, as soon as the step's state arrives, and a physics run with `afhub run "
+      "--lockstep` waits for the body's command: the callback must send one each time "
+      "(body.command(...)), which then answers that step.\n"
+      "The callback returning False, or calling loop.stop(), ends the loop; an exception "
+      "it raises (Ctrl-C's KeyboardInterrupt too) ends it and is raised by run().")
+      .def(
+          py::init<double, py::function, std::optional<Body*>, bool, std::string, int, int, bool>(),
+          py::arg("rate_hz"), py::arg("callback"), py::kw_only(), py::arg("body") = py::none(),
+          py::arg("lockstep") = false, py::arg("name") = "python", py::arg("fifo_priority") = 0,
+          py::arg("cpu") = -1, py::arg("lock_memory") = false, py::keep_alive<1, 4>())
+      .def("run", &Loop::run, py::arg("cycles") = 0, py::arg("seconds") = 0.0,
+           "Runs until `cycles` cycles or `seconds` have passed (0: no limit), the callback "
+           "ends it, or it raises. Returns the loop's statistics (as afhub.loop_stats() gives "
+           "them) over the whole run. SCHED_FIFO, CPU and memory locking, when asked for, "
+           "apply to the calling thread and stay after run() returns.")
+      .def("stop", &Loop::stop,
+           "Ends the loop after the current cycle; from the callback or any other thread.");
+}
+
+}  // namespace afhub::python

@@ -1,0 +1,201 @@
+// The Python module `afhub`: a process joins the hub and reads and commands bodies,
+// devices and the world in shared memory through the project's hub client.
+#include <pybind11/stl.h>
+
+#include <cmath>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "afhub/hub/bodies.hpp"
+#include "afhub/hub/hub_presence.hpp"
+#include "afhub/hub/loop_stats_reader.hpp"
+#include "afhub/rt/clock.hpp"
+#include "afhub/shm_layout/error.hpp"
+#include "bindings.hpp"
+#include "errors.hpp"
+
+namespace afhub::python {
+
+void ensure_connected(double wait_s) {
+  if (!runtime_name().empty()) return;
+  if (!(wait_s >= 0.0 && wait_s <= 1e6)) throw py::value_error("wait_s takes 0 to 1e6 seconds");
+  py::gil_scoped_release release;
+  connect_to_hub("python", HubPolicy::kRequire,
+                 std::chrono::milliseconds(static_cast<std::int64_t>(wait_s * 1000.0)));
+}
+
+py::array_t<double> finite_values(const py::handle& values, const char* what,
+                                  std::optional<std::size_t> size) {
+  auto array = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(values);
+  if (!array || array.ndim() != 1)
+    throw py::value_error(std::string(what) + " takes a sequence of numbers");
+  if (size && static_cast<std::size_t>(array.size()) != *size)
+    throw py::value_error(std::string(what) + " takes " + std::to_string(*size) + " numbers, not " +
+                          std::to_string(array.size()));
+  const double* data = array.data();
+  for (py::ssize_t i = 0; i < array.size(); ++i)
+    if (!std::isfinite(data[i]))
+      throw py::value_error(std::string(what) + "[" + std::to_string(i) + "] is " +
+                            py::str(py::float_(data[i])).cast<std::string>() +
+                            ", not a finite number: nothing was sent");
+  return array;
+}
+
+Vec3 to_vec3(const py::handle& values, const char* what) {
+  const auto array = finite_values(values, what, 3);
+  return {array.at(0), array.at(1), array.at(2)};
+}
+
+Quaternion to_quaternion(const py::handle& values, const char* what) {
+  const auto array = finite_values(values, what, 4);
+  return {array.at(0), array.at(1), array.at(2), array.at(3)};
+}
+
+py::array view(const double* first, std::size_t count, std::size_t stride, py::handle owner) {
+  py::array array(py::dtype::of<double>(), {count}, {stride}, first, owner);
+  py::detail::array_proxy(array.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
+  return array;
+}
+
+std::int64_t deadline_after(double seconds, const char* what) {
+  if (!(seconds >= 0.0 && seconds <= 1e6))
+    throw py::value_error(std::string(what) + " takes 0 to 1e6 seconds");
+  return monotonic_ns() + static_cast<std::int64_t>(seconds * 1e9);
+}
+
+namespace {
+
+// The hub's catalog, read in place; one reader per process.
+CatalogReader& catalog_reader() {
+  ensure_connected();
+  static std::unique_ptr<CatalogReader> reader;
+  if (!reader) {
+    auto made = std::make_unique<CatalogReader>();
+    made->wait(std::chrono::milliseconds(1000));
+    reader = std::move(made);
+  }
+  return *reader;
+}
+
+py::dict entry_dict(const BodyList& list, std::uint32_t index) {
+  const BodyInfo& info = list.bodies[index];
+  py::dict entry;
+  entry["channel"] = std::string(name_of(info.channel));
+  entry["kind"] = info.kind == ChannelKind::kDevice ? "device" : "body";
+  entry["owner"] = std::string(name_of(info.owner));
+  entry["owner_pid"] = info.owner_pid;
+  entry["publish_rate_hz"] = info.publish_rate_hz;
+  entry["joint_names"] = joint_names_of(list, info);
+  return entry;
+}
+
+py::dict percentiles_dict(const DurationPercentiles& p) {
+  py::dict out;
+  out["p50_us"] = p.p50_us;
+  out["p99_us"] = p.p99_us;
+  out["p999_us"] = p.p999_us;
+  out["max_us"] = p.max_us;
+  return out;
+}
+
+}  // namespace
+
+py::dict loop_stats_dict(const LoopStats& stats) {
+  py::dict out;
+  out["name"] = std::string(name_of(stats.name));
+  out["body"] = std::string(name_of(stats.body));
+  out["pid"] = stats.header.publisher_pid;
+  out["period_s"] = stats.period_s;
+  out["rate_hz"] = stats.rate_hz;
+  out["cycles"] = stats.cycles;
+  out["overruns"] = stats.overruns;
+  out["late_commands"] = stats.late_commands;
+  out["wake_latency"] = percentiles_dict(stats.wake_latency);
+  out["compute"] = percentiles_dict(stats.compute);
+  out["realtime"] = stats.realtime != 0;
+  out["memory_locked"] = stats.memory_locked != 0;
+  out["lockstep"] = stats.lockstep != 0;
+  out["cpu"] = stats.cpu;
+  return out;
+}
+
+}  // namespace afhub::python
+
+PYBIND11_MODULE(afhub, module) {
+  using namespace afhub::python;
+  module.doc() =
+      "afhub from Python: read bodies' states and write their commands in shared memory, "
+      "control the world's clock, read and command devices, and run real-time loops.\n\n"
+      "Every call joins the running hub on first use (afhub.connect() does it explicitly). "
+      "Errors are afhub.Error with the command line's messages; a command the physics "
+      "refused raises afhub.CommandRefused; bad arguments raise ValueError.";
+  register_errors(module);
+  // pybind11 binds numpy's C API on first use, under a static guard that a thread
+  // blocks on while holding the GIL: the importing thread does it now, before any other
+  // thread (ambf_client's publisher) can race it into a deadlock.
+  try {
+    py::array_t<double> first_use(0);
+  } catch (py::error_already_set&) {
+    const auto executable = py::module_::import("sys").attr("executable").cast<std::string>();
+    throw py::import_error("afhub needs numpy, which " + executable +
+                           " cannot import: run Debian's /usr/bin/python3, with python3-numpy "
+                           "installed (./run.sh build installs it)");
+  }
+
+  module.def(
+      "connect", [](double wait_s) { ensure_connected(wait_s); }, py::arg("wait_s") = 0.0,
+      "Joins the running hub (once per process), waiting up to wait_s seconds for it to "
+      "come up. Raises afhub.Error saying how to start one when none runs.");
+  module.def(
+      "catalog",
+      [] {
+        afhub::CatalogReader& reader = catalog_reader();
+        const afhub::BodyList& list = reader.latest();
+        py::list entries;
+        for (std::uint32_t i = 0; i < list.body_count; ++i) entries.append(entry_dict(list, i));
+        return entries;
+      },
+      "Every live body and device as the hub lists it (`afhub ls`): a list of dicts with "
+      "channel, kind ('body' or 'device'), owner, owner_pid, publish_rate_hz and "
+      "joint_names (in state order).");
+  module.def(
+      "bodies",
+      [] {
+        afhub::CatalogReader& reader = catalog_reader();
+        const afhub::BodyList& list = reader.latest();
+        std::vector<std::string> names;
+        for (std::uint32_t i = 0; i < list.body_count; ++i)
+          if (list.bodies[i].kind == afhub::ChannelKind::kBody)
+            names.emplace_back(afhub::name_of(list.bodies[i].channel));
+        return names;
+      },
+      "The channel names of the live bodies, e.g. ['afhub/arm/base', ...].");
+  module.def(
+      "resolve",
+      [](const std::string& name) {
+        return std::string(afhub::name_of(catalog_reader().resolve(name).info.channel));
+      },
+      py::arg("name"),
+      "The channel of the body or device named by `name`: its channel name or a unique "
+      "suffix of it after a '/' ('arm/base', 'base'), as the command line finds them. "
+      "Raises afhub.Error listing the candidates when none or several match.");
+  module.def(
+      "loop_stats",
+      [] {
+        ensure_connected();
+        static afhub::LoopStatsReader reader;
+        py::list out;
+        for (const afhub::LoopStats& stats : reader.latest()) out.append(loop_stats_dict(stats));
+        return out;
+      },
+      "The newest statistics of every live loop (what `afhub top` shows), one dict each: "
+      "name, body, pid, period_s, rate_hz, cycles, overruns, late_commands, wake_latency and "
+      "compute (p50_us, p99_us, p999_us, max_us), realtime, memory_locked, lockstep, cpu. A "
+      "loop publishes once a second; one that just started may be missing.");
+
+  register_body(module);
+  register_device(module);
+  register_world(module);
+  register_loop(module);
+}

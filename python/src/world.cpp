@@ -1,0 +1,187 @@
+// afhub.World: the simulation's clock, read from the world state, and its commands
+// (pause, resume, step N, reset), each confirmed by the world state as `afhub world`
+// confirms them.
+#include <cstdio>
+#include <string>
+
+#include "afhub/hub/channel.hpp"
+#include "afhub/rt/clock.hpp"
+#include "afhub/shm_layout/channel_names.hpp"
+#include "afhub/shm_layout/error.hpp"
+#include "afhub/shm_layout/limits.hpp"
+#include "afhub/shm_layout/world.hpp"
+#include "bindings.hpp"
+
+namespace afhub::python {
+namespace {
+
+ChannelId world_channel(const std::string& name_space, std::string_view event) {
+  return {std::string(kService), world_instance(name_space), std::string(event)};
+}
+
+std::string at(const WorldState& state) {
+  char text[96];
+  std::snprintf(text, sizeof text, "at step %llu (t = %.3f s)",
+                static_cast<unsigned long long>(state.header.sim_step), state.header.sim_time_s);
+  return text;
+}
+
+class World {
+ public:
+  explicit World(const std::string& name_space)
+      : reader_((ensure_connected(), world_channel(name_space, kStateEvent))),
+        writer_(world_channel(name_space, kCommandEvent)) {
+    // The simulation acts on each sequence number once: start past any number an
+    // earlier writer could have used.
+    writer_.raw().continue_sequence_after(static_cast<std::uint64_t>(monotonic_ns()));
+  }
+
+  // The newest world state; the world state is published every step, paused or not.
+  WorldState state(double wait_s) {
+    const std::int64_t give_up = deadline_after(wait_s, "wait_s");
+    const WorldState* state = reader_.latest();
+    if (!state) {
+      py::gil_scoped_release release;
+      while (!(state = reader_.latest()) && monotonic_ns() < give_up)
+        sleep_until_ns(monotonic_ns() + 1'000'000);
+    }
+    if (!state)
+      throw Error(
+          "no simulation is running: nothing has published the world state for " +
+          py::str(py::float_(wait_s)).cast<std::string>() +
+          " s. Start one with `afhub run MODEL` (or `afhub synth`); a lockstep run waiting for "
+          "its clients publishes nothing until they join");
+    return *state;
+  }
+
+  // Sends `action` and waits until the world state shows it done; says what happened.
+  std::string act(WorldAction action, std::uint32_t steps, double timeout_s) {
+    const std::int64_t give_up = deadline_after(timeout_s, "timeout_s");
+    if (action == WorldAction::kStep && (steps == 0 || steps > kMaxWorldStepsPerCommand))
+      throw py::value_error("step takes a number of steps from 1 to " +
+                            std::to_string(kMaxWorldStepsPerCommand) +
+                            "; to run on, World.resume()");
+    const WorldState before = state(2.0);
+    if (action == WorldAction::kStep && !before.paused)
+      throw Error(
+          "the world is running, so there is nothing to step: pause it first "
+          "(World.pause()), then World.step(n)");
+    WorldCommand* command = writer_.loan();
+    if (!command) throw Error("shared memory is exhausted: the world command was not sent");
+    command->action = action;
+    command->step_count = steps;
+    writer_.publish(command);
+
+    const std::uint64_t target_step = before.header.sim_step + steps;
+    std::uint64_t previous_step = before.header.sim_step;
+    py::gil_scoped_release release;
+    while (monotonic_ns() < give_up) {
+      const WorldState* now = reader_.latest();
+      if (now && reader_.updated()) {
+        switch (action) {
+          case WorldAction::kPause:
+            if (now->paused) return (before.paused ? "already paused " : "paused ") + at(*now);
+            break;
+          case WorldAction::kResume:
+            if (!now->paused) return (before.paused ? "resumed " : "already running ") + at(*now);
+            break;
+          case WorldAction::kStep:
+            if (now->header.sim_step >= target_step)
+              return "stepped " + std::to_string(steps) + (steps == 1 ? " step" : " steps") +
+                     ": now paused " + at(*now);
+            break;
+          case WorldAction::kReset:
+            // The step count goes back to 0; from step 0 there is nothing to see.
+            if (now->header.sim_step < previous_step || before.header.sim_step == 0)
+              return "reset from step " + std::to_string(previous_step) + ": now " + at(*now) +
+                     (now->paused ? ", paused" : "");
+            previous_step = now->header.sim_step;
+            break;
+          case WorldAction::kNone:
+            return "";
+        }
+      }
+      sleep_until_ns(monotonic_ns() + 200'000);
+    }
+    throw Error("the command was sent but the simulation did not act on it within " +
+                std::to_string(timeout_s) +
+                " s: is it stalled, or waiting for lockstep clients? (`afhub status`)");
+  }
+
+ private:
+  LatestReader<WorldState> reader_;
+  Writer<WorldCommand> writer_;
+};
+
+py::dict state_dict(const WorldState& s) {
+  py::dict out;
+  out["step"] = s.header.sim_step;
+  out["time"] = s.header.sim_time_s;
+  out["stamp_ns"] = s.header.publish_stamp_ns;
+  out["wall_time"] = s.wall_time_s;
+  out["achieved_rate_hz"] = s.achieved_rate_hz;
+  out["body_count"] = s.body_count;
+  out["paused"] = s.paused != 0;
+  out["lockstep"] = s.lockstep != 0;
+  out["rejected_commands"] = s.rejected_commands;
+  out["watchdog_expiries"] = s.watchdog_expiries;
+  out["stale_commands"] = s.stale_commands;
+  out["lockstep_clients"] = s.lockstep_clients;
+  out["late_answers"] = s.late_answers;
+  out["dropped_clients"] = s.dropped_clients;
+  out["nan_recoveries"] = s.nan_recoveries;
+  return out;
+}
+
+}  // namespace
+
+void register_world(py::module_& module) {
+  py::class_<World>(module, "World",
+                    "The simulation's clock. World(namespace='') is the world of `afhub run`, "
+                    "or of `afhub run --namespace NS`. Each command waits until the world "
+                    "state shows it done and returns what happened, as `afhub world` prints "
+                    "it; afhub.Error when no simulation runs or it did not act in time.")
+      .def(py::init<const std::string&>(), py::arg("namespace") = "")
+      .def(
+          "state", [](World& world, double wait_s) { return state_dict(world.state(wait_s)); },
+          py::arg("wait_s") = 2.0,
+          "The newest world state as a dict: step, time (simulated s), stamp_ns, wall_time, "
+          "achieved_rate_hz, body_count, paused, lockstep, rejected_commands, "
+          "watchdog_expiries, stale_commands, lockstep_clients, late_answers, "
+          "dropped_clients, nan_recoveries.")
+      .def(
+          "sim_step", [](World& world) { return world.state(2.0).header.sim_step; },
+          "The step the simulation is at.")
+      .def(
+          "sim_time", [](World& world) { return world.state(2.0).header.sim_time_s; },
+          "Simulated time, s.")
+      .def(
+          "pause",
+          [](World& world, double timeout_s) {
+            return world.act(WorldAction::kPause, 1, timeout_s);
+          },
+          py::arg("timeout_s") = 5.0, "Stops stepping; states are still published.")
+      .def(
+          "resume",
+          [](World& world, double timeout_s) {
+            return world.act(WorldAction::kResume, 1, timeout_s);
+          },
+          py::arg("timeout_s") = 5.0, "Steps again after a pause.")
+      .def(
+          "step",
+          [](World& world, std::uint32_t steps, double timeout_s) {
+            return world.act(WorldAction::kStep, steps, timeout_s);
+          },
+          py::arg("steps") = 1, py::arg("timeout_s") = 5.0,
+          "While paused, advances `steps` steps, then stays paused.")
+      .def(
+          "reset",
+          [](World& world, double timeout_s) {
+            return world.act(WorldAction::kReset, 1, timeout_s);
+          },
+          py::arg("timeout_s") = 5.0,
+          "Puts every body back where the model starts it, clears its commands and sets the "
+          "step count to 0 (paused or running, as before).");
+}
+
+}  // namespace afhub::python

@@ -1,0 +1,81 @@
+// Meshes written to break assimp (issue 27): each is a located error naming the mesh
+// and exit 1 from `afhub check` and `afhub run`, never a crash (assimp's abort, a
+// SIGSEGV), a hang (an OBJ whose mtllib is a FIFO, a PLY that declares 100 million
+// vertices) or unbounded growth. Needs no hub: `check` never connects, and `run
+// --offline` refuses the model before it would step.
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+
+#include <filesystem>
+
+#include "afhub_process.hpp"
+#include "model_files.hpp"
+
+namespace afhub::test {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Case {
+  std::string name;      // what it is
+  std::string mesh;      // the body's `mesh`
+  std::string where;     // the start of the error: where the model names the mesh
+  std::string expected;  // a part of the error
+};
+
+class MeshFaults : public ::testing::Test {
+ protected:
+  MeshFaults() {
+    // Header: 2 faces; one given. assimp's triangulation asserts (abort).
+    folder_.write("faces.off", "OFF\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 1 2\n");
+    // A face naming vertex 900000000 of 3: assimp reads past its array (SIGSEGV).
+    folder_.write("indices.ply", ply_header("3") + "0 0 0\n1 0 0\n0 1 0\n3 0 1 900000000\n");
+    // The material library is a FIFO: opening it waits for a writer forever.
+    folder_.write("fifo.obj", "mtllib fifo.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n");
+    mkfifo((folder_.dir() / "fifo.mtl").c_str(), 0644);
+    // 100 million vertices declared, three given: assimp loops and grows.
+    folder_.write("count.ply", ply_header("100000000") + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+    fs::create_directory(folder_.dir() / "directory.stl");
+    fs::create_symlink("loop.stl", folder_.dir() / "loop.stl");
+  }
+  static std::string ply_header(const std::string& vertices) {
+    return "ply\nformat ascii 1.0\nelement vertex " + vertices +
+           "\nproperty float x\nproperty float y\nproperty float z\nelement face 1\n"
+           "property list uchar int vertex_indices\nend_header\n";
+  }
+  std::string model_with_mesh(const std::string& mesh) {
+    return folder_.write("model.yaml",
+                         "bodies: [BODY a]\nBODY a:\n  name: a\n  mass: 1\n  mesh: " + mesh + "\n");
+  }
+  afhub::testing::ModelFolder folder_;
+};
+
+TEST_F(MeshFaults, EachIsALocatedErrorAndExitOneNeverACrashOrAHang) {
+  // Read, and refused: where the body names it. Not a file: where its name is.
+  const std::string read = "model.yaml:3:3: error: body 'BODY a': its mesh cannot be used: ";
+  const std::string named = "model.yaml:5:9: error: mesh '";
+  const std::vector<Case> cases = {
+      {"face counts that disagree", "faces.off", read, "crashed on it: ABRT"},
+      {"face indices past the vertices", "indices.ply", read, "crashed on it: SEGV"},
+      {"an mtllib that is a FIFO", "fifo.obj", read, "fifo.mtl', which is a FIFO"},
+      {"a huge declared count", "count.ply", read, "its header declares 100000001 elements"},
+      {"a directory", "directory.stl", named, "is a directory"},
+      {"a symlink loop", "loop.stl", named, "is a symlink loop"},
+  };
+  for (const Case& c : cases) {
+    const std::string model = model_with_mesh(c.mesh);
+    for (const std::vector<std::string>& args :
+         {std::vector<std::string>{"check", model}, {"run", model, "--offline", "--steps", "1"}}) {
+      SCOPED_TRACE(c.name + ", afhub " + args[0]);
+      // The reader's limits: 20 s of CPU time, 40 s without progress.
+      const RunResult result = run_afhub(args, std::chrono::seconds(90));
+      EXPECT_EQ(result.exit_code, 1) << result.err;
+      EXPECT_TRUE(contains(result.err, c.expected)) << result.err;
+      EXPECT_TRUE(contains(result.err, c.where)) << result.err;
+      EXPECT_TRUE(contains(result.err, c.mesh)) << result.err;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace afhub::test

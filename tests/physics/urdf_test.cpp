@@ -1,0 +1,446 @@
+// URDF robots (physics/urdf_loader.hpp), checked against an independent reference:
+// Orocos KDL reads the same files, and every link's pose must match its forward
+// kinematics, at load (zero configuration) and at random commanded configurations
+// (at the joint positions the simulation reports). Plus what each URDF feature means,
+// and a clear error, never a crash, for every bad file.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <kdl/treefksolverpos_recursive.hpp>
+#include <kdl_parser/kdl_parser.hpp>
+#include <map>
+#include <random>
+
+#include "afhub/physics/adf_loader.hpp"
+#include "afhub/physics/adf_writer.hpp"
+#include "afhub/physics/simulation.hpp"
+#include "afhub/physics/urdf_loader.hpp"
+#include "afhub/shm_layout/error.hpp"
+
+namespace afhub::physics {
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::string kModels = AFHUB_URDF_TEST_MODELS;
+const std::string kShared = AFHUB_SHARED_URDF_MODELS;
+
+std::string shared_urdf(const std::string& relative) {
+  return kShared + "/example-robot-data/robots/" + relative;
+}
+
+// Through the same entry point `afhub run` uses for model files.
+Model load(const std::string& path, const UrdfOptions& options = {}) {
+  Model model;
+  load_adf_files_into({path}, model, options);
+  return model;
+}
+
+std::string load_error(const std::string& path, const UrdfOptions& options = {}) {
+  try {
+    load(path, options);
+  } catch (const Error& error) {
+    return error.what();
+  }
+  return "(loaded)";
+}
+
+// The link frames KDL computes for joint values `q` by joint name; the root is the
+// identity.
+std::map<std::string, KDL::Frame> kdl_poses(const KDL::Tree& tree,
+                                            const std::map<std::string, double>& q) {
+  // At least one entry: KDL's solver reads entry 0 for a tree of fixed joints too.
+  KDL::JntArray values(std::max(1u, tree.getNrOfJoints()));
+  for (const auto& [name, element] : tree.getSegments()) {
+    const KDL::Joint& joint = GetTreeElementSegment(element).getJoint();
+    if (joint.getType() == KDL::Joint::None) continue;
+    auto found = q.find(joint.getName());
+    values(GetTreeElementQNr(element)) = found == q.end() ? 0.0 : found->second;
+  }
+  KDL::TreeFkSolverPos_recursive solver(tree);
+  std::map<std::string, KDL::Frame> poses;
+  for (const auto& [name, element] : tree.getSegments()) {
+    KDL::Frame frame;
+    if (solver.JntToCart(values, frame, name) < 0) ADD_FAILURE() << "KDL FK failed for " << name;
+    poses[name] = frame;
+  }
+  return poses;
+}
+
+KDL::Rotation to_kdl(const Quaternion& q) {
+  return KDL::Rotation::Quaternion(q.x, q.y, q.z, q.w);
+}
+
+// The angle of the turn between two rotations, from the sine of its half (acos of a
+// dot product would lose the last eight digits).
+double angle_between(const KDL::Rotation& a, const KDL::Rotation& b) {
+  double x, y, z, w;
+  (a.Inverse() * b).GetQuaternion(x, y, z, w);
+  return 2.0 * std::atan2(std::sqrt(x * x + y * y + z * z), std::abs(w));
+}
+
+// Largest position (m) and rotation (rad) difference of any link against KDL.
+struct PoseError {
+  double position_m = 0.0, rotation_rad = 0.0;
+  std::string worst;
+};
+
+PoseError compare(const Simulation& sim, const std::map<std::string, KDL::Frame>& kdl) {
+  PoseError error;
+  const Model& model = sim.model();
+  for (std::size_t b = 0; b < model.bodies.size(); ++b) {
+    const std::string link = model.bodies[b].identifier.substr(5);  // "BODY <link>"
+    auto found = kdl.find(link);
+    if (found == kdl.end()) {
+      ADD_FAILURE() << "KDL has no segment " << link;
+      continue;
+    }
+    const Pose pose = sim.body_pose(b);
+    const KDL::Frame& f = found->second;
+    const double dp = std::hypot(pose.position_m.x - f.p.x(), pose.position_m.y - f.p.y(),
+                                 pose.position_m.z - f.p.z());
+    const double dr = angle_between(f.M, to_kdl(pose.orientation));
+    if (dp > error.position_m || dr > error.rotation_rad) error.worst = link;
+    error.position_m = std::max(error.position_m, dp);
+    error.rotation_rad = std::max(error.rotation_rad, dr);
+  }
+  return error;
+}
+
+KDL::Tree kdl_tree(const std::string& path) {
+  KDL::Tree tree;
+  EXPECT_TRUE(kdl_parser::treeFromFile(path, tree)) << path;
+  return tree;
+}
+
+struct Case {
+  std::string path;
+  UrdfOptions options;
+};
+
+std::vector<Case> valid_cases() {
+  std::vector<Case> cases = {{kModels + "/arm.urdf", {}},
+                             {kModels + "/gripper_mimic.urdf", {}},
+                             {kModels + "/floating_planar.urdf", {{}, true}}};
+  if (fs::exists(kShared)) {
+    cases.push_back({shared_urdf("ur_description/urdf/ur5_robot.urdf"), {{kShared}, false}});
+    cases.push_back(
+        {shared_urdf("allegro_hand_description/urdf/allegro_right_hand.urdf"), {{kShared}, false}});
+  } else {
+    std::printf("urdf_test: %s is absent: the UR5 and the Allegro hand are skipped\n",
+                kShared.c_str());
+  }
+  return cases;
+}
+
+TEST(Urdf, EveryLinkAtZeroMatchesKdlWithin1e9) {
+  for (const Case& c : valid_cases()) {
+    if (c.options.floating_base) continue;  // KDL reads floating and planar joints as fixed
+    SCOPED_TRACE(c.path);
+    const Model model = load(c.path, c.options);
+    const Simulation sim(model, 0.001);
+    const PoseError error = compare(sim, kdl_poses(kdl_tree(c.path), {}));
+    EXPECT_LT(error.position_m, 1e-9) << error.worst;
+    EXPECT_LT(error.rotation_rad, 1e-9) << error.worst;
+    for (std::size_t j = 0; j < model.joints.size(); ++j)
+      EXPECT_NEAR(sim.joint_position(j), 0.0, 1e-9) << model.joints[j].name;
+  }
+}
+
+// Random targets within each joint's limits, commanded through the root body (as
+// `afhub cmd` does), settled without gravity; then every link against KDL at the
+// positions the simulation reports: the chain, not the controller, is checked.
+TEST(Urdf, RandomCommandedConfigurationsMatchKdlWithin1e6) {
+  std::mt19937 random(29);
+  for (const Case& c : valid_cases()) {
+    if (c.options.floating_base) continue;  // KDL reads floating and planar joints as fixed
+    SCOPED_TRACE(c.path);
+    Model model = load(c.path, c.options);
+    // No gravity and no contacts (random configurations put links inside each
+    // other): what remains is the chain's kinematics.
+    override_gravity(model, {0, 0, 0});
+    for (BodySpec& body : model.bodies) {
+      body.collision_mesh.clear();
+      body.collision_shapes.clear();
+    }
+    for (JointSpec& joint : model.joints) {
+      joint.controller = {200.0, 0.0, 0.0};
+      joint.controller_output = ControllerOutput::kVelocity;
+      joint.max_motor_impulse = 10.0;
+    }
+    Simulation sim(model, 0.001);
+    const KDL::Tree tree = kdl_tree(c.path);
+    std::size_t root = 0;
+    for (std::size_t b = 0; b < model.bodies.size(); ++b)
+      if (model.descendant_joints[b].size() > model.descendant_joints[root].size()) root = b;
+    const std::vector<int>& below = model.descendant_joints[root];
+    for (int trial = 0; trial < 20; ++trial) {
+      BodyInput input;
+      input.joint_count = static_cast<std::uint32_t>(below.size());
+      for (std::size_t i = 0; i < below.size(); ++i) {
+        const JointSpec& joint = model.joints[below[i]];
+        input.joint_modes[i] = JointMode::kPosition;
+        const double low = joint.limit_low.value_or(-3.0), high = joint.limit_high.value_or(3.0);
+        input.joint_values[i] =
+            has_joint_axis(joint.type) ? std::uniform_real_distribution(low, high)(random) : 0.0;
+      }
+      ASSERT_EQ(sim.input_problem(root, input), nullptr);
+      sim.set_input(root, input);
+      for (int step = 0; step < 3000; ++step) sim.step();
+      std::map<std::string, double> q;
+      for (std::size_t j = 0; j < model.joints.size(); ++j)
+        q[model.joints[j].name] = sim.joint_position(j);
+      const PoseError error = compare(sim, kdl_poses(tree, q));
+      EXPECT_LT(error.position_m, 1e-6) << "trial " << trial << ": " << error.worst;
+      EXPECT_LT(error.rotation_rad, 1e-6) << "trial " << trial << ": " << error.worst;
+      ASSERT_TRUE(sim.all_finite());
+    }
+  }
+}
+
+// The real robots on the project's default gains: under gravity alone (the joints
+// free: the arm swings down), then under position commands, nothing blows up, no
+// joint comes apart and nothing spins away.
+TEST(Urdf, RealRobotsStayStableUnderGravityAndPositionCommands) {
+  if (!fs::exists(kShared)) GTEST_SKIP() << kShared << " is absent";
+  for (const std::string& urdf : {shared_urdf("ur_description/urdf/ur5_robot.urdf"),
+                                  shared_urdf("allegro_hand_description/urdf/"
+                                              "allegro_right_hand.urdf")}) {
+    SCOPED_TRACE(urdf);
+    const auto start = std::chrono::steady_clock::now();
+    const Model model = load(urdf, {{kShared}, false});
+    const auto loaded = std::chrono::steady_clock::now();
+    Simulation sim(model, 0.001);  // reads the collision meshes
+    const auto built = std::chrono::steady_clock::now();
+    std::printf("urdf_test: %s loaded in %.1f ms, built with its meshes in %.1f ms more\n",
+                fs::path(urdf).filename().c_str(),
+                std::chrono::duration<double, std::milli>(loaded - start).count(),
+                std::chrono::duration<double, std::milli>(built - loaded).count());
+    auto check = [&](const char* phase) {
+      SCOPED_TRACE(phase);
+      ASSERT_TRUE(sim.all_finite());
+      EXPECT_EQ(sim.nan_recoveries().count, 0u);
+      for (std::size_t j = 0; j < model.joints.size(); ++j) {
+        EXPECT_LT(sim.joint_pivot_gap_m(j), 5e-3) << model.joints[j].name;
+        EXPECT_LT(std::abs(sim.joint_velocity(j)), 20.0) << model.joints[j].name;
+      }
+    };
+    for (int step = 0; step < 5000; ++step) sim.step();
+    check("gravity");
+    std::size_t root = 0;
+    for (std::size_t b = 0; b < model.bodies.size(); ++b)
+      if (model.descendant_joints[b].size() > model.descendant_joints[root].size()) root = b;
+    BodyInput input;
+    input.joint_count = static_cast<std::uint32_t>(model.descendant_joints[root].size());
+    for (std::size_t i = 0; i < input.joint_count; ++i) {
+      input.joint_modes[i] = JointMode::kPosition;
+      input.joint_values[i] = 0.3;
+    }
+    sim.set_input(root, input);
+    for (int step = 0; step < 5000; ++step) sim.step();
+    check("position commands");
+  }
+}
+
+// `afhub convert`'s ADF loads to the same bodies, joints and poses as the URDF.
+TEST(Urdf, ConvertedAdfLoadsToTheSameRobotWithin1e9) {
+  for (const Case& c : valid_cases()) {
+    SCOPED_TRACE(c.path);
+    const Model urdf = load(c.path, c.options);
+    std::vector<std::string> lost;
+    const fs::path adf = fs::temp_directory_path() / "afhub_urdf_test_converted.yaml";
+    std::ofstream(adf) << adf_text(urdf, lost);
+    const Model converted = load_adf_files({adf.string()});
+    ASSERT_EQ(converted.bodies.size(), urdf.bodies.size());
+    ASSERT_EQ(converted.joints.size(), urdf.joints.size());
+    const Simulation a(urdf, 0.001), b(converted, 0.001);
+    for (std::size_t i = 0; i < urdf.bodies.size(); ++i) {
+      EXPECT_EQ(converted.bodies[i].channel, urdf.bodies[i].channel);
+      EXPECT_EQ(converted.bodies[i].mass_kg, urdf.bodies[i].mass_kg);
+      const Pose pa = a.body_pose(i), pb = b.body_pose(i);
+      EXPECT_NEAR(pa.position_m.x, pb.position_m.x, 1e-9) << urdf.bodies[i].name;
+      EXPECT_NEAR(pa.position_m.y, pb.position_m.y, 1e-9) << urdf.bodies[i].name;
+      EXPECT_NEAR(pa.position_m.z, pb.position_m.z, 1e-9) << urdf.bodies[i].name;
+      EXPECT_LT(angle_between(to_kdl(pa.orientation), to_kdl(pb.orientation)), 1e-9)
+          << urdf.bodies[i].name;
+    }
+    for (std::size_t j = 0; j < urdf.joints.size(); ++j) {
+      EXPECT_EQ(converted.joints[j].channel, urdf.joints[j].channel);
+      EXPECT_EQ(converted.joints[j].type, urdf.joints[j].type);
+      EXPECT_NEAR(b.joint_position(j), 0.0, 1e-9) << urdf.joints[j].name;
+    }
+    EXPECT_EQ(lost.size(), c.path.ends_with("gripper_mimic.urdf") ? 1u : 0u);
+    fs::remove(adf);
+  }
+}
+
+TEST(Urdf, ChannelsAreNamedFromRobotAndLinks) {
+  const Model model = load(kModels + "/arm.urdf");
+  ASSERT_EQ(model.bodies.size(), 6u);
+  EXPECT_EQ(model.bodies[0].channel, "ambf/env/test_arm/base");
+  EXPECT_EQ(model.bodies[5].channel, "ambf/env/test_arm/tool");
+  EXPECT_EQ(model.joints[0].name, "yaw");
+  EXPECT_EQ(model.descendant_joints[0].size(), 5u);
+}
+
+TEST(Urdf, LinksJointsAndRootMeanWhatUrdfSays) {
+  const Model model = load(kModels + "/arm.urdf");
+  const BodySpec& base = model.bodies[0];
+  EXPECT_EQ(base.mass_kg, 0.0) << "the root is fixed by default";
+  const BodySpec& upper = model.bodies[1];
+  EXPECT_EQ(upper.mass_kg, 1.5);
+  EXPECT_EQ(upper.visual_shapes.size(), 2u);
+  EXPECT_EQ(upper.collision_shapes.size(), 2u);
+  ASSERT_TRUE(upper.color_rgba);
+  EXPECT_NEAR((*upper.color_rgba)[0], 0.8, 1e-6);  // urdfdom keeps floats
+  // The principal moments of the off-diagonal tensor, which keep its trace.
+  ASSERT_TRUE(upper.inertia_kgm2);
+  EXPECT_NEAR(upper.inertia_kgm2->x + upper.inertia_kgm2->y + upper.inertia_kgm2->z, 0.065, 1e-12);
+  const BodySpec& fore = model.bodies[2];
+  EXPECT_EQ(fore.scale, 0.05);
+  EXPECT_TRUE(fore.visual_mesh.ends_with("meshes/cube.obj"));
+  EXPECT_TRUE(fore.collision_mesh.ends_with("meshes/cube.obj"));
+  EXPECT_EQ(model.bodies[5].mass_kg, 1e-3) << "a link without <inertial> is a frame";
+  EXPECT_EQ(model.joints[0].type, JointType::kContinuous);
+  EXPECT_EQ(model.joints[0].damping, 0.1);
+  EXPECT_EQ(model.joints[1].type, JointType::kRevolute);
+  EXPECT_EQ(*model.joints[1].limit_low, -2.0);
+  EXPECT_EQ(model.joints[2].type, JointType::kPrismatic);
+  EXPECT_EQ(model.joints[4].type, JointType::kFixed);
+  for (const JointSpec& joint : model.joints) EXPECT_TRUE(joint.ignore_inter_collision);
+  // Each ignored element once, located.
+  std::string warnings;
+  for (const auto& warning : model.warnings) warnings += warning + "\n";
+  for (const char* what :
+       {"<transmission>", "<gazebo>", "<safety_controller>", "<calibration>", "friction"})
+    EXPECT_NE(warnings.find(what), std::string::npos) << what << " in\n" << warnings;
+  EXPECT_NE(warnings.find("arm.urdf:"), std::string::npos);
+  std::string notes;
+  for (const auto& note : model.notes) notes += note + "\n";
+  EXPECT_NE(notes.find("root link 'base' is fixed to the world"), std::string::npos) << notes;
+  EXPECT_NE(notes.find("do not collide"), std::string::npos) << notes;
+}
+
+TEST(Urdf, FloatingBaseFreesTheRootAndAWorldRootStaysFixed) {
+  const Model fixed = load(kModels + "/floating_planar.urdf");
+  EXPECT_EQ(fixed.bodies[0].mass_kg, 0.0);
+  Model free = load(kModels + "/floating_planar.urdf", {{}, true});
+  EXPECT_EQ(free.bodies[0].mass_kg, 3.0);
+  EXPECT_EQ(free.joints[0].type, JointType::kSixDof);  // planar
+  ASSERT_TRUE(free.joints[0].multi_limits);
+  EXPECT_FALSE(free.joints[1].multi_limits);  // floating: every direction free
+  {  // At load, each link where its joint's origin puts it.
+    const Simulation at_load(free, 0.001);
+    const Pose drone = at_load.body_pose(2), puck = at_load.body_pose(1);
+    EXPECT_NEAR(drone.position_m.x, 0.5, 1e-12);
+    EXPECT_NEAR(drone.orientation.z, std::sin(0.35), 1e-12);
+    EXPECT_NEAR(puck.position_m.z, 0.2, 1e-12);
+    EXPECT_NEAR(puck.orientation.y, std::sin(0.15), 1e-12);
+  }
+  // The free robot falls under gravity; the planar puck keeps its plane's height
+  // above the body.
+  Simulation sim(free, 0.001);
+  for (int step = 0; step < 200; ++step) sim.step();
+  EXPECT_LT(sim.body_pose(0).position_m.z, -0.1);
+  if (fs::exists(kShared)) {
+    const Model ur5 = load(shared_urdf("ur_description/urdf/ur5_robot.urdf"), {{kShared}, true});
+    std::string notes;
+    for (const auto& note : ur5.notes) notes += note;
+    EXPECT_NE(notes.find("root link 'world' is fixed"), std::string::npos) << notes;
+  }
+}
+
+TEST(Urdf, AMimicJointFollowsItsLeader) {
+  Model model = load(kModels + "/gripper_mimic.urdf");
+  override_gravity(model, {0, 0, 0});
+  ASSERT_TRUE(model.joints[1].mimic);
+  EXPECT_EQ(model.joints[1].mimic->joint, 0);
+  for (JointSpec& joint : model.joints) {
+    joint.controller = {200.0, 0.0, 0.0};
+    joint.controller_output = ControllerOutput::kVelocity;
+  }
+  Simulation sim(model, 0.001);
+  BodyInput input;
+  input.joint_count = 1;
+  input.joint_modes[0] = JointMode::kPosition;
+  input.joint_values[0] = 0.03;
+  sim.set_input(0, input);
+  for (int step = 0; step < 2000; ++step) sim.step();
+  EXPECT_NEAR(sim.joint_position(0), 0.03, 1e-4);
+  EXPECT_NEAR(sim.joint_position(1), 0.5 * sim.joint_position(0) + 0.01, 1e-4);
+}
+
+TEST(Urdf, BadFilesGetALocatedErrorNamingTheProblem) {
+  const std::string missing = load_error(kModels + "/missing_mesh.urdf");
+  EXPECT_NE(missing.find("missing_mesh.urdf:4:1: error: link 'base'"), std::string::npos)
+      << missing;
+  EXPECT_NE(missing.find("package://no_such_package/meshes/base.stl"), std::string::npos)
+      << missing;
+  EXPECT_NE(missing.find("ROS_PACKAGE_PATH"), std::string::npos) << missing;
+  const std::string cycle = load_error(kModels + "/cycle.urdf");
+  EXPECT_NE(cycle.find("cycle.urdf:1:1: error: not a valid URDF"), std::string::npos) << cycle;
+  const std::string malformed = load_error(kModels + "/malformed.urdf");
+  EXPECT_NE(malformed.find("malformed.urdf:1:1: error: not a valid URDF"), std::string::npos)
+      << malformed;
+  const std::string xacro = load_error(kModels + "/robot.urdf.xacro");
+  EXPECT_NE(xacro.find("expand it to a URDF first"), std::string::npos) << xacro;
+  const std::string absent = load_error(kModels + "/absent.urdf");
+  EXPECT_NE(absent.find("does not exist"), std::string::npos) << absent;
+  // With the package given, the same mesh name is looked for there.
+  const std::string given = load_error(kModels + "/missing_mesh.urdf", {{"/nonexistent"}, false});
+  EXPECT_NE(given.find("no package 'no_such_package'"), std::string::npos) << given;
+}
+
+TEST(Urdf, PackagesResolveThroughPackagePathAndRosPackagePath) {
+  if (!fs::exists(kShared)) GTEST_SKIP() << kShared << " is absent";
+  const std::string ur5 = shared_urdf("ur_description/urdf/ur5_robot.urdf");
+  EXPECT_EQ(load(ur5).bodies.size(), 11u) << "found walking up from the URDF's folder";
+  // A copy elsewhere finds its package only through a search path.
+  const fs::path copy = fs::temp_directory_path() / "afhub_urdf_test_ur5.urdf";
+  fs::copy_file(ur5, copy, fs::copy_options::overwrite_existing);
+  EXPECT_NE(load_error(copy.string()).find("was not found"), std::string::npos);
+  EXPECT_EQ(load(copy.string(), {{kShared}, false}).bodies.size(), 11u);
+  setenv("ROS_PACKAGE_PATH", ("/nonexistent:" + kShared).c_str(), 1);
+  EXPECT_EQ(load(copy.string()).bodies.size(), 11u);
+  unsetenv("ROS_PACKAGE_PATH");
+  fs::remove(copy);
+}
+
+// The hub publishes 450 bodies at most, but a model of 1000 links loads (and so
+// `afhub check` reads it) with no quadratic step.
+TEST(Urdf, AThousandLinkChainLoads) {
+  const fs::path path = fs::temp_directory_path() / "afhub_urdf_test_chain.urdf";
+  {
+    std::ofstream out(path);
+    out << "<robot name=\"chain\">\n";
+    for (int i = 0; i < 1000; ++i) {
+      out << "<link name=\"l" << i << "\"><inertial><mass value=\"0.1\"/><inertia ixx=\"1e-4\" "
+          << "ixy=\"0\" ixz=\"0\" iyy=\"1e-4\" iyz=\"0\" izz=\"1e-4\"/></inertial></link>\n";
+      if (i > 0)
+        out << "<joint name=\"j" << i << "\" type=\"revolute\"><parent link=\"l" << i - 1
+            << "\"/><child link=\"l" << i << "\"/><origin xyz=\"0 0 0.01\" rpy=\"0 0 0.1\"/>"
+            << "<axis xyz=\"0 1 0\"/><limit lower=\"-1\" upper=\"1\" effort=\"1\" "
+            << "velocity=\"1\"/></joint>\n";
+    }
+    out << "</robot>\n";
+  }
+  const auto start = std::chrono::steady_clock::now();
+  const Model model = load(path.string());
+  // A figure for docs/urdf.md, not a check: this machine's load varies.
+  std::printf(
+      "urdf_test: the 1000-link chain loaded in %.1f ms\n",
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+  EXPECT_EQ(model.bodies.size(), 1000u);
+  EXPECT_EQ(model.joints.size(), 999u);
+  EXPECT_EQ(model.bodies[999].channel, "ambf/env/chain/l999");
+  const Simulation sim(model, 0.001);
+  const PoseError error = compare(sim, kdl_poses(kdl_tree(path.string()), {}));
+  EXPECT_LT(error.position_m, 1e-9);
+  fs::remove(path);
+}
+
+}  // namespace
+}  // namespace afhub::physics

@@ -1,0 +1,233 @@
+"""The native module against the project's arm (and the KUKA when the AMBF corpus is
+there): reading, commanding with effects checked in the simulation, the world's clock,
+loops and their statistics, lockstep's determinism, and every error's message."""
+
+import os
+import subprocess
+import sys
+import threading
+
+import numpy as np
+import pytest
+
+import afhub
+from conftest import AFHUB, EXAMPLES, KUKA, needs_shared_models, wait_until
+
+ARM = EXAMPLES / 'arm7.yaml'
+
+
+def hold_until(body, targets, tolerance, timeout_s):
+    """Sends position targets for joints 0.. every 10 ms until they are reached."""
+    def reached():
+        body.set_joint_positions(targets)
+        state = body.wait_next(timeout_s=2.0)
+        return np.all(np.abs(state.joint_positions[:len(targets)] - targets) < tolerance)
+    wait_until(reached, timeout_s, f'{body.channel} reached {targets}')
+
+
+def test_reads_state_and_catalog(physics):
+    run = physics(ARM)
+    base = run.wait_for_body('arm/base')
+    assert 'afhub/arm/base' in afhub.bodies()
+    entry = next(e for e in afhub.catalog() if e['channel'] == 'afhub/arm/base')
+    assert entry['kind'] == 'body' and entry['joint_names'] == base.joint_names
+    assert len(base.joint_names) == 7 and base.joint_index('link1-link2') == 1
+    first = base.read()
+    second = base.wait_next(after_step=first.step)
+    assert second.step > first.step and second.time > first.time
+    assert second.stamp_ns > first.stamp_ns
+    assert second.position.shape == (3,) and second.orientation.shape == (4,)
+    assert second.joint_positions.shape == (7,) and second.joint_efforts.shape == (7,)
+    assert second.joint_velocities.shape == (7,)
+    assert abs(np.linalg.norm(second.orientation) - 1.0) < 1e-9
+    assert second.mass > 0 and second.inertia.shape == (3,)
+    assert not second.joint_positions.flags.writeable
+    # A state is a copy: the next read does not change it.
+    before = second.joint_positions.copy()
+    base.wait_next(after_step=second.step + 5)
+    assert np.array_equal(second.joint_positions, before)
+
+
+@pytest.mark.parametrize('model', [ARM, pytest.param(KUKA, marks=needs_shared_models())],
+                         ids=['arm', 'kuka'])
+def test_position_targets_are_reached(physics, model):
+    run = physics(model)
+    name = 'arm/base' if model == ARM else 'base'
+    body = run.wait_for_body(name)
+    targets = np.array([0.4, -0.3, 0.2])
+    hold_until(body, targets, 0.02, 15)
+    # Mixed per joint: joint 0 in position, joint 1 in velocity 0, joint 2 in effort.
+    body.command([0.1, 0.0, 0.0], [afhub.JointType.POSITION, 'velocity', 'effort'])
+    state = body.wait_next(after_step=body.read().step + 2)
+    assert state.joint_count == len(body.joint_names)
+
+
+def test_force_moves_a_free_body(physics):
+    run = physics('--launch', EXAMPLES / 'launch.yaml', '-l', '2')
+    palm = run.wait_for_body('gripper/palm')
+    start = palm.read().position.copy()
+    for _ in range(100):  # 1 s of 5 N upwards, refreshed: more than its weight
+        palm.command(force=[0.0, 0.0, 5.0])
+        palm.wait_next(timeout_s=2.0)
+    assert palm.read().position[2] > start[2] + 0.05
+
+
+def test_world_pause_step_resume_reset(physics):
+    run = physics(ARM)
+    run.wait_for_body('arm/base')
+    world = afhub.World()
+    assert world.pause().startswith('paused at step')
+    step = world.sim_step()
+    assert world.step(10).startswith('stepped 10 steps: now paused at step')
+    assert world.sim_step() == step + 10
+    with pytest.raises(ValueError, match='from 1 to'):
+        world.step(0)
+    assert world.state()['paused']
+    assert world.resume().startswith('resumed')
+    with pytest.raises(afhub.Error, match='the world is running, so there is nothing to step'):
+        world.step(1)
+    wait_until(lambda: world.sim_step() > 100, 10, 'the world ran past step 100')
+    assert world.reset().startswith('reset from step')
+    assert world.sim_step() < 100
+
+
+def test_errors_say_what_is_wrong(physics, tmp_path):
+    run = physics(ARM)
+    base = run.wait_for_body('arm/base')
+    copy = physics('--namespace', 'copy', ARM)
+    copy.wait_for_body('copy/afhub/arm/base')
+    with pytest.raises(afhub.Error, match="no live body is named 'nothing'.*afhub/arm/base"):
+        afhub.Body('nothing')
+    with pytest.raises(afhub.Error, match='copy/afhub/arm/base.*afhub/arm/base|afhub/arm/base.*copy'):
+        afhub.Body('arm/base')  # two bodies end so: the message lists both
+    with pytest.raises(ValueError, match=r'values\[1\] is nan, not a finite number'):
+        base.set_joint_positions([0.0, float('nan')])
+    with pytest.raises(ValueError, match='gives 8 joint values but body afhub/arm/base has 7'):
+        base.set_joint_efforts([0.0] * 8)
+    with pytest.raises(ValueError, match='one Cartesian mode'):
+        base.command(force=[1, 0, 0], position=[0, 0, 1])
+    with pytest.raises(ValueError, match='joint_values needs joint_types'):
+        base.command([0.1])
+    with pytest.raises(ValueError, match='a joint type is'):
+        base.command([0.1], ['sideways'])
+    with pytest.raises(afhub.Error, match='no new state came from'):
+        afhub.World().pause()
+        try:
+            base.wait_next(after_step=base.read().step + 10, timeout_s=0.3)
+        finally:
+            afhub.World().resume()
+    base.command(force=[1e12, 0.0, 0.0])  # beyond the body's bound: the physics refuses it
+
+    def refused():
+        try:
+            base.check_refused()
+            base.wait_next(timeout_s=2.0)
+            return False
+        except afhub.CommandRefused as refusal:
+            return str(refusal)
+    message = wait_until(refused, 5, 'the refusal came back')
+    assert 'the physics refused the command for afhub/arm/base: force 1e+12 N is beyond' in message
+    # No hub: a process of its own in namespaces of its own.
+    env = dict(os.environ)
+    del env['AFHUB_PRIVATE_NAMESPACES']
+    result = subprocess.run(
+        ['bash', os.path.join(os.path.dirname(__file__), '../support/private_namespaces.sh'),
+         sys.executable, '-c', 'import afhub; afhub.Body("arm/base")'],
+        env=env, capture_output=True, text=True)
+    assert result.returncode == 1
+    assert 'afhub.Error: no hub is running. Start one with `afhub hub`' in result.stderr
+
+
+def test_loop_at_1khz_publishes_its_statistics(physics):
+    run = physics(ARM)
+    base = run.wait_for_body('arm/base')
+    seen = {}
+    cycles = [0]
+
+    def cycle(state):
+        cycles[0] += 1
+        base.set_joint_positions(state.joint_positions[:1])
+
+    def watch():  # the loop holds the GIL only in its callback: this thread runs
+        def listed():
+            return [s for s in afhub.loop_stats() if s['name'] == 'python test']
+        seen['stats'] = wait_until(listed, 4, 'the loop in afhub.loop_stats()')
+        top = subprocess.run([AFHUB, 'top', '--once'], capture_output=True, text=True)
+        seen['top'] = top.stdout
+    watcher = threading.Thread(target=watch)
+    watcher.start()
+    report = afhub.Loop(1000, cycle, body=base, name='python test').run(seconds=5)
+    watcher.join()
+    print(f"1 kHz Python loop, 5 s: {report['cycles']} cycles, wake-up latency p50 "
+          f"{report['wake_latency']['p50_us']:.0f} us, p99 {report['wake_latency']['p99_us']:.0f}"
+          f" us, max {report['wake_latency']['max_us']:.0f} us; overruns {report['overruns']}")
+    # The cycle that saw the time run out is counted without calling the callback.
+    assert report['cycles'] - cycles[0] in (0, 1)
+    assert report['cycles'] + report['overruns'] > 4000
+    assert report['period_s'] == pytest.approx(0.001)
+    assert seen['stats'][0]['body'] == 'afhub/arm/base'
+    assert 'python test' in seen['top']
+
+
+def test_loop_ends_on_false_and_raises_what_the_callback_raised():
+    calls = []
+    assert afhub.Loop(1000, lambda: calls.append(1) or len(calls) < 5).run()['cycles'] == 5
+
+    def fail():
+        raise KeyError('from the callback')
+    with pytest.raises(KeyError, match='from the callback'):
+        afhub.Loop(1000, fail).run(seconds=5)
+    with pytest.raises(ValueError, match='lockstep loop answers a body'):
+        afhub.Loop(0, fail, lockstep=True)
+
+
+def lockstep_run(physics, tmp_path, run_index):
+    report = tmp_path / f'report{run_index}.json'
+    run = physics(ARM, '--lockstep', '--wait-for', '1', '--client-timeout', '60000', '--fast',
+                  '--steps', '2000', '--report', report)
+    wait_until(lambda: 'afhub/arm/base' in afhub.bodies(), 20, 'the arm in the catalog')
+    base = afhub.Body('arm/base')
+
+    def answer(state):
+        base.set_joint_positions([0.4 * np.sin(2 * np.pi * state.time), 0.2])
+    loop = afhub.Loop(0, answer, body=base, lockstep=True, name='python lockstep')
+    ended = threading.Thread(target=lambda: (run.wait(120), loop.stop()))
+    ended.start()
+    report_of_loop = loop.run(seconds=120)
+    ended.join()
+    assert run.wait(1) == 0, run.log()
+    assert report_of_loop['cycles'] >= 1999 and report_of_loop['lockstep']
+    text = report.read_text()
+    return text[:text.find('"max_joint_error_m"')]
+
+
+def test_lockstep_runs_are_identical(physics, tmp_path):
+    first = lockstep_run(physics, tmp_path, 1)
+    second = lockstep_run(physics, tmp_path, 2)
+    assert '"steps":2000' in first
+    assert first == second
+
+
+def test_device_state_and_force(tmp_path):
+    log = open(tmp_path / 'device.log', 'w')
+    driver = subprocess.Popen([AFHUB, 'device', 'run', 'virtual', '--name', 'pyhand'],
+                              stdout=log, stderr=subprocess.STDOUT)
+    try:
+        wait_until(lambda: 'device/pyhand' in [e['channel'] for e in afhub.catalog()], 20,
+                   'the virtual device in the catalog')
+        with pytest.raises(afhub.Error, match='is a device, not a body'):
+            afhub.Body('pyhand')
+        hand = afhub.Device('pyhand')
+        assert hand.read(wait_s=5)['model'] == 'virtual'
+
+        # The driver drops a force not commanded again within 10 ms: a 500 Hz loop.
+        def push():
+            hand.command(force=[0.0, 0.0, 2.0])
+            state = hand.read()
+            return not (state['gate'] == 'applying' and state['applied_force'][2] > 1.0)
+        report = afhub.Loop(500, push).run(seconds=10)
+        state = hand.read()
+        assert state['gate'] == 'applying' and state['applied_force'][2] > 1.0, (state, report)
+    finally:
+        driver.send_signal(2)
+        driver.wait(timeout=10)
