@@ -223,9 +223,11 @@ class Records {
     mesh.xyz.resize(3 * header_.vertex_count);
     mesh.triangles.resize(3 * header_.triangle_count);
     const std::size_t xyz_bytes = mesh.xyz.size() * sizeof(float);
-    std::memcpy(mesh.xyz.data(), body_.data(), xyz_bytes);
-    std::memcpy(mesh.triangles.data(), body_.data() + xyz_bytes,
-                mesh.triangles.size() * sizeof(std::uint32_t));
+    // (An empty mesh's vectors have no storage: memcpy must not see their null pointers.)
+    if (!mesh.xyz.empty()) std::memcpy(mesh.xyz.data(), body_.data(), xyz_bytes);
+    if (!mesh.triangles.empty())
+      std::memcpy(mesh.triangles.data(), body_.data() + xyz_bytes,
+                  mesh.triangles.size() * sizeof(std::uint32_t));
     for (std::uint32_t index : mesh.triangles)
       if (index >= header_.vertex_count) throw Error("it wrote a triangle naming no vertex");
   }
