@@ -34,8 +34,9 @@ PACKAGES=(
   jq openssl
   # the tests' private namespaces and their documentation check
   util-linux iproute2 python3
-  # `import afhub` (pybind11 over the hub client; states as numpy arrays) and its tests
-  pybind11-dev python3-dev python3-numpy python3-pytest
+  # `import afhub` (pybind11 over the hub client; states as numpy arrays), its tests, and
+  # the rospy it is compared with (python/examples/bench_vs_rospy.py)
+  pybind11-dev python3-dev python3-numpy python3-pytest python3-rospy
 )
 
 install_packages() {

@@ -12,6 +12,7 @@
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/json_writer.hpp"
 #include "afhub/shm_layout/error.hpp"
+#include "afhub/shm_layout/force_gate_name.hpp"
 
 namespace afhub::cli {
 namespace {
@@ -235,29 +236,6 @@ std::vector<std::string> split_commas(const std::string& text) {
   return out;
 }
 
-}  // namespace afhub::cli
-
-namespace afhub::cli {
-namespace {
-
-const char* gate_name(ForceGate gate) {
-  switch (gate) {
-    case ForceGate::kApplying:
-      return "applying";
-    case ForceGate::kDisabled:
-      return "disabled";
-    case ForceGate::kNoCommand:
-      return "no command";
-    case ForceGate::kWatchdog:
-      return "watchdog";
-    case ForceGate::kStopping:
-      return "stopping";
-  }
-  return "?";
-}
-
-}  // namespace
-
 std::string device_state_json(const BodyEntry& entry, const DeviceState& state) {
   JsonWriter json;
   json.begin_object();
@@ -275,7 +253,7 @@ std::string device_state_json(const BodyEntry& entry, const DeviceState& state) 
   vec3(json, state.velocity.angular_radps);
   json.key("gripper_angle").value(state.gripper_angle_rad);
   json.key("buttons").value(static_cast<long long>(state.buttons));
-  json.key("force_gate").value(gate_name(state.gate));
+  json.key("force_gate").value(force_gate_name(state.gate));
   json.key("applied_force");
   vec3(json, state.applied.force_n);
   json.key("applied_torque");
@@ -291,7 +269,7 @@ std::string device_state_text(const BodyEntry& entry, const DeviceState& state) 
   std::snprintf(line, sizeof line, "%s seq %llu buttons 0x%x gripper %.4f force %s",
                 std::string(name_of(entry.info.channel)).c_str(),
                 static_cast<unsigned long long>(state.header.sequence), state.buttons,
-                state.gripper_angle_rad, gate_name(state.gate));
+                state.gripper_angle_rad, force_gate_name(state.gate));
   std::string out = line;
   const auto v3 = [](const Vec3& v) { return std::array<double, 3>{v.x, v.y, v.z}; };
   append(out, "pos", v3(state.pose.position_m).data(), 3);

@@ -9,6 +9,7 @@
 #include "afhub/rt/clock.hpp"
 #include "afhub/shm_layout/device.hpp"
 #include "afhub/shm_layout/error.hpp"
+#include "afhub/shm_layout/force_gate_name.hpp"
 #include "bindings.hpp"
 
 namespace afhub::python {
@@ -16,22 +17,6 @@ namespace {
 
 py::array vec3(const Vec3& v) {
   return py::array_t<double>(3, &v.x);
-}
-
-const char* gate_name(ForceGate gate) {
-  switch (gate) {
-    case ForceGate::kApplying:
-      return "applying";
-    case ForceGate::kDisabled:
-      return "disabled";
-    case ForceGate::kNoCommand:
-      return "no command";
-    case ForceGate::kWatchdog:
-      return "watchdog";
-    case ForceGate::kStopping:
-      return "stopping";
-  }
-  return "unknown";
 }
 
 class Device {
@@ -77,7 +62,7 @@ class Device {
     for (std::uint32_t i = 0; i < s->spec.button_count && i < 32; ++i)
       buttons.append((s->buttons >> i & 1U) != 0);
     out["buttons"] = buttons;
-    out["gate"] = gate_name(s->gate);
+    out["gate"] = force_gate_name(s->gate);
     out["applied_force"] = vec3(s->applied.force_n);
     out["applied_torque"] = vec3(s->applied.torque_nm);
     out["applied_gripper_force"] = s->applied_gripper_force_n;
