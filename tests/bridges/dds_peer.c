@@ -6,8 +6,9 @@
  * the J joint names j0 .. j<J-1> (default 1), as an exporting bridge does; publishes
  * their states at HZ (default 0: none); with --command, writes position commands of K
  * joints (default 1) to BODY at 500 Hz, as a mirroring bridge does; and counts the
- * states of other bodies it receives. Each second it prints to stdout
- *   dds_peer: states received R, commands sent C
+ * states of other bodies it receives, and the commands to its own bodies (those named
+ * P...). Each second it prints to stdout
+ *   dds_peer: states received R, commands sent C, commands received K
  * for S seconds (default: until SIGTERM). Exit 0, 1 on bad usage, 2 on a DDS error. */
 #include <dds/dds.h>
 #include <signal.h>
@@ -103,6 +104,8 @@ int main(int argc, char** argv) {
   dds_qset_ignorelocal(others_qos, DDS_IGNORELOCAL_PARTICIPANT);
   const dds_entity_t state_reader =
       must(dds_create_reader(participant, state_topic, others_qos, NULL), "state reader");
+  const dds_entity_t command_reader =
+      must(dds_create_reader(participant, command_topic, others_qos, NULL), "command reader");
 
   char(*names)[64] = calloc(joints ? joints : 1, sizeof *names);
   for (unsigned j = 0; j < joints; ++j) snprintf(names[j], sizeof names[j], "j%u", j);
@@ -130,17 +133,23 @@ int main(int argc, char** argv) {
   command.joints._length = command.joints._maximum = command_joints;
   if (command_body) snprintf(command.body, sizeof command.body, "%s", command_body);
 
-  unsigned long long received = 0, sent = 0, step = 0;
+  unsigned long long received = 0, sent = 0, commanded = 0, step = 0;
   const double start = now_s();
   double next_state = start, next_print = start + 1.0;
   afhub_dds_BodyState in;
   memset(&in, 0, sizeof in);
   void* in_samples[1] = {&in};
   dds_sample_info_t in_info;
+  afhub_dds_BodyCommand command_in;
+  memset(&command_in, 0, sizeof command_in);
+  void* command_samples[1] = {&command_in};
+  const size_t prefix_length = strlen(prefix);
   while (!stopping && (seconds <= 0.0 || now_s() - start < seconds)) {
     const double now = now_s();
     while (dds_take(state_reader, in_samples, &in_info, 1, 1) > 0)
       if (in_info.valid_data) ++received;
+    while (dds_take(command_reader, command_samples, &in_info, 1, 1) > 0)
+      if (in_info.valid_data && !strncmp(command_in.body, prefix, prefix_length)) ++commanded;
     if (state_rate > 0.0 && now >= next_state) {
       ++step;
       state.header.sequence_number = step;
@@ -163,15 +172,18 @@ int main(int argc, char** argv) {
       if (dds_write(command_writer, &command) >= 0) ++sent;
     }
     if (now >= next_print) {
-      printf("dds_peer: states received %llu, commands sent %llu\n", received, sent);
+      printf("dds_peer: states received %llu, commands sent %llu, commands received %llu\n",
+             received, sent, commanded);
       fflush(stdout);
       next_print += 1.0;
     }
     struct timespec pause = {0, 2000000};  // 500 Hz
     nanosleep(&pause, NULL);
   }
-  printf("dds_peer: states received %llu, commands sent %llu\n", received, sent);
+  printf("dds_peer: states received %llu, commands sent %llu, commands received %llu\n", received,
+         sent, commanded);
   dds_sample_free(&in, &afhub_dds_BodyState_desc, DDS_FREE_CONTENTS);
+  dds_sample_free(&command_in, &afhub_dds_BodyCommand_desc, DDS_FREE_CONTENTS);
   dds_delete(participant);
   dds_delete_qos(info_qos);
   dds_delete_qos(stream_qos);

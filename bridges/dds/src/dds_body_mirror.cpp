@@ -24,8 +24,8 @@ std::string_view text_of(const char (&name)[N]) noexcept {
 
 BodyMirror::BodyMirror(dds_entity_t participant, const BodyTopics& topics,
                        const DdsBridgeOptions& options, SampleWaiter& arrivals,
-                       MirrorDirectory& directory)
-    : options_(options), arrivals_(arrivals), directory_(directory) {
+                       MirrorDirectory& directory, MirrorClaims& claims)
+    : options_(options), arrivals_(arrivals), directory_(directory), claims_(claims) {
   const Qos stream, info;
   set_stream_qos(stream.get(), options.reliable);
   set_ignore_own(stream.get());
@@ -65,48 +65,58 @@ BodyMirror::Body* BodyMirror::find(std::string_view channel) noexcept {
   return nullptr;
 }
 
+// Announcements are taken only while a claim can be queued: the others wait in the
+// reader until there is room.
 void BodyMirror::take_announcements() {
   void* samples[1] = {nullptr};  // loaned from the reader: joint name lists vary
   dds_sample_info_t info;
-  while (dds_take(info_reader_.id(), samples, &info, 1, 1) > 0) {
+  while (claims_.has_room() && dds_take(info_reader_.id(), samples, &info, 1, 1) > 0) {
     const auto* body_info = static_cast<const afhub_dds_BodyInfo*>(samples[0]);
     const std::string_view channel = text_of(body_info->body);
     if (info.valid_data && matches_any(std::string(channel), options_.body_globs) &&
-        !find(channel) && !refused_.count(std::string(channel)))
-      add(*body_info);
+        !find(channel) && claims_.may_ask(channel))
+      ask(*body_info);
     dds_return_loan(info_reader_.id(), samples, 1);
     samples[0] = nullptr;
   }
 }
 
-// A body that does not fit (too many joints for a state, too many bodies for this
-// hub, or a directory larger than its chunks) is refused, said once.
-void BodyMirror::add(const afhub_dds_BodyInfo& info) {
+void BodyMirror::ask(const afhub_dds_BodyInfo& info) {
   const std::string channel(text_of(info.body));
-  try {
-    if (info.joint_names._length > kMaxJointsPerBody)
-      throw Error("it has " + std::to_string(info.joint_names._length) +
-                  " joints; a body state holds at most " + std::to_string(kMaxJointsPerBody));
-    std::vector<std::string> joint_names;
-    for (std::uint32_t j = 0; j < info.joint_names._length; ++j)
+  const std::uint32_t joints = info.joint_names._length;
+  std::vector<std::string> joint_names;
+  if (joints <= kMaxJointsPerBody)
+    for (std::uint32_t j = 0; j < joints; ++j)
       joint_names.emplace_back(text_of(info.joint_names._buffer[j]));
-    const BodyEntry entry = make_body_entry(channel, joint_names);
-    directory_.check_room(entry);
-    check_room_for_bodies({channel}, 1);
-    Body body{channel, static_cast<std::uint32_t>(joint_names.size()),
-              std::make_unique<BodyPublisher>(channel)};
-    directory_.add(entry);
-    arrivals_.attach(body.publisher->command_reader());  // when full: by the cycle alone
-    {
-      const std::lock_guard lock(mutex_);
-      mirrored_.push_back(std::move(body));
-    }
-    std::fprintf(stderr, "afhub bridge dds: mirroring %s (%zu joints)\n", channel.c_str(),
-                 joint_names.size());
-  } catch (const Error& error) {
-    std::fprintf(stderr, "afhub bridge dds: not mirroring %s: %s\n", channel.c_str(), error.what());
-    refused_.insert(channel);
+  claims_.ask(channel,
+              [this, channel, joints, joint_names] { return claim(channel, joints, joint_names); });
+}
+
+// On the claims' thread. A body that does not fit (too many joints for a state, too
+// many bodies for this hub, or a directory larger than its chunks) is refused.
+MirrorClaims::Install BodyMirror::claim(const std::string& channel, std::uint32_t announced_joints,
+                                        const std::vector<std::string>& joint_names) {
+  if (announced_joints > kMaxJointsPerBody)
+    throw Error("it has " + std::to_string(announced_joints) +
+                " joints; a body state holds at most " + std::to_string(kMaxJointsPerBody));
+  const BodyEntry entry = make_body_entry(channel, joint_names);
+  directory_.check_room(entry);
+  check_room_for_bodies({channel}, 1);
+  auto body = std::make_shared<Body>(
+      Body{channel, announced_joints, std::make_unique<BodyPublisher>(channel)});
+  directory_.add(entry);
+  return [this, body] { install(std::move(*body)); };
+}
+
+// On the loop's thread, which owns the waiter and is the one that grows the bodies.
+void BodyMirror::install(Body body) {
+  arrivals_.attach(body.publisher->command_reader());  // when full: by the cycle alone
+  {
+    const std::lock_guard lock(mutex_);
+    mirrored_.push_back(std::move(body));
   }
+  std::fprintf(stderr, "afhub bridge dds: mirroring %s (%u joints)\n",
+               mirrored_.back().channel.c_str(), static_cast<unsigned>(mirrored_.back().joints));
 }
 
 // On Cyclone's receive thread, so that a state never waits for the bridge's loop.
@@ -124,7 +134,10 @@ void BodyMirror::mirror_states() {
   while (!hub_lost() && dds_take(state_reader_.id(), samples, &info, 1, 1) > 0) {
     if (!info.valid_data) continue;
     Body* body = find(text_of(state_in_.body));
-    if (!body) continue;  // its info has not come yet, or it was refused
+    if (!body) {  // being claimed (counted), its info has not come yet, or it was refused
+      claims_.drop_if_pending(text_of(state_in_.body));
+      continue;
+    }
     BodyState* state = body->publisher->loan_state(body->joints);
     if (!state) continue;
     from_dds(state_in_, *state);

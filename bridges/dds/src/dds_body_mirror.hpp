@@ -2,7 +2,8 @@
 // become this hub's bodies, owned by the bridge and listed in its directory (within
 // its bounds: mirror_directory.hpp); their "afhub/body_state" samples are published
 // into the hub as they arrive, and the commands written to them here go back out as
-// "afhub/body_command" samples, stamped with their age.
+// "afhub/body_command" samples, stamped with their age. Bodies are claimed off the
+// loop (mirror_claims.hpp), so that a slow claim stalls neither states nor commands.
 // In steady state nothing here allocates: samples are made once with full-capacity
 // sequences, and bodies are looked up in a vector made when they appear.
 #pragma once
@@ -12,7 +13,6 @@
 #include <cstdint>
 #include <memory>
 #include <mutex>
-#include <set>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -24,6 +24,7 @@
 #include "afhub_dds.h"
 #include "dds_body_topics.hpp"
 #include "dds_entity.hpp"
+#include "mirror_claims.hpp"
 #include "mirror_directory.hpp"
 
 namespace afhub::bridges {
@@ -34,15 +35,17 @@ struct MirrorCounters {
 
 class BodyMirror {
  public:
-  // `arrivals` is woken by each command written here to a mirrored body, and
-  // `directory` lists the mirrored bodies; both must outlive this.
+  // `arrivals` is woken by each command written here to a mirrored body, `directory`
+  // lists the mirrored bodies, and `claims` claims them; all must outlive this, and
+  // `claims` must stop before this goes (its claims use it).
   BodyMirror(dds_entity_t participant, const BodyTopics& topics, const DdsBridgeOptions& options,
-             SampleWaiter& arrivals, MirrorDirectory& directory);
+             SampleWaiter& arrivals, MirrorDirectory& directory, MirrorClaims& claims);
   ~BodyMirror();  // Cyclone's thread is done with this before anything goes
   BodyMirror(const BodyMirror&) = delete;
   BodyMirror& operator=(const BodyMirror&) = delete;
 
-  // On the loop's thread: bodies newly announced, and commands to mirrored bodies out.
+  // On the loop's thread: bodies newly announced (asked of the claims), and commands to
+  // mirrored bodies out.
   void take_announcements();
   void export_commands() noexcept;
   // Whether this bridge mirrors `channel` (never exported back).
@@ -62,12 +65,16 @@ class BodyMirror {
 
   static void on_states(dds_entity_t reader, void* self);
   void mirror_states();
-  void add(const afhub_dds_BodyInfo& info);
+  void ask(const afhub_dds_BodyInfo& info);
+  MirrorClaims::Install claim(const std::string& channel, std::uint32_t announced_joints,
+                              const std::vector<std::string>& joint_names);  // claims' thread
+  void install(Body body);
   Body* find(std::string_view channel) noexcept;
 
   const DdsBridgeOptions& options_;
   SampleWaiter& arrivals_;
-  MirrorDirectory& directory_;
+  MirrorDirectory& directory_;  // the claims' thread's
+  MirrorClaims& claims_;
   Entity state_reader_, info_reader_, command_writer_;
   afhub_dds_BodyState state_in_{};       // taken on Cyclone's thread (on_states)
   afhub_dds_BodyCommand command_out_{};  // written on the loop's thread
@@ -75,7 +82,6 @@ class BodyMirror {
   // while it publishes states; the loop reads them without it.
   mutable std::mutex mutex_;
   std::vector<Body> mirrored_;
-  std::set<std::string> refused_;  // said once, not tried again
   MirrorCounters counters_;
   LatencyHistogram state_ages_;  // --latency: source publish to publish here
 };

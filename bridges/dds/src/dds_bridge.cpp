@@ -1,9 +1,10 @@
 // `afhub bridge dds` (see dds_bridge.hpp): one loop at --rate that exports local bodies
 // (dds_body_export.hpp) and mirrors remote ones (dds_body_mirror.hpp), devices and the
 // world beside them (dds_device_world.hpp). States and commands from DDS never wait
-// for this loop: Cyclone's thread that receives them publishes them into the hub. The
-// catalog is rescanned for new bodies once a second (which may allocate; it is not per
-// message).
+// for this loop: Cyclone's thread that receives them publishes them into the hub. Nor
+// does this loop wait for the hub to make room for a newly mirrored body or device: a
+// thread of their own claims them (mirror_claims.hpp). The catalog is rescanned for new
+// bodies once a second (which may allocate; it is not per message).
 #include "afhub/bridges/dds_bridge.hpp"
 
 #include <dds/dds.h>
@@ -28,6 +29,7 @@
 #include "dds_device_world.hpp"
 #include "dds_entity.hpp"
 #include "dds_security.hpp"
+#include "mirror_claims.hpp"
 #include "mirror_directory.hpp"
 
 namespace afhub::bridges {
@@ -59,11 +61,14 @@ class Bridge {
     topics_ = std::make_unique<BodyTopics>(p);
     if (options.mirror) {
       directory_ = std::make_unique<MirrorDirectory>(options.max_mirrored);
-      mirror_ = std::make_unique<BodyMirror>(p, *topics_, options, arrivals_, *directory_);
+      claims_ = std::make_unique<MirrorClaims>(MirrorClaims::Limits{});
+      mirror_ =
+          std::make_unique<BodyMirror>(p, *topics_, options, arrivals_, *directory_, *claims_);
     }
     if (options.export_bodies)
       export_ = std::make_unique<BodyExport>(p, *topics_, options, arrivals_);
-    devices_and_world_ = std::make_unique<DeviceWorldBridge>(p, options, directory_.get());
+    devices_and_world_ =
+        std::make_unique<DeviceWorldBridge>(p, options, directory_.get(), claims_.get());
   }
 
   int run() {
@@ -89,6 +94,7 @@ class Bridge {
           next_scan_ns = now_ns + 1'000'000'000;
         }
         if (mirror_) mirror_->take_announcements();
+        if (claims_) claims_->install_claimed();
       }
       if (now_ns >= next_report_ns || report_requested) {
         report_requested = 0;
@@ -177,6 +183,7 @@ class Bridge {
                    static_cast<unsigned long long>(extra.commands_in),
                    static_cast<unsigned long long>(extra.stale_commands),
                    static_cast<unsigned long long>(extra.bad_samples));
+    if (claims_) claims_->report();
     if (mirror_) mirror_->report();
   }
 
@@ -191,6 +198,8 @@ class Bridge {
   std::unique_ptr<BodyMirror> mirror_;
   std::unique_ptr<BodyExport> export_;
   std::unique_ptr<DeviceWorldBridge> devices_and_world_;  // --devices, --world
+  // Last, so first to go: its thread stops before the mirror and devices its claims use.
+  std::unique_ptr<MirrorClaims> claims_;
 };
 
 }  // namespace

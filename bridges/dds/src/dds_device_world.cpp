@@ -42,8 +42,8 @@ bool rate_allows(std::int64_t now_ns, std::int64_t& last_ns, double rate_hz) {
 }  // namespace
 
 DeviceWorldBridge::DeviceWorldBridge(dds_entity_t participant, const DdsBridgeOptions& options,
-                                     MirrorDirectory* directory)
-    : options_(options), directory_(directory), world_(world_instance()) {
+                                     MirrorDirectory* directory, MirrorClaims* claims)
+    : options_(options), directory_(directory), claims_(claims), world_(world_instance()) {
   const bool devices = !options.device_globs.empty();
   const Qos stream, commands;
   set_stream_qos(stream.get(), options.reliable);
@@ -220,22 +220,36 @@ void DeviceWorldBridge::import_commands() noexcept {
   }
 }
 
-void DeviceWorldBridge::add_mirrored_device(const char* channel) {
-  const std::string name(device_name_of(channel));
+// A new remote device (its spec comes in every state): asked for once, not per
+// message; its states are dropped until it is in place.
+void DeviceWorldBridge::ask_for_device(const char* channel) noexcept {
+  const std::string_view text(channel);
+  if (claims_->drop_if_pending(text) || text.rfind(kDevicePrefix, 0) != 0) return;
   try {
-    const BodyEntry entry = make_device_entry(name);
-    directory_->check_room(entry);
-    check_room_for_bodies({channel}, 1);
-    MirroredDevice device{
-        channel, std::make_unique<Writer<DeviceState>>(body_state_channel(channel)),
-        std::make_unique<LatestReader<DeviceCommand>>(body_command_channel(channel))};
-    directory_->add(entry);
-    mirrored_.push_back(std::move(device));
-    std::fprintf(stderr, "afhub bridge dds: mirroring device %s\n", channel);
-  } catch (const Error& error) {
-    std::fprintf(stderr, "afhub bridge dds: not mirroring device %s: %s\n", channel, error.what());
-    refused_.emplace_back(channel);
+    if (!matches_any(std::string(device_name_of(text)), options_.device_globs) ||
+        !claims_->may_ask(text))
+      return;
+    const std::string name(text);
+    claims_->ask(name, [this, name] { return claim_device(name); });
+  } catch (const std::exception&) {
+    // Out of memory: asked again with the next state.
   }
+}
+
+// On the claims' thread: a device that does not fit is refused.
+MirrorClaims::Install DeviceWorldBridge::claim_device(const std::string& channel) {
+  const BodyEntry entry = make_device_entry(device_name_of(channel));
+  directory_->check_room(entry);
+  check_room_for_bodies({channel}, 1);
+  auto device = std::make_shared<MirroredDevice>(
+      MirroredDevice{channel, std::make_unique<Writer<DeviceState>>(body_state_channel(channel)),
+                     std::make_unique<LatestReader<DeviceCommand>>(body_command_channel(channel))});
+  directory_->add(entry);
+  return [this, device] {
+    mirrored_.push_back(std::move(*device));
+    std::fprintf(stderr, "afhub bridge dds: mirroring device %s\n",
+                 mirrored_.back().channel.c_str());
+  };
 }
 
 void DeviceWorldBridge::mirror_devices() noexcept {
@@ -246,21 +260,8 @@ void DeviceWorldBridge::mirror_devices() noexcept {
     const char* channel = device_state_sample_.device;
     MirroredDevice* device = find_mirrored(channel);
     if (!device) {
-      // A new remote device (its spec comes in every state): once, not per message.
-      const std::string_view text(channel);
-      if (text.rfind(kDevicePrefix, 0) != 0 ||
-          !matches_any(std::string(device_name_of(text)), options_.device_globs))
-        continue;
-      bool refused = false;
-      for (const std::string& name : refused_) refused = refused || name == text;
-      if (refused) continue;
-      try {
-        add_mirrored_device(channel);
-      } catch (const std::exception&) {
-        continue;  // out of memory: tried again with the next state
-      }
-      device = find_mirrored(channel);
-      if (!device) continue;
+      ask_for_device(channel);
+      continue;
     }
     DeviceState* state = device->state->loan();
     if (!state) continue;

@@ -6,7 +6,8 @@
 //   bound go into the local command channels.
 //   Mirror: remote devices become this hub's devices (the catalog lists them as
 //   devices), the remote world state is published as this hub's world, and the
-//   device and world commands written here go back over DDS.
+//   device and world commands written here go back over DDS. Devices are claimed off
+//   the loop (mirror_claims.hpp).
 // World commands are each acted on once, so they travel reliably, with a short queue.
 #pragma once
 
@@ -26,6 +27,7 @@
 #include "afhub/shm_layout/device.hpp"
 #include "afhub/shm_layout/world.hpp"
 #include "afhub_dds.h"
+#include "mirror_claims.hpp"
 #include "mirror_directory.hpp"
 
 namespace afhub::bridges {
@@ -42,9 +44,11 @@ inline bool too_old(dds_time_t source_timestamp, double max_age_s) {
 
 class DeviceWorldBridge {
  public:
-  // `directory`: the mirror's directory of this process's channels (null when not mirroring).
+  // `directory`: the mirror's directory of this process's channels, and `claims`, which
+  // claims mirrored devices (both null when not mirroring; `claims` stops before this
+  // goes).
   DeviceWorldBridge(dds_entity_t participant, const DdsBridgeOptions& options,
-                    MirrorDirectory* directory);
+                    MirrorDirectory* directory, MirrorClaims* claims);
   ~DeviceWorldBridge();
   DeviceWorldBridge(const DeviceWorldBridge&) = delete;
   DeviceWorldBridge& operator=(const DeviceWorldBridge&) = delete;
@@ -74,13 +78,15 @@ class DeviceWorldBridge {
     std::unique_ptr<LatestReader<DeviceCommand>> command;
   };
   void mirror_devices() noexcept;
-  void add_mirrored_device(const char* channel);
+  void ask_for_device(const char* channel) noexcept;
+  MirrorClaims::Install claim_device(const std::string& channel);  // claims' thread
   ExportedDevice* find_exported(const char* channel) noexcept;
   MirroredDevice* find_mirrored(const char* channel) noexcept;
   void mirror_world() noexcept;
 
   const DdsBridgeOptions& options_;
-  MirrorDirectory* directory_;
+  MirrorDirectory* directory_;  // the claims' thread's
+  MirrorClaims* claims_;
   std::string world_;  // the world's channel instance
   dds_entity_t device_state_topic_ = 0, device_command_topic_ = 0;
   dds_entity_t world_state_topic_ = 0, world_command_topic_ = 0;
@@ -95,7 +101,6 @@ class DeviceWorldBridge {
   std::vector<ExportedDevice> exported_;
   std::set<std::string> not_exported_;  // refused a port, said once
   std::vector<MirroredDevice> mirrored_;
-  std::vector<std::string> refused_;
   // Export: the local world's state and command channels; mirror: the remote world's.
   std::unique_ptr<LatestReader<WorldState>> world_state_in_;
   std::unique_ptr<Writer<WorldCommand>> world_command_out_;
