@@ -17,7 +17,7 @@
 #include "afhub/controllers/joint_targets.hpp"
 #include "afhub/hub/channel.hpp"
 #include "afhub/hub/hub_presence.hpp"
-#include "afhub/hub/process_spawn.hpp"
+#include "afhub/rt/process_spawn.hpp"
 #include "afhub/rt/stop_signal.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "afhub/shm_layout/world.hpp"
@@ -26,7 +26,7 @@
 namespace afhub::bench {
 namespace {
 
-constexpr std::int64_t kPeriodNs = 1'000'000;
+constexpr std::int64_t kControllerPeriodNs = 1'000'000;
 
 // cyclictest -h output: "# Histogram", one "bin count" line per microsecond, then
 // "# Max Latencies: N" and "# Histogram Overflows: N".
@@ -76,7 +76,7 @@ void run_loop_bench(const BenchOptions& options, LoopResult& result) {
                         priority, "--lock-memory"},
                        prefix + "-physics.log");
 
-  const auto cycles = static_cast<std::uint64_t>(options.loop_seconds * 1e9 / kPeriodNs);
+  const auto cycles = static_cast<std::uint64_t>(options.loop_seconds * 1e9 / kControllerPeriodNs);
   std::unique_ptr<ChildProcess> cyclictest;
   if (access("/usr/bin/cyclictest", X_OK) == 0)
     cyclictest = std::make_unique<ChildProcess>(
@@ -91,11 +91,11 @@ void run_loop_bench(const BenchOptions& options, LoopResult& result) {
   ControllerOptions controller;
   controller.name = "bench";
   controller.body = options.body;
-  controller.loop.period_ns = kPeriodNs;
+  controller.loop.period_ns = kControllerPeriodNs;
   controller.loop.fifo_priority = options.fifo_priority;
   controller.loop.lock_memory = true;
   controller.loop.max_cycles = cycles;
-  controller.after_step_ns = kPeriodNs / 2;
+  controller.after_step_ns = kControllerPeriodNs / 2;
   LoopTiming timing;
   // The counters at the start are read on the first cycle, once the physics runs.
   bool started = false;

@@ -11,7 +11,7 @@
 #include <memory>
 
 #include "afhub/bench/bench.hpp"
-#include "afhub/hub/process_spawn.hpp"
+#include "afhub/rt/process_spawn.hpp"
 #include "afhub/rt/stop_signal.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "child_process.hpp"

@@ -11,16 +11,16 @@
 #include <fstream>
 #include <iterator>
 
-#include "afhub/hub/process_spawn.hpp"
 #include "afhub/rt/cpu_wake_latency.hpp"
 #include "afhub/rt/periodic_loop.hpp"
+#include "afhub/rt/process_spawn.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "child_process.hpp"
 
 namespace afhub::bench {
 namespace {
 
-constexpr std::int64_t kPeriodNs = 1'000'000;
+constexpr std::int64_t kWakePeriodNs = 1'000'000;
 constexpr int kFifoPriority = 80;
 
 // The kernel's limit now, in us; -1 when it cannot be read.
@@ -49,11 +49,11 @@ int run_wake_peer(std::size_t setting, double seconds) {
     throw Error("no wake-up setting " + std::to_string(setting));
   const WakeSetting& wanted = wake_settings()[setting];
   LoopOptions loop;
-  loop.period_ns = kPeriodNs;
+  loop.period_ns = kWakePeriodNs;
   loop.fifo_priority = wanted.fifo_priority;
   loop.cpu_wake_latency_us = wanted.cpu_wake_latency_us;
   loop.timer_slack_ns = wanted.timer_slack_ns;
-  loop.max_cycles = static_cast<std::uint64_t>(std::llround(seconds * 1e9 / kPeriodNs));
+  loop.max_cycles = static_cast<std::uint64_t>(std::llround(seconds * 1e9 / kWakePeriodNs));
   const RealtimeGrant grant = apply_realtime(loop, "afhub bench wake");
   if (wanted.fifo_priority > 0 && !grant.realtime) {
     std::printf("refused: SCHED_FIFO needs root, CAP_SYS_NICE or `ulimit -r`\n");

@@ -4,7 +4,6 @@
 #include <fcntl.h>
 #include <poll.h>
 #include <signal.h>
-#include <spawn.h>
 #include <sys/syscall.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -17,6 +16,7 @@
 #include <string_view>
 
 #include "afhub/physics/mesh.hpp"
+#include "afhub/rt/process_spawn.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "mesh_wire.hpp"
 
@@ -61,44 +61,25 @@ bool executable(const std::string& path) {
 
 // Starts the reader on `files`, its stdout and stderr on the pipes' write ends, with
 // nothing else of this process: no other descriptor (the hub's shared memory), the
-// default signal handling, an empty signal mask. posix_spawn, not fork: this process
-// may run iceoryx's threads. (The physics core cannot use hub/client's spawn_process:
-// it stands on shm_layout alone.)
+// default signal handling, an empty signal mask.
 pid_t start_reader(const std::string& program, const std::vector<std::string>& files, int out,
                    int err) {
-  posix_spawn_file_actions_t actions;
-  posix_spawnattr_t attributes;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawnattr_init(&attributes);
-  posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
-  posix_spawn_file_actions_adddup2(&actions, out, STDOUT_FILENO);
-  posix_spawn_file_actions_adddup2(&actions, err, STDERR_FILENO);
-  posix_spawn_file_actions_addclosefrom_np(&actions, 3);
-  sigset_t signals;
-  sigemptyset(&signals);
-  posix_spawnattr_setsigmask(&attributes, &signals);
-  sigfillset(&signals);
-  posix_spawnattr_setsigdefault(&attributes, &signals);
-  posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETSIGMASK | POSIX_SPAWN_SETSIGDEF);
-  std::vector<char*> argv{const_cast<char*>(program.c_str())};
-  for (const std::string& file : files) argv.push_back(const_cast<char*>(file.c_str()));
-  argv.push_back(nullptr);
+  std::vector<std::string> argv{program};
+  argv.insert(argv.end(), files.begin(), files.end());
+  SpawnOptions options;
+  options.stdout_fd = out;
+  options.stderr_fd = err;
+  options.null_stdin = true;
+  options.close_other_descriptors = true;
   // Its heap on huge pages (glibc's tunable): a fresh process faulting in its memory a
   // page at a time is a fifth of what reading small meshes costs.
-  static char kHugePages[] = "GLIBC_TUNABLES=glibc.malloc.hugetlb=1";
-  std::vector<char*> environment;
-  for (char** entry = environ; *entry; ++entry) environment.push_back(*entry);
-  if (!std::getenv("GLIBC_TUNABLES")) environment.push_back(kHugePages);
-  environment.push_back(nullptr);
-  pid_t pid = -1;
-  const int error =
-      ::posix_spawn(&pid, program.c_str(), &actions, &attributes, argv.data(), environment.data());
-  posix_spawnattr_destroy(&attributes);
-  posix_spawn_file_actions_destroy(&actions);
-  if (error != 0)
-    throw Error("cannot read meshes: cannot start the mesh reader " + program + ": " +
-                std::strerror(error));
-  return pid;
+  if (!std::getenv("GLIBC_TUNABLES"))
+    options.extra_environment.push_back("GLIBC_TUNABLES=glibc.malloc.hugetlb=1");
+  try {
+    return spawn_process(argv, options);
+  } catch (const Error& error) {
+    throw Error(std::string("cannot read meshes: ") + error.what());
+  }
 }
 
 // The reader process, killed and reaped however the reading ends.

@@ -32,7 +32,7 @@
 #include <vector>
 
 #include "afhub/hub/hub_presence.hpp"
-#include "afhub/hub/process_spawn.hpp"
+#include "afhub/rt/process_spawn.hpp"
 #include "afhub/shm_layout/body_command.hpp"
 #include "afhub/shm_layout/body_state.hpp"
 #include "afhub/shm_layout/world.hpp"

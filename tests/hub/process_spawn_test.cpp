@@ -1,7 +1,7 @@
-// spawn_process (afhub/hub/process_spawn.hpp): the program's exit code and output, a
+// spawn_process (afhub/rt/process_spawn.hpp): the program's exit code and output, a
 // clear error for a program that cannot start, a clean signal state, and a detached
 // child in its own session, reaped so that it leaves no zombie.
-#include "afhub/hub/process_spawn.hpp"
+#include "afhub/rt/process_spawn.hpp"
 
 #include <gtest/gtest.h>
 #include <signal.h>

@@ -82,7 +82,7 @@ TEST_F(MeshReader, AReaderThatCannotBeStartedIsAnError) {
     read_mesh_files({"/a.stl"}, options);
     ADD_FAILURE() << "no error";
   } catch (const Error& error) {
-    EXPECT_TRUE(contains(error.what(), "cannot start the mesh reader " + options.program))
+    EXPECT_TRUE(contains(error.what(), "cannot read meshes: cannot start " + options.program))
         << error.what();
   }
 }

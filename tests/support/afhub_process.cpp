@@ -15,7 +15,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "afhub/hub/process_spawn.hpp"
+#include "afhub/rt/process_spawn.hpp"
 #include "afhub/shm_layout/error.hpp"
 
 namespace afhub::test {

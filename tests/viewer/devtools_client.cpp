@@ -12,7 +12,7 @@
 #include <sstream>
 #include <thread>
 
-#include "afhub/hub/process_spawn.hpp"
+#include "afhub/rt/process_spawn.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "afhub_process.hpp"
 #include "web_client.hpp"

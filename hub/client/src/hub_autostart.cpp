@@ -12,7 +12,7 @@
 
 #include "afhub/hub/hub_files.hpp"
 #include "afhub/hub/hub_presence.hpp"
-#include "afhub/hub/process_spawn.hpp"
+#include "afhub/rt/process_spawn.hpp"
 #include "afhub/rt/stop_signal.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "afhub_executable.hpp"

@@ -14,34 +14,32 @@ namespace {
 constexpr auto kPublishPeriod = std::chrono::seconds(1);
 constexpr auto kSubscriberPeriod = std::chrono::milliseconds(100);
 
-template <class Topic>
-iox::popo::SubscriberOptions latest_only() {
-  iox::popo::SubscriberOptions options;
-  options.queueCapacity = 1;
-  options.historyRequest = 1;
-  return options;
-}
-
-// Keeps the newest sample of an introspection topic.
-template <class Topic>
-struct LatestTopic {
-  explicit LatestTopic(const iox::capro::ServiceDescription& service)
-      : subscriber(service, latest_only<Topic>()) {}
-  const Topic* latest() {
-    for (;;) {
-      auto taken = subscriber.take();
-      if (taken.has_error()) break;
-      held.emplace(std::move(taken.value()));
-    }
-    return held ? held->get() : nullptr;
-  }
-  iox::popo::Subscriber<Topic> subscriber;
-  std::optional<iox::popo::Sample<const Topic>> held;
-};
-
 }  // namespace
 
 struct HealthReporter::Introspection {
+  // Keeps the newest sample of an introspection topic.
+  template <class Topic>
+  struct LatestTopic {
+    explicit LatestTopic(const iox::capro::ServiceDescription& service)
+        : subscriber(service, latest_only()) {}
+    static iox::popo::SubscriberOptions latest_only() {
+      iox::popo::SubscriberOptions options;
+      options.queueCapacity = 1;
+      options.historyRequest = 1;
+      return options;
+    }
+    const Topic* latest() {
+      for (;;) {
+        auto taken = subscriber.take();
+        if (taken.has_error()) break;
+        held.emplace(std::move(taken.value()));
+      }
+      return held ? held->get() : nullptr;
+    }
+    iox::popo::Subscriber<Topic> subscriber;
+    std::optional<iox::popo::Sample<const Topic>> held;
+  };
+
   LatestTopic<iox::roudi::ProcessIntrospectionFieldTopic> processes{
       iox::roudi::IntrospectionProcessService};
   LatestTopic<iox::roudi::MemPoolIntrospectionInfoContainer> mempools{

@@ -19,6 +19,13 @@ struct SpawnOptions {
   int stderr_fd = -1;
   // When not empty, stdout and stderr go to this file instead (created, truncated).
   std::string output_path;
+  // stdin from /dev/null (as a detached child's always is).
+  bool null_stdin = false;
+  // Only the standard streams go across: every other descriptor of this process (its
+  // shared memory, a socket not opened O_CLOEXEC) is closed in the child.
+  bool close_other_descriptors = false;
+  // Set in the child's environment beside this process's ("NAME=value" each).
+  std::vector<std::string> extra_environment;
   // argv[0] found on PATH when it holds no '/' (as execvp).
   bool search_path = false;
   // In a process group of its own (its pid), so that one kill(-pid) reaches it and the

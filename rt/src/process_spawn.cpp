@@ -1,5 +1,5 @@
 // Starting programs with posix_spawn (see process_spawn.hpp).
-#include "afhub/hub/process_spawn.hpp"
+#include "afhub/rt/process_spawn.hpp"
 
 #include <fcntl.h>
 #include <signal.h>
@@ -53,7 +53,7 @@ pid_t spawn_process(const std::vector<std::string>& argv, const SpawnOptions& op
   posix_spawnattr_setflags(&setup.attributes, flags);
 
   posix_spawn_file_actions_t& actions = setup.actions;
-  if (options.detached && options.stdin_fd < 0)
+  if ((options.detached || options.null_stdin) && options.stdin_fd < 0)
     posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
   redirect(actions, options.stdin_fd, STDIN_FILENO);
   redirect(actions, options.stdout_fd, STDOUT_FILENO);
@@ -63,13 +63,19 @@ pid_t spawn_process(const std::vector<std::string>& argv, const SpawnOptions& op
                                      O_WRONLY | O_CREAT | O_TRUNC, 0644);
     posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
   }
+  if (options.close_other_descriptors) posix_spawn_file_actions_addclosefrom_np(&actions, 3);
 
   std::vector<char*> arguments;
   for (const std::string& argument : argv) arguments.push_back(const_cast<char*>(argument.c_str()));
   arguments.push_back(nullptr);
+  std::vector<char*> environment;
+  for (char** entry = environ; *entry; ++entry) environment.push_back(*entry);
+  for (const std::string& entry : options.extra_environment)
+    environment.push_back(const_cast<char*>(entry.c_str()));
+  environment.push_back(nullptr);
   pid_t pid = -1;
   const int error = (options.search_path ? posix_spawnp : posix_spawn)(
-      &pid, arguments.front(), &actions, &setup.attributes, arguments.data(), environ);
+      &pid, arguments.front(), &actions, &setup.attributes, arguments.data(), environment.data());
   if (error != 0)
     throw Error("cannot start " + argv.front() +
                 (options.output_path.empty() ? "" : " with its output to " + options.output_path) +
