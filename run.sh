@@ -17,8 +17,9 @@ PACKAGES=(
   iceoryx libiceoryx-posh-dev libiceoryx-hoofs-dev libacl1-dev
   libcli11-dev libyaml-cpp-dev libbullet-dev libassimp-dev libeigen3-dev
   libgtest-dev libgmock-dev libbenchmark-dev clang-format
-  # URDF robots: liburdfdom parses them; Orocos KDL is the tests' independent reference
-  liburdfdom-dev liborocos-kdl-dev libkdl-parser-dev
+  # URDF robots: liburdfdom parses them (TinyXML, its XML parser, locates errors);
+  # Orocos KDL is the tests' independent reference
+  liburdfdom-dev libtinyxml-dev liborocos-kdl-dev libkdl-parser-dev
   # the tests' strict JSON reader (tests only)
   nlohmann-json3-dev
   # afhub bench: the transports it compares with, the machine's floor, the plot

@@ -6,6 +6,7 @@
 
 #include "afhub/hub/hub_loss.hpp"
 #include "afhub/hub/hub_presence.hpp"
+#include "afhub/physics/mesh_fallback.hpp"
 #include "afhub/physics/run_loop.hpp"
 #include "afhub/physics/scene_loader.hpp"
 #include "afhub/rt/periodic_loop.hpp"
@@ -28,6 +29,7 @@ struct RunCliOptions {
       name_space;
   std::string gravity;                       // "x,y,z": over the world's and every file's
   std::vector<std::string> watchdog_bodies;  // "BODY=SECONDS"
+  std::vector<std::string> placements;       // "FILE=x,y,z[,r,p,y]"
   double dt_s = 0.001;
   double watchdog_s = 0.5;
   std::uint64_t steps = 0;
@@ -43,6 +45,7 @@ struct RunCliOptions {
   bool stop_on_nan = false;
   std::string overrun = "catch-up";
   double max_catch_up_ms = 100.0;
+  std::string mesh_fallback = "refuse";
   GainOptions gains;
   physics::UrdfOptions urdf;
 };
@@ -67,6 +70,8 @@ int run_run(const RunCliOptions& options) {
     throw Error("--wait-timeout needs --wait-for N: it limits the wait for N lockstep clients");
   if (options.overrun != "catch-up" && options.overrun != "skip")
     throw Error("--overrun takes skip or catch-up, got '" + options.overrun + "'");
+  if (options.mesh_fallback != "refuse" && options.mesh_fallback != "box")
+    throw Error("--mesh-fallback takes refuse or box, got '" + options.mesh_fallback + "'");
   if (!(options.max_catch_up_ms >= 0.0 && options.max_catch_up_ms <= 10'000.0))
     throw Error("--max-catch-up must be 0 to 10000 ms, got " +
                 std::to_string(options.max_catch_up_ms));
@@ -103,6 +108,8 @@ int run_run(const RunCliOptions& options) {
   request.adf_files.insert(request.adf_files.end(), options.files.begin(), options.files.end());
   request.world_file = options.world_file;
   request.urdf = options.urdf;
+  for (const std::string& placement : options.placements)
+    request.placements.push_back(physics::parse_file_placement(placement));
 
   physics::Model model;
   try {
@@ -118,6 +125,10 @@ int run_run(const RunCliOptions& options) {
     const std::vector<double> g = parse_numbers(options.gravity, "--gravity", 3);
     physics::override_gravity(model, {g[0], g[1], g[2]});
   }
+
+  if (options.mesh_fallback == "box")
+    for (const std::string& warning : physics::fall_back_to_boxes(model))
+      std::fprintf(stderr, "%s\n", warning.c_str());
 
   install_stop_signal_handlers();
   std::unique_ptr<physics::Simulation> built;
@@ -162,6 +173,11 @@ int run_run(const RunCliOptions& options) {
   physics::RunReport report;
   if (!options.step_log_file.empty()) report.step_log.reserve(options.steps);
   physics::run_loop(sim, channels.get(), run, report);
+  // Where the loops held worst: the joint, its pivot gap and the step (`--report` has each
+  // joint's).
+  if (const std::string worst = physics::worst_joint_summary(report, sim); !worst.empty())
+    std::fprintf(stderr, "afhub run: %llu steps; %s\n",
+                 static_cast<unsigned long long>(report.steps), worst.c_str());
   if (const std::string nan = physics::nan_summary(sim); !nan.empty()) {
     if (report.nan_detected)
       std::fprintf(stderr,
@@ -207,6 +223,13 @@ void register_run(CLI::App& app, Runner& selected) {
       "Put every body's channels under this prefix (copy/afhub/arm/base), and the world's "
       "(copy/world: `afhub world pause --namespace copy`), to run a second copy of a model "
       "beside the first: a live body has one publisher");
+  run->add_option("--at", options->placements,
+                  "Place a loaded file's bodies: FILE=x,y,z or FILE=x,y,z,r,p,y (metres; roll, "
+                  "pitch, yaw in radians), every body of FILE moved so, about the world's "
+                  "origin; repeat for more files (of a file loaded twice, each places the next "
+                  "copy). AMBF draws its robots at the origin, where "
+                  "loaded together they overlap and push each other apart")
+      ->allow_extra_args(false);  // one FILE=... each: files may follow
   run->add_option("--gravity", options->gravity,
                   "x,y,z in m/s^2 for the world and every body, over the world file's and the "
                   "model files' `gravity` (by AMBF's rule a file's gravity wins over the world's)");
@@ -246,6 +269,10 @@ void register_run(CLI::App& app, Runner& selected) {
                   "runs the late steps back to back, at most --max-catch-up of them, skipping "
                   "the rest; skip goes on at the next period, the steps missed skipped (no burst, "
                   "for haptics)");
+  run->add_option("--mesh-fallback", options->mesh_fallback,
+                  "A body whose collision mesh cannot be used (corrupt, or it crashes or hangs "
+                  "the mesh reader): refuse (the default) refuses the model; box makes the body "
+                  "collide as a box of its mass and inertia, said once per body");
   run->add_option("--max-catch-up", options->max_catch_up_ms,
                   "With --overrun catch-up: the most simulated time, in ms, made up after a "
                   "stall (default 100; 0 to 10000); a longer stall is skipped");

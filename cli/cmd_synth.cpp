@@ -8,6 +8,7 @@
 
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/body_claims.hpp"
+#include "afhub/hub/hub_health.hpp"
 #include "afhub/hub/hub_loss.hpp"
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/hub/world_command_queue.hpp"
@@ -120,6 +121,11 @@ int run_synth(const SynthOptions& options) {
     bodies[i].channel = std::make_unique<BodyPublisher>(channel);
     bodies[i].joints.resize(options.joints);
   }
+  // Before the first loan, as the physics: a synth must not starve a running physics.
+  std::vector<ChunkNeed> needs(bodies.size(),
+                               published_each_cycle(body_state_bytes(options.joints)));
+  needs.push_back(published_each_cycle(sizeof(WorldState)));
+  require_chunks(needs, "this synth (" + std::to_string(bodies.size()) + " bodies)");
   directory.publish();
   confirm_body_claims(channels, std::chrono::seconds(2));
   Writer<WorldState> world(

@@ -25,7 +25,7 @@ source "$here/../tests/bridges/two_machines.sh"
 echo "two_machines.sh: starting the two machines (logs in $work)" >&2
 for side in a b; do
   spawn $side hub_$side "$afhub" hub
-  for _ in $(seq 100); do on $side "$afhub" status >/dev/null 2>&1 && break; sleep 0.1; done
+  wait_until 60 "machine $side's hub to start" on $side "$afhub" status
 done
 spawn a physics "$afhub" run "$here/models/arm7.yaml"
 spawn a bridge_a "$afhub" bridge dds --export --insecure-accept-commands

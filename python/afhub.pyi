@@ -46,12 +46,17 @@ class State:
     joint_velocities: npt.NDArray[np.float64]
     joint_efforts: npt.NDArray[np.float64]
     sensor_distances: npt.NDArray[np.float64]
+    sensor_ranges: npt.NDArray[np.float64]
     refused_commands: int
     refusal_reason: str
 
 class Body:
     channel: str
     joint_names: List[str]
+    sensor_rays: List[str]
+    actuator_names: List[str]
+    child_names: List[str]
+    parent_name: str
     def __init__(self, name: str, wait_s: float = 0.0) -> None: ...
     def joint_index(self, name: str) -> int: ...
     def read(self, wait_s: float = 0.0) -> Optional[State]: ...

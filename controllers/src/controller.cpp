@@ -8,6 +8,7 @@
 #include <memory>
 
 #include "afhub/hub/bodies.hpp"
+#include "afhub/hub/hub_health.hpp"
 #include "afhub/hub/hub_loss.hpp"
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/hub/loop_stats_publisher.hpp"
@@ -112,6 +113,9 @@ int run_controller(const ControllerOptions& options, const ControllerCycle& cycl
   const BodyEntry entry = wait.wait_for_body(options.body, who);
   const std::string channel(name_of(entry.info.channel));
   BodyClient body(entry);
+  require_chunks({published_each_cycle(body_command_bytes(entry.info.joint_count)),
+                  published_each_cycle(sizeof(LoopStats))},
+                 "this controller (commanding " + channel + ")");
   LoopTiming own_timing;  // preallocated before memory is locked and the loop starts
   LoopTiming& timing = timing_out ? *timing_out : own_timing;
   const RealtimeGrant grant = apply_realtime(options.loop, who.c_str());

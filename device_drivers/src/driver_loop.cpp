@@ -7,6 +7,7 @@
 
 #include "afhub/devices/safe_request.hpp"
 #include "afhub/hub/bodies.hpp"
+#include "afhub/hub/hub_health.hpp"
 #include "afhub/hub/hub_loss.hpp"
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/hub/loop_stats_publisher.hpp"
@@ -142,6 +143,9 @@ int run_driver(const DeviceOpener& open, const DriverOptions& options) {
   }
   std::unique_ptr<Device> device = open();
   wait.connect_to_hub("device");
+  require_chunks(
+      {published_each_cycle(sizeof(DeviceState)), published_each_cycle(sizeof(LoopStats))},
+      "this driver (" + channel + ")");
   Writer<DeviceState> states(body_state_channel(channel));
   LatestReader<DeviceCommand> commands(body_command_channel(channel));
   DirectoryPublisher directory;

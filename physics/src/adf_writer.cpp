@@ -136,7 +136,14 @@ std::string adf_text(const Model& model, std::vector<std::string>& lost) {
   for (const BodySpec& body : model.bodies) out << "- " << quoted(body.identifier) << "\n";
   if (!model.joints.empty()) out << "joints:\n";
   for (const JointSpec& joint : model.joints) out << "- " << quoted(joint.identifier) << "\n";
-  for (const BodySpec& body : model.bodies) write_body(out, body);
+  for (const BodySpec& body : model.bodies) {
+    write_body(out, body);
+    if (!body.collision_mesh_parts.empty())
+      lost.push_back("link '" + body.name + "' collides as " +
+                     std::to_string(body.collision_mesh_parts.size()) +
+                     " placed meshes: ADF takes one collision mesh per body, at its frame, so "
+                     "they are left out; give it a 'collision mesh' or collision shapes");
+  }
   for (const JointSpec& joint : model.joints) {
     write_joint(out, model, joint);
     if (joint.mimic)

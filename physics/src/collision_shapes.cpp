@@ -56,18 +56,18 @@ std::unique_ptr<btCollisionShape> convex_hull(const std::vector<btVector3>& poin
   return hull;
 }
 
-void add_mesh(const BodySpec& body, const btTransform& com_from_mesh, const TriangleMesh& mesh,
-              bool dynamic, CollisionShape& owner) {
-  // Vertices move into the centre-of-mass frame, so no compound is needed.
+btCollisionShape* add_mesh(const BodySpec& body, const btTransform& com_from_mesh,
+                           const TriangleMesh& mesh, bool dynamic, CollisionShape& owner) {
+  // Vertices move into the centre-of-mass frame, so no compound is needed for one mesh.
   std::vector<btVector3> points;
   points.reserve(mesh.vertices.size());
   for (const auto& v : mesh.vertices) points.push_back(com_from_mesh * btVector3(v[0], v[1], v[2]));
   std::unique_ptr<btCollisionShape> shape;
   auto triangles = [&] {
-    owner.triangles = std::make_unique<btTriangleMesh>(true, false);
+    auto& made = owner.triangles.emplace_back(std::make_unique<btTriangleMesh>(true, false));
     for (const auto& t : mesh.triangles)
-      owner.triangles->addTriangle(points[t[0]], points[t[1]], points[t[2]], true);
-    return owner.triangles.get();
+      made->addTriangle(points[t[0]], points[t[1]], points[t[2]], true);
+    return made.get();
   };
   switch (body.collision_mesh_type) {
     case CollisionMeshType::kConvexHull:
@@ -77,12 +77,13 @@ void add_mesh(const BodySpec& body, const btTransform& com_from_mesh, const Tria
       shape = std::make_unique<btConvexTriangleMeshShape>(triangles());
       break;
     case CollisionMeshType::kPointCloud: {
-      owner.points.reserve(points.size() * 4);
+      std::vector<btScalar>& cloud = owner.point_clouds.emplace_back();
+      cloud.reserve(points.size() * 4);
       for (const auto& p : points)
-        for (int k = 0; k < 4; ++k) owner.points.push_back(k < 3 ? p[k] : 0);
-      shape = std::make_unique<btConvexPointCloudShape>(
-          reinterpret_cast<btVector3*>(owner.points.data()), static_cast<int>(points.size()),
-          btVector3(1, 1, 1));
+        for (int k = 0; k < 4; ++k) cloud.push_back(k < 3 ? p[k] : 0);
+      shape = std::make_unique<btConvexPointCloudShape>(reinterpret_cast<btVector3*>(cloud.data()),
+                                                        static_cast<int>(points.size()),
+                                                        btVector3(1, 1, 1));
       break;
     }
     case CollisionMeshType::kTrimesh:
@@ -96,31 +97,42 @@ void add_mesh(const BodySpec& body, const btTransform& com_from_mesh, const Tria
   }
   shape->setMargin(body.collision_margin);
   owner.shapes.push_back(std::move(shape));
-  owner.root = owner.shapes.back().get();
+  return owner.shapes.back().get();
 }
 
 }  // namespace
 
 CollisionShape build_collision_shape(const BodySpec& body, const btTransform& com_from_mesh,
-                                     const TriangleMesh* mesh, bool dynamic) {
+                                     const TriangleMesh* mesh,
+                                     const std::vector<const TriangleMesh*>& parts, bool dynamic) {
   CollisionShape owner;
-  if (mesh) {
-    add_mesh(body, com_from_mesh, *mesh, dynamic, owner);
+  if (mesh && parts.empty() && body.collision_shapes.empty()) {
+    owner.root = add_mesh(body, com_from_mesh, *mesh, dynamic, owner);
     return owner;
   }
-  if (body.collision_shapes.empty()) {
+  if (!mesh && parts.empty() && body.collision_shapes.empty()) {
     owner.shapes.push_back(std::make_unique<btEmptyShape>());
     owner.root = owner.shapes.back().get();
     return owner;
   }
   auto compound = std::make_unique<btCompoundShape>();
+  // Each mesh's vertices are already in the centre-of-mass frame.
+  if (mesh)
+    compound->addChildShape(btTransform::getIdentity(),
+                            add_mesh(body, com_from_mesh, *mesh, dynamic, owner));
+  for (std::size_t p = 0; p < parts.size(); ++p)
+    compound->addChildShape(
+        btTransform::getIdentity(),
+        add_mesh(body, com_from_mesh * to_transform(body.collision_mesh_parts[p].offset), *parts[p],
+                 dynamic, owner));
   for (const ShapeSpec& spec : body.collision_shapes) {
     btCollisionShape* child = primitive(spec, owner);
     child->setMargin(body.collision_margin);
     compound->addChildShape(com_from_mesh * to_transform(spec.offset), child);
   }
   // A single plane cannot sit in a compound (it is concave): use it directly.
-  if (body.collision_shapes.size() == 1 && body.collision_shapes[0].kind == ShapeKind::kPlane) {
+  if (compound->getNumChildShapes() == 1 && !body.collision_shapes.empty() &&
+      body.collision_shapes[0].kind == ShapeKind::kPlane) {
     owner.root = owner.shapes.back().get();
     return owner;
   }

@@ -16,14 +16,16 @@ namespace afhub::physics {
 struct CollisionShape {
   btCollisionShape* root = nullptr;
   std::vector<std::unique_ptr<btCollisionShape>> shapes;
-  std::unique_ptr<btTriangleMesh> triangles;
-  std::vector<btScalar> points;  // for a point cloud shape
+  std::vector<std::unique_ptr<btTriangleMesh>> triangles;
+  std::vector<std::vector<btScalar>> point_clouds;  // for point cloud shapes
 };
 
 // `com_from_mesh`: the mesh frame seen from the centre of mass (inverse of the
-// inertial offset). `mesh` is the loaded collision mesh, when the body has one.
+// inertial offset). `mesh` is the loaded collision mesh, when the body has one, and
+// `parts` its loaded `collision_mesh_parts`, in order.
 // A dynamic body cannot have a static triangle mesh: its TRIMESH collides as its convex hull.
 CollisionShape build_collision_shape(const BodySpec& body, const btTransform& com_from_mesh,
-                                     const TriangleMesh* mesh, bool dynamic);
+                                     const TriangleMesh* mesh,
+                                     const std::vector<const TriangleMesh*>& parts, bool dynamic);
 
 }  // namespace afhub::physics

@@ -125,7 +125,7 @@ TriangleMesh load_body_mesh(const std::string& path, double scale, const SourceL
   return load_body_meshes({{path, scale, where, owner}}).front();
 }
 
-std::vector<TriangleMesh> load_body_meshes(const std::vector<MeshRequest>& requests) {
+std::vector<MeshOrError> try_load_body_meshes(const std::vector<MeshRequest>& requests) {
   // Each file checked here first (what it is, its size), then taken from the last
   // batch's meshes or read once in the reader.
   std::map<std::string, std::string> refused;  // path -> error
@@ -160,18 +160,28 @@ std::vector<TriangleMesh> load_body_meshes(const std::vector<MeshRequest>& reque
                                        std::make_shared<const RawMesh>(std::move(read[i].mesh))});
   }
   keep_meshes(found);
-  std::vector<TriangleMesh> meshes;
-  for (const MeshRequest& request : requests) {
-    // load_mesh's errors name the file alone; a block's say where it is named.
-    const bool located = !request.owner.empty();
+  std::vector<MeshOrError> meshes(requests.size());
+  for (std::size_t i = 0; i < requests.size(); ++i) {
+    const MeshRequest& request = requests[i];
     try {
       if (auto was_refused = refused.find(request.path); was_refused != refused.end())
         throw Error(was_refused->second);
-      meshes.push_back(scaled(*found.at(request.path).mesh, request.path, request.scale));
+      meshes[i].mesh = scaled(*found.at(request.path).mesh, request.path, request.scale);
     } catch (const Error& error) {
-      if (located) throw block_error(request, error.what());
-      throw;
+      meshes[i].error = error.what();
     }
+  }
+  return meshes;
+}
+
+std::vector<TriangleMesh> load_body_meshes(const std::vector<MeshRequest>& requests) {
+  std::vector<MeshOrError> read = try_load_body_meshes(requests);
+  std::vector<TriangleMesh> meshes;
+  for (std::size_t i = 0; i < requests.size(); ++i) {
+    // load_mesh's errors name the file alone; a block's say where it is named.
+    if (!read[i].mesh && !requests[i].owner.empty()) throw block_error(requests[i], read[i].error);
+    if (!read[i].mesh) throw Error(read[i].error);
+    meshes.push_back(std::move(*read[i].mesh));
   }
   return meshes;
 }
@@ -186,6 +196,8 @@ std::size_t check_meshes(const Model& model) {
   };
   for (const BodySpec& body : model.bodies) {
     add(body.collision_mesh, body.scale, body.where, "body '" + body.identifier + "'");
+    for (const PlacedMesh& part : body.collision_mesh_parts)
+      add(part.path, body.scale, body.where, "body '" + body.identifier + "'");
     add(body.visual_mesh, body.scale, body.where, "body '" + body.identifier + "' (visual)");
   }
   for (const SoftBodySpec& soft : model.soft_bodies)

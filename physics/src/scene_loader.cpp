@@ -3,7 +3,9 @@
 // ADF; the launch file names the world, colors, input devices and the models.
 #include "afhub/physics/scene_loader.hpp"
 
+#include <algorithm>
 #include <charconv>
+#include <cmath>
 #include <filesystem>
 #include <map>
 
@@ -11,6 +13,7 @@
 #include "afhub/shm_layout/channel_names.hpp"
 #include "afhub/shm_layout/limits.hpp"
 #include "file_reader.hpp"
+#include "frames.hpp"
 #include "path_kind.hpp"
 
 namespace afhub::physics {
@@ -18,11 +21,16 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// A path written in `file` at `node`, relative to that file's folder; must exist.
+// A path written in `file` at `node`, relative to that file's folder.
+fs::path resolved_path(const FileReader& file, const YAML::Node& node, const std::string& what) {
+  const fs::path written(file.text(node, what));
+  return written.is_absolute() ? written : fs::path(file.path()).parent_path() / written;
+}
+
+// The same, which must exist.
 std::string existing_path(const FileReader& file, const YAML::Node& node, const std::string& what) {
   const fs::path written(file.text(node, what));
-  const fs::path resolved =
-      written.is_absolute() ? written : fs::path(file.path()).parent_path() / written;
+  const fs::path resolved = resolved_path(file, node, what);
   if (const std::string why = not_a_regular_file(resolved); !why.empty())
     fail(file.at(node), what + " '" + written.string() +
                             "': " + resolved.lexically_normal().string() + " " + why +
@@ -111,7 +119,97 @@ void apply_colors(const std::string& path, Model& model) {
   }
 }
 
+// The launch file's `at:` map, {config path: [x, y, z] or [x, y, z, r, p, y]}: each
+// key resolved against the launch file and listed in its `multibody configs`.
+std::vector<FilePlacement> read_launch_placements(const FileReader& file, const YAML::Node& at,
+                                                  const std::vector<std::string>& configs) {
+  if (!at.IsMap())
+    fail(file.at(at),
+         "'at' must map model paths of 'multibody configs' to [x, y, z] or "
+         "[x, y, z, r, p, y] (metres, radians)");
+  std::vector<FilePlacement> placements;
+  for (const auto& entry : at) {
+    const std::string path = resolved_path(file, entry.first, "'at' model").lexically_normal();
+    if (std::find(configs.begin(), configs.end(), path) == configs.end())
+      fail(file.at(entry.first), "'at' names '" + file.text(entry.first, "'at' model") +
+                                     "', which is not in 'multibody configs'");
+    const YAML::Node& value = entry.second;
+    if (!value.IsSequence() || (value.size() != 3 && value.size() != 6))
+      fail(file.at(value), "'at' takes [x, y, z] or [x, y, z, r, p, y] (metres, radians) for " +
+                               file.text(entry.first, "'at' model"));
+    double numbers[6] = {};
+    for (std::size_t i = 0; i < value.size(); ++i)
+      numbers[i] = i < 3 ? file.length(value[i], "at") : file.number(value[i], "at");
+    placements.push_back(
+        {path, {{numbers[0], numbers[1], numbers[2]}, {numbers[3], numbers[4], numbers[5]}}});
+  }
+  return placements;
+}
+
+// Moves every body and soft body of the loaded file `files[index]` by `placement`.
+void place_file(Model& model, const std::vector<std::string>& files, std::size_t index,
+                const Placement& placement) {
+  const btTransform move = to_transform(placement);
+  auto moved = [&](Placement& location) {
+    const btTransform pose = move * to_transform(location);
+    location = {from_bt(pose.getOrigin()), rpy_of(pose.getBasis())};
+  };
+  for (BodySpec& body : model.bodies)
+    if (body.file_index == static_cast<int>(index)) moved(body.location);
+  std::error_code error;
+  for (SoftBodySpec& soft : model.soft_bodies)
+    if (fs::equivalent(soft.where.file, files[index], error)) moved(soft.location);
+}
+
+// The loaded file that `placement` names, by path (any spelling of it): of a file
+// loaded several times, the first copy not yet `placed`.
+std::size_t placed_file(const std::vector<std::string>& files, const FilePlacement& placement,
+                        std::vector<bool>& placed) {
+  std::error_code error;
+  bool loaded = false;
+  for (std::size_t i = 0; i < files.size(); ++i)
+    if (fs::equivalent(files[i], placement.file, error)) {
+      loaded = true;
+      if (!placed[i]) {
+        placed[i] = true;
+        return i;
+      }
+    }
+  if (loaded)
+    throw Error("--at names '" + placement.file +
+                "' more times than it is loaded: each --at places one copy");
+  std::string listed;
+  for (const std::string& file : files) listed += "\n  " + file;
+  throw Error("--at names '" + placement.file +
+              "', which is not a loaded file; give one of the files loaded:" + listed);
+}
+
 }  // namespace
+
+FilePlacement parse_file_placement(const std::string& text) {
+  const std::string usage =
+      "--at takes FILE=x,y,z or FILE=x,y,z,r,p,y (metres, radians), e.g. "
+      "--at robots/mtm.yaml=3,0,0; got '" +
+      text + "'";
+  const std::size_t equals = text.rfind('=');
+  if (equals == std::string::npos || equals == 0) throw Error(usage);
+  std::vector<double> numbers;
+  std::size_t start = equals + 1;
+  while (start <= text.size()) {
+    const std::size_t end = std::min(text.find(',', start), text.size());
+    double value = 0.0;
+    auto [ptr, ec] = std::from_chars(text.data() + start, text.data() + end, value);
+    if (ec != std::errc() || ptr != text.data() + end || !std::isfinite(value)) throw Error(usage);
+    if (numbers.size() < 3 && std::abs(value) > kMaxLengthM)
+      throw Error(usage + ": a position is at most " + yaml::number_text(kMaxLengthM) + " m");
+    numbers.push_back(value);
+    start = end + 1;
+  }
+  if (numbers.size() != 3 && numbers.size() != 6) throw Error(usage);
+  numbers.resize(6, 0.0);
+  return {text.substr(0, equals),
+          {{numbers[0], numbers[1], numbers[2]}, {numbers[3], numbers[4], numbers[5]}}};
+}
 
 std::vector<int> parse_index_list(const std::string& text) {
   std::vector<int> indices;
@@ -133,6 +231,7 @@ std::vector<int> parse_index_list(const std::string& text) {
 Model load_scene(const SceneRequest& request) {
   Model model;
   std::vector<std::string> adf_files;
+  std::vector<FilePlacement> placements;
   std::string world_file = request.world_file, color_file;
   if (!request.launch_file.empty()) {
     const YAML::Node root =
@@ -169,6 +268,16 @@ Model load_scene(const SceneRequest& request) {
       adf_files.push_back(
           existing_path(file, configs[index], "multibody config #" + std::to_string(index)));
     }
+    if (YAML::Node at = root["at"]) {
+      std::vector<std::string> listed;
+      for (int index = 0; index < count; ++index)
+        listed.push_back(
+            resolved_path(file, configs[index], "multibody config #" + std::to_string(index))
+                .lexically_normal());
+      for (FilePlacement& placement : read_launch_placements(file, at, listed))
+        if (std::find(adf_files.begin(), adf_files.end(), placement.file) != adf_files.end())
+          placements.push_back(std::move(placement));  // the models picked with -l
+    }
   } else if (!request.launch_indices.empty()) {
     throw Error("-l picks models from a launch file; give one with --launch FILE");
   }
@@ -179,6 +288,10 @@ Model load_scene(const SceneRequest& request) {
   if (adf_files.empty())
     throw Error("nothing to simulate: give ADF files, or --launch FILE with -l indices");
   load_adf_files_into(adf_files, model, request.urdf);
+  placements.insert(placements.end(), request.placements.begin(), request.placements.end());
+  std::vector<bool> placed(adf_files.size(), false);
+  for (const FilePlacement& placement : placements)
+    place_file(model, adf_files, placed_file(adf_files, placement, placed), placement.placement);
   if (!color_file.empty()) apply_colors(color_file, model);
   return model;
 }

@@ -81,11 +81,14 @@ void Simulation::Data::build_bodies() {
   // Every collision mesh read at once (one reader process), each (file, scale) once.
   std::map<std::pair<std::string, double>, std::size_t> mesh_index;
   std::vector<MeshRequest> requests;
-  for (const BodySpec& spec : model.bodies)
-    if (!spec.collision_mesh.empty() &&
-        mesh_index.emplace(std::pair(spec.collision_mesh, spec.scale), requests.size()).second)
-      requests.push_back(
-          {spec.collision_mesh, spec.scale, spec.where, "body '" + spec.identifier + "'"});
+  auto request = [&](const BodySpec& spec, const std::string& path) {
+    if (mesh_index.emplace(std::pair(path, spec.scale), requests.size()).second)
+      requests.push_back({path, spec.scale, spec.where, "body '" + spec.identifier + "'"});
+  };
+  for (const BodySpec& spec : model.bodies) {
+    if (!spec.collision_mesh.empty()) request(spec, spec.collision_mesh);
+    for (const PlacedMesh& part : spec.collision_mesh_parts) request(spec, part.path);
+  }
   const std::vector<TriangleMesh> meshes = load_body_meshes(requests);
   bodies.resize(model.bodies.size());
   for (std::size_t i = 0; i < model.bodies.size(); ++i) {
@@ -118,7 +121,10 @@ void Simulation::Data::build_bodies() {
                              btMatrix3x3(a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7], a[8]));
     }
     body.com_from_mesh = mesh_from_com.inverse();
-    body.shape = build_collision_shape(spec, body.com_from_mesh, mesh, body.dynamic);
+    std::vector<const TriangleMesh*> parts;
+    for (const PlacedMesh& part : spec.collision_mesh_parts)
+      parts.push_back(&meshes[mesh_index.at(std::pair(part.path, spec.scale))]);
+    body.shape = build_collision_shape(spec, body.com_from_mesh, mesh, parts, body.dynamic);
     btVector3 inertia(0, 0, 0);
     if (body.dynamic) {
       if (spec.inertia_kgm2) {

@@ -35,8 +35,10 @@ void Simulation::read_body(std::size_t index, BodyReading& reading) const noexce
   }
   const std::size_t rays = std::min(body.ray_count, kBodyRayCapacity);
   reading.ray_count = static_cast<std::uint32_t>(rays);
-  for (std::size_t r = 0; r < rays; ++r)
+  for (std::size_t r = 0; r < rays; ++r) {
     reading.ray_distances_m[r] = d.rays[body.first_ray + r].distance_m;
+    reading.ray_ranges_m[r] = d.rays[body.first_ray + r].range_m;
+  }
 }
 
 std::size_t Simulation::soft_body_node_count(std::size_t soft) const noexcept {

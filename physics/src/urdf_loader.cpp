@@ -1,11 +1,14 @@
 // URDF loader (see urdf_loader.hpp). liburdfdom parses the file and builds the tree
 // (refusing cycles, links with two parents, unknown links); this file turns each link
 // into a BodySpec and each joint into a JointSpec with the paper's Algorithm 3 offset.
-// Line numbers come from a scan of the text for each `<link`/`<joint` tag's name: a
-// located error, not a second XML parser.
+// Line numbers come from TinyXML, the XML parser urdfdom itself parses with (its
+// header includes it): the file is read into TinyXML first, which locates an XML error
+// and every element; urdfdom's own errors, which carry no line, are placed at the
+// link or joint they name.
 #include "afhub/physics/urdf_loader.hpp"
 
 #include <console_bridge/console.h>
+#include <tinyxml.h>
 #include <urdf_parser/urdf_parser.h>
 
 #include <Eigen/Eigenvalues>
@@ -50,30 +53,92 @@ class CollectedLog : public console_bridge::OutputHandler {
   std::vector<std::string> messages;
 };
 
-// Line of each `<link name=...>` and `<joint name=...>` tag (1-based), by name.
-struct TagLines {
-  std::map<std::string, int> links, joints;
-  int robot = 1;
+// The file's XML elements, for their lines: the robot, each link and joint by name.
+struct XmlElements {
+  TiXmlDocument document;
+  const TiXmlElement* robot = nullptr;
+  std::map<std::string, const TiXmlElement*> links, joints;
 };
 
-TagLines scan_tags(const std::string& text) {
-  TagLines lines;
-  static const std::regex tag(R"(<(link|joint|robot)\b[^>]*?\bname\s*=\s*["']([^"']*)["'])");
-  int line = 1;
-  std::size_t counted = 0;
-  for (auto it = std::sregex_iterator(text.begin(), text.end(), tag); it != std::sregex_iterator();
-       ++it) {
-    const auto position = static_cast<std::size_t>(it->position(0));
-    line +=
-        static_cast<int>(std::count(text.begin() + static_cast<std::ptrdiff_t>(counted),
-                                    text.begin() + static_cast<std::ptrdiff_t>(position), '\n'));
-    counted = position;
-    const std::string kind = (*it)[1], name = (*it)[2];
-    if (kind == "robot") lines.robot = line;
-    auto& table = kind == "link" ? lines.links : lines.joints;
-    if (kind != "robot") table.try_emplace(name, line);
+SourceLocation location_of(const std::string& path, const TiXmlBase& node) {
+  return {path, std::max(1, node.Row()), std::max(1, node.Column())};
+}
+
+// Reads the text as XML: a file that is not well-formed, or has no <robot>, is an
+// error at the place TinyXML stopped.
+void read_xml(const std::string& path, const std::string& text, XmlElements& xml) {
+  xml.document.SetTabSize(1);  // columns count characters
+  xml.document.Parse(text.c_str(), nullptr, TIXML_ENCODING_UTF8);
+  if (xml.document.Error()) {
+    std::string why = xml.document.ErrorDesc();
+    if (!why.empty() && why.back() == '.') why.pop_back();
+    fail({path, std::max(1, xml.document.ErrorRow()), std::max(1, xml.document.ErrorCol())},
+         "not well-formed XML (" + lower(why) +
+             "); fix the XML here or just above: a tag left open or closed twice, a missing "
+             "quote or '>'");
   }
-  return lines;
+  xml.robot = xml.document.RootElement();
+  if (!xml.robot || xml.robot->ValueStr() != "robot")
+    fail(xml.robot ? location_of(path, *xml.robot) : SourceLocation{path, 1, 1},
+         "the top element is not <robot name=\"...\">; is this a URDF file?");
+  for (const TiXmlElement* e = xml.robot->FirstChildElement(); e; e = e->NextSiblingElement()) {
+    const char* name = e->Attribute("name");
+    if (!name) continue;
+    if (e->ValueStr() == "link") xml.links.try_emplace(name, e);
+    if (e->ValueStr() == "joint") xml.joints.try_emplace(name, e);
+  }
+}
+
+// The first element under `element` (or itself) with an attribute whose value, or one
+// of its space-separated words ("0 0 abc"), is `value`.
+const TiXmlElement* holding_value(const TiXmlElement* element, const std::string& value) {
+  for (const TiXmlAttribute* a = element->FirstAttribute(); a; a = a->Next()) {
+    std::istringstream words(a->ValueStr());
+    for (std::string word; words >> word;)
+      if (word == value) return element;
+  }
+  for (const TiXmlElement* e = element->FirstChildElement(); e; e = e->NextSiblingElement())
+    if (const TiXmlElement* found = holding_value(e, value)) return found;
+  return nullptr;
+}
+
+// The element a urdfdom message names, or null: a joint before a link ("child link
+// [c] of joint [j]" is the joint's mistake).
+const TiXmlElement* named_element(const XmlElements& xml, const std::string& message) {
+  static const std::regex named(R"((joint|link)\s*(?:\[([^\]]*)\]|'([^']*)'))", std::regex::icase);
+  const TiXmlElement* link = nullptr;
+  for (auto it = std::sregex_iterator(message.begin(), message.end(), named);
+       it != std::sregex_iterator(); ++it) {
+    const bool joint = lower((*it)[1]) == "joint";
+    const auto& table = joint ? xml.joints : xml.links;
+    auto found = table.find((*it)[2].matched ? (*it)[2].str() : (*it)[3].str());
+    if (found == table.end()) continue;
+    if (joint) return found->second;
+    if (!link) link = found->second;
+  }
+  return link;
+}
+
+// Where urdfdom's first problem is: the joint or link its messages name, down to the
+// element holding a value they quote ("mass [1.x] is not a float"); else the <robot>
+// element.
+SourceLocation urdfdom_error_at(const std::string& path, const XmlElements& xml,
+                                const std::vector<std::string>& messages) {
+  static const std::regex quoted(R"(\[([^\]]*)\]|\(([^)]*)\) is not)");
+  for (std::size_t m = 0; m < messages.size(); ++m) {
+    const TiXmlElement* element = named_element(xml, messages[m]);
+    if (!element) continue;
+    for (std::size_t before = 0; before <= m; ++before)
+      for (auto it = std::sregex_iterator(messages[before].begin(), messages[before].end(), quoted);
+           it != std::sregex_iterator(); ++it) {
+        const std::string value = (*it)[1].matched ? (*it)[1].str() : (*it)[2].str();
+        if (value.empty() || value == element->Attribute("name")) continue;
+        if (const TiXmlElement* holder = holding_value(element, value))
+          return location_of(path, *holder);
+      }
+    return location_of(path, *element);
+  }
+  return location_of(path, *xml.robot);
 }
 
 std::string read_text(const std::string& path) {
@@ -116,20 +181,22 @@ class UrdfReader {
            "this is a xacro file (it uses <xacro:...> macros); expand it to a URDF first, "
            "e.g. `xacro robot.urdf.xacro > robot.urdf` on a ROS machine (xacro is not in "
            "Debian 12)");
-    lines_ = scan_tags(text);
+    read_xml(path_, text, xml_);
     {
       CollectedLog log;
       robot_ = urdf::parseURDF(text);
       if (!robot_) {
-        std::string why = log.messages.empty() ? "not a URDF" : log.messages.front();
+        std::string why = log.messages.empty() ? "urdfdom refused it" : log.messages.front();
         for (std::size_t i = 1; i < log.messages.size(); ++i) why += "; " + log.messages[i];
-        fail({path_, 1, 1}, "not a valid URDF: " + why);
+        while (!why.empty() && why.back() == '.') why.pop_back();
+        fail(urdfdom_error_at(path_, xml_, log.messages),
+             "not a valid URDF: " + why +
+                 ". Fix it here (the format: https://wiki.ros.org/urdf/XML)");
       }
     }
     for (const char* element : {"transmission", "gazebo"})
-      if (const std::size_t at = text.find(std::string("<") + element); at != std::string::npos)
-        warn(1 + static_cast<int>(std::count(text.begin(),
-                                             text.begin() + static_cast<std::ptrdiff_t>(at), '\n')),
+      if (const TiXmlElement* first = xml_.robot->FirstChildElement(element))
+        warn(location_of(path_, *first).line,
              std::string("<") + element +
                  "> elements are ignored (afhub simulates the links and joints)");
     name_space_ = "/ambf/env/" + robot_->getName() + "/";
@@ -144,12 +211,12 @@ class UrdfReader {
 
  private:
   SourceLocation link_at(const std::string& name) const {
-    auto found = lines_.links.find(name);
-    return {path_, found == lines_.links.end() ? lines_.robot : found->second, 1};
+    auto found = xml_.links.find(name);
+    return location_of(path_, found == xml_.links.end() ? *xml_.robot : *found->second);
   }
   SourceLocation joint_at(const std::string& name) const {
-    auto found = lines_.joints.find(name);
-    return {path_, found == lines_.joints.end() ? lines_.robot : found->second, 1};
+    auto found = xml_.joints.find(name);
+    return location_of(path_, found == xml_.joints.end() ? *xml_.robot : *found->second);
   }
   void warn(int line, const std::string& what) {
     model_.warnings.push_back(path_ + ":" + std::to_string(line) + ":1: warning: " + what);
@@ -256,6 +323,8 @@ class UrdfReader {
       body.visual_mesh = mesh_path(mesh, link.name, "visual");
       use_scale(mesh);
     }
+    std::vector<PlacedMesh> meshes;
+    bool at_link_frame = true;
     for (const auto& collision : link.collision_array) {
       if (!collision->geometry) continue;
       ShapeSpec shape;
@@ -264,18 +333,17 @@ class UrdfReader {
         continue;
       }
       const auto& mesh = static_cast<const urdf::Mesh&>(*collision->geometry);
-      if (!body.collision_mesh.empty() || !is_identity(collision->origin))
-        fail(link_at(link.name),
-             "link '" + link.name + "': collision mesh '" + mesh.filename +
-                 "' is a second collision mesh or has an <origin>; afhub takes one collision "
-                 "mesh per link, at the link frame. Use boxes, cylinders and spheres for the rest");
-      body.collision_mesh = mesh_path(mesh, link.name, "collision");
+      meshes.push_back(
+          {mesh_path(mesh, link.name, "collision"), placement(to_bt(collision->origin))});
+      at_link_frame = at_link_frame && is_identity(collision->origin);
       use_scale(mesh);
     }
-    if (!body.collision_mesh.empty() && !body.collision_shapes.empty())
-      fail(link_at(link.name), "link '" + link.name +
-                                   "' collides as a mesh and as primitive shapes; afhub takes "
-                                   "one or the other per link");
+    // One mesh at the link frame collides as that mesh; several, or one at an
+    // <origin> or beside shapes, as one compound.
+    if (meshes.size() == 1 && at_link_frame && body.collision_shapes.empty())
+      body.collision_mesh = meshes.front().path;
+    else
+      body.collision_mesh_parts = std::move(meshes);
     // Convex hulls for moving meshes, as ADF bodies; a static one keeps its triangles.
     body.collision_mesh_type = CollisionMeshType::kTrimesh;
     body.scale = scale.value_or(1.0);
@@ -493,7 +561,7 @@ class UrdfReader {
   const std::string path_, dir_;
   const UrdfOptions& options_;
   Model& model_;
-  TagLines lines_;
+  XmlElements xml_;
   urdf::ModelInterfaceSharedPtr robot_;
   std::string name_space_;
   std::map<std::string, btTransform> world_;

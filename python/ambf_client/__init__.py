@@ -10,10 +10,13 @@ It stands on the native module ``afhub`` (shared memory, no ROS): see docs/pytho
 what is supported and where afhub departs from AMBF.
 """
 
+from .actuator import Actuator
 from .client import Client
 from .geometry import Point, Pose, Quaternion, Twist, Vector3, Wrench
 from .rigid_body import RigidBody
+from .sensor import Sensor
+from .unrendered import Camera, Light
 from .world import World
 
-__all__ = ['Client', 'RigidBody', 'World', 'Point', 'Quaternion', 'Pose', 'Vector3',
-           'Wrench', 'Twist']
+__all__ = ['Client', 'RigidBody', 'World', 'Sensor', 'Actuator', 'Camera', 'Light', 'Point',
+           'Quaternion', 'Pose', 'Vector3', 'Wrench', 'Twist']

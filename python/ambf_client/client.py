@@ -1,6 +1,7 @@
-"""AMBF's ``Client`` on afhub: finds the simulated bodies in afhub's catalog instead of
-ROS topics, hands out handles to them, and re-sends every handle's command at the
-publish rate from a background thread."""
+"""AMBF's ``Client`` on afhub: finds the simulated bodies, their sensors and actuators in
+afhub's catalog, and the world's cameras and lights in its world state, instead of ROS
+topics; hands out handles to them, and re-sends every handle's command at the publish
+rate from a background thread."""
 
 import os
 import sys
@@ -9,7 +10,10 @@ import time
 
 import afhub
 
+from .actuator import Actuator
 from .rigid_body import RigidBody
+from .sensor import Sensor
+from .unrendered import Camera, Light
 from .world import World
 
 
@@ -18,6 +22,10 @@ class Client:
         self._client_name = client_name
         self._objects = {}  # AMBF name ('/ambf/env/ecm/baselink') -> handle, once asked for
         self._names = []  # AMBF names of the live bodies, from the catalog
+        # AMBF name of a sensor, actuator, camera or light -> (kind, carrier body, rays or
+        # index)
+        self._parts = {}
+        self._world_reader = None  # afhub.World: the world state names cameras and lights
         self._common_namespace = ''
         self._world = None
         self._rate_hz = 120.0
@@ -51,7 +59,27 @@ class Client:
         self._rate_hz = float(rate)
 
     def _read_catalog(self):
-        self._names = ['/' + channel for channel in afhub.bodies()]
+        self._names, self._parts = [], {}
+        for entry in afhub.catalog():
+            if entry['kind'] != 'body':
+                continue
+            body = '/' + entry['channel']
+            self._names.append(body)
+            namespace = body[:body.rfind('/') + 1]  # a body's parts are named in its namespace
+            for ray, sensor in enumerate(entry['sensor_rays']):
+                self._parts.setdefault(namespace + sensor, ('sensor', body, []))[2].append(ray)
+            for index, actuator in enumerate(entry['actuator_names']):
+                self._parts[namespace + actuator] = ('actuator', body, index)
+        if self._names:
+            try:
+                if self._world_reader is None:
+                    self._world_reader = afhub.World()
+                state = self._world_reader.state(wait_s=1.0)
+                for kind in ('camera', 'light'):
+                    for name in state[kind + 's']:
+                        self._parts['/' + name.lstrip('/')] = (kind, None, None)
+            except afhub.Error:  # a world of another namespace: no cameras or lights
+                pass
         self._common_namespace = os.path.commonprefix(self._names) if self._names else ''
         if self._common_namespace and not self._common_namespace.endswith('/'):
             self._common_namespace = self._common_namespace[:self._common_namespace.rfind('/') + 1]
@@ -61,10 +89,10 @@ class Client:
         return self._common_namespace
 
     def get_obj_names(self):
-        """Every live body's AMBF name ('/ambf/env/ecm/baselink'), and 'World' when a
-        simulation runs."""
+        """Every live body's AMBF name ('/ambf/env/ecm/baselink'), then its sensors',
+        actuators', cameras' and lights', and 'World' when a simulation runs."""
         self._read_catalog()
-        return (['World'] if self._names else []) + list(self._names)
+        return (['World'] if self._names else []) + list(self._names) + list(self._parts)
 
     def get_world_handle(self):
         if self._world is None:
@@ -73,14 +101,21 @@ class Client:
         return self._world
 
     def _find(self, a_name):
-        names = self._names
+        names = self._names + list(self._parts)
         for candidate in (a_name, '/' + a_name.lstrip('/')):
             if candidate in names:
                 return candidate, None
+        suffix = '/' + a_name.lstrip('/')
+        parts = [name for name in self._parts if name.endswith(suffix)]
         try:  # afhub's rule: a unique suffix after a '/'
-            return '/' + afhub.resolve(a_name.lstrip('/')), None
+            body = '/' + afhub.resolve(a_name.lstrip('/'))
+            if not parts:
+                return body, None
+            message = f'{a_name} names {body} and {", ".join(parts)}'
         except afhub.Error as error:
-            message = str(error)
+            if len(parts) == 1:
+                return parts[0], None
+            message = str(error) + (f'; or one of {", ".join(parts)}' if parts else '')
         matches = [name for name in names if a_name in name]  # AMBF's rule: a substring
         if len(matches) == 1:
             return matches[0], None
@@ -101,10 +136,20 @@ class Client:
             return None
         handle = self._objects.get(name)
         if handle is None:
-            handle = RigidBody(name, afhub.Body(name.lstrip('/')))
+            handle = self._open(name)
             handle.set_active()
             self._objects[name] = handle
         return handle
+
+    def _open(self, name):
+        kind, body, where = self._parts.get(name, ('body', name, None))
+        if kind == 'body':
+            return RigidBody(name, afhub.Body(body.lstrip('/')))
+        if kind == 'sensor':  # a reader of its own: the publisher thread uses the carrier's
+            return Sensor(name, afhub.Body(body.lstrip('/')), where)
+        if kind == 'actuator':  # its flag travels in the carrier's command
+            return Actuator(name, self.get_obj_handle(body), where)
+        return Camera(name) if kind == 'camera' else Light(name)
 
     def get_obj_pose(self, a_name):
         handle = self.get_obj_handle(a_name)

@@ -55,6 +55,7 @@ class RigidBody:
         self._twist = Twist()
         self._pose_cmd_set = self._twist_cmd_set = self._wrench_cmd_set = False
         self._active = False
+        self._actuators = []  # flags of the body's actuators, once one is set
         self._last_command = 0.0
         self._told_refusal = None
         self._publish_flags = {'children': True, 'joint_names': True, 'joint_positions': True}
@@ -200,13 +201,17 @@ class RigidBody:
     def set_publish_joint_positions_flag(self, state):
         self._publish_flags['joint_positions'] = bool(state)
 
-    get_children_names = _unsupported(
-        'get_children_names', "afhub's catalog lists bodies and their descendant joints, not "
-        'the body tree; get_joint_names() names the joints')
-    get_num_of_children = _unsupported('get_num_of_children',
-                                       "afhub's catalog does not carry the body tree")
-    get_parent_name = _unsupported('get_parent_name',
-                                   "afhub's catalog does not carry the body tree")
+    def get_children_names(self):
+        """The bodies jointed directly below this one (their model names)."""
+        return list(self._body.child_names)
+
+    def get_num_of_children(self):
+        return len(self._body.child_names)
+
+    def get_parent_name(self):
+        """The body this one is jointed below (its model name), or '' for a root."""
+        return self._body.parent_name
+
     get_identifier = _unsupported('get_identifier', 'afhub states carry no identifier')
     get_msg_header = _unsupported('get_msg_header', 'afhub states are not ROS messages')
     get_msg_time_stamp = _unsupported('get_msg_time_stamp',
@@ -319,6 +324,14 @@ class RigidBody:
     def velocity_command(self, vx, vy, vz, ax, ay, az):
         self.set_twist(Twist(Vector3(vx, vy, vz), Vector3(ax, ay, az)))
 
+    def set_actuator(self, index, engage):
+        """Engages or releases the body's actuator `index` (an Actuator handle calls it)."""
+        with self._lock:
+            if not self._actuators:
+                self._actuators = [False] * len(self._body.actuator_names)
+            self._actuators[index] = bool(engage)
+        self._apply_command()
+
     def _apply_command(self):
         # Every command feeds the wrench's watchdog, as in AMBF.
         now = time.monotonic()
@@ -344,6 +357,8 @@ class RigidBody:
                 kwargs = {'linear_velocity': tuple(self._twist.linear),
                           'angular_velocity': tuple(self._twist.angular)}
             joints = (self._joint_cmds, self._joint_types) if self._joint_cmds else (None, None)
+            if self._actuators:
+                kwargs['actuators'] = self._actuators
             try:
                 self._body.command(joints[0], joints[1], **kwargs)
             except afhub.CommandRefused as refusal:

@@ -232,6 +232,13 @@ void register_state(py::module_& module) {
           },
           "Proximity sensors' rays in file order: distance to the first hit, m, or -1.")
       .def_property_readonly(
+          "sensor_ranges",
+          [](py::object self) {
+            const State& s = self.cast<const State&>();
+            return view(s->sensor_ranges_m.data(), s->sensor_ray_count, sizeof(double), self);
+          },
+          "Each ray's range, m (Body.sensor_rays names its sensor).")
+      .def_property_readonly(
           "refused_commands", [](const State& s) { return s->refused_commands; },
           "Commands for this body the physics refused since it started.")
       .def_property_readonly("refusal_reason",
@@ -278,6 +285,18 @@ void register_body(py::module_& module) {
       .def_property_readonly("channel", &Body::channel, "The body's channel name.")
       .def_property_readonly("joint_names", &Body::joint_names,
                              "The names of its descendant joints, in state and command order.")
+      .def_property_readonly(
+          "sensor_rays", [](const Body& body) { return body.entry().sensor_rays; },
+          "Per ray of State.sensor_distances, the name of the proximity sensor it belongs to.")
+      .def_property_readonly(
+          "actuator_names", [](const Body& body) { return body.entry().actuator_names; },
+          "Its constraint actuators, in the order of command()'s actuators flags.")
+      .def_property_readonly(
+          "child_names", [](const Body& body) { return body.entry().child_names; },
+          "The bodies jointed directly below it (model names, without the namespace).")
+      .def_property_readonly(
+          "parent_name", [](const Body& body) { return body.entry().parent_name; },
+          "The body it is jointed below (its model name), or '' for none.")
       .def("joint_index", &Body::joint_index, py::arg("name"),
            "The index of joint `name`; afhub.Error listing the body's joints when it has none "
            "so named.")

@@ -33,6 +33,8 @@ class Body {
 
   const std::string& channel() const { return channel_; }
   const std::vector<std::string>& joint_names() const { return entry_.joint_names; }
+  // Its sensors, actuators and neighbours as the catalog names them (see BodyEntry).
+  const BodyEntry& entry() const { return entry_; }
   std::size_t joint_index(const std::string& name) { return client_.joint_index(name); }
   // The newest state, copied; None before the first (after waiting up to wait_s for it).
   std::optional<State> read(double wait_s);

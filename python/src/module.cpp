@@ -86,7 +86,12 @@ py::dict entry_dict(const BodyList& list, std::uint32_t index) {
   entry["owner"] = std::string(name_of(info.owner));
   entry["owner_pid"] = info.owner_pid;
   entry["publish_rate_hz"] = info.publish_rate_hz;
-  entry["joint_names"] = joint_names_of(list, info);
+  const BodyEntry body = entry_of(list, index);
+  entry["joint_names"] = body.joint_names;
+  entry["sensor_rays"] = body.sensor_rays;
+  entry["actuator_names"] = body.actuator_names;
+  entry["child_names"] = body.child_names;
+  entry["parent_name"] = body.parent_name;
   return entry;
 }
 
@@ -157,8 +162,11 @@ PYBIND11_MODULE(afhub, module) {
         return entries;
       },
       "Every live body and device as the hub lists it (`afhub ls`): a list of dicts with "
-      "channel, kind ('body' or 'device'), owner, owner_pid, publish_rate_hz and "
-      "joint_names (in state order).");
+      "channel, kind ('body' or 'device'), owner, owner_pid, publish_rate_hz, "
+      "joint_names (in state order), sensor_rays (per ray of the state's sensor arrays, its "
+      "proximity sensor's name), actuator_names (in command order), child_names (bodies "
+      "jointed directly below) and parent_name ('' for none); body names without their "
+      "namespace, as in the model.");
   module.def(
       "bodies",
       [] {

@@ -1,9 +1,11 @@
 // afhub.World: the simulation's clock, read from the world state, and its commands
 // (pause, resume, step N, reset), each confirmed by the world state as `afhub world`
 // confirms them.
+#include <algorithm>
 #include <cstdio>
 #include <string>
 
+#include "afhub/hub/bodies.hpp"
 #include "afhub/hub/channel.hpp"
 #include "afhub/rt/clock.hpp"
 #include "afhub/shm_layout/channel_names.hpp"
@@ -130,6 +132,14 @@ py::dict state_dict(const WorldState& s) {
   out["late_answers"] = s.late_answers;
   out["dropped_clients"] = s.dropped_clients;
   out["nan_recoveries"] = s.nan_recoveries;
+  const auto names = [](const auto& objects, std::uint32_t count) {
+    py::list list;
+    for (std::uint32_t i = 0; i < std::min<std::uint32_t>(count, kMaxWorldObjects); ++i)
+      list.append(std::string(name_of(objects[i].name)));
+    return list;
+  };
+  out["lights"] = names(s.lights, s.light_count);
+  out["cameras"] = names(s.cameras, s.camera_count);
   return out;
 }
 
@@ -148,7 +158,8 @@ void register_world(py::module_& module) {
           "The newest world state as a dict: step, time (simulated s), stamp_ns, wall_time, "
           "achieved_rate_hz, body_count, paused, lockstep, rejected_commands, "
           "watchdog_expiries, stale_commands, lockstep_clients, late_answers, "
-          "dropped_clients, nan_recoveries.")
+          "dropped_clients, nan_recoveries, and the names of the world file's lights and "
+          "cameras.")
       .def(
           "sim_step", [](World& world) { return world.state(2.0).header.sim_step; },
           "The step the simulation is at.")

@@ -57,7 +57,11 @@ const char* body_list_problem(const BodyList& list, std::size_t bytes) noexcept 
   for (std::uint32_t i = 0; i < list.body_count; ++i) {
     const BodyInfo& body = list.bodies[i];
     if (body.joint_count > kMaxJointsPerBody) return "BodyInfo.joint_count";
-    if (std::uint64_t{body.first_joint_ref} + body.joint_count > list.joint_ref_count)
+    if (body.sensor_ray_count > kMaxSensorRaysPerBody) return "BodyInfo.sensor_ray_count";
+    if (body.actuator_count > kMaxActuatorsPerBody) return "BodyInfo.actuator_count";
+    if (body.child_count > kMaxModelBodies) return "BodyInfo.child_count";
+    if (body.parent_count > 1) return "BodyInfo.parent_count";
+    if (body.first_joint_ref + body_ref_count(body) > list.joint_ref_count)
       return "BodyInfo.first_joint_ref";
   }
   const std::uint32_t* refs = joint_refs_in(list);

@@ -61,7 +61,7 @@ spawn b hub "$afhub" hub
 for _ in $(seq 100); do on a "$afhub" ls 2>/dev/null | grep "$palm" >/dev/null && break; sleep 0.1; done
 on a "$afhub" ls | grep "$palm" >/dev/null || fail "the physics on A did not list $palm"
 
-for _ in $(seq 100); do on b "$afhub" ls >/dev/null 2>&1 && break; sleep 0.1; done
+wait_until 60 "B's hub to start" on b "$afhub" ls
 spawn a bridge_a $rt "$afhub" bridge dds --export --insecure-accept-commands --bodies 'afhub/gripper/*' --world --latency
 bridge_a=$spawned
 # B's bridge from a config file (the flags would do the same).

@@ -36,7 +36,7 @@ body=afhub/arm/base
 spawn a physics "$afhub" run "$model"
 physics=$spawned
 spawn b hub "$afhub" hub
-for _ in $(seq 200); do on b "$afhub" status >/dev/null 2>&1 && break; sleep 0.1; done
+wait_until 60 "B's hub to start" on b "$afhub" status
 for _ in $(seq 100); do on a "$afhub" ls 2>/dev/null | grep "$body" >/dev/null && break; sleep 0.1; done
 on a "$afhub" ls | grep "$body" >/dev/null || fail "the physics on A did not list $body"
 

@@ -58,6 +58,15 @@ fail() {
   exit 1
 }
 
+# wait_until SECONDS WHAT COMMAND...: runs COMMAND every 0.1 s until it succeeds, and
+# fails naming WHAT when it has not within SECONDS (on a loaded machine, starting is slow).
+wait_until() {
+  local seconds=$1 what=$2
+  shift 2
+  for _ in $(seq $((seconds * 10))); do "$@" >/dev/null 2>&1 && return 0; sleep 0.1; done
+  fail "$what: not within $seconds s"
+}
+
 ip netns add "$ns_a"
 ip netns add "$ns_b"
 ip link add "$veth_a" netns "$ns_a" type veth peer name "$veth_b" netns "$ns_b"

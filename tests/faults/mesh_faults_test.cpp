@@ -10,6 +10,7 @@
 
 #include "afhub_process.hpp"
 #include "model_files.hpp"
+#include "strict_json.hpp"
 
 namespace afhub::test {
 namespace {
@@ -75,6 +76,46 @@ TEST_F(MeshFaults, EachIsALocatedErrorAndExitOneNeverACrashOrAHang) {
       EXPECT_TRUE(contains(result.err, c.mesh)) << result.err;
     }
   }
+}
+
+// `afhub run --mesh-fallback box`: the body whose mesh crashes the reader collides as
+// the box of its mass and inertia (0.2 x 0.4 x 0.6 m for these), said once; falling
+// on a floor whose top is z = 0, its centre comes to rest at half its height. With no
+// shape it would fall through, and as a 10 cm cube it would rest at 0.05 m.
+TEST_F(MeshFaults, ABodyWhoseMeshCannotBeUsedFallsBackToItsBoxWhenAsked) {
+  const std::string model = folder_.write(
+      "model.yaml",
+      "bodies: [BODY floor, BODY a]\n"
+      "BODY floor:\n  name: floor\n  mass: 0\n  shape: BOX\n"
+      "  geometry: {x: 4, y: 4, z: 0.2}\n"
+      "  location: {position: {x: 0, y: 0, z: -0.1}, orientation: {r: 0, p: 0, y: 0}}\n"
+      "BODY a:\n  name: a\n  mass: 12\n  inertia: {ix: 0.52, iy: 0.40, iz: 0.20}\n"
+      "  location: {position: {x: 0, y: 0, z: 0.5}, orientation: {r: 0, p: 0, y: 0}}\n"
+      "  mesh: faces.off\n");
+  const std::string report = (folder_.dir() / "report.json").string();
+  const RunResult run = run_afhub({"run", model, "--offline", "--fast", "--steps", "2000",
+                                   "--report", report, "--mesh-fallback", "box"},
+                                  std::chrono::seconds(90));
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const std::string said = "model.yaml:9:3: warning: body 'BODY a': its mesh cannot be used (";
+  EXPECT_TRUE(contains(run.err, said)) << run.err;
+  EXPECT_EQ(run.err.find(said), run.err.rfind(said)) << "said more than once: " << run.err;
+  for (const char* part : {"faces.off", "crashed on it: ABRT",
+                           "it collides as a box 0.2 x 0.4 x 0.6 m", "--mesh-fallback box"})
+    EXPECT_TRUE(contains(run.err, part)) << part << " in " << run.err;
+  const nlohmann::json json = parse_json(read_file(report));
+  EXPECT_EQ(json.at("steps"), 2000);
+  EXPECT_EQ(json.at("nan_detected"), false);
+  const nlohmann::json& position = json.at("bodies").at("ambf/env/a").at("position");
+  EXPECT_NEAR(position.at(2).get<double>(), 0.3, 0.01) << position;
+  EXPECT_NEAR(position.at(0).get<double>(), 0.0, 0.01) << position;
+  // Refused, as before, without the flag.
+  const RunResult refused =
+      run_afhub({"run", model, "--offline", "--steps", "1"}, std::chrono::seconds(90));
+  EXPECT_EQ(refused.exit_code, 1) << refused.err;
+  EXPECT_TRUE(
+      contains(refused.err, "model.yaml:9:3: error: body 'BODY a': its mesh cannot be used"))
+      << refused.err;
 }
 
 }  // namespace

@@ -18,6 +18,7 @@
 #include "afhub/shm_layout/error.hpp"
 #include "afhub/shm_layout/health.hpp"
 #include "afhub/shm_layout/limits.hpp"
+#include "afhub/shm_layout/loop_stats.hpp"
 #include "afhub/shm_layout/world.hpp"
 #include "afhub_process.hpp"
 #include "hub_environment.hpp"
@@ -197,11 +198,65 @@ TEST(Claims, AControllerFindingNoPublisherPortLeftSaysSo) {
   EXPECT_EQ(synth.stop(), 0);
 }
 
-// The world state's pool nearly full (taken here, by loans held): a new physics is
-// refused, naming the pool and its size, before it takes the chunks the running
-// physics publishes its world state with (with 32 physics the first lost its world
-// state, and every physics wrote iceoryx's complaint from its loop).
-TEST(Claims, ANewPhysicsIsRefusedBeforeItTakesTheLastChunks) {
+// The hub's pool that payloads of `bytes` land in (the smallest that fits them), by the
+// latest Health; nullptr before one.
+const MempoolUsage* pool_for(LatestReader<Health>& health, std::size_t bytes) {
+  const Health* latest = health.latest();
+  if (!latest) return nullptr;
+  const MempoolUsage* found = nullptr;
+  for (std::uint32_t i = 0; i < latest->mempool_count; ++i) {
+    const MempoolUsage& pool = latest->mempools[i];
+    if (pool.segment_id != latest->mempools[0].segment_id && pool.chunk_payload_bytes >= bytes &&
+        (!found || pool.chunk_payload_bytes < found->chunk_payload_bytes))
+      found = &pool;
+  }
+  return found;
+}
+
+// The free chunks of the pool for `bytes`, by the latest Health.
+std::uint32_t free_chunks(LatestReader<Health>& health, std::size_t bytes) {
+  const MempoolUsage* pool = pool_for(health, bytes);
+  return pool->chunk_count - pool->used_chunks;
+}
+
+// Loans held in `writers`, 8 per writer (iceoryx's most per publisher), until `left`
+// chunks of the pool for `bytes` are free.
+void take_chunks(LatestReader<Health>& health, std::size_t bytes, PayloadKind kind,
+                 std::uint32_t left, std::vector<std::unique_ptr<RawWriter>>& writers) {
+  const std::uint32_t to_take = free_chunks(health, bytes) - left;
+  std::uint32_t taken = 0;
+  while (taken < to_take) {
+    writers.push_back(std::make_unique<RawWriter>(
+        ChannelId{"afhub", "fill", "w" + std::to_string(writers.size())}, kind));
+    for (int i = 0; i < 8 && taken < to_take; ++i, ++taken)
+      ASSERT_NE(writers.back()->loan(static_cast<std::uint32_t>(bytes)), nullptr)
+          << taken << " of " << to_take;
+  }
+  ASSERT_TRUE(wait_until([&] { return free_chunks(health, bytes) <= left + 2; }, 5s));
+}
+
+// The loans given back, once the hub's Health says so: the next test's processes check
+// the pool by it.
+void give_back(LatestReader<Health>& health, std::size_t bytes,
+               std::vector<std::unique_ptr<RawWriter>>& writers) {
+  writers.clear();
+  EXPECT_TRUE(wait_until(
+      [&] { return free_chunks(health, bytes) > pool_for(health, bytes)->chunk_count / 2; }, 5s))
+      << free_chunks(health, bytes) << " free";
+}
+
+// "chunks of the hub's pool of N chunks of B bytes", as a refusal names it.
+std::string named(const MempoolUsage& pool) {
+  return "chunks of the hub's pool of " + std::to_string(pool.chunk_count) + " chunks of " +
+         std::to_string(pool.chunk_payload_bytes) + " bytes";
+}
+
+// The world state's pool nearly full (taken here, by loans held): a new physics, or a
+// synth, is refused, naming the pool and its size, before it takes the chunks the
+// running physics publishes its world state with (with 32 physics the first lost its
+// world state, and every physics wrote iceoryx's complaint from its loop; a synth
+// was not checked at all).
+TEST(Claims, ANewPublisherIsRefusedBeforeItTakesTheLastChunks) {
   const std::string arm = AFHUB_EXAMPLE_MODELS "/arm7.yaml";
   ScopedProcess first(spawn_afhub({"run", arm, "--no-autostart"}, "/tmp/afhub-claims-first.log"));
   LatestReader<WorldState> world(
@@ -210,43 +265,55 @@ TEST(Claims, ANewPhysicsIsRefusedBeforeItTakesTheLastChunks) {
       << read_file("/tmp/afhub-claims-first.log");
   LatestReader<Health> health(
       {std::string(kService), std::string(kHubInstance), std::string(kHealthEvent)});
-  const auto world_pool = [&]() -> const MempoolUsage* {
-    const Health* latest = health.latest();
-    if (!latest) return nullptr;
-    for (std::uint32_t i = latest->mempool_count; i-- > 0;)
-      if (latest->mempools[i].chunk_payload_bytes >= sizeof(WorldState) &&
-          (i == 0 || latest->mempools[i - 1].chunk_payload_bytes < sizeof(WorldState)))
-        return &latest->mempools[i];
-    return nullptr;
-  };
-  ASSERT_TRUE(wait_until([&] { return world_pool() != nullptr; }, 5s));
-  // Loans held, 8 per writer (iceoryx's most per publisher), leaving 6 free: room for a
-  // physics's two, but not for them and the spare.
-  const std::uint32_t total = world_pool()->chunk_count;
-  const std::uint32_t to_take = total - world_pool()->used_chunks - 6;
+  // 6 left: room for a physics's two, but not for them and the spare.
+  ASSERT_TRUE(wait_until([&] { return pool_for(health, sizeof(WorldState)) != nullptr; }, 5s));
   std::vector<std::unique_ptr<RawWriter>> writers;
-  std::uint32_t taken = 0;
-  while (taken < to_take) {
-    writers.push_back(std::make_unique<RawWriter>(
-        ChannelId{"afhub", "fill", "w" + std::to_string(writers.size())},
-        PayloadKind::kWorldState));
-    for (int i = 0; i < 8 && taken < to_take; ++i, ++taken)
-      ASSERT_NE(writers.back()->loan(sizeof(WorldState)), nullptr) << taken << " of " << to_take;
-  }
-  ASSERT_TRUE(
-      wait_until([&] { return world_pool()->chunk_count - world_pool()->used_chunks <= 8; }, 5s));
+  ASSERT_NO_FATAL_FAILURE(
+      take_chunks(health, sizeof(WorldState), PayloadKind::kWorldState, 6, writers));
+  const std::string pool = named(*pool_for(health, sizeof(WorldState)));
   const RunResult second = run_afhub({"run", arm, "--namespace", "b", "--no-autostart"}, 30s);
   EXPECT_EQ(second.exit_code, 1) << second.err;
-  EXPECT_TRUE(
-      contains(second.err, "chunks of the hub's pool of " + std::to_string(total) + " chunks of " +
-                               std::to_string(world_pool()->chunk_payload_bytes) + " bytes"))
-      << second.err;
+  EXPECT_TRUE(contains(second.err, pool)) << second.err;
+  const RunResult synth =
+      run_afhub({"synth", "--namespace", "s", "--seconds", "3", "--no-autostart"}, 30s);
+  EXPECT_EQ(synth.exit_code, 1) << synth.err;
+  EXPECT_TRUE(contains(synth.err, "this synth (3 bodies) needs 2 " + pool)) << synth.err;
+  EXPECT_TRUE(contains(synth.err, "afhub hub --pool")) << synth.err;
   // The first physics still publishes its world state, and never said it could not.
   const std::uint64_t before = world.latest()->header.sim_step;
   EXPECT_TRUE(wait_until([&] { return world.latest()->header.sim_step > before + 100; }, 5s));
   EXPECT_EQ(first.stop(), 0);
   EXPECT_FALSE(contains(read_file("/tmp/afhub-claims-first.log"), "exhausted"))
       << read_file("/tmp/afhub-claims-first.log");
+  give_back(health, sizeof(WorldState), writers);
+}
+
+// The loop stats' pool nearly full: a controller and a device driver, which publish
+// their loop's timing, are refused before their first loan (they were not checked).
+TEST(Claims, AControllerAndADriverAreRefusedBeforeTheyTakeTheLastChunks) {
+  const std::string arm = AFHUB_EXAMPLE_MODELS "/arm7.yaml";
+  ScopedProcess physics(spawn_afhub({"run", arm, "--no-autostart"}, "/tmp/afhub-claims-arm.log"));
+  ASSERT_TRUE(wait_until([] { return contains(run_afhub({"ls"}).out, "afhub/arm/link1"); }, 10s))
+      << read_file("/tmp/afhub-claims-arm.log");
+  LatestReader<Health> health(
+      {std::string(kService), std::string(kHubInstance), std::string(kHealthEvent)});
+  // 10 left: fewer than a sixteenth of the pool, the spare, with the two asked for.
+  ASSERT_TRUE(wait_until([&] { return pool_for(health, sizeof(LoopStats)) != nullptr; }, 5s));
+  std::vector<std::unique_ptr<RawWriter>> writers;
+  ASSERT_NO_FATAL_FAILURE(
+      take_chunks(health, sizeof(LoopStats), PayloadKind::kLoopStats, 10, writers));
+  const std::string pool = named(*pool_for(health, sizeof(LoopStats)));
+  const RunResult ctl = run_afhub({"ctl", "hold", "afhub/arm/link1", "--wait", "5"}, 30s);
+  EXPECT_EQ(ctl.exit_code, 1) << ctl.err;
+  EXPECT_TRUE(contains(ctl.err, "this controller (commanding afhub/arm/link1) needs")) << ctl.err;
+  EXPECT_TRUE(contains(ctl.err, pool)) << ctl.err;
+  const RunResult driver = run_afhub({"device", "run", "virtual", "--name", "full"}, 30s);
+  EXPECT_EQ(driver.exit_code, 1) << driver.err;
+  EXPECT_TRUE(contains(driver.err, "this driver (device/full) needs 2 " + pool)) << driver.err;
+  EXPECT_EQ(physics.stop(), 0);
+  EXPECT_FALSE(contains(read_file("/tmp/afhub-claims-arm.log"), "exhausted"))
+      << read_file("/tmp/afhub-claims-arm.log");
+  give_back(health, sizeof(LoopStats), writers);
 }
 
 // Every client reads the hub's catalog, and iceoryx connects at most

@@ -1,5 +1,6 @@
 // Load and step times of the real AMBF models, with and without publishing, and
-// what publishing ten bodies costs. Run: build/release/bin/physics_benchmark
+// what publishing ten bodies costs; load and convert times of the real URDF robots
+// beside them. Run: build/release/bin/physics_benchmark
 // (it starts a hub when none runs, and stops it at the end).
 #include <benchmark/benchmark.h>
 
@@ -7,10 +8,12 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <filesystem>
 #include <vector>
 
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/physics/adf_loader.hpp"
+#include "afhub/physics/adf_writer.hpp"
 #include "afhub/physics/sim_channels.hpp"
 #include "afhub/rt/latency_histogram.hpp"
 #include "afhub/rt/stop_signal.hpp"
@@ -44,6 +47,46 @@ void BM_Load(benchmark::State& state, const std::string& file) {
 }
 BENCHMARK_CAPTURE(BM_Load, kuka, kKuka)->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_Load, four_bar, kFourBar)->Unit(benchmark::kMillisecond);
+
+// The real URDF robots in ../shared/urdf_models, their meshes through --package-path:
+// the UR5 (11 links, 6 collision meshes) is the size of the Kuka above (8 bodies).
+const std::string kUrdfModels = AFHUB_SHARED_URDF_MODELS;
+const std::string kUr5 =
+    kUrdfModels + "/example-robot-data/robots/ur_description/urdf/ur5_robot.urdf";
+const std::string kAllegro =
+    kUrdfModels +
+    "/example-robot-data/robots/allegro_hand_description/urdf/allegro_right_hand.urdf";
+
+bool have_urdf_models(benchmark::State& state) {
+  if (std::filesystem::is_directory(kUrdfModels)) return true;
+  state.SkipWithError(("needs the URDF robots, and " + kUrdfModels + " does not exist").c_str());
+  return false;
+}
+
+// As BM_Load: the URDF parsed, its meshes read and the Bullet world built.
+void BM_LoadUrdf(benchmark::State& state, const std::string& file) {
+  if (!have_urdf_models(state)) return;
+  for (auto _ : state) {
+    Model model;
+    load_adf_files_into({file}, model, {{kUrdfModels}, false});
+    Simulation sim(model, 0.001);
+    benchmark::DoNotOptimize(sim.step_count());
+  }
+}
+BENCHMARK_CAPTURE(BM_LoadUrdf, ur5, kUr5)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_LoadUrdf, allegro_hand, kAllegro)->Unit(benchmark::kMillisecond);
+
+// `afhub convert`'s work: the URDF parsed and written as ADF text.
+void BM_ConvertUrdf(benchmark::State& state, const std::string& file) {
+  if (!have_urdf_models(state)) return;
+  for (auto _ : state) {
+    Model model;
+    load_adf_files_into({file}, model, {{kUrdfModels}, false});
+    std::vector<std::string> lost;
+    benchmark::DoNotOptimize(adf_text(model, lost).size());
+  }
+}
+BENCHMARK_CAPTURE(BM_ConvertUrdf, ur5, kUr5)->Unit(benchmark::kMillisecond);
 
 // One step of the physics alone, or the whole loop iteration of `afhub run`:
 // commands read, step, every body's state and the world state published, and the

@@ -9,7 +9,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <thread>
+#include <utility>
+#include <vector>
 
 #include "afhub/hub/bodies.hpp"
 #include "afhub/physics/adf_loader.hpp"
@@ -252,6 +255,94 @@ TEST(Run, ANanBodyIsPutBackUnlessStopOnNan) {
 
 // The project's own launch file: check takes it as run does, and neither loads the world
 // alone when no model is picked.
+// Two pendulums swinging from a fixed base under gravity: a long, heavy, slow one and
+// a short, light one that swings fast, whose pivots drift apart most: the report names
+// it, and when.
+std::string two_pendulums(const afhub::testing::ModelFolder& folder) {
+  std::string text =
+      "bodies: [BODY base, BODY long, BODY short]\n"
+      "joints: [JOINT base-long, JOINT base-short]\n"
+      "ignore inter-collision: true\n"
+      "BODY base:\n  name: base\n  mass: 0\n";
+  auto pendulum = [&](const std::string& name, double x, double length, double mass) {
+    const std::string half = std::to_string(length / 2);
+    text += "BODY " + name + ":\n  name: " + name + "\n  mass: " + std::to_string(mass) +
+            "\n  location: {position: {x: " + std::to_string(x) + ", y: " + half +
+            ", z: 0}}\n  shape: box\n  geometry: {x: 0.02, y: " + std::to_string(length) +
+            ", z: 0.02}\n";
+    text += "JOINT base-" + name + ":\n  name: base-" + name +
+            "\n  parent: BODY base\n  child: BODY " + name +
+            "\n  parent pivot: {x: " + std::to_string(x) +
+            ", y: 0, z: 0}\n  parent axis: {x: 1, y: 0, z: 0}\n" + "  child pivot: {x: 0, y: -" +
+            half + ", z: 0}\n  child axis: {x: 1, y: 0, z: 0}\n" + "  type: revolute\n";
+  };
+  pendulum("long", 0.0, 1.0, 5.0);
+  pendulum("short", 1.0, 0.1, 0.1);
+  return folder.write("pendulums.yaml", text);
+}
+
+TEST(Run, TheReportAndTheEndLineNameTheWorstJointItsErrorAndStep) {
+  afhub::testing::ModelFolder folder;
+  const std::string pendulums = two_pendulums(folder);
+  const physics::Model model = physics::load_adf_files({pendulums});
+  physics::Simulation sim(model, 0.001);
+  physics::RunOptions options;
+  options.fast = true;
+  options.steps = 400;
+  physics::RunReport report;
+  physics::run_loop(sim, nullptr, options, report);
+
+  const std::optional<std::size_t> worst = physics::worst_joint(report);
+  ASSERT_TRUE(worst.has_value());
+  const physics::JointError& error = report.joint_errors.at(*worst);
+  EXPECT_EQ(model.joints[*worst].channel, "ambf/env/base-short");
+  EXPECT_EQ(error.max_m, report.max_joint_error_m);
+  EXPECT_GT(error.max_m, report.joint_errors.at(1 - *worst).max_m);
+  EXPECT_GT(error.step, 0u);
+  // The same world stepped to that step again has that joint's pivots that far apart.
+  physics::Simulation replay(model, 0.001);
+  for (std::uint64_t step = 0; step < error.step; ++step) replay.step();
+  EXPECT_EQ(replay.joint_pivot_gap_m(*worst), error.max_m);
+
+  const nlohmann::json json = parse_json(physics::report_json(report, sim));
+  const nlohmann::json& named = json.at("worst_joint");
+  EXPECT_EQ(named.at("name"), "ambf/env/base-short");
+  EXPECT_EQ(named.at("max_pivot_gap_m").get<double>(), error.max_m);
+  EXPECT_EQ(named.at("step"), error.step);
+  for (const std::string joint : {"ambf/env/base-long", "ambf/env/base-short"}) {
+    const nlohmann::json& entry = json.at("joints").at(joint);
+    EXPECT_GT(entry.at("max_pivot_gap_m").get<double>(), 0.0) << joint;
+    EXPECT_LE(entry.at("max_pivot_gap_m").get<double>(), error.max_m) << joint;
+    EXPECT_LE(entry.at("max_pivot_gap_step").get<std::uint64_t>(), 400u) << joint;
+  }
+
+  // `afhub run` says the same at its end.
+  RunResult run = run_afhub({"run", pendulums, "--offline", "--fast", "--steps", "400"}, 60s);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_TRUE(contains(run.err, "afhub run: 400 steps; largest joint error ")) << run.err;
+  EXPECT_TRUE(contains(run.err, ", at ambf/env/base-short at step " + std::to_string(error.step)))
+      << run.err;
+}
+
+TEST(Run, AtPlacesAFileAndRefusesBadValues) {
+  afhub::testing::ModelFolder folder;
+  const std::string pendulums = two_pendulums(folder);
+  const std::string report = (folder.dir() / "report.json").string();
+  RunResult placed = run_afhub({"run", pendulums, "--at", pendulums + "=0,2,5", "--offline",
+                                "--fast", "--steps", "1", "--report", report},
+                               60s);
+  ASSERT_EQ(placed.exit_code, 0) << placed.err;
+  const nlohmann::json base = parse_json(read_file(report)).at("bodies").at("ambf/env/base");
+  EXPECT_EQ(base.at("position"), nlohmann::json::array({0.0, 2.0, 5.0}));
+  for (const auto& [at, error] : std::vector<std::pair<std::string, std::string>>{
+           {pendulums + "=0,2", "--at takes FILE=x,y,z or FILE=x,y,z,r,p,y"},
+           {folder.dir().string() + "/other.yaml=0,2,5", "--at names '"}}) {
+    RunResult bad = run_afhub({"run", pendulums, "--at", at, "--offline", "--steps", "1"}, 60s);
+    EXPECT_EQ(bad.exit_code, 1) << at;
+    EXPECT_TRUE(contains(bad.err, error)) << bad.err;
+  }
+}
+
 TEST(Run, CheckAndRunTakeALaunchFileAndRefuseItWithNoModelPicked) {
   const std::string launch = AFHUB_EXAMPLE_MODELS "/launch.yaml";
   RunResult picked = run_afhub({"check", "--launch", launch, "-l", "0,2"}, 60s);

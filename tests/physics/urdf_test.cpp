@@ -375,15 +375,15 @@ TEST(Urdf, AMimicJointFollowsItsLeader) {
 
 TEST(Urdf, BadFilesGetALocatedErrorNamingTheProblem) {
   const std::string missing = load_error(kModels + "/missing_mesh.urdf");
-  EXPECT_NE(missing.find("missing_mesh.urdf:4:1: error: link 'base'"), std::string::npos)
+  EXPECT_NE(missing.find("missing_mesh.urdf:4:3: error: link 'base'"), std::string::npos)
       << missing;
   EXPECT_NE(missing.find("package://no_such_package/meshes/base.stl"), std::string::npos)
       << missing;
   EXPECT_NE(missing.find("ROS_PACKAGE_PATH"), std::string::npos) << missing;
   const std::string cycle = load_error(kModels + "/cycle.urdf");
-  EXPECT_NE(cycle.find("cycle.urdf:1:1: error: not a valid URDF"), std::string::npos) << cycle;
+  EXPECT_NE(cycle.find("cycle.urdf:3:1: error: not a valid URDF"), std::string::npos) << cycle;
   const std::string malformed = load_error(kModels + "/malformed.urdf");
-  EXPECT_NE(malformed.find("malformed.urdf:1:1: error: not a valid URDF"), std::string::npos)
+  EXPECT_NE(malformed.find("malformed.urdf:6:3: error: not well-formed XML"), std::string::npos)
       << malformed;
   const std::string xacro = load_error(kModels + "/robot.urdf.xacro");
   EXPECT_NE(xacro.find("expand it to a URDF first"), std::string::npos) << xacro;
@@ -392,6 +392,110 @@ TEST(Urdf, BadFilesGetALocatedErrorNamingTheProblem) {
   // With the package given, the same mesh name is looked for there.
   const std::string given = load_error(kModels + "/missing_mesh.urdf", {{"/nonexistent"}, false});
   EXPECT_NE(given.find("no package 'no_such_package'"), std::string::npos) << given;
+}
+
+// A URDF written to a temporary file, removed when the test ends.
+struct WrittenUrdf {
+  WrittenUrdf(const std::string& name, const std::string& text)
+      : path((fs::temp_directory_path() / ("afhub_urdf_test_" + name)).string()) {
+    std::ofstream(path) << text;
+  }
+  ~WrittenUrdf() { fs::remove(path); }
+  WrittenUrdf(const WrittenUrdf&) = delete;
+  WrittenUrdf& operator=(const WrittenUrdf&) = delete;
+  const std::string path;
+};
+
+// Each mistake at its own line and column, with what is wrong: XML that is not
+// well-formed (TinyXML's place) and what urdfdom refuses (at the link or joint it
+// names, down to the element holding the value it quotes).
+TEST(Urdf, MalformedAndInvalidFilesAreErrorsAtTheirLine) {
+  const std::string head = "<?xml version=\"1.0\"?>\n<robot name=\"bad\">\n  <link name=\"a\"/>\n";
+  struct Bad {
+    std::string name, body, where, what;
+  };
+  const std::vector<Bad> cases = {
+      {"unclosed.urdf", "  <link name=\"b\">\n    <inertial><mass value=\"1\"/>\n  </link>\n",
+       ":6:3: error: not well-formed XML (error reading end tag)", "a tag left open"},
+      {"quote.urdf", "  <link name=\"b/>\n",
+       ":4:9: error: not well-formed XML (error parsing element)", "a missing quote"},
+      {"no_parent.urdf",
+       "  <link name=\"b\"/>\n  <joint name=\"j\" type=\"fixed\">\n    <child link=\"b\"/>\n"
+       "  </joint>\n",
+       ":5:3: error: not a valid URDF", "Joint [j] is missing a parent"},
+      {"unknown_link.urdf",
+       "  <joint name=\"j\" type=\"fixed\">\n    <parent link=\"a\"/>\n    <child "
+       "link=\"nowhere\"/>\n  </joint>\n",
+       ":6:5: error: not a valid URDF", "child link [nowhere] of joint [j] not found"},
+      {"bad_mass.urdf",
+       "  <link name=\"b\">\n    <inertial>\n      <mass value=\"1.x\"/>\n    </inertial>\n  "
+       "</link>\n",
+       ":6:7: error: not a valid URDF", "mass [1.x] is not a float"},
+      {"bad_origin.urdf",
+       "  <link name=\"b\"/>\n  <joint name=\"j\" type=\"fixed\">\n    <parent link=\"a\"/>\n"
+       "    <child link=\"b\"/>\n    <origin xyz=\"0 0 abc\"/>\n  </joint>\n",
+       ":8:5: error: not a valid URDF", "[abc]"},
+      {"bad_limit.urdf",
+       "  <link name=\"b\"/>\n  <joint name=\"j\" type=\"revolute\">\n    <parent "
+       "link=\"a\"/>\n    <child link=\"b\"/>\n    <limit lower=\"-1\" upper=\"one\" "
+       "effort=\"1\" velocity=\"1\"/>\n  </joint>\n",
+       ":8:5: error: not a valid URDF", "upper value (one) is not a valid float"},
+  };
+  for (const Bad& bad : cases) {
+    SCOPED_TRACE(bad.name);
+    const WrittenUrdf file(bad.name, head + bad.body + "</robot>\n");
+    const std::string error = load_error(file.path);
+    EXPECT_TRUE(error.starts_with(file.path + bad.where)) << error;
+    EXPECT_NE(error.find(bad.what), std::string::npos) << error;
+  }
+  const WrittenUrdf not_robot("not_robot.urdf", "<?xml version=\"1.0\"?>\n<model name=\"m\"/>\n");
+  EXPECT_EQ(load_error(not_robot.path),
+            not_robot.path +
+                ":2:1: error: the top element is not <robot name=\"...\">; is this "
+                "a URDF file?");
+}
+
+// Several collision meshes on one link, each at its <origin>, beside a sphere: one
+// compound. Two cubes 0.6 m apart, 0.5 m below the link frame, land the block level
+// on a floor 1 m below it (a single cube under the centre of mass, or the meshes at
+// the link frame, would land it elsewhere or tipped).
+TEST(Urdf, SeveralPlacedCollisionMeshesCollideAsOneCompound) {
+  const std::string cube = kModels + "/meshes/cube.obj";
+  auto mesh = [&](const std::string& xyz) {
+    return "<collision><origin xyz=\"" + xyz + "\"/><geometry><mesh filename=\"" + cube +
+           "\" scale=\"0.1 0.1 0.1\"/></geometry></collision>";
+  };
+  const WrittenUrdf floor("floor.urdf",
+                          "<robot name=\"ground\"><link name=\"world\"><collision><origin "
+                          "xyz=\"0 0 -1.1\"/><geometry><box size=\"3 3 0.2\"/></geometry>"
+                          "</collision></link></robot>\n");
+  const WrittenUrdf block(
+      "block.urdf",
+      "<robot name=\"block\"><link name=\"block\"><inertial><mass value=\"1\"/>"
+      "<inertia ixx=\"0.01\" ixy=\"0\" ixz=\"0\" iyy=\"0.01\" iyz=\"0\" "
+      "izz=\"0.01\"/></inertial>" +
+          mesh("0.3 0 -0.5") + mesh("-0.3 0 -0.5") +
+          "<collision><geometry><sphere radius=\"0.05\"/></geometry></collision>"
+          "</link></robot>\n");
+  Model model;
+  load_adf_files_into({floor.path, block.path}, model, {{}, true});
+  ASSERT_EQ(model.bodies.size(), 2u);
+  const BodySpec& spec = model.bodies[1];
+  EXPECT_TRUE(spec.collision_mesh.empty());
+  ASSERT_EQ(spec.collision_mesh_parts.size(), 2u);
+  EXPECT_EQ(spec.collision_mesh_parts[0].offset.position_m.x, 0.3);
+  EXPECT_EQ(spec.collision_shapes.size(), 1u);
+  Simulation sim(model, 0.001);
+  for (int step = 0; step < 3000; ++step) sim.step();
+  const Pose pose = sim.body_pose(1);
+  EXPECT_NEAR(pose.position_m.z, -0.45, 5e-3);  // the cubes' bottoms on the floor
+  EXPECT_NEAR(pose.position_m.x, 0.0, 5e-3);
+  EXPECT_LT(angle_between(to_kdl(pose.orientation), KDL::Rotation::Identity()), 1e-2);
+  // ADF takes one collision mesh per body: convert says what it leaves out.
+  std::vector<std::string> lost;
+  adf_text(model, lost);
+  ASSERT_EQ(lost.size(), 1u);
+  EXPECT_NE(lost[0].find("link 'block' collides as 2 placed meshes"), std::string::npos) << lost[0];
 }
 
 TEST(Urdf, PackagesResolveThroughPackagePathAndRosPackagePath) {

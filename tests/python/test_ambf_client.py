@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 import afhub
+from ambf_client import Actuator, Client, Sensor
 from conftest import ECM, EXAMPLES, needs_shared_models, wait_until
 
 LAUNCH = EXAMPLES / 'launch.yaml'
@@ -130,9 +131,13 @@ def test_names_handles_and_unsupported_calls(physics, tmp_path):
         assert a.get_joint_idx_from_name('link2-link3') == 2
         assert a.get_joint_pos(99) is None
         assert len(c.get_obj_pose('arm/base')) == 6
+        assert a.get_children_names() == ['link1'], a.get_children_names()
+        assert a.get_num_of_children() == 1 and a.get_parent_name() == 'mount'
+        link7 = c.get_obj_handle('arm/link7')
+        assert link7.get_children_names() == [] and link7.get_parent_name() == 'link6'
         try:
-            a.get_children_names()
-            raise SystemExit('get_children_names did not raise')
+            a.get_msg_header()
+            raise SystemExit('get_msg_header did not raise')
         except NotImplementedError as error:
             print('unsupported:', error)
         w = c.get_world_handle()
@@ -147,7 +152,7 @@ def test_names_handles_and_unsupported_calls(physics, tmp_path):
         print('OK')
     """)
     output = script.finish()
-    assert 'unsupported: get_children_names' in output and 'OK' in output
+    assert 'unsupported: get_msg_header' in output and 'OK' in output
     assert 'no_such_body NAMED OBJECT NOT FOUND' in output
 
 
@@ -175,3 +180,126 @@ def test_ecm_by_ambf_names(physics, tmp_path):
     script.enter()
     output = script.finish()
     assert "'/ambf/env/ecm/baselink'" in output
+
+
+def write_parts_model(tmp_path):
+    """`afhub run` arguments: a model with a proximity sensor and a constraint actuator, and
+    a world with a camera and a light. The probe's ray looks along +x, 2 m; the block
+    (static: a pose command moves it) starts out of it. The gripper's actuator is at its
+    origin, inside the ball resting on the table under it."""
+    (tmp_path / 'parts.yaml').write_text(textwrap.dedent("""\
+        namespace: /afhub/parts/
+        bodies: [BODY probe, BODY block, BODY gripper, BODY ball, BODY table]
+        sensors: [SENSOR range]
+        actuators: [ACTUATOR grip]
+        BODY probe:
+          name: probe
+          mass: 0
+          shape: sphere
+          geometry: {radius: 0.05}
+          location: {position: {x: 0, y: -2, z: 0}}
+        BODY block:
+          name: block
+          mass: 0
+          shape: box
+          geometry: {x: 0.2, y: 0.2, z: 0.2}
+          location: {position: {x: 1, y: 2, z: 0}}
+        BODY gripper:
+          name: gripper
+          mass: 0
+        BODY ball:
+          name: ball
+          mass: 1
+          shape: sphere
+          geometry: {radius: 0.05}
+          location: {position: {x: 0, y: 0, z: -0.045}}
+        BODY table:
+          name: table
+          mass: 0
+          shape: box
+          geometry: {x: 1, y: 1, z: 0.1}
+          location: {position: {x: 0, y: 0, z: -0.145}}
+        SENSOR range:
+          name: range
+          type: Proximity
+          parent: BODY probe
+          range: 2.0
+          array:
+          - {offset: {x: 0, y: 0, z: 0}, direction: {x: 1, y: 0, z: 0}}
+        ACTUATOR grip:
+          name: grip
+          type: Constraint
+          parent: BODY gripper
+          max impulse: 10
+          tau: 1
+        """))
+    (tmp_path / 'world.yaml').write_text(textwrap.dedent("""\
+        namespace: /afhub/parts/
+        gravity: {x: 0.0, y: 0.0, z: -9.81}
+        lights: [light_top]
+        cameras: [camera_front]
+        light_top:
+          name: top
+          location: {x: 0, y: 0, z: 3}
+          direction: {x: 0, y: 0, z: -1}
+        camera_front:
+          name: front
+          location: {x: 3, y: 0, z: 1}
+          look at: {x: 0, y: 0, z: 0}
+          up: {x: 0, y: 0, z: 1}
+        """))
+    return tmp_path / 'parts.yaml', '--world', tmp_path / 'world.yaml'
+
+
+def test_proximity_sensor_sees_a_body_moved_into_its_ray(physics, tmp_path):
+    run = physics(*write_parts_model(tmp_path))
+    run.wait_for_body('parts/probe')
+    c = Client('sensor_test')
+    c.connect()
+    try:
+        assert '/afhub/parts/range' in c.get_obj_names()
+        sensor = c.get_obj_handle('range')
+        assert isinstance(sensor, Sensor) and sensor is c.get_obj_handle('/afhub/parts/range')
+        assert sensor.get_count() == 1 and sensor.get_parent_name() == 'probe'
+        assert sensor.get_range(0) == pytest.approx(2.0)
+        assert sensor.is_triggered(0) is False and sensor.get_measurement(0) == 0.0
+        assert sensor.get_measurement(1) is None  # past its elements, as AMBF
+        c.get_obj_handle('parts/block').set_pos(1.0, -2.0, 0.0)  # into the ray
+        wait_until(lambda: sensor.is_triggered(0), 10, 'the sensor sees the block')
+        # The block's near face is 0.9 m along the 2 m ray.
+        assert sensor.get_distance(0) == pytest.approx(0.9, abs=0.005)
+        assert sensor.get_measurement(0) == pytest.approx(1.0 - 0.9 / 2.0, abs=0.005)
+        with pytest.raises(NotImplementedError, match='get_sensed_object'):
+            sensor.get_sensed_object(0)
+        camera = c.get_obj_handle('front')
+        with pytest.raises(NotImplementedError, match='^get_pos: .*front is a camera'):
+            camera.get_pos()
+        with pytest.raises(NotImplementedError, match='^set_intensity: .*top is a light'):
+            c.get_obj_handle('top').set_intensity(0.5)
+    finally:
+        c.clean_up()
+
+
+def test_actuator_holds_the_touching_body_and_lets_go(physics, tmp_path):
+    run = physics(*write_parts_model(tmp_path))
+    ball = run.wait_for_body('parts/ball')
+    c = Client('actuator_test')
+    c.connect()
+    try:
+        grip = c.get_obj_handle('grip')
+        assert isinstance(grip, Actuator) and grip.get_parent_name() == 'gripper'
+        gripper = c.get_obj_handle('parts/gripper')
+        assert ball.wait_next().position[2] < 0.0  # on the table
+        grip.actuate('ball')
+        gripper.set_pos(0.0, 0.0, 0.5)  # the gripper jumps 0.5 m up: the ball must follow
+        wait_until(lambda: ball.wait_next().position[2] > 0.35, 10,
+                   'the held ball followed the gripper up')
+        # Held for longer than the watchdog: the client re-sends the actuator's flag.
+        assert held_for(ball, lambda s: s.position[2] > 0.35, 1.0)
+        grip.deactuate()
+        wait_until(lambda: ball.wait_next().position[2] < 0.0, 10,
+                   'the released ball fell back to the table')
+        with pytest.raises(NotImplementedError, match='pose'):
+            grip.actuate('ball', pose=[0, 0, 0, 0, 0, 0])
+    finally:
+        c.clean_up()

@@ -204,6 +204,27 @@ TEST(PayloadCheck, RefusesABodyListWhoseBodyCountsTooManyJoints) {
     joint_refs_in(*list)[5] = 0;
     EXPECT_EQ(check_payload(list.get(), bytes - 4, kind, &field), PayloadError::kCountTooLarge);
     EXPECT_STREQ(field, "BodyList.joint_ref_count");
+    // Its sensors', actuators', children's and parent's references follow its joints'.
+    list->bodies[1].sensor_ray_count = 3;
+    list->bodies[1].actuator_count = 2;
+    list->bodies[1].child_count = 4;
+    list->bodies[1].parent_count = 1;
+    EXPECT_EQ(check_payload(list.get(), bytes, kind), PayloadError::kNone);
+    list->bodies[1].first_joint_ref = kMaxJointsPerBody - 11;  // 12 refs, 11 left
+    EXPECT_EQ(check_payload(list.get(), bytes, kind, &field), PayloadError::kCountTooLarge);
+    EXPECT_STREQ(field, "BodyInfo.first_joint_ref");
+    list->bodies[1].first_joint_ref = 0;
+    list->bodies[1].sensor_ray_count = kMaxSensorRaysPerBody + 1;
+    EXPECT_EQ(check_payload(list.get(), bytes, kind, &field), PayloadError::kCountTooLarge);
+    EXPECT_STREQ(field, "BodyInfo.sensor_ray_count");
+    list->bodies[1].sensor_ray_count = 0;
+    list->bodies[1].actuator_count = kMaxActuatorsPerBody + 1;
+    EXPECT_EQ(check_payload(list.get(), bytes, kind, &field), PayloadError::kCountTooLarge);
+    EXPECT_STREQ(field, "BodyInfo.actuator_count");
+    list->bodies[1].actuator_count = 0;
+    list->bodies[1].parent_count = 2;
+    EXPECT_EQ(check_payload(list.get(), bytes, kind, &field), PayloadError::kCountTooLarge);
+    EXPECT_STREQ(field, "BodyInfo.parent_count");
   }
 }
 
@@ -355,9 +376,10 @@ TEST(PayloadCheck, EveryErrorHasAnExplanation) {
 
 TEST(Layout, PayloadsFitTheirMempoolsAndStaySmall) {
   // Sent at their real size: a body of up to 64 joints stays within 2 KB, the
-  // contact wrench and the last refusal's sender and reason (2264 B), and one of
-  // kMaxJointsPerBody within the hub's largest body tier (hub_mempools.cpp).
-  EXPECT_LE(body_state_bytes(64), 2048u + 56u + 168u);
+  // contact wrench, the last refusal's sender and reason and its sensor rays' ranges
+  // (2520 B), and one of kMaxJointsPerBody within the hub's largest body tier
+  // (hub_mempools.cpp).
+  EXPECT_LE(body_state_bytes(64), 2048u + 56u + 168u + 8u * kMaxSensorRaysPerBody);
   EXPECT_LE(body_command_bytes(64), 1280u);
   EXPECT_EQ(body_state_bytes(kMaxJointsPerBody), sizeof(BodyState));
   EXPECT_LE(body_command_bytes(kMaxJointsPerBody), body_state_bytes(kMaxJointsPerBody));

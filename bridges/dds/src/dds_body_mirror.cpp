@@ -6,6 +6,7 @@
 #include <cstring>
 
 #include "afhub/hub/body_claims.hpp"
+#include "afhub/hub/hub_health.hpp"
 #include "afhub/hub/hub_loss.hpp"
 #include "afhub/rt/clock.hpp"
 #include "afhub/shm_layout/error.hpp"
@@ -102,6 +103,8 @@ MirrorClaims::Install BodyMirror::claim(const std::string& channel, std::uint32_
   const BodyEntry entry = make_body_entry(channel, joint_names);
   directory_.check_room(entry);
   check_room_for_bodies({channel}, 1);
+  require_chunks({published_each_cycle(body_state_bytes(announced_joints))},
+                 "mirroring " + channel);
   auto body = std::make_shared<Body>(
       Body{channel, announced_joints, std::make_unique<BodyPublisher>(channel)});
   directory_.add(entry);

@@ -8,6 +8,7 @@
 #include <memory>
 
 #include "afhub/hub/bodies.hpp"
+#include "afhub/hub/hub_health.hpp"
 #include "afhub/hub/hub_loss.hpp"
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/hub/loop_stats_publisher.hpp"
@@ -182,6 +183,13 @@ int run_teleop(const TeleopOptions& options, TeleopLatency* latency) {
                  binding.spec.identifier.c_str(), binding.device_name.c_str(),
                  binding.body.c_str());
   }
+  // Before the first loan, as the physics: teleop must not starve a running physics.
+  std::vector<ChunkNeed> needs{published_each_cycle(sizeof(LoopStats))};
+  for (const auto& link : links) {
+    needs.push_back(published_each_cycle(sizeof(DeviceCommand)));
+    needs.push_back(published_each_cycle(body_command_bytes(link->binding->gripper_joints.size())));
+  }
+  require_chunks(needs, "this teleop (" + std::to_string(links.size()) + " devices)");
   const std::size_t most = latency ? options.latency_samples : 0;
   if (latency) {
     latency->to_body_command.reserve(most);

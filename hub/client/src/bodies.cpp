@@ -57,30 +57,55 @@ std::size_t BodyClient::joint_index(std::string_view name) {
       (names.empty() ? std::string("it has no joints") : "its joints are (index name): " + known));
 }
 
-std::vector<std::string> joint_names_of(const BodyList& list, const BodyInfo& body) {
+namespace {
+
+// The `count` names referenced from `first` on in `list`.
+std::vector<std::string> names_at(const BodyList& list, std::uint64_t first, std::uint32_t count) {
   const JointName* names = joint_names_in(list);
-  const std::uint32_t* refs = joint_refs_in(list) + body.first_joint_ref;
-  std::vector<std::string> joint_names;
-  joint_names.reserve(body.joint_count);
-  for (std::uint32_t i = 0; i < body.joint_count; ++i)
-    joint_names.emplace_back(name_of(names[refs[i]]));
-  return joint_names;
+  const std::uint32_t* refs = joint_refs_in(list) + first;
+  std::vector<std::string> found;
+  found.reserve(count);
+  for (std::uint32_t i = 0; i < count; ++i) found.emplace_back(name_of(names[refs[i]]));
+  return found;
+}
+
+}  // namespace
+
+std::vector<std::string> joint_names_of(const BodyList& list, const BodyInfo& body) {
+  return names_at(list, body.first_joint_ref, body.joint_count);
 }
 
 BodyEntry entry_of(const BodyList& list, std::uint32_t index) {
-  return {list.bodies[index], joint_names_of(list, list.bodies[index])};
+  const BodyInfo& body = list.bodies[index];
+  BodyEntry entry{body, joint_names_of(list, body)};
+  std::uint64_t at = std::uint64_t{body.first_joint_ref} + body.joint_count;
+  entry.sensor_rays = names_at(list, at, body.sensor_ray_count);
+  at += body.sensor_ray_count;
+  entry.actuator_names = names_at(list, at, body.actuator_count);
+  at += body.actuator_count;
+  entry.child_names = names_at(list, at, body.child_count);
+  at += body.child_count;
+  if (body.parent_count == 1) entry.parent_name = names_at(list, at, 1).front();
+  return entry;
 }
 
 BodyList* loan_body_list(RawWriter& writer, const std::vector<BodyEntry>& entries) {
   std::vector<std::string_view> names;
   std::unordered_map<std::string_view, std::uint32_t> name_index;
   std::vector<std::uint32_t> refs;
-  for (const BodyEntry& entry : entries)
-    for (const std::string& name : entry.joint_names) {
-      const auto [at, added] = name_index.emplace(name, static_cast<std::uint32_t>(names.size()));
-      if (added) names.push_back(name);
-      refs.push_back(at->second);
-    }
+  const auto refer = [&](std::string_view name) {
+    const auto [at, added] = name_index.emplace(name, static_cast<std::uint32_t>(names.size()));
+    if (added) names.push_back(name);
+    refs.push_back(at->second);
+  };
+  // In the order BodyInfo gives.
+  for (const BodyEntry& entry : entries) {
+    for (const std::string& name : entry.joint_names) refer(name);
+    for (const std::string& name : entry.sensor_rays) refer(name);
+    for (const std::string& name : entry.actuator_names) refer(name);
+    for (const std::string& name : entry.child_names) refer(name);
+    if (!entry.parent_name.empty()) refer(entry.parent_name);
+  }
   if (entries.size() > kMaxBodies || names.size() > kMaxCatalogJointNames ||
       refs.size() > kMaxCatalogJointRefs)
     return nullptr;
@@ -95,9 +120,14 @@ BodyList* loan_body_list(RawWriter& writer, const std::vector<BodyEntry>& entrie
   std::uint32_t first_ref = 0;
   for (std::size_t i = 0; i < entries.size(); ++i) {
     list->bodies[i] = entries[i].info;
-    list->bodies[i].joint_count = static_cast<std::uint32_t>(entries[i].joint_names.size());
-    list->bodies[i].first_joint_ref = first_ref;
-    first_ref += list->bodies[i].joint_count;
+    BodyInfo& body = list->bodies[i];
+    body.joint_count = static_cast<std::uint32_t>(entries[i].joint_names.size());
+    body.sensor_ray_count = static_cast<std::uint32_t>(entries[i].sensor_rays.size());
+    body.actuator_count = static_cast<std::uint32_t>(entries[i].actuator_names.size());
+    body.child_count = static_cast<std::uint32_t>(entries[i].child_names.size());
+    body.parent_count = entries[i].parent_name.empty() ? 0 : 1;
+    body.first_joint_ref = first_ref;
+    first_ref += static_cast<std::uint32_t>(body_ref_count(body));
   }
   JointName* name_slots = joint_names_in(*list);
   for (std::size_t n = 0; n < names.size(); ++n) set_name(name_slots[n], names[n]);
@@ -147,6 +177,31 @@ BodyEntry make_body_entry(std::string_view body_channel,
   for (const std::string& name : joint_names) copy_name(checked, name, "joint name");
   entry.joint_names = joint_names;
   return entry;
+}
+
+void set_body_parts(BodyEntry& entry, std::vector<std::string> sensor_rays,
+                    std::vector<std::string> actuator_names, std::vector<std::string> child_names,
+                    std::string parent_name) {
+  const std::string body(name_of(entry.info.channel));
+  const auto bound = [&](std::size_t count, std::size_t most, std::string_view what,
+                         std::string_view limit) {
+    if (count > most)
+      throw Error("body '" + body + "' has " + std::to_string(count) + " " + std::string(what) +
+                  "; afhub carries at most " + std::to_string(most) + " per body (" +
+                  std::string(limit) + ")");
+  };
+  bound(sensor_rays.size(), kMaxSensorRaysPerBody, "proximity-sensor rays",
+        "kMaxSensorRaysPerBody");
+  bound(actuator_names.size(), kMaxActuatorsPerBody, "actuators", "kMaxActuatorsPerBody");
+  bound(child_names.size(), kMaxModelBodies, "child bodies", "kMaxModelBodies");
+  JointName checked{};
+  for (const auto* names : {&sensor_rays, &actuator_names, &child_names})
+    for (const std::string& name : *names) copy_name(checked, name, "name of a part of " + body);
+  copy_name(checked, parent_name, "parent name of " + body);
+  entry.sensor_rays = std::move(sensor_rays);
+  entry.actuator_names = std::move(actuator_names);
+  entry.child_names = std::move(child_names);
+  entry.parent_name = std::move(parent_name);
 }
 
 BodyEntry make_device_entry(std::string_view device_name) {

@@ -124,6 +124,9 @@ std::optional<std::uint32_t> free_publisher_ports(std::chrono::milliseconds time
 }
 
 void require_chunks(const std::vector<ChunkNeed>& needs, const std::string& what) {
+  // Read afresh: a process checks long after it connected (a model takes seconds to
+  // load), and others take chunks meanwhile.
+  free_ports(std::chrono::milliseconds(500));
   const std::lock_guard lock(g_pools_mutex);
   std::vector<std::uint32_t> needed(g_pools.size(), 0);  // pools sorted by size, as iceoryx's
   for (const ChunkNeed& need : needs)

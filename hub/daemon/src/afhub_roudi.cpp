@@ -5,7 +5,11 @@ namespace afhub {
 
 // The hub does not kill clients when it stops: they keep running and re-attach.
 AfhubRouDi::AfhubRouDi(iox::roudi::RouDiMemoryInterface& memory, iox::roudi::PortManager& ports)
-    : RouDi(memory, ports, RoudiStartupParameters{iox::roudi::MonitoringMode::OFF, false}) {}
+    : RouDi(memory, ports, RoudiStartupParameters{iox::roudi::MonitoringMode::OFF, false}) {
+  // The pools are measured every 100 ms rather than every second: a new process checks
+  // the chunks it needs by them (require_chunks), so they must be recent.
+  m_mempoolIntrospection.setSendInterval(iox::units::Duration::fromMilliseconds(100));
+}
 
 AfhubRouDi::~AfhubRouDi() = default;
 

@@ -17,7 +17,7 @@ constexpr auto kSubscriberPeriod = std::chrono::milliseconds(100);
 }  // namespace
 
 struct HealthReporter::Introspection {
-  // Keeps the newest sample of an introspection topic.
+  // Keeps the newest sample of an introspection topic; `fresh` while it is unpublished.
   template <class Topic>
   struct LatestTopic {
     explicit LatestTopic(const iox::capro::ServiceDescription& service)
@@ -33,11 +33,13 @@ struct HealthReporter::Introspection {
         auto taken = subscriber.take();
         if (taken.has_error()) break;
         held.emplace(std::move(taken.value()));
+        fresh = true;
       }
       return held ? held->get() : nullptr;
     }
     iox::popo::Subscriber<Topic> subscriber;
     std::optional<iox::popo::Sample<const Topic>> held;
+    bool fresh = false;
   };
 
   LatestTopic<iox::roudi::ProcessIntrospectionFieldTopic> processes{
@@ -61,12 +63,14 @@ void HealthReporter::poll(std::chrono::steady_clock::time_point now, std::uint32
   // then once a second.
   // Also at once when the bodies or the free publisher ports change (writers check
   // them), and within kSubscriberPeriod when the free subscriber ports do (readers
-  // check them; the rate probes of many bodies come and go all the time).
+  // check them; the rate probes of many bodies come and go all the time), and as
+  // often when RouDi measured the pools anew (new processes check their chunks).
   const bool changed =
       body_count != last_body_count_ || free_ports.publishers != last_free_ports_.publishers;
-  const bool readers_changed = free_ports.subscribers != last_free_ports_.subscribers &&
-                               now - last_publish_ >= kSubscriberPeriod;
-  if (last_publish_ != std::chrono::steady_clock::time_point{} && !changed && !readers_changed &&
+  const bool readers_changed = free_ports.subscribers != last_free_ports_.subscribers;
+  const bool soon = (readers_changed || introspection_->mempools.fresh) &&
+                    now - last_publish_ >= kSubscriberPeriod;
+  if (last_publish_ != std::chrono::steady_clock::time_point{} && !changed && !soon &&
       now - last_publish_ < kPublishPeriod)
     return;
   Health* health = writer_.loan();
@@ -87,6 +91,7 @@ void HealthReporter::poll(std::chrono::steady_clock::time_point now, std::uint32
     }
   }
   if (mempools) {
+    introspection_->mempools.fresh = false;
     for (const auto& segment : *mempools) {
       for (const auto& pool : segment.m_mempoolInfo) {
         if (health->mempool_count == kMaxMempools) break;

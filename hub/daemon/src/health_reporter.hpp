@@ -1,5 +1,6 @@
 // The hub's health channel: live processes and mempool usage, relayed from
-// RouDi's introspection, plus uptime and body count, once a second.
+// RouDi's introspection, plus uptime and body count: once a second, and within 100 ms
+// of a change (see poll).
 #pragma once
 
 #include <sys/types.h>

@@ -20,11 +20,14 @@
 namespace afhub::physics {
 namespace {
 
-double largest_pivot_gap(const Simulation& sim) noexcept {
-  double largest = 0.0;
-  for (std::size_t j = 0; j < sim.model().joints.size(); ++j)
-    largest = std::max(largest, sim.joint_pivot_gap_m(j));
-  return largest;
+// Each joint's pivot gap after the step: its largest so far, and the step that made it.
+void record_joint_errors(const Simulation& sim, std::uint64_t step, RunReport& report) noexcept {
+  for (std::size_t j = 0; j < report.joint_errors.size(); ++j) {
+    const double gap = sim.joint_pivot_gap_m(j);
+    JointError& error = report.joint_errors[j];
+    if (gap > error.max_m) error = {gap, step};
+    report.max_joint_error_m = std::max(report.max_joint_error_m, gap);
+  }
 }
 
 // Each joint under a position command: how far the step left it from its target.
@@ -52,7 +55,8 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
   WorldCommand world_command;
   double achieved_rate_hz = 0.0;
   std::uint64_t late_counted = 0;
-  report.max_joint_error_m = std::max(report.max_joint_error_m, largest_pivot_gap(sim));
+  report.joint_errors.resize(sim.model().joints.size());
+  record_joint_errors(sim, report.steps, report);  // step 0: the model as loaded
   report.tracking.resize(sim.model().joints.size());
   // The physics loop's own timing, on its stats channel like every loop (`afhub top`).
   std::unique_ptr<LoopStatsPublisher> stats;
@@ -103,7 +107,7 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
       sim.step();
       ++report.steps;
       record_tracking(sim, report);
-      report.max_joint_error_m = std::max(report.max_joint_error_m, largest_pivot_gap(sim));
+      record_joint_errors(sim, report.steps, report);
       if (options.stop_on_nan && sim.nan_recoveries().count > 0) {
         report.nan_detected = true;  // said after the loop
         return false;
@@ -142,6 +146,24 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
   report.wall_time_s = static_cast<double>(clock_ns() - start_ns) * 1e-9;
 }
 
+std::optional<std::size_t> worst_joint(const RunReport& report) {
+  std::optional<std::size_t> worst;
+  for (std::size_t j = 0; j < report.joint_errors.size(); ++j)
+    if (!worst || report.joint_errors[j].max_m > report.joint_errors[*worst].max_m) worst = j;
+  return worst;
+}
+
+std::string worst_joint_summary(const RunReport& report, const Simulation& sim) {
+  const std::optional<std::size_t> worst = worst_joint(report);
+  if (!worst) return "";
+  const JointError& error = report.joint_errors[*worst];
+  char text[160];
+  std::snprintf(text, sizeof text, "largest joint error %.3g m, at %s at step %llu", error.max_m,
+                sim.model().joints[*worst].channel.c_str(),
+                static_cast<unsigned long long>(error.step));
+  return text;
+}
+
 std::string nan_summary(const Simulation& sim) {
   const NanRecoveries& nan = sim.nan_recoveries();
   if (nan.count == 0) return "";
@@ -177,7 +199,13 @@ std::string report_json(const RunReport& report, const Simulation& sim) {
   json.end_object();
   json.key("joints").begin_object();
   for (const auto& [name, j] : joints) {
-    json.key(name).begin_object().key("position").value(sim.joint_position(j));
+    json.key(name).begin_object();
+    if (j < report.joint_errors.size()) {
+      json.key("max_pivot_gap_m").value(report.joint_errors[j].max_m);
+      json.key("max_pivot_gap_step")
+          .value(static_cast<unsigned long long>(report.joint_errors[j].step));
+    }
+    json.key("position").value(sim.joint_position(j));
     if (j < report.tracking.size() && report.tracking[j].steps > 0) {
       const JointTracking& tracking = report.tracking[j];
       json.key("tracking").begin_object();
@@ -203,6 +231,14 @@ std::string report_json(const RunReport& report, const Simulation& sim) {
   json.end_object();
   json.key("steps").value(static_cast<unsigned long long>(report.steps));
   json.key("wall_time_s").value(report.wall_time_s);
+  if (const std::optional<std::size_t> worst = worst_joint(report)) {
+    const JointError& error = report.joint_errors[*worst];
+    json.key("worst_joint").begin_object();
+    json.key("max_pivot_gap_m").value(error.max_m);
+    json.key("name").value(model.joints[*worst].channel);
+    json.key("step").value(static_cast<unsigned long long>(error.step));
+    json.end_object();
+  }
   json.end_object();
   return json.str() + "\n";
 }

@@ -34,8 +34,33 @@ void to_state(const BodyReading& reading, BodyState& state) noexcept {
     state.joints[j] = {reading.joint_positions[j], reading.joint_velocities[j],
                        reading.joint_efforts[j]};
   state.sensor_ray_count = reading.ray_count;
-  for (std::uint32_t r = 0; r < reading.ray_count; ++r)
+  for (std::uint32_t r = 0; r < reading.ray_count; ++r) {
     state.sensor_distances_m[r] = reading.ray_distances_m[r];
+    state.sensor_ranges_m[r] = reading.ray_ranges_m[r];
+  }
+}
+
+// Body b's catalog entry: its joints, and by name its sensors' rays and actuators in
+// state and command order (the order Simulation builds them in), the bodies jointed
+// below it and its parent (the first joint's in file order, for a body in a loop).
+BodyEntry body_entry(const Model& model, std::size_t b, const std::vector<std::string>& joints) {
+  BodyEntry entry = make_body_entry(model.bodies[b].channel, joints);
+  std::vector<std::string> rays, actuators, children;
+  std::string parent;
+  const int body = static_cast<int>(b);
+  for (const SensorSpec& sensor : model.sensors)
+    if (sensor.parent == body) rays.insert(rays.end(), sensor.rays.size(), sensor.name);
+  for (const ActuatorSpec& actuator : model.actuators)
+    if (actuator.parent == body) actuators.push_back(actuator.name);
+  for (const JointSpec& joint : model.joints) {
+    if (joint.parent == body && joint.child >= 0)
+      children.push_back(model.bodies[joint.child].name);
+    if (joint.child == body && joint.parent >= 0 && parent.empty())
+      parent = model.bodies[joint.parent].name;
+  }
+  set_body_parts(entry, std::move(rays), std::move(actuators), std::move(children),
+                 std::move(parent));
+  return entry;
 }
 
 // The bodies the model publishes (passive ones publish nothing), checked with the hub
@@ -77,7 +102,7 @@ SimChannels::SimChannels(Simulation& sim, double watchdog_s, std::string_view na
       throw Error(body.where.str() + ": error: '" + body.name + "' has " +
                   std::to_string(joint_names.size()) +
                   " joints below it; a state carries at most " + std::to_string(kMaxJointsPerBody));
-    directory_.add(make_body_entry(body.channel, joint_names));
+    directory_.add(body_entry(model, b, joint_names));
     Channel channel;
     channel.index = b;
     channel.publisher = std::make_unique<BodyPublisher>(body.channel);
@@ -104,11 +129,10 @@ SimChannels::SimChannels(Simulation& sim, double watchdog_s, std::string_view na
         ChannelId{std::string(kService), name, std::string(kSoftNodesEvent)});
     soft_surfaces_.push_back(std::move(surface));
   }
-  // Before the first loan: each state published every step keeps a loan and a sample
-  // in flight.
-  std::vector<ChunkNeed> needs{{static_cast<std::uint32_t>(sizeof(WorldState)), 2}};
+  // Before the first loan.
+  std::vector<ChunkNeed> needs{published_each_cycle(sizeof(WorldState))};
   for (const Channel& channel : channels_)
-    needs.push_back({static_cast<std::uint32_t>(body_state_bytes(channel.joint_count)), 2});
+    needs.push_back(published_each_cycle(body_state_bytes(channel.joint_count)));
   require_chunks(needs, "this physics (" + std::to_string(channels_.size()) + " bodies)");
   std::size_t joint_values = 0;
   for (std::size_t b = 0; b < scene_body_count(model); ++b)

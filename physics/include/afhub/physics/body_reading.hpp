@@ -26,9 +26,11 @@ struct BodyReading {
   std::array<double, kBodyJointCapacity> joint_positions{};   // rad or m
   std::array<double, kBodyJointCapacity> joint_velocities{};  // rad/s or m/s
   std::array<double, kBodyJointCapacity> joint_efforts{};     // N m or N
-  // Proximity-sensor rays in file order: distance to the first hit, -1 when none.
+  // Proximity-sensor rays in file order: distance to the first hit, -1 when none,
+  // and the ray's range.
   std::uint32_t ray_count = 0;
   std::array<double, kBodyRayCapacity> ray_distances_m{};
+  std::array<double, kBodyRayCapacity> ray_ranges_m{};
 };
 
 }  // namespace afhub::physics

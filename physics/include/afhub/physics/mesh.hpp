@@ -5,6 +5,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -53,6 +54,14 @@ struct MeshRequest {
 // files are unchanged, for the next call (`afhub check` reads a model's meshes, then
 // builds its simulation). Throws the error of the first that cannot be used.
 std::vector<TriangleMesh> load_body_meshes(const std::vector<MeshRequest>& requests);
+
+// A request's mesh, or why it cannot be used (the mesh's own error, not located).
+struct MeshOrError {
+  std::optional<TriangleMesh> mesh;
+  std::string error;
+};
+// load_body_meshes, without throwing for a mesh that cannot be used.
+std::vector<MeshOrError> try_load_body_meshes(const std::vector<MeshRequest>& requests);
 
 // Reads every mesh the model names once (what `afhub check` does, so that it
 // finds the mesh problems `afhub run` would); returns how many were read.

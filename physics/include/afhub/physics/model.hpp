@@ -55,6 +55,12 @@ enum class ControllerOutput { kForce, kVelocity };
 // `controller`), its file, or `afhub run --default-gains` / `--gains`.
 enum class GainSource { kAmbfDefault, kFile, kCommandLine };
 
+// A mesh file placed in a body's mesh frame.
+struct PlacedMesh {
+  std::string path;  // resolved
+  Placement offset;
+};
+
 struct BodySpec {
   std::string identifier;  // "BODY base": the key joints refer to
   // "<namespace>/<identifier>" ("/ambf/env/BODY base"): how other files may name it.
@@ -72,6 +78,10 @@ struct BodySpec {
   std::string collision_mesh;  // resolved path; empty when shapes are used
   CollisionMeshType collision_mesh_type = CollisionMeshType::kTrimesh;
   std::vector<ShapeSpec> collision_shapes;  // empty: the collision mesh, else the visual shapes
+  // Further collision meshes, each at its offset (a URDF link's several <collision>
+  // elements): with any, the body collides as one compound of the collision mesh,
+  // these and the collision shapes.
+  std::vector<PlacedMesh> collision_mesh_parts;
   std::optional<Placement> collision_offset;
   double scale = 1.0;
   bool passive = false;

@@ -49,8 +49,9 @@ struct BodyState {
   // that `afhub top` and `afhub status` show the physics' one count.
   std::uint32_t commanded_steps{0};
   // Proximity sensors on this body, their rays in file order; entries
-  // [0, sensor_ray_count) are valid. Distance to the first hit, or -1 when nothing
-  // is within the sensor's range.
+  // [0, sensor_ray_count) of sensor_distances_m and sensor_ranges_m are valid. Distance
+  // to the first hit, or -1 when nothing is within the sensor's range. The catalog
+  // names the sensor of each ray (BodyInfo.sensor_ray_count).
   std::uint32_t sensor_ray_count{0};
   std::uint32_t answered_steps{0};  // see commanded_steps
   std::uint32_t contact_count{0};   // contact points that pushed on the body in the last step
@@ -62,6 +63,9 @@ struct BodyState {
   std::uint32_t refused_command_pid{0};
   std::array<char, kRefusalReasonSize> refusal_reason{};
   std::array<double, kMaxSensorRaysPerBody> sensor_distances_m{};
+  // Each ray's range, m: with its distance, what AMBF's sensor reports (its normalized
+  // measurement), so that a reader needs no model file.
+  std::array<double, kMaxSensorRaysPerBody> sensor_ranges_m{};
   std::array<JointSample, kMaxJointsPerBody> joints{};  // last: sized by joint_count
 };
 

@@ -2,8 +2,9 @@
 // A process that owns bodies publishes a BodyDirectory of them; the hub merges
 // every live directory into the Catalog. Both share one shape and are loaned at
 // their real size, body_list_bytes(): the first body_count entries of `bodies`,
-// then the joint names (each distinct name once), then the joint references (per
-// body, its joint_count indices into the names, from first_joint_ref on).
+// then the names (each distinct name once), then the references into them (per body,
+// body_ref_count() of them from first_joint_ref on: its joints, then its sensors' rays,
+// its actuators, its children and its parent; see BodyInfo).
 #pragma once
 
 #include <array>
@@ -30,7 +31,24 @@ struct BodyInfo {
   // Its joints, in state order, are names[refs[first_joint_ref + i]] for i < joint_count.
   std::uint32_t first_joint_ref{0};
   ChannelKind kind{ChannelKind::kBody};
+  // After its joints' refs, in this order: for each sensor ray of its state (in state
+  // order, at most kMaxSensorRaysPerBody) the name of the proximity sensor it belongs
+  // to; the names of its constraint actuators, in command order (at most
+  // kMaxActuatorsPerBody); the names of the bodies jointed directly below it; and its
+  // parent's name when it has one (parent_count 1). Body names are the model's, without
+  // the namespace, as AMBF's client gives them. So that a client addresses sensors and
+  // actuators by name without reading the model's files.
+  std::uint32_t sensor_ray_count{0};
+  std::uint32_t actuator_count{0};
+  std::uint32_t child_count{0};
+  std::uint32_t parent_count{0};  // 0 or 1
 };
+
+// The references of one body: its joints, sensor rays, actuators, children and parent.
+constexpr std::uint64_t body_ref_count(const BodyInfo& body) {
+  return std::uint64_t{body.joint_count} + body.sensor_ray_count + body.actuator_count +
+         body.child_count + body.parent_count;
+}
 
 struct BodyList {
   // No kKind: a BodyList is a kBodyDirectory or a kCatalog, named by its channel.

@@ -48,10 +48,15 @@ class BodyPublisher {
   LatestReader<BodyCommand> command_;
 };
 
-// A body as the catalog lists it, with its joint names in state order.
+// A body as the catalog lists it, with its joint names in state order and the names
+// of its parts and neighbours (see BodyInfo).
 struct BodyEntry {
   BodyInfo info;
   std::vector<std::string> joint_names;
+  std::vector<std::string> sensor_rays{};     // per ray of its state, its sensor's name
+  std::vector<std::string> actuator_names{};  // in command order
+  std::vector<std::string> child_names{};     // bodies jointed directly below it
+  std::string parent_name{};                  // "" when it has none
 };
 
 class BodyClient {
@@ -104,6 +109,13 @@ BodyEntry entry_of(const BodyList& list, std::uint32_t index);
 // A catalog entry for a body this process owns; throws afhub::Error on a bad name.
 BodyEntry make_body_entry(std::string_view body_channel,
                           const std::vector<std::string>& joint_names);
+
+// Adds the names of a body's parts and neighbours to its entry (see BodyEntry);
+// throws afhub::Error when there are more than a state or command carries, or a name
+// is too long for the catalog.
+void set_body_parts(BodyEntry& entry, std::vector<std::string> sensor_rays,
+                    std::vector<std::string> actuator_names, std::vector<std::string> child_names,
+                    std::string parent_name);
 
 // A catalog entry for a device this process drives ("device/<name>": DeviceState
 // and DeviceCommand); throws afhub::Error on a bad name.

@@ -47,9 +47,14 @@ struct ChunkNeed {
   std::uint32_t bytes = 0;
   std::uint32_t count = 0;
 };
+// What a writer that publishes every cycle holds: a loan and a sample in flight.
+constexpr ChunkNeed published_each_cycle(std::size_t bytes) {
+  return {static_cast<std::uint32_t>(bytes), 2};
+}
 // Throws afhub::Error, naming `what`, the pool and its size, when taking `needs` would
-// leave a pool of the hub nearly empty (by the Health read at connect_to_hub()): a new
-// process is refused before it takes the chunks those running publish with.
+// leave a pool of the hub nearly empty (by the hub's latest Health, read afresh): a new
+// process is refused before it takes the chunks those running publish with. Every
+// process that publishes calls it before its first loan.
 void require_chunks(const std::vector<ChunkNeed>& needs, const std::string& what);
 
 // Takes a port from the count, or gives one back: this process opened or closed a

@@ -9,6 +9,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -42,6 +43,13 @@ struct JointTracking {
   double last_target = 0.0, last_error = 0.0;  // the last such step's
 };
 
+// One joint's largest pivot gap (how far apart the two bodies' pivots are: a closed
+// loop opening) and the step that left it there (0: the model as loaded).
+struct JointError {
+  double max_m = 0.0;
+  std::uint64_t step = 0;
+};
+
 // One step of the step log: when it began (CLOCK_MONOTONIC ns) and how long the
 // loop iteration took (the step_time histogram's measure).
 struct StepSample {
@@ -56,7 +64,8 @@ struct RunReport {
   LoopTiming timing;               // wake-up lateness, work time, overruns, late lockstep answers
   bool nan_detected = false;       // with stop_on_nan: the loop stopped on a NaN
   double max_joint_error_m = 0.0;  // the largest pivot gap seen, over all joints and steps
-  std::vector<JointTracking> tracking;  // per joint, sized before the first step
+  std::vector<JointError> joint_errors;  // per joint, sized before the first step
+  std::vector<JointTracking> tracking;   // per joint, sized before the first step
   // Each step's sample, up to the capacity the caller reserved before the loop (none
   // by default): the loop never grows it, so it never allocates.
   std::vector<StepSample> step_log;
@@ -67,9 +76,19 @@ struct RunReport {
 void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options, RunReport& report);
 
 // The --report JSON: steps, times, step-time percentiles, NaN flag and recoveries,
-// largest pivot gap, final body poses and joint positions, and each position-commanded
-// joint's tracking (steps, max and RMS error, last target and error). Keys are sorted.
+// largest pivot gap and the joint and step it was seen at (worst_joint), final body
+// poses, and per joint its position, largest pivot gap and that gap's step, and, when
+// position-commanded, its tracking (steps, max and RMS error, last target and error).
+// Keys are sorted.
 std::string report_json(const RunReport& report, const Simulation& sim);
+
+// The joint with the largest pivot gap over the run (the first of equals), none
+// without joints.
+std::optional<std::size_t> worst_joint(const RunReport& report);
+
+// "largest joint error 0.042 m, at ambf/env/mtm/BottomArm-ArmParallel at step 1234",
+// or "" without joints: `afhub run`'s end line.
+std::string worst_joint_summary(const RunReport& report, const Simulation& sim);
 
 // "2 bodies put back after a step made them NaN or infinite; first: arm/link3 at
 // step 5; last: ...", or "" when none was. Said after the loop, never inside it.
