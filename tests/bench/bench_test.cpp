@@ -11,6 +11,7 @@
 
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/rt/cpu_wake_latency.hpp"
+#include "afhub/shm_layout/body_state.hpp"
 #include "afhub_process.hpp"
 #include "model_files.hpp"
 #include "real_time.hpp"
@@ -82,24 +83,29 @@ TEST(Bench, ShortRunMeasuresEveryTransportAndTheLoop) {
   EXPECT_GT(ratio, 0.9);  // below it, the bench exits 1 (above)
 }
 
-// A hub whose pools starve the body states (`--pool 1024:20` between the body tiers, as
-// `--bench-pools` once put 1024:16): the bench fails loudly, naming the pool, instead of
-// reporting "met" (it said 1.7 % in time, exit 0). Either the physics starts, drops
-// states and says so once, or it is refused at start for the lack of spare chunks.
+// A hub whose pools starve the body states (`--pool` of 20 chunks just large enough for
+// the example arm's states, below the body tiers: they all come from it): the bench
+// fails loudly, naming the pool, instead of reporting "met" (it said 1.7 % in time, exit
+// 0). Either the physics starts, drops states and says so once, or it is refused at start
+// for the lack of spare chunks.
 TEST(Bench, StarvedBodyStatesFailTheBench) {
-  ScopedProcess hub(spawn_afhub({"hub", "--bench-pools", "--pool", "1024:20"}));
+  // arm/base's state, the arm's largest (7 joints below it), rounded as the hub rounds.
+  const std::string bytes = std::to_string((afhub::body_state_bytes(7) + 7) / 8 * 8);
+  ScopedProcess hub(spawn_afhub({"hub", "--bench-pools", "--pool", bytes + ":20"}));
   ASSERT_TRUE(wait_until(
       [] { return probe_roudi() == RoudiPresence::kRunning && running_hub_pid(); }, 10s));
   const RunResult run = run_afhub(
       {"bench", "--transports", "afhub", "--rounds", "1", "--pings", "5", "--loop-seconds", "2"},
       120s);
   EXPECT_EQ(run.exit_code, 1) << run.out << run.err;
+  const std::string pool = "chunks of " + bytes + " bytes";
   const bool dropped = contains(run.err,
                                 "afhub bench: FAILED: the physics did not publish every step's "
                                 "states: it said \"afhub physics: shared memory exhausted: the "
-                                "hub's pool of 20 chunks of 1024 bytes has none free");
-  const bool refused = contains(run.err, "The physics ended (exit code 1)") &&
-                       contains(run.err, "chunks of the hub's pool of 20 chunks of 1024 bytes");
+                                "hub's pool of ") &&
+                       contains(run.err, pool + " has none free");
+  const bool refused =
+      contains(run.err, "The physics ended (exit code 1)") && contains(run.err, pool);
   EXPECT_TRUE(dropped || refused) << run.err;
   if (dropped) {
     EXPECT_TRUE(contains(run.out, "(goal >= 90 %): NOT met")) << run.out;

@@ -66,7 +66,7 @@ std::vector<MempoolSpec> default_mempools() {
   std::vector<MempoolSpec> pools = {
       {128, 512, "world commands, small iceoryx samples"},
       {round_up8(body_command_bytes(64)), 4096,
-       "body commands of up to 64 joints, states of up to 21"},
+       "body commands of up to 64 joints, states of bodies with few joints"},
       {round_up8(body_state_bytes(64)), 4096, "body states of up to 64 joints"},
       {round_up8(body_state_bytes(256)), 1024, "body states and commands of up to 256 joints"},
       {round_up8(body_state_bytes(kMaxJointsPerBody)), 256,
