@@ -100,6 +100,12 @@ teleop::TeleopBinding bind_device(const teleop::InputDeviceSpec& spec,
     const physics::JointSpec& joint = model.joints[static_cast<std::size_t>(j)];
     binding.gripper_joints.push_back(
         {joint.limit_low.value_or(0.0), joint.limit_high.value_or(0.0)});
+    // Every body below the root, once (a closed loop reaches one by two joints).
+    if (joint.child < 0 || joint.child == static_cast<int>(root)) continue;
+    const std::string& child = model.bodies[static_cast<std::size_t>(joint.child)].channel;
+    if (std::find(binding.subtree_bodies.begin(), binding.subtree_bodies.end(), child) ==
+        binding.subtree_bodies.end())
+      binding.subtree_bodies.push_back(child);
   }
   for (const physics::ActuatorSpec& actuator : model.actuators)
     if (actuator.parent == static_cast<int>(root)) ++binding.actuator_count;
@@ -160,7 +166,7 @@ void register_teleop(CLI::App& app, Runner& selected) {
       "device's driver (device/<name>, `afhub device run ...`) moves the root body of its "
       "\"simulated multibody\" through a Cartesian PD wrench, and gets the haptic gain times "
       "the body's lag behind the device's proxy as force (clutch, gripper and mode buttons "
-      "as AMBF maps them), or with --feedback contact the body's contact force. The physics "
+      "as AMBF maps them), or with --feedback contact the multibody's contact force. The physics "
       "simulates the multibody: start it with `afhub run "
       "<the simulated multibody file>` (it waits for it, printing that command). Device "
       "channels: by default the \"hardware name\" in lower case, other characters as '_' "
@@ -184,8 +190,9 @@ void register_teleop(CLI::App& app, Runner& selected) {
   teleop->add_option(
       "--feedback", options->feedback,
       "What the device's force renders: proxy (default, as AMBF: the haptic gain times the "
-      "body's lag behind the device's proxy), contact (the force the body's contacts push it "
-      "with, from the physics' contact wrench, times haptic gain / the linear controller gain "
+      "body's lag behind the device's proxy), contact (the force the contacts of the root body "
+      "and every body below it push the multibody with, from the physics' contact wrenches, "
+      "taken at the root, times haptic gain / the linear controller gain "
       "P, so that a steady press feels as with proxy; nothing while the body touches "
       "nothing), or both (their sum). The torque alike with the angular gains. Either way "
       "through the file's deadband, max force and max jerk, in the device's frame");

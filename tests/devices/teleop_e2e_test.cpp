@@ -4,7 +4,8 @@
 // binding the two. The device's motion is followed by the palm, scaled; the clutch
 // holds the palm and lets go with no jump; pushing the palm into the floor gives an
 // opposing force on the device, bounded by the file's max force, from the proxy or (with
-// --feedback contact) from the palm's contact force.
+// --feedback contact) from the contact force on the whole gripper: a finger pressed
+// on a wall, the palm touching nothing, pushes the device back too.
 #include <gtest/gtest.h>
 #include <signal.h>
 
@@ -42,16 +43,19 @@ const std::vector<std::string> kPatientTeleop = {"--stale", "500"};
 class Teleop : public TeleopSession {
  public:
   Teleop(const std::string& device, const std::vector<std::string>& driver_args,
-         const std::vector<std::string>& teleop_extra = {})
-      : TeleopSession(setup(device, driver_args, teleop_extra)) {}
+         const std::vector<std::string>& teleop_extra = {},
+         const std::vector<std::string>& extra_models = {})
+      : TeleopSession(setup(device, driver_args, teleop_extra, extra_models)) {}
   const BodyState& palm() { return body(); }
 
  private:
   static TeleopSetup setup(const std::string& device, const std::vector<std::string>& driver_args,
-                           const std::vector<std::string>& teleop_extra) {
+                           const std::vector<std::string>& teleop_extra,
+                           const std::vector<std::string>& extra_models) {
     static afhub::testing::ModelFolder folder;
     TeleopSetup s;
     s.models = {kGripper, kFloor};
+    s.models.insert(s.models.end(), extra_models.begin(), extra_models.end());
     s.devices_file = kVirtualHand;
     s.teleop_args = {"--device", device};
     s.teleop_args.insert(s.teleop_args.end(), teleop_extra.begin(), teleop_extra.end());
@@ -245,6 +249,75 @@ TEST(TeleopEndToEnd, ContactFeedbackIsZeroInTheAirAndPushesBackOnTheFloor) {
   EXPECT_LE(most_force, kMaxForce + 1e-9) << "the device got more than the max force";
   SKIP_REAL_TIME_BOUNDS_IN_SANITIZED_BUILD();
   EXPECT_GT(mean_up, 0.8 * kMaxForce) << "the device got no force opposing the push";
+}
+
+// --feedback contact takes the whole multibody's contacts: a wall 2 cm ahead of the
+// fingertips (the palm stays 9 cm from it), the hand moving 2 cm toward it (the
+// virtual hand yields to the force it gets: it stops about 1.5 cm out, its proxy 5 cm
+// into the wall). Only the fingers touch it, and the device is pushed back (-x), away
+// from the contact; before it moves, nothing touches and the device
+// gets no force. (With the root's contacts only, it got none at all.)
+TEST(TeleopEndToEnd, ContactFeedbackFeelsAFingerTouchingAWall) {
+  afhub::testing::ModelFolder scripts;
+  // A passive box, its face at x 0.71 (the fingertips at 0.69), spanning both fingers.
+  const std::string wall = scripts.write("wall.yaml", R"(adf version: '1.0'
+bodies: [BODY wall]
+joints: []
+namespace: /afhub/test_wall/
+BODY wall:
+  name: wall
+  mass: 0.0
+  location:
+    position: {x: 0.76, y: 0.8, z: 0.6}
+    orientation: {r: 0.0, p: 0.0, y: 0.0}
+  shape: BOX
+  geometry: {x: 0.1, y: 0.3, z: 0.2}
+  collision shape: BOX
+  collision geometry: {x: 0.1, y: 0.3, z: 0.2}
+  passive: true
+)");
+  const std::string csv =
+      scripts.write("finger.csv", "0,0,0,0\n3,0,0,0\n4,0.02,0,0\n10,0.02,0,0\n");
+  Teleop teleop("finger", {"--trajectory", csv}, {"--feedback", "contact"}, {wall});
+  LatestReader<BodyState> finger(body_state_channel("afhub/gripper/left_finger"));
+  ASSERT_TRUE(teleop.wait_running()) << teleop.logs();
+  double still_most = 0.0, back_sum = 0.0, side_most = 0.0, finger_x_sum = 0.0;
+  std::uint32_t palm_contacts = 0, finger_contacts = 0;
+  int still = 0, pressing = 0;
+  for (int i = 0; i < 3000; ++i) {  // about 6 s, every 2 ms
+    const DeviceState& device = teleop.device();
+    const Vec3& f = device.applied.force_n;
+    palm_contacts = std::max(palm_contacts, teleop.palm().contact_count);
+    if (device.pose.position_m.x < 1e-4) {  // the hand not yet moved: nothing touches
+      still_most = std::max(still_most, std::sqrt(f.x * f.x + f.y * f.y + f.z * f.z));
+      ++still;
+    } else if (device.pose.position_m.x > 0.01 && device.gate == ForceGate::kApplying) {
+      // The fingers on the wall since the hand's 4 mm: pushing 3 cm of proxy into it.
+      back_sum += f.x;
+      side_most = std::max(side_most, std::hypot(f.y, f.z));
+      if (const BodyState* s = finger.latest()) {
+        finger_contacts = std::max(finger_contacts, s->contact_count);
+        finger_x_sum += s->contact_wrench.force_n.x;
+      }
+      ++pressing;
+    }
+    pause_ms(2);
+  }
+  const double mean_back = pressing ? back_sum / pressing : 0.0;
+  std::printf(
+      "finger on a wall: still: largest force %.3g N (%d samples); pressing: device force "
+      "along x %.3f N (mean), largest sideways %.3f N, left finger contact force along x "
+      "%.2f N (mean), at most %u finger and %u palm contacts (%d samples)\n",
+      still_most, still, mean_back, side_most, pressing ? finger_x_sum / pressing : 0.0,
+      finger_contacts, palm_contacts, pressing);
+  ASSERT_GT(still, 200) << teleop.logs();
+  ASSERT_GT(pressing, 200) << "the hand never pushed on with teleop commanding" << teleop.logs();
+  EXPECT_LT(still_most, 1e-3) << "a force with nothing touched" << teleop.logs();
+  EXPECT_GT(finger_contacts, 0u) << "the finger never touched the wall";
+  EXPECT_EQ(palm_contacts, 0u) << "the palm touched something: the test proves nothing";
+  EXPECT_LT(mean_back, -0.3) << "the device got no force away from the finger's contact"
+                             << teleop.logs();
+  EXPECT_LT(side_most, std::abs(mean_back)) << "the force points elsewhere than back";
 }
 
 // The teleoperation process SIGKILLed while the device pushes into the floor (more

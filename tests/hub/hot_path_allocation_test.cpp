@@ -395,7 +395,10 @@ teleop::TeleopBinding palm_binding(const std::string& device) {
     const physics::JointSpec& joint = model.joints[static_cast<std::size_t>(j)];
     binding.gripper_joints.push_back(
         {joint.limit_low.value_or(0.0), joint.limit_high.value_or(0.0)});
+    binding.subtree_bodies.push_back(model.bodies[static_cast<std::size_t>(joint.child)].channel);
   }
+  // Proxy and contact feedback: the cycle reads the fingers' states too.
+  binding.feedback = teleop::FeedbackSource::kBoth;
   // What the physics accepts (physics/src/sim_bounds.cpp), as cmd_teleop.cpp bounds it.
   double mass_kg = 0.0;
   for (const physics::BodySpec& body : model.bodies) mass_kg += body.mass_kg;

@@ -18,6 +18,7 @@
 #include "afhub/shm_layout/error.hpp"
 #include "afhub/teleop/device_freshness.hpp"
 #include "afhub/teleop/state_freshness.hpp"
+#include "afhub/teleop/subtree_contact.hpp"
 #include "afhub/teleop/teleop_law.hpp"
 
 namespace afhub::teleop {
@@ -45,6 +46,11 @@ struct Link {
         device_command(body_command_channel(device_channel_name(b.device_name))),
         body(entry) {
     if (!b.spec.enable_joint_control) joints = 0;
+    // Contact feedback reads the states of the bodies below the root too.
+    if (b.feedback != FeedbackSource::kProxy)
+      for (const std::string& channel : b.subtree_bodies)
+        subtree.push_back(std::make_unique<BodyClient>(channel));
+    multibody_states.resize(subtree.size() + 1);
   }
   const TeleopBinding* binding;
   DeviceFreshness freshness;
@@ -54,6 +60,8 @@ struct Link {
   LatestReader<DeviceState> device_state;
   Writer<DeviceCommand> device_command;
   BodyClient body;
+  std::vector<std::unique_ptr<BodyClient>> subtree;  // below the root: contact feedback only
+  std::vector<const BodyState*> multibody_states;    // the root's, then those below: per cycle
   TeleopOutput out;
   std::size_t joints{std::numeric_limits<std::size_t>::max()};  // capped below
   std::int64_t last_cycle_ns{0};
@@ -141,7 +149,11 @@ void cycle(Link& link, std::int64_t now, TeleopLatency* latency, std::size_t mos
       std::fprintf(stderr, "afhub teleop: device/%s is back: %s moves on from where it was held\n",
                    name, body);
   }
-  link.law.step(*device, state->pose, state->twist, dt, link.out, state->contact_wrench);
+  link.multibody_states[0] = state;
+  for (std::size_t i = 0; i < link.subtree.size(); ++i)
+    link.multibody_states[i + 1] = link.subtree[i]->latest_state();
+  const Wrench contact = subtree_contact_wrench(state->pose.position_m, link.multibody_states);
+  link.law.step(*device, state->pose, state->twist, dt, link.out, contact);
 
   const std::size_t joints =
       std::min<std::size_t>({link.joints, link.binding->gripper_joints.size(), state->joint_count});

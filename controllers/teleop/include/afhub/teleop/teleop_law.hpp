@@ -6,8 +6,9 @@
 //   body wrench  = P (target - body) + D (target velocity - body velocity)   (world frame)
 //   device force = M^T haptic_gain (body - target)        (pulls the hand to the body)
 //
-// or, with contact feedback, what the body's contacts push it with (the physics'
-// BodyState.contact_wrench), scaled so that a steady press feels as the proxy does:
+// or, with contact feedback, what the contacts push the multibody with (the physics'
+// BodyState.contact_wrench of the body and every body below it, summed at the body's
+// origin: subtree_contact.hpp), scaled so that a steady press feels as the proxy does:
 //   device force = M^T (haptic_gain / P) contact force      (P: the body's linear gain)
 // (the body pressing still on a surface has P (target - body) = -contact force). With
 // both, the sum.
@@ -72,8 +73,8 @@ class TeleopLaw {
   explicit TeleopLaw(const TeleopParams& params);
 
   // One cycle: the newest device sample, the body's newest pose and twist (world), the
-  // time since the previous cycle, and the body's contact wrench (world frame, torque
-  // about the body's origin: BodyState.contact_wrench) for contact feedback.
+  // time since the previous cycle, and the multibody's contact wrench (world frame,
+  // torque about the body's origin: subtree_contact_wrench) for contact feedback.
   void step(const DeviceState& device, const Pose& body_pose, const Twist& body_twist, double dt_s,
             TeleopOutput& out, const Wrench& body_contact = {}) noexcept;
 

@@ -23,8 +23,11 @@ namespace afhub::teleop {
 // description (by the caller: this layer does not read models).
 struct TeleopBinding {
   InputDeviceSpec spec;
-  std::string device_name;                 // the driver's --name: channels device/<name>
-  std::string body;                        // the root body's channel, "<namespace>/<body>"
+  std::string device_name;  // the driver's --name: channels device/<name>
+  std::string body;         // the root body's channel, "<namespace>/<body>"
+  // The channels of the bodies below the root: contact feedback sums their contact
+  // wrenches with the root's (subtree_contact.hpp).
+  std::vector<std::string> subtree_bodies;
   CartesianGains body_gains;               // the root body's own controller gains (AMBF's fallback)
   std::vector<JointRange> gripper_joints;  // the root's descendant joints, command order
   std::uint32_t actuator_count{0};
