@@ -3,24 +3,16 @@ hold the body that touches it, deactuate() lets go. Its flag travels in the comm
 the body that carries it, which that body's handle sends and re-sends (so the physics'
 watchdog does not release it)."""
 
+from .handle import Handle
 
-class Actuator:
+
+class Actuator(Handle):
     def __init__(self, name, carrier, index):
         """name: its AMBF name; carrier: the RigidBody handle of the body carrying it;
         index: its place among that body's actuators (command order)."""
-        self._name = name
+        super().__init__(name)
         self._carrier = carrier
         self._index = index
-        self._active = False
-
-    def get_name(self):
-        return self._name
-
-    def is_active(self):
-        return self._active
-
-    def set_active(self):
-        self._active = True
 
     def run_publisher(self):
         """Nothing of its own to send: the carrier's handle sends the flag."""

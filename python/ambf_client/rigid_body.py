@@ -13,6 +13,7 @@ import afhub
 
 from .geometry import (Point, Pose, Quaternion, Twist, Vector3, Wrench, quaternion_from_rpy,
                        rpy_from_quaternion)
+from .handle import Handle
 
 _EFFORT, _POSITION, _VELOCITY = afhub.JointType.EFFORT, afhub.JointType.POSITION, \
     afhub.JointType.VELOCITY
@@ -40,9 +41,9 @@ def _quaternion_szyx(roll, pitch, yaw):
                     quaternion_from_rpy(0, 0, roll))
 
 
-class RigidBody:
+class RigidBody(Handle):
     def __init__(self, name, body, time_out=0.1):
-        self._name = name
+        super().__init__(name)
         self._body = body
         self._time_out = time_out
         self._lock = threading.Lock()
@@ -54,7 +55,6 @@ class RigidBody:
         self._pose = None
         self._twist = Twist()
         self._pose_cmd_set = self._twist_cmd_set = self._wrench_cmd_set = False
-        self._active = False
         self._actuators = []  # flags of the body's actuators, once one is set
         self._last_command = 0.0
         self._told_refusal = None
@@ -68,15 +68,6 @@ class RigidBody:
             raise RuntimeError(f'{self._name}: no state came from {self._body.channel} in 1 s: '
                                'is its simulation running?')
         return state
-
-    def get_name(self):
-        return self._name
-
-    def is_active(self):
-        return self._active
-
-    def set_active(self):
-        self._active = True
 
     def get_sim_step(self):
         return self._state().step

@@ -2,24 +2,16 @@
 of the body that carries it (afhub publishes a sensor's rays with that body's state, and
 the catalog names the sensor of each ray)."""
 
+from .handle import Handle
 
-class Sensor:
+
+class Sensor(Handle):
     def __init__(self, name, body, rays):
         """name: its AMBF name; body: the afhub.Body carrying it; rays: the indices of its
         rays in that body's State.sensor_distances."""
-        self._name = name
+        super().__init__(name)
         self._body = body
         self._rays = list(rays)
-        self._active = False
-
-    def get_name(self):
-        return self._name
-
-    def is_active(self):
-        return self._active
-
-    def set_active(self):
-        self._active = True
 
     def run_publisher(self):
         """Nothing to send: a sensor takes no command."""

@@ -1,15 +1,11 @@
 """Cameras and lights, as AMBF's ``Camera`` and ``Light``: afhub does not render, so
 every call of theirs but get_name() raises NotImplementedError naming the call."""
 
+from .handle import Handle
 
-class _Unrendered:
+
+class _Unrendered(Handle):
     _kind = ''
-
-    def __init__(self, name):
-        self._name = name
-
-    def get_name(self):
-        return self._name
 
     def is_active(self):
         return False  # nothing for the client's thread to send

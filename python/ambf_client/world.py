@@ -4,26 +4,18 @@ and stepping it from update()."""
 
 import afhub
 
+from .handle import Handle
 
-class World:
+
+class World(Handle):
     def __init__(self, name='World'):
-        self._name = name
+        super().__init__(name)
         self._world = afhub.World()
         self._throttling = False
         self._step_skips = 1
-        self._active = False
-
-    def get_name(self):
-        return self._name
 
     def set_name(self, name):
         self._name = name
-
-    def set_active(self):
-        self._active = True
-
-    def is_active(self):
-        return self._active
 
     def get_sim_time(self):
         return self._world.sim_time()

@@ -118,5 +118,27 @@ TEST_F(MeshFaults, ABodyWhoseMeshCannotBeUsedFallsBackToItsBoxWhenAsked) {
       << refused.err;
 }
 
+// Every mesh that the reader cannot use (a crash, a FIFO it would hang on, a count past
+// its limits) falls back the same way; a path that is not a file is still refused.
+TEST_F(MeshFaults, EveryUnreadableMeshFallsBackAndABadPathIsStillRefused) {
+  for (const std::string mesh : {"faces.off", "indices.ply", "fifo.obj", "count.ply"}) {
+    SCOPED_TRACE(mesh);
+    const RunResult run = run_afhub(
+        {"run", model_with_mesh(mesh), "--offline", "--steps", "1", "--mesh-fallback", "box"},
+        std::chrono::seconds(90));
+    EXPECT_EQ(run.exit_code, 0) << run.err;
+    EXPECT_TRUE(contains(run.err,
+                         "model.yaml:3:3: warning: body 'BODY a': its mesh cannot be "
+                         "used ("))
+        << run.err;
+    EXPECT_TRUE(contains(run.err, mesh)) << run.err;
+  }
+  const RunResult refused = run_afhub({"run", model_with_mesh("directory.stl"), "--offline",
+                                       "--steps", "1", "--mesh-fallback", "box"},
+                                      std::chrono::seconds(90));
+  EXPECT_EQ(refused.exit_code, 1) << refused.err;
+  EXPECT_TRUE(contains(refused.err, "is a directory")) << refused.err;
+}
+
 }  // namespace
 }  // namespace afhub::test
