@@ -111,7 +111,11 @@ void run_ping_pong(const BenchOptions& options, BenchResults& results) {
       const std::string port = std::to_string(free_port());
       setenv("ROS_MASTER_URI", ("http://127.0.0.1:" + port + "/").c_str(), 1);
       setenv("ROS_IP", "127.0.0.1", 1);
-      setenv("ROS_HOME", "/tmp/afhub-bench-ros", 1);  // its logs, wherever HOME is
+      // Its logs, wherever HOME is: in a folder of this run's own (a fixed name in /tmp
+      // could be a symlink planted by another user).
+      char ros_home[] = "/tmp/afhub-bench-ros-XXXXXX";
+      if (!mkdtemp(ros_home)) throw Error("cannot make a folder for rosmaster's logs in /tmp");
+      setenv("ROS_HOME", ros_home, 1);
       rosmaster = std::make_unique<ChildProcess>(
           std::vector<std::string>{"rosmaster", "--core", "-p", port});
     }

@@ -7,9 +7,11 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <cstring>
 #include <thread>
 
+#include "afhub/rt/safe_open.hpp"
 #include "afhub/shm_layout/error.hpp"
 
 namespace afhub {
@@ -29,6 +31,17 @@ struct SpawnSetup {
   }
   SpawnSetup(const SpawnSetup&) = delete;
   SpawnSetup& operator=(const SpawnSetup&) = delete;
+};
+
+// A descriptor of this process's, closed however the spawn ends.
+struct Descriptor {
+  int fd = -1;
+  Descriptor() = default;
+  ~Descriptor() {
+    if (fd >= 0) close(fd);
+  }
+  Descriptor(const Descriptor&) = delete;
+  Descriptor& operator=(const Descriptor&) = delete;
 };
 
 void redirect(posix_spawn_file_actions_t& actions, int from, int to) {
@@ -58,10 +71,24 @@ pid_t spawn_process(const std::vector<std::string>& argv, const SpawnOptions& op
   redirect(actions, options.stdin_fd, STDIN_FILENO);
   redirect(actions, options.stdout_fd, STDOUT_FILENO);
   redirect(actions, options.stderr_fd, STDERR_FILENO);
+  // Output files are often in /tmp under predictable names: opened here, where a symlink,
+  // a FIFO or another user's file planted at the name is refused (the child's own open
+  // would follow, block or write into it).
+  Descriptor output;
   if (!options.output_path.empty()) {
-    posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, options.output_path.c_str(),
-                                     O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
+    output.fd =
+        options.output_path == "/dev/null"
+            ? open("/dev/null", O_WRONLY | O_CLOEXEC)
+            : open_own_file(options.output_path, O_WRONLY | O_CREAT | O_TRUNC | O_NONBLOCK, 0644);
+    if (output.fd < 0)
+      throw Error("cannot start " + argv.front() + ": its output file " + options.output_path +
+                  (errno == EPERM || errno == ELOOP || errno == ENXIO
+                       ? " is not a regular file of this user's (a symlink, a FIFO or another "
+                         "user's file is in its place): remove it, or pick another path"
+                       : std::string(": ") + std::strerror(errno)));
+    fcntl(output.fd, F_SETFL, fcntl(output.fd, F_GETFL) & ~O_NONBLOCK);
+    posix_spawn_file_actions_adddup2(&actions, output.fd, STDOUT_FILENO);
+    posix_spawn_file_actions_adddup2(&actions, output.fd, STDERR_FILENO);
   }
   if (options.close_other_descriptors) posix_spawn_file_actions_addclosefrom_np(&actions, 3);
 

@@ -1,5 +1,6 @@
 // `afhub view` against connections that misbehave, from raw sockets: WebSocket frames
-// that claim a gigabyte, and idle or slow connections by the hundred from one address.
+// that claim a gigabyte, idle or slow connections by the hundred from one address, and
+// more pages than the viewer serves at once from several.
 // Each is judged by events (the server closed the connection, a request answered while
 // the other connections are still open), with generous waits only.
 #include <gtest/gtest.h>
@@ -93,20 +94,36 @@ int count_closed(const std::vector<int>& fds) {
   return closed;
 }
 
+// A page's WebSocket upgrade request, as a browser sends it.
+void send_upgrade(int fd) {
+  const std::string upgrade =
+      "GET /ws HTTP/1.1\r\nHost: 127.0.0.1\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
+      "Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n\r\n";
+  ASSERT_EQ(send(fd, upgrade.data(), upgrade.size(), MSG_NOSIGNAL),
+            static_cast<ssize_t>(upgrade.size()));
+}
+
+// What the server answered, up to the end of its headers (and a refusal's text).
+std::string reply_head(int fd) {
+  std::string reply;
+  char byte;
+  while (reply.find("\r\n\r\n") == std::string::npos && recv(fd, &byte, 1, 0) == 1) reply += byte;
+  if (!contains(reply, " 101 ")) {
+    char text[512];
+    const ssize_t n = recv(fd, text, sizeof text, 0);
+    if (n > 0) reply.append(text, static_cast<std::size_t>(n));
+  }
+  return reply;
+}
+
 TEST_F(ViewFaults, AWebSocketFrameClaimingAGigabyteIsRefusedAtItsHeader) {
   constexpr std::size_t kTried = 128u << 20;  // sent of each frame, if the viewer reads it
   const std::vector<int> sockets = open_connections("127.0.0.1", 3);
   ASSERT_EQ(sockets.size(), 3U);
   std::vector<char> chunk(1 << 20, 'x');
   for (const int fd : sockets) {
-    const std::string upgrade =
-        "GET /ws HTTP/1.1\r\nHost: 127.0.0.1\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
-        "Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n\r\n";
-    ASSERT_EQ(send(fd, upgrade.data(), upgrade.size(), MSG_NOSIGNAL),
-              static_cast<ssize_t>(upgrade.size()));
-    std::string reply;
-    char byte;
-    while (reply.find("\r\n\r\n") == std::string::npos && recv(fd, &byte, 1, 0) == 1) reply += byte;
+    send_upgrade(fd);
+    const std::string reply = reply_head(fd);
     ASSERT_TRUE(contains(reply, "101 Switching Protocols")) << reply;
     // A binary frame of 1 GiB, masked as a page's frames are.
     const unsigned char header[] = {0x82, 0xFF, 0, 0, 0, 0, 0x40, 0, 0, 0, 1, 2, 3, 4};
@@ -129,6 +146,36 @@ TEST_F(ViewFaults, AWebSocketFrameClaimingAGigabyteIsRefusedAtItsHeader) {
   ASSERT_TRUE(page.connected());
   EXPECT_TRUE(wait_until([&] { return page.binary_frames() >= 10; }, 10s));
   EXPECT_EQ(http_request(port_, "GET", "/").status, 200);
+}
+
+// Pages held open from several addresses, each within its own limit: each page holds a
+// worker thread, so without a cap on pages together they would take every thread (75
+// pages, 64 threads) and nothing else would be served.
+TEST_F(ViewFaults, PagesFromManyAddressesNeverTakeEveryThread) {
+  constexpr int kMaxPages = 32;  // the viewer's kMaxPages
+  std::vector<int> pages;
+  for (const char* from : {"127.0.0.2", "127.0.0.3", "127.0.0.4", "127.0.0.5", "127.0.0.6"})
+    for (const int fd : open_connections(from, kPerAddress - 1)) pages.push_back(fd);
+  ASSERT_EQ(pages.size(), 75U);
+  // Every request first, then the answers: the pages are all open before the first
+  // goes quiet (a page that answers no ping is dropped after 5 s).
+  for (const int fd : pages) send_upgrade(fd);
+  int opened = 0, refused = 0;
+  std::string unexpected;
+  for (const int fd : pages) {
+    const std::string reply = reply_head(fd);
+    if (contains(reply, "101 Switching Protocols"))
+      ++opened;
+    else if (contains(reply, " 503 ") && contains(reply, "the most it serves at once"))
+      ++refused;
+    else
+      unexpected = reply;
+  }
+  EXPECT_EQ(opened, kMaxPages) << "pages opened of 75";
+  EXPECT_EQ(refused, 75 - kMaxPages) << "pages refused; another answer: " << unexpected;
+  // Plain requests are still served while those pages are open.
+  EXPECT_EQ(http_request(port_, "GET", "/options.json", "127.0.0.7").status, 200);
+  EXPECT_TRUE(contains(read_file(log_), "pages are open already")) << read_file(log_);
 }
 
 // Idle or slow connections `held` from one address: those over its limit are closed

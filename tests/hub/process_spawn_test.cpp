@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 #include <signal.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -33,6 +34,31 @@ TEST(ProcessSpawn, RunsTheProgramWithItsOutputInAFile) {
   EXPECT_EQ(wait_exit_code(pid), 3);
   EXPECT_EQ(read_file(log), "out\nerr\n");
   std::filesystem::remove(log);
+}
+
+// A predictable output path in /tmp where another user planted something: nothing is
+// written through a symlink, and a FIFO never hangs the caller.
+TEST(ProcessSpawn, AnOutputPathThatIsASymlinkOrAFifoIsRefused) {
+  const std::filesystem::path folder =
+      std::filesystem::temp_directory_path() / ("spawn-planted-" + std::to_string(getpid()));
+  std::filesystem::create_directories(folder);
+  const std::filesystem::path target = folder / "chosen-by-another-user";
+  std::filesystem::create_symlink(target, folder / "symlink.log");
+  ASSERT_EQ(mkfifo((folder / "fifo.log").c_str(), 0666), 0);
+  for (const char* name : {"symlink.log", "fifo.log"}) {
+    SpawnOptions options;
+    options.output_path = (folder / name).string();
+    try {
+      const pid_t pid = spawn_process({"/bin/sh", "-c", "echo planted"}, options);
+      wait_exit_code(pid);
+      ADD_FAILURE() << "started with its output to " << name;
+    } catch (const Error& error) {
+      EXPECT_TRUE(contains(error.what(), "is not a regular file of this user's")) << error.what();
+      EXPECT_TRUE(contains(error.what(), name)) << error.what();
+    }
+  }
+  EXPECT_FALSE(std::filesystem::exists(target)) << "wrote through the planted symlink";
+  std::filesystem::remove_all(folder);
 }
 
 TEST(ProcessSpawn, AProgramThatCannotStartIsAnErrorNamingIt) {

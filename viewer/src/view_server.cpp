@@ -245,6 +245,20 @@ int ViewServer::serve_page_socket(mg_connection* connection) {
               "/ws is a WebSocket (version 13): the page opens it\n");
     return 400;
   }
+  // A place among the pages, taken before the handshake and given back when the page leaves.
+  if (open_pages_.fetch_add(1) >= kMaxPages) {
+    --open_pages_;
+    send_text(connection, 503, "text/plain",
+              "the viewer has " + std::to_string(kMaxPages) +
+                  " pages open, the most it serves at once: close one, then reload\n");
+    std::fprintf(stderr, "afhub view: refused a page from %s: %d pages are open already\n",
+                 mg_get_request_info(connection)->remote_addr, kMaxPages);
+    return 503;
+  }
+  struct GiveBack {
+    std::atomic<int>& pages;
+    ~GiveBack() { --pages; }
+  } give_back{open_pages_};
   const int fd = connection_socket(connection, port_);
   if (fd < 0) {
     send_text(connection, 500, "text/plain", "the viewer lost this connection's socket\n");

@@ -17,7 +17,8 @@ struct SpawnOptions {
   int stdin_fd = -1;
   int stdout_fd = -1;
   int stderr_fd = -1;
-  // When not empty, stdout and stderr go to this file instead (created, truncated).
+  // When not empty, stdout and stderr go to this file instead (created, truncated). A
+  // symlink, a FIFO or another user's file at the path is refused (afhub::Error).
   std::string output_path;
   // stdin from /dev/null (as a detached child's always is).
   bool null_stdin = false;

@@ -21,7 +21,8 @@
 // Every request, the WebSocket's included, must name the viewer in its Host header
 // and come from no other site's page (its Origin): page_access.hpp.
 // Anything else is 404; nothing else is read from the disk. One address may hold
-// kConnectionsPerAddress connections; more are closed at once. A request's headers
+// kConnectionsPerAddress connections; more are closed at once. At most kMaxPages
+// WebSockets are open at once; one more is refused (503, saying so). A request's headers
 // must come within 5 s.
 #pragma once
 
@@ -62,6 +63,10 @@ struct ServerOptions {
 // plus a WebSocket per page), and civetweb's worker threads (one per connection).
 inline constexpr int kConnectionsPerAddress = 16;
 inline constexpr int kWorkerThreads = 64;
+// Pages open at once, from every address together: each holds a worker thread for as
+// long as it is open, so half the threads always remain for plain requests (any of the
+// 127.x addresses reaches a loopback viewer, so the cap per address alone would not).
+inline constexpr int kMaxPages = kWorkerThreads / 2;
 
 class ViewServer {
  public:
@@ -100,7 +105,8 @@ class ViewServer {
   mg_context* context_ = nullptr;
   std::atomic<int> port_{0};
   std::atomic<bool> stopping_{false};
-  std::mutex mutex_;  // guards scene_, joints_json_, senders_ and refused_
+  std::atomic<int> open_pages_{0};  // WebSockets being served, at most kMaxPages
+  std::mutex mutex_;                // guards scene_, joints_json_, senders_ and refused_
   std::shared_ptr<const ViewScene> scene_;
   std::string joints_json_ = "{}";
   std::map<const mg_connection*, std::unique_ptr<FrameSender>> senders_;

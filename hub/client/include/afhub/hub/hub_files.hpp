@@ -9,6 +9,8 @@
 #include <optional>
 #include <string>
 
+#include "afhub/rt/safe_open.hpp"  // open_own_file, open_regular_file
+
 namespace afhub {
 
 // The directory of this user's hub: /run/afhub for root, else $XDG_RUNTIME_DIR/afhub,
@@ -24,15 +26,6 @@ std::string hub_directory();
 std::string hub_lock_path(const std::string& directory);      // flock'ed by the hub, 0600
 std::string hub_identity_path(const std::string& directory);  // "<pid> <instance>", 0644
 std::string hub_log_path(const std::string& directory);
-
-// Opens `path` with `flags` | O_NOFOLLOW | O_CLOEXEC, refusing a file that belongs to
-// another user than this process's (or root's). Returns -1 with errno set.
-int open_own_file(const std::string& path, int flags, mode_t mode = 0600);
-
-// Opens `path` for reading only if it is a regular file: with O_NOFOLLOW, and with
-// O_NONBLOCK, so that a FIFO swapped in by another user cannot hang the caller (a plain
-// open of a FIFO waits for a writer). Returns -1 with errno set (EINVAL: not a regular file).
-int open_regular_file(const std::string& path);
 
 // iceoryx's runtime opens /tmp/<runtime name>.lock with O_CREAT and follows a symlink
 // there: one planted by another user (where fs.protected_symlinks is 0) would have this
