@@ -82,6 +82,38 @@ TEST(BadInputCli, CheckRefusesWhatRunWouldRefuse) {
       << check.err;
 }
 
+// The costliest files within every bound (size, nodes, depth, bodies): `afhub check`
+// answers each within 2 GB of address space, with its verdict, never out of memory. Its
+// time is printed (a figure for docs/simulating.md, not a bound: this machine is shared).
+TEST(BadInputCli, TheCostliestModelFilesWithinTheBoundsCheckWithin2GB) {
+  afhub::testing::ModelFolder folder;
+  std::string junk;  // top-level blocks no body names: lookups among many keys
+  for (int i = 0; i < 300000; ++i) junk += "k" + std::to_string(1000000 + i) + ": 0\n";
+  std::string flat = "bodies: [0";  // nodes up to the bound, each a few bytes
+  for (std::size_t i = 2; i < kMaxYamlNodes - 8; ++i) flat += ",0";
+  flat += "]\n";
+  const std::vector<std::pair<std::string, std::string>> files = {
+      {"bodies.yaml",
+       junk + afhub::testing::passive_spheres_at_origin(static_cast<int>(kMaxModelBodies))},
+      {"flat.yaml", flat},
+      {"scalar.yaml", "name: " + std::string(kMaxYamlFileBytes - 64, 'x') + "\n"}};
+  for (const auto& [name, text] : files) {
+    ASSERT_LE(text.size(), kMaxYamlFileBytes) << name;
+    std::vector<std::string> argv = {afhub_executable(), "check", folder.write(name, text)};
+#if !defined(AFHUB_SANITIZED)  // (ASan reserves terabytes of address space for itself)
+    argv.insert(argv.begin(), {"prlimit", "--as=" + std::to_string(2ULL << 30), "--"});
+#endif
+    const RunResult check = run_command(argv, std::chrono::seconds(120));
+    std::printf("afhub check %s (%zu bytes): exit %d in %.2f s\n", name.c_str(), text.size(),
+                check.exit_code, check.seconds);
+    EXPECT_TRUE(check.exit_code == 0 || check.exit_code == 1) << name << ": " << check.err;
+    EXPECT_FALSE(contains(check.err, "bad_alloc") || contains(check.err, "memory")) << check.err;
+    if (check.exit_code == 1) {
+      EXPECT_TRUE(contains(check.err, name + ":")) << check.err;
+    }
+  }
+}
+
 TEST(BadInputCli, NumericOptionsOutOfRangeAreRefused) {
   struct Case {
     std::vector<std::string> args;

@@ -22,6 +22,7 @@
 #include "afhub/shm_layout/world.hpp"
 #include "afhub_process.hpp"
 #include "hub_environment.hpp"
+#include "strict_json.hpp"
 
 namespace afhub::test {
 namespace {
@@ -314,6 +315,31 @@ TEST(Claims, AControllerAndADriverAreRefusedBeforeTheyTakeTheLastChunks) {
   EXPECT_FALSE(contains(read_file("/tmp/afhub-claims-arm.log"), "exhausted"))
       << read_file("/tmp/afhub-claims-arm.log");
   give_back(health, sizeof(LoopStats), writers);
+}
+
+// The hub's health lists every attached process, past the 64 it once stopped at, and
+// `afhub status` shows them all.
+TEST(Claims, StatusListsEveryAttachedProcess) {
+  constexpr int kWaiting = 80;
+  std::vector<std::unique_ptr<ScopedProcess>> waiting;
+  for (int i = 0; i < kWaiting; ++i)
+    waiting.push_back(std::make_unique<ScopedProcess>(
+        spawn_afhub({"echo", "nosuch/body" + std::to_string(i), "--wait", "120"}, "/dev/null")));
+  RunResult status;
+  std::size_t listed = 0;
+  EXPECT_TRUE(wait_until(
+      [&] {
+        status = run_afhub({"status", "--json"});
+        if (status.exit_code != 0) return false;
+        listed = 0;
+        for (const auto& process : waiting)
+          if (contains(status.out, "\"pid\":" + std::to_string(process->pid) + "}")) ++listed;
+        return listed == waiting.size();
+      },
+      60s))
+      << listed << " of " << kWaiting << " waiting clients listed:\n"
+      << status.out << status.err;
+  EXPECT_GT(parse_json(status.out).at("processes").size(), static_cast<std::size_t>(kWaiting));
 }
 
 // Every client reads the hub's catalog, and iceoryx connects at most
