@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "afhub/hub/bodies.hpp"
+#include "afhub/hub/hub_health.hpp"
 #include "afhub/hub/hub_loss.hpp"
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/physics/model.hpp"
@@ -297,6 +298,9 @@ int run_cmd(const CmdOptions& options) {
   const std::string joints = complete_joints(options, entry, body, prototype);
   const std::string channel(name_of(entry.info.channel));
   RefusalWatch watch(body);
+  // Before the first loan, as every publisher: a command must not starve a running physics.
+  require_chunks({published_each_cycle(body_command_bytes(prototype.joint_count))},
+                 "this command (to " + channel + ")");
   if (once) {
     if (!publish_once(body, prototype)) throw Error("shared memory exhausted: command not sent");
     check_once(watch, channel);

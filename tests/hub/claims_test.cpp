@@ -342,6 +342,48 @@ TEST(Claims, StatusListsEveryAttachedProcess) {
   EXPECT_GT(parse_json(status.out).at("processes").size(), static_cast<std::size_t>(kWaiting));
 }
 
+// The same for teleop (its loop's statistics, with a physics and a driver running before
+// the pool fills) and for `afhub cmd` (the body commands' pool).
+TEST(Claims, TeleopAndCmdAreRefusedBeforeTheyTakeTheLastChunks) {
+  const std::string models = AFHUB_EXAMPLE_MODELS;
+  ScopedProcess physics(
+      spawn_afhub({"run", models + "/gripper.yaml", models + "/floor.yaml", "--no-autostart"},
+                  "/tmp/afhub-claims-gripper.log"));
+  ScopedProcess driver(spawn_afhub({"device", "run", "virtual"}, "/tmp/afhub-claims-driver.log"));
+  ASSERT_TRUE(wait_until(
+      [] {
+        const std::string listed = run_afhub({"ls"}).out;
+        return contains(listed, "afhub/gripper/palm") && contains(listed, "device/");
+      },
+      20s))
+      << read_file("/tmp/afhub-claims-gripper.log") << read_file("/tmp/afhub-claims-driver.log");
+  LatestReader<Health> health(
+      {std::string(kService), std::string(kHubInstance), std::string(kHealthEvent)});
+  ASSERT_TRUE(wait_until([&] { return pool_for(health, sizeof(LoopStats)) != nullptr; }, 5s));
+  std::vector<std::unique_ptr<RawWriter>> writers;
+  ASSERT_NO_FATAL_FAILURE(
+      take_chunks(health, sizeof(LoopStats), PayloadKind::kLoopStats, 10, writers));
+  const std::string stats_pool = named(*pool_for(health, sizeof(LoopStats)));
+  const RunResult teleop = run_afhub({"teleop", models + "/virtual_hand.yaml", "--wait", "5"}, 30s);
+  EXPECT_EQ(teleop.exit_code, 1) << teleop.err;
+  EXPECT_TRUE(contains(teleop.err, "this teleop (1 devices) needs")) << teleop.err;
+  EXPECT_TRUE(contains(teleop.err, stats_pool)) << teleop.err;
+  give_back(health, sizeof(LoopStats), writers);
+
+  const std::size_t command_bytes = body_command_bytes(0);
+  ASSERT_NO_FATAL_FAILURE(
+      take_chunks(health, command_bytes, PayloadKind::kBodyCommand, 10, writers));
+  const std::string command_pool = named(*pool_for(health, command_bytes));
+  const RunResult cmd = run_afhub({"cmd", "afhub/gripper/palm", "--force", "0,0,1"}, 30s);
+  EXPECT_EQ(cmd.exit_code, 1) << cmd.err;
+  EXPECT_TRUE(contains(cmd.err, "this command (to afhub/gripper/palm) needs 2 " + command_pool))
+      << cmd.err;
+  EXPECT_EQ(physics.stop(), 0);
+  EXPECT_FALSE(contains(read_file("/tmp/afhub-claims-gripper.log"), "exhausted"))
+      << read_file("/tmp/afhub-claims-gripper.log");
+  give_back(health, command_bytes, writers);
+}
+
 // Every client reads the hub's catalog, and iceoryx connects at most
 // kMaxReadersPerChannel readers to one channel: the client past them is told so (it
 // was told the hub is not an afhub hub).
