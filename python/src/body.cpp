@@ -8,6 +8,7 @@
 #include <cstring>
 #include <new>
 
+#include "afhub/hub/hub_health.hpp"
 #include "afhub/hub/hub_loss.hpp"
 #include "afhub/hub/sample_waiter.hpp"
 #include "afhub/rt/clock.hpp"
@@ -39,7 +40,12 @@ Body::Body(const std::string& name, double wait_s)
       }()),
       channel_(name_of(entry_.info.channel)),
       client_(entry_),
-      pid_(static_cast<std::uint32_t>(getpid())) {}
+      pid_(static_cast<std::uint32_t>(getpid())) {
+  // Before the first loan, as every publisher: a script must not starve a running physics.
+  py::gil_scoped_release release;
+  require_chunks({published_each_cycle(body_command_bytes(entry_.info.joint_count))},
+                 "this Python client (commanding " + channel_ + ")");
+}
 
 std::optional<State> Body::read(double wait_s) {
   const BodyState* sample = client_.latest_state();

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdlib>
 
+#include "afhub/hub/hub_health.hpp"
 #include "afhub/shm_layout/channel_names.hpp"
 
 namespace afhub::viewer {
@@ -103,6 +104,16 @@ std::string JointCommander::run(const std::string& query) {
   if (joint >= state->joint_count)
     return "joint: " + body + " has " + std::to_string(state->joint_count) + " joints, got index " +
            joint_text;
+  if (!client->pools_checked) {
+    // Before the first loan, as every publisher: a page must not starve a running physics.
+    try {
+      require_chunks({published_each_cycle(body_command_bytes(state->joint_count))},
+                     "the viewer's commands to " + body);
+    } catch (const std::exception& error) {
+      return error.what();
+    }
+    client->pools_checked = true;
+  }
   BodyCommand* command = client->client.loan_command(state->joint_count);
   if (!command) return "no shared memory for a command";
   for (std::uint32_t j = 0; j < state->joint_count; ++j)

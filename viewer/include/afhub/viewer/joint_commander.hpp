@@ -41,6 +41,7 @@ class JointCommander {
     explicit Client(const std::string& body) : client(body) {}
     std::mutex mutex;
     BodyClient client;
+    bool pools_checked = false;  // the hub's pools, before the first command (guarded)
   };
   // The body's client, opened when it has none (closing the least recently used one
   // over the cap), or nullptr when the catalog does not list the body.
