@@ -24,7 +24,6 @@
 #include <cstring>
 #include <iterator>
 #include <map>
-#include <memory>
 #include <regex>
 #include <sstream>
 #include <string>
@@ -35,6 +34,7 @@
 #include "afhub/rt/process_spawn.hpp"
 #include "afhub/shm_layout/body_command.hpp"
 #include "afhub/shm_layout/body_state.hpp"
+#include "afhub/shm_layout/health.hpp"
 #include "afhub/shm_layout/world.hpp"
 #include "afhub_process.hpp"
 #include "hub_environment.hpp"
@@ -144,28 +144,47 @@ std::uint32_t pool_of(const PoolUsage& usage, std::size_t bytes) {
 // a reader the loaded machine has not run yet), up to about one per body channel (the
 // arm has 16; seen: 11 over the first hub's count under CI's load). A leak per
 // re-attach holds at least one chunk per channel every round, so it passes this bound
-// by the second round; and once every client has stopped the check below is exact.
+// by the second round; and once every client has stopped the check below is exact
+// (but for the health samples in flight, below).
 constexpr std::uint32_t kInFlightChunks = 16;
 
-// Same usage as `baseline`, exactly in every pool but the streaming ones, and within
-// kInFlightChunks over those.
-bool same_usage(const PoolUsage& baseline, const PoolUsage& usage) {
+// The hub publishes its health with each count of the pools by RouDi (every 100 ms), and the
+// probe reads that count through a health reader of its own: at a count, that reader may
+// still hold the sample before the hub's newest, and until its next poll the one before
+// that. So the health pool's count goes up and down by up to two from one look to the
+// next, under every hub alike (seen: 3 under the first hub, then 2). The pool also holds
+// the arm's scene description, loaned at its real size (8 bodies, 25680 B: just over the
+// 25560 B tier), one chunk in the physics' history, and nothing else of the test's.
+constexpr std::uint32_t kHealthInFlight = 2;
+
+// Same usage as `baseline`: exactly in every pool but the streaming ones and the health
+// pool; within `streaming` chunks over or under in the streaming ones; in the health
+// pool, at most kHealthInFlight over (fewer is no leak: the baseline may have caught
+// samples in flight). A leak of one health chunk per re-attach is r + 1 over by round r:
+// past the bound by the third round, or the fifth when the baseline caught two in flight.
+bool same_usage(const PoolUsage& baseline, const PoolUsage& usage, std::uint32_t streaming) {
   if (usage.size() != baseline.size() || usage.empty()) return false;
   // (Sent at their real size: the arm's states and commands, of 0 to 7 joints, are in
   // the tiers that hold 7.)
-  const std::uint32_t streaming[] = {pool_of(baseline, body_command_bytes(7)),
-                                     pool_of(baseline, body_state_bytes(7)),
-                                     pool_of(baseline, sizeof(WorldState))};
+  const std::uint32_t streaming_pools[] = {pool_of(baseline, body_command_bytes(7)),
+                                           pool_of(baseline, body_state_bytes(7)),
+                                           pool_of(baseline, sizeof(WorldState))};
+  const std::uint32_t health_pool = pool_of(baseline, sizeof(Health));
   long long streaming_difference = 0;
   for (const auto& [bytes, used] : baseline) {
     const auto found = usage.find(bytes);
     if (found == usage.end()) return false;
-    if (std::find(std::begin(streaming), std::end(streaming), bytes) != std::end(streaming))
-      streaming_difference += static_cast<long long>(found->second) - used;
-    else if (found->second != used)
+    const long long difference = static_cast<long long>(found->second) - used;
+    if (bytes == health_pool) {
+      if (difference > kHealthInFlight) return false;
+    } else if (std::find(std::begin(streaming_pools), std::end(streaming_pools), bytes) !=
+               std::end(streaming_pools)) {
+      streaming_difference += difference;
+    } else if (difference != 0) {
       return false;
+    }
   }
-  return std::llabs(streaming_difference) <= kInFlightChunks;
+  return std::llabs(streaming_difference) <= streaming;
 }
 
 class HubRestart : public ::testing::TestWithParam<bool> {};
@@ -286,7 +305,7 @@ TEST_P(HubRestart, EveryClientOutlivesTheHubAndReattaches) {
     const bool same = wait_until(
         [&] {
           used = chunks_in_use();
-          return same_usage(baseline, used);
+          return same_usage(baseline, used, kInFlightChunks);
         },
         15s);
     EXPECT_TRUE(same) << "round " << round << ": payload chunks in use " << usage_text(used)
@@ -297,13 +316,13 @@ TEST_P(HubRestart, EveryClientOutlivesTheHubAndReattaches) {
                 what.c_str(), median_text(values).c_str());
 
   // Everyone still stops cleanly on SIGTERM, and the last hub's pools then hold exactly
-  // what an empty hub holds.
+  // what an empty hub holds (but for health samples in flight).
   for (ScopedProcess* process : {&echo, &sine, &hold, &physics}) EXPECT_EQ(process->stop(), 0);
   PoolUsage after;
   const bool clean = wait_until(
       [&] {
         after = chunks_in_use();
-        return after == empty;
+        return same_usage(empty, after, 0);
       },
       15s);
   EXPECT_TRUE(clean) << "payload chunks in use once every client stopped: " << usage_text(after)
@@ -399,6 +418,7 @@ TEST(HubLoss, TheViewerSaysTheHubIsLostThenServesLiveFramesAgain) {
     ASSERT_TRUE(page.connected());
     ASSERT_TRUE(live_frames(page, 20s)) << tail(read_file(view_log));
   }
+  int reexecs = 0;
   for (const bool sigkill : {false, true}) {
     const char* loss = sigkill ? "a hub SIGKILL" : "`afhub hub stop --force`";
     if (sigkill) {
@@ -408,16 +428,21 @@ TEST(HubLoss, TheViewerSaysTheHubIsLostThenServesLiveFramesAgain) {
     }
     waitpid(hub.pid, nullptr, 0);
     hub.pid = -1;
-    // The viewer re-executes to re-attach: a page reconnects, as the page does (the first
-    // try may reach the viewer before it noticed), and is told that the hub is lost.
-    std::unique_ptr<FrameCounter> page;
+    // The viewer re-executes to re-attach; its new image says it waits for a hub once it
+    // listens again. The page is opened on that image only: the old one, between noticing
+    // the loss and its re-exec, sends hub-lost frames too, and the exec then closes a page
+    // opened on it (a browser's page reconnects; this one would wait on it for nothing).
+    ++reexecs;
     ASSERT_TRUE(wait_until(
         [&] {
-          if (!page || !page->connected() || page->closed())
-            page = std::make_unique<FrameCounter>(port);
-          return page->connected() && says_hub_lost(page->last_frame());
+          return occurrences(read_file(view_log), "waiting for a hub to re-attach to") >= reexecs;
         },
         20s))
+        << "after " << loss << ":\n"
+        << tail(read_file(view_log));
+    FrameCounter page(port);
+    ASSERT_TRUE(page.connected());
+    ASSERT_TRUE(wait_until([&] { return says_hub_lost(page.last_frame()); }, 20s))
         << "after " << loss << ":\n"
         << tail(read_file(view_log));
     EXPECT_EQ(exit_code_if_ended(view.pid), -1) << tail(read_file(view_log));
@@ -425,8 +450,9 @@ TEST(HubLoss, TheViewerSaysTheHubIsLostThenServesLiveFramesAgain) {
     hub.pid = spawn_afhub({"hub"}, "/tmp/afhub-test-hub.log");
     ASSERT_TRUE(wait_until([] { return probe_roudi() == RoudiPresence::kRunning; }, 10s));
     // Live again on the connection opened while the hub was lost.
-    EXPECT_TRUE(live_frames(*page, 30s))
-        << "after " << loss << ":\nview: " << tail(read_file(view_log))
+    EXPECT_TRUE(live_frames(page, 30s))
+        << "after " << loss << (page.closed() ? " (the viewer closed the page)" : "")
+        << ":\nview: " << tail(read_file(view_log))
         << "\nphysics: " << tail(read_file(physics_log));
   }
   EXPECT_EQ(view.stop(), 0) << tail(read_file(view_log));

@@ -183,9 +183,10 @@ void ViewServer::add_socket(mg_connection* connection) {
         if (write_frame(connection, Opcode::kBinary,
                         std::string_view(reinterpret_cast<const char*>(data), size)))
           return true;
+        // Also when the page closed its connection while a frame was being written.
         std::fprintf(stderr,
-                     "afhub view: dropped a page that stopped reading (a frame could not be sent "
-                     "in 5 s)\n");
+                     "afhub view: dropped a page: a frame could not be sent (the page closed its "
+                     "connection, or stopped reading for 5 s)\n");
         return false;
       });
   std::lock_guard lock(mutex_);
