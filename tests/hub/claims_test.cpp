@@ -224,6 +224,7 @@ std::uint32_t free_chunks(LatestReader<Health>& health, std::size_t bytes) {
 // chunks of the pool for `bytes` are free.
 void take_chunks(LatestReader<Health>& health, std::size_t bytes, PayloadKind kind,
                  std::uint32_t left, std::vector<std::unique_ptr<RawWriter>>& writers) {
+  ASSERT_TRUE(wait_until([&] { return pool_for(health, bytes) != nullptr; }, 5s));
   const std::uint32_t to_take = free_chunks(health, bytes) - left;
   std::uint32_t taken = 0;
   while (taken < to_take) {
@@ -267,7 +268,6 @@ TEST(Claims, ANewPublisherIsRefusedBeforeItTakesTheLastChunks) {
   LatestReader<Health> health(
       {std::string(kService), std::string(kHubInstance), std::string(kHealthEvent)});
   // 6 left: room for a physics's two, but not for them and the spare.
-  ASSERT_TRUE(wait_until([&] { return pool_for(health, sizeof(WorldState)) != nullptr; }, 5s));
   std::vector<std::unique_ptr<RawWriter>> writers;
   ASSERT_NO_FATAL_FAILURE(
       take_chunks(health, sizeof(WorldState), PayloadKind::kWorldState, 6, writers));
@@ -299,7 +299,6 @@ TEST(Claims, AControllerAndADriverAreRefusedBeforeTheyTakeTheLastChunks) {
   LatestReader<Health> health(
       {std::string(kService), std::string(kHubInstance), std::string(kHealthEvent)});
   // 10 left: fewer than a sixteenth of the pool, the spare, with the two asked for.
-  ASSERT_TRUE(wait_until([&] { return pool_for(health, sizeof(LoopStats)) != nullptr; }, 5s));
   std::vector<std::unique_ptr<RawWriter>> writers;
   ASSERT_NO_FATAL_FAILURE(
       take_chunks(health, sizeof(LoopStats), PayloadKind::kLoopStats, 10, writers));
@@ -359,7 +358,6 @@ TEST(Claims, TeleopAndCmdAreRefusedBeforeTheyTakeTheLastChunks) {
       << read_file("/tmp/afhub-claims-gripper.log") << read_file("/tmp/afhub-claims-driver.log");
   LatestReader<Health> health(
       {std::string(kService), std::string(kHubInstance), std::string(kHealthEvent)});
-  ASSERT_TRUE(wait_until([&] { return pool_for(health, sizeof(LoopStats)) != nullptr; }, 5s));
   std::vector<std::unique_ptr<RawWriter>> writers;
   ASSERT_NO_FATAL_FAILURE(
       take_chunks(health, sizeof(LoopStats), PayloadKind::kLoopStats, 10, writers));
