@@ -266,7 +266,7 @@ TEST_P(HubRestart, EveryClientOutlivesTheHubAndReattaches) {
     hub.pid = spawn_afhub({"hub"}, "/tmp/afhub-test-hub.log");
     ASSERT_TRUE(wait_until(
         [] { return probe_roudi() == RoudiPresence::kRunning && running_hub_pid().has_value(); },
-        10s))
+        kHubStartWait))
         << read_file("/tmp/afhub-test-hub.log");
     const Clock::time_point up = Clock::now();
 
@@ -339,7 +339,7 @@ TEST(HubLoss, MakeSafeHooksRunBeforeTheReexec) {
   unlink(out.c_str());
   unlink(err.c_str());
   ScopedProcess hub = spawn_afhub({"hub"}, hub_log);
-  ASSERT_TRUE(wait_until([] { return probe_roudi() == RoudiPresence::kRunning; }, 10s));
+  ASSERT_TRUE(wait_until([] { return probe_roudi() == RoudiPresence::kRunning; }, kHubStartWait));
   ScopedProcess hooked = start_probe({"hooked"}, out, err);
   ASSERT_TRUE(wait_until([&] { return contains(read_file(out), "attached 0"); }, 10s))
       << read_file(err);
@@ -448,7 +448,7 @@ TEST(HubLoss, TheViewerSaysTheHubIsLostThenServesLiveFramesAgain) {
     EXPECT_EQ(exit_code_if_ended(view.pid), -1) << tail(read_file(view_log));
 
     hub.pid = spawn_afhub({"hub"}, "/tmp/afhub-test-hub.log");
-    ASSERT_TRUE(wait_until([] { return probe_roudi() == RoudiPresence::kRunning; }, 10s));
+    ASSERT_TRUE(wait_until([] { return probe_roudi() == RoudiPresence::kRunning; }, kHubStartWait));
     // Live again on the connection opened while the hub was lost.
     EXPECT_TRUE(live_frames(page, 30s))
         << "after " << loss << (page.closed() ? " (the viewer closed the page)" : "")

@@ -16,6 +16,7 @@
 #include "afhub/hub/hub_files.hpp"
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub_process.hpp"
+#include "hub_environment.hpp"
 
 namespace afhub::test {
 namespace {
@@ -41,7 +42,7 @@ class PidNamespaceTest : public ::testing::Test {
   }
   bool hub_up() {
     return wait_until([] { return probe_roudi() == RoudiPresence::kRunning && running_hub(); },
-                      10s);
+                      kHubStartWait);
   }
   const std::string hub_log_ = "/tmp/afhub-pidns-hub.log";
 };

@@ -22,6 +22,7 @@
 
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub_process.hpp"
+#include "hub_environment.hpp"
 
 namespace afhub::test {
 namespace {
@@ -40,7 +41,7 @@ class Access : public ::testing::Test {
   }
   bool hub_up() {
     return wait_until([] { return probe_roudi() == RoudiPresence::kRunning && running_hub(); },
-                      10s);
+                      kHubStartWait);
   }
   // `afhub args...` as `uid`, with `gid` as its only group: a copy of the executable
   // in a folder every user can reach (the build tree may sit under a private home).

@@ -16,7 +16,7 @@ pid_t start_test_hub() {
   }
   pid_t hub = spawn_afhub({"hub"}, "/tmp/afhub-test-hub.log");
   bool up = wait_until([] { return probe_roudi() == RoudiPresence::kRunning && running_hub_pid(); },
-                       std::chrono::seconds(10));
+                       kHubStartWait);
   EXPECT_TRUE(up) << "the test hub did not come up; its log:\n"
                   << read_file("/tmp/afhub-test-hub.log");
   return hub;

@@ -5,7 +5,14 @@
 #include <gtest/gtest.h>
 #include <sys/types.h>
 
+#include <chrono>
+
 namespace afhub::test {
+
+// How long a test waits for a hub it started to answer: RouDi writes its 150 MB of
+// segments at start, which took over 10 s on the loaded 2-core CI machine (a wait for an
+// event, not a bound on its speed).
+inline constexpr std::chrono::seconds kHubStartWait{30};
 
 // Starts `afhub hub` and waits until it answers; fails the test when it does not
 // or when a hub is already running (the tests never touch a user's hub).
