@@ -127,7 +127,7 @@ int run_synth(const SynthOptions& options) {
   needs.push_back(published_each_cycle(sizeof(WorldState)));
   require_chunks(needs, "this synth (" + std::to_string(bodies.size()) + " bodies)");
   directory.publish();
-  confirm_body_claims(channels, std::chrono::seconds(2));
+  confirm_body_claims(channels, kClaimConfirmTimeout);
   Writer<WorldState> world(
       {std::string(kService), std::string(kWorldInstance), std::string(kStateEvent)});
   WorldCommandQueue world_commands{std::string(kWorldInstance)};

@@ -217,7 +217,7 @@ int hub_ping(std::uint64_t pings, const char* path) {
   directory.add(make_body_entry(kPingBody, joint_names()));
   BodyPublisher body(kPingBody);
   directory.publish();
-  confirm_body_claims({kPingBody}, std::chrono::seconds(2));
+  confirm_body_claims({kPingBody}, kClaimConfirmTimeout);
   SampleWaiter command_arrival;
   command_arrival.attach(body.command_reader());
   // Until the pong answers: the bridges discover each other and the mirror appears.

@@ -83,11 +83,17 @@ void confirm_body_claims(const std::vector<std::string>& channels,
       if (found == owners.end() || found->second.pid != me) missing.push_back(channel);
     }
     if (missing.empty()) return;
-    if (std::chrono::steady_clock::now() > deadline)
-      throw Error("the hub did not list " + std::to_string(missing.size()) + " of " +
-                  std::to_string(channels.size()) + " bodies (first: " + missing.front() +
-                  "): its catalog is full (" + std::to_string(kMaxBodies) +
-                  " bodies); `afhub ls` shows who holds them");
+    if (std::chrono::steady_clock::now() > deadline) {
+      const std::string not_listed = "the hub did not list " + std::to_string(missing.size()) +
+                                     " of " + std::to_string(channels.size()) +
+                                     " bodies (first: " + missing.front() + ")";
+      if (owners.size() + missing.size() > kMaxBodies)
+        throw Error(not_listed + ": its catalog is full (" + std::to_string(kMaxBodies) +
+                    " bodies); `afhub ls` shows who holds them");
+      throw Error(not_listed + " within " + std::to_string(timeout.count() / 1000) +
+                  " s, though its catalog has room: the hub is overloaded or stalled "
+                  "(`afhub status`); start this again once it answers");
+    }
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
 }

@@ -148,7 +148,7 @@ SimChannels::SimChannels(Simulation& sim, double watchdog_s, std::string_view na
   publish_scene();
   publish_soft_faces();
   directory_.publish();
-  confirm_body_claims(claimed_, std::chrono::seconds(2));
+  confirm_body_claims(claimed_, kClaimConfirmTimeout);
 }
 
 SimChannels::~SimChannels() = default;

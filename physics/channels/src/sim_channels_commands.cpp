@@ -23,7 +23,13 @@ void SimChannels::apply_commands(std::int64_t now_ns) noexcept {
       // broken writer) is no fresher than an old one: past a small allowance it is
       // ignored too, or it would hold the watchdog off for as long as it is ahead.
       const std::int64_t stamp_ns = command->header.publish_stamp_ns;
-      const std::int64_t age_ns = now_ns - stamp_ns;
+      std::int64_t age_ns = now_ns - stamp_ns;
+      if (age_ns < -kFutureStampAllowanceNs) {
+        // Or published after `now_ns` was read, this thread preempted meanwhile (for
+        // milliseconds on a loaded machine): judged again by the clock as it is now.
+        now_ns = monotonic_ns();
+        age_ns = now_ns - stamp_ns;
+      }
       if (age_ns > channel.watchdog_ns || age_ns < -kFutureStampAllowanceNs) {
         ++stale_;
         if (Notice* notice = note(channel, kStale, answer.pid))

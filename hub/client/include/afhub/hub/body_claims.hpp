@@ -19,9 +19,12 @@ namespace afhub {
 void check_room_for_bodies(const std::vector<std::string>& channels, std::size_t publishers);
 
 // Waits up to `timeout` for the catalog to list every channel as this process's.
-// Throws afhub::Error naming the owner of a body another process holds, or the
-// bodies a full catalog refused.
+// Throws afhub::Error naming the owner of a body another process holds, the bodies a
+// full catalog refused, or, with room in the catalog, the bodies not listed in time.
 void confirm_body_claims(const std::vector<std::string>& channels,
                          std::chrono::milliseconds timeout);
+// How long a publisher waits for its claims: the hub merges a directory within
+// milliseconds, but a hub just started on a loaded machine took over 2 s.
+inline constexpr std::chrono::seconds kClaimConfirmTimeout{10};
 
 }  // namespace afhub
