@@ -294,11 +294,17 @@ TEST_F(ViewPageTest, PauseStepAndResetButtonsDriveTheWorld) {
   ASSERT_FALSE(world.latest()->paused);
   const std::string shots[4] = {dir_ + "/running1.png", dir_ + "/running2.png",
                                 dir_ + "/paused1.png", dir_ + "/paused2.png"};
-  // Running, the controller moves the arm: screenshots a second apart differ.
+  // Running, the controller moves the arm: a later screenshot differs (how much in a
+  // given second depends on where the sine is, and on the machine's load: waited for).
   ASSERT_TRUE(browser_->screenshot(shots[0]));
-  std::this_thread::sleep_for(std::chrono::seconds(1));
-  ASSERT_TRUE(browser_->screenshot(shots[1]));
-  const long running = pixels({"differ", shots[0], shots[1]});
+  long running = 0;
+  wait_until(
+      [&] {
+        std::this_thread::sleep_for(std::chrono::milliseconds(500));
+        running = browser_->screenshot(shots[1]) ? pixels({"differ", shots[0], shots[1]}) : 0;
+        return running > 500;
+      },
+      std::chrono::seconds(15));
 
   click_element("pause");
   ASSERT_TRUE(wait_until([&] { return world.latest()->paused != 0; }, std::chrono::seconds(5)))
