@@ -176,19 +176,20 @@ int ViewServer::connections() {
   return static_cast<int>(senders_.size());
 }
 
-void ViewServer::add_socket(mg_connection* connection) {
-  auto sender =
-      std::make_unique<FrameSender>([connection](const std::uint8_t* data, std::size_t size) {
-        // A write that timed out part-way broke the stream.
-        if (write_frame(connection, Opcode::kBinary,
-                        std::string_view(reinterpret_cast<const char*>(data), size)))
-          return true;
-        // Also when the page closed its connection while a frame was being written.
-        std::fprintf(stderr,
-                     "afhub view: dropped a page: a frame could not be sent (the page closed its "
-                     "connection, or stopped reading for 5 s)\n");
-        return false;
-      });
+std::unique_ptr<FrameSender> ViewServer::make_sender(mg_connection* connection) {
+  return std::make_unique<FrameSender>([connection](const std::uint8_t* data, std::size_t size) {
+    // A write that timed out part-way broke the stream.
+    if (write_frame(connection, Opcode::kBinary,
+                    std::string_view(reinterpret_cast<const char*>(data), size)))
+      return true;
+    std::fprintf(stderr,
+                 "afhub view: dropped a page: a frame could not be sent (the page closed its "
+                 "connection, or stopped reading for 5 s)\n");
+    return false;
+  });
+}
+
+void ViewServer::add_socket(mg_connection* connection, std::unique_ptr<FrameSender> sender) {
   std::lock_guard lock(mutex_);
   senders_[connection] = std::move(sender);
 }
@@ -265,6 +266,19 @@ int ViewServer::serve_page_socket(mg_connection* connection) {
     send_text(connection, 500, "text/plain", "the viewer lost this connection's socket\n");
     return 500;
   }
+  // The page's sender thread, started before the handshake: when the machine has no
+  // thread to give (out of pids or memory, under load), the page is refused and retries.
+  // The exception would otherwise cross civetweb's C frames and end the viewer.
+  std::unique_ptr<FrameSender> sender;
+  try {
+    sender = make_sender(connection);
+  } catch (const std::exception& error) {
+    std::fprintf(stderr, "afhub view: refused a page: no thread for its frames (%s)\n",
+                 error.what());
+    send_text(connection, 503, "text/plain",
+              "the viewer could not start a thread for this page; try again\n");
+    return 503;
+  }
   // A frame goes out as two writes (its header, its payload): sent at once, not held
   // back for the first one's acknowledgement.
   const int on = 1;
@@ -273,7 +287,7 @@ int ViewServer::serve_page_socket(mg_connection* connection) {
             "HTTP/1.1 101 Switching Protocols\r\nUpgrade: websocket\r\nConnection: "
             "Upgrade\r\nSec-WebSocket-Accept: %s\r\n\r\n",
             websocket_accept(key).c_str());
-  add_socket(connection);
+  add_socket(connection, std::move(sender));
   const PageEnd end = read_page_frames(
       fd, [this, connection] { return !stopping_ && !page_dropped(connection); },
       [connection](Opcode opcode, std::string_view payload) {

@@ -97,7 +97,10 @@ class ViewServer {
 
  private:
   std::shared_ptr<const ViewScene> scene();
-  void add_socket(mg_connection* connection);
+  // A page's sender (it throws when no thread can be started), and its registration,
+  // after the handshake: frames are offered to it from then on.
+  std::unique_ptr<FrameSender> make_sender(mg_connection* connection);
+  void add_socket(mg_connection* connection, std::unique_ptr<FrameSender> sender);
   void remove_socket(const mg_connection* connection);
   bool page_dropped(const mg_connection* connection);
 
