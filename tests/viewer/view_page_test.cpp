@@ -1,7 +1,8 @@
 // The viewer's page in headless Chromium, driven over the DevTools protocol, beside
 // `afhub run` of the example scene (the arm, the floor and the world file's three
-// cameras): inspect a clicked body's joint positions and plot them, move a joint with
-// a slider (only with --allow-commands), pause, step and reset with the buttons, open
+// cameras): the scene drawn, every listed body live, inspect a clicked body's joint
+// positions and plot them, move a joint with a slider (only with --allow-commands),
+// pause, step and reset with the buttons (the drawn arm moving, then still), open
 // a camera's viewport by name, and mark the cameras input devices pair.
 #include <gtest/gtest.h>
 #include <stdlib.h>
@@ -297,6 +298,19 @@ TEST_F(ViewPageTest, PauseStepAndResetButtonsDriveTheWorld) {
   // Running, the controller moves the arm: a later screenshot differs (how much in a
   // given second depends on where the sine is, and on the machine's load: waited for).
   ASSERT_TRUE(browser_->screenshot(shots[0]));
+  const long drawn = pixels({"count", shots[0]});
+  std::printf("pixels drawn over the background: %ld of 480000\n", drawn);
+  EXPECT_GT(drawn, 3000) << "the scene is not drawn";
+  // Every body the hub lists is live in the page (its status line counts them).
+  CatalogReader catalog;
+  catalog.wait(std::chrono::seconds(2));
+  std::uint32_t listed = 0;
+  for (std::uint32_t i = 0; i < catalog.latest().body_count; ++i)
+    if (catalog.latest().bodies[i].kind == ChannelKind::kBody) ++listed;
+  const std::string live = ", " + std::to_string(listed) + " live bodies";
+  EXPECT_TRUE(
+      wait_until([&] { return contains(text_of("#status"), live); }, std::chrono::seconds(5)))
+      << text_of("#status") << " (the hub lists " << listed << ")";
   long running = 0;
   wait_until(
       [&] {

@@ -1,6 +1,6 @@
 // `afhub view` beside `afhub run` of the project's arm and a mesh body: what the
 // server serves and refuses, the binary pose frames over its WebSocket, joint
-// commands only with --allow-commands, and headless Chromium drawing the arm.
+// commands only with --allow-commands. (view_page_test runs the page in Chromium.)
 #include <gtest/gtest.h>
 #include <stdlib.h>
 
@@ -23,7 +23,6 @@
 #include "afhub/shm_layout/scene.hpp"
 #include "afhub/viewer/joint_commander.hpp"
 #include "afhub_process.hpp"
-#include "pixels.hpp"
 #include "strict_json.hpp"
 #include "web_client.hpp"
 
@@ -567,57 +566,6 @@ TEST_F(ViewTest, APageThatStopsReadingDelaysNoOtherAndIsDropped) {
   const long grown = resident_kb(view.process->pid) - memory_before;
   std::printf("the viewer's memory grew by %ld kB\n", grown);
   EXPECT_LT(grown, 2048);
-}
-
-// Runs headless Chromium on `url`; returns its stderr (console messages included).
-std::string screenshot(const std::string& url, const std::string& file) {
-  const RunResult result = run_command(
-      {"chromium", "--headless=new", "--no-sandbox", "--use-gl=swiftshader",
-       "--enable-unsafe-swiftshader", "--window-size=800,600", "--virtual-time-budget=4000",
-       "--enable-logging=stderr", "--v=0", "--screenshot=" + file, url},
-      std::chrono::seconds(90));
-  EXPECT_EQ(result.exit_code, 0) << result.err;
-  return result.err;
-}
-
-TEST_F(ViewTest, ChromiumDrawsTheArmAndItsMotion) {
-  View view = start_view();
-  ASSERT_GT(view.port, 0) << read_file(view.log);
-  ScopedProcess sine(spawn_afhub({"ctl", "sine", "arm/base", "--amplitude", "0.8", "--period", "2"},
-                                 dir_ + "/sine.log"));
-  const std::string url = "http://127.0.0.1:" + std::to_string(view.port) + "/";
-  const std::string first = dir_ + "/first.png", second = dir_ + "/second.png";
-  const std::string console = screenshot(url, first);
-  EXPECT_FALSE(contains(console, "Uncaught")) << console;
-  EXPECT_FALSE(contains(console, "Failed to load resource")) << console;
-  // The page's scene holds every body the hub lists (its status line counts them).
-  const RunResult dom =
-      run_command({"chromium", "--headless=new", "--no-sandbox", "--use-gl=swiftshader",
-                   "--enable-unsafe-swiftshader", "--window-size=800,600",
-                   "--virtual-time-budget=4000", "--dump-dom", url},
-                  std::chrono::seconds(90));
-  EXPECT_TRUE(contains(dom.out, ", " + std::to_string(catalog_bodies()) + " live bodies"))
-      << dom.out;
-  std::this_thread::sleep_for(std::chrono::seconds(1));
-  screenshot(url, second);
-  const long drawn = pixels({"count", first});
-  std::printf("arm pixels: %ld of 480000; ", drawn);
-  EXPECT_GT(drawn, 3000) << "the arm is not drawn";
-  const long moved = pixels({"differ", first, second});
-  std::printf("pixels changed a second later: %ld\n", moved);
-  // The status line's clock changes a few hundred pixels; the arm's motion thousands.
-  EXPECT_GT(moved, 2000) << "the arm did not move between the screenshots";
-
-  // Paused, the same controller moves nothing: the screenshots stay the same.
-  ASSERT_EQ(run_afhub({"world", "pause"}).exit_code, 0);
-  const std::string third = dir_ + "/third.png", fourth = dir_ + "/fourth.png";
-  screenshot(url, third);
-  std::this_thread::sleep_for(std::chrono::seconds(1));
-  screenshot(url, fourth);
-  EXPECT_EQ(run_afhub({"world", "resume"}).exit_code, 0);
-  const long paused_change = pixels({"differ", third, fourth});
-  std::printf("pixels changed a second later, paused: %ld\n", paused_change);
-  EXPECT_LT(paused_change, 100) << "the scene changed while the world was paused";
 }
 
 std::uint32_t frame_word(const std::vector<std::uint8_t>& frame, std::size_t at) {
