@@ -4,15 +4,14 @@
 
 #include "afhub/bench/bench.hpp"
 #include "strict_json.hpp"
+#include "text_contains.hpp"
 
 namespace afhub::bench {
 namespace {
 
 using nlohmann::json;
 
-bool contains(const std::string& text, const std::string& part) {
-  return text.find(part) != std::string::npos;
-}
+using afhub::test::contains;
 
 // One-way latencies 1..100 us times `scale` at every size; round trips twice that.
 TransportResult transport(const std::string& name, double scale) {

@@ -11,15 +11,14 @@
 
 #include "afhub/shm_layout/error.hpp"
 #include "shared_models.hpp"
+#include "text_contains.hpp"
 
 namespace afhub::teleop {
 namespace {
 
 namespace fs = std::filesystem;
 
-bool contains(const std::string& text, const std::string& part) {
-  return text.find(part) != std::string::npos;
-}
+using afhub::test::contains;
 
 const std::string kRealFile =
     afhub::testing::kSharedModels + "/descriptions/input_devices/input_devices.yaml";

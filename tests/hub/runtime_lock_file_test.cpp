@@ -41,9 +41,9 @@ TEST(RuntimeLockFile, APlantedSymlinkIsRemovedAndItsTargetNeverMade) {
   const std::string target = scratch.dir + "/chosen-by-another-user";
   const std::string lock = scratch.dir + "/afhub-run-2.lock";
   ASSERT_EQ(symlink(target.c_str(), lock.c_str()), 0);
-  testing::internal::CaptureStderr();
+  ::testing::internal::CaptureStderr();
   claim_runtime_lock_file(lock);
-  const std::string said = testing::internal::GetCapturedStderr();
+  const std::string said = ::testing::internal::GetCapturedStderr();
   EXPECT_FALSE(fs::exists(target)) << "the symlink was followed";
   struct stat info {};
   ASSERT_EQ(lstat(lock.c_str(), &info), 0);
@@ -57,10 +57,10 @@ TEST(RuntimeLockFile, ADirectoryOrAFifoThereIsReplaced) {
   const std::string as_fifo = scratch.dir + "/afhub-run-4.lock";
   ASSERT_EQ(mkdir(as_dir.c_str(), 0700), 0);
   ASSERT_EQ(mkfifo(as_fifo.c_str(), 0600), 0);
-  testing::internal::CaptureStderr();
+  ::testing::internal::CaptureStderr();
   claim_runtime_lock_file(as_dir);
   claim_runtime_lock_file(as_fifo);
-  testing::internal::GetCapturedStderr();
+  ::testing::internal::GetCapturedStderr();
   EXPECT_TRUE(fs::is_regular_file(as_dir));
   EXPECT_TRUE(fs::is_regular_file(as_fifo));
 }

@@ -15,7 +15,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const std::string kModels = AFHUB_SHARED_MODELS "/descriptions/multi-bodies/";
+using afhub::testing::kMultiBodies;
 
 std::vector<std::string> joint_names_below(const Model& model, const std::string& channel) {
   for (std::size_t b = 0; b < model.bodies.size(); ++b) {
@@ -29,7 +29,7 @@ std::vector<std::string> joint_names_below(const Model& model, const std::string
 
 TEST(AdfLoader, LoadsTheKuka) {
   SKIP_WITHOUT_SHARED_MODELS();
-  Model model = load_adf_files({kModels + "robots/blender-kuka.yaml"});
+  Model model = load_adf_files({kMultiBodies + "robots/blender-kuka.yaml"});
   ASSERT_EQ(model.bodies.size(), 8u);
   ASSERT_EQ(model.joints.size(), 7u);
   EXPECT_EQ(model.bodies[0].channel, "ambf/env/base");
@@ -49,7 +49,7 @@ TEST(AdfLoader, LoadsTheKuka) {
 
 TEST(AdfLoader, FourBarKeepsItsLoopJointOnceInFileOrder) {
   SKIP_WITHOUT_SHARED_MODELS();
-  Model model = load_adf_files({kModels + "puzzles/parallel_structure.yaml"});
+  Model model = load_adf_files({kMultiBodies + "puzzles/parallel_structure.yaml"});
   EXPECT_EQ(model.closed_loop_count, 1);
   EXPECT_EQ(joint_names_below(model, "ambf/env/l1"),
             (std::vector<std::string>{"l1-l2", "l2-l3", "l3-l4", "l1-l4"}));

@@ -15,9 +15,9 @@
 namespace afhub::physics {
 namespace {
 
-constexpr double kGravity = 9.81;
+constexpr double kWorldGravity = 9.81;
 constexpr double kMass = 2.0;
-constexpr double kWeight = kMass * kGravity;
+constexpr double kWeight = kMass * kWorldGravity;
 
 // The floor (static, its top the plane z = 0), a 10 cm box of 2 kg resting on it at
 // the origin, a box falling from 5 m, and a static wall whose face is at x = 0.25.

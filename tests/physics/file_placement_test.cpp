@@ -11,13 +11,12 @@
 #include "afhub/shm_layout/error.hpp"
 #include "frames.hpp"
 #include "model_files.hpp"
+#include "text_contains.hpp"
 
 namespace afhub::physics {
 namespace {
 
-bool contains(const std::string& text, const std::string& part) {
-  return text.find(part) != std::string::npos;
-}
+using afhub::test::contains;
 
 // A base and a link turned about z, on a hinge about z: its pivots meet as written.
 const char* const kHinge =

@@ -14,6 +14,7 @@
 #include "afhub/physics/simulation.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "model_files.hpp"
+#include "text_contains.hpp"
 
 namespace afhub::physics {
 namespace {
@@ -51,9 +52,7 @@ std::string error_of(const std::function<void()>& action) {
   return "";
 }
 
-bool contains(const std::string& text, const std::string& part) {
-  return text.find(part) != std::string::npos;
-}
+using afhub::test::contains;
 
 TEST(GainOverrides, TheLoaderSaysWhichFilesGiveGains) {
   testing::ModelFolder folder;

@@ -17,12 +17,16 @@
 namespace afhub::physics {
 namespace {
 
-const std::string kModels = AFHUB_SHARED_MODELS "/descriptions/multi-bodies/";
+using afhub::testing::kMultiBodies;
 const std::vector<std::string> kRobots = {
-    kModels + "robots/blender-kuka.yaml",        kModels + "robots/blender-ecm.yaml",
-    kModels + "robots/blender-mtm.yaml",         kModels + "robots/blender-suj.yaml",
-    kModels + "puzzles/parallel_structure.yaml", kModels + "grippers/pr2 gripper.yaml",
-    kModels + "grippers/pr2 gripper small.yaml", kModels + "grippers/pr2 gripper small red.yaml",
+    kMultiBodies + "robots/blender-kuka.yaml",
+    kMultiBodies + "robots/blender-ecm.yaml",
+    kMultiBodies + "robots/blender-mtm.yaml",
+    kMultiBodies + "robots/blender-suj.yaml",
+    kMultiBodies + "puzzles/parallel_structure.yaml",
+    kMultiBodies + "grippers/pr2 gripper.yaml",
+    kMultiBodies + "grippers/pr2 gripper small.yaml",
+    kMultiBodies + "grippers/pr2 gripper small red.yaml",
 };
 constexpr int kSteps = 3000;
 constexpr double kApartM = 3.0;  // robot i at x = 3 i: no two touch

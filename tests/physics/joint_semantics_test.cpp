@@ -21,7 +21,7 @@
 namespace afhub::physics {
 namespace {
 
-const std::string kModels = AFHUB_SHARED_MODELS "/descriptions/multi-bodies/";
+using afhub::testing::kMultiBodies;
 
 // A static base and a 1 kg arm, 0.2 m long along x, on joint `j` at the base's
 // origin about y; `extra` adds to the joint's block, `header` to the file's.
@@ -122,7 +122,7 @@ TEST(JointSemantics, PassiveJointsStayOutOfJointLists) {
 // joints a controller drives are listed, so no two PIDs fight about one loop.
 TEST(JointSemantics, TheEcmListsOnlyItsActiveJoints) {
   SKIP_WITHOUT_SHARED_MODELS();
-  const Model model = load_adf_files({kModels + "robots/blender-ecm.yaml"});
+  const Model model = load_adf_files({kMultiBodies + "robots/blender-ecm.yaml"});
   std::size_t base = 0;
   for (std::size_t b = 0; b < model.bodies.size(); ++b)
     if (model.bodies[b].name == "baselink") base = b;
@@ -221,7 +221,7 @@ TEST(JointSemantics, PositionCommandsBeyondALimitStopAtIt) {
 // The KUKA's position command of 3.0 rad on a joint limited to 2.094 went 0.09 rad past.
 TEST(JointSemantics, KukaJointStopsAtItsLimit) {
   SKIP_WITHOUT_SHARED_MODELS();
-  const Model model = load_adf_files({kModels + "robots/blender-kuka.yaml"});
+  const Model model = load_adf_files({kMultiBodies + "robots/blender-kuka.yaml"});
   std::size_t base = 0;
   for (std::size_t b = 0; b < model.bodies.size(); ++b)
     if (model.bodies[b].name == "base") base = b;
@@ -414,7 +414,7 @@ TEST(JointSemantics, GravityFollowsAmbfsRuleAndTheOverride) {
 
 TEST(JointSemantics, TheKukaFallsUnderAnOverriddenGravity) {
   SKIP_WITHOUT_SHARED_MODELS();
-  Model model = load_adf_files({kModels + "robots/blender-kuka.yaml"});
+  Model model = load_adf_files({kMultiBodies + "robots/blender-kuka.yaml"});
   EXPECT_EQ(effective_gravity(model, 1).z, 0.0);  // the file says 0
   override_gravity(model, {0, 0, -9.81});
   Simulation sim(model, 0.001);

@@ -10,13 +10,12 @@
 #include "afhub/shm_layout/error.hpp"
 #include "mesh_reader.hpp"
 #include "model_files.hpp"
+#include "text_contains.hpp"
 
 namespace afhub::physics {
 namespace {
 
-bool contains(const std::string& text, const std::string& part) {
-  return text.find(part) != std::string::npos;
-}
+using afhub::test::contains;
 
 class MeshReader : public ::testing::Test {
  protected:

@@ -12,15 +12,14 @@
 #include "afhub/shm_layout/error.hpp"
 #include "afhub/shm_layout/limits.hpp"
 #include "model_files.hpp"
+#include "text_contains.hpp"
 
 namespace afhub::physics {
 namespace {
 
 namespace fs = std::filesystem;
 
-bool contains(const std::string& text, const std::string& part) {
-  return text.find(part) != std::string::npos;
-}
+using afhub::test::contains;
 
 class ModelFileCost : public ::testing::Test {
  protected:

@@ -11,17 +11,16 @@
 #include "afhub/shm_layout/error.hpp"
 #include "model_files.hpp"
 #include "shared_models.hpp"
+#include "text_contains.hpp"
 
 namespace afhub::physics {
 namespace {
 
-const std::string kModels = AFHUB_SHARED_MODELS "/descriptions/multi-bodies/";
-const std::string kSmallGripper = kModels + "grippers/pr2 gripper small.yaml";
-const std::string kSmallRedGripper = kModels + "grippers/pr2 gripper small red.yaml";
+using afhub::testing::kMultiBodies;
+const std::string kSmallGripper = kMultiBodies + "grippers/pr2 gripper small.yaml";
+const std::string kSmallRedGripper = kMultiBodies + "grippers/pr2 gripper small red.yaml";
 
-bool contains(const std::string& text, const std::string& part) {
-  return text.find(part) != std::string::npos;
-}
+using afhub::test::contains;
 
 // An arm as AMBF's da Vinci files write them: the same block names in every robot
 // ("BODY base link", "BODY tool link"), each file in its own namespace. With a
@@ -59,7 +58,7 @@ std::string joint_between(const std::string& parent, const std::string& child) {
          "  type: fixed\n";
 }
 
-std::string error_of(const std::vector<std::string>& paths) {
+std::string scene_error_of(const std::vector<std::string>& paths) {
   try {
     load_adf_files(paths);
   } catch (const Error& error) {
@@ -119,7 +118,7 @@ TEST_F(SceneScope, AReferenceAcrossFilesResolvesWhenUnique) {
 TEST_F(SceneScope, AnAmbiguousReferenceIsALocatedErrorListingTheCandidates) {
   const std::string bridge =
       folder_.write("bridge.yaml", joint_between("BODY base link", "/ambf/env/psm/BODY tool link"));
-  const std::string message = error_of({psm_, ecm_, bridge});
+  const std::string message = scene_error_of({psm_, ecm_, bridge});
   EXPECT_TRUE(contains(message,
                        "bridge.yaml:4:11: error: parent 'BODY base link' of JOINT "
                        "bridge is ambiguous: 2 loaded bodies match it"))
@@ -133,8 +132,8 @@ TEST_F(SceneScope, AnAmbiguousReferenceIsALocatedErrorListingTheCandidates) {
   // Still an error within one file: a block listed twice.
   const std::string twice =
       folder_.write("twice.yaml", "bodies: [BODY a, BODY a]\nBODY a:\n  name: a\n  mass: 1\n");
-  EXPECT_TRUE(contains(error_of({twice}), "twice.yaml:1:18: error: 'BODY a' is listed twice"))
-      << error_of({twice});
+  EXPECT_TRUE(contains(scene_error_of({twice}), "twice.yaml:1:18: error: 'BODY a' is listed twice"))
+      << scene_error_of({twice});
 }
 
 TEST_F(SceneScope, TheSameModelLoadedTwiceGetsItsOwnChannelsNamedAsAmbfNamesCopies) {
@@ -172,7 +171,7 @@ TEST_F(SceneScope, TheSameModelLoadedTwiceGetsItsOwnChannelsNamedAsAmbfNamesCopi
   EXPECT_EQ(linked.bodies[linked.joints.back().parent].channel, "ambf/env/psm/toollink1");
   const std::string to_either =
       folder_.write("to_either.yaml", joint_between("/ambf/env/psm/BODY tool link", "BODY ball"));
-  const std::string message = error_of({psm_, psm_, ball, to_either});
+  const std::string message = scene_error_of({psm_, psm_, ball, to_either});
   EXPECT_TRUE(contains(message, "is ambiguous")) << message;
   EXPECT_TRUE(contains(message,
                        "'/ambf/env/psm/BODY tool link1' (channel "
@@ -201,7 +200,7 @@ TEST_F(SceneScope, ALaunchFilesIndicesLoadSeveralRobotsEachInItsNamespace) {
 // binding of one gripper file to two devices.
 TEST(SceneScopeSharedModels, TheEcmTwiceAndBesideTheKukaLoads) {
   SKIP_WITHOUT_SHARED_MODELS();
-  const std::string ecm = kModels + "robots/blender-ecm.yaml";
+  const std::string ecm = kMultiBodies + "robots/blender-ecm.yaml";
   const Model one = load_adf_files({ecm});
   const Model two = load_adf_files({ecm, ecm});
   ASSERT_EQ(two.bodies.size(), 2 * one.bodies.size());
@@ -212,7 +211,7 @@ TEST(SceneScopeSharedModels, TheEcmTwiceAndBesideTheKukaLoads) {
     EXPECT_EQ(two.joints[copy].parent, one.joints[j].parent + static_cast<int>(one.bodies.size()));
     EXPECT_EQ(two.joints[copy].child, one.joints[j].child + static_cast<int>(one.bodies.size()));
   }
-  const Model with_kuka = load_adf_files({ecm, kModels + "robots/blender-kuka.yaml"});
+  const Model with_kuka = load_adf_files({ecm, kMultiBodies + "robots/blender-kuka.yaml"});
   EXPECT_EQ(with_kuka.bodies.size(), one.bodies.size() + 8);
 }
 

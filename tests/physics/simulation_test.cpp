@@ -20,7 +20,7 @@
 namespace afhub::physics {
 namespace {
 
-const std::string kModels = AFHUB_SHARED_MODELS "/descriptions/multi-bodies/";
+using afhub::testing::kMultiBodies;
 constexpr double kGravity = 9.81;
 
 int body_index(const Model& model, const std::string& name) {
@@ -146,7 +146,7 @@ TEST(Simulation, PendulumPeriodMatchesTheAnalyticValue) {
 
 TEST(Simulation, KukaJointsReachTheirTargetsUnderTheirPid) {
   SKIP_WITHOUT_SHARED_MODELS();
-  const Model model = load_adf_files({kModels + "robots/blender-kuka.yaml"});
+  const Model model = load_adf_files({kMultiBodies + "robots/blender-kuka.yaml"});
   Simulation sim(model, 0.001);
   const std::array<double, 7> targets = {0.5, -0.4, 0.3, 0.6, -0.5, 0.4, 0.7};
   BodyInput command{};
@@ -168,7 +168,7 @@ TEST(Simulation, KukaJointsReachTheirTargetsUnderTheirPid) {
 // the arm fall under gravity; hold keeps every joint where it was.
 TEST(Simulation, WatchdogPoliciesZeroEffortOrHoldPosition) {
   SKIP_WITHOUT_SHARED_MODELS();
-  const Model model = load_adf_files({kModels + "robots/blender-kuka.yaml"});
+  const Model model = load_adf_files({kMultiBodies + "robots/blender-kuka.yaml"});
   const int base = body_index(model, "base");
   const std::vector<int>& joints = model.descendant_joints[base];
   BodyInput command{};
@@ -202,7 +202,7 @@ TEST(Simulation, WatchdogPoliciesZeroEffortOrHoldPosition) {
 TEST(Simulation, RealModelsRunTenSecondsHoldingTogether) {
   SKIP_WITHOUT_SHARED_MODELS();
   for (const char* file : {"robots/blender-kuka.yaml", "puzzles/parallel_structure.yaml"}) {
-    const Model model = load_adf_files({kModels + file});
+    const Model model = load_adf_files({kMultiBodies + file});
     Simulation sim(model, 0.001);
     const double gap = run_for(sim, 10.0);
     EXPECT_TRUE(sim.all_finite()) << file;
@@ -212,7 +212,7 @@ TEST(Simulation, RealModelsRunTenSecondsHoldingTogether) {
 
 TEST(Simulation, FourBarLoopStaysClosedUnderGravity) {
   SKIP_WITHOUT_SHARED_MODELS();
-  Model model = load_adf_files({kModels + "puzzles/parallel_structure.yaml"});
+  Model model = load_adf_files({kMultiBodies + "puzzles/parallel_structure.yaml"});
   ASSERT_EQ(model.closed_loop_count, 1);
   Simulation sim(model, 0.001);
   run_for(sim, 10.0);
@@ -474,7 +474,7 @@ TEST(Simulation, CommandsWithNanOrBadJointsAreRefused) {
 
 TEST(Simulation, ResetReturnsToTheStart) {
   SKIP_WITHOUT_SHARED_MODELS();
-  const Model model = load_adf_files({kModels + "puzzles/parallel_structure.yaml"});
+  const Model model = load_adf_files({kMultiBodies + "puzzles/parallel_structure.yaml"});
   Simulation sim(model, 0.001);
   const double start = sim.joint_position(1);
   run_for(sim, 1.0);

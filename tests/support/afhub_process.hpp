@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "text_contains.hpp"
+
 namespace afhub::test {
 
 struct RunResult {
@@ -78,7 +80,6 @@ bool wait_until(Predicate predicate, std::chrono::milliseconds timeout) {
 
 std::string afhub_executable();
 
-bool contains(const std::string& text, const std::string& part);
 // How many times `part` occurs in `text` (overlaps counted).
 int occurrences(const std::string& text, const std::string& part);
 // The comma-separated numbers that follow `key` in `text` (searched from `from`), up

@@ -10,6 +10,8 @@
 namespace afhub::testing {
 
 inline const std::string kSharedModels = AFHUB_SHARED_MODELS;
+// Its robots (the KUKA, the ECM, the MTM, ...), each a folder of ADF files.
+inline const std::string kMultiBodies = kSharedModels + "/descriptions/multi-bodies/";
 
 inline bool shared_models_present() {
   return std::filesystem::is_directory(kSharedModels);
