@@ -91,9 +91,14 @@ State Body::wait_next(std::optional<std::uint64_t> after_step, double timeout_s)
 void Body::check_refused() {
   const BodyState* state = client_.latest_state();
   if (!state) return;
-  // A state before any seen: its refusals are new only when they name this process.
+  // The first state seen: published before this body's first command (by this physics,
+  // or by one an earlier test or script stopped), it cannot carry a refusal of it, and
+  // only sets the count; published after, its refusals are new when they name this process.
   const bool new_refusal =
-      refusals_known_ ? state->refused_commands != refusals_seen_ : state->refused_commands > 0;
+      refusals_known_ ? state->refused_commands != refusals_seen_
+                      : first_command_ns_ != 0 &&
+                            state->header.publish_stamp_ns >= first_command_ns_ &&
+                            state->refused_commands > 0;
   refusals_seen_ = state->refused_commands;
   refusals_known_ = true;
   if (!new_refusal || state->refused_command_pid != pid_) return;
@@ -121,6 +126,7 @@ void Body::send(std::uint32_t joint_count, const Fill& fill) {
     command->header.sim_time_s = state->header.sim_time_s;
   }
   command->lockstep = lockstep_;
+  if (first_command_ns_ == 0) first_command_ns_ = monotonic_ns();
   client_.publish_command(command);
 }
 

@@ -60,6 +60,7 @@ class Body {
   std::uint32_t pid_;
   std::uint32_t refusals_seen_ = 0;
   bool refusals_known_ = false;
+  std::int64_t first_command_ns_ = 0;  // monotonic_ns() when this body sent its first command
 };
 
 }  // namespace afhub::python

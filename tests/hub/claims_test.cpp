@@ -197,6 +197,11 @@ TEST(Claims, AControllerFindingNoPublisherPortLeftSaysSo) {
   EXPECT_EQ(ctl.exit_code, 1) << ctl.err;
   EXPECT_TRUE(contains(ctl.err, "iceoryx publisher port and the hub has 0 left of 512")) << ctl.err;
   EXPECT_EQ(synth.stop(), 0);
+  // The ports given back, once the hub's Health says so: the next test's processes
+  // check the ports left by it.
+  writers.clear();
+  EXPECT_TRUE(wait_until([&] { return health.latest()->free_publisher_ports > 256; }, 10s))
+      << health.latest()->free_publisher_ports << " free";
 }
 
 // The hub's pool that payloads of `bytes` land in (the smallest that fits them), by the
