@@ -235,10 +235,15 @@ class RefusalWatch {
     if (!new_refusal || state->refused_command_pid != pid_) return "";
     return std::string(name_of(state->refusal_reason));
   }
-  // The sequence of the newest state (0: none yet), to wait for the physics' answer.
+  // The sequence and publish stamp of the newest state (0: none yet), to wait for the
+  // physics' answer.
   std::uint64_t state_sequence() {
     const BodyState* state = body_.latest_state();
     return state ? state->header.sequence : 0;
+  }
+  std::int64_t state_stamp_ns() {
+    const BodyState* state = body_.latest_state();
+    return state ? state->header.publish_stamp_ns : 0;
   }
 
  private:
@@ -255,13 +260,18 @@ class RefusalWatch {
               channel + "` shows its joints now");
 }
 
-// After --once: the physics' answer comes with the states it publishes after taking the
-// command in (the first one after it was sent may have been stepped before).
-void check_once(RefusalWatch& watch, const std::string& channel) {
-  const std::uint64_t sent_at = watch.state_sequence();
+// After --once: the physics takes commands in at the start of a step and publishes its
+// states at the end, so the second state published after the command went out (at
+// `sent_ns`) carries its answer.
+void check_once(RefusalWatch& watch, const std::string& channel, std::int64_t sent_ns) {
   const std::int64_t give_up = monotonic_ns() + 1'000'000'000;  // paused or gone: no answer
-  while (watch.state_sequence() < sent_at + 2 && monotonic_ns() < give_up && !stop_requested())
-    sleep_until_ns(monotonic_ns() + 1'000'000);
+  const auto wait_for = [&](const auto& done) {
+    while (!done() && monotonic_ns() < give_up && !stop_requested())
+      sleep_until_ns(monotonic_ns() + 1'000'000);
+  };
+  wait_for([&] { return watch.state_stamp_ns() > sent_ns; });
+  const std::uint64_t first_after = watch.state_sequence();
+  wait_for([&] { return watch.state_sequence() > first_after; });
   if (const std::string reason = watch.refusal(); !reason.empty()) refused(channel, reason);
 }
 
@@ -302,8 +312,9 @@ int run_cmd(const CmdOptions& options) {
   require_chunks({published_each_cycle(body_command_bytes(prototype.joint_count))},
                  "this command (to " + channel + ")");
   if (once) {
+    const std::int64_t sent_ns = monotonic_ns();
     if (!publish_once(body, prototype)) throw Error("shared memory exhausted: command not sent");
-    check_once(watch, channel);
+    check_once(watch, channel, sent_ns);
     std::fprintf(stderr,
                  "afhub cmd: sent one command to %s%s%s.\nwarning: the physics' watchdog releases "
                  "it when no new command comes within its period (0.5 s unless `afhub run "

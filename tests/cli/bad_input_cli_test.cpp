@@ -86,6 +86,11 @@ TEST(BadInputCli, CheckRefusesWhatRunWouldRefuse) {
 // answers each within 2 GB of address space, with its verdict, never out of memory. Its
 // time is printed (a figure for docs/simulating.md, not a bound: this machine is shared).
 TEST(BadInputCli, TheCostliestModelFilesWithinTheBoundsCheckWithin2GB) {
+#if defined(AFHUB_SANITIZED)
+  // ASan reserves terabytes of address space for itself, so no bound can apply here; the
+  // same files' code paths run under the sanitizers in smaller files (adf_fuzz).
+  GTEST_SKIP() << "a bound on memory: checked in the release build, not under the sanitizers";
+#endif
   afhub::testing::ModelFolder folder;
   std::string junk;  // top-level blocks no body names: lookups among many keys
   for (int i = 0; i < 300000; ++i) junk += "k" + std::to_string(1000000 + i) + ": 0\n";
@@ -99,11 +104,10 @@ TEST(BadInputCli, TheCostliestModelFilesWithinTheBoundsCheckWithin2GB) {
       {"scalar.yaml", "name: " + std::string(kMaxYamlFileBytes - 64, 'x') + "\n"}};
   for (const auto& [name, text] : files) {
     ASSERT_LE(text.size(), kMaxYamlFileBytes) << name;
-    std::vector<std::string> argv = {afhub_executable(), "check", folder.write(name, text)};
-#if !defined(AFHUB_SANITIZED)  // (ASan reserves terabytes of address space for itself)
-    argv.insert(argv.begin(), {"prlimit", "--as=" + std::to_string(2ULL << 30), "--"});
-#endif
-    const RunResult check = run_command(argv, std::chrono::seconds(120));
+    const std::string path = folder.write(name, text);
+    const RunResult check = run_command(
+        {"prlimit", "--as=" + std::to_string(2ULL << 30), "--", afhub_executable(), "check", path},
+        std::chrono::seconds(120));
     std::printf("afhub check %s (%zu bytes): exit %d in %.2f s\n", name.c_str(), text.size(),
                 check.exit_code, check.seconds);
     EXPECT_TRUE(check.exit_code == 0 || check.exit_code == 1) << name << ": " << check.err;
