@@ -12,11 +12,13 @@
 set -euo pipefail
 cd "$(dirname "$0")"
 
-PACKAGES=(
-  g++ cmake ninja-build pkg-config
+# What the build and the product need; then what only the tests run (`./run.sh test`
+# installs those while it builds).
+BUILD_PACKAGES=(
+  g++ cmake ninja-build pkg-config clang-format
   iceoryx libiceoryx-posh-dev libiceoryx-hoofs-dev libacl1-dev
   libcli11-dev libyaml-cpp-dev libbullet-dev libassimp-dev libeigen3-dev
-  libgtest-dev libgmock-dev libbenchmark-dev clang-format
+  libgtest-dev libgmock-dev libbenchmark-dev
   # URDF robots: liburdfdom parses them (TinyXML, its XML parser, locates errors);
   # Orocos KDL is the tests' independent reference
   liburdfdom-dev libtinyxml-dev liborocos-kdl-dev libkdl-parser-dev
@@ -27,22 +29,26 @@ PACKAGES=(
   rt-tests gnuplot-nox
   # device drivers: evdev input devices, USB (Falcon), and their emulation in tests
   libevdev-dev libusb-1.0-0-dev umockdev libumockdev-dev
-  # afhub view: its web server, three.js, and the browser and image checks of its tests
-  libcivetweb-dev libjs-three chromium python3-pil
-  # the syntax check of the viewer page's JavaScript (tests only)
-  nodejs
+  # afhub view: its web server and three.js
+  libcivetweb-dev libjs-three
+  # `import afhub` (pybind11 over the hub client; states as numpy arrays)
+  pybind11-dev python3-dev python3-numpy
+)
+TEST_PACKAGES=(
+  # the viewer's tests: the browser, its image checks, the page's JavaScript syntax check
+  chromium python3-pil nodejs
   # afhub bridge dds: its tests' JSON checks, and the DDS Security credentials
   jq openssl
   # the tests' private namespaces and their documentation check
   util-linux iproute2 python3
-  # `import afhub` (pybind11 over the hub client; states as numpy arrays), its tests, and
-  # the rospy it is compared with (python/examples/bench_vs_rospy.py)
-  pybind11-dev python3-dev python3-numpy python3-pytest python3-rospy
+  # the Python tests, and the rospy they compare with (python/examples/bench_vs_rospy.py)
+  python3-pytest python3-rospy
 )
 
+# install_packages PACKAGE...: those not installed yet.
 install_packages() {
   local missing=()
-  for package in "${PACKAGES[@]}"; do
+  for package in "$@"; do
     dpkg-query -W -f='${Status}' "$package" 2>/dev/null | grep -q "install ok installed" ||
       missing+=("$package")
   done
@@ -50,7 +56,8 @@ install_packages() {
   echo "run.sh: installing ${missing[*]}"
   local sudo=""
   [ "$(id -u)" -ne 0 ] && sudo="sudo"
-  $sudo apt-get update -qq
+  [ -n "$APT_UPDATED" ] || $sudo apt-get update -qq
+  APT_UPDATED=1
   DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
 }
 
@@ -74,12 +81,14 @@ build() {
   cmake --build "$dir" --parallel "$(nproc)" "${targets[@]}"
 }
 
-# run_tests DIR [ctest options...]: hub tests wait more than they compute, so one more
-# runs than there are cores; tests with real-time bounds take every slot.
+# run_tests DIR SLOTS [ctest options...]: SLOTS tests at once; a test with real-time
+# bounds takes one more slot than there are cores (tests/CMakeLists.txt), so it runs alone
+# when SLOTS is that.
+SLOTS=$(($(nproc) + 1))
 run_tests() {
-  local dir=$1
-  shift
-  ctest --test-dir "$dir" --output-on-failure --parallel "$(($(nproc) + 1))" "$@"
+  local dir=$1 slots=$2
+  shift 2
+  ctest --test-dir "$dir" --output-on-failure --parallel "$slots" "$@"
   # Tests skip only for a reason they print (the AMBF corpus beside the project is
   # missing, say): say how many, and why.
   local log="$dir/Testing/Temporary/LastTest.log" skipped
@@ -120,8 +129,11 @@ finish_background_phase() {
   PHASES+=("$(printf '%-16s %4d s (beside the phases before it)' "$BACKGROUND_NAME" $((SECONDS - BACKGROUND_START)))")
 }
 BACKGROUND_PID=""
-at_lowest_priority() {
-  renice -n 19 -p "$BASHPID" >/dev/null
+APT_UPDATED=""
+# at_idle_priority COMMAND...: runs it only on CPU time nothing else wants (SCHED_IDLE,
+# inherited by its children): a test waking for its next 1 kHz period preempts it at once.
+at_idle_priority() {
+  chrt --idle -p 0 "$BASHPID" >/dev/null
   "$@"
 }
 print_phases() {
@@ -138,30 +150,34 @@ check_format() {
 
 case "${1:-}" in
   demo)
-    install_packages
+    install_packages "${BUILD_PACKAGES[@]}"
     build "${RELEASE[@]}"
     exec build/release/bin/afhub demo "${@:2}"
     ;;
   test)
-    phase packages install_packages
+    phase packages install_packages "${BUILD_PACKAGES[@]}"
+    mkdir -p build
+    background_phase test-packages build/test-packages.log install_packages "${TEST_PACKAGES[@]}"
     phase format check_format
     phase build build "${RELEASE[@]}"
-    phase real-time-tests run_tests build/release -L real-time
-    # The other tests wait more than they compute: the sanitizer build takes the CPU
-    # they leave, at the lowest priority, so that it never delays them.
-    background_phase sanitize-build build/sanitize-build.log \
-      at_lowest_priority build "${SANITIZE[@]}" -- sanitize_selection
-    phase tests run_tests build/release -L integration -LE real-time
     finish_background_phase
-    phase sanitize-tests run_tests build/sanitize -L 'unit|fuzz|sanitize'
+    # The tests wait more than they compute: the sanitizer build takes the CPU they
+    # leave, at idle priority, so that it never delays them (the real-time tests' figures
+    # are the same beside it: docs/testing.md).
+    background_phase sanitize-build build/sanitize-build.log \
+      at_idle_priority build "${SANITIZE[@]}" -- sanitize_selection
+    phase real-time-tests run_tests build/release "$SLOTS" -L real-time
+    phase tests run_tests build/release $((2 * $(nproc))) -L integration -LE real-time
+    finish_background_phase
+    phase sanitize-tests run_tests build/sanitize "$SLOTS" -L 'unit|fuzz|sanitize'
     ;;
   sanitize)
-    phase packages install_packages
+    phase packages install_packages "${BUILD_PACKAGES[@]}" "${TEST_PACKAGES[@]}"
     phase sanitize-build build "${SANITIZE[@]}"
-    phase sanitize-tests run_tests build/sanitize
+    phase sanitize-tests run_tests build/sanitize "$SLOTS"
     ;;
   build)
-    install_packages
+    install_packages "${BUILD_PACKAGES[@]}"
     build "${RELEASE[@]}"
     ;;
   *)
