@@ -113,8 +113,12 @@ phase() {
 background_phase() {
   local name=$1 log=$2
   shift 2
-  BACKGROUND_NAME=$name BACKGROUND_LOG=$log BACKGROUND_START=$SECONDS
-  "$@" >"$log" 2>&1 &
+  BACKGROUND_NAME=$name BACKGROUND_LOG=$log
+  # (Its time is its own, kept when it ends: the phases beside it may end later.)
+  ( local start=$SECONDS status=0
+    "$@" || status=$?
+    echo $((SECONDS - start)) >"$log.seconds"
+    exit $status ) >"$log" 2>&1 &
   BACKGROUND_PID=$!
 }
 finish_background_phase() {
@@ -126,7 +130,7 @@ finish_background_phase() {
     echo "run.sh: $BACKGROUND_NAME failed (its output is above)" >&2
     return $status
   fi
-  PHASES+=("$(printf '%-16s %4d s (beside the phases before it)' "$BACKGROUND_NAME" $((SECONDS - BACKGROUND_START)))")
+  PHASES+=("$(printf '%-16s %4d s (beside the phases before it)' "$BACKGROUND_NAME" "$(cat "$BACKGROUND_LOG.seconds")")")
 }
 BACKGROUND_PID=""
 APT_UPDATED=""

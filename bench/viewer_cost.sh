@@ -135,6 +135,7 @@ readers=$(cat "$work"/reader*.log 2>/dev/null | tr '\n' ' ')
 grep -ih "fifo\|lock" "$work"/run-*.log || true
 python3 - "$work/steps-watched.txt" "$work/steps-twin.txt" "$work/windows.txt" "$tick" "$window" \
   "$readers" <<'PY'
+import math
 import sys
 watched_file, twin_file, windows_file, tick, window, readers = sys.argv[1:]
 tick = float(tick)
@@ -143,9 +144,9 @@ def steps(path):
         next(f)
         return [(int(begin), float(us)) for begin, us in (line.split() for line in f)]
 watched, twin = steps(watched_file), steps(twin_file)
-def percentile(values, q):
+def percentile(values, q):  # afhub's one rule (rt/percentile.hpp): nearest rank
     values = sorted(values)
-    return values[min(len(values) - 1, int(q * len(values)))] if values else float("nan")
+    return values[max(1, math.ceil(q * len(values))) - 1] if values else float("nan")
 def inside(samples, spans):
     return [us for t, us in samples if any(b <= t < e for b, e in spans)]
 windows = []

@@ -143,6 +143,11 @@ kill -9 "$bridge_b"
 start_mirror --spin
 wait_listed
 moves || fail "no recovery after B's bridge restarted (with --spin, B's commands cross polled)"
+# (Polling takes a core: the rest runs with B's bridge waiting on its readers again.)
+kill -TERM "$bridge_b"
+wait "$bridge_b" || fail "B's polling bridge did not stop cleanly"
+start_mirror
+wait_listed
 
 echo "6. A's physics SIGKILLed and restarted under the running bridges"
 kill -0 "$physics" || fail "the physics on A died"
