@@ -85,9 +85,11 @@ def main():
     parser.add_argument('--seconds', type=float, default=10, help='how long the loops run')
     parser.add_argument('--plot', metavar='OUT.png', help='draw the figures into this file')
     args = parser.parse_args()
+    # The loops first: rospy leaves threads of its own in this process, which would
+    # take the GIL from the Python loop.
+    loops = loop_figures(args.body, args.seconds)
     joints, (afhub_p50, afhub_p99) = afhub_figures(args.body, args.count)
     (trip_p50, trip_p99), (publish_p50, publish_p99) = rospy_figures(joints, args.count)
-    loops = loop_figures(args.body, args.seconds)
     load = ', '.join(f'{value:.1f}' for value in os.getloadavg())
     print(f'{args.count} iterations each, {joints} joints; loops for {args.seconds:g} s; '
           f'load average {load}')
