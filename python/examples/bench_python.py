@@ -69,8 +69,10 @@ def plot(path, iteration, loops):
             'set ylabel "microseconds (log scale)"',
             'set key top left',
             'set title "One iteration from Python: read a state, write a command"',
+            'set xrange [-0.6:2.6]',
             f"plot '{tmp}/iteration.dat' using 2:xtic(1) title 'p50', '' using 3 title 'p99'",
             'set title "1 kHz loops run together: wake-up latency"',
+            'set xrange [-0.6:1.6]',
             f"plot '{tmp}/loops.dat' using 2:xtic(1) title 'p50', '' using 3 title 'p99', "
             "'' using 4 title 'p99.9'",
             'unset multiplot',
@@ -93,9 +95,10 @@ def main():
     load = ', '.join(f'{value:.1f}' for value in os.getloadavg())
     print(f'{args.count} iterations each, {joints} joints; loops for {args.seconds:g} s; '
           f'load average {load}')
+    # (rospy's round trip: its command, and the state a second process answers it with.)
     iteration = {'afhub read + command': (afhub_p50, afhub_p99),
-                 'rospy command -> state': (trip_p50, trip_p99),
-                 'rospy publish() alone': (publish_p50, publish_p99)}
+                 'rospy round trip': (trip_p50, trip_p99),
+                 'rospy publish()': (publish_p50, publish_p99)}
     for label, (p50, p99) in iteration.items():
         print(f'{label:24s} p50 {p50:8.2f} us   p99 {p99:8.2f} us')
     print(f'rospy round trip / afhub iteration: {trip_p50 / afhub_p50:.0f}x at p50, '

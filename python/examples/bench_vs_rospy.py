@@ -1,10 +1,9 @@
 #!/usr/bin/env python3
-"""One Python control iteration on afhub beside the same through ROS 1 with rospy (AMBF's
-transport), in the same run; prints p50 and p99 in microseconds, and the load average.
+"""The two sides of bench_python.py's first comparison: one Python control iteration
+on afhub, and the same through ROS 1 with rospy (AMBF's transport).
 
 - afhub: read a body's newest state and write one position command (bench_iteration.py's
-  iteration), with a running simulation:
-      build/release/bin/afhub run examples/models/arm7.yaml &
+  iteration), with a running simulation.
 - rospy: the client publishes the command (std_msgs/Float64MultiArray, one value per
   joint) and waits for the state a second process answers it with (pose, twist and each
   joint's position, velocity and effort: 13 + 3 x joints values), over a rosmaster of
@@ -12,9 +11,7 @@ transport), in the same run; prints p50 and p99 in microseconds, and the load av
   newest state its subscriber delivered, so this round trip is the time from a command
   to the state that follows it, and the publish() call alone is timed too.
 
-    PYTHONPATH=$PWD/build/release/python python3 python/examples/bench_vs_rospy.py arm/base
-
-Needs Debian's python3-rospy and python3-rosmaster (run.sh installs them)."""
+Run as `bench_vs_rospy.py --echo JOINTS`, it is that second process."""
 
 import os
 import socket
@@ -133,22 +130,5 @@ def afhub_figures(name, count):
     return joints, timed(iteration, count)
 
 
-def main():
-    if sys.argv[1:2] == ['--echo']:
-        echo(int(sys.argv[2]))
-        return
-    name = sys.argv[1] if len(sys.argv) > 1 else 'arm/base'
-    count = int(sys.argv[2]) if len(sys.argv) > 2 else 10_000
-    joints, (afhub_p50, afhub_p99) = afhub_figures(name, count)
-    (trip_p50, trip_p99), (publish_p50, publish_p99) = rospy_figures(joints, count)
-    load = ', '.join(f'{value:.1f}' for value in os.getloadavg())
-    print(f'{count} iterations each, {joints} joints, load average {load}')
-    print(f'afhub read + command      p50 {afhub_p50:8.2f} us   p99 {afhub_p99:8.2f} us')
-    print(f'rospy command -> state    p50 {trip_p50:8.2f} us   p99 {trip_p99:8.2f} us')
-    print(f'rospy publish() alone     p50 {publish_p50:8.2f} us   p99 {publish_p99:8.2f} us')
-    print(f'rospy round trip / afhub iteration: {trip_p50 / afhub_p50:.0f}x at p50, '
-          f'{trip_p99 / afhub_p99:.0f}x at p99')
-
-
-if __name__ == '__main__':
-    main()
+if __name__ == '__main__' and sys.argv[1:2] == ['--echo']:
+    echo(int(sys.argv[2]))  # the second process of rospy_figures

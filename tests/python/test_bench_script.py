@@ -28,8 +28,8 @@ def test_bench_python_measures_prints_and_plots(physics, tmp_path):
          '--plot', str(png)],
         capture_output=True, text=True, timeout=120, env=dict(os.environ, AFHUB=AFHUB))
     assert result.returncode == 0, result.stdout + result.stderr
-    for label, count in (('afhub read + command', 2), ('rospy command -> state', 2),
-                         ('rospy publish() alone', 2), ('C++ ctl hold', 4),
+    for label, count in (('afhub read + command', 2), ('rospy round trip', 2),
+                         ('rospy publish()', 2), ('C++ ctl hold', 4),
                          ('Python afhub.Loop', 4)):
         values = figures(label, result.stdout)
         assert len(values) == count and all(value > 0 for value in values), result.stdout
