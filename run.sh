@@ -41,7 +41,7 @@ TEST_PACKAGES=(
   jq openssl
   # the tests' private namespaces and their documentation check
   util-linux iproute2 python3
-  # the Python tests, and the rospy they compare with (python/examples/bench_vs_rospy.py)
+  # the Python tests, and the rospy afhub is compared with (python/examples/bench_python.py)
   python3-pytest python3-rospy
 )
 
