@@ -171,7 +171,7 @@ case "${1:-}" in
     background_phase sanitize-build build/sanitize-build.log \
       at_idle_priority build "${SANITIZE[@]}" -- sanitize_selection
     phase real-time-tests run_tests build/release "$SLOTS" -L real-time
-    phase tests run_tests build/release $((2 * $(nproc))) -L integration -LE real-time
+    phase tests run_tests build/release "$SLOTS" -L integration -LE real-time
     finish_background_phase
     phase sanitize-tests run_tests build/sanitize "$SLOTS" -L 'unit|fuzz|sanitize'
     ;;
