@@ -162,12 +162,24 @@ kill -0 "$physics" || fail "the restarted physics on A died"
 # counts NAME PID: "ALLOCATIONS MESSAGES" of a bridge at this moment: SIGUSR2 makes
 # the counting library print its count, SIGUSR1 the bridge its counters.
 counts() {
+  local log="$work/$1.log" counted said
+  counted=$(grep -c 'malloc-count: ' "$log" || true)
+  said=$(grep -c 'states out' "$log" || true)
   kill -USR2 "$2"
   kill -USR1 "$2"
-  sleep 0.3
+  # Both answers waited for (a loaded machine may take a while to run the handlers).
+  local answered=0
+  for _ in $(seq 100); do
+    if (($(grep -c 'malloc-count: ' "$log") > counted && $(grep -c 'states out' "$log") > said)); then
+      answered=1
+      break
+    fi
+    sleep 0.1
+  done
+  ((answered)) || fail "$1 did not print its counts within 10 s of SIGUSR2 and SIGUSR1"
   local allocations messages
-  allocations=$(grep -o 'malloc-count: [0-9]*' "$work/$1.log" | tail -1 | cut -d' ' -f2)
-  messages=$(grep 'states out' "$work/$1.log" | tail -1 |
+  allocations=$(grep -o 'malloc-count: [0-9]*' "$log" | tail -1 | cut -d' ' -f2)
+  messages=$(grep 'states out' "$log" | tail -1 |
     sed -E 's/.*states out ([0-9]+) in ([0-9]+), commands out ([0-9]+) in ([0-9]+),.*/\1 + \2 + \3 + \4/')
   echo "$allocations $((messages))"
 }
