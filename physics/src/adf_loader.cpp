@@ -176,13 +176,14 @@ void load_adf_files_into(const std::vector<std::string>& paths, Model& model,
   for (const std::string& path : paths) {
     if (is_urdf_path(path)) {
       const FileSpan span{path, model.bodies.size(), model.soft_bodies.size(),
-                          pending.joints.size()};
+                          pending.joints.size(), model.joints.size()};
       load_urdf_into(path, urdf, model);
       channels.load_as_copies(span, model, pending.joints, copy_suffix);
       continue;
     }
     YAML::Node root = yaml::load_map(path, "an ADF file (a map with 'bodies' and 'joints' lists)");
-    const FileSpan span{path, model.bodies.size(), model.soft_bodies.size(), pending.joints.size()};
+    const FileSpan span{path, model.bodies.size(), model.soft_bodies.size(), pending.joints.size(),
+                        model.joints.size()};
     try {
       load_file(path, root, model, pending);
     } catch (const YAML::Exception& error) {

@@ -68,6 +68,15 @@ void write_shapes(std::ostream& out, const char* key, const std::vector<ShapeSpe
   for (const ShapeSpec& s : shapes) out << "  - " << shape(s, scale) << "\n";
 }
 
+// afhub's extension (body_reader.cpp): meshes placed in the body's frame, in metres.
+void write_placed_meshes(std::ostream& out, const char* key,
+                         const std::vector<PlacedMesh>& meshes) {
+  if (meshes.empty()) return;
+  out << "  " << key << ":\n";
+  for (const PlacedMesh& m : meshes)
+    out << "  - {mesh: " << quoted(m.path) << ", offset: " << placement(m.offset) << "}\n";
+}
+
 void write_body(std::ostream& out, const BodySpec& body) {
   out << quoted(body.identifier) << ":\n";
   out << "  name: " << quoted(body.name) << "\n";
@@ -81,11 +90,13 @@ void write_body(std::ostream& out, const BodySpec& body) {
     out << "  inertial offset: " << placement(*body.inertial_offset) << "\n";
   if (body.scale != 1.0) out << "  scale: " << number(body.scale) << "\n";
   if (!body.visual_mesh.empty()) out << "  mesh: " << quoted(body.visual_mesh) << "\n";
+  write_placed_meshes(out, "visual meshes", body.visual_mesh_parts);
   write_shapes(out, "compound shape", body.visual_shapes, body.scale);
   if (!body.collision_mesh.empty()) {
     out << "  collision mesh: " << quoted(body.collision_mesh) << "\n";
     out << "  collision mesh type: TRIMESH\n";
   }
+  write_placed_meshes(out, "collision meshes", body.collision_mesh_parts);
   write_shapes(out, "compound collision shape", body.collision_shapes, body.scale);
   if (body.color_rgba) {
     const auto& c = *body.color_rgba;
@@ -136,14 +147,7 @@ std::string adf_text(const Model& model, std::vector<std::string>& lost) {
   for (const BodySpec& body : model.bodies) out << "- " << quoted(body.identifier) << "\n";
   if (!model.joints.empty()) out << "joints:\n";
   for (const JointSpec& joint : model.joints) out << "- " << quoted(joint.identifier) << "\n";
-  for (const BodySpec& body : model.bodies) {
-    write_body(out, body);
-    if (!body.collision_mesh_parts.empty())
-      lost.push_back("link '" + body.name + "' collides as " +
-                     std::to_string(body.collision_mesh_parts.size()) +
-                     " placed meshes: ADF takes one collision mesh per body, at its frame, so "
-                     "they are left out; give it a 'collision mesh' or collision shapes");
-  }
+  for (const BodySpec& body : model.bodies) write_body(out, body);
   for (const JointSpec& joint : model.joints) {
     write_joint(out, model, joint);
     if (joint.mimic)

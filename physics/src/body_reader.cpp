@@ -25,6 +25,8 @@ const std::set<std::string> kBodyKeys = {"name",
                                          "compound collision shape",
                                          "collision margin",
                                          "collision groups",
+                                         "visual meshes",
+                                         "collision meshes",
                                          "mass",
                                          "inertia",
                                          "inertial offset",
@@ -49,6 +51,27 @@ const std::set<std::string> kBodyKeys = {"name",
                                          "gravity",
                                          "plugins",
                                          "shaders"};
+
+// `visual meshes` and `collision meshes`, an afhub extension AMBF ignores:
+// [{mesh: FILE, offset: {position, orientation}}], each placed in the body's frame in
+// metres (not scaled), as a URDF link's several <visual> or <collision> elements are;
+// `afhub convert` writes them.
+std::vector<PlacedMesh> read_placed_meshes(const FileReader& file, const YAML::Node& list,
+                                           const std::string& folder, const std::string& what) {
+  if (!list.IsSequence() || list.size() == 0)
+    fail(file.at(list), "'" + what + "' must be a non-empty list of {mesh: FILE, offset: " +
+                            "{position: {x, y, z}, orientation: {r, p, y}}}");
+  std::vector<PlacedMesh> meshes;
+  for (const auto& entry : list) {
+    file.require_map(entry, what + " entry", "{mesh: part.stl, offset: {position: ...}}");
+    YAML::Node mesh = entry["mesh"];
+    if (!mesh) fail(file.at(entry), "'" + what + "' entry needs 'mesh'");
+    PlacedMesh placed{resolve_mesh(file, mesh, folder, what + " mesh"), {}};
+    if (YAML::Node offset = entry["offset"]) placed.offset = file.placement(offset, "offset");
+    meshes.push_back(std::move(placed));
+  }
+  return meshes;
+}
 
 // Colors are kept for a future viewer: `color rgba`, `color components` or a named `color`.
 void read_color(const FileReader& file, const YAML::Node& block, BodySpec& body) {
@@ -200,6 +223,11 @@ BodySpec read_body(const FileReader& file, const YAML::Node& block, const std::s
   } else {
     body.collision_shapes = body.visual_shapes;
   }
+
+  if (YAML::Node list = block["visual meshes"])
+    body.visual_mesh_parts = read_placed_meshes(file, list, high, "visual meshes");
+  if (YAML::Node list = block["collision meshes"])
+    body.collision_mesh_parts = read_placed_meshes(file, list, low, "collision meshes");
 
   scale_shapes(body.visual_shapes, body.scale);
   scale_shapes(body.collision_shapes, body.scale);

@@ -21,13 +21,17 @@ std::string LoadedChannels::free_name(const std::string& channel,
 void LoadedChannels::load_as_copies(const FileSpan& span, Model& model,
                                     std::vector<PendingJoint>& joints,
                                     std::vector<std::string>& copy_suffix) {
+  std::vector<JointSpec*> file_joints;
+  for (std::size_t j = span.first_joint; j < joints.size(); ++j)
+    file_joints.push_back(&joints[j].spec);
+  for (std::size_t j = span.first_model_joint; j < model.joints.size(); ++j)
+    file_joints.push_back(&model.joints[j]);
   std::unordered_set<std::string> own_bodies, own_joints;
   for (std::size_t b = span.first_body; b < model.bodies.size(); ++b)
     own_bodies.insert(model.bodies[b].channel);
   for (std::size_t s = span.first_soft_body; s < model.soft_bodies.size(); ++s)
     own_bodies.insert(model.soft_bodies[s].channel);
-  for (std::size_t j = span.first_joint; j < joints.size(); ++j)
-    own_joints.insert(joints[j].spec.channel);
+  for (const JointSpec* joint : file_joints) own_joints.insert(joint->channel);
 
   std::size_t renamed = 0;
   std::string first_example;
@@ -57,10 +61,9 @@ void LoadedChannels::load_as_copies(const FileSpan& span, Model& model,
     SoftBodySpec& soft = model.soft_bodies[s];
     rename(soft.name, soft.channel, soft.where, bodies_, own_bodies);
   }
-  for (std::size_t j = span.first_joint; j < joints.size(); ++j) {
-    JointSpec& joint = joints[j].spec;
-    std::string kept_name = joint.name;  // a joint's name is its body's business
-    rename(kept_name, joint.channel, joint.where, joints_, own_joints);
+  for (JointSpec* joint : file_joints) {
+    std::string kept_name = joint->name;  // a joint's name is its body's business
+    rename(kept_name, joint->channel, joint->where, joints_, own_joints);
   }
   if (renamed > 0)
     model.warnings.push_back(span.path + ":1:1: warning: " + std::to_string(renamed) +
@@ -72,8 +75,7 @@ void LoadedChannels::load_as_copies(const FileSpan& span, Model& model,
     bodies_.try_emplace(model.bodies[b].channel, model.bodies[b].where);
   for (std::size_t s = span.first_soft_body; s < model.soft_bodies.size(); ++s)
     bodies_.try_emplace(model.soft_bodies[s].channel, model.soft_bodies[s].where);
-  for (std::size_t j = span.first_joint; j < joints.size(); ++j)
-    joints_.try_emplace(joints[j].spec.channel, joints[j].spec.where);
+  for (const JointSpec* joint : file_joints) joints_.try_emplace(joint->channel, joint->where);
 }
 
 }  // namespace afhub::physics::adf

@@ -15,10 +15,11 @@
 
 namespace afhub::physics::adf {
 
-// What one file added to the model, from these indices on.
+// What one file added to the model, from these indices on: its joints are pending
+// (ADF, resolved once every file is read) or already in the model (URDF).
 struct FileSpan {
   std::string path;
-  std::size_t first_body = 0, first_soft_body = 0, first_joint = 0;
+  std::size_t first_body = 0, first_soft_body = 0, first_joint = 0, first_model_joint = 0;
 };
 
 class LoadedChannels {

@@ -199,6 +199,8 @@ std::size_t check_meshes(const Model& model) {
     for (const PlacedMesh& part : body.collision_mesh_parts)
       add(part.path, body.scale, body.where, "body '" + body.identifier + "'");
     add(body.visual_mesh, body.scale, body.where, "body '" + body.identifier + "' (visual)");
+    for (const PlacedMesh& part : body.visual_mesh_parts)
+      add(part.path, body.scale, body.where, "body '" + body.identifier + "' (visual)");
   }
   for (const SoftBodySpec& soft : model.soft_bodies)
     add(soft.mesh, soft.scale, soft.where, "soft body '" + soft.identifier + "'");

@@ -311,16 +311,11 @@ class UrdfReader {
         continue;
       }
       const auto& mesh = static_cast<const urdf::Mesh&>(*visual->geometry);
-      if (!body.visual_mesh.empty()) {
-        warn(link_at(link.name).line, "link '" + link.name + "': visual mesh '" + mesh.filename +
-                                          "' is not drawn: the viewer draws one mesh per link");
-        continue;
-      }
-      if (!is_identity(visual->origin))
-        warn(link_at(link.name).line, "link '" + link.name + "': the viewer draws visual mesh '" +
-                                          mesh.filename +
-                                          "' at the link frame, without its <origin>");
-      body.visual_mesh = mesh_path(mesh, link.name, "visual");
+      std::string path = mesh_path(mesh, link.name, "visual");
+      if (body.visual_mesh.empty() && body.visual_mesh_parts.empty() && is_identity(visual->origin))
+        body.visual_mesh = std::move(path);
+      else
+        body.visual_mesh_parts.push_back({std::move(path), placement(to_bt(visual->origin))});
       use_scale(mesh);
     }
     std::vector<PlacedMesh> meshes;

@@ -103,6 +103,11 @@ const char* scene_problem(const SceneDescription& scene, std::size_t bytes) noex
     if (!terminated(body.mesh)) return "SceneBody.mesh";
     if (body.shape_count > kMaxSceneShapesPerBody) return "SceneBody.shape_count";
   }
+  if (scene.mesh_part_count > kMaxSceneMeshParts) return "SceneDescription.mesh_part_count";
+  for (std::uint32_t p = 0; p < scene.mesh_part_count; ++p) {
+    if (scene.mesh_parts[p].body >= scene.body_count) return "SceneMeshPart.body";
+    if (!terminated(scene.mesh_parts[p].mesh)) return "SceneMeshPart.mesh";
+  }
   return nullptr;
 }
 

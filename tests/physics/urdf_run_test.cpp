@@ -1,11 +1,12 @@
 // A URDF robot through the tools an ADF robot goes through (issue 29): `afhub run
 // robot.urdf` publishes its links, `afhub cmd` and `afhub ctl` move a joint (read back
 // from the robot's own state), and `afhub view`'s scene lists every link, with the
-// mesh its page loads: the project's own test arm (tests/physics/urdf/arm.urdf), and
-// the UR5 when ../shared/urdf_models is there.
+// meshes its page loads, each at its <origin>: the project's own test arm
+// (tests/physics/urdf/arm.urdf), and the UR5 when ../shared/urdf_models is there.
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <regex>
@@ -38,6 +39,8 @@ struct Robot {
   std::string root, joint;         // `joint` turns about the vertical: gravity leaves it be
   std::vector<std::string> links;  // every link's channel
   std::string mesh_link, mesh_format, mesh_file;
+  // The mesh link's further visual meshes: where each sits in its frame (x, y, z).
+  std::vector<std::array<double, 3>> further_meshes = {};
 };
 
 // `afhub cmd` takes `joint` to rest at 0.5 and `afhub ctl sine` (0.3 rad, 4 s period)
@@ -108,10 +111,19 @@ void drive_and_view(const Robot& robot) {
   for (const std::string& link : robot.links) EXPECT_GE(scene_index(scene, link), 0) << link;
   const int mesh_link = scene_index(scene, robot.mesh_link);
   ASSERT_GE(mesh_link, 0);
-  EXPECT_EQ(scene.at("bodies").at(mesh_link).at("format"), robot.mesh_format);
-  const HttpReply mesh = http_request(port, "GET", "/mesh/" + std::to_string(mesh_link));
-  EXPECT_EQ(mesh.status, 200);
-  EXPECT_EQ(mesh.body, read_file(robot.mesh_file));
+  const nlohmann::json& meshes = scene.at("bodies").at(mesh_link).at("meshes");
+  ASSERT_EQ(meshes.size(), 1 + robot.further_meshes.size()) << meshes.dump();
+  EXPECT_EQ(meshes.at(0).at("format"), robot.mesh_format);
+  for (std::size_t m = 1; m < meshes.size(); ++m)
+    for (int k = 0; k < 3; ++k)
+      EXPECT_NEAR(meshes.at(m).at("position").at(k).get<double>(), robot.further_meshes[m - 1][k],
+                  1e-9)
+          << meshes.dump();
+  for (const nlohmann::json& mesh : meshes) {
+    const HttpReply file = http_request(port, "GET", "/mesh/" + mesh.at("index").dump());
+    EXPECT_EQ(file.status, 200) << mesh.dump();
+    EXPECT_EQ(file.body, read_file(robot.mesh_file)) << mesh.dump();
+  }
 }
 
 // The project's own test arm: it runs without ../shared.
@@ -126,7 +138,8 @@ TEST(UrdfRun, CmdCtlAndTheViewerDriveAndShowTheTestArm) {
                   links,
                   arm + "fore",
                   ".obj",
-                  kModels + "/meshes/cube.obj"});
+                  kModels + "/meshes/cube.obj",
+                  {{0.0, 0.0, 0.2}}});
 }
 
 // The UR5 from ../shared, without gravity: on the project's gain caps its arm falls

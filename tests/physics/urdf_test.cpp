@@ -260,6 +260,16 @@ TEST(Urdf, ConvertedAdfLoadsToTheSameRobotWithin1e9) {
     for (std::size_t i = 0; i < urdf.bodies.size(); ++i) {
       EXPECT_EQ(converted.bodies[i].channel, urdf.bodies[i].channel);
       EXPECT_EQ(converted.bodies[i].mass_kg, urdf.bodies[i].mass_kg);
+      for (const auto parts : {&BodySpec::visual_mesh_parts, &BodySpec::collision_mesh_parts}) {
+        const std::vector<PlacedMesh>&a_parts = urdf.bodies[i].*parts,
+              &b_parts = converted.bodies[i].*parts;
+        ASSERT_EQ(b_parts.size(), a_parts.size()) << urdf.bodies[i].name;
+        for (std::size_t p = 0; p < a_parts.size(); ++p) {
+          EXPECT_EQ(b_parts[p].path, a_parts[p].path);
+          EXPECT_EQ(b_parts[p].offset.position_m.z, a_parts[p].offset.position_m.z);
+          EXPECT_EQ(b_parts[p].offset.rpy_rad.z, a_parts[p].offset.rpy_rad.z);
+        }
+      }
       const Pose pa = a.body_pose(i), pb = b.body_pose(i);
       EXPECT_NEAR(pa.position_m.x, pb.position_m.x, 1e-9) << urdf.bodies[i].name;
       EXPECT_NEAR(pa.position_m.y, pb.position_m.y, 1e-9) << urdf.bodies[i].name;
@@ -286,6 +296,23 @@ TEST(Urdf, ChannelsAreNamedFromRobotAndLinks) {
   EXPECT_EQ(model.descendant_joints[0].size(), 5u);
 }
 
+// As an ADF file loaded twice: the second copy's channels get an index, its joints too,
+// and it simulates (its joints on its own bodies).
+TEST(Urdf, TheSameUrdfTwiceLoadsAsACopy) {
+  Model model;
+  load_adf_files_into({kModels + "/arm.urdf", kModels + "/arm.urdf"}, model, {});
+  ASSERT_EQ(model.bodies.size(), 12u);
+  ASSERT_EQ(model.joints.size(), 10u);
+  EXPECT_EQ(model.bodies[6].channel, "ambf/env/test_arm/base1");
+  EXPECT_EQ(model.joints[5].channel, "ambf/env/test_arm/yaw1");
+  EXPECT_EQ(model.joints[5].name, "yaw") << "a joint keeps its name";
+  EXPECT_EQ(model.joints[5].parent, 6);
+  EXPECT_EQ(model.joints[5].child, 7);
+  Simulation sim(model, 0.001);
+  sim.step();
+  EXPECT_TRUE(std::isfinite(sim.joint_position(5)));
+}
+
 TEST(Urdf, LinksJointsAndRootMeanWhatUrdfSays) {
   const Model model = load(kModels + "/arm.urdf");
   const BodySpec& base = model.bodies[0];
@@ -302,6 +329,10 @@ TEST(Urdf, LinksJointsAndRootMeanWhatUrdfSays) {
   const BodySpec& fore = model.bodies[2];
   EXPECT_EQ(fore.scale, 0.05);
   EXPECT_TRUE(fore.visual_mesh.ends_with("meshes/cube.obj"));
+  ASSERT_EQ(fore.visual_mesh_parts.size(), 1u) << "its second <visual>, at its <origin>";
+  EXPECT_TRUE(fore.visual_mesh_parts[0].path.ends_with("meshes/cube.obj"));
+  EXPECT_EQ(fore.visual_mesh_parts[0].offset.position_m.z, 0.2);
+  EXPECT_NEAR(fore.visual_mesh_parts[0].offset.rpy_rad.z, 0.5, 1e-12);
   EXPECT_TRUE(fore.collision_mesh.ends_with("meshes/cube.obj"));
   EXPECT_EQ(model.bodies[5].mass_kg, 1e-3) << "a link without <inertial> is a frame";
   EXPECT_EQ(model.joints[0].type, JointType::kContinuous);
@@ -491,11 +522,20 @@ TEST(Urdf, SeveralPlacedCollisionMeshesCollideAsOneCompound) {
   EXPECT_NEAR(pose.position_m.z, -0.45, 5e-3);  // the cubes' bottoms on the floor
   EXPECT_NEAR(pose.position_m.x, 0.0, 5e-3);
   EXPECT_LT(angle_between(to_kdl(pose.orientation), KDL::Rotation::Identity()), 1e-2);
-  // ADF takes one collision mesh per body: convert says what it leaves out.
+  // Converted (the floor and the block in one file), the block keeps its placed meshes
+  // (afhub's `collision meshes` key) and lands the same way.
   std::vector<std::string> lost;
-  adf_text(model, lost);
-  ASSERT_EQ(lost.size(), 1u);
-  EXPECT_NE(lost[0].find("link 'block' collides as 2 placed meshes"), std::string::npos) << lost[0];
+  const WrittenUrdf adf("block.yaml", adf_text(model, lost));
+  EXPECT_TRUE(lost.empty());
+  const Model converted = load_adf_files({adf.path});
+  ASSERT_EQ(converted.bodies.size(), 2u);
+  const BodySpec& read_back = converted.bodies[1];
+  ASSERT_EQ(read_back.collision_mesh_parts.size(), 2u);
+  EXPECT_EQ(read_back.collision_mesh_parts[1].path, spec.collision_mesh_parts[1].path);
+  EXPECT_EQ(read_back.collision_mesh_parts[1].offset.position_m.x, -0.3);
+  Simulation again(converted, 0.001);
+  for (int step = 0; step < 3000; ++step) again.step();
+  EXPECT_NEAR(again.body_pose(1).position_m.z, pose.position_m.z, 1e-6);
 }
 
 TEST(Urdf, PackagesResolveThroughPackagePathAndRosPackagePath) {

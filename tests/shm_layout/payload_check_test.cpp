@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -260,6 +261,24 @@ TEST(PayloadCheck, SceneDescriptionsHoldTheirBodiesAndTerminateTheirPaths) {
             PayloadError::kCountTooLarge);
   EXPECT_STREQ(field, "SceneBody.shape_count");
   scene->bodies[0].shape_count = 0;
+  // Further meshes: within their capacity, each of a listed body, its path terminated.
+  scene->mesh_part_count = 1;
+  scene->mesh_parts[0].body = 1;
+  EXPECT_EQ(check_payload(scene.get(), bytes, PayloadKind::kSceneDescription), PayloadError::kNone);
+  const std::pair<std::function<void()>, const char*> bad_parts[] = {
+      {[&] { scene->mesh_part_count = kMaxSceneMeshParts + 1; },
+       "SceneDescription.mesh_part_count"},
+      {[&] { scene->mesh_parts[0].body = 2; }, "SceneMeshPart.body"},
+      {[&] { scene->mesh_parts[0].mesh.fill('m'); }, "SceneMeshPart.mesh"}};
+  for (const auto& [spoil, name] : bad_parts) {
+    spoil();
+    EXPECT_EQ(check_payload(scene.get(), bytes, PayloadKind::kSceneDescription, &field),
+              PayloadError::kCountTooLarge);
+    EXPECT_STREQ(field, name);
+    scene->mesh_part_count = 1;
+    scene->mesh_parts[0] = SceneMeshPart{};
+  }
+  scene->mesh_part_count = 0;
   scene->camera_count = kMaxWorldObjects + 1;
   EXPECT_EQ(check_payload(scene.get(), bytes, PayloadKind::kSceneDescription, &field),
             PayloadError::kCountTooLarge);

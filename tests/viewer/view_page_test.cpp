@@ -463,6 +463,55 @@ TEST_F(ViewSoftBodyTest, TheClothIsDrawnAndItsNodesMoveAsItFalls) {
   expect_clean_console();
 }
 
+// The project's URDF test arm: its link 'fore' has two visual meshes, the second at
+// an <origin> (0, 0, 0.2, yaw 0.5), both a unit cube scaled by 0.05.
+class ViewUrdfTest : public ViewPageTest {
+ protected:
+  static void SetUpTestSuite() {
+    char pattern[] = "/tmp/afhub_view_urdf_test_XXXXXX";
+    ASSERT_NE(mkdtemp(pattern), nullptr);
+    dir_ = pattern;
+    physics_ = std::make_unique<ScopedProcess>(
+        spawn_afhub({"run", std::string(AFHUB_URDF_TEST_MODELS) + "/arm.urdf"}, dir_ + "/run.log"));
+    connect_to_hub("viewurdftest", HubPolicy::kRequire);
+    base_ = std::make_unique<BodyClient>("ambf/env/test_arm/base");
+    ASSERT_TRUE(
+        wait_until([] { return base_->latest_state() != nullptr; }, std::chrono::seconds(20)))
+        << read_file(dir_ + "/run.log");
+    read_only_ = start_view({});
+    browser_ = std::make_unique<Browser>(dir_);
+    ASSERT_TRUE(browser_->ready()) << browser_->problem();
+  }
+};
+
+TEST_F(ViewUrdfTest, EveryVisualMeshIsDrawnAtItsOriginAndScale) {
+  open(read_only_.url + "/");
+  ASSERT_TRUE(wait_until([] { return browser_->evaluate("window.afhub.meshesLoaded") == 2; },
+                         std::chrono::seconds(10)))
+      << "meshes loaded: " << browser_->evaluate("window.afhub.meshesLoaded").dump();
+  // Each mesh's box in the link's frame (the link's world matrix taken out for the
+  // measure): its centre and its size.
+  const nlohmann::json boxes = browser_->evaluate(R"((() => {
+      const fore = bodies.find((b) => b.userData.channel === 'ambf/env/test_arm/fore');
+      fore.matrixWorld.identity();
+      const boxes = fore.children.map((holder) => {
+        const box = new THREE.Box3().setFromObject(holder);
+        const c = box.getCenter(new THREE.Vector3()), s = box.getSize(new THREE.Vector3());
+        return [c.x, c.y, c.z, s.x, s.y, s.z];
+      });
+      fore.updateMatrixWorld(true);
+      return boxes;
+    })())");
+  ASSERT_TRUE(boxes.is_array() && boxes.size() == 2U) << boxes.dump();
+  const double turned_width = 0.05 * (std::cos(0.5) + std::sin(0.5));  // yawed by 0.5 rad
+  const double expected[2][6] = {{0, 0, 0, 0.05, 0.05, 0.05},
+                                 {0, 0, 0.2, turned_width, turned_width, 0.05}};
+  for (int m = 0; m < 2; ++m)
+    for (int k = 0; k < 6; ++k)
+      EXPECT_NEAR(number_of(boxes.at(m).at(k)), expected[m][k], 1e-4) << boxes.dump();
+  expect_clean_console();
+}
+
 // AMBF's own world file and input_devices.yaml (../shared/ambf_models): its devices
 // pair "camera1", the world file's block key of the camera named "default_camera".
 class ViewAmbfPairingTest : public ViewPageTest {

@@ -494,6 +494,9 @@ TEST_F(ViewTest, AScenesMeshesAreServedOnlyAsMeshFilesWithinItsModelFolders) {
     set_name(scene->bodies[b].channel, "crafted/body" + std::to_string(b));
     set_name(scene->bodies[b].mesh, meshes[b]);
   }
+  // The same files again as body 0's further meshes: /mesh/6 to /mesh/11.
+  scene->mesh_part_count = static_cast<std::uint32_t>(meshes.size());
+  for (std::size_t p = 0; p < meshes.size(); ++p) set_name(scene->mesh_parts[p].mesh, meshes[p]);
   scene->model_folder_count = 1;
   set_name(scene->model_folders[0], model);
   writer.publish(scene);
@@ -506,17 +509,22 @@ TEST_F(ViewTest, AScenesMeshesAreServedOnlyAsMeshFilesWithinItsModelFolders) {
                5;
       },
       std::chrono::seconds(10)));
-  const HttpReply part = http_request(view.port, "GET", "/mesh/0");
-  EXPECT_EQ(part.status, 200);
-  EXPECT_EQ(part.body, stl_);
-  for (std::size_t b = 1; b < meshes.size(); ++b) {
-    const HttpReply reply = http_request(view.port, "GET", "/mesh/" + std::to_string(b));
-    EXPECT_EQ(reply.status, 403) << meshes[b] << ": " << reply.body;
-    EXPECT_FALSE(contains(reply.body, "PRIVATE KEY")) << meshes[b];
-    EXPECT_FALSE(contains(reply.body, "PHOTO BYTES")) << meshes[b];
-    EXPECT_FALSE(contains(reply.body, "root:")) << meshes[b];
+  for (std::size_t m = 0; m < 2 * meshes.size(); ++m) {
+    const std::string& file = meshes[m % meshes.size()];
+    const HttpReply reply = http_request(view.port, "GET", "/mesh/" + std::to_string(m));
+    if (m % meshes.size() == 0) {
+      EXPECT_EQ(reply.status, 200) << m;
+      EXPECT_EQ(reply.body, stl_) << m;
+      continue;
+    }
+    EXPECT_EQ(reply.status, 403) << file << ": " << reply.body;
+    EXPECT_FALSE(contains(reply.body, "PRIVATE KEY")) << file;
+    EXPECT_FALSE(contains(reply.body, "PHOTO BYTES")) << file;
+    EXPECT_FALSE(contains(reply.body, "root:")) << file;
     EXPECT_FALSE(contains(reply.body, dir_)) << "a reply names no path";
   }
+  EXPECT_EQ(http_request(view.port, "GET", "/mesh/" + std::to_string(2 * meshes.size())).status,
+            404);
 }
 
 // The resident memory of a process, in kB (0 when unknown).

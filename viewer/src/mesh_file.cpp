@@ -59,9 +59,9 @@ void MeshFile::open(const ViewScene& scene, std::string_view index_text) {
   const auto [at, error] = std::from_chars(index_text.data(), end, index);
   if (index_text.empty() || error != std::errc() || at != end || index >= scene.meshes.size() ||
       scene.meshes[index].empty())
-    return refuse(404, "not a mesh the scene lists: /mesh/N serves scene body N's mesh");
-  // The reply names the body, never the path: the page learns no path of this machine.
-  const std::string body = "body " + std::to_string(index) + "'s mesh ";
+    return refuse(404, "not a mesh the scene lists: /mesh/N serves the N-th mesh of /scene.json");
+  // The reply names the mesh's number, never its path: the page learns no path of this machine.
+  const std::string body = "mesh " + std::to_string(index) + " ";
   if (!is_mesh_extension(scene.meshes[index]))
     return refuse(403, body +
                            "is not of a mesh format (.stl, .obj, .dae, .ply, .off, .3ds, .fbx, "

@@ -1,4 +1,4 @@
-// The one kind of file /mesh/N reads from the disk: the mesh a scene body lists, when it
+// The one kind of file /mesh/N reads from the disk: the N-th mesh a scene lists, when it
 // is a regular file (no symlink at the moment it is opened), with a mesh format's
 // extension, within a model folder the scene lists. Any member of the hub's group can
 // publish a scene, so the scene's paths are not trusted to name only meshes.
@@ -19,7 +19,7 @@ bool is_mesh_extension(std::string_view path);
 
 class MeshFile {
  public:
-  // Opens the mesh scene body `index_text` ("3") lists; check problem().
+  // Opens the scene's mesh number `index_text` ("3"); check problem().
   MeshFile(const ViewScene& scene, std::string_view index_text);
   ~MeshFile();
   MeshFile(const MeshFile&) = delete;

@@ -54,6 +54,17 @@ const char* shape_name(SceneShapeKind kind) {
   return "box";
 }
 
+// One of a body's meshes: what /mesh/`index` serves. The page learns a mesh's
+// format and name, never its path on this machine.
+void mesh(JsonWriter& json, std::size_t index, const char* path, const Pose& offset) {
+  const std::filesystem::path file(path);
+  json.begin_object().key("index").value(static_cast<unsigned long long>(index));
+  json.key("mesh").value(file.filename().string());
+  json.key("format").value(file.extension().string());
+  pose(json, offset);
+  json.end_object();
+}
+
 }  // namespace
 
 ViewScene view_scene_of(const SceneDescription& scene, std::uint32_t generation,
@@ -65,15 +76,22 @@ ViewScene view_scene_of(const SceneDescription& scene, std::uint32_t generation,
   views(json, "lights", scene.lights, scene.light_count);
   views(json, "cameras", scene.cameras, scene.camera_count);
   json.key("bodies").begin_array();
+  // /mesh/N: body N's first mesh, then mesh part N - body_count.
+  for (std::uint32_t b = 0; b < scene.body_count; ++b)
+    out.meshes.emplace_back(scene.bodies[b].mesh.data());
+  for (std::uint32_t p = 0; p < scene.mesh_part_count; ++p)
+    out.meshes.emplace_back(scene.mesh_parts[p].mesh.data());
   for (std::uint32_t b = 0; b < scene.body_count; ++b) {
     const SceneBody& body = scene.bodies[b];
     out.channels.emplace_back(body.channel.data());
-    out.meshes.emplace_back(body.mesh.data());
     json.begin_object().key("channel").value(body.channel.data());
-    // The page learns a mesh's format and name, never its path on this machine.
-    const std::filesystem::path mesh(body.mesh.data());
-    json.key("mesh").value(mesh.filename().string());
-    json.key("format").value(mesh.extension().string());
+    json.key("meshes").begin_array();
+    if (body.mesh[0] != '\0') mesh(json, b, body.mesh.data(), body.mesh_offset);
+    for (std::uint32_t p = 0; p < scene.mesh_part_count; ++p)
+      if (scene.mesh_parts[p].body == b)
+        mesh(json, scene.body_count + p, scene.mesh_parts[p].mesh.data(),
+             scene.mesh_parts[p].offset);
+    json.end_array();
     json.key("color").numbers(body.color_rgba, 4);
     json.key("scale").value(body.scale);
     json.key("publishes").value(body.publishes != 0);

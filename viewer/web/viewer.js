@@ -46,25 +46,34 @@ function shapeMesh(shape, material) {
   return holder;
 }
 
-function meshGeometry(index, body, material, group) {
-  const format = body.format.toLowerCase();
-  const url = '/mesh/' + index;
+// One of a body's meshes (scene.json's body.meshes[i]), scaled by the body's scale and
+// placed at its offset in the body's frame.
+function meshGeometry(mesh, scale, material, group) {
+  const format = mesh.format.toLowerCase();
+  const url = '/mesh/' + mesh.index;
+  const holder = new THREE.Group();
+  holder.position.copy(vec(mesh.position));
+  const q = mesh.orientation;
+  holder.quaternion.set(q[0], q[1], q[2], q[3]);
+  holder.scale.setScalar(scale);
+  group.add(holder);
   const done = () => { window.afhub.meshesLoaded++; };
   if (format === '.stl') {
     new THREE.STLLoader().load(url, (geometry) => {
       geometry.computeVertexNormals();
-      group.add(new THREE.Mesh(geometry, material));
+      holder.add(new THREE.Mesh(geometry, material));
       done();
     });
   } else if (format === '.obj') {
     new THREE.OBJLoader().load(url, (object) => {
       object.traverse((child) => { if (child.isMesh) child.material = material; });
-      group.add(object);
+      holder.add(object);
       done();
     });
   } else {
-    // A format the page cannot read: a small marker where the body is.
-    group.add(new THREE.Mesh(new THREE.SphereBufferGeometry(0.02, 8, 6), material));
+    // A format the page cannot read: a small marker where the mesh is (not scaled).
+    holder.scale.setScalar(1);
+    holder.add(new THREE.Mesh(new THREE.SphereBufferGeometry(0.02, 8, 6), material));
   }
 }
 
@@ -156,9 +165,8 @@ async function loadScene() {
     const c = body.color;
     const material = new THREE.MeshPhongMaterial({color: new THREE.Color(c[0], c[1], c[2]),
         opacity: c[3], transparent: c[3] < 1});
-    if (body.mesh) meshGeometry(index, body, material, group);
-    for (const shape of body.shapes) group.add(shapeMesh(shape, material));
-    group.scale.setScalar(body.scale);
+    for (const mesh of body.meshes) meshGeometry(mesh, body.scale, material, group);
+    for (const shape of body.shapes) group.add(shapeMesh(shape, material));  // in metres
     group.position.copy(vec(body.position));
     const q = body.orientation;
     group.quaternion.set(q[0], q[1], q[2], q[3]);

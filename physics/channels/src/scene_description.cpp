@@ -65,6 +65,38 @@ void fill_view(const WorldObjectSpec& spec, const Pose& pose, SceneView& view) {
   view.up = rotate(pose.orientation, {0.0, 0.0, 1.0});
 }
 
+// The body's visual meshes: its first in its SceneBody, the others in the scene's
+// mesh parts while they last.
+void add_meshes(const BodySpec& spec, std::uint32_t index, SceneDescription& scene,
+                std::vector<std::string>& warnings) {
+  std::vector<PlacedMesh> meshes;
+  if (!spec.visual_mesh.empty()) meshes.push_back({spec.visual_mesh, {}});
+  meshes.insert(meshes.end(), spec.visual_mesh_parts.begin(), spec.visual_mesh_parts.end());
+  SceneBody& body = scene.bodies[index];
+  for (const PlacedMesh& mesh : meshes) {
+    std::error_code ignored;
+    const std::string path = std::filesystem::absolute(mesh.path, ignored).string();
+    const Pose offset{mesh.offset.position_m, rpy_to_quaternion(mesh.offset.rpy_rad)};
+    if (path.size() >= kScenePathBufferSize) {
+      warnings.push_back(spec.where.str() + ": warning: '" + spec.name + "': mesh path " + path +
+                         " is longer than a viewer takes (" +
+                         std::to_string(kScenePathBufferSize - 1) + " characters); not drawn");
+    } else if (body.mesh[0] == '\0') {
+      copy_text(path, body.mesh);
+      body.mesh_offset = offset;
+    } else if (scene.mesh_part_count == kMaxSceneMeshParts) {
+      warnings.push_back(spec.where.str() + ": warning: '" + spec.name + "': a viewer draws " +
+                         std::to_string(kMaxSceneMeshParts) +
+                         " further visual meshes in a scene; mesh " + path + " is not drawn");
+    } else {
+      SceneMeshPart& part = scene.mesh_parts[scene.mesh_part_count++];
+      part.body = index;
+      part.offset = offset;
+      copy_text(path, part.mesh);
+    }
+  }
+}
+
 // The deepest folder holding both `model_file` and `mesh`: the model's tree, where a
 // viewer may serve its meshes from (AMBF's models keep theirs in ../../../meshes).
 std::filesystem::path model_folder(const std::string& model_file, const std::string& mesh) {
@@ -85,6 +117,10 @@ void fill_model_folders(const Model& model, SceneDescription& scene,
   for (std::size_t b = 0; b < scene.body_count; ++b)
     if (scene.bodies[b].mesh[0] != '\0')
       folders.push_back(model_folder(model.bodies[b].where.file, scene.bodies[b].mesh.data()));
+  for (std::size_t p = 0; p < scene.mesh_part_count; ++p) {
+    const SceneMeshPart& part = scene.mesh_parts[p];
+    folders.push_back(model_folder(model.bodies[part.body].where.file, part.mesh.data()));
+  }
   std::sort(folders.begin(), folders.end());
   std::vector<std::string> listed;
   scene.model_folder_count = 0;
@@ -141,20 +177,13 @@ void fill_scene(const Simulation& sim, SceneDescription& scene,
                        " bodies; a viewer does not draw the other " +
                        std::to_string(model.bodies.size() - count));
   scene.body_count = static_cast<std::uint32_t>(count);
+  scene.mesh_part_count = 0;
   for (std::size_t b = 0; b < count; ++b) {
     const BodySpec& spec = model.bodies[b];
     SceneBody& body = scene.bodies[b];
     body = SceneBody{};
     copy_text(spec.channel, body.channel);  // checked at load to fit a channel
-    if (!spec.visual_mesh.empty()) {
-      std::error_code ignored;
-      const std::string path = std::filesystem::absolute(spec.visual_mesh, ignored).string();
-      if (!copy_text(path, body.mesh))
-        warnings.push_back(spec.where.str() + ": warning: '" + spec.name +
-                           "': its mesh path is longer than a viewer takes (" +
-                           std::to_string(kScenePathBufferSize - 1) +
-                           " characters); a viewer draws the body as a marker");
-    }
+    add_meshes(spec, static_cast<std::uint32_t>(b), scene, warnings);
     if (spec.color_rgba)
       for (int c = 0; c < 4; ++c) body.color_rgba[c] = static_cast<float>((*spec.color_rgba)[c]);
     body.scale = spec.scale;

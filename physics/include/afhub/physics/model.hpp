@@ -73,14 +73,17 @@ struct BodySpec {
   std::optional<Vec3> inertia_kgm2;
   std::optional<Placement> inertial_offset;
   Placement location;
-  std::string visual_mesh;  // resolved path, empty when shapes are used
+  std::string visual_mesh;  // resolved path, at the body's frame; empty when shapes are used
+  // Further visual meshes, each at its offset (a URDF link's <visual> elements away from
+  // the link frame or beyond its first; ADF's `visual meshes`, an afhub extension).
+  std::vector<PlacedMesh> visual_mesh_parts;
   std::vector<ShapeSpec> visual_shapes;
   std::string collision_mesh;  // resolved path; empty when shapes are used
   CollisionMeshType collision_mesh_type = CollisionMeshType::kTrimesh;
   std::vector<ShapeSpec> collision_shapes;  // empty: the collision mesh, else the visual shapes
   // Further collision meshes, each at its offset (a URDF link's several <collision>
-  // elements): with any, the body collides as one compound of the collision mesh,
-  // these and the collision shapes.
+  // elements; ADF's `collision meshes`, an afhub extension): with any, the body
+  // collides as one compound of the collision mesh, these and the collision shapes.
   std::vector<PlacedMesh> collision_mesh_parts;
   std::optional<Placement> collision_offset;
   double scale = 1.0;

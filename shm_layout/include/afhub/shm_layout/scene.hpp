@@ -1,6 +1,6 @@
 // SceneDescription: what a viewer needs to draw a world, published once by the
 // physics (keep-last history, as the directory), on {"afhub", <world instance>,
-// "scene"}: per body its channel, visual mesh (an absolute path) or primitive
+// "scene"}: per body its channel, visual meshes (absolute paths, placed) or primitive
 // shapes, scale and colour; the world's lights and cameras; the folders of the models
 // it loaded (a viewer serves no mesh outside them). Poses travel in the
 // body states, the world state and the viewer's pose feed (scene_poses.hpp), never
@@ -27,6 +27,11 @@ inline constexpr std::size_t kScenePathBufferSize = 512;
 // physics loaded; `afhub run` of a launch file loads a few.
 inline constexpr std::size_t kMaxSceneModelFolders = 16;
 
+// Visual meshes beyond each body's first (a URDF link with several <visual> elements),
+// in all: robots with such links have a few; 64 entries cost 37 KB in every scene
+// chunk. Further ones are left out of the scene and said once by the physics.
+inline constexpr std::size_t kMaxSceneMeshParts = 64;
+
 // Primitive shapes drawn for one body (a compound shape lists several); AMBF's
 // models use one, generated ones a few.
 inline constexpr std::size_t kMaxSceneShapesPerBody = 8;
@@ -50,13 +55,22 @@ struct SceneShape {
 struct SceneBody {
   std::array<char, kChannelNameBufferSize> channel{};  // its state's channel; NUL-terminated
   std::array<char, kScenePathBufferSize> mesh{};       // absolute path, or "" for shapes
+  Pose mesh_offset;                                    // where `mesh` sits in the body's frame
   std::array<float, 4> color_rgba{0.7F, 0.7F, 0.7F, 1.0F};
-  double scale{1.0};
-  Pose pose;  // where it was loaded: the pose of a body that publishes no state (passive)
+  double scale{1.0};  // of its meshes (its shapes' sizes are in metres)
+  Pose pose;          // where it was loaded: the pose of a body that publishes no state (passive)
   std::uint8_t publishes{1};  // 0: passive, drawn at `pose`
   std::uint8_t reserved[3]{};
   std::uint32_t shape_count{0};  // entries [0, shape_count) of `shapes`
   std::array<SceneShape, kMaxSceneShapesPerBody> shapes{};
+};
+
+// A further visual mesh of body `body`, drawn with it as its first mesh is.
+struct SceneMeshPart {
+  std::uint32_t body{0};  // an index into SceneDescription.bodies
+  std::uint32_t reserved{0};
+  Pose offset;                                    // in the body's frame
+  std::array<char, kScenePathBufferSize> mesh{};  // absolute path, NUL-terminated
 };
 
 // A world file's light or camera: where it is and where it looks, in the world
@@ -92,6 +106,9 @@ struct SceneDescription {
   std::uint32_t model_folder_count{0};
   std::uint32_t reserved_folders{0};
   std::array<std::array<char, kScenePathBufferSize>, kMaxSceneModelFolders> model_folders{};
+  std::uint32_t mesh_part_count{0};  // entries [0, mesh_part_count) of `mesh_parts`
+  std::uint32_t reserved_parts{0};
+  std::array<SceneMeshPart, kMaxSceneMeshParts> mesh_parts{};
   std::uint32_t body_count{0};
   std::uint32_t reserved{0};
   std::array<SceneBody, kMaxSceneBodies> bodies{};  // last: sized by body_count

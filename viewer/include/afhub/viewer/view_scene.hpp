@@ -15,7 +15,9 @@ namespace afhub::viewer {
 struct ViewScene {
   std::uint32_t generation = 0;       // counts the descriptions the viewer read: a new one, reload
   std::vector<std::string> channels;  // per body, its state channel
-  std::vector<std::string> meshes;    // per body, its mesh's absolute path or ""
+  // /mesh/N's files, absolute paths: per body its first mesh (or ""), then the
+  // scene's further mesh parts
+  std::vector<std::string> meshes;
   std::vector<std::string> model_folders;  // the folders meshes may be served from
   std::vector<std::string> soft_channels;  // per soft body, its channel
   std::string json;                        // what /scene.json serves
