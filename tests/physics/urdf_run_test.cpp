@@ -1,8 +1,9 @@
 // A URDF robot through the tools an ADF robot goes through (issue 29): `afhub run
-// robot.urdf` publishes its links, `afhub cmd` and `afhub ctl` move a joint (read back
-// from the robot's own state), and `afhub view`'s scene lists every link, with the
-// meshes its page loads, each at its <origin>: the project's own test arm
-// (tests/physics/urdf/arm.urdf), and the UR5 when ../shared/urdf_models is there.
+// robot.urdf` publishes its links, `afhub ls` and `echo` show them, `afhub cmd` and
+// `afhub ctl` move a joint (read back from the robot's own state), and `afhub view`'s
+// scene lists every link, with the meshes its page loads, each at its <origin>: the
+// project's own test arm (tests/physics/urdf/arm.urdf), and the UR5 when
+// ../shared/urdf_models is there.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -56,6 +57,19 @@ void drive_and_view(const Robot& robot) {
   ASSERT_TRUE(wait_until([&] { return root.latest_state() != nullptr; }, 30s)) << read_file(log);
   const std::size_t joint = root.joint_index(robot.joint);
   auto joint_at = [&] { return root.latest_state()->joints[joint].position; };
+
+  // `afhub ls` lists every link, and `afhub echo` prints the root's state with its joints.
+  const RunResult ls = run_afhub({"ls", "--json"});
+  ASSERT_EQ(ls.exit_code, 0) << ls.err;
+  const nlohmann::json listed = parse_json(ls.out);
+  for (const std::string& link : robot.links)
+    EXPECT_TRUE(std::any_of(listed.begin(), listed.end(),
+                            [&](const nlohmann::json& entry) { return entry.at("body") == link; }))
+        << link << " is not in `afhub ls`: " << ls.out;
+  const RunResult echo = run_afhub({"echo", robot.root, "-n", "1", "--json"});
+  ASSERT_EQ(echo.exit_code, 0) << echo.err;
+  const nlohmann::json names = parse_json(echo.out).at("joint_names");
+  EXPECT_NE(std::find(names.begin(), names.end(), robot.joint), names.end()) << echo.out;
 
   {
     ScopedProcess cmd(spawn_afhub({"cmd", robot.root, "--joint", robot.joint + "=0.5"}));

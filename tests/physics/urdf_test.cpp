@@ -16,6 +16,7 @@
 
 #include "afhub/physics/adf_loader.hpp"
 #include "afhub/physics/adf_writer.hpp"
+#include "afhub/physics/scene_loader.hpp"
 #include "afhub/physics/simulation.hpp"
 #include "afhub/physics/urdf_loader.hpp"
 #include "afhub/shm_layout/error.hpp"
@@ -38,6 +39,18 @@ Model load(const std::string& path, const UrdfOptions& options = {}) {
   load_adf_files_into({path}, model, options);
   return model;
 }
+
+// A model file (URDF, ADF, launch) written to a temporary file, removed when the test ends.
+struct WrittenFile {
+  WrittenFile(const std::string& name, const std::string& text)
+      : path((fs::temp_directory_path() / ("afhub_urdf_test_" + name)).string()) {
+    std::ofstream(path) << text;
+  }
+  ~WrittenFile() { fs::remove(path); }
+  WrittenFile(const WrittenFile&) = delete;
+  WrittenFile& operator=(const WrittenFile&) = delete;
+  const std::string path;
+};
 
 std::string load_error(const std::string& path, const UrdfOptions& options = {}) {
   try {
@@ -296,6 +309,28 @@ TEST(Urdf, ChannelsAreNamedFromRobotAndLinks) {
   EXPECT_EQ(model.descendant_joints[0].size(), 5u);
 }
 
+// A launch file listing a URDF arm beside an ADF gripper, with a world file and the
+// arm placed by `at:`: one scene, as AMBF's launch files make with ADF files alone.
+TEST(Urdf, ALaunchFileLoadsAUrdfBesideAdfAndAWorld) {
+  const std::string examples = AFHUB_EXAMPLE_MODELS;
+  const WrittenFile launch("launch.yaml",
+                           "world config: " + examples + "/world.yaml\nmultibody configs:\n  - " +
+                               kModels + "/arm.urdf\n  - " + examples + "/gripper.yaml\nat:\n  " +
+                               kModels + "/arm.urdf: [1, 2, 0]\n");
+  SceneRequest request;
+  request.launch_file = launch.path;
+  request.launch_indices = {0, 1};
+  const Model model = load_scene(request);
+  ASSERT_EQ(model.bodies.size(), 10u) << "the world's floor, 6 links, the gripper's 3 bodies";
+  EXPECT_EQ(model.bodies[0].channel, "afhub/env/floor");
+  EXPECT_EQ(model.bodies[1].channel, "ambf/env/test_arm/base");
+  EXPECT_EQ(model.bodies[7].channel, "afhub/gripper/palm");
+  EXPECT_EQ(model.world.lights.size(), 2u) << "the world file's";
+  const Simulation sim(model, 0.001);
+  EXPECT_NEAR(sim.body_pose(1).position_m.x, 1.0, 1e-12);
+  EXPECT_NEAR(sim.body_pose(1).position_m.y, 2.0, 1e-12);
+}
+
 // As an ADF file loaded twice: the second copy's channels get an index, its joints too,
 // and it simulates (its joints on its own bodies).
 TEST(Urdf, TheSameUrdfTwiceLoadsAsACopy) {
@@ -425,18 +460,6 @@ TEST(Urdf, BadFilesGetALocatedErrorNamingTheProblem) {
   EXPECT_NE(given.find("no package 'no_such_package'"), std::string::npos) << given;
 }
 
-// A URDF written to a temporary file, removed when the test ends.
-struct WrittenUrdf {
-  WrittenUrdf(const std::string& name, const std::string& text)
-      : path((fs::temp_directory_path() / ("afhub_urdf_test_" + name)).string()) {
-    std::ofstream(path) << text;
-  }
-  ~WrittenUrdf() { fs::remove(path); }
-  WrittenUrdf(const WrittenUrdf&) = delete;
-  WrittenUrdf& operator=(const WrittenUrdf&) = delete;
-  const std::string path;
-};
-
 // Each mistake at its own line and column, with what is wrong: XML that is not
 // well-formed (TinyXML's place) and what urdfdom refuses (at the link or joint it
 // names, down to the element holding the value it quotes).
@@ -474,12 +497,12 @@ TEST(Urdf, MalformedAndInvalidFilesAreErrorsAtTheirLine) {
   };
   for (const Bad& bad : cases) {
     SCOPED_TRACE(bad.name);
-    const WrittenUrdf file(bad.name, head + bad.body + "</robot>\n");
+    const WrittenFile file(bad.name, head + bad.body + "</robot>\n");
     const std::string error = load_error(file.path);
     EXPECT_TRUE(error.starts_with(file.path + bad.where)) << error;
     EXPECT_NE(error.find(bad.what), std::string::npos) << error;
   }
-  const WrittenUrdf not_robot("not_robot.urdf", "<?xml version=\"1.0\"?>\n<model name=\"m\"/>\n");
+  const WrittenFile not_robot("not_robot.urdf", "<?xml version=\"1.0\"?>\n<model name=\"m\"/>\n");
   EXPECT_EQ(load_error(not_robot.path),
             not_robot.path +
                 ":2:1: error: the top element is not <robot name=\"...\">; is this "
@@ -496,11 +519,11 @@ TEST(Urdf, SeveralPlacedCollisionMeshesCollideAsOneCompound) {
     return "<collision><origin xyz=\"" + xyz + "\"/><geometry><mesh filename=\"" + cube +
            "\" scale=\"0.1 0.1 0.1\"/></geometry></collision>";
   };
-  const WrittenUrdf floor("floor.urdf",
+  const WrittenFile floor("floor.urdf",
                           "<robot name=\"ground\"><link name=\"world\"><collision><origin "
                           "xyz=\"0 0 -1.1\"/><geometry><box size=\"3 3 0.2\"/></geometry>"
                           "</collision></link></robot>\n");
-  const WrittenUrdf block(
+  const WrittenFile block(
       "block.urdf",
       "<robot name=\"block\"><link name=\"block\"><inertial><mass value=\"1\"/>"
       "<inertia ixx=\"0.01\" ixy=\"0\" ixz=\"0\" iyy=\"0.01\" iyz=\"0\" "
@@ -525,7 +548,7 @@ TEST(Urdf, SeveralPlacedCollisionMeshesCollideAsOneCompound) {
   // Converted (the floor and the block in one file), the block keeps its placed meshes
   // (afhub's `collision meshes` key) and lands the same way.
   std::vector<std::string> lost;
-  const WrittenUrdf adf("block.yaml", adf_text(model, lost));
+  const WrittenFile adf("block.yaml", adf_text(model, lost));
   EXPECT_TRUE(lost.empty());
   const Model converted = load_adf_files({adf.path});
   ASSERT_EQ(converted.bodies.size(), 2u);
