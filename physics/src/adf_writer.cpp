@@ -68,13 +68,15 @@ void write_shapes(std::ostream& out, const char* key, const std::vector<ShapeSpe
   for (const ShapeSpec& s : shapes) out << "  - " << shape(s, scale) << "\n";
 }
 
-// afhub's extension (body_reader.cpp): meshes placed in the body's frame, in metres.
+// afhub's extension (body_reader.cpp): meshes placed in the body's frame, in metres,
+// each with its scale.
 void write_placed_meshes(std::ostream& out, const char* key,
                          const std::vector<PlacedMesh>& meshes) {
   if (meshes.empty()) return;
   out << "  " << key << ":\n";
   for (const PlacedMesh& m : meshes)
-    out << "  - {mesh: " << quoted(m.path) << ", offset: " << placement(m.offset) << "}\n";
+    out << "  - {mesh: " << quoted(m.path) << ", offset: " << placement(m.offset)
+        << ", scale: " << xyz(m.scale) << "}\n";
 }
 
 void write_body(std::ostream& out, const BodySpec& body) {

@@ -53,21 +53,31 @@ const std::set<std::string> kBodyKeys = {"name",
                                          "shaders"};
 
 // `visual meshes` and `collision meshes`, an afhub extension AMBF ignores:
-// [{mesh: FILE, offset: {position, orientation}}], each placed in the body's frame in
-// metres (not scaled), as a URDF link's several <visual> or <collision> elements are;
+// [{mesh: FILE, offset: {position, orientation}, scale: {x, y, z}}], each placed in the
+// body's frame in metres (its offset not scaled) and scaled per axis (by default as the
+// body's `scale`), as a URDF link's several <visual> or <collision> elements are;
 // `afhub convert` writes them.
 std::vector<PlacedMesh> read_placed_meshes(const FileReader& file, const YAML::Node& list,
-                                           const std::string& folder, const std::string& what) {
+                                           const std::string& folder, double body_scale,
+                                           const std::string& what) {
   if (!list.IsSequence() || list.size() == 0)
     fail(file.at(list), "'" + what + "' must be a non-empty list of {mesh: FILE, offset: " +
-                            "{position: {x, y, z}, orientation: {r, p, y}}}");
+                            "{position: {x, y, z}, orientation: {r, p, y}}, scale: {x, y, z}}");
   std::vector<PlacedMesh> meshes;
   for (const auto& entry : list) {
     file.require_map(entry, what + " entry", "{mesh: part.stl, offset: {position: ...}}");
     YAML::Node mesh = entry["mesh"];
     if (!mesh) fail(file.at(entry), "'" + what + "' entry needs 'mesh'");
-    PlacedMesh placed{resolve_mesh(file, mesh, folder, what + " mesh"), {}};
+    PlacedMesh placed{
+        resolve_mesh(file, mesh, folder, what + " mesh"), {}, uniform_scale(body_scale)};
     if (YAML::Node offset = entry["offset"]) placed.offset = file.placement(offset, "offset");
+    if (YAML::Node scale = entry["scale"]) {
+      placed.scale = file.vec3(scale, what + " scale");
+      for (double axis : {placed.scale.x, placed.scale.y, placed.scale.z})
+        if (!(axis > 0) || axis > kMaxScale)
+          fail(file.at(scale), "each axis of a '" + what + "' scale must be above 0 and at most " +
+                                   yaml::number_text(kMaxScale));
+    }
     meshes.push_back(std::move(placed));
   }
   return meshes;
@@ -225,9 +235,9 @@ BodySpec read_body(const FileReader& file, const YAML::Node& block, const std::s
   }
 
   if (YAML::Node list = block["visual meshes"])
-    body.visual_mesh_parts = read_placed_meshes(file, list, high, "visual meshes");
+    body.visual_mesh_parts = read_placed_meshes(file, list, high, body.scale, "visual meshes");
   if (YAML::Node list = block["collision meshes"])
-    body.collision_mesh_parts = read_placed_meshes(file, list, low, "collision meshes");
+    body.collision_mesh_parts = read_placed_meshes(file, list, low, body.scale, "collision meshes");
 
   scale_shapes(body.visual_shapes, body.scale);
   scale_shapes(body.collision_shapes, body.scale);

@@ -29,12 +29,12 @@ Error block_error(const MeshRequest& request, const std::string& error) {
 }
 
 // `raw` scaled, every vertex checked.
-TriangleMesh scaled(const RawMesh& raw, const std::string& path, double scale) {
+TriangleMesh scaled(const RawMesh& raw, const std::string& path, const Vec3& scale) {
   TriangleMesh mesh;
   mesh.vertices.reserve(raw.xyz.size() / 3);
   for (std::size_t v = 0; v < raw.xyz.size(); v += 3) {
     const float* p = &raw.xyz[v];
-    const std::array<double, 3> point{p[0] * scale, p[1] * scale, p[2] * scale};
+    const std::array<double, 3> point{p[0] * scale.x, p[1] * scale.y, p[2] * scale.z};
     for (double component : point)
       if (!std::isfinite(component) || std::abs(component) > kMaxVertexM)
         throw Error(path + ": error: vertex " + std::to_string(v / 3) + " is (" +
@@ -117,12 +117,12 @@ void keep_meshes(const std::map<std::string, KeptMesh>& batch) {
 }  // namespace
 
 TriangleMesh load_mesh(const std::string& path, double scale) {
-  return load_body_meshes({{path, scale, {}, ""}}).front();
+  return load_body_meshes({{path, uniform_scale(scale), {}, ""}}).front();
 }
 
 TriangleMesh load_body_mesh(const std::string& path, double scale, const SourceLocation& where,
                             const std::string& owner) {
-  return load_body_meshes({{path, scale, where, owner}}).front();
+  return load_body_meshes({{path, uniform_scale(scale), where, owner}}).front();
 }
 
 std::vector<MeshOrError> try_load_body_meshes(const std::vector<MeshRequest>& requests) {
@@ -187,23 +187,24 @@ std::vector<TriangleMesh> load_body_meshes(const std::vector<MeshRequest>& reque
 }
 
 std::size_t check_meshes(const Model& model) {
-  std::set<std::pair<std::string, double>> seen;
+  std::set<MeshKey> seen;
   std::vector<MeshRequest> requests;
-  auto add = [&](const std::string& path, double scale, const SourceLocation& where,
+  auto add = [&](const std::string& path, const Vec3& scale, const SourceLocation& where,
                  const std::string& owner) {
-    if (!path.empty() && seen.emplace(path, scale).second)
+    if (!path.empty() && seen.insert(mesh_key(path, scale)).second)
       requests.push_back({path, scale, where, owner});
   };
   for (const BodySpec& body : model.bodies) {
-    add(body.collision_mesh, body.scale, body.where, "body '" + body.identifier + "'");
+    const std::string owner = "body '" + body.identifier + "'";
+    add(body.collision_mesh, uniform_scale(body.scale), body.where, owner);
     for (const PlacedMesh& part : body.collision_mesh_parts)
-      add(part.path, body.scale, body.where, "body '" + body.identifier + "'");
-    add(body.visual_mesh, body.scale, body.where, "body '" + body.identifier + "' (visual)");
+      add(part.path, part.scale, body.where, owner);
+    add(body.visual_mesh, uniform_scale(body.scale), body.where, owner + " (visual)");
     for (const PlacedMesh& part : body.visual_mesh_parts)
-      add(part.path, body.scale, body.where, "body '" + body.identifier + "' (visual)");
+      add(part.path, part.scale, body.where, owner + " (visual)");
   }
   for (const SoftBodySpec& soft : model.soft_bodies)
-    add(soft.mesh, soft.scale, soft.where, "soft body '" + soft.identifier + "'");
+    add(soft.mesh, uniform_scale(soft.scale), soft.where, "soft body '" + soft.identifier + "'");
   load_body_meshes(requests);
   return requests.size();
 }

@@ -48,8 +48,8 @@ std::vector<std::string> fall_back_to_boxes(Model& model) {
   for (std::size_t b = 0; b < model.bodies.size(); ++b) {
     const BodySpec& body = model.bodies[b];
     if (body.collision_mesh.empty()) continue;
-    requests.push_back(
-        {body.collision_mesh, body.scale, body.where, "body '" + body.identifier + "'"});
+    requests.push_back({body.collision_mesh, uniform_scale(body.scale), body.where,
+                        "body '" + body.identifier + "'"});
     owners.push_back(b);
   }
   const std::vector<MeshOrError> read = try_load_body_meshes(requests);

@@ -79,15 +79,15 @@ int find_parent(const Model& model, const std::string& parent) {
 
 void Simulation::Data::build_bodies() {
   // Every collision mesh read at once (one reader process), each (file, scale) once.
-  std::map<std::pair<std::string, double>, std::size_t> mesh_index;
+  std::map<MeshKey, std::size_t> mesh_index;
   std::vector<MeshRequest> requests;
-  auto request = [&](const BodySpec& spec, const std::string& path) {
-    if (mesh_index.emplace(std::pair(path, spec.scale), requests.size()).second)
-      requests.push_back({path, spec.scale, spec.where, "body '" + spec.identifier + "'"});
+  auto request = [&](const BodySpec& spec, const std::string& path, const Vec3& scale) {
+    if (mesh_index.emplace(mesh_key(path, scale), requests.size()).second)
+      requests.push_back({path, scale, spec.where, "body '" + spec.identifier + "'"});
   };
   for (const BodySpec& spec : model.bodies) {
-    if (!spec.collision_mesh.empty()) request(spec, spec.collision_mesh);
-    for (const PlacedMesh& part : spec.collision_mesh_parts) request(spec, part.path);
+    if (!spec.collision_mesh.empty()) request(spec, spec.collision_mesh, uniform_scale(spec.scale));
+    for (const PlacedMesh& part : spec.collision_mesh_parts) request(spec, part.path, part.scale);
   }
   const std::vector<TriangleMesh> meshes = load_body_meshes(requests);
   bodies.resize(model.bodies.size());
@@ -97,7 +97,7 @@ void Simulation::Data::build_bodies() {
     const TriangleMesh* mesh =
         spec.collision_mesh.empty()
             ? nullptr
-            : &meshes[mesh_index.at(std::pair(spec.collision_mesh, spec.scale))];
+            : &meshes[mesh_index.at(mesh_key(spec.collision_mesh, uniform_scale(spec.scale)))];
     body.dynamic = spec.mass_kg > 0.0;
     Placement inertial = spec.inertial_offset.value_or(Placement{});
     std::optional<MeshMassProperties> properties;
@@ -123,7 +123,7 @@ void Simulation::Data::build_bodies() {
     body.com_from_mesh = mesh_from_com.inverse();
     std::vector<const TriangleMesh*> parts;
     for (const PlacedMesh& part : spec.collision_mesh_parts)
-      parts.push_back(&meshes[mesh_index.at(std::pair(part.path, spec.scale))]);
+      parts.push_back(&meshes[mesh_index.at(mesh_key(part.path, part.scale))]);
     body.shape = build_collision_shape(spec, body.com_from_mesh, mesh, parts, body.dynamic);
     btVector3 inertia(0, 0, 0);
     if (body.dynamic) {

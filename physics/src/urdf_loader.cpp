@@ -251,14 +251,16 @@ class UrdfReader {
     return resolved;
   }
 
-  double mesh_scale(const urdf::Mesh& mesh, const std::string& link) {
+  // A mesh's scale per axis, each positive and within the bound ADF scales have.
+  Vec3 mesh_scale(const urdf::Mesh& mesh, const std::string& link) {
     const urdf::Vector3& s = mesh.scale;
-    if (!(s.x > 0) || std::abs(s.x - s.y) > 1e-12 || std::abs(s.x - s.z) > 1e-12)
-      fail(link_at(link), "link '" + link + "': mesh '" + mesh.filename + "' has scale " +
-                              std::to_string(s.x) + " " + std::to_string(s.y) + " " +
-                              std::to_string(s.z) +
-                              "; afhub takes one positive scale for all three axes");
-    return s.x;
+    for (double axis : {s.x, s.y, s.z})
+      if (!(axis > 0) || axis > kMaxScale)
+        fail(link_at(link), "link '" + link + "': mesh '" + mesh.filename + "' has scale " +
+                                std::to_string(s.x) + " " + std::to_string(s.y) + " " +
+                                std::to_string(s.z) +
+                                "; give each axis a scale above 0 and at most 1000");
+    return {s.x, s.y, s.z};
   }
 
   // A box, cylinder or sphere at `origin` in the link frame; false for a mesh.
@@ -290,15 +292,18 @@ class UrdfReader {
   }
 
   void read_geometry(const urdf::Link& link, BodySpec& body) {
-    std::optional<double> scale;
-    auto use_scale = [&](const urdf::Mesh& mesh) {
-      const double value = mesh_scale(mesh, link.name);
-      if (scale && std::abs(*scale - value) > 1e-12)
-        fail(link_at(link.name), "link '" + link.name +
-                                     "': its meshes have different scales; afhub takes one "
-                                     "scale per link");
-      scale = value;
+    struct LinkMesh {
+      PlacedMesh placed;
+      bool at_origin;  // no <origin>, or an identity one
     };
+    auto link_mesh = [&](const urdf::Geometry& geometry, const urdf::Pose& origin,
+                         const char* kind) {
+      const auto& mesh = static_cast<const urdf::Mesh&>(geometry);
+      return LinkMesh{
+          {mesh_path(mesh, link.name, kind), placement(to_bt(origin)), mesh_scale(mesh, link.name)},
+          is_identity(origin)};
+    };
+    std::vector<LinkMesh> visuals, collisions;
     for (const auto& visual : link.visual_array) {
       if (!visual->geometry) continue;
       if (visual->material && !body.color_rgba) {
@@ -306,42 +311,44 @@ class UrdfReader {
         body.color_rgba = std::array<double, 4>{c.r, c.g, c.b, c.a};
       }
       ShapeSpec shape;
-      if (primitive(*visual->geometry, visual->origin, shape)) {
+      if (primitive(*visual->geometry, visual->origin, shape))
         body.visual_shapes.push_back(shape);
-        continue;
-      }
-      const auto& mesh = static_cast<const urdf::Mesh&>(*visual->geometry);
-      std::string path = mesh_path(mesh, link.name, "visual");
-      if (body.visual_mesh.empty() && body.visual_mesh_parts.empty() && is_identity(visual->origin))
-        body.visual_mesh = std::move(path);
       else
-        body.visual_mesh_parts.push_back({std::move(path), placement(to_bt(visual->origin))});
-      use_scale(mesh);
+        visuals.push_back(link_mesh(*visual->geometry, visual->origin, "visual"));
     }
-    std::vector<PlacedMesh> meshes;
-    bool at_link_frame = true;
     for (const auto& collision : link.collision_array) {
       if (!collision->geometry) continue;
       ShapeSpec shape;
-      if (primitive(*collision->geometry, collision->origin, shape)) {
+      if (primitive(*collision->geometry, collision->origin, shape))
         body.collision_shapes.push_back(shape);
-        continue;
-      }
-      const auto& mesh = static_cast<const urdf::Mesh&>(*collision->geometry);
-      meshes.push_back(
-          {mesh_path(mesh, link.name, "collision"), placement(to_bt(collision->origin))});
-      at_link_frame = at_link_frame && is_identity(collision->origin);
-      use_scale(mesh);
+      else
+        collisions.push_back(link_mesh(*collision->geometry, collision->origin, "collision"));
     }
-    // One mesh at the link frame collides as that mesh; several, or one at an
-    // <origin> or beside shapes, as one compound.
-    if (meshes.size() == 1 && at_link_frame && body.collision_shapes.empty())
-      body.collision_mesh = meshes.front().path;
+    // The body's scale is its first mesh's, when the same on every axis. A mesh at the
+    // link frame at that scale is the body's own mesh, as an ADF body's; the others
+    // are placed, each at its origin and scale.
+    const LinkMesh* first = !visuals.empty()      ? &visuals.front()
+                            : !collisions.empty() ? &collisions.front()
+                                                  : nullptr;
+    const Vec3* s = first ? &first->placed.scale : nullptr;
+    body.scale = s && s->x == s->y && s->x == s->z ? s->x : 1.0;
+    auto own = [&](const LinkMesh& mesh) {
+      const Vec3& m = mesh.placed.scale;
+      return mesh.at_origin && m.x == body.scale && m.y == body.scale && m.z == body.scale;
+    };
+    for (const LinkMesh& mesh : visuals) {
+      if (body.visual_mesh.empty() && body.visual_mesh_parts.empty() && own(mesh))
+        body.visual_mesh = mesh.placed.path;
+      else
+        body.visual_mesh_parts.push_back(mesh.placed);
+    }
+    // One such mesh collides as that mesh; anything more as one compound.
+    if (collisions.size() == 1 && own(collisions.front()) && body.collision_shapes.empty())
+      body.collision_mesh = collisions.front().placed.path;
     else
-      body.collision_mesh_parts = std::move(meshes);
+      for (const LinkMesh& mesh : collisions) body.collision_mesh_parts.push_back(mesh.placed);
     // Convex hulls for moving meshes, as ADF bodies; a static one keeps its triangles.
     body.collision_mesh_type = CollisionMeshType::kTrimesh;
-    body.scale = scale.value_or(1.0);
   }
 
   // Mass and the full inertia tensor at the inertial origin, diagonalised: the

@@ -308,7 +308,14 @@ TEST_F(BadInput, AbsurdValuesAreRefusedWithTheirLocation) {
        "model.yaml:5:17: error: 'inertia.ix' is 1e308, beyond"},
       {"  mass: 1\n  controller: {linear: {P: 1e308}}\n",
        "model.yaml:5:28: error: 'controller.linear.P' is 1e308, beyond"},
+      {"  mass: 1\n  visual meshes: part.stl\n",
+       "model.yaml:5:18: error: 'visual meshes' must be a non-empty list of {mesh: FILE"},
+      {"  mass: 1\n  collision meshes: [{offset: {position: {x: 1, y: 0, z: 0}}}]\n",
+       "model.yaml:5:22: error: 'collision meshes' entry needs 'mesh'"},
+      {"  mass: 1\n  visual meshes: [{mesh: part.stl, scale: {x: 1, y: 0, z: 1}}]\n",
+       "error: each axis of a 'visual meshes' scale must be above 0 and at most 1000"},
   };
+  folder_.write("part.stl", "solid part\nendsolid part\n");
   for (const Case& c : cases) {
     const std::string message = error_of({folder_.write("model.yaml", head + c.body)}, false);
     EXPECT_TRUE(contains(message, c.expected)) << c.body << "\n" << message;

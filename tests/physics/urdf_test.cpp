@@ -281,6 +281,7 @@ TEST(Urdf, ConvertedAdfLoadsToTheSameRobotWithin1e9) {
           EXPECT_EQ(b_parts[p].path, a_parts[p].path);
           EXPECT_EQ(b_parts[p].offset.position_m.z, a_parts[p].offset.position_m.z);
           EXPECT_EQ(b_parts[p].offset.rpy_rad.z, a_parts[p].offset.rpy_rad.z);
+          EXPECT_EQ(b_parts[p].scale.y, a_parts[p].scale.y);
         }
       }
       const Pose pa = a.body_pose(i), pb = b.body_pose(i);
@@ -368,6 +369,7 @@ TEST(Urdf, LinksJointsAndRootMeanWhatUrdfSays) {
   EXPECT_TRUE(fore.visual_mesh_parts[0].path.ends_with("meshes/cube.obj"));
   EXPECT_EQ(fore.visual_mesh_parts[0].offset.position_m.z, 0.2);
   EXPECT_NEAR(fore.visual_mesh_parts[0].offset.rpy_rad.z, 0.5, 1e-12);
+  EXPECT_EQ(fore.visual_mesh_parts[0].scale.z, 0.1) << "its own scale, taller";
   EXPECT_TRUE(fore.collision_mesh.ends_with("meshes/cube.obj"));
   EXPECT_EQ(model.bodies[5].mass_kg, 1e-3) << "a link without <inertial> is a frame";
   EXPECT_EQ(model.joints[0].type, JointType::kContinuous);
@@ -513,11 +515,13 @@ TEST(Urdf, MalformedAndInvalidFilesAreErrorsAtTheirLine) {
 // compound. Two cubes 0.6 m apart, 0.5 m below the link frame, land the block level
 // on a floor 1 m below it (a single cube under the centre of mass, or the meshes at
 // the link frame, would land it elsewhere or tipped).
+// Two cubes 0.3 m tall (each scaled per axis, differently in x) under a block, and a
+// small sphere: the block rests on the cubes.
 TEST(Urdf, SeveralPlacedCollisionMeshesCollideAsOneCompound) {
   const std::string cube = kModels + "/meshes/cube.obj";
-  auto mesh = [&](const std::string& xyz) {
+  auto mesh = [&](const std::string& xyz, const std::string& scale) {
     return "<collision><origin xyz=\"" + xyz + "\"/><geometry><mesh filename=\"" + cube +
-           "\" scale=\"0.1 0.1 0.1\"/></geometry></collision>";
+           "\" scale=\"" + scale + "\"/></geometry></collision>";
   };
   const WrittenFile floor("floor.urdf",
                           "<robot name=\"ground\"><link name=\"world\"><collision><origin "
@@ -528,7 +532,7 @@ TEST(Urdf, SeveralPlacedCollisionMeshesCollideAsOneCompound) {
       "<robot name=\"block\"><link name=\"block\"><inertial><mass value=\"1\"/>"
       "<inertia ixx=\"0.01\" ixy=\"0\" ixz=\"0\" iyy=\"0.01\" iyz=\"0\" "
       "izz=\"0.01\"/></inertial>" +
-          mesh("0.3 0 -0.5") + mesh("-0.3 0 -0.5") +
+          mesh("0.3 0 -0.5", "0.2 0.1 0.3") + mesh("-0.3 0 -0.5", "0.1 0.1 0.3") +
           "<collision><geometry><sphere radius=\"0.05\"/></geometry></collision>"
           "</link></robot>\n");
   Model model;
@@ -538,11 +542,13 @@ TEST(Urdf, SeveralPlacedCollisionMeshesCollideAsOneCompound) {
   EXPECT_TRUE(spec.collision_mesh.empty());
   ASSERT_EQ(spec.collision_mesh_parts.size(), 2u);
   EXPECT_EQ(spec.collision_mesh_parts[0].offset.position_m.x, 0.3);
+  EXPECT_EQ(spec.collision_mesh_parts[0].scale.x, 0.2);
+  EXPECT_EQ(spec.collision_mesh_parts[1].scale.x, 0.1);
   EXPECT_EQ(spec.collision_shapes.size(), 1u);
   Simulation sim(model, 0.001);
   for (int step = 0; step < 3000; ++step) sim.step();
   const Pose pose = sim.body_pose(1);
-  EXPECT_NEAR(pose.position_m.z, -0.45, 5e-3);  // the cubes' bottoms on the floor
+  EXPECT_NEAR(pose.position_m.z, -0.35, 5e-3);  // the cubes' bottoms on the floor
   EXPECT_NEAR(pose.position_m.x, 0.0, 5e-3);
   EXPECT_LT(angle_between(to_kdl(pose.orientation), KDL::Rotation::Identity()), 1e-2);
   // Converted (the floor and the block in one file), the block keeps its placed meshes
@@ -556,6 +562,8 @@ TEST(Urdf, SeveralPlacedCollisionMeshesCollideAsOneCompound) {
   ASSERT_EQ(read_back.collision_mesh_parts.size(), 2u);
   EXPECT_EQ(read_back.collision_mesh_parts[1].path, spec.collision_mesh_parts[1].path);
   EXPECT_EQ(read_back.collision_mesh_parts[1].offset.position_m.x, -0.3);
+  EXPECT_EQ(read_back.collision_mesh_parts[0].scale.x, 0.2);
+  EXPECT_EQ(read_back.collision_mesh_parts[0].scale.z, 0.3);
   Simulation again(converted, 0.001);
   for (int step = 0; step < 3000; ++step) again.step();
   EXPECT_NEAR(again.body_pose(1).position_m.z, pose.position_m.z, 1e-6);

@@ -463,8 +463,9 @@ TEST_F(ViewSoftBodyTest, TheClothIsDrawnAndItsNodesMoveAsItFalls) {
   expect_clean_console();
 }
 
-// The project's URDF test arm: its link 'fore' has two visual meshes, the second at
-// an <origin> (0, 0, 0.2, yaw 0.5), both a unit cube scaled by 0.05.
+// The project's URDF test arm: its link 'fore' has two visual meshes, both a unit
+// cube, the first scaled by 0.05, the second by (0.05, 0.05, 0.1) at an <origin>
+// (0, 0, 0.2, yaw 0.5).
 class ViewUrdfTest : public ViewPageTest {
  protected:
   static void SetUpTestSuite() {
@@ -505,7 +506,7 @@ TEST_F(ViewUrdfTest, EveryVisualMeshIsDrawnAtItsOriginAndScale) {
   ASSERT_TRUE(boxes.is_array() && boxes.size() == 2U) << boxes.dump();
   const double turned_width = 0.05 * (std::cos(0.5) + std::sin(0.5));  // yawed by 0.5 rad
   const double expected[2][6] = {{0, 0, 0, 0.05, 0.05, 0.05},
-                                 {0, 0, 0.2, turned_width, turned_width, 0.05}};
+                                 {0, 0, 0.2, turned_width, turned_width, 0.1}};
   for (int m = 0; m < 2; ++m)
     for (int k = 0; k < 6; ++k)
       EXPECT_NEAR(number_of(boxes.at(m).at(k)), expected[m][k], 1e-4) << boxes.dump();

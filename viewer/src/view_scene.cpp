@@ -56,12 +56,15 @@ const char* shape_name(SceneShapeKind kind) {
 
 // One of a body's meshes: what /mesh/`index` serves. The page learns a mesh's
 // format and name, never its path on this machine.
-void mesh(JsonWriter& json, std::size_t index, const char* path, const Pose& offset) {
+void mesh(JsonWriter& json, std::size_t index, const char* path, const Pose& offset,
+          const Vec3& scale) {
   const std::filesystem::path file(path);
   json.begin_object().key("index").value(static_cast<unsigned long long>(index));
   json.key("mesh").value(file.filename().string());
   json.key("format").value(file.extension().string());
   pose(json, offset);
+  json.key("scale");
+  vec3(json, scale);
   json.end_object();
 }
 
@@ -86,14 +89,12 @@ ViewScene view_scene_of(const SceneDescription& scene, std::uint32_t generation,
     out.channels.emplace_back(body.channel.data());
     json.begin_object().key("channel").value(body.channel.data());
     json.key("meshes").begin_array();
-    if (body.mesh[0] != '\0') mesh(json, b, body.mesh.data(), body.mesh_offset);
+    if (body.mesh[0] != '\0') mesh(json, b, body.mesh.data(), body.mesh_offset, body.mesh_scale);
     for (std::uint32_t p = 0; p < scene.mesh_part_count; ++p)
-      if (scene.mesh_parts[p].body == b)
-        mesh(json, scene.body_count + p, scene.mesh_parts[p].mesh.data(),
-             scene.mesh_parts[p].offset);
+      if (const SceneMeshPart& part = scene.mesh_parts[p]; part.body == b)
+        mesh(json, scene.body_count + p, part.mesh.data(), part.offset, part.scale);
     json.end_array();
     json.key("color").numbers(body.color_rgba, 4);
-    json.key("scale").value(body.scale);
     json.key("publishes").value(body.publishes != 0);
     pose(json, body.pose);
     json.key("shapes").begin_array();

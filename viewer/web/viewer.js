@@ -46,16 +46,16 @@ function shapeMesh(shape, material) {
   return holder;
 }
 
-// One of a body's meshes (scene.json's body.meshes[i]), scaled by the body's scale and
-// placed at its offset in the body's frame.
-function meshGeometry(mesh, scale, material, group) {
+// One of a body's meshes (scene.json's body.meshes[i]), scaled per axis and placed at
+// its offset in the body's frame.
+function meshGeometry(mesh, material, group) {
   const format = mesh.format.toLowerCase();
   const url = '/mesh/' + mesh.index;
   const holder = new THREE.Group();
   holder.position.copy(vec(mesh.position));
   const q = mesh.orientation;
   holder.quaternion.set(q[0], q[1], q[2], q[3]);
-  holder.scale.setScalar(scale);
+  holder.scale.copy(vec(mesh.scale));
   group.add(holder);
   const done = () => { window.afhub.meshesLoaded++; };
   if (format === '.stl') {
@@ -165,7 +165,7 @@ async function loadScene() {
     const c = body.color;
     const material = new THREE.MeshPhongMaterial({color: new THREE.Color(c[0], c[1], c[2]),
         opacity: c[3], transparent: c[3] < 1});
-    for (const mesh of body.meshes) meshGeometry(mesh, body.scale, material, group);
+    for (const mesh of body.meshes) meshGeometry(mesh, material, group);
     for (const shape of body.shapes) group.add(shapeMesh(shape, material));  // in metres
     group.position.copy(vec(body.position));
     const q = body.orientation;

@@ -70,7 +70,8 @@ void fill_view(const WorldObjectSpec& spec, const Pose& pose, SceneView& view) {
 void add_meshes(const BodySpec& spec, std::uint32_t index, SceneDescription& scene,
                 std::vector<std::string>& warnings) {
   std::vector<PlacedMesh> meshes;
-  if (!spec.visual_mesh.empty()) meshes.push_back({spec.visual_mesh, {}});
+  if (!spec.visual_mesh.empty())
+    meshes.push_back({spec.visual_mesh, {}, uniform_scale(spec.scale)});
   meshes.insert(meshes.end(), spec.visual_mesh_parts.begin(), spec.visual_mesh_parts.end());
   SceneBody& body = scene.bodies[index];
   for (const PlacedMesh& mesh : meshes) {
@@ -84,6 +85,7 @@ void add_meshes(const BodySpec& spec, std::uint32_t index, SceneDescription& sce
     } else if (body.mesh[0] == '\0') {
       copy_text(path, body.mesh);
       body.mesh_offset = offset;
+      body.mesh_scale = mesh.scale;
     } else if (scene.mesh_part_count == kMaxSceneMeshParts) {
       warnings.push_back(spec.where.str() + ": warning: '" + spec.name + "': a viewer draws " +
                          std::to_string(kMaxSceneMeshParts) +
@@ -92,6 +94,7 @@ void add_meshes(const BodySpec& spec, std::uint32_t index, SceneDescription& sce
       SceneMeshPart& part = scene.mesh_parts[scene.mesh_part_count++];
       part.body = index;
       part.offset = offset;
+      part.scale = mesh.scale;
       copy_text(path, part.mesh);
     }
   }
@@ -186,7 +189,6 @@ void fill_scene(const Simulation& sim, SceneDescription& scene,
     add_meshes(spec, static_cast<std::uint32_t>(b), scene, warnings);
     if (spec.color_rgba)
       for (int c = 0; c < 4; ++c) body.color_rgba[c] = static_cast<float>((*spec.color_rgba)[c]);
-    body.scale = spec.scale;
     body.pose = sim.body_pose(b);
     body.publishes = spec.passive ? 0 : 1;
     const std::size_t shapes = std::min(spec.visual_shapes.size(), kMaxSceneShapesPerBody);

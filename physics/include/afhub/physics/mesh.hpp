@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "afhub/physics/model.hpp"
@@ -43,10 +44,16 @@ TriangleMesh load_body_mesh(const std::string& path, double scale, const SourceL
 // A mesh that a block of a model names.
 struct MeshRequest {
   std::string path;
-  double scale = 1.0;
+  Vec3 scale{1.0, 1.0, 1.0};  // per axis
   SourceLocation where;
   std::string owner;  // "body 'BODY base'"
 };
+
+// A mesh file at one scale: what is read once however many bodies name it.
+using MeshKey = std::tuple<std::string, double, double, double>;
+inline MeshKey mesh_key(const std::string& path, const Vec3& scale) {
+  return {path, scale.x, scale.y, scale.z};
+}
 
 // load_body_mesh for each request, in their order, all read by one child process
 // (each file once, whatever its scales): what a model's loading costs is one process

@@ -55,11 +55,17 @@ enum class ControllerOutput { kForce, kVelocity };
 // `controller`), its file, or `afhub run --default-gains` / `--gains`.
 enum class GainSource { kAmbfDefault, kFile, kCommandLine };
 
-// A mesh file placed in a body's mesh frame.
+// A mesh file placed in a body's mesh frame, with its own scale per axis (a URDF
+// mesh's `scale` may differ per axis and per mesh).
 struct PlacedMesh {
   std::string path;  // resolved
   Placement offset;
+  Vec3 scale{1.0, 1.0, 1.0};
 };
+
+constexpr Vec3 uniform_scale(double scale) {
+  return {scale, scale, scale};
+}
 
 struct BodySpec {
   std::string identifier;  // "BODY base": the key joints refer to

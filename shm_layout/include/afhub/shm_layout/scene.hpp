@@ -1,7 +1,7 @@
 // SceneDescription: what a viewer needs to draw a world, published once by the
 // physics (keep-last history, as the directory), on {"afhub", <world instance>,
-// "scene"}: per body its channel, visual meshes (absolute paths, placed) or primitive
-// shapes, scale and colour; the world's lights and cameras; the folders of the models
+// "scene"}: per body its channel, visual meshes (absolute paths, placed and scaled)
+// or primitive shapes, and colour; the world's lights and cameras; the folders of the models
 // it loaded (a viewer serves no mesh outside them). Poses travel in the
 // body states, the world state and the viewer's pose feed (scene_poses.hpp), never
 // here. Loaned at its real size,
@@ -56,9 +56,9 @@ struct SceneBody {
   std::array<char, kChannelNameBufferSize> channel{};  // its state's channel; NUL-terminated
   std::array<char, kScenePathBufferSize> mesh{};       // absolute path, or "" for shapes
   Pose mesh_offset;                                    // where `mesh` sits in the body's frame
+  Vec3 mesh_scale{1.0, 1.0, 1.0};                      // per axis (its shapes' sizes are in metres)
   std::array<float, 4> color_rgba{0.7F, 0.7F, 0.7F, 1.0F};
-  double scale{1.0};  // of its meshes (its shapes' sizes are in metres)
-  Pose pose;          // where it was loaded: the pose of a body that publishes no state (passive)
+  Pose pose;  // where it was loaded: the pose of a body that publishes no state (passive)
   std::uint8_t publishes{1};  // 0: passive, drawn at `pose`
   std::uint8_t reserved[3]{};
   std::uint32_t shape_count{0};  // entries [0, shape_count) of `shapes`
@@ -70,6 +70,7 @@ struct SceneMeshPart {
   std::uint32_t body{0};  // an index into SceneDescription.bodies
   std::uint32_t reserved{0};
   Pose offset;                                    // in the body's frame
+  Vec3 scale{1.0, 1.0, 1.0};                      // per axis
   std::array<char, kScenePathBufferSize> mesh{};  // absolute path, NUL-terminated
 };
 
