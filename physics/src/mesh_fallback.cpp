@@ -47,16 +47,23 @@ std::vector<std::string> fall_back_to_boxes(Model& model) {
   std::vector<std::size_t> owners;
   for (std::size_t b = 0; b < model.bodies.size(); ++b) {
     const BodySpec& body = model.bodies[b];
-    if (body.collision_mesh.empty()) continue;
-    requests.push_back({body.collision_mesh, uniform_scale(body.scale), body.where,
-                        "body '" + body.identifier + "'"});
-    owners.push_back(b);
+    const std::string owner = "body '" + body.identifier + "'";
+    if (!body.collision_mesh.empty()) {
+      requests.push_back({body.collision_mesh, uniform_scale(body.scale), body.where, owner});
+      owners.push_back(b);
+    }
+    for (const PlacedMesh& part : body.collision_mesh_parts) {
+      requests.push_back({part.path, part.scale, body.where, owner});
+      owners.push_back(b);
+    }
   }
   const std::vector<MeshOrError> read = try_load_body_meshes(requests);
   std::vector<std::string> warnings;
   for (std::size_t r = 0; r < requests.size(); ++r) {
-    if (read[r].mesh) continue;
     BodySpec& body = model.bodies[owners[r]];
+    // A body whose first unusable mesh this is: all its meshes give way to the box.
+    if (read[r].mesh || (body.collision_mesh.empty() && body.collision_mesh_parts.empty()))
+      continue;
     std::string made_from;
     const ShapeSpec box = box_for(body, made_from);
     const Vec3& size = box.box_size_m;
@@ -65,7 +72,8 @@ std::vector<std::string> fall_back_to_boxes(Model& model) {
                        metres(size.x) + " x " + metres(size.y) + " x " + metres(size.z) + " m " +
                        made_from + " (--mesh-fallback box)");
     body.collision_mesh.clear();
-    body.collision_shapes = {box};
+    body.collision_mesh_parts.clear();
+    body.collision_shapes.push_back(box);
   }
   return warnings;
 }

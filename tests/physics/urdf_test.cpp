@@ -16,6 +16,7 @@
 
 #include "afhub/physics/adf_loader.hpp"
 #include "afhub/physics/adf_writer.hpp"
+#include "afhub/physics/mesh_fallback.hpp"
 #include "afhub/physics/scene_loader.hpp"
 #include "afhub/physics/simulation.hpp"
 #include "afhub/physics/urdf_loader.hpp"
@@ -567,6 +568,35 @@ TEST(Urdf, SeveralPlacedCollisionMeshesCollideAsOneCompound) {
   Simulation again(converted, 0.001);
   for (int step = 0; step < 3000; ++step) again.step();
   EXPECT_NEAR(again.body_pose(1).position_m.z, pose.position_m.z, 1e-6);
+}
+
+// --mesh-fallback box: a link with a collision mesh that cannot be used (no
+// triangles) collides as one box instead of its meshes, beside its primitive shapes.
+TEST(Urdf, ALinkWithAnUnusableCollisionMeshFallsBackToABox) {
+  const WrittenFile empty("empty.stl", "solid empty\nendsolid empty\n");
+  const std::string cube = kModels + "/meshes/cube.obj";
+  const WrittenFile link(
+      "broken.urdf",
+      "<robot name=\"broken\"><link name=\"block\"><inertial><mass value=\"1\"/>"
+      "<inertia ixx=\"0.01\" ixy=\"0\" ixz=\"0\" iyy=\"0.01\" iyz=\"0\" izz=\"0.01\"/>"
+      "</inertial><collision><origin xyz=\"0.3 0 0\"/><geometry><mesh filename=\"" +
+          cube +
+          "\" scale=\"0.1 0.1 0.1\"/></geometry></collision><collision><geometry><mesh "
+          "filename=\"" +
+          empty.path +
+          "\"/></geometry></collision><collision><geometry><sphere "
+          "radius=\"0.05\"/></geometry></collision></link></robot>\n");
+  Model model = load(link.path);
+  ASSERT_EQ(model.bodies.at(0).collision_mesh_parts.size(), 2u);
+  const std::vector<std::string> warnings = fall_back_to_boxes(model);
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_NE(warnings[0].find("it collides as a box"), std::string::npos) << warnings[0];
+  const BodySpec& body = model.bodies[0];
+  EXPECT_TRUE(body.collision_mesh_parts.empty());
+  ASSERT_EQ(body.collision_shapes.size(), 2u) << "the sphere, then the box";
+  EXPECT_EQ(body.collision_shapes[1].kind, ShapeKind::kBox);
+  Simulation sim(model, 0.001);
+  sim.step();
 }
 
 TEST(Urdf, PackagesResolveThroughPackagePathAndRosPackagePath) {

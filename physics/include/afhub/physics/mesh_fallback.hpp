@@ -10,12 +10,13 @@
 
 namespace afhub::physics {
 
-// Reads every body's collision mesh; each body whose mesh cannot be used gets a box
-// as its collision shape instead, made from what its block does say: with a mass and
-// an `inertia`, the solid box of that mass whose principal inertias are those, turned
-// and placed as its `inertial offset`; else a 10 cm cube there. Returns a warning for
-// each: "FILE:LINE:COL: warning: body 'X': its mesh cannot be used (WHY): ...". The
-// meshes read stay kept for the simulation's build (mesh.hpp).
+// Reads every body's collision meshes; each body with a mesh that cannot be used
+// collides as a box instead of its meshes (beside its primitive shapes), made from
+// what its block does say: with a mass and an `inertia`, the solid box of that mass
+// whose principal inertias are those, turned and placed as its `inertial offset`;
+// else a 10 cm cube there. Returns a warning for each: "FILE:LINE:COL: warning: body
+// 'X': its mesh cannot be used (WHY): ...". The meshes read stay kept for the
+// simulation's build (mesh.hpp).
 std::vector<std::string> fall_back_to_boxes(Model& model);
 
 }  // namespace afhub::physics
