@@ -1,6 +1,7 @@
 // The 1 kHz loop: `afhub run` simulates the model in real time; this process runs
-// a controller at 1 kHz on the model's body (holding its joints), woken half a
-// period after each physics step; cyclictest runs beside it, at the same priority
+// a controller at 1 kHz on the model's body (holding its joints), in phase with the
+// physics as every controller is by default (half a period after each step is due);
+// cyclictest runs beside it, at the same priority
 // and over the same seconds, as the machine's floor. Measured: the controller's
 // wake-up latency, cyclictest's, and the share of steps whose command answered the
 // state published just before (from the physics' own counters).
@@ -95,7 +96,6 @@ void run_loop_bench(const BenchOptions& options, LoopResult& result) {
   controller.loop.fifo_priority = options.fifo_priority;
   controller.loop.lock_memory = true;
   controller.loop.max_cycles = cycles;
-  controller.after_step_ns = kControllerPeriodNs / 2;
   LoopTiming timing;
   // The counters at the start are read on the first cycle, once the physics runs.
   bool started = false;

@@ -32,38 +32,64 @@ void answer(BodyClient& body, const BodyState& state, const ControllerCycle& cyc
   body.publish_command(command);
 }
 
+// A free-running controller whose physics is late polls for the state every
+// kLateStatePollNs, answering it up to kLateStateMarginNs before the next step.
+constexpr std::int64_t kLateStatePollNs = 20'000, kLateStateMarginNs = 100'000;
+
 // Free-running: every period, the newest state in, a command out.
 void run_free(BodyClient& body, const ControllerOptions& options, const ControllerCycle& cycle,
               LoopTiming& timing, LoopStatsPublisher& stats) {
   LoopOptions loop = options.loop;
-  if (options.after_step_ns >= 0) {
+  const std::int64_t after_ns = options.after_step_ns == ControllerOptions::kHalfPeriod
+                                    ? loop.period_ns / 2
+                                    : options.after_step_ns;
+  if (after_ns >= 0) {
     const BodyState* state = body.latest_state();
     for (const std::int64_t give_up = monotonic_ns() + 3'000'000'000;
          !state && monotonic_ns() < give_up && !stop_requested(); state = body.latest_state())
       sleep_until_ns(monotonic_ns() + 1'000'000);
     if (!state)
       throw Error("no state came from " + body.channel() + " in 3 s: is the physics running?");
-    loop.grid_origin_ns = state->header.publish_stamp_ns + options.after_step_ns;
+    loop.grid_origin_ns = grid_in_phase(*state, after_ns);
   }
   // Late commands as the physics counts them for this body (its state carries the
   // body's steps under command and those answered in time), so that this loop's
   // stats, `afhub top` and `afhub status` agree. A restarted physics counts from 0.
   std::uint32_t physics_late = 0;  // modulo 2^32, as the state carries it
   std::uint32_t physics_pid = 0;
-  run_periodic(
-      loop, timing,
-      [&] {
-        const BodyState* state = body.latest_state();
-        if (!state) return true;
-        const std::uint32_t late = state->commanded_steps - state->answered_steps;
-        if (state->header.publisher_pid == physics_pid)
-          timing.count_late(static_cast<std::uint32_t>(late - physics_late));
-        physics_pid = state->header.publisher_pid;
-        physics_late = late;
-        answer(body, *state, cycle, false);
-        return true;
-      },
-      [&](std::int64_t now) { stats.maybe_publish(now, timing); });
+  std::int64_t regrid_ns = 0, deadline_ns = 0;
+  LoopCycle steps;
+  steps.regrid_ns = &regrid_ns;
+  steps.deadline_ns = &deadline_ns;
+  if (after_ns >= 0)
+    steps.wait = [&] {
+      // The physics late with the step due `after_ns` ago: its state is waited for, in
+      // short sleeps, until shortly before its next step, so that the command still
+      // answers it in time.
+      const std::int64_t due = deadline_ns - after_ns;
+      const std::int64_t give_up = due + loop.period_ns - kLateStateMarginNs;
+      for (const BodyState* state = body.latest_state();
+           state && state->step_due_ns > 0 && state->step_due_ns < due && !stop_requested() &&
+           monotonic_ns() < give_up;
+           state = body.latest_state())
+        sleep_until_ns(monotonic_ns() + kLateStatePollNs);
+      return true;
+    };
+  steps.work = [&] {
+    const BodyState* state = body.latest_state();
+    if (!state) return true;
+    const std::uint32_t late = state->commanded_steps - state->answered_steps;
+    if (state->header.publisher_pid == physics_pid)
+      timing.count_late(static_cast<std::uint32_t>(late - physics_late));
+    else if (physics_pid != 0)  // a new physics, on a grid of its own
+      regrid_ns = grid_in_phase(*state, after_ns);
+    physics_pid = state->header.publisher_pid;
+    physics_late = late;
+    answer(body, *state, cycle, false);
+    return true;
+  };
+  steps.after = [&](std::int64_t now) { stats.maybe_publish(now, timing); };
+  run_periodic(loop, timing, steps);
 }
 
 // Lockstep: answer each new step as soon as its state arrives, asleep on the state
@@ -102,6 +128,11 @@ void run_lockstep(BodyClient& body, const ControllerOptions& options, const Cont
 }
 
 }  // namespace
+
+std::int64_t grid_in_phase(const BodyState& state, std::int64_t after_ns) noexcept {
+  if (after_ns < 0) return 0;
+  return (state.step_due_ns > 0 ? state.step_due_ns : state.header.publish_stamp_ns) + after_ns;
+}
 
 int run_controller(const ControllerOptions& options, const ControllerCycle& cycle,
                    LoopTiming* timing_out) {

@@ -80,21 +80,25 @@ class MonotonicClock final : public LoopClock {
   }
 };
 
+// The first deadline after `now`: the grid's origin when it is ahead, else the grid's
+// next point; with no origin, one period from now.
+std::int64_t first_deadline(std::int64_t origin, std::int64_t period, std::int64_t now) {
+  if (origin > now) return origin;
+  if (origin > 0 && period > 0) return origin + ((now - origin) / period + 1) * period;
+  return now + period;
+}
+
 }  // namespace
 
 void run_periodic(const LoopOptions& options, LoopTiming& timing, const LoopCycle& cycle) {
   MonotonicClock monotonic;
   LoopClock& clock = options.clock ? *options.clock : monotonic;
   const std::int64_t period = options.period_ns;
-  const std::int64_t now = clock.now_ns();
-  std::int64_t scheduled = now + period;
-  if (options.grid_origin_ns > now)
-    scheduled = options.grid_origin_ns;
-  else if (options.grid_origin_ns > 0 && period > 0)  // the grid's first point after now
-    scheduled = options.grid_origin_ns + ((now - options.grid_origin_ns) / period + 1) * period;
+  std::int64_t scheduled = first_deadline(options.grid_origin_ns, period, clock.now_ns());
   for (std::uint64_t done = 0;
        !stop_requested() && (options.max_cycles == 0 || done < options.max_cycles); ++done) {
     if (period > 0) clock.sleep_until_ns(scheduled);
+    if (cycle.deadline_ns) *cycle.deadline_ns = scheduled;
     const std::int64_t woke = clock.now_ns();
     if (cycle.wait && !cycle.wait()) break;
     const std::int64_t began = clock.now_ns();
@@ -117,6 +121,10 @@ void run_periodic(const LoopOptions& options, LoopTiming& timing, const LoopCycl
         // Behind: the next cycles run at once, back to back, until caught up.
         timing.count_overruns(1);
       }
+    }
+    if (cycle.regrid_ns && *cycle.regrid_ns > 0) {
+      scheduled = first_deadline(*cycle.regrid_ns, period, clock.now_ns());
+      *cycle.regrid_ns = 0;
     }
     if (cycle.after) {
       const std::int64_t after_began = clock.now_ns();

@@ -31,6 +31,7 @@ TEST(DdsConvert, StateRoundTripsEveryField) {
   from->contact_count = 5;
   from->mass_kg = 2.5;
   from->principal_inertia_kgm2 = {0.1, 0.2, 0.3};
+  from->step_due_ns = 987000000;
   from->commanded_steps = 77;
   from->answered_steps = 76;
   from->sensor_ray_count = 3;
@@ -52,7 +53,9 @@ TEST(DdsConvert, StateRoundTripsEveryField) {
   EXPECT_EQ(received.joints._maximum, kMaxJointsPerBody);
 
   std::unique_ptr<BodyState, decltype(&std::free)> to(make_state(7), &std::free);
+  to->step_due_ns = -1;  // a loaned chunk's leftover
   from_dds(received, *to);
+  EXPECT_EQ(to->step_due_ns, 0) << "a due time of the other machine's clock is not carried";
   EXPECT_EQ(to->header.sim_step, 4242u);
   EXPECT_EQ(to->header.sim_time_s, 4.242);
   EXPECT_EQ(to->pose.position_m.z, 3);

@@ -201,7 +201,7 @@ TEST(Controllers, KilledControllerTripsTheHoldWatchdogAndARestartTakesOver) {
   EXPECT_TRUE(contains(read_file(log), "its joints hold their positions")) << read_file(log);
 }
 
-TEST(Controllers, AfterStepAlignsTheLoopSoEachCommandAnswersTheNewestState) {
+TEST(Controllers, AFreeRunningControllerWakesInPhaseSoEachCommandAnswersTheNewestState) {
   afhub::testing::ModelFolder folder;
   const std::string log = (folder.dir() / "run.log").string();
   ScopedProcess physics(spawn_afhub({"run", kArm, "--no-autostart"}, log));
@@ -209,11 +209,10 @@ TEST(Controllers, AfterStepAlignsTheLoopSoEachCommandAnswersTheNewestState) {
   ASSERT_TRUE(wait_until([&] { return world.latest() != nullptr; }, 10s)) << read_file(log);
   EXPECT_EQ(world.latest()->commanded_steps, 0u);  // nothing commands the arm yet
 
-  // Woken half a period after each step, the controller's command is in place
-  // before the next one: the physics counts the steps whose command answered the
-  // state it had just published.
-  ScopedProcess hold(
-      spawn_afhub({"ctl", "hold", "base", "--after-step", "500", "--cycles", "3000"}));
+  // Woken half a period after each step is due (the default), the controller's
+  // command is in place before the next one: the physics counts the steps whose
+  // command answered the state it had just published.
+  ScopedProcess hold(spawn_afhub({"ctl", "hold", "base", "--cycles", "3000"}));
   ASSERT_EQ(wait_for_exit(hold, 15s), 0);
   ASSERT_TRUE(wait_until([&] { return world.latest()->commanded_steps >= 2900; }, 2s));
   const WorldState& counts = *world.latest();
@@ -246,6 +245,9 @@ TEST(Controllers, BadArgumentsGetClearErrors) {
   EXPECT_EQ(long_phase.exit_code, 1);
   EXPECT_TRUE(contains(long_phase.err, "--after-step must be shorter than the loop's period"))
       << long_phase.err;
+  RunResult both = run_afhub({"ctl", "hold", "base", "--after-step", "100", "--unaligned"});
+  EXPECT_EQ(both.exit_code, 1);
+  EXPECT_TRUE(contains(both.err, "--after-step and --unaligned exclude each other")) << both.err;
   RunResult bad_fifo = run_afhub({"run", kArm, "--offline", "--steps", "1", "--fifo", "120"});
   EXPECT_EQ(bad_fifo.exit_code, 1);
   EXPECT_TRUE(contains(bad_fifo.err, "--fifo takes a SCHED_FIFO priority")) << bad_fifo.err;

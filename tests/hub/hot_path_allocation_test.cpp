@@ -117,7 +117,7 @@ void expect_physics_loop_allocation_free(const std::vector<std::string>& files,
   auto one_cycle = [&]() {
     channels.apply_commands(monotonic_ns());
     sim.step();
-    channels.publish(0.0, 0.0, false);
+    channels.publish({});
     channels.publish_view(std::int64_t{++cycle} * 1'000'000);
     if (viewer.latest() && viewer.updated()) ++viewer_updates;
     const BodyState* state = controller.latest_state();
@@ -179,7 +179,7 @@ TEST(HotPath, NanRecoveryDoesNotAllocate) {
   auto one_cycle = [&]() {
     if (++cycle % 100 == 0) sim.set_input(link, poison);
     sim.step();
-    channels.publish(0.0, 0.0, false);
+    channels.publish({});
     return sim.all_finite();
   };
   ASSERT_TRUE(test::wait_until([&] { return one_cycle() && world.latest(); }, 2s));
@@ -230,7 +230,7 @@ TEST(HotPath, ActuatorsAndSensorsDoNotAllocate) {
       ++changes;
     }
     sim.step();
-    channels.publish(0.0, 0.0, false);
+    channels.publish({});
     const BodyState* state = controller.latest_state();
     BodyCommand* command = controller.loan_command(0);
     if (!state || !command) return false;
@@ -270,7 +270,7 @@ TEST(HotPath, EventsAreSaidOutsideTheLoopOnly) {
   int cycle = 0;
   std::int64_t link2_commanded_ns = 0;
   auto one_cycle = [&]() {
-    channels.publish(0.0, 0.0, false);
+    channels.publish({});
     const BodyState* state = base.latest_state();
     if (!state) return false;
     if (++cycle % 2 == 0) {  // the lockstep client answers every other step: joins, drops
@@ -345,7 +345,7 @@ TEST(HotPath, LockstepControllerLoopDoesNotAllocate) {
   LoopStatsPublisher stats("test", "afhub/arm/base", 1'000'000, true, RealtimeGrant{});
   std::int64_t fake_clock_ns = 0;  // a second per cycle: stats are published every cycle
   auto one_cycle = [&]() {
-    channels.publish(0.0, 0.0, false);
+    channels.publish({});
     const BodyState* state = client.latest_state();
     BodyCommand* command = client.loan_command(kMaxJointsPerBody);
     if (!state || !command) return false;
@@ -423,7 +423,7 @@ TEST(HotPath, TeleopLoopDoesNotAllocate) {
     for (std::int64_t next = monotonic_ns(); !done; next += 1'000'000) {
       channels.apply_commands(monotonic_ns());
       sim.step();
-      channels.publish(0.0, 0.0, false);
+      channels.publish({});
       sleep_until_ns(next);
     }
   });

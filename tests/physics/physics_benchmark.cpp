@@ -115,7 +115,7 @@ void BM_Step(benchmark::State& state, const std::string& file, bool publish, boo
     const std::int64_t begin_ns = monotonic_ns();
     if (channels) channels->apply_commands(begin_ns);
     sim.step();
-    if (channels) channels->publish(0.0, 0.0, false);
+    if (channels) channels->publish({});
     if (step_us.size() < step_us.capacity())
       step_us.push_back(static_cast<float>(monotonic_ns() - begin_ns) * 1e-3F);
     if (channels) channels->publish_view(clock_ns += 1'000'000);
@@ -164,7 +164,7 @@ void BM_PublishTenBodies(benchmark::State& state) {
   for (auto& reader : readers)
     if (!afhub::test::wait_until([&] { return reader->subscribed(); }, std::chrono::seconds(5)))
       state.SkipWithError("a reader did not connect");
-  for (auto _ : state) channels.publish(0.0, 0.0, false);
+  for (auto _ : state) channels.publish({});
   state.counters["bodies"] = static_cast<double>(channels.channel_count());
 }
 BENCHMARK(BM_PublishTenBodies)->ArgName("readers")->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
@@ -212,7 +212,7 @@ void BM_LockstepRoundTrip(benchmark::State& state, bool kuka, bool spin) {
   options.wait_for = 1;
   options.spin = spin;
   channels.enable_lockstep(options);
-  channels.publish(0.0, 0.0, false);
+  channels.publish({});
   std::vector<std::string> client_args{"ctl", "hold", kuka ? "base" : "ball", "--lockstep"};
   if (spin) client_args.push_back("--spin");
   afhub::test::ScopedProcess client(afhub::test::spawn_afhub(client_args));
@@ -222,7 +222,7 @@ void BM_LockstepRoundTrip(benchmark::State& state, bool kuka, bool spin) {
   for (auto _ : state) {
     sim.step();
     const std::int64_t published = monotonic_ns();
-    channels.publish(0.0, 0.0, false);
+    channels.publish({});
     channels.await_lockstep();
     round_trip.record(monotonic_ns() - published);
   }

@@ -120,7 +120,7 @@ TEST(Run, LockstepWaitsAsleepUnlessSpinning) {
   physics::SimChannels channels(sim, 5.0);
   BodyClient client(model.bodies[0].channel);
   auto answer = [&] {
-    channels.publish(0.0, 0.0, false);
+    channels.publish({});
     const BodyState* state = client.latest_state();
     BodyCommand* command = client.loan_command(0);
     if (!state || !command) return false;
@@ -138,7 +138,7 @@ TEST(Run, LockstepWaitsAsleepUnlessSpinning) {
     ASSERT_TRUE(wait_until([&] { return answer() && channels.await_lockstep(); }, 5s));
     ASSERT_EQ(channels.lockstep_clients(), 1u);
     sim.step();
-    channels.publish(0.0, 0.0, false);
+    channels.publish({});
     const std::uint64_t late = channels.late_answers();
     const ThreadUse use = thread_use([&] { channels.await_lockstep(); });  // no answer: 300 ms
     EXPECT_EQ(channels.late_answers(), late + 1);
@@ -162,7 +162,7 @@ TEST(Run, LockstepWaitsAsleepUnlessSpinning) {
         client.publish_command(command);
       }
     });
-    channels.publish(0.0, 0.0, false);
+    channels.publish({});
     channels.await_lockstep();
     answering.join();
     EXPECT_EQ(channels.late_answers(), late + 1) << (spin ? "spinning" : "asleep");

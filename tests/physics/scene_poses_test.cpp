@@ -29,7 +29,7 @@ struct Loop {
     for (int i = 0; i < cycles; ++i, ++cycle) {
       channels.apply_commands(monotonic_ns());
       sim.step();
-      channels.publish(cycle * 1e-3, 1000.0, false);
+      channels.publish({cycle * 1e-3, 1000.0, false});
       channels.publish_view(std::int64_t{cycle} * 1'000'000);
       if (viewer && viewer->latest() && viewer->updated()) ++*updates;
     }

@@ -236,6 +236,41 @@ TEST(PeriodicLoop, AGivenGridOriginSetsThePhaseOfEveryWakeUp) {
   EXPECT_EQ(clock.deadlines.front(), options.grid_origin_ns);
 }
 
+// The cycle learns its deadline; a new grid point written by a cycle moves the
+// following wake-ups onto that grid (a controller following a restarted physics).
+TEST(PeriodicLoop, ACycleReadsItsDeadlineAndCanMoveTheGrid) {
+  FakeClock clock;
+  clock.lateness = noisy(2'000'000);
+  LoopOptions options;
+  options.period_ns = 10'000'000;
+  options.max_cycles = 10;
+  options.grid_origin_ns = clock.now;
+  options.clock = &clock;
+  std::int64_t deadline = 0, regrid = 0;
+  std::vector<std::int64_t> seen;
+  const std::int64_t new_origin = clock.now + 3'000'000;  // 3 ms later in the period
+  LoopCycle cycle;
+  cycle.deadline_ns = &deadline;
+  cycle.regrid_ns = &regrid;
+  cycle.work = [&] {
+    seen.push_back(deadline);
+    if (seen.size() == 4) regrid = new_origin;
+    return true;
+  };
+  LoopTiming timing;
+  run_periodic(options, timing, cycle);
+  ASSERT_EQ(seen.size(), 10u);
+  EXPECT_EQ(seen, clock.deadlines);
+  for (std::size_t k = 0; k < 4; ++k)
+    EXPECT_EQ((seen[k] - options.grid_origin_ns) % options.period_ns, 0) << k;
+  for (std::size_t k = 4; k < seen.size(); ++k) {
+    EXPECT_EQ((seen[k] - new_origin) % options.period_ns, 0) << k;
+    EXPECT_GT(seen[k], seen[k - 1]) << k;
+  }
+  EXPECT_EQ(seen[4] - seen[3], 3'000'000) << "the next point of the new grid";
+  EXPECT_EQ(regrid, 0) << "taken";
+}
+
 TEST(PeriodicLoop, OnTheRealClockItSleepsToItsDeadlines) {
   // The real clock, checked only from below (a loaded machine may always be later):
   // 20 periods of 5 ms never take less than 20 periods from the start.

@@ -81,6 +81,7 @@ void from_dds(const afhub_dds_BodyState& sample, BodyState& state) noexcept {
   state.contact_wrench = from_dds(sample.contact_wrench);
   state.mass_kg = sample.mass_kg;
   state.principal_inertia_kgm2 = from_dds(sample.principal_inertia_kgm2);
+  state.step_due_ns = 0;  // a due time on the other machine's clock means nothing here
   state.commanded_steps = sample.commanded_steps;
   state.answered_steps = sample.answered_steps;
   state.contact_count = sample.contact_count;

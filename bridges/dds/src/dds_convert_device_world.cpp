@@ -130,6 +130,8 @@ void to_dds(std::string_view channel, const WorldState& state,
 void from_dds(const afhub_dds_WorldState& sample, WorldState& state) noexcept {
   from_dds(sample.header, state.header);
   copy_world_values(sample, state);
+  state.step_due_ns = 0;  // the other machine's clock: no phase to keep here
+  state.step_period_ns = 0;
   copy_text(sample.last_nan_body, state.last_nan_body);
   state.light_count = poses_in(sample.lights, state.lights);
   state.camera_count = poses_in(sample.cameras, state.cameras);

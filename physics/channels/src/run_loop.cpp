@@ -63,7 +63,7 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
   if (channels)
     stats = std::make_unique<LoopStatsPublisher>("run", "", options.fast ? 0 : period_ns,
                                                  channels->lockstep(), options.grant);
-  if (channels) channels->publish(0.0, 0.0, false);  // step 0: the model as loaded
+  if (channels) channels->publish({});  // step 0: the model as loaded
   // The wait for lockstep clients before the first step is setup: the clock starts after it.
   if (channels && channels->lockstep() && !channels->wait_for_clients()) return;
   const std::int64_t start_ns = clock_ns();
@@ -81,6 +81,9 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
   pacing.clock = options.clock;
   pacing.grid_origin_ns = start_ns;
   LoopCycle cycle;
+  // Each step's deadline, published with its states: controllers wake in phase with it.
+  std::int64_t step_due_ns = 0;
+  cycle.deadline_ns = &step_due_ns;
   // Commands in: the world's (pause, resume, step, reset), then the bodies'; in
   // lockstep, the clients' answers to the current step.
   cycle.wait = [&] {
@@ -114,8 +117,9 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
       }
     }
     if (channels)
-      channels->publish(static_cast<double>(clock_ns() - start_ns) * 1e-9, achieved_rate_hz,
-                        control.halted());
+      channels->publish({static_cast<double>(clock_ns() - start_ns) * 1e-9, achieved_rate_hz,
+                         control.halted(), pacing.period_ns > 0 ? step_due_ns : 0,
+                         pacing.period_ns});
     if (stepping) {
       const std::int64_t duration_ns = monotonic_ns() - begin_ns;
       report.step_time.record(duration_ns);

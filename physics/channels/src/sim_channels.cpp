@@ -163,8 +163,8 @@ void SimChannels::fill_objects(std::array<WorldObjectPose, kMaxWorldObjects>& ou
   }
 }
 
-void SimChannels::publish(double wall_time_s, double achieved_rate_hz, bool paused) noexcept {
-  last_published_ = {wall_time_s, achieved_rate_hz, paused};
+void SimChannels::publish(const WorldClock& clock) noexcept {
+  last_published_ = clock;
   const std::uint64_t step = sim_.step_count();
   const double time_s = sim_.time_s();
   if (step != timeliness_step_) {  // once per step taken, not per publish while paused
@@ -189,6 +189,7 @@ void SimChannels::publish(double wall_time_s, double achieved_rate_hz, bool paus
     else
       sim_.read_body(channel.index, reading_);
     to_state(reading_, *state);
+    state->step_due_ns = clock.step_due_ns;
     state->commanded_steps = static_cast<std::uint32_t>(channel.commanded_steps);
     state->answered_steps = static_cast<std::uint32_t>(channel.answered_steps);
     state->refused_commands = channel.refused;
@@ -199,10 +200,12 @@ void SimChannels::publish(double wall_time_s, double achieved_rate_hz, bool paus
   if (WorldState* world = world_.loan()) {
     world->header.sim_step = step;
     world->header.sim_time_s = time_s;
-    world->wall_time_s = wall_time_s;
-    world->achieved_rate_hz = achieved_rate_hz;
+    world->wall_time_s = clock.wall_time_s;
+    world->achieved_rate_hz = clock.achieved_rate_hz;
+    world->step_due_ns = clock.step_due_ns;
+    world->step_period_ns = clock.step_period_ns;
     world->body_count = static_cast<std::uint32_t>(channels_.size());
-    world->paused = paused;
+    world->paused = clock.paused;
     world->rejected_commands = rejected_;
     world->watchdog_expiries = expiries_;
     world->stale_commands = stale_;

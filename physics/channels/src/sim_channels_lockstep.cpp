@@ -85,7 +85,7 @@ bool SimChannels::hold_step_turn(std::int64_t now_ns, std::int64_t& republish_ns
   // State channels keep no history: a client that subscribes while the step is held
   // sees it only if it is published again.
   if (now_ns >= republish_ns) {
-    publish(last_published_.wall_time_s, last_published_.achieved_rate_hz, last_published_.paused);
+    publish(last_published_);
     republish_ns = now_ns + kRepublishWhileWaitingNs;
   }
   return true;

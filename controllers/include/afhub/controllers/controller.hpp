@@ -34,10 +34,16 @@ struct ControllerOptions {
   // Lockstep: poll for the next step with sched_yield (a dedicated core) instead of
   // sleeping until it comes (iceoryx's WaitSet, a futex).
   bool spin = false;
-  // Free-running: wake this long after the physics publishes a step, so that each
-  // command is ready before the next step (the grid is aligned to the first state
-  // seen; both loops keep absolute deadlines). -1: start on the clock, unaligned.
-  std::int64_t after_step_ns = -1;
+  // Free-running: wake this long after each physics step is due (the step's deadline
+  // on the physics' grid, carried by its state: BodyState.step_due_ns), so that every
+  // command answers the newest state and arrives before the next step. Both loops
+  // keep absolute deadlines; a restarted physics is followed to its new phase. When
+  // the physics is late with a step, its state is waited for (in 20 us polls) until
+  // 0.1 ms before the next step is due.
+  // kHalfPeriod (the default): half the controller's period after, which leaves either
+  // process's wake-up jitter the most room. kUnaligned: on the controller's own clock.
+  static constexpr std::int64_t kHalfPeriod = -1, kUnaligned = -2;
+  std::int64_t after_step_ns = kHalfPeriod;
   // Started together with the hub and the physics (a launch script), the controller
   // waits this long for the hub and then for its body, saying so once on stderr,
   // before giving up with an error. 0: fail at once when either is missing.
@@ -48,6 +54,11 @@ struct ControllerOptions {
   // ends on a lost hub, as a plain iceoryx client does.
   bool survive_hub_loss = true;
 };
+
+// A point of a free-running controller's grid: `after_ns` after `state`'s step was due
+// on its physics' grid (after it was published, when the physics is not paced by the
+// clock); 0 (unaligned) when after_ns is negative.
+std::int64_t grid_in_phase(const BodyState& state, std::int64_t after_ns) noexcept;
 
 // `state` is the body's newest state; `command` starts zeroed. Both live in shared
 // memory: no copy. Runs in the real-time loop: do not allocate or block in it.

@@ -81,6 +81,13 @@ struct LoopCycle {
   // Optional, outside the measured time, with the current CLOCK_MONOTONIC time:
   // publish statistics there.
   std::function<void(std::int64_t now_ns)> after;
+  // Optional: each cycle's deadline is written here before it runs (on the loop's
+  // clock; the physics stamps its steps with it).
+  std::int64_t* deadline_ns = nullptr;
+  // Optional: a grid point the cycle writes here (a controller following a restarted
+  // physics' phase): the loop keeps to that grid from the next cycle on, and sets it
+  // back to 0.
+  std::int64_t* regrid_ns = nullptr;
 };
 
 // Runs `cycle` once per period until its work returns false, options.max_cycles or

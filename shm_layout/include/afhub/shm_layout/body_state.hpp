@@ -39,6 +39,11 @@ struct BodyState {
   Wrench contact_wrench;
   double mass_kg{0.0};
   Vec3 principal_inertia_kgm2;
+  // When this step was due on its physics' clock (CLOCK_MONOTONIC ns): the physics
+  // steps on the grid step_due_ns + k dt, and a free-running controller wakes in phase
+  // with it (controllers/controller.hpp). 0 when the physics is not paced by the
+  // clock (--fast) or the state was not published on this machine (a DDS mirror).
+  std::int64_t step_due_ns{0};
   // Descendant joints in the catalog's order; entries [0, joint_count) are valid
   // and the only ones in the chunk.
   std::uint32_t joint_count{0};

@@ -23,6 +23,11 @@ struct WorldState {
   PayloadHeader header;          // sim_step and sim_time_s are the world's clock
   double wall_time_s{0.0};       // since the simulation started
   double achieved_rate_hz{0.0};  // steps per wall-clock second, over the last second
+  // The physics' phase: its steps are due at step_due_ns + k step_period_ns
+  // (CLOCK_MONOTONIC); step_due_ns is this step's (as BodyState.step_due_ns). Both 0
+  // when it is not paced by the clock (--fast).
+  std::int64_t step_due_ns{0};
+  std::int64_t step_period_ns{0};
   std::uint32_t body_count{0};
   std::uint8_t paused{0};
   std::uint8_t lockstep{0};  // stepping waits for the lockstep clients

@@ -102,8 +102,16 @@ class SimChannels {
   void forget_commands() noexcept;
   // Reads each body's newest command, applies it, and runs the watchdogs.
   void apply_commands(std::int64_t now_ns) noexcept;
+  // The world's clock as published with the states.
+  struct WorldClock {
+    double wall_time_s = 0.0;
+    double achieved_rate_hz = 0.0;
+    bool paused = false;
+    // The step's deadline on the loop's grid, and its period (0, 0: not paced).
+    std::int64_t step_due_ns = 0, step_period_ns = 0;
+  };
   // Publishes every body's state and the world state.
-  void publish(double wall_time_s, double achieved_rate_hz, bool paused) noexcept;
+  void publish(const WorldClock& clock) noexcept;
   // What a viewer reads, at most kViewerRateHz of `now_ns` (CLOCK_MONOTONIC), paused
   // too, each only while something reads it (once without, for a viewer that joins
   // later): every scene body's pose and joints in one payload (ScenePoses), and each
@@ -183,11 +191,6 @@ class SimChannels {
   // Puts `channel` in the barrier for client `pid` (0: out of it), keeping the count.
   void set_lockstep_pid(Channel& channel, std::uint32_t pid) noexcept;
   // The world's clock as last published, for publishing a held step again.
-  struct WorldClock {
-    double wall_time_s = 0.0;
-    double achieved_rate_hz = 0.0;
-    bool paused = false;
-  };
   static constexpr std::int64_t kRepublishWhileWaitingNs = 20'000'000;
 
   // What a command's header says about the step it answers, copied with the command.
