@@ -63,15 +63,17 @@ void run_free(BodyClient& body, const ControllerOptions& options, const Controll
   steps.deadline_ns = &deadline_ns;
   if (after_ns >= 0)
     steps.wait = [&] {
-      // The physics late with the step due `after_ns` ago: its state is waited for, in
-      // short sleeps, until shortly before its next step, so that the command still
-      // answers it in time.
+      // The physics late with the step due `after_ns` ago (its newest state is of the
+      // step before): that step's state is waited for, in short sleeps, until shortly
+      // before the next step, so that the command still answers it in time. A physics
+      // further behind is stopped or gone: nothing is waited for.
       const std::int64_t due = deadline_ns - after_ns;
       const std::int64_t give_up = due + loop.period_ns - kLateStateMarginNs;
-      for (const BodyState* state = body.latest_state();
-           state && state->step_due_ns > 0 && state->step_due_ns < due && !stop_requested() &&
-           monotonic_ns() < give_up;
-           state = body.latest_state())
+      auto just_late = [&](const BodyState* state) {
+        return state && state->step_due_ns > 0 && state->step_due_ns < due &&
+               due - state->step_due_ns <= loop.period_ns;
+      };
+      while (just_late(body.latest_state()) && !stop_requested() && monotonic_ns() < give_up)
         sleep_until_ns(monotonic_ns() + kLateStatePollNs);
       return true;
     };
