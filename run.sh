@@ -43,6 +43,8 @@ TEST_PACKAGES=(
   util-linux iproute2 python3
   # the Python tests, and the rospy afhub is compared with (python/examples/bench_python.py)
   python3-pytest python3-rospy
+  # stack traces of a process a test finds hung (stack_traces in tests/support)
+  gdb
 )
 
 # install_packages PACKAGE...: those not installed yet.

@@ -154,7 +154,8 @@ TEST(Pause, StoppedProcessesCarryOnWhenResumed) {
     EXPECT_TRUE(wait_until([&] { return read_file(echo_out).size() > printed + 1000; }, 10s))
         << "echo stopped printing after the " << who << " resumed";
     const RunResult ls = run_afhub({"ls"});
-    EXPECT_EQ(ls.exit_code, 0) << who << ": " << ls.err;
+    EXPECT_EQ(ls.exit_code, 0) << who << ": " << ls.err
+                               << (ls.exit_code == -1 ? stack_traces("afhub hub") : "");
     EXPECT_TRUE(contains(ls.out, "afhub/arm/base")) << who << ": " << ls.out;
     for (pid_t process : {hub.pid, physics.pid, controller.pid, second.pid, echo.pid})
       EXPECT_TRUE(still_running(process))

@@ -193,6 +193,18 @@ std::vector<double> numbers_after(const std::string& text, const std::string& ke
   return numbers;
 }
 
+std::string stack_traces(const std::string& pattern) {
+  const RunResult pids = run_command({"pgrep", "-f", pattern});
+  std::string out;
+  std::istringstream in(pids.out);
+  for (std::string pid; in >> pid;) {
+    const RunResult gdb = run_command({"gdb", "-p", pid, "-batch", "-ex", "thread apply all bt"},
+                                      std::chrono::seconds(60));
+    out += "== stacks of pid " + pid + " (" + pattern + ")\n" + gdb.out + gdb.err;
+  }
+  return out.empty() ? "no process matches '" + pattern + "'\n" : out;
+}
+
 int wait_for_exit(ScopedProcess& process, std::chrono::milliseconds timeout) {
   int status = 0;
   if (!wait_until([&] { return waitpid(process.pid, &status, WNOHANG) == process.pid; }, timeout))

@@ -64,6 +64,10 @@ int exit_code_if_ended(pid_t pid);
 // or -1 when it is still running (it is then left to the ScopedProcess).
 int wait_for_exit(ScopedProcess& process, std::chrono::milliseconds timeout);
 
+// Every thread's stack of each process named `pattern` (pgrep -f), through gdb: for a
+// test to print when it finds a process hung, so that the cause can be read from CI's log.
+std::string stack_traces(const std::string& pattern);
+
 // Waits until `predicate` holds, polling every 10 ms, for at most `timeout`.
 template <class Predicate>
 bool wait_until(Predicate predicate, std::chrono::milliseconds timeout) {
