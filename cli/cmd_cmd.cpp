@@ -309,7 +309,7 @@ int run_cmd(const CmdOptions& options) {
   const std::string channel(name_of(entry.info.channel));
   RefusalWatch watch(body);
   // Before the first loan, as every publisher: a command must not starve a running physics.
-  require_chunks({published_each_cycle(body_command_bytes(prototype.joint_count))},
+  require_chunks({written_as_slot(body_command_bytes(prototype.joint_count))},
                  "this command (to " + channel + ")");
   if (once) {
     const std::int64_t sent_ns = monotonic_ns();

@@ -122,9 +122,8 @@ int run_synth(const SynthOptions& options) {
     bodies[i].joints.resize(options.joints);
   }
   // Before the first loan, as the physics: a synth must not starve a running physics.
-  std::vector<ChunkNeed> needs(bodies.size(),
-                               published_each_cycle(body_state_bytes(options.joints)));
-  needs.push_back(published_each_cycle(sizeof(WorldState)));
+  std::vector<ChunkNeed> needs(bodies.size(), written_as_slot(body_state_bytes(options.joints)));
+  needs.push_back(written_as_slot(sizeof(WorldState)));
   require_chunks(needs, "this synth (" + std::to_string(bodies.size()) + " bodies)");
   directory.publish();
   confirm_body_claims(channels, kClaimConfirmTimeout);

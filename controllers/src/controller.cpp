@@ -146,7 +146,7 @@ int run_controller(const ControllerOptions& options, const ControllerCycle& cycl
   const BodyEntry entry = wait.wait_for_body(options.body, who);
   const std::string channel(name_of(entry.info.channel));
   BodyClient body(entry);
-  require_chunks({published_each_cycle(body_command_bytes(entry.info.joint_count)),
+  require_chunks({written_as_slot(body_command_bytes(entry.info.joint_count)),
                   published_each_cycle(sizeof(LoopStats))},
                  "this controller (commanding " + channel + ")");
   LoopTiming own_timing;  // preallocated before memory is locked and the loop starts

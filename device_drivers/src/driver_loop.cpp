@@ -143,9 +143,8 @@ int run_driver(const DeviceOpener& open, const DriverOptions& options) {
   }
   std::unique_ptr<Device> device = open();
   wait.connect_to_hub("device");
-  require_chunks(
-      {published_each_cycle(sizeof(DeviceState)), published_each_cycle(sizeof(LoopStats))},
-      "this driver (" + channel + ")");
+  require_chunks({written_as_slot(sizeof(DeviceState)), published_each_cycle(sizeof(LoopStats))},
+                 "this driver (" + channel + ")");
   Writer<DeviceState> states(body_state_channel(channel));
   LatestReader<DeviceCommand> commands(body_command_channel(channel));
   DirectoryPublisher directory;

@@ -43,7 +43,7 @@ Body::Body(const std::string& name, double wait_s)
       pid_(static_cast<std::uint32_t>(getpid())) {
   // Before the first loan, as every publisher: a script must not starve a running physics.
   py::gil_scoped_release release;
-  require_chunks({published_each_cycle(body_command_bytes(entry_.info.joint_count))},
+  require_chunks({written_as_slot(body_command_bytes(entry_.info.joint_count))},
                  "this Python client (commanding " + channel_ + ")");
 }
 
@@ -94,11 +94,11 @@ void Body::check_refused() {
   // The first state seen: published before this body's first command (by this physics,
   // or by one an earlier test or script stopped), it cannot carry a refusal of it, and
   // only sets the count; published after, its refusals are new when they name this process.
-  const bool new_refusal =
-      refusals_known_ ? state->refused_commands != refusals_seen_
-                      : first_command_ns_ != 0 &&
-                            state->header.publish_stamp_ns >= first_command_ns_ &&
-                            state->refused_commands > 0;
+  const bool new_refusal = refusals_known_
+                               ? state->refused_commands != refusals_seen_
+                               : first_command_ns_ != 0 &&
+                                     state->header.publish_stamp_ns >= first_command_ns_ &&
+                                     state->refused_commands > 0;
   refusals_seen_ = state->refused_commands;
   refusals_known_ = true;
   if (!new_refusal || state->refused_command_pid != pid_) return;

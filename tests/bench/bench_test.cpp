@@ -12,6 +12,7 @@
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/rt/cpu_wake_latency.hpp"
 #include "afhub/shm_layout/body_state.hpp"
+#include "afhub/shm_layout/slot.hpp"
 #include "afhub_process.hpp"
 #include "model_files.hpp"
 #include "real_time.hpp"
@@ -83,15 +84,17 @@ TEST(Bench, ShortRunMeasuresEveryTransportAndTheLoop) {
   EXPECT_GT(ratio, 0.9);  // below it, the bench exits 1 (above)
 }
 
-// A hub whose pools starve the body states (`--pool` of 20 chunks just large enough for
-// the example arm's states, below the body tiers: they all come from it): the bench
-// fails loudly, naming the pool, instead of reporting "met" (it said 1.7 % in time, exit
-// 0). Either the physics starts, drops states and says so once, or it is refused at start
-// for the lack of spare chunks.
+// A hub whose pools starve the body states (`--pool` of 6 chunks just large enough for
+// the example arm's state slots, below the body tiers: they all come from it, one per
+// body of the 8): the bench fails loudly, naming the pool, instead of reporting "met"
+// (it said 1.7 % in time, exit 0). Either the physics starts, drops states and says so
+// once, or it is refused at start for the lack of spare chunks.
 TEST(Bench, StarvedBodyStatesFailTheBench) {
-  // arm/base's state, the arm's largest (7 joints below it), rounded as the hub rounds.
-  const std::string bytes = std::to_string((afhub::body_state_bytes(7) + 7) / 8 * 8);
-  ScopedProcess hub(spawn_afhub({"hub", "--bench-pools", "--pool", bytes + ":20"}));
+  // arm/base's state slot, the arm's largest (7 joints below it), rounded as the hub
+  // rounds.
+  const std::string bytes =
+      std::to_string((afhub::body_state_bytes(7) + afhub::kSlotOverheadBytes + 7) / 8 * 8);
+  ScopedProcess hub(spawn_afhub({"hub", "--bench-pools", "--pool", bytes + ":6"}));
   ASSERT_TRUE(wait_until(
       [] { return probe_roudi() == RoudiPresence::kRunning && running_hub_pid(); }, 10s));
   const RunResult run = run_afhub(

@@ -18,7 +18,8 @@
 #include "afhub/shm_layout/layout_id.hpp"
 #include "afhub/shm_layout/world.hpp"
 #include "afhub_process.hpp"
-#include "iceoryx_posh/popo/untyped_publisher.hpp"
+#include "iceoryx_posh/mepoo/chunk_header.hpp"
+#include "latest_slot.hpp"
 #include "model_files.hpp"
 #include "strict_json.hpp"
 
@@ -216,37 +217,32 @@ TEST(FaultsCommands, ARestartedPhysicsIgnoresALiveWritersOldCommand) {
   EXPECT_TRUE(contains(output, "ignored a command for afhub/arm/base from pid")) << output;
 }
 
-// A command stamped an hour ahead (written with iceoryx directly, as a forger or a
-// writer on another clock would: afhub's own writers stamp at publish) is ignored and
-// counted as stale, said once; it does not move the arm.
+// A command stamped an hour ahead (forged in its slot, as a forger or a writer on
+// another clock would: afhub's own writers stamp at publish) is ignored and counted as
+// stale, said once; it does not move the arm.
 TEST(FaultsCommands, ACommandStampedInTheFutureIsIgnored) {
   ArmRun run;
   ASSERT_TRUE(run.ready()) << read_file(run.log);
   // Not the base: the previous test's old command to it, still held for a late
   // subscriber until the hub drops its writer, would be the one stale notice said.
-  const ChannelId channel = body_command_channel("afhub/arm/link1");
-  using iox::capro::IdString_t;
-  iox::popo::UntypedPublisher forger({IdString_t(iox::cxx::TruncateToCapacity, channel.service),
-                                      IdString_t(iox::cxx::TruncateToCapacity, channel.instance),
-                                      IdString_t(iox::cxx::TruncateToCapacity, channel.event)});
   BodyClient link("afhub/arm/link1");
   ASSERT_TRUE(wait_until([&] { return link.latest_state() != nullptr; }, 5s));
-  for (std::uint64_t sequence = 1; sequence <= 50; ++sequence) {
-    auto loaned =
-        forger.loan(static_cast<std::uint32_t>(body_command_bytes(1)), alignof(PayloadHeader));
-    ASSERT_FALSE(loaned.has_error());
-    // Sized for one joint: only that much is written.
-    std::memset(loaned.value(), 0, body_command_bytes(1));
-    auto* command = static_cast<BodyCommand*>(loaned.value());
-    command->header.layout_id = kLayoutId;
-    command->header.kind = PayloadKind::kBodyCommand;
-    command->header.publisher_pid = static_cast<std::uint32_t>(getpid());
+  RawWriter forger(body_command_channel("afhub/arm/link1"), PayloadKind::kBodyCommand);
+  auto* command = static_cast<BodyCommand*>(forger.loan(body_command_bytes(1)));
+  ASSERT_NE(command, nullptr);
+  // Sized for one joint: only that much is written.
+  std::memset(static_cast<void*>(command), 0, body_command_bytes(1));
+  command->joint_count = 1;
+  forger.publish(command);  // a command holding nothing, in a slot the physics takes
+  auto* slot =
+      static_cast<SlotControl*>(iox::mepoo::ChunkHeader::fromUserPayload(command)->userHeader());
+  for (std::uint64_t sequence = 2; sequence <= 50; ++sequence) {
+    slot::begin_update(*slot);
     command->header.sequence = sequence;
     command->header.publish_stamp_ns = monotonic_ns() + 3'600'000'000'000LL;
-    command->joint_count = 1;
     command->joints[0].type = JointCommandType::kPosition;
     command->joints[0].value = 1.0;
-    forger.publish(command);
+    slot::end_update(*slot, command->header.publish_stamp_ns);
     std::this_thread::sleep_for(10ms);
   }
   ASSERT_TRUE(wait_until([&] { return run.now().stale_commands >= 1; }, 5s)) << read_file(run.log);

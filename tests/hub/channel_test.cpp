@@ -1,15 +1,19 @@
-// Zero-copy channels against a live hub: in-place reads and writes, latest-value
-// semantics, late joiners, foreign payloads refused, and the catalog.
+// Channels against a live hub: slots updated in place and read as checked copies,
+// latest-value semantics, several writers, a writer killed mid-update, late
+// joiners, foreign payloads refused, and the catalog.
 #include "afhub/hub/channel.hpp"
 #include "afhub/rt/clock.hpp"
 
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
+#include <fstream>
 #include <memory>
 #include <string>
 #include <vector>
@@ -40,25 +44,45 @@ std::uint64_t step_of(const BodyState* state) {
   return state ? state->header.sim_step : ~0ull;
 }
 
-TEST(Channel, ReaderSeesTheWritersChunkInPlace) {
-  BodyPublisher physics("test/zero_copy");
-  BodyClient controller("test/zero_copy");
+// A state is a slot: the writer updates one chunk in place; a reader gets a copy,
+// checked after it was copied, that stays as it was until the reader asks again.
+TEST(Channel, ReaderGetsACopyOfTheWritersSlotThatStaysUntilItAsksAgain) {
+  BodyPublisher physics("test/slot");
+  BodyClient controller("test/slot");
   ASSERT_TRUE(test::wait_until([&] { return controller.subscribed(); }, 2s));
   BodyState* loaned = physics.loan_state(2);
   ASSERT_NE(loaned, nullptr);
   loaned->header.sim_step = 42;
-  loaned->joint_count = 2;
   loaned->joints[1].position = 0.25;
   physics.publish_state(loaned);
   const BodyState* read = nullptr;
   ASSERT_TRUE(test::wait_until([&] { return (read = controller.latest_state()) != nullptr; }, 2s));
-  // One process maps the segment once: the reader's pointer is the writer's chunk.
-  EXPECT_EQ(static_cast<const void*>(read), static_cast<const void*>(loaned));
+  EXPECT_NE(static_cast<const void*>(read), static_cast<const void*>(loaned)) << "a copy";
   EXPECT_EQ(read->header.sim_step, 42u);
   EXPECT_EQ(read->header.layout_id, kLayoutId);
   EXPECT_EQ(read->header.publisher_pid, static_cast<std::uint32_t>(getpid()));
   EXPECT_GT(read->header.publish_stamp_ns, 0);
+  EXPECT_EQ(read->joint_count, 2u);
   EXPECT_EQ(read->joints[1].position, 0.25);
+  // The next update is written in the same chunk, published once.
+  BodyState* again = physics.loan_state(2);
+  EXPECT_EQ(again, loaned);
+  again->header.sim_step = 43;
+  again->joints[1].position = 0.5;
+  EXPECT_EQ(read->joints[1].position, 0.25) << "the reader's copy did not change";
+  physics.publish_state(again);
+  read = controller.latest_state();
+  EXPECT_TRUE(controller.state_updated());
+  EXPECT_EQ(read->header.sim_step, 43u);
+  EXPECT_EQ(read->joints[1].position, 0.5);
+  // A state of more joints than the slot holds moves the writer to a larger slot.
+  BodyState* larger = physics.loan_state(5);
+  ASSERT_NE(larger, nullptr);
+  EXPECT_NE(larger, loaned);
+  larger->header.sim_step = 44;
+  physics.publish_state(larger);
+  ASSERT_TRUE(test::wait_until([&] { return step_of(controller.latest_state()) == 44u; }, 2s));
+  EXPECT_EQ(controller.latest_state()->joint_count, 5u);
 }
 
 TEST(Channel, ReaderGetsOnlyTheNewestSample) {
@@ -92,35 +116,35 @@ TEST(Channel, LateJoinerGetsTheLastCommandAtOnce) {
   EXPECT_EQ(read->joint_count, 7u);
 }
 
-// State is published every period, so its channel keeps no history: a reader that
-// joins late gets the next state, never an old one.
-TEST(Channel, LateJoinerGetsTheNextStateNotAnOldOne) {
+// A reader that joins late gets the current state at once: the slot it takes holds it.
+TEST(Channel, LateJoinerGetsTheCurrentStateAtOnce) {
   BodyPublisher physics("test/late_state");
   ASSERT_TRUE(publish_step(physics, 7));
   BodyClient late("test/late_state");
-  ASSERT_TRUE(test::wait_until([&] { return late.subscribed(); }, 2s));
-  EXPECT_EQ(late.latest_state(), nullptr);
+  ASSERT_TRUE(test::wait_until([&] { return late.latest_state() != nullptr; }, 2s));
+  EXPECT_EQ(step_of(late.latest_state()), 7u);
   ASSERT_TRUE(publish_step(physics, 8));
   EXPECT_EQ(step_of(late.latest_state()), 8u);
 }
 
-TEST(Channel, UnsubscribedReaderKeepsItsSampleAndMissesNewOnes) {
+// A reader holding a slot costs its writer nothing, subscribed or not: one that steps
+// aside still reads the slot it holds.
+TEST(Channel, AReaderKeepsReadingTheSlotItHoldsWhenItStepsAside) {
   BodyPublisher physics("test/step_aside");
   LatestReader<BodyState> probe(body_state_channel("test/step_aside"));
-  ASSERT_TRUE(test::wait_until([&] { return probe.raw().subscribed(); }, 2s));
   ASSERT_TRUE(publish_step(physics, 1));
-  const BodyState* held = probe.latest();
-  ASSERT_NE(held, nullptr);
+  ASSERT_TRUE(test::wait_until([&] { return probe.latest() != nullptr; }, 2s));
   probe.raw().unsubscribe();
   ASSERT_TRUE(test::wait_until([&] { return !probe.raw().subscribed(); }, 2s));
   ASSERT_TRUE(publish_step(physics, 2));
-  EXPECT_EQ(probe.latest(), held);
-  EXPECT_FALSE(probe.updated());
-  EXPECT_EQ(held->header.sim_step, 1u);
-  probe.raw().subscribe();
+  EXPECT_EQ(step_of(probe.latest()), 2u);
+  EXPECT_TRUE(probe.updated());
+  probe.raw().subscribe();  // the writer's history hands the same slot again
   ASSERT_TRUE(test::wait_until([&] { return probe.raw().subscribed(); }, 2s));
   ASSERT_TRUE(publish_step(physics, 3));
   EXPECT_EQ(step_of(probe.latest()), 3u);
+  EXPECT_EQ(step_of(probe.latest()), 3u);
+  EXPECT_FALSE(probe.updated());
 }
 
 TEST(Channel, CommandsTravelToThePhysicsSide) {
@@ -141,6 +165,84 @@ TEST(Channel, CommandsTravelToThePhysicsSide) {
   EXPECT_EQ(read->joint_count, 3u);
   EXPECT_EQ(read->joints[2].type, JointCommandType::kVelocity);
   EXPECT_EQ(read->joints[2].value, -0.5);
+}
+
+// Commands may come from several writers at once (a controller, a teleop, a script):
+// each writes its own slot, and the reader takes the newest update of any.
+TEST(Channel, TheNewestCommandOfSeveralWritersWins) {
+  BodyPublisher physics("test/two_writers");
+  BodyClient first("test/two_writers"), second("test/two_writers");
+  auto send = [](BodyClient& writer, double value) {
+    BodyCommand* command = writer.loan_command(1);
+    ASSERT_NE(command, nullptr);
+    command->joints[0].value = value;
+    writer.publish_command(command);
+  };
+  auto value_read = [&] {
+    const BodyCommand* command = physics.latest_command();
+    return command ? command->joints[0].value : -1.0;
+  };
+  send(first, 1.0);
+  ASSERT_TRUE(test::wait_until([&] { return value_read() == 1.0; }, 2s));
+  send(second, 2.0);
+  ASSERT_TRUE(test::wait_until([&] { return value_read() == 2.0; }, 2s));
+  send(first, 3.0);
+  EXPECT_EQ(value_read(), 3.0);
+  EXPECT_TRUE(physics.command_updated());
+  EXPECT_EQ(value_read(), 3.0);
+  EXPECT_FALSE(physics.command_updated());
+}
+
+// A writer SIGKILLed in the middle of updating its slots (tests/support/
+// torn_slot_writer.cpp: a command to synth/body0, a state of torn/body) leaves them
+// torn: readers keep the last whole update, never the half-written one, without a
+// lock to repair or a wait; a new writer's slot is taken at once.
+TEST(Channel, AWriterKilledMidUpdateLeavesATornSlotThatReadersSkip) {
+  BodyPublisher physics("synth/body0");
+  BodyClient reader("torn/body");
+  const std::string go = "/tmp/torn_slot_go";
+  std::filesystem::remove(go);
+  const pid_t writer = test::spawn_command({AFHUB_TORN_SLOT_WRITER, go});
+  // The whole updates first.
+  const BodyCommand* command = nullptr;
+  const BodyState* state = nullptr;
+  EXPECT_TRUE(test::wait_until(
+      [&] {
+        command = physics.latest_command();
+        state = reader.latest_state();
+        return command && state;
+      },
+      10s));
+  std::ofstream{go};
+  int status = 0;
+  ASSERT_EQ(waitpid(writer, &status, 0), writer);
+  ASSERT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL)
+      << "torn_slot_writer did not die in its updates (exit " << WEXITSTATUS(status) << ")";
+  ASSERT_TRUE(command && state);
+  command = physics.latest_command();
+  state = reader.latest_state();
+  EXPECT_EQ(command->joints[0].value, 0.2) << "the last whole command";
+  EXPECT_EQ(state->header.sim_step, 1u) << "the last whole state";
+  EXPECT_EQ(state->pose.position_m.x, 0.0);
+  for (int i = 0; i < 100; ++i) {
+    EXPECT_EQ(physics.latest_command()->joints[0].value, 0.2);
+    EXPECT_FALSE(physics.command_updated());
+    EXPECT_EQ(reader.latest_state()->header.sim_step, 1u);
+    EXPECT_FALSE(reader.state_updated());
+  }
+  EXPECT_EQ(physics.refused_commands(), 0u) << "a torn slot is skipped, not refused";
+  // A restarted writer publishes a slot of its own, which the readers take.
+  BodyPublisher restarted("torn/body");
+  ASSERT_TRUE(publish_step(restarted, 5));
+  EXPECT_TRUE(test::wait_until([&] { return step_of(reader.latest_state()) == 5u; }, 2s));
+  BodyClient controller("synth/body0");
+  BodyCommand* fresh = controller.loan_command(1);
+  ASSERT_NE(fresh, nullptr);
+  fresh->joints[0].value = 0.7;
+  controller.publish_command(fresh);
+  EXPECT_TRUE(test::wait_until(
+      [&] { return physics.latest_command() && physics.latest_command()->joints[0].value == 0.7; },
+      2s));
 }
 
 // A writer built from other sources: same channel, another layout id.

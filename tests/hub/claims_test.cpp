@@ -19,6 +19,7 @@
 #include "afhub/shm_layout/health.hpp"
 #include "afhub/shm_layout/limits.hpp"
 #include "afhub/shm_layout/loop_stats.hpp"
+#include "afhub/shm_layout/slot.hpp"
 #include "afhub/shm_layout/world.hpp"
 #include "afhub_process.hpp"
 #include "hub_environment.hpp"
@@ -225,16 +226,22 @@ std::uint32_t free_chunks(LatestReader<Health>& health, std::size_t bytes) {
   return pool->chunk_count - pool->used_chunks;
 }
 
+// The pool payloads of `bytes` of `kind` land in: a slot's control block comes with it.
+std::size_t pool_bytes(std::size_t bytes, PayloadKind kind) {
+  return is_slot_kind(kind) ? bytes + kSlotOverheadBytes : bytes;
+}
+
 // Loans held in `writers`, 8 per writer (iceoryx's most per publisher), until `left`
-// chunks of the pool for `bytes` are free.
-void take_chunks(LatestReader<Health>& health, std::size_t bytes, PayloadKind kind,
-                 std::uint32_t left, std::vector<std::unique_ptr<RawWriter>>& writers) {
+// chunks of the pool for `bytes` are free. Loaned by queue writers, which take a new
+// chunk on each loan (a slot's writer holds one).
+void take_chunks(LatestReader<Health>& health, std::size_t bytes, std::uint32_t left,
+                 std::vector<std::unique_ptr<RawWriter>>& writers) {
   ASSERT_TRUE(wait_until([&] { return pool_for(health, bytes) != nullptr; }, 5s));
   const std::uint32_t to_take = free_chunks(health, bytes) - left;
   std::uint32_t taken = 0;
   while (taken < to_take) {
     writers.push_back(std::make_unique<RawWriter>(
-        ChannelId{"afhub", "fill", "w" + std::to_string(writers.size())}, kind));
+        ChannelId{"afhub", "fill", "w" + std::to_string(writers.size())}, PayloadKind::kLoopStats));
     for (int i = 0; i < 8 && taken < to_take; ++i, ++taken)
       ASSERT_NE(writers.back()->loan(static_cast<std::uint32_t>(bytes)), nullptr)
           << taken << " of " << to_take;
@@ -274,16 +281,16 @@ TEST(Claims, ANewPublisherIsRefusedBeforeItTakesTheLastChunks) {
       {std::string(kService), std::string(kHubInstance), std::string(kHealthEvent)});
   // 6 left: room for a physics's two, but not for them and the spare.
   std::vector<std::unique_ptr<RawWriter>> writers;
-  ASSERT_NO_FATAL_FAILURE(
-      take_chunks(health, sizeof(WorldState), PayloadKind::kWorldState, 6, writers));
-  const std::string pool = named(*pool_for(health, sizeof(WorldState)));
+  const std::size_t world_bytes = pool_bytes(sizeof(WorldState), PayloadKind::kWorldState);
+  ASSERT_NO_FATAL_FAILURE(take_chunks(health, world_bytes, 6, writers));
+  const std::string pool = named(*pool_for(health, world_bytes));
   const RunResult second = run_afhub({"run", arm, "--namespace", "b", "--no-autostart"}, 30s);
   EXPECT_EQ(second.exit_code, 1) << second.err;
   EXPECT_TRUE(contains(second.err, pool)) << second.err;
   const RunResult synth =
       run_afhub({"synth", "--namespace", "s", "--seconds", "3", "--no-autostart"}, 30s);
   EXPECT_EQ(synth.exit_code, 1) << synth.err;
-  EXPECT_TRUE(contains(synth.err, "this synth (3 bodies) needs 2 " + pool)) << synth.err;
+  EXPECT_TRUE(contains(synth.err, "this synth (3 bodies) needs 1 " + pool)) << synth.err;
   EXPECT_TRUE(contains(synth.err, "afhub hub --pool")) << synth.err;
   // The first physics still publishes its world state, and never said it could not.
   const std::uint64_t before = world.latest()->header.sim_step;
@@ -291,7 +298,7 @@ TEST(Claims, ANewPublisherIsRefusedBeforeItTakesTheLastChunks) {
   EXPECT_EQ(first.stop(), 0);
   EXPECT_FALSE(contains(read_file("/tmp/afhub-claims-first.log"), "exhausted"))
       << read_file("/tmp/afhub-claims-first.log");
-  give_back(health, sizeof(WorldState), writers);
+  give_back(health, world_bytes, writers);
 }
 
 // The loop stats' pool nearly full: a controller and a device driver, which publish
@@ -305,8 +312,7 @@ TEST(Claims, AControllerAndADriverAreRefusedBeforeTheyTakeTheLastChunks) {
       {std::string(kService), std::string(kHubInstance), std::string(kHealthEvent)});
   // 10 left: fewer than a sixteenth of the pool, the spare, with the two asked for.
   std::vector<std::unique_ptr<RawWriter>> writers;
-  ASSERT_NO_FATAL_FAILURE(
-      take_chunks(health, sizeof(LoopStats), PayloadKind::kLoopStats, 10, writers));
+  ASSERT_NO_FATAL_FAILURE(take_chunks(health, sizeof(LoopStats), 10, writers));
   const std::string pool = named(*pool_for(health, sizeof(LoopStats)));
   const RunResult ctl = run_afhub({"ctl", "hold", "afhub/arm/link1", "--wait", "5"}, 30s);
   EXPECT_EQ(ctl.exit_code, 1) << ctl.err;
@@ -364,8 +370,7 @@ TEST(Claims, TeleopAndCmdAreRefusedBeforeTheyTakeTheLastChunks) {
   LatestReader<Health> health(
       {std::string(kService), std::string(kHubInstance), std::string(kHealthEvent)});
   std::vector<std::unique_ptr<RawWriter>> writers;
-  ASSERT_NO_FATAL_FAILURE(
-      take_chunks(health, sizeof(LoopStats), PayloadKind::kLoopStats, 10, writers));
+  ASSERT_NO_FATAL_FAILURE(take_chunks(health, sizeof(LoopStats), 10, writers));
   const std::string stats_pool = named(*pool_for(health, sizeof(LoopStats)));
   const RunResult teleop = run_afhub({"teleop", models + "/virtual_hand.yaml", "--wait", "5"}, 30s);
   EXPECT_EQ(teleop.exit_code, 1) << teleop.err;
@@ -373,13 +378,12 @@ TEST(Claims, TeleopAndCmdAreRefusedBeforeTheyTakeTheLastChunks) {
   EXPECT_TRUE(contains(teleop.err, stats_pool)) << teleop.err;
   give_back(health, sizeof(LoopStats), writers);
 
-  const std::size_t command_bytes = body_command_bytes(0);
-  ASSERT_NO_FATAL_FAILURE(
-      take_chunks(health, command_bytes, PayloadKind::kBodyCommand, 10, writers));
+  const std::size_t command_bytes = pool_bytes(body_command_bytes(0), PayloadKind::kBodyCommand);
+  ASSERT_NO_FATAL_FAILURE(take_chunks(health, command_bytes, 10, writers));
   const std::string command_pool = named(*pool_for(health, command_bytes));
   const RunResult cmd = run_afhub({"cmd", "afhub/gripper/palm", "--force", "0,0,1"}, 30s);
   EXPECT_EQ(cmd.exit_code, 1) << cmd.err;
-  EXPECT_TRUE(contains(cmd.err, "this command (to afhub/gripper/palm) needs 2 " + command_pool))
+  EXPECT_TRUE(contains(cmd.err, "this command (to afhub/gripper/palm) needs 1 " + command_pool))
       << cmd.err;
   EXPECT_EQ(physics.stop(), 0);
   EXPECT_FALSE(contains(read_file("/tmp/afhub-claims-gripper.log"), "exhausted"))

@@ -185,8 +185,8 @@ def lockstep_run(physics, tmp_path, run_index):
     report = tmp_path / f'report{run_index}.json'
     run = physics(ARM, '--lockstep', '--wait-for', '1', '--client-timeout', '60000', '--fast',
                   '--steps', '2000', '--report', report)
-    wait_until(lambda: 'afhub/arm/base' in afhub.bodies(), 20, 'the arm in the catalog')
-    base = afhub.Body('arm/base')
+    # The catalog may still list the first run's arm, gone since: wait for a live one.
+    base = afhub.Body('arm/base', wait_s=20)
 
     def answer(state):
         base.set_joint_positions([0.4 * np.sin(2 * np.pi * state.time), 0.2])

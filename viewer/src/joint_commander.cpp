@@ -107,7 +107,7 @@ std::string JointCommander::run(const std::string& query) {
   if (!client->pools_checked) {
     // Before the first loan, as every publisher: a page must not starve a running physics.
     try {
-      require_chunks({published_each_cycle(body_command_bytes(state->joint_count))},
+      require_chunks({written_as_slot(body_command_bytes(state->joint_count))},
                      "the viewer's commands to " + body);
     } catch (const std::exception& error) {
       return error.what();

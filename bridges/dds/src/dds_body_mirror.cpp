@@ -103,8 +103,7 @@ MirrorClaims::Install BodyMirror::claim(const std::string& channel, std::uint32_
   const BodyEntry entry = make_body_entry(channel, joint_names);
   directory_.check_room(entry);
   check_room_for_bodies({channel}, 1);
-  require_chunks({published_each_cycle(body_state_bytes(announced_joints))},
-                 "mirroring " + channel);
+  require_chunks({written_as_slot(body_state_bytes(announced_joints))}, "mirroring " + channel);
   auto body = std::make_shared<Body>(
       Body{channel, announced_joints, std::make_unique<BodyPublisher>(channel)});
   directory_.add(entry);

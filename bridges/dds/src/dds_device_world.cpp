@@ -104,7 +104,7 @@ DeviceWorldBridge::DeviceWorldBridge(dds_entity_t participant, const DdsBridgeOp
       world_command_writer_ =
           checked(dds_create_writer(participant, world_command_topic_, commands.get(), nullptr),
                   "world command writer");
-      require_chunks({published_each_cycle(sizeof(WorldState))},
+      require_chunks({written_as_slot(sizeof(WorldState))},
                      "afhub bridge dds (the world's state, --world)");
       world_state_out_ = std::make_unique<Writer<WorldState>>(
           ChannelId{std::string(kService), world_, std::string(kStateEvent)});
@@ -244,7 +244,7 @@ MirrorClaims::Install DeviceWorldBridge::claim_device(const std::string& channel
   const BodyEntry entry = make_device_entry(device_name_of(channel));
   directory_->check_room(entry);
   check_room_for_bodies({channel}, 1);
-  require_chunks({published_each_cycle(sizeof(DeviceState))}, "mirroring " + channel);
+  require_chunks({written_as_slot(sizeof(DeviceState))}, "mirroring " + channel);
   auto device = std::make_shared<MirroredDevice>(
       MirroredDevice{channel, std::make_unique<Writer<DeviceState>>(body_state_channel(channel)),
                      std::make_unique<LatestReader<DeviceCommand>>(body_command_channel(channel))});

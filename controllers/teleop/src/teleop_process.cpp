@@ -198,8 +198,8 @@ int run_teleop(const TeleopOptions& options, TeleopLatency* latency) {
   // Before the first loan, as the physics: teleop must not starve a running physics.
   std::vector<ChunkNeed> needs{published_each_cycle(sizeof(LoopStats))};
   for (const auto& link : links) {
-    needs.push_back(published_each_cycle(sizeof(DeviceCommand)));
-    needs.push_back(published_each_cycle(body_command_bytes(link->binding->gripper_joints.size())));
+    needs.push_back(written_as_slot(sizeof(DeviceCommand)));
+    needs.push_back(written_as_slot(body_command_bytes(link->binding->gripper_joints.size())));
   }
   require_chunks(needs, "this teleop (" + std::to_string(links.size()) + " devices)");
   const std::size_t most = latency ? options.latency_samples : 0;

@@ -8,7 +8,7 @@
 namespace afhub {
 
 struct RawLatestReader::Port {
-  Port(const ChannelId& channel, History history);
+  Port(const ChannelId& channel, bool slots);
   iox::popo::UntypedSubscriber subscriber;
 };
 

@@ -1,14 +1,27 @@
-// Waiting for samples on iceoryx's WaitSet (see sample_waiter.hpp).
+// Waiting for updates (see sample_waiter.hpp): on the futexes of the slots the
+// readers hold, or on iceoryx's WaitSet while none holds a slot yet.
 #include "afhub/hub/sample_waiter.hpp"
 
+#include <algorithm>
+#include <vector>
+
 #include "iceoryx_posh/popo/wait_set.hpp"
+#include "latest_slot.hpp"
 #include "reader_port.hpp"
 
 namespace afhub {
+namespace {
+
+// A slot's futex says nothing of a new writer's slot arriving through iceoryx (a
+// restarted physics, a second controller): a wait on slots looks for those this often.
+constexpr std::int64_t kArrivalCheckNs = 1'000'000;
+
+}  // namespace
 
 struct SampleWaiter::WaitSet {
   iox::popo::WaitSet<> set;
-  std::size_t attached = 0;
+  std::vector<RawLatestReader*> readers;
+  std::vector<slot::Watch> watches;  // reserved at attach: wait() does not allocate
 };
 
 const std::size_t SampleWaiter::kCapacity = iox::MAX_NUMBER_OF_ATTACHMENTS_PER_WAITSET;
@@ -20,17 +33,31 @@ SampleWaiter::~SampleWaiter() = default;
 bool SampleWaiter::attach(RawLatestReader& reader) {
   // A state, not an event: the wait returns while a sample waits in the reader's
   // queue, so a sample that came before the wait is never missed.
-  if (wait_set_->attached >= kCapacity) return false;
+  if (wait_set_->readers.size() >= kCapacity) return false;
   auto result =
       wait_set_->set.attachState(reader.port_->subscriber, iox::popo::SubscriberState::HAS_DATA);
   if (result.has_error()) return false;
-  ++wait_set_->attached;
+  wait_set_->readers.push_back(&reader);
+  wait_set_->watches.reserve(wait_set_->readers.size() * RawLatestReader::kMaxHeldSlots);
   return true;
 }
 
 void SampleWaiter::wait(std::int64_t timeout_ns) noexcept {
   if (timeout_ns <= 0) return;
-  wait_set_->set.timedWait(iox::units::Duration::fromNanoseconds(timeout_ns));
+  std::vector<slot::Watch>& watches = wait_set_->watches;
+  watches.clear();
+  for (RawLatestReader* reader : wait_set_->readers) {
+    if (reader->port_->subscriber.hasData()) return;  // a sample or a new slot waits
+    for (std::size_t i = 0; i < reader->held_slot_count_; ++i)
+      watches.push_back({reader->held_slots_[i].control, reader->held_slots_[i].observed});
+  }
+  if (watches.empty()) {
+    wait_set_->set.timedWait(iox::units::Duration::fromNanoseconds(timeout_ns));
+    return;
+  }
+  // futex_waitv watches at most 128 words; past that the wait looks again sooner.
+  const std::size_t count = std::min<std::size_t>(watches.size(), 128);
+  slot::wait({watches.data(), count}, std::min(timeout_ns, kArrivalCheckNs));
 }
 
 }  // namespace afhub

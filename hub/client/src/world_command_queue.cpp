@@ -23,7 +23,7 @@ struct WorldCommandQueue::Port {
             [] {
               iox::popo::SubscriberOptions options;
               options.queueCapacity = kCapacity;
-              // World command writers keep their last command (History::kKeepLast):
+              // World command writers keep their last command (their history):
               // ask for it, so that one sent while this subscription was being set
               // up is not lost; the caller drops those older than the physics.
               options.historyRequest = 1;

@@ -15,6 +15,7 @@
 #include "afhub/shm_layout/loop_stats.hpp"
 #include "afhub/shm_layout/scene.hpp"
 #include "afhub/shm_layout/scene_poses.hpp"
+#include "afhub/shm_layout/slot.hpp"
 #include "afhub/shm_layout/soft_body.hpp"
 #include "afhub/shm_layout/world.hpp"
 
@@ -23,6 +24,12 @@ namespace {
 
 constexpr std::uint32_t round_up8(std::size_t bytes) {
   return static_cast<std::uint32_t>((bytes + 7) / 8 * 8);
+}
+
+// A pool's payload size for a slot kind's largest payload: iceoryx counts the slot's
+// control block (a user header) into the payload size it picks a pool by.
+constexpr std::uint32_t slot_bytes(std::size_t payload_bytes) {
+  return round_up8(payload_bytes + kSlotOverheadBytes);
 }
 
 // iceoryx rejects a chunk above 4 GiB; a pool beyond this many bytes in all is
@@ -65,15 +72,15 @@ std::vector<MempoolSpec> default_mempools() {
   // in its writer's history, and three in each reader.
   std::vector<MempoolSpec> pools = {
       {128, 512, "world commands, small iceoryx samples"},
-      {round_up8(body_command_bytes(64)), 4096,
+      {slot_bytes(body_command_bytes(64)), 4096,
        "body commands of up to 64 joints, states of bodies with few joints"},
-      {round_up8(body_state_bytes(64)), 4096, "body states of up to 64 joints"},
-      {round_up8(body_state_bytes(256)), 1024, "body states and commands of up to 256 joints"},
-      {round_up8(body_state_bytes(kMaxJointsPerBody)), 256,
+      {slot_bytes(body_state_bytes(64)), 4096, "body states of up to 64 joints"},
+      {slot_bytes(body_state_bytes(256)), 1024, "body states and commands of up to 256 joints"},
+      {slot_bytes(body_state_bytes(kMaxJointsPerBody)), 256,
        "body states and commands of up to kMaxJointsPerBody joints"},
       // Each physics's world state: a chunk in its history and a loan, and three in
       // each reader (`afhub status`, `afhub world`, a viewer).
-      {round_up8(sizeof(WorldState)), 2 * kMaxProcesses + 64, "world state"},
+      {slot_bytes(sizeof(WorldState)), 2 * kMaxProcesses + 64, "world state"},
       {round_up8(sizeof(Health)), 128, "hub health"},
       {round_up8(sizeof(LoopStats)), 256, "loop stats"},
       // Each process's directory: a chunk in its history, a loan, and the hub's reader

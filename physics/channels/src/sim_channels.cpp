@@ -130,9 +130,9 @@ SimChannels::SimChannels(Simulation& sim, double watchdog_s, std::string_view na
     soft_surfaces_.push_back(std::move(surface));
   }
   // Before the first loan.
-  std::vector<ChunkNeed> needs{published_each_cycle(sizeof(WorldState))};
+  std::vector<ChunkNeed> needs{written_as_slot(sizeof(WorldState))};
   for (const Channel& channel : channels_)
-    needs.push_back(published_each_cycle(body_state_bytes(channel.joint_count)));
+    needs.push_back(written_as_slot(body_state_bytes(channel.joint_count)));
   require_chunks(needs, "this physics (" + std::to_string(channels_.size()) + " bodies)");
   std::size_t joint_values = 0;
   for (std::size_t b = 0; b < scene_body_count(model); ++b)

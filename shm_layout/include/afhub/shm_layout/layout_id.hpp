@@ -18,6 +18,7 @@
 #include "afhub/shm_layout/loop_stats.hpp"
 #include "afhub/shm_layout/scene.hpp"
 #include "afhub/shm_layout/scene_poses.hpp"
+#include "afhub/shm_layout/slot.hpp"
 #include "afhub/shm_layout/soft_body.hpp"
 #include "afhub/shm_layout/world.hpp"
 
@@ -274,6 +275,11 @@ inline constexpr std::uint64_t kLayoutId = layout_detail::mix({
     AFHUB_OFF(ScenePoses, body_count),
     AFHUB_OFF(ScenePoses, joint_value_count),
     AFHUB_OFF(ScenePoses, bodies),
+    sizeof(SlotControl),
+    AFHUB_OFF(SlotControl, sleeping),
+    AFHUB_OFF(SlotControl, stamp_ns),
+    AFHUB_OFF(SlotControl, magic),
+    kSlotMagic,
 });
 #undef AFHUB_OFF
 

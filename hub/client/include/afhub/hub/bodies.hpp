@@ -19,8 +19,8 @@
 
 namespace afhub {
 
-// The owner publishes state every period, paused or not: the state channel keeps
-// no history (see history_of), so a reader that joins gets the next period's state.
+// The owner publishes state every period, paused or not, into the body's state slot
+// (see channel.hpp); a reader that joins gets the current state at once.
 class BodyPublisher {
  public:
   explicit BodyPublisher(std::string_view body_channel);

@@ -1,11 +1,17 @@
 // Zero-copy channel ends with latest-value semantics.
-//   Writer<T>: loan a chunk in shared memory, fill it in place, publish it.
-//   LatestReader<T>: read the newest valid sample in place; older ones are dropped.
-// A late joiner receives the last published sample at once, or, on a state channel
-// (published every period), the next one: see History.
+//   Writer<T>: loan a payload in shared memory, fill it in place, publish it.
+//   LatestReader<T>: the newest valid payload; older ones are dropped.
+// Two transports, by payload kind (is_slot_kind, shm_layout/slot.hpp):
+//   - States and commands are latest-value slots: the writer publishes one iceoryx
+//     chunk once and then updates it in place under a seqlock; a reader holds the
+//     chunk and copies the payload out, then checks the copy. No lock is shared and a
+//     reader costs the writer nothing. A late joiner gets the current value at once.
+//   - Every other kind is a queue of iceoryx samples: each publish sends a new chunk,
+//     read in place; the writer keeps the last one for late joiners.
 // loan(), publish() and latest() are real-time safe: no heap, no exceptions.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <cstring>
 #include <memory>
@@ -19,39 +25,25 @@
 
 namespace afhub {
 
-// What a writer keeps for readers that subscribe after it published.
-//   kKeepLast: the last sample, handed to a late joiner at once.
-//   kNone: nothing; a late joiner gets the next sample. For channels written every
-//     period (body and world state): a publish then costs about half as much in
-//     iceoryx 2.0.3 (no history chunk to swap), and a reader waits at most a period.
-enum class History { kKeepLast, kNone };
-
-// Body and world state keep no history; every other kind keeps the last sample.
-// Writers and readers both follow it, so a reader never asks for a history the
-// writer does not keep (RouDi would log a warning on every such subscribe).
-constexpr History history_of(PayloadKind kind) {
-  return kind == PayloadKind::kBodyState || kind == PayloadKind::kWorldState ? History::kNone
-                                                                             : History::kKeepLast;
-}
+struct SlotControl;
 
 // Untyped ends; the typed templates below are what code uses.
 class RawWriter {
  public:
-  RawWriter(const ChannelId& channel, PayloadKind kind)
-      : RawWriter(channel, kind, history_of(kind)) {}
-  RawWriter(const ChannelId& channel, PayloadKind kind, History history);
+  RawWriter(const ChannelId& channel, PayloadKind kind);
   ~RawWriter();
   RawWriter(const RawWriter&) = delete;
   RawWriter& operator=(const RawWriter&) = delete;
 
-  // A chunk of `bytes` bytes, or nullptr when shared memory is exhausted.
+  // A payload of `bytes` bytes to fill, or nullptr when shared memory is exhausted.
+  // On a slot the same one every time (while `bytes` fits it), its update begun.
   void* loan(std::uint32_t bytes) noexcept;
   // Stamps the header (layout, kind, pid, sequence, monotonic time) and publishes.
   // The caller sets header.sim_step and header.sim_time_s. Returns the stamp.
   std::int64_t publish(void* payload) noexcept;
 
   const ChannelId& channel() const { return channel_; }
-  // Whether any reader is subscribed now: each one costs every publish.
+  // Whether any reader is subscribed now (on a queue, each one costs every publish).
   bool has_readers() const noexcept;
   // The next publish carries sequence `last` + 1. A short-lived writer of commands
   // that readers act on once per sequence number (world commands) starts from a
@@ -65,6 +57,11 @@ class RawWriter {
   std::uint32_t pid_;  // read once: getpid() is a system call
   std::uint64_t sequence_ = 0;
   std::unique_ptr<Port> port_;
+  // The slot being written (slot kinds only).
+  void* slot_payload_ = nullptr;
+  SlotControl* slot_ = nullptr;
+  std::uint32_t slot_bytes_ = 0;
+  bool slot_published_ = false;
 };
 
 class RawLatestReader {
@@ -76,6 +73,7 @@ class RawLatestReader {
 
   // The newest valid payload, or nullptr before the first one. It stays valid
   // and unchanged until the next call. Invalid payloads are refused and counted.
+  // From a slot it is this reader's checked copy.
   const void* latest() noexcept;
   // Whether the last latest() call found a sample newer than the one before.
   bool updated() const { return updated_; }
@@ -83,33 +81,54 @@ class RawLatestReader {
   std::uint32_t latest_bytes() const { return held_bytes_; }
   std::uint64_t refused_count() const { return refused_; }
   const ChannelId& channel() const { return channel_; }
-  // A reader starts subscribed. Every subscribed reader costs the writer on each
-  // publish, so one that looks only now and then can step aside in between; what
-  // latest() holds stays valid.
+  // A reader starts subscribed. On a queue every subscribed reader costs the writer
+  // on each publish, so one that looks only now and then can step aside in between;
+  // what latest() holds stays valid.
   void subscribe() noexcept;
   void unsubscribe() noexcept;
   // Connected to the writer: every sample published from now on reaches this reader.
   bool subscribed() const noexcept;
 
  private:
-  friend class SampleWaiter;  // waits on the port's subscriber
+  friend class SampleWaiter;  // waits on the port's subscriber and the held slots
   struct Port;
-  void report_refusal(const void* payload, PayloadError error, const char* field) noexcept;
+  // A writer's slot this reader holds. A channel has one writer of state; commands
+  // may come from a few (a controller, a teleop, a script), each its own slot, the
+  // newest update taken.
+  struct HeldSlot {
+    const void* payload;
+    SlotControl* control;
+    std::uint32_t bytes;
+    std::uint64_t origin;    // the writer's iceoryx port id
+    std::uint32_t observed;  // its sequence when this reader last looked
+  };
+  static constexpr std::size_t kMaxHeldSlots = 4;
+  const void* latest_queued() noexcept;
+  const void* latest_slot() noexcept;
+  void take_slot(const void* payload) noexcept;
+  bool grow_copies(std::uint32_t bytes) noexcept;
+  void report_refusal(const void* payload, std::uint32_t bytes, const char* field,
+                      const char* problem) noexcept;
   ChannelId channel_;
   PayloadKind kind_;
+  bool slots_;  // is_slot_kind(kind_)
   const void* held_ = nullptr;
   const void* retired_ = nullptr;  // replaced by held_, released on the next call
   std::uint32_t held_bytes_ = 0;
   bool updated_ = false;
   std::uint64_t refused_ = 0;
   std::unique_ptr<Port> port_;
+  std::array<HeldSlot, kMaxHeldSlots> held_slots_{};
+  std::size_t held_slot_count_ = 0;
+  // The checked copy latest() returns, and the buffer the next copy goes to.
+  std::unique_ptr<unsigned char[]> copy_, spare_;
+  std::uint32_t copy_capacity_ = 0;
 };
 
 template <class T>
 class Writer {
  public:
-  explicit Writer(const ChannelId& channel, History history = history_of(T::kKind))
-      : raw_(channel, T::kKind, history) {}
+  explicit Writer(const ChannelId& channel) : raw_(channel, T::kKind) {}
   // A default-initialised payload in shared memory, or nullptr when memory is exhausted.
   T* loan() noexcept { return loan(sizeof(T)); }
   // The first `bytes` bytes of a default-initialised payload: for payloads sent at

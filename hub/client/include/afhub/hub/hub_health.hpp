@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include "afhub/shm_layout/slot.hpp"
+
 namespace afhub {
 
 struct FreePorts {
@@ -47,9 +49,15 @@ struct ChunkNeed {
   std::uint32_t bytes = 0;
   std::uint32_t count = 0;
 };
-// What a writer that publishes every cycle holds: a loan and a sample in flight.
+// What a writer of a queue that publishes every cycle holds: a loan and a sample in
+// flight.
 constexpr ChunkNeed published_each_cycle(std::size_t bytes) {
   return {static_cast<std::uint32_t>(bytes), 2};
+}
+// What a writer of a slot (states and commands, see channel.hpp) holds: its one chunk,
+// the slot's control block beside the payload.
+constexpr ChunkNeed written_as_slot(std::size_t payload_bytes) {
+  return {static_cast<std::uint32_t>(payload_bytes + kSlotOverheadBytes), 1};
 }
 // Throws afhub::Error, naming `what`, the pool and its size, when taking `needs` would
 // leave a pool of the hub nearly empty (by the hub's latest Health, read afresh): a new

@@ -1,7 +1,8 @@
-// Blocks a thread until a sample reaches one of some readers: iceoryx's WaitSet,
-// a futex-backed semaphore in shared memory that the writer's publish posts. A
-// lockstep wait sleeps on it instead of spinning on sched_yield, which under
-// SCHED_FIFO never gives the core to a client of lower or equal priority.
+// Blocks a thread until one of some readers has something new: an update of a slot
+// it holds (a futex wait on the slots' sequences, which the writer wakes), or a
+// sample in its queue (iceoryx's WaitSet, a futex-backed semaphore the writer's
+// publish posts). A lockstep wait sleeps on it instead of spinning on sched_yield,
+// which under SCHED_FIFO never gives the core to a client of lower or equal priority.
 // Construct and attach before the loop (needs connect_to_hub()); wait() does not
 // allocate.
 #pragma once

@@ -1,0 +1,47 @@
+// The seqlock and futex protocol of a latest-value slot (SlotControl, see
+// shm_layout/slot.hpp), over plain memory: no iceoryx here, so the protocol is
+// tested on its own, under ThreadSanitizer too. Every function is allocation-free
+// and noexcept.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+
+#include "afhub/shm_layout/slot.hpp"
+
+namespace afhub::slot {
+
+// A fresh slot, before its chunk is published.
+void init(SlotControl& slot) noexcept;
+
+// Writer: begin_update makes the sequence odd (the payload may then be written in
+// place); end_update records the payload's stamp, makes the sequence even and wakes
+// any reader asleep on it. begin_update on a slot already odd (an update begun and
+// never ended) keeps it odd.
+void begin_update(SlotControl& slot) noexcept;
+void end_update(SlotControl& slot, std::int64_t stamp_ns) noexcept;
+
+enum class Read {
+  kCopied,     // `out` holds an update newer than `observed`
+  kUnchanged,  // the sequence is still `observed`
+  kTorn,       // mid-update (its writer busy, or killed in it): try again later
+};
+
+// Copies `bytes` of `payload` into `out` when the slot holds an update other than
+// `observed` (the sequence this reader last saw), and sets `observed` to the sequence
+// it found. Gives up after a few tries on a slot being written, rather than wait for
+// a writer that may be gone: `out` then holds garbage, and the caller keeps its copy.
+Read read(const SlotControl& slot, const void* payload, std::size_t bytes, void* out,
+          std::uint32_t& observed) noexcept;
+
+// One slot a reader waits on, and the sequence it last saw there.
+struct Watch {
+  SlotControl* slot;
+  std::uint32_t observed;
+};
+
+// Sleeps until one of `watches` (at most 128) changes, or `timeout_ns` passes.
+void wait(std::span<const Watch> watches, std::int64_t timeout_ns) noexcept;
+
+}  // namespace afhub::slot

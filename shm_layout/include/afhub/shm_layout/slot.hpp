@@ -1,0 +1,61 @@
+// A latest-value slot: the control block of a chunk that a writer publishes once and
+// then updates in place for as long as it lives; readers hold the chunk and copy its
+// payload out. It sits in the chunk's iceoryx user header, in front of the payload,
+// so the payload keeps its layout. No lock is shared: the writer makes the sequence
+// odd, writes the payload, makes it even again (a seqlock), and a reader keeps a
+// copy only when the sequence was the same even number before and after it copied.
+// A writer killed mid-update leaves the sequence odd: its readers keep their last
+// copy and recognise the slot as torn, until a restarted writer publishes a new one.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+
+#include "afhub/shm_layout/header.hpp"
+
+namespace afhub {
+
+struct SlotControl {
+  // Odd while the writer updates the payload; +2 per update. Also the futex word a
+  // waiting reader sleeps on (32 bits, as a futex is).
+  std::atomic<std::uint32_t> sequence{0};
+  // Set by a reader about to sleep on `sequence`; the writer that finds it set clears
+  // it and wakes the sleepers. A flag rather than a count: a reader killed asleep
+  // costs the writer one futex_wake, not one on every update from then on.
+  std::atomic<std::uint32_t> sleeping{0};
+  // The payload's publish stamp (monotonic_ns) of the last finished update, readable
+  // without copying the payload: a reader holding several writers' slots of one
+  // channel (commands) takes the newest.
+  std::atomic<std::int64_t> stamp_ns{0};
+  // kSlotMagic: set before the first publish; a chunk without it is not a slot.
+  std::uint64_t magic{0};
+};
+
+inline constexpr std::uint64_t kSlotMagic = 0x61666875622d736cULL;  // "afhub-sl"
+
+// Lock-free in shared memory: the atomics must not fall back to a process-local lock.
+static_assert(std::atomic<std::uint32_t>::is_always_lock_free);
+static_assert(std::atomic<std::int64_t>::is_always_lock_free);
+
+// The kinds written as slots: written every period, read as latest values. The rest
+// (catalog, directories, world commands, events, scene, bench samples) are queues of
+// iceoryx samples, each published once.
+constexpr bool is_slot_kind(PayloadKind kind) {
+  switch (kind) {
+    case PayloadKind::kBodyState:
+    case PayloadKind::kBodyCommand:
+    case PayloadKind::kWorldState:
+    case PayloadKind::kDeviceState:
+    case PayloadKind::kDeviceCommand:
+      return true;
+    default:
+      return false;
+  }
+}
+
+// What a slot adds to its chunk beyond the payload: the control block, and padding
+// up to the payload's alignment. Pools for slot kinds are sized with it.
+inline constexpr std::uint32_t kSlotOverheadBytes = 64;
+static_assert(sizeof(SlotControl) + alignof(PayloadHeader) <= kSlotOverheadBytes);
+
+}  // namespace afhub
