@@ -21,10 +21,28 @@ void State::Free::operator()(BodyState* state) const noexcept {
   std::free(state);
 }
 
+// One allocation: the state at its real size, then its joints' three columns.
 State::State(const BodyState& sample)
-    : state_(static_cast<BodyState*>(std::malloc(body_state_bytes(sample.joint_count)))) {
+    : state_(static_cast<BodyState*>(std::malloc(body_state_bytes(sample.joint_count) +
+                                                 3 * sample.joint_count * sizeof(double)))) {
   if (!state_) throw std::bad_alloc();
-  std::memcpy(state_.get(), &sample, body_state_bytes(sample.joint_count));
+  const std::size_t bytes = body_state_bytes(sample.joint_count);
+  std::memcpy(state_.get(), &sample, bytes);
+  auto* columns = reinterpret_cast<double*>(reinterpret_cast<char*>(state_.get()) + bytes);
+  const std::uint32_t count = sample.joint_count;
+  for (std::uint32_t j = 0; j < count; ++j) {
+    columns[j] = sample.joints[j].position;
+    columns[count + j] = sample.joints[j].velocity;
+    columns[2 * count + j] = sample.joints[j].effort;
+  }
+}
+
+const double* State::joint_column(std::size_t member) const {
+  static_assert(offsetof(JointSample, velocity) == sizeof(double) &&
+                offsetof(JointSample, effort) == 2 * sizeof(double));
+  const auto* columns = reinterpret_cast<const double*>(
+      reinterpret_cast<const char*>(state_.get()) + body_state_bytes(state_->joint_count));
+  return columns + member / sizeof(double) * state_->joint_count;
 }
 
 Body::Body(const std::string& name, double wait_s)
@@ -181,10 +199,8 @@ void register_state(py::module_& module) {
   };
   const auto joints = [](std::size_t member) {
     return [member](py::object self) {
-      const auto& state = *self.cast<const State&>();
-      const auto* first = reinterpret_cast<const double*>(
-          reinterpret_cast<const char*>(state.joints.data()) + member);
-      return view(first, state.joint_count, sizeof(JointSample), self);
+      const State& state = self.cast<const State&>();
+      return view(state.joint_column(member), state->joint_count, sizeof(double), self);
     };
   };
   py::class_<State>(module, "State",

@@ -19,6 +19,10 @@ class State {
   explicit State(const BodyState& sample);
   const BodyState& operator*() const { return *state_; }
   const BodyState* operator->() const { return state_.get(); }
+  // The joints' positions, velocities or efforts (`member`: the offset of that member
+  // in JointSample), side by side: a contiguous array goes back into a command as is,
+  // where a view striding over the samples is first copied.
+  const double* joint_column(std::size_t member) const;
 
  private:
   struct Free {
