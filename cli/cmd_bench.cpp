@@ -131,8 +131,9 @@ void register_bench(CLI::App& app, Runner& selected) {
   bench->add_option("--json", options->json_file, "Write every distribution to this JSON file");
   bench->add_option("--plot", options->plot_file,
                     "Draw latency CDFs and the loop's jitter histogram into this PNG (gnuplot)");
-  bench->add_option("--transports", options->transports,
-                    "Transports to compare, comma-separated (default afhub,dds,uds,ros1)");
+  bench->add_option(
+      "--transports", options->transports,
+      "Transports to compare, comma-separated (default afhub,afhub-slot,dds,uds,ros1)");
   add_count_option(bench, "--rounds", options->rounds, "Interleaved rounds (default 20, quick 5)");
   add_count_option(bench, "--pings", options->pings,
                    "Round trips per transport, size and round (default 500, quick 200)");

@@ -62,6 +62,13 @@ double median_of(const BenchResults& results, const std::string& name, std::uint
   return summarize(transport->one_way_us.at(bytes)).p50_us;
 }
 
+// The same at p99.
+double p99_of(const BenchResults& results, const std::string& name, std::uint32_t bytes) {
+  const TransportResult* transport = find(results, name);
+  if (!transport || !transport->one_way_us.count(bytes)) return 0.0;
+  return summarize(transport->one_way_us.at(bytes)).p99_us;
+}
+
 std::string format(const char* pattern, double a, double b = 0.0, double c = 0.0) {
   char line[256];
   std::snprintf(line, sizeof line, pattern, a, b, c);
@@ -205,6 +212,24 @@ std::string results_table(const BenchResults& results) {
     out += format("  1 KiB median, afhub %.2f us vs ", afhub_1k) + name +
            format(" %.2f us: %.1fx lower (goal %.1fx): ", other, other / afhub_1k, goal) +
            (other / afhub_1k >= goal ? "met\n" : "NOT met\n");
+  }
+  // States and commands travel through slots: their own goals.
+  const double slot_1k = median_of(results, "afhub-slot", 1024);
+  const double slot_1k_p99 = p99_of(results, "afhub-slot", 1024);
+  if (slot_1k > 0.0) {
+    out += format(
+               "  1 KiB through a slot (states, commands): median %.2f us (goal <= 0.4 us), "
+               "p99 %.2f us (goal <= 1 us): ",
+               slot_1k, slot_1k_p99) +
+           (slot_1k <= 0.4 && slot_1k_p99 <= 1.0 ? "met\n" : "NOT met\n");
+    for (const auto& [name, goal] :
+         {std::pair<const char*, double>{"dds", 75.0}, {"uds", 5.0}, {"ros1", 100.0}}) {
+      const double other = median_of(results, name, 1024);
+      if (other <= 0.0) continue;
+      out += format("  1 KiB median, afhub-slot %.2f us vs ", slot_1k) + name +
+             format(" %.2f us: %.1fx lower (goal %.0fx): ", other, other / slot_1k, goal) +
+             (other / slot_1k >= goal ? "met\n" : "NOT met\n");
+    }
   }
   const double afhub_1m = median_of(results, "afhub", 1u << 20);
   if (afhub_1k > 0.0 && afhub_1m > 0.0)

@@ -12,6 +12,8 @@ const char* transport_name(TransportKind kind) {
   switch (kind) {
     case TransportKind::kAfhub:
       return "afhub";
+    case TransportKind::kAfhubSlot:
+      return "afhub-slot";
     case TransportKind::kDds:
       return "dds";
     case TransportKind::kUds:
@@ -23,8 +25,8 @@ const char* transport_name(TransportKind kind) {
 }
 
 std::optional<TransportKind> parse_transport(const std::string& name) {
-  for (TransportKind kind :
-       {TransportKind::kAfhub, TransportKind::kDds, TransportKind::kUds, TransportKind::kRos1})
+  for (TransportKind kind : {TransportKind::kAfhub, TransportKind::kAfhubSlot, TransportKind::kDds,
+                             TransportKind::kUds, TransportKind::kRos1})
     if (name == transport_name(kind)) return kind;
   return std::nullopt;
 }
@@ -48,7 +50,8 @@ std::unique_ptr<Transport> open_transport(TransportKind kind, Side side,
   if (!unavailable.empty()) throw Error(std::string(transport_name(kind)) + ": " + unavailable);
   switch (kind) {
     case TransportKind::kAfhub:
-      return open_afhub_transport(side, session);
+    case TransportKind::kAfhubSlot:
+      return open_afhub_transport(side, session, kind == TransportKind::kAfhubSlot);
     case TransportKind::kDds:
       return open_dds_transport(side, session);
     case TransportKind::kUds:

@@ -12,7 +12,7 @@
 
 namespace afhub::bench {
 
-enum class TransportKind { kAfhub, kDds, kUds, kRos1 };
+enum class TransportKind { kAfhub, kAfhubSlot, kDds, kUds, kRos1 };
 enum class Side { kPing, kPong };
 
 struct Message {
@@ -56,7 +56,8 @@ inline constexpr std::uint32_t kMaxPayloadBytes = 1u << 20;
 inline constexpr std::uint32_t kMinPayloadBytes = 64;
 
 // The transports, each in its own file.
-std::unique_ptr<Transport> open_afhub_transport(Side side, const std::string& session);
+// A queue of samples, or (`slot`) a latest-value slot.
+std::unique_ptr<Transport> open_afhub_transport(Side side, const std::string& session, bool slot);
 std::unique_ptr<Transport> open_uds_transport(Side side, const std::string& session);
 std::unique_ptr<Transport> open_dds_transport(Side side, const std::string& session);
 std::unique_ptr<Transport> open_ros1_transport(Side side, const std::string& session);

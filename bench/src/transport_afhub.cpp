@@ -1,6 +1,10 @@
-// afhub's own channels: iceoryx through the hub, zero copy. The sender loans a
-// chunk of the payload's size and writes only the fields it needs into it, as a
-// producer filling its data in place would; the receiver reads it in place.
+// afhub's own channels through the hub, two ways:
+//   afhub: a queue of iceoryx samples, zero copy. The sender loans a chunk of the
+//     payload's size and writes only the fields it needs into it, as a producer filling
+//     its data in place would; the receiver reads it in place.
+//   afhub-slot: a latest-value slot, as states and commands travel (see channel.hpp).
+//     The sender updates its one chunk in place, writing the same fields; the receiver
+//     copies the whole payload out and checks the copy.
 #include <chrono>
 #include <new>
 #include <thread>
@@ -10,6 +14,7 @@
 #include "afhub/shm_layout/bench_sample.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "afhub/shm_layout/health.hpp"
+#include "afhub/shm_layout/slot.hpp"
 #include "transport.hpp"
 
 namespace afhub::bench {
@@ -17,9 +22,9 @@ namespace {
 
 class AfhubTransport : public Transport {
  public:
-  AfhubTransport(Side side, const std::string& session)
-      : writer_(channel(session, side == Side::kPing ? "ping" : "pong"), BenchSample::kKind),
-        reader_(channel(session, side == Side::kPing ? "pong" : "ping"), BenchSample::kKind) {}
+  AfhubTransport(Side side, const std::string& session, PayloadKind kind)
+      : writer_(channel(session, side == Side::kPing ? "ping" : "pong", kind), kind),
+        reader_(channel(session, side == Side::kPing ? "pong" : "ping", kind), kind) {}
 
   std::int64_t send(std::uint32_t bytes, std::uint64_t round,
                     std::int64_t peer_receive_ns) override {
@@ -50,8 +55,8 @@ class AfhubTransport : public Transport {
   }
 
  private:
-  static ChannelId channel(const std::string& session, const char* event) {
-    return {"afhub", "bench/" + session, event};
+  static ChannelId channel(const std::string& session, const char* event, PayloadKind kind) {
+    return {"afhub", "bench/" + session, std::string(event) + (is_slot_kind(kind) ? "_slot" : "")};
   }
   RawWriter writer_;
   RawLatestReader reader_;
@@ -77,7 +82,7 @@ void require_bench_pools() {
   for (std::uint32_t i = 0; i < health->mempool_count; ++i) {
     const MempoolUsage& pool = health->mempools[i];
     if (pool.segment_id != health->mempools[0].segment_id &&
-        pool.chunk_payload_bytes >= kMaxPayloadBytes)
+        pool.chunk_payload_bytes >= kMaxPayloadBytes + kSlotOverheadBytes)
       free_chunks += pool.chunk_count - pool.used_chunks;
   }
   if (free_chunks < kNeeded)
@@ -90,11 +95,12 @@ void require_bench_pools() {
 
 }  // namespace
 
-std::unique_ptr<Transport> open_afhub_transport(Side side, const std::string& session) {
+std::unique_ptr<Transport> open_afhub_transport(Side side, const std::string& session, bool slot) {
   // The hub is the bench's own (BenchHub) or one that already ran.
   connect_to_hub(side == Side::kPing ? "bench" : "bench-peer", HubPolicy::kRequire);
   if (side == Side::kPing) require_bench_pools();
-  return std::make_unique<AfhubTransport>(side, session);
+  return std::make_unique<AfhubTransport>(
+      side, session, slot ? PayloadKind::kBenchSlot : PayloadKind::kBenchSample);
 }
 
 }  // namespace afhub::bench

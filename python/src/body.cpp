@@ -17,14 +17,11 @@
 
 namespace afhub::python {
 
-void State::Free::operator()(BodyState* state) const noexcept {
-  std::free(state);
-}
-
 // One allocation: the state at its real size, then its joints' three columns.
 State::State(const BodyState& sample)
     : state_(static_cast<BodyState*>(std::malloc(body_state_bytes(sample.joint_count) +
-                                                 3 * sample.joint_count * sizeof(double)))) {
+                                                 3 * sample.joint_count * sizeof(double))),
+             [](BodyState* state) { std::free(state); }) {
   if (!state_) throw std::bad_alloc();
   const std::size_t bytes = body_state_bytes(sample.joint_count);
   std::memcpy(state_.get(), &sample, bytes);
@@ -37,12 +34,19 @@ State::State(const BodyState& sample)
   }
 }
 
-const double* State::joint_column(std::size_t member) const {
+py::object State::joint_column(std::size_t member) const {
   static_assert(offsetof(JointSample, velocity) == sizeof(double) &&
                 offsetof(JointSample, effort) == 2 * sizeof(double));
-  const auto* columns = reinterpret_cast<const double*>(
-      reinterpret_cast<const char*>(state_.get()) + body_state_bytes(state_->joint_count));
-  return columns + member / sizeof(double) * state_->joint_count;
+  const std::size_t column = member / sizeof(double);
+  if (!columns_[column]) {
+    const auto* first = reinterpret_cast<const double*>(
+        reinterpret_cast<const char*>(state_.get()) + body_state_bytes(state_->joint_count));
+    py::capsule owner(new std::shared_ptr<BodyState>(state_),
+                      [](void* kept) { delete static_cast<std::shared_ptr<BodyState>*>(kept); });
+    columns_[column] =
+        view(first + column * state_->joint_count, state_->joint_count, sizeof(double), owner);
+  }
+  return columns_[column];
 }
 
 Body::Body(const std::string& name, double wait_s)
@@ -65,7 +69,7 @@ Body::Body(const std::string& name, double wait_s)
                  "this Python client (commanding " + channel_ + ")");
 }
 
-std::optional<State> Body::read(double wait_s) {
+py::object Body::read(double wait_s) {
   const BodyState* sample = client_.latest_state();
   if (!sample && wait_s > 0.0) {
     const std::int64_t give_up = deadline_after(wait_s, "wait_s");
@@ -73,8 +77,16 @@ std::optional<State> Body::read(double wait_s) {
     while (!(sample = client_.latest_state()) && monotonic_ns() < give_up)
       sleep_until_ns(monotonic_ns() + 1'000'000);
   }
-  if (!sample) return std::nullopt;
-  return State(*sample);
+  if (!sample) return py::none();
+  // The same sample as last time (by its writer and sequence): the same State.
+  const PayloadHeader& header = sample->header;
+  if (last_read_ && header.publisher_pid == last_read_header_.publisher_pid &&
+      header.sequence == last_read_header_.sequence &&
+      header.publish_stamp_ns == last_read_header_.publish_stamp_ns)
+    return last_read_;
+  last_read_ = py::cast(State(*sample));
+  last_read_header_ = header;
+  return last_read_;
 }
 
 State Body::wait_next(std::optional<std::uint64_t> after_step, double timeout_s) {
@@ -198,10 +210,7 @@ void register_state(py::module_& module) {
     };
   };
   const auto joints = [](std::size_t member) {
-    return [member](py::object self) {
-      const State& state = self.cast<const State&>();
-      return view(state.joint_column(member), state->joint_count, sizeof(double), self);
-    };
+    return [member](const State& state) { return state.joint_column(member); };
   };
   py::class_<State>(module, "State",
                     "One state of a body, copied out of shared memory when read (one small "

@@ -1,6 +1,7 @@
 // afhub.Body and afhub.State: one body's newest state as numpy arrays, and its commands.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -13,22 +14,24 @@ namespace afhub::python {
 
 // A body state copied out of shared memory at its real size: one small copy, so that its
 // arrays stay valid for as long as Python holds them (a view on the held sample would
-// change under them at the next read).
+// change under them at the next read). It never changes: Body.read hands the same
+// State again until a newer sample comes.
 class State {
  public:
   explicit State(const BodyState& sample);
   const BodyState& operator*() const { return *state_; }
   const BodyState* operator->() const { return state_.get(); }
   // The joints' positions, velocities or efforts (`member`: the offset of that member
-  // in JointSample), side by side: a contiguous array goes back into a command as is,
-  // where a view striding over the samples is first copied.
-  const double* joint_column(std::size_t member) const;
+  // in JointSample) as a read-only numpy array, made on the first call. Side by side: a
+  // contiguous array goes back into a command as is, where a view striding over the
+  // samples is first copied.
+  py::object joint_column(std::size_t member) const;
 
  private:
-  struct Free {
-    void operator()(BodyState* state) const noexcept;
-  };
-  std::unique_ptr<BodyState, Free> state_;
+  // Shared with the arrays made on it (through a capsule, not this State: an array
+  // holding its State while the State holds the array would never be freed).
+  std::shared_ptr<BodyState> state_;
+  mutable std::array<py::object, 3> columns_;
 };
 
 class Body {
@@ -40,8 +43,9 @@ class Body {
   // Its sensors, actuators and neighbours as the catalog names them (see BodyEntry).
   const BodyEntry& entry() const { return entry_; }
   std::size_t joint_index(const std::string& name) { return client_.joint_index(name); }
-  // The newest state, copied; None before the first (after waiting up to wait_s for it).
-  std::optional<State> read(double wait_s);
+  // The newest state (a State), copied; the same object again while no newer sample
+  // came; None before the first (after waiting up to wait_s for it).
+  py::object read(double wait_s);
   // The first state of a step after `after_step` (or any newer sample when None),
   // waiting up to timeout_s; afhub.Error when none came.
   State wait_next(std::optional<std::uint64_t> after_step, double timeout_s);
@@ -65,6 +69,8 @@ class Body {
   std::uint32_t refusals_seen_ = 0;
   bool refusals_known_ = false;
   std::int64_t first_command_ns_ = 0;  // monotonic_ns() when this body sent its first command
+  py::object last_read_;               // the State read() returned last
+  PayloadHeader last_read_header_{};   // and its sample's header, which tells a newer one
 };
 
 }  // namespace afhub::python

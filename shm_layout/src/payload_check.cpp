@@ -25,6 +25,7 @@ std::size_t fixed_size_of(PayloadKind kind) noexcept {
     case PayloadKind::kLoopStats:
       return sizeof(LoopStats);
     case PayloadKind::kBenchSample:
+    case PayloadKind::kBenchSlot:
       return sizeof(BenchSample);
     case PayloadKind::kDeviceState:
       return sizeof(DeviceState);
@@ -215,6 +216,7 @@ const char* count_beyond_capacity(const char* at, std::size_t bytes, PayloadKind
     }
     case PayloadKind::kLoopStats:
     case PayloadKind::kBenchSample:
+    case PayloadKind::kBenchSlot:
       return nullptr;
   }
   return nullptr;

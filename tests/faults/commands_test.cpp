@@ -237,7 +237,7 @@ TEST(FaultsCommands, ACommandStampedInTheFutureIsIgnored) {
   auto* slot =
       static_cast<SlotControl*>(iox::mepoo::ChunkHeader::fromUserPayload(command)->userHeader());
   for (std::uint64_t sequence = 2; sequence <= 50; ++sequence) {
-    slot::begin_update(*slot);
+    slot::begin_update(*slot, static_cast<std::uint32_t>(body_command_bytes(1)));
     command->header.sequence = sequence;
     command->header.publish_stamp_ns = monotonic_ns() + 3'600'000'000'000LL;
     command->joints[0].type = JointCommandType::kPosition;

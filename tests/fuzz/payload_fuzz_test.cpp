@@ -41,7 +41,7 @@ constexpr std::array kKinds{
     PayloadKind::kBodyState,    PayloadKind::kBodyCommand,   PayloadKind::kWorldState,
     PayloadKind::kWorldCommand, PayloadKind::kBodyDirectory, PayloadKind::kCatalog,
     PayloadKind::kHealth,       PayloadKind::kLoopStats,     PayloadKind::kBenchSample,
-    PayloadKind::kDeviceState,  PayloadKind::kDeviceCommand};
+    PayloadKind::kDeviceState,  PayloadKind::kDeviceCommand, PayloadKind::kBenchSlot};
 
 std::uint64_t env_number(const char* name, std::uint64_t fallback) {
   const char* text = std::getenv(name);
@@ -135,6 +135,8 @@ std::vector<Seed> make_seeds() {
   set_name(loop.name, "ctl sine");
   set_name(loop.body, "arm/base");
   auto bench = stamped<BenchSample>();
+  auto bench_slot = bench;  // the same payload, through a slot
+  bench_slot.header.kind = PayloadKind::kBenchSlot;
   auto device = stamped<DeviceState>();
   device.spec.max_force_n = 10.0;
   device.spec.max_stiffness_npm = 3000.0;
@@ -175,6 +177,7 @@ std::vector<Seed> make_seeds() {
       seed_of(bench, {}),
       device_seed,
       command_seed,
+      seed_of(bench_slot, {}),
   };
 }
 
@@ -439,6 +442,7 @@ class Fuzzer {
         break;
       }
       case PayloadKind::kBenchSample:
+      case PayloadKind::kBenchSlot:
         break;  // its fields are stamps and a round number, read as numbers
       case PayloadKind::kDeviceState:
         consume_device_state(*reinterpret_cast<const DeviceState*>(data), sink);

@@ -29,9 +29,19 @@ struct TestSlot {
 };
 
 void write(TestSlot& slot, std::uint64_t value) {
-  slot::begin_update(slot.control);
+  slot::begin_update(slot.control, sizeof slot.payload);
   for (std::uint64_t& word : slot.payload.word) word = value;
   slot::end_update(slot.control, static_cast<std::int64_t>(value));
+}
+
+slot::Read read(const TestSlot& slot, Words& copy, std::uint32_t& observed) {
+  std::uint32_t copied = 0;
+  const slot::Read result =
+      slot::read(slot.control, &slot.payload, sizeof copy, &copy, observed, copied);
+  if (result == slot::Read::kCopied) {
+    EXPECT_EQ(copied, sizeof copy);
+  }
+  return result;
 }
 
 TEST(LatestSlot, ReadersNeverSeeAMixedUpdate) {
@@ -48,9 +58,7 @@ TEST(LatestSlot, ReadersNeverSeeAMixedUpdate) {
       std::uint64_t last = 0;
       Words copy;
       while (!done.load(std::memory_order_acquire)) {
-        if (slot::read(slot.control, &slot.payload, sizeof copy, &copy, observed) !=
-            slot::Read::kCopied)
-          continue;
+        if (read(slot, copy, observed) != slot::Read::kCopied) continue;
         copies.fetch_add(1, std::memory_order_relaxed);
         for (std::uint64_t word : copy.word)
           if (word != copy.word[0]) {
@@ -76,15 +84,35 @@ TEST(LatestSlot, AnUnchangedSlotIsNotCopiedAgain) {
   write(slot, 7);
   std::uint32_t observed = ~0U;
   Words copy;
-  EXPECT_EQ(slot::read(slot.control, &slot.payload, sizeof copy, &copy, observed),
-            slot::Read::kCopied);
+  EXPECT_EQ(read(slot, copy, observed), slot::Read::kCopied);
   EXPECT_EQ(copy.word[5], 7U);
-  EXPECT_EQ(slot::read(slot.control, &slot.payload, sizeof copy, &copy, observed),
-            slot::Read::kUnchanged);
+  EXPECT_EQ(read(slot, copy, observed), slot::Read::kUnchanged);
   write(slot, 8);
-  EXPECT_EQ(slot::read(slot.control, &slot.payload, sizeof copy, &copy, observed),
-            slot::Read::kCopied);
+  EXPECT_EQ(read(slot, copy, observed), slot::Read::kCopied);
   EXPECT_EQ(copy.word[95], 8U);
+}
+
+// An update shorter than its slot (a state of fewer joints) is copied at its length.
+TEST(LatestSlot, AReaderCopiesTheBytesTheUpdateWrote) {
+  TestSlot slot;
+  slot::init(slot.control);
+  Words copy;
+  copy.word.fill(9);
+  slot::begin_update(slot.control, 3 * sizeof(std::uint64_t));
+  for (std::size_t i = 0; i < 3; ++i) slot.payload.word[i] = 1;
+  slot::end_update(slot.control, 1);
+  std::uint32_t observed = ~0U, copied = 0;
+  ASSERT_EQ(slot::read(slot.control, &slot.payload, sizeof copy, &copy, observed, copied),
+            slot::Read::kCopied);
+  EXPECT_EQ(copied, 3 * sizeof(std::uint64_t));
+  EXPECT_EQ(copy.word[2], 1U);
+  EXPECT_EQ(copy.word[3], 9U) << "copied past the update";
+  // Never past the reader's capacity, whatever the slot claims.
+  slot::begin_update(slot.control, 1'000'000);
+  slot::end_update(slot.control, 2);
+  ASSERT_EQ(slot::read(slot.control, &slot.payload, sizeof copy, &copy, observed, copied),
+            slot::Read::kCopied);
+  EXPECT_EQ(copied, sizeof copy);
 }
 
 TEST(LatestSlot, AnUpdateNeverEndedIsTornUntilTheNextWriterEndsOne) {
@@ -93,16 +121,13 @@ TEST(LatestSlot, AnUpdateNeverEndedIsTornUntilTheNextWriterEndsOne) {
   write(slot, 3);
   std::uint32_t observed = ~0U;
   Words copy;
-  ASSERT_EQ(slot::read(slot.control, &slot.payload, sizeof copy, &copy, observed),
-            slot::Read::kCopied);
+  ASSERT_EQ(read(slot, copy, observed), slot::Read::kCopied);
   // The writer dies after begin_update: half its payload written.
-  slot::begin_update(slot.control);
+  slot::begin_update(slot.control, sizeof slot.payload);
   for (std::size_t i = 0; i < 40; ++i) slot.payload.word[i] = 4;
-  EXPECT_EQ(slot::read(slot.control, &slot.payload, sizeof copy, &copy, observed),
-            slot::Read::kTorn);
+  EXPECT_EQ(read(slot, copy, observed), slot::Read::kTorn);
   EXPECT_EQ(observed & 1U, 1U) << "a reader remembers the torn sequence";
-  EXPECT_EQ(slot::read(slot.control, &slot.payload, sizeof copy, &copy, observed),
-            slot::Read::kTorn)
+  EXPECT_EQ(read(slot, copy, observed), slot::Read::kTorn)
       << "and says it again at the cost of one load";
   // A wait on it sleeps (until its timeout) rather than spin on the torn slot.
   const slot::Watch watch{&slot.control, observed};
@@ -111,11 +136,10 @@ TEST(LatestSlot, AnUpdateNeverEndedIsTornUntilTheNextWriterEndsOne) {
   EXPECT_GE(std::chrono::steady_clock::now() - before, std::chrono::milliseconds(19));
   // begin_update again (a writer that resumes the slot) keeps it odd; ending it gives a
   // whole update.
-  slot::begin_update(slot.control);
+  slot::begin_update(slot.control, sizeof slot.payload);
   for (std::uint64_t& word : slot.payload.word) word = 5;
   slot::end_update(slot.control, 5);
-  EXPECT_EQ(slot::read(slot.control, &slot.payload, sizeof copy, &copy, observed),
-            slot::Read::kCopied);
+  EXPECT_EQ(read(slot, copy, observed), slot::Read::kCopied);
   EXPECT_EQ(copy.word[0], 5U);
   EXPECT_EQ(copy.word[95], 5U);
 }

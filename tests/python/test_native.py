@@ -6,6 +6,7 @@ import os
 import subprocess
 import sys
 import threading
+import time
 
 import numpy as np
 import pytest
@@ -46,6 +47,25 @@ def test_reads_state_and_catalog(physics):
     before = second.joint_positions.copy()
     base.wait_next(after_step=second.step + 5)
     assert np.array_equal(second.joint_positions, before)
+    # Its joint arrays are contiguous, made once, and outlive the state.
+    assert second.joint_positions.flags.c_contiguous
+    assert second.joint_positions is second.joint_positions
+    positions = base.read().joint_positions
+    expected = positions.copy()
+    base.wait_next(after_step=base.read().step + 5)
+    assert np.array_equal(positions, expected)
+    # read() hands the same State while no newer sample came, a new one when one did.
+    same = new = 0
+    give_up = time.monotonic() + 10
+    while (same == 0 or new == 0) and time.monotonic() < give_up:
+        a, b = base.read(), base.read()
+        if a.sequence == b.sequence:
+            assert a is b
+            same += 1
+        else:
+            assert a is not b and b.sequence > a.sequence
+            new += 1
+    assert same > 0 and new > 0
 
 
 @pytest.mark.parametrize('model', [ARM, pytest.param(KUKA, marks=needs_shared_models())],

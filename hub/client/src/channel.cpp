@@ -67,7 +67,7 @@ void* RawWriter::loan(std::uint32_t bytes) noexcept {
     return result.has_error() ? nullptr : result.value();
   }
   if (slot_payload_ && bytes <= slot_bytes_) {
-    slot::begin_update(*slot_);
+    slot::begin_update(*slot_, bytes);
     return slot_payload_;
   }
   // The first loan, or a larger payload than the slot holds: a new slot, which
@@ -79,7 +79,7 @@ void* RawWriter::loan(std::uint32_t bytes) noexcept {
   slot_payload_ = result.value();
   slot_ = new (iox::mepoo::ChunkHeader::fromUserPayload(slot_payload_)->userHeader()) SlotControl;
   slot::init(*slot_);
-  slot::begin_update(*slot_);
+  slot::begin_update(*slot_, bytes);
   slot_bytes_ = bytes;
   slot_published_ = false;
   return slot_payload_;
@@ -253,19 +253,20 @@ const void* RawLatestReader::latest_slot() noexcept {
       held_slots_[i].observed = held_slots_[i].control->sequence.load(std::memory_order_acquire);
   HeldSlot& slot = held_slots_[newest];
   if (!grow_copies(slot.bytes)) return held_;
-  if (slot::read(*slot.control, slot.payload, slot.bytes, spare_.get(), slot.observed) !=
+  std::uint32_t bytes = 0;
+  if (slot::read(*slot.control, slot.payload, slot.bytes, spare_.get(), slot.observed, bytes) !=
       slot::Read::kCopied)
     return held_;
   // Checked after the copy: the writer cannot change what was checked.
   const char* field = "";
-  const PayloadError error = check_payload(spare_.get(), slot.bytes, kind_, &field);
+  const PayloadError error = check_payload(spare_.get(), bytes, kind_, &field);
   if (error != PayloadError::kNone) {
-    report_refusal(spare_.get(), slot.bytes, field, describe(error));
+    report_refusal(spare_.get(), bytes, field, describe(error));
     return held_;
   }
   copy_.swap(spare_);
   held_ = copy_.get();
-  held_bytes_ = slot.bytes;
+  held_bytes_ = bytes;
   updated_ = true;
   return held_;
 }

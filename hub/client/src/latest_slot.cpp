@@ -65,15 +65,18 @@ void init(SlotControl& slot) noexcept {
   slot.sequence.store(0, std::memory_order_relaxed);
   slot.sleeping.store(0, std::memory_order_relaxed);
   slot.stamp_ns.store(0, std::memory_order_relaxed);
+  slot.payload_bytes.store(0, std::memory_order_relaxed);
   slot.magic = kSlotMagic;
 }
 
-void begin_update(SlotControl& slot) noexcept {
+void begin_update(SlotControl& slot, std::uint32_t bytes) noexcept {
   const std::uint32_t sequence = slot.sequence.load(std::memory_order_relaxed);
-  if (sequence & 1U) return;
-  slot.sequence.store(sequence + 1, std::memory_order_relaxed);
-  // The odd sequence is visible before any write to the payload.
-  std::atomic_thread_fence(std::memory_order_release);
+  if (!(sequence & 1U)) {
+    slot.sequence.store(sequence + 1, std::memory_order_relaxed);
+    // The odd sequence is visible before any write to the payload.
+    std::atomic_thread_fence(std::memory_order_release);
+  }
+  slot.payload_bytes.store(bytes, std::memory_order_relaxed);
 }
 
 void end_update(SlotControl& slot, std::int64_t stamp_ns) noexcept {
@@ -87,8 +90,8 @@ void end_update(SlotControl& slot, std::int64_t stamp_ns) noexcept {
     syscall(SYS_futex, futex_word(&slot), FUTEX_WAKE, INT_MAX, nullptr, nullptr, 0);
 }
 
-Read read(const SlotControl& slot, const void* payload, std::size_t bytes, void* out,
-          std::uint32_t& observed) noexcept {
+Read read(const SlotControl& slot, const void* payload, std::uint32_t capacity, void* out,
+          std::uint32_t& observed, std::uint32_t& copied) noexcept {
   for (int attempt = 0; attempt < kReadTries; ++attempt) {
     const std::uint32_t before = slot.sequence.load(std::memory_order_acquire);
     if (before == observed) return (before & 1U) ? Read::kTorn : Read::kUnchanged;
@@ -96,11 +99,14 @@ Read read(const SlotControl& slot, const void* payload, std::size_t bytes, void*
       pause_briefly();
       continue;
     }
+    const std::uint32_t bytes =
+        std::min(slot.payload_bytes.load(std::memory_order_relaxed), capacity);
     copy_racing(out, payload, bytes);
     // The copy's reads complete before the sequence is read again.
     std::atomic_thread_fence(std::memory_order_acquire);
     if (slot.sequence.load(std::memory_order_relaxed) == before) {
       observed = before;
+      copied = bytes;
       return Read::kCopied;
     }
   }

@@ -16,10 +16,10 @@ namespace afhub::slot {
 void init(SlotControl& slot) noexcept;
 
 // Writer: begin_update makes the sequence odd (the payload may then be written in
-// place); end_update records the payload's stamp, makes the sequence even and wakes
-// any reader asleep on it. begin_update on a slot already odd (an update begun and
-// never ended) keeps it odd.
-void begin_update(SlotControl& slot) noexcept;
+// place, `bytes` of it); end_update records the payload's stamp, makes the sequence
+// even and wakes any reader asleep on it. begin_update on a slot already odd (an
+// update begun and never ended) keeps it odd.
+void begin_update(SlotControl& slot, std::uint32_t bytes) noexcept;
 void end_update(SlotControl& slot, std::int64_t stamp_ns) noexcept;
 
 enum class Read {
@@ -28,12 +28,13 @@ enum class Read {
   kTorn,       // mid-update (its writer busy, or killed in it): try again later
 };
 
-// Copies `bytes` of `payload` into `out` when the slot holds an update other than
-// `observed` (the sequence this reader last saw), and sets `observed` to the sequence
-// it found. Gives up after a few tries on a slot being written, rather than wait for
-// a writer that may be gone: `out` then holds garbage, and the caller keeps its copy.
-Read read(const SlotControl& slot, const void* payload, std::size_t bytes, void* out,
-          std::uint32_t& observed) noexcept;
+// Copies the update's bytes of `payload` (at most `capacity`, the chunk's) into `out`
+// when the slot holds an update other than `observed` (the sequence this reader last
+// saw), and sets `observed` to the sequence it found and `copied` to the bytes. Gives
+// up after a few tries on a slot being written, rather than wait for a writer that may
+// be gone: `out` then holds garbage, and the caller keeps its copy.
+Read read(const SlotControl& slot, const void* payload, std::uint32_t capacity, void* out,
+          std::uint32_t& observed, std::uint32_t& copied) noexcept;
 
 // One slot a reader waits on, and the sequence it last saw there.
 struct Watch {

@@ -119,19 +119,21 @@ std::vector<MempoolSpec> with_bench_pools(std::vector<MempoolSpec> pools) {
   // sample would be taken from anyway: a pool of their own between two of the body
   // tiers would take the body states below it too (a 1 KiB pool of 16 chunks took
   // every state of the example arm, and the physics dropped most of its steps).
+  // Its slots (afhub-slot) carry their control block beside the sample.
   constexpr std::uint32_t kBenchChunks = 16;
-  for (std::uint32_t bytes : {1u << 10, 1u << 14, 1u << 18, 1u << 20}) {
-    auto fits = std::find_if(pools.begin(), pools.end(), [bytes](const MempoolSpec& pool) {
-      return pool.payload_bytes >= bytes;
-    });
-    if (fits == pools.end()) {
-      pools.push_back(
-          {bytes, kBenchChunks, "bench samples of " + std::to_string(bytes >> 10) + " KiB"});
-      continue;
+  for (std::uint32_t sample : {1u << 10, 1u << 14, 1u << 18, 1u << 20})
+    for (std::uint32_t bytes : {sample, slot_bytes(sample)}) {
+      auto fits = std::find_if(pools.begin(), pools.end(), [bytes](const MempoolSpec& pool) {
+        return pool.payload_bytes >= bytes;
+      });
+      if (fits == pools.end()) {
+        pools.push_back(
+            {bytes, kBenchChunks, "bench samples of " + std::to_string(sample >> 10) + " KiB"});
+        continue;
+      }
+      fits->chunk_count += kBenchChunks;
+      fits->holds += "; bench samples of " + std::to_string(sample >> 10) + " KiB";
     }
-    fits->chunk_count += kBenchChunks;
-    fits->holds += "; bench samples of " + std::to_string(bytes >> 10) + " KiB";
-  }
   sort_by_size(pools);
   return pools;
 }

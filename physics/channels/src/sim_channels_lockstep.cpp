@@ -82,8 +82,8 @@ void SimChannels::set_lockstep_pid(Channel& channel, std::uint32_t pid) noexcept
 bool SimChannels::hold_step_turn(std::int64_t now_ns, std::int64_t& republish_ns) noexcept {
   apply_commands(now_ns);
   if (stop_requested()) return false;
-  // State channels keep no history: a client that subscribes while the step is held
-  // sees it only if it is published again.
+  // The held step again, freshly stamped: readers that judge a physics by its stamps
+  // (`afhub status`, `world pause`, a controller's phase) see it alive while it waits.
   if (now_ns >= republish_ns) {
     publish(last_published_);
     republish_ns = now_ns + kRepublishWhileWaitingNs;

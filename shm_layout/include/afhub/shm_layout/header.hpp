@@ -24,6 +24,7 @@ enum class PayloadKind : std::uint32_t {
   kSceneDescription = 12,  // what a viewer draws, published once by the physics
   kSoftBodyMesh = 13,      // a soft body's faces (once) or node positions (display rate)
   kScenePoses = 14,        // every body's pose for a viewer, at display rate
+  kBenchSlot = 15,         // `afhub bench` pings and pongs through slots (afhub-slot)
 };
 
 struct PayloadHeader {

@@ -278,6 +278,7 @@ inline constexpr std::uint64_t kLayoutId = layout_detail::mix({
     sizeof(SlotControl),
     AFHUB_OFF(SlotControl, sleeping),
     AFHUB_OFF(SlotControl, stamp_ns),
+    AFHUB_OFF(SlotControl, payload_bytes),
     AFHUB_OFF(SlotControl, magic),
     kSlotMagic,
 });

@@ -27,6 +27,9 @@ struct SlotControl {
   // without copying the payload: a reader holding several writers' slots of one
   // channel (commands) takes the newest.
   std::atomic<std::int64_t> stamp_ns{0};
+  // The bytes of the payload the update wrote (at most the chunk's): a reader copies
+  // these. A writer's payloads may be shorter than its slot (a state of fewer joints).
+  std::atomic<std::uint32_t> payload_bytes{0};
   // kSlotMagic: set before the first publish; a chunk without it is not a slot.
   std::uint64_t magic{0};
 };
@@ -47,6 +50,7 @@ constexpr bool is_slot_kind(PayloadKind kind) {
     case PayloadKind::kWorldState:
     case PayloadKind::kDeviceState:
     case PayloadKind::kDeviceCommand:
+    case PayloadKind::kBenchSlot:
       return true;
     default:
       return false;
