@@ -44,12 +44,23 @@ void run_free(BodyClient& body, const ControllerOptions& options, const Controll
                                     ? loop.period_ns / 2
                                     : options.after_step_ns;
   if (after_ns >= 0) {
+    // The grid comes from the first state. Listed in the catalog, a body's state may
+    // still take seconds to come (a hub just restarted, a loaded machine): waited for,
+    // said once.
     const BodyState* state = body.latest_state();
-    for (const std::int64_t give_up = monotonic_ns() + 3'000'000'000;
-         !state && monotonic_ns() < give_up && !stop_requested(); state = body.latest_state())
+    for (std::int64_t say_at = monotonic_ns() + 3'000'000'000; !state;
+         state = body.latest_state()) {
+      if (stop_requested()) return;
+      if (say_at > 0 && monotonic_ns() >= say_at) {
+        std::fprintf(stderr,
+                     "afhub %s: no state from %s yet after 3 s (%s its writer); still waiting: is "
+                     "the physics running?\n",
+                     options.name.c_str(), body.channel().c_str(),
+                     body.subscribed() ? "connected to" : "not connected to");
+        say_at = 0;
+      }
       sleep_until_ns(monotonic_ns() + 1'000'000);
-    if (!state)
-      throw Error("no state came from " + body.channel() + " in 3 s: is the physics running?");
+    }
     loop.grid_origin_ns = grid_in_phase(*state, after_ns);
   }
   // Late commands as the physics counts them for this body (its state carries the

@@ -5,6 +5,7 @@
 #include <cstring>
 
 #include "afhub/shm_layout/payload_check.hpp"
+#include "afhub/shm_layout/slot.hpp"
 
 namespace afhub {
 
@@ -12,6 +13,11 @@ CopyingReader::CopyingReader(const ChannelId& channel, PayloadKind kind)
     : reader_(channel, kind), kind_(kind) {}
 
 const void* CopyingReader::latest() {
+  if (is_slot_kind(kind_)) {
+    const void* copy = reader_.latest();
+    updated_ = reader_.updated();
+    return copy;
+  }
   updated_ = false;
   // The in-place check of RawLatestReader sorts out honest mistakes (another build's
   // layout); the check of the copy below is the one that counts.

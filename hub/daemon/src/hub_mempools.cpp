@@ -64,12 +64,12 @@ std::vector<MempoolSpec> default_mempools() {
   // Body states, body commands and catalogs are loaned at their real size, and
   // iceoryx takes a chunk from the smallest pool that fits it, whatever its type: the
   // body payloads share four tiers by size, most chunks where most bodies are (up to
-  // 64 joints). Chunk counts: each active body holds up to eight state and eight
-  // command chunks (a loan, and per reader a queued, a held and a retired sample,
-  // for the hub's rate probe and a controller or two), for up to kMaxBodies bodies in
-  // the first tiers, fewer for bodies with hundreds of joints below them (a rope or
-  // chain whose every link is active). Catalogs and directories: each holds a chunk
-  // in its writer's history, and three in each reader.
+  // 64 joints). States and commands are slots (one chunk per writer, held by its
+  // readers, plus the slot's control block): the counts leave room for kMaxBodies
+  // bodies with several command writers each in the first tiers, fewer for bodies with
+  // hundreds of joints below them (a rope or chain whose every link is active), and
+  // for the queue samples of other kinds that fit those sizes. Catalogs and
+  // directories: each holds a chunk in its writer's history, and three in each reader.
   std::vector<MempoolSpec> pools = {
       {128, 512, "world commands, small iceoryx samples"},
       {slot_bytes(body_command_bytes(64)), 4096,
@@ -78,8 +78,7 @@ std::vector<MempoolSpec> default_mempools() {
       {slot_bytes(body_state_bytes(256)), 1024, "body states and commands of up to 256 joints"},
       {slot_bytes(body_state_bytes(kMaxJointsPerBody)), 256,
        "body states and commands of up to kMaxJointsPerBody joints"},
-      // Each physics's world state: a chunk in its history and a loan, and three in
-      // each reader (`afhub status`, `afhub world`, a viewer).
+      // Each physics's world state: a slot, and, briefly, a larger one replacing it.
       {slot_bytes(sizeof(WorldState)), 2 * kMaxProcesses + 64, "world state"},
       {round_up8(sizeof(Health)), 128, "hub health"},
       {round_up8(sizeof(LoopStats)), 256, "loop stats"},
@@ -98,11 +97,11 @@ std::vector<MempoolSpec> default_mempools() {
       {round_up8(scene_description_bytes(64)), 32, "scene descriptions of up to 64 bodies"},
       {round_up8(scene_description_bytes(kMaxSceneBodies)), 8,
        "scene descriptions of up to kMaxSceneBodies bodies"},
-      // A viewer's pose feed: per physics a chunk in the writer's history and a loan,
-      // three in each viewer.
-      {round_up8(scene_poses_bytes(64, 512)), 32,
+      // A viewer's pose feed: a slot per physics (and one replacing it when the scene
+      // grows).
+      {slot_bytes(scene_poses_bytes(64, 512)), 32,
        "viewer pose feeds of up to 64 bodies (512 joint values)"},
-      {round_up8(scene_poses_bytes(kMaxSceneBodies, kMaxSceneJointValues)), 8,
+      {slot_bytes(scene_poses_bytes(kMaxSceneBodies, kMaxSceneJointValues)), 8,
        "viewer pose feeds of up to kMaxSceneBodies bodies (kMaxSceneJointValues joint values)"},
       // Per soft body a node chunk in the writer's history, a loan, and three in
       // each viewer; its faces once, kept the same way.

@@ -40,9 +40,10 @@ inline constexpr std::uint64_t kSlotMagic = 0x61666875622d736cULL;  // "afhub-sl
 static_assert(std::atomic<std::uint32_t>::is_always_lock_free);
 static_assert(std::atomic<std::int64_t>::is_always_lock_free);
 
-// The kinds written as slots: written every period, read as latest values. The rest
-// (catalog, directories, world commands, events, scene, bench samples) are queues of
-// iceoryx samples, each published once.
+// The kinds written as slots: written every period, read as latest values (states,
+// commands, a viewer's pose feed). The rest (catalog, directories, world commands,
+// health, stats, scene, soft body meshes, bench samples) are queues of iceoryx
+// samples, each published once.
 constexpr bool is_slot_kind(PayloadKind kind) {
   switch (kind) {
     case PayloadKind::kBodyState:
@@ -50,6 +51,7 @@ constexpr bool is_slot_kind(PayloadKind kind) {
     case PayloadKind::kWorldState:
     case PayloadKind::kDeviceState:
     case PayloadKind::kDeviceCommand:
+    case PayloadKind::kScenePoses:
     case PayloadKind::kBenchSlot:
       return true;
     default:

@@ -3,6 +3,8 @@
 // and only the copy is used. A check made in place proves nothing: every member of the
 // hub's group can write the chunk between the check and a later read of the same count.
 // Costs one copy per new sample; for channels read now and then, not for 1 kHz loops.
+// A slot's reader copies and checks already (see channel.hpp): on a slot kind this one
+// hands that copy on.
 #pragma once
 
 #include <cstddef>
