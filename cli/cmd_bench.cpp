@@ -23,7 +23,7 @@ namespace afhub::cli {
 namespace {
 
 struct BenchCliOptions {
-  bool quick = false;
+  bool quick = false, touch = false;
   std::string transports, json_file, plot_file, model, body = "arm/base";
   std::uint32_t rounds = 0, pings = 0;
   double loop_seconds = -1.0;
@@ -39,7 +39,7 @@ void write_file(const std::string& path, const std::string& text) {
 }
 
 int run_bench(const BenchCliOptions& cli) {
-  if (!cli.peer.empty()) return bench::run_peer(cli.peer, cli.session, cli.peer_cpu);
+  if (!cli.peer.empty()) return bench::run_peer(cli.peer, cli.session, cli.peer_cpu, cli.touch);
   bench::BenchOptions options;
   if (cli.quick) options = bench::quick_options(options);
   if (!cli.transports.empty()) options.transports = split_commas(cli.transports);
@@ -51,6 +51,7 @@ int run_bench(const BenchCliOptions& cli) {
   options.model = cli.model.empty() ? example_model("arm7.yaml")
                                     : std::filesystem::path(cli.model).lexically_normal().string();
   options.body = cli.body;
+  options.touch = cli.touch;
 
   bench::BenchResults results;
   results.machine = bench::read_machine_info();
@@ -128,6 +129,9 @@ void register_bench(CLI::App& app, Runner& selected) {
       "Measure end-to-end latency over afhub, Cyclone DDS, Unix sockets and ROS 1 (64 B to "
       "1 MiB), and a 1 kHz controller's jitter against the physics beside cyclictest.");
   bench->add_flag("--quick", options->quick, "A shorter run: about 30 s instead of 2.5 min");
+  bench->add_flag("--touch", options->touch,
+                  "Every sender writes every byte of its message and every receiver reads every "
+                  "byte (checked), rather than the stamps alone");
   bench->add_option("--json", options->json_file, "Write every distribution to this JSON file");
   bench->add_option("--plot", options->plot_file,
                     "Draw latency CDFs and the loop's jitter histogram into this PNG (gnuplot)");

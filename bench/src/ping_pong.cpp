@@ -96,7 +96,8 @@ void run_ping_pong(const BenchOptions& options, BenchResults& results) {
   std::vector<Peer> peers;
   for (const std::string& name : options.transports)
     if (!parse_transport(name))
-      throw Error("unknown transport '" + name + "': choose from afhub, dds, uds, ros1");
+      throw Error("unknown transport '" + name +
+                  "': choose from afhub, afhub-slot, dds, uds, ros1");
   results.transports.reserve(options.transports.size());
   for (const std::string& name : options.transports) {
     const std::optional<TransportKind> kind = parse_transport(name);
@@ -120,11 +121,13 @@ void run_ping_pong(const BenchOptions& options, BenchResults& results) {
           std::vector<std::string>{"rosmaster", "--core", "-p", port});
     }
     std::fprintf(stderr, "afhub bench: starting the %s peer\n", name.c_str());
-    Peer peer{&result, *kind, open_transport(*kind, Side::kPing, session), nullptr};
+    Peer peer{&result, *kind, open_transport(*kind, Side::kPing, session, options.touch), nullptr};
+    std::vector<std::string> peer_args{
+        this_executable(), "bench", "--peer",     name,
+        "--session",       session, "--peer-cpu", std::to_string(pong_cpu())};
+    if (options.touch) peer_args.push_back("--touch");
     peer.process = std::make_unique<ChildProcess>(
-        std::vector<std::string>{this_executable(), "bench", "--peer", name, "--session", session,
-                                 "--peer-cpu", std::to_string(pong_cpu())},
-        "/tmp/afhub-bench-" + session + "-" + name + ".log");
+        peer_args, "/tmp/afhub-bench-" + session + "-" + name + ".log");
     peer.end->connect(monotonic_ns() + kConnectTimeoutNs);
     peers.push_back(std::move(peer));
   }
@@ -157,11 +160,11 @@ void run_ping_pong(const BenchOptions& options, BenchResults& results) {
   pin_to_cpu(-1);
 }
 
-int run_peer(const std::string& transport, const std::string& session, int cpu) {
+int run_peer(const std::string& transport, const std::string& session, int cpu, bool touch) {
   install_stop_signal_handlers();
   const std::optional<TransportKind> kind = parse_transport(transport);
   if (!kind) throw Error("unknown transport '" + transport + "'");
-  std::unique_ptr<Transport> end = open_transport(*kind, Side::kPong, session);
+  std::unique_ptr<Transport> end = open_transport(*kind, Side::kPong, session, touch);
   end->connect(monotonic_ns() + kConnectTimeoutNs);
   pin_to_cpu(cpu);
   while (!stop_requested())

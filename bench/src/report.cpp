@@ -103,6 +103,7 @@ std::string results_json(const BenchResults& results) {
   json.key("warmup_pings").value(static_cast<unsigned long long>(results.options.warmup_pings));
   json.key("loop_seconds").value(results.options.loop_seconds);
   json.key("fifo_priority").value(static_cast<long long>(results.options.fifo_priority));
+  json.key("touch").value(results.options.touch);
   json.end_object();
   json.key("transports");  // one-way latency
   write_transports(json, results, &TransportResult::one_way_us);
@@ -140,7 +141,11 @@ std::string results_json(const BenchResults& results) {
 }
 
 std::string results_table(const BenchResults& results) {
-  std::string out;
+  std::string out = results.options.touch
+                        ? "Messages: every byte written by the sender and read by the receiver "
+                          "(--touch)\n\n"
+                        : "Messages: the stamps written and read, the rest left as it is (the "
+                          "iceperf convention; --touch writes and reads every byte)\n\n";
   const auto row = [&](const std::string& name, const std::vector<std::string>& cells) {
     char head[32];
     std::snprintf(head, sizeof head, "%-8s", name.c_str());

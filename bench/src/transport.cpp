@@ -4,6 +4,8 @@
 #include <time.h>
 #include <unistd.h>
 
+#include <cstring>
+
 #include "afhub/shm_layout/error.hpp"
 
 namespace afhub::bench {
@@ -44,25 +46,48 @@ std::string transport_unavailable(TransportKind kind) {
   return "";
 }
 
-std::unique_ptr<Transport> open_transport(TransportKind kind, Side side,
-                                          const std::string& session) {
+std::unique_ptr<Transport> open_transport(TransportKind kind, Side side, const std::string& session,
+                                          bool touch) {
   const std::string unavailable = transport_unavailable(kind);
   if (!unavailable.empty()) throw Error(std::string(transport_name(kind)) + ": " + unavailable);
+  std::unique_ptr<Transport> opened;
   switch (kind) {
     case TransportKind::kAfhub:
     case TransportKind::kAfhubSlot:
-      return open_afhub_transport(side, session, kind == TransportKind::kAfhubSlot);
+      opened = open_afhub_transport(side, session, kind == TransportKind::kAfhubSlot);
+      break;
     case TransportKind::kDds:
-      return open_dds_transport(side, session);
+      opened = open_dds_transport(side, session);
+      break;
     case TransportKind::kUds:
-      return open_uds_transport(side, session);
+      opened = open_uds_transport(side, session);
+      break;
     case TransportKind::kRos1:
 #ifdef AFHUB_BENCH_ROS1
-      return open_ros1_transport(side, session);
+      opened = open_ros1_transport(side, session);
 #endif
       break;
   }
-  throw Error("unknown transport");
+  if (!opened) throw Error("unknown transport");
+  opened->set_touch(touch);
+  return opened;
 }
 
+void Transport::touch_written(char* at, std::size_t bytes, std::uint64_t round) const {
+  if (touch_) std::memset(at, static_cast<int>(round & 0xffU), bytes);
+}
+
+void Transport::touch_read(const char* at, std::size_t bytes, std::uint64_t round,
+                           const char* transport) const {
+  if (!touch_) return;
+  // Every byte read, none skipped: the differences are summed, not searched for.
+  const auto expected = static_cast<unsigned char>(round & 0xffU);
+  std::size_t differ = 0;
+  for (std::size_t i = 0; i < bytes; ++i)
+    differ += static_cast<unsigned char>(at[i]) != expected ? 1 : 0;
+  if (differ != 0)
+    throw Error(std::string(transport) + ": " + std::to_string(differ) + " of " +
+                std::to_string(bytes) + " bytes of round " + std::to_string(round) +
+                " arrived changed");
+}
 }  // namespace afhub::bench

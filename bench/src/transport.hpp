@@ -33,6 +33,10 @@ struct Stamps {
 class Transport {
  public:
   virtual ~Transport() = default;
+  // --touch: the sender writes every byte of a message after its stamps and the
+  // receiver reads every one (checking them) before it stamps the arrival. Off, only
+  // the stamps are written and read (iceoryx's iceperf convention).
+  void set_touch(bool touch) { touch_ = touch; }
   // After the peer process started: accept or wait for it (until deadline_ns).
   virtual void connect(std::int64_t /*deadline_ns*/) {}
   // Sends `bytes` bytes; returns the send stamp written into the message.
@@ -40,6 +44,16 @@ class Transport {
                             std::int64_t peer_receive_ns) = 0;
   // The next message, or nothing when none came before deadline_ns.
   virtual std::optional<Message> receive(std::int64_t deadline_ns) = 0;
+
+ protected:
+  // With --touch: writes the `bytes` bytes at `at` (a pattern of the round), or reads
+  // them all and throws afhub::Error, naming `transport`, when one differs.
+  void touch_written(char* at, std::size_t bytes, std::uint64_t round) const;
+  void touch_read(const char* at, std::size_t bytes, std::uint64_t round,
+                  const char* transport) const;
+
+ private:
+  bool touch_ = false;
 };
 
 const char* transport_name(TransportKind kind);
@@ -47,9 +61,10 @@ std::optional<TransportKind> parse_transport(const std::string& name);
 // Why a transport cannot run in this build or on this machine; empty when it can.
 std::string transport_unavailable(TransportKind kind);
 
-// `session` names this bench run's channels, topics and socket. Throws afhub::Error.
-std::unique_ptr<Transport> open_transport(TransportKind kind, Side side,
-                                          const std::string& session);
+// `session` names this bench run's channels, topics and socket; `touch`, see
+// Transport::set_touch. Throws afhub::Error.
+std::unique_ptr<Transport> open_transport(TransportKind kind, Side side, const std::string& session,
+                                          bool touch);
 
 // The largest payload and the smallest message (the round and the stamps must fit).
 inline constexpr std::uint32_t kMaxPayloadBytes = 1u << 20;

@@ -28,14 +28,19 @@ class AfhubTransport : public Transport {
 
   std::int64_t send(std::uint32_t bytes, std::uint64_t round,
                     std::int64_t peer_receive_ns) override {
+    const std::int64_t send_ns = monotonic_ns();
     void* chunk = writer_.loan(bytes);
     if (!chunk)
       throw Error("afhub bench: shared memory exhausted for a " + std::to_string(bytes) +
                   " byte sample; see `afhub status` for the hub's pools");
     auto* sample = new (chunk) BenchSample{};
-    sample->round = round;
+    sample->header.sim_step = round;
+    sample->send_ns = send_ns;
     sample->peer_receive_ns = peer_receive_ns;
-    return writer_.publish(sample);
+    touch_written(static_cast<char*>(chunk) + sizeof(BenchSample), bytes - sizeof(BenchSample),
+                  round);
+    writer_.publish(sample);
+    return send_ns;
   }
 
   std::optional<Message> receive(std::int64_t deadline_ns) override {
@@ -43,10 +48,12 @@ class AfhubTransport : public Transport {
       const auto* sample = static_cast<const BenchSample*>(reader_.latest());
       if (reader_.updated()) {
         Message message;
-        message.receive_ns = monotonic_ns();
         message.bytes = static_cast<std::uint32_t>(reader_.latest_bytes());
-        message.round = sample->round;
-        message.send_ns = sample->header.publish_stamp_ns;
+        touch_read(reinterpret_cast<const char*>(sample) + sizeof(BenchSample),
+                   message.bytes - sizeof(BenchSample), sample->header.sim_step, "afhub");
+        message.receive_ns = monotonic_ns();
+        message.round = sample->header.sim_step;
+        message.send_ns = sample->send_ns;
         message.peer_receive_ns = sample->peer_receive_ns;
         return message;
       }

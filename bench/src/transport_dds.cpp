@@ -79,6 +79,7 @@ class DdsTransport : public Transport {
     const std::size_t i = index_of(bytes);
     const Stamps stamps{round, monotonic_ns(), peer_receive_ns};
     std::memcpy(buffer_.data(), &stamps, sizeof stamps);
+    touch_written(buffer_.data() + sizeof stamps, bytes - sizeof stamps, round);
     check(dds_write(writers_[i], buffer_.data()), "write");
     return stamps.send_ns;
   }
@@ -90,13 +91,14 @@ class DdsTransport : public Transport {
         dds_sample_info_t info;
         const dds_return_t taken = dds_take(readers_[i], samples, &info, 1, 1);
         if (taken <= 0) continue;
-        const std::int64_t received = monotonic_ns();
         std::optional<Message> message;
         if (info.valid_data) {
           Stamps stamps;
           std::memcpy(&stamps, samples[0], sizeof stamps);
+          touch_read(static_cast<const char*>(samples[0]) + sizeof stamps,
+                     kTypes[i].bytes - sizeof stamps, stamps.round, "dds");
           message = Message{kTypes[i].bytes, stamps.round, stamps.send_ns, stamps.peer_receive_ns,
-                            received};
+                            monotonic_ns()};
         }
         dds_return_loan(readers_[i], samples, taken);
         if (message) return message;

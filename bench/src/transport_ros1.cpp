@@ -32,6 +32,8 @@ class Ros1Transport : public Transport {
     message_.data.resize(bytes - kOverheadBytes);
     const Stamps stamps{round, monotonic_ns(), peer_receive_ns};
     std::memcpy(message_.data.data(), &stamps, sizeof stamps);
+    touch_written(reinterpret_cast<char*>(message_.data.data()) + sizeof stamps,
+                  message_.data.size() - sizeof stamps, round);
     publisher_.publish(message_);
     return stamps.send_ns;
   }
@@ -52,12 +54,13 @@ class Ros1Transport : public Transport {
   static constexpr std::uint32_t kOverheadBytes = 12;
 
   void on_message(const std_msgs::UInt8MultiArray::ConstPtr& incoming) {
-    const std::int64_t received = monotonic_ns();
     if (incoming->data.size() < sizeof(Stamps)) return;
     Stamps stamps;
     std::memcpy(&stamps, incoming->data.data(), sizeof stamps);
+    touch_read(reinterpret_cast<const char*>(incoming->data.data()) + sizeof stamps,
+               incoming->data.size() - sizeof stamps, stamps.round, "ros1");
     received_ = Message{static_cast<std::uint32_t>(incoming->data.size() + kOverheadBytes),
-                        stamps.round, stamps.send_ns, stamps.peer_receive_ns, received};
+                        stamps.round, stamps.send_ns, stamps.peer_receive_ns, monotonic_ns()};
   }
 
   ros::NodeHandle node_;

@@ -88,6 +88,7 @@ class UdsTransport : public Transport {
                     std::int64_t peer_receive_ns) override {
     Frame frame{bytes, 0, round, monotonic_ns(), peer_receive_ns};
     std::memcpy(buffer_.data(), &frame, sizeof frame);
+    touch_written(buffer_.data() + sizeof frame, bytes - sizeof frame, round);
     for (std::size_t sent = 0; sent < bytes;) {
       const ssize_t n = ::send(fd_, buffer_.data() + sent, bytes - sent, MSG_NOSIGNAL);
       if (n > 0) {
@@ -107,6 +108,7 @@ class UdsTransport : public Transport {
       throw Error("uds: a frame of " + std::to_string(frame.bytes) + " bytes is out of range");
     // A message once begun is read to its end, whatever the deadline.
     read_exactly(sizeof frame, frame.bytes, 0);
+    touch_read(buffer_.data() + sizeof frame, frame.bytes - sizeof frame, frame.round, "uds");
     return Message{frame.bytes, frame.round, frame.send_ns, frame.peer_receive_ns, monotonic_ns()};
   }
 

@@ -45,7 +45,7 @@ TEST(Bench, ShortRunMeasuresEveryTransportAndTheLoop) {
 
   const nlohmann::json json = parse_json(read_file(json_path));
   const nlohmann::json& transports = json.at("transports");
-  for (const char* name : {"afhub", "dds", "uds", "ros1"}) {
+  for (const char* name : {"afhub", "afhub-slot", "dds", "uds", "ros1"}) {
     ASSERT_TRUE(transports.contains(name)) << name << " missing: " << read_file(json_path);
     for (const char* bytes : {"64", "1024", "16384", "262144", "1048576"}) {
       const nlohmann::json& one_way = transports.at(name).at(bytes);
@@ -82,6 +82,28 @@ TEST(Bench, ShortRunMeasuresEveryTransportAndTheLoop) {
   std::printf("loop deadline hit ratio: %.3f\n", ratio);
   SKIP_REAL_TIME_BOUNDS_IN_SANITIZED_BUILD();
   EXPECT_GT(ratio, 0.9);  // below it, the bench exits 1 (above)
+}
+
+// --touch: every sender writes every byte of its messages and every receiver reads and
+// checks them, each round a new pattern: a transport whose sender left the bytes as
+// they were, or whose receiver saw other bytes, would fail the run.
+TEST(Bench, TouchWritesAndReadsEveryByte) {
+  ASSERT_EQ(probe_roudi(), RoudiPresence::kAbsent) << "stop the running hub first";
+  struct StopHub {
+    ~StopHub() { run_afhub({"hub", "stop"}); }
+  } stop_hub_afterwards;
+  afhub::testing::ModelFolder folder;
+  const std::string json_path = (folder.dir() / "bench.json").string();
+  const RunResult run =
+      run_afhub({"bench", "--touch", "--transports", "afhub,afhub-slot,dds,uds", "--rounds", "2",
+                 "--pings", "10", "--loop-seconds", "0", "--json", json_path},
+                180s);
+  ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
+  EXPECT_TRUE(contains(run.out, "Messages: every byte written by the sender and read")) << run.out;
+  const nlohmann::json json = parse_json(read_file(json_path));
+  EXPECT_EQ(json.at("settings").at("touch"), true) << read_file(json_path);
+  for (const char* name : {"afhub", "afhub-slot", "dds", "uds"})
+    EXPECT_EQ(json.at("transports").at(name).at("1048576").at("samples"), 40) << name;
 }
 
 // A hub whose pools starve the body states (`--pool` of 6 chunks just large enough for
@@ -166,7 +188,8 @@ TEST(Bench, WakeMeasuresEveryRealTimeSetting) {
 TEST(Bench, BadArgumentsAreRefusedClearly) {
   RunResult run = run_afhub({"bench", "--transports", "afhub,zeromq", "--loop-seconds", "0"});
   EXPECT_EQ(run.exit_code, 1);
-  EXPECT_TRUE(contains(run.err, "unknown transport 'zeromq': choose from afhub, dds, uds, ros1"))
+  EXPECT_TRUE(contains(run.err,
+                       "unknown transport 'zeromq': choose from afhub, afhub-slot, dds, uds, ros1"))
       << run.err;
   run = run_afhub({"bench", "--loop-seconds", "1"});
   EXPECT_EQ(run.exit_code, 1);

@@ -25,6 +25,9 @@ struct BenchOptions {
   std::string model;                    // the physics the loop runs against
   std::string body = "base";            // the body its controller commands
   int fifo_priority = 80;               // the loop's and cyclictest's SCHED_FIFO priority
+  // Every byte of a message written by its sender and read by its receiver, rather than
+  // the stamps alone (see Transport::set_touch).
+  bool touch = false;
 };
 
 // --quick: a few minutes' worth instead of a quarter of an hour's.
@@ -78,7 +81,7 @@ void run_ping_pong(const BenchOptions& options, BenchResults& results);
 void run_loop_bench(const BenchOptions& options, LoopResult& result);
 
 // The pong side of the ping-pong, as the peer process the bench starts.
-int run_peer(const std::string& transport, const std::string& session, int cpu);
+int run_peer(const std::string& transport, const std::string& session, int cpu, bool touch);
 
 // The outputs: the --json document, the table for stdout, the --plot PNG (gnuplot).
 std::string results_json(const BenchResults& results);

@@ -210,7 +210,7 @@ inline constexpr std::uint64_t kLayoutId = layout_detail::mix({
     AFHUB_OFF(LoopStats, cpu_wake_latency_us),
     sizeof(DurationPercentiles),
     sizeof(BenchSample),
-    AFHUB_OFF(BenchSample, round),
+    AFHUB_OFF(BenchSample, send_ns),
     AFHUB_OFF(BenchSample, peer_receive_ns),
     kMaxSceneBodies,
     kMaxSceneShapesPerBody,
