@@ -80,14 +80,23 @@ void Transport::touch_written(char* at, std::size_t bytes, std::uint64_t round) 
 void Transport::touch_read(const char* at, std::size_t bytes, std::uint64_t round,
                            const char* transport) const {
   if (!touch_) return;
-  // Every byte read, none skipped: the differences are summed, not searched for.
+  // Every byte read, none skipped, eight at a time (a consumer reads at memory speed):
+  // the differences are gathered, not searched for.
   const auto expected = static_cast<unsigned char>(round & 0xffU);
-  std::size_t differ = 0;
-  for (std::size_t i = 0; i < bytes; ++i)
-    differ += static_cast<unsigned char>(at[i]) != expected ? 1 : 0;
-  if (differ != 0)
-    throw Error(std::string(transport) + ": " + std::to_string(differ) + " of " +
-                std::to_string(bytes) + " bytes of round " + std::to_string(round) +
-                " arrived changed");
+  const std::uint64_t pattern = 0x0101010101010101ULL * expected;
+  std::uint64_t differ = 0;
+  std::size_t i = 0;
+  for (; i + sizeof pattern <= bytes; i += sizeof pattern) {
+    std::uint64_t word;
+    std::memcpy(&word, at + i, sizeof word);
+    differ |= word ^ pattern;
+  }
+  for (; i < bytes; ++i) differ |= static_cast<unsigned char>(at[i]) ^ expected;
+  if (differ == 0) return;
+  std::size_t changed = 0;
+  for (i = 0; i < bytes; ++i) changed += static_cast<unsigned char>(at[i]) != expected ? 1 : 0;
+  throw Error(std::string(transport) + ": " + std::to_string(changed) + " of " +
+              std::to_string(bytes) + " bytes of round " + std::to_string(round) +
+              " arrived changed");
 }
 }  // namespace afhub::bench
