@@ -101,8 +101,12 @@ std::vector<MempoolSpec> default_mempools() {
       // grows).
       {slot_bytes(scene_poses_bytes(64, 512)), 32,
        "viewer pose feeds of up to 64 bodies (512 joint values)"},
-      {slot_bytes(scene_poses_bytes(kMaxSceneBodies, kMaxSceneJointValues)), 8,
-       "viewer pose feeds of up to kMaxSceneBodies bodies (kMaxSceneJointValues joint values)"},
+      // It also takes the scene descriptions of about 8 to 20 bodies (their mesh parts
+      // make them 60 to 80 KB): each physics keeps one in its history, and one that just
+      // ended keeps one until RouDi has removed its port.
+      {slot_bytes(scene_poses_bytes(kMaxSceneBodies, kMaxSceneJointValues)), 64,
+       "viewer pose feeds of up to kMaxSceneBodies bodies (kMaxSceneJointValues joint values), "
+       "scene descriptions of 8 to 20 bodies"},
       // Per soft body a node chunk in the writer's history, a loan, and three in
       // each viewer; its faces once, kept the same way.
       {round_up8(soft_body_mesh_bytes(0)), 64, "soft body node positions"},
