@@ -55,18 +55,15 @@ const TransportResult* find(const BenchResults& results, const std::string& name
   return nullptr;
 }
 
-// The median one-way latency of a transport at a size; 0 when not measured.
-double median_of(const BenchResults& results, const std::string& name, std::uint32_t bytes) {
+// The one-way latency of a transport at a size; all zero when not measured.
+Distribution one_way_of(const BenchResults& results, const std::string& name, std::uint32_t bytes) {
   const TransportResult* transport = find(results, name);
-  if (!transport || !transport->one_way_us.count(bytes)) return 0.0;
-  return summarize(transport->one_way_us.at(bytes)).p50_us;
+  if (!transport || !transport->one_way_us.count(bytes)) return {};
+  return summarize(transport->one_way_us.at(bytes));
 }
 
-// The same at p99.
-double p99_of(const BenchResults& results, const std::string& name, std::uint32_t bytes) {
-  const TransportResult* transport = find(results, name);
-  if (!transport || !transport->one_way_us.count(bytes)) return 0.0;
-  return summarize(transport->one_way_us.at(bytes)).p99_us;
+double median_of(const BenchResults& results, const std::string& name, std::uint32_t bytes) {
+  return one_way_of(results, name, bytes).p50_us;
 }
 
 std::string format(const char* pattern, double a, double b = 0.0, double c = 0.0) {
@@ -220,7 +217,7 @@ std::string results_table(const BenchResults& results) {
   }
   // States and commands travel through slots: their own goals.
   const double slot_1k = median_of(results, "afhub-slot", 1024);
-  const double slot_1k_p99 = p99_of(results, "afhub-slot", 1024);
+  const double slot_1k_p99 = one_way_of(results, "afhub-slot", 1024).p99_us;
   if (slot_1k > 0.0) {
     out += format(
                "  1 KiB through a slot (states, commands): median %.2f us (goal <= 0.4 us), "

@@ -23,12 +23,17 @@ namespace {
 
 using namespace std::chrono_literals;
 
-// No hub runs: the bench starts one with the pools it needs (a production hub has none).
-TEST(Bench, ShortRunMeasuresEveryTransportAndTheLoop) {
-  ASSERT_EQ(probe_roudi(), RoudiPresence::kAbsent) << "stop the running hub first";
-  struct StopHub {
-    ~StopHub() { run_afhub({"hub", "stop"}); }
-  } stop_hub_afterwards;
+// No hub runs: the bench starts one with the pools it needs (a production hub has none),
+// and stops it; stopped here too should the bench fail.
+class BenchOwnHub : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    ASSERT_EQ(probe_roudi(), RoudiPresence::kAbsent) << "stop the running hub first";
+  }
+  void TearDown() override { run_afhub({"hub", "stop"}); }
+};
+
+TEST_F(BenchOwnHub, ShortRunMeasuresEveryTransportAndTheLoop) {
   afhub::testing::ModelFolder folder;
   const std::string json_path = (folder.dir() / "bench.json").string();
   const std::string plot_path = (folder.dir() / "bench.png").string();
@@ -87,11 +92,7 @@ TEST(Bench, ShortRunMeasuresEveryTransportAndTheLoop) {
 // --touch: every sender writes every byte of its messages and every receiver reads and
 // checks them, each round a new pattern: a transport whose sender left the bytes as
 // they were, or whose receiver saw other bytes, would fail the run.
-TEST(Bench, TouchWritesAndReadsEveryByte) {
-  ASSERT_EQ(probe_roudi(), RoudiPresence::kAbsent) << "stop the running hub first";
-  struct StopHub {
-    ~StopHub() { run_afhub({"hub", "stop"}); }
-  } stop_hub_afterwards;
+TEST_F(BenchOwnHub, TouchWritesAndReadsEveryByte) {
   afhub::testing::ModelFolder folder;
   const std::string json_path = (folder.dir() / "bench.json").string();
   const RunResult run =
