@@ -119,6 +119,10 @@ TEST_F(DeviceSafety, ForceNeverExceedsTheMaximumWhateverIsCommanded) {
     EXPECT_TRUE(enough) << ask << ": " << applied << " states applying the force in 5 s\n"
                         << read_file("/tmp/afhub-force.log");
     commander.stop();
+    // Its last command stays fresh for the 10 ms watchdog: the next commander's states
+    // are those after the force was released.
+    ASSERT_TRUE(watch([](const DeviceState& s) { return s.gate != ForceGate::kApplying; }, 5s))
+        << ask << ": the force stayed on after its commander stopped";
   }
   // Not a number: the driver's reader refuses it (naming the field), the last valid
   // command goes stale and the force is zero.
