@@ -15,6 +15,7 @@
 #include "afhub/rt/clock.hpp"
 #include "afhub/rt/stop_signal.hpp"
 #include "afhub/shm_layout/error.hpp"
+#include "afhub/shm_layout/slot_block.hpp"
 #include "afhub/shm_layout/world_control.hpp"
 #include "commands.hpp"
 #include "connection_options.hpp"
@@ -108,8 +109,11 @@ int run_synth(const SynthOptions& options) {
   std::vector<std::string> channels;
   for (unsigned i = 0; i < options.bodies; ++i)
     channels.push_back(body_channel_name(options.name_space, "body" + std::to_string(i)));
-  // A state publisher per body, the world's, the directory's.
-  check_room_for_bodies(channels, channels.size() + 2);
+  // The blocks of the bodies' state slots, the world state's, the directory's.
+  check_room_for_bodies(
+      channels, slot_blocks_for(channels.size(),
+                                static_cast<std::uint32_t>(body_state_bytes(options.joints))) +
+                    2);
   DirectoryPublisher directory;
   std::vector<SyntheticBody> bodies(options.bodies);
   for (std::size_t i = 0; i < bodies.size(); ++i) {
@@ -122,9 +126,11 @@ int run_synth(const SynthOptions& options) {
     bodies[i].joints.resize(options.joints);
   }
   // Before the first loan, as the physics: a synth must not starve a running physics.
-  std::vector<ChunkNeed> needs(bodies.size(), written_as_slot(body_state_bytes(options.joints)));
-  needs.push_back(written_as_slot(sizeof(WorldState)));
-  require_chunks(needs, "this synth (" + std::to_string(bodies.size()) + " bodies)");
+  std::vector<SlotWritten> slots(bodies.size(),
+                                 {PayloadKind::kBodyState, body_state_bytes(options.joints)});
+  slots.push_back({PayloadKind::kWorldState, sizeof(WorldState)});
+  require_chunks(written_as_slots(slots),
+                 "this synth (" + std::to_string(bodies.size()) + " bodies)");
   directory.publish();
   confirm_body_claims(channels, kClaimConfirmTimeout);
   Writer<WorldState> world(

@@ -14,7 +14,7 @@
 #include "afhub/shm_layout/bench_sample.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "afhub/shm_layout/health.hpp"
-#include "afhub/shm_layout/slot.hpp"
+#include "afhub/shm_layout/slot_block.hpp"
 #include "transport.hpp"
 
 namespace afhub::bench {
@@ -89,7 +89,7 @@ void require_bench_pools() {
   for (std::uint32_t i = 0; i < health->mempool_count; ++i) {
     const MempoolUsage& pool = health->mempools[i];
     if (pool.segment_id != health->mempools[0].segment_id &&
-        pool.chunk_payload_bytes >= kMaxPayloadBytes + kSlotOverheadBytes)
+        pool.chunk_payload_bytes >= slot_block_pool_bytes(first_slot_block_bytes(kMaxPayloadBytes)))
       free_chunks += pool.chunk_count - pool.used_chunks;
   }
   if (free_chunks < kNeeded)

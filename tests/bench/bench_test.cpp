@@ -12,7 +12,7 @@
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/rt/cpu_wake_latency.hpp"
 #include "afhub/shm_layout/body_state.hpp"
-#include "afhub/shm_layout/slot.hpp"
+#include "afhub/shm_layout/slot_block.hpp"
 #include "afhub_process.hpp"
 #include "model_files.hpp"
 #include "real_time.hpp"
@@ -113,10 +113,9 @@ TEST_F(BenchOwnHub, TouchWritesAndReadsEveryByte) {
 // (it said 1.7 % in time, exit 0). Either the physics starts, drops states and says so
 // once, or it is refused at start for the lack of spare chunks.
 TEST(Bench, StarvedBodyStatesFailTheBench) {
-  // arm/base's state slot, the arm's largest (7 joints below it), rounded as the hub
-  // rounds.
-  const std::string bytes =
-      std::to_string((afhub::body_state_bytes(7) + afhub::kSlotOverheadBytes + 7) / 8 * 8);
+  // The block of arm/base's state slot, the arm's largest (7 joints below it).
+  const std::string bytes = std::to_string(
+      afhub::slot_block_pool_bytes(afhub::first_slot_block_bytes(afhub::body_state_bytes(7))));
   ScopedProcess hub(spawn_afhub({"hub", "--bench-pools", "--pool", bytes + ":6"}));
   ASSERT_TRUE(wait_until(
       [] { return probe_roudi() == RoudiPresence::kRunning && running_hub_pid(); }, 10s));

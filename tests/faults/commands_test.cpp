@@ -16,9 +16,9 @@
 #include "afhub/hub/bodies.hpp"
 #include "afhub/shm_layout/channel_names.hpp"
 #include "afhub/shm_layout/layout_id.hpp"
+#include "afhub/shm_layout/slot_block.hpp"
 #include "afhub/shm_layout/world.hpp"
 #include "afhub_process.hpp"
-#include "iceoryx_posh/mepoo/chunk_header.hpp"
 #include "latest_slot.hpp"
 #include "model_files.hpp"
 #include "strict_json.hpp"
@@ -234,8 +234,10 @@ TEST(FaultsCommands, ACommandStampedInTheFutureIsIgnored) {
   std::memset(static_cast<void*>(command), 0, body_command_bytes(1));
   command->joint_count = 1;
   forger.publish(command);  // a command holding nothing, in a slot the physics takes
-  auto* slot =
-      static_cast<SlotControl*>(iox::mepoo::ChunkHeader::fromUserPayload(command)->userHeader());
+  // The slot's control block heads its entry in the block (shm_layout/slot_block.hpp).
+  SlotControl* slot = &reinterpret_cast<SlotEntryHeader*>(
+                           reinterpret_cast<unsigned char*>(command) - kSlotEntryHeaderBytes)
+                           ->control;
   for (std::uint64_t sequence = 2; sequence <= 50; ++sequence) {
     slot::begin_update(*slot, static_cast<std::uint32_t>(body_command_bytes(1)));
     command->header.sequence = sequence;

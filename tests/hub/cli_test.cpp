@@ -13,7 +13,7 @@
 
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/shm_layout/body_state.hpp"
-#include "afhub/shm_layout/slot.hpp"
+#include "afhub/shm_layout/slot_block.hpp"
 #include "afhub_process.hpp"
 #include "hub_environment.hpp"
 #include "model_files.hpp"
@@ -411,12 +411,12 @@ TEST_F(CliWithBodies, StatusShowsProcessesAndMempools) {
       5s))
       << status.out;
   ASSERT_EQ(status.exit_code, 0) << status.err;
-  // Several segments may hold pools of one size: any of them. A state pool holds the
-  // slot's control block beside the payload.
+  // Several segments may hold pools of one size: any of them. States are in blocks of
+  // slots, whose first comes from the first tier's pool.
   const nlohmann::json& pools = health.at("mempools");
   EXPECT_TRUE(std::any_of(pools.begin(), pools.end(), [](const nlohmann::json& pool) {
     return pool.at("chunk_payload_bytes") ==
-           (body_state_bytes(64) + kSlotOverheadBytes + 7) / 8 * 8;
+           slot_block_pool_bytes(first_slot_block_bytes(body_state_bytes(64)));
   })) << status.out;
   const nlohmann::json* body1 = find_element(health.at("bodies"), "body", "synth/body1");
   ASSERT_NE(body1, nullptr) << status.out;

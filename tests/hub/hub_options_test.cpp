@@ -11,11 +11,11 @@ namespace {
 TEST(HubOptions, ProductionHubCarriesNoBenchPools) {
   const RunResult plain = run_afhub({"hub", "--dry-run"});
   ASSERT_EQ(plain.exit_code, 0) << plain.err;
-  EXPECT_TRUE(contains(plain.out, "body states")) << plain.out;
-  EXPECT_FALSE(contains(plain.out, "1048576")) << plain.out;
+  EXPECT_TRUE(contains(plain.out, "blocks of slots")) << plain.out;
+  EXPECT_FALSE(contains(plain.out, "bench samples")) << plain.out;
   const RunResult bench = run_afhub({"hub", "--dry-run", "--bench-pools"});
   ASSERT_EQ(bench.exit_code, 0) << bench.err;
-  EXPECT_TRUE(contains(bench.out, "1048576")) << bench.out;
+  EXPECT_TRUE(contains(bench.out, "bench samples of 1024 KiB")) << bench.out;
 }
 
 TEST(HubOptions, PoolsFromFileAndFlagsAddOrResize) {

@@ -1,8 +1,8 @@
-// A client killed in the middle of updating its slots: once readers are connected, it
-// commands synth/body0 once and publishes one state of torn/body (step 1); when the
+// A client killed in the middle of updating its slots: it commands synth/body0 once
+// and publishes one state of torn/body (step 1); once readers hold both slots and the
 // file named by its argument exists (the readers have their copies), it begins an
 // update of each, writes half of it, and SIGKILLs itself, leaving both slots torn
-// (their sequence odd). Exits 2 if no reader connects, or no file comes, in 10 s.
+// (their sequence odd). Exits 2 if no reader comes, or no file, in 10 s.
 #include <signal.h>
 
 #include <chrono>
@@ -32,8 +32,6 @@ int main(int argc, char** argv) {
       std::this_thread::sleep_for(std::chrono::milliseconds(10));
     }
   };
-  wait_for([&] { return commands.raw().has_readers() && states.raw().has_readers(); },
-           "no readers");
   afhub::BodyCommand* command = commands.loan(afhub::body_command_bytes(1));
   afhub::BodyState* state = states.loan(afhub::body_state_bytes(1));
   if (!command || !state) {
@@ -47,6 +45,8 @@ int main(int argc, char** argv) {
   state->joint_count = 1;
   state->header.sim_step = 1;
   states.publish(state);
+  wait_for([&] { return commands.raw().has_readers() && states.raw().has_readers(); },
+           "no readers");
   wait_for([&] { return std::filesystem::exists(argv[1]); }, "no go-ahead");
   // The updates it dies in: half written, and absurd.
   command = commands.loan(afhub::body_command_bytes(1));

@@ -388,8 +388,10 @@ TEST_F(ViewTest, CommandsNeedTheTokenAndEveryRequestTheViewersHostAndOrigin) {
   EXPECT_TRUE(contains(handshake("http://127.0.0.1:" + port), " 101 "));
 }
 
-// A loop of requests naming made-up bodies would take a BodyClient (iceoryx ports) each,
-// and all 512 publisher ports in the end: only catalog bodies are opened.
+// A loop of requests naming made-up bodies is refused without opening a client for
+// any: only catalog bodies are opened, and a body's client takes no port of its own
+// (its slots are entries in its process's blocks): iceoryx's 512 publisher ports
+// stay free however many bodies a viewer commands.
 TEST_F(ViewTest, MadeUpBodyNamesTakeNoPorts) {
   View view = start_view({"--allow-commands"});
   ASSERT_GT(view.port, 0) << read_file(view.log);
@@ -411,17 +413,14 @@ TEST_F(ViewTest, MadeUpBodyNamesTakeNoPorts) {
     EXPECT_EQ(reply.status, 400);
     EXPECT_TRUE(contains(reply.body, "not a body the catalog lists")) << reply.body;
   }
-  // A catalog body's client, opened after them: once it is counted, so would they be.
-  ASSERT_EQ(view.post("/command?body=afhub/arm/link1&joint=99&value=0").status, 400);
-  std::uint32_t after = 0;
-  EXPECT_TRUE(wait_until(
-      [&] {
-        after = free_publisher_ports(std::chrono::seconds(1)).value_or(before);
-        return after < before;
-      },
-      std::chrono::seconds(10)));
-  std::printf("free publisher ports: %u before the made-up names, %u after\n", before, after);
-  EXPECT_GE(after + 3, before) << "the made-up names took ports";
+  // Catalog bodies' clients, opened after them, and a command sent through each.
+  for (const char* body : {"afhub/arm/link1", "afhub/arm/link2", "afhub/arm/link3"})
+    EXPECT_EQ(view.post(std::string("/command?body=") + body + "&joint=0&value=0").status, 200)
+        << body;
+  std::this_thread::sleep_for(std::chrono::milliseconds(1500));  // the hub's health, twice
+  const std::uint32_t after = free_publisher_ports(std::chrono::seconds(1)).value_or(0);
+  // At most one: the block of the viewer's command slots, if its first command opened it.
+  EXPECT_GE(after + 1, before) << "the made-up names, or the bodies' clients, took ports";
 }
 
 // The commander keeps at most its cap of BodyClients, the least recently used closed.

@@ -14,6 +14,7 @@
 #include "iceoryx_posh/popo/untyped_subscriber.hpp"
 #include "latest_slot.hpp"
 #include "reader_port.hpp"
+#include "slot_blocks.hpp"
 
 namespace afhub {
 namespace {
@@ -48,41 +49,43 @@ struct RawWriter::Port {
 };
 
 RawWriter::RawWriter(const ChannelId& channel, PayloadKind kind)
-    : channel_(channel), kind_(kind), pid_(static_cast<std::uint32_t>(getpid())) {
+    : channel_(channel),
+      kind_(kind),
+      pid_(static_cast<std::uint32_t>(getpid())),
+      slot_kind_(is_slot_kind(kind)) {
   require_fits(channel);
+  if (slot_kind_) {
+    slot_blocks::require_port_for(kind, "writing '" + channel.to_string() + "'");
+    return;
+  }
   require_publisher_ports(1, "writing '" + channel.to_string() + "'");
   port_ = std::make_unique<Port>(channel);
   took_publisher_port();
 }
 
 RawWriter::~RawWriter() {
-  if (!port_) return;
-  if (slot_payload_ && !slot_published_) port_->publisher.release(slot_payload_);
-  gave_back_publisher_port();
+  if (slot_kind_) {
+    slot_blocks::release(slot_);
+    return;
+  }
+  if (port_) gave_back_publisher_port();
 }
 
 void* RawWriter::loan(std::uint32_t bytes) noexcept {
-  if (!is_slot_kind(kind_)) {
+  if (!slot_kind_) {
     auto result = port_->publisher.loan(bytes, alignof(PayloadHeader));
     return result.has_error() ? nullptr : result.value();
   }
-  if (slot_payload_ && bytes <= slot_bytes_) {
-    slot::begin_update(*slot_, bytes);
-    return slot_payload_;
+  if (!slot_.entry || bytes > slot_.capacity) {
+    // The first loan, or a larger payload than the entry holds: a new entry, which
+    // readers take in place of this writer's old one.
+    const slot_blocks::Claim claimed = slot_blocks::claim(channel_, kind_, bytes);
+    if (!claimed.entry) return nullptr;
+    slot_blocks::release(slot_);
+    slot_ = claimed;
   }
-  // The first loan, or a larger payload than the slot holds: a new slot, which
-  // readers take in place of this writer's old one when it is published.
-  auto result = port_->publisher.loan(bytes, alignof(PayloadHeader), sizeof(SlotControl),
-                                      alignof(SlotControl));
-  if (result.has_error()) return nullptr;
-  if (slot_payload_ && !slot_published_) port_->publisher.release(slot_payload_);
-  slot_payload_ = result.value();
-  slot_ = new (iox::mepoo::ChunkHeader::fromUserPayload(slot_payload_)->userHeader()) SlotControl;
-  slot::init(*slot_);
-  slot::begin_update(*slot_, bytes);
-  slot_bytes_ = bytes;
-  slot_published_ = false;
-  return slot_payload_;
+  slot::begin_update(slot_.entry->control, bytes);
+  return slot_.payload;
 }
 
 std::int64_t RawWriter::publish(void* payload) noexcept {
@@ -92,28 +95,22 @@ std::int64_t RawWriter::publish(void* payload) noexcept {
   header->publisher_pid = pid_;
   header->sequence = ++sequence_;
   const std::int64_t stamp = header->publish_stamp_ns = monotonic_ns();
-  if (!is_slot_kind(kind_)) {
+  if (slot_kind_)
+    slot::end_update(slot_.entry->control, stamp);
+  else
     port_->publisher.publish(payload);
-    return stamp;
-  }
-  slot::end_update(*slot_, stamp);
-  if (!slot_published_) {  // once per slot: from now on readers hold it
-    port_->publisher.publish(payload);
-    slot_published_ = true;
-  }
   return stamp;
 }
 
 bool RawWriter::has_readers() const noexcept {
+  if (slot_kind_) return slot_.entry && slot_.entry->readers.load(std::memory_order_relaxed) > 0;
   return port_->publisher.hasSubscribers();
 }
 
-RawLatestReader::Port::Port(const ChannelId& channel, bool slots)
-    : subscriber(describe_channel(channel), [slots] {
+RawLatestReader::Port::Port(const ChannelId& channel)
+    : subscriber(describe_channel(channel), [] {
         iox::popo::SubscriberOptions options;
-        // A queue: a newer sample replaces a queued one. Slots: room for a few
-        // writers' slots arriving between two looks.
-        options.queueCapacity = slots ? RawLatestReader::kMaxHeldSlots : 1;
+        options.queueCapacity = 1;  // a newer sample replaces a queued one
         options.historyRequest = 1;
         options.queueFullPolicy = iox::popo::QueueFullPolicy::DISCARD_OLDEST_DATA;
         return options;
@@ -122,18 +119,25 @@ RawLatestReader::Port::Port(const ChannelId& channel, bool slots)
 RawLatestReader::RawLatestReader(const ChannelId& channel, PayloadKind kind)
     : channel_(channel), kind_(kind), slots_(is_slot_kind(kind)) {
   require_fits(channel);
+  if (slots_) {
+    directory_ = &slot_blocks::directory(kind);
+    directory_->attach();
+    key_ = channel.to_string();
+    held_slots_ = std::make_unique<slot_blocks::Found[]>(kMaxHeldSlots);
+    return;
+  }
   require_subscriber_ports(1, "reading '" + channel.to_string() + "'");
-  port_ = std::make_unique<Port>(channel, slots_);
+  port_ = std::make_unique<Port>(channel);
   took_subscriber_port();
 }
 
 RawLatestReader::~RawLatestReader() {
-  gave_back_subscriber_port();
   if (slots_) {
-    for (std::size_t i = 0; i < held_slot_count_; ++i)
-      port_->subscriber.release(held_slots_[i].payload);
+    unbind_slots();
+    directory_->detach();
     return;
   }
+  gave_back_subscriber_port();
   if (held_) port_->subscriber.release(held_);
   if (retired_) port_->subscriber.release(retired_);
 }
@@ -170,50 +174,53 @@ const void* RawLatestReader::latest_queued() noexcept {
   return held_;
 }
 
+// A slot reader costs its writer nothing: stepping aside changes only what
+// subscribed() says, and it keeps reading the entries it holds.
 void RawLatestReader::subscribe() noexcept {
-  port_->subscriber.subscribe();
+  if (slots_)
+    stepped_aside_ = false;
+  else
+    port_->subscriber.subscribe();
 }
 
 void RawLatestReader::unsubscribe() noexcept {
-  port_->subscriber.unsubscribe();
+  if (slots_)
+    stepped_aside_ = true;
+  else
+    port_->subscriber.unsubscribe();
 }
 
 bool RawLatestReader::subscribed() const noexcept {
+  // Slots: every writer's entry of the kind reaches the process's directory.
+  if (slots_) return !stepped_aside_ && directory_->subscribed();
   return port_->subscriber.getSubscriptionState() == iox::SubscribeState::SUBSCRIBED;
 }
 
-void RawLatestReader::take_slot(const void* payload) noexcept {
-  const auto* chunk = iox::mepoo::ChunkHeader::fromUserPayload(payload);
-  auto* control = static_cast<SlotControl*>(const_cast<void*>(chunk->userHeader()));
-  if (chunk->userHeaderSize() < sizeof(SlotControl) || control->magic != kSlotMagic) {
-    // Most likely a writer of another build: its layout id says so, if it has one.
-    const char* field = "slot";
-    const PayloadError error = check_payload(payload, chunk->userPayloadSize(), kind_, &field);
-    report_refusal(
-        payload, chunk->userPayloadSize(), field,
-        error != PayloadError::kNone ? describe(error) : "a sample, not a latest-value slot");
-    port_->subscriber.release(payload);
+void RawLatestReader::unbind_slots() noexcept {
+  if (held_slot_count_ > 0) directory_->unbind(held_slots_.get(), held_slot_count_);
+  held_slot_count_ = 0;
+}
+
+void RawLatestReader::rebind_slots() noexcept {
+  std::array<slot_blocks::Found, kMaxHeldSlots> found{};
+  std::size_t count = 0;
+  bound_generation_ = directory_->generation();
+  try {
+    count = directory_->bind(key_, found.data(), kMaxHeldSlots);
+  } catch (const std::exception&) {  // a lock that failed: keep what is held
     return;
   }
-  const HeldSlot slot{payload, control, chunk->userPayloadSize(),
-                      static_cast<std::uint64_t>(chunk->originId()), ~0U};
-  // A writer's new slot replaces its old one; a new writer takes a free place, or
-  // the place of the writer updated longest ago (most likely gone).
-  std::size_t place = held_slot_count_;
-  for (std::size_t i = 0; i < held_slot_count_; ++i)
-    if (held_slots_[i].origin == slot.origin) place = i;
-  if (place == held_slot_count_ && held_slot_count_ == kMaxHeldSlots) {
-    place = 0;
-    for (std::size_t i = 1; i < held_slot_count_; ++i)
-      if (held_slots_[i].control->stamp_ns.load(std::memory_order_relaxed) <
-          held_slots_[place].control->stamp_ns.load(std::memory_order_relaxed))
-        place = i;
+  // An entry held before keeps the sequence last seen: it is not copied again. A new
+  // one counts as seen at sequence 0, which it has until its writer's first update.
+  std::array<std::uint32_t, kMaxHeldSlots> observed{};
+  for (std::size_t i = 0; i < count; ++i) {
+    for (std::size_t j = 0; j < held_slot_count_; ++j)
+      if (held_slots_[j].entry == found[i].entry) observed[i] = observed_[j];
   }
-  if (place == held_slot_count_)
-    ++held_slot_count_;
-  else
-    port_->subscriber.release(held_slots_[place].payload);
-  held_slots_[place] = slot;
+  unbind_slots();
+  for (std::size_t i = 0; i < count; ++i) held_slots_[i] = found[i];
+  observed_ = observed;
+  held_slot_count_ = count;
 }
 
 bool RawLatestReader::grow_copies(std::uint32_t bytes) noexcept {
@@ -231,18 +238,17 @@ bool RawLatestReader::grow_copies(std::uint32_t bytes) noexcept {
 }
 
 const void* RawLatestReader::latest_slot() noexcept {
-  for (;;) {
-    auto taken = port_->subscriber.take();
-    if (taken.has_error()) break;
-    take_slot(taken.value());
-  }
+  directory_->look();
+  if (directory_->generation() != bound_generation_) rebind_slots();
   if (held_slot_count_ == 0) return held_;
   // The writer that updated last; the others count as looked at (a wait then
   // sleeps until one of them updates again).
   std::size_t newest = 0;
-  std::int64_t newest_stamp = held_slots_[0].control->stamp_ns.load(std::memory_order_acquire);
+  std::int64_t newest_stamp =
+      held_slots_[0].entry->control.stamp_ns.load(std::memory_order_acquire);
   for (std::size_t i = 1; i < held_slot_count_; ++i) {
-    const std::int64_t stamp = held_slots_[i].control->stamp_ns.load(std::memory_order_acquire);
+    const std::int64_t stamp =
+        held_slots_[i].entry->control.stamp_ns.load(std::memory_order_acquire);
     if (stamp > newest_stamp) {
       newest = i;
       newest_stamp = stamp;
@@ -250,12 +256,12 @@ const void* RawLatestReader::latest_slot() noexcept {
   }
   for (std::size_t i = 0; i < held_slot_count_; ++i)
     if (i != newest)
-      held_slots_[i].observed = held_slots_[i].control->sequence.load(std::memory_order_acquire);
-  HeldSlot& slot = held_slots_[newest];
-  if (!grow_copies(slot.bytes)) return held_;
+      observed_[i] = held_slots_[i].entry->control.sequence.load(std::memory_order_acquire);
+  const slot_blocks::Found& slot = held_slots_[newest];
+  if (!grow_copies(slot.capacity)) return held_;
   std::uint32_t bytes = 0;
-  if (slot::read(*slot.control, slot.payload, slot.bytes, spare_.get(), slot.observed, bytes) !=
-      slot::Read::kCopied)
+  if (slot::read(slot.entry->control, slot.payload, slot.capacity, spare_.get(), observed_[newest],
+                 bytes) != slot::Read::kCopied)
     return held_;
   // Checked after the copy: the writer cannot change what was checked.
   const char* field = "";
@@ -269,6 +275,30 @@ const void* RawLatestReader::latest_slot() noexcept {
   held_bytes_ = bytes;
   updated_ = true;
   return held_;
+}
+
+std::optional<SlotActivity> slot_activity(const ChannelId& channel, PayloadKind kind) {
+  if (!is_slot_kind(kind)) return std::nullopt;
+  slot_blocks::Directory& directory = slot_blocks::directory(kind);
+  directory.watch();
+  directory.refresh(false);
+  const slot_blocks::Found found = directory.newest(channel.to_string());
+  if (!found.entry) return std::nullopt;
+  const SlotControl& control = found.entry->control;
+  // The count and the stamp of one update: the same even sequence around the stamp.
+  for (int attempt = 0; attempt < 64; ++attempt) {
+    const std::uint32_t before = control.sequence.load(std::memory_order_acquire);
+    const std::int64_t stamp = control.stamp_ns.load(std::memory_order_relaxed);
+    std::atomic_thread_fence(std::memory_order_acquire);
+    if (before & 1U || control.sequence.load(std::memory_order_relaxed) != before) continue;
+    if (before == 0) return std::nullopt;  // claimed, never written
+    return SlotActivity{reinterpret_cast<std::uintptr_t>(found.entry), before / 2, stamp};
+  }
+  return std::nullopt;  // mid-update every time: its writer died in one
+}
+
+void release_gone_slot_writers() noexcept {
+  slot_blocks::refresh_all();
 }
 
 void RawLatestReader::report_refusal(const void* payload, std::uint32_t bytes, const char* field,

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <thread>
@@ -27,17 +28,17 @@ std::string publishers_message(std::size_t count, std::int64_t left, const std::
   return what + " needs " + std::to_string(count) + " iceoryx publisher port" +
          (count == 1 ? "" : "s") + " and the hub has " + std::to_string(left) + " left of " +
          std::to_string(iox::MAX_PUBLISHERS) +
-         " (one per body state, per command writer, per loop's stats). Stop another afhub "
-         "process, or simulate fewer bodies";
+         " (one per block of slots a process writes, each holding many bodies' states or "
+         "commands, and one per queue). Stop another afhub process";
 }
 
 std::string subscribers_message(std::size_t count, std::int64_t left, const std::string& what) {
   return what + " needs " + std::to_string(count) + " iceoryx subscriber port" +
          (count == 1 ? "" : "s") + " and the hub has " + std::to_string(left) + " left of " +
          std::to_string(iox::MAX_SUBSCRIBERS) + " (" + std::to_string(kReservedSubscriberPorts) +
-         " of them kept for reading the hub's health; one per body's command slot, per state "
-         "a controller, bridge or tool reads). Stop another afhub process or bridge, or have "
-         "it read fewer bodies";
+         " of them kept for reading the hub's health; each process takes one per kind of "
+         "slot it reads (states, commands) and one per queue). Stop another afhub process or "
+         "bridge";
 }
 
 // A process is refused while it would leave fewer free chunks than this in a pool:
@@ -121,6 +122,19 @@ std::optional<std::uint32_t> free_publisher_ports(std::chrono::milliseconds time
   const std::optional<FreePorts> free = free_ports(timeout);
   if (!free) return std::nullopt;
   return free->publishers;
+}
+
+std::vector<ChunkNeed> written_as_slots(const std::vector<SlotWritten>& slots) {
+  std::map<std::pair<PayloadKind, std::uint32_t>, std::size_t> entries;
+  for (const SlotWritten& slot : slots)
+    ++entries[{slot.kind, slot_payload_capacity(static_cast<std::uint32_t>(slot.payload_bytes))}];
+  std::vector<ChunkNeed> needs;
+  for (const auto& [size, count] : entries) {
+    const std::uint32_t capacity = size.second;
+    for (std::size_t nth = 0, held = 0; held < count; held += slot_block_entries(nth++, capacity))
+      needs.push_back({static_cast<std::uint32_t>(slot_block_loan_bytes(nth, capacity)), 1});
+  }
+  return needs;
 }
 
 void require_chunks(const std::vector<ChunkNeed>& needs, const std::string& what) {

@@ -8,7 +8,7 @@
 namespace afhub {
 
 struct RawLatestReader::Port {
-  Port(const ChannelId& channel, bool slots);
+  explicit Port(const ChannelId& channel);
   iox::popo::UntypedSubscriber subscriber;
 };
 

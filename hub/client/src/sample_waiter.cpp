@@ -1,5 +1,6 @@
 // Waiting for updates (see sample_waiter.hpp): on the futexes of the slots the
-// readers hold, or on iceoryx's WaitSet while none holds a slot yet.
+// readers hold, or on iceoryx's WaitSet (queue readers, and slot readers that hold no
+// slot yet, which look again every kArrivalCheckNs).
 #include "afhub/hub/sample_waiter.hpp"
 
 #include <algorithm>
@@ -12,8 +13,8 @@
 namespace afhub {
 namespace {
 
-// A slot's futex says nothing of a new writer's slot arriving through iceoryx (a
-// restarted physics, a second controller): a wait on slots looks for those this often.
+// A slot's futex says nothing of a new writer's entry (a restarted physics, a second
+// controller): a wait on slots returns this often, and the readers look for one.
 constexpr std::int64_t kArrivalCheckNs = 1'000'000;
 
 }  // namespace
@@ -31,12 +32,14 @@ SampleWaiter::SampleWaiter() : wait_set_(std::make_unique<WaitSet>()) {}
 SampleWaiter::~SampleWaiter() = default;
 
 bool SampleWaiter::attach(RawLatestReader& reader) {
-  // A state, not an event: the wait returns while a sample waits in the reader's
-  // queue, so a sample that came before the wait is never missed.
   if (wait_set_->readers.size() >= kCapacity) return false;
-  auto result =
-      wait_set_->set.attachState(reader.port_->subscriber, iox::popo::SubscriberState::HAS_DATA);
-  if (result.has_error()) return false;
+  if (!reader.slots_) {
+    // A state, not an event: the wait returns while a sample waits in the reader's
+    // queue, so a sample that came before the wait is never missed.
+    auto result =
+        wait_set_->set.attachState(reader.port_->subscriber, iox::popo::SubscriberState::HAS_DATA);
+    if (result.has_error()) return false;
+  }
   wait_set_->readers.push_back(&reader);
   wait_set_->watches.reserve(wait_set_->readers.size() * RawLatestReader::kMaxHeldSlots);
   return true;
@@ -46,13 +49,19 @@ void SampleWaiter::wait(std::int64_t timeout_ns) noexcept {
   if (timeout_ns <= 0) return;
   std::vector<slot::Watch>& watches = wait_set_->watches;
   watches.clear();
+  bool looking = false;  // a slot reader has not found its writer yet
   for (RawLatestReader* reader : wait_set_->readers) {
-    if (reader->port_->subscriber.hasData()) return;  // a sample or a new slot waits
+    if (!reader->slots_) {
+      if (reader->port_->subscriber.hasData()) return;  // a sample waits
+      continue;
+    }
+    looking |= reader->held_slot_count_ == 0;
     for (std::size_t i = 0; i < reader->held_slot_count_; ++i)
-      watches.push_back({reader->held_slots_[i].control, reader->held_slots_[i].observed});
+      watches.push_back({&reader->held_slots_[i].entry->control, reader->observed_[i]});
   }
   if (watches.empty()) {
-    wait_set_->set.timedWait(iox::units::Duration::fromNanoseconds(timeout_ns));
+    wait_set_->set.timedWait(iox::units::Duration::fromNanoseconds(
+        looking ? std::min(timeout_ns, kArrivalCheckNs) : timeout_ns));
     return;
   }
   // futex_waitv watches at most 128 words; past that the wait looks again sooner.

@@ -23,8 +23,7 @@ CatalogBuilder::~CatalogBuilder() = default;
 
 void CatalogBuilder::poll(std::chrono::steady_clock::time_point now) {
   const bool changed = merge(refresh_directories());
-  take_rate_samples(now);
-  start_rate_samples(now);
+  sample_rates(now);
   const bool due = now - last_publish_ >= kRepublishPeriod;
   if (due) last_publish_ = now;
   if (changed || due) publish();
@@ -55,16 +54,16 @@ bool CatalogBuilder::merge(bool directories_changed) {
   std::vector<std::string> messages;
   bodies_ = merge_directories(bodies_, offered, messages);
   for (const std::string& message : messages) tell_once(message);
-  // Rate probes follow the body set; each opens its reader when it samples.
-  std::map<std::string, RateProbe> probes;
+  // Rates follow the body set.
+  std::map<std::string, Rate> rates;
   for (const BodyEntry& body : bodies_) {
     std::string channel(name_of(body.info.channel));
     auto old = rates_.find(channel);
-    RateProbe& probe = probes[channel];
-    if (old != rates_.end()) probe = std::move(old->second);
-    probe.kind = body.info.kind;
+    Rate& rate = rates[channel];
+    if (old != rates_.end()) rate = old->second;
+    rate.kind = body.info.kind;
   }
-  rates_ = std::move(probes);
+  rates_ = std::move(rates);
   return true;
 }
 
@@ -74,75 +73,30 @@ void CatalogBuilder::tell_once(const std::string& message) {
   if (told_.insert(message).second) std::fprintf(stderr, "afhub hub: %s\n", message.c_str());
 }
 
-void CatalogBuilder::take_rate_samples(std::chrono::steady_clock::time_point now) {
-  for (auto& [channel, probe] : rates_) {
-    if (!probe.sampling) continue;
-    const auto* header = static_cast<const PayloadHeader*>(probe.reader->latest());
-    if (!probe.reader->updated()) {
-      if (now - probe.started >= kSamplePeriod) {
-        probe.rate_hz = 0.0;  // nothing published for a whole period
-        probe.last_sequence = 0;
-        end_sample(probe);
-      }
+void CatalogBuilder::sample_rates(std::chrono::steady_clock::time_point now) {
+  release_gone_slot_writers();  // their chunks back to the pools, even with no body left
+  for (auto& [channel, rate] : rates_) {
+    if (now - rate.looked < kSamplePeriod) continue;
+    rate.looked = now;
+    std::optional<SlotActivity> activity;
+    try {
+      activity = slot_activity(body_state_channel(channel), rate.kind == ChannelKind::kDevice
+                                                                ? PayloadKind::kDeviceState
+                                                                : PayloadKind::kBodyState);
+    } catch (const std::exception& error) {  // no subscriber port for the directory, a bad name
+      tell_once("no publish rate for " + channel + ": " + error.what());
+    }
+    const std::optional<SlotActivity> last = rate.last;
+    rate.last = activity;
+    if (!activity || !last || activity->writer != last->writer) {
+      rate.hz = 0.0;  // no writer, or a new one: a rate from the next look
       continue;
     }
-    const std::uint64_t sequence = header->sequence;
-    const std::int64_t stamp_ns = header->publish_stamp_ns;
-    if (probe.last_sequence != 0 && sequence >= probe.last_sequence &&
-        stamp_ns > probe.last_stamp_ns)
-      probe.rate_hz = static_cast<double>(sequence - probe.last_sequence) * 1e9 /
-                      static_cast<double>(stamp_ns - probe.last_stamp_ns);
-    probe.last_sequence = sequence;
-    probe.last_stamp_ns = stamp_ns;
-    end_sample(probe);
-  }
-}
-
-void CatalogBuilder::end_sample(RateProbe& probe) {
-  probe.sampling = false;
-  if (rates_.size() <= kMaxRateProbes)
-    probe.reader->unsubscribe();
-  else
-    probe.reader.reset();  // its port, for the next body round
-}
-
-void CatalogBuilder::start_rate_samples(std::chrono::steady_clock::time_point now) {
-  const bool few = rates_.size() <= kMaxRateProbes;
-  std::size_t open = 0;
-  for (auto& [channel, probe] : rates_) {
-    if (!few && !probe.sampling) probe.reader.reset();  // kept from when there were few
-    open += probe.reader ? 1 : 0;
-  }
-  if (rates_.empty()) return;
-  // Once round the bodies, from where the last call stopped.
-  auto it = rates_.lower_bound(next_probe_);
-  for (std::size_t visited = 0; visited < rates_.size(); ++visited, ++it) {
-    if (it == rates_.end()) it = rates_.begin();
-    auto& [channel, probe] = *it;
-    if (probe.sampling || (probe.started != std::chrono::steady_clock::time_point{} &&
-                           now - probe.started < kSamplePeriod))
-      continue;
-    if (probe.reader) {
-      probe.reader->subscribe();
-    } else {
-      if (open == kMaxRateProbes) {
-        next_probe_ = channel;
-        return;
-      }
-      try {
-        probe.reader = std::make_unique<RawLatestReader>(body_state_channel(channel),
-                                                         probe.kind == ChannelKind::kDevice
-                                                             ? PayloadKind::kDeviceState
-                                                             : PayloadKind::kBodyState);
-      } catch (const std::exception& error) {  // no subscriber port left, or a bad name
-        tell_once("no publish rate for " + channel + ": " + error.what());
-        next_probe_ = channel;
-        return;
-      }
-      ++open;
-    }
-    probe.sampling = true;
-    probe.started = now;
+    // Unsigned: a count that wrapped still gives the updates between the two looks.
+    const std::uint32_t updates = (activity->updates - last->updates) & 0x7fffffffU;
+    const std::int64_t span_ns = activity->last_stamp_ns - last->last_stamp_ns;
+    rate.hz = span_ns > 0 ? static_cast<double>(updates) * 1e9 / static_cast<double>(span_ns)
+                          : 0.0;  // nothing published for a whole period
   }
 }
 
@@ -155,7 +109,7 @@ void CatalogBuilder::publish() {
     return;
   }
   for (std::size_t i = 0; i < bodies_.size(); ++i)
-    list->bodies[i].publish_rate_hz = rates_[std::string(name_of(bodies_[i].info.channel))].rate_hz;
+    list->bodies[i].publish_rate_hz = rates_[std::string(name_of(bodies_[i].info.channel))].hz;
   writer_.publish(list);
 }
 

@@ -15,7 +15,7 @@
 #include "afhub/shm_layout/loop_stats.hpp"
 #include "afhub/shm_layout/scene.hpp"
 #include "afhub/shm_layout/scene_poses.hpp"
-#include "afhub/shm_layout/slot.hpp"
+#include "afhub/shm_layout/slot_block.hpp"
 #include "afhub/shm_layout/soft_body.hpp"
 #include "afhub/shm_layout/world.hpp"
 
@@ -26,10 +26,8 @@ constexpr std::uint32_t round_up8(std::size_t bytes) {
   return static_cast<std::uint32_t>((bytes + 7) / 8 * 8);
 }
 
-// A pool's payload size for a slot kind's largest payload: iceoryx counts the slot's
-// control block (a user header) into the payload size it picks a pool by.
-constexpr std::uint32_t slot_bytes(std::size_t payload_bytes) {
-  return round_up8(payload_bytes + kSlotOverheadBytes);
+constexpr std::uint32_t block_pool(std::size_t loan_bytes) {
+  return round_up8(slot_block_pool_bytes(loan_bytes));
 }
 
 // iceoryx rejects a chunk above 4 GiB; a pool beyond this many bytes in all is
@@ -61,25 +59,22 @@ std::string parse_pool(const std::string& text, MempoolSpec& pool) {
 }  // namespace
 
 std::vector<MempoolSpec> default_mempools() {
-  // Body states, body commands and catalogs are loaned at their real size, and
-  // iceoryx takes a chunk from the smallest pool that fits it, whatever its type: the
-  // body payloads share four tiers by size, most chunks where most bodies are (up to
-  // 64 joints). States and commands are slots (one chunk per writer, held by its
-  // readers, plus the slot's control block): the counts leave room for kMaxBodies
-  // bodies with several command writers each in the first tiers, fewer for bodies with
-  // hundreds of joints below them (a rope or chain whose every link is active), and
-  // for the queue samples of other kinds that fit those sizes. Catalogs and
-  // directories: each holds a chunk in its writer's history, and three in each reader.
+  // States, commands, world states, device channels and pose feeds are slots in blocks
+  // (shm_layout/slot_block.hpp): a writer process's n-th block of a kind and entry size
+  // fills the n-th tier, the last tier thereafter. Most processes take one 16 KiB block
+  // per kind they write (a controller's commands, a driver's device state); a physics
+  // of a thousand bodies five blocks, a thousand commands from 125 controllers 125
+  // blocks of the first tier. Block readers hold each block once per process.
+  // Catalogs and directories are loaned at their real size, and iceoryx takes a chunk
+  // from the smallest pool that fits it, whatever its type: each holds a chunk in its
+  // writer's history, and three in each reader.
   std::vector<MempoolSpec> pools = {
       {128, 512, "world commands, small iceoryx samples"},
-      {slot_bytes(body_command_bytes(64)), 4096,
-       "body commands of up to 64 joints, states of bodies with few joints"},
-      {slot_bytes(body_state_bytes(64)), 4096, "body states of up to 64 joints"},
-      {slot_bytes(body_state_bytes(256)), 1024, "body states and commands of up to 256 joints"},
-      {slot_bytes(body_state_bytes(kMaxJointsPerBody)), 256,
-       "body states and commands of up to kMaxJointsPerBody joints"},
-      // Each physics's world state: a slot, and, briefly, a larger one replacing it.
-      {slot_bytes(sizeof(WorldState)), 2 * kMaxProcesses + 64, "world state"},
+      {block_pool(kSlotBlockTiers[0]), 2048, "first blocks of slots (a writer's first 16 KiB)"},
+      {block_pool(kSlotBlockTiers[1]), 256,
+       "second blocks of slots, and blocks of one state of up to kMaxJointsPerBody joints"},
+      {block_pool(kSlotBlockTiers[2]), 64, "third blocks of slots, and a large scene's pose feed"},
+      {block_pool(kSlotBlockTiers[3]), 32, "blocks of slots of a writer of hundreds of channels"},
       {round_up8(sizeof(Health)), 128, "hub health"},
       {round_up8(sizeof(LoopStats)), 256, "loop stats"},
       // Each process's directory: a chunk in its history, a loan, and the hub's reader
@@ -97,16 +92,10 @@ std::vector<MempoolSpec> default_mempools() {
       {round_up8(scene_description_bytes(64)), 32, "scene descriptions of up to 64 bodies"},
       {round_up8(scene_description_bytes(kMaxSceneBodies)), 8,
        "scene descriptions of up to kMaxSceneBodies bodies"},
-      // A viewer's pose feed: a slot per physics (and one replacing it when the scene
-      // grows).
-      {slot_bytes(scene_poses_bytes(64, 512)), 32,
-       "viewer pose feeds of up to 64 bodies (512 joint values)"},
-      // It also takes the scene descriptions of about 8 to 20 bodies (their mesh parts
-      // make them 60 to 80 KB): each physics keeps one in its history, and one that just
-      // ended keeps one until RouDi has removed its port.
-      {slot_bytes(scene_poses_bytes(kMaxSceneBodies, kMaxSceneJointValues)), 64,
-       "viewer pose feeds of up to kMaxSceneBodies bodies (kMaxSceneJointValues joint values), "
-       "scene descriptions of 8 to 20 bodies"},
+      // Scene descriptions of about 8 to 20 bodies (their mesh parts make them 60 to 80
+      // KB): each physics keeps one in its history, and one that just ended keeps one
+      // until RouDi has removed its port.
+      {round_up8(scene_description_bytes(20)), 64, "scene descriptions of 8 to 20 bodies"},
       // Per soft body a node chunk in the writer's history, a loan, and three in
       // each viewer; its faces once, kept the same way.
       {round_up8(soft_body_mesh_bytes(0)), 64, "soft body node positions"},
@@ -122,10 +111,10 @@ std::vector<MempoolSpec> with_bench_pools(std::vector<MempoolSpec> pools) {
   // sample would be taken from anyway: a pool of their own between two of the body
   // tiers would take the body states below it too (a 1 KiB pool of 16 chunks took
   // every state of the example arm, and the physics dropped most of its steps).
-  // Its slots (afhub-slot) carry their control block beside the sample.
+  // Its slots (afhub-slot) are each the first block of its writer.
   constexpr std::uint32_t kBenchChunks = 16;
   for (std::uint32_t sample : {1u << 10, 1u << 14, 1u << 18, 1u << 20})
-    for (std::uint32_t bytes : {sample, slot_bytes(sample)}) {
+    for (std::uint32_t bytes : {sample, block_pool(first_slot_block_bytes(sample))}) {
       auto fits = std::find_if(pools.begin(), pools.end(), [bytes](const MempoolSpec& pool) {
         return pool.payload_bytes >= bytes;
       });

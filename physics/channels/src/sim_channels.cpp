@@ -4,13 +4,16 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <map>
 
 #include "afhub/hub/body_claims.hpp"
 #include "afhub/hub/hub_health.hpp"
 #include "afhub/hub/sample_waiter.hpp"
 #include "afhub/hub/world_command_queue.hpp"
+#include "afhub/shm_layout/body_state.hpp"
 #include "afhub/shm_layout/channel_names.hpp"
 #include "afhub/shm_layout/error.hpp"
+#include "afhub/shm_layout/slot_block.hpp"
 #include "scene_description.hpp"
 
 namespace afhub::physics {
@@ -65,17 +68,29 @@ BodyEntry body_entry(const Model& model, std::size_t b, const std::vector<std::s
 
 // The bodies the model publishes (passive ones publish nothing), checked with the hub
 // before this process opens a publisher: one publisher per body, and room for them.
-// A state publisher per body, the world's, the scene's, the directory's and the loop
-// stats'.
+// The blocks of their state slots (by size: a body's state carries the joints below
+// it), and the world state's, the scene's, the pose feed's, the directory's and the
+// loop stats' publishers.
 std::vector<std::string> claim_bodies(const Model& model) {
   std::vector<std::string> claimed;
-  for (const BodySpec& body : model.bodies)
-    if (!body.passive) claimed.push_back(body.channel);
-  for (const SoftBodySpec& soft : model.soft_bodies) claimed.push_back(soft.channel);
+  std::map<std::uint32_t, std::size_t> states_by_size;
+  for (std::size_t b = 0; b < model.bodies.size(); ++b) {
+    if (model.bodies[b].passive) continue;
+    claimed.push_back(model.bodies[b].channel);
+    ++states_by_size[slot_payload_capacity(
+        static_cast<std::uint32_t>(body_state_bytes(model.descendant_joints[b].size())))];
+  }
+  for (const SoftBodySpec& soft : model.soft_bodies) {
+    claimed.push_back(soft.channel);
+    ++states_by_size[slot_payload_capacity(static_cast<std::uint32_t>(body_state_bytes(0)))];
+  }
   if (claimed.size() > kMaxBodies)
     throw Error("the model publishes " + std::to_string(claimed.size()) +
                 " bodies; the hub holds " + std::to_string(kMaxBodies));
-  check_room_for_bodies(claimed, claimed.size() + 4);
+  std::size_t publishers = 5;
+  for (const auto& [capacity, count] : states_by_size)
+    publishers += slot_blocks_for(count, capacity);
+  check_room_for_bodies(claimed, publishers);
   return claimed;
 }
 
@@ -130,10 +145,11 @@ SimChannels::SimChannels(Simulation& sim, double watchdog_s, std::string_view na
     soft_surfaces_.push_back(std::move(surface));
   }
   // Before the first loan.
-  std::vector<ChunkNeed> needs{written_as_slot(sizeof(WorldState))};
+  std::vector<SlotWritten> slots{{PayloadKind::kWorldState, sizeof(WorldState)}};
   for (const Channel& channel : channels_)
-    needs.push_back(written_as_slot(body_state_bytes(channel.joint_count)));
-  require_chunks(needs, "this physics (" + std::to_string(channels_.size()) + " bodies)");
+    slots.push_back({PayloadKind::kBodyState, body_state_bytes(channel.joint_count)});
+  require_chunks(written_as_slots(slots),
+                 "this physics (" + std::to_string(channels_.size()) + " bodies)");
   std::size_t joint_values = 0;
   for (std::size_t b = 0; b < scene_body_count(model); ++b)
     if (!model.bodies[b].passive)

@@ -19,6 +19,7 @@
 #include "afhub/shm_layout/scene.hpp"
 #include "afhub/shm_layout/scene_poses.hpp"
 #include "afhub/shm_layout/slot.hpp"
+#include "afhub/shm_layout/slot_block.hpp"
 #include "afhub/shm_layout/soft_body.hpp"
 #include "afhub/shm_layout/world.hpp"
 
@@ -281,6 +282,20 @@ inline constexpr std::uint64_t kLayoutId = layout_detail::mix({
     AFHUB_OFF(SlotControl, payload_bytes),
     AFHUB_OFF(SlotControl, magic),
     kSlotMagic,
+    sizeof(SlotBlockHeader),
+    AFHUB_OFF(SlotBlockHeader, layout_id),
+    AFHUB_OFF(SlotBlockHeader, kind),
+    AFHUB_OFF(SlotBlockHeader, writer_pid),
+    AFHUB_OFF(SlotBlockHeader, entry_count),
+    AFHUB_OFF(SlotBlockHeader, entry_bytes),
+    AFHUB_OFF(SlotBlockHeader, claimed),
+    AFHUB_OFF(SlotBlockHeader, closed),
+    sizeof(SlotEntryHeader),
+    AFHUB_OFF(SlotEntryHeader, readers),
+    AFHUB_OFF(SlotEntryHeader, service),
+    AFHUB_OFF(SlotEntryHeader, instance),
+    AFHUB_OFF(SlotEntryHeader, event),
+    kSlotBlockMagic,
 });
 #undef AFHUB_OFF
 

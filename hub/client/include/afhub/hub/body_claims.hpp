@@ -14,8 +14,8 @@ namespace afhub {
 
 // Throws afhub::Error, saying what to do, when a body in `channels` is published by
 // another live process, when the catalog cannot take them all, or when iceoryx has
-// fewer than `publishers` publisher ports, or than one subscriber port a channel (its
-// command reader), left.
+// fewer than `publishers` publisher ports (a block of state slots holds many bodies,
+// see slot_blocks_for()), or no subscriber port (for its command slots), left.
 void check_room_for_bodies(const std::vector<std::string>& channels, std::size_t publishers);
 
 // Waits up to `timeout` for the catalog to list every channel as this process's.

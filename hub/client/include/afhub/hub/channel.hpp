@@ -2,10 +2,12 @@
 //   Writer<T>: loan a payload in shared memory, fill it in place, publish it.
 //   LatestReader<T>: the newest valid payload; older ones are dropped.
 // Two transports, by payload kind (is_slot_kind, shm_layout/slot.hpp):
-//   - States and commands are latest-value slots: the writer publishes one iceoryx
-//     chunk once and then updates it in place under a seqlock; a reader holds the
-//     chunk and copies the payload out, then checks the copy. No lock is shared and a
-//     reader costs the writer nothing. A late joiner gets the current value at once.
+//   - States and commands are latest-value slots: the writer claims an entry in a
+//     block of slots (shm_layout/slot_block.hpp) that its process published once, and
+//     updates it in place under a seqlock; a reader holds the block and copies the
+//     payload out, then checks the copy. No lock is shared and a reader costs the
+//     writer nothing. A late joiner gets the current value at once. A process takes a
+//     port per block, not per channel: a world of thousands of bodies fits iceoryx's.
 //   - Every other kind is a queue of iceoryx samples: each publish sends a new chunk,
 //     read in place; the writer keeps the last one for late joiners.
 // loan(), publish() and latest() are real-time safe: no heap, no exceptions.
@@ -16,6 +18,7 @@
 #include <cstring>
 #include <memory>
 #include <new>
+#include <optional>
 #include <string>
 
 #include "afhub/shm_layout/channel_names.hpp"
@@ -25,7 +28,18 @@
 
 namespace afhub {
 
-struct SlotControl;
+struct SlotEntryHeader;
+namespace slot_blocks {
+struct Found;
+class Directory;
+}  // namespace slot_blocks
+
+// A slot writer's entry in its process's block (see slot_blocks.hpp).
+struct SlotClaim {
+  SlotEntryHeader* entry = nullptr;
+  void* payload = nullptr;
+  std::uint32_t capacity = 0;
+};
 
 // Untyped ends; the typed templates below are what code uses.
 class RawWriter {
@@ -56,12 +70,9 @@ class RawWriter {
   PayloadKind kind_;
   std::uint32_t pid_;  // read once: getpid() is a system call
   std::uint64_t sequence_ = 0;
-  std::unique_ptr<Port> port_;
-  // The slot being written (slot kinds only).
-  void* slot_payload_ = nullptr;
-  SlotControl* slot_ = nullptr;
-  std::uint32_t slot_bytes_ = 0;
-  bool slot_published_ = false;
+  std::unique_ptr<Port> port_;  // queue kinds
+  bool slot_kind_;
+  SlotClaim slot_;  // slot kinds: the entry written, claimed at the first loan
 };
 
 class RawLatestReader {
@@ -92,20 +103,14 @@ class RawLatestReader {
  private:
   friend class SampleWaiter;  // waits on the port's subscriber and the held slots
   struct Port;
-  // A writer's slot this reader holds. A channel has one writer of state; commands
-  // may come from a few (a controller, a teleop, a script), each its own slot, the
-  // newest update taken.
-  struct HeldSlot {
-    const void* payload;
-    SlotControl* control;
-    std::uint32_t bytes;
-    std::uint64_t origin;    // the writer's iceoryx port id
-    std::uint32_t observed;  // its sequence when this reader last looked
-  };
+  // A channel has one writer of state; commands may come from a few (a controller, a
+  // teleop, a script), each its own slot, the newest update taken.
   static constexpr std::size_t kMaxHeldSlots = 4;
   const void* latest_queued() noexcept;
   const void* latest_slot() noexcept;
-  void take_slot(const void* payload) noexcept;
+  // Takes the channel's entries anew from the directory (a writer came or went).
+  void rebind_slots() noexcept;
+  void unbind_slots() noexcept;
   bool grow_copies(std::uint32_t bytes) noexcept;
   void report_refusal(const void* payload, std::uint32_t bytes, const char* field,
                       const char* problem) noexcept;
@@ -117,13 +122,36 @@ class RawLatestReader {
   std::uint32_t held_bytes_ = 0;
   bool updated_ = false;
   std::uint64_t refused_ = 0;
-  std::unique_ptr<Port> port_;
-  std::array<HeldSlot, kMaxHeldSlots> held_slots_{};
+  std::unique_ptr<Port> port_;  // queue kinds
+  // Slot kinds: the process's directory of the kind, this channel's key in it, the
+  // entries held (and the sequence of each when this reader last looked).
+  slot_blocks::Directory* directory_ = nullptr;
+  std::string key_;
+  std::uint64_t bound_generation_ = ~0ULL;
+  bool stepped_aside_ = false;  // unsubscribe()d
+  std::unique_ptr<slot_blocks::Found[]> held_slots_;
+  std::array<std::uint32_t, kMaxHeldSlots> observed_{};
   std::size_t held_slot_count_ = 0;
   // The checked copy latest() returns, and the buffer the next copy goes to.
   std::unique_ptr<unsigned char[]> copy_, spare_;
   std::uint32_t copy_capacity_ = 0;
 };
+
+// What a slot's writer tells of itself in its entry (slot kinds only): how many
+// updates it made (modulo 2^31) and the stamp of the last. Read in place, without
+// holding the entry: the caller is not counted as a reader, nothing is copied. The
+// entry updated last when several writers share the channel; nullopt when none has
+// written it yet. Not for the steady-state loop (it takes the directory's lock).
+struct SlotActivity {
+  std::uintptr_t writer = 0;  // tells a restarted writer's entry from the last one
+  std::uint32_t updates = 0;
+  std::int64_t last_stamp_ns = 0;
+};
+std::optional<SlotActivity> slot_activity(const ChannelId& channel, PayloadKind kind);
+
+// Lets go of the blocks of slots whose writers closed them or died, for a process
+// that reads slots only now and then (the hub): a reader's latest() does it anyway.
+void release_gone_slot_writers() noexcept;
 
 template <class T>
 class Writer {

@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "afhub/shm_layout/slot.hpp"
+#include "afhub/shm_layout/slot_block.hpp"
 
 namespace afhub {
 
@@ -54,11 +54,21 @@ struct ChunkNeed {
 constexpr ChunkNeed published_each_cycle(std::size_t bytes) {
   return {static_cast<std::uint32_t>(bytes), 2};
 }
-// What a writer of a slot (states and commands, see channel.hpp) holds: its one chunk,
-// the slot's control block beside the payload.
+// What a writer of a slot (states and commands, see channel.hpp) may take: the first
+// block of slots of its process for payloads of its size (shared with the process's
+// other writers of the kind, so this counts high).
 constexpr ChunkNeed written_as_slot(std::size_t payload_bytes) {
-  return {static_cast<std::uint32_t>(payload_bytes + kSlotOverheadBytes), 1};
+  return {
+      static_cast<std::uint32_t>(first_slot_block_bytes(static_cast<std::uint32_t>(payload_bytes))),
+      1};
 }
+// What the writers of a process's many slots may take: the blocks they fill, by kind
+// and entry size (see slot_blocks_for()).
+struct SlotWritten {
+  PayloadKind kind;
+  std::size_t payload_bytes;
+};
+std::vector<ChunkNeed> written_as_slots(const std::vector<SlotWritten>& slots);
 // Throws afhub::Error, naming `what`, the pool and its size, when taking `needs` would
 // leave a pool of the hub nearly empty (by the hub's latest Health, read afresh): a new
 // process is refused before it takes the chunks those running publish with. Every
