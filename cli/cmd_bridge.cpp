@@ -102,7 +102,7 @@ void register_bridge(CLI::App& app, Runner& selected) {
               "the commands written to them here back over DDS");
   add_setting(dds, *cli, "--max-mirrored", &DdsOptions::max_mirrored,
               "With --mirror: mirror at most this many remote bodies and devices, so that "
-              "this hub keeps room for its own (default 225, half of the 450 a hub lists); "
+              "this hub keeps room for its own (default 225, of the 4096 a hub lists); "
               "those past it, or whose joint names would not fit the hub's catalog, are "
               "refused and said once");
   add_setting(dds, *cli, "--accept-commands", &DdsOptions::accept_commands,

@@ -106,8 +106,10 @@ BodyList* loan_body_list(RawWriter& writer, const std::vector<BodyEntry>& entrie
     for (const std::string& name : entry.child_names) refer(name);
     if (!entry.parent_name.empty()) refer(entry.parent_name);
   }
+  // Past the largest tier no pool holds the list (iceoryx would abort the loan).
   if (entries.size() > kMaxBodies || names.size() > kMaxCatalogJointNames ||
-      refs.size() > kMaxCatalogJointRefs)
+      refs.size() > kMaxCatalogJointRefs ||
+      body_list_bytes(entries.size(), names.size(), refs.size()) > kBodyListTiers.back())
     return nullptr;
   auto* list = static_cast<BodyList*>(writer.loan(
       static_cast<std::uint32_t>(body_list_loan_bytes(entries.size(), names.size(), refs.size()))));

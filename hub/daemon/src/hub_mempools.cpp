@@ -64,17 +64,18 @@ std::vector<MempoolSpec> default_mempools() {
   // fills the n-th tier, the last tier thereafter. Most processes take one 16 KiB block
   // per kind they write (a controller's commands, a driver's device state); a physics
   // of a thousand bodies five blocks, a thousand commands from 125 controllers 125
-  // blocks of the first tier. Block readers hold each block once per process.
+  // blocks of the first tier. Block readers hold each block once per process. In all
+  // the default pools take 152 MB of /dev/shm (iceoryx's own default: 206 MB).
   // Catalogs and directories are loaned at their real size, and iceoryx takes a chunk
   // from the smallest pool that fits it, whatever its type: each holds a chunk in its
   // writer's history, and three in each reader.
   std::vector<MempoolSpec> pools = {
       {128, 512, "world commands, small iceoryx samples"},
-      {block_pool(kSlotBlockTiers[0]), 2048, "first blocks of slots (a writer's first 16 KiB)"},
+      {block_pool(kSlotBlockTiers[0]), 1024, "first blocks of slots (a writer's first 16 KiB)"},
       {block_pool(kSlotBlockTiers[1]), 256,
        "second blocks of slots, and blocks of one state of up to kMaxJointsPerBody joints"},
       {block_pool(kSlotBlockTiers[2]), 64, "third blocks of slots, and a large scene's pose feed"},
-      {block_pool(kSlotBlockTiers[3]), 32, "blocks of slots of a writer of hundreds of channels"},
+      {block_pool(kSlotBlockTiers[3]), 16, "blocks of slots of a writer of hundreds of channels"},
       {round_up8(sizeof(Health)), 128, "hub health"},
       {round_up8(sizeof(LoopStats)), 256, "loop stats"},
       // Each process's directory: a chunk in its history, a loan, and the hub's reader
@@ -85,7 +86,7 @@ std::vector<MempoolSpec> default_mempools() {
       {round_up8(kBodyListTiers[1]), 32,
        "catalogs and directories of up to 64 bodies (512 joint names, 2048 references)"},
       {round_up8(kBodyListTiers[2]), 24,
-       "catalogs and directories of up to kMaxBodies bodies (4096 joint names, 65536 "
+       "catalogs and directories of up to kMaxBodies bodies (8192 joint names, 65536 "
        "references)"},
       // The physics' scene description keeps one chunk in its history, and three in
       // each viewer.

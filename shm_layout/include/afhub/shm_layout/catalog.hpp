@@ -75,7 +75,7 @@ constexpr std::size_t body_list_bytes(std::size_t count, std::size_t names = 0,
 // took the world state's chunks, and 32 physics ran the world state out of them.
 inline constexpr std::array<std::size_t, 3> kBodyListTiers = {
     body_list_bytes(8, 64, 256), body_list_bytes(64, 512, 2048),
-    body_list_bytes(kMaxBodies, 4096, 65536)};
+    body_list_bytes(kMaxBodies, 8192, 65536)};
 // The smallest tier that holds the list (its real size past the last tier).
 constexpr std::size_t body_list_loan_bytes(std::size_t count, std::size_t names = 0,
                                            std::size_t refs = 0) {

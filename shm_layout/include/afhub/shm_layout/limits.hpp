@@ -30,12 +30,11 @@ inline constexpr std::size_t kJointNameBufferSize = 64;
 // Process (iceoryx runtime) names are limited to 100 characters by iceoryx.
 inline constexpr std::size_t kProcessNameBufferSize = 104;
 
-// Bodies in the catalog. iceoryx 2.0 allows 512 publishers in the whole system
-// (6 its own) and every active body needs a state publisher; a command publisher
-// is made only by a process that commands the body. Below the ports by a margin:
-// processes that claim bodies at once open their publishers before the catalog
-// refuses one of them, and that must never run iceoryx out of ports (it aborts).
-inline constexpr std::size_t kMaxBodies = 450;
+// Bodies in the catalog. Their states and commands are slots in blocks (slot_block.hpp),
+// a publisher port per block rather than per body, so iceoryx's 512 ports no longer
+// bound them; the catalog does: a catalog of this many bodies (with 8192 joint names)
+// is a 1.8 MB chunk, of which the hub keeps 24 (hub_mempools.cpp).
+inline constexpr std::size_t kMaxBodies = 4096;
 
 // Bodies (rigid and soft, passive ones too) one physics simulates. Passive bodies use
 // no hub resource, so this bounds what a model costs to build and step: Bullet keeps

@@ -51,8 +51,8 @@ struct DdsBridgeOptions {
   std::string ros2_prefix;
   // DDS Security credentials (see bridges/dds/src/dds_security.hpp); empty: none.
   std::string security_dir;
-  // Bodies and devices mirrored at most: half of a hub's 450 leaves the rest for its
-  // own, whatever a peer announces.
+  // Bodies and devices mirrored at most: leaves the rest of a hub's 4096 for its own,
+  // whatever a peer announces.
   std::size_t max_mirrored = 225;
 };
 
