@@ -82,16 +82,24 @@ void require_bench_pools() {
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   const Health* health = reader.latest();
   if (!health) throw Error("the hub publishes no health: is it an afhub hub?");
-  // Free chunks that fit the largest sample, in the payload pools (RouDi's own
-  // introspection segment comes first). Two channels hold up to five chunks each.
+  // Free chunks of the pool iceoryx would take the largest sample's block of slots from
+  // (the smallest that fits, in the payload segment; RouDi's own introspection segment
+  // comes first), if that pool is sized for it: a production hub's next larger pool
+  // holds catalogs, which the bench must not take. Two channels hold up to five chunks
+  // each.
   constexpr std::uint32_t kNeeded = 16;
-  std::uint32_t free_chunks = 0;
+  const std::size_t block_bytes = slot_block_pool_bytes(first_slot_block_bytes(kMaxPayloadBytes));
+  const MempoolUsage* fits = nullptr;
   for (std::uint32_t i = 0; i < health->mempool_count; ++i) {
     const MempoolUsage& pool = health->mempools[i];
     if (pool.segment_id != health->mempools[0].segment_id &&
-        pool.chunk_payload_bytes >= slot_block_pool_bytes(first_slot_block_bytes(kMaxPayloadBytes)))
-      free_chunks += pool.chunk_count - pool.used_chunks;
+        pool.chunk_payload_bytes >= block_bytes &&
+        (!fits || pool.chunk_payload_bytes < fits->chunk_payload_bytes))
+      fits = &pool;
   }
+  const std::uint32_t free_chunks = fits && fits->chunk_payload_bytes <= block_bytes * 5 / 4
+                                        ? fits->chunk_count - fits->used_chunks
+                                        : 0;
   if (free_chunks < kNeeded)
     throw Error("the running hub has " + std::to_string(free_chunks) + " free chunks for " +
                 std::to_string(kMaxPayloadBytes) + " byte samples; the bench needs " +

@@ -91,8 +91,10 @@ TEST(MempoolKinds, BenchPoolsLeaveTheBodiesTheirPools) {
       ASSERT_GE(with.chunk_count, without.chunk_count) << with.holds;
     }
   EXPECT_NE(pool_for(bench, 1u << 20).holds.find("bench samples of 1024 KiB"), std::string::npos);
-  EXPECT_GE(pool_for(bench, first_slot_block_bytes(1u << 20)).payload_bytes,
-            slot_block_pool_bytes(first_slot_block_bytes(1u << 20)));
+  const MempoolSpec& largest_slot =
+      pool_for(bench, slot_block_pool_bytes(first_slot_block_bytes(1u << 20)));
+  EXPECT_GE(largest_slot.payload_bytes, slot_block_pool_bytes(first_slot_block_bytes(1u << 20)));
+  EXPECT_FALSE(holds_body_lists(largest_slot)) << "1 MiB bench slots would take catalog chunks";
 }
 
 }  // namespace

@@ -282,19 +282,7 @@ std::optional<SlotActivity> slot_activity(const ChannelId& channel, PayloadKind 
   slot_blocks::Directory& directory = slot_blocks::directory(kind);
   directory.watch();
   directory.refresh(false);
-  const slot_blocks::Found found = directory.newest(channel.to_string());
-  if (!found.entry) return std::nullopt;
-  const SlotControl& control = found.entry->control;
-  // The count and the stamp of one update: the same even sequence around the stamp.
-  for (int attempt = 0; attempt < 64; ++attempt) {
-    const std::uint32_t before = control.sequence.load(std::memory_order_acquire);
-    const std::int64_t stamp = control.stamp_ns.load(std::memory_order_relaxed);
-    std::atomic_thread_fence(std::memory_order_acquire);
-    if (before & 1U || control.sequence.load(std::memory_order_relaxed) != before) continue;
-    if (before == 0) return std::nullopt;  // claimed, never written
-    return SlotActivity{reinterpret_cast<std::uintptr_t>(found.entry), before / 2, stamp};
-  }
-  return std::nullopt;  // mid-update every time: its writer died in one
+  return directory.activity(channel.to_string());
 }
 
 void release_gone_slot_writers() noexcept {

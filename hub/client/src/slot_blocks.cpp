@@ -413,11 +413,21 @@ void Directory::unbind(const Found* found, std::size_t count) noexcept {
   }
 }
 
-Found Directory::newest(const std::string& key) {
+std::optional<SlotActivity> Directory::activity(const std::string& key) {
   Found found;
   std::lock_guard lock(mutex_);
-  bind_locked(key, &found, 1, false);
-  return found;
+  if (bind_locked(key, &found, 1, false) == 0) return std::nullopt;
+  const SlotControl& control = found.entry->control;
+  // The count and the stamp of one update: the same even sequence around the stamp.
+  for (int attempt = 0; attempt < 64; ++attempt) {
+    const std::uint32_t before = control.sequence.load(std::memory_order_acquire);
+    const std::int64_t stamp = control.stamp_ns.load(std::memory_order_relaxed);
+    std::atomic_thread_fence(std::memory_order_acquire);
+    if (before & 1U || control.sequence.load(std::memory_order_relaxed) != before) continue;
+    if (before == 0) return std::nullopt;  // claimed, never written
+    return SlotActivity{reinterpret_cast<std::uintptr_t>(found.entry), before / 2, stamp};
+  }
+  return std::nullopt;  // mid-update every time: its writer died in one
 }
 
 namespace {

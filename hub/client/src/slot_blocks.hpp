@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <unordered_map>
 #include <vector>
@@ -76,8 +77,9 @@ class Directory {
   // first; each pins its block until unbind().
   std::size_t bind(const std::string& key, Found* out, std::size_t max);
   void unbind(const Found* found, std::size_t count) noexcept;
-  // The live entry of `key` updated last, without pinning it; entry == nullptr if none.
-  Found newest(const std::string& key);
+  // What the writer of `key`'s entry updated last tells of itself (see slot_activity()),
+  // read under the directory's lock: the block cannot go meanwhile.
+  std::optional<SlotActivity> activity(const std::string& key);
   bool subscribed() const noexcept;
 
  private:

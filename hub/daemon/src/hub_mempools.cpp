@@ -119,7 +119,9 @@ std::vector<MempoolSpec> with_bench_pools(std::vector<MempoolSpec> pools) {
       auto fits = std::find_if(pools.begin(), pools.end(), [bytes](const MempoolSpec& pool) {
         return pool.payload_bytes >= bytes;
       });
-      if (fits == pools.end()) {
+      // Past the largest block tier the next pool up holds catalogs: one of their own.
+      if (fits == pools.end() || (bytes > block_pool(kSlotBlockTiers[kSlotBlockTierCount - 1]) &&
+                                  fits->payload_bytes > bytes / 4 * 5)) {
         pools.push_back(
             {bytes, kBenchChunks, "bench samples of " + std::to_string(sample >> 10) + " KiB"});
         continue;
