@@ -66,7 +66,6 @@ void init(SlotControl& slot) noexcept {
   slot.sleeping.store(0, std::memory_order_relaxed);
   slot.stamp_ns.store(0, std::memory_order_relaxed);
   slot.payload_bytes.store(0, std::memory_order_relaxed);
-  slot.magic = kSlotMagic;
 }
 
 void begin_update(SlotControl& slot, std::uint32_t bytes) noexcept {

@@ -280,8 +280,6 @@ inline constexpr std::uint64_t kLayoutId = layout_detail::mix({
     AFHUB_OFF(SlotControl, sleeping),
     AFHUB_OFF(SlotControl, stamp_ns),
     AFHUB_OFF(SlotControl, payload_bytes),
-    AFHUB_OFF(SlotControl, magic),
-    kSlotMagic,
     sizeof(SlotBlockHeader),
     AFHUB_OFF(SlotBlockHeader, layout_id),
     AFHUB_OFF(SlotBlockHeader, kind),

@@ -1,11 +1,10 @@
-// A latest-value slot: the control block of a chunk that a writer publishes once and
-// then updates in place for as long as it lives; readers hold the chunk and copy its
-// payload out. It sits in the chunk's iceoryx user header, in front of the payload,
-// so the payload keeps its layout. No lock is shared: the writer makes the sequence
-// odd, writes the payload, makes it even again (a seqlock), and a reader keeps a
-// copy only when the sequence was the same even number before and after it copied.
-// A writer killed mid-update leaves the sequence odd: its readers keep their last
-// copy and recognise the slot as torn, until a restarted writer publishes a new one.
+// A latest-value slot: the control block of an entry in a block of slots
+// (slot_block.hpp) that a writer updates in place for as long as it lives; readers
+// hold the block and copy the entry's payload out. No lock is shared: the writer makes
+// the sequence odd, writes the payload, makes it even again (a seqlock), and a reader
+// keeps a copy only when the sequence was the same even number before and after it
+// copied. A writer killed mid-update leaves the sequence odd: its readers keep their
+// last copy and recognise the slot as torn, until a restarted writer claims a new one.
 #pragma once
 
 #include <atomic>
@@ -30,11 +29,7 @@ struct SlotControl {
   // The bytes of the payload the update wrote (at most the chunk's): a reader copies
   // these. A writer's payloads may be shorter than its slot (a state of fewer joints).
   std::atomic<std::uint32_t> payload_bytes{0};
-  // kSlotMagic: set before the first publish; a chunk without it is not a slot.
-  std::uint64_t magic{0};
 };
-
-inline constexpr std::uint64_t kSlotMagic = 0x61666875622d736cULL;  // "afhub-sl"
 
 // Lock-free in shared memory: the atomics must not fall back to a process-local lock.
 static_assert(std::atomic<std::uint32_t>::is_always_lock_free);
@@ -58,10 +53,5 @@ constexpr bool is_slot_kind(PayloadKind kind) {
       return false;
   }
 }
-
-// What a slot adds to its chunk beyond the payload: the control block, and padding
-// up to the payload's alignment. Pools for slot kinds are sized with it.
-inline constexpr std::uint32_t kSlotOverheadBytes = 64;
-static_assert(sizeof(SlotControl) + alignof(PayloadHeader) <= kSlotOverheadBytes);
 
 }  // namespace afhub

@@ -94,10 +94,12 @@ class RawLatestReader {
   const ChannelId& channel() const { return channel_; }
   // A reader starts subscribed. On a queue every subscribed reader costs the writer
   // on each publish, so one that looks only now and then can step aside in between;
-  // what latest() holds stays valid.
+  // what latest() holds stays valid. A slot reader costs its writer nothing: stepping
+  // aside changes only what subscribed() says.
   void subscribe() noexcept;
   void unsubscribe() noexcept;
-  // Connected to the writer: every sample published from now on reaches this reader.
+  // Connected: every sample published from now on (queues), every writer's slot
+  // (slot kinds, through the process's directory of the kind) reaches this reader.
   bool subscribed() const noexcept;
 
  private:
