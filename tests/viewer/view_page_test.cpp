@@ -257,8 +257,20 @@ TEST_F(ViewPageTest, ASliderMovesTheJointOnlyWithAllowCommands) {
   EXPECT_EQ(browser_->evaluate("document.querySelectorAll('#drive input, #world button').length"),
             0);
   const double refused_target = -target;
-  // Released by the physics' watchdog, the joint may drift; a command would take it most
-  // of the way to the refused target within the second.
+  // Released by the physics' watchdog, the arm falls, and its links' fall swings joint 0
+  // (under load by most of a radian in a second): measured once the arm has come to rest,
+  // so that a command, which would take joint 0 most of the way to the refused target
+  // within the second, is what moves it.
+  EXPECT_TRUE(wait_until(
+      [] {
+        const BodyState* state = base_->latest_state();
+        if (!state) return false;
+        for (std::size_t j = 0; j < state->joint_count; ++j)
+          if (std::abs(state->joints[j].velocity) > 0.02) return false;
+        return true;
+      },
+      std::chrono::seconds(20)))
+      << "the released arm never came to rest";
   const double before = base_joint(0);
   const std::string post =
       "fetch('/command?body=afhub/arm/base&joint=0&value=" + std::to_string(refused_target) +
