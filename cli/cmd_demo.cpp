@@ -11,11 +11,13 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <regex>
 #include <string>
 #include <thread>
@@ -31,6 +33,9 @@
 
 namespace afhub::cli {
 namespace {
+
+// How long the physics may take to load its scene and show a body in the catalog.
+constexpr std::chrono::seconds kSceneTimeout{120};
 
 struct DemoOptions {
   double seconds = 0.0;  // 0: until Ctrl-C
@@ -225,12 +230,27 @@ int run_demo(const DemoOptions& options) {
   const bool tty = isatty(STDOUT_FILENO);
   const auto refresh = std::chrono::milliseconds(tty ? 100 : 1000);
   const auto start = std::chrono::steady_clock::now();
+  // --seconds counts from the scene's bodies in the catalog: a loaded machine may take
+  // seconds to load the meshes, and the demo's seconds are seconds of simulation shown.
+  std::optional<std::chrono::steady_clock::time_point> live;
   auto next_draw = start;
   std::uint32_t drawn_bodies = 0;
   while (!stop_requested()) {
     const auto now = std::chrono::steady_clock::now();
     const double t = std::chrono::duration<double>(now - start).count();
-    if (options.seconds > 0 && t > options.seconds) break;
+    if (options.seconds > 0 && live &&
+        std::chrono::duration<double>(now - *live).count() > options.seconds)
+      break;
+    if (!live && now - start > kSceneTimeout) {
+      std::fprintf(stderr,
+                   "afhub demo: the simulation showed no body within %lld s; see its messages "
+                   "above\n",
+                   static_cast<long long>(kSceneTimeout.count()));
+      kill(physics, SIGTERM);
+      waitpid(physics, nullptr, 0);
+      stop_viewer(viewer);
+      return 1;
+    }
     int status = 0;
     if (waitpid(physics, &status, WNOHANG) == physics) {
       std::fprintf(stderr, "afhub demo: the simulation exited unexpectedly\n");
@@ -238,6 +258,7 @@ int run_demo(const DemoOptions& options) {
       return 1;
     }
     const BodyList& list = catalog.latest();
+    if (!live && list.body_count > 0) live = now;
     if (movers.empty() && list.body_count > 0) {
       if (options.model.empty()) {
         for (const BodyMotion& motion : example_scene_motions())
@@ -281,7 +302,8 @@ void register_demo(CLI::App& app, Runner& selected) {
                    "ADF file to simulate instead, its root body's joints waving (default: the "
                    "example scene, examples/models/launch.yaml)");
   demo->add_option("--seconds", options->seconds,
-                   "Stop after this many seconds (default: until Ctrl-C)");
+                   "Stop after this many seconds of the scene live, counted from its "
+                   "bodies' first appearance (default: until Ctrl-C)");
   demo->add_flag("!--no-view", options->view, "Do not start the browser viewer");
   demo->add_flag("!--no-browser", options->open_browser,
                  "Do not open the viewer's URL in your browser (it is opened with xdg-open "

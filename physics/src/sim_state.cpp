@@ -10,11 +10,12 @@ void Simulation::read_body(std::size_t index, BodyReading& reading) const noexce
   const Data& d = *data_;
   const BodyData& body = d.bodies[index];
   const btRigidBody& rb = *body.body;
-  reading.pose = to_pose(rb.getWorldTransform() * body.com_from_mesh);
+  const btTransform mesh_frame = rb.getWorldTransform() * body.com_from_mesh;
+  reading.pose = to_pose(mesh_frame);
   reading.twist = {from_bt(rb.getLinearVelocity()), from_bt(rb.getAngularVelocity())};
   reading.wrench = body.applied;
   // The contact moment about the world origin, moved to the mesh frame's origin.
-  const btVector3 origin = (rb.getWorldTransform() * body.com_from_mesh).getOrigin();
+  const btVector3 origin = mesh_frame.getOrigin();
   reading.contact_wrench = {from_bt(body.contact_force), from_bt(body.contact_moment_at_origin -
                                                                  origin.cross(body.contact_force))};
   reading.contact_count = body.contact_count;

@@ -86,6 +86,33 @@ TEST(Channel, ReaderGetsACopyOfTheWritersSlotThatStaysUntilItAsksAgain) {
   EXPECT_EQ(controller.latest_state()->joint_count, 64u);
 }
 
+// The physics rewrites every field each step, so its slot keeps the last update's
+// bytes rather than being filled with defaults first; a loan() still gets defaults,
+// and so does a rewrite larger than any loan before (bytes never written).
+TEST(Channel, ARewrittenStateKeepsTheLastUpdateAndAPlainLoanGetsDefaults) {
+  BodyPublisher physics("test/rewrite");
+  BodyState* first = physics.rewrite_state(2);
+  ASSERT_NE(first, nullptr);
+  EXPECT_EQ(first->mass_kg, 0.0) << "a new entry's first rewrite is defaults";
+  first->mass_kg = 3.5;
+  first->joints[1].position = 0.25;
+  physics.publish_state(first);
+  BodyState* rewritten = physics.rewrite_state(2);
+  ASSERT_EQ(rewritten, first);
+  EXPECT_EQ(rewritten->mass_kg, 3.5);
+  EXPECT_EQ(rewritten->joints[1].position, 0.25);
+  physics.publish_state(rewritten);
+  BodyState* grown = physics.rewrite_state(3);  // a third joint, never written
+  ASSERT_EQ(grown, first) << "three joints fit the entry";
+  EXPECT_EQ(grown->mass_kg, 0.0);
+  EXPECT_EQ(grown->joints[1].position, 0.0);
+  grown->mass_kg = 1.5;
+  physics.publish_state(grown);
+  BodyState* loaned = physics.loan_state(3);
+  EXPECT_EQ(loaned->mass_kg, 0.0);
+  physics.publish_state(loaned);
+}
+
 TEST(Channel, ReaderGetsOnlyTheNewestSample) {
   BodyPublisher physics("test/latest");
   BodyClient controller("test/latest");

@@ -96,22 +96,43 @@ void BM_ConvertUrdf(benchmark::State& state, const std::string& file) {
 BENCHMARK_CAPTURE(BM_ConvertUrdf, ur5, kUr5)->Unit(benchmark::kMillisecond);
 
 // One iteration of `afhub run`'s loop as it times it (commands in, step, states out),
-// its time kept in `step_us` while there is room.
-void timed_step(Simulation& sim, SimChannels* channels, std::vector<float>& step_us) {
+// its phases' times kept in `times` while there is room.
+struct StepTimes {
+  explicit StepTimes(std::size_t room) {
+    for (auto* phase : {&total, &commands, &physics, &publish}) phase->reserve(room);
+  }
+  std::vector<float> total, commands, physics, publish;  // us
+};
+
+void timed_step(Simulation& sim, SimChannels* channels, StepTimes& times) {
   const std::int64_t begin_ns = monotonic_ns();
   if (channels) channels->apply_commands(begin_ns);
+  const std::int64_t commanded_ns = monotonic_ns();
   sim.step();
+  const std::int64_t stepped_ns = monotonic_ns();
   if (channels) channels->publish({});
-  if (step_us.size() < step_us.capacity())
-    step_us.push_back(static_cast<float>(monotonic_ns() - begin_ns) * 1e-3F);
+  const std::int64_t end_ns = monotonic_ns();
+  if (times.total.size() == times.total.capacity()) return;
+  times.total.push_back(static_cast<float>(end_ns - begin_ns) * 1e-3F);
+  times.commands.push_back(static_cast<float>(commanded_ns - begin_ns) * 1e-3F);
+  times.physics.push_back(static_cast<float>(stepped_ns - commanded_ns) * 1e-3F);
+  times.publish.push_back(static_cast<float>(end_ns - stepped_ns) * 1e-3F);
 }
 
-// The steps' p50 and p99, as counters.
-void report_step_times(benchmark::State& state, std::vector<float>& step_us) {
-  std::sort(step_us.begin(), step_us.end());
-  if (step_us.empty()) return;
-  state.counters["step_p50_us"] = step_us[step_us.size() / 2];
-  state.counters["step_p99_us"] = step_us[step_us.size() * 99 / 100];
+// The steps' p50 and p99, and each phase's p50 (commands read and applied, the
+// physics' step, the states published): the publishing share is measured, not
+// inferred from two runs.
+void report_step_times(benchmark::State& state, StepTimes& times) {
+  if (times.total.empty()) return;
+  const auto percentile = [](std::vector<float>& values, std::size_t percent) {
+    std::sort(values.begin(), values.end());
+    return values[values.size() * percent / 100];
+  };
+  state.counters["step_p50_us"] = percentile(times.total, 50);
+  state.counters["step_p99_us"] = percentile(times.total, 99);
+  state.counters["commands_p50_us"] = percentile(times.commands, 50);
+  state.counters["physics_p50_us"] = percentile(times.physics, 50);
+  state.counters["publish_p50_us"] = percentile(times.publish, 50);
 }
 
 // One step of the physics alone, or the whole loop iteration of `afhub run`:
@@ -135,14 +156,13 @@ void BM_Step(benchmark::State& state, const std::string& file, bool publish, boo
   std::int64_t clock_ns = 0;
   // Each step's time as `afhub run` times it (commands in, step, states out; not the
   // display-rate chores after), for its tail: the mean hides a cost paid every 17th step.
-  std::vector<float> step_us;
-  step_us.reserve(1 << 22);
+  StepTimes times(1 << 22);
   for (auto _ : state) {
-    timed_step(sim, channels.get(), step_us);
+    timed_step(sim, channels.get(), times);
     if (channels) channels->publish_view(clock_ns += 1'000'000);
   }
   state.counters["bodies"] = static_cast<double>(model.bodies.size());
-  report_step_times(state, step_us);
+  report_step_times(state, times);
 }
 BENCHMARK_CAPTURE(BM_Step, kuka_physics, kKuka, false, false)->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(BM_Step, kuka_published, kKuka, true, false)->Unit(benchmark::kMicrosecond);
@@ -205,8 +225,7 @@ void BM_StepThousandBodies(benchmark::State& state, bool publish, bool commanded
   if (commanded)
     for (const BodySpec& body : model.bodies)
       controller.push_back(std::make_unique<BodyClient>(body.channel));
-  std::vector<float> step_us;
-  step_us.reserve(1 << 20);
+  StepTimes times(1 << 20);
   std::uint64_t step = 0;
   for (auto _ : state) {
     for (auto& body : controller)
@@ -214,12 +233,12 @@ void BM_StepThousandBodies(benchmark::State& state, bool publish, bool commanded
         command->header.sim_step = step;
         body->publish_command(command);
       }
-    timed_step(sim, channels.get(), step_us);
+    timed_step(sim, channels.get(), times);
     ++step;
   }
   state.counters["bodies"] = static_cast<double>(model.bodies.size());
   if (channels) state.counters["published"] = static_cast<double>(channels->channel_count());
-  report_step_times(state, step_us);
+  report_step_times(state, times);
 }
 BENCHMARK_CAPTURE(BM_StepThousandBodies, physics, false, false)->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(BM_StepThousandBodies, published, true, false)->Unit(benchmark::kMicrosecond);

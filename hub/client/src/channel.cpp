@@ -4,6 +4,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 
 #include "afhub/hub/hub_health.hpp"
@@ -71,7 +72,8 @@ RawWriter::~RawWriter() {
   if (port_) gave_back_publisher_port();
 }
 
-void* RawWriter::loan(std::uint32_t bytes) noexcept {
+void* RawWriter::loan(std::uint32_t bytes, bool* rewritten) noexcept {
+  if (rewritten) *rewritten = false;
   if (!slot_kind_) {
     auto result = port_->publisher.loan(bytes, alignof(PayloadHeader));
     return result.has_error() ? nullptr : result.value();
@@ -83,7 +85,10 @@ void* RawWriter::loan(std::uint32_t bytes) noexcept {
     if (!claimed.entry) return nullptr;
     slot_blocks::release(slot_);
     slot_ = claimed;
+    slot_loaned_bytes_ = 0;
   }
+  if (rewritten) *rewritten = bytes <= slot_loaned_bytes_;
+  slot_loaned_bytes_ = std::max(slot_loaned_bytes_, bytes);
   slot::begin_update(slot_.entry->control, bytes);
   return slot_.payload;
 }

@@ -196,7 +196,8 @@ void SimChannels::publish(const WorldClock& clock) noexcept {
     }
   }
   for (Channel& channel : channels_) {
-    BodyState* state = channel.publisher->loan_state(channel.joint_count);
+    // Every field is set below: the slot's last update needs no defaults first.
+    BodyState* state = channel.publisher->rewrite_state(channel.joint_count);
     if (!state) continue;  // shared memory exhausted: skip this step, never block
     state->header.sim_step = step;
     state->header.sim_time_s = time_s;

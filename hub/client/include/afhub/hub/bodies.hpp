@@ -32,6 +32,13 @@ class BodyPublisher {
     if (state) state->joint_count = joints;
     return state;
   }
+  // As loan_state, but keeping the fields of the last update (defaults the first time):
+  // for the physics, which sets every field at every step.
+  BodyState* rewrite_state(std::uint32_t joints) noexcept {
+    BodyState* state = state_.loan_rewritten(body_state_bytes(joints));
+    if (state) state->joint_count = joints;
+    return state;
+  }
   void publish_state(BodyState* state) noexcept { state_.publish(state); }
   bool has_state_readers() const noexcept { return state_.raw().has_readers(); }
   // The newest command, or nullptr before the first; read in place.
