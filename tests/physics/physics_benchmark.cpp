@@ -368,7 +368,9 @@ BENCHMARK_CAPTURE(BM_LockstepRoundTrip, kuka_spin, true, true)
 // The floor under a lockstep round trip asleep: two processes ping-ponging on a bare
 // futex in shared memory, each sleeping until the other's turn ends (two futex
 // wake-ups of a sleeping thread per round trip, as in lockstep). Counters as above.
-void BM_BareFutexRoundTrip(benchmark::State& state) {
+// `timed`: each wait has a timeout, as every wait of afhub's has (a lockstep drops a
+// dead client, a controller notices a dead physics), which arms a kernel timer.
+void BM_BareFutexRoundTrip(benchmark::State& state, bool timed) {
   void* shared = mmap(nullptr, sizeof(std::atomic<std::uint32_t>), PROT_READ | PROT_WRITE,
                       MAP_SHARED | MAP_ANONYMOUS, -1, 0);
   if (shared == MAP_FAILED) {
@@ -380,8 +382,9 @@ void BM_BareFutexRoundTrip(benchmark::State& state) {
   auto* word = reinterpret_cast<std::uint32_t*>(turn);
   // Sleeps while the turn is `value`.
   auto wait_while = [&](std::uint32_t value) {
+    const timespec second{1, 0};
     while (turn->load(std::memory_order_acquire) == value)
-      syscall(SYS_futex, word, FUTEX_WAIT, value, nullptr, nullptr, 0);
+      syscall(SYS_futex, word, FUTEX_WAIT, value, timed ? &second : nullptr, nullptr, 0);
   };
   auto pass = [&](std::uint32_t value) {
     turn->store(value, std::memory_order_release);
@@ -414,7 +417,12 @@ void BM_BareFutexRoundTrip(benchmark::State& state) {
   state.counters["round_trip_p50_us"] = round_trip.percentile_us(0.50);
   state.counters["round_trip_p99_us"] = round_trip.percentile_us(0.99);
 }
-BENCHMARK(BM_BareFutexRoundTrip)->Unit(benchmark::kMicrosecond)->Iterations(20000);
+BENCHMARK_CAPTURE(BM_BareFutexRoundTrip, bare, false)
+    ->Unit(benchmark::kMicrosecond)
+    ->Iterations(20000);
+BENCHMARK_CAPTURE(BM_BareFutexRoundTrip, timed, true)
+    ->Unit(benchmark::kMicrosecond)
+    ->Iterations(20000);
 
 }  // namespace
 }  // namespace afhub::physics
