@@ -28,6 +28,7 @@ class State:
     step: int
     time: float
     stamp_ns: int
+    step_due_ns: int
     sequence: int
     publisher_pid: int
     position: npt.NDArray[np.float64]
@@ -93,6 +94,7 @@ class World:
 class Loop:
     def __init__(self, rate_hz: float, callback: Callable[..., Optional[bool]], *,
                  body: Optional[Body] = None, lockstep: bool = False, name: str = "python",
-                 fifo_priority: int = 0, cpu: int = -1, lock_memory: bool = False) -> None: ...
+                 fifo_priority: int = 0, cpu: int = -1, lock_memory: bool = False,
+                 after_step_us: Optional[float] = None, unaligned: bool = False) -> None: ...
     def run(self, cycles: int = 0, seconds: float = 0.0) -> Dict[str, Any]: ...
     def stop(self) -> None: ...

@@ -6,6 +6,7 @@
 
 #include <cstdio>
 #include <memory>
+#include <optional>
 
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/hub_health.hpp"
@@ -32,10 +33,6 @@ void answer(BodyClient& body, const BodyState& state, const ControllerCycle& cyc
   body.publish_command(command);
 }
 
-// A free-running controller whose physics is late polls for the state every
-// kLateStatePollNs, answering it up to kLateStateMarginNs before the next step.
-constexpr std::int64_t kLateStatePollNs = 20'000, kLateStateMarginNs = 100'000;
-
 // Free-running: every period, the newest state in, a command out.
 void run_free(BodyClient& body, const ControllerOptions& options, const ControllerCycle& cycle,
               LoopTiming& timing, LoopStatsPublisher& stats) {
@@ -43,13 +40,12 @@ void run_free(BodyClient& body, const ControllerOptions& options, const Controll
   const std::int64_t after_ns = options.after_step_ns == ControllerOptions::kHalfPeriod
                                     ? loop.period_ns / 2
                                     : options.after_step_ns;
+  std::optional<StepPhase> phase;
   if (after_ns >= 0) {
     // The grid comes from the first state. Listed in the catalog, a body's state may
     // still take seconds to come (a hub just restarted, a loaded machine): waited for,
     // said once.
-    const BodyState* state = body.latest_state();
-    for (std::int64_t say_at = monotonic_ns() + 3'000'000'000; !state;
-         state = body.latest_state()) {
+    for (std::int64_t say_at = monotonic_ns() + 3'000'000'000; !body.latest_state();) {
       if (stop_requested()) return;
       if (say_at > 0 && monotonic_ns() >= say_at) {
         std::fprintf(stderr,
@@ -61,41 +57,22 @@ void run_free(BodyClient& body, const ControllerOptions& options, const Controll
       }
       sleep_until_ns(monotonic_ns() + 1'000'000);
     }
-    loop.grid_origin_ns = grid_in_phase(*state, after_ns);
+    phase.emplace(after_ns, [&body] { return body.latest_state(); });
   }
   // Late commands as the physics counts them for this body (its state carries the
   // body's steps under command and those answered in time), so that this loop's
   // stats, `afhub top` and `afhub status` agree. A restarted physics counts from 0.
   std::uint32_t physics_late = 0;  // modulo 2^32, as the state carries it
   std::uint32_t physics_pid = 0;
-  std::int64_t regrid_ns = 0, deadline_ns = 0;
   LoopCycle steps;
-  steps.regrid_ns = &regrid_ns;
-  steps.deadline_ns = &deadline_ns;
-  if (after_ns >= 0)
-    steps.wait = [&] {
-      // The physics late with the step due `after_ns` ago (its newest state is of the
-      // step before): that step's state is waited for, in short sleeps, until shortly
-      // before the next step, so that the command still answers it in time. A physics
-      // further behind is stopped or gone: nothing is waited for.
-      const std::int64_t due = deadline_ns - after_ns;
-      const std::int64_t give_up = due + loop.period_ns - kLateStateMarginNs;
-      auto just_late = [&](const BodyState* state) {
-        return state && state->step_due_ns > 0 && state->step_due_ns < due &&
-               due - state->step_due_ns <= loop.period_ns;
-      };
-      while (just_late(body.latest_state()) && !stop_requested() && monotonic_ns() < give_up)
-        sleep_until_ns(monotonic_ns() + kLateStatePollNs);
-      return true;
-    };
+  if (phase) phase->attach(loop, steps);
   steps.work = [&] {
     const BodyState* state = body.latest_state();
     if (!state) return true;
     const std::uint32_t late = state->commanded_steps - state->answered_steps;
     if (state->header.publisher_pid == physics_pid)
       timing.count_late(static_cast<std::uint32_t>(late - physics_late));
-    else if (physics_pid != 0)  // a new physics, on a grid of its own
-      regrid_ns = grid_in_phase(*state, after_ns);
+    if (phase) phase->follow(*state);  // a new physics, on a grid of its own
     physics_pid = state->header.publisher_pid;
     physics_late = late;
     answer(body, *state, cycle, false);
@@ -141,11 +118,6 @@ void run_lockstep(BodyClient& body, const ControllerOptions& options, const Cont
 }
 
 }  // namespace
-
-std::int64_t grid_in_phase(const BodyState& state, std::int64_t after_ns) noexcept {
-  if (after_ns < 0) return 0;
-  return (state.step_due_ns > 0 ? state.step_due_ns : state.header.publish_stamp_ns) + after_ns;
-}
 
 int run_controller(const ControllerOptions& options, const ControllerCycle& cycle,
                    LoopTiming* timing_out) {

@@ -225,6 +225,10 @@ void register_state(py::module_& module) {
           "stamp_ns", [](const State& s) { return s->header.publish_stamp_ns; },
           "When it was published: CLOCK_MONOTONIC ns (time.monotonic_ns()).")
       .def_property_readonly(
+          "step_due_ns", [](const State& s) { return s->step_due_ns; },
+          "When its step was due on the physics' clock (CLOCK_MONOTONIC ns); 0 when the "
+          "physics is not paced by the clock (--fast) or the state came from another machine.")
+      .def_property_readonly(
           "sequence", [](const State& s) { return s->header.sequence; },
           "Its publisher's sequence number.")
       .def_property_readonly("publisher_pid",

@@ -13,6 +13,7 @@
 
 #include "afhub/hub/loop_stats_publisher.hpp"
 #include "afhub/hub/sample_waiter.hpp"
+#include "afhub/hub/step_phase.hpp"
 #include "afhub/rt/clock.hpp"
 #include "afhub/rt/loop_timing.hpp"
 #include "afhub/rt/periodic_loop.hpp"
@@ -26,7 +27,8 @@ namespace {
 class Loop {
  public:
   Loop(double rate_hz, py::function callback, std::optional<Body*> body, bool lockstep,
-       std::string name, int fifo_priority, int cpu, bool lock_memory)
+       std::string name, int fifo_priority, int cpu, bool lock_memory,
+       std::optional<double> after_step_us, bool unaligned)
       : callback_(std::move(callback)),
         body_(body.value_or(nullptr)),
         lockstep_(lockstep),
@@ -38,6 +40,15 @@ class Loop {
     if (fifo_priority < 0 || fifo_priority > 99)
       throw py::value_error("fifo_priority takes 0 (the normal scheduler) to 99");
     options_.period_ns = lockstep ? 0 : static_cast<std::int64_t>(1e9 / rate_hz);
+    if (after_step_us && unaligned)
+      throw py::value_error("after_step_us and unaligned=True exclude each other");
+    if (after_step_us && !(*after_step_us >= 0.0 && *after_step_us * 1e3 < options_.period_ns))
+      throw py::value_error("after_step_us takes 0 up to the loop's period (" +
+                            std::to_string(options_.period_ns / 1000) + " us)");
+    // In phase with the physics by default, as `afhub ctl`'s controllers are.
+    after_step_ns_ = unaligned       ? -1
+                     : after_step_us ? static_cast<std::int64_t>(*after_step_us * 1e3)
+                                     : options_.period_ns / 2;
     options_.fifo_priority = fifo_priority;
     options_.cpu = cpu;
     options_.lock_memory = lock_memory;
@@ -108,21 +119,28 @@ class Loop {
     options.max_cycles = cycles;
     // Late commands as the physics counts them for the body (see controller.cpp).
     std::uint32_t physics_late = 0, physics_pid = 0;
-    run_periodic(
-        options, timing,
-        [&] {
-          if (end_ns && monotonic_ns() >= end_ns) return false;
-          if (!body_) return call(nullptr);
-          const BodyState* state = body_->client().latest_state();
-          if (!state) return !signals_pending();
-          const std::uint32_t late = state->commanded_steps - state->answered_steps;
-          if (state->header.publisher_pid == physics_pid)
-            timing.count_late(static_cast<std::uint32_t>(late - physics_late));
-          physics_pid = state->header.publisher_pid;
-          physics_late = late;
-          return call(state);
-        },
-        [&](std::int64_t now) { stats.maybe_publish(now, timing); });
+    LoopCycle cycle;
+    // With a body, woken after_step_ns after each of its steps is due (see StepPhase).
+    std::optional<StepPhase> phase;
+    if (body_ && after_step_ns_ >= 0) {
+      phase.emplace(after_step_ns_, [this] { return body_->client().latest_state(); });
+      phase->attach(options, cycle);
+    }
+    cycle.work = [&] {
+      if (end_ns && monotonic_ns() >= end_ns) return false;
+      if (!body_) return call(nullptr);
+      const BodyState* state = body_->client().latest_state();
+      if (!state) return !signals_pending();
+      const std::uint32_t late = state->commanded_steps - state->answered_steps;
+      if (state->header.publisher_pid == physics_pid)
+        timing.count_late(static_cast<std::uint32_t>(late - physics_late));
+      if (phase) phase->follow(*state);
+      physics_pid = state->header.publisher_pid;
+      physics_late = late;
+      return call(state);
+    };
+    cycle.after = [&](std::int64_t now) { stats.maybe_publish(now, timing); };
+    run_periodic(options, timing, cycle);
   }
 
   // Each new step's state in, the callback's command out, as soon as the state
@@ -159,6 +177,7 @@ class Loop {
   bool lockstep_;
   std::string name_;
   LoopOptions options_;
+  std::int64_t after_step_ns_;     // negative: on the loop's own clock
   std::atomic<bool> stop_{false};  // stop() may come from another thread
   std::exception_ptr error_;
 };
@@ -174,21 +193,26 @@ void register_loop(py::module_& module) {
       "holds the GIL only while the function runs, and publishes its timing once a second "
       "for `afhub top` (name, wake-up latency, compute time, overruns, late commands).\n\n"
       "Loop(rate_hz, callback, body=None, lockstep=False, name='python', fifo_priority=0, "
-      "cpu=-1, lock_memory=False)\n"
+      "cpu=-1, lock_memory=False, after_step_us=None, unaligned=False)\n"
       "  without a body: callback() every period;\n"
       "  with body=afhub.Body(...): callback(state) every period with the body's newest "
-      "state (afhub.State), once it has one;\n"
+      "state (afhub.State), once it has one, woken in phase with the physics: "
+      "after_step_us after each step is due on the physics' clock (default: half the "
+      "period), so that a command answers the newest state and arrives before the next "
+      "step, as `afhub ctl --after-step` does; unaligned=True: on the loop's own clock;\n"
       "  lockstep=True (with a body; rate_hz is ignored): callback(state) once per physics "
       "step, as soon as the step's state arrives, and a physics run with `afhub run "
       "--lockstep` waits for the body's command: the callback must send one each time "
       "(body.command(...)), which then answers that step.\n"
       "The callback returning False, or calling loop.stop(), ends the loop; an exception "
       "it raises (Ctrl-C's KeyboardInterrupt too) ends it and is raised by run().")
-      .def(
-          py::init<double, py::function, std::optional<Body*>, bool, std::string, int, int, bool>(),
-          py::arg("rate_hz"), py::arg("callback"), py::kw_only(), py::arg("body") = py::none(),
-          py::arg("lockstep") = false, py::arg("name") = "python", py::arg("fifo_priority") = 0,
-          py::arg("cpu") = -1, py::arg("lock_memory") = false, py::keep_alive<1, 4>())
+      .def(py::init<double, py::function, std::optional<Body*>, bool, std::string, int, int, bool,
+                    std::optional<double>, bool>(),
+           py::arg("rate_hz"), py::arg("callback"), py::kw_only(), py::arg("body") = py::none(),
+           py::arg("lockstep") = false, py::arg("name") = "python", py::arg("fifo_priority") = 0,
+           py::arg("cpu") = -1, py::arg("lock_memory") = false,
+           py::arg("after_step_us") = py::none(), py::arg("unaligned") = false,
+           py::keep_alive<1, 4>())
       .def("run", &Loop::run, py::arg("cycles") = 0, py::arg("seconds") = 0.0,
            "Runs until `cycles` cycles or `seconds` have passed (0: no limit), the callback "
            "ends it, or it raises. Returns the loop's statistics (as afhub.loop_stats() gives "

@@ -17,6 +17,11 @@ KUKA = SHARED / 'descriptions/multi-bodies/robots/blender-kuka.yaml'
 ECM = SHARED / 'descriptions/multi-bodies/robots/blender-ecm.yaml'
 
 
+def pytest_configure(config):
+    config.addinivalue_line(
+        'markers', 'real_time: a timing bound; ctest runs these alone (python_real_time)')
+
+
 def needs_shared_models():
     return pytest.mark.skipif(not SHARED.is_dir(), reason=(
         f'needs the AMBF model corpus, and {SHARED} does not exist '

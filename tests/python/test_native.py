@@ -189,6 +189,41 @@ def test_loop_at_1khz_publishes_its_statistics(physics):
     assert 'python test' in seen['top']
 
 
+@pytest.mark.real_time
+def test_loop_in_phase_answers_the_newest_state(physics):
+    """Woken half a period after each step is due (the default), every command answers
+    the state the physics just published and arrives before its next step; after_step_us
+    moves the wake-up within the period. Timing bounds: run in the real-time phase, with
+    the machine to itself."""
+    run = physics(ARM)
+    base = run.wait_for_body('arm/base')
+
+    def hold(state):
+        base.set_joint_positions(state.joint_positions[:1])
+    phased = afhub.Loop(1000, hold, body=base, name='python in phase').run(cycles=3000)
+    late = phased['late_commands'] / phased['cycles']
+
+    def after_due(after_step_us):
+        """The median of each callback's time after its state's step was due, us."""
+        seen = []
+
+        def note(state):
+            seen.append((time.monotonic_ns() - state.step_due_ns) / 1e3)
+            hold(state)
+        afhub.Loop(1000, note, body=base, after_step_us=after_step_us).run(cycles=1000)
+        return float(np.median(seen))
+    early, later = after_due(200), after_due(700)
+    print(f"1 kHz Python loop: {late:.1%} late commands in phase; woken {early:.0f} us after "
+          f"the step was due with after_step_us=200, {later:.0f} us with 700")
+    # Misses come from this machine's stalls (the C++ controllers' bound).
+    assert late < 0.25
+    # The wake-up latency and the call into Python come on top: at most 200 us at the
+    # median on this machine's slowest runs. On its own clock the loop would wake
+    # anywhere in the period, the same for both.
+    assert 200 <= early < 450 and 700 <= later < 950
+    assert 400 <= later - early <= 600
+
+
 def test_loop_ends_on_false_and_raises_what_the_callback_raised():
     calls = []
     assert afhub.Loop(1000, lambda: calls.append(1) or len(calls) < 5).run()['cycles'] == 5
@@ -197,6 +232,10 @@ def test_loop_ends_on_false_and_raises_what_the_callback_raised():
         raise KeyError('from the callback')
     with pytest.raises(KeyError, match='from the callback'):
         afhub.Loop(1000, fail).run(seconds=5)
+    with pytest.raises(ValueError, match='after_step_us takes 0 up to the loop'):
+        afhub.Loop(1000, fail, after_step_us=1000)
+    with pytest.raises(ValueError, match='exclude each other'):
+        afhub.Loop(1000, fail, after_step_us=100, unaligned=True)
     with pytest.raises(ValueError, match='lockstep loop answers a body'):
         afhub.Loop(0, fail, lockstep=True)
 

@@ -20,6 +20,7 @@
 #include <functional>
 #include <string>
 
+#include "afhub/hub/step_phase.hpp"
 #include "afhub/rt/periodic_loop.hpp"
 #include "afhub/shm_layout/body_command.hpp"
 #include "afhub/shm_layout/body_state.hpp"
@@ -54,11 +55,6 @@ struct ControllerOptions {
   // ends on a lost hub, as a plain iceoryx client does.
   bool survive_hub_loss = true;
 };
-
-// A point of a free-running controller's grid: `after_ns` after `state`'s step was due
-// on its physics' grid (after it was published, when the physics is not paced by the
-// clock); 0 (unaligned) when after_ns is negative.
-std::int64_t grid_in_phase(const BodyState& state, std::int64_t after_ns) noexcept;
 
 // `state` is the body's newest state; `command` starts zeroed. Both live in shared
 // memory: no copy. Runs in the real-time loop: do not allocate or block in it.

@@ -1,0 +1,46 @@
+// A free-running loop in phase with the physics that steps its body: it wakes a set
+// time after each step is due on the physics' grid (BodyState.step_due_ns), so that
+// what it sends answers the newest state and arrives before the next step. Used by
+// `afhub ctl`'s controllers and Python's afhub.Loop.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+
+#include "afhub/rt/periodic_loop.hpp"
+#include "afhub/shm_layout/body_state.hpp"
+
+namespace afhub {
+
+// A point of a free-running loop's grid: `after_ns` after `state`'s step was due on its
+// physics' grid (after it was published, when the physics is not paced by the clock);
+// 0 (unaligned) when after_ns is negative.
+std::int64_t grid_in_phase(const BodyState& state, std::int64_t after_ns) noexcept;
+
+class StepPhase {
+ public:
+  // `after_ns` (>= 0, under `loop`'s period): how long after each step is due the loop
+  // wakes. `latest` gives the body's newest state, or nullptr before the first.
+  StepPhase(std::int64_t after_ns, std::function<const BodyState*()> latest);
+
+  // Puts `loop` on the physics' grid when a state is there already (otherwise the first
+  // state moves it there, see follow()), and `cycle` its deadline, its re-gridding
+  // and a wait: when the physics is just late (its newest state is of the step before
+  // the one due `after_ns` ago), that step's state is waited for in 20 us sleeps until
+  // 0.1 ms before the next step; a physics further behind (stopped, gone) is not.
+  void attach(LoopOptions& loop, LoopCycle& cycle);
+  // In the cycle's work, with the state it answers: a state of another physics (a
+  // restart, or the first state) moves the loop onto that physics' grid.
+  void follow(const BodyState& state) noexcept;
+
+ private:
+  bool wait_for_late_step() const;
+
+  std::int64_t after_ns_;
+  std::function<const BodyState*()> latest_;
+  std::int64_t period_ns_ = 0;
+  std::int64_t deadline_ns_ = 0, regrid_ns_ = 0;
+  std::uint32_t physics_pid_ = 0;
+};
+
+}  // namespace afhub
