@@ -20,8 +20,7 @@ struct CtlOptions {
   LoopRateOptions pacing;
   bool lockstep = false;
   bool spin = false;
-  double after_step_us = -1.0;  // -1: half the period
-  bool unaligned = false;
+  PhaseOptions phase;
   double wait_s = 10.0;
 };
 
@@ -35,16 +34,9 @@ ControllerOptions controller_options(const CtlOptions& options, const std::strin
   if (options.spin && !options.lockstep)
     throw Error("--spin needs --lockstep: it is how a lockstep client waits for a step");
   controller.spin = options.spin;
-  if (options.after_step_us >= 0.0 || options.unaligned) {
-    if (options.lockstep)
-      throw Error("--after-step and --unaligned are for free-running loops, not --lockstep");
-    if (options.after_step_us >= 0.0 && options.unaligned)
-      throw Error("--after-step and --unaligned exclude each other: keep one");
-    if (options.after_step_us * 1e3 >= static_cast<double>(controller.loop.period_ns))
-      throw Error("--after-step must be shorter than the loop's period");
-    controller.after_step_ns = options.unaligned ? ControllerOptions::kUnaligned
-                                                 : std::llround(options.after_step_us * 1e3);
-  }
+  controller.after_step_ns = after_step_ns(options.phase, controller.loop.period_ns);
+  if (options.lockstep && controller.after_step_ns != kAfterStepHalfPeriod)
+    throw Error("--after-step and --unaligned are for free-running loops, not --lockstep");
   return controller;
 }
 
@@ -59,12 +51,7 @@ void add_controller_options(CLI::App* command, CtlOptions& options) {
                     "With --lockstep: poll for the next step with sched_yield instead of sleeping "
                     "until it comes (only on a core of its own: under SCHED_FIFO a yield never "
                     "lets the physics run on that core)");
-  command->add_option("--after-step", options.after_step_us,
-                      "Wake this many microseconds after each physics step is due (default: "
-                      "half the period), so that every command answers the newest state and "
-                      "is ready for the next step");
-  command->add_flag("--unaligned", options.unaligned,
-                    "Wake on this loop's own clock instead, out of phase with the physics");
+  add_phase_options(command, options.phase, "command");
   add_wait_option(command, options.wait_s, "the body");
 }
 

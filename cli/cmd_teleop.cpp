@@ -27,6 +27,7 @@ struct TeleopCliOptions {
   std::string selection;
   std::vector<std::string> devices;
   LoopRateOptions pacing;
+  PhaseOptions phase;
   double wait_s = 10.0;
   double stale_ms = 50.0;
   std::uint64_t latency_samples = 0;
@@ -144,6 +145,7 @@ teleop::TeleopOptions teleop_options(const TeleopCliOptions& options) {
   teleop.wait_s = options.wait_s;
   teleop.stale_ns = std::llround(options.stale_ms * 1e6);
   teleop.latency_samples = options.latency_samples;
+  teleop.after_step_ns = after_step_ns(options.phase, teleop.loop.period_ns);
   return teleop;
 }
 
@@ -181,6 +183,7 @@ void register_teleop(CLI::App& app, Runner& selected) {
                      "The driver (its --name) of each selected device, in the order of -d; "
                      "repeat it, e.g. --device virtual --device falcon2");
   add_loop_rate_options(teleop, options->pacing);
+  add_phase_options(teleop, options->phase, "body command");
   add_wait_option(teleop, options->wait_s, "each device and body");
   teleop->add_option("--stale", options->stale_ms,
                      "A device with no new sample for this many ms (its driver stopped) "

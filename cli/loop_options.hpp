@@ -5,6 +5,7 @@
 #include <CLI/CLI.hpp>
 #include <cstdint>
 
+#include "afhub/hub/step_phase.hpp"
 #include "afhub/rt/periodic_loop.hpp"
 #include "realtime_options.hpp"
 
@@ -20,5 +21,18 @@ void add_loop_rate_options(CLI::App* command, LoopRateOptions& options);
 
 // Checks them (afhub::Error naming the option) and sets them on `loop`.
 void set_loop_rate_options(const LoopRateOptions& options, LoopOptions& loop);
+
+// --after-step and --unaligned: when a loop reading a body wakes against its physics'
+// steps (afhub/hub/step_phase.hpp), for ctl's controllers and teleop.
+struct PhaseOptions {
+  double after_step_us = -1.0;  // -1: half the period
+  bool unaligned = false;
+};
+
+void add_phase_options(CLI::App* command, PhaseOptions& options, const char* what);
+
+// Checks them against the loop's period (afhub::Error naming the option) and gives the
+// loop's after_step_ns: an offset, kAfterStepHalfPeriod or kAfterStepUnaligned.
+std::int64_t after_step_ns(const PhaseOptions& options, std::int64_t period_ns);
 
 }  // namespace afhub::cli

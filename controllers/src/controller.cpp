@@ -37,9 +37,7 @@ void answer(BodyClient& body, const BodyState& state, const ControllerCycle& cyc
 void run_free(BodyClient& body, const ControllerOptions& options, const ControllerCycle& cycle,
               LoopTiming& timing, LoopStatsPublisher& stats) {
   LoopOptions loop = options.loop;
-  const std::int64_t after_ns = options.after_step_ns == ControllerOptions::kHalfPeriod
-                                    ? loop.period_ns / 2
-                                    : options.after_step_ns;
+  const std::int64_t after_ns = after_step_offset_ns(options.after_step_ns, loop.period_ns);
   std::optional<StepPhase> phase;
   if (after_ns >= 0) {
     // The grid comes from the first state. Listed in the catalog, a body's state may

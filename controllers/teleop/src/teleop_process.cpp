@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <limits>
 #include <memory>
+#include <optional>
 
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/hub_health.hpp"
@@ -212,14 +213,25 @@ int run_teleop(const TeleopOptions& options, TeleopLatency* latency) {
   const RealtimeGrant grant = apply_realtime(options.loop, who.c_str());
   LoopStatsPublisher stats("teleop", options.bindings.front().body, options.loop.period_ns, false,
                            grant);
-  run_periodic(
-      options.loop, timing,
-      [&] {
-        const std::int64_t now = monotonic_ns();
-        for (auto& link : links) cycle(*link, now, latency, most);
-        return true;
-      },
-      [&](std::int64_t now) { stats.maybe_publish(now, timing); });
+  LoopOptions loop = options.loop;
+  LoopCycle steps;
+  // In phase with the first body's physics: each body command answers the newest state.
+  std::optional<StepPhase> phase;
+  BodyClient& phased = links.front()->body;
+  if (const std::int64_t after_ns = after_step_offset_ns(options.after_step_ns, loop.period_ns);
+      after_ns >= 0) {
+    phase.emplace(after_ns, [&phased] { return phased.latest_state(); });
+    phase->attach(loop, steps);
+  }
+  steps.work = [&] {
+    const std::int64_t now = monotonic_ns();
+    if (phase)
+      if (const BodyState* state = phased.latest_state()) phase->follow(*state);
+    for (auto& link : links) cycle(*link, now, latency, most);
+    return true;
+  };
+  steps.after = [&](std::int64_t now) { stats.maybe_publish(now, timing); };
+  run_periodic(loop, timing, steps);
   return 0;
 }
 

@@ -43,7 +43,8 @@ struct ControllerOptions {
   // 0.1 ms before the next step is due.
   // kHalfPeriod (the default): half the controller's period after, which leaves either
   // process's wake-up jitter the most room. kUnaligned: on the controller's own clock.
-  static constexpr std::int64_t kHalfPeriod = -1, kUnaligned = -2;
+  static constexpr std::int64_t kHalfPeriod = kAfterStepHalfPeriod,
+                                kUnaligned = kAfterStepUnaligned;
   std::int64_t after_step_ns = kHalfPeriod;
   // Started together with the hub and the physics (a launch script), the controller
   // waits this long for the hub and then for its body, saying so once on stderr,

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "afhub/hub/step_phase.hpp"
 #include "afhub/rt/periodic_loop.hpp"
 #include "afhub/teleop/input_device_spec.hpp"
 #include "afhub/teleop/teleop_commands.hpp"
@@ -58,6 +59,10 @@ struct TeleopOptions {
   // once states come back.
   std::int64_t stale_ns = 50'000'000;
   std::size_t latency_samples = 0;  // per kind; 0: no latency recording
+  // When the loop wakes against the steps of the first binding's physics (see
+  // afhub/hub/step_phase.hpp): half its period after each step is due by default, so
+  // that its commands answer the newest state and arrive before the next step.
+  std::int64_t after_step_ns = kAfterStepHalfPeriod;
 };
 
 // Runs until Ctrl-C, SIGTERM or loop.max_cycles. Throws afhub::Error when the hub,

@@ -17,6 +17,16 @@ namespace afhub {
 // 0 (unaligned) when after_ns is negative.
 std::int64_t grid_in_phase(const BodyState& state, std::int64_t after_ns) noexcept;
 
+// How a loop's options say when it wakes: an offset after each step is due (ns, >= 0),
+// or one of these.
+inline constexpr std::int64_t kAfterStepHalfPeriod = -1;  // half the loop's period
+inline constexpr std::int64_t kAfterStepUnaligned = -2;   // on the loop's own clock
+// The offset those options give a loop of `period_ns`: negative for unaligned.
+constexpr std::int64_t after_step_offset_ns(std::int64_t after_step_ns,
+                                            std::int64_t period_ns) noexcept {
+  return after_step_ns == kAfterStepHalfPeriod ? period_ns / 2 : after_step_ns;
+}
+
 class StepPhase {
  public:
   // `after_ns` (>= 0, under `loop`'s period): how long after each step is due the loop
