@@ -1,7 +1,7 @@
 // A free-running loop in phase with the physics that steps its body: it wakes a set
 // time after each step is due on the physics' grid (BodyState.step_due_ns), so that
 // what it sends answers the newest state and arrives before the next step. Used by
-// `afhub ctl`'s controllers and Python's afhub.Loop.
+// `afhub ctl`'s controllers, `afhub teleop` and Python's afhub.Loop.
 #pragma once
 
 #include <cstdint>
