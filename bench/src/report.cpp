@@ -232,6 +232,11 @@ std::string results_table(const BenchResults& results) {
              format(" %.2f us: %.1fx lower (goal %.0fx): ", other, other / slot_1k, goal) +
              (other / slot_1k >= goal ? "met\n" : "NOT met\n");
     }
+    if (const double shm = median_of(results, "dds-shm", 1024); shm > 0.0)
+      out += format(
+          "  1 KiB median, afhub-slot %.2f us vs dds-shm %.2f us: %.1fx lower (no goal "
+          "set: Cyclone DDS with its own shared memory)\n",
+          slot_1k, shm, shm / slot_1k);
   }
   const double afhub_1m = median_of(results, "afhub", 1u << 20);
   if (afhub_1k > 0.0 && afhub_1m > 0.0)

@@ -18,6 +18,8 @@ const char* transport_name(TransportKind kind) {
       return "afhub-slot";
     case TransportKind::kDds:
       return "dds";
+    case TransportKind::kDdsShm:
+      return "dds-shm";
     case TransportKind::kUds:
       return "uds";
     case TransportKind::kRos1:
@@ -28,7 +30,7 @@ const char* transport_name(TransportKind kind) {
 
 std::optional<TransportKind> parse_transport(const std::string& name) {
   for (TransportKind kind : {TransportKind::kAfhub, TransportKind::kAfhubSlot, TransportKind::kDds,
-                             TransportKind::kUds, TransportKind::kRos1})
+                             TransportKind::kDdsShm, TransportKind::kUds, TransportKind::kRos1})
     if (name == transport_name(kind)) return kind;
   return std::nullopt;
 }
@@ -57,7 +59,8 @@ std::unique_ptr<Transport> open_transport(TransportKind kind, Side side, const s
       opened = open_afhub_transport(side, session, kind == TransportKind::kAfhubSlot);
       break;
     case TransportKind::kDds:
-      opened = open_dds_transport(side, session);
+    case TransportKind::kDdsShm:
+      opened = open_dds_transport(side, session, kind == TransportKind::kDdsShm);
       break;
     case TransportKind::kUds:
       opened = open_uds_transport(side, session);

@@ -12,7 +12,7 @@
 
 namespace afhub::bench {
 
-enum class TransportKind { kAfhub, kAfhubSlot, kDds, kUds, kRos1 };
+enum class TransportKind { kAfhub, kAfhubSlot, kDds, kDdsShm, kUds, kRos1 };
 enum class Side { kPing, kPong };
 
 struct Message {
@@ -74,7 +74,9 @@ inline constexpr std::uint32_t kMinPayloadBytes = 64;
 // A queue of samples, or (`slot`) a latest-value slot.
 std::unique_ptr<Transport> open_afhub_transport(Side side, const std::string& session, bool slot);
 std::unique_ptr<Transport> open_uds_transport(Side side, const std::string& session);
-std::unique_ptr<Transport> open_dds_transport(Side side, const std::string& session);
+// `shared_memory`: Cyclone's iceoryx transport through the running hub (dds-shm).
+std::unique_ptr<Transport> open_dds_transport(Side side, const std::string& session,
+                                              bool shared_memory);
 std::unique_ptr<Transport> open_ros1_transport(Side side, const std::string& session);
 
 }  // namespace afhub::bench

@@ -1,8 +1,11 @@
-// Cyclone DDS through its C API on loopback, with Cyclone's shared memory off:
-// what a user bridging processes over DDS gets on one machine. One topic pair per
+// Cyclone DDS through its C API on loopback: what a user bridging processes over DDS
+// gets on one machine. `dds`: Cyclone's shared memory off. `dds-shm`: on, so that
+// Cyclone carries each sample in an iceoryx chunk of the running hub (its RouDi), the
+// writer filling a loaned sample and the reader taking it in place. One topic pair per
 // payload size (an IDL type of exactly that size), reliable, keep last 1. The
 // receiver waits in a waitset: Cyclone delivers through its own receive thread.
 #include <dds/dds.h>
+#include <dds/ddsc/dds_loan_api.h>
 
 #include <array>
 #include <cstdlib>
@@ -31,11 +34,14 @@ const std::array<SizedType, 5> kTypes = {{
 
 static_assert(sizeof(afhub_bench_Sample64) == 64 && sizeof(afhub_bench_Sample1048576) == 1048576);
 
-// Loopback only, no shared memory, no tracing; both processes read it from the environment.
-constexpr const char* kConfig =
-    "<CycloneDDS><Domain id=\"any\"><General><Interfaces><NetworkInterface name=\"lo\"/>"
-    "</Interfaces></General><SharedMemory><Enable>false</Enable></SharedMemory>"
-    "<Tracing><Verbosity>none</Verbosity></Tracing></Domain></CycloneDDS>";
+// Loopback only, shared memory off or on, no tracing.
+std::string config(bool shared_memory) {
+  return std::string(
+             "<CycloneDDS><Domain id=\"any\"><General><Interfaces><NetworkInterface "
+             "name=\"lo\"/></Interfaces></General><SharedMemory><Enable>") +
+         (shared_memory ? "true</Enable><LogLevel>warn</LogLevel>" : "false</Enable>") +
+         "</SharedMemory><Tracing><Verbosity>none</Verbosity></Tracing></Domain></CycloneDDS>";
+}
 
 dds_entity_t check(dds_entity_t entity, const char* what) {
   if (entity < 0) throw Error(std::string("dds: ") + what + ": " + dds_strretcode(entity));
@@ -44,9 +50,13 @@ dds_entity_t check(dds_entity_t entity, const char* what) {
 
 class DdsTransport : public Transport {
  public:
-  DdsTransport(Side side, const std::string& session) : buffer_(kMaxPayloadBytes) {
-    // Each bench run has a domain of its own: parallel runs on lo do not meet.
-    const auto domain = static_cast<dds_domainid_t>(1 + std::hash<std::string>{}(session) % 200);
+  DdsTransport(Side side, const std::string& session, bool shared_memory)
+      : shared_memory_(shared_memory), buffer_(kMaxPayloadBytes) {
+    // Each bench run has a domain of its own (and each of its two configurations):
+    // parallel runs on lo do not meet.
+    const auto domain = static_cast<dds_domainid_t>(
+        1 + 2 * (std::hash<std::string>{}(session) % 100) + (shared_memory ? 1 : 0));
+    domain_ = check(dds_create_domain(domain, config(shared_memory).c_str()), "domain");
     participant_ = check(dds_create_participant(domain, nullptr, nullptr), "participant");
     dds_qos_t* qos = dds_create_qos();
     dds_qset_reliability(qos, DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
@@ -70,17 +80,27 @@ class DdsTransport : public Transport {
       check(dds_waitset_attach(waitset_, readers_[i], static_cast<dds_attach_t>(i)), "attach");
     }
     dds_delete_qos(qos);
+    if (shared_memory && !dds_is_shared_memory_available(writers_[0]))
+      throw Error(
+          "dds-shm: Cyclone DDS did not put its writers on shared memory (this build of "
+          "libddsc has no iceoryx support, or no hub runs)");
   }
 
-  ~DdsTransport() override { dds_delete(participant_); }
+  ~DdsTransport() override { dds_delete(domain_); }
 
   std::int64_t send(std::uint32_t bytes, std::uint64_t round,
                     std::int64_t peer_receive_ns) override {
     const std::size_t i = index_of(bytes);
     const Stamps stamps{round, monotonic_ns(), peer_receive_ns};
-    std::memcpy(buffer_.data(), &stamps, sizeof stamps);
-    touch_written(buffer_.data() + sizeof stamps, bytes - sizeof stamps, round);
-    check(dds_write(writers_[i], buffer_.data()), "write");
+    char* sample = buffer_.data();
+    if (shared_memory_) {  // a sample in an iceoryx chunk, written in place
+      void* loaned = nullptr;
+      check(dds_loan_sample(writers_[i], &loaned), "loan");
+      sample = static_cast<char*>(loaned);
+    }
+    std::memcpy(sample, &stamps, sizeof stamps);
+    touch_written(sample + sizeof stamps, bytes - sizeof stamps, round);
+    check(dds_write(writers_[i], sample), "write");
     return stamps.send_ns;
   }
 
@@ -96,7 +116,8 @@ class DdsTransport : public Transport {
           Stamps stamps;
           std::memcpy(&stamps, samples[0], sizeof stamps);
           touch_read(static_cast<const char*>(samples[0]) + sizeof stamps,
-                     kTypes[i].bytes - sizeof stamps, stamps.round, "dds");
+                     kTypes[i].bytes - sizeof stamps, stamps.round,
+                     shared_memory_ ? "dds-shm" : "dds");
           message = Message{kTypes[i].bytes, stamps.round, stamps.send_ns, stamps.peer_receive_ns,
                             monotonic_ns()};
         }
@@ -116,16 +137,17 @@ class DdsTransport : public Transport {
     throw Error("dds: no IDL type of " + std::to_string(bytes) + " bytes");
   }
 
+  bool shared_memory_;
   std::vector<char> buffer_;
-  dds_entity_t participant_ = 0, waitset_ = 0;
+  dds_entity_t domain_ = 0, participant_ = 0, waitset_ = 0;
   std::array<dds_entity_t, kTypes.size()> writers_{}, readers_{};
 };
 
 }  // namespace
 
-std::unique_ptr<Transport> open_dds_transport(Side side, const std::string& session) {
-  setenv("CYCLONEDDS_URI", kConfig, 1);
-  return std::make_unique<DdsTransport>(side, session);
+std::unique_ptr<Transport> open_dds_transport(Side side, const std::string& session,
+                                              bool shared_memory) {
+  return std::make_unique<DdsTransport>(side, session, shared_memory);
 }
 
 }  // namespace afhub::bench

@@ -50,7 +50,7 @@ TEST_F(BenchOwnHub, ShortRunMeasuresEveryTransportAndTheLoop) {
 
   const nlohmann::json json = parse_json(read_file(json_path));
   const nlohmann::json& transports = json.at("transports");
-  for (const char* name : {"afhub", "afhub-slot", "dds", "uds", "ros1"}) {
+  for (const char* name : {"afhub", "afhub-slot", "dds", "dds-shm", "uds", "ros1"}) {
     ASSERT_TRUE(transports.contains(name)) << name << " missing: " << read_file(json_path);
     for (const char* bytes : {"64", "1024", "16384", "262144", "1048576"}) {
       const nlohmann::json& one_way = transports.at(name).at(bytes);
@@ -96,14 +96,14 @@ TEST_F(BenchOwnHub, TouchWritesAndReadsEveryByte) {
   afhub::testing::ModelFolder folder;
   const std::string json_path = (folder.dir() / "bench.json").string();
   const RunResult run =
-      run_afhub({"bench", "--touch", "--transports", "afhub,afhub-slot,dds,uds", "--rounds", "2",
-                 "--pings", "10", "--loop-seconds", "0", "--json", json_path},
+      run_afhub({"bench", "--touch", "--transports", "afhub,afhub-slot,dds,dds-shm,uds", "--rounds",
+                 "2", "--pings", "10", "--loop-seconds", "0", "--json", json_path},
                 180s);
   ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
   EXPECT_TRUE(contains(run.out, "Messages: every byte written by the sender and read")) << run.out;
   const nlohmann::json json = parse_json(read_file(json_path));
   EXPECT_EQ(json.at("settings").at("touch"), true) << read_file(json_path);
-  for (const char* name : {"afhub", "afhub-slot", "dds", "uds"})
+  for (const char* name : {"afhub", "afhub-slot", "dds", "dds-shm", "uds"})
     EXPECT_EQ(json.at("transports").at(name).at("1048576").at("samples"), 40) << name;
 }
 
@@ -188,8 +188,9 @@ TEST(Bench, WakeMeasuresEveryRealTimeSetting) {
 TEST(Bench, BadArgumentsAreRefusedClearly) {
   RunResult run = run_afhub({"bench", "--transports", "afhub,zeromq", "--loop-seconds", "0"});
   EXPECT_EQ(run.exit_code, 1);
-  EXPECT_TRUE(contains(run.err,
-                       "unknown transport 'zeromq': choose from afhub, afhub-slot, dds, uds, ros1"))
+  EXPECT_TRUE(contains(
+      run.err,
+      "unknown transport 'zeromq': choose from afhub, afhub-slot, dds, dds-shm, uds, ros1"))
       << run.err;
   run = run_afhub({"bench", "--loop-seconds", "1"});
   EXPECT_EQ(run.exit_code, 1);
