@@ -46,9 +46,9 @@ class Loop {
       throw py::value_error("after_step_us takes 0 up to the loop's period (" +
                             std::to_string(options_.period_ns / 1000) + " us)");
     // In phase with the physics by default, as `afhub ctl`'s controllers are.
-    after_step_ns_ = unaligned       ? -1
+    after_step_ns_ = unaligned       ? kAfterStepUnaligned
                      : after_step_us ? static_cast<std::int64_t>(*after_step_us * 1e3)
-                                     : options_.period_ns / 2;
+                                     : kAfterStepHalfPeriod;
     options_.fifo_priority = fifo_priority;
     options_.cpu = cpu;
     options_.lock_memory = lock_memory;
@@ -122,8 +122,9 @@ class Loop {
     LoopCycle cycle;
     // With a body, woken after_step_ns after each of its steps is due (see StepPhase).
     std::optional<StepPhase> phase;
-    if (body_ && after_step_ns_ >= 0) {
-      phase.emplace(after_step_ns_, [this] { return body_->client().latest_state(); });
+    const std::int64_t after_ns = after_step_offset_ns(after_step_ns_, options.period_ns);
+    if (body_ && after_ns >= 0) {
+      phase.emplace(after_ns, [this] { return body_->client().latest_state(); });
       phase->attach(options, cycle);
     }
     cycle.work = [&] {
@@ -177,7 +178,7 @@ class Loop {
   bool lockstep_;
   std::string name_;
   LoopOptions options_;
-  std::int64_t after_step_ns_;     // negative: on the loop's own clock
+  std::int64_t after_step_ns_;     // an offset, kAfterStepHalfPeriod or kAfterStepUnaligned
   std::atomic<bool> stop_{false};  // stop() may come from another thread
   std::exception_ptr error_;
 };
