@@ -6,8 +6,13 @@
 
 private_namespace() {
   if [[ $(id -u) == 0 && -z ${AFHUB_BENCH_PRIVATE:-} ]]; then
-    exec env AFHUB_BENCH_PRIVATE=1 unshare -m bash -c \
-      'mount -t tmpfs tmpfs /tmp && mount -t tmpfs tmpfs /dev/shm && mount -t tmpfs tmpfs /run && exec "$0" "$@"' \
+    # A clone under /tmp, ../shared beside it and paths given under /tmp stay visible.
+    local root
+    root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+    exec env AFHUB_BENCH_PRIVATE=1 AFHUB_SOURCE_ROOT="$root" unshare -m bash -c \
+      'source "$AFHUB_SOURCE_ROOT/tests/support/private_tmp.sh" &&
+       mount_private_tmp "$AFHUB_SOURCE_ROOT" "$AFHUB_SOURCE_ROOT/../shared" "$0" "$@" &&
+       mount -t tmpfs tmpfs /dev/shm && mount -t tmpfs tmpfs /run && exec "$0" "$@"' \
       "$@"
   fi
   work=$(mktemp -d)

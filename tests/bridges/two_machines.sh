@@ -83,9 +83,14 @@ cyclone_uri() {
 declare -A uri=([a]="$(cyclone_uri "$veth_a")" [b]="$(cyclone_uri "$veth_b")")
 declare -A netns=([a]=$ns_a [b]=$ns_b)
 
+# Each side's private /tmp keeps the source tree, ../shared, $work and the sourcing
+# script's arguments (the program, models) when they live under /tmp.
+root_dir=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
 for side in a b; do
   ip netns exec "${netns[$side]}" unshare -m --propagation private bash -c \
-    'mount -t tmpfs tmpfs /tmp && mount -t tmpfs tmpfs /dev/shm && mount -t tmpfs tmpfs /run && exec sleep infinity' &
+    'source "$0" && mount_private_tmp "$@" && mount -t tmpfs tmpfs /dev/shm &&
+     mount -t tmpfs tmpfs /run && exec sleep infinity' \
+    "$root_dir/tests/support/private_tmp.sh" "$root_dir" "$root_dir/../shared" "$work" "$@" &
   holder[$side]=$!
 done
 sleep 0.5

@@ -12,30 +12,10 @@ if [[ -z "${AFHUB_PRIVATE_NAMESPACES:-}" ]]; then
   fi
   exec env AFHUB_PRIVATE_NAMESPACES=1 unshare --mount --net --propagation private bash "$0" "$@"
 fi
-# A tree under /tmp (a clone there, its build, ../shared beside it) would vanish under
-# the private /tmp: each is bind-mounted aside first and moved onto the new /tmp.
-source_root=$(cd "$(dirname "$0")/../.." && pwd)
-kept=()
-for path in "$source_root" "$source_root/../shared" "$1"; do
-  [[ $path == /tmp/* && -e $path ]] || continue
-  top=${path#/tmp/}
-  top=${top%%/*}
-  [[ " ${kept[*]-} " == *" $top "* ]] || kept+=("$top")
-done
-if ((${#kept[@]})); then
-  aside=$(mktemp -d /run/afhub-test-keep.XXXXXX)
-  for top in "${kept[@]}"; do
-    mkdir "$aside/$top"
-    mount --bind "/tmp/$top" "$aside/$top"
-  done
-fi
-mount -t tmpfs -o mode=1777 tmpfs /tmp
-for top in "${kept[@]}"; do
-  mkdir "/tmp/$top"
-  mount --move "$aside/$top" "/tmp/$top"
-  rmdir "$aside/$top"
-done
-if ((${#kept[@]})); then rmdir "$aside"; fi
+# A tree under /tmp (a clone there, its build, ../shared beside it) stays visible.
+support=$(cd "$(dirname "$0")" && pwd)
+source "$support/private_tmp.sh"
+mount_private_tmp "$support/../.." "$support/../../../shared" "$1"
 # Huge pages where a file is big enough: RouDi writes every page of its 150 MB of
 # segments at start, and on this kind of VM 4 KiB page faults made that 8 to 10 s of a
 # loaded machine (2 MiB pages: about half). A user's /dev/shm can be mounted so too.
