@@ -5,6 +5,7 @@
 #include <BulletSoftBody/btSoftBodyHelpers.h>
 
 #include <map>
+#include <numeric>
 
 #include "afhub/shm_layout/error.hpp"
 #include "afhub/shm_layout/limits.hpp"
@@ -164,6 +165,51 @@ void Simulation::Data::build_joints() {
                                                   parent.com_from_mesh, child.com_from_mesh, dt_s));
     world.addConstraint(&joints.back()->constraint(), spec.ignore_inter_collision);
   }
+  mark_loop_islands();
+}
+
+// Bullet's islands are the moving bodies joined by joints (a static body joins
+// nothing: it is the ground). An island holds a closed loop when it has as many
+// joints as moving bodies, one more when some of them reach the ground. Its joints
+// are marked for the direct solve (constraint_solver.hpp), and every island is then
+// solved on its own, not batched with others.
+void Simulation::Data::mark_loop_islands() {
+  if (!model.world.direct_loop_solve) return;
+  std::vector<int> group(bodies.size());
+  std::iota(group.begin(), group.end(), 0);
+  auto root = [&](int b) {
+    while (group[b] != b) b = group[b] = group[group[b]];
+    return b;
+  };
+  for (const JointSpec& spec : model.joints)
+    if (bodies[spec.parent].dynamic && bodies[spec.child].dynamic)
+      group[root(spec.parent)] = root(spec.child);
+  struct Island {
+    int bodies = 0, joints = 0;
+    bool grounded = false;
+  };
+  std::vector<Island> islands(bodies.size());
+  for (std::size_t b = 0; b < bodies.size(); ++b)
+    if (bodies[b].dynamic) ++islands[root(static_cast<int>(b))].bodies;
+  auto island_of = [&](const JointSpec& spec) {
+    return root(bodies[spec.parent].dynamic ? spec.parent : spec.child);
+  };
+  for (const JointSpec& spec : model.joints) {
+    if (!bodies[spec.parent].dynamic && !bodies[spec.child].dynamic) continue;
+    Island& island = islands[island_of(spec)];
+    ++island.joints;
+    island.grounded |= !bodies[spec.parent].dynamic || !bodies[spec.child].dynamic;
+  }
+  bool any = false;
+  for (std::size_t j = 0; j < model.joints.size(); ++j) {
+    const JointSpec& spec = model.joints[j];
+    if (!bodies[spec.parent].dynamic && !bodies[spec.child].dynamic) continue;
+    const Island& island = islands[island_of(spec)];
+    if (island.joints < island.bodies + (island.grounded ? 1 : 0)) continue;
+    joints[j]->constraint().setUserConstraintType(ConstraintSolver::kInLoopIsland);
+    any = true;
+  }
+  if (any) world.getSolverInfo().m_minimumSolverBatchSize = 1;
 }
 
 void Simulation::Data::build_soft_bodies() {

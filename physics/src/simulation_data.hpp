@@ -22,6 +22,7 @@
 
 #include "afhub/physics/simulation.hpp"
 #include "collision_shapes.hpp"
+#include "constraint_solver.hpp"
 #include "frames.hpp"
 #include "joint_model.hpp"
 
@@ -138,26 +139,6 @@ class CollisionFilter : public btOverlapFilterCallback {
   const Model& model_;
 };
 
-// Bullet's solver grows its work arrays when a scene gets more contacts or active
-// joint limits than before: a heap allocation in the middle of a run. Reserving
-// room up front keeps the step allocation-free for any scene that fits.
-class PreallocatedSolver : public btSequentialImpulseConstraintSolver {
- public:
-  PreallocatedSolver(int bodies, int joints) {
-    constexpr int kContacts = 4096;  // contact points, each with two friction rows
-    const int joint_rows = 6 * joints + 64;
-    m_tmpSolverBodyPool.reserve(bodies + 64);
-    m_tmpSolverContactConstraintPool.reserve(kContacts);
-    m_tmpSolverContactFrictionConstraintPool.reserve(2 * kContacts);
-    m_tmpSolverContactRollingFrictionConstraintPool.reserve(3 * kContacts);
-    m_tmpSolverNonContactConstraintPool.reserve(joint_rows);
-    m_orderTmpConstraintPool.reserve(kContacts);
-    m_orderFrictionConstraintPool.reserve(2 * kContacts);
-    m_orderNonContactConstraintPool.reserve(joint_rows);
-    m_tmpConstraintSizesPool.reserve(joints + 64);
-  }
-};
-
 struct Simulation::Data {
   const Model& model;
   double dt_s;
@@ -166,7 +147,7 @@ struct Simulation::Data {
   btSoftBodyRigidBodyCollisionConfiguration collision_config;
   btCollisionDispatcher dispatcher{&collision_config};
   btDbvtBroadphase broadphase;
-  PreallocatedSolver solver;
+  ConstraintSolver solver;
   ReservedWorld world{&dispatcher, &broadphase, &solver, &collision_config};
   CollisionFilter filter;
 
@@ -186,7 +167,8 @@ struct Simulation::Data {
       : model(m),
         dt_s(dt),
         solver(static_cast<int>(m.bodies.size()),
-               static_cast<int>(m.joints.size() + m.actuators.size())),
+               static_cast<int>(m.joints.size() + m.actuators.size()),
+               m.closed_loop_count > 0 && m.world.direct_loop_solve),
         filter(m) {}
   ~Data() {
     for (auto& joint : joints) world.removeConstraint(&joint->constraint());
@@ -203,6 +185,7 @@ struct Simulation::Data {
 
   void build_bodies();
   void build_joints();
+  void mark_loop_islands();
   void build_soft_bodies();
   void build_sensors();
   void build_actuators();

@@ -35,6 +35,7 @@ namespace {
 const std::string kModels = AFHUB_SHARED_MODELS "/descriptions/multi-bodies/";
 const std::string kKuka = kModels + "robots/blender-kuka.yaml";
 const std::string kFourBar = kModels + "puzzles/parallel_structure.yaml";
+const std::string kEcm = kModels + "robots/blender-ecm.yaml";
 
 // False, with the benchmark skipped naming the directory, when the corpus is missing.
 bool have_shared_models(benchmark::State& state) {
@@ -170,6 +171,23 @@ BENCHMARK_CAPTURE(BM_Step, kuka_published_viewed, kKuka, true, true)->Unit(bench
 BENCHMARK_CAPTURE(BM_Step, four_bar_physics, kFourBar, false, false)->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(BM_Step, four_bar_published, kFourBar, true, false)
     ->Unit(benchmark::kMicrosecond);
+
+// A robot with closed loops, stepped with its loop islands solved directly and with
+// them iterated like the rest (the world's 20 iterations), in one run: what the
+// direct solve costs (physics/src/constraint_solver.hpp).
+void BM_LoopStep(benchmark::State& state, const std::string& file, bool direct) {
+  if (!have_shared_models(state)) return;
+  Model model = load_adf_files({file});
+  model.world.direct_loop_solve = direct;
+  Simulation sim(model, 0.001);
+  StepTimes times(1 << 22);
+  for (auto _ : state) timed_step(sim, nullptr, times);
+  report_step_times(state, times);
+}
+BENCHMARK_CAPTURE(BM_LoopStep, ecm_direct, kEcm, true)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_LoopStep, ecm_iterated, kEcm, false)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_LoopStep, four_bar_direct, kFourBar, true)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_LoopStep, four_bar_iterated, kFourBar, false)->Unit(benchmark::kMicrosecond);
 
 // A generated scene of `arms` arms of `links` links each, every link an active body
 // (a state slot each) and every joint a revolute one under a PD controller: 125 arms of

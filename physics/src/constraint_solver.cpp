@@ -1,0 +1,365 @@
+// The world's constraint solver (see constraint_solver.hpp). In Bullet's terms a
+// row i of a group has a Jacobian J_i (m_contactNormal1/2 and m_relpos1/2CrossNormal
+// on its two solver bodies), a target velocity m_rhs / m_jacDiagABInv, a
+// constraint-force mixing, and bounds on its total impulse. Sequential impulses
+// drive each row's residual to zero one row at a time; here the residuals of all
+// rows are zeroed at once: A dl = r with A = J M^-1 J^T + cfm, within the bounds.
+#include "constraint_solver.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace afhub::physics {
+namespace {
+
+constexpr int K = ConstraintSolver::kMaxDirectRows;  // the matrices' row stride
+// A row whose pivot keeps less than this share of its own diagonal in J J^T, a
+// Jacobian within about 2 degrees of a combination of the rows before it, is taken
+// as implied by them: a planar loop of 3D joints repeats rows exactly, and a loop
+// drawn in CAD repeats them to within its drawing's error (the ECM's axes disagree
+// by about 0.3 degrees: held exactly, its yaw locked).
+constexpr double kDependent = 1e-3;
+constexpr double kUnbounded = 1e30;
+constexpr int kSchurSweeps = 100;
+
+double dot(const btVector3& a, const btVector3& b) {
+  return a.dot(b);
+}
+
+bool bounded(const btSolverConstraint& row) {
+  return row.m_lowerLimit > -kUnbounded || row.m_upperLimit < kUnbounded;
+}
+
+double target(const btSolverConstraint& row) {
+  return row.m_rhs / row.m_jacDiagABInv;
+}
+
+double cfm(const btSolverConstraint& row) {
+  return row.m_cfm / row.m_jacDiagABInv;
+}
+
+}  // namespace
+
+ConstraintSolver::ConstraintSolver(int bodies, int joints, bool direct_loops) {
+  constexpr int kContacts = 4096;  // contact points, each with two friction rows
+  const int joint_rows = 6 * joints + 64;
+  m_tmpSolverBodyPool.reserve(bodies + 64);
+  m_tmpSolverContactConstraintPool.reserve(kContacts);
+  m_tmpSolverContactFrictionConstraintPool.reserve(2 * kContacts);
+  m_tmpSolverContactRollingFrictionConstraintPool.reserve(3 * kContacts);
+  m_tmpSolverNonContactConstraintPool.reserve(joint_rows);
+  m_orderTmpConstraintPool.reserve(kContacts);
+  m_orderFrictionConstraintPool.reserve(2 * kContacts);
+  m_orderNonContactConstraintPool.reserve(joint_rows);
+  m_tmpConstraintSizesPool.reserve(joints + 64);
+  if (!direct_loops) return;
+  effects_.resize(K);
+  equality_.reserve(K);
+  bounded_.reserve(K);
+  row_.resize(K);
+  bounded_slot_.resize(K);
+  dependent_.resize(K);
+  first_.resize(K);
+  for (auto* matrix : {&a_, &shape_, &factor_, &null_, &gram_, &w_, &schur_}) matrix->resize(K * K);
+  for (auto* vector : {&residual_, &equality_solution_, &bounded_solution_, &delta_, &gram_rhs_})
+    vector->resize(K);
+}
+
+btScalar ConstraintSolver::solveGroupCacheFriendlyIterations(
+    btCollisionObject** bodies, int numBodies, btPersistentManifold** manifolds, int numManifolds,
+    btTypedConstraint** constraints, int numConstraints, const btContactSolverInfo& info,
+    btIDebugDraw* debug_drawer) {
+  const auto iterate = [&] {
+    return btSequentialImpulseConstraintSolver::solveGroupCacheFriendlyIterations(
+        bodies, numBodies, manifolds, numManifolds, constraints, numConstraints, info,
+        debug_drawer);
+  };
+  const bool loop = std::any_of(constraints, constraints + numConstraints, [](auto* c) {
+    return c->getUserConstraintType() == kInLoopIsland;
+  });
+  if (!loop || a_.empty()) return iterate();
+  // Every row of the island: joints, then contacts, then their friction and rolling
+  // friction (bounded by the contact's own impulse).
+  btConstraintArray& joints = m_tmpSolverNonContactConstraintPool;
+  btConstraintArray& contacts = m_tmpSolverContactConstraintPool;
+  btConstraintArray& frictions = m_tmpSolverContactFrictionConstraintPool;
+  btConstraintArray& rollings = m_tmpSolverContactRollingFrictionConstraintPool;
+  rows_ = joints.size() + contacts.size() + frictions.size() + rollings.size();
+  if (rows_ > K) return iterate();
+  int r = 0;
+  for (int i = 0; i < joints.size(); ++i, ++r) row_[r] = {&joints[i], -1, false};
+  const int first_contact = r;
+  for (int i = 0; i < contacts.size(); ++i, ++r) row_[r] = {&contacts[i], -1, false};
+  for (int i = 0; i < frictions.size(); ++i, ++r)
+    row_[r] = {&frictions[i], first_contact + frictions[i].m_frictionIndex, false};
+  for (int i = 0; i < rollings.size(); ++i, ++r)
+    row_[r] = {&rollings[i], first_contact + rollings[i].m_frictionIndex, true};
+  // Penetration is pushed out apart from the velocities (Bullet's split impulse).
+  solveGroupCacheFriendlySplitImpulseIterations(bodies, numBodies, manifolds, numManifolds,
+                                                constraints, numConstraints, info, debug_drawer);
+  factor();
+  solve_rows();
+  return 0;
+}
+
+// A, its equality rows' Cholesky factor (dependent rows left out) with the null
+// vectors the dependent rows make, W and S.
+void ConstraintSolver::factor() noexcept {
+  for (int i = 0; i < rows_; ++i) {
+    const btSolverConstraint& row = *row_[i].row;
+    const btSolverBody& a = m_tmpSolverBodyPool[row.m_solverBodyIdA];
+    const btSolverBody& b = m_tmpSolverBodyPool[row.m_solverBodyIdB];
+    const btVector3 zero(0, 0, 0);
+    Effect& e = effects_[i];
+    e.linear_a = a.m_originalBody ? row.m_contactNormal1 * a.m_invMass * a.m_linearFactor : zero;
+    e.angular_a = a.m_originalBody ? row.m_angularComponentA * a.m_angularFactor : zero;
+    e.linear_b = b.m_originalBody ? row.m_contactNormal2 * b.m_invMass * b.m_linearFactor : zero;
+    e.angular_b = b.m_originalBody ? row.m_angularComponentB * b.m_angularFactor : zero;
+  }
+  equality_.clear();
+  bounded_.clear();
+  for (int i = 0; i < rows_; ++i) {
+    const btSolverConstraint& ri = *row_[i].row;
+    const bool moves_a = m_tmpSolverBodyPool[ri.m_solverBodyIdA].m_originalBody != nullptr;
+    const bool moves_b = m_tmpSolverBodyPool[ri.m_solverBodyIdB].m_originalBody != nullptr;
+    for (int j = 0; j <= i; ++j) {
+      const btSolverConstraint& rj = *row_[j].row;
+      const Effect& e = effects_[j];
+      double mass = 0.0, shape = 0.0;
+      if (moves_a && ri.m_solverBodyIdA == rj.m_solverBodyIdA) {
+        mass += dot(ri.m_contactNormal1, e.linear_a) + dot(ri.m_relpos1CrossNormal, e.angular_a);
+        shape += dot(ri.m_contactNormal1, rj.m_contactNormal1) +
+                 dot(ri.m_relpos1CrossNormal, rj.m_relpos1CrossNormal);
+      }
+      if (moves_a && ri.m_solverBodyIdA == rj.m_solverBodyIdB) {
+        mass += dot(ri.m_contactNormal1, e.linear_b) + dot(ri.m_relpos1CrossNormal, e.angular_b);
+        shape += dot(ri.m_contactNormal1, rj.m_contactNormal2) +
+                 dot(ri.m_relpos1CrossNormal, rj.m_relpos2CrossNormal);
+      }
+      if (moves_b && ri.m_solverBodyIdB == rj.m_solverBodyIdA) {
+        mass += dot(ri.m_contactNormal2, e.linear_a) + dot(ri.m_relpos2CrossNormal, e.angular_a);
+        shape += dot(ri.m_contactNormal2, rj.m_contactNormal1) +
+                 dot(ri.m_relpos2CrossNormal, rj.m_relpos1CrossNormal);
+      }
+      if (moves_b && ri.m_solverBodyIdB == rj.m_solverBodyIdB) {
+        mass += dot(ri.m_contactNormal2, e.linear_b) + dot(ri.m_relpos2CrossNormal, e.angular_b);
+        shape += dot(ri.m_contactNormal2, rj.m_contactNormal2) +
+                 dot(ri.m_relpos2CrossNormal, rj.m_relpos2CrossNormal);
+      }
+      a_[i * K + j] = a_[j * K + i] = mass;
+      shape_[i * K + j] = shape_[j * K + i] = shape;
+    }
+    // A row with no effective mass (its bodies cannot move along it) takes no part.
+    bounded_slot_[i] = -1;
+    if (ri.m_jacDiagABInv == 0 || !(a_[i * K + i] > 0)) continue;
+    a_[i * K + i] += cfm(ri);
+    if (bounded(ri) || row_[i].normal >= 0) {
+      bounded_slot_[i] = static_cast<int>(bounded_.size());
+      bounded_.push_back(i);
+    } else {
+      equality_.push_back(i);
+    }
+  }
+
+  // Which rows a loop repeats is a matter of shape, not of mass: it is judged on
+  // J J^T (every body of unit mass and inertia), where a mass ratio of a thousand
+  // cannot make a row look implied. Then A is factored over the rows kept.
+  const int ne = static_cast<int>(equality_.size());
+  std::fill(dependent_.begin(), dependent_.begin() + ne, false);
+  cholesky(shape_.data(), true);
+  cholesky(a_.data(), false);
+
+  // A dependent row d repeats a combination c of the rows kept: A's null space
+  // holds n = e_d - c, and A reaches only right-hand sides orthogonal to every n.
+  nulls_ = 0;
+  for (int k = 0; k < ne; ++k) {
+    if (!dependent_[k]) continue;
+    double* n = &null_[nulls_ * K];
+    for (int j = 0; j < ne; ++j) n[j] = a_[equality_[j] * K + equality_[k]];
+    solve_kept(n);
+    for (int j = 0; j < ne; ++j) n[j] = -n[j];
+    n[k] = 1.0;
+    ++nulls_;
+  }
+  // The null vectors' Gram matrix, Cholesky-factored in place (its lower half).
+  for (int p = 0; p < nulls_; ++p)
+    for (int q = 0; q <= p; ++q) {
+      double sum = 0.0;
+      for (int j = 0; j < ne; ++j) sum += null_[p * K + j] * null_[q * K + j];
+      for (int m = 0; m < q; ++m) sum -= gram_[p * K + m] * gram_[q * K + m];
+      gram_[p * K + q] = p == q ? std::sqrt(sum) : sum / gram_[q * K + q];
+    }
+
+  // W's row b is A_ee^+ times A's equality entries of bounded row b.
+  const int nb = static_cast<int>(bounded_.size());
+  for (int b = 0; b < nb; ++b) {
+    double* w = &w_[b * K];
+    for (int k = 0; k < ne; ++k) w[k] = a_[bounded_[b] * K + equality_[k]];
+    solve_equality(w);
+  }
+  for (int b1 = 0; b1 < nb; ++b1)
+    for (int b2 = 0; b2 < nb; ++b2) {
+      double sum = a_[bounded_[b1] * K + bounded_[b2]];
+      for (int k = 0; k < ne; ++k) sum -= a_[bounded_[b1] * K + equality_[k]] * w_[b2 * K + k];
+      schur_[b1 * K + b2] = sum;
+    }
+}
+
+// The Cholesky factor of m's equality block into factor_, leaving out the rows
+// marked dependent and, when `judge`, marking those whose pivot keeps less than
+// kDependent of their own diagonal. A row meets only the rows sharing one of its
+// two bodies, so it starts late: its factor row starts where it does (fill-in stays
+// within that envelope), and the products skip the zeros before it.
+void ConstraintSolver::cholesky(const double* m, bool judge) noexcept {
+  const int ne = static_cast<int>(equality_.size());
+  double* l = factor_.data();
+  for (int k = 0; k < ne; ++k) {
+    int first = 0;
+    while (first < k && m[equality_[k] * K + equality_[first]] == 0.0) ++first;
+    first_[k] = first;
+  }
+  for (int k = 0; k < ne; ++k) {
+    const double* lk = &l[k * K];
+    const double own = m[equality_[k] * K + equality_[k]];
+    double d = own;
+    for (int j = first_[k]; j < k; ++j) d -= lk[j] * lk[j];
+    if (judge && d <= kDependent * own) dependent_[k] = true;
+    if (!dependent_[k] && !(d > 0)) dependent_[k] = true;  // round-off on a kept row
+    const double pivot = dependent_[k] ? 0.0 : std::sqrt(d);
+    l[k * K + k] = pivot;
+    for (int i = k + 1; i < ne; ++i) {
+      if (first_[i] > k) continue;  // outside row i's envelope: zero, never read
+      double sum = 0.0;
+      if (!dependent_[k]) {
+        const double* li = &l[i * K];
+        sum = m[equality_[i] * K + equality_[k]];
+        for (int j = std::max(first_[i], first_[k]); j < k; ++j) sum -= li[j] * lk[j];
+        sum /= pivot;
+      }
+      l[i * K + k] = sum;
+    }
+  }
+}
+
+// v <- A_kk^-1 v over the kept equality rows (the dependent ones get 0).
+void ConstraintSolver::solve_kept(double* v) const noexcept {
+  const int ne = static_cast<int>(equality_.size());
+  const double* l = factor_.data();
+  for (int k = 0; k < ne; ++k) {
+    if (dependent_[k]) {
+      v[k] = 0.0;
+      continue;
+    }
+    double sum = v[k];
+    for (int j = first_[k]; j < k; ++j) sum -= l[k * K + j] * v[j];
+    v[k] = sum / l[k * K + k];
+  }
+  for (int k = ne - 1; k >= 0; --k) {
+    if (dependent_[k]) continue;
+    double sum = v[k];
+    for (int i = k + 1; i < ne; ++i)
+      if (first_[i] <= k) sum -= l[i * K + k] * v[i];
+    v[k] = sum / l[k * K + k];
+  }
+}
+
+// v <- A_ee^+ v: v's part that no impulse can reach (along the null vectors) is
+// dropped first, so that the rows share a loop's inconsistency in least squares
+// instead of the dependent rows taking all of it.
+void ConstraintSolver::solve_equality(double* v) noexcept {
+  const int ne = static_cast<int>(equality_.size());
+  double* g = gram_rhs_.data();
+  for (int p = 0; p < nulls_; ++p) {
+    double sum = 0.0;
+    for (int j = 0; j < ne; ++j) sum += null_[p * K + j] * v[j];
+    for (int m = 0; m < p; ++m) sum -= gram_[p * K + m] * g[m];
+    g[p] = sum / gram_[p * K + p];
+  }
+  for (int p = nulls_ - 1; p >= 0; --p) {
+    double sum = g[p];
+    for (int m = p + 1; m < nulls_; ++m) sum -= gram_[m * K + p] * g[m];
+    g[p] = sum / gram_[p * K + p];
+  }
+  for (int p = 0; p < nulls_; ++p)
+    for (int j = 0; j < ne; ++j) v[j] -= null_[p * K + j] * g[p];
+  solve_kept(v);
+}
+
+// Zeroes every row's residual at once, from the bodies' velocities so far: the
+// equality rows exactly (in least squares where a loop repeats rows), the bounded
+// rows (limits, motors, contacts, friction) within their bounds.
+void ConstraintSolver::solve_rows() noexcept {
+  for (int i = 0; i < rows_; ++i) {
+    const btSolverConstraint& row = *row_[i].row;
+    if (row.m_jacDiagABInv == 0) continue;
+    const btSolverBody& a = m_tmpSolverBodyPool[row.m_solverBodyIdA];
+    const btSolverBody& b = m_tmpSolverBodyPool[row.m_solverBodyIdB];
+    residual_[i] = target(row) - cfm(row) * row.m_appliedImpulse -
+                   dot(row.m_contactNormal1, a.m_deltaLinearVelocity) -
+                   dot(row.m_relpos1CrossNormal, a.m_deltaAngularVelocity) -
+                   dot(row.m_contactNormal2, b.m_deltaLinearVelocity) -
+                   dot(row.m_relpos2CrossNormal, b.m_deltaAngularVelocity);
+  }
+  const int ne = static_cast<int>(equality_.size());
+  const int nb = static_cast<int>(bounded_.size());
+  double* y = equality_solution_.data();
+  for (int k = 0; k < ne; ++k) y[k] = residual_[equality_[k]];
+  solve_equality(y);
+  // The bounded rows: projected Gauss-Seidel on S x = r_b - A_be y, which is small.
+  double* x = bounded_solution_.data();
+  for (int b = 0; b < nb; ++b) {
+    double sum = residual_[bounded_[b]];
+    for (int k = 0; k < ne; ++k) sum -= a_[bounded_[b] * K + equality_[k]] * y[k];
+    delta_[b] = sum;  // the reduced right-hand side
+    x[b] = 0.0;
+  }
+  for (int sweep = 0; sweep < kSchurSweeps && nb > 0; ++sweep) {
+    double largest_change = 0.0, largest = 0.0;
+    for (int b = 0; b < nb; ++b) {
+      const double diagonal = schur_[b * K + b];
+      if (!(diagonal > 0)) continue;
+      double sum = delta_[b];
+      for (int c = 0; c < nb; ++c) sum -= schur_[b * K + c] * x[c];
+      const Row& row = row_[bounded_[b]];
+      double low = row.row->m_lowerLimit, high = row.row->m_upperLimit;
+      if (row.normal >= 0) {  // friction: within the coefficient times the contact's push
+        const int contact = bounded_slot_[row.normal];
+        const double push =
+            row_[row.normal].row->m_appliedImpulse + (contact >= 0 ? x[contact] : 0.0);
+        high = row.row->m_friction * std::max(push, 0.0);
+        if (row.rolling) high = std::min(high, double{row.row->m_friction});  // as Bullet caps it
+        low = -high;
+      }
+      const double applied = row.row->m_appliedImpulse;
+      const double next = std::clamp(x[b] + sum / diagonal, low - applied, high - applied);
+      largest_change = std::max(largest_change, std::abs(next - x[b]));
+      largest = std::max(largest, std::abs(next));
+      x[b] = next;
+    }
+    if (largest_change <= 1e-12 * (1.0 + largest)) break;
+  }
+  // The equality rows answer the bounded rows' impulses: y - W^T x.
+  for (int b = 0; b < nb; ++b)
+    for (int k = 0; k < ne; ++k) y[k] -= w_[b * K + k] * x[b];
+
+  auto apply = [&](int i, double impulse) {
+    if (impulse == 0.0) return;
+    btSolverConstraint& row = *row_[i].row;
+    const Effect& e = effects_[i];
+    row.m_appliedImpulse = row.m_appliedImpulse + impulse;
+    btSolverBody& a = m_tmpSolverBodyPool[row.m_solverBodyIdA];
+    btSolverBody& b = m_tmpSolverBodyPool[row.m_solverBodyIdB];
+    if (a.m_originalBody) {
+      a.m_deltaLinearVelocity += e.linear_a * impulse;
+      a.m_deltaAngularVelocity += e.angular_a * impulse;
+    }
+    if (b.m_originalBody) {
+      b.m_deltaLinearVelocity += e.linear_b * impulse;
+      b.m_deltaAngularVelocity += e.angular_b * impulse;
+    }
+  };
+  for (int k = 0; k < ne; ++k) apply(equality_[k], y[k]);
+  for (int b = 0; b < nb; ++b) apply(bounded_[b], x[b]);
+}
+
+}  // namespace afhub::physics
