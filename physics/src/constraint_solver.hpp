@@ -26,9 +26,10 @@ class ConstraintSolver : public btSequentialImpulseConstraintSolver {
   // is about 3 M, a millisecond), and its matrices more memory than they are worth.
   static constexpr int kMaxDirectRows = 256;
 
-  // `direct_loops`: the world holds a closed loop; only then is room made for the
-  // direct solve (seven 256 x 256 matrices of doubles, 3.7 MB).
-  ConstraintSolver(int bodies, int joints, bool direct_loops);
+  ConstraintSolver(int bodies, int joints);
+  // Makes room for the direct solve (seven 256 x 256 matrices of doubles, 3.7 MB):
+  // called at build when some constraint is marked kInLoopIsland, never in a step.
+  void enable_direct_solve();
 
  protected:
   btScalar solveGroupCacheFriendlyIterations(btCollisionObject** bodies, int numBodies,
@@ -46,7 +47,7 @@ class ConstraintSolver : public btSequentialImpulseConstraintSolver {
   void cholesky(const double* m, bool judge) noexcept;
   void solve_kept(double* v) const noexcept;
   void solve_equality(double* v) noexcept;
-  void solve_rows() noexcept;
+  bool solve_rows() noexcept;
 
   struct Row {
     btSolverConstraint* row;
@@ -66,7 +67,7 @@ class ConstraintSolver : public btSequentialImpulseConstraintSolver {
   // rows and their Gram matrix's factor; W = A_ee^+ A_eb; the bounded rows' Schur
   // complement S = A_bb - A_be W.
   std::vector<double> a_, shape_, factor_, null_, gram_, w_, schur_;
-  std::vector<double> residual_, equality_solution_, bounded_solution_, delta_, gram_rhs_;
+  std::vector<double> residual_, equality_solution_, bounded_solution_, reduced_rhs_, gram_rhs_;
 };
 
 }  // namespace afhub::physics

@@ -168,11 +168,12 @@ void Simulation::Data::build_joints() {
   mark_loop_islands();
 }
 
-// Bullet's islands are the moving bodies joined by joints (a static body joins
-// nothing: it is the ground). An island holds a closed loop when it has as many
-// joints as moving bodies, one more when some of them reach the ground. Its joints
-// are marked for the direct solve (constraint_solver.hpp), and every island is then
-// solved on its own, not batched with others.
+// The moving bodies joined by joints (a static body joins nothing: it is the
+// ground) hold a closed loop when they have as many joints as bodies, one more when
+// some of them reach the ground. Their joints are marked for the direct solve
+// (constraint_solver.hpp), which then takes the whole Bullet island they are in
+// (contacts join islands too), and every island is solved on its own, not batched.
+// A loop closed while running (an actuator's hold) is not marked.
 void Simulation::Data::mark_loop_islands() {
   if (!model.world.direct_loop_solve) return;
   std::vector<int> group(bodies.size());
@@ -209,7 +210,9 @@ void Simulation::Data::mark_loop_islands() {
     joints[j]->constraint().setUserConstraintType(ConstraintSolver::kInLoopIsland);
     any = true;
   }
-  if (any) world.getSolverInfo().m_minimumSolverBatchSize = 1;
+  if (!any) return;
+  solver.enable_direct_solve();
+  world.getSolverInfo().m_minimumSolverBatchSize = 1;
 }
 
 void Simulation::Data::build_soft_bodies() {

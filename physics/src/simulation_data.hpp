@@ -167,8 +167,7 @@ struct Simulation::Data {
       : model(m),
         dt_s(dt),
         solver(static_cast<int>(m.bodies.size()),
-               static_cast<int>(m.joints.size() + m.actuators.size()),
-               m.closed_loop_count > 0 && m.world.direct_loop_solve),
+               static_cast<int>(m.joints.size() + m.actuators.size())),
         filter(m) {}
   ~Data() {
     for (auto& joint : joints) world.removeConstraint(&joint->constraint());
