@@ -13,7 +13,11 @@ if [[ -z "${AFHUB_PRIVATE_LOOPBACK:-}" ]]; then
   fi
   exec env AFHUB_PRIVATE_LOOPBACK=1 unshare -m -n --propagation private bash "$0" "$@"
 fi
-mount -t tmpfs tmpfs /tmp
+# The private /tmp keeps the source tree, ../shared and the test's arguments (the
+# program, models) when they live under /tmp (a clone there).
+root_dir=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
+source "$root_dir/tests/support/private_tmp.sh"
+mount_private_tmp "$root_dir" "$root_dir/../shared" "$@"
 mount -t tmpfs tmpfs /dev/shm
 mount -t tmpfs tmpfs /run
 ip link set lo up

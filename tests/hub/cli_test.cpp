@@ -337,7 +337,7 @@ TEST_F(CliWithBodies, LsListsBodiesJointsOwnerAndRate) {
         return body && body->at("rate_hz").is_number() &&  // null until measured
                std::abs(body->at("rate_hz").get<double>() - 1000.0) < 20.0;
       },
-      5s))
+      20s))  // a README-order run (a clone in /tmp beside the demo's hub) took over 5 s
       << ls.out;
 }
 
