@@ -56,7 +56,7 @@ ConstraintSolver::ConstraintSolver(int bodies, int joints) {
 }
 
 void ConstraintSolver::enable_direct_solve() {
-  effects_.resize(K);
+  sides_.resize(K);
   equality_.reserve(K);
   bounded_.reserve(K);
   row_.resize(K);
@@ -114,14 +114,20 @@ btScalar ConstraintSolver::solveGroupCacheFriendlyIterations(
 void ConstraintSolver::factor() noexcept {
   for (int i = 0; i < rows_; ++i) {
     const btSolverConstraint& row = *row_[i].row;
-    const btSolverBody& a = m_tmpSolverBodyPool[row.m_solverBodyIdA];
-    const btSolverBody& b = m_tmpSolverBodyPool[row.m_solverBodyIdB];
-    const btVector3 zero(0, 0, 0);
-    Effect& e = effects_[i];
-    e.linear_a = a.m_originalBody ? row.m_contactNormal1 * a.m_invMass * a.m_linearFactor : zero;
-    e.angular_a = a.m_originalBody ? row.m_angularComponentA * a.m_angularFactor : zero;
-    e.linear_b = b.m_originalBody ? row.m_contactNormal2 * b.m_invMass * b.m_linearFactor : zero;
-    e.angular_b = b.m_originalBody ? row.m_angularComponentB * b.m_angularFactor : zero;
+    auto side = [&](int body, const btVector3& normal, const btVector3& turn,
+                    const btVector3& angular_component) {
+      const btSolverBody& solver_body = m_tmpSolverBodyPool[body];
+      Side out{body, solver_body.m_originalBody != nullptr, normal, turn};
+      if (out.moves) {
+        out.linear = normal * solver_body.m_invMass * solver_body.m_linearFactor;
+        out.angular = angular_component * solver_body.m_angularFactor;
+      }
+      return out;
+    };
+    sides_[i] = {side(row.m_solverBodyIdA, row.m_contactNormal1, row.m_relpos1CrossNormal,
+                      row.m_angularComponentA),
+                 side(row.m_solverBodyIdB, row.m_contactNormal2, row.m_relpos2CrossNormal,
+                      row.m_angularComponentB)};
   }
   equality_.clear();
   bounded_.clear();
@@ -139,32 +145,16 @@ void ConstraintSolver::factor() noexcept {
   const double turn_weight = levers2 > 0 ? levers / levers2 : 1.0;  // 1 / L^2
   for (int i = 0; i < rows_; ++i) {
     const btSolverConstraint& ri = *row_[i].row;
-    const bool moves_a = m_tmpSolverBodyPool[ri.m_solverBodyIdA].m_originalBody != nullptr;
-    const bool moves_b = m_tmpSolverBodyPool[ri.m_solverBodyIdB].m_originalBody != nullptr;
     for (int j = 0; j <= i; ++j) {
-      const btSolverConstraint& rj = *row_[j].row;
-      const Effect& e = effects_[j];
       // Row i's velocity change per unit impulse of row j (mass), and the two rows'
       // Jacobians' product (shape), through each moving body they share.
       double mass = 0.0, shape = 0.0;
-      auto share = [&](const btVector3& normal_i, const btVector3& turn_i,
-                       const btVector3& normal_j, const btVector3& turn_j,
-                       const btVector3& linear_j, const btVector3& angular_j) {
-        mass += dot(normal_i, linear_j) + dot(turn_i, angular_j);
-        shape += dot(normal_i, normal_j) + dot(turn_i, turn_j) * turn_weight;
-      };
-      if (moves_a && ri.m_solverBodyIdA == rj.m_solverBodyIdA)
-        share(ri.m_contactNormal1, ri.m_relpos1CrossNormal, rj.m_contactNormal1,
-              rj.m_relpos1CrossNormal, e.linear_a, e.angular_a);
-      if (moves_a && ri.m_solverBodyIdA == rj.m_solverBodyIdB)
-        share(ri.m_contactNormal1, ri.m_relpos1CrossNormal, rj.m_contactNormal2,
-              rj.m_relpos2CrossNormal, e.linear_b, e.angular_b);
-      if (moves_b && ri.m_solverBodyIdB == rj.m_solverBodyIdA)
-        share(ri.m_contactNormal2, ri.m_relpos2CrossNormal, rj.m_contactNormal1,
-              rj.m_relpos1CrossNormal, e.linear_a, e.angular_a);
-      if (moves_b && ri.m_solverBodyIdB == rj.m_solverBodyIdB)
-        share(ri.m_contactNormal2, ri.m_relpos2CrossNormal, rj.m_contactNormal2,
-              rj.m_relpos2CrossNormal, e.linear_b, e.angular_b);
+      for (const Side& si : sides_[i])
+        for (const Side& sj : sides_[j])
+          if (si.moves && si.body == sj.body) {
+            mass += dot(si.normal, sj.linear) + dot(si.turn, sj.angular);
+            shape += dot(si.normal, sj.normal) + dot(si.turn, sj.turn) * turn_weight;
+          }
       a_[i * K + j] = a_[j * K + i] = mass;
       shape_[i * K + j] = shape_[j * K + i] = shape;
     }

@@ -14,6 +14,7 @@
 
 #include <btBulletDynamicsCommon.h>
 
+#include <array>
 #include <vector>
 
 namespace afhub::physics {
@@ -40,9 +41,15 @@ class ConstraintSolver : public btSequentialImpulseConstraintSolver {
 
  private:
   // A unit impulse of a row changes its bodies' velocities by these.
-  struct Effect {
-    btVector3 linear_a, angular_a, linear_b, angular_b;
+  // A row's Jacobian on one of its two bodies, and what a unit impulse of the row
+  // does to that body's velocities (zero for a body that cannot move).
+  struct Side {
+    int body;  // solver body
+    bool moves;
+    btVector3 normal, turn;  // m_contactNormal1/2, m_relpos1/2CrossNormal
+    btVector3 linear{0, 0, 0}, angular{0, 0, 0};
   };
+
   void factor() noexcept;
   void cholesky(const double* m, bool judge) noexcept;
   void solve_kept(double* v) const noexcept;
@@ -57,7 +64,7 @@ class ConstraintSolver : public btSequentialImpulseConstraintSolver {
   int rows_ = 0;
   std::vector<Row> row_;
   std::vector<int> bounded_slot_;  // per row: its place in bounded_, or -1
-  std::vector<Effect> effects_;
+  std::vector<std::array<Side, 2>> sides_;
   std::vector<int> equality_, bounded_;  // row indices
   std::vector<bool> dependent_;          // per equality row: implied by the rows before it
   std::vector<int> first_;               // per equality row: its first nonzero in A
