@@ -51,15 +51,21 @@ TEST(LatestSlot, ReadersNeverSeeAMixedUpdate) {
   constexpr std::uint64_t kUpdates = 200'000;
   std::atomic<bool> done{false};
   std::atomic<std::uint64_t> mixed{0}, copies{0}, backwards{0};
+  // The writer starts once both readers hold a first copy: on a loaded machine (the
+  // sanitizer phase of CI) it once wrote every update before a reader had run.
+  std::atomic<int> reading{0};
   std::vector<std::thread> readers;
   for (int r = 0; r < 2; ++r)
     readers.emplace_back([&] {
       std::uint32_t observed = ~0U;
       std::uint64_t last = 0;
       Words copy;
+      bool counted = false;
       while (!done.load(std::memory_order_acquire)) {
         if (read(slot, copy, observed) != slot::Read::kCopied) continue;
         copies.fetch_add(1, std::memory_order_relaxed);
+        if (!counted) reading.fetch_add(1);
+        counted = true;
         for (std::uint64_t word : copy.word)
           if (word != copy.word[0]) {
             mixed.fetch_add(1, std::memory_order_relaxed);
@@ -69,6 +75,7 @@ TEST(LatestSlot, ReadersNeverSeeAMixedUpdate) {
         last = copy.word[0];
       }
     });
+  while (reading.load() < 2) std::this_thread::yield();
   for (std::uint64_t value = 2; value <= kUpdates; ++value) write(slot, value);
   done.store(true, std::memory_order_release);
   for (std::thread& reader : readers) reader.join();
