@@ -40,7 +40,6 @@ class ConstraintSolver : public btSequentialImpulseConstraintSolver {
                                              btIDebugDraw* debug_drawer) override;
 
  private:
-  // A unit impulse of a row changes its bodies' velocities by these.
   // A row's Jacobian on one of its two bodies, and what a unit impulse of the row
   // does to that body's velocities (zero for a body that cannot move).
   struct Side {
@@ -69,7 +68,8 @@ class ConstraintSolver : public btSequentialImpulseConstraintSolver {
   std::vector<bool> dependent_;          // per equality row: implied by the rows before it
   std::vector<int> first_;               // per equality row: its first nonzero in A
   int nulls_ = 0;                        // dependent equality rows
-  // Dense, row-major, kMaxDirectRows wide: the rows' effective mass A; the Cholesky
+  // Dense, row-major, kMaxDirectRows wide: the rows' effective mass A and their
+  // shape matrix (factor(): which rows a loop repeats is judged on it); the Cholesky
   // factor of its equality block's kept rows; the null vectors of the dependent
   // rows and their Gram matrix's factor; W = A_ee^+ A_eb; the bounded rows' Schur
   // complement S = A_bb - A_be W.
