@@ -33,6 +33,8 @@ BUILD_PACKAGES=(
   libcivetweb-dev libjs-three
   # `import afhub` (pybind11 over the hub client; states as numpy arrays)
   pybind11-dev python3-dev python3-numpy
+  # afhub record: MCAP chunks compressed as LZ4 frames or zstd (CRC-32 from zlib)
+  liblz4-dev libzstd-dev zlib1g-dev
 )
 TEST_PACKAGES=(
   # the viewer's tests: the browser, its image checks, the page's JavaScript syntax check
@@ -61,6 +63,20 @@ install_packages() {
   [ -n "$APT_UPDATED" ] || $sudo apt-get update -qq
   APT_UPDATED=1
   DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
+}
+
+# The recordings' independent reader (tests/record/mcap_check): npm's @mcap/core, with
+# the versions its lock file pins, into build/mcap_check (once per lock file), and the
+# checker beside them.
+install_mcap_check() {
+  local source=tests/record/mcap_check target=build/mcap_check
+  command -v npm >/dev/null || install_packages npm
+  if ! cmp -s "$source/package-lock.json" "$target/package-lock.json" || [ ! -d "$target/node_modules" ]; then
+    mkdir -p "$target"
+    cp "$source/package.json" "$source/package-lock.json" "$target/"
+    (cd "$target" && npm ci --no-audit --no-fund --loglevel=error)
+  fi
+  cp "$source/check.mjs" "$target/"  # beside its node_modules, where node resolves imports
 }
 
 # The two builds: optimised with line tables (enough for a backtrace, a third cheaper to
@@ -150,8 +166,13 @@ print_phases() {
 }
 trap print_phases EXIT
 
+test_setup() {
+  install_packages "${TEST_PACKAGES[@]}"
+  install_mcap_check
+}
+
 check_format() {
-  find shm_layout hub rt physics controllers device_drivers bench viewer bridges cli tests examples -name '*.[ch]pp' -print0 | xargs -0 clang-format --dry-run --Werror
+  find shm_layout hub rt physics controllers device_drivers bench viewer bridges record cli tests examples -name '*.[ch]pp' -print0 | xargs -0 clang-format --dry-run --Werror
 }
 
 case "${1:-}" in
@@ -163,7 +184,7 @@ case "${1:-}" in
   test)
     phase packages install_packages "${BUILD_PACKAGES[@]}"
     mkdir -p build
-    background_phase test-packages build/test-packages.log install_packages "${TEST_PACKAGES[@]}"
+    background_phase test-packages build/test-packages.log test_setup
     phase format check_format
     phase build build "${RELEASE[@]}"
     finish_background_phase
@@ -179,6 +200,7 @@ case "${1:-}" in
     ;;
   sanitize)
     phase packages install_packages "${BUILD_PACKAGES[@]}" "${TEST_PACKAGES[@]}"
+    phase mcap-check install_mcap_check
     phase sanitize-build build "${SANITIZE[@]}"
     phase sanitize-tests run_tests build/sanitize "$SLOTS"
     ;;

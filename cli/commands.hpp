@@ -28,5 +28,7 @@ void register_device(CLI::App& app, Runner& selected);
 void register_teleop(CLI::App& app, Runner& selected);
 void register_view(CLI::App& app, Runner& selected);
 void register_bridge(CLI::App& app, Runner& selected);
+void register_record(CLI::App& app, Runner& selected);
+void register_info(CLI::App& app, Runner& selected);
 
 }  // namespace afhub::cli

@@ -62,6 +62,8 @@ int main(int argc, char** argv) {
   afhub::cli::register_teleop(app, selected);
   afhub::cli::register_view(app, selected);
   afhub::cli::register_bridge(app, selected);
+  afhub::cli::register_record(app, selected);
+  afhub::cli::register_info(app, selected);
   try {
     app.parse(argc, argv);
   } catch (const CLI::RequiredError& error) {

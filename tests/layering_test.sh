@@ -3,8 +3,8 @@
 # the bottom; rt and rt/yaml (the located YAML reader) on shm_layout alone; hub/client
 # on rt, hub/daemon on the client; the physics core on shm_layout, rt and rt/yaml;
 # physics/channels and controllers on hub/client; bench on those; device_drivers on
-# hub/client (not physics or controllers); python on hub/client and rt; cli on
-# everything. Fails, naming the file, when a layer includes one above it, or when the
+# hub/client (not physics or controllers); record (MCAP) on hub/client; python on
+# hub/client and rt; cli on everything. Fails, naming the file, when a layer includes one above it, or when the
 # test binary of rt or of the physics core links iceoryx.
 set -euo pipefail
 source_dir=$1
@@ -36,6 +36,7 @@ forbid device_drivers 'physics|controllers|bench'
 forbid bench '(cli)'
 forbid viewer 'physics|controllers|devices|bench'
 forbid bridges 'physics|controllers|devices|bench|viewer'
+forbid record 'physics|controllers|devices|bench|viewer|bridges'
 forbid python 'physics|controllers|devices|bench|viewer'
 if grep -rn '#include "afhub/hub/hub_daemon.hpp"' "$source_dir/hub/client"; then
   echo "layering: hub/client must not include the daemon" >&2

@@ -1,0 +1,133 @@
+// `afhub record`: every body's state (and with options the commands, devices and the
+// world) to an MCAP file at the rate it is published, until Ctrl-C or --duration.
+// `afhub record --recover FILE`: gives a file that was cut off its index back.
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <memory>
+
+#include "afhub/hub/startup_wait.hpp"
+#include "afhub/record/mcap_reader.hpp"
+#include "afhub/record/recorder.hpp"
+#include "afhub/rt/stop_signal.hpp"
+#include "afhub/shm_layout/error.hpp"
+#include "commands.hpp"
+#include "realtime_options.hpp"
+
+namespace afhub::cli {
+namespace {
+
+struct RecordCliOptions {
+  mcap::RecordOptions record;
+  std::string compression = "zstd";
+  double buffer_mb = 256;
+  double wait_s = 0.0;
+  std::string recover;
+  RealtimeOptions realtime;
+};
+
+std::string progress_line(const mcap::RecordProgress& p, double mb_per_s) {
+  char line[200];
+  std::snprintf(line, sizeof line,
+                "recorded %.1f s  %llu channels  %llu messages  %.1f MB  %.1f MB/s  dropped %llu  "
+                "missed %llu",
+                p.seconds, static_cast<unsigned long long>(p.channels),
+                static_cast<unsigned long long>(p.messages),
+                static_cast<double>(p.file_bytes) / 1e6, mb_per_s,
+                static_cast<unsigned long long>(p.dropped),
+                static_cast<unsigned long long>(p.missed));
+  return line;
+}
+
+int run_recover(const std::string& path) {
+  const mcap::ScanResult result = mcap::recover(path);
+  std::printf("%s: %s; rewrote %llu messages in %llu chunks with a summary and index\n",
+              path.c_str(),
+              result.complete ? "was complete" : ("was cut off: " + result.cut_off).c_str(),
+              static_cast<unsigned long long>(result.messages),
+              static_cast<unsigned long long>(result.chunks));
+  return 0;
+}
+
+int run_record(RecordCliOptions& options) {
+  if (!options.recover.empty()) return run_recover(options.recover);
+  const auto compression =
+      mcap::compression_named(options.compression == "none" ? "" : options.compression);
+  if (!compression)
+    throw Error("--compression takes none, lz4 or zstd, not " + options.compression);
+  options.record.compression = *compression;
+  if (!(options.record.duration_s >= 0.0) || !std::isfinite(options.record.duration_s))
+    throw Error("--duration takes seconds, 0 or more (0: until Ctrl-C)");
+  if (!(options.buffer_mb >= 1.0 && options.buffer_mb <= 65536.0))
+    throw Error("--buffer takes megabytes from 1 to 65536");
+  options.record.buffer_bytes = static_cast<std::size_t>(options.buffer_mb * (1 << 20)) & ~7ull;
+  set_realtime_options(options.realtime, options.record.loop);
+  install_stop_signal_handlers();
+  const StartupWait wait(options.wait_s);
+  wait.connect_to_hub("record");
+
+  const bool live = isatty(STDERR_FILENO);
+  double last_seconds = 0.0;
+  std::uint64_t last_bytes = 0;
+  const auto report = [&](const mcap::RecordProgress& p) {
+    const double dt = p.seconds - last_seconds;
+    const double rate = dt > 0.0 ? static_cast<double>(p.file_bytes - last_bytes) / 1e6 / dt : 0.0;
+    last_seconds = p.seconds;
+    last_bytes = p.file_bytes;
+    if (live) std::fprintf(stderr, "\r%s\033[K", progress_line(p, rate).c_str());
+  };
+  std::fprintf(stderr, "afhub record: writing %s (Ctrl-C stops)\n", options.record.output.c_str());
+  const mcap::RecordProgress end = mcap::record(
+      options.record, [] { return !stop_requested(); }, report);
+  const double mean =
+      end.seconds > 0.0 ? static_cast<double>(end.file_bytes) / 1e6 / end.seconds : 0;
+  std::fprintf(stderr, "%safhub record: %s\n", live ? "\n" : "", progress_line(end, mean).c_str());
+  if (end.dropped > 0)
+    std::fprintf(stderr,
+                 "afhub record: %llu messages were dropped: the disk did not keep up (a larger "
+                 "--buffer, a faster disk, or --compression lz4 helps)\n",
+                 static_cast<unsigned long long>(end.dropped));
+  return 0;
+}
+
+}  // namespace
+
+void register_record(CLI::App& app, Runner& selected) {
+  auto options = std::make_shared<RecordCliOptions>();
+  auto* record = app.add_subcommand(
+      "record",
+      "Record body states (and with options commands, devices and the world) to an MCAP file "
+      "at the rate they are published, until Ctrl-C or --duration; `afhub info` describes it.");
+  record->add_option("-o,--output", options->record.output, "The MCAP file to write")
+      ->capture_default_str();
+  record->add_option("--bodies", options->record.body_globs,
+                     "Body channels to record, as globs (default: every body)");
+  record->add_flag("--devices", options->record.devices, "Record every device's state and command");
+  record->add_flag("--world", options->record.world, "Record the world's state, each step");
+  record->add_flag("--commands", options->record.commands,
+                   "Record the commands sent to the recorded bodies");
+  record->add_option("--duration", options->record.duration_s,
+                     "Seconds to record from the first message (default: until Ctrl-C)");
+  record->add_option("--compression", options->compression, "Chunk compression: none, lz4 or zstd")
+      ->capture_default_str();
+  record
+      ->add_option("--buffer", options->buffer_mb,
+                   "Megabytes buffered between reading and the disk (a slower disk drops "
+                   "messages, counted, when it is full)")
+      ->capture_default_str();
+  record->add_option("--profile", options->record.profile,
+                     "ros2: write ROS 2 messages (CDR) instead of afhub's payloads (not yet)");
+  record
+      ->add_option("--recover", options->recover,
+                   "Rewrite a file that was cut off (kill -9, a full disk) with its index; "
+                   "no recording")
+      ->check(CLI::ExistingFile);
+  add_realtime_options(record, options->realtime, "the reading loop");
+  record->add_option("--wait", options->wait_s,
+                     "Started together with the hub (a launch script): wait up to this many "
+                     "seconds for it, saying so once (default 0: fail at once)");
+  record->callback([&selected, options] { selected = [options] { return run_record(*options); }; });
+}
+
+}  // namespace afhub::cli

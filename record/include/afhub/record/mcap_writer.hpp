@@ -1,0 +1,111 @@
+// Writes an MCAP file (mcap.dev/spec): messages in compressed chunks, each followed by
+// its message indexes, then a summary (schemas, channels, statistics, chunk and
+// metadata indexes, summary offsets) and the footer, so that readers can seek.
+// Schemas, channels and metadata go into the data section as they are added, outside
+// the chunks: a file cut off (kill -9, a full disk) keeps every complete chunk readable.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "afhub/record/compression.hpp"
+
+namespace afhub::mcap {
+
+using Metadata = std::map<std::string, std::string>;
+
+struct Message {
+  std::uint16_t channel_id = 0;
+  std::uint32_t sequence = 0;
+  std::uint64_t log_time_ns = 0;
+  std::uint64_t publish_time_ns = 0;
+  std::span<const std::uint8_t> data;
+};
+
+class Writer {
+ public:
+  struct Options {
+    std::string profile;  // the Header's profile: "" (none), "ros2", ...
+    std::string library = "afhub";
+    Compression compression = Compression::kZstd;
+    // A chunk is written once it holds this much: what a crash can lose at most.
+    std::size_t chunk_bytes = 1u << 20;
+  };
+
+  // Creates (or truncates) `path`; throws afhub::Error naming the path and the reason.
+  Writer(const std::string& path, Options options);
+  // Closes the file if close() was not called (an error then goes unreported).
+  ~Writer();
+  Writer(const Writer&) = delete;
+  Writer& operator=(const Writer&) = delete;
+
+  // Ids count from 1 (0 is the spec's "no schema").
+  std::uint16_t add_schema(std::string_view name, std::string_view encoding,
+                           std::span<const std::uint8_t> data);
+  std::uint16_t add_channel(std::uint16_t schema_id, std::string_view topic,
+                            std::string_view message_encoding, const Metadata& metadata = {});
+  void add_metadata(std::string_view name, const Metadata& metadata);
+  // Throws afhub::Error when the disk refuses the bytes (full, gone).
+  void write(const Message& message);
+  // Writes out the open chunk.
+  void flush_chunk();
+  // The summary and footer; the file is complete afterwards.
+  void close();
+
+  // Bytes in the file so far, and messages written.
+  std::uint64_t file_bytes() const { return file_offset_ + pending_.size(); }
+  std::uint64_t message_count() const { return message_count_; }
+
+ private:
+  struct ChunkIndex {
+    std::uint64_t start_ns, end_ns, offset, length;
+    std::map<std::uint16_t, std::uint64_t> message_index_offsets;
+    std::uint64_t message_index_length, compressed_size, uncompressed_size;
+  };
+  struct MetadataIndex {
+    std::uint64_t offset, length;
+    std::string name;
+  };
+  struct Channel {
+    std::uint16_t schema_id;
+    std::string topic, encoding;
+    Metadata metadata;
+  };
+  struct Schema {
+    std::string name, encoding;
+    std::vector<std::uint8_t> data;
+  };
+
+  void write_schema(std::vector<std::uint8_t>& out, std::uint16_t id) const;
+  void write_channel(std::vector<std::uint8_t>& out, std::uint16_t id) const;
+  void write_out(bool force);
+
+  std::string path_;
+  Options options_;
+  int fd_ = -1;
+  Compressor compressor_;
+  std::vector<std::uint8_t> pending_;  // file bytes not yet written
+  std::uint64_t file_offset_ = 0;      // bytes written to the file
+
+  std::vector<Schema> schemas_;  // id - 1
+  std::vector<Channel> channels_;
+  std::vector<ChunkIndex> chunk_indexes_;
+  std::vector<MetadataIndex> metadata_indexes_;
+
+  // The open chunk: its records, and each channel's (log time, offset) entries.
+  std::vector<std::uint8_t> chunk_;
+  std::vector<std::uint8_t> compressed_;
+  std::map<std::uint16_t, std::vector<std::pair<std::uint64_t, std::uint64_t>>> chunk_entries_;
+  std::uint64_t chunk_start_ns_ = 0, chunk_end_ns_ = 0;
+
+  std::uint64_t message_count_ = 0;
+  std::uint64_t first_ns_ = 0, last_ns_ = 0;
+  std::map<std::uint16_t, std::uint64_t> channel_counts_;
+  bool closed_ = false;
+};
+
+}  // namespace afhub::mcap

@@ -1,0 +1,319 @@
+#include "afhub/record/mcap_reader.hpp"
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <memory>
+
+#include "afhub/shm_layout/error.hpp"
+#include "mcap_bytes.hpp"
+
+namespace afhub::mcap {
+
+namespace {
+
+std::string opcode_name(std::uint8_t opcode) {
+  static const char* const kNames[] = {"",           "header",           "footer",
+                                       "schema",     "channel",          "message",
+                                       "chunk",      "message index",    "chunk index",
+                                       "attachment", "attachment index", "statistics",
+                                       "metadata",   "metadata index",   "summary offset",
+                                       "data end"};
+  if (opcode >= 1 && opcode <= 0x0F) return kNames[opcode];
+  char text[32];
+  std::snprintf(text, sizeof text, "opcode 0x%02x", opcode);
+  return text;
+}
+
+// The file, read in order.
+class File {
+ public:
+  explicit File(const std::string& path) : path_(path), file_(std::fopen(path.c_str(), "rb")) {
+    if (!file_) throw Error("cannot open " + path + ": " + std::strerror(errno));
+    std::error_code error;
+    size_ = std::filesystem::file_size(path, error);
+    if (error) throw Error("cannot read " + path + ": " + error.message());
+  }
+  ~File() { std::fclose(file_); }
+  File(const File&) = delete;
+  File& operator=(const File&) = delete;
+
+  // Reads exactly `out.size()` bytes, or false at the end of the file.
+  bool read(std::span<std::uint8_t> out) {
+    if (out.empty()) return true;
+    const std::size_t n = std::fread(out.data(), 1, out.size(), file_);
+    if (n != out.size() && std::ferror(file_))
+      throw Error("cannot read " + path_ + ": " + std::strerror(errno));
+    at_ += n;
+    return n == out.size();
+  }
+  std::uint64_t at() const { return at_; }
+  std::uint64_t size() const { return size_; }
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+  std::FILE* file_;
+  std::uint64_t size_ = 0;
+  std::uint64_t at_ = 0;
+};
+
+Schema read_schema(FieldReader& fields) {
+  Schema schema;
+  schema.id = fields.u16("id");
+  schema.name = fields.str("name");
+  schema.encoding = fields.str("encoding");
+  const auto data = fields.bytes32("data");
+  schema.data.assign(data.begin(), data.end());
+  return schema;
+}
+
+Channel read_channel(FieldReader& fields) {
+  Channel channel;
+  channel.id = fields.u16("id");
+  channel.schema_id = fields.u16("schema_id");
+  channel.topic = fields.str("topic");
+  channel.message_encoding = fields.str("message_encoding");
+  channel.metadata = fields.map("metadata");
+  return channel;
+}
+
+Message read_message(FieldReader& fields) {
+  Message message;
+  message.channel_id = fields.u16("channel_id");
+  message.sequence = fields.u32("sequence");
+  message.log_time_ns = fields.u64("log_time");
+  message.publish_time_ns = fields.u64("publish_time");
+  message.data = fields.rest();
+  return message;
+}
+
+class Scanner {
+ public:
+  Scanner(const std::string& path, Visitor& visitor) : file_(path), visitor_(visitor) {}
+
+  ScanResult run() {
+    std::uint8_t magic[sizeof kMagic];
+    if (!file_.read(magic) || std::memcmp(magic, kMagic, sizeof kMagic) != 0)
+      throw Error(file_.path() +
+                  " is not an MCAP file: it does not start with MCAP's magic "
+                  "bytes (0x89 MCAP0 \\r\\n)");
+    bool first = true;
+    bool data_ended = false;
+    while (true) {
+      const std::uint64_t at = file_.at();
+      std::uint8_t prefix[kRecordPrefix];
+      if (!file_.read(prefix))
+        return cut("the file ends " + std::to_string(at) +
+                   " bytes in, inside a record's opcode and length");
+      const std::uint8_t opcode = prefix[0];
+      std::uint64_t length;
+      std::memcpy(&length, prefix + 1, sizeof length);
+      const std::string what = opcode_name(opcode) + " record at byte " + std::to_string(at);
+      const std::uint64_t left = file_.size() - file_.at();
+      if (length > left)
+        return cut(what + " says it holds " + std::to_string(length) + " bytes, the file has " +
+                   std::to_string(left) + " after it");
+      if (length > kMaxRecordBytes)
+        throw Error(file_.path() + ": " + what + " holds " + std::to_string(length) +
+                    " bytes, more than afhub reads in one record (1 GiB)");
+      if (first && opcode != kHeader)
+        throw Error(file_.path() + ": the first record is a " + what +
+                    ", not the header the spec requires");
+      first = false;
+      content_.resize(length);
+      if (!file_.read(content_)) return cut(what + " is cut off");
+      FieldReader fields(content_, file_.path() + ": " + what);
+      if (opcode == kFooter) return finish(at);
+      if (opcode == kDataEnd) data_ended = true;
+      if (!data_ended) data_record(opcode, fields, at);
+    }
+  }
+
+ private:
+  ScanResult cut(std::string why) {
+    result_.cut_off = std::move(why);
+    return result_;
+  }
+
+  ScanResult finish(std::uint64_t footer_at) {
+    std::uint8_t magic[sizeof kMagic];
+    if (!file_.read(magic) || std::memcmp(magic, kMagic, sizeof kMagic) != 0)
+      return cut("the footer at byte " + std::to_string(footer_at) +
+                 " is not followed by MCAP's closing magic bytes");
+    result_.complete = true;
+    return result_;
+  }
+
+  void data_record(std::uint8_t opcode, FieldReader& fields, std::uint64_t at) {
+    switch (opcode) {
+      case kHeader: {
+        std::string profile = fields.str("profile");
+        visitor_.header(profile, fields.str("library"));
+        break;
+      }
+      case kChunk:
+        read_chunk(fields, at);
+        break;
+      default:
+        inner_record(opcode, fields);
+    }
+  }
+
+  // A record that may stand in the data section or inside a chunk.
+  void inner_record(std::uint8_t opcode, FieldReader& fields) {
+    switch (opcode) {
+      case kSchema:
+        visitor_.schema(read_schema(fields));
+        break;
+      case kChannel:
+        visitor_.channel(read_channel(fields));
+        break;
+      case kMessage:
+        ++result_.messages;
+        visitor_.message(read_message(fields));
+        break;
+      case kMetadata: {
+        std::string name = fields.str("name");
+        visitor_.metadata(name, fields.map("metadata"));
+        break;
+      }
+      default:
+        break;  // indexes, attachments, records a later version adds: not needed here
+    }
+  }
+
+  void read_chunk(FieldReader& fields, std::uint64_t at) {
+    const std::string what = file_.path() + ": chunk at byte " + std::to_string(at);
+    fields.u64("message_start_time");
+    fields.u64("message_end_time");
+    const std::uint64_t size = fields.u64("uncompressed_size");
+    const std::uint32_t crc = fields.u32("uncompressed_crc");
+    const std::string compression_text = fields.str("compression");
+    const auto records = fields.take(fields.u64("records length"), "records");
+    const auto compression = compression_named(compression_text);
+    if (!compression)
+      throw Error(what + " is compressed with \"" + compression_text +
+                  "\", which afhub does not read (it reads none, lz4 and zstd)");
+    if (size > kMaxRecordBytes)
+      throw Error(what + " says it holds " + std::to_string(size) +
+                  " bytes uncompressed, more than afhub reads in one chunk (1 GiB)");
+    uncompressed_.resize(size);
+    decompress(*compression, records, uncompressed_, what);
+    if (crc != 0 && crc32(uncompressed_) != crc)
+      throw Error(what + ": its records do not match their CRC (a corrupt file)");
+    ++result_.chunks;
+    visitor_.chunk(compression_text);
+    std::span<const std::uint8_t> rest(uncompressed_);
+    while (!rest.empty()) {
+      const std::uint64_t inner_at = uncompressed_.size() - rest.size();
+      FieldReader prefix(rest, what + ", record at byte " + std::to_string(inner_at) + " inside");
+      const std::uint8_t opcode = prefix.u8("opcode");
+      const std::uint64_t length = prefix.u64("length");
+      FieldReader inner(prefix.take(length, "content"), what + ", " + opcode_name(opcode) +
+                                                            " record at byte " +
+                                                            std::to_string(inner_at) + " inside");
+      inner_record(opcode, inner);
+      rest = rest.subspan(kRecordPrefix + length);
+    }
+  }
+
+  File file_;
+  Visitor& visitor_;
+  ScanResult result_;
+  std::vector<std::uint8_t> content_, uncompressed_;
+};
+
+// Copies what it reads into a new file, its ids mapped to the writer's.
+class Copier : public Visitor {
+ public:
+  explicit Copier(const std::string& path) : path_(path) {}
+  void header(const std::string& profile, const std::string& library) override {
+    options_.profile = profile;
+    options_.library = library;
+  }
+  void chunk(std::string_view compression) override {
+    // The first chunk tells how the original was compressed; records before it are held.
+    if (!writer_) {
+      options_.compression = *compression_named(compression);
+      open();
+    }
+  }
+  void schema(const Schema& schema) override {
+    held_schemas_.push_back(schema);
+    if (writer_) add(schema);
+  }
+  void channel(const Channel& channel) override {
+    held_channels_.push_back(channel);
+    if (writer_) add(channel);
+  }
+  void metadata(const std::string& name, const Metadata& metadata) override {
+    held_metadata_.emplace_back(name, metadata);
+    if (writer_) writer_->add_metadata(name, metadata);
+  }
+  void message(const Message& message) override {
+    if (!writer_) open();  // a file without chunks
+    const auto channel = channel_ids_.find(message.channel_id);
+    if (channel == channel_ids_.end())
+      throw Error("a message on channel " + std::to_string(message.channel_id) +
+                  ", which no channel record declares");
+    Message copy = message;
+    copy.channel_id = channel->second;
+    writer_->write(copy);
+  }
+  void close() {
+    if (!writer_) open();
+    writer_->close();
+  }
+
+ private:
+  void open() {
+    writer_ = std::make_unique<Writer>(path_, options_);
+    for (const Schema& schema : held_schemas_) add(schema);
+    for (const Channel& channel : held_channels_) add(channel);
+    for (const auto& [name, metadata] : held_metadata_) writer_->add_metadata(name, metadata);
+  }
+  void add(const Schema& schema) {
+    schema_ids_[schema.id] = writer_->add_schema(schema.name, schema.encoding, schema.data);
+  }
+  void add(const Channel& channel) {
+    const auto schema = schema_ids_.find(channel.schema_id);
+    channel_ids_[channel.id] =
+        writer_->add_channel(schema == schema_ids_.end() ? 0 : schema->second, channel.topic,
+                             channel.message_encoding, channel.metadata);
+  }
+
+  std::string path_;
+  Writer::Options options_;
+  std::unique_ptr<Writer> writer_;
+  std::vector<Schema> held_schemas_;
+  std::vector<Channel> held_channels_;
+  std::vector<std::pair<std::string, Metadata>> held_metadata_;
+  std::map<std::uint16_t, std::uint16_t> schema_ids_, channel_ids_;
+};
+
+}  // namespace
+
+ScanResult scan(const std::string& path, Visitor& visitor) {
+  return Scanner(path, visitor).run();
+}
+
+ScanResult recover(const std::string& path) {
+  const std::string temporary = path + ".recovering";
+  ScanResult result;
+  try {
+    Copier copier(temporary);
+    result = scan(path, copier);
+    copier.close();
+  } catch (...) {
+    std::filesystem::remove(temporary);
+    throw;
+  }
+  std::error_code error;
+  std::filesystem::rename(temporary, path, error);
+  if (error) throw Error("cannot replace " + path + " with " + temporary + ": " + error.message());
+  return result;
+}
+
+}  // namespace afhub::mcap

@@ -1,0 +1,48 @@
+#include "recorded_payloads.hpp"
+
+#include <cstdio>
+
+#include "afhub/shm_layout/body_command.hpp"
+#include "afhub/shm_layout/body_state.hpp"
+#include "afhub/shm_layout/device.hpp"
+#include "afhub/shm_layout/error.hpp"
+#include "afhub/shm_layout/layout_id.hpp"
+#include "afhub/shm_layout/world.hpp"
+
+namespace afhub::mcap {
+
+namespace {
+constexpr RecordedPayload kPayloads[] = {
+    {PayloadKind::kBodyState, "afhub.BodyState", "body_state.hpp", sizeof(BodyState)},
+    {PayloadKind::kBodyCommand, "afhub.BodyCommand", "body_command.hpp", sizeof(BodyCommand)},
+    {PayloadKind::kWorldState, "afhub.WorldState", "world.hpp", sizeof(WorldState)},
+    {PayloadKind::kDeviceState, "afhub.DeviceState", "device.hpp", sizeof(DeviceState)},
+    {PayloadKind::kDeviceCommand, "afhub.DeviceCommand", "device.hpp", sizeof(DeviceCommand)},
+};
+}  // namespace
+
+std::span<const RecordedPayload> recorded_payloads() {
+  return kPayloads;
+}
+
+const RecordedPayload& payload_of(PayloadKind kind) {
+  for (const RecordedPayload& payload : kPayloads)
+    if (payload.kind == kind) return payload;
+  throw Error("afhub does not record payloads of kind " +
+              std::to_string(static_cast<unsigned>(kind)));
+}
+
+std::vector<std::uint8_t> payload_schema_text(const RecordedPayload& payload) {
+  char text[512];
+  const int n = std::snprintf(
+      text, sizeof text,
+      "%s: the bytes of the C++ struct afhub::%s (shm_layout/include/afhub/shm_layout/%s) as "
+      "they were in shared memory, x86-64 little-endian, cut to the size its writer published "
+      "(array entries past a count are left out); at most %zu bytes. layout_id 0x%016llx: a "
+      "build of another layout id reads them only through this description.\n",
+      payload.schema_name, payload.schema_name + 6, payload.header, payload.max_bytes,
+      static_cast<unsigned long long>(kLayoutId));
+  return {text, text + n};
+}
+
+}  // namespace afhub::mcap

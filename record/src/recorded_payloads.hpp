@@ -1,0 +1,30 @@
+// The payloads afhub records, as schemas of its MCAP files: a message is the payload's
+// bytes as they were in shared memory, at the size the writer published.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "afhub/shm_layout/header.hpp"
+
+namespace afhub::mcap {
+
+inline constexpr const char* kPayloadEncoding = "afhub";
+inline constexpr const char* kLayoutSchemaEncoding = "afhub-layout";
+
+struct RecordedPayload {
+  PayloadKind kind;
+  const char* schema_name;  // "afhub.BodyState"
+  const char* header;       // where the struct is defined
+  std::size_t max_bytes;    // sizeof the struct
+};
+
+std::span<const RecordedPayload> recorded_payloads();
+// Throws afhub::Error for a kind afhub does not record.
+const RecordedPayload& payload_of(PayloadKind kind);
+// The schema's data: what the bytes are, with the layout id that must match to read them.
+std::vector<std::uint8_t> payload_schema_text(const RecordedPayload& payload);
+
+}  // namespace afhub::mcap

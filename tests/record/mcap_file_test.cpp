@@ -1,0 +1,217 @@
+// afhub's MCAP writer and reader against each other: every message back as written,
+// with each compression; a file cut off reads up to its last complete chunk and
+// `recover` gives it its index again; bad files are errors naming what and where.
+// (tests/record/mcap_check reads the writer's files with an independent reader.)
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "afhub/record/mcap_reader.hpp"
+#include "afhub/record/mcap_writer.hpp"
+#include "afhub/shm_layout/error.hpp"
+
+namespace afhub::mcap {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Collected : Visitor {
+  std::string profile;
+  std::vector<Schema> schemas;
+  std::vector<Channel> channels;
+  std::vector<std::pair<std::string, Metadata>> metadata_records;
+  std::vector<std::string> chunk_compressions;
+  struct Received {
+    std::uint16_t channel;
+    std::uint32_t sequence;
+    std::uint64_t log_time;
+    std::vector<std::uint8_t> data;
+  };
+  std::vector<Received> messages;
+
+  void header(const std::string& p, const std::string&) override { profile = p; }
+  void schema(const Schema& s) override { schemas.push_back(s); }
+  void channel(const Channel& c) override { channels.push_back(c); }
+  void metadata(const std::string& name, const Metadata& m) override {
+    metadata_records.emplace_back(name, m);
+  }
+  void chunk(std::string_view compression) override {
+    chunk_compressions.emplace_back(compression);
+  }
+  void message(const Message& m) override {
+    messages.push_back({m.channel_id, m.sequence, m.log_time_ns, {m.data.begin(), m.data.end()}});
+  }
+};
+
+// A payload that differs per message: a lost, repeated or shifted byte shows.
+std::vector<std::uint8_t> payload(std::uint32_t channel, std::uint32_t sequence) {
+  std::vector<std::uint8_t> data(100 + (sequence * 7 + channel) % 400);
+  for (std::size_t i = 0; i < data.size(); ++i)
+    data[i] = static_cast<std::uint8_t>(i * 31 + sequence * 17 + channel);
+  return data;
+}
+
+class McapFile : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    directory_ = fs::temp_directory_path() / ("mcap_file_test_" + std::to_string(getpid()));
+    fs::create_directories(directory_);
+  }
+  void TearDown() override { fs::remove_all(directory_); }
+  std::string path(const std::string& name) const { return (directory_ / name).string(); }
+
+  // Two channels, `messages` messages each, in chunks of 16 KiB.
+  void write_sample(const std::string& file, Compression compression, std::uint32_t messages) {
+    Writer writer(file, {"afhub", "afhub", compression, 16 * 1024});
+    const std::uint8_t schema_text[] = {'s', 'c', 'h', 'e', 'm', 'a'};
+    const auto schema = writer.add_schema("afhub.BodyState", "afhub-layout", schema_text);
+    const auto a = writer.add_channel(schema, "/arm/base/state", "afhub", {{"joints", "3"}});
+    writer.add_metadata("afhub", {{"layout_id", "42"}});
+    const auto b = writer.add_channel(schema, "/arm/tool/state", "afhub");
+    for (std::uint32_t s = 1; s <= messages; ++s)
+      for (std::uint16_t channel : {a, b}) {
+        const auto data = payload(channel, s);
+        writer.write({channel, s, 1'000'000ull * s, 1'000'000ull * s + 5, data});
+      }
+    writer.close();
+  }
+
+  void expect_sample(const Collected& read, std::uint32_t messages) {
+    ASSERT_EQ(read.messages.size(), 2u * messages);
+    for (std::uint32_t s = 1; s <= messages; ++s)
+      for (std::uint16_t channel : {1, 2}) {
+        const auto& m = read.messages[2 * (s - 1) + (channel - 1)];
+        ASSERT_EQ(m.channel, channel);
+        ASSERT_EQ(m.sequence, s);
+        ASSERT_EQ(m.log_time, 1'000'000ull * s);
+        ASSERT_EQ(m.data, payload(channel, s)) << "channel " << channel << " message " << s;
+      }
+  }
+
+  fs::path directory_;
+};
+
+TEST_F(McapFile, EveryMessageComesBackAsWrittenWithEachCompression) {
+  for (Compression compression : {Compression::kNone, Compression::kLz4, Compression::kZstd}) {
+    SCOPED_TRACE(std::string(compression_name(compression)));
+    const std::string file = path("sample.mcap");
+    write_sample(file, compression, 2000);
+    Collected read;
+    const ScanResult result = scan(file, read);
+    EXPECT_TRUE(result.complete) << result.cut_off;
+    EXPECT_EQ(result.messages, 4000u);
+    EXPECT_GT(result.chunks, 10u);
+    EXPECT_EQ(read.profile, "afhub");
+    ASSERT_EQ(read.schemas.size(), 1u);
+    EXPECT_EQ(read.schemas[0].name, "afhub.BodyState");
+    ASSERT_EQ(read.channels.size(), 2u);
+    EXPECT_EQ(read.channels[0].topic, "/arm/base/state");
+    EXPECT_EQ(read.channels[0].metadata.at("joints"), "3");
+    ASSERT_EQ(read.metadata_records.size(), 1u);
+    EXPECT_EQ(read.metadata_records[0].second.at("layout_id"), "42");
+    for (const auto& c : read.chunk_compressions) EXPECT_EQ(c, compression_name(compression));
+    expect_sample(read, 2000);
+  }
+}
+
+TEST_F(McapFile, AFileCutOffReadsToItsLastCompleteChunkAndRecoverGivesItsIndexBack) {
+  const std::string file = path("cut.mcap");
+  write_sample(file, Compression::kZstd, 3000);
+  Collected whole;
+  const ScanResult full = scan(file, whole);
+  ASSERT_TRUE(full.complete);
+  // Cut in the middle of the data: what a kill -9 leaves.
+  fs::resize_file(file, fs::file_size(file) * 3 / 5);
+  Collected partial;
+  const ScanResult cut = scan(file, partial);
+  EXPECT_FALSE(cut.complete);
+  EXPECT_NE(cut.cut_off.find("chunk record at byte"), std::string::npos) << cut.cut_off;
+  EXPECT_GT(cut.messages, 1000u);
+  EXPECT_LT(cut.messages, full.messages);
+  ASSERT_EQ(partial.messages.size(), cut.messages);
+  for (std::size_t i = 0; i < partial.messages.size(); ++i)
+    ASSERT_EQ(partial.messages[i].data, whole.messages[i].data) << "message " << i;
+
+  const ScanResult original = recover(file);
+  EXPECT_EQ(original.messages, cut.messages);
+  Collected recovered;
+  const ScanResult after = scan(file, recovered);
+  EXPECT_TRUE(after.complete) << after.cut_off;
+  EXPECT_EQ(after.messages, cut.messages);
+  EXPECT_EQ(recovered.channels.size(), 2u);
+  EXPECT_EQ(recovered.metadata_records.size(), 1u);
+  EXPECT_FALSE(fs::exists(file + ".recovering"));
+}
+
+// The message of the afhub::Error `scan` throws for `file`, or "" when it throws none.
+std::string scan_error(const std::string& file) {
+  Collected read;
+  try {
+    scan(file, read);
+  } catch (const Error& error) {
+    return error.what();
+  }
+  return "";
+}
+
+void overwrite(const std::string& file, std::uint64_t at, const std::vector<std::uint8_t>& bytes) {
+  std::fstream out(file, std::ios::in | std::ios::out | std::ios::binary);
+  out.seekp(static_cast<std::streamoff>(at));
+  out.write(reinterpret_cast<const char*>(bytes.data()),
+            static_cast<std::streamsize>(bytes.size()));
+}
+
+TEST_F(McapFile, BadFilesAreErrorsSayingWhatAndWhere) {
+  const std::string file = path("bad.mcap");
+  { std::ofstream(file) << "not an mcap file at all"; }
+  EXPECT_NE(scan_error(file).find("is not an MCAP file"), std::string::npos) << scan_error(file);
+  { std::ofstream out(file); }
+  EXPECT_NE(scan_error(file).find("is not an MCAP file"), std::string::npos);
+  EXPECT_NE(scan_error(path("missing.mcap")).find("cannot open"), std::string::npos);
+
+  // The header's length made absurd: more than the file, so a cut-off file, said where.
+  write_sample(file, Compression::kNone, 10);
+  overwrite(file, 9, {0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0x7f});
+  Collected read;
+  const ScanResult huge = scan(file, read);
+  EXPECT_FALSE(huge.complete);
+  EXPECT_NE(huge.cut_off.find("header record at byte 8 says it holds"), std::string::npos)
+      << huge.cut_off;
+
+  // A byte flipped inside the first chunk's records: its CRC says so.
+  write_sample(file, Compression::kNone, 100);
+  Collected clean;
+  scan(file, clean);
+  std::ifstream in(file, std::ios::binary);
+  std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)), {});
+  const auto& needle = clean.messages[3].data;
+  const auto found = std::search(bytes.begin(), bytes.end(), needle.begin(), needle.end());
+  ASSERT_NE(found, bytes.end());
+  overwrite(file, static_cast<std::uint64_t>(found - bytes.begin()) + 10,
+            {static_cast<std::uint8_t>(needle[10] ^ 0xff)});
+  EXPECT_NE(scan_error(file).find("do not match their CRC"), std::string::npos) << scan_error(file);
+
+  // A first record that is not a header.
+  write_sample(file, Compression::kNone, 10);
+  overwrite(file, 8, {0x05});
+  EXPECT_NE(scan_error(file).find("not the header the spec requires"), std::string::npos)
+      << scan_error(file);
+}
+
+TEST_F(McapFile, AChunkOfAnUnknownCompressionIsAnErrorNamingIt) {
+  const std::string file = path("brotli.mcap");
+  write_sample(file, Compression::kLz4, 10);
+  std::ifstream in(file, std::ios::binary);
+  std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)), {});
+  const std::string lz4 = "lz4";
+  const auto found = std::search(bytes.begin(), bytes.end(), lz4.begin(), lz4.end());
+  ASSERT_NE(found, bytes.end());
+  overwrite(file, static_cast<std::uint64_t>(found - bytes.begin()), {'b', 'r', 'o'});
+  EXPECT_NE(scan_error(file).find("compressed with \"bro\""), std::string::npos)
+      << scan_error(file);
+}
+
+}  // namespace
+}  // namespace afhub::mcap
