@@ -1,5 +1,5 @@
-// `afhub record`: every body's state (and with options the commands, devices and the
-// world) to an MCAP file at the rate it is published, until Ctrl-C or --duration.
+// `afhub record`: every body's state, the world's and the scene (and with options the
+// commands and devices) to an MCAP file at the rate it is published, until Ctrl-C or --duration.
 // `afhub record --recover FILE`: gives a file that was cut off its index back.
 #include <unistd.h>
 
@@ -97,14 +97,14 @@ void register_record(CLI::App& app, Runner& selected) {
   auto options = std::make_shared<RecordCliOptions>();
   auto* record = app.add_subcommand(
       "record",
-      "Record body states (and with options commands, devices and the world) to an MCAP file "
-      "at the rate they are published, until Ctrl-C or --duration; `afhub info` describes it.");
+      "Record body states, the world's state and the scene (and with options commands and "
+      "devices) to an MCAP file at the rate they are published, until Ctrl-C or --duration; "
+      "`afhub info` describes it, `afhub play` replays it.");
   record->add_option("-o,--output", options->record.output, "The MCAP file to write")
       ->capture_default_str();
   record->add_option("--bodies", options->record.body_globs,
                      "Body channels to record, as globs (default: every body)");
   record->add_flag("--devices", options->record.devices, "Record every device's state and command");
-  record->add_flag("--world", options->record.world, "Record the world's state, each step");
   record->add_flag("--commands", options->record.commands,
                    "Record the commands sent to the recorded bodies");
   record->add_option("--duration", options->record.duration_s,

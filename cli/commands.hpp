@@ -30,5 +30,6 @@ void register_view(CLI::App& app, Runner& selected);
 void register_bridge(CLI::App& app, Runner& selected);
 void register_record(CLI::App& app, Runner& selected);
 void register_info(CLI::App& app, Runner& selected);
+void register_play(CLI::App& app, Runner& selected);
 
 }  // namespace afhub::cli

@@ -64,6 +64,7 @@ int main(int argc, char** argv) {
   afhub::cli::register_bridge(app, selected);
   afhub::cli::register_record(app, selected);
   afhub::cli::register_info(app, selected);
+  afhub::cli::register_play(app, selected);
   try {
     app.parse(argc, argv);
   } catch (const CLI::RequiredError& error) {

@@ -7,6 +7,8 @@
 #include "afhub/shm_layout/device.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "afhub/shm_layout/layout_id.hpp"
+#include "afhub/shm_layout/scene.hpp"
+#include "afhub/shm_layout/scene_poses.hpp"
 #include "afhub/shm_layout/world.hpp"
 
 namespace afhub::mcap {
@@ -18,6 +20,9 @@ constexpr RecordedPayload kPayloads[] = {
     {PayloadKind::kWorldState, "afhub.WorldState", "world.hpp", sizeof(WorldState)},
     {PayloadKind::kDeviceState, "afhub.DeviceState", "device.hpp", sizeof(DeviceState)},
     {PayloadKind::kDeviceCommand, "afhub.DeviceCommand", "device.hpp", sizeof(DeviceCommand)},
+    {PayloadKind::kSceneDescription, "afhub.SceneDescription", "scene.hpp",
+     sizeof(SceneDescription)},
+    {PayloadKind::kScenePoses, "afhub.ScenePoses", "scene_poses.hpp", sizeof(ScenePoses)},
 };
 }  // namespace
 

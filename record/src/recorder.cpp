@@ -1,6 +1,5 @@
 #include "afhub/record/recorder.hpp"
 
-#include <fnmatch.h>
 #include <sys/resource.h>
 #include <unistd.h>
 
@@ -36,12 +35,6 @@ std::int64_t realtime_ns() {
   timespec now{};
   clock_gettime(CLOCK_REALTIME, &now);
   return static_cast<std::int64_t>(now.tv_sec) * 1'000'000'000 + now.tv_nsec;
-}
-
-bool matches_any(const std::string& channel, const std::vector<std::string>& globs) {
-  for (const std::string& glob : globs)
-    if (fnmatch(glob.c_str(), channel.c_str(), 0) == 0) return true;
-  return false;
 }
 
 // A channel of the hub and its channel in the file.
@@ -105,11 +98,14 @@ class Session {
         ChannelId{std::string(kService), world_instance(), std::string(kStateEvent)});
     SampleWaiter waiter;
     waiter.attach(world.raw());
-    Recorded world_recorded;
-    if (options_.world)
-      world_recorded.channel_id =
-          declare(payload_of(PayloadKind::kWorldState), "/" + world_instance() + "/state", {});
-    world_recorded.per_step = true;
+    const auto world_channel = [](std::string_view event) {
+      return ChannelId{std::string(kService), world_instance(), std::string(event)};
+    };
+    // The world's clock, and what a viewer draws (the scene once, every body's pose at
+    // display rate): what `afhub play` needs to replay a run into `afhub view`.
+    add(world_channel(kStateEvent), PayloadKind::kWorldState, {});
+    add(world_channel(kSceneEvent), PayloadKind::kSceneDescription, {});
+    add(world_channel(kScenePosesEvent), PayloadKind::kScenePoses, {});
 
     std::int64_t next_discovery_ns = 0, next_progress_ns = monotonic_ns() + kProgressPeriodNs;
     while (keep_going() && !write_failed_) {
@@ -119,13 +115,11 @@ class Session {
         discover(waiter);
         next_discovery_ns = now + kDiscoveryPeriodNs;
       }
-      const void* world_state = world.raw().latest();
-      if (options_.world && world_state && world.updated())
-        sample(world_recorded, world_state, world.raw().latest_bytes());
+      world.latest();  // taken, so that the waiter sleeps until the next step
       for (Recorded& recorded : recorded_) {
         const void* payload = recorded.reader->latest();
         if (payload && recorded.reader->updated())
-          sample(recorded, payload, recorded.reader->latest_bytes());
+          sample(recorded, payload, recorded.reader->latest_bytes(), now);
       }
       if (now >= next_progress_ns) {
         progress(snapshot());
@@ -138,7 +132,10 @@ class Session {
   }
 
   // Copies a new sample into the buffer, or counts it dropped when the buffer is full.
-  void sample(Recorded& recorded, const void* payload, std::uint32_t bytes) noexcept {
+  // Its log time is when it was read (`now_ns`): the file's order, which play follows;
+  // its publish time the writer's stamp.
+  void sample(Recorded& recorded, const void* payload, std::uint32_t bytes,
+              std::int64_t now_ns) noexcept {
     const auto& header = *static_cast<const PayloadHeader*>(payload);
     const std::uint64_t key = recorded.per_step ? header.sim_step : header.sequence;
     const bool same_writer = recorded.seen && recorded.publisher_pid == header.publisher_pid;
@@ -147,13 +144,13 @@ class Session {
     recorded.seen = true;
     recorded.publisher_pid = header.publisher_pid;
     recorded.last = key;
-    if (first_sample_ns_ == 0) first_sample_ns_ = monotonic_ns();
+    if (first_sample_ns_ == 0) first_sample_ns_ = now_ns;
     QueuedMessage message;
     message.channel_id = recorded.channel_id;
     message.sequence = static_cast<std::uint32_t>(key);
     message.publish_time_ns =
         static_cast<std::uint64_t>(header.publish_stamp_ns + realtime_offset_ns_);
-    message.log_time_ns = message.publish_time_ns;
+    message.log_time_ns = static_cast<std::uint64_t>(now_ns + realtime_offset_ns_);
     if (!queue_.push(message, {static_cast<const std::uint8_t*>(payload), bytes})) ++dropped_;
   }
 
@@ -167,29 +164,29 @@ class Session {
       const bool device = entry.info.kind == ChannelKind::kDevice;
       if (device ? !options_.devices : !matches_any(channel, options_.body_globs)) continue;
       if (!known_.insert(channel).second) continue;
-      Metadata metadata{{"afhub_channel", channel}};
       std::string joints;
       for (const std::string& joint : entry.joint_names)
         joints += (joints.empty() ? "" : ",") + joint;
-      if (!device) metadata["joint_names"] = joints;
+      const Metadata metadata = device ? Metadata{} : Metadata{{"joint_names", joints}};
       Recorded& state = add(body_state_channel(channel),
-                            device ? PayloadKind::kDeviceState : PayloadKind::kBodyState,
-                            "/" + channel + "/state", metadata);
+                            device ? PayloadKind::kDeviceState : PayloadKind::kBodyState, metadata);
       // A device publishes at its own rate, not the physics': its updates wake the loop.
       if (device) waiter.attach(*state.reader);
       if (device || options_.commands)
         add(body_command_channel(channel),
-            device ? PayloadKind::kDeviceCommand : PayloadKind::kBodyCommand,
-            "/" + channel + "/command", metadata);
+            device ? PayloadKind::kDeviceCommand : PayloadKind::kBodyCommand, metadata);
     }
   }
 
-  Recorded& add(const ChannelId& id, PayloadKind kind, const std::string& topic,
-                const Metadata& metadata) {
+  // A channel recorded from now on; its topic is "/<instance>/<event>", and its
+  // metadata name the hub's channel, for `afhub play`.
+  Recorded& add(const ChannelId& id, PayloadKind kind, Metadata metadata) {
+    metadata["afhub_instance"] = id.instance;
+    metadata["afhub_event"] = id.event;
     Recorded recorded;
     recorded.reader = std::make_unique<RawLatestReader>(id, kind);
-    recorded.channel_id = declare(payload_of(kind), topic, metadata);
-    recorded.per_step = kind == PayloadKind::kBodyState;
+    recorded.channel_id = declare(payload_of(kind), "/" + id.instance + "/" + id.event, metadata);
+    recorded.per_step = kind == PayloadKind::kBodyState || kind == PayloadKind::kWorldState;
     return recorded_.emplace_back(std::move(recorded));
   }
 

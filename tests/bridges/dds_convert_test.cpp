@@ -9,6 +9,7 @@
 #include <memory>
 
 #include "afhub/bridges/dds_bridge.hpp"
+#include "afhub/hub/bodies.hpp"
 #include "dds_convert.hpp"
 #include "through_cyclone.hpp"
 

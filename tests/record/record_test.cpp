@@ -1,17 +1,23 @@
 // `afhub record` and `afhub info` against a live hub: the example scene's physics with a
-// controller, recorded with the world and the commands. The file is read back by afhub's
+// controller, recorded with the commands. The file is read back by afhub's
 // reader and by an independent one (npm's @mcap/core, tests/record/mcap_check), which
 // must agree message for message. A recording SIGKILLed mid-write reads up to its last
 // chunk, and `record --recover` gives it its index back.
 #include <gtest/gtest.h>
 #include <signal.h>
 
+#include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <set>
+#include <thread>
 
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/hub_presence.hpp"
+#include "afhub/record/mcap_reader.hpp"
+#include "afhub/shm_layout/body_state.hpp"
 #include "afhub/shm_layout/channel_names.hpp"
+#include "afhub/shm_layout/layout_id.hpp"
 #include "afhub/shm_layout/world.hpp"
 #include "afhub_process.hpp"
 #include "model_files.hpp"
@@ -73,8 +79,8 @@ TEST(Record, EveryBodyOfASceneUnderControlIsRecordedAndAnIndependentReaderAgrees
   SceneRun scene;
   ASSERT_TRUE(scene.ready()) << scene.logs();
   const std::string file = scene.dir("scene.mcap");
-  const RunResult recorded = run_afhub(
-      {"record", "-o", file, "--duration", "3", "--world", "--commands", "--fifo", "50"}, 60s);
+  const RunResult recorded =
+      run_afhub({"record", "-o", file, "--duration", "3", "--commands", "--fifo", "50"}, 60s);
   ASSERT_EQ(recorded.exit_code, 0) << recorded.err;
   EXPECT_EQ(number_after(recorded.err, "dropped "), 0) << recorded.err;
   const long long missed = number_after(recorded.err, "missed ");
@@ -158,6 +164,73 @@ TEST(Record, ARecordingKilledMidWriteReadsToItsLastChunkAndRecoverIndexesIt) {
   EXPECT_EQ(check["compression"], json::array({"lz4"}));
 }
 
+// Every recorded state of `channel`: its joint positions by step.
+std::map<std::uint64_t, std::vector<double>> recorded_joints(const std::string& file,
+                                                             const std::string& channel) {
+  struct Joints : mcap::Visitor {
+    std::string topic;
+    std::uint16_t id = 0;
+    std::map<std::uint64_t, std::vector<double>> by_step;
+    void channel(const mcap::Channel& c) override {
+      if (c.topic == topic) id = c.id;
+    }
+    void message(const mcap::Message& m) override {
+      if (m.channel_id != id) return;
+      BodyState state;
+      std::memcpy(&state, m.data.data(), std::min(m.data.size(), sizeof state));
+      auto& joints = by_step[state.header.sim_step];
+      for (std::uint32_t j = 0; j < state.joint_count; ++j)
+        joints.push_back(state.joints[j].position);
+    }
+  } joints;
+  joints.topic = "/" + channel + "/state";
+  mcap::scan(file, joints);
+  return joints.by_step;
+}
+
+TEST(Record, APlayedRecordingIsSeenAsIfLiveAndPausesAndStepsUnderAfhubWorld) {
+  SceneRun scene;
+  ASSERT_TRUE(scene.ready()) << scene.logs();
+  const std::string file = scene.dir("played.mcap");
+  ASSERT_EQ(run_afhub({"record", "-o", file, "--duration", "2"}, 60s).exit_code, 0);
+  scene.controller->stop();
+  scene.physics->stop();
+  const auto recorded = recorded_joints(file, "afhub/arm/link3");
+  ASSERT_GT(recorded.size(), 1500u);
+
+  ScopedProcess player(spawn_afhub({"play", file, "--loop"}, scene.dir("play.log")));
+  LatestReader<BodyState> link3(body_state_channel("afhub/arm/link3"));
+  // Each state seen is the recorded state of its step, bit for bit, in step order.
+  std::uint64_t seen = 0, last_step = 0;
+  ASSERT_TRUE(wait_until(
+      [&] {
+        const BodyState* state = link3.latest();
+        if (!state || !link3.updated() || state->header.sim_step < last_step) return seen >= 200;
+        last_step = state->header.sim_step;
+        const auto step = recorded.find(last_step);
+        EXPECT_NE(step, recorded.end()) << "step " << last_step << " was never recorded";
+        if (step == recorded.end()) return true;
+        for (std::uint32_t j = 0; j < state->joint_count; ++j)
+          EXPECT_EQ(state->joints[j].position, step->second.at(j)) << "step " << last_step;
+        return ++seen >= 200;
+      },
+      20s))
+      << read_file(scene.dir("play.log"));
+
+  RunResult pause = run_afhub({"world", "pause"});
+  ASSERT_EQ(pause.exit_code, 0) << pause.err;
+  const std::uint64_t paused_at = link3.latest()->header.sim_step;
+  RunResult step = run_afhub({"world", "step", "5"});
+  ASSERT_EQ(step.exit_code, 0) << step.err;
+  EXPECT_NE(step.out.find("stepped 5 steps"), std::string::npos) << step.out;
+  ASSERT_TRUE(wait_until([&] { return link3.latest()->header.sim_step == paused_at + 5; }, 5s))
+      << paused_at << " -> " << link3.latest()->header.sim_step;
+  std::this_thread::sleep_for(100ms);
+  EXPECT_EQ(link3.latest()->header.sim_step, paused_at + 5) << "a paused play stays paused";
+  ASSERT_EQ(run_afhub({"world", "resume"}).exit_code, 0);
+  EXPECT_TRUE(wait_until([&] { return link3.latest()->header.sim_step > paused_at + 50; }, 5s));
+}
+
 TEST(Record, BadFilesAndOptionsAreClearErrors) {
   afhub::testing::ModelFolder folder;
   const std::string text = (folder.dir() / "notes.mcap").string();
@@ -169,6 +242,20 @@ TEST(Record, BadFilesAndOptionsAreClearErrors) {
   RunResult bad = run_afhub({"record", "--compression", "brotli", "--duration", "1"});
   EXPECT_EQ(bad.exit_code, 1);
   EXPECT_NE(bad.err.find("--compression takes none, lz4 or zstd"), std::string::npos) << bad.err;
+
+  // A recording of another payload layout: play refuses it, naming both.
+  const std::string other = (folder.dir() / "other.mcap").string();
+  {
+    mcap::Writer writer(other, {});
+    char layout[32];
+    std::snprintf(layout, sizeof layout, "0x%016llx",
+                  static_cast<unsigned long long>(kLayoutId ^ 1));
+    writer.add_metadata("afhub", {{"layout_id", layout}});
+    writer.close();
+  }
+  RunResult played = run_afhub({"play", other});
+  EXPECT_EQ(played.exit_code, 1);
+  EXPECT_NE(played.err.find("another payload layout"), std::string::npos) << played.err;
 
   RunResult missing = run_afhub({"info", (folder.dir() / "absent.mcap").string()});
   EXPECT_NE(missing.exit_code, 0);

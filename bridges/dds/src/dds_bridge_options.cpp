@@ -1,5 +1,4 @@
 // The bridge's options checked before anything starts (see dds_bridge.hpp).
-#include <fnmatch.h>
 
 #include "afhub/bridges/dds_bridge.hpp"
 #include "afhub/bridges/dds_bridge_config.hpp"
@@ -10,12 +9,6 @@
 #include "dds_security.hpp"
 
 namespace afhub::bridges {
-
-bool matches_any(const std::string& channel, const std::vector<std::string>& globs) {
-  for (const std::string& glob : globs)
-    if (fnmatch(glob.c_str(), channel.c_str(), 0) == 0) return true;
-  return false;
-}
 
 void check_dds_bridge_options(const DdsBridgeOptions& options) {
   if (!options.export_bodies && !options.mirror)

@@ -1,6 +1,7 @@
 // Body channels and the catalog (see bodies.hpp).
 #include "afhub/hub/bodies.hpp"
 
+#include <fnmatch.h>
 #include <unistd.h>
 
 #include <time.h>
@@ -317,6 +318,12 @@ BodyEntry wait_for_body(const std::string& query, const std::string& who, std::i
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
+}
+
+bool matches_any(const std::string& channel, const std::vector<std::string>& globs) {
+  for (const std::string& glob : globs)
+    if (fnmatch(glob.c_str(), channel.c_str(), 0) == 0) return true;
+  return false;
 }
 
 }  // namespace afhub

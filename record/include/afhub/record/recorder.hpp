@@ -1,7 +1,8 @@
 // `afhub record`'s engine: joins the hub's channels and writes every new sample to an
-// MCAP file. A reading loop wakes with each step of the physics (its world state),
-// copies every recorded channel's new sample into a bounded buffer and never waits on
-// the disk; a writing thread drains the buffer into the file. A full buffer drops the
+// MCAP file: the bodies' states, the world's state and the scene a viewer draws, and
+// with options the commands and the devices. A reading loop wakes with each step of the physics
+// (its world state), copies every recorded channel's new sample into a bounded buffer and never
+// waits on the disk; a writing thread drains the buffer into the file. A full buffer drops the
 // sample and counts it; a body whose steps jump (the loop woke too late for one) counts
 // the steps it missed. Bodies that appear later (a physics restarted) join the file.
 #pragma once
@@ -20,7 +21,6 @@ struct RecordOptions {
   std::string output = "afhub.mcap";
   std::vector<std::string> body_globs{"*"};  // fnmatch patterns over body channel names
   bool devices = false;                      // every device's state and command
-  bool world = false;                        // the world's state, each step
   bool commands = false;                     // every command sent to a recorded body
   double duration_s = 0.0;                   // 0: until stopped
   Compression compression = Compression::kZstd;

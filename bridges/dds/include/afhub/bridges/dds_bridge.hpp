@@ -62,7 +62,4 @@ void check_dds_bridge_options(const DdsBridgeOptions& options);
 // Throws afhub::Error on bad options or when DDS cannot start; returns the exit code.
 int run_dds_bridge(const DdsBridgeOptions& options);
 
-// Whether `channel` matches any of `globs` (fnmatch, '*' crosses '/').
-bool matches_any(const std::string& channel, const std::vector<std::string>& globs);
-
 }  // namespace afhub::bridges

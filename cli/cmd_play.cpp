@@ -1,0 +1,62 @@
+// `afhub play FILE.mcap`: replays a recording's states into the hub as a physics would,
+// for `afhub echo`, `afhub view`, controllers and the DDS bridge to see the run again.
+#include <cmath>
+#include <cstdio>
+#include <memory>
+
+#include "afhub/hub/startup_wait.hpp"
+#include "afhub/record/player.hpp"
+#include "afhub/rt/stop_signal.hpp"
+#include "commands.hpp"
+
+namespace afhub::cli {
+namespace {
+
+struct PlayCliOptions {
+  mcap::PlayOptions play;
+  bool fast = false;
+  double wait_s = 0.0;
+};
+
+int run_play(PlayCliOptions& options) {
+  if (options.fast) options.play.rate = 0.0;
+  install_stop_signal_handlers();
+  const StartupWait wait(options.wait_s);
+  wait.connect_to_hub("play");
+  std::fprintf(stderr, "afhub play: %s into the hub (Ctrl-C stops)\n", options.play.file.c_str());
+  const mcap::PlayReport report = mcap::play(options.play, [] { return !stop_requested(); });
+  std::fprintf(stderr, "afhub play: published %llu messages in %u complete pass%s\n",
+               static_cast<unsigned long long>(report.published), report.passes,
+               report.passes == 1 ? "" : "es");
+  return 0;
+}
+
+}  // namespace
+
+void register_play(CLI::App& app, Runner& selected) {
+  auto options = std::make_shared<PlayCliOptions>();
+  auto* play = app.add_subcommand(
+      "play",
+      "Replay a recording of `afhub record` into the hub as a physics would (body states, the "
+      "world's state, the scene), with its recorded timing; `afhub world` pauses, resumes and "
+      "steps it.");
+  play->add_option("file", options->play.file, "The .mcap file")
+      ->required()
+      ->check(CLI::ExistingFile);
+  play->add_option("--rate", options->play.rate, "Speed: 2 plays twice as fast, 0.5 half")
+      ->capture_default_str();
+  play->add_flag("--fast", options->fast, "As fast as possible, ignoring the recorded timing");
+  play->add_flag("--loop", options->play.loop, "Start again at the end, until Ctrl-C");
+  play->add_option("--start", options->play.start_s,
+                   "Seconds into the recording to start from (default 0)");
+  play->add_option("--end", options->play.end_s,
+                   "Seconds into the recording to end at (default: its end)");
+  play->add_option("--bodies", options->play.body_globs,
+                   "Body channels to replay, as globs (default: every body recorded)");
+  play->add_option("--wait", options->wait_s,
+                   "Started together with the hub (a launch script): wait up to this many "
+                   "seconds for it, saying so once (default 0: fail at once)");
+  play->callback([&selected, options] { selected = [options] { return run_play(*options); }; });
+}
+
+}  // namespace afhub::cli

@@ -1,0 +1,261 @@
+#include "afhub/record/player.hpp"
+
+#include <cstring>
+#include <map>
+#include <memory>
+
+#include "afhub/hub/bodies.hpp"
+#include "afhub/hub/body_claims.hpp"
+#include "afhub/hub/channel.hpp"
+#include "afhub/hub/world_command_queue.hpp"
+#include "afhub/record/mcap_reader.hpp"
+#include "afhub/rt/clock.hpp"
+#include "afhub/shm_layout/channel_names.hpp"
+#include "afhub/shm_layout/error.hpp"
+#include "afhub/shm_layout/layout_id.hpp"
+#include "afhub/shm_layout/payload_check.hpp"
+#include "afhub/shm_layout/world.hpp"
+#include "recorded_payloads.hpp"
+
+namespace afhub::mcap {
+
+namespace {
+
+constexpr std::int64_t kPausedPublishNs = 10'000'000;  // a paused world still says so
+
+// Ends a pass: the range's end, or a stop.
+struct EndOfPass {
+  bool stop;
+};
+
+std::vector<std::string> split(const std::string& text) {
+  std::vector<std::string> out;
+  std::size_t from = 0;
+  while (from <= text.size() && !text.empty()) {
+    const std::size_t comma = std::min(text.find(',', from), text.size());
+    out.push_back(text.substr(from, comma - from));
+    from = comma + 1;
+  }
+  return out;
+}
+
+// A recorded channel published again.
+struct Replayed {
+  PayloadKind kind;
+  std::string topic;
+  std::unique_ptr<RawWriter> writer;
+};
+
+class Player : public Visitor {
+ public:
+  Player(const PlayOptions& options, const std::function<bool()>& keep_going)
+      : options_(options), keep_going_(keep_going), world_commands_(world_instance()) {}
+
+  // One pass through the file's range.
+  void pass() {
+    pass_start_ns_ = 0;
+    first_log_ns_ = 0;
+    scan(options_.file, *this);
+  }
+  std::uint64_t published() const { return published_; }
+
+  void header(const std::string& profile, const std::string&) override {
+    if (!profile.empty())
+      throw Error(options_.file + " was recorded with --profile " + profile +
+                  ": `afhub play` replays afhub's own recordings (no --profile)");
+  }
+  void metadata(const std::string& name, const Metadata& metadata) override {
+    if (name != "afhub") return;
+    char ours[32];
+    std::snprintf(ours, sizeof ours, "0x%016llx", static_cast<unsigned long long>(kLayoutId));
+    const auto layout = metadata.find("layout_id");
+    if (layout == metadata.end() || layout->second != ours)
+      throw Error(options_.file + " was recorded by an afhub of another payload layout (" +
+                  (layout == metadata.end() ? "none" : layout->second) + "; this one is " + ours +
+                  "): play it with the afhub that recorded it");
+    layout_checked_ = true;
+  }
+  void schema(const Schema& schema) override {
+    for (const RecordedPayload& payload : recorded_payloads())
+      if (schema.name == payload.schema_name) kinds_[schema.id] = payload.kind;
+  }
+  void channel(const Channel& channel) override {
+    if (replayed_.count(channel.id)) return;  // a later pass: set up already
+    Replayed& replayed = replayed_[channel.id];
+    const auto kind = kinds_.find(channel.schema_id);
+    const auto instance = channel.metadata.find("afhub_instance");
+    const auto event = channel.metadata.find("afhub_event");
+    if (kind == kinds_.end() || instance == channel.metadata.end() ||
+        event == channel.metadata.end())
+      return;  // not afhub's: left out
+    replayed.kind = kind->second;
+    replayed.topic = channel.topic;
+    switch (replayed.kind) {
+      case PayloadKind::kBodyState: {
+        if (!matches_any(instance->second, options_.body_globs)) return;
+        check_room_for_bodies({instance->second}, 1);
+        const auto joints = channel.metadata.find("joint_names");
+        directory_.add(make_body_entry(instance->second, joints == channel.metadata.end()
+                                                             ? std::vector<std::string>{}
+                                                             : split(joints->second)));
+        directory_.publish();
+        break;
+      }
+      case PayloadKind::kWorldState:
+      case PayloadKind::kSceneDescription:
+      case PayloadKind::kScenePoses:
+        break;
+      default:
+        return;  // commands and devices: a replay drives nothing
+    }
+    replayed.writer = std::make_unique<RawWriter>(
+        ChannelId{std::string(kService), instance->second, event->second}, replayed.kind);
+  }
+
+  void message(const Message& message) override {
+    if (!layout_checked_)
+      throw Error(options_.file +
+                  " has no afhub metadata before its messages: not a recording "
+                  "of `afhub record`");
+    const auto found = replayed_.find(message.channel_id);
+    if (found == replayed_.end() || !found->second.writer) return;
+    Replayed& replayed = found->second;
+    if (first_log_ns_ == 0) first_log_ns_ = message.log_time_ns;
+    const double at_s = static_cast<double>(message.log_time_ns - first_log_ns_) * 1e-9;
+    // The scene is published once by a physics: replayed whenever it comes.
+    const bool once = replayed.kind == PayloadKind::kSceneDescription;
+    if (!once && at_s < options_.start_s) return;
+    if (options_.end_s > 0.0 && at_s > options_.end_s) throw EndOfPass{false};
+
+    const char* field = nullptr;
+    const PayloadError error =
+        check_payload(message.data.data(), message.data.size(), replayed.kind, &field);
+    if (error != PayloadError::kNone)
+      throw Error(options_.file + ": a message on " + replayed.topic + " is not a valid payload (" +
+                  field + "): " + describe(error));
+    const auto& header = *reinterpret_cast<const PayloadHeader*>(message.data.data());
+    if (!once) wait_until_due(at_s, header.sim_step, replayed.kind);
+    publish(replayed, message.data);
+    if (replayed.kind == PayloadKind::kWorldState) {
+      last_world_.assign(message.data.begin(), message.data.end());
+      world_writer_ = replayed.writer.get();
+    }
+  }
+
+ private:
+  void publish(Replayed& replayed, std::span<const std::uint8_t> data) {
+    void* payload = replayed.writer->loan(static_cast<std::uint32_t>(data.size()));
+    if (!payload) throw Error("no shared memory left to publish " + replayed.topic);
+    std::memcpy(payload, data.data(), data.size());
+    if (replayed.kind == PayloadKind::kWorldState) static_cast<WorldState*>(payload)->lockstep = 0;
+    replayed.writer->publish(payload);
+    ++published_;
+  }
+
+  // Sleeps until the message at `at_s` of the recording is due, following the world
+  // commands meanwhile; a new step while paused waits for a step command.
+  void wait_until_due(double at_s, std::uint64_t step, PayloadKind kind) {
+    const bool steps = kind == PayloadKind::kBodyState || kind == PayloadKind::kWorldState;
+    const bool new_step = steps && step != current_step_;
+    while (true) {
+      if (!keep_going_()) throw EndOfPass{true};
+      take_world_commands();
+      if (!paused_ || !new_step || steps_allowed_ > 0) break;
+      publish_paused_world();
+      sleep_until_ns(monotonic_ns() + 1'000'000);
+    }
+    if (new_step) {
+      current_step_ = step;
+      if (paused_) --steps_allowed_;
+    }
+    if (paused_ || options_.rate == 0.0) return;
+    const std::int64_t offset_ns =
+        static_cast<std::int64_t>((at_s - options_.start_s) * 1e9 / options_.rate);
+    if (pass_start_ns_ == 0) pass_start_ns_ = monotonic_ns() - offset_ns;
+    const std::int64_t due = pass_start_ns_ + offset_ns;
+    while (monotonic_ns() < due) {
+      if (!keep_going_()) throw EndOfPass{true};
+      sleep_until_ns(std::min(due, monotonic_ns() + 100'000'000));
+    }
+  }
+
+  void take_world_commands() {
+    WorldCommand command;
+    while (world_commands_.next(command)) {
+      switch (command.action) {
+        case WorldAction::kPause:
+          if (!paused_) paused_at_ns_ = monotonic_ns();
+          paused_ = true;
+          break;
+        case WorldAction::kResume:
+          if (paused_ && pass_start_ns_ != 0) pass_start_ns_ += monotonic_ns() - paused_at_ns_;
+          paused_ = false;
+          steps_allowed_ = 0;
+          break;
+        case WorldAction::kStep:
+          if (paused_) steps_allowed_ += command.step_count;
+          break;
+        default:
+          break;  // a reset: a recording cannot go back
+      }
+    }
+  }
+
+  // While paused, the world state says so (as a physics publishes it, paused or not).
+  void publish_paused_world() {
+    const std::int64_t now = monotonic_ns();
+    if (!world_writer_ || now < next_paused_publish_ns_) return;
+    next_paused_publish_ns_ = now + kPausedPublishNs;
+    auto* world = static_cast<WorldState*>(
+        world_writer_->loan(static_cast<std::uint32_t>(last_world_.size())));
+    if (!world) return;
+    std::memcpy(world, last_world_.data(), last_world_.size());
+    world->paused = 1;
+    world->lockstep = 0;
+    world_writer_->publish(world);
+  }
+
+  const PlayOptions& options_;
+  const std::function<bool()>& keep_going_;
+  WorldCommandQueue world_commands_;
+  DirectoryPublisher directory_;
+  std::map<std::uint16_t, PayloadKind> kinds_;
+  std::map<std::uint16_t, Replayed> replayed_;
+  bool layout_checked_ = false;
+  std::uint64_t published_ = 0;
+
+  std::uint64_t first_log_ns_ = 0;
+  std::int64_t pass_start_ns_ = 0;  // when the range's start was (would have been) published
+
+  bool paused_ = false;
+  std::int64_t paused_at_ns_ = 0;
+  std::uint64_t steps_allowed_ = 0;
+  std::uint64_t current_step_ = ~0ull;
+  std::vector<std::uint8_t> last_world_;
+  RawWriter* world_writer_ = nullptr;
+  std::int64_t next_paused_publish_ns_ = 0;
+};
+
+}  // namespace
+
+PlayReport play(const PlayOptions& options, const std::function<bool()>& keep_going) {
+  if (!(options.rate >= 0.0) || options.rate > 1e6)
+    throw Error("--rate takes a factor above 0 (2: twice as fast), or 0: as fast as possible");
+  if (!(options.start_s >= 0.0) || !(options.end_s >= 0.0) ||
+      (options.end_s > 0.0 && options.end_s <= options.start_s))
+    throw Error("--start and --end take seconds from the recording's start, --end after --start");
+  Player player(options, keep_going);
+  PlayReport report;
+  do {
+    try {
+      player.pass();
+    } catch (const EndOfPass& end) {
+      if (end.stop) break;
+    }
+    ++report.passes;
+  } while (options.loop && keep_going());
+  report.published = player.published();
+  return report;
+}
+
+}  // namespace afhub::mcap
