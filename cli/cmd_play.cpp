@@ -5,6 +5,7 @@
 #include <memory>
 
 #include "afhub/hub/startup_wait.hpp"
+#include "afhub/record/lockstep_replay.hpp"
 #include "afhub/record/player.hpp"
 #include "afhub/rt/stop_signal.hpp"
 #include "commands.hpp"
@@ -15,14 +16,32 @@ namespace {
 struct PlayCliOptions {
   mcap::PlayOptions play;
   bool fast = false;
+  bool into_physics = false;
   double wait_s = 0.0;
 };
+
+int run_replay(const PlayCliOptions& options) {
+  const mcap::ReplayCheck check =
+      mcap::replay_into_physics(options.play.file, [] { return !stop_requested(); });
+  if (check.diverged) {
+    std::printf("diverges at step %llu: %s %s (%llu steps and %llu states identical before it)\n",
+                static_cast<unsigned long long>(check.step), check.body.c_str(),
+                check.field.c_str(), static_cast<unsigned long long>(check.steps),
+                static_cast<unsigned long long>(check.states));
+    return 1;
+  }
+  std::printf("reproduced bit-identically: %llu steps, %llu body states compared\n",
+              static_cast<unsigned long long>(check.steps),
+              static_cast<unsigned long long>(check.states));
+  return 0;
+}
 
 int run_play(PlayCliOptions& options) {
   if (options.fast) options.play.rate = 0.0;
   install_stop_signal_handlers();
   const StartupWait wait(options.wait_s);
   wait.connect_to_hub("play");
+  if (options.into_physics) return run_replay(options);
   std::fprintf(stderr, "afhub play: %s into the hub (Ctrl-C stops)\n", options.play.file.c_str());
   const mcap::PlayReport report = mcap::play(options.play, [] { return !stop_requested(); });
   std::fprintf(stderr, "afhub play: published %llu messages in %u complete pass%s\n",
@@ -53,6 +72,10 @@ void register_play(CLI::App& app, Runner& selected) {
                    "Seconds into the recording to end at (default: its end)");
   play->add_option("--bodies", options->play.body_globs,
                    "Body channels to replay, as globs (default: every body recorded)");
+  play->add_flag("--commands-into-physics", options->into_physics,
+                 "Reproduce a lockstep run: its recorded commands into a new physics of the same "
+                 "models (`afhub run ... --lockstep --wait-for 1`), every state compared bit for "
+                 "bit with the recording; names the first step that differs (exit 1)");
   play->add_option("--wait", options->wait_s,
                    "Started together with the hub (a launch script): wait up to this many "
                    "seconds for it, saying so once (default 0: fail at once)");

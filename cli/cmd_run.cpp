@@ -43,6 +43,7 @@ struct RunCliOptions {
   double client_timeout_ms = 100.0;
   RealtimeOptions realtime;
   bool stop_on_nan = false;
+  bool paused = false;
   std::string overrun = "catch-up";
   double max_catch_up_ms = 100.0;
   std::string mesh_fallback = "refuse";
@@ -79,10 +80,11 @@ int run_run(const RunCliOptions& options) {
     throw Error("--step-log needs --steps N (at most 1e8): the log is sized before the first step");
   LoopOptions realtime;
   set_realtime_options(options.realtime, realtime);
-  if (options.offline &&
-      (options.lockstep || !options.watchdog_hold.empty() || !options.watchdog_bodies.empty()))
+  if (options.offline && (options.lockstep || options.paused || !options.watchdog_hold.empty() ||
+                          !options.watchdog_bodies.empty()))
     throw Error(
-        "--lockstep, --watchdog-hold and --watchdog-body need the hub's channels: drop --offline");
+        "--lockstep, --paused, --watchdog-hold and --watchdog-body need the hub's channels: drop "
+        "--offline");
   // "arm/link3=0.002": each body's own watchdog period.
   std::vector<std::pair<std::string, double>> watchdog_bodies;
   for (const std::string& list : options.watchdog_bodies)
@@ -167,6 +169,7 @@ int run_run(const RunCliOptions& options) {
   run.fast = options.fast;
   run.steps = options.steps;
   run.stop_on_nan = options.stop_on_nan;
+  run.start_paused = options.paused;
   run.overrun = options.overrun == "skip" ? OverrunPolicy::kSkip : OverrunPolicy::kCatchUp;
   run.max_catch_up_ns = static_cast<std::int64_t>(options.max_catch_up_ms * 1e6);
   run.grant = apply_realtime(realtime, "afhub run");
@@ -285,6 +288,9 @@ void register_run(CLI::App& app, Runner& selected) {
   run->add_flag("--offline", options->offline,
                 "Simulate without a hub: no channels (for reports and measurements)");
   add_no_autostart_option(run, options->no_autostart);
+  run->add_flag("--paused", options->paused,
+                "Start paused at step 0 (the model as loaded, published); `afhub world resume` "
+                "or `step N` goes on: controllers and `afhub record` join before anything moves");
   run->add_flag("--stop-on-nan", options->stop_on_nan,
                 "Stop (exit 1) at the first step that makes a body NaN or infinite, instead of "
                 "putting the body back at its last good pose with its commands released");

@@ -197,6 +197,11 @@ JointModel::JointModel(const JointSpec& spec, btRigidBody& parent, btRigidBody& 
   }
   limit_gains();
   if (spec.enable_feedback) {
+    // btVector3's constructor leaves it uninitialised: before the first step the
+    // reading would be whatever the memory held (a replay caught it differing).
+    for (btVector3* v : {&feedback_.m_appliedForceBodyA, &feedback_.m_appliedTorqueBodyA,
+                         &feedback_.m_appliedForceBodyB, &feedback_.m_appliedTorqueBodyB})
+      v->setZero();
     constraint_->enableFeedback(true);
     constraint_->setJointFeedback(&feedback_);
   }

@@ -12,11 +12,6 @@
 
 namespace afhub::mcap {
 
-namespace {
-// Bytes gathered before a write(2): a few chunks' worth.
-constexpr std::size_t kWriteBytes = 4u << 20;
-}  // namespace
-
 Writer::Writer(const std::string& path, Options options)
     : path_(path), options_(std::move(options)), compressor_(options_.compression) {
   fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
@@ -101,7 +96,11 @@ void Writer::write(const Message& message) {
 }
 
 void Writer::flush_chunk() {
-  if (chunk_.empty()) return;
+  if (!chunk_.empty()) write_chunk();
+  write_out();
+}
+
+void Writer::write_chunk() {
   compressor_.compress(chunk_, compressed_);
   ChunkIndex index{};
   index.start_ns = chunk_start_ns_;
@@ -129,11 +128,9 @@ void Writer::flush_chunk() {
   chunk_indexes_.push_back(std::move(index));
   chunk_.clear();
   chunk_entries_.clear();
-  write_out(false);
 }
 
-void Writer::write_out(bool force) {
-  if (!force && pending_.size() < kWriteBytes) return;
+void Writer::write_out() {
   std::size_t done = 0;
   while (done < pending_.size()) {
     const ssize_t n = ::write(fd_, pending_.data() + done, pending_.size() - done);
@@ -150,9 +147,9 @@ void Writer::write_out(bool force) {
 void Writer::close() {
   if (closed_) return;
   closed_ = true;  // whatever happens below, once
-  flush_chunk();
+  if (!chunk_.empty()) write_chunk();
   RecordBuilder(pending_, kDataEnd).u32(0);  // 0: no data section CRC (the chunks carry theirs)
-  write_out(true);  // from here on pending_ holds the summary: its CRC is taken there
+  write_out();  // from here on pending_ holds the summary: its CRC is taken there
 
   const std::uint64_t summary_start = file_bytes();
   struct Group {
@@ -212,7 +209,7 @@ void Writer::close() {
   const std::uint32_t crc = crc32(std::span(pending_).first(pending_.size() - 4));
   std::memcpy(pending_.data() + pending_.size() - 4, &crc, sizeof crc);
   pending_.insert(pending_.end(), std::begin(kMagic), std::end(kMagic));
-  write_out(true);
+  write_out();
   if (::close(fd_) != 0) throw Error("cannot close " + path_ + ": " + std::strerror(errno));
   fd_ = -1;
 }

@@ -12,7 +12,6 @@
 #include "afhub/rt/clock.hpp"
 #include "afhub/shm_layout/channel_names.hpp"
 #include "afhub/shm_layout/error.hpp"
-#include "afhub/shm_layout/layout_id.hpp"
 #include "afhub/shm_layout/payload_check.hpp"
 #include "afhub/shm_layout/world.hpp"
 #include "recorded_payloads.hpp"
@@ -66,13 +65,7 @@ class Player : public Visitor {
   }
   void metadata(const std::string& name, const Metadata& metadata) override {
     if (name != "afhub") return;
-    char ours[32];
-    std::snprintf(ours, sizeof ours, "0x%016llx", static_cast<unsigned long long>(kLayoutId));
-    const auto layout = metadata.find("layout_id");
-    if (layout == metadata.end() || layout->second != ours)
-      throw Error(options_.file + " was recorded by an afhub of another payload layout (" +
-                  (layout == metadata.end() ? "none" : layout->second) + "; this one is " + ours +
-                  "): play it with the afhub that recorded it");
+    require_this_layout(options_.file, metadata);
     layout_checked_ = true;
   }
   void schema(const Schema& schema) override {

@@ -37,6 +37,20 @@ const RecordedPayload& payload_of(PayloadKind kind) {
               std::to_string(static_cast<unsigned>(kind)));
 }
 
+std::string layout_id_text() {
+  char text[32];
+  std::snprintf(text, sizeof text, "0x%016llx", static_cast<unsigned long long>(kLayoutId));
+  return text;
+}
+
+void require_this_layout(const std::string& file, const Metadata& metadata) {
+  const auto layout = metadata.find("layout_id");
+  if (layout == metadata.end() || layout->second != layout_id_text())
+    throw Error(file + " was recorded by an afhub of another payload layout (" +
+                (layout == metadata.end() ? "none" : layout->second) + "; this one is " +
+                layout_id_text() + "): play it with the afhub that recorded it");
+}
+
 std::vector<std::uint8_t> payload_schema_text(const RecordedPayload& payload) {
   char text[512];
   const int n = std::snprintf(

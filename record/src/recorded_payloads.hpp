@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "afhub/record/mcap_writer.hpp"
 #include "afhub/shm_layout/header.hpp"
 
 namespace afhub::mcap {
@@ -26,5 +27,11 @@ std::span<const RecordedPayload> recorded_payloads();
 const RecordedPayload& payload_of(PayloadKind kind);
 // The schema's data: what the bytes are, with the layout id that must match to read them.
 std::vector<std::uint8_t> payload_schema_text(const RecordedPayload& payload);
+
+// This build's kLayoutId as a recording's "afhub" metadata gives it ("0x83498001fb7ea7ad").
+std::string layout_id_text();
+// Throws afhub::Error unless `metadata` (a recording's "afhub" metadata) names this
+// build's layout: another layout's payloads would be misread.
+void require_this_layout(const std::string& file, const Metadata& metadata);
 
 }  // namespace afhub::mcap

@@ -16,7 +16,6 @@
 #include "afhub/record/mcap_writer.hpp"
 #include "afhub/shm_layout/device.hpp"
 #include "afhub/shm_layout/error.hpp"
-#include "afhub/shm_layout/layout_id.hpp"
 #include "afhub/shm_layout/world.hpp"
 #include "record_queue.hpp"
 #include "recorded_payloads.hpp"
@@ -172,9 +171,13 @@ class Session {
                             device ? PayloadKind::kDeviceState : PayloadKind::kBodyState, metadata);
       // A device publishes at its own rate, not the physics': its updates wake the loop.
       if (device) waiter.attach(*state.reader);
+      // A command can be overwritten by the next before the next step: its writes wake
+      // the loop too (a lockstep client's, answering each step, are all read so).
       if (device || options_.commands)
-        add(body_command_channel(channel),
-            device ? PayloadKind::kDeviceCommand : PayloadKind::kBodyCommand, metadata);
+        waiter.attach(*add(body_command_channel(channel),
+                           device ? PayloadKind::kDeviceCommand : PayloadKind::kBodyCommand,
+                           metadata)
+                           .reader);
     }
   }
 
@@ -242,9 +245,7 @@ class Session {
     char started[64];
     const std::time_t now = std::time(nullptr);
     std::strftime(started, sizeof started, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&now));
-    char layout[32];
-    std::snprintf(layout, sizeof layout, "0x%016llx", static_cast<unsigned long long>(kLayoutId));
-    return {{"layout_id", layout},
+    return {{"layout_id", layout_id_text()},
             {"host", host},
             {"started", started},
             {"bodies", [&] {

@@ -15,6 +15,7 @@
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/record/mcap_reader.hpp"
+#include "afhub/shm_layout/body_command.hpp"
 #include "afhub/shm_layout/body_state.hpp"
 #include "afhub/shm_layout/channel_names.hpp"
 #include "afhub/shm_layout/layout_id.hpp"
@@ -200,21 +201,21 @@ TEST(Record, APlayedRecordingIsSeenAsIfLiveAndPausesAndStepsUnderAfhubWorld) {
 
   ScopedProcess player(spawn_afhub({"play", file, "--loop"}, scene.dir("play.log")));
   LatestReader<BodyState> link3(body_state_channel("afhub/arm/link3"));
-  // Each state seen is the recorded state of its step, bit for bit, in step order.
-  std::uint64_t seen = 0, last_step = 0;
+  // Each state seen is the recorded state of its step, bit for bit (each pass of the loop).
+  std::uint64_t seen = 0;
   ASSERT_TRUE(wait_until(
       [&] {
         const BodyState* state = link3.latest();
-        if (!state || !link3.updated() || state->header.sim_step < last_step) return seen >= 200;
-        last_step = state->header.sim_step;
-        const auto step = recorded.find(last_step);
-        EXPECT_NE(step, recorded.end()) << "step " << last_step << " was never recorded";
+        if (!state || !link3.updated()) return false;
+        const auto step = recorded.find(state->header.sim_step);
+        EXPECT_NE(step, recorded.end())
+            << "step " << state->header.sim_step << " was never recorded";
         if (step == recorded.end()) return true;
         for (std::uint32_t j = 0; j < state->joint_count; ++j)
-          EXPECT_EQ(state->joints[j].position, step->second.at(j)) << "step " << last_step;
+          EXPECT_EQ(state->joints[j].position, step->second.at(j)) << "step " << step->first;
         return ++seen >= 200;
       },
-      20s))
+      60s))
       << read_file(scene.dir("play.log"));
 
   RunResult pause = run_afhub({"world", "pause"});
@@ -229,6 +230,115 @@ TEST(Record, APlayedRecordingIsSeenAsIfLiveAndPausesAndStepsUnderAfhubWorld) {
   EXPECT_EQ(link3.latest()->header.sim_step, paused_at + 5) << "a paused play stays paused";
   ASSERT_EQ(run_afhub({"world", "resume"}).exit_code, 0);
   EXPECT_TRUE(wait_until([&] { return link3.latest()->header.sim_step > paused_at + 50; }, 5s));
+}
+
+// A copy of `from` in which the commands answering steps from `step` on carry joint 0's
+// target moved by `delta`: what a changed gain does to a run.
+void copy_with_changed_commands(const std::string& from, const std::string& to, std::uint64_t step,
+                                double delta) {
+  struct Copy : mcap::Visitor {
+    mcap::Writer writer;
+    std::uint64_t from_step;
+    double delta;
+    std::set<std::uint16_t> commands;
+    std::uint64_t changed = 0;
+    Copy(const std::string& path, std::uint64_t s, double d)
+        : writer(path, {}), from_step(s), delta(d) {}
+    void schema(const mcap::Schema& schema) override {
+      writer.add_schema(schema.name, schema.encoding, schema.data);
+    }
+    void channel(const mcap::Channel& channel) override {
+      writer.add_channel(channel.schema_id, channel.topic, channel.message_encoding,
+                         channel.metadata);
+      if (channel.topic.ends_with("/command")) commands.insert(channel.id);
+    }
+    void metadata(const std::string& name, const mcap::Metadata& metadata) override {
+      writer.add_metadata(name, metadata);
+    }
+    void message(const mcap::Message& message) override {
+      std::vector<std::uint8_t> data(message.data.begin(), message.data.end());
+      BodyCommand command;
+      std::memcpy(&command, data.data(), std::min(data.size(), sizeof command));
+      if (commands.count(message.channel_id) && command.header.sim_step >= from_step &&
+          command.joint_count > 0) {
+        command.joints[0].value += delta;
+        std::memcpy(data.data(), &command, data.size());
+        ++changed;
+      }
+      mcap::Message copy = message;
+      copy.data = data;
+      writer.write(copy);
+    }
+  } copy(to, step, delta);
+  mcap::scan(from, copy);
+  copy.writer.close();
+  ASSERT_GT(copy.changed, 100u);
+}
+
+TEST(Record, ALockstepRunIsReproducedBitIdenticallyAndAChangedGainIsCaughtAtItsStep) {
+  afhub::testing::ModelFolder folder;
+  const std::string file = (folder.dir() / "lockstep.mcap").string();
+  const std::string arm = AFHUB_EXAMPLE_MODELS "/arm7.yaml";
+  const auto log = [&](const std::string& name) { return (folder.dir() / name).string(); };
+  LatestReader<WorldState> world(
+      ChannelId{std::string(kService), std::string(kWorldInstance), std::string(kStateEvent)});
+  const auto lockstep_physics = [&](const std::string& name, bool paused = false) {
+    std::vector<std::string> args{"run", arm, "--lockstep", "--no-autostart"};
+    args.insert(args.end(), paused ? std::initializer_list<std::string>{"--paused"}
+                                   : std::initializer_list<std::string>{"--wait-for", "1"});
+    return std::make_unique<ScopedProcess>(spawn_afhub(args, log(name)));
+  };
+
+  // Recorded from the physics' first step: the recorder is there before it steps.
+  ScopedProcess recorder(
+      spawn_afhub({"record", "-o", file, "--commands", "--fifo", "50"}, log("record.log")));
+  auto physics = lockstep_physics("run.log", true);
+  ASSERT_TRUE(wait_until(
+      [&] {
+        const RunResult info = run_afhub({"info", file});
+        return info.out.find("/afhub/arm/base/command") != std::string::npos;
+      },
+      30s))
+      << read_file(log("record.log")) << read_file(log("run.log"));
+  // A reader connects to a new writer within RouDi's discovery period (about 100 ms):
+  // the physics starts paused until the recorder holds the controller's first command,
+  // so that none is overwritten before it is read.
+  ScopedProcess controller(spawn_afhub({"ctl", "sine", "arm/base", "--lockstep"}, log("ctl.log")));
+  ASSERT_TRUE(wait_until(
+      [&] {
+        const json info = info_of(file);
+        for (const json& channel : info["channels"])
+          if (channel["topic"] == "/afhub/arm/base/command") return channel["messages"] > 0;
+        return false;
+      },
+      30s))
+      << read_file(log("ctl.log"));
+  ASSERT_EQ(run_afhub({"world", "resume"}).exit_code, 0);
+  ASSERT_TRUE(
+      wait_until([&] { return world.latest() && world.latest()->header.sim_step > 1500; }, 60s))
+      << read_file(log("ctl.log"));
+  controller.stop();
+  EXPECT_EQ(stop_process(recorder.pid, SIGINT), 0) << read_file(log("record.log"));
+  physics.reset();
+  const std::string recorded = read_file(log("record.log"));
+  EXPECT_NE(recorded.find("missed 0"), std::string::npos) << recorded;
+
+  // The same model, the recorded commands: every state of every step as recorded.
+  physics = lockstep_physics("replay.log");
+  RunResult replay = run_afhub({"play", file, "--commands-into-physics", "--wait", "10"}, 120s);
+  EXPECT_EQ(replay.exit_code, 0) << replay.out << replay.err << read_file(log("replay.log"));
+  const long long steps = number_after(replay.out, "reproduced bit-identically: ");
+  EXPECT_GT(steps, 1500) << replay.out;
+
+  // A gain changed at step 700: the commands answering step 700 act at step 701.
+  const std::string changed = (folder.dir() / "changed.mcap").string();
+  copy_with_changed_commands(file, changed, 700, 1e-3);
+  physics = lockstep_physics("changed.log");
+  RunResult diverged =
+      run_afhub({"play", changed, "--commands-into-physics", "--wait", "10"}, 120s);
+  EXPECT_EQ(diverged.exit_code, 1) << diverged.out << diverged.err;
+  EXPECT_EQ(number_after(diverged.out, "diverges at step "), 701) << diverged.out;
+  EXPECT_NE(diverged.out.find("afhub/arm/"), std::string::npos) << diverged.out;
 }
 
 TEST(Record, BadFilesAndOptionsAreClearErrors) {

@@ -52,6 +52,7 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
   const auto period_ns = static_cast<std::int64_t>(sim.dt_s() * 1e9);
   auto clock_ns = [&] { return options.clock ? options.clock->now_ns() : monotonic_ns(); };
   WorldControl control;
+  control.paused = options.start_paused;
   WorldCommand world_command;
   double achieved_rate_hz = 0.0;
   std::uint64_t late_counted = 0;

@@ -51,7 +51,7 @@ class Writer {
   void add_metadata(std::string_view name, const Metadata& metadata);
   // Throws afhub::Error when the disk refuses the bytes (full, gone).
   void write(const Message& message);
-  // Writes out the open chunk.
+  // Writes the open chunk, and every record before it, to the file.
   void flush_chunk();
   // The summary and footer; the file is complete afterwards.
   void close();
@@ -82,13 +82,14 @@ class Writer {
 
   void write_schema(std::vector<std::uint8_t>& out, std::uint16_t id) const;
   void write_channel(std::vector<std::uint8_t>& out, std::uint16_t id) const;
-  void write_out(bool force);
+  void write_chunk();  // into pending_
+  void write_out();    // pending_ to the file
 
   std::string path_;
   Options options_;
   int fd_ = -1;
   Compressor compressor_;
-  std::vector<std::uint8_t> pending_;  // file bytes not yet written
+  std::vector<std::uint8_t> pending_;  // file bytes not yet written: records since the last chunk
   std::uint64_t file_offset_ = 0;      // bytes written to the file
 
   std::vector<Schema> schemas_;  // id - 1

@@ -28,6 +28,9 @@ struct RunOptions {
   // Stop at the first step that made a body NaN or infinite (report.nan_detected),
   // instead of going on with the body put back (Simulation::nan_recoveries).
   bool stop_on_nan = false;
+  // Start paused at step 0 (`afhub world resume` or `step` goes on): controllers and a
+  // recorder join before anything moves.
+  bool start_paused = false;
   // What a step that ran past later deadlines does (see above).
   OverrunPolicy overrun = OverrunPolicy::kCatchUp;
   std::int64_t max_catch_up_ns = 100'000'000;

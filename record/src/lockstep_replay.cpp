@@ -1,0 +1,242 @@
+#include "afhub/record/lockstep_replay.hpp"
+
+#include <cstring>
+#include <map>
+#include <memory>
+#include <vector>
+
+#include "afhub/hub/channel.hpp"
+#include "afhub/hub/sample_waiter.hpp"
+#include "afhub/record/mcap_reader.hpp"
+#include "afhub/rt/clock.hpp"
+#include "afhub/shm_layout/body_command.hpp"
+#include "afhub/shm_layout/body_state.hpp"
+#include "afhub/shm_layout/channel_names.hpp"
+#include "afhub/shm_layout/error.hpp"
+#include "afhub/shm_layout/payload_check.hpp"
+#include "afhub/shm_layout/world.hpp"
+#include "recorded_payloads.hpp"
+#include "state_difference.hpp"
+
+namespace afhub::mcap {
+
+namespace {
+
+constexpr std::int64_t kStepTimeoutNs = 10'000'000'000;
+
+struct Stop {};
+
+// The recording's channels: which are body states and commands, of which body.
+class ChannelMap : public Visitor {
+ public:
+  explicit ChannelMap(const std::string& file) : file_(file) {}
+  void header(const std::string& profile, const std::string&) override {
+    if (!profile.empty())
+      throw Error(file_ + " was recorded with --profile " + profile +
+                  ": a replay needs afhub's own recordings (no --profile)");
+  }
+  void metadata(const std::string& name, const Metadata& metadata) override {
+    if (name != "afhub") return;
+    require_this_layout(file_, metadata);
+    layout_checked_ = true;
+  }
+  void schema(const Schema& schema) override {
+    for (const RecordedPayload& payload : recorded_payloads())
+      if (schema.name == payload.schema_name) kinds_[schema.id] = payload.kind;
+  }
+  void channel(const Channel& channel) override {
+    const auto kind = kinds_.find(channel.schema_id);
+    const auto instance = channel.metadata.find("afhub_instance");
+    if (kind != kinds_.end() && instance != channel.metadata.end())
+      channels_[channel.id] = {kind->second, instance->second};
+  }
+
+ protected:
+  // The body and kind of a message's channel, or nullptr when not afhub's.
+  const std::pair<PayloadKind, std::string>* of(const Message& message) const {
+    if (!layout_checked_)
+      throw Error(file_ +
+                  " has no afhub metadata before its messages: not a recording of "
+                  "`afhub record`");
+    const auto found = channels_.find(message.channel_id);
+    return found == channels_.end() ? nullptr : &found->second;
+  }
+  // The message as a checked payload of `kind`.
+  void check(const Message& message, PayloadKind kind) const {
+    const char* field = nullptr;
+    if (check_payload(message.data.data(), message.data.size(), kind, &field) !=
+        PayloadError::kNone)
+      throw Error(file_ + ": a recorded payload is not valid (" + field + ")");
+  }
+
+  std::string file_;
+
+ private:
+  bool layout_checked_ = false;
+  std::map<std::uint16_t, PayloadKind> kinds_;
+  std::map<std::uint16_t, std::pair<PayloadKind, std::string>> channels_;
+};
+
+// First pass: every recorded command, by the step it answered.
+class CommandLoader : public ChannelMap {
+ public:
+  using ChannelMap::ChannelMap;
+  struct Command {
+    std::string body;
+    std::vector<std::uint8_t> bytes;
+  };
+  std::map<std::uint64_t, std::vector<Command>> by_step;
+
+  void message(const Message& message) override {
+    const auto* channel = of(message);
+    if (!channel || channel->first != PayloadKind::kBodyCommand) return;
+    check(message, PayloadKind::kBodyCommand);
+    const auto& header = *reinterpret_cast<const PayloadHeader*>(message.data.data());
+    by_step[header.sim_step].push_back(
+        {channel->second, {message.data.begin(), message.data.end()}});
+  }
+};
+
+// Second pass: steps the physics with the commands, comparing each recorded state.
+class Replayer : public ChannelMap {
+ public:
+  Replayer(const std::string& file, const CommandLoader& commands,
+           const std::function<bool()>& keep_going)
+      : ChannelMap(file),
+        commands_(commands.by_step),
+        keep_going_(keep_going),
+        world_(ChannelId{std::string(kService), world_instance(), std::string(kStateEvent)}) {
+    waiter_.attach(world_.raw());
+  }
+
+  void message(const Message& message) override {
+    const auto* channel = of(message);
+    if (!channel || channel->first != PayloadKind::kBodyState) return;
+    check(message, PayloadKind::kBodyState);
+    BodyState recorded;
+    std::memcpy(&recorded, message.data.data(), std::min(message.data.size(), sizeof recorded));
+    const std::uint64_t step = recorded.header.sim_step;
+    if (!started_) start(step);
+    while (step_ < step) advance();
+    if (step < step_) return;  // a state of a step already passed (recorded late): compared then
+    const BodyState* live = live_state(channel->second);
+    if (!live || live->header.sim_step != step)
+      throw Error("the physics shows no state of " + channel->second + " at step " +
+                  std::to_string(step) + ": is it the model that was recorded?");
+    ++result.states;
+    if (const std::string difference = state_difference(recorded, *live); !difference.empty()) {
+      result.diverged = true;
+      result.step = step;
+      result.body = channel->second;
+      result.field = difference;
+      throw Stop{};
+    }
+  }
+
+  ReplayCheck result;
+
+ private:
+  // The physics waits at the recording's first step (a lockstep physics holds step 0
+  // for its client).
+  void start(std::uint64_t first_step) {
+    const WorldState* world = wait_for_world([](const WorldState&) { return true; });
+    if (!world->lockstep)
+      throw Error(
+          "the physics is not in lockstep: start it with `afhub run MODEL --lockstep "
+          "--wait-for 1`, then replay");
+    if (world->header.sim_step != first_step)
+      throw Error("the recording starts at step " + std::to_string(first_step) +
+                  ", the physics is at step " + std::to_string(world->header.sim_step) +
+                  ": a replay needs a recording from the physics' first step (start `afhub "
+                  "record` before the physics steps) and a physics just started");
+    if (commands_.empty() || commands_.begin()->first != first_step)
+      throw Error("the recording has no command answering its first step " +
+                  std::to_string(first_step) + ": was it recorded with --commands, in lockstep?");
+    step_ = first_step;
+    started_ = true;
+  }
+
+  // Answers step_ with its recorded commands and waits for the next step.
+  void advance() {
+    const auto commands = commands_.find(step_);
+    // Past the last command the recorded physics went on without its client: the replay
+    // ends with the commands.
+    if (step_ > commands_.rbegin()->first) throw Stop{};
+    if (commands == commands_.end())
+      throw Error("no command answering step " + std::to_string(step_) +
+                  " is in the recording (the recorder missed it): the run cannot be reproduced "
+                  "from here");
+    for (const CommandLoader::Command& command : commands->second) {
+      RawWriter& writer = command_writer(command.body);
+      void* payload = writer.loan(static_cast<std::uint32_t>(command.bytes.size()));
+      if (!payload) throw Error("no shared memory left for a command to " + command.body);
+      std::memcpy(payload, command.bytes.data(), command.bytes.size());
+      static_cast<BodyCommand*>(payload)->lockstep = 1;
+      writer.publish(payload);
+    }
+    const std::uint64_t next = step_ + 1;
+    wait_for_world([next](const WorldState& w) { return w.header.sim_step >= next; });
+    step_ = next;
+    ++result.steps;
+  }
+
+  template <class Done>
+  const WorldState* wait_for_world(Done done) {
+    const std::int64_t give_up = monotonic_ns() + kStepTimeoutNs;
+    while (true) {
+      const WorldState* world = world_.latest();
+      if (world && done(*world)) return world;
+      if (!keep_going_()) throw Stop{};
+      if (monotonic_ns() > give_up)
+        throw Error(world
+                        ? "the physics did not take step " + std::to_string(step_ + 1) +
+                              " within 10 s of the commands answering step " + std::to_string(step_)
+                        : "no physics is running: start `afhub run MODEL --lockstep "
+                          "--wait-for 1`, then replay");
+      waiter_.wait(1'000'000);
+    }
+  }
+
+  const BodyState* live_state(const std::string& body) {
+    auto& reader = states_[body];
+    if (!reader) reader = std::make_unique<LatestReader<BodyState>>(body_state_channel(body));
+    const std::int64_t give_up = monotonic_ns() + 1'000'000'000;  // a new reader's first copy
+    const BodyState* state = reader->latest();
+    while ((!state || state->header.sim_step != step_) && monotonic_ns() < give_up) {
+      sleep_until_ns(monotonic_ns() + 100'000);
+      state = reader->latest();
+    }
+    return state;
+  }
+
+  RawWriter& command_writer(const std::string& body) {
+    auto& writer = commands_out_[body];
+    if (!writer)
+      writer = std::make_unique<RawWriter>(body_command_channel(body), PayloadKind::kBodyCommand);
+    return *writer;
+  }
+
+  const std::map<std::uint64_t, std::vector<CommandLoader::Command>>& commands_;
+  const std::function<bool()>& keep_going_;
+  LatestReader<WorldState> world_;
+  SampleWaiter waiter_;
+  std::map<std::string, std::unique_ptr<LatestReader<BodyState>>> states_;
+  std::map<std::string, std::unique_ptr<RawWriter>> commands_out_;
+  bool started_ = false;
+  std::uint64_t step_ = 0;
+};
+
+}  // namespace
+
+ReplayCheck replay_into_physics(const std::string& file, const std::function<bool()>& keep_going) {
+  CommandLoader commands(file);
+  scan(file, commands);
+  Replayer replayer(file, commands, keep_going);
+  try {
+    scan(file, replayer);
+  } catch (const Stop&) {
+  }
+  return replayer.result;
+}
+
+}  // namespace afhub::mcap
