@@ -31,5 +31,6 @@ void register_bridge(CLI::App& app, Runner& selected);
 void register_record(CLI::App& app, Runner& selected);
 void register_info(CLI::App& app, Runner& selected);
 void register_play(CLI::App& app, Runner& selected);
+void register_plot(CLI::App& app, Runner& selected);
 
 }  // namespace afhub::cli

@@ -65,6 +65,7 @@ int main(int argc, char** argv) {
   afhub::cli::register_record(app, selected);
   afhub::cli::register_info(app, selected);
   afhub::cli::register_play(app, selected);
+  afhub::cli::register_plot(app, selected);
   try {
     app.parse(argc, argv);
   } catch (const CLI::RequiredError& error) {

@@ -118,6 +118,19 @@ TEST(Record, EveryBodyOfASceneUnderControlIsRecordedAndAnIndependentReaderAgrees
   EXPECT_GT(counts["/afhub/arm/base/command"], 2000u) << "the controller's commands";
   EXPECT_GT(counts["/world/state"], 2500u);
 
+  // A joint and the position of a body over time, drawn by gnuplot: one point per state.
+  const std::string png = scene.dir("link3.png");
+  const RunResult plotted =
+      run_afhub({"plot", file, "link3", "--fields", "joints,pose", "-o", png}, 60s);
+  EXPECT_EQ(plotted.exit_code, 0) << plotted.err;
+  EXPECT_EQ(number_after(plotted.out, ": "), counts["/afhub/arm/link3/state"]) << plotted.out;
+  EXPECT_EQ(read_file(png).substr(0, 8), "\x89PNG\r\n\x1a\n");
+  const RunResult unknown = run_afhub({"plot", file, "link9"});
+  EXPECT_EQ(unknown.exit_code, 1);
+  EXPECT_NE(unknown.err.find("records no body named 'link9'; it records afhub/arm/base"),
+            std::string::npos)
+      << unknown.err;
+
   const json check = checked(file);
   ASSERT_EQ(check["exit"], 0) << check["stderr"];
   EXPECT_TRUE(check["ok"].get<bool>()) << check.dump();
