@@ -1,6 +1,7 @@
 // `afhub record`: every body's state, the world's and the scene (and with options the
 // commands and devices) to an MCAP file at the rate it is published, until Ctrl-C or --duration.
 // `afhub record --recover FILE`: gives a file that was cut off its index back.
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include <cmath>
@@ -26,6 +27,15 @@ struct RecordCliOptions {
   std::string recover;
   RealtimeOptions realtime;
 };
+
+// Low: above every normal process, below any real-time loop a user gave a priority.
+constexpr int kDefaultFifoPriority = 10;
+
+bool may_use_fifo(int priority) {
+  rlimit limit{};
+  return geteuid() == 0 || (getrlimit(RLIMIT_RTPRIO, &limit) == 0 &&
+                            limit.rlim_cur >= static_cast<rlim_t>(priority));
+}
 
 std::string progress_line(const mcap::RecordProgress& p, double mb_per_s) {
   char line[200];
@@ -63,6 +73,10 @@ int run_record(RecordCliOptions& options) {
     throw Error("--buffer takes megabytes from 1 to 65536");
   options.record.buffer_bytes = static_cast<std::size_t>(options.buffer_mb * (1 << 20)) & ~7ull;
   set_realtime_options(options.realtime, options.record.loop);
+  // Under the normal scheduler a busy machine keeps the reading loop asleep through a
+  // step now and then: where the system allows it, the loop runs under SCHED_FIFO.
+  if (options.realtime.fifo_priority == 0 && may_use_fifo(kDefaultFifoPriority))
+    options.record.loop.fifo_priority = kDefaultFifoPriority;
   install_stop_signal_handlers();
   const StartupWait wait(options.wait_s);
   wait.connect_to_hub("record");
@@ -117,7 +131,8 @@ void register_record(CLI::App& app, Runner& selected) {
                    "messages, counted, when it is full)")
       ->capture_default_str();
   record->add_option("--profile", options->record.profile,
-                     "ros2: write ROS 2 messages (CDR) instead of afhub's payloads (not yet)");
+                     "ros2: a ROS 2 bag instead of afhub's payloads: each body's joint_states, "
+                     "pose, twist and wrench, and /clock, CDR-encoded (stamps: simulation time)");
   record
       ->add_option("--recover", options->recover,
                    "Rewrite a file that was cut off (kill -9, a full disk) with its index; "

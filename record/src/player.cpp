@@ -27,17 +27,6 @@ struct EndOfPass {
   bool stop;
 };
 
-std::vector<std::string> split(const std::string& text) {
-  std::vector<std::string> out;
-  std::size_t from = 0;
-  while (from <= text.size() && !text.empty()) {
-    const std::size_t comma = std::min(text.find(',', from), text.size());
-    out.push_back(text.substr(from, comma - from));
-    from = comma + 1;
-  }
-  return out;
-}
-
 // A recorded channel published again.
 struct Replayed {
   PayloadKind kind;
@@ -87,10 +76,7 @@ class Player : public Visitor {
       case PayloadKind::kBodyState: {
         if (!matches_any(instance->second, options_.body_globs)) return;
         check_room_for_bodies({instance->second}, 1);
-        const auto joints = channel.metadata.find("joint_names");
-        directory_.add(make_body_entry(instance->second, joints == channel.metadata.end()
-                                                             ? std::vector<std::string>{}
-                                                             : split(joints->second)));
+        directory_.add(make_body_entry(instance->second, joint_names_in(channel.metadata)));
         directory_.publish();
         break;
       }

@@ -14,6 +14,7 @@
 #include "afhub/shm_layout/body_state.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "afhub/shm_layout/payload_check.hpp"
+#include "recorded_payloads.hpp"
 
 extern char** environ;
 
@@ -109,13 +110,7 @@ class Series : public Visitor {
           options_.body + "'; it records " + (all.empty() ? "none" : all));
     body = matches[0];
     chosen_ = &bodies_.at(body);
-    std::vector<std::string> joints;
-    const std::string& list = chosen_->metadata.at("joint_names");
-    for (std::size_t from = 0; !list.empty() && from <= list.size();) {
-      const std::size_t comma = std::min(list.find(',', from), list.size());
-      joints.push_back(list.substr(from, comma - from));
-      from = comma + 1;
-    }
+    const std::vector<std::string> joints = joint_names_in(chosen_->metadata);
     for (const std::string& field : options_.fields) panels.push_back(panel_of(field, joints));
   }
 

@@ -37,6 +37,25 @@ const RecordedPayload& payload_of(PayloadKind kind) {
               std::to_string(static_cast<unsigned>(kind)));
 }
 
+std::string joint_names_text(const std::vector<std::string>& names) {
+  std::string text;
+  for (const std::string& name : names) text += (text.empty() ? "" : ",") + name;
+  return text;
+}
+
+std::vector<std::string> joint_names_in(const Metadata& channel_metadata) {
+  std::vector<std::string> names;
+  const auto found = channel_metadata.find("joint_names");
+  if (found == channel_metadata.end() || found->second.empty()) return names;
+  const std::string& text = found->second;
+  for (std::size_t from = 0; from <= text.size();) {
+    const std::size_t comma = std::min(text.find(',', from), text.size());
+    names.push_back(text.substr(from, comma - from));
+    from = comma + 1;
+  }
+  return names;
+}
+
 std::string layout_id_text() {
   char text[32];
   std::snprintf(text, sizeof text, "0x%016llx", static_cast<unsigned long long>(kLayoutId));

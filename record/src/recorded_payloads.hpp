@@ -28,6 +28,11 @@ const RecordedPayload& payload_of(PayloadKind kind);
 // The schema's data: what the bytes are, with the layout id that must match to read them.
 std::vector<std::uint8_t> payload_schema_text(const RecordedPayload& payload);
 
+// A body channel's joint names as its channel metadata holds them ("joint_names":
+// comma-separated, in state order), and back.
+std::string joint_names_text(const std::vector<std::string>& names);
+std::vector<std::string> joint_names_in(const Metadata& channel_metadata);
+
 // This build's kLayoutId as a recording's "afhub" metadata gives it ("0x83498001fb7ea7ad").
 std::string layout_id_text();
 // Throws afhub::Error unless `metadata` (a recording's "afhub" metadata) names this

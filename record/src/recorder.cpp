@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <cstring>
 #include <ctime>
 #include <exception>
 #include <mutex>
@@ -19,6 +20,7 @@
 #include "afhub/shm_layout/world.hpp"
 #include "record_queue.hpp"
 #include "recorded_payloads.hpp"
+#include "ros2_messages.hpp"
 
 namespace afhub::mcap {
 
@@ -41,6 +43,7 @@ struct Recorded {
   std::unique_ptr<RawLatestReader> reader;
   std::uint16_t channel_id = 0;
   bool per_step = false;  // a state: one message per step (a paused physics republishes it)
+  bool wakes = false;     // its updates wake the reading loop
   bool seen = false;
   std::uint32_t publisher_pid = 0;
   std::uint64_t last = 0;  // its last step (per_step) or sequence
@@ -58,12 +61,21 @@ class Session {
  public:
   Session(const RecordOptions& options)
       : options_(options),
+        ros2_(options.profile == "ros2"),
         writer_(options.output, {options.profile, "afhub", options.compression}),
         queue_(options.buffer_bytes),
         realtime_offset_ns_(realtime_ns() - monotonic_ns()) {
-    for (const RecordedPayload& payload : recorded_payloads())
-      schema_ids_[payload.kind] = writer_.add_schema(payload.schema_name, kLayoutSchemaEncoding,
-                                                     payload_schema_text(payload));
+    if (ros2_) {
+      for (const Ros2Schema& schema : ros2_schemas())
+        ros2_schema_ids_.push_back(writer_.add_schema(
+            schema.name, "ros2msg",
+            {reinterpret_cast<const std::uint8_t*>(schema.definition),
+             std::strlen(schema.definition)}));
+    } else {
+      for (const RecordedPayload& payload : recorded_payloads())
+        schema_ids_[payload.kind] = writer_.add_schema(payload.schema_name, kLayoutSchemaEncoding,
+                                                       payload_schema_text(payload));
+    }
     writer_.add_metadata("afhub", recording_metadata());
   }
 
@@ -74,16 +86,21 @@ class Session {
       setpriority(PRIO_PROCESS, static_cast<id_t>(gettid()), kWriterNice);
       write_loop();
     });
+    // The catalog is read, and readers made, beside the reading loop: never in its way.
+    std::thread discovering([this] { discover_loop(); });
     try {
       read_loop(keep_going, progress);
     } catch (...) {
       reading_done_ = true;
+      discovering.join();
       writing.join();
       throw;
     }
     reading_done_ = true;
+    discovering.join();
     writing.join();
     if (write_error_) std::rethrow_exception(write_error_);
+    if (discover_error_) std::rethrow_exception(discover_error_);
     const RecordProgress last = snapshot();
     progress(last);
     return last;
@@ -97,23 +114,11 @@ class Session {
         ChannelId{std::string(kService), world_instance(), std::string(kStateEvent)});
     SampleWaiter waiter;
     waiter.attach(world.raw());
-    const auto world_channel = [](std::string_view event) {
-      return ChannelId{std::string(kService), world_instance(), std::string(event)};
-    };
-    // The world's clock, and what a viewer draws (the scene once, every body's pose at
-    // display rate): what `afhub play` needs to replay a run into `afhub view`.
-    add(world_channel(kStateEvent), PayloadKind::kWorldState, {});
-    add(world_channel(kSceneEvent), PayloadKind::kSceneDescription, {});
-    add(world_channel(kScenePosesEvent), PayloadKind::kScenePoses, {});
-
-    std::int64_t next_discovery_ns = 0, next_progress_ns = monotonic_ns() + kProgressPeriodNs;
-    while (keep_going() && !write_failed_) {
+    std::int64_t next_progress_ns = monotonic_ns() + kProgressPeriodNs;
+    while (keep_going() && !write_failed_ && !discover_failed_) {
       waiter.wait(kIdleWaitNs);
       const std::int64_t now = monotonic_ns();
-      if (now >= next_discovery_ns) {
-        discover(waiter);
-        next_discovery_ns = now + kDiscoveryPeriodNs;
-      }
+      take_discovered(waiter);
       world.latest();  // taken, so that the waiter sleeps until the next step
       for (Recorded& recorded : recorded_) {
         const void* payload = recorded.reader->latest();
@@ -128,6 +133,21 @@ class Session {
           now - first_sample_ns_ >= static_cast<std::int64_t>(options_.duration_s * 1e9))
         break;
     }
+  }
+
+  // Channels the discovery found, taken when its lock is free (never waited for). A
+  // device's state and every command wake the loop too: a device publishes at its own
+  // rate, and a command can be overwritten by the next before the next step.
+  void take_discovered(SampleWaiter& waiter) {
+    if (!discovered_ready_.load(std::memory_order_acquire)) return;
+    std::unique_lock lock(discovered_mutex_, std::try_to_lock);
+    if (!lock.owns_lock()) return;
+    for (Recorded& recorded : discovered_) {
+      if (recorded.wakes) waiter.attach(*recorded.reader);
+      recorded_.push_back(std::move(recorded));
+    }
+    discovered_.clear();
+    discovered_ready_.store(false, std::memory_order_release);
   }
 
   // Copies a new sample into the buffer, or counts it dropped when the buffer is full.
@@ -153,44 +173,62 @@ class Session {
     if (!queue_.push(message, {static_cast<const std::uint8_t*>(payload), bytes})) ++dropped_;
   }
 
+  void discover_loop() {
+    try {
+      // The world's clock, and what a viewer draws (the scene once, every body's pose at
+      // display rate): what `afhub play` needs to replay a run into `afhub view`.
+      const auto world_channel = [](std::string_view event) {
+        return ChannelId{std::string(kService), world_instance(), std::string(event)};
+      };
+      add(world_channel(kStateEvent), PayloadKind::kWorldState, {}, false);
+      add(world_channel(kSceneEvent), PayloadKind::kSceneDescription, {}, false);
+      add(world_channel(kScenePosesEvent), PayloadKind::kScenePoses, {}, false);
+      CatalogReader catalog;
+      while (!reading_done_) {
+        discover(catalog);
+        const std::int64_t next_ns = monotonic_ns() + kDiscoveryPeriodNs;
+        while (!reading_done_ && monotonic_ns() < next_ns) usleep(10'000);
+      }
+    } catch (...) {
+      discover_error_ = std::current_exception();
+      discover_failed_ = true;
+    }
+  }
+
   // Readers for the catalog's bodies (and devices) that match and are not recorded yet.
-  void discover(SampleWaiter& waiter) {
-    if (!catalog_) catalog_ = std::make_unique<CatalogReader>();
-    const BodyList& list = catalog_->latest();
+  void discover(CatalogReader& catalog) {
+    const BodyList& list = catalog.latest();
     for (std::uint32_t i = 0; i < list.body_count; ++i) {
       const BodyEntry entry = entry_of(list, i);
       const std::string channel(name_of(entry.info.channel));
       const bool device = entry.info.kind == ChannelKind::kDevice;
       if (device ? !options_.devices : !matches_any(channel, options_.body_globs)) continue;
       if (!known_.insert(channel).second) continue;
-      std::string joints;
-      for (const std::string& joint : entry.joint_names)
-        joints += (joints.empty() ? "" : ",") + joint;
-      const Metadata metadata = device ? Metadata{} : Metadata{{"joint_names", joints}};
-      Recorded& state = add(body_state_channel(channel),
-                            device ? PayloadKind::kDeviceState : PayloadKind::kBodyState, metadata);
-      // A device publishes at its own rate, not the physics': its updates wake the loop.
-      if (device) waiter.attach(*state.reader);
-      // A command can be overwritten by the next before the next step: its writes wake
-      // the loop too (a lockstep client's, answering each step, are all read so).
+      const Metadata metadata =
+          device ? Metadata{} : Metadata{{"joint_names", joint_names_text(entry.joint_names)}};
+      add(body_state_channel(channel),
+          device ? PayloadKind::kDeviceState : PayloadKind::kBodyState, metadata, device);
       if (device || options_.commands)
-        waiter.attach(*add(body_command_channel(channel),
-                           device ? PayloadKind::kDeviceCommand : PayloadKind::kBodyCommand,
-                           metadata)
-                           .reader);
+        add(body_command_channel(channel),
+            device ? PayloadKind::kDeviceCommand : PayloadKind::kBodyCommand, metadata, true);
     }
   }
 
-  // A channel recorded from now on; its topic is "/<instance>/<event>", and its
-  // metadata name the hub's channel, for `afhub play`.
-  Recorded& add(const ChannelId& id, PayloadKind kind, Metadata metadata) {
+  // A channel recorded from now on, handed to the reading loop (`wakes`: its updates
+  // wake the loop). Its topic is "/<instance>/<event>", and its metadata name the
+  // hub's channel, for `afhub play`.
+  void add(const ChannelId& id, PayloadKind kind, Metadata metadata, bool wakes) {
     metadata["afhub_instance"] = id.instance;
     metadata["afhub_event"] = id.event;
     Recorded recorded;
     recorded.reader = std::make_unique<RawLatestReader>(id, kind);
-    recorded.channel_id = declare(payload_of(kind), "/" + id.instance + "/" + id.event, metadata);
+    recorded.channel_id =
+        declare(payload_of(kind), "/" + id.instance + "/" + id.event, metadata);
     recorded.per_step = kind == PayloadKind::kBodyState || kind == PayloadKind::kWorldState;
-    return recorded_.emplace_back(std::move(recorded));
+    recorded.wakes = wakes;
+    const std::lock_guard lock(discovered_mutex_);
+    discovered_.push_back(std::move(recorded));
+    discovered_ready_.store(true, std::memory_order_release);
   }
 
   std::uint16_t declare(const RecordedPayload& payload, const std::string& topic,
@@ -210,8 +248,12 @@ class Session {
         const bool last_round = reading_done_;
         add_declared();
         const std::size_t taken = queue_.drain([&](const QueuedMessage& m, auto data) {
-          if (m.channel_id > file_channels_) add_declared();  // declared after the first call
-          writer_.write({m.channel_id, m.sequence, m.log_time_ns, m.publish_time_ns, data});
+          if (m.channel_id >= outputs_.size()) add_declared();  // declared after the first call
+          for (const Output& output : outputs_[m.channel_id]) {
+            if (output.encode) output.encode(data, encoded_);
+            writer_.write({output.channel, m.sequence, m.log_time_ns, m.publish_time_ns,
+                           output.encode ? std::span<const std::uint8_t>(encoded_) : data});
+          }
         });
         messages_written_ = writer_.message_count();
         file_bytes_ = writer_.file_bytes();
@@ -230,11 +272,23 @@ class Session {
     }
   }
 
+  // The file's channels for each channel declared since: one of afhub's payloads, or
+  // with --profile ros2 the ROS 2 messages made of it.
   void add_declared() {
     const std::lock_guard lock(declared_mutex_);
     for (const Declared& d : declared_) {
-      writer_.add_channel(schema_ids_.at(d.payload.kind), d.topic, kPayloadEncoding, d.metadata);
-      file_channels_ = d.id;
+      outputs_.resize(d.id + 1);
+      std::vector<Output>& outputs = outputs_[d.id];
+      if (!ros2_) {
+        outputs.push_back({writer_.add_channel(schema_ids_.at(d.payload.kind), d.topic,
+                                               kPayloadEncoding, d.metadata),
+                           nullptr});
+        continue;
+      }
+      for (Ros2Output& ros2 : ros2_outputs(d.payload.kind, d.metadata.at("afhub_instance"),
+                                           joint_names_in(d.metadata)))
+        outputs.push_back({writer_.add_channel(ros2_schema_ids_[ros2.schema], ros2.topic, "cdr"),
+                           std::move(ros2.encode)});
     }
     declared_.clear();
   }
@@ -269,15 +323,22 @@ class Session {
   }
 
   const RecordOptions& options_;
+  const bool ros2_;
   Writer writer_;
   RecordQueue queue_;
   const std::int64_t realtime_offset_ns_;
   std::map<PayloadKind, std::uint16_t> schema_ids_;
+  std::vector<std::uint16_t> ros2_schema_ids_;  // by ros2_schemas()' index
 
   // The reading loop's.
-  std::unique_ptr<CatalogReader> catalog_;
   std::vector<Recorded> recorded_;
+
+  // The discovery's, and what it hands over.
   std::set<std::string> known_;
+  std::mutex discovered_mutex_;
+  std::vector<Recorded> discovered_;
+  std::atomic<bool> discovered_ready_{false}, discover_failed_{false};
+  std::exception_ptr discover_error_;
   std::uint16_t next_channel_id_ = 1;
   std::atomic<std::int64_t> first_sample_ns_{0};
   std::atomic<std::uint64_t> dropped_{0}, missed_{0}, channel_count_{0};
@@ -288,8 +349,14 @@ class Session {
   std::atomic<bool> reading_done_{false}, write_failed_{false};
   std::exception_ptr write_error_;
 
-  // The writing thread's.
-  std::uint16_t file_channels_ = 0;
+  // The writing thread's: for each declared channel, the file's channels it is written
+  // to and how (nullptr: as it is).
+  struct Output {
+    std::uint16_t channel;
+    Encode encode;
+  };
+  std::vector<std::vector<Output>> outputs_;
+  std::vector<std::uint8_t> encoded_;
   std::atomic<std::uint64_t> messages_written_{0}, file_bytes_{0};
 };
 
@@ -297,9 +364,9 @@ class Session {
 
 RecordProgress record(const RecordOptions& options, const std::function<bool()>& keep_going,
                       const std::function<void(const RecordProgress&)>& progress) {
-  if (!options.profile.empty())
-    throw Error("--profile " + options.profile +
-                ": not written yet; afhub records its own payloads (no --profile)");
+  if (!options.profile.empty() && options.profile != "ros2")
+    throw Error("--profile takes ros2 (ROS 2 messages in CDR), not " + options.profile +
+                "; without it afhub records its own payloads");
   Session session(options);
   return session.run(keep_going, progress);
 }

@@ -145,6 +145,42 @@ TEST(Record, EveryBodyOfASceneUnderControlIsRecordedAndAnIndependentReaderAgrees
   }
 }
 
+TEST(Record, AsAROS2BagItsJointStatesDecodeWithAnIndependentCdrReader) {
+  SceneRun scene;
+  ASSERT_TRUE(scene.ready()) << scene.logs();
+  const std::string file = scene.dir("ros2.mcap");
+  const RunResult recorded =
+      run_afhub({"record", "-o", file, "--duration", "1", "--profile", "ros2"}, 60s);
+  ASSERT_EQ(recorded.exit_code, 0) << recorded.err;
+  const RunResult check =
+      run_command({"node", kChecker, file, "--jointstate", "/afhub/arm/base/joint_states"}, 120s);
+  ASSERT_EQ(check.exit_code, 0) << check.err;
+  const json out = parse_json(check.out);
+  EXPECT_EQ(out["profile"], "ros2");
+  std::set<std::string> schemas;
+  for (const json& schema : out["schemas"]) {
+    EXPECT_EQ(schema["encoding"], "ros2msg");
+    schemas.insert(schema["name"].get<std::string>());
+  }
+  EXPECT_EQ(schemas, (std::set<std::string>{"sensor_msgs/msg/JointState",
+                                            "geometry_msgs/msg/PoseStamped",
+                                            "geometry_msgs/msg/TwistStamped",
+                                            "geometry_msgs/msg/WrenchStamped",
+                                            "rosgraph_msgs/msg/Clock"}));
+  for (const json& channel : out["channels"]) EXPECT_EQ(channel["messageEncoding"], "cdr");
+  // The first JointState: the body's joints by name, a value of each kind per joint, and
+  // a stamp of simulated time.
+  const json& joints = out["jointstate"];
+  CatalogReader catalog;
+  catalog.wait(5s);
+  EXPECT_EQ(joints["name"].get<std::vector<std::string>>(),
+            catalog.resolve("afhub/arm/base").joint_names);
+  EXPECT_EQ(joints["position"].size(), joints["name"].size());
+  EXPECT_EQ(joints["effort"].size(), joints["name"].size());
+  EXPECT_GT(joints["sec"].get<double>() + joints["nanosec"].get<double>() * 1e-9, 0.1);
+  EXPECT_LT(joints["nanosec"].get<double>(), 1e9);
+}
+
 TEST(Record, ARecordingKilledMidWriteReadsToItsLastChunkAndRecoverIndexesIt) {
   SceneRun scene;
   ASSERT_TRUE(scene.ready()) << scene.logs();

@@ -25,7 +25,7 @@ struct RecordOptions {
   double duration_s = 0.0;                   // 0: until stopped
   Compression compression = Compression::kZstd;
   std::size_t buffer_bytes = 256u << 20;
-  std::string profile;  // "" (afhub's payloads) or "ros2" (not yet written)
+  std::string profile;  // "" (afhub's payloads) or "ros2" (ROS 2 messages, ros2_messages.hpp)
   // The reading loop's real-time requests (its period is the physics'): under the normal
   // scheduler a busy machine can keep it asleep through a step, which is then missed.
   LoopOptions loop;

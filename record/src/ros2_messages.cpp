@@ -1,0 +1,177 @@
+#include "ros2_messages.hpp"
+
+#include <cmath>
+#include <cstring>
+
+#include "afhub/shm_layout/body_state.hpp"
+#include "afhub/shm_layout/world.hpp"
+
+namespace afhub::mcap {
+
+namespace {
+
+// Dependencies follow a message's own definition, each after a line of 80 '='.
+#define AFHUB_MSG_SEPARATOR \
+  "================================================================================\n"
+#define AFHUB_HEADER_DEFINITION                                                          \
+  AFHUB_MSG_SEPARATOR "MSG: std_msgs/Header\nbuiltin_interfaces/Time stamp\nstring frame_id\n" \
+  AFHUB_MSG_SEPARATOR "MSG: builtin_interfaces/Time\nint32 sec\nuint32 nanosec\n"
+#define AFHUB_VECTOR3_DEFINITION \
+  AFHUB_MSG_SEPARATOR "MSG: geometry_msgs/Vector3\nfloat64 x\nfloat64 y\nfloat64 z\n"
+
+constexpr Ros2Schema kSchemas[] = {
+    {"sensor_msgs/msg/JointState",
+     "std_msgs/Header header\nstring[] name\nfloat64[] position\nfloat64[] velocity\n"
+     "float64[] effort\n" AFHUB_HEADER_DEFINITION},
+    {"geometry_msgs/msg/PoseStamped",
+     "std_msgs/Header header\ngeometry_msgs/Pose pose\n" AFHUB_HEADER_DEFINITION
+         AFHUB_MSG_SEPARATOR
+     "MSG: geometry_msgs/Pose\nPoint position\nQuaternion orientation\n" AFHUB_MSG_SEPARATOR
+     "MSG: geometry_msgs/Point\nfloat64 x\nfloat64 y\nfloat64 z\n" AFHUB_MSG_SEPARATOR
+     "MSG: geometry_msgs/Quaternion\nfloat64 x 0\nfloat64 y 0\nfloat64 z 0\nfloat64 w 1\n"},
+    {"geometry_msgs/msg/TwistStamped",
+     "std_msgs/Header header\ngeometry_msgs/Twist twist\n" AFHUB_HEADER_DEFINITION
+         AFHUB_MSG_SEPARATOR "MSG: geometry_msgs/Twist\nVector3 linear\nVector3 angular\n"
+             AFHUB_VECTOR3_DEFINITION},
+    {"geometry_msgs/msg/WrenchStamped",
+     "std_msgs/Header header\ngeometry_msgs/Wrench wrench\n" AFHUB_HEADER_DEFINITION
+         AFHUB_MSG_SEPARATOR "MSG: geometry_msgs/Wrench\nVector3 force\nVector3 torque\n"
+             AFHUB_VECTOR3_DEFINITION},
+    {"rosgraph_msgs/msg/Clock",
+     "builtin_interfaces/Time clock\n" AFHUB_MSG_SEPARATOR
+     "MSG: builtin_interfaces/Time\nint32 sec\nuint32 nanosec\n"},
+};
+enum SchemaIndex : std::size_t { kJointState, kPoseStamped, kTwistStamped, kWrenchStamped, kClock };
+
+// Plain CDR, little-endian (the encapsulation rmw writes): each primitive aligned to its
+// size, counted from after the 4-byte encapsulation header.
+class Cdr {
+ public:
+  explicit Cdr(std::vector<std::uint8_t>& out) : out_(out) {
+    out_.assign({0x00, 0x01, 0x00, 0x00});  // CDR_LE
+  }
+  template <class T>
+  Cdr& put(T value) {
+    while ((out_.size() - 4) % sizeof(T) != 0) out_.push_back(0);
+    const auto* bytes = reinterpret_cast<const std::uint8_t*>(&value);
+    out_.insert(out_.end(), bytes, bytes + sizeof value);
+    return *this;
+  }
+  Cdr& string(const std::string& text) {
+    put(static_cast<std::uint32_t>(text.size() + 1));
+    out_.insert(out_.end(), text.begin(), text.end());
+    out_.push_back(0);
+    return *this;
+  }
+  // builtin_interfaces/Time, then the frame: a std_msgs/Header.
+  Cdr& header(double sim_time_s, const std::string& frame_id) {
+    time(sim_time_s);
+    return string(frame_id);
+  }
+  Cdr& time(double seconds) {
+    const long long ns = std::llround(seconds * 1e9);
+    const long long sec = ns >= 0 ? ns / 1'000'000'000 : (ns - 999'999'999) / 1'000'000'000;
+    put(static_cast<std::int32_t>(sec));
+    return put(static_cast<std::uint32_t>(ns - sec * 1'000'000'000));
+  }
+  Cdr& vec(const Vec3& v) { return put(v.x).put(v.y).put(v.z); }
+
+ private:
+  std::vector<std::uint8_t>& out_;
+};
+
+const BodyState& state_of(std::span<const std::uint8_t> payload, BodyState& copy) {
+  std::memcpy(&copy, payload.data(), std::min(payload.size(), sizeof copy));
+  return copy;
+}
+
+const char* const kWorldFrame = "world";
+
+}  // namespace
+
+std::span<const Ros2Schema> ros2_schemas() { return kSchemas; }
+
+std::string ros2_topic_name(const std::string& channel, const std::string& suffix) {
+  std::string name;
+  for (const std::string& part : {channel, suffix}) {
+    bool part_start = true;
+    for (const char c : part) {
+      if (c == '/') {
+        part_start = true;
+        continue;
+      }
+      if (part_start) {
+        name += '/';
+        if (c >= '0' && c <= '9') name += '_';
+        part_start = false;
+      }
+      const bool allowed = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') ||
+                           (c >= '0' && c <= '9') || c == '_';
+      name += allowed ? c : '_';
+    }
+  }
+  return name;
+}
+
+std::vector<Ros2Output> ros2_outputs(PayloadKind kind, const std::string& channel,
+                                     const std::vector<std::string>& joint_names) {
+  // A state is copied out of the buffer once per message: a BodyState is a few
+  // kilobytes, and the writing thread has the time.
+  auto state = std::make_shared<BodyState>();
+  switch (kind) {
+    case PayloadKind::kBodyState:
+      return {
+          {ros2_topic_name(channel, "joint_states"), kJointState,
+           [state, joint_names](auto payload, auto& out) {
+             const BodyState& s = state_of(payload, *state);
+             const std::size_t n = std::min<std::size_t>(s.joint_count, joint_names.size());
+             Cdr cdr(out);
+             cdr.header(s.header.sim_time_s, "").put(static_cast<std::uint32_t>(n));
+             for (std::size_t j = 0; j < n; ++j) cdr.string(joint_names[j]);
+             for (double JointSample::*field :
+                  {&JointSample::position, &JointSample::velocity, &JointSample::effort}) {
+               cdr.put(static_cast<std::uint32_t>(n));
+               for (std::size_t j = 0; j < n; ++j) cdr.put(s.joints[j].*field);
+             }
+           }},
+          {ros2_topic_name(channel, "pose"), kPoseStamped,
+           [state](auto payload, auto& out) {
+             const BodyState& s = state_of(payload, *state);
+             const Quaternion& q = s.pose.orientation;
+             Cdr(out)
+                 .header(s.header.sim_time_s, kWorldFrame)
+                 .vec(s.pose.position_m)
+                 .put(q.x)
+                 .put(q.y)
+                 .put(q.z)
+                 .put(q.w);
+           }},
+          {ros2_topic_name(channel, "twist"), kTwistStamped,
+           [state](auto payload, auto& out) {
+             const BodyState& s = state_of(payload, *state);
+             Cdr(out)
+                 .header(s.header.sim_time_s, kWorldFrame)
+                 .vec(s.twist.linear_mps)
+                 .vec(s.twist.angular_radps);
+           }},
+          {ros2_topic_name(channel, "wrench"), kWrenchStamped,
+           [state](auto payload, auto& out) {
+             const BodyState& s = state_of(payload, *state);
+             Cdr(out)
+                 .header(s.header.sim_time_s, kWorldFrame)
+                 .vec(s.wrench.force_n)
+                 .vec(s.wrench.torque_nm);
+           }},
+      };
+    case PayloadKind::kWorldState:
+      return {{"/clock", kClock, [](auto payload, auto& out) {
+                 PayloadHeader header;
+                 std::memcpy(&header, payload.data(), sizeof header);
+                 Cdr(out).time(header.sim_time_s);
+               }}};
+    default:
+      return {};
+  }
+}
+
+}  // namespace afhub::mcap
