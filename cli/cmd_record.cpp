@@ -33,8 +33,8 @@ constexpr int kDefaultFifoPriority = 10;
 
 bool may_use_fifo(int priority) {
   rlimit limit{};
-  return geteuid() == 0 || (getrlimit(RLIMIT_RTPRIO, &limit) == 0 &&
-                            limit.rlim_cur >= static_cast<rlim_t>(priority));
+  return geteuid() == 0 ||
+         (getrlimit(RLIMIT_RTPRIO, &limit) == 0 && limit.rlim_cur >= static_cast<rlim_t>(priority));
 }
 
 std::string progress_line(const mcap::RecordProgress& p, double mb_per_s) {

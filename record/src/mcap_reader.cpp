@@ -117,7 +117,7 @@ class Scanner {
                    std::to_string(left) + " after it");
       if (length > kMaxRecordBytes)
         throw Error(file_.path() + ": " + what + " holds " + std::to_string(length) +
-                    " bytes, more than afhub reads in one record (1 GiB)");
+                    " bytes, more than afhub reads in one record (256 MiB)");
       if (first && opcode != kHeader)
         throw Error(file_.path() + ": the first record is a " + what +
                     ", not the header the spec requires");
@@ -198,7 +198,7 @@ class Scanner {
                   "\", which afhub does not read (it reads none, lz4 and zstd)");
     if (size > kMaxRecordBytes)
       throw Error(what + " says it holds " + std::to_string(size) +
-                  " bytes uncompressed, more than afhub reads in one chunk (1 GiB)");
+                  " bytes uncompressed, more than afhub reads in one chunk (256 MiB)");
     uncompressed_.resize(size);
     decompress(*compression, records, uncompressed_, what);
     if (crc != 0 && crc32(uncompressed_) != crc)

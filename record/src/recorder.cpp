@@ -4,7 +4,6 @@
 #include <unistd.h>
 
 #include <atomic>
-#include <cstring>
 #include <ctime>
 #include <exception>
 #include <mutex>
@@ -67,10 +66,10 @@ class Session {
         realtime_offset_ns_(realtime_ns() - monotonic_ns()) {
     if (ros2_) {
       for (const Ros2Schema& schema : ros2_schemas())
-        ros2_schema_ids_.push_back(writer_.add_schema(
-            schema.name, "ros2msg",
-            {reinterpret_cast<const std::uint8_t*>(schema.definition),
-             std::strlen(schema.definition)}));
+        ros2_schema_ids_.push_back(
+            writer_.add_schema(schema.name, "ros2msg",
+                               {reinterpret_cast<const std::uint8_t*>(schema.definition.data()),
+                                schema.definition.size()}));
     } else {
       for (const RecordedPayload& payload : recorded_payloads())
         schema_ids_[payload.kind] = writer_.add_schema(payload.schema_name, kLayoutSchemaEncoding,
@@ -206,8 +205,8 @@ class Session {
       if (!known_.insert(channel).second) continue;
       const Metadata metadata =
           device ? Metadata{} : Metadata{{"joint_names", joint_names_text(entry.joint_names)}};
-      add(body_state_channel(channel),
-          device ? PayloadKind::kDeviceState : PayloadKind::kBodyState, metadata, device);
+      add(body_state_channel(channel), device ? PayloadKind::kDeviceState : PayloadKind::kBodyState,
+          metadata, device);
       if (device || options_.commands)
         add(body_command_channel(channel),
             device ? PayloadKind::kDeviceCommand : PayloadKind::kBodyCommand, metadata, true);
@@ -222,8 +221,7 @@ class Session {
     metadata["afhub_event"] = id.event;
     Recorded recorded;
     recorded.reader = std::make_unique<RawLatestReader>(id, kind);
-    recorded.channel_id =
-        declare(payload_of(kind), "/" + id.instance + "/" + id.event, metadata);
+    recorded.channel_id = declare(payload_of(kind), "/" + id.instance + "/" + id.event, metadata);
     recorded.per_step = kind == PayloadKind::kBodyState || kind == PayloadKind::kWorldState;
     recorded.wakes = wakes;
     const std::lock_guard lock(discovered_mutex_);

@@ -10,37 +10,40 @@ namespace afhub::mcap {
 
 namespace {
 
-// Dependencies follow a message's own definition, each after a line of 80 '='.
-#define AFHUB_MSG_SEPARATOR \
-  "================================================================================\n"
-#define AFHUB_HEADER_DEFINITION                                                          \
-  AFHUB_MSG_SEPARATOR "MSG: std_msgs/Header\nbuiltin_interfaces/Time stamp\nstring frame_id\n" \
-  AFHUB_MSG_SEPARATOR "MSG: builtin_interfaces/Time\nint32 sec\nuint32 nanosec\n"
-#define AFHUB_VECTOR3_DEFINITION \
-  AFHUB_MSG_SEPARATOR "MSG: geometry_msgs/Vector3\nfloat64 x\nfloat64 y\nfloat64 z\n"
+// A dependency's definition, after the message's own: a line of 80 '=', its name, its
+// fields, as ROS 2 bags hold them.
+std::string dependency(const char* name, const char* fields) {
+  return std::string(80, '=') + "\nMSG: " + name + "\n" + fields;
+}
 
-constexpr Ros2Schema kSchemas[] = {
-    {"sensor_msgs/msg/JointState",
-     "std_msgs/Header header\nstring[] name\nfloat64[] position\nfloat64[] velocity\n"
-     "float64[] effort\n" AFHUB_HEADER_DEFINITION},
-    {"geometry_msgs/msg/PoseStamped",
-     "std_msgs/Header header\ngeometry_msgs/Pose pose\n" AFHUB_HEADER_DEFINITION
-         AFHUB_MSG_SEPARATOR
-     "MSG: geometry_msgs/Pose\nPoint position\nQuaternion orientation\n" AFHUB_MSG_SEPARATOR
-     "MSG: geometry_msgs/Point\nfloat64 x\nfloat64 y\nfloat64 z\n" AFHUB_MSG_SEPARATOR
-     "MSG: geometry_msgs/Quaternion\nfloat64 x 0\nfloat64 y 0\nfloat64 z 0\nfloat64 w 1\n"},
-    {"geometry_msgs/msg/TwistStamped",
-     "std_msgs/Header header\ngeometry_msgs/Twist twist\n" AFHUB_HEADER_DEFINITION
-         AFHUB_MSG_SEPARATOR "MSG: geometry_msgs/Twist\nVector3 linear\nVector3 angular\n"
-             AFHUB_VECTOR3_DEFINITION},
-    {"geometry_msgs/msg/WrenchStamped",
-     "std_msgs/Header header\ngeometry_msgs/Wrench wrench\n" AFHUB_HEADER_DEFINITION
-         AFHUB_MSG_SEPARATOR "MSG: geometry_msgs/Wrench\nVector3 force\nVector3 torque\n"
-             AFHUB_VECTOR3_DEFINITION},
-    {"rosgraph_msgs/msg/Clock",
-     "builtin_interfaces/Time clock\n" AFHUB_MSG_SEPARATOR
-     "MSG: builtin_interfaces/Time\nint32 sec\nuint32 nanosec\n"},
-};
+std::vector<Ros2Schema> make_schemas() {
+  const std::string header =
+      dependency("std_msgs/Header", "builtin_interfaces/Time stamp\nstring frame_id\n") +
+      dependency("builtin_interfaces/Time", "int32 sec\nuint32 nanosec\n");
+  const std::string vector3 =
+      dependency("geometry_msgs/Vector3", "float64 x\nfloat64 y\nfloat64 z\n");
+  return {
+      {"sensor_msgs/msg/JointState",
+       "std_msgs/Header header\nstring[] name\nfloat64[] position\nfloat64[] velocity\n"
+       "float64[] effort\n" +
+           header},
+      {"geometry_msgs/msg/PoseStamped",
+       "std_msgs/Header header\ngeometry_msgs/Pose pose\n" + header +
+           dependency("geometry_msgs/Pose", "Point position\nQuaternion orientation\n") +
+           dependency("geometry_msgs/Point", "float64 x\nfloat64 y\nfloat64 z\n") +
+           dependency("geometry_msgs/Quaternion",
+                      "float64 x 0\nfloat64 y 0\nfloat64 z 0\nfloat64 w 1\n")},
+      {"geometry_msgs/msg/TwistStamped",
+       "std_msgs/Header header\ngeometry_msgs/Twist twist\n" + header +
+           dependency("geometry_msgs/Twist", "Vector3 linear\nVector3 angular\n") + vector3},
+      {"geometry_msgs/msg/WrenchStamped",
+       "std_msgs/Header header\ngeometry_msgs/Wrench wrench\n" + header +
+           dependency("geometry_msgs/Wrench", "Vector3 force\nVector3 torque\n") + vector3},
+      {"rosgraph_msgs/msg/Clock",
+       "builtin_interfaces/Time clock\n" +
+           dependency("builtin_interfaces/Time", "int32 sec\nuint32 nanosec\n")},
+  };
+}
 enum SchemaIndex : std::size_t { kJointState, kPoseStamped, kTwistStamped, kWrenchStamped, kClock };
 
 // Plain CDR, little-endian (the encapsulation rmw writes): each primitive aligned to its
@@ -89,7 +92,10 @@ const char* const kWorldFrame = "world";
 
 }  // namespace
 
-std::span<const Ros2Schema> ros2_schemas() { return kSchemas; }
+std::span<const Ros2Schema> ros2_schemas() {
+  static const std::vector<Ros2Schema> schemas = make_schemas();
+  return schemas;
+}
 
 std::string ros2_topic_name(const std::string& channel, const std::string& suffix) {
   std::string name;
@@ -105,8 +111,8 @@ std::string ros2_topic_name(const std::string& channel, const std::string& suffi
         if (c >= '0' && c <= '9') name += '_';
         part_start = false;
       }
-      const bool allowed = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') ||
-                           (c >= '0' && c <= '9') || c == '_';
+      const bool allowed =
+          (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_';
       name += allowed ? c : '_';
     }
   }

@@ -16,13 +16,13 @@
 namespace afhub::mcap {
 
 struct Ros2Schema {
-  const char* name;        // "sensor_msgs/msg/JointState"
-  const char* definition;  // the .msg text with its dependencies, as ROS 2 bags hold it
+  std::string name;        // "sensor_msgs/msg/JointState"
+  std::string definition;  // the .msg text with its dependencies, as ROS 2 bags hold it
 };
 std::span<const Ros2Schema> ros2_schemas();
 
-using Encode = std::function<void(std::span<const std::uint8_t> payload,
-                                  std::vector<std::uint8_t>& out)>;
+using Encode =
+    std::function<void(std::span<const std::uint8_t> payload, std::vector<std::uint8_t>& out)>;
 
 // One ROS 2 message made from each payload of an afhub channel.
 struct Ros2Output {

@@ -162,11 +162,10 @@ TEST(Record, AsAROS2BagItsJointStatesDecodeWithAnIndependentCdrReader) {
     EXPECT_EQ(schema["encoding"], "ros2msg");
     schemas.insert(schema["name"].get<std::string>());
   }
-  EXPECT_EQ(schemas, (std::set<std::string>{"sensor_msgs/msg/JointState",
-                                            "geometry_msgs/msg/PoseStamped",
-                                            "geometry_msgs/msg/TwistStamped",
-                                            "geometry_msgs/msg/WrenchStamped",
-                                            "rosgraph_msgs/msg/Clock"}));
+  EXPECT_EQ(schemas,
+            (std::set<std::string>{"sensor_msgs/msg/JointState", "geometry_msgs/msg/PoseStamped",
+                                   "geometry_msgs/msg/TwistStamped",
+                                   "geometry_msgs/msg/WrenchStamped", "rosgraph_msgs/msg/Clock"}));
   for (const json& channel : out["channels"]) EXPECT_EQ(channel["messageEncoding"], "cdr");
   // The first JointState: the body's joints by name, a value of each kind per joint, and
   // a stamp of simulated time.

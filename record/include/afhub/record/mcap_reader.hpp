@@ -43,8 +43,9 @@ struct ScanResult {
   std::uint64_t chunks = 0, messages = 0;
 };
 
-// The most a record may hold for afhub to read it (a chunk is decompressed in memory).
-inline constexpr std::uint64_t kMaxRecordBytes = 1ull << 30;
+// The most a record, or a chunk decompressed, may hold for afhub to read it (it is held
+// in memory): afhub writes chunks of 1 MiB, other tools a few MiB.
+inline constexpr std::uint64_t kMaxRecordBytes = 256ull << 20;
 
 // Reads `path` from the start. Throws afhub::Error for a file that cannot be opened, is
 // not MCAP, or is corrupt.
