@@ -37,30 +37,33 @@ Compressor::~Compressor() {
   ZSTD_freeCCtx(static_cast<ZSTD_CCtx*>(context_));
 }
 
-void Compressor::compress(std::span<const std::uint8_t> in, std::vector<std::uint8_t>& out) {
+std::size_t Compressor::append(std::span<const std::uint8_t> in, std::vector<std::uint8_t>& out) {
+  const std::size_t start = out.size();
   std::size_t written = 0;
   switch (compression_) {
     case Compression::kNone:
-      out.assign(in.begin(), in.end());
-      return;
+      out.insert(out.end(), in.begin(), in.end());
+      return in.size();
     case Compression::kLz4: {
       LZ4F_preferences_t preferences{};
       preferences.frameInfo.contentSize = in.size();  // lets a reader size its buffer
-      out.resize(LZ4F_compressFrameBound(in.size(), &preferences));
-      written = LZ4F_compressFrame(out.data(), out.size(), in.data(), in.size(), &preferences);
+      out.resize(start + LZ4F_compressFrameBound(in.size(), &preferences));
+      written = LZ4F_compressFrame(out.data() + start, out.size() - start, in.data(), in.size(),
+                                   &preferences);
       if (LZ4F_isError(written))
         throw Error(std::string("lz4 compression failed: ") + LZ4F_getErrorName(written));
       break;
     }
     case Compression::kZstd:
-      out.resize(ZSTD_compressBound(in.size()));
-      written = ZSTD_compressCCtx(static_cast<ZSTD_CCtx*>(context_), out.data(), out.size(),
-                                  in.data(), in.size(), kZstdLevel);
+      out.resize(start + ZSTD_compressBound(in.size()));
+      written = ZSTD_compressCCtx(static_cast<ZSTD_CCtx*>(context_), out.data() + start,
+                                  out.size() - start, in.data(), in.size(), kZstdLevel);
       if (ZSTD_isError(written))
         throw Error(std::string("zstd compression failed: ") + ZSTD_getErrorName(written));
       break;
   }
-  out.resize(written);
+  out.resize(start + written);
+  return written;
 }
 
 void decompress(Compression compression, std::span<const std::uint8_t> in,

@@ -101,33 +101,36 @@ void Writer::flush_chunk() {
 }
 
 void Writer::write_chunk() {
-  compressor_.compress(chunk_, compressed_);
   ChunkIndex index{};
   index.start_ns = chunk_start_ns_;
   index.end_ns = chunk_end_ns_;
   index.offset = file_bytes();
-  index.compressed_size = compressed_.size();
   index.uncompressed_size = chunk_.size();
-  RecordBuilder(pending_, kChunk)
-      .u64(chunk_start_ns_)
-      .u64(chunk_end_ns_)
-      .u64(chunk_.size())
-      .u32(crc32(chunk_))
-      .str(compression_name(options_.compression))
-      .u64(compressed_.size())
-      .raw(compressed_);
+  {
+    RecordBuilder record(pending_, kChunk);
+    record.u64(chunk_start_ns_)
+        .u64(chunk_end_ns_)
+        .u64(chunk_.size())
+        .u32(crc32(chunk_))
+        .str(compression_name(options_.compression));
+    const std::size_t length_at = pending_.size();
+    record.u64(0);  // the records' length, known once they are compressed in place
+    index.compressed_size = compressor_.append(chunk_, pending_);
+    std::memcpy(pending_.data() + length_at, &index.compressed_size, sizeof index.compressed_size);
+  }
   index.length = file_bytes() - index.offset;
   const std::uint64_t indexes_start = file_bytes();
-  for (const auto& [channel, entries] : chunk_entries_) {
+  for (auto& [channel, entries] : chunk_entries_) {
+    if (entries.empty()) continue;
     index.message_index_offsets[channel] = file_bytes();
     RecordBuilder record(pending_, kMessageIndex);
     record.u16(channel).u32(static_cast<std::uint32_t>(entries.size() * 16));
     for (const auto& [time, offset] : entries) record.u64(time).u64(offset);
+    entries.clear();  // its capacity kept for the next chunk
   }
   index.message_index_length = file_bytes() - indexes_start;
   chunk_indexes_.push_back(std::move(index));
   chunk_.clear();
-  chunk_entries_.clear();
 }
 
 void Writer::write_out() {

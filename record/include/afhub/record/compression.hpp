@@ -18,15 +18,15 @@ std::string_view compression_name(Compression compression);
 // The compression named `name` in a file ("", "lz4", "zstd"), or nullopt.
 std::optional<Compression> compression_named(std::string_view name);
 
-// Compresses `in` into `out` (replacing its contents). Keeps its codec's context
-// between calls: one per thread.
+// Compresses `in` onto the end of `out`, and says how many bytes it added. Keeps its
+// codec's context between calls: one per thread.
 class Compressor {
  public:
   explicit Compressor(Compression compression);
   ~Compressor();
   Compressor(const Compressor&) = delete;
   Compressor& operator=(const Compressor&) = delete;
-  void compress(std::span<const std::uint8_t> in, std::vector<std::uint8_t>& out);
+  std::size_t append(std::span<const std::uint8_t> in, std::vector<std::uint8_t>& out);
 
  private:
   Compression compression_;

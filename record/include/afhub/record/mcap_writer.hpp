@@ -97,9 +97,9 @@ class Writer {
   std::vector<ChunkIndex> chunk_indexes_;
   std::vector<MetadataIndex> metadata_indexes_;
 
-  // The open chunk: its records, and each channel's (log time, offset) entries.
+  // The open chunk: its records, and each channel's (log time, offset) entries (empty
+  // vectors kept between chunks, so that a chunk allocates nothing once warm).
   std::vector<std::uint8_t> chunk_;
-  std::vector<std::uint8_t> compressed_;
   std::map<std::uint16_t, std::vector<std::pair<std::uint64_t, std::uint64_t>>> chunk_entries_;
   std::uint64_t chunk_start_ns_ = 0, chunk_end_ns_ = 0;
 

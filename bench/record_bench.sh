@@ -1,0 +1,104 @@
+#!/usr/bin/env bash
+# What recording costs (issue 32), measured, never asserted:
+#   1. The example scene (19 bodies) simulated at 1 kHz by `afhub run`, with `afhub ctl
+#      sine` commanding its arm, alternately without and with `afhub record --commands`
+#      running beside it (PAIRS pairs of runs, STEPS steps each): each run's step p50 and
+#      p99 from `afhub run --report`, and the ratio of the medians with and without.
+#   2. A thousand bodies at 1 kHz from `afhub synth --bodies 1000 --joints 8` (a stand-in
+#      for a physics, which takes 3 to 4 ms a step for a thousand bodies on the project's
+#      2-core VM) recorded for SECONDS s: messages/s, MB/s into the file, dropped and
+#      missed updates, and the recorder's CPU (user + system time over wall time).
+#
+#   bench/record_bench.sh [SECONDS] [PAIRS] [STEPS] [BUILD_DIR]
+#       (defaults: 60 s, 3 pairs, 10000 steps, build/dev)
+#
+# As root it runs in a private mount namespace (its own /tmp, /dev/shm, /run). The files
+# are written to /tmp there (a tmpfs: the disk's speed is not what is measured).
+set -euo pipefail
+
+seconds=${1:-60}
+pairs=${2:-3}
+steps=${3:-10000}
+root=$(cd "$(dirname "$0")/.." && pwd)
+build=$(cd "${4:-$root/build/dev}" && pwd)
+afhub=$build/bin/afhub
+[[ -x $afhub ]] || { echo "record_bench.sh: $afhub is missing: build it" >&2; exit 1; }
+
+source "$root/bench/scene_script.sh"
+private_namespace "$0" "$seconds" "$pairs" "$steps" "$build"
+
+"$afhub" hub > "$work/hub.log" 2>&1 &
+pids+=($!)
+for _ in $(seq 100); do "$afhub" status > /dev/null 2>&1 && break; sleep 0.1; done
+
+# CPU seconds (user + system) of process $1 so far.
+cpu_seconds() {
+  awk -v tick="$(getconf CLK_TCK)" '{ print ($14 + $15) / tick }' "/proc/$1/stat"
+}
+
+echo "== the example scene at 1 kHz, $steps steps a run: step time without and with the recorder"
+p99s_without=() p99s_with=()
+for pair in $(seq "$pairs"); do
+  for recorded in 0 1; do
+    report=$work/run-$pair-$recorded.json
+    "$afhub" run --launch "$root/examples/models/launch.yaml" -l 0,1,2 --paused --steps "$steps" \
+      --report "$report" --no-autostart > "$work/run.log" 2>&1 &
+    run=$!
+    "$afhub" ctl sine arm/base --wait 30 > "$work/ctl.log" 2>&1 &
+    ctl=$!
+    recorder=""
+    if [[ $recorded == 1 ]]; then
+      "$afhub" record -o "$work/scene.mcap" --commands > "$work/record.log" 2>&1 &
+      recorder=$!
+    fi
+    sleep 2  # the controller and the recorder join before the first step
+    "$afhub" world resume > /dev/null
+    wait "$run"
+    kill "$ctl" 2> /dev/null || true
+    [[ -n $recorder ]] && kill -INT "$recorder" && wait "$recorder" || true
+    wait "$ctl" 2> /dev/null || true
+    read -r p50 p99 < <(python3 -c "import json,sys; t=json.load(open(sys.argv[1]))['step_time_us']; print(t['p50'], t['p99'])" "$report")
+    printf 'run %d %-15s step p50 %6.1f us  p99 %6.1f us%s\n' "$pair" \
+      "$([[ $recorded == 1 ]] && echo 'with recorder' || echo 'without')" "$p50" "$p99" \
+      "$([[ $recorded == 1 ]] && echo "  ($(tail -1 "$work/record.log" | sed 's/^afhub record: //'))")"
+    if [[ $recorded == 1 ]]; then p99s_with+=("$p99"); else p99s_without+=("$p99"); fi
+  done
+done
+python3 - "${p99s_without[*]}" "${p99s_with[*]}" <<'PY'
+import statistics, sys
+without = [float(x) for x in sys.argv[1].split()]
+with_ = [float(x) for x in sys.argv[2].split()]
+a, b = statistics.median(without), statistics.median(with_)
+print(f"median step p99: {a:.1f} us without, {b:.1f} us with the recorder: {b / a:.3f}x")
+PY
+
+echo "== a thousand bodies at 1 kHz (afhub synth, 8 joints: 1184-byte states), recorded for $seconds s"
+"$afhub" synth --bodies 1000 --joints 8 --no-autostart > "$work/synth.log" 2>&1 &
+pids+=($!)
+sleep 3
+for compression in zstd lz4 none; do
+  "$afhub" record -o "$work/thousand.mcap" --duration "$seconds" --compression "$compression" \
+    > "$work/thousand.log" 2>&1 &
+  recorder=$!
+  start=$(date +%s.%N)
+  cpu=0
+  while kill -0 "$recorder" 2> /dev/null; do
+    cpu=$(cpu_seconds "$recorder" 2> /dev/null || echo "$cpu")
+    sleep 0.5
+  done
+  end=$(date +%s.%N)
+  python3 - "$compression" "$work/thousand.log" "$cpu" "$start" "$end" \
+    "$(stat -c %s "$work/thousand.mcap")" <<'PY'
+import re, sys
+line = [l for l in open(sys.argv[2]) if l.startswith("afhub record: recorded")][-1]
+number = lambda pattern: float(re.search(pattern, line).group(1))
+recorded, messages = number(r"recorded ([0-9.]+) s"), number(r"(\d+) messages")
+dropped, missed = number(r"dropped (\d+)"), number(r"missed (\d+)")
+cpu, wall, size = float(sys.argv[3]), float(sys.argv[5]) - float(sys.argv[4]), int(sys.argv[6])
+published = messages + dropped + missed
+print(f"{sys.argv[1]:>5}: {messages / recorded:,.0f} messages/s written, {size / recorded / 1e6:.1f} MB/s "
+      f"into the file, dropped {100 * dropped / published:.1f} %, missed {100 * missed / published:.1f} % "
+      f"of {published / recorded:,.0f} updates/s; recorder CPU {100 * cpu / wall:.0f} % of one core")
+PY
+  rm -f "$work/thousand.mcap"
+done
