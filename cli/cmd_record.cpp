@@ -6,8 +6,10 @@
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 
+#include "afhub/hub/hub_loss.hpp"
 #include "afhub/hub/startup_wait.hpp"
 #include "afhub/record/mcap_reader.hpp"
 #include "afhub/record/recorder.hpp"
@@ -50,6 +52,14 @@ std::string progress_line(const mcap::RecordProgress& p, double mb_per_s) {
   return line;
 }
 
+// "run.mcap" as the `n`-th file after it: "run.n.mcap".
+std::string numbered(const std::string& path, unsigned n) {
+  const std::filesystem::path file(path);
+  return (file.parent_path() / (file.stem().string() + "." + std::to_string(n) +
+                                (file.has_extension() ? file.extension().string() : "")))
+      .string();
+}
+
 int run_recover(const std::string& path) {
   const mcap::ScanResult result = mcap::recover(path);
   std::printf("%s: %s; rewrote %llu messages in %llu chunks with a summary and index\n",
@@ -78,6 +88,11 @@ int run_record(RecordCliOptions& options) {
   if (options.realtime.fifo_priority == 0 && may_use_fifo(kDefaultFifoPriority))
     options.record.loop.fifo_priority = kDefaultFifoPriority;
   install_stop_signal_handlers();
+  // A hub lost: the file is finished (the recorder's hook), and the process re-executes
+  // to wait for the next hub and record into the next file: run.mcap, run.1.mcap, ...
+  survive_hub_loss("afhub record");
+  if (reattach_count() > 0)
+    options.record.output = numbered(options.record.output, reattach_count());
   const StartupWait wait(options.wait_s);
   wait.connect_to_hub("record");
 

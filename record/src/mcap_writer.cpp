@@ -18,6 +18,7 @@ Writer::Writer(const std::string& path, Options options)
   if (fd_ < 0) throw Error("cannot create " + path + ": " + std::strerror(errno));
   pending_.insert(pending_.end(), std::begin(kMagic), std::end(kMagic));
   RecordBuilder(pending_, kHeader).str(options_.profile).str(options_.library);
+  write_out();  // from now on the file reads as MCAP, cut off
 }
 
 Writer::~Writer() {

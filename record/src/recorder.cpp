@@ -12,6 +12,7 @@
 
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/channel.hpp"
+#include "afhub/hub/hub_loss.hpp"
 #include "afhub/hub/sample_waiter.hpp"
 #include "afhub/record/mcap_writer.hpp"
 #include "afhub/shm_layout/device.hpp"
@@ -56,6 +57,15 @@ struct Declared {
   Metadata metadata;
 };
 
+class Session;
+// Makes a session the one a hub loss finishes, for its lifetime.
+struct ActiveSession {
+  explicit ActiveSession(Session* session);
+  ~ActiveSession();
+  ActiveSession(const ActiveSession&) = delete;
+  ActiveSession& operator=(const ActiveSession&) = delete;
+};
+
 class Session {
  public:
   Session(const RecordOptions& options)
@@ -80,6 +90,7 @@ class Session {
 
   RecordProgress run(const std::function<bool()>& keep_going,
                      const std::function<void(const RecordProgress&)>& progress) {
+    const ActiveSession active(this);
     std::thread writing([this] {
       // Compression gives way to the physics and to the reading loop.
       setpriority(PRIO_PROCESS, static_cast<id_t>(gettid()), kWriterNice);
@@ -244,32 +255,70 @@ class Session {
       std::int64_t next_flush_ns = monotonic_ns() + kChunkFlushPeriodNs;
       while (true) {
         const bool last_round = reading_done_;
-        add_declared();
-        const std::size_t taken = queue_.drain([&](const QueuedMessage& m, auto data) {
-          if (m.channel_id >= outputs_.size()) add_declared();  // declared after the first call
-          for (const Output& output : outputs_[m.channel_id]) {
-            if (output.encode) output.encode(data, encoded_);
-            writer_.write({output.channel, m.sequence, m.log_time_ns, m.publish_time_ns,
-                           output.encode ? std::span<const std::uint8_t>(encoded_) : data});
+        std::size_t taken = 0;
+        {
+          const std::lock_guard lock(writing_mutex_);
+          if (closed_) return;  // by a hub loss (finish_on_hub_loss)
+          taken = write_buffered();
+          if (!last_round && monotonic_ns() >= next_flush_ns) {
+            writer_.flush_chunk();
+            next_flush_ns = monotonic_ns() + kChunkFlushPeriodNs;
           }
-        });
-        messages_written_ = writer_.message_count();
-        file_bytes_ = writer_.file_bytes();
-        if (last_round) break;
-        if (monotonic_ns() >= next_flush_ns) {
-          writer_.flush_chunk();
-          next_flush_ns = monotonic_ns() + kChunkFlushPeriodNs;
+          if (last_round) {
+            writer_.close();
+            closed_ = true;
+            file_bytes_ = writer_.file_bytes();
+            return;
+          }
         }
         if (taken == 0) usleep(1000);
       }
-      writer_.close();
-      file_bytes_ = writer_.file_bytes();
     } catch (...) {
       write_error_ = std::current_exception();
       write_failed_ = true;
     }
   }
 
+  // The declared channels, then the buffer's messages, into the file (writing_mutex_
+  // held); returns how many messages.
+  std::size_t write_buffered() {
+    add_declared();
+    const std::size_t taken = queue_.drain([&](const QueuedMessage& m, auto data) {
+      if (m.channel_id >= outputs_.size()) add_declared();  // declared after the first call
+      for (const Output& output : outputs_[m.channel_id]) {
+        if (output.encode) output.encode(data, encoded_);
+        writer_.write({output.channel, m.sequence, m.log_time_ns, m.publish_time_ns,
+                       output.encode ? std::span<const std::uint8_t>(encoded_) : data});
+      }
+    });
+    messages_written_ = writer_.message_count();
+    file_bytes_ = writer_.file_bytes();
+    return taken;
+  }
+
+ public:
+  // The hub is gone and this process re-executes next (hub_loss.hpp), on whichever
+  // thread noticed: the file gets what was buffered, its summary and footer, so that it
+  // ends complete. The writing thread, if it was writing, finishes its batch first, and
+  // writes nothing after.
+  void finish_on_hub_loss() noexcept {
+    reading_done_ = true;
+    const std::lock_guard lock(writing_mutex_);
+    if (closed_) return;
+    closed_ = true;
+    try {
+      write_buffered();
+      writer_.close();
+      std::fprintf(stderr, "afhub record: the hub is gone: %s closed with %llu messages\n",
+                   options_.output.c_str(),
+                   static_cast<unsigned long long>(writer_.message_count()));
+    } catch (const std::exception& error) {
+      std::fprintf(stderr, "afhub record: the hub is gone, and %s could not be closed: %s\n",
+                   options_.output.c_str(), error.what());
+    }
+  }
+
+ private:
   // The file's channels for each channel declared since: one of afhub's payloads, or
   // with --profile ros2 the ROS 2 messages made of it.
   void add_declared() {
@@ -341,7 +390,9 @@ class Session {
   std::atomic<std::int64_t> first_sample_ns_{0};
   std::atomic<std::uint64_t> dropped_{0}, missed_{0}, channel_count_{0};
 
-  // Between the two threads.
+  // Between the threads.
+  std::mutex writing_mutex_;  // held while the file is written
+  bool closed_ = false;       // the file is complete (writing_mutex_)
   std::mutex declared_mutex_;
   std::vector<Declared> declared_;
   std::atomic<bool> reading_done_{false}, write_failed_{false};
@@ -357,6 +408,23 @@ class Session {
   std::vector<std::uint8_t> encoded_;
   std::atomic<std::uint64_t> messages_written_{0}, file_bytes_{0};
 };
+
+// The session a hub loss finishes (set while one runs).
+std::atomic<Session*> active_session{nullptr};
+
+ActiveSession::ActiveSession(Session* session) {
+  static std::once_flag hooked;
+  std::call_once(hooked, [] {
+    on_hub_lost([] {
+      if (Session* active = active_session.load()) active->finish_on_hub_loss();
+    });
+  });
+  active_session = session;
+}
+
+ActiveSession::~ActiveSession() {
+  active_session = nullptr;
+}
 
 }  // namespace
 

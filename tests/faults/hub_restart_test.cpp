@@ -402,6 +402,50 @@ bool live_frames(FrameCounter& page, std::chrono::milliseconds timeout) {
 // `afhub view` outlives its hub like every client (before, it served its last frame as
 // live forever). Meanwhile its pages are told the hub is lost; once a hub is back they
 // get live frames again, on the same port.
+// `afhub record` through a hub SIGKILL: the file it was writing ends complete (its
+// summary and footer), and once a hub is back it records into the next file.
+TEST(HubLoss, ARecordingEndsCompleteWhenTheHubGoesAndGoesOnIntoTheNextFile) {
+  const std::string log = "/tmp/afhub-fault-record.log", file = "/tmp/afhub-fault-record.mcap",
+                    next = "/tmp/afhub-fault-record.1.mcap";
+  ScopedProcess hub(start_test_hub());
+  ASSERT_GT(hub.pid, 0);
+  ScopedProcess physics =
+      spawn_afhub({"run", std::string(AFHUB_EXAMPLE_MODELS) + "/arm7.yaml", "--no-autostart"},
+                  "/tmp/afhub-fault-record-physics.log");
+  ScopedProcess recorder = spawn_afhub({"record", "-o", file}, log);
+  // `afhub info` of a file as far as it reads: {complete, messages}.
+  const auto info = [](const std::string& path) {
+    const RunResult run = run_afhub({"info", path, "--json"});
+    std::smatch complete, messages;
+    const std::regex complete_key("\"complete\":(true|false)"),
+        messages_key("\"messages\":([0-9]+)");
+    if (run.exit_code != 0 || !std::regex_search(run.out, complete, complete_key) ||
+        !std::regex_search(run.out, messages, messages_key))
+      return std::make_pair(false, 0ull);
+    return std::make_pair(complete[1] == "true", std::stoull(messages[1]));
+  };
+  ASSERT_TRUE(wait_until([&] { return info(file).second > 1000; }, 30s)) << read_file(log);
+
+  kill(hub.pid, SIGKILL);
+  waitpid(hub.pid, nullptr, 0);
+  hub.pid = -1;
+  ASSERT_TRUE(wait_until(
+      [&] { return read_file(log).find("the hub is gone: ") != std::string::npos; }, 20s))
+      << read_file(log);
+  const auto [complete, messages] = info(file);
+  EXPECT_TRUE(complete) << read_file(log);
+  EXPECT_GT(messages, 1000u);
+
+  hub.pid = spawn_afhub({"hub"}, "/tmp/afhub-test-hub.log");
+  ASSERT_TRUE(wait_until([] { return probe_roudi() == RoudiPresence::kRunning; }, kHubStartWait));
+  EXPECT_TRUE(wait_until([&] { return info(next).second > 1000; }, 60s)) << read_file(log);
+  EXPECT_NE(read_file(log).find("waiting for a hub"), std::string::npos) << read_file(log);
+  EXPECT_EQ(stop_process(recorder.pid, SIGINT), 0) << read_file(log);
+  recorder.pid = -1;
+  EXPECT_TRUE(info(next).first) << read_file(log);
+  EXPECT_EQ(physics.stop(), 0);
+}
+
 TEST(HubLoss, TheViewerSaysTheHubIsLostThenServesLiveFramesAgain) {
   const std::string view_log = "/tmp/afhub-fault-view.log",
                     physics_log = "/tmp/afhub-fault-view-physics.log";

@@ -389,6 +389,47 @@ TEST(Record, ALockstepRunIsReproducedBitIdenticallyAndAChangedGainIsCaughtAtItsS
   EXPECT_NE(diverged.out.find("afhub/arm/"), std::string::npos) << diverged.out;
 }
 
+TEST(Record, BodiesThatAppearLaterAndAPhysicsRestartedAreRecorded) {
+  afhub::testing::ModelFolder folder;
+  const std::string file = (folder.dir() / "restart.mcap").string();
+  const std::string arm = AFHUB_EXAMPLE_MODELS "/arm7.yaml";
+  const auto log = [&](const std::string& name) { return (folder.dir() / name).string(); };
+  // Messages of the arm's base so far, as the file reads.
+  const auto base_messages = [&] {
+    const json info = info_of(file);
+    for (const json& channel : info["channels"])
+      if (channel["topic"] == "/afhub/arm/base/state")
+        return channel["messages"].get<std::uint64_t>();
+    return std::uint64_t{0};
+  };
+  ScopedProcess recorder(spawn_afhub({"record", "-o", file}, log("record.log")));
+  ASSERT_TRUE(wait_until([&] { return std::filesystem::exists(file); }, 20s));
+  for (int run = 1; run <= 2; ++run) {
+    const std::uint64_t before = base_messages();
+    ScopedProcess physics(spawn_afhub({"run", arm, "--no-autostart"}, log("run.log")));
+    ASSERT_TRUE(wait_until([&] { return base_messages() > before + 1000; }, 60s))
+        << "run " << run << ": " << read_file(log("record.log")) << read_file(log("run.log"));
+  }
+  EXPECT_EQ(stop_process(recorder.pid, SIGINT), 0) << read_file(log("record.log"));
+  // The steps go up, start again from the restarted physics' first, and go up again.
+  struct Steps : mcap::Visitor {
+    std::uint16_t id = 0;
+    std::vector<std::uint64_t> steps;
+    void channel(const mcap::Channel& c) override {
+      if (c.topic == "/afhub/arm/base/state") id = c.id;
+    }
+    void message(const mcap::Message& m) override {
+      if (m.channel_id == id) steps.push_back(m.sequence);
+    }
+  } read;
+  mcap::scan(file, read);
+  std::size_t restarts = 0;
+  for (std::size_t i = 1; i < read.steps.size(); ++i)
+    if (read.steps[i] < read.steps[i - 1]) ++restarts;
+  EXPECT_EQ(restarts, 1u);
+  EXPECT_GT(read.steps.size(), 2000u);
+}
+
 TEST(Record, BadFilesAndOptionsAreClearErrors) {
   afhub::testing::ModelFolder folder;
   const std::string text = (folder.dir() / "notes.mcap").string();
