@@ -9,6 +9,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <regex>
 #include <set>
 #include <thread>
 
@@ -23,6 +24,7 @@
 #include "afhub_process.hpp"
 #include "model_files.hpp"
 #include "strict_json.hpp"
+#include "web_client.hpp"
 
 namespace afhub::test {
 namespace {
@@ -265,6 +267,37 @@ TEST(Record, APlayedRecordingIsSeenAsIfLiveAndPausesAndStepsUnderAfhubWorld) {
       },
       60s))
       << read_file(scene.dir("play.log"));
+
+  // `afhub view` draws it: the scene recorded, its poses moving on in simulated time.
+  ScopedProcess view(spawn_afhub({"view", "--port", "0"}, scene.dir("view.log")));
+  int port = 0;
+  ASSERT_TRUE(wait_until(
+      [&] {
+        std::smatch match;
+        const std::string text = read_file(scene.dir("view.log"));
+        if (!std::regex_search(text, match, std::regex("http://127\\.0\\.0\\.1:([0-9]+)/")))
+          return false;
+        port = std::stoi(match[1]);
+        return true;
+      },
+      20s))
+      << read_file(scene.dir("view.log"));
+  {
+    FrameCounter page(port);
+    ASSERT_TRUE(page.connected());
+    double first = -1.0;
+    EXPECT_TRUE(wait_until(
+        [&] {
+          const double now = page.last_sim_time_s();
+          if (page.binary_frames() < 2 || now <= 0.0) return false;
+          if (first < 0.0) first = now;
+          return now > first;
+        },
+        20s))
+        << page.binary_frames() << " frames\n"
+        << read_file(scene.dir("view.log"));
+  }
+  view.stop();
 
   RunResult pause = run_afhub({"world", "pause"});
   ASSERT_EQ(pause.exit_code, 0) << pause.err;
