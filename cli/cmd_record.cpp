@@ -136,8 +136,10 @@ void register_record(CLI::App& app, Runner& selected) {
   record->add_flag("--devices", options->record.devices, "Record every device's state and command");
   record->add_flag("--commands", options->record.commands,
                    "Record the commands sent to the recorded bodies");
-  record->add_option("--duration", options->record.duration_s,
-                     "Seconds to record from the first message (default: until Ctrl-C)");
+  record->add_option(
+      "--duration", options->record.duration_s,
+      "Seconds to record from the first message (or from the start, when none comes; "
+      "default: until Ctrl-C)");
   record->add_option("--compression", options->compression, "Chunk compression: none, lz4 or zstd")
       ->capture_default_str();
   record

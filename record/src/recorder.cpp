@@ -124,7 +124,8 @@ class Session {
         ChannelId{std::string(kService), world_instance(), std::string(kStateEvent)});
     SampleWaiter waiter;
     waiter.attach(world.raw());
-    std::int64_t next_progress_ns = monotonic_ns() + kProgressPeriodNs;
+    const std::int64_t start_ns = monotonic_ns();
+    std::int64_t next_progress_ns = start_ns + kProgressPeriodNs;
     while (keep_going() && !write_failed_ && !discover_failed_) {
       waiter.wait(kIdleWaitNs);
       const std::int64_t now = monotonic_ns();
@@ -139,8 +140,10 @@ class Session {
         progress(snapshot());
         next_progress_ns = now + kProgressPeriodNs;
       }
-      if (options_.duration_s > 0.0 && first_sample_ns_ != 0 &&
-          now - first_sample_ns_ >= static_cast<std::int64_t>(options_.duration_s * 1e9))
+      // The duration counts from the first message, or from the start while none came.
+      const std::int64_t since = first_sample_ns_ != 0 ? first_sample_ns_.load() : start_ns;
+      if (options_.duration_s > 0.0 &&
+          now - since >= static_cast<std::int64_t>(options_.duration_s * 1e9))
         break;
     }
   }

@@ -463,6 +463,32 @@ TEST(Record, BodiesThatAppearLaterAndAPhysicsRestartedAreRecorded) {
   EXPECT_GT(read.steps.size(), 2000u);
 }
 
+TEST(Record, ADeviceIsRecordedAtItsOwnRateWithDevices) {
+  afhub::testing::ModelFolder folder;
+  const auto log = [&](const std::string& name) { return (folder.dir() / name).string(); };
+  const std::string file = log("device.mcap");
+  // A device without a physics: its own 1 kHz loop wakes the recorder.
+  ScopedProcess device(spawn_afhub(
+      {"device", "run", "virtual", "--name", "hand", "--circle", "0.05,2"}, log("device.log")));
+  ASSERT_TRUE(wait_until(
+      [] { return run_afhub({"ls"}).out.find("device/hand") != std::string::npos; }, 20s))
+      << read_file(log("device.log"));
+  const RunResult recorded = run_afhub({"record", "-o", file, "--devices", "--duration", "2"}, 60s);
+  ASSERT_EQ(recorded.exit_code, 0) << recorded.err;
+  const json info = info_of(file);
+  std::map<std::string, json> channels;
+  for (const json& channel : info["channels"]) channels[channel["topic"]] = channel;
+  ASSERT_TRUE(channels.count("/device/hand/state")) << info.dump();
+  EXPECT_EQ(channels["/device/hand/state"]["schema"], "afhub.DeviceState");
+  EXPECT_GT(channels["/device/hand/state"]["rate_hz"].get<double>(), 900.0);
+  EXPECT_EQ(channels["/device/hand/command"]["schema"], "afhub.DeviceCommand");
+  // Without --devices, none.
+  const RunResult bodies_only =
+      run_afhub({"record", "-o", log("none.mcap"), "--duration", "0.5"}, 60s);
+  ASSERT_EQ(bodies_only.exit_code, 0) << bodies_only.err;
+  EXPECT_EQ(info_of(log("none.mcap")).dump().find("/device/hand"), std::string::npos);
+}
+
 TEST(Record, BadFilesAndOptionsAreClearErrors) {
   afhub::testing::ModelFolder folder;
   const std::string text = (folder.dir() / "notes.mcap").string();

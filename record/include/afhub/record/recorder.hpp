@@ -22,7 +22,7 @@ struct RecordOptions {
   std::vector<std::string> body_globs{"*"};  // fnmatch patterns over body channel names
   bool devices = false;                      // every device's state and command
   bool commands = false;                     // every command sent to a recorded body
-  double duration_s = 0.0;                   // 0: until stopped
+  double duration_s = 0.0;  // from the first message (the start while none came); 0: until stopped
   Compression compression = Compression::kZstd;
   std::size_t buffer_bytes = 256u << 20;
   std::string profile;  // "" (afhub's payloads) or "ros2" (ROS 2 messages, ros2_messages.hpp)
@@ -43,8 +43,8 @@ struct RecordProgress {
   std::uint64_t buffered_bytes = 0;
 };
 
-// Records until `keep_going()` says false or options.duration_s has passed since the
-// first sample, reporting to `progress` about twice a second and once at the end.
+// Records until `keep_going()` says false or options.duration_s has passed (see there),
+// reporting to `progress` about twice a second and once at the end.
 // Needs connect_to_hub(). Throws afhub::Error when the file cannot be written.
 RecordProgress record(const RecordOptions& options, const std::function<bool()>& keep_going,
                       const std::function<void(const RecordProgress&)>& progress);
