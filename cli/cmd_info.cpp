@@ -31,13 +31,13 @@ void print_json(const mcap::FileSummary& s) {
   json.key("messages").value(static_cast<unsigned long long>(s.messages));
   json.key("duration_s").value(s.duration_s());
   json.key("start_ns").value(static_cast<unsigned long long>(s.first_ns));
-  json.key("metadata").begin_object();
+  json.key("metadata").begin_array();  // records may repeat a name (a physics restarted)
   for (const auto& [name, entries] : s.metadata) {
-    json.key(name).begin_object();
+    json.begin_object().key("name").value(name).key("entries").begin_object();
     for (const auto& [key, value] : entries) json.key(key).value(value);
-    json.end_object();
+    json.end_object().end_object();
   }
-  json.end_object();
+  json.end_array();
   json.key("channels").begin_array();
   for (const auto& c : s.channels) {
     json.begin_object();

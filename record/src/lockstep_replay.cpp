@@ -1,5 +1,8 @@
 #include "afhub/record/lockstep_replay.hpp"
 
+#include <signal.h>
+
+#include <cerrno>
 #include <cstring>
 #include <map>
 #include <memory>
@@ -15,6 +18,7 @@
 #include "afhub/shm_layout/error.hpp"
 #include "afhub/shm_layout/payload_check.hpp"
 #include "afhub/shm_layout/world.hpp"
+#include "afhub/shm_layout/world_control.hpp"
 #include "recorded_payloads.hpp"
 #include "state_difference.hpp"
 
@@ -91,7 +95,8 @@ class CommandLoader : public ChannelMap {
     const auto* channel = of(message);
     if (!channel || channel->first != PayloadKind::kBodyCommand) return;
     check(message, PayloadKind::kBodyCommand);
-    const auto& header = *reinterpret_cast<const PayloadHeader*>(message.data.data());
+    PayloadHeader header;
+    std::memcpy(&header, message.data.data(), sizeof header);  // checked: at least a header
     by_step[header.sim_step].push_back(
         {channel->second, {message.data.begin(), message.data.end()}});
   }
@@ -118,7 +123,7 @@ class Replayer : public ChannelMap {
     const std::uint64_t step = recorded.header.sim_step;
     if (!started_) start(step);
     while (step_ < step) advance();
-    if (step < step_) return;  // a state of a step already passed (recorded late): compared then
+    if (step < step_) return;  // a state of a step already passed (read late): not compared
     const BodyState* live = live_state(channel->second);
     if (!live || live->header.sim_step != step)
       throw Error("the physics shows no state of " + channel->second + " at step " +
@@ -139,11 +144,16 @@ class Replayer : public ChannelMap {
   // The physics waits at the recording's first step (a lockstep physics holds step 0
   // for its client).
   void start(std::uint64_t first_step) {
-    const WorldState* world = wait_for_world([](const WorldState&) { return true; });
+    // A world state whose physics lives (a stopped physics' last one stays readable).
+    const WorldState* world = wait_for_world(
+        [](const WorldState& w) {
+          return ::kill(static_cast<pid_t>(w.header.publisher_pid), 0) == 0 || errno != ESRCH;
+        },
+        "");
     if (!world->lockstep)
       throw Error(
           "the physics is not in lockstep: start it with `afhub run MODEL --lockstep "
-          "--wait-for 1`, then replay");
+          "--paused`, then replay");
     if (world->header.sim_step != first_step)
       throw Error("the recording starts at step " + std::to_string(first_step) +
                   ", the physics is at step " + std::to_string(world->header.sim_step) +
@@ -154,6 +164,43 @@ class Replayer : public ChannelMap {
                   std::to_string(first_step) + ": was it recorded with --commands, in lockstep?");
     step_ = first_step;
     started_ = true;
+    resume_after_first_ = world->paused;
+    physics_pid_ = world->header.publisher_pid;
+  }
+
+  // A physics started paused (`--paused`) is resumed once it holds every body's first
+  // command: with --wait-for, a physics might take its first step as soon as one body's
+  // command came, before the others joined the barrier. Its readers find this process's
+  // commands (one block for all its bodies) within RouDi's discovery period; then every
+  // body's is read within a period of its paused loop.
+  void resume() {
+    resume_after_first_ = false;
+    // Judged on this physics' world state alone: a stopped one's last stays readable.
+    const std::uint32_t pid = physics_pid_;
+    wait_for_world(
+        [pid](const WorldState& w) {
+          return w.header.publisher_pid == pid && w.lockstep_clients > 0;
+        },
+        "the paused physics did not take this replay's first commands within 10 s");
+    sleep_until_ns(monotonic_ns() + 20'000'000);
+    // Sent until the physics runs: a queue made after a command was sent skips it.
+    afhub::Writer<WorldCommand> writer(
+        ChannelId{std::string(kService), world_instance(), std::string(kCommandEvent)});
+    writer.raw().continue_sequence_after(static_cast<std::uint64_t>(monotonic_ns()));
+    for (int tries = 0; tries < 100; ++tries) {
+      if (WorldCommand* command = writer.loan()) {
+        command->action = WorldAction::kResume;
+        writer.publish(command);
+      }
+      try {
+        wait_for_world(
+            [pid](const WorldState& w) { return w.header.publisher_pid == pid && !w.paused; }, "",
+            100'000'000);
+        return;
+      } catch (const Error&) {
+      }
+    }
+    throw Error("the paused physics did not resume within 10 s");
   }
 
   // Answers step_ with its recorded commands and waits for the next step.
@@ -174,25 +221,33 @@ class Replayer : public ChannelMap {
       static_cast<BodyCommand*>(payload)->lockstep = 1;
       writer.publish(payload);
     }
+    if (resume_after_first_) resume();
     const std::uint64_t next = step_ + 1;
-    wait_for_world([next](const WorldState& w) { return w.header.sim_step >= next; });
+    const std::uint32_t pid = physics_pid_;
+    wait_for_world(
+        [next, pid](const WorldState& w) {
+          return w.header.publisher_pid == pid && w.header.sim_step >= next;
+        },
+        "the physics did not take step " + std::to_string(next) +
+            " within 10 s of the commands answering step " + std::to_string(step_));
     step_ = next;
     ++result.steps;
   }
 
+  // The world state once `done` holds; after `timeout_ns`, throws afhub::Error saying
+  // `waited_for`.
   template <class Done>
-  const WorldState* wait_for_world(Done done) {
-    const std::int64_t give_up = monotonic_ns() + kStepTimeoutNs;
+  const WorldState* wait_for_world(Done done, const std::string& waited_for,
+                                   std::int64_t timeout_ns = kStepTimeoutNs) {
+    const std::int64_t give_up = monotonic_ns() + timeout_ns;
     while (true) {
       const WorldState* world = world_.latest();
       if (world && done(*world)) return world;
       if (!keep_going_()) throw Stop{};
       if (monotonic_ns() > give_up)
-        throw Error(world
-                        ? "the physics did not take step " + std::to_string(step_ + 1) +
-                              " within 10 s of the commands answering step " + std::to_string(step_)
-                        : "no physics is running: start `afhub run MODEL --lockstep "
-                          "--wait-for 1`, then replay");
+        throw Error(world ? waited_for
+                          : "no physics is running: start `afhub run MODEL --lockstep --paused`, "
+                            "then replay");
       waiter_.wait(1'000'000);
     }
   }
@@ -223,6 +278,8 @@ class Replayer : public ChannelMap {
   std::map<std::string, std::unique_ptr<LatestReader<BodyState>>> states_;
   std::map<std::string, std::unique_ptr<RawWriter>> commands_out_;
   bool started_ = false;
+  bool resume_after_first_ = false;
+  std::uint32_t physics_pid_ = 0;  // the physics replayed into
   std::uint64_t step_ = 0;
 };
 

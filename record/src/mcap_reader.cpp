@@ -5,6 +5,9 @@
 #include <cstring>
 #include <filesystem>
 #include <memory>
+#include <set>
+
+#include <zstd.h>
 
 #include "afhub/shm_layout/error.hpp"
 #include "mcap_bytes.hpp"
@@ -58,6 +61,24 @@ class File {
   std::uint64_t size_ = 0;
   std::uint64_t at_ = 0;
 };
+
+// A chunk's uncompressed size checked against what its records can hold, before that
+// much memory is taken: the same size uncompressed, what a zstd frame says it holds
+// (when it says), at most 255 times the bytes of an LZ4 frame (its densest).
+void check_claimed_size(Compression compression, std::span<const std::uint8_t> records,
+                        std::uint64_t size, const std::string& what) {
+  std::uint64_t most = records.size();
+  if (compression == Compression::kLz4) most = records.size() * 255 + 65536;
+  if (compression == Compression::kZstd) {
+    const unsigned long long framed = ZSTD_getFrameContentSize(records.data(), records.size());
+    most = framed == ZSTD_CONTENTSIZE_UNKNOWN ? kMaxRecordBytes
+           : framed == ZSTD_CONTENTSIZE_ERROR ? 0
+                                              : static_cast<std::uint64_t>(framed);
+  }
+  if (size > most || (compression == Compression::kNone && size != most))
+    throw Error(what + " says it holds " + std::to_string(size) + " bytes, which its " +
+                std::to_string(records.size()) + " bytes of records cannot (a corrupt file)");
+}
 
 Schema read_schema(FieldReader& fields) {
   Schema schema;
@@ -199,6 +220,7 @@ class Scanner {
     if (size > kMaxRecordBytes)
       throw Error(what + " says it holds " + std::to_string(size) +
                   " bytes uncompressed, more than afhub reads in one chunk (256 MiB)");
+    check_claimed_size(*compression, records, size, what);
     uncompressed_.resize(size);
     decompress(*compression, records, uncompressed_, what);
     if (crc != 0 && crc32(uncompressed_) != crc)
@@ -240,11 +262,14 @@ class Copier : public Visitor {
       open();
     }
   }
+  // A schema or channel another writer repeats (in each chunk) is copied once.
   void schema(const Schema& schema) override {
+    if (!seen_schemas_.insert(schema.id).second) return;
     held_schemas_.push_back(schema);
     if (writer_) add(schema);
   }
   void channel(const Channel& channel) override {
+    if (!seen_channels_.insert(channel.id).second) return;
     held_channels_.push_back(channel);
     if (writer_) add(channel);
   }
@@ -291,6 +316,7 @@ class Copier : public Visitor {
   std::vector<Channel> held_channels_;
   std::vector<std::pair<std::string, Metadata>> held_metadata_;
   std::map<std::uint16_t, std::uint16_t> schema_ids_, channel_ids_;
+  std::set<std::uint16_t> seen_schemas_, seen_channels_;
 };
 
 }  // namespace

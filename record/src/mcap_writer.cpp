@@ -22,7 +22,6 @@ Writer::Writer(const std::string& path, Options options)
 }
 
 Writer::~Writer() {
-  if (closed_) return;
   try {
     close();
   } catch (const Error&) {
@@ -135,13 +134,20 @@ void Writer::write_chunk() {
 }
 
 void Writer::write_out() {
+  if (failed_) throw Error("cannot write " + path_ + " any more: an earlier write failed");
   std::size_t done = 0;
   while (done < pending_.size()) {
     const ssize_t n = ::write(fd_, pending_.data() + done, pending_.size() - done);
     if (n < 0 && errno == EINTR) continue;
-    if (n <= 0)
+    if (n <= 0) {
+      // What was written stays; nothing is written after it, so that the file ends at
+      // its last complete chunk plus part of one, which a reader sees as cut off.
+      failed_ = true;
+      file_offset_ += done;
+      pending_.clear();
       throw Error("cannot write " + path_ + ": " + std::strerror(n < 0 ? errno : ENOSPC) +
                   " (the file keeps its complete chunks; `afhub record --recover` indexes them)");
+    }
     done += static_cast<std::size_t>(n);
   }
   file_offset_ += pending_.size();
@@ -149,7 +155,7 @@ void Writer::write_out() {
 }
 
 void Writer::close() {
-  if (closed_) return;
+  if (closed_ || failed_) return;
   closed_ = true;  // whatever happens below, once
   if (!chunk_.empty()) write_chunk();
   RecordBuilder(pending_, kDataEnd).u32(0);  // 0: no data section CRC (the chunks carry theirs)

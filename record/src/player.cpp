@@ -100,7 +100,9 @@ class Player : public Visitor {
     if (found == replayed_.end() || !found->second.writer) return;
     Replayed& replayed = found->second;
     if (first_log_ns_ == 0) first_log_ns_ = message.log_time_ns;
-    const double at_s = static_cast<double>(message.log_time_ns - first_log_ns_) * 1e-9;
+    // Signed: a message logged before the first (another writer's order) is not far ahead.
+    const double at_s =
+        static_cast<double>(static_cast<std::int64_t>(message.log_time_ns - first_log_ns_)) * 1e-9;
     // The scene is published once by a physics: replayed whenever it comes.
     const bool once = replayed.kind == PayloadKind::kSceneDescription;
     if (!once && at_s < options_.start_s) return;
@@ -112,7 +114,8 @@ class Player : public Visitor {
     if (error != PayloadError::kNone)
       throw Error(options_.file + ": a message on " + replayed.topic + " is not a valid payload (" +
                   field + "): " + describe(error));
-    const auto& header = *reinterpret_cast<const PayloadHeader*>(message.data.data());
+    PayloadHeader header;
+    std::memcpy(&header, message.data.data(), sizeof header);  // checked: at least a header
     if (!once) wait_until_due(at_s, header.sim_step, replayed.kind);
     publish(replayed, message.data);
     if (replayed.kind == PayloadKind::kWorldState) {
@@ -163,11 +166,10 @@ class Player : public Visitor {
     while (world_commands_.next(command)) {
       switch (command.action) {
         case WorldAction::kPause:
-          if (!paused_) paused_at_ns_ = monotonic_ns();
           paused_ = true;
           break;
         case WorldAction::kResume:
-          if (paused_ && pass_start_ns_ != 0) pass_start_ns_ += monotonic_ns() - paused_at_ns_;
+          pass_start_ns_ = 0;  // the next message sets the time base again
           paused_ = false;
           steps_allowed_ = 0;
           break;
@@ -207,7 +209,6 @@ class Player : public Visitor {
   std::int64_t pass_start_ns_ = 0;  // when the range's start was (would have been) published
 
   bool paused_ = false;
-  std::int64_t paused_at_ns_ = 0;
   std::uint64_t steps_allowed_ = 0;
   std::uint64_t current_step_ = ~0ull;
   std::vector<std::uint8_t> last_world_;

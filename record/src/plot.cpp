@@ -65,20 +65,29 @@ Panel panel_of(const std::string& field, const std::vector<std::string>& joints)
   throw Error("--fields: no field '" + field + "'; plot takes " + kPlotFields);
 }
 
-// The body's states, as rows of simulated time and each panel's values.
+// The body's states, as rows of simulated time and each panel's values. The body is
+// the one whose channel matches, wherever in the file it first appears.
 class Series : public Visitor {
  public:
   explicit Series(const PlotOptions& options) : options_(options) {}
 
   void channel(const Channel& channel) override {
     const auto instance = channel.metadata.find("afhub_instance");
-    if (instance != channel.metadata.end() && channel.topic.ends_with("/state") &&
-        channel.metadata.count("joint_names"))
-      bodies_[instance->second] = channel;
+    if (instance == channel.metadata.end() || !channel.topic.ends_with("/state") ||
+        !channel.metadata.count("joint_names"))
+      return;
+    const std::string& name = instance->second;
+    bodies_ += (bodies_.empty() ? "" : ", ") + name;
+    if (name != options_.body && !name.ends_with("/" + options_.body)) return;
+    if (!body.empty() && name != body) ambiguous_ = true;
+    if (!body.empty()) return;
+    body = name;
+    channel_id_ = channel.id;
+    const std::vector<std::string> joints = joint_names_in(channel.metadata);
+    for (const std::string& field : options_.fields) panels.push_back(panel_of(field, joints));
   }
   void message(const Message& message) override {
-    if (!chosen_) choose();
-    if (message.channel_id != chosen_->id) return;
+    if (body.empty() || message.channel_id != channel_id_) return;
     const char* field = nullptr;
     if (check_payload(message.data.data(), message.data.size(), PayloadKind::kBodyState, &field) !=
         PayloadError::kNone)
@@ -89,34 +98,23 @@ class Series : public Visitor {
     row.push_back(state_.header.sim_time_s);
     for (const Panel& panel : panels) panel.values(state_, row);
   }
+  // Throws afhub::Error when no body, or several, answered to the name.
+  void require_one() const {
+    if (body.empty() || ambiguous_)
+      throw Error(options_.file +
+                  (body.empty() ? " records no body named '" : " records several bodies named '") +
+                  options_.body + "'; it records " + (bodies_.empty() ? "none" : bodies_));
+  }
 
   std::string body;
   std::vector<Panel> panels;
   std::vector<std::vector<double>> rows;
 
  private:
-  // The body asked for, among those recorded before the first message.
-  void choose() {
-    std::vector<std::string> matches;
-    std::string all;
-    for (const auto& [name, channel] : bodies_) {
-      if (name == options_.body || name.ends_with("/" + options_.body)) matches.push_back(name);
-      all += (all.empty() ? "" : ", ") + name;
-    }
-    if (matches.size() != 1)
-      throw Error(
-          options_.file +
-          (matches.empty() ? " records no body named '" : " records several bodies named '") +
-          options_.body + "'; it records " + (all.empty() ? "none" : all));
-    body = matches[0];
-    chosen_ = &bodies_.at(body);
-    const std::vector<std::string> joints = joint_names_in(chosen_->metadata);
-    for (const std::string& field : options_.fields) panels.push_back(panel_of(field, joints));
-  }
-
   const PlotOptions& options_;
-  std::map<std::string, Channel> bodies_;
-  const Channel* chosen_ = nullptr;
+  std::string bodies_;  // every body recorded, for the error
+  bool ambiguous_ = false;
+  std::uint16_t channel_id_ = 0;
   BodyState state_;
 };
 
@@ -160,9 +158,8 @@ std::size_t plot(const PlotOptions& options) {
     throw Error("--out " + options.out + ": plot writes .png or .svg files");
   Series series(options);
   scan(options.file, series);
-  if (series.rows.empty())
-    throw Error(options.file + " holds no state of " +
-                (series.body.empty() ? options.body : series.body));
+  series.require_one();
+  if (series.rows.empty()) throw Error(options.file + " holds no state of " + series.body);
 
   char folder[] = "/tmp/afhub-plot-XXXXXX";
   if (!mkdtemp(folder)) throw Error("cannot make a folder for the plot's data in /tmp");

@@ -4,8 +4,10 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <cstring>
 #include <ctime>
 #include <exception>
+#include <fstream>
 #include <mutex>
 #include <set>
 #include <thread>
@@ -17,6 +19,7 @@
 #include "afhub/record/mcap_writer.hpp"
 #include "afhub/shm_layout/device.hpp"
 #include "afhub/shm_layout/error.hpp"
+#include "afhub/shm_layout/scene.hpp"
 #include "afhub/shm_layout/world.hpp"
 #include "record_queue.hpp"
 #include "recorded_payloads.hpp"
@@ -38,12 +41,24 @@ std::int64_t realtime_ns() {
   return static_cast<std::int64_t>(now.tv_sec) * 1'000'000'000 + now.tv_nsec;
 }
 
+// "crc32 0x1234abcd, 5678 bytes" of a file, or why it could not be read.
+std::string file_fingerprint(const char* path) {
+  std::ifstream in(path, std::ios::binary);
+  const std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)), {});
+  if (!in.eof() && !in) return std::string("unreadable: ") + std::strerror(errno);
+  char text[64];
+  std::snprintf(text, sizeof text, "crc32 0x%08x, %zu bytes", crc32(bytes), bytes.size());
+  return text;
+}
+
 // A channel of the hub and its channel in the file.
 struct Recorded {
   std::unique_ptr<RawLatestReader> reader;
   std::uint16_t channel_id = 0;
   bool per_step = false;  // a state: one message per step (a paused physics republishes it)
   bool wakes = false;     // its updates wake the reading loop
+  bool once = false;      // published once (the scene): never dropped, retried
+  bool retry = false;     // its last sample found the buffer full
   bool seen = false;
   std::uint32_t publisher_pid = 0;
   std::uint64_t last = 0;  // its last step (per_step) or sequence
@@ -96,10 +111,11 @@ class Session {
       setpriority(PRIO_PROCESS, static_cast<id_t>(gettid()), kWriterNice);
       write_loop();
     });
-    // The catalog is read, and readers made, beside the reading loop: never in its way.
-    std::thread discovering([this] { discover_loop(); });
+    // The catalog is read, readers made and progress told beside the reading loop:
+    // never in its way.
+    std::thread discovering([this, &progress] { discover_loop(progress); });
     try {
-      read_loop(keep_going, progress);
+      read_loop(keep_going);
     } catch (...) {
       reading_done_ = true;
       discovering.join();
@@ -117,15 +133,13 @@ class Session {
   }
 
  private:
-  void read_loop(const std::function<bool()>& keep_going,
-                 const std::function<void(const RecordProgress&)>& progress) {
+  void read_loop(const std::function<bool()>& keep_going) {
     apply_realtime(options_.loop, "afhub record");
     LatestReader<WorldState> world(
         ChannelId{std::string(kService), world_instance(), std::string(kStateEvent)});
     SampleWaiter waiter;
     waiter.attach(world.raw());
     const std::int64_t start_ns = monotonic_ns();
-    std::int64_t next_progress_ns = start_ns + kProgressPeriodNs;
     while (keep_going() && !write_failed_ && !discover_failed_) {
       waiter.wait(kIdleWaitNs);
       const std::int64_t now = monotonic_ns();
@@ -133,12 +147,8 @@ class Session {
       world.latest();  // taken, so that the waiter sleeps until the next step
       for (Recorded& recorded : recorded_) {
         const void* payload = recorded.reader->latest();
-        if (payload && recorded.reader->updated())
+        if (payload && (recorded.reader->updated() || recorded.retry))
           sample(recorded, payload, recorded.reader->latest_bytes(), now);
-      }
-      if (now >= next_progress_ns) {
-        progress(snapshot());
-        next_progress_ns = now + kProgressPeriodNs;
       }
       // The duration counts from the first message, or from the start while none came.
       const std::int64_t since = first_sample_ns_ != 0 ? first_sample_ns_.load() : start_ns;
@@ -168,25 +178,34 @@ class Session {
   // its publish time the writer's stamp.
   void sample(Recorded& recorded, const void* payload, std::uint32_t bytes,
               std::int64_t now_ns) noexcept {
-    const auto& header = *static_cast<const PayloadHeader*>(payload);
+    PayloadHeader header;
+    std::memcpy(&header, payload, sizeof header);  // checked by the reader: at least a header
     const std::uint64_t key = recorded.per_step ? header.sim_step : header.sequence;
     const bool same_writer = recorded.seen && recorded.publisher_pid == header.publisher_pid;
     if (same_writer && key == recorded.last) return;  // a paused physics' step again
-    if (same_writer && key > recorded.last + 1) missed_ += key - recorded.last - 1;
-    recorded.seen = true;
-    recorded.publisher_pid = header.publisher_pid;
-    recorded.last = key;
-    if (first_sample_ns_ == 0) first_sample_ns_ = now_ns;
     QueuedMessage message;
     message.channel_id = recorded.channel_id;
     message.sequence = static_cast<std::uint32_t>(key);
     message.publish_time_ns =
         static_cast<std::uint64_t>(header.publish_stamp_ns + realtime_offset_ns_);
     message.log_time_ns = static_cast<std::uint64_t>(now_ns + realtime_offset_ns_);
-    if (!queue_.push(message, {static_cast<const std::uint8_t*>(payload), bytes})) ++dropped_;
+    recorded.retry = false;
+    if (!queue_.push(message, {static_cast<const std::uint8_t*>(payload), bytes})) {
+      // Published once (the scene): tried again at the next wake until there is room.
+      if (recorded.once) {
+        recorded.retry = true;
+        return;
+      }
+      ++dropped_;
+    }
+    if (same_writer && key > recorded.last + 1) missed_ += key - recorded.last - 1;
+    recorded.seen = true;
+    recorded.publisher_pid = header.publisher_pid;
+    recorded.last = key;
+    if (first_sample_ns_ == 0) first_sample_ns_ = now_ns;
   }
 
-  void discover_loop() {
+  void discover_loop(const std::function<void(const RecordProgress&)>& progress) {
     try {
       // The world's clock, and what a viewer draws (the scene once, every body's pose at
       // display rate): what `afhub play` needs to replay a run into `afhub view`.
@@ -197,10 +216,17 @@ class Session {
       add(world_channel(kSceneEvent), PayloadKind::kSceneDescription, {}, false);
       add(world_channel(kScenePosesEvent), PayloadKind::kScenePoses, {}, false);
       CatalogReader catalog;
+      std::int64_t next_progress_ns = monotonic_ns() + kProgressPeriodNs;
       while (!reading_done_) {
         discover(catalog);
         const std::int64_t next_ns = monotonic_ns() + kDiscoveryPeriodNs;
-        while (!reading_done_ && monotonic_ns() < next_ns) usleep(10'000);
+        while (!reading_done_ && monotonic_ns() < next_ns) {
+          usleep(10'000);
+          if (monotonic_ns() >= next_progress_ns) {
+            progress(snapshot());
+            next_progress_ns += kProgressPeriodNs;
+          }
+        }
       }
     } catch (...) {
       discover_error_ = std::current_exception();
@@ -238,6 +264,7 @@ class Session {
     recorded.channel_id = declare(payload_of(kind), "/" + id.instance + "/" + id.event, metadata);
     recorded.per_step = kind == PayloadKind::kBodyState || kind == PayloadKind::kWorldState;
     recorded.wakes = wakes;
+    recorded.once = kind == PayloadKind::kSceneDescription;
     const std::lock_guard lock(discovered_mutex_);
     discovered_.push_back(std::move(recorded));
     discovered_ready_.store(true, std::memory_order_release);
@@ -288,6 +315,7 @@ class Session {
     add_declared();
     const std::size_t taken = queue_.drain([&](const QueuedMessage& m, auto data) {
       if (m.channel_id >= outputs_.size()) add_declared();  // declared after the first call
+      if (kinds_[m.channel_id] == PayloadKind::kSceneDescription) name_models(data);
       for (const Output& output : outputs_[m.channel_id]) {
         if (output.encode) output.encode(data, encoded_);
         writer_.write({output.channel, m.sequence, m.log_time_ns, m.publish_time_ns,
@@ -322,12 +350,31 @@ class Session {
   }
 
  private:
+  // The model files a physics' scene names, with their sizes and CRC-32s as this
+  // machine reads them now, as the file's "afhub.models" metadata (once per physics).
+  void name_models(std::span<const std::uint8_t> scene) {
+    PayloadHeader header;
+    std::memcpy(&header, scene.data(), sizeof header);
+    if (!models_named_.insert(header.publisher_pid).second) return;
+    std::uint32_t count = 0;
+    std::memcpy(&count, scene.data() + offsetof(SceneDescription, model_file_count), sizeof count);
+    Metadata models;
+    for (std::uint32_t f = 0; f < count; ++f) {  // checked by the reader: NUL-terminated
+      const char* path = reinterpret_cast<const char*>(scene.data()) +
+                         offsetof(SceneDescription, model_files) + f * kScenePathBufferSize;
+      models[path] = file_fingerprint(path);
+    }
+    writer_.add_metadata("afhub.models", models);
+  }
+
   // The file's channels for each channel declared since: one of afhub's payloads, or
   // with --profile ros2 the ROS 2 messages made of it.
   void add_declared() {
     const std::lock_guard lock(declared_mutex_);
     for (const Declared& d : declared_) {
       outputs_.resize(d.id + 1);
+      kinds_.resize(d.id + 1);
+      kinds_[d.id] = d.payload.kind;
       std::vector<Output>& outputs = outputs_[d.id];
       if (!ros2_) {
         outputs.push_back({writer_.add_channel(schema_ids_.at(d.payload.kind), d.topic,
@@ -408,6 +455,8 @@ class Session {
     Encode encode;
   };
   std::vector<std::vector<Output>> outputs_;
+  std::vector<PayloadKind> kinds_;        // of each declared channel
+  std::set<std::uint32_t> models_named_;  // the physics whose models are in the file
   std::vector<std::uint8_t> encoded_;
   std::atomic<std::uint64_t> messages_written_{0}, file_bytes_{0};
 };

@@ -1,6 +1,6 @@
 // Where two body states of one step differ, in what the physics computes (pose, twist,
-// wrenches, joints, sensors, contacts), bit for bit; clocks, counters and senders
-// are left out.
+// wrenches, joints, sensor distances, the contact count), bit for bit; clocks, counters
+// and senders are left out.
 #pragma once
 
 #include <string>

@@ -96,6 +96,9 @@ const char* scene_problem(const SceneDescription& scene, std::size_t bytes) noex
     return "SceneDescription.model_folder_count";
   for (std::uint32_t i = 0; i < scene.model_folder_count; ++i)
     if (!terminated(scene.model_folders[i])) return "SceneDescription.model_folders";
+  if (scene.model_file_count > kMaxSceneModelFiles) return "SceneDescription.model_file_count";
+  for (std::uint32_t i = 0; i < scene.model_file_count; ++i)
+    if (!terminated(scene.model_files[i])) return "SceneDescription.model_files";
   if (scene.body_count > kMaxSceneBodies || bytes < scene_description_bytes(scene.body_count))
     return "SceneDescription.body_count";
   for (std::uint32_t b = 0; b < scene.body_count; ++b) {

@@ -3,7 +3,10 @@
 // `recover` gives it its index again; bad files are errors naming what and where.
 // (tests/record/mcap_check reads the writer's files with an independent reader.)
 #include <gtest/gtest.h>
+#include <sys/resource.h>
 #include <unistd.h>
+
+#include <csignal>
 
 #include <filesystem>
 #include <fstream>
@@ -143,6 +146,41 @@ TEST_F(McapFile, AFileCutOffReadsToItsLastCompleteChunkAndRecoverGivesItsIndexBa
   EXPECT_EQ(recovered.channels.size(), 2u);
   EXPECT_EQ(recovered.metadata_records.size(), 1u);
   EXPECT_FALSE(fs::exists(file + ".recovering"));
+}
+
+TEST_F(McapFile, ADiskThatFillsUpLeavesAFileCutOffNotCorrupt) {
+  // The file size limit stands for a full disk: a write past it fails (EFBIG).
+  const std::string file = path("full.mcap");
+  signal(SIGXFSZ, SIG_IGN);
+  rlimit before{};
+  getrlimit(RLIMIT_FSIZE, &before);
+  rlimit small = before;
+  small.rlim_cur = 100 * 1024 + 123;  // within a chunk
+  std::string error;
+  {
+    Writer writer(file, {"afhub", "afhub", Compression::kNone, 16 * 1024});
+    const auto schema = writer.add_schema("s", "e", {});
+    const auto channel = writer.add_channel(schema, "/t", "afhub");
+    setrlimit(RLIMIT_FSIZE, &small);
+    try {
+      for (std::uint32_t s = 1; s <= 3000; ++s) {
+        const auto data = payload(channel, s);
+        writer.write({channel, s, s, s, data});
+      }
+    } catch (const Error& e) {
+      error = e.what();
+    }
+    setrlimit(RLIMIT_FSIZE, &before);  // room again when the writer is destroyed
+  }
+  EXPECT_NE(error.find("cannot write"), std::string::npos) << error;
+  EXPECT_LE(fs::file_size(file), small.rlim_cur);
+  Collected read;
+  const ScanResult cut = scan(file, read);  // no CRC error: nothing was written twice
+  EXPECT_FALSE(cut.complete);
+  EXPECT_GT(cut.messages, 100u);
+  for (std::size_t i = 0; i < read.messages.size(); ++i)
+    ASSERT_EQ(read.messages[i].data, payload(1, static_cast<std::uint32_t>(i + 1)));
+  EXPECT_EQ(recover(file).messages, cut.messages);
 }
 
 // The message of the afhub::Error `scan` throws for `file`, or "" when it throws none.

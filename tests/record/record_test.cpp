@@ -90,7 +90,16 @@ TEST(Record, EveryBodyOfASceneUnderControlIsRecordedAndAnIndependentReaderAgrees
 
   const json info = info_of(file);
   EXPECT_TRUE(info["complete"].get<bool>()) << info.dump();
-  EXPECT_EQ(info["metadata"]["afhub"]["bodies"], "*");
+  // The recording's metadata: afhub's, and the model files the physics loaded.
+  std::map<std::string, json> metadata;
+  for (const json& record : info["metadata"]) metadata[record["name"]] = record["entries"];
+  EXPECT_EQ(metadata["afhub"]["bodies"], "*");
+  for (const char* model : {"arm7.yaml", "rcm.yaml", "gripper.yaml", "floor.yaml", "world.yaml"}) {
+    const std::string path = AFHUB_EXAMPLE_MODELS "/" + std::string(model);
+    ASSERT_TRUE(metadata["afhub.models"].contains(path)) << metadata["afhub.models"].dump();
+    EXPECT_NE(metadata["afhub.models"][path].get<std::string>().find("crc32 0x"),
+              std::string::npos);
+  }
   EXPECT_GE(info["duration_s"].get<double>(), 2.9);
 
   // Every body of the catalog has its state channel, at the physics' rate, its steps in
@@ -404,10 +413,12 @@ TEST(Record, ALockstepRunIsReproducedBitIdenticallyAndAChangedGainIsCaughtAtItsS
   const std::string recorded = read_file(log("record.log"));
   EXPECT_NE(recorded.find("missed 0"), std::string::npos) << recorded;
 
-  // The same model, the recorded commands: every state of every step as recorded.
-  physics = lockstep_physics("replay.log");
+  // The same model, the recorded commands: every state of every step as recorded (the
+  // physics started paused, as the docs advise, and resumed by the replay).
+  physics = lockstep_physics("replay.log", true);
   RunResult replay = run_afhub({"play", file, "--commands-into-physics", "--wait", "10"}, 120s);
-  EXPECT_EQ(replay.exit_code, 0) << replay.out << replay.err << read_file(log("replay.log"));
+  EXPECT_EQ(replay.exit_code, 0) << replay.out << replay.err << read_file(log("replay.log"))
+                                 << run_afhub({"status"}).out;
   const long long steps = number_after(replay.out, "reproduced bit-identically: ");
   EXPECT_GT(steps, 1500) << replay.out;
 

@@ -304,6 +304,17 @@ TEST(PayloadCheck, SceneDescriptionsHoldTheirBodiesAndTerminateTheirPaths) {
             PayloadError::kCountTooLarge);
   EXPECT_STREQ(field, "SceneSoftBody.channel");
   scene->soft_bodies[0].channel.fill('\0');
+  // The model files a recording names.
+  scene->model_file_count = kMaxSceneModelFiles + 1;
+  EXPECT_EQ(check_payload(scene.get(), bytes, PayloadKind::kSceneDescription, &field),
+            PayloadError::kCountTooLarge);
+  EXPECT_STREQ(field, "SceneDescription.model_file_count");
+  scene->model_file_count = 1;
+  scene->model_files[0].fill('/');
+  EXPECT_EQ(check_payload(scene.get(), bytes, PayloadKind::kSceneDescription, &field),
+            PayloadError::kCountTooLarge);
+  EXPECT_STREQ(field, "SceneDescription.model_files");
+  scene->model_file_count = 0;
   // The model folders a viewer serves meshes from.
   scene->model_folder_count = kMaxSceneModelFolders + 1;
   EXPECT_EQ(check_payload(scene.get(), bytes, PayloadKind::kSceneDescription, &field),

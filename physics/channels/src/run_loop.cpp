@@ -64,7 +64,7 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
   if (channels)
     stats = std::make_unique<LoopStatsPublisher>("run", "", options.fast ? 0 : period_ns,
                                                  channels->lockstep(), options.grant);
-  if (channels) channels->publish({});  // step 0: the model as loaded
+  if (channels) channels->publish({0.0, 0.0, control.halted()});  // step 0: the model as loaded
   // The wait for lockstep clients before the first step is setup: the clock starts after it.
   if (channels && channels->lockstep() && !channels->wait_for_clients()) return;
   const std::int64_t start_ns = clock_ns();

@@ -113,6 +113,32 @@ std::filesystem::path model_folder(const std::string& model_file, const std::str
   return common;
 }
 
+// Lists the model files the bodies, joints and world came from, each once, absolute.
+void fill_model_files(const Model& model, SceneDescription& scene,
+                      std::vector<std::string>& warnings) {
+  std::vector<std::string> files;
+  const auto add = [&](const std::string& file) {
+    std::error_code ignored;
+    if (!file.empty()) files.push_back(std::filesystem::absolute(file, ignored).string());
+  };
+  for (const BodySpec& body : model.bodies) add(body.where.file);
+  for (const JointSpec& joint : model.joints) add(joint.where.file);
+  add(model.world.file);
+  std::sort(files.begin(), files.end());
+  files.erase(std::unique(files.begin(), files.end()), files.end());
+  scene.model_file_count = 0;
+  for (const std::string& file : files) {
+    if (scene.model_file_count == kMaxSceneModelFiles ||
+        !copy_text(file, scene.model_files[scene.model_file_count])) {
+      warnings.push_back("a recording does not name " + file + ": the scene description lists " +
+                         std::to_string(kMaxSceneModelFiles) + " model files of at most " +
+                         std::to_string(kScenePathBufferSize - 1) + " characters");
+      continue;
+    }
+    ++scene.model_file_count;
+  }
+}
+
 // Lists the model folders of the bodies' meshes, each once (none inside another).
 void fill_model_folders(const Model& model, SceneDescription& scene,
                         std::vector<std::string>& warnings) {
@@ -200,6 +226,7 @@ void fill_scene(const Simulation& sim, SceneDescription& scene,
     for (std::size_t s = 0; s < shapes; ++s) body.shapes[s] = to_scene_shape(spec.visual_shapes[s]);
   }
   fill_model_folders(model, scene, warnings);
+  fill_model_files(model, scene, warnings);
 }
 
 }  // namespace afhub::physics

@@ -49,7 +49,8 @@ class Writer {
   std::uint16_t add_channel(std::uint16_t schema_id, std::string_view topic,
                             std::string_view message_encoding, const Metadata& metadata = {});
   void add_metadata(std::string_view name, const Metadata& metadata);
-  // Throws afhub::Error when the disk refuses the bytes (full, gone).
+  // Throws afhub::Error when the disk refuses the bytes (full, gone); the file then
+  // stays as it is, cut off, and nothing more is written.
   void write(const Message& message);
   // Writes the open chunk, and every record before it, to the file.
   void flush_chunk();
@@ -107,6 +108,7 @@ class Writer {
   std::uint64_t first_ns_ = 0, last_ns_ = 0;
   std::map<std::uint16_t, std::uint64_t> channel_counts_;
   bool closed_ = false;
+  bool failed_ = false;  // a write failed: the file is left as it is
 };
 
 }  // namespace afhub::mcap

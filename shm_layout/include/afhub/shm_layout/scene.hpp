@@ -27,6 +27,10 @@ inline constexpr std::size_t kScenePathBufferSize = 512;
 // physics loaded; `afhub run` of a launch file loads a few.
 inline constexpr std::size_t kMaxSceneModelFolders = 16;
 
+// Model files a scene lists (ADF, URDF, the world file), for a recording to name what
+// was simulated: a launch file's scene loads a few; a robot of many files, a few tens.
+inline constexpr std::size_t kMaxSceneModelFiles = 32;
+
 // Visual meshes beyond each body's first (a URDF link with several <visual> elements),
 // in all: robots with such links have a few; 64 entries cost 37 KB in every scene
 // chunk. Further ones are left out of the scene and said once by the physics.
@@ -107,6 +111,10 @@ struct SceneDescription {
   std::uint32_t model_folder_count{0};
   std::uint32_t reserved_folders{0};
   std::array<std::array<char, kScenePathBufferSize>, kMaxSceneModelFolders> model_folders{};
+  // The model files loaded, absolute, NUL-terminated: entries [0, model_file_count).
+  std::uint32_t model_file_count{0};
+  std::uint32_t reserved_files{0};
+  std::array<std::array<char, kScenePathBufferSize>, kMaxSceneModelFiles> model_files{};
   std::uint32_t mesh_part_count{0};  // entries [0, mesh_part_count) of `mesh_parts`
   std::uint32_t reserved_parts{0};
   std::array<SceneMeshPart, kMaxSceneMeshParts> mesh_parts{};
