@@ -65,17 +65,15 @@ class ChannelMap : public Visitor {
     const auto found = channels_.find(message.channel_id);
     return found == channels_.end() ? nullptr : &found->second;
   }
-  // The message as a checked payload of `kind`.
-  void check(const Message& message, PayloadKind kind) const {
-    const char* field = nullptr;
-    if (check_payload(message.data.data(), message.data.size(), kind, &field) !=
-        PayloadError::kNone)
-      throw Error(file_ + ": a recorded payload is not valid (" + field + ")");
+  // The message as a checked payload of `kind`, aligned (valid until the next call).
+  const void* check(const Message& message, PayloadKind kind) {
+    return checked_copy(message.data, kind, aligned_, file_ + ": a recorded payload");
   }
 
   std::string file_;
 
  private:
+  std::vector<std::uint64_t> aligned_;
   bool layout_checked_ = false;
   std::map<std::uint16_t, PayloadKind> kinds_;
   std::map<std::uint16_t, std::pair<PayloadKind, std::string>> channels_;

@@ -108,12 +108,8 @@ class Player : public Visitor {
     if (!once && at_s < options_.start_s) return;
     if (options_.end_s > 0.0 && at_s > options_.end_s) throw EndOfPass{false};
 
-    const char* field = nullptr;
-    const PayloadError error =
-        check_payload(message.data.data(), message.data.size(), replayed.kind, &field);
-    if (error != PayloadError::kNone)
-      throw Error(options_.file + ": a message on " + replayed.topic + " is not a valid payload (" +
-                  field + "): " + describe(error));
+    checked_copy(message.data, replayed.kind, aligned_,
+                 options_.file + ": a message on " + replayed.topic);
     PayloadHeader header;
     std::memcpy(&header, message.data.data(), sizeof header);  // checked: at least a header
     if (!once) wait_until_due(at_s, header.sim_step, replayed.kind);
@@ -203,6 +199,7 @@ class Player : public Visitor {
   std::map<std::uint16_t, PayloadKind> kinds_;
   std::map<std::uint16_t, Replayed> replayed_;
   bool layout_checked_ = false;
+  std::vector<std::uint64_t> aligned_;
   std::uint64_t published_ = 0;
 
   std::uint64_t first_log_ns_ = 0;

@@ -88,12 +88,9 @@ class Series : public Visitor {
   }
   void message(const Message& message) override {
     if (body.empty() || message.channel_id != channel_id_) return;
-    const char* field = nullptr;
-    if (check_payload(message.data.data(), message.data.size(), PayloadKind::kBodyState, &field) !=
-        PayloadError::kNone)
-      throw Error(options_.file + ": a state of " + body + " is not a valid payload (" + field +
-                  ")");
-    std::memcpy(&state_, message.data.data(), std::min(message.data.size(), sizeof state_));
+    const void* state = checked_copy(message.data, PayloadKind::kBodyState, aligned_,
+                                     options_.file + ": a state of " + body);
+    std::memcpy(&state_, state, std::min(message.data.size(), sizeof state_));
     std::vector<double>& row = rows.emplace_back();
     row.push_back(state_.header.sim_time_s);
     for (const Panel& panel : panels) panel.values(state_, row);
@@ -115,6 +112,7 @@ class Series : public Visitor {
   std::string bodies_;  // every body recorded, for the error
   bool ambiguous_ = false;
   std::uint16_t channel_id_ = 0;
+  std::vector<std::uint64_t> aligned_;
   BodyState state_;
 };
 

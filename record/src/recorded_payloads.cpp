@@ -1,12 +1,14 @@
 #include "recorded_payloads.hpp"
 
 #include <cstdio>
+#include <cstring>
 
 #include "afhub/shm_layout/body_command.hpp"
 #include "afhub/shm_layout/body_state.hpp"
 #include "afhub/shm_layout/device.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "afhub/shm_layout/layout_id.hpp"
+#include "afhub/shm_layout/payload_check.hpp"
 #include "afhub/shm_layout/scene.hpp"
 #include "afhub/shm_layout/scene_poses.hpp"
 #include "afhub/shm_layout/world.hpp"
@@ -35,6 +37,17 @@ const RecordedPayload& payload_of(PayloadKind kind) {
     if (payload.kind == kind) return payload;
   throw Error("afhub does not record payloads of kind " +
               std::to_string(static_cast<unsigned>(kind)));
+}
+
+const void* checked_copy(std::span<const std::uint8_t> data, PayloadKind kind,
+                         std::vector<std::uint64_t>& buffer, const std::string& what) {
+  buffer.resize(data.size() / sizeof(std::uint64_t) + 1);
+  std::memcpy(buffer.data(), data.data(), data.size());
+  const char* field = nullptr;
+  const PayloadError error = check_payload(buffer.data(), data.size(), kind, &field);
+  if (error != PayloadError::kNone)
+    throw Error(what + " is not a valid payload (" + field + "): " + describe(error));
+  return buffer.data();
 }
 
 std::string joint_names_text(const std::vector<std::string>& names) {

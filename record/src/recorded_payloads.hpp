@@ -28,6 +28,12 @@ const RecordedPayload& payload_of(PayloadKind kind);
 // The schema's data: what the bytes are, with the layout id that must match to read them.
 std::vector<std::uint8_t> payload_schema_text(const RecordedPayload& payload);
 
+// A recorded payload copied into `buffer` (an MCAP message's bytes sit at any offset of
+// its chunk: the copy is aligned as the structs need) and checked as `kind`
+// (check_payload). Throws afhub::Error naming `what` and the field at fault.
+const void* checked_copy(std::span<const std::uint8_t> data, PayloadKind kind,
+                         std::vector<std::uint64_t>& buffer, const std::string& what);
+
 // A body channel's joint names as its channel metadata holds them ("joint_names":
 // comma-separated, in state order), and back.
 std::string joint_names_text(const std::vector<std::string>& names);
