@@ -66,7 +66,7 @@ class ChannelMap : public Visitor {
     return found == channels_.end() ? nullptr : &found->second;
   }
   // The message as a checked payload of `kind`, aligned (valid until the next call).
-  const void* check(const Message& message, PayloadKind kind) {
+  std::span<const std::uint8_t> check(const Message& message, PayloadKind kind) {
     return checked_copy(message.data, kind, aligned_, file_ + ": a recorded payload");
   }
 
@@ -92,11 +92,10 @@ class CommandLoader : public ChannelMap {
   void message(const Message& message) override {
     const auto* channel = of(message);
     if (!channel || channel->first != PayloadKind::kBodyCommand) return;
-    check(message, PayloadKind::kBodyCommand);
+    const auto command = check(message, PayloadKind::kBodyCommand);
     PayloadHeader header;
-    std::memcpy(&header, message.data.data(), sizeof header);  // checked: at least a header
-    by_step[header.sim_step].push_back(
-        {channel->second, {message.data.begin(), message.data.end()}});
+    std::memcpy(&header, command.data(), sizeof header);  // checked: at least a header
+    by_step[header.sim_step].push_back({channel->second, {command.begin(), command.end()}});
   }
 };
 
@@ -115,9 +114,9 @@ class Replayer : public ChannelMap {
   void message(const Message& message) override {
     const auto* channel = of(message);
     if (!channel || channel->first != PayloadKind::kBodyState) return;
-    check(message, PayloadKind::kBodyState);
+    const auto state = check(message, PayloadKind::kBodyState);
     BodyState recorded;
-    std::memcpy(&recorded, message.data.data(), std::min(message.data.size(), sizeof recorded));
+    std::memcpy(&recorded, state.data(), std::min(state.size(), sizeof recorded));
     const std::uint64_t step = recorded.header.sim_step;
     if (!started_) start(step);
     while (step_ < step) advance();

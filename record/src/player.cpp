@@ -108,14 +108,14 @@ class Player : public Visitor {
     if (!once && at_s < options_.start_s) return;
     if (options_.end_s > 0.0 && at_s > options_.end_s) throw EndOfPass{false};
 
-    checked_copy(message.data, replayed.kind, aligned_,
-                 options_.file + ": a message on " + replayed.topic);
+    const auto payload = checked_copy(message.data, replayed.kind, aligned_,
+                                      options_.file + ": a message on " + replayed.topic);
     PayloadHeader header;
-    std::memcpy(&header, message.data.data(), sizeof header);  // checked: at least a header
+    std::memcpy(&header, payload.data(), sizeof header);  // checked: at least a header
     if (!once) wait_until_due(at_s, header.sim_step, replayed.kind);
-    publish(replayed, message.data);
+    publish(replayed, payload);
     if (replayed.kind == PayloadKind::kWorldState) {
-      last_world_.assign(message.data.begin(), message.data.end());
+      last_world_.assign(payload.begin(), payload.end());
       world_writer_ = replayed.writer.get();
     }
   }

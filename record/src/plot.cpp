@@ -88,9 +88,9 @@ class Series : public Visitor {
   }
   void message(const Message& message) override {
     if (body.empty() || message.channel_id != channel_id_) return;
-    const void* state = checked_copy(message.data, PayloadKind::kBodyState, aligned_,
-                                     options_.file + ": a state of " + body);
-    std::memcpy(&state_, state, std::min(message.data.size(), sizeof state_));
+    const auto state = checked_copy(message.data, PayloadKind::kBodyState, aligned_,
+                                    options_.file + ": a state of " + body);
+    std::memcpy(&state_, state.data(), std::min(state.size(), sizeof state_));
     std::vector<double>& row = rows.emplace_back();
     row.push_back(state_.header.sim_time_s);
     for (const Panel& panel : panels) panel.values(state_, row);

@@ -1,5 +1,6 @@
 #include "recorded_payloads.hpp"
 
+#include <cstddef>
 #include <cstdio>
 #include <cstring>
 
@@ -39,15 +40,76 @@ const RecordedPayload& payload_of(PayloadKind kind) {
               std::to_string(static_cast<unsigned>(kind)));
 }
 
-const void* checked_copy(std::span<const std::uint8_t> data, PayloadKind kind,
-                         std::vector<std::uint64_t>& buffer, const std::string& what) {
-  buffer.resize(data.size() / sizeof(std::uint64_t) + 1);
-  std::memcpy(buffer.data(), data.data(), data.size());
+namespace {
+
+// A packed body state: its bytes up to the refusal reason; the reason (kept whole once a
+// command was refused, else left out); the first sensor_ray_count entries of each sensor
+// array; the joints. Its size tells whether the reason is there.
+constexpr std::size_t kReasonAt = offsetof(BodyState, refusal_reason);
+constexpr std::size_t kReasonBytes = offsetof(BodyState, sensor_distances_m) - kReasonAt;  // padded
+constexpr std::size_t kRayBytes = sizeof(double);
+
+std::size_t packed_state_bytes(bool reason, std::uint32_t rays, std::uint32_t joints) {
+  return kReasonAt + (reason ? kReasonBytes : 0) + 2 * rays * kRayBytes +
+         joints * sizeof(JointSample);
+}
+
+// The counts of a state (packed or not): they precede everything left out.
+bool state_counts(std::span<const std::uint8_t> data, std::uint32_t& rays, std::uint32_t& joints) {
+  if (data.size() < kReasonAt) return false;
+  std::memcpy(&rays, data.data() + offsetof(BodyState, sensor_ray_count), sizeof rays);
+  std::memcpy(&joints, data.data() + offsetof(BodyState, joint_count), sizeof joints);
+  return rays <= kMaxSensorRaysPerBody && joints <= kMaxJointsPerBody;
+}
+
+}  // namespace
+
+std::size_t pieces_for_file(std::span<const std::uint8_t> payload, PayloadKind kind,
+                            FilePieces& pieces) {
+  std::uint32_t rays = 0, joints = 0;
+  if (kind != PayloadKind::kBodyState || !state_counts(payload, rays, joints) ||
+      payload.size() != body_state_bytes(joints)) {
+    pieces[0] = payload;  // not a state as the layout has it: kept as it is (checked on reading)
+    return 1;
+  }
+  const bool reason = payload[kReasonAt] != 0;
+  pieces[0] = payload.first(kReasonAt + (reason ? kReasonBytes : 0));
+  pieces[1] = payload.subspan(offsetof(BodyState, sensor_distances_m), rays * kRayBytes);
+  pieces[2] = payload.subspan(offsetof(BodyState, sensor_ranges_m), rays * kRayBytes);
+  pieces[3] = payload.subspan(offsetof(BodyState, joints), joints * sizeof(JointSample));
+  return 4;
+}
+
+std::span<const std::uint8_t> checked_copy(std::span<const std::uint8_t> data, PayloadKind kind,
+                                           std::vector<std::uint64_t>& buffer,
+                                           const std::string& what) {
+  std::uint32_t rays = 0, joints = 0;
+  const bool state = kind == PayloadKind::kBodyState && state_counts(data, rays, joints);
+  const bool packed = state && data.size() != body_state_bytes(joints) &&
+                      (data.size() == packed_state_bytes(true, rays, joints) ||
+                       data.size() == packed_state_bytes(false, rays, joints));
+  const std::size_t bytes = packed ? body_state_bytes(joints) : data.size();
+  buffer.assign(bytes / sizeof(std::uint64_t) + 1, 0);
+  auto* out = reinterpret_cast<std::uint8_t*>(buffer.data());
+  if (!packed) {
+    std::memcpy(out, data.data(), data.size());
+  } else {
+    const bool reason = data.size() == packed_state_bytes(true, rays, joints);
+    const std::uint8_t* in = data.data();
+    const auto take = [&](std::size_t to, std::size_t n) {
+      std::memcpy(out + to, in, n);
+      in += n;
+    };
+    take(0, kReasonAt + (reason ? kReasonBytes : 0));
+    take(offsetof(BodyState, sensor_distances_m), rays * kRayBytes);
+    take(offsetof(BodyState, sensor_ranges_m), rays * kRayBytes);
+    take(offsetof(BodyState, joints), joints * sizeof(JointSample));
+  }
   const char* field = nullptr;
-  const PayloadError error = check_payload(buffer.data(), data.size(), kind, &field);
+  const PayloadError error = check_payload(out, bytes, kind, &field);
   if (error != PayloadError::kNone)
     throw Error(what + " is not a valid payload (" + field + "): " + describe(error));
-  return buffer.data();
+  return {out, bytes};
 }
 
 std::string joint_names_text(const std::vector<std::string>& names) {
@@ -84,14 +146,20 @@ void require_this_layout(const std::string& file, const Metadata& metadata) {
 }
 
 std::vector<std::uint8_t> payload_schema_text(const RecordedPayload& payload) {
-  char text[512];
+  char text[1024];
   const int n = std::snprintf(
       text, sizeof text,
       "%s: the bytes of the C++ struct afhub::%s (shm_layout/include/afhub/shm_layout/%s) as "
       "they were in shared memory, x86-64 little-endian, cut to the size its writer published "
-      "(array entries past a count are left out); at most %zu bytes. layout_id 0x%016llx: a "
+      "(array entries past a count are left out); at most %zu bytes.%s layout_id 0x%016llx: a "
       "build of another layout id reads them only through this description.\n",
       payload.schema_name, payload.schema_name + 6, payload.header, payload.max_bytes,
+      payload.kind != PayloadKind::kBodyState
+          ? ""
+          : " Packed when its size is below body_state_bytes(joint_count): its bytes before "
+            "refusal_reason; refusal_reason whole unless it was empty (the size says which); "
+            "the first sensor_ray_count entries of sensor_distances_m, then of "
+            "sensor_ranges_m; its joints. What is left out reads as zeros.",
       static_cast<unsigned long long>(kLayoutId));
   return {text, text + n};
 }

@@ -1,7 +1,9 @@
 // The payloads afhub records, as schemas of its MCAP files: a message is the payload's
-// bytes as they were in shared memory, at the size the writer published.
+// bytes as they were in shared memory, at the size the writer published; a body state
+// leaves out its unused arrays (pack_for_file).
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <span>
 #include <string>
@@ -28,11 +30,23 @@ const RecordedPayload& payload_of(PayloadKind kind);
 // The schema's data: what the bytes are, with the layout id that must match to read them.
 std::vector<std::uint8_t> payload_schema_text(const RecordedPayload& payload);
 
-// A recorded payload copied into `buffer` (an MCAP message's bytes sit at any offset of
-// its chunk: the copy is aligned as the structs need) and checked as `kind`
-// (check_payload). Throws afhub::Error naming `what` and the field at fault.
-const void* checked_copy(std::span<const std::uint8_t> data, PayloadKind kind,
-                         std::vector<std::uint64_t>& buffer, const std::string& what);
+// A payload as the file holds it. A body state of a thousand bodies is mostly empty
+// arrays (sensor rays past sensor_ray_count, a refusal reason while nothing was
+// refused: 672 of its 1184 bytes with 8 joints), which would double what is copied and
+// compressed: they are left out, and read back as zeros. Other payloads are kept as
+// published. The pieces of `payload` the file holds, in order, are put in `pieces`;
+// returns how many.
+using FilePieces = std::array<std::span<const std::uint8_t>, 4>;
+std::size_t pieces_for_file(std::span<const std::uint8_t> payload, PayloadKind kind,
+                            FilePieces& pieces);
+
+// A recorded message as the payload it was, unpacked into `buffer` (an MCAP message's
+// bytes sit at any offset of its chunk: the copy is aligned as the structs need) and
+// checked as `kind` (check_payload). Throws afhub::Error naming `what` and the field at
+// fault. The span stays valid until `buffer` changes.
+std::span<const std::uint8_t> checked_copy(std::span<const std::uint8_t> data, PayloadKind kind,
+                                           std::vector<std::uint64_t>& buffer,
+                                           const std::string& what);
 
 // A body channel's joint names as its channel metadata holds them ("joint_names":
 // comma-separated, in state order), and back.

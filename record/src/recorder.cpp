@@ -317,9 +317,16 @@ class Session {
       if (m.channel_id >= outputs_.size()) add_declared();  // declared after the first call
       if (kinds_[m.channel_id] == PayloadKind::kSceneDescription) name_models(data);
       for (const Output& output : outputs_[m.channel_id]) {
-        if (output.encode) output.encode(data, encoded_);
-        writer_.write({output.channel, m.sequence, m.log_time_ns, m.publish_time_ns,
-                       output.encode ? std::span<const std::uint8_t>(encoded_) : data});
+        const Message message{output.channel, m.sequence, m.log_time_ns, m.publish_time_ns, {}};
+        if (output.encode) {
+          output.encode(data, encoded_);
+          const std::span<const std::uint8_t> encoded(encoded_);
+          writer_.write(message, std::span(&encoded, 1));
+        } else {
+          FilePieces pieces;
+          const std::size_t count = pieces_for_file(data, kinds_[m.channel_id], pieces);
+          writer_.write(message, std::span(pieces).first(count));
+        }
       }
     });
     messages_written_ = writer_.message_count();

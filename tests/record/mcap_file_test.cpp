@@ -13,7 +13,11 @@
 
 #include "afhub/record/mcap_reader.hpp"
 #include "afhub/record/mcap_writer.hpp"
+#include "afhub/shm_layout/body_state.hpp"
 #include "afhub/shm_layout/error.hpp"
+#include "afhub/shm_layout/layout_id.hpp"
+#include "afhub/shm_layout/world.hpp"
+#include "recorded_payloads.hpp"
 
 namespace afhub::mcap {
 namespace {
@@ -130,7 +134,10 @@ TEST_F(McapFile, AFileCutOffReadsToItsLastCompleteChunkAndRecoverGivesItsIndexBa
   Collected partial;
   const ScanResult cut = scan(file, partial);
   EXPECT_FALSE(cut.complete);
-  EXPECT_NE(cut.cut_off.find("chunk record at byte"), std::string::npos) << cut.cut_off;
+  // Said where: inside a chunk, or inside the prefix of the record after one.
+  EXPECT_TRUE(cut.cut_off.find("chunk record at byte") != std::string::npos ||
+              cut.cut_off.find("inside a record's opcode and length") != std::string::npos)
+      << cut.cut_off;
   EXPECT_GT(cut.messages, 1000u);
   EXPECT_LT(cut.messages, full.messages);
   ASSERT_EQ(partial.messages.size(), cut.messages);
@@ -231,6 +238,26 @@ TEST_F(McapFile, BadFilesAreErrorsSayingWhatAndWhere) {
             {static_cast<std::uint8_t>(needle[10] ^ 0xff)});
   EXPECT_NE(scan_error(file).find("do not match their CRC"), std::string::npos) << scan_error(file);
 
+  // A byte flipped in the middle of a compressed chunk: its frame's checksum (or its
+  // structure) says so. The frame starts with its magic, after the u64 of its length.
+  for (const auto& [compression, magic] :
+       {std::pair{Compression::kZstd, std::vector<std::uint8_t>{0x28, 0xb5, 0x2f, 0xfd}},
+        std::pair{Compression::kLz4, std::vector<std::uint8_t>{0x04, 0x22, 0x4d, 0x18}}}) {
+    write_sample(file, compression, 100);
+    std::ifstream packed_in(file, std::ios::binary);
+    const std::vector<std::uint8_t> packed((std::istreambuf_iterator<char>(packed_in)), {});
+    const auto frame = std::search(packed.begin(), packed.end(), magic.begin(), magic.end());
+    ASSERT_NE(frame, packed.end()) << compression_name(compression);
+    const auto at = static_cast<std::uint64_t>(frame - packed.begin());
+    std::uint64_t frame_bytes = 0;
+    std::memcpy(&frame_bytes, packed.data() + at - 8, sizeof frame_bytes);
+    ASSERT_GT(frame_bytes, 16u);
+    overwrite(file, at + frame_bytes / 2,
+              {static_cast<std::uint8_t>(packed[at + frame_bytes / 2] ^ 0x5a)});
+    EXPECT_NE(scan_error(file).find("could not decompress"), std::string::npos)
+        << compression_name(compression) << ": " << scan_error(file);
+  }
+
   // A first record that is not a header.
   write_sample(file, Compression::kNone, 10);
   overwrite(file, 8, {0x05});
@@ -249,6 +276,57 @@ TEST_F(McapFile, AChunkOfAnUnknownCompressionIsAnErrorNamingIt) {
   overwrite(file, static_cast<std::uint64_t>(found - bytes.begin()), {'b', 'r', 'o'});
   EXPECT_NE(scan_error(file).find("compressed with \"bro\""), std::string::npos)
       << scan_error(file);
+}
+
+// A body state in the file leaves out its unused arrays and reads back as it was: with
+// and without sensor rays, with and without a refusal reason, with none and many joints.
+TEST(RecordedPayloads, AStateIsPackedForTheFileAndReadsBackAsItWas) {
+  for (const std::uint32_t rays : {0u, 3u, static_cast<std::uint32_t>(kMaxSensorRaysPerBody)})
+    for (const bool refused : {false, true})
+      for (const std::uint32_t joints : {0u, 8u, 300u}) {
+        SCOPED_TRACE(::testing::Message()
+                     << rays << " rays, refused " << refused << ", " << joints << " joints");
+        auto state = std::make_unique<BodyState>();
+        state->header.layout_id = kLayoutId;
+        state->header.kind = PayloadKind::kBodyState;
+        state->header.sim_step = 41;
+        state->pose.position_m = {1, 2, 3};
+        state->sensor_ray_count = rays;
+        for (std::uint32_t r = 0; r < rays; ++r) {
+          state->sensor_distances_m[r] = 0.5 + r;
+          state->sensor_ranges_m[r] = 2.0 + r;
+        }
+        if (refused) std::strcpy(state->refusal_reason.data(), "joint 2: NaN");
+        state->joint_count = joints;
+        for (std::uint32_t j = 0; j < joints; ++j) state->joints[j].position = 0.25 * j;
+        const std::span<const std::uint8_t> published(
+            reinterpret_cast<const std::uint8_t*>(state.get()), body_state_bytes(joints));
+
+        FilePieces pieces;
+        std::vector<std::uint8_t> in_file;
+        const std::size_t count = pieces_for_file(published, PayloadKind::kBodyState, pieces);
+        for (std::size_t p = 0; p < count; ++p)
+          in_file.insert(in_file.end(), pieces[p].begin(), pieces[p].end());
+        const std::size_t left_out = (kMaxSensorRaysPerBody - rays) * 2 * sizeof(double) +
+                                     (refused ? 0
+                                              : offsetof(BodyState, sensor_distances_m) -
+                                                    offsetof(BodyState, refusal_reason));
+        EXPECT_EQ(in_file.size(), published.size() - left_out);
+        std::vector<std::uint64_t> aligned;
+        const auto read = checked_copy(in_file, PayloadKind::kBodyState, aligned, "a state");
+        ASSERT_EQ(read.size(), published.size());
+        EXPECT_TRUE(std::equal(read.begin(), read.end(), published.begin()));
+      }
+
+  // Other payloads, and a state not of this layout's size, are kept as they are.
+  FilePieces pieces;
+  const std::vector<std::uint8_t> odd(body_state_bytes(0) + 3, 0);
+  ASSERT_EQ(pieces_for_file(odd, PayloadKind::kBodyState, pieces), 1u);
+  EXPECT_EQ(pieces[0].data(), odd.data());
+  EXPECT_EQ(pieces[0].size(), odd.size());
+  const std::vector<std::uint8_t> world(sizeof(WorldState), 0);
+  ASSERT_EQ(pieces_for_file(world, PayloadKind::kWorldState, pieces), 1u);
+  EXPECT_EQ(pieces[0].size(), world.size());
 }
 
 }  // namespace

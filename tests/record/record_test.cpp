@@ -23,6 +23,7 @@
 #include "afhub/shm_layout/world.hpp"
 #include "afhub_process.hpp"
 #include "model_files.hpp"
+#include "recorded_payloads.hpp"
 #include "strict_json.hpp"
 #include "web_client.hpp"
 
@@ -231,13 +232,15 @@ std::map<std::uint64_t, std::vector<double>> recorded_joints(const std::string& 
     std::string topic;
     std::uint16_t id = 0;
     std::map<std::uint64_t, std::vector<double>> by_step;
+    std::vector<std::uint64_t> aligned;
     void channel(const mcap::Channel& c) override {
       if (c.topic == topic) id = c.id;
     }
     void message(const mcap::Message& m) override {
       if (m.channel_id != id) return;
+      const auto payload = mcap::checked_copy(m.data, PayloadKind::kBodyState, aligned, topic);
       BodyState state;
-      std::memcpy(&state, m.data.data(), std::min(m.data.size(), sizeof state));
+      std::memcpy(&state, payload.data(), std::min(payload.size(), sizeof state));
       auto& joints = by_step[state.header.sim_step];
       for (std::uint32_t j = 0; j < state.joint_count; ++j)
         joints.push_back(state.joints[j].position);

@@ -52,6 +52,8 @@ class Writer {
   // Throws afhub::Error when the disk refuses the bytes (full, gone); the file then
   // stays as it is, cut off, and nothing more is written.
   void write(const Message& message);
+  // The same, its bytes given in pieces that the file joins (message.data unused).
+  void write(const Message& message, std::span<const std::span<const std::uint8_t>> pieces);
   // Writes the open chunk, and every record before it, to the file.
   void flush_chunk();
   // The summary and footer; the file is complete afterwards.
@@ -62,11 +64,6 @@ class Writer {
   std::uint64_t message_count() const { return message_count_; }
 
  private:
-  struct ChunkIndex {
-    std::uint64_t start_ns, end_ns, offset, length;
-    std::map<std::uint16_t, std::uint64_t> message_index_offsets;
-    std::uint64_t message_index_length, compressed_size, uncompressed_size;
-  };
   struct MetadataIndex {
     std::uint64_t offset, length;
     std::string name;
@@ -95,18 +92,24 @@ class Writer {
 
   std::vector<Schema> schemas_;  // id - 1
   std::vector<Channel> channels_;
-  std::vector<ChunkIndex> chunk_indexes_;
+  // The summary's chunk index records, written as each chunk is: a few bytes per channel
+  // of the chunk, rather than a map per chunk held until close.
+  std::vector<std::uint8_t> chunk_index_records_;
+  std::uint32_t chunk_count_ = 0;
   std::vector<MetadataIndex> metadata_indexes_;
 
-  // The open chunk: its records, and each channel's (log time, offset) entries (empty
-  // vectors kept between chunks, so that a chunk allocates nothing once warm).
+  // The open chunk: its records, and each channel's (log time, offset) entries by
+  // channel id, the channels it holds listed (empty vectors kept between chunks, so
+  // that a chunk allocates nothing once warm).
   std::vector<std::uint8_t> chunk_;
-  std::map<std::uint16_t, std::vector<std::pair<std::uint64_t, std::uint64_t>>> chunk_entries_;
+  std::vector<std::vector<std::pair<std::uint64_t, std::uint64_t>>> chunk_entries_;
+  std::vector<std::uint16_t> chunk_channels_;
+  std::vector<std::pair<std::uint16_t, std::uint64_t>> message_index_offsets_;
   std::uint64_t chunk_start_ns_ = 0, chunk_end_ns_ = 0;
 
   std::uint64_t message_count_ = 0;
   std::uint64_t first_ns_ = 0, last_ns_ = 0;
-  std::map<std::uint16_t, std::uint64_t> channel_counts_;
+  std::vector<std::uint64_t> channel_counts_;  // by channel id
   bool closed_ = false;
   bool failed_ = false;  // a write failed: the file is left as it is
 };
