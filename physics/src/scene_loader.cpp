@@ -237,6 +237,7 @@ Model load_scene(const SceneRequest& request) {
     const YAML::Node root =
         yaml::load_map(request.launch_file, "a launch file ('world config', 'multibody configs')");
     FileReader file(request.launch_file, model);
+    model.other_files.push_back(request.launch_file);
     if (YAML::Node world = root["world config"]; world && world_file.empty())
       world_file = existing_path(file, world, "world config");
     if (YAML::Node colors = root["color config"])
@@ -292,7 +293,10 @@ Model load_scene(const SceneRequest& request) {
   std::vector<bool> placed(adf_files.size(), false);
   for (const FilePlacement& placement : placements)
     place_file(model, adf_files, placed_file(adf_files, placement, placed), placement.placement);
-  if (!color_file.empty()) apply_colors(color_file, model);
+  if (!color_file.empty()) {
+    apply_colors(color_file, model);
+    model.other_files.push_back(color_file);
+  }
   return model;
 }
 

@@ -24,6 +24,7 @@
 #include "record_queue.hpp"
 #include "recorded_payloads.hpp"
 #include "ros2_messages.hpp"
+#include "sha256.hpp"
 
 namespace afhub::mcap {
 
@@ -41,14 +42,12 @@ std::int64_t realtime_ns() {
   return static_cast<std::int64_t>(now.tv_sec) * 1'000'000'000 + now.tv_nsec;
 }
 
-// "crc32 0x1234abcd, 5678 bytes" of a file, or why it could not be read.
+// "sha256 <64 hex digits>, 5678 bytes" of a file, or why it could not be read.
 std::string file_fingerprint(const char* path) {
   std::ifstream in(path, std::ios::binary);
   const std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)), {});
   if (!in.eof() && !in) return std::string("unreadable: ") + std::strerror(errno);
-  char text[64];
-  std::snprintf(text, sizeof text, "crc32 0x%08x, %zu bytes", crc32(bytes), bytes.size());
-  return text;
+  return "sha256 " + sha256_hex(bytes) + ", " + std::to_string(bytes.size()) + " bytes";
 }
 
 // A channel of the hub and its channel in the file.
@@ -357,7 +356,7 @@ class Session {
   }
 
  private:
-  // The model files a physics' scene names, with their sizes and CRC-32s as this
+  // The model files a physics' scene names, with their sizes and SHA-256s as this
   // machine reads them now, as the file's "afhub.models" metadata (once per physics).
   void name_models(std::span<const std::uint8_t> scene) {
     PayloadHeader header;

@@ -18,6 +18,7 @@
 #include "afhub/shm_layout/layout_id.hpp"
 #include "afhub/shm_layout/world.hpp"
 #include "recorded_payloads.hpp"
+#include "sha256.hpp"
 
 namespace afhub::mcap {
 namespace {
@@ -327,6 +328,19 @@ TEST(RecordedPayloads, AStateIsPackedForTheFileAndReadsBackAsItWas) {
   const std::vector<std::uint8_t> world(sizeof(WorldState), 0);
   ASSERT_EQ(pieces_for_file(world, PayloadKind::kWorldState, pieces), 1u);
   EXPECT_EQ(pieces[0].size(), world.size());
+}
+
+// FIPS 180-4's examples: one block, two blocks of padding, a million bytes.
+TEST(Sha256, MatchesTheStandardsExamples) {
+  const auto of = [](const std::string& text) {
+    return sha256_hex({reinterpret_cast<const std::uint8_t*>(text.data()), text.size()});
+  };
+  EXPECT_EQ(of(""), "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855");
+  EXPECT_EQ(of("abc"), "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
+  EXPECT_EQ(of("abcdbcdecdefdefgefghfghighijhijkijkljklmklmnlmnomnopnopq"),
+            "248d6a61d20638b8e5c026930c3e6039a33ce45964ff2167f6ecedd419db06c1");
+  EXPECT_EQ(of(std::string(1'000'000, 'a')),
+            "cdc76e5c9914fb9281a1c7e284d73e67f1809a48a497200e046d39ccc7112cd0");
 }
 
 }  // namespace

@@ -95,11 +95,16 @@ TEST(Record, EveryBodyOfASceneUnderControlIsRecordedAndAnIndependentReaderAgrees
   std::map<std::string, json> metadata;
   for (const json& record : info["metadata"]) metadata[record["name"]] = record["entries"];
   EXPECT_EQ(metadata["afhub"]["bodies"], "*");
-  for (const char* model : {"arm7.yaml", "rcm.yaml", "gripper.yaml", "floor.yaml", "world.yaml"}) {
+  // Each with its SHA-256 as sha256sum gives it, and its size.
+  for (const char* model : {"arm7.yaml", "rcm.yaml", "gripper.yaml", "floor.yaml", "world.yaml",
+                            "launch.yaml", "colors.yaml"}) {
     const std::string path = AFHUB_EXAMPLE_MODELS "/" + std::string(model);
     ASSERT_TRUE(metadata["afhub.models"].contains(path)) << metadata["afhub.models"].dump();
-    EXPECT_NE(metadata["afhub.models"][path].get<std::string>().find("crc32 0x"),
-              std::string::npos);
+    const RunResult sum = run_command({"sha256sum", path}, 30s);
+    ASSERT_EQ(sum.exit_code, 0) << sum.err;
+    EXPECT_EQ(metadata["afhub.models"][path].get<std::string>(),
+              "sha256 " + sum.out.substr(0, 64) + ", " +
+                  std::to_string(std::filesystem::file_size(path)) + " bytes");
   }
   EXPECT_GE(info["duration_s"].get<double>(), 2.9);
 

@@ -231,6 +231,9 @@ struct Model {
   std::vector<SensorSpec> sensors;
   std::vector<ActuatorSpec> actuators;
   std::vector<bool> file_ignores_inter_collision;  // per loaded file
+  // Files read besides the bodies', joints' and world's: the launch file and its color
+  // config (a recording names every file a run came from).
+  std::vector<std::string> other_files;
   // For each body, every joint below it (paper Algorithm 1), each once, in file
   // order, passive joints left out (as AMBF's active child-joint list): the order of
   // its state's joints and of its command's.
