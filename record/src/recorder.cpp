@@ -16,9 +16,11 @@
 #include "afhub/hub/channel.hpp"
 #include "afhub/hub/hub_loss.hpp"
 #include "afhub/hub/sample_waiter.hpp"
+#include "afhub/hub/step_tape.hpp"
 #include "afhub/record/mcap_writer.hpp"
 #include "afhub/shm_layout/device.hpp"
 #include "afhub/shm_layout/error.hpp"
+#include "afhub/shm_layout/payload_check.hpp"
 #include "afhub/shm_layout/scene.hpp"
 #include "afhub/shm_layout/world.hpp"
 #include "record_queue.hpp"
@@ -35,6 +37,8 @@ constexpr std::int64_t kProgressPeriodNs = 500'000'000;
 constexpr std::int64_t kIdleWaitNs = 2'000'000;  // no world state: sampled this often
 constexpr int kWriterNice = 10;
 constexpr std::int64_t kChunkFlushPeriodNs = 1'000'000'000;  // what a kill -9 loses at most
+// A body the physics' step tape brought within this long is read from the tape alone.
+constexpr std::int64_t kTapeFreshNs = 100'000'000;
 
 std::int64_t realtime_ns() {
   timespec now{};
@@ -60,7 +64,9 @@ struct Recorded {
   bool retry = false;     // its last sample found the buffer full
   bool seen = false;
   std::uint32_t publisher_pid = 0;
-  std::uint64_t last = 0;  // its last step (per_step) or sequence
+  std::uint64_t last = 0;     // its last step (per_step) or sequence
+  std::string body;           // a body's state: the body's channel, as the step tape names it
+  std::int64_t taped_ns = 0;  // when the step tape last brought it
 };
 
 // A channel the reading loop has numbered, for the writing thread to add to the file.
@@ -136,6 +142,9 @@ class Session {
     apply_realtime(options_.loop, "afhub record");
     LatestReader<WorldState> world(
         ChannelId{std::string(kService), world_instance(), std::string(kStateEvent)});
+    // Every step's states, queued: what a late wake-up would miss in the states' slots.
+    StepTapeReader tape(world_instance());
+    const auto taped = std::make_unique<StepTape>();
     SampleWaiter waiter;
     waiter.attach(world.raw());
     const std::int64_t start_ns = monotonic_ns();
@@ -144,7 +153,9 @@ class Session {
       const std::int64_t now = monotonic_ns();
       take_discovered(waiter);
       world.latest();  // taken, so that the waiter sleeps until the next step
+      while (tape.next(*taped)) sample_tape(*taped, now);
       for (Recorded& recorded : recorded_) {
+        if (recorded.taped_ns != 0 && now - recorded.taped_ns < kTapeFreshNs) continue;
         const void* payload = recorded.reader->latest();
         if (payload && (recorded.reader->updated() || recorded.retry))
           sample(recorded, payload, recorded.reader->latest_bytes(), now);
@@ -166,10 +177,24 @@ class Session {
     if (!lock.owns_lock()) return;
     for (Recorded& recorded : discovered_) {
       if (recorded.wakes) waiter.attach(*recorded.reader);
+      if (!recorded.body.empty()) by_body_.emplace(recorded.body, recorded_.size());
       recorded_.push_back(std::move(recorded));
     }
     discovered_.clear();
     discovered_ready_.store(false, std::memory_order_release);
+  }
+
+  // The states of a step tape's sample, each checked as the state it is (the sample is
+  // this process's copy), for the bodies recorded.
+  void sample_tape(const StepTape& tape, std::int64_t now_ns) noexcept {
+    for_each_tape_entry(tape, [&](std::string_view body, const void* state, std::uint32_t bytes) {
+      const auto found = by_body_.find(body);
+      if (found == by_body_.end()) return;  // not recorded, or not discovered yet
+      if (check_payload(state, bytes, PayloadKind::kBodyState) != PayloadError::kNone) return;
+      Recorded& recorded = recorded_[found->second];
+      recorded.taped_ns = now_ns;
+      sample(recorded, state, bytes, now_ns);
+    });
   }
 
   // Copies a new sample into the buffer, or counts it dropped when the buffer is full.
@@ -181,7 +206,8 @@ class Session {
     std::memcpy(&header, payload, sizeof header);  // checked by the reader: at least a header
     const std::uint64_t key = recorded.per_step ? header.sim_step : header.sequence;
     const bool same_writer = recorded.seen && recorded.publisher_pid == header.publisher_pid;
-    if (same_writer && key == recorded.last) return;  // a paused physics' step again
+    // A paused physics' step again, or one its tape brings after its slot did.
+    if (same_writer && key <= recorded.last) return;
     QueuedMessage message;
     message.channel_id = recorded.channel_id;
     message.sequence = static_cast<std::uint32_t>(key);
@@ -245,7 +271,7 @@ class Session {
       const Metadata metadata =
           device ? Metadata{} : Metadata{{"joint_names", joint_names_text(entry.joint_names)}};
       add(body_state_channel(channel), device ? PayloadKind::kDeviceState : PayloadKind::kBodyState,
-          metadata, device);
+          metadata, device, device ? std::string() : channel);
       if (device || options_.commands)
         add(body_command_channel(channel),
             device ? PayloadKind::kDeviceCommand : PayloadKind::kBodyCommand, metadata, true);
@@ -255,7 +281,8 @@ class Session {
   // A channel recorded from now on, handed to the reading loop (`wakes`: its updates
   // wake the loop). Its topic is "/<instance>/<event>", and its metadata name the
   // hub's channel, for `afhub play`.
-  void add(const ChannelId& id, PayloadKind kind, Metadata metadata, bool wakes) {
+  void add(const ChannelId& id, PayloadKind kind, Metadata metadata, bool wakes,
+           std::string body = {}) {
     metadata["afhub_instance"] = id.instance;
     metadata["afhub_event"] = id.event;
     Recorded recorded;
@@ -264,6 +291,7 @@ class Session {
     recorded.per_step = kind == PayloadKind::kBodyState || kind == PayloadKind::kWorldState;
     recorded.wakes = wakes;
     recorded.once = kind == PayloadKind::kSceneDescription;
+    recorded.body = std::move(body);
     const std::lock_guard lock(discovered_mutex_);
     discovered_.push_back(std::move(recorded));
     discovered_ready_.store(true, std::memory_order_release);
@@ -435,6 +463,7 @@ class Session {
 
   // The reading loop's.
   std::vector<Recorded> recorded_;
+  std::map<std::string, std::size_t, std::less<>> by_body_;  // index in recorded_ of a body's state
 
   // The discovery's, and what it hands over.
   std::set<std::string> known_;

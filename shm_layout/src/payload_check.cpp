@@ -40,6 +40,8 @@ std::size_t fixed_size_of(PayloadKind kind) noexcept {
       return soft_body_mesh_bytes(0);
     case PayloadKind::kScenePoses:
       return scene_poses_bytes(0);  // an empty scene's
+    case PayloadKind::kStepTape:
+      return offsetof(StepTape, data);  // read at its used size
   }
   return 0;
 }
@@ -68,6 +70,27 @@ const char* body_list_problem(const BodyList& list, std::size_t bytes) noexcept 
   const std::uint32_t* refs = joint_refs_in(list);
   for (std::uint32_t r = 0; r < list.joint_ref_count; ++r)
     if (refs[r] >= list.joint_name_count) return "BodyList joint reference";
+  return nullptr;
+}
+
+// A tape's entries within its data and the chunk, each a channel name and a state of
+// at most a BodyState's size (each state is checked as one by whoever reads it).
+const char* step_tape_problem(const StepTape& tape, std::size_t bytes) noexcept {
+  if (tape.data_bytes > tape.data.size() || bytes < offsetof(StepTape, data) + tape.data_bytes)
+    return "StepTape.data_bytes";
+  std::size_t at = 0;
+  for (std::uint32_t e = 0; e < tape.entry_count; ++e) {
+    StepTapeEntry entry;
+    if (tape.data_bytes - at < sizeof entry) return "StepTape.entry_count";
+    std::memcpy(&entry, tape.data.data() + at, sizeof entry);
+    if (entry.name_bytes == 0 || entry.name_bytes >= kChannelNameBufferSize)
+      return "StepTapeEntry.name_bytes";
+    if (entry.state_bytes < body_state_bytes(0) || entry.state_bytes > sizeof(BodyState))
+      return "StepTapeEntry.state_bytes";
+    const std::size_t entry_bytes = step_tape_entry_bytes(entry.name_bytes, entry.state_bytes);
+    if (tape.data_bytes - at < entry_bytes) return "StepTapeEntry.state_bytes";
+    at += entry_bytes;
+  }
   return nullptr;
 }
 
@@ -210,6 +233,8 @@ const char* count_beyond_capacity(const char* at, std::size_t bytes, PayloadKind
       return soft_body_problem(*reinterpret_cast<const SoftBodyMesh*>(at), bytes);
     case PayloadKind::kScenePoses:
       return scene_poses_problem(*reinterpret_cast<const ScenePoses*>(at), bytes);
+    case PayloadKind::kStepTape:
+      return step_tape_problem(*reinterpret_cast<const StepTape*>(at), bytes);
     case PayloadKind::kWorldCommand: {
       const auto* command = reinterpret_cast<const WorldCommand*>(at);
       if (command->action == WorldAction::kStep &&

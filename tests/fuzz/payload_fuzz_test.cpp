@@ -21,6 +21,7 @@
 
 #include "afhub/devices/force_safety.hpp"
 #include "afhub/hub/bodies.hpp"
+#include "afhub/hub/step_tape.hpp"
 #include "afhub/physics/adf_loader.hpp"
 #include "afhub/physics/simulation.hpp"
 #include "afhub/shm_layout/layout_id.hpp"
@@ -41,7 +42,8 @@ constexpr std::array kKinds{
     PayloadKind::kBodyState,    PayloadKind::kBodyCommand,   PayloadKind::kWorldState,
     PayloadKind::kWorldCommand, PayloadKind::kBodyDirectory, PayloadKind::kCatalog,
     PayloadKind::kHealth,       PayloadKind::kLoopStats,     PayloadKind::kBenchSample,
-    PayloadKind::kDeviceState,  PayloadKind::kDeviceCommand, PayloadKind::kBenchSlot};
+    PayloadKind::kDeviceState,  PayloadKind::kDeviceCommand, PayloadKind::kBenchSlot,
+    PayloadKind::kStepTape};
 
 std::uint64_t env_number(const char* name, std::uint64_t fallback) {
   const char* text = std::getenv(name);
@@ -113,6 +115,27 @@ Seed body_list_seed(PayloadKind kind) {
   return {std::move(bytes), std::move(counts), {}};
 }
 
+// A step tape of two states (named as a physics names its bodies), at its used size.
+Seed step_tape_seed(const BodyState& state) {
+  auto tape = std::make_unique<StepTape>(stamped<StepTape>());
+  std::vector<std::size_t> counts = {offsetof(StepTape, entry_count),
+                                     offsetof(StepTape, data_bytes)};
+  for (const std::string name : {"arm/base", "arm/link1"}) {
+    const std::uint32_t bytes = static_cast<std::uint32_t>(body_state_bytes(state.joint_count));
+    const StepTapeEntry entry{static_cast<std::uint32_t>(name.size()), bytes};
+    std::uint8_t* at = tape->data.data() + tape->data_bytes;
+    counts.push_back(offsetof(StepTape, data) + tape->data_bytes);      // name_bytes
+    counts.push_back(offsetof(StepTape, data) + tape->data_bytes + 4);  // state_bytes
+    std::memcpy(at, &entry, sizeof entry);
+    std::memcpy(at + sizeof entry, name.data(), name.size());
+    std::memcpy(at + step_tape_state_offset(name.size()), &state, bytes);
+    tape->data_bytes += static_cast<std::uint32_t>(step_tape_entry_bytes(name.size(), bytes));
+    ++tape->entry_count;
+  }
+  tape->last_part = 1;
+  return seed_of(*tape, std::move(counts), offsetof(StepTape, data) + tape->data_bytes);
+}
+
 std::vector<Seed> make_seeds() {
   auto state = stamped<BodyState>();
   state.joint_count = 7;
@@ -178,6 +201,7 @@ std::vector<Seed> make_seeds() {
       device_seed,
       command_seed,
       seed_of(bench_slot, {}),
+      step_tape_seed(state),
   };
 }
 
@@ -449,6 +473,18 @@ class Fuzzer {
         break;
       case PayloadKind::kDeviceCommand:
         consume_device_command(*reinterpret_cast<const DeviceCommand*>(data), sink);
+        break;
+      case PayloadKind::kStepTape:
+        // As a recorder reads it: each entry's state copied out, checked, then read.
+        for_each_tape_entry(
+            *reinterpret_cast<const StepTape*>(data),
+            [&](std::string_view name, const void* bytes, std::uint32_t size) {
+              auto state = std::make_unique<BodyState>();
+              std::memcpy(static_cast<void*>(state.get()), bytes, size);
+              sink += name.size();
+              if (check_payload(state.get(), size, PayloadKind::kBodyState) == PayloadError::kNone)
+                sink += cli::state_json(info_, *state).size();
+            });
         break;
       case PayloadKind::kSceneDescription:
       case PayloadKind::kSoftBodyMesh:

@@ -21,6 +21,7 @@
 #include "afhub/devices/virtual_device.hpp"
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/loop_stats_publisher.hpp"
+#include "afhub/hub/step_tape.hpp"
 #include "afhub/physics/adf_loader.hpp"
 #include "afhub/physics/sim_channels.hpp"
 #include "afhub/rt/clock.hpp"
@@ -112,14 +113,18 @@ void expect_physics_loop_allocation_free(const std::vector<std::string>& files,
   // A viewer reading the pose feed, which then goes out every ~17 cycles of 1 ms.
   LatestReader<ScenePoses> viewer(
       {std::string(kService), world_instance(), std::string(kScenePosesEvent)});
+  // A recorder reading the step tape, which then goes out every step.
+  StepTapeReader recorder(world_instance());
+  const auto tape = std::make_unique<StepTape>();
   int cycle = 0;
-  std::uint64_t viewer_updates = 0;
+  std::uint64_t viewer_updates = 0, taped_steps = 0;
   auto one_cycle = [&]() {
     channels.apply_commands(monotonic_ns());
     sim.step();
     channels.publish({});
     channels.publish_view(std::int64_t{++cycle} * 1'000'000);
     if (viewer.latest() && viewer.updated()) ++viewer_updates;
+    while (recorder.next(*tape)) taped_steps += tape->last_part;
     const BodyState* state = controller.latest_state();
     BodyCommand* command = controller.loan_command(kMaxJointsPerBody);
     if (!state || !command) return false;
@@ -137,10 +142,11 @@ void expect_physics_loop_allocation_free(const std::vector<std::string>& files,
   for (int i = 0; i < 6300; ++i) ASSERT_TRUE(one_cycle());
 
   constexpr int kCycles = 5000;
-  const std::uint64_t updates_before = viewer_updates;
+  const std::uint64_t updates_before = viewer_updates, taped_before = taped_steps;
   EXPECT_TRUE(count_allocations(kCycles, one_cycle));
   EXPECT_EQ(g_allocations, 0) << "heap allocations in " << kCycles << " physics cycles";
   EXPECT_GE(viewer_updates - updates_before, 290u) << "the pose feed went out at 60 Hz";
+  EXPECT_EQ(taped_steps - taped_before, static_cast<std::uint64_t>(kCycles)) << "the step tape";
   EXPECT_TRUE(sim.all_finite());
   EXPECT_EQ(channels.rejected_commands(), 0u);
 }

@@ -103,6 +103,7 @@ SimChannels::SimChannels(Simulation& sim, double watchdog_s, std::string_view na
       scene_({std::string(kService), world_instance(name_space), std::string(kSceneEvent)}),
       scene_poses_(
           {std::string(kService), world_instance(name_space), std::string(kScenePosesEvent)}),
+      tape_(world_instance(name_space)),
       world_commands_(std::make_unique<WorldCommandQueue>(world_instance(name_space))) {
   if (!(watchdog_s >= kMinWatchdogS && watchdog_s <= kMaxWatchdogS))
     throw Error("the watchdog period must be 0.002 to 3600 s, got " + std::to_string(watchdog_s));
@@ -195,6 +196,7 @@ void SimChannels::publish(const WorldClock& clock) noexcept {
       }
     }
   }
+  const bool taping = step != taped_step_ && tape_.begin(step, time_s);
   for (Channel& channel : channels_) {
     // Every field is set below: the slot's last update needs no defaults first.
     BodyState* state = channel.publisher->rewrite_state(channel.joint_count);
@@ -213,6 +215,14 @@ void SimChannels::publish(const WorldClock& clock) noexcept {
     state->refused_command_pid = channel.refused_pid;
     state->refusal_reason = channel.refusal_reason;
     channel.publisher->publish_state(state);
+    if (taping)  // this process's own entry: read back as it was just published
+      tape_.add(channel.soft ? sim_.model().soft_bodies[channel.index].channel
+                             : sim_.model().bodies[channel.index].channel,
+                state, static_cast<std::uint32_t>(body_state_bytes(channel.joint_count)));
+  }
+  if (taping) {
+    tape_.finish();
+    taped_step_ = step;
   }
   if (WorldState* world = world_.loan()) {
     world->header.sim_step = step;

@@ -20,6 +20,7 @@ inline constexpr std::string_view kHealthEvent = "health";
 inline constexpr std::string_view kSceneEvent = "scene";  // {"afhub", <world instance>, "scene"}
 // {"afhub", <world instance>, "scene_poses"}: shm_layout/scene_poses.hpp
 inline constexpr std::string_view kScenePosesEvent = "scene_poses";
+inline constexpr std::string_view kStepTapeEvent = "step_tape";
 // {"afhub", <soft body channel>, "soft_faces" | "soft_nodes"}: shm_layout/soft_body.hpp
 inline constexpr std::string_view kSoftFacesEvent = "soft_faces";
 inline constexpr std::string_view kSoftNodesEvent = "soft_nodes";

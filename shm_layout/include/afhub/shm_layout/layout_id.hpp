@@ -21,6 +21,7 @@
 #include "afhub/shm_layout/slot.hpp"
 #include "afhub/shm_layout/slot_block.hpp"
 #include "afhub/shm_layout/soft_body.hpp"
+#include "afhub/shm_layout/step_tape.hpp"
 #include "afhub/shm_layout/world.hpp"
 
 namespace afhub {
@@ -279,6 +280,14 @@ inline constexpr std::uint64_t kLayoutId = layout_detail::mix({
     AFHUB_OFF(ScenePoses, body_count),
     AFHUB_OFF(ScenePoses, joint_value_count),
     AFHUB_OFF(ScenePoses, bodies),
+    sizeof(StepTape),
+    AFHUB_OFF(StepTape, part),
+    AFHUB_OFF(StepTape, last_part),
+    AFHUB_OFF(StepTape, entry_count),
+    AFHUB_OFF(StepTape, data_bytes),
+    AFHUB_OFF(StepTape, data),
+    sizeof(StepTapeEntry),
+    AFHUB_OFF(StepTapeEntry, state_bytes),
     sizeof(SlotControl),
     AFHUB_OFF(SlotControl, sleeping),
     AFHUB_OFF(SlotControl, stamp_ns),
@@ -315,5 +324,6 @@ static_assert(layout_detail::is_shm_payload<DeviceCommand>);
 static_assert(layout_detail::is_shm_payload<SceneDescription>);
 static_assert(layout_detail::is_shm_payload<SoftBodyMesh>);
 static_assert(layout_detail::is_shm_payload<ScenePoses>);
+static_assert(layout_detail::is_shm_payload<StepTape>);
 
 }  // namespace afhub

@@ -39,6 +39,7 @@
 #include <vector>
 
 #include "afhub/hub/bodies.hpp"
+#include "afhub/hub/step_tape.hpp"
 #include "afhub/physics/simulation.hpp"
 #include "afhub/shm_layout/body_command.hpp"
 #include "afhub/shm_layout/body_state.hpp"
@@ -225,7 +226,11 @@ class SimChannels {
   Writer<ScenePoses> scene_poses_;        // where it is, at display rate
   std::uint32_t scene_joint_values_ = 0;  // joint positions per ScenePoses: fixed by the model
   bool scene_poses_published_ = false;
-  std::int64_t view_next_ns_ = 0;  // when publish_view is due next
+  // Every step's states again, queued for a recorder, while one reads: a recorder that
+  // falls behind the latest-value states catches up from its queue.
+  StepTapeWriter tape_;
+  std::uint64_t taped_step_ = ~0ULL;  // a paused world's step is taped once
+  std::int64_t view_next_ns_ = 0;     // when publish_view is due next
   std::unique_ptr<WorldCommandQueue> world_commands_;
   std::uint64_t rejected_ = 0, expiries_ = 0, stale_ = 0;
   bool lockstep_ = false;

@@ -1,0 +1,73 @@
+// The two ends of a world's step tape (shm_layout/step_tape.hpp): the physics writes
+// every step's states to it while a recorder reads; the recorder reads every sample in
+// order. Both are real-time safe once made: no heap, no exceptions.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <string_view>
+
+#include "afhub/hub/channel.hpp"
+#include "afhub/shm_layout/step_tape.hpp"
+
+namespace afhub {
+
+class StepTapeWriter {
+ public:
+  explicit StepTapeWriter(const std::string& world_instance);
+
+  // Starts a step's tape when something reads it (false: nothing to write this step).
+  bool begin(std::uint64_t step, double time_s) noexcept;
+  // Adds a body's state as published (`bytes` of it), after begin() said true.
+  void add(std::string_view channel, const void* state, std::uint32_t bytes) noexcept;
+  // Publishes the step's last part.
+  void finish() noexcept;
+  // Steps whose tape could not be written whole (shared memory exhausted).
+  std::uint64_t lost_steps() const noexcept { return lost_steps_; }
+
+ private:
+  bool next_part() noexcept;
+  RawWriter writer_;
+  StepTape* tape_ = nullptr;  // the part being filled
+  std::uint64_t step_ = 0;
+  double time_s_ = 0.0;
+  std::uint32_t part_ = 0;
+  bool lost_ = false;  // this step lost a part
+  std::uint64_t lost_steps_ = 0;
+};
+
+class StepTapeReader {
+ public:
+  explicit StepTapeReader(const std::string& world_instance);
+  ~StepTapeReader();
+  StepTapeReader(const StepTapeReader&) = delete;
+  StepTapeReader& operator=(const StepTapeReader&) = delete;
+
+  // The oldest sample not read yet, copied into `out` (its used part) and checked;
+  // false when none waits. Invalid samples are refused (said once, counted) and skipped.
+  bool next(StepTape& out) noexcept;
+  std::uint64_t refused_count() const noexcept { return refused_; }
+
+ private:
+  struct Port;
+  std::unique_ptr<Port> port_;
+  std::uint64_t refused_ = 0;
+};
+
+// Calls `visit(std::string_view channel, const void* state, std::uint32_t bytes)` for each
+// entry of a checked tape (check_payload), in order.
+template <class Visit>
+void for_each_tape_entry(const StepTape& tape, Visit&& visit) {
+  std::size_t at = 0;
+  for (std::uint32_t e = 0; e < tape.entry_count; ++e) {
+    StepTapeEntry entry;
+    std::memcpy(&entry, tape.data.data() + at, sizeof entry);
+    const auto* name = reinterpret_cast<const char*>(tape.data.data() + at + sizeof entry);
+    visit(std::string_view(name, entry.name_bytes),
+          tape.data.data() + at + step_tape_state_offset(entry.name_bytes), entry.state_bytes);
+    at += step_tape_entry_bytes(entry.name_bytes, entry.state_bytes);
+  }
+}
+
+}  // namespace afhub
