@@ -11,6 +11,7 @@
 #include "afhub/hub/hub_health.hpp"
 #include "afhub/hub/hub_loss.hpp"
 #include "afhub/hub/hub_presence.hpp"
+#include "afhub/hub/step_tape.hpp"
 #include "afhub/hub/world_command_queue.hpp"
 #include "afhub/rt/clock.hpp"
 #include "afhub/rt/stop_signal.hpp"
@@ -73,9 +74,11 @@ void step_body(SyntheticBody& body, std::size_t index, double t, double dt) {
   }
 }
 
-void publish_body(SyntheticBody& body, std::size_t index, std::uint64_t step, double t) {
+// Returns the state published (this process's own slot), or nullptr when there was no room.
+const BodyState* publish_body(SyntheticBody& body, std::size_t index, std::uint64_t step,
+                              double t) {
   BodyState* state = body.channel->loan_state(static_cast<std::uint32_t>(body.joints.size()));
-  if (!state) return;
+  if (!state) return nullptr;
   const double radius = 0.1 * static_cast<double>(index + 1);
   const double angle = 2.0 * M_PI * 0.2 * t;
   state->header.sim_step = step;
@@ -93,6 +96,7 @@ void publish_body(SyntheticBody& body, std::size_t index, std::uint64_t step, do
     state->joints[j].velocity = body.joints[j].velocity;
   }
   body.channel->publish_state(state);
+  return state;
 }
 
 int run_synth(const SynthOptions& options) {
@@ -109,11 +113,12 @@ int run_synth(const SynthOptions& options) {
   std::vector<std::string> channels;
   for (unsigned i = 0; i < options.bodies; ++i)
     channels.push_back(body_channel_name(options.name_space, "body" + std::to_string(i)));
-  // The blocks of the bodies' state slots, the world state's, the directory's.
+  // The blocks of the bodies' state slots, the world state's, the step tape's, the
+  // directory's.
   check_room_for_bodies(
       channels, slot_blocks_for(channels.size(),
                                 static_cast<std::uint32_t>(body_state_bytes(options.joints))) +
-                    2);
+                    3);
   DirectoryPublisher directory;
   std::vector<SyntheticBody> bodies(options.bodies);
   for (std::size_t i = 0; i < bodies.size(); ++i) {
@@ -136,6 +141,7 @@ int run_synth(const SynthOptions& options) {
   Writer<WorldState> world(
       {std::string(kService), std::string(kWorldInstance), std::string(kStateEvent)});
   WorldCommandQueue world_commands{std::string(kWorldInstance)};
+  StepTapeWriter tape{std::string(kWorldInstance)};  // as the physics, for a recorder
 
   const double dt = 1.0 / options.rate_hz;
   const auto period_ns = static_cast<std::int64_t>(1e9 * dt);
@@ -158,10 +164,15 @@ int run_synth(const SynthOptions& options) {
     // channels keep no history for late joiners.
     const bool stepping = control.take_step();
     const double t = static_cast<double>(step) * dt;
+    const bool taping = stepping && tape.begin(step, t);
     for (std::size_t i = 0; i < bodies.size(); ++i) {
       if (stepping) step_body(bodies[i], i, t, dt);
-      publish_body(bodies[i], i, step, t);
+      const BodyState* state = publish_body(bodies[i], i, step, t);
+      if (state && taping)
+        tape.add(PayloadKind::kBodyState, channels[i], state,
+                 static_cast<std::uint32_t>(body_state_bytes(options.joints)));
     }
+    if (taping) tape.finish();
     if (WorldState* state = world.loan()) {
       state->header.sim_step = step;
       state->header.sim_time_s = t;

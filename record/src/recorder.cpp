@@ -64,8 +64,9 @@ struct Recorded {
   bool retry = false;     // its last sample found the buffer full
   bool seen = false;
   std::uint32_t publisher_pid = 0;
-  std::uint64_t last = 0;     // its last step (per_step) or sequence
-  std::string body;           // a body's state: the body's channel, as the step tape names it
+  std::uint64_t last = 0;  // its last step (per_step) or sequence
+  PayloadKind kind{};
+  std::string body;           // what the step tape names it: a body's channel, the world's instance
   std::int64_t taped_ns = 0;  // when the step tape last brought it
 };
 
@@ -177,24 +178,46 @@ class Session {
     if (!lock.owns_lock()) return;
     for (Recorded& recorded : discovered_) {
       if (recorded.wakes) waiter.attach(*recorded.reader);
-      if (!recorded.body.empty()) by_body_.emplace(recorded.body, recorded_.size());
+      if (!recorded.body.empty())
+        by_body_[tape_kind_index(recorded.kind)].emplace(recorded.body, recorded_.size());
       recorded_.push_back(std::move(recorded));
     }
+    std::fill(tape_order_.begin(), tape_order_.end(), kUnknown);  // a new body may be taped
     discovered_.clear();
     discovered_ready_.store(false, std::memory_order_release);
   }
 
-  // The states of a step tape's sample, each checked as the state it is (the sample is
-  // this process's copy), for the bodies recorded.
+  // The states and commands of a step tape's sample, each checked as what it is (the
+  // sample is this process's copy), for the channels recorded.
   void sample_tape(const StepTape& tape, std::int64_t now_ns) noexcept {
-    for_each_tape_entry(tape, [&](std::string_view body, const void* state, std::uint32_t bytes) {
-      const auto found = by_body_.find(body);
-      if (found == by_body_.end()) return;  // not recorded, or not discovered yet
-      if (check_payload(state, bytes, PayloadKind::kBodyState) != PayloadError::kNone) return;
-      Recorded& recorded = recorded_[found->second];
+    if (tape.part == 0) tape_position_ = 0;
+    for_each_tape_entry(tape, [&](PayloadKind kind, std::string_view body, const void* payload,
+                                  std::uint32_t bytes) {
+      const std::size_t index = recorded_index(kind, body, tape_position_++);
+      if (index >= recorded_.size()) return;  // not recorded, or not discovered yet
+      if (check_payload(payload, bytes, kind) != PayloadError::kNone) return;
+      Recorded& recorded = recorded_[index];
       recorded.taped_ns = now_ns;
-      sample(recorded, state, bytes, now_ns);
+      sample(recorded, payload, bytes, now_ns);
     });
+  }
+
+  // The index in recorded_ of a tape's entry at `position` in its step (kNotRecorded
+  // when none). A physics tapes its bodies in the same order every step: what was at
+  // this position the step before is tried first, and the map searched only when it
+  // differs.
+  static constexpr std::size_t kUnknown = ~std::size_t{0}, kNotRecorded = kUnknown - 1;
+  std::size_t recorded_index(PayloadKind kind, std::string_view body,
+                             std::size_t position) noexcept {
+    if (position >= tape_order_.size()) return kNotRecorded;  // more than a world holds
+    std::size_t& cached = tape_order_[position];
+    if (cached == kNotRecorded) return cached;
+    if (cached != kUnknown && recorded_[cached].kind == kind && recorded_[cached].body == body)
+      return cached;
+    const auto& by_body = by_body_[tape_kind_index(kind)];
+    const auto found = by_body.find(body);
+    cached = found == by_body.end() ? kNotRecorded : found->second;
+    return cached;
   }
 
   // Copies a new sample into the buffer, or counts it dropped when the buffer is full.
@@ -237,7 +260,7 @@ class Session {
       const auto world_channel = [](std::string_view event) {
         return ChannelId{std::string(kService), world_instance(), std::string(event)};
       };
-      add(world_channel(kStateEvent), PayloadKind::kWorldState, {}, false);
+      add(world_channel(kStateEvent), PayloadKind::kWorldState, {}, false, world_instance());
       add(world_channel(kSceneEvent), PayloadKind::kSceneDescription, {}, false);
       add(world_channel(kScenePosesEvent), PayloadKind::kScenePoses, {}, false);
       CatalogReader catalog;
@@ -274,7 +297,8 @@ class Session {
           metadata, device, device ? std::string() : channel);
       if (device || options_.commands)
         add(body_command_channel(channel),
-            device ? PayloadKind::kDeviceCommand : PayloadKind::kBodyCommand, metadata, true);
+            device ? PayloadKind::kDeviceCommand : PayloadKind::kBodyCommand, metadata, true,
+            device ? std::string() : channel);
     }
   }
 
@@ -291,6 +315,7 @@ class Session {
     recorded.per_step = kind == PayloadKind::kBodyState || kind == PayloadKind::kWorldState;
     recorded.wakes = wakes;
     recorded.once = kind == PayloadKind::kSceneDescription;
+    recorded.kind = kind;
     recorded.body = std::move(body);
     const std::lock_guard lock(discovered_mutex_);
     discovered_.push_back(std::move(recorded));
@@ -463,7 +488,13 @@ class Session {
 
   // The reading loop's.
   std::vector<Recorded> recorded_;
-  std::map<std::string, std::size_t, std::less<>> by_body_;  // index in recorded_ of a body's state
+  // The index in recorded_ of each channel a tape brings, by tape_kind_index and name.
+  static std::size_t tape_kind_index(PayloadKind kind) {
+    return kind == PayloadKind::kBodyState ? 0 : kind == PayloadKind::kBodyCommand ? 1 : 2;
+  }
+  std::array<std::map<std::string, std::size_t, std::less<>>, 3> by_body_;
+  std::vector<std::size_t> tape_order_ = std::vector<std::size_t>(kMaxBodies, kUnknown);
+  std::size_t tape_position_ = 0;  // of the next entry in its step
 
   // The discovery's, and what it hands over.
   std::set<std::string> known_;

@@ -2,7 +2,9 @@
 
 #include <cmath>
 #include <cstring>
+#include <limits>
 
+#include "afhub/shm_layout/body_command.hpp"
 #include "afhub/shm_layout/body_state.hpp"
 #include "afhub/shm_layout/world.hpp"
 
@@ -169,6 +171,31 @@ std::vector<Ros2Output> ros2_outputs(PayloadKind kind, const std::string& channe
                  .vec(s.wrench.torque_nm);
            }},
       };
+    case PayloadKind::kBodyCommand: {
+      // As the bridge takes a command in (its joint_command topic): the joints by name,
+      // and an array for each command type used, a joint of another type NaN in it.
+      auto command = std::make_shared<BodyCommand>();
+      return {{ros2_topic_name(channel, "joint_command"), kJointState,
+               [command, joint_names](auto payload, auto& out) {
+                 std::memcpy(static_cast<void*>(command.get()), payload.data(),
+                             std::min(payload.size(), sizeof *command));
+                 const BodyCommand& c = *command;
+                 const std::size_t n = std::min<std::size_t>(c.joint_count, joint_names.size());
+                 Cdr cdr(out);
+                 cdr.header(c.header.sim_time_s, "").put(static_cast<std::uint32_t>(n));
+                 for (std::size_t j = 0; j < n; ++j) cdr.string(joint_names[j]);
+                 for (JointCommandType type :
+                      {JointCommandType::kPosition, JointCommandType::kVelocity,
+                       JointCommandType::kEffort}) {
+                   bool used = false;
+                   for (std::size_t j = 0; j < n; ++j) used = used || c.joints[j].type == type;
+                   cdr.put(static_cast<std::uint32_t>(used ? n : 0));
+                   for (std::size_t j = 0; used && j < n; ++j)
+                     cdr.put(c.joints[j].type == type ? c.joints[j].value
+                                                      : std::numeric_limits<double>::quiet_NaN());
+                 }
+               }}};
+    }
     case PayloadKind::kWorldState:
       return {{"/clock", kClock, [](auto payload, auto& out) {
                  PayloadHeader header;

@@ -1,6 +1,7 @@
-// `afhub record --profile ros2`: body states and the world's clock as the ROS 2 messages
-// the DDS bridge's ROS 2 profile publishes (sensor_msgs/JointState, geometry_msgs/
-// PoseStamped, TwistStamped, WrenchStamped, and rosgraph_msgs/Clock), CDR-encoded as
+// `afhub record --profile ros2`: body states, commands and the world's clock as the ROS 2
+// messages the DDS bridge's ROS 2 profile publishes and takes (sensor_msgs/JointState,
+// geometry_msgs/PoseStamped, TwistStamped, WrenchStamped, rosgraph_msgs/Clock; a command
+// as the JointState of its joint_command topic), CDR-encoded as
 // ROS 2's rmw writes them, with their .msg definitions as schemas: a ROS 2 bag that ROS 2
 // tools and Foxglove Studio open. Stamps are simulation time.
 #pragma once
@@ -32,7 +33,8 @@ struct Ros2Output {
 };
 
 // The messages of a channel of `kind` ("afhub/arm/base" for a body, with its joints'
-// names): four for a body state, /clock for the world's state, none for the rest.
+// names): four for a body state, its joint_command for a body command, /clock for the
+// world's state, none for the rest.
 std::vector<Ros2Output> ros2_outputs(PayloadKind kind, const std::string& channel,
                                      const std::vector<std::string>& joint_names);
 

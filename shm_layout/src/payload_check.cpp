@@ -73,8 +73,9 @@ const char* body_list_problem(const BodyList& list, std::size_t bytes) noexcept 
   return nullptr;
 }
 
-// A tape's entries within its data and the chunk, each a channel name and a state of
-// at most a BodyState's size (each state is checked as one by whoever reads it).
+// A tape's entries within its data and the chunk, each a channel name and a state, a
+// command or a world state within its type's sizes (each is checked as what it is by
+// whoever reads it).
 const char* step_tape_problem(const StepTape& tape, std::size_t bytes) noexcept {
   if (tape.data_bytes > tape.data.size() || bytes < offsetof(StepTape, data) + tape.data_bytes)
     return "StepTape.data_bytes";
@@ -85,10 +86,24 @@ const char* step_tape_problem(const StepTape& tape, std::size_t bytes) noexcept 
     std::memcpy(&entry, tape.data.data() + at, sizeof entry);
     if (entry.name_bytes == 0 || entry.name_bytes >= kChannelNameBufferSize)
       return "StepTapeEntry.name_bytes";
-    if (entry.state_bytes < body_state_bytes(0) || entry.state_bytes > sizeof(BodyState))
-      return "StepTapeEntry.state_bytes";
-    const std::size_t entry_bytes = step_tape_entry_bytes(entry.name_bytes, entry.state_bytes);
-    if (tape.data_bytes - at < entry_bytes) return "StepTapeEntry.state_bytes";
+    std::size_t least = 0, most = 0;
+    switch (entry.kind) {
+      case PayloadKind::kBodyState:
+        least = body_state_bytes(0), most = sizeof(BodyState);
+        break;
+      case PayloadKind::kBodyCommand:
+        least = body_command_bytes(0), most = sizeof(BodyCommand);
+        break;
+      case PayloadKind::kWorldState:
+        least = most = sizeof(WorldState);
+        break;
+      default:
+        return "StepTapeEntry.kind";
+    }
+    if (entry.payload_bytes < least || entry.payload_bytes > most)
+      return "StepTapeEntry.payload_bytes";
+    const std::size_t entry_bytes = step_tape_entry_bytes(entry.name_bytes, entry.payload_bytes);
+    if (tape.data_bytes - at < entry_bytes) return "StepTapeEntry.payload_bytes";
     at += entry_bytes;
   }
   return nullptr;

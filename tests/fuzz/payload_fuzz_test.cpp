@@ -115,23 +115,30 @@ Seed body_list_seed(PayloadKind kind) {
   return {std::move(bytes), std::move(counts), {}};
 }
 
-// A step tape of two states (named as a physics names its bodies), at its used size.
-Seed step_tape_seed(const BodyState& state) {
+// A step tape of a command taken and two states (named as a physics names its bodies),
+// at its used size.
+Seed step_tape_seed(const BodyState& state, const BodyCommand& command) {
+  static_assert(sizeof(BodyCommand) <= sizeof(BodyState));  // the consumer's copy holds either
   auto tape = std::make_unique<StepTape>(stamped<StepTape>());
   std::vector<std::size_t> counts = {offsetof(StepTape, entry_count),
                                      offsetof(StepTape, data_bytes)};
-  for (const std::string name : {"arm/base", "arm/link1"}) {
-    const std::uint32_t bytes = static_cast<std::uint32_t>(body_state_bytes(state.joint_count));
-    const StepTapeEntry entry{static_cast<std::uint32_t>(name.size()), bytes};
+  const auto add = [&](PayloadKind kind, const std::string& name, const void* payload,
+                       std::size_t bytes) {
+    const StepTapeEntry entry{static_cast<std::uint32_t>(name.size()),
+                              static_cast<std::uint32_t>(bytes), kind, 0};
     std::uint8_t* at = tape->data.data() + tape->data_bytes;
     counts.push_back(offsetof(StepTape, data) + tape->data_bytes);      // name_bytes
-    counts.push_back(offsetof(StepTape, data) + tape->data_bytes + 4);  // state_bytes
+    counts.push_back(offsetof(StepTape, data) + tape->data_bytes + 4);  // payload_bytes
+    counts.push_back(offsetof(StepTape, data) + tape->data_bytes + 8);  // kind
     std::memcpy(at, &entry, sizeof entry);
     std::memcpy(at + sizeof entry, name.data(), name.size());
-    std::memcpy(at + step_tape_state_offset(name.size()), &state, bytes);
+    std::memcpy(at + step_tape_payload_offset(name.size()), payload, bytes);
     tape->data_bytes += static_cast<std::uint32_t>(step_tape_entry_bytes(name.size(), bytes));
     ++tape->entry_count;
-  }
+  };
+  add(PayloadKind::kBodyCommand, "arm/base", &command, body_command_bytes(command.joint_count));
+  add(PayloadKind::kBodyState, "arm/base", &state, body_state_bytes(state.joint_count));
+  add(PayloadKind::kBodyState, "arm/link1", &state, body_state_bytes(state.joint_count));
   tape->last_part = 1;
   return seed_of(*tape, std::move(counts), offsetof(StepTape, data) + tape->data_bytes);
 }
@@ -201,7 +208,7 @@ std::vector<Seed> make_seeds() {
       device_seed,
       command_seed,
       seed_of(bench_slot, {}),
-      step_tape_seed(state),
+      step_tape_seed(state, command),
   };
 }
 
@@ -475,15 +482,20 @@ class Fuzzer {
         consume_device_command(*reinterpret_cast<const DeviceCommand*>(data), sink);
         break;
       case PayloadKind::kStepTape:
-        // As a recorder reads it: each entry's state copied out, checked, then read.
+        // As a recorder reads it: each entry copied out, checked as what it says it is,
+        // then read by that kind's consumers.
         for_each_tape_entry(
             *reinterpret_cast<const StepTape*>(data),
-            [&](std::string_view name, const void* bytes, std::uint32_t size) {
-              auto state = std::make_unique<BodyState>();
-              std::memcpy(static_cast<void*>(state.get()), bytes, size);
+            [&](PayloadKind entry_kind, std::string_view name, const void* bytes,
+                std::uint32_t size) {
               sink += name.size();
-              if (check_payload(state.get(), size, PayloadKind::kBodyState) == PayloadError::kNone)
-                sink += cli::state_json(info_, *state).size();
+              auto copy = std::make_unique<BodyState>();
+              std::memcpy(static_cast<void*>(copy.get()), bytes, size);
+              if (check_payload(copy.get(), size, entry_kind) != PayloadError::kNone) return;
+              if (entry_kind == PayloadKind::kBodyState)
+                sink += cli::state_json(info_, *copy).size();
+              else
+                apply_command(*reinterpret_cast<const BodyCommand*>(copy.get()));
             });
         break;
       case PayloadKind::kSceneDescription:

@@ -47,7 +47,7 @@ bool StepTapeWriter::next_part() noexcept {
   return true;
 }
 
-void StepTapeWriter::add(std::string_view channel, const void* state,
+void StepTapeWriter::add(PayloadKind kind, std::string_view channel, const void* payload,
                          std::uint32_t bytes) noexcept {
   if (lost_) return;  // the step's tape is cut short: its reader counts what it misses
   const std::size_t need = step_tape_entry_bytes(channel.size(), bytes);
@@ -57,10 +57,10 @@ void StepTapeWriter::add(std::string_view channel, const void* state,
     if (!next_part()) return;
   }
   std::uint8_t* at = tape_->data.data() + tape_->data_bytes;
-  const StepTapeEntry entry{static_cast<std::uint32_t>(channel.size()), bytes};
+  const StepTapeEntry entry{static_cast<std::uint32_t>(channel.size()), bytes, kind, 0};
   std::memcpy(at, &entry, sizeof entry);
   std::memcpy(at + sizeof entry, channel.data(), channel.size());
-  std::memcpy(at + step_tape_state_offset(channel.size()), state, bytes);
+  std::memcpy(at + step_tape_payload_offset(channel.size()), payload, bytes);
   tape_->data_bytes += static_cast<std::uint32_t>(need);
   ++tape_->entry_count;
 }

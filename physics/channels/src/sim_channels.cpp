@@ -69,8 +69,8 @@ BodyEntry body_entry(const Model& model, std::size_t b, const std::vector<std::s
 // The bodies the model publishes (passive ones publish nothing), checked with the hub
 // before this process opens a publisher: one publisher per body, and room for them.
 // The blocks of their state slots (by size: a body's state carries the joints below
-// it), and the world state's, the scene's, the pose feed's, the directory's and the
-// loop stats' publishers.
+// it), and the world state's, the scene's, the pose feed's, the step tape's, the
+// directory's and the loop stats' publishers.
 std::vector<std::string> claim_bodies(const Model& model) {
   std::vector<std::string> claimed;
   std::map<std::uint32_t, std::size_t> states_by_size;
@@ -87,7 +87,7 @@ std::vector<std::string> claim_bodies(const Model& model) {
   if (claimed.size() > kMaxBodies)
     throw Error("the model publishes " + std::to_string(claimed.size()) +
                 " bodies; the hub holds " + std::to_string(kMaxBodies));
-  std::size_t publishers = 5;
+  std::size_t publishers = 6;
   for (const auto& [capacity, count] : states_by_size)
     publishers += slot_blocks_for(count, capacity);
   check_room_for_bodies(claimed, publishers);
@@ -103,7 +103,8 @@ SimChannels::SimChannels(Simulation& sim, double watchdog_s, std::string_view na
       scene_({std::string(kService), world_instance(name_space), std::string(kSceneEvent)}),
       scene_poses_(
           {std::string(kService), world_instance(name_space), std::string(kScenePosesEvent)}),
-      tape_(world_instance(name_space)),
+      world_instance_(world_instance(name_space)),
+      tape_(world_instance_),
       world_commands_(std::make_unique<WorldCommandQueue>(world_instance(name_space))) {
   if (!(watchdog_s >= kMinWatchdogS && watchdog_s <= kMaxWatchdogS))
     throw Error("the watchdog period must be 0.002 to 3600 s, got " + std::to_string(watchdog_s));
@@ -215,14 +216,17 @@ void SimChannels::publish(const WorldClock& clock) noexcept {
     state->refused_command_pid = channel.refused_pid;
     state->refusal_reason = channel.refusal_reason;
     channel.publisher->publish_state(state);
-    if (taping)  // this process's own entry: read back as it was just published
-      tape_.add(channel.soft ? sim_.model().soft_bodies[channel.index].channel
-                             : sim_.model().bodies[channel.index].channel,
-                state, static_cast<std::uint32_t>(body_state_bytes(channel.joint_count)));
-  }
-  if (taping) {
-    tape_.finish();
-    taped_step_ = step;
+    if (taping) {
+      const std::string& name = channel.soft ? sim_.model().soft_bodies[channel.index].channel
+                                             : sim_.model().bodies[channel.index].channel;
+      if (channel.taken_command)  // what this step answered, as it was taken
+        tape_.add(PayloadKind::kBodyCommand, name, channel.taken_command,
+                  channel.publisher->command_bytes());
+      // This process's own entry: read back as it was just published.
+      tape_.add(PayloadKind::kBodyState, name, state,
+                static_cast<std::uint32_t>(body_state_bytes(channel.joint_count)));
+    }
+    channel.taken_command = nullptr;
   }
   if (WorldState* world = world_.loan()) {
     world->header.sim_step = step;
@@ -257,6 +261,11 @@ void SimChannels::publish(const WorldClock& clock) noexcept {
     fill_objects(world->lights, spec.lights, &Simulation::light_pose);
     fill_objects(world->cameras, spec.cameras, &Simulation::camera_pose);
     world_.publish(world);
+    if (taping) tape_.add(PayloadKind::kWorldState, world_instance_, world, sizeof *world);
+  }
+  if (taping) {
+    tape_.finish();
+    taped_step_ = step;
   }
 }
 

@@ -15,6 +15,7 @@ void SimChannels::apply_commands(std::int64_t now_ns) noexcept {
     const BodyCommand* command = channel.publisher->latest_command();
     if (command && channel.publisher->command_updated()) {
       // Copied out of shared memory once, then checked, then applied.
+      channel.taken_command = command;
       to_input(*command, input_);
       const Answer answer{command->header.sim_step, command->header.publisher_pid,
                           command->lockstep != 0};

@@ -1,4 +1,5 @@
-// StepTape: a physics' body states of one step, for a reader that must see every step
+// StepTape: a physics' body states of one step, the commands it took for it and its
+// world state, for a reader that must see every step
 // (`afhub record`), on {"afhub", <world instance>, "step_tape"}. A state is a
 // latest-value slot: a reader that wakes a step late finds the newer state, and the one
 // before is gone. The tape is a queue of iceoryx samples instead, published after the
@@ -25,11 +26,14 @@ inline constexpr std::size_t kStepTapeBytes = 60 * 1024;
 inline constexpr std::uint32_t kStepTapeQueue = 256;
 
 // An entry of a tape's data: this header, the body's channel name (name_bytes, no
-// NUL), then at the next multiple of 8 the state as published (state_bytes); the next
+// NUL; the world's instance for its state), then at the next multiple of 8 the payload
+// (payload_bytes): a state as published, or a command as the physics took it; the next
 // entry starts at the multiple of 8 after it.
 struct StepTapeEntry {
   std::uint32_t name_bytes{0};
-  std::uint32_t state_bytes{0};
+  std::uint32_t payload_bytes{0};
+  PayloadKind kind{PayloadKind::kBodyState};  // or kBodyCommand, kWorldState
+  std::uint32_t reserved{0};
 };
 
 struct StepTape {
@@ -46,12 +50,12 @@ static_assert(sizeof(StepTape) == kStepTapeBytes);
 constexpr std::size_t round_up_to_8(std::size_t bytes) {
   return (bytes + 7) / 8 * 8;
 }
-// Where an entry's state starts, from the entry's start; and the entry's whole size.
-constexpr std::size_t step_tape_state_offset(std::size_t name_bytes) {
+// Where an entry's payload starts, from the entry's start; and the entry's whole size.
+constexpr std::size_t step_tape_payload_offset(std::size_t name_bytes) {
   return round_up_to_8(sizeof(StepTapeEntry) + name_bytes);
 }
-constexpr std::size_t step_tape_entry_bytes(std::size_t name_bytes, std::size_t state_bytes) {
-  return step_tape_state_offset(name_bytes) + round_up_to_8(state_bytes);
+constexpr std::size_t step_tape_entry_bytes(std::size_t name_bytes, std::size_t payload_bytes) {
+  return step_tape_payload_offset(name_bytes) + round_up_to_8(payload_bytes);
 }
 
 }  // namespace afhub

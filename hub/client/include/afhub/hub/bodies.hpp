@@ -44,6 +44,7 @@ class BodyPublisher {
   // The newest command, or nullptr before the first; read in place.
   const BodyCommand* latest_command() noexcept { return command_.latest(); }
   bool command_updated() const { return command_.updated(); }
+  std::uint32_t command_bytes() { return command_.raw().latest_bytes(); }
   std::uint64_t refused_commands() { return command_.raw().refused_count(); }
   // The command reader, to wait on (SampleWaiter).
   RawLatestReader& command_reader() noexcept { return command_.raw(); }

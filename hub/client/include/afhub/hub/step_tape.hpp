@@ -19,8 +19,10 @@ class StepTapeWriter {
 
   // Starts a step's tape when something reads it (false: nothing to write this step).
   bool begin(std::uint64_t step, double time_s) noexcept;
-  // Adds a body's state as published (`bytes` of it), after begin() said true.
-  void add(std::string_view channel, const void* state, std::uint32_t bytes) noexcept;
+  // Adds a body's state as published, or a command as taken (`bytes` of it), after
+  // begin() said true.
+  void add(PayloadKind kind, std::string_view channel, const void* payload,
+           std::uint32_t bytes) noexcept;
   // Publishes the step's last part.
   void finish() noexcept;
   // Steps whose tape could not be written whole (shared memory exhausted).
@@ -55,8 +57,8 @@ class StepTapeReader {
   std::uint64_t refused_ = 0;
 };
 
-// Calls `visit(std::string_view channel, const void* state, std::uint32_t bytes)` for each
-// entry of a checked tape (check_payload), in order.
+// Calls `visit(PayloadKind kind, std::string_view channel, const void* payload,
+// std::uint32_t bytes)` for each entry of a checked tape (check_payload), in order.
 template <class Visit>
 void for_each_tape_entry(const StepTape& tape, Visit&& visit) {
   std::size_t at = 0;
@@ -64,9 +66,9 @@ void for_each_tape_entry(const StepTape& tape, Visit&& visit) {
     StepTapeEntry entry;
     std::memcpy(&entry, tape.data.data() + at, sizeof entry);
     const auto* name = reinterpret_cast<const char*>(tape.data.data() + at + sizeof entry);
-    visit(std::string_view(name, entry.name_bytes),
-          tape.data.data() + at + step_tape_state_offset(entry.name_bytes), entry.state_bytes);
-    at += step_tape_entry_bytes(entry.name_bytes, entry.state_bytes);
+    visit(entry.kind, std::string_view(name, entry.name_bytes),
+          tape.data.data() + at + step_tape_payload_offset(entry.name_bytes), entry.payload_bytes);
+    at += step_tape_entry_bytes(entry.name_bytes, entry.payload_bytes);
   }
 }
 

@@ -185,6 +185,8 @@ class SimChannels {
     std::uint64_t answered_step = 0;        // lockstep: the step this client answered last
     std::uint64_t applied_answer_step = 0;  // the step the command being applied answers
     int misses = 0;                         // late steps in a row
+    // The command taken since the last publish (the reader's checked copy), for the tape.
+    const BodyCommand* taken_command = nullptr;
   };
   // The notice to fill for `event`, or nullptr when a said-once event was noted already.
   static Notice* note(Channel& channel, Event event, std::uint32_t pid) noexcept;
@@ -228,6 +230,7 @@ class SimChannels {
   bool scene_poses_published_ = false;
   // Every step's states again, queued for a recorder, while one reads: a recorder that
   // falls behind the latest-value states catches up from its queue.
+  std::string world_instance_;  // the world's name on its channels (and on the tape)
   StepTapeWriter tape_;
   std::uint64_t taped_step_ = ~0ULL;  // a paused world's step is taped once
   std::int64_t view_next_ns_ = 0;     // when publish_view is due next
