@@ -172,7 +172,7 @@ int run_synth(const SynthOptions& options) {
         tape.add(PayloadKind::kBodyState, channels[i], state,
                  static_cast<std::uint32_t>(body_state_bytes(options.joints)));
     }
-    if (taping) tape.finish();
+
     if (WorldState* state = world.loan()) {
       state->header.sim_step = step;
       state->header.sim_time_s = t;
@@ -181,7 +181,10 @@ int run_synth(const SynthOptions& options) {
       state->body_count = static_cast<std::uint32_t>(bodies.size());
       state->paused = control.halted();
       world.publish(state);
+      if (taping)
+        tape.add(PayloadKind::kWorldState, std::string(kWorldInstance), state, sizeof *state);
     }
+    if (taping) tape.finish();
     if (stepping) ++step;
     next_ns += period_ns;
     if (next_ns - rate_window_ns >= 1'000'000'000) {

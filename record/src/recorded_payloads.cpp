@@ -157,9 +157,10 @@ std::vector<std::uint8_t> payload_schema_text(const RecordedPayload& payload) {
       payload.kind != PayloadKind::kBodyState
           ? ""
           : " Packed when its size is below body_state_bytes(joint_count): its bytes before "
-            "refusal_reason; refusal_reason whole unless it was empty (the size says which); "
-            "the first sensor_ray_count entries of sensor_distances_m, then of "
-            "sensor_ranges_m; its joints. What is left out reads as zeros.",
+            "refusal_reason; refusal_reason and the padding after it, up to "
+            "sensor_distances_m, unless the reason was empty (the size says which); the "
+            "first sensor_ray_count entries of sensor_distances_m, then of sensor_ranges_m; "
+            "its joints. What is left out reads as zeros.",
       static_cast<unsigned long long>(kLayoutId));
   return {text, text + n};
 }

@@ -1,6 +1,6 @@
 // The payloads afhub records, as schemas of its MCAP files: a message is the payload's
 // bytes as they were in shared memory, at the size the writer published; a body state
-// leaves out its unused arrays (pack_for_file).
+// leaves out its unused arrays (pieces_for_file).
 #pragma once
 
 #include <array>
@@ -32,7 +32,7 @@ std::vector<std::uint8_t> payload_schema_text(const RecordedPayload& payload);
 
 // A payload as the file holds it. A body state of a thousand bodies is mostly empty
 // arrays (sensor rays past sensor_ray_count, a refusal reason while nothing was
-// refused: 672 of its 1184 bytes with 8 joints), which would double what is copied and
+// refused: 676 of its 1184 bytes with 8 joints), which would double what is copied and
 // compressed: they are left out, and read back as zeros. Other payloads are kept as
 // published. The pieces of `payload` the file holds, in order, are put in `pieces`;
 // returns how many.

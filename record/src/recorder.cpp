@@ -64,7 +64,8 @@ struct Recorded {
   bool retry = false;     // its last sample found the buffer full
   bool seen = false;
   std::uint32_t publisher_pid = 0;
-  std::uint64_t last = 0;  // its last step (per_step) or sequence
+  std::uint64_t last = 0;          // its last step (per_step) or sequence
+  std::int64_t last_stamp_ns = 0;  // its last publish stamp: a writer's own clock, always newer
   PayloadKind kind{};
   std::string body;           // what the step tape names it: a body's channel, the world's instance
   std::int64_t taped_ns = 0;  // when the step tape last brought it
@@ -156,7 +157,12 @@ class Session {
       world.latest();  // taken, so that the waiter sleeps until the next step
       while (tape.next(*taped)) sample_tape(*taped, now);
       for (Recorded& recorded : recorded_) {
-        if (recorded.taped_ns != 0 && now - recorded.taped_ns < kTapeFreshNs) continue;
+        if (recorded.taped_ns != 0 && now - recorded.taped_ns < kTapeFreshNs) {
+          // Read from the tape; a reader that wakes the loop is still taken, or the
+          // waiter would find its update new at every wait and never sleep.
+          if (recorded.wakes) recorded.reader->latest();
+          continue;
+        }
         const void* payload = recorded.reader->latest();
         if (payload && (recorded.reader->updated() || recorded.retry))
           sample(recorded, payload, recorded.reader->latest_bytes(), now);
@@ -182,7 +188,7 @@ class Session {
         by_body_[tape_kind_index(recorded.kind)].emplace(recorded.body, recorded_.size());
       recorded_.push_back(std::move(recorded));
     }
-    std::fill(tape_order_.begin(), tape_order_.end(), kUnknown);  // a new body may be taped
+    std::fill(tape_order_.begin(), tape_order_.end(), TapePosition{});  // a new one may be taped
     discovered_.clear();
     discovered_ready_.store(false, std::memory_order_release);
   }
@@ -190,10 +196,10 @@ class Session {
   // The states and commands of a step tape's sample, each checked as what it is (the
   // sample is this process's copy), for the channels recorded.
   void sample_tape(const StepTape& tape, std::int64_t now_ns) noexcept {
-    if (tape.part == 0) tape_position_ = 0;
+    std::size_t position = tape.first_entry;
     for_each_tape_entry(tape, [&](PayloadKind kind, std::string_view body, const void* payload,
                                   std::uint32_t bytes) {
-      const std::size_t index = recorded_index(kind, body, tape_position_++);
+      const std::size_t index = recorded_index(kind, body, position++);
       if (index >= recorded_.size()) return;  // not recorded, or not discovered yet
       if (check_payload(payload, bytes, kind) != PayloadError::kNone) return;
       Recorded& recorded = recorded_[index];
@@ -203,21 +209,34 @@ class Session {
   }
 
   // The index in recorded_ of a tape's entry at `position` in its step (kNotRecorded
-  // when none). A physics tapes its bodies in the same order every step: what was at
-  // this position the step before is tried first, and the map searched only when it
-  // differs.
+  // when none). A physics tapes its bodies in the same order every step (a command only
+  // when it took one): what was at this position the step before is tried first, and
+  // the map searched only when it was another entry.
   static constexpr std::size_t kUnknown = ~std::size_t{0}, kNotRecorded = kUnknown - 1;
+  struct TapePosition {
+    std::size_t index = kUnknown;
+    PayloadKind kind{};
+    std::uint64_t name_hash = 0;  // of a name not recorded
+  };
+  static std::uint64_t name_hash(std::string_view name) noexcept {
+    std::uint64_t hash = 0xcbf29ce484222325ULL;  // FNV-1a
+    for (const char c : name) hash = (hash ^ static_cast<unsigned char>(c)) * 0x100000001b3ULL;
+    return hash;
+  }
   std::size_t recorded_index(PayloadKind kind, std::string_view body,
                              std::size_t position) noexcept {
-    if (position >= tape_order_.size()) return kNotRecorded;  // more than a world holds
-    std::size_t& cached = tape_order_[position];
-    if (cached == kNotRecorded) return cached;
-    if (cached != kUnknown && recorded_[cached].kind == kind && recorded_[cached].body == body)
-      return cached;
+    if (position >= tape_order_.size()) return kNotRecorded;  // more than a world tapes
+    TapePosition& cached = tape_order_[position];
+    if (cached.kind == kind) {
+      if (cached.index == kNotRecorded && cached.name_hash == name_hash(body)) return kNotRecorded;
+      if (cached.index < recorded_.size() && recorded_[cached.index].body == body)
+        return cached.index;
+    }
     const auto& by_body = by_body_[tape_kind_index(kind)];
     const auto found = by_body.find(body);
-    cached = found == by_body.end() ? kNotRecorded : found->second;
-    return cached;
+    cached = {found == by_body.end() ? kNotRecorded : found->second, kind,
+              found == by_body.end() ? name_hash(body) : 0};
+    return cached.index;
   }
 
   // Copies a new sample into the buffer, or counts it dropped when the buffer is full.
@@ -229,8 +248,10 @@ class Session {
     std::memcpy(&header, payload, sizeof header);  // checked by the reader: at least a header
     const std::uint64_t key = recorded.per_step ? header.sim_step : header.sequence;
     const bool same_writer = recorded.seen && recorded.publisher_pid == header.publisher_pid;
-    // A paused physics' step again, or one its tape brings after its slot did.
-    if (same_writer && key <= recorded.last) return;
+    // A paused physics' step again, or an update its tape brings after its slot did (or
+    // the other way round). A world reset starts the steps again: that is recorded.
+    if (same_writer && (key == recorded.last || header.publish_stamp_ns <= recorded.last_stamp_ns))
+      return;
     QueuedMessage message;
     message.channel_id = recorded.channel_id;
     message.sequence = static_cast<std::uint32_t>(key);
@@ -250,6 +271,7 @@ class Session {
     recorded.seen = true;
     recorded.publisher_pid = header.publisher_pid;
     recorded.last = key;
+    recorded.last_stamp_ns = header.publish_stamp_ns;
     if (first_sample_ns_ == 0) first_sample_ns_ = now_ns;
   }
 
@@ -493,8 +515,8 @@ class Session {
     return kind == PayloadKind::kBodyState ? 0 : kind == PayloadKind::kBodyCommand ? 1 : 2;
   }
   std::array<std::map<std::string, std::size_t, std::less<>>, 3> by_body_;
-  std::vector<std::size_t> tape_order_ = std::vector<std::size_t>(kMaxBodies, kUnknown);
-  std::size_t tape_position_ = 0;  // of the next entry in its step
+  // Each body's state and command, and the world's state.
+  std::vector<TapePosition> tape_order_ = std::vector<TapePosition>(2 * kMaxBodies + 1);
 
   // The discovery's, and what it hands over.
   std::set<std::string> known_;

@@ -173,8 +173,8 @@ void take_publisher_ports_leaving(LatestReader<Health>& health, std::uint32_t le
 // A port per block of slots, not per body: 250 bodies take a few ports. Queue writers
 // take one each, which is how this process runs the hub out of them.
 TEST(Claims, RunningOutOfPublisherPortsIsRefusedSayingHowManyAreLeft) {
-  // The blocks of 250 one-joint states, the world state's and the directory's.
-  const std::size_t needed = slot_blocks_for(250, body_state_bytes(1)) + 2;
+  // The blocks of 250 one-joint states, the world state's, the step tape's and the directory's.
+  const std::size_t needed = slot_blocks_for(250, body_state_bytes(1)) + 3;
   EXPECT_LE(needed, 8u);
   LatestReader<Health> health(
       {std::string(kService), std::string(kHubInstance), std::string(kHealthEvent)});

@@ -1,6 +1,7 @@
 // The ends of a world's step tape (see step_tape.hpp).
 #include "afhub/hub/step_tape.hpp"
 
+#include <algorithm>
 #include <cstdio>
 #include <cstring>
 
@@ -22,10 +23,12 @@ StepTapeWriter::StepTapeWriter(const std::string& world_instance)
     : writer_(tape_channel(world_instance), PayloadKind::kStepTape) {}
 
 bool StepTapeWriter::begin(std::uint64_t step, double time_s) noexcept {
+  finish();  // a step left unfinished goes out as it is, never held
   if (!writer_.has_readers()) return false;
   step_ = step;
   time_s_ = time_s;
   part_ = 0;
+  entries_ = 0;
   lost_ = false;
   return next_part();
 }
@@ -34,14 +37,14 @@ bool StepTapeWriter::begin(std::uint64_t step, double time_s) noexcept {
 bool StepTapeWriter::next_part() noexcept {
   tape_ = static_cast<StepTape*>(writer_.loan(sizeof(StepTape)));
   if (!tape_) {
-    if (!lost_) ++lost_steps_;
-    lost_ = true;
+    lost_ = true;  // shared memory exhausted: the rest of the step's tape is missed
     return false;
   }
   tape_->header.sim_step = step_;
   tape_->header.sim_time_s = time_s_;
   tape_->part = part_++;
   tape_->last_part = 0;
+  tape_->first_entry = entries_;
   tape_->entry_count = 0;
   tape_->data_bytes = 0;
   return true;
@@ -51,7 +54,10 @@ void StepTapeWriter::add(PayloadKind kind, std::string_view channel, const void*
                          std::uint32_t bytes) noexcept {
   if (lost_) return;  // the step's tape is cut short: its reader counts what it misses
   const std::size_t need = step_tape_entry_bytes(channel.size(), bytes);
-  if (!tape_ || need > tape_->data.size()) return;  // cannot happen: a state fits a part
+  if (!tape_ || need > tape_->data.size()) {  // cannot happen: a payload fits a part
+    lost_ = true;
+    return;
+  }
   if (tape_->data_bytes + need > tape_->data.size()) {
     writer_.publish(tape_);
     if (!next_part()) return;
@@ -63,11 +69,12 @@ void StepTapeWriter::add(PayloadKind kind, std::string_view channel, const void*
   std::memcpy(at + step_tape_payload_offset(channel.size()), payload, bytes);
   tape_->data_bytes += static_cast<std::uint32_t>(need);
   ++tape_->entry_count;
+  ++entries_;
 }
 
 void StepTapeWriter::finish() noexcept {
-  if (!tape_ || lost_) return;
-  tape_->last_part = 1;
+  if (!tape_) return;
+  tape_->last_part = lost_ ? 0 : 1;
   writer_.publish(tape_);
   tape_ = nullptr;
 }

@@ -197,7 +197,11 @@ void SimChannels::publish(const WorldClock& clock) noexcept {
       }
     }
   }
-  const bool taping = step != taped_step_ && tape_.begin(step, time_s);
+  // A step is taped once: a paused or held step published again is not, and the commands
+  // taken meanwhile wait for the next step's tape.
+  const bool new_step = step != taped_step_;
+  const bool taping = new_step && tape_.begin(step, time_s);
+  taped_step_ = step;
   for (Channel& channel : channels_) {
     // Every field is set below: the slot's last update needs no defaults first.
     BodyState* state = channel.publisher->rewrite_state(channel.joint_count);
@@ -226,7 +230,7 @@ void SimChannels::publish(const WorldClock& clock) noexcept {
       tape_.add(PayloadKind::kBodyState, name, state,
                 static_cast<std::uint32_t>(body_state_bytes(channel.joint_count)));
     }
-    channel.taken_command = nullptr;
+    if (new_step) channel.taken_command = nullptr;
   }
   if (WorldState* world = world_.loan()) {
     world->header.sim_step = step;
@@ -263,10 +267,7 @@ void SimChannels::publish(const WorldClock& clock) noexcept {
     world_.publish(world);
     if (taping) tape_.add(PayloadKind::kWorldState, world_instance_, world, sizeof *world);
   }
-  if (taping) {
-    tape_.finish();
-    taped_step_ = step;
-  }
+  if (taping) tape_.finish();
 }
 
 bool SimChannels::next_world_command(WorldCommand& out) noexcept {

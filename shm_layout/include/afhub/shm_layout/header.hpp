@@ -25,7 +25,7 @@ enum class PayloadKind : std::uint32_t {
   kSoftBodyMesh = 13,      // a soft body's faces (once) or node positions (display rate)
   kScenePoses = 14,        // every body's pose for a viewer, at display rate
   kBenchSlot = 15,         // `afhub bench` pings and pongs through slots (afhub-slot)
-  kStepTape = 16,          // a physics' states of one step, queued for a recorder
+  kStepTape = 16,          // a physics' states, commands taken, world state of a step, queued
 };
 
 struct PayloadHeader {

@@ -283,6 +283,7 @@ inline constexpr std::uint64_t kLayoutId = layout_detail::mix({
     sizeof(StepTape),
     AFHUB_OFF(StepTape, part),
     AFHUB_OFF(StepTape, last_part),
+    AFHUB_OFF(StepTape, first_entry),
     AFHUB_OFF(StepTape, entry_count),
     AFHUB_OFF(StepTape, data_bytes),
     AFHUB_OFF(StepTape, data),

@@ -38,12 +38,14 @@ struct StepTapeEntry {
 
 struct StepTape {
   static constexpr PayloadKind kKind = PayloadKind::kStepTape;
-  PayloadHeader header;        // sim_step: the step of its states
-  std::uint32_t part{0};       // of the step's samples, from 0
-  std::uint32_t last_part{0};  // 1 on the step's last sample
+  PayloadHeader header;          // sim_step: the step of its states
+  std::uint32_t part{0};         // of the step's samples, from 0
+  std::uint32_t last_part{0};    // 1 on the step's last sample
+  std::uint32_t first_entry{0};  // the step's entries in the parts before this one
   std::uint32_t entry_count{0};
   std::uint32_t data_bytes{0};  // entries fill data[0, data_bytes)
-  std::array<std::uint8_t, kStepTapeBytes - sizeof(PayloadHeader) - 16> data{};
+  std::uint32_t reserved{0};
+  std::array<std::uint8_t, kStepTapeBytes - sizeof(PayloadHeader) - 24> data{};
 };
 static_assert(sizeof(StepTape) == kStepTapeBytes);
 

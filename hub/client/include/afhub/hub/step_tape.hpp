@@ -25,8 +25,6 @@ class StepTapeWriter {
            std::uint32_t bytes) noexcept;
   // Publishes the step's last part.
   void finish() noexcept;
-  // Steps whose tape could not be written whole (shared memory exhausted).
-  std::uint64_t lost_steps() const noexcept { return lost_steps_; }
 
  private:
   bool next_part() noexcept;
@@ -35,8 +33,8 @@ class StepTapeWriter {
   std::uint64_t step_ = 0;
   double time_s_ = 0.0;
   std::uint32_t part_ = 0;
-  bool lost_ = false;  // this step lost a part
-  std::uint64_t lost_steps_ = 0;
+  std::uint32_t entries_ = 0;  // this step's, so far
+  bool lost_ = false;          // this step lost a part or an entry
 };
 
 class StepTapeReader {
@@ -49,7 +47,6 @@ class StepTapeReader {
   // The oldest sample not read yet, copied into `out` (its used part) and checked;
   // false when none waits. Invalid samples are refused (said once, counted) and skipped.
   bool next(StepTape& out) noexcept;
-  std::uint64_t refused_count() const noexcept { return refused_; }
 
  private:
   struct Port;
