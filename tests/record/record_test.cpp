@@ -501,7 +501,8 @@ TEST(Record, ALockstepRunIsReproducedBitIdenticallyAndAChangedGainIsCaughtAtItsS
   physics.reset();
   const std::string recorded = read_file(log("record.log"));
   // Every step's states, commands and world state (the physics' step tape).
-  for (const json& channel : info_of(file)["channels"])
+  const json lockstep_info = info_of(file);
+  for (const json& channel : lockstep_info["channels"])
     if (channel["schema"] != "afhub.ScenePoses") {
       EXPECT_EQ(channel["skipped"], 0) << channel["topic"] << "\n" << recorded;
     }
