@@ -66,7 +66,7 @@ std::vector<MempoolSpec> default_mempools() {
   // per kind they write (a controller's commands, a driver's device state); a physics
   // of a thousand bodies five blocks, a thousand commands from 125 controllers 125
   // blocks of the first tier. Block readers hold each block once per process. In all
-  // the default pools take 189 MB of /dev/shm (iceoryx's own default: 206 MB).
+  // the default pools take 173 MB of /dev/shm (iceoryx's own default: 206 MB).
   // Catalogs and directories are loaned at their real size, and iceoryx takes a chunk
   // from the smallest pool that fits it, whatever its type: each holds a chunk in its
   // writer's history, and three in each reader.
@@ -102,11 +102,14 @@ std::vector<MempoolSpec> default_mempools() {
       // each viewer; its faces once, kept the same way.
       {round_up8(soft_body_mesh_bytes(0)), 64, "soft body node positions"},
       {round_up8(soft_body_mesh_bytes(kMaxSoftBodyFaces)), 32, "soft body faces"},
-      // Two recorders' queues of a world's step tape, the tape's history and the
-      // physics' loans: 35 MB, which keep a recorder of a world of up to about forty
-      // bodies (their states, commands and the world's state) from losing a step while
-      // it is a quarter of a second behind.
-      {round_up8(sizeof(StepTape)), 2 * kStepTapeQueue + 64, "step tapes (recorders' queues)"},
+      // A recorder's queue of a world's step tape, the tape's history and the physics'
+      // loans: 19.7 MB, which keep a recorder of a world of up to about forty bodies
+      // (their states, commands and the world's state) from losing a step while it is a
+      // quarter of a second behind. Two recorders far behind at once share it: the
+      // physics' loans then fail and the steps they would have held are missed. (The hub
+      // writes every page at its start: with room for two queues, 35 MB, a CI run on the
+      // 2-core VM had a hub start and a hub stop too slow for two tests; this size passed.)
+      {round_up8(sizeof(StepTape)), kStepTapeQueue + 64, "step tapes (a recorder's queue)"},
   };
   sort_by_size(pools);
   return pools;
