@@ -408,7 +408,7 @@ TEST_F(CliWithBodies, StatusShowsProcessesAndMempools) {
         const std::string synth = "afhub-synth-" + std::to_string(synth_.pid);
         return find_element(health.at("processes"), "name", synth) && health.at("body_count") == 2;
       },
-      5s))
+      20s))
       << status.out;
   ASSERT_EQ(status.exit_code, 0) << status.err;
   // Several segments may hold pools of one size: any of them. States are in blocks of
