@@ -41,10 +41,10 @@ double cfm(const btSolverConstraint& row) {
 
 }  // namespace
 
-ConstraintSolver::ConstraintSolver(int bodies, int joints) {
+ConstraintSolver::ConstraintSolver(int bodies, int joints) : body_capacity_(bodies + 64) {
   constexpr int kContacts = 4096;  // contact points, each with two friction rows
   const int joint_rows = 6 * joints + 64;
-  m_tmpSolverBodyPool.reserve(bodies + 64);
+  m_tmpSolverBodyPool.reserve(body_capacity_);
   m_tmpSolverContactConstraintPool.reserve(kContacts);
   m_tmpSolverContactFrictionConstraintPool.reserve(2 * kContacts);
   m_tmpSolverContactRollingFrictionConstraintPool.reserve(3 * kContacts);
@@ -57,6 +57,8 @@ ConstraintSolver::ConstraintSolver(int bodies, int joints) {
 
 void ConstraintSolver::enable_direct_solve() {
   sides_.resize(K);
+  next_side_.resize(2 * K);
+  body_rows_.reserve(body_capacity_);
   equality_.reserve(K);
   bounded_.reserve(K);
   row_.resize(K);
@@ -78,10 +80,16 @@ btScalar ConstraintSolver::solveGroupCacheFriendlyIterations(
         bodies, numBodies, manifolds, numManifolds, constraints, numConstraints, info,
         debug_drawer);
   };
-  const bool loop = std::any_of(constraints, constraints + numConstraints, [](auto* c) {
-    return c->getUserConstraintType() == kInLoopIsland;
-  });
-  if (!loop || a_.empty()) return iterate();
+  // Any marked joint makes the island direct. Rows a loop repeats are looked for
+  // when a joint in it is marked so, or a constraint is not marked at all (an
+  // actuator's hold, which may close a loop while running).
+  bool direct = false, find_dependent = false;
+  for (int c = 0; c < numConstraints; ++c) {
+    const int type = constraints[c]->getUserConstraintType();
+    direct |= type == kInLoopIsland || type == kInTreeIsland;
+    find_dependent |= type != kInTreeIsland;
+  }
+  if (!direct || a_.empty()) return iterate();
   // Every row of the island: joints, then contacts, then their friction and rolling
   // friction (bounded by the contact's own impulse).
   btConstraintArray& joints = m_tmpSolverNonContactConstraintPool;
@@ -101,7 +109,7 @@ btScalar ConstraintSolver::solveGroupCacheFriendlyIterations(
   // Penetration is pushed out apart from the velocities (Bullet's split impulse).
   solveGroupCacheFriendlySplitImpulseIterations(bodies, numBodies, manifolds, numManifolds,
                                                 constraints, numConstraints, info, debug_drawer);
-  factor();
+  factor(find_dependent);
   if (!solve_rows())  // then as Bullet would have (the split impulse is done)
     for (int iteration = 0; iteration < info.m_numIterations; ++iteration)
       solveSingleIteration(iteration, bodies, numBodies, manifolds, numManifolds, constraints,
@@ -109,9 +117,9 @@ btScalar ConstraintSolver::solveGroupCacheFriendlyIterations(
   return 0;
 }
 
-// A, its equality rows' Cholesky factor (dependent rows left out) with the null
-// vectors the dependent rows make, W and S.
-void ConstraintSolver::factor() noexcept {
+// A, its equality rows' Cholesky factor (dependent rows left out, when looked for)
+// with the null vectors the dependent rows make, W and S.
+void ConstraintSolver::factor(bool find_dependent) noexcept {
   for (int i = 0; i < rows_; ++i) {
     const btSolverConstraint& row = *row_[i].row;
     auto side = [&](int body, const btVector3& normal, const btVector3& turn,
@@ -135,7 +143,7 @@ void ConstraintSolver::factor() noexcept {
   // compared by shape weigh a turn by L, as a point L away sees it (shape_ below).
   double levers2 = 0.0;
   int levers = 0;
-  for (int i = 0; i < rows_; ++i) {
+  for (int i = 0; i < rows_ && find_dependent; ++i) {
     const btSolverConstraint& row = *row_[i].row;
     if (row.m_contactNormal1.length2() > 0) {
       levers2 += row.m_relpos1CrossNormal.length2() + row.m_relpos2CrossNormal.length2();
@@ -143,21 +151,37 @@ void ConstraintSolver::factor() noexcept {
     }
   }
   const double turn_weight = levers2 > 0 ? levers / levers2 : 1.0;  // 1 / L^2
+  // Row i's velocity change per unit impulse of row j (mass), and the two rows'
+  // Jacobians' product (shape), through each moving body they share: summed over
+  // the rows meeting at each body (a list per body), so that an open chain's rows
+  // cost their neighbours, not the whole island.
+  body_rows_.assign(m_tmpSolverBodyPool.size(), -1);
+  for (int i = 0; i < rows_; ++i) {
+    std::fill_n(&a_[i * K], rows_, 0.0);
+    if (find_dependent) std::fill_n(&shape_[i * K], rows_, 0.0);
+    for (int s = 0; s < 2; ++s) {
+      const Side& side = sides_[i][s];
+      if (!side.moves) continue;
+      next_side_[2 * i + s] = body_rows_[side.body];
+      body_rows_[side.body] = 2 * i + s;
+    }
+  }
+  for (const int first : body_rows_)
+    for (int e = first; e >= 0; e = next_side_[e])
+      for (int f = e; f >= 0; f = next_side_[f]) {
+        const Side& se = sides_[e / 2][e % 2];
+        const Side& sf = sides_[f / 2][f % 2];
+        const int i = e / 2, j = f / 2;
+        const double mass = dot(se.normal, sf.linear) + dot(se.turn, sf.angular);
+        a_[i * K + j] += mass;
+        if (i != j) a_[j * K + i] += mass;
+        if (!find_dependent) continue;
+        const double shape = dot(se.normal, sf.normal) + dot(se.turn, sf.turn) * turn_weight;
+        shape_[i * K + j] += shape;
+        if (i != j) shape_[j * K + i] += shape;
+      }
   for (int i = 0; i < rows_; ++i) {
     const btSolverConstraint& ri = *row_[i].row;
-    for (int j = 0; j <= i; ++j) {
-      // Row i's velocity change per unit impulse of row j (mass), and the two rows'
-      // Jacobians' product (shape), through each moving body they share.
-      double mass = 0.0, shape = 0.0;
-      for (const Side& si : sides_[i])
-        for (const Side& sj : sides_[j])
-          if (si.moves && si.body == sj.body) {
-            mass += dot(si.normal, sj.linear) + dot(si.turn, sj.angular);
-            shape += dot(si.normal, sj.normal) + dot(si.turn, sj.turn) * turn_weight;
-          }
-      a_[i * K + j] = a_[j * K + i] = mass;
-      shape_[i * K + j] = shape_[j * K + i] = shape;
-    }
     // A row with no effective mass (its bodies cannot move along it) takes no part.
     bounded_slot_[i] = -1;
     if (ri.m_jacDiagABInv == 0 || !(a_[i * K + i] > 0)) continue;
@@ -176,7 +200,7 @@ void ConstraintSolver::factor() noexcept {
   // a row look implied. Then A itself is factored over the rows kept.
   const int ne = static_cast<int>(equality_.size());
   std::fill(dependent_.begin(), dependent_.begin() + ne, false);
-  cholesky(shape_.data(), true);
+  if (find_dependent) cholesky(shape_.data(), true);
   cholesky(a_.data(), false);
 
   // A dependent row d repeats a combination c of the rows kept: A's null space

@@ -165,17 +165,19 @@ void Simulation::Data::build_joints() {
                                                   parent.com_from_mesh, child.com_from_mesh, dt_s));
     world.addConstraint(&joints.back()->constraint(), spec.ignore_inter_collision);
   }
-  mark_loop_islands();
+  mark_joint_islands();
 }
 
-// The moving bodies joined by joints (a static body joins nothing: it is the
-// ground) hold a closed loop when they have as many joints as bodies, one more when
-// some of them reach the ground. Their joints are marked for the direct solve
-// (constraint_solver.hpp), which then takes the whole Bullet island they are in
-// (contacts join islands too), and every island is solved on its own, not batched.
-// A loop closed while running (an actuator's hold) is not marked.
-void Simulation::Data::mark_loop_islands() {
-  if (!model.world.direct_loop_solve) return;
+// Every joint that moves a body is marked for the direct solve
+// (constraint_solver.hpp), which then takes the whole Bullet island it is in
+// (contacts join islands too), every island solved on its own, not batched. The
+// moving bodies joined by joints (a static body joins nothing: it is the ground)
+// hold a closed loop when they have as many joints as bodies, one more when some of
+// them reach the ground: their joints are marked as in a loop, where the solve looks
+// for the rows a loop repeats. A loop closed while running (an actuator's hold) is
+// not marked, and makes the solve look too.
+void Simulation::Data::mark_joint_islands() {
+  if (!model.world.direct_solve) return;
   std::vector<int> group(bodies.size());
   std::iota(group.begin(), group.end(), 0);
   auto root = [&](int b) {
@@ -206,8 +208,9 @@ void Simulation::Data::mark_loop_islands() {
     const JointSpec& spec = model.joints[j];
     if (!bodies[spec.parent].dynamic && !bodies[spec.child].dynamic) continue;
     const Island& island = islands[island_of(spec)];
-    if (island.joints < island.bodies + (island.grounded ? 1 : 0)) continue;
-    joints[j]->constraint().setUserConstraintType(ConstraintSolver::kInLoopIsland);
+    const bool loop = island.joints >= island.bodies + (island.grounded ? 1 : 0);
+    joints[j]->constraint().setUserConstraintType(loop ? ConstraintSolver::kInLoopIsland
+                                                       : ConstraintSolver::kInTreeIsland);
     any = true;
   }
   if (!any) return;

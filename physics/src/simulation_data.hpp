@@ -25,6 +25,7 @@
 #include "constraint_solver.hpp"
 #include "frames.hpp"
 #include "joint_model.hpp"
+#include "reserved_world.hpp"
 
 namespace afhub::physics {
 
@@ -92,16 +93,6 @@ struct ActuatorData {
   std::unique_ptr<std::optional<btPoint2PointConstraint>> storage;
   btPoint2PointConstraint* hold = nullptr;  // engaged: the constraint in `storage`
   int held = -1;                            // engaged: the body it holds
-};
-
-// The world, with room for every constraint it may hold at once.
-class ReservedWorld : public btSoftRigidDynamicsWorld {
- public:
-  using btSoftRigidDynamicsWorld::btSoftRigidDynamicsWorld;
-  void reserve_constraints(int count) {
-    m_constraints.reserve(count);
-    m_sortedConstraints.reserve(count);
-  }
 };
 
 struct Ray {
@@ -184,7 +175,7 @@ struct Simulation::Data {
 
   void build_bodies();
   void build_joints();
-  void mark_loop_islands();
+  void mark_joint_islands();
   void build_soft_bodies();
   void build_sensors();
   void build_actuators();

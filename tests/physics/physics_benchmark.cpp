@@ -178,7 +178,7 @@ BENCHMARK_CAPTURE(BM_Step, four_bar_published, kFourBar, true, false)
 void BM_LoopStep(benchmark::State& state, const std::string& file, bool direct) {
   if (!have_shared_models(state)) return;
   Model model = load_adf_files({file});
-  model.world.direct_loop_solve = direct;
+  model.world.direct_solve = direct;
   Simulation sim(model, 0.001);
   StepTimes times(1 << 22);
   for (auto _ : state) timed_step(sim, nullptr, times);

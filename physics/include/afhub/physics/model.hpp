@@ -217,9 +217,9 @@ struct WorldSpec {
   Vec3 gravity_mps2{0.0, 0.0, -9.81};
   Vec3 enclosure_m{0.0, 0.0, 0.0};
   int max_iterations = 20;  // solver iterations; Bullet has 10, which lets a loop open 2 mm
-  // Islands holding a closed loop have their joints solved directly, not by the
-  // iterations above (physics/src/constraint_solver.hpp); false: iterated like the rest.
-  bool direct_loop_solve = true;
+  // Islands of joints are solved directly, not by the iterations above
+  // (physics/src/constraint_solver.hpp); false: iterated like the rest.
+  bool direct_solve = true;
   std::vector<WorldObjectSpec> lights, cameras;
 };
 

@@ -1,0 +1,67 @@
+#include "reserved_world.hpp"
+
+#include <BulletCollision/CollisionDispatch/btSimulationIslandManager.h>
+
+#include <algorithm>
+
+namespace afhub::physics {
+namespace {
+
+// As Bullet tells a constraint's island: its first body's, unless that is static.
+int island_of(const btTypedConstraint& constraint) {
+  const int a = constraint.getRigidBodyA().getIslandTag();
+  return a >= 0 ? a : constraint.getRigidBodyB().getIslandTag();
+}
+
+}  // namespace
+
+void ReservedWorld::reserve_constraints(int count) {
+  m_constraints.reserve(count);
+  m_sortedConstraints.reserve(count);
+  keyed_.reserve(count);
+  sorted_.reserve(count);
+}
+
+void ReservedWorld::solveConstraints(btContactSolverInfo& info) {
+  if (info.m_minimumSolverBatchSize > 1) {
+    btSoftRigidDynamicsWorld::solveConstraints(info);
+    return;
+  }
+  keyed_.clear();
+  for (int i = 0; i < m_constraints.size(); ++i)
+    keyed_.push_back({island_of(*m_constraints[i]), i});
+  std::sort(keyed_.begin(), keyed_.end(), [](const Keyed& x, const Keyed& y) {
+    return x.island != y.island ? x.island < y.island : x.index < y.index;
+  });
+  sorted_.clear();
+  for (const Keyed& k : keyed_) sorted_.push_back(m_constraints[k.index]);
+
+  struct Islands : btSimulationIslandManager::IslandCallback {
+    ReservedWorld& world;
+    btContactSolverInfo& info;
+    Islands(ReservedWorld& w, btContactSolverInfo& i) : world(w), info(i) {}
+    void processIsland(btCollisionObject** bodies, int body_count, btPersistentManifold** manifolds,
+                       int manifold_count, int island) override {
+      const auto& keyed = world.keyed_;
+      if (island < 0) {  // islands not split: everything at once
+        world.m_constraintSolver->solveGroup(bodies, body_count, manifolds, manifold_count,
+                                             world.sorted_.data(), static_cast<int>(keyed.size()),
+                                             info, world.m_debugDrawer, world.getDispatcher());
+        return;
+      }
+      const auto in =
+          std::equal_range(keyed.begin(), keyed.end(), Keyed{island, 0},
+                           [](const Keyed& x, const Keyed& y) { return x.island < y.island; });
+      const auto first = static_cast<int>(in.first - keyed.begin());
+      const auto count = static_cast<int>(in.second - in.first);
+      world.m_constraintSolver->solveGroup(bodies, body_count, manifolds, manifold_count,
+                                           count ? &world.sorted_[first] : nullptr, count, info,
+                                           world.m_debugDrawer, world.getDispatcher());
+    }
+  } islands(*this, info);
+  m_constraintSolver->prepareSolve(getNumCollisionObjects(), getDispatcher()->getNumManifolds());
+  m_islandManager->buildAndProcessIslands(getDispatcher(), this, &islands);
+  m_constraintSolver->allSolved(info, m_debugDrawer);
+}
+
+}  // namespace afhub::physics
