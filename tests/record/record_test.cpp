@@ -174,7 +174,16 @@ TEST(Record, ARecorderPausedForAFifthOfASecondMissesNoStep) {
   const std::string file = scene.dir("paused.mcap");
   ScopedProcess recorder(spawn_afhub({"record", "-o", file, "--duration", "3", "--commands"},
                                      scene.dir("record.log")));
-  std::this_thread::sleep_for(1s);
+  // Paused once it records (its 3 s count from the first message): a first chunk
+  // (about 170 KB) is in the file. A fixed second was not always enough under load:
+  // CI's tests beside it once delayed the start past both pauses.
+  ASSERT_TRUE(wait_until(
+      [&] {
+        std::error_code error;
+        return std::filesystem::file_size(file, error) > 100'000 && !error;
+      },
+      30s))
+      << read_file(scene.dir("record.log"));
   for (int pause = 0; pause < 2; ++pause) {
     ASSERT_EQ(kill(recorder.pid, SIGSTOP), 0);
     std::this_thread::sleep_for(200ms);
