@@ -5,7 +5,7 @@
 #      running beside it (PAIRS pairs of runs, STEPS steps each): each run's step p50 and
 #      p99 from `afhub run --report`, and the ratio of the medians with and without.
 #   2. A thousand bodies at 1 kHz from `afhub synth --bodies 1000 --joints 8` (a stand-in
-#      for a physics, which takes 3 to 4 ms a step for a thousand bodies on the project's
+#      for a physics, which takes about 1 ms a step for a thousand bodies on the project's
 #      2-core VM) recorded for SECONDS s: messages/s, MB/s into the file, dropped and
 #      missed updates, and the recorder's CPU (user + system time over wall time).
 #
