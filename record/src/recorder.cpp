@@ -37,6 +37,9 @@ constexpr std::int64_t kProgressPeriodNs = 500'000'000;
 constexpr std::int64_t kIdleWaitNs = 2'000'000;  // no world state: sampled this often
 constexpr int kWriterNice = 10;
 constexpr std::int64_t kChunkFlushPeriodNs = 1'000'000'000;  // what a kill -9 loses at most
+// An idle writing thread looks for messages this often: each wake-up is a context switch
+// on a core a real-time loop may want (the reading loop hands them over every 4 ms).
+constexpr useconds_t kWriterIdleUs = 5'000;
 // A body the physics' step tape brought within this long is read from the tape alone.
 constexpr std::int64_t kTapeFreshNs = 100'000'000;
 // While a tape comes, it is read this often (its queue holds 256 samples: 12 steps of a
@@ -392,7 +395,7 @@ class Session {
             return;
           }
         }
-        if (taken == 0) usleep(1000);
+        if (taken == 0) usleep(kWriterIdleUs);
       }
     } catch (...) {
       write_error_ = std::current_exception();

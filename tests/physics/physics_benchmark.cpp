@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "afhub/hub/hub_presence.hpp"
+#include "afhub/hub/step_tape.hpp"
 #include "afhub/physics/adf_loader.hpp"
 #include "afhub/physics/adf_writer.hpp"
 #include "afhub/physics/sim_channels.hpp"
@@ -139,8 +140,12 @@ void report_step_times(benchmark::State& state, StepTimes& times) {
 // One step of the physics alone, or the whole loop iteration of `afhub run`:
 // commands read, step, every body's state and the world state published, and the
 // display-rate chores after them, at 1 ms per step; `viewed`: with a viewer reading
-// the pose feed (which then goes out at 60 Hz, every ~17th step).
-void BM_Step(benchmark::State& state, const std::string& file, bool publish, bool viewed) {
+// the pose feed (which then goes out at 60 Hz, every ~17th step); `taped`: with a
+// recorder's step tape reader (the physics then copies each step's states, commands
+// and world state into the tape: what a recorder costs the step itself; the reader
+// drains it between steps, untimed).
+void BM_Step(benchmark::State& state, const std::string& file, bool publish, bool viewed,
+             bool taped = false) {
   if (!have_shared_models(state)) return;
   const Model model = load_adf_files({file});
   Simulation sim(model, 0.001);
@@ -154,6 +159,22 @@ void BM_Step(benchmark::State& state, const std::string& file, bool publish, boo
                                  std::chrono::seconds(5)))
       state.SkipWithError("the viewer's reader did not connect");
   }
+  std::unique_ptr<StepTapeReader> tape;
+  const auto tape_sample = std::make_unique<StepTape>();
+  if (taped) {
+    tape = std::make_unique<StepTapeReader>(world_instance());
+    // Connected once a step's tape comes (after RouDi's discovery pass).
+    if (!afhub::test::wait_until(
+            [&] {
+              sim.step();
+              channels->publish({});
+              bool taped_one = false;
+              while (tape->next(*tape_sample)) taped_one = true;
+              return taped_one;
+            },
+            std::chrono::seconds(5)))
+      state.SkipWithError("the step tape reader did not connect");
+  }
   std::int64_t clock_ns = 0;
   // Each step's time as `afhub run` times it (commands in, step, states out; not the
   // display-rate chores after), for its tail: the mean hides a cost paid every 17th step.
@@ -161,6 +182,9 @@ void BM_Step(benchmark::State& state, const std::string& file, bool publish, boo
   for (auto _ : state) {
     timed_step(sim, channels.get(), times);
     if (channels) channels->publish_view(clock_ns += 1'000'000);
+    if (tape)
+      while (tape->next(*tape_sample)) {
+      }
   }
   state.counters["bodies"] = static_cast<double>(model.bodies.size());
   report_step_times(state, times);
@@ -168,6 +192,8 @@ void BM_Step(benchmark::State& state, const std::string& file, bool publish, boo
 BENCHMARK_CAPTURE(BM_Step, kuka_physics, kKuka, false, false)->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(BM_Step, kuka_published, kKuka, true, false)->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(BM_Step, kuka_published_viewed, kKuka, true, true)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_Step, kuka_published_taped, kKuka, true, false, true)
+    ->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(BM_Step, four_bar_physics, kFourBar, false, false)->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(BM_Step, four_bar_published, kFourBar, true, false)
     ->Unit(benchmark::kMicrosecond);
