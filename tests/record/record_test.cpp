@@ -594,7 +594,13 @@ TEST(Record, ADeviceIsRecordedAtItsOwnRateWithDevices) {
   for (const json& channel : info["channels"]) channels[channel["topic"]] = channel;
   ASSERT_TRUE(channels.count("/device/hand/state")) << info.dump();
   EXPECT_EQ(channels["/device/hand/state"]["schema"], "afhub.DeviceState");
-  EXPECT_GT(channels["/device/hand/state"]["rate_hz"].get<double>(), 900.0);
+  // The device's updates are in the file: the recorder missed at most 5 % of them (a
+  // gap in their sequence). Its loop's own rate is the device's business (on a machine
+  // busy with other tests it once ran at 895 Hz).
+  const json& hand = channels["/device/hand/state"];
+  EXPECT_GT(hand["rate_hz"].get<double>(), 500.0) << info.dump();
+  EXPECT_LE(hand["skipped"].get<std::uint64_t>() * 20, hand["messages"].get<std::uint64_t>())
+      << info.dump();
   EXPECT_EQ(channels["/device/hand/command"]["schema"], "afhub.DeviceCommand");
   // Without --devices, none.
   const RunResult bodies_only =
