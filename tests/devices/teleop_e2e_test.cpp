@@ -180,17 +180,21 @@ TEST(TeleopEndToEnd, WhenTheDriverDiesThePalmIsHeldAndResumesWithNoJump) {
   pause_ms(500);
   const double out = teleop.palm().pose.position_m.x;
   EXPECT_NEAR(out, kX0 + kScale * 0.02, 0.01) << teleop.logs();
+  const char* said = "no sample from device/dies";
+  // Said once for this outage. (A driver starved for 50 ms before the kill, as a
+  // sanitizer run beside other tests once did, has been said already: not counted.)
+  const int said_before = occurrences(teleop.teleop_log(), said);
   const std::int64_t killed_at = monotonic_ns();
   teleop.kill_driver();
-  const char* said = "no sample from device/dies";
-  ASSERT_TRUE(wait_until([&] { return contains(teleop.teleop_log(), said); }, 5s)) << teleop.logs();
+  ASSERT_TRUE(wait_until([&] { return occurrences(teleop.teleop_log(), said) > said_before; }, 5s))
+      << teleop.logs();
   double held_drift = 0.0;
   for (int i = 0; i < 250; ++i) {
     held_drift = std::max(held_drift, std::abs(teleop.palm().pose.position_m.x - out));
     pause_ms(2);
   }
   EXPECT_LT(held_drift, 0.005) << "the palm moved while the device was gone";
-  EXPECT_EQ(occurrences(teleop.teleop_log(), said), 1) << teleop.teleop_log();
+  EXPECT_EQ(occurrences(teleop.teleop_log(), said), said_before + 1) << teleop.teleop_log();
 
   teleop.start_driver();  // its hand at x = 0 for 1 s
   ASSERT_TRUE(wait_until([&] { return teleop.device().header.publish_stamp_ns > killed_at; }, 20s));

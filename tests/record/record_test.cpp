@@ -210,8 +210,9 @@ TEST(Record, ARecorderPausedForAFifthOfASecondMissesNoStep) {
   EXPECT_GE(state_channels, 15u);
   EXPECT_GE(pose_skips, 10u) << "the pauses were not seen (60 Hz): " << info.dump();
   // The commands the physics took: a gap is one its controller replaced before the
-  // physics read it (the controller woken late on a busy machine), never a pause's 200.
-  EXPECT_LT(largest_gap(file, "/afhub/arm/base/command"), 50u);
+  // physics read it (the controller woken late on a busy machine: 102 steps once under
+  // the sanitizers beside other tests), never a pause's 200.
+  EXPECT_LT(largest_gap(file, "/afhub/arm/base/command"), 160u);
 }
 
 TEST(Record, AsAROS2BagItsJointStatesDecodeWithAnIndependentCdrReader) {
