@@ -436,18 +436,21 @@ class Session {
   void finish_on_hub_loss() noexcept {
     reading_done_ = true;
     const std::lock_guard lock(writing_mutex_);
-    if (closed_) return;
-    closed_ = true;
-    try {
-      write_buffered();
-      writer_.close();
-      std::fprintf(stderr, "afhub record: the hub is gone: %s closed with %llu messages\n",
-                   options_.output.c_str(),
-                   static_cast<unsigned long long>(writer_.message_count()));
-    } catch (const std::exception& error) {
-      std::fprintf(stderr, "afhub record: the hub is gone, and %s could not be closed: %s\n",
-                   options_.output.c_str(), error.what());
+    // The writing thread may have closed it first: it saw reading done (set above, or
+    // by the reading loop ending on the loss) before this took the lock.
+    if (!closed_) {
+      closed_ = true;
+      try {
+        write_buffered();
+        writer_.close();
+      } catch (const std::exception& error) {
+        std::fprintf(stderr, "afhub record: the hub is gone, and %s could not be closed: %s\n",
+                     options_.output.c_str(), error.what());
+        return;
+      }
     }
+    std::fprintf(stderr, "afhub record: the hub is gone: %s closed with %llu messages\n",
+                 options_.output.c_str(), static_cast<unsigned long long>(writer_.message_count()));
   }
 
  private:
