@@ -7,6 +7,7 @@
 #include <cerrno>
 #include <cstring>
 #include <limits>
+#include <utility>
 
 #include "afhub/shm_layout/error.hpp"
 #include "mcap_bytes.hpp"
@@ -20,6 +21,7 @@ Writer::Writer(const std::string& path, Options options)
   pending_.insert(pending_.end(), std::begin(kMagic), std::end(kMagic));
   RecordBuilder(pending_, kHeader).str(options_.profile).str(options_.library);
   write_out();  // from now on the file reads as MCAP, cut off
+  if (options_.background) thread_ = std::thread([this] { background_loop(); });
 }
 
 Writer::~Writer() {
@@ -28,7 +30,43 @@ Writer::~Writer() {
   } catch (const Error&) {
     // Reported by close() when called; a destructor cannot throw.
   }
+  stop_background();
   if (fd_ >= 0) ::close(fd_);
+}
+
+void Writer::background_loop() {
+  std::unique_lock lock(mutex_);
+  for (;;) {
+    changed_.wait(lock, [&] { return busy_ || stopping_; });
+    if (!busy_) return;
+    lock.unlock();
+    try {
+      if (!sealed_.records.empty()) write_chunk(sealed_);
+      write_out();
+    } catch (...) {
+      error_ = std::current_exception();
+    }
+    lock.lock();
+    busy_ = false;
+    changed_.notify_all();
+  }
+}
+
+void Writer::wait_idle() {
+  if (!thread_.joinable()) return;
+  std::unique_lock lock(mutex_);
+  changed_.wait(lock, [&] { return !busy_; });
+  if (error_) std::rethrow_exception(std::exchange(error_, nullptr));
+}
+
+void Writer::stop_background() noexcept {
+  if (!thread_.joinable()) return;
+  {
+    const std::lock_guard lock(mutex_);
+    stopping_ = true;
+  }
+  changed_.notify_all();
+  thread_.join();  // after the chunk it was writing, if any
 }
 
 void Writer::write_schema(std::vector<std::uint8_t>& out, std::uint16_t id) const {
@@ -48,6 +86,7 @@ void Writer::write_channel(std::vector<std::uint8_t>& out, std::uint16_t id) con
 
 std::uint16_t Writer::add_schema(std::string_view name, std::string_view encoding,
                                  std::span<const std::uint8_t> data) {
+  wait_idle();
   if (schemas_.size() >= std::numeric_limits<std::uint16_t>::max())
     throw Error("an MCAP file holds at most 65535 schemas");
   schemas_.push_back({std::string(name), std::string(encoding), {data.begin(), data.end()}});
@@ -58,6 +97,7 @@ std::uint16_t Writer::add_schema(std::string_view name, std::string_view encodin
 
 std::uint16_t Writer::add_channel(std::uint16_t schema_id, std::string_view topic,
                                   std::string_view message_encoding, const Metadata& metadata) {
+  wait_idle();
   if (channels_.size() >= std::numeric_limits<std::uint16_t>::max())
     throw Error("an MCAP file holds at most 65535 channels");
   if (schema_id > schemas_.size())
@@ -69,9 +109,10 @@ std::uint16_t Writer::add_channel(std::uint16_t schema_id, std::string_view topi
 }
 
 void Writer::add_metadata(std::string_view name, const Metadata& metadata) {
-  const std::uint64_t offset = file_bytes();
+  wait_idle();
+  const std::uint64_t start = offset();
   RecordBuilder(pending_, kMetadata).str(name).map(metadata);
-  metadata_indexes_.push_back({offset, file_bytes() - offset, std::string(name)});
+  metadata_indexes_.push_back({start, offset() - start, std::string(name)});
 }
 
 void Writer::write(const Message& message) {
@@ -82,23 +123,22 @@ void Writer::write(const Message& message, std::span<const std::span<const std::
   if (message.channel_id == 0 || message.channel_id > channels_.size())
     throw Error("a message on channel " + std::to_string(message.channel_id) +
                 ", which was never added");
-  if (chunk_.empty()) chunk_start_ns_ = chunk_end_ns_ = message.log_time_ns;
-  if (chunk_entries_.size() <= message.channel_id) {
-    chunk_entries_.resize(channels_.size() + 1);
-    channel_counts_.resize(channels_.size() + 1);
-  }
-  auto& entries = chunk_entries_[message.channel_id];
-  if (entries.empty()) chunk_channels_.push_back(message.channel_id);
-  entries.emplace_back(message.log_time_ns, chunk_.size());
+  Chunk& chunk = open_;
+  if (chunk.records.empty()) chunk.start_ns = chunk.end_ns = message.log_time_ns;
+  if (chunk.entries.size() <= message.channel_id) chunk.entries.resize(channels_.size() + 1);
+  if (channel_counts_.size() <= message.channel_id) channel_counts_.resize(channels_.size() + 1);
+  auto& entries = chunk.entries[message.channel_id];
+  if (entries.empty()) chunk.channels.push_back(message.channel_id);
+  entries.emplace_back(message.log_time_ns, chunk.records.size());
   {
     // Written in place, the chunk grown once: a thousand bodies make a million a second.
     std::size_t bytes = 0;
     for (const auto& piece : pieces) bytes += piece.size();
     const std::uint64_t length = 2 + 4 + 8 + 8 + bytes;
-    std::size_t at = chunk_.size();
-    chunk_.resize(at + kRecordPrefix + length);
+    std::size_t at = chunk.records.size();
+    chunk.records.resize(at + kRecordPrefix + length);
     const auto put = [&](const void* from, std::size_t n) {
-      std::memcpy(chunk_.data() + at, from, n);  // x86-64: little-endian, as the file
+      std::memcpy(chunk.records.data() + at, from, n);  // x86-64: little-endian, as the file
       at += n;
     };
     const std::uint8_t opcode = kMessage;
@@ -110,64 +150,74 @@ void Writer::write(const Message& message, std::span<const std::span<const std::
     put(&message.publish_time_ns, 8);
     for (const auto& piece : pieces) put(piece.data(), piece.size());
   }
-  chunk_start_ns_ = std::min(chunk_start_ns_, message.log_time_ns);
-  chunk_end_ns_ = std::max(chunk_end_ns_, message.log_time_ns);
+  chunk.start_ns = std::min(chunk.start_ns, message.log_time_ns);
+  chunk.end_ns = std::max(chunk.end_ns, message.log_time_ns);
   if (message_count_ == 0) first_ns_ = last_ns_ = message.log_time_ns;
   first_ns_ = std::min(first_ns_, message.log_time_ns);
   last_ns_ = std::max(last_ns_, message.log_time_ns);
   ++message_count_;
   ++channel_counts_[message.channel_id];
-  if (chunk_.size() >= options_.chunk_bytes) flush_chunk();
+  if (chunk.records.size() >= options_.chunk_bytes) flush_chunk();
 }
 
 void Writer::flush_chunk() {
-  if (!chunk_.empty()) write_chunk();
-  write_out();
+  if (!thread_.joinable()) {
+    if (!open_.records.empty()) write_chunk(open_);
+    write_out();
+    return;
+  }
+  wait_idle();
+  std::swap(open_, sealed_);  // the one written before, emptied, fills next
+  {
+    const std::lock_guard lock(mutex_);
+    busy_ = true;
+  }
+  changed_.notify_all();
 }
 
-void Writer::write_chunk() {
-  const std::uint64_t chunk_offset = file_bytes();
+void Writer::write_chunk(Chunk& chunk) {
+  const std::uint64_t chunk_offset = offset();
   std::uint64_t compressed_size = 0;
   {
     RecordBuilder record(pending_, kChunk);
     // A compressed chunk's frame carries its own checksum of the records, which its
     // decompression checks (zstd's XXH64, LZ4's XXH32): the CRC-32 over them, a fifth of
     // a thousand bodies' writing time, is then left out (0: "not computed").
-    record.u64(chunk_start_ns_)
-        .u64(chunk_end_ns_)
-        .u64(chunk_.size())
-        .u32(options_.compression == Compression::kNone ? crc32(chunk_) : 0)
+    record.u64(chunk.start_ns)
+        .u64(chunk.end_ns)
+        .u64(chunk.records.size())
+        .u32(options_.compression == Compression::kNone ? crc32(chunk.records) : 0)
         .str(compression_name(options_.compression));
     const std::size_t length_at = pending_.size();
     record.u64(0);  // the records' length, known once they are compressed in place
-    compressed_size = compressor_.append(chunk_, pending_);
+    compressed_size = compressor_.append(chunk.records, pending_);
     std::memcpy(pending_.data() + length_at, &compressed_size, sizeof compressed_size);
   }
-  const std::uint64_t chunk_length = file_bytes() - chunk_offset;
-  const std::uint64_t indexes_start = file_bytes();
-  std::sort(chunk_channels_.begin(), chunk_channels_.end());
+  const std::uint64_t chunk_length = offset() - chunk_offset;
+  const std::uint64_t indexes_start = offset();
+  std::sort(chunk.channels.begin(), chunk.channels.end());
   message_index_offsets_.clear();
-  for (const std::uint16_t channel : chunk_channels_) {
-    auto& entries = chunk_entries_[channel];
-    message_index_offsets_.emplace_back(channel, file_bytes());
+  for (const std::uint16_t channel : chunk.channels) {
+    auto& entries = chunk.entries[channel];
+    message_index_offsets_.emplace_back(channel, offset());
     RecordBuilder record(pending_, kMessageIndex);
     record.u16(channel).u32(static_cast<std::uint32_t>(entries.size() * 16));
     for (const auto& [time, offset] : entries) record.u64(time).u64(offset);
     entries.clear();  // its capacity kept for the next chunk
   }
-  chunk_channels_.clear();
-  const std::uint64_t indexes_length = file_bytes() - indexes_start;
+  chunk.channels.clear();
+  const std::uint64_t indexes_length = offset() - indexes_start;
 
   RecordBuilder index(chunk_index_records_, kChunkIndex);
-  index.u64(chunk_start_ns_).u64(chunk_end_ns_).u64(chunk_offset).u64(chunk_length);
+  index.u64(chunk.start_ns).u64(chunk.end_ns).u64(chunk_offset).u64(chunk_length);
   index.u32(static_cast<std::uint32_t>(message_index_offsets_.size() * 10));
   for (const auto& [channel, offset] : message_index_offsets_) index.u16(channel).u64(offset);
   index.u64(indexes_length)
       .str(compression_name(options_.compression))
       .u64(compressed_size)
-      .u64(chunk_.size());
+      .u64(chunk.records.size());
   ++chunk_count_;
-  chunk_.clear();
+  chunk.records.clear();
 }
 
 void Writer::write_out() {
@@ -181,6 +231,7 @@ void Writer::write_out() {
       // its last complete chunk plus part of one, which a reader sees as cut off.
       failed_ = true;
       file_offset_ += done;
+      written_.store(file_offset_, std::memory_order_relaxed);
       pending_.clear();
       throw Error("cannot write " + path_ + ": " + std::strerror(n < 0 ? errno : ENOSPC) +
                   " (the file keeps its complete chunks; `afhub record --recover` indexes them)");
@@ -188,26 +239,30 @@ void Writer::write_out() {
     done += static_cast<std::size_t>(n);
   }
   file_offset_ += pending_.size();
+  written_.store(file_offset_, std::memory_order_relaxed);
   pending_.clear();
 }
 
 void Writer::close() {
-  if (closed_ || failed_) return;
+  if (closed_) return;
+  wait_idle();  // its error, if any, reported here
+  stop_background();
+  if (failed_) return;
   closed_ = true;  // whatever happens below, once
-  if (!chunk_.empty()) write_chunk();
+  if (!open_.records.empty()) write_chunk(open_);
   RecordBuilder(pending_, kDataEnd).u32(0);  // 0: no data section CRC (the chunks carry theirs)
   write_out();  // from here on pending_ holds the summary: its CRC is taken there
 
-  const std::uint64_t summary_start = file_bytes();
+  const std::uint64_t summary_start = offset();
   struct Group {
     Opcode opcode;
     std::uint64_t start, length;
   };
   std::vector<Group> groups;
   auto group = [&](Opcode opcode, auto write_records) {
-    const std::uint64_t start = file_bytes();
+    const std::uint64_t start = offset();
     write_records();
-    if (file_bytes() > start) groups.push_back({opcode, start, file_bytes() - start});
+    if (offset() > start) groups.push_back({opcode, start, offset() - start});
   };
   group(kSchema, [&] {
     for (std::size_t id = 1; id <= schemas_.size(); ++id)
@@ -241,7 +296,7 @@ void Writer::close() {
     for (const MetadataIndex& index : metadata_indexes_)
       RecordBuilder(pending_, kMetadataIndex).u64(index.offset).u64(index.length).str(index.name);
   });
-  const std::uint64_t summary_offset_start = file_bytes();
+  const std::uint64_t summary_offset_start = offset();
   for (const Group& g : groups)
     RecordBuilder(pending_, kSummaryOffset).u8(g.opcode).u64(g.start).u64(g.length);
 

@@ -27,8 +27,12 @@ class RecordQueue {
   explicit RecordQueue(std::size_t bytes)
       : capacity_(bytes), ring_(std::make_unique<std::uint8_t[]>(bytes)) {}
 
-  bool push(const QueuedMessage& message, std::span<const std::uint8_t> payload) noexcept {
-    const std::size_t need = entry_bytes(payload.size());
+  // The entry's payload is `pieces` joined.
+  bool push(const QueuedMessage& message,
+            std::span<const std::span<const std::uint8_t>> pieces) noexcept {
+    std::size_t bytes = 0;
+    for (const auto& piece : pieces) bytes += piece.size();
+    const std::size_t need = entry_bytes(bytes);
     const std::uint64_t head = head_.load(std::memory_order_relaxed);
     const std::uint64_t tail = tail_.load(std::memory_order_acquire);
     std::size_t at = head % capacity_;
@@ -40,9 +44,13 @@ class RecordQueue {
       at = 0;
     }
     QueuedMessage header = message;
-    header.bytes = static_cast<std::uint32_t>(payload.size());
+    header.bytes = static_cast<std::uint32_t>(bytes);
     std::memcpy(ring_.get() + at, &header, sizeof header);
-    std::memcpy(ring_.get() + at + sizeof header, payload.data(), payload.size());
+    at += sizeof header;
+    for (const auto& piece : pieces) {
+      std::memcpy(ring_.get() + at, piece.data(), piece.size());
+      at += piece.size();
+    }
     head_.store(head + skip + need, std::memory_order_release);
     return true;
   }

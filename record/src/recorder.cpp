@@ -99,7 +99,7 @@ class Session {
   Session(const RecordOptions& options)
       : options_(options),
         ros2_(options.profile == "ros2"),
-        writer_(options.output, {options.profile, "afhub", options.compression}),
+        writer_(options.output, {options.profile, "afhub", options.compression, 1u << 20, true}),
         queue_(options.buffer_bytes),
         realtime_offset_ns_(realtime_ns() - monotonic_ns()) {
     if (ros2_) {
@@ -279,7 +279,12 @@ class Session {
         static_cast<std::uint64_t>(header.publish_stamp_ns + realtime_offset_ns_);
     message.log_time_ns = static_cast<std::uint64_t>(now_ns + realtime_offset_ns_);
     recorded.retry = false;
-    if (!queue_.push(message, {static_cast<const std::uint8_t*>(payload), bytes})) {
+    // Packed here as the file holds it (the ROS 2 profile's encoders read whole
+    // states): the buffer then holds twice the states, and is copied half as much.
+    const std::span<const std::uint8_t> whole(static_cast<const std::uint8_t*>(payload), bytes);
+    FilePieces pieces{whole};
+    const std::size_t count = ros2_ ? 1 : pieces_for_file(whole, recorded.kind, pieces);
+    if (!queue_.push(message, std::span(pieces).first(count))) {
       // Published once (the scene): tried again at the next wake until there is room.
       if (recorded.once) {
         recorded.retry = true;

@@ -70,9 +70,11 @@ class McapFile : public ::testing::Test {
   void TearDown() override { fs::remove_all(directory_); }
   std::string path(const std::string& name) const { return (directory_ / name).string(); }
 
-  // Two channels, `messages` messages each, in chunks of 16 KiB.
-  void write_sample(const std::string& file, Compression compression, std::uint32_t messages) {
-    Writer writer(file, {"afhub", "afhub", compression, 16 * 1024});
+  // Two channels, `messages` messages each, in chunks of 16 KiB (compressed and written
+  // by the writer's own thread, or not).
+  void write_sample(const std::string& file, Compression compression, std::uint32_t messages,
+                    bool background = false) {
+    Writer writer(file, {"afhub", "afhub", compression, 16 * 1024, background});
     const std::uint8_t schema_text[] = {'s', 'c', 'h', 'e', 'm', 'a'};
     const auto schema = writer.add_schema("afhub.BodyState", "afhub-layout", schema_text);
     const auto a = writer.add_channel(schema, "/arm/base/state", "afhub", {{"joints", "3"}});
@@ -102,26 +104,28 @@ class McapFile : public ::testing::Test {
 };
 
 TEST_F(McapFile, EveryMessageComesBackAsWrittenWithEachCompression) {
-  for (Compression compression : {Compression::kNone, Compression::kLz4, Compression::kZstd}) {
-    SCOPED_TRACE(std::string(compression_name(compression)));
-    const std::string file = path("sample.mcap");
-    write_sample(file, compression, 2000);
-    Collected read;
-    const ScanResult result = scan(file, read);
-    EXPECT_TRUE(result.complete) << result.cut_off;
-    EXPECT_EQ(result.messages, 4000u);
-    EXPECT_GT(result.chunks, 10u);
-    EXPECT_EQ(read.profile, "afhub");
-    ASSERT_EQ(read.schemas.size(), 1u);
-    EXPECT_EQ(read.schemas[0].name, "afhub.BodyState");
-    ASSERT_EQ(read.channels.size(), 2u);
-    EXPECT_EQ(read.channels[0].topic, "/arm/base/state");
-    EXPECT_EQ(read.channels[0].metadata.at("joints"), "3");
-    ASSERT_EQ(read.metadata_records.size(), 1u);
-    EXPECT_EQ(read.metadata_records[0].second.at("layout_id"), "42");
-    for (const auto& c : read.chunk_compressions) EXPECT_EQ(c, compression_name(compression));
-    expect_sample(read, 2000);
-  }
+  for (const bool background : {false, true})
+    for (Compression compression : {Compression::kNone, Compression::kLz4, Compression::kZstd}) {
+      SCOPED_TRACE(std::string(compression_name(compression)) +
+                   (background ? " in the background" : ""));
+      const std::string file = path("sample.mcap");
+      write_sample(file, compression, 2000, background);
+      Collected read;
+      const ScanResult result = scan(file, read);
+      EXPECT_TRUE(result.complete) << result.cut_off;
+      EXPECT_EQ(result.messages, 4000u);
+      EXPECT_GT(result.chunks, 10u);
+      EXPECT_EQ(read.profile, "afhub");
+      ASSERT_EQ(read.schemas.size(), 1u);
+      EXPECT_EQ(read.schemas[0].name, "afhub.BodyState");
+      ASSERT_EQ(read.channels.size(), 2u);
+      EXPECT_EQ(read.channels[0].topic, "/arm/base/state");
+      EXPECT_EQ(read.channels[0].metadata.at("joints"), "3");
+      ASSERT_EQ(read.metadata_records.size(), 1u);
+      EXPECT_EQ(read.metadata_records[0].second.at("layout_id"), "42");
+      for (const auto& c : read.chunk_compressions) EXPECT_EQ(c, compression_name(compression));
+      expect_sample(read, 2000);
+    }
 }
 
 TEST_F(McapFile, AFileCutOffReadsToItsLastCompleteChunkAndRecoverGivesItsIndexBack) {
@@ -157,38 +161,42 @@ TEST_F(McapFile, AFileCutOffReadsToItsLastCompleteChunkAndRecoverGivesItsIndexBa
 }
 
 TEST_F(McapFile, ADiskThatFillsUpLeavesAFileCutOffNotCorrupt) {
-  // The file size limit stands for a full disk: a write past it fails (EFBIG).
-  const std::string file = path("full.mcap");
-  signal(SIGXFSZ, SIG_IGN);
-  rlimit before{};
-  getrlimit(RLIMIT_FSIZE, &before);
-  rlimit small = before;
-  small.rlim_cur = 100 * 1024 + 123;  // within a chunk
-  std::string error;
-  {
-    Writer writer(file, {"afhub", "afhub", Compression::kNone, 16 * 1024});
-    const auto schema = writer.add_schema("s", "e", {});
-    const auto channel = writer.add_channel(schema, "/t", "afhub");
-    setrlimit(RLIMIT_FSIZE, &small);
-    try {
-      for (std::uint32_t s = 1; s <= 3000; ++s) {
-        const auto data = payload(channel, s);
-        writer.write({channel, s, s, s, data});
+  for (const bool background : {false, true}) {
+    SCOPED_TRACE(background ? "in the background" : "in the caller's thread");
+    // The file size limit stands for a full disk: a write past it fails (EFBIG). In the
+    // background the failed write is said by the next call after it.
+    const std::string file = path("full.mcap");
+    signal(SIGXFSZ, SIG_IGN);
+    rlimit before{};
+    getrlimit(RLIMIT_FSIZE, &before);
+    rlimit small = before;
+    small.rlim_cur = 100 * 1024 + 123;  // within a chunk
+    std::string error;
+    {
+      Writer writer(file, {"afhub", "afhub", Compression::kNone, 16 * 1024, background});
+      const auto schema = writer.add_schema("s", "e", {});
+      const auto channel = writer.add_channel(schema, "/t", "afhub");
+      setrlimit(RLIMIT_FSIZE, &small);
+      try {
+        for (std::uint32_t s = 1; s <= 3000; ++s) {
+          const auto data = payload(channel, s);
+          writer.write({channel, s, s, s, data});
+        }
+      } catch (const Error& e) {
+        error = e.what();
       }
-    } catch (const Error& e) {
-      error = e.what();
+      setrlimit(RLIMIT_FSIZE, &before);  // room again when the writer is destroyed
     }
-    setrlimit(RLIMIT_FSIZE, &before);  // room again when the writer is destroyed
+    EXPECT_NE(error.find("cannot write"), std::string::npos) << error;
+    EXPECT_LE(fs::file_size(file), small.rlim_cur);
+    Collected read;
+    const ScanResult cut = scan(file, read);  // no CRC error: nothing was written twice
+    EXPECT_FALSE(cut.complete);
+    EXPECT_GT(cut.messages, 100u);
+    for (std::size_t i = 0; i < read.messages.size(); ++i)
+      ASSERT_EQ(read.messages[i].data, payload(1, static_cast<std::uint32_t>(i + 1)));
+    EXPECT_EQ(recover(file).messages, cut.messages);
   }
-  EXPECT_NE(error.find("cannot write"), std::string::npos) << error;
-  EXPECT_LE(fs::file_size(file), small.rlim_cur);
-  Collected read;
-  const ScanResult cut = scan(file, read);  // no CRC error: nothing was written twice
-  EXPECT_FALSE(cut.complete);
-  EXPECT_GT(cut.messages, 100u);
-  for (std::size_t i = 0; i < read.messages.size(); ++i)
-    ASSERT_EQ(read.messages[i].data, payload(1, static_cast<std::uint32_t>(i + 1)));
-  EXPECT_EQ(recover(file).messages, cut.messages);
 }
 
 // The message of the afhub::Error `scan` throws for `file`, or "" when it throws none.

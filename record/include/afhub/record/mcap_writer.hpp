@@ -5,11 +5,16 @@
 // the chunks: a file cut off (kill -9, a full disk) keeps every complete chunk readable.
 #pragma once
 
+#include <atomic>
+#include <condition_variable>
 #include <cstdint>
+#include <exception>
 #include <map>
+#include <mutex>
 #include <span>
 #include <string>
 #include <string_view>
+#include <thread>
 #include <vector>
 
 #include "afhub/record/compression.hpp"
@@ -34,6 +39,9 @@ class Writer {
     Compression compression = Compression::kZstd;
     // A chunk is written once it holds this much: what a crash can lose at most.
     std::size_t chunk_bytes = 1u << 20;
+    // Each full chunk compressed and written by a thread of the writer's own while the
+    // next one fills: a thousand bodies' recorder spent half its writing thread in zstd.
+    bool background = false;
   };
 
   // Creates (or truncates) `path`; throws afhub::Error naming the path and the reason.
@@ -50,7 +58,8 @@ class Writer {
                             std::string_view message_encoding, const Metadata& metadata = {});
   void add_metadata(std::string_view name, const Metadata& metadata);
   // Throws afhub::Error when the disk refuses the bytes (full, gone); the file then
-  // stays as it is, cut off, and nothing more is written.
+  // stays as it is, cut off, and nothing more is written. In the background, that
+  // error comes from the next call after it.
   void write(const Message& message);
   // The same, its bytes given in pieces that the file joins (message.data unused).
   void write(const Message& message, std::span<const std::span<const std::uint8_t>> pieces);
@@ -59,8 +68,8 @@ class Writer {
   // The summary and footer; the file is complete afterwards.
   void close();
 
-  // Bytes in the file so far, and messages written.
-  std::uint64_t file_bytes() const { return file_offset_ + pending_.size(); }
+  // Bytes written to the file so far, and messages written.
+  std::uint64_t file_bytes() const { return written_.load(std::memory_order_relaxed); }
   std::uint64_t message_count() const { return message_count_; }
 
  private:
@@ -78,10 +87,26 @@ class Writer {
     std::vector<std::uint8_t> data;
   };
 
+  // A chunk's records, and each channel's (log time, offset) entries by channel id, the
+  // channels it holds listed (empty vectors kept between chunks, so that a chunk
+  // allocates nothing once warm).
+  struct Chunk {
+    std::vector<std::uint8_t> records;
+    std::vector<std::vector<std::pair<std::uint64_t, std::uint64_t>>> entries;
+    std::vector<std::uint16_t> channels;
+    std::uint64_t start_ns = 0, end_ns = 0;
+  };
+
   void write_schema(std::vector<std::uint8_t>& out, std::uint16_t id) const;
   void write_channel(std::vector<std::uint8_t>& out, std::uint16_t id) const;
-  void write_chunk();  // into pending_
-  void write_out();    // pending_ to the file
+  std::uint64_t offset() const { return file_offset_ + pending_.size(); }
+  void write_chunk(Chunk& chunk);  // into pending_, and emptied
+  void write_out();                // pending_ to the file
+  // In the background: waits until the thread has written what it was given (the
+  // file's state is this thread's again), and rethrows the error it met.
+  void wait_idle();
+  void stop_background() noexcept;
+  void background_loop();
 
   std::string path_;
   Options options_;
@@ -89,6 +114,7 @@ class Writer {
   Compressor compressor_;
   std::vector<std::uint8_t> pending_;  // file bytes not yet written: records since the last chunk
   std::uint64_t file_offset_ = 0;      // bytes written to the file
+  std::atomic<std::uint64_t> written_{0};  // the same, for another thread to read
 
   std::vector<Schema> schemas_;  // id - 1
   std::vector<Channel> channels_;
@@ -98,20 +124,23 @@ class Writer {
   std::uint32_t chunk_count_ = 0;
   std::vector<MetadataIndex> metadata_indexes_;
 
-  // The open chunk: its records, and each channel's (log time, offset) entries by
-  // channel id, the channels it holds listed (empty vectors kept between chunks, so
-  // that a chunk allocates nothing once warm).
-  std::vector<std::uint8_t> chunk_;
-  std::vector<std::vector<std::pair<std::uint64_t, std::uint64_t>>> chunk_entries_;
-  std::vector<std::uint16_t> chunk_channels_;
+  Chunk open_;  // being filled
   std::vector<std::pair<std::uint16_t, std::uint64_t>> message_index_offsets_;
-  std::uint64_t chunk_start_ns_ = 0, chunk_end_ns_ = 0;
 
   std::uint64_t message_count_ = 0;
   std::uint64_t first_ns_ = 0, last_ns_ = 0;
   std::vector<std::uint64_t> channel_counts_;  // by channel id
   bool closed_ = false;
   bool failed_ = false;  // a write failed: the file is left as it is
+
+  // The background: the chunk handed to the thread, which owns it, pending_ and the
+  // file's offsets while `busy_`.
+  Chunk sealed_;
+  std::thread thread_;
+  std::mutex mutex_;
+  std::condition_variable changed_;
+  bool busy_ = false, stopping_ = false;
+  std::exception_ptr error_;
 };
 
 }  // namespace afhub::mcap
