@@ -65,6 +65,7 @@ void ConstraintSolver::enable_direct_solve() {
   bounded_slot_.resize(K);
   dependent_.resize(K);
   first_.resize(K);
+  last_.resize(K);
   for (auto* matrix : {&a_, &shape_, &factor_, &null_, &gram_, &w_, &schur_}) matrix->resize(K * K);
   for (auto* vector :
        {&residual_, &equality_solution_, &bounded_solution_, &reduced_rhs_, &gram_rhs_})
@@ -243,7 +244,8 @@ void ConstraintSolver::factor(bool find_dependent) noexcept {
 // marked dependent and, when `judge`, marking those whose pivot keeps less than
 // kDependent of their own diagonal. A row meets only the rows sharing one of its
 // two bodies, so it starts late: its factor row starts where it does (fill-in stays
-// within that envelope), and the products skip the zeros before it.
+// within that envelope), and the products skip the zeros before it. A column ends
+// at the last row whose envelope reaches it: an open chain's factor is a band.
 void ConstraintSolver::cholesky(const double* m, bool judge) noexcept {
   const int ne = static_cast<int>(equality_.size());
   double* l = factor_.data();
@@ -251,6 +253,8 @@ void ConstraintSolver::cholesky(const double* m, bool judge) noexcept {
     int first = 0;
     while (first < k && m[equality_[k] * K + equality_[first]] == 0.0) ++first;
     first_[k] = first;
+    last_[k] = k;
+    for (int j = first; j < k; ++j) last_[j] = k;
   }
   for (int k = 0; k < ne; ++k) {
     const double* lk = &l[k * K];
@@ -261,7 +265,7 @@ void ConstraintSolver::cholesky(const double* m, bool judge) noexcept {
     if (!dependent_[k] && !(d > 0)) dependent_[k] = true;  // round-off on a kept row
     const double pivot = dependent_[k] ? 0.0 : std::sqrt(d);
     l[k * K + k] = pivot;
-    for (int i = k + 1; i < ne; ++i) {
+    for (int i = k + 1; i <= last_[k]; ++i) {
       if (first_[i] > k) continue;  // outside row i's envelope: zero, never read
       double sum = 0.0;
       if (!dependent_[k]) {
@@ -291,7 +295,7 @@ void ConstraintSolver::solve_kept(double* v) const noexcept {
   for (int k = ne - 1; k >= 0; --k) {
     if (dependent_[k]) continue;
     double sum = v[k];
-    for (int i = k + 1; i < ne; ++i)
+    for (int i = k + 1; i <= last_[k]; ++i)
       if (first_[i] <= k) sum -= l[i * K + k] * v[i];
     v[k] = sum / l[k * K + k];
   }

@@ -76,6 +76,7 @@ class ConstraintSolver : public btSequentialImpulseConstraintSolver {
   std::vector<int> equality_, bounded_;  // row indices
   std::vector<bool> dependent_;          // per equality row: implied by the rows before it
   std::vector<int> first_;               // per equality row: its first nonzero in A
+  std::vector<int> last_;                // per column of the factor: its last row
   int nulls_ = 0;                        // dependent equality rows
   // Dense, row-major, kMaxDirectRows wide: the rows' effective mass A and their
   // shape matrix (factor(): which rows a loop repeats is judged on it); the Cholesky
