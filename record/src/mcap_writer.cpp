@@ -21,7 +21,6 @@ Writer::Writer(const std::string& path, Options options)
   pending_.insert(pending_.end(), std::begin(kMagic), std::end(kMagic));
   RecordBuilder(pending_, kHeader).str(options_.profile).str(options_.library);
   write_out();  // from now on the file reads as MCAP, cut off
-  if (options_.background) thread_ = std::thread([this] { background_loop(); });
 }
 
 Writer::~Writer() {
@@ -161,11 +160,14 @@ void Writer::write(const Message& message, std::span<const std::span<const std::
 }
 
 void Writer::flush_chunk() {
-  if (!thread_.joinable()) {
+  if (!options_.background) {
     if (!open_.records.empty()) write_chunk(open_);
     write_out();
     return;
   }
+  // Started here, by the thread that writes, whose priority it takes (the recorder's
+  // writing thread runs below the loops of the machine).
+  if (!thread_.joinable()) thread_ = std::thread([this] { background_loop(); });
   wait_idle();
   std::swap(open_, sealed_);  // the one written before, emptied, fills next
   {
