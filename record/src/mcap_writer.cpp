@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
+#include <filesystem>
 #include <limits>
 #include <utility>
 
@@ -31,6 +32,7 @@ Writer::~Writer() {
   }
   stop_background();
   if (fd_ >= 0) ::close(fd_);
+  if (spill_fd_ >= 0) ::close(spill_fd_);
 }
 
 void Writer::background_loop() {
@@ -210,16 +212,44 @@ void Writer::write_chunk(Chunk& chunk) {
   chunk.channels.clear();
   const std::uint64_t indexes_length = offset() - indexes_start;
 
-  RecordBuilder index(chunk_index_records_, kChunkIndex);
-  index.u64(chunk.start_ns).u64(chunk.end_ns).u64(chunk_offset).u64(chunk_length);
-  index.u32(static_cast<std::uint32_t>(message_index_offsets_.size() * 10));
-  for (const auto& [channel, offset] : message_index_offsets_) index.u16(channel).u64(offset);
-  index.u64(indexes_length)
-      .str(compression_name(options_.compression))
-      .u64(compressed_size)
-      .u64(chunk.records.size());
+  {
+    RecordBuilder index(chunk_index_records_, kChunkIndex);  // its length set as it goes
+    index.u64(chunk.start_ns).u64(chunk.end_ns).u64(chunk_offset).u64(chunk_length);
+    index.u32(static_cast<std::uint32_t>(message_index_offsets_.size() * 10));
+    for (const auto& [channel, offset] : message_index_offsets_) index.u16(channel).u64(offset);
+    index.u64(indexes_length)
+        .str(compression_name(options_.compression))
+        .u64(compressed_size)
+        .u64(chunk.records.size());
+  }
   ++chunk_count_;
   chunk.records.clear();
+  if (chunk_index_records_.size() >= options_.index_memory_bytes) spill_chunk_indexes();
+}
+
+// Beside the output (the disk the user chose for the recording), else in the
+// temporary directory; unnamed: gone with the process however it ends.
+void Writer::spill_chunk_indexes() {
+  if (spill_fd_ < 0) {
+    const std::filesystem::path beside = std::filesystem::absolute(path_).parent_path();
+    for (const auto& dir : {beside, std::filesystem::temp_directory_path()})
+      if (spill_fd_ < 0) spill_fd_ = ::open(dir.c_str(), O_TMPFILE | O_RDWR | O_CLOEXEC, 0600);
+    if (spill_fd_ < 0)
+      throw Error("cannot make a temporary file for " + path_ + "'s index, beside it or in " +
+                  std::filesystem::temp_directory_path().string() + ": " + std::strerror(errno));
+  }
+  std::size_t done = 0;
+  while (done < chunk_index_records_.size()) {
+    const ssize_t n =
+        ::write(spill_fd_, chunk_index_records_.data() + done, chunk_index_records_.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0)
+      throw Error("cannot write " + path_ +
+                  "'s index to its temporary file: " + std::strerror(n < 0 ? errno : ENOSPC));
+    done += static_cast<std::size_t>(n);
+  }
+  spilled_bytes_ += done;
+  chunk_index_records_.clear();
 }
 
 void Writer::write_out() {
@@ -253,9 +283,15 @@ void Writer::close() {
   closed_ = true;  // whatever happens below, once
   if (!open_.records.empty()) write_chunk(open_);
   RecordBuilder(pending_, kDataEnd).u32(0);  // 0: no data section CRC (the chunks carry theirs)
-  write_out();  // from here on pending_ holds the summary: its CRC is taken there
+  write_out();
 
+  // The summary, its CRC taken as it goes out.
   const std::uint64_t summary_start = offset();
+  std::uint32_t crc = 0;
+  const auto summary_out = [&] {
+    crc = crc32(pending_, crc);
+    write_out();
+  };
   struct Group {
     Opcode opcode;
     std::uint64_t start, length;
@@ -292,6 +328,20 @@ void Writer::close() {
         record.u16(static_cast<std::uint16_t>(channel)).u64(channel_counts_[channel]);
   });
   group(kChunkIndex, [&] {
+    // What waited in the temporary file, a piece at a time, then what is in memory.
+    constexpr std::size_t kPiece = 1u << 20;
+    for (std::uint64_t at = 0; at < spilled_bytes_;) {
+      const std::size_t start = pending_.size();
+      pending_.resize(start + std::min<std::uint64_t>(kPiece, spilled_bytes_ - at));
+      const ssize_t n = ::pread(spill_fd_, pending_.data() + start, pending_.size() - start,
+                                static_cast<off_t>(at));
+      if (n <= 0)
+        throw Error("cannot read back " + path_ +
+                    "'s index from its temporary file: " + std::strerror(n < 0 ? errno : EIO));
+      pending_.resize(start + static_cast<std::size_t>(n));
+      at += static_cast<std::uint64_t>(n);
+      summary_out();
+    }
     pending_.insert(pending_.end(), chunk_index_records_.begin(), chunk_index_records_.end());
   });
   group(kMetadataIndex, [&] {
@@ -304,7 +354,7 @@ void Writer::close() {
 
   // The summary CRC covers the summary and the footer up to its summary_offset_start.
   RecordBuilder(pending_, kFooter).u64(summary_start).u64(summary_offset_start).u32(0);
-  const std::uint32_t crc = crc32(std::span(pending_).first(pending_.size() - 4));
+  crc = crc32(std::span(pending_).first(pending_.size() - 4), crc);
   std::memcpy(pending_.data() + pending_.size() - 4, &crc, sizeof crc);
   pending_.insert(pending_.end(), std::begin(kMagic), std::end(kMagic));
   write_out();

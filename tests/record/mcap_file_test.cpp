@@ -71,10 +71,11 @@ class McapFile : public ::testing::Test {
   std::string path(const std::string& name) const { return (directory_ / name).string(); }
 
   // Two channels, `messages` messages each, in chunks of 16 KiB (compressed and written
-  // by the writer's own thread, or not).
+  // by the writer's own thread, or not; their indexes held in memory up to
+  // `index_memory_bytes`).
   void write_sample(const std::string& file, Compression compression, std::uint32_t messages,
-                    bool background = false) {
-    Writer writer(file, {"afhub", "afhub", compression, 16 * 1024, background});
+                    bool background = false, std::size_t index_memory_bytes = 16u << 20) {
+    Writer writer(file, {"afhub", "afhub", compression, 16 * 1024, background, index_memory_bytes});
     const std::uint8_t schema_text[] = {'s', 'c', 'h', 'e', 'm', 'a'};
     const auto schema = writer.add_schema("afhub.BodyState", "afhub-layout", schema_text);
     const auto a = writer.add_channel(schema, "/arm/base/state", "afhub", {{"joints", "3"}});
@@ -126,6 +127,29 @@ TEST_F(McapFile, EveryMessageComesBackAsWrittenWithEachCompression) {
       for (const auto& c : read.chunk_compressions) EXPECT_EQ(c, compression_name(compression));
       expect_sample(read, 2000);
     }
+}
+
+std::string file_bytes(const std::string& file) {
+  std::ifstream in(file, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+TEST_F(McapFile, ChunkIndexesThatWaitedInATemporaryFileMakeTheSameFile) {
+  // Held in memory, or written to the temporary file after every chunk (a byte is
+  // past the bound): the same bytes, summary and its CRC included.
+  for (const bool background : {false, true}) {
+    SCOPED_TRACE(background ? "in the background" : "in the caller's thread");
+    write_sample(path("held.mcap"), Compression::kZstd, 3000, background);
+    write_sample(path("spilled.mcap"), Compression::kZstd, 3000, background, 1);
+    const std::string held = file_bytes(path("held.mcap"));
+    EXPECT_GT(held.size(), 100'000u);
+    EXPECT_TRUE(held == file_bytes(path("spilled.mcap")));
+    Collected read;
+    const ScanResult result = scan(path("spilled.mcap"), read);
+    EXPECT_TRUE(result.complete) << result.cut_off;
+    EXPECT_GT(result.chunks, 10u);
+    expect_sample(read, 3000);
+  }
 }
 
 TEST_F(McapFile, AFileCutOffReadsToItsLastCompleteChunkAndRecoverGivesItsIndexBack) {

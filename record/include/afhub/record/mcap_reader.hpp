@@ -44,7 +44,7 @@ struct ScanResult {
 };
 
 // The most a record, or a chunk decompressed, may hold for afhub to read it (it is held
-// in memory): afhub writes chunks of 1 MiB, other tools a few MiB.
+// in memory): afhub writes chunks of 4 MiB, other tools a few MiB.
 inline constexpr std::uint64_t kMaxRecordBytes = 256ull << 20;
 
 // Reads `path` from the start. Throws afhub::Error for a file that cannot be opened, is

@@ -42,6 +42,10 @@ class Writer {
     // Each full chunk compressed and written by a thread of the writer's own while the
     // next one fills: a thousand bodies' recorder spent half its writing thread in zstd.
     bool background = false;
+    // The summary's chunk indexes held in memory; past this they wait in an unnamed
+    // temporary file beside the output until close: a chunk's index names each channel
+    // in it (10 bytes each), and a thousand bodies make 570 chunks of 1 MiB a second.
+    std::size_t index_memory_bytes = 16u << 20;
   };
 
   // Creates (or truncates) `path`; throws afhub::Error naming the path and the reason.
@@ -102,6 +106,7 @@ class Writer {
   std::uint64_t offset() const { return file_offset_ + pending_.size(); }
   void write_chunk(Chunk& chunk);  // into pending_, and emptied
   void write_out();                // pending_ to the file
+  void spill_chunk_indexes();      // chunk_index_records_ to spill_fd_
   // In the background: waits until the thread has written what it was given (the
   // file's state is this thread's again), and rethrows the error it met.
   void wait_idle();
@@ -121,6 +126,8 @@ class Writer {
   // The summary's chunk index records, written as each chunk is: a few bytes per channel
   // of the chunk, rather than a map per chunk held until close.
   std::vector<std::uint8_t> chunk_index_records_;
+  int spill_fd_ = -1;  // the chunk index records before them
+  std::uint64_t spilled_bytes_ = 0;
   std::uint32_t chunk_count_ = 0;
   std::vector<MetadataIndex> metadata_indexes_;
 
