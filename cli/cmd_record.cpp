@@ -83,9 +83,15 @@ int run_record(RecordCliOptions& options) {
     throw Error("--buffer takes megabytes from 1 to 65536");
   options.record.buffer_bytes = static_cast<std::size_t>(options.buffer_mb * (1 << 20)) & ~7ull;
   set_realtime_options(options.realtime, options.record.loop);
-  // Under the normal scheduler a busy machine keeps the reading loop asleep through a
-  // step now and then: where the system allows it, the loop runs under SCHED_FIFO.
-  if (options.realtime.fifo_priority == 0 && may_use_fifo(kDefaultFifoPriority))
+  // States, commands and the world state come on the physics' step tape, which holds
+  // the steps of a late reader: the loop runs under the normal scheduler, never taking
+  // a core from a physics or a controller that runs under it (under SCHED_FIFO it put
+  // the example scene's step p99 at 1.46x without the recorder; under the normal
+  // scheduler 0.92x, bench/record_bench.sh). A device's updates are read from its slot,
+  // which a loop kept asleep through an update misses: with --devices the loop runs
+  // under SCHED_FIFO where the system allows it.
+  if (options.record.devices && options.realtime.fifo_priority == 0 &&
+      may_use_fifo(kDefaultFifoPriority))
     options.record.loop.fifo_priority = kDefaultFifoPriority;
   install_stop_signal_handlers();
   // A hub lost: the file is finished (the recorder's hook), and the process re-executes

@@ -4,6 +4,7 @@
 // must agree message for message. A recording SIGKILLed mid-write reads up to its last
 // chunk, and `record --recover` gives it its index back.
 #include <gtest/gtest.h>
+#include <sched.h>
 #include <signal.h>
 
 #include <cstring>
@@ -616,6 +617,31 @@ TEST(Record, ADeviceIsRecordedAtItsOwnRateWithDevices) {
       run_afhub({"record", "-o", log("none.mcap"), "--duration", "0.5"}, 60s);
   ASSERT_EQ(bodies_only.exit_code, 0) << bodies_only.err;
   EXPECT_EQ(info_of(log("none.mcap")).dump().find("/device/hand"), std::string::npos);
+}
+
+// States and commands come on the step tape, which holds a late reader's steps: the
+// reading loop then stays under the normal scheduler, never taking a core from a
+// physics or controller running under it. A device's updates come from its slot,
+// which a late loop misses: with --devices it runs under SCHED_FIFO (as root here).
+TEST(Record, TheReadingLoopTakesNoCoreFromTheLoopsUnlessItReadsDevices) {
+  afhub::testing::ModelFolder folder;
+  const auto log = [&](const std::string& name) { return (folder.dir() / name).string(); };
+  ScopedProcess taped(spawn_afhub({"record", "-o", log("taped.mcap")}, log("taped.log")));
+  ScopedProcess devices(
+      spawn_afhub({"record", "-o", log("devices.mcap"), "--devices"}, log("devices.log")));
+  ASSERT_TRUE(wait_until([&] { return sched_getscheduler(devices.pid) == SCHED_FIFO; }, 30s))
+      << read_file(log("devices.log"));
+  // Both files are open, so both loops have set their scheduling by now.
+  ASSERT_TRUE(wait_until(
+      [&] {
+        return std::filesystem::exists(log("taped.mcap")) &&
+               std::filesystem::exists(log("devices.mcap"));
+      },
+      30s));
+  std::this_thread::sleep_for(1s);
+  EXPECT_EQ(sched_getscheduler(taped.pid), SCHED_OTHER) << read_file(log("taped.log"));
+  EXPECT_EQ(stop_process(taped.pid, SIGINT), 0);
+  EXPECT_EQ(stop_process(devices.pid, SIGINT), 0);
 }
 
 TEST(Record, BadFilesAndOptionsAreClearErrors) {
