@@ -14,6 +14,24 @@
 #include "mcap_bytes.hpp"
 
 namespace afhub::mcap {
+namespace {
+
+// Writes `bytes` to `fd`; returns how many went before an error (errno says which).
+std::size_t write_all(int fd, std::span<const std::uint8_t> bytes) {
+  std::size_t done = 0;
+  while (done < bytes.size()) {
+    const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      if (n == 0) errno = ENOSPC;
+      break;
+    }
+    done += static_cast<std::size_t>(n);
+  }
+  return done;
+}
+
+}  // namespace
 
 Writer::Writer(const std::string& path, Options options)
     : path_(path), options_(std::move(options)), compressor_(options_.compression) {
@@ -238,37 +256,26 @@ void Writer::spill_chunk_indexes() {
       throw Error("cannot make a temporary file for " + path_ + "'s index, beside it or in " +
                   std::filesystem::temp_directory_path().string() + ": " + std::strerror(errno));
   }
-  std::size_t done = 0;
-  while (done < chunk_index_records_.size()) {
-    const ssize_t n =
-        ::write(spill_fd_, chunk_index_records_.data() + done, chunk_index_records_.size() - done);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0)
-      throw Error("cannot write " + path_ +
-                  "'s index to its temporary file: " + std::strerror(n < 0 ? errno : ENOSPC));
-    done += static_cast<std::size_t>(n);
-  }
-  spilled_bytes_ += done;
+  if (write_all(spill_fd_, chunk_index_records_) < chunk_index_records_.size())
+    throw Error("cannot write " + path_ +
+                "'s index to its temporary file: " + std::strerror(errno));
+  spilled_bytes_ += chunk_index_records_.size();
   chunk_index_records_.clear();
 }
 
 void Writer::write_out() {
   if (failed_) throw Error("cannot write " + path_ + " any more: an earlier write failed");
-  std::size_t done = 0;
-  while (done < pending_.size()) {
-    const ssize_t n = ::write(fd_, pending_.data() + done, pending_.size() - done);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) {
-      // What was written stays; nothing is written after it, so that the file ends at
-      // its last complete chunk plus part of one, which a reader sees as cut off.
-      failed_ = true;
-      file_offset_ += done;
-      written_.store(file_offset_, std::memory_order_relaxed);
-      pending_.clear();
-      throw Error("cannot write " + path_ + ": " + std::strerror(n < 0 ? errno : ENOSPC) +
-                  " (the file keeps its complete chunks; `afhub record --recover` indexes them)");
-    }
-    done += static_cast<std::size_t>(n);
+  const std::size_t done = write_all(fd_, pending_);
+  if (done < pending_.size()) {
+    // What was written stays; nothing is written after it, so that the file ends at
+    // its last complete chunk plus part of one, which a reader sees as cut off.
+    const int error = errno;
+    failed_ = true;
+    file_offset_ += done;
+    written_.store(file_offset_, std::memory_order_relaxed);
+    pending_.clear();
+    throw Error("cannot write " + path_ + ": " + std::strerror(error) +
+                " (the file keeps its complete chunks; `afhub record --recover` indexes them)");
   }
   file_offset_ += pending_.size();
   written_.store(file_offset_, std::memory_order_relaxed);
