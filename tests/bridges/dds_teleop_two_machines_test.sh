@@ -143,7 +143,9 @@ applying = sum(x["force_gate"] == "applying" for x in s)
 mean_up = sum(up) / len(up) if up else 0
 print(f"  {len(pressing)} states pressing: mean force up {mean_up:.2f} N (max force 3 N), "
       f"largest {most:.2f} N, gate applying in {applying} of {len(s)}")
-sys.exit(0 if len(pressing) > 100 and mean_up > 0.8 * 3 and most <= 3 + 1e-9 and applying == len(s) else 1)
+# The gate closes while the physics' states or the device's samples stop for 50 ms (as it
+# must: 9 of 300 samples once, on a VM that held processes for 50 ms): nearly always open.
+sys.exit(0 if len(pressing) > 100 and mean_up > 0.8 * 3 and most <= 3 + 1e-9 and applying >= 0.95 * len(s) else 1)
 PY
 cat "$work/push.txt"
 kill -USR1 "$bridge_a" "$bridge_b"
