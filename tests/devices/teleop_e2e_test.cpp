@@ -421,6 +421,16 @@ TEST(TeleopEndToEnd, ADeviceNeverPushesOnAStoppedOrDeadPhysics) {
   afhub::testing::ModelFolder scripts;
   const std::string csv = scripts.write("push.csv", "0,0,0,0\n1,0,0,-0.2\n");
   Teleop teleop("frozen", {"--trajectory", csv});
+  // Bound, then a new driver: teleop holds the palm while it has none and anchors it at
+  // the new one's first sample, so the push starts however late teleop bound (the first
+  // driver's trajectory had ended before it did once under the sanitizers: no push).
+  ASSERT_TRUE(teleop.wait_running()) << teleop.logs();
+  const char* gone = "no sample from device/frozen";
+  const int gone_before = occurrences(teleop.teleop_log(), gone);
+  teleop.kill_driver();
+  ASSERT_TRUE(wait_until([&] { return occurrences(teleop.teleop_log(), gone) > gone_before; }, 5s))
+      << teleop.logs();
+  teleop.start_driver();
   ASSERT_TRUE(wait_until([&] { return pushing_up(teleop); }, 20s)) << teleop.logs();
 
   const std::int64_t stopped_at = monotonic_ns();
