@@ -427,9 +427,7 @@ class Session {
           const std::span<const std::uint8_t> encoded(encoded_);
           writer_.write(message, std::span(&encoded, 1));
         } else {
-          FilePieces pieces;
-          const std::size_t count = pieces_for_file(data, kinds_[m.channel_id], pieces);
-          writer_.write(message, std::span(pieces).first(count));
+          writer_.write(message, std::span(&data, 1));  // packed by the reading loop
         }
       }
     });
