@@ -22,6 +22,14 @@ void ReservedWorld::reserve_constraints(int count) {
   sorted_.reserve(count);
 }
 
+void ReservedWorld::solve_islands_in_parallel(ConstraintSolver& solver, int bodies, int joints,
+                                              bool direct) {
+  solver_ = &solver;
+  parallel_ = std::make_unique<ParallelIslands>(bodies, joints, direct);
+  islands_.reserve(getNumCollisionObjects());
+  island_bodies_.reserve(getNumCollisionObjects());
+}
+
 void ReservedWorld::solveConstraints(btContactSolverInfo& info) {
   if (info.m_minimumSolverBatchSize > 1) {
     btSoftRigidDynamicsWorld::solveConstraints(info);
@@ -54,13 +62,22 @@ void ReservedWorld::solveConstraints(btContactSolverInfo& info) {
                            [](const Keyed& x, const Keyed& y) { return x.island < y.island; });
       const auto first = static_cast<int>(in.first - keyed.begin());
       const auto count = static_cast<int>(in.second - in.first);
+      if (world.parallel_) {
+        world.islands_.push_back({static_cast<int>(world.island_bodies_.size()), body_count,
+                                  manifolds, manifold_count, first, count});
+        world.island_bodies_.insert(world.island_bodies_.end(), bodies, bodies + body_count);
+        return;
+      }
       world.m_constraintSolver->solveGroup(bodies, body_count, manifolds, manifold_count,
                                            count ? &world.sorted_[first] : nullptr, count, info,
                                            world.m_debugDrawer, world.getDispatcher());
     }
   } islands(*this, info);
   m_constraintSolver->prepareSolve(getNumCollisionObjects(), getDispatcher()->getNumManifolds());
+  islands_.clear();
+  island_bodies_.clear();
   m_islandManager->buildAndProcessIslands(getDispatcher(), this, &islands);
+  if (parallel_) parallel_->solve(*solver_, islands_, island_bodies_.data(), sorted_.data(), info);
   m_constraintSolver->allSolved(info, m_debugDrawer);
 }
 

@@ -5,7 +5,10 @@
 
 #include <BulletSoftBody/btSoftRigidDynamicsWorld.h>
 
+#include <memory>
 #include <vector>
+
+#include "parallel_islands.hpp"
 
 namespace afhub::physics {
 
@@ -13,6 +16,12 @@ class ReservedWorld : public btSoftRigidDynamicsWorld {
  public:
   using btSoftRigidDynamicsWorld::btSoftRigidDynamicsWorld;
   void reserve_constraints(int count);
+  // Islands solved one at a time are solved by two threads at once when there are
+  // many (parallel_islands.hpp); `solver` is this world's, the helper's is made like it.
+  void solve_islands_in_parallel(ConstraintSolver& solver, int bodies, int joints, bool direct);
+  std::uint64_t islands_solved_by_helper() const noexcept {
+    return parallel_ ? parallel_->helped() : 0;
+  }
 
  protected:
   // With islands solved one at a time (a minimum solver batch of 1: the direct
@@ -30,6 +39,12 @@ class ReservedWorld : public btSoftRigidDynamicsWorld {
   };
   std::vector<Keyed> keyed_;
   std::vector<btTypedConstraint*> sorted_;
+  // With a helper: the step's islands, gathered before they are solved, and their
+  // bodies (Bullet's list of an island's bodies lasts only for its callback).
+  std::unique_ptr<ParallelIslands> parallel_;
+  ConstraintSolver* solver_ = nullptr;
+  std::vector<ParallelIslands::Island> islands_;
+  std::vector<btCollisionObject*> island_bodies_;
 };
 
 }  // namespace afhub::physics

@@ -67,6 +67,9 @@ double Simulation::dt_s() const noexcept {
 std::uint64_t Simulation::step_count() const noexcept {
   return data_->steps;
 }
+std::uint64_t Simulation::islands_solved_by_helper() const noexcept {
+  return data_->world.islands_solved_by_helper();
+}
 double Simulation::time_s() const noexcept {
   return static_cast<double>(data_->steps) * data_->dt_s;
 }

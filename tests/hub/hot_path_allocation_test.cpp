@@ -11,6 +11,8 @@
 #include <atomic>
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
+#include <fstream>
 #include <memory>
 #include <new>
 #include <string>
@@ -101,11 +103,21 @@ TEST(HotPath, SteadyStateLoopDoesNotAllocate) {
   EXPECT_EQ(physics.latest_command()->joints[6].value, static_cast<double>(100 + kCycles - 1));
 }
 
+// The id of this process's thread named `name`, or 0.
+pid_t thread_named(const std::string& name) {
+  for (const auto& task : std::filesystem::directory_iterator("/proc/self/task")) {
+    std::ifstream comm(task.path() / "comm");
+    std::string line;
+    if (std::getline(comm, line) && line == name) return std::stoi(task.path().filename());
+  }
+  return 0;
+}
+
 // The physics loop of `afhub run`: commands in, Bullet step (joint PID, closed
 // loops), states and world state out, and a controller reading `body`'s state and
-// writing position commands.
+// writing position commands. `helped`: the world's islands are solved by two threads.
 void expect_physics_loop_allocation_free(const std::vector<std::string>& files,
-                                         const std::string& body) {
+                                         const std::string& body, bool helped = false) {
   const physics::Model model = physics::load_adf_files(files);
   physics::Simulation sim(model, 0.001);
   physics::SimChannels channels(sim, 0.5);
@@ -143,8 +155,21 @@ void expect_physics_loop_allocation_free(const std::vector<std::string>& files,
 
   constexpr int kCycles = 5000;
   const std::uint64_t updates_before = viewer_updates, taped_before = taped_steps;
+  const std::uint64_t helped_before = sim.islands_solved_by_helper();
+  // The solve's helper thread (physics/src/parallel_islands.hpp) counts too.
+  std::atomic<long> helper_allocations{0};
+  if (helped) {
+    const pid_t helper = thread_named("afhub-islands");
+    ASSERT_NE(helper, 0) << "no thread afhub-islands: the islands are solved by one thread";
+    test::count_allocations_of_thread(helper, &helper_allocations);
+  }
   EXPECT_TRUE(count_allocations(kCycles, one_cycle));
+  test::count_allocations_of_thread(0, nullptr);
   EXPECT_EQ(g_allocations, 0) << "heap allocations in " << kCycles << " physics cycles";
+  EXPECT_EQ(helper_allocations.load(), 0) << "by the helper, in " << kCycles << " physics cycles";
+  if (helped) {
+    EXPECT_GT(sim.islands_solved_by_helper(), helped_before) << "the helper solved no island";
+  }
   EXPECT_GE(viewer_updates - updates_before, 290u) << "the pose feed went out at 60 Hz";
   EXPECT_EQ(taped_steps - taped_before, static_cast<std::uint64_t>(kCycles)) << "the step tape";
   EXPECT_TRUE(sim.all_finite());
@@ -156,6 +181,14 @@ void expect_physics_loop_allocation_free(const std::vector<std::string>& files,
 TEST(HotPath, PhysicsLoopDoesNotAllocate) {
   expect_physics_loop_allocation_free(
       {AFHUB_EXAMPLE_MODELS "/arm7.yaml", AFHUB_EXAMPLE_MODELS "/rcm.yaml"}, "afhub/arm/base");
+}
+
+// Sixteen arms of eight links: sixteen islands, solved by two threads
+// (physics/src/parallel_islands.hpp).
+TEST(HotPath, PhysicsLoopOfManyArmsSolvedByTwoThreadsDoesNotAllocate) {
+  const testing::ModelFolder folder;
+  expect_physics_loop_allocation_free({folder.write("arms.yaml", testing::arms_model(16, 8))},
+                                      "arms/a0l0", true);
 }
 
 // The real AMBF models: mesh shapes, and the four-bar's loop.

@@ -4,14 +4,18 @@
 // (the MTM's loops 0.042 m open beside the SUJ) came from robots loaded where AMBF
 // draws them, at the origin, overlapping: the last test keeps that measurable. No hub.
 #include <gtest/gtest.h>
+#include <sched.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <string>
 #include <vector>
 
 #include "afhub/physics/scene_loader.hpp"
 #include "afhub/physics/simulation.hpp"
+#include "model_files.hpp"
 #include "shared_models.hpp"
 
 namespace afhub::physics {
@@ -88,6 +92,62 @@ TEST(Islands, RobotsLoadedOverlappingAtTheOriginChangeEachOther) {
   const double mtm_overlapping = largest_errors({2, 3}, true).at(0);
   std::printf("MTM alone %.3g m, overlapping the SUJ %.3g m\n", mtm_alone, mtm_overlapping);
   EXPECT_GT(mtm_overlapping, 10 * mtm_alone);
+}
+
+// A world of many islands of joints has them solved by two threads at once
+// (physics/src/parallel_islands.hpp). Each island is solved alike whichever thread
+// takes it, so every body ends bit for bit where the stepping thread alone puts it.
+// 16 arms of 8 links, each driven to its own sinusoid, 2000 steps.
+TEST(Islands, TwoThreadsSolveManyArmsBitForBitAsOneDoes) {
+  cpu_set_t cpus;
+  ASSERT_EQ(sched_getaffinity(0, sizeof cpus, &cpus), 0);
+  if (CPU_COUNT(&cpus) < 2) GTEST_SKIP() << "this process may run on one CPU: no helper to test";
+  constexpr int kArms = 16, kLinks = 8, kArmSteps = 2000;
+  afhub::testing::ModelFolder folder;
+  Model model =
+      load_adf_files({folder.write("arms.yaml", afhub::testing::arms_model(kArms, kLinks))});
+  struct Run {
+    std::vector<Pose> poses;
+    std::vector<double> joints;
+    std::uint64_t helped = 0;
+  };
+  auto run = [&](int solver_threads) {
+    model.world.solver_threads = solver_threads;
+    Simulation sim(model, 0.001);
+    BodyInput input;
+    input.joint_count = kLinks - 1;
+    for (int j = 0; j < kLinks - 1; ++j) input.joint_modes[j] = JointMode::kPosition;
+    for (int step = 0; step < kArmSteps; ++step) {
+      for (int arm = 0; arm < kArms; ++arm) {
+        for (int j = 0; j < kLinks - 1; ++j)
+          input.joint_values[j] = 0.5 * std::sin(1e-3 * step * (1 + arm % 5) + j);
+        const auto base = static_cast<std::size_t>(arm * kLinks);
+        EXPECT_EQ(sim.input_problem(base, input), nullptr);
+        sim.set_input(base, input);
+      }
+      sim.step();
+    }
+    Run out;
+    for (std::size_t b = 0; b < model.bodies.size(); ++b) out.poses.push_back(sim.body_pose(b));
+    for (std::size_t j = 0; j < model.joints.size(); ++j)
+      out.joints.push_back(sim.joint_position(j));
+    out.helped = sim.islands_solved_by_helper();
+    return out;
+  };
+  const Run alone = run(1), helped = run(2);
+  std::printf("islands solved by the helper: %llu of %d\n",
+              static_cast<unsigned long long>(helped.helped), kArms * kArmSteps);
+  EXPECT_EQ(alone.helped, 0u);
+  EXPECT_GT(helped.helped, 0u) << "the helper never solved an island: nothing was compared";
+  ASSERT_EQ(alone.poses.size(), helped.poses.size());
+  for (std::size_t b = 0; b < alone.poses.size(); ++b)
+    EXPECT_EQ(std::memcmp(&alone.poses[b], &helped.poses[b], sizeof(Pose)), 0)
+        << model.bodies[b].name;
+  EXPECT_EQ(alone.joints, helped.joints);
+  // The arms moved: the comparison is of a world in motion.
+  double travel = 0;
+  for (double q : alone.joints) travel = std::max(travel, std::abs(q));
+  EXPECT_GT(travel, 0.1);
 }
 
 }  // namespace

@@ -233,54 +233,20 @@ BENCHMARK_CAPTURE(BM_LoopStep, ecm_iterated, kEcm, false)->Unit(benchmark::kMicr
 BENCHMARK_CAPTURE(BM_LoopStep, four_bar_direct, kFourBar, true)->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(BM_LoopStep, four_bar_iterated, kFourBar, false)->Unit(benchmark::kMicrosecond);
 
-// A generated scene of `arms` arms of `links` links each, every link an active body
-// (a state slot each) and every joint a revolute one under a PD controller: 125 arms of
-// 8 links are the thousand bodies of issue 30. The arms stand 1 m apart, each base fixed.
-std::string arms_model(int arms, int links) {
-  std::string text = "adf version: '1.0'\nnamespace: /arms/\n";
-  text += "gravity: {x: 0.0, y: 0.0, z: -9.81}\nignore inter-collision: true\nbodies: [";
-  for (int a = 0; a < arms; ++a)
-    for (int l = 0; l < links; ++l)
-      text += (a || l ? ", " : "") + std::string("BODY a") + std::to_string(a) + "l" +
-              std::to_string(l);
-  text += "]\njoints: [";
-  for (int a = 0; a < arms; ++a)
-    for (int l = 1; l < links; ++l)
-      text += (a || l > 1 ? ", " : "") + std::string("JOINT a") + std::to_string(a) + "j" +
-              std::to_string(l);
-  text += "]\n";
-  for (int a = 0; a < arms; ++a) {
-    const std::string arm = "a" + std::to_string(a);
-    const std::string x = std::to_string(a % 12), y = std::to_string(a / 12);
-    for (int l = 0; l < links; ++l)
-      text += "BODY " + arm + "l" + std::to_string(l) + ":\n  name: " + arm + "l" +
-              std::to_string(l) + "\n  mass: " + (l ? "1.0" : "0.0") +
-              "\n  inertia: {ix: 0.01, iy: 0.01, iz: 0.01}\n  shape: box\n"
-              "  geometry: {x: 0.05, y: 0.05, z: 0.1}\n  location:\n    position: {x: " +
-              x + ", y: " + y + ", z: " + std::to_string(0.1 * l) + "}\n";
-    for (int l = 1; l < links; ++l)
-      text += "JOINT " + arm + "j" + std::to_string(l) + ":\n  name: " + arm + "j" +
-              std::to_string(l) + "\n  parent: BODY " + arm + "l" + std::to_string(l - 1) +
-              "\n  child: BODY " + arm + "l" + std::to_string(l) +
-              "\n  type: revolute\n  parent pivot: {x: 0, y: 0, z: 0.05}\n"
-              "  parent axis: {x: 0, y: " +
-              (l % 2 ? "1" : "0") + ", z: " + (l % 2 ? "0" : "1") +
-              "}\n  child pivot: {x: 0, y: 0, z: -0.05}\n  child axis: {x: 0, y: " +
-              (l % 2 ? "1" : "0") + ", z: " + (l % 2 ? "0" : "1") +
-              "}\n  controller: {P: 50.0, I: 0.0, D: 2.0}\n";
-  }
-  return text;
-}
-
 // The thousand bodies at 1 kHz: one step of 125 eight-link arms, as the physics alone,
 // with every state and the world state published, and with every body commanded each
 // step by one controller in this process (its 1000 command slots in a few blocks).
 // Issue 30's goal: step p99 under 1 ms, publishing under 10 % of the step (the
-// published case's p50 against the physics alone's, in one run).
-void BM_StepThousandBodies(benchmark::State& state, bool publish, bool commanded) {
+// published case's p50 against the physics alone's, in one run). The islands are
+// solved by two threads (physics/src/parallel_islands.hpp), or by the stepping thread
+// alone (`one_thread`): "helped" is the share of islands the helper solved.
+void BM_StepThousandBodies(benchmark::State& state, bool publish, bool commanded,
+                           int solver_threads) {
   afhub::testing::ModelFolder folder;
-  const Model model = load_adf_files({folder.write("arms.yaml", arms_model(125, 8))});
+  Model model = load_adf_files({folder.write("arms.yaml", afhub::testing::arms_model(125, 8))});
+  model.world.solver_threads = solver_threads;
   Simulation sim(model, 0.001);
+  const std::uint64_t helped_before = sim.islands_solved_by_helper();
   std::unique_ptr<SimChannels> channels;
   if (publish) channels = std::make_unique<SimChannels>(sim, 0.5);
   std::vector<std::unique_ptr<BodyClient>> controller;
@@ -299,12 +265,18 @@ void BM_StepThousandBodies(benchmark::State& state, bool publish, bool commanded
     ++step;
   }
   state.counters["bodies"] = static_cast<double>(model.bodies.size());
+  state.counters["helped"] =
+      static_cast<double>(sim.islands_solved_by_helper() - helped_before) / (125.0 * step);
   if (channels) state.counters["published"] = static_cast<double>(channels->channel_count());
   report_step_times(state, times);
 }
-BENCHMARK_CAPTURE(BM_StepThousandBodies, physics, false, false)->Unit(benchmark::kMicrosecond);
-BENCHMARK_CAPTURE(BM_StepThousandBodies, published, true, false)->Unit(benchmark::kMicrosecond);
-BENCHMARK_CAPTURE(BM_StepThousandBodies, published_commanded, true, true)
+BENCHMARK_CAPTURE(BM_StepThousandBodies, physics, false, false, 2)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_StepThousandBodies, physics_one_thread, false, false, 1)
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_StepThousandBodies, published, true, false, 2)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_StepThousandBodies, published_commanded, true, true, 2)
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_StepThousandBodies, published_commanded_one_thread, true, true, 1)
     ->Unit(benchmark::kMicrosecond);
 
 // Publishing alone: one step's ten body states (a ten-link chain, so each body

@@ -1,6 +1,8 @@
 // The counting operator new (see heap_counter.hpp).
 #include "heap_counter.hpp"
 
+#include <unistd.h>
+
 #include <cstdlib>
 #include <new>
 
@@ -12,6 +14,9 @@ namespace {
 std::atomic<long> g_allocations{0};
 thread_local long t_allocations = 0;
 thread_local std::atomic<long>* t_also = nullptr;
+// One thread watched from another: its id, and where its allocations go.
+std::atomic<pid_t> g_watched_tid{0};
+std::atomic<std::atomic<long>*> g_watched_counter{nullptr};
 
 #if defined(AFHUB_SANITIZED)
 // The sanitizers own malloc.
@@ -35,6 +40,11 @@ void note_heap_allocation() noexcept {
   g_allocations.fetch_add(1, std::memory_order_relaxed);
   ++t_allocations;
   if (t_also) t_also->fetch_add(1, std::memory_order_relaxed);
+  if (std::atomic<long>* watched = g_watched_counter.load(std::memory_order_acquire)) {
+    thread_local const pid_t tid = gettid();
+    if (tid == g_watched_tid.load(std::memory_order_relaxed))
+      watched->fetch_add(1, std::memory_order_relaxed);
+  }
 }
 
 long heap_allocations() noexcept {
@@ -47,6 +57,12 @@ long thread_heap_allocations() noexcept {
 
 void count_thread_allocations_into(std::atomic<long>* counter) noexcept {
   t_also = counter;
+}
+
+void count_allocations_of_thread(pid_t tid, std::atomic<long>* counter) noexcept {
+  g_watched_counter.store(nullptr, std::memory_order_release);
+  g_watched_tid.store(tid, std::memory_order_relaxed);
+  g_watched_counter.store(counter, std::memory_order_release);
 }
 
 }  // namespace afhub::test

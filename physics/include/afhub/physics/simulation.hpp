@@ -109,6 +109,10 @@ class Simulation {
   // its Cartesian input, and the inputs of every joint touching it or driven by
   // it, are released. The count since the start, the first and the last such event.
   const NanRecoveries& nan_recoveries() const noexcept;
+  // Islands of joints the solve's helper thread solved since the start
+  // (physics/src/parallel_islands.hpp): 0 while the world has few, or while the
+  // stepping thread may run on one CPU only.
+  std::uint64_t islands_solved_by_helper() const noexcept;
   // Whether actuator `actuator` (an index into model().actuators) holds a body.
   bool actuator_engaged(std::size_t actuator) const noexcept;
 

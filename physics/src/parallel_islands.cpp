@@ -1,0 +1,109 @@
+#include "parallel_islands.hpp"
+
+#include <pthread.h>
+
+namespace afhub::physics {
+namespace {
+
+constexpr std::uint64_t kFieldMask = (std::uint64_t{1} << ParallelIslands::kCountBits) - 1;
+constexpr int kSpinsBeforeYield = 4096;  // 0.1 to 0.3 ms of pauses: a few islands
+
+}  // namespace
+
+ParallelIslands::ParallelIslands(int bodies, int joints, bool direct) : solver_(bodies, joints) {
+  if (direct) solver_.enable_direct_solve();
+  helper_ = std::thread([this] { help(); });
+  pthread_setname_np(helper_.native_handle(), "afhub-islands");  // as top and perf show it
+}
+
+ParallelIslands::~ParallelIslands() {
+  stopping_.store(true);
+  job_.fetch_add(1);
+  job_.notify_one();
+  helper_.join();
+}
+
+void ParallelIslands::solve_one(ConstraintSolver& solver, int island) noexcept {
+  const Island& i = (*islands_)[island];
+  solver.solveGroup(bodies_ + i.first_body, i.body_count, i.manifolds, i.manifold_count,
+                    i.constraint_count ? constraints_ + i.first_constraint : nullptr,
+                    i.constraint_count, *info_, nullptr, nullptr);
+}
+
+// The stepping thread's scheduling and CPUs, given to the helper when they change (the
+// real-time loop sets them after the world is built); false if it may use one CPU only.
+bool ParallelIslands::follow_stepping_thread() noexcept {
+  sched_param param{};
+  int policy = 0;
+  cpu_set_t cpus;
+  if (pthread_getschedparam(pthread_self(), &policy, &param) != 0 ||
+      pthread_getaffinity_np(pthread_self(), sizeof cpus, &cpus) != 0)
+    return !alone_;
+  if (policy != policy_ || param.sched_priority != priority_) {
+    // Refused (no right to real-time priorities), the helper keeps its policy: the
+    // stepping thread's was granted, so this is not expected.
+    pthread_setschedparam(helper_.native_handle(), policy, &param);
+    policy_ = policy;
+    priority_ = param.sched_priority;
+  }
+  if (!CPU_EQUAL(&cpus, &cpus_)) {
+    alone_ = CPU_COUNT(&cpus) < 2;
+    if (!alone_) pthread_setaffinity_np(helper_.native_handle(), sizeof cpus, &cpus);
+    cpus_ = cpus;
+  }
+  return !alone_;
+}
+
+void ParallelIslands::solve(ConstraintSolver& own, const std::vector<Island>& islands,
+                            btCollisionObject** bodies, btTypedConstraint** constraints,
+                            const btContactSolverInfo& info) noexcept {
+  const int count = static_cast<int>(islands.size());
+  islands_ = &islands;
+  bodies_ = bodies;
+  constraints_ = constraints;
+  info_ = &info;
+  if (count < kMinIslands || count >= static_cast<int>(kFieldMask) || !follow_stepping_thread()) {
+    for (int i = 0; i < count; ++i) solve_one(own, i);
+    return;
+  }
+  const std::uint32_t job = job_.load(std::memory_order_relaxed) + 1;
+  solved_.store(0, std::memory_order_relaxed);
+  ticket_.store((std::uint64_t{job} << (2 * kCountBits)) | (std::uint64_t(count) << kCountBits),
+                std::memory_order_release);
+  job_.store(job, std::memory_order_release);
+  job_.notify_one();
+  for (;;) {
+    const std::uint64_t taken = ticket_.fetch_add(1, std::memory_order_acq_rel) & kFieldMask;
+    if (taken >= static_cast<std::uint64_t>(count)) break;
+    solve_one(own, static_cast<int>(taken));
+    solved_.fetch_add(1, std::memory_order_release);
+  }
+  // Only the island the helper is in the middle of, if any, is left. Should the
+  // helper have been moved onto this thread's CPU, spinning would keep it off: yield.
+  for (int spins = 0; solved_.load(std::memory_order_acquire) < count; ++spins)
+    spins < kSpinsBeforeYield ? __builtin_ia32_pause() : static_cast<void>(sched_yield());
+}
+
+void ParallelIslands::help() noexcept {
+  std::uint32_t seen = 0;
+  for (;;) {
+    job_.wait(seen, std::memory_order_acquire);
+    if (stopping_.load()) return;
+    seen = job_.load(std::memory_order_acquire);
+    std::uint64_t ticket = ticket_.load(std::memory_order_acquire);
+    for (;;) {
+      const std::uint64_t next = ticket & kFieldMask;
+      const std::uint64_t count = (ticket >> kCountBits) & kFieldMask;
+      // Another job's ticket (a later one: this wake was late), or none left.
+      if ((ticket >> (2 * kCountBits)) != (seen & 0xffffff) || next >= count) break;
+      if (ticket_.compare_exchange_weak(ticket, ticket + 1, std::memory_order_acq_rel)) {
+        solve_one(solver_, static_cast<int>(next));
+        helped_.fetch_add(1, std::memory_order_relaxed);
+        solved_.fetch_add(1, std::memory_order_release);
+        ticket = ticket_.load(std::memory_order_acquire);
+      }
+    }
+  }
+}
+
+}  // namespace afhub::physics

@@ -1,0 +1,86 @@
+// A step's islands solved by the stepping thread and one helper thread at once. A
+// world of many robots is many islands (125 eight-link arms: 125), each solved on its
+// own (reserved_world.hpp), and their solve was 70 % of the step on one core.
+//
+// Islands share nothing the solve writes: each moves only its own bodies, contacts
+// and joints (static bodies are read, never written; Bullet writes to a kinematic
+// body from every island it touches, and afhub makes none). Each thread has its own
+// solver, so an island's result is the same whichever thread solves it: the step is
+// bit-identical to solving them one after another.
+//
+// The two threads take islands from one counter, so the stepping thread never waits
+// for a helper that wakes late (a sleeping vCPU takes tens of microseconds): it waits
+// only for the island the helper is in the middle of. The helper runs under the
+// stepping thread's scheduling policy and priority, on the CPUs it may run on; with
+// one CPU allowed, the stepping thread solves everything itself.
+#pragma once
+
+#include <sched.h>
+
+#include <atomic>
+#include <cstdint>
+#include <thread>
+#include <vector>
+
+#include "constraint_solver.hpp"
+
+namespace afhub::physics {
+
+class ParallelIslands {
+ public:
+  // Fewer islands than this are solved by the stepping thread alone: waking the
+  // helper costs more than it takes over.
+  static constexpr int kMinIslands = 16;
+  static constexpr int kCountBits = 20;  // a step's islands: fewer than 2^20 (ticket_)
+
+  struct Island {
+    int first_body, body_count;  // in the bodies array solve() is given
+    btPersistentManifold** manifolds;
+    int manifold_count;
+    int first_constraint, constraint_count;  // in the constraints array
+  };
+
+  // The helper's solver is made like the world's (ConstraintSolver(bodies, joints),
+  // with the direct solve if `direct`).
+  ParallelIslands(int bodies, int joints, bool direct);
+  ~ParallelIslands();
+  ParallelIslands(const ParallelIslands&) = delete;
+  ParallelIslands& operator=(const ParallelIslands&) = delete;
+
+  // Solves every island, `own` solving those the stepping thread takes; returns when
+  // all are solved.
+  void solve(ConstraintSolver& own, const std::vector<Island>& islands, btCollisionObject** bodies,
+             btTypedConstraint** constraints, const btContactSolverInfo& info) noexcept;
+  // Islands the helper solved, since the start.
+  std::uint64_t helped() const noexcept { return helped_.load(std::memory_order_relaxed); }
+
+ private:
+  void solve_one(ConstraintSolver& solver, int island) noexcept;
+  void help() noexcept;
+  bool follow_stepping_thread() noexcept;
+
+  // A job's islands are taken one at a time from `ticket_`: its job number (the top 24
+  // bits), its island count (20 bits) and the next island to take (20 bits), in one
+  // word, so that a late helper can never take an island of a job that has ended.
+  std::atomic<std::uint64_t> ticket_{0};
+  std::atomic<std::uint32_t> job_{0};  // the job's number; the helper sleeps on it
+  std::atomic<int> solved_{0};         // islands of the job solved
+  std::atomic<bool> stopping_{false};
+  std::atomic<std::uint64_t> helped_{0};
+
+  // The job, written before its ticket is published, read after an island is taken.
+  const std::vector<Island>* islands_ = nullptr;
+  btCollisionObject** bodies_ = nullptr;
+  btTypedConstraint** constraints_ = nullptr;
+  const btContactSolverInfo* info_ = nullptr;
+
+  // The stepping thread's policy, priority and CPUs, last applied to the helper.
+  int policy_ = -1, priority_ = -1;
+  cpu_set_t cpus_{};
+  bool alone_ = false;  // the stepping thread may run on one CPU only
+
+  ConstraintSolver solver_;
+  std::thread helper_;
+};
+
+}  // namespace afhub::physics
