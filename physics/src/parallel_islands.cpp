@@ -6,12 +6,13 @@ namespace afhub::physics {
 namespace {
 
 constexpr std::uint64_t kFieldMask = (std::uint64_t{1} << ParallelIslands::kCountBits) - 1;
+constexpr std::uint64_t kJobMask = (std::uint64_t{1} << (64 - 2 * ParallelIslands::kCountBits)) - 1;
 constexpr int kSpinsBeforeYield = 4096;  // 0.1 to 0.3 ms of pauses: a few islands
 
 }  // namespace
 
-ParallelIslands::ParallelIslands(int bodies, int joints, bool direct) : solver_(bodies, joints) {
-  if (direct) solver_.enable_direct_solve();
+ParallelIslands::ParallelIslands(int bodies, int joints) : solver_(bodies, joints) {
+  solver_.enable_direct_solve();
   helper_ = std::thread([this] { help(); });
   pthread_setname_np(helper_.native_handle(), "afhub-islands");  // as top and perf show it
 }
@@ -38,19 +39,17 @@ bool ParallelIslands::follow_stepping_thread() noexcept {
   cpu_set_t cpus;
   if (pthread_getschedparam(pthread_self(), &policy, &param) != 0 ||
       pthread_getaffinity_np(pthread_self(), sizeof cpus, &cpus) != 0)
+    return false;
+  if (policy == policy_ && param.sched_priority == priority_ && CPU_EQUAL(&cpus, &cpus_))
     return !alone_;
-  if (policy != policy_ || param.sched_priority != priority_) {
-    // Refused (no right to real-time priorities), the helper keeps its policy: the
-    // stepping thread's was granted, so this is not expected.
-    pthread_setschedparam(helper_.native_handle(), policy, &param);
-    policy_ = policy;
-    priority_ = param.sched_priority;
-  }
-  if (!CPU_EQUAL(&cpus, &cpus_)) {
-    alone_ = CPU_COUNT(&cpus) < 2;
-    if (!alone_) pthread_setaffinity_np(helper_.native_handle(), sizeof cpus, &cpus);
-    cpus_ = cpus;
-  }
+  policy_ = policy;
+  priority_ = param.sched_priority;
+  cpus_ = cpus;
+  // A helper refused the stepping thread's priority could wait behind it on its CPU
+  // while it waits for the helper's island: then the stepping thread solves alone.
+  alone_ = CPU_COUNT(&cpus) < 2 ||
+           pthread_setschedparam(helper_.native_handle(), policy, &param) != 0 ||
+           pthread_setaffinity_np(helper_.native_handle(), sizeof cpus, &cpus) != 0;
   return !alone_;
 }
 
@@ -80,8 +79,14 @@ void ParallelIslands::solve(ConstraintSolver& own, const std::vector<Island>& is
   }
   // Only the island the helper is in the middle of, if any, is left. Should the
   // helper have been moved onto this thread's CPU, spinning would keep it off: yield.
-  for (int spins = 0; solved_.load(std::memory_order_acquire) < count; ++spins)
-    spins < kSpinsBeforeYield ? __builtin_ia32_pause() : static_cast<void>(sched_yield());
+  for (int spins = 0; solved_.load(std::memory_order_acquire) < count;) {
+    if (spins < kSpinsBeforeYield) {
+      ++spins;
+      __builtin_ia32_pause();
+    } else {
+      sched_yield();
+    }
+  }
 }
 
 void ParallelIslands::help() noexcept {
@@ -95,7 +100,7 @@ void ParallelIslands::help() noexcept {
       const std::uint64_t next = ticket & kFieldMask;
       const std::uint64_t count = (ticket >> kCountBits) & kFieldMask;
       // Another job's ticket (a later one: this wake was late), or none left.
-      if ((ticket >> (2 * kCountBits)) != (seen & 0xffffff) || next >= count) break;
+      if ((ticket >> (2 * kCountBits)) != (seen & kJobMask) || next >= count) break;
       if (ticket_.compare_exchange_weak(ticket, ticket + 1, std::memory_order_acq_rel)) {
         solve_one(solver_, static_cast<int>(next));
         helped_.fetch_add(1, std::memory_order_relaxed);

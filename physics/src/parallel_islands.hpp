@@ -4,15 +4,18 @@
 //
 // Islands share nothing the solve writes: each moves only its own bodies, contacts
 // and joints (static bodies are read, never written; Bullet writes to a kinematic
-// body from every island it touches, and afhub makes none). Each thread has its own
-// solver, so an island's result is the same whichever thread solves it: the step is
+// body from every island it touches: none is made, and a world with one is solved by
+// one thread). Bullet's one global written, a count of deep contacts' split-impulse
+// corrections that nothing reads, may be raced on. Each thread has its own solver,
+// so an island's result is the same whichever thread solves it: the step is
 // bit-identical to solving them one after another.
 //
 // The two threads take islands from one counter, so the stepping thread never waits
 // for a helper that wakes late (a sleeping vCPU takes tens of microseconds): it waits
 // only for the island the helper is in the middle of. The helper runs under the
 // stepping thread's scheduling policy and priority, on the CPUs it may run on; with
-// one CPU allowed, the stepping thread solves everything itself.
+// one CPU allowed (`afhub run --cpu`), or the helper refused that priority, the
+// stepping thread solves everything itself.
 #pragma once
 
 #include <sched.h>
@@ -40,9 +43,9 @@ class ParallelIslands {
     int first_constraint, constraint_count;  // in the constraints array
   };
 
-  // The helper's solver is made like the world's (ConstraintSolver(bodies, joints),
-  // with the direct solve if `direct`).
-  ParallelIslands(int bodies, int joints, bool direct);
+  // The helper's solver is made like the world's: ConstraintSolver(bodies, joints),
+  // with the direct solve (islands are solved one at a time only with it).
+  ParallelIslands(int bodies, int joints);
   ~ParallelIslands();
   ParallelIslands(const ParallelIslands&) = delete;
   ParallelIslands& operator=(const ParallelIslands&) = delete;

@@ -22,12 +22,12 @@ void ReservedWorld::reserve_constraints(int count) {
   sorted_.reserve(count);
 }
 
-void ReservedWorld::solve_islands_in_parallel(ConstraintSolver& solver, int bodies, int joints,
-                                              bool direct) {
-  solver_ = &solver;
-  parallel_ = std::make_unique<ParallelIslands>(bodies, joints, direct);
-  islands_.reserve(getNumCollisionObjects());
-  island_bodies_.reserve(getNumCollisionObjects());
+void ReservedWorld::solve_islands_in_parallel(int bodies, int joints, int objects) {
+  for (int i = 0; i < getNumCollisionObjects(); ++i)
+    if (getCollisionObjectArray()[i]->isKinematicObject()) return;
+  parallel_ = std::make_unique<ParallelIslands>(bodies, joints);
+  islands_.reserve(objects);
+  island_bodies_.reserve(objects);
 }
 
 void ReservedWorld::solveConstraints(btContactSolverInfo& info) {
@@ -77,7 +77,9 @@ void ReservedWorld::solveConstraints(btContactSolverInfo& info) {
   islands_.clear();
   island_bodies_.clear();
   m_islandManager->buildAndProcessIslands(getDispatcher(), this, &islands);
-  if (parallel_) parallel_->solve(*solver_, islands_, island_bodies_.data(), sorted_.data(), info);
+  if (parallel_)
+    parallel_->solve(static_cast<ConstraintSolver&>(*m_constraintSolver), islands_,
+                     island_bodies_.data(), sorted_.data(), info);
   m_constraintSolver->allSolved(info, m_debugDrawer);
 }
 

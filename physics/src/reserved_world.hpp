@@ -17,8 +17,10 @@ class ReservedWorld : public btSoftRigidDynamicsWorld {
   using btSoftRigidDynamicsWorld::btSoftRigidDynamicsWorld;
   void reserve_constraints(int count);
   // Islands solved one at a time are solved by two threads at once when there are
-  // many (parallel_islands.hpp); `solver` is this world's, the helper's is made like it.
-  void solve_islands_in_parallel(ConstraintSolver& solver, int bodies, int joints, bool direct);
+  // many (parallel_islands.hpp), the world's solver being a ConstraintSolver(bodies,
+  // joints) with the direct solve; `objects`: the collision objects it will hold. Not
+  // with a kinematic body, which Bullet writes to from every island it touches.
+  void solve_islands_in_parallel(int bodies, int joints, int objects);
   std::uint64_t islands_solved_by_helper() const noexcept {
     return parallel_ ? parallel_->helped() : 0;
   }
@@ -42,7 +44,6 @@ class ReservedWorld : public btSoftRigidDynamicsWorld {
   // With a helper: the step's islands, gathered before they are solved, and their
   // bodies (Bullet's list of an island's bodies lasts only for its callback).
   std::unique_ptr<ParallelIslands> parallel_;
-  ConstraintSolver* solver_ = nullptr;
   std::vector<ParallelIslands::Island> islands_;
   std::vector<btCollisionObject*> island_bodies_;
 };

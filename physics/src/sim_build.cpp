@@ -216,12 +216,14 @@ void Simulation::Data::mark_joint_islands() {
   if (!any) return;
   solver.enable_direct_solve();
   world.getSolverInfo().m_minimumSolverBatchSize = 1;
-  const auto moving_islands = std::count_if(islands.begin(), islands.end(),
-                                            [](const Island& island) { return island.bodies > 0; });
-  if (model.world.solver_threads > 1 && moving_islands >= ParallelIslands::kMinIslands)
-    world.solve_islands_in_parallel(solver, static_cast<int>(model.bodies.size()),
-                                    static_cast<int>(model.joints.size() + model.actuators.size()),
-                                    true);
+  // Groups of moving bodies joined by joints: islands, unless contacts join them.
+  const auto groups = std::count_if(islands.begin(), islands.end(),
+                                    [](const Island& island) { return island.bodies > 0; });
+  if (model.world.solver_threads > 1 && groups >= ParallelIslands::kMinIslands)
+    world.solve_islands_in_parallel(
+        static_cast<int>(model.bodies.size()),
+        static_cast<int>(model.joints.size() + model.actuators.size()),
+        static_cast<int>(model.bodies.size() + model.soft_bodies.size()));
 }
 
 void Simulation::Data::build_soft_bodies() {

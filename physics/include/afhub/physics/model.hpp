@@ -220,9 +220,9 @@ struct WorldSpec {
   // Islands of joints are solved directly, not by the iterations above
   // (physics/src/constraint_solver.hpp); false: iterated like the rest.
   bool direct_solve = true;
-  // Threads that solve a step's islands of joints: 2, a helper beside the stepping
-  // thread when there are many (physics/src/parallel_islands.hpp); 1, the stepping
-  // thread alone.
+  // Threads that solve a step's islands of joints: 2 (the most), a helper beside the
+  // stepping thread when there are many (physics/src/parallel_islands.hpp); 1, the
+  // stepping thread alone.
   int solver_threads = 2;
   std::vector<WorldObjectSpec> lights, cameras;
 };
