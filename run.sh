@@ -103,6 +103,9 @@ build() {
 # bounds takes one more slot than there are cores (tests/CMakeLists.txt), so it runs alone
 # when SLOTS is that.
 SLOTS=$(($(nproc) + 1))
+# Under the sanitizers a test per core: their processes run two to three times slower,
+# and three at once on two cores starved each other's hubs past the tests' waits.
+SANITIZED_SLOTS=$(nproc)
 run_tests() {
   local dir=$1 slots=$2
   shift 2
@@ -197,15 +200,13 @@ case "${1:-}" in
       at_idle_priority build "${SANITIZE[@]}" -- sanitize_selection
     phase tests run_tests build/release "$SLOTS" -L integration -LE real-time
     finish_background_phase
-    # A test per core: sanitized processes run two to three times slower, and three at
-    # once on two cores starved each other's hubs past the tests' waits.
-    phase sanitize-tests run_tests build/sanitize "$(nproc)" -L 'unit|fuzz|sanitize'
+    phase sanitize-tests run_tests build/sanitize "$SANITIZED_SLOTS" -L 'unit|fuzz|sanitize'
     ;;
   sanitize)
     phase packages install_packages "${BUILD_PACKAGES[@]}" "${TEST_PACKAGES[@]}"
     phase mcap-check install_mcap_check
     phase sanitize-build build "${SANITIZE[@]}"
-    phase sanitize-tests run_tests build/sanitize "$SLOTS"
+    phase sanitize-tests run_tests build/sanitize "$SANITIZED_SLOTS"
     ;;
   build)
     install_packages "${BUILD_PACKAGES[@]}"
