@@ -260,18 +260,29 @@ class RefusalWatch {
               channel + "` shows its joints now");
 }
 
-// After --once: the physics takes commands in at the start of a step and publishes its
-// states at the end, so the second state published after the command went out (at
-// `sent_ns`) carries its answer.
-void check_once(RefusalWatch& watch, const std::string& channel, std::int64_t sent_ns) {
-  const std::int64_t give_up = monotonic_ns() + 1'000'000'000;  // paused or gone: no answer
-  const auto wait_for = [&](const auto& done) {
+// After --once: the physics takes up a new writer's slot when it next looks for writers
+// (at most once a coarse clock tick, up to 4 ms: more steps than one at 1 kHz, many under
+// load), reads commands at the start of a step and publishes states at the end; so once
+// it holds the slot, the second state published after carries its answer.
+void check_once(BodyClient& body, RefusalWatch& watch, const std::string& channel) {
+  const auto wait_for = [&](std::int64_t limit_ns, const auto& done) {
+    const std::int64_t give_up = monotonic_ns() + limit_ns;
     while (!done() && monotonic_ns() < give_up && !stop_requested())
       sleep_until_ns(monotonic_ns() + 1'000'000);
+    return done();
   };
-  wait_for([&] { return watch.state_stamp_ns() > sent_ns; });
+  if (!wait_for(5'000'000'000, [&] { return body.command_has_readers(); })) {
+    std::fprintf(stderr,
+                 "afhub cmd: warning: no physics took the command in 5 s (is %s's "
+                 "physics running? `afhub ls` lists the bodies)\n",
+                 channel.c_str());
+    return;
+  }
+  const std::int64_t taken_ns = monotonic_ns();
+  constexpr std::int64_t kAnswerNs = 1'000'000'000;  // paused or gone: no answer
+  wait_for(kAnswerNs, [&] { return watch.state_stamp_ns() > taken_ns; });
   const std::uint64_t first_after = watch.state_sequence();
-  wait_for([&] { return watch.state_sequence() > first_after; });
+  wait_for(kAnswerNs, [&] { return watch.state_sequence() > first_after; });
   if (const std::string reason = watch.refusal(); !reason.empty()) refused(channel, reason);
 }
 
@@ -312,9 +323,8 @@ int run_cmd(const CmdOptions& options) {
   require_chunks({written_as_slot(body_command_bytes(prototype.joint_count))},
                  "this command (to " + channel + ")");
   if (once) {
-    const std::int64_t sent_ns = monotonic_ns();
     if (!publish_once(body, prototype)) throw Error("shared memory exhausted: command not sent");
-    check_once(watch, channel, sent_ns);
+    check_once(body, watch, channel);
     std::fprintf(stderr,
                  "afhub cmd: sent one command to %s%s%s.\nwarning: the physics' watchdog releases "
                  "it when no new command comes within its period (0.5 s unless `afhub run "

@@ -10,9 +10,8 @@ namespace {
 constexpr double kGravity = 9.81;
 constexpr double kTwoPi = 2.0 * M_PI;
 
-double length(const Vec3& v) {
-  return std::sqrt(v.x * v.x + v.y * v.y + v.z * v.z);
-}
+// hypot: a refused 1e308 is said as 1e308, not as the inf its square overflows to.
+double length(const Vec3& v) { return std::hypot(v.x, v.y, v.z); }
 
 }  // namespace
 

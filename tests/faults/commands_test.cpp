@@ -69,6 +69,8 @@ TEST(FaultsCommands, FiniteExtremeCommandsAreRefusedAndCountedWhileTheWorldRunsO
     EXPECT_EQ(sent.exit_code, 1) << sent.err;
     EXPECT_TRUE(contains(sent.err, "the physics refused the command for afhub/arm/base: "))
         << sent.err;
+    EXPECT_FALSE(contains(sent.err, " inf ")) << "the value as sent, not its overflow\n"
+                                              << sent.err;
     ++expected;
     ASSERT_TRUE(wait_until([&] { return run.now().rejected_commands >= expected; }, 5s))
         << extreme[0] << ": " << run.now().rejected_commands << " refused\n"

@@ -99,6 +99,8 @@ class BodyClient {
     return command;
   }
   void publish_command(BodyCommand* command) noexcept { command_.publish(command); }
+  // A reader (the physics, once it has found this writer's slot) holds the command slot.
+  bool command_has_readers() const noexcept { return command_.raw().has_readers(); }
   const std::string& channel() const { return channel_; }
 
  private:
