@@ -11,7 +11,9 @@ constexpr double kGravity = 9.81;
 constexpr double kTwoPi = 2.0 * M_PI;
 
 // hypot: a refused 1e308 is said as 1e308, not as the inf its square overflows to.
-double length(const Vec3& v) { return std::hypot(v.x, v.y, v.z); }
+double length(const Vec3& v) {
+  return std::hypot(v.x, v.y, v.z);
+}
 
 }  // namespace
 
