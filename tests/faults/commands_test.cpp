@@ -2,7 +2,8 @@
 // of the example arm on a test hub: finite extreme commands refused and counted
 // while the world runs on; world commands from several writers acted on once each,
 // in order; a restarted physics ignoring a live writer's old command; a per-body
-// watchdog of 2 ms; and one count of late commands in `status`, `top` and the world.
+// watchdog of 2 ms; one count of late commands in `status`, `top` and the world; and a
+// --once command to a stopped physics said to be lost.
 // Assertions are on counters, states and messages, never on tight wall-clock times.
 #include <gtest/gtest.h>
 
@@ -11,6 +12,7 @@
 #include <optional>
 #include <thread>
 
+#include <signal.h>
 #include <unistd.h>
 
 #include "afhub/hub/bodies.hpp"
@@ -90,6 +92,29 @@ TEST(FaultsCommands, FiniteExtremeCommandsAreRefusedAndCountedWhileTheWorldRunsO
   EXPECT_TRUE(contains(output, "joint 0 (base-link1) effort 1e+308 N m is beyond its bound"))
       << output;
   EXPECT_FALSE(contains(output, "NaN")) << output;
+}
+
+// A --once command lives in its writer's slot until the writer exits: to a physics that
+// does not take it up (stopped here, as by a debugger), `afhub cmd --once` says after a
+// bounded wait that nothing was applied, exit 1, and the physics carries on once resumed.
+TEST(FaultsCommands, OnceToAStoppedPhysicsSaysNothingWasApplied) {
+  ArmRun run;
+  ASSERT_TRUE(run.ready()) << read_file(run.log);
+  ASSERT_EQ(kill(run.physics->pid, SIGSTOP), 0);
+  const RunResult sent = run_afhub({"cmd", "arm/base", "--once", "--force", "1,0,0"});
+  ASSERT_EQ(kill(run.physics->pid, SIGCONT), 0);
+  EXPECT_EQ(sent.exit_code, 1) << sent.err;
+  EXPECT_TRUE(contains(sent.err,
+                       "no physics took the command for afhub/arm/base within 5 s, "
+                       "so nothing of it was applied"))
+      << sent.err;
+  const std::uint64_t step = run.now().header.sim_step;
+  EXPECT_TRUE(wait_until([&] { return run.now().header.sim_step > step + 100; }, 10s))
+      << read_file(run.log);
+  // Running again, it takes the next one.
+  const RunResult again = run_afhub({"cmd", "arm/base", "--once", "--force", "1,0,0"});
+  EXPECT_EQ(again.exit_code, 0) << again.err;
+  EXPECT_EQ(run.physics->stop(), 0);
 }
 
 // A command entry for a joint without an axis (here a fixed one) is refused and
