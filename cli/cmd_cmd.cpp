@@ -271,12 +271,18 @@ void check_once(BodyClient& body, RefusalWatch& watch, const std::string& channe
       sleep_until_ns(monotonic_ns() + 1'000'000);
     return done();
   };
-  // The slot goes when this process ends: a command no physics took is lost.
-  if (!wait_for(5'000'000'000, [&] { return body.command_has_readers(); }))
+  // The slot goes when this process ends: a command no physics took is lost. (Another
+  // reader of commands, the DDS bridge say, holds the slot too: then this can pass before
+  // the physics holds it, as the old wait for two states did.)
+  if (!wait_for(5'000'000'000, [&] { return body.command_has_readers(); })) {
+    if (stop_requested())
+      throw Error("stopped before a physics took the command for " + channel +
+                  ": nothing of it was applied");
     throw Error("no physics took the command for " + channel +
                 " within 5 s, so nothing of it was applied. Is the physics stopped or stuck? "
                 "`afhub status` shows whether the world steps; send the command again once it "
                 "does");
+  }
   const std::int64_t taken_ns = monotonic_ns();
   constexpr std::int64_t kAnswerNs = 1'000'000'000;  // paused or gone: no answer
   wait_for(kAnswerNs, [&] { return watch.state_stamp_ns() > taken_ns; });
