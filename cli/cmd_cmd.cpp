@@ -272,8 +272,8 @@ void check_once(BodyClient& body, RefusalWatch& watch, const std::string& channe
     return done();
   };
   // The slot goes when this process ends: a command no physics took is lost. (Another
-  // reader of commands, the DDS bridge say, holds the slot too: then this can pass before
-  // the physics holds it, as the old wait for two states did.)
+  // reader of commands, the DDS bridge say, holds the slot too: with one, this can pass
+  // before the physics holds it.)
   if (!wait_for(5'000'000'000, [&] { return body.command_has_readers(); })) {
     if (stop_requested())
       throw Error("stopped before a physics took the command for " + channel +
