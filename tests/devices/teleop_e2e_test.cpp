@@ -80,6 +80,9 @@ TEST(TeleopEndToEnd, TheGripperFollowsTheDevicesCircleScaled) {
   const Following f = measure_following(teleop, kScale, 2000);  // about four turns
   const double in_time = static_cast<double>(teleop.palm().answered_steps - answered) /
                          std::max(1U, teleop.palm().commanded_steps - commanded);
+  // Each loop's wake-ups and overruns, to tell a stalled teleop, driver or physics apart
+  // when the following fails (once in CI: RMS 21 mm, p99 105 mm, every state read fresh).
+  const std::string loops = run_afhub({"top", "--once"}).out;
   const Vec3& body_mean = f.body_mean;
   const double radius = f.body_radius, rms = f.rms, worst = f.worst;
   std::printf(
@@ -107,8 +110,8 @@ TEST(TeleopEndToEnd, TheGripperFollowsTheDevicesCircleScaled) {
   // before the reads were judged on the states' stamps, a physics descheduled for
   // 76 ms at load 10 gave 7.8 mm RMS and 3.8 cm at worst. Not following at all is the
   // circle's 10 cm.
-  EXPECT_LT(rms, 0.005) << teleop.logs();
-  EXPECT_LT(f.p99, 0.015) << teleop.logs();
+  EXPECT_LT(rms, 0.005) << teleop.logs() << "\nloops:\n" << loops;
+  EXPECT_LT(f.p99, 0.015) << teleop.logs() << "\nloops:\n" << loops;
 }
 
 TEST(TeleopEndToEnd, ClutchHoldsTheGripperAndReleasingItGivesNoJump) {
