@@ -215,8 +215,10 @@ def test_loop_in_phase_answers_the_newest_state(physics):
     early, later = after_due(200), after_due(700)
     print(f"1 kHz Python loop: {late:.1%} late commands in phase; woken {early:.0f} us after "
           f"the step was due with after_step_us=200, {later:.0f} us with 700")
-    # Misses come from this machine's stalls (the C++ controllers' bound).
-    assert late < 0.25
+    # Misses come from this machine's stalls: 0.4 to 2.5 % in six runs on the project's
+    # VM. A loop left on the grid of the model as loaded (step 0, published before the
+    # physics' clock starts) was 0.6 to 41 % late.
+    assert late < 0.10
     # The wake-up latency and the call into Python come on top (18 to 41 us at the
     # median in four runs on the project's VM). On its own clock each loop would keep
     # whatever offset it started with.

@@ -26,7 +26,7 @@ void StepPhase::attach(LoopOptions& loop, LoopCycle& cycle) {
   period_ns_ = loop.period_ns;
   if (const BodyState* state = latest_()) {
     loop.grid_origin_ns = grid_in_phase(*state, after_ns_);
-    physics_pid_ = state->header.publisher_pid;
+    remember(*state);
   }
   cycle.deadline_ns = &deadline_ns_;
   cycle.regrid_ns = &regrid_ns_;
@@ -34,8 +34,16 @@ void StepPhase::attach(LoopOptions& loop, LoopCycle& cycle) {
 }
 
 void StepPhase::follow(const BodyState& state) noexcept {
-  if (state.header.publisher_pid != physics_pid_) regrid_ns_ = grid_in_phase(state, after_ns_);
+  if (state.header.publisher_pid != physics_pid_ || (state.step_due_ns > 0 && !grid_from_due_) ||
+      state.header.sim_step < last_step_)
+    regrid_ns_ = grid_in_phase(state, after_ns_);
+  remember(state);
+}
+
+void StepPhase::remember(const BodyState& state) noexcept {
   physics_pid_ = state.header.publisher_pid;
+  grid_from_due_ = state.step_due_ns > 0;
+  last_step_ = state.header.sim_step;
 }
 
 bool StepPhase::wait_for_late_step() const {

@@ -39,18 +39,24 @@ class StepPhase {
   // the one due `after_ns` ago), that step's state is waited for in 20 us sleeps until
   // 0.1 ms before the next step; a physics further behind (stopped, gone) is not.
   void attach(LoopOptions& loop, LoopCycle& cycle);
-  // In the cycle's work, with the state it answers: a state of another physics (a
-  // restart, or the first state) moves the loop onto that physics' grid.
+  // In the cycle's work, with the state it answers: a state on a grid the loop is not
+  // on moves the loop onto it: another physics (a restart, or the first state), the
+  // first step due on the clock after the model as loaded (step 0 has no due time, so
+  // a loop started then took the publish stamp), a physics started over in the same
+  // process (its steps count again from 0: a re-exec after a hub restart).
   void follow(const BodyState& state) noexcept;
 
  private:
   bool wait_for_late_step() const;
+  void remember(const BodyState& state) noexcept;  // the grid `state` is on
 
   std::int64_t after_ns_;
   std::function<const BodyState*()> latest_;
   std::int64_t period_ns_ = 0;
   std::int64_t deadline_ns_ = 0, regrid_ns_ = 0;
   std::uint32_t physics_pid_ = 0;
+  bool grid_from_due_ = false;  // the grid came from a due time, not a publish stamp
+  std::uint64_t last_step_ = 0;
 };
 
 }  // namespace afhub
