@@ -76,7 +76,7 @@ install_mcap_check() {
     cp "$source/package.json" "$source/package-lock.json" "$target/"
     (cd "$target" && npm ci --no-audit --no-fund --loglevel=error)
   fi
-  cp "$source/check.mjs" "$target/"  # beside its node_modules, where node resolves imports
+  cp "$source"/*.mjs "$target/"  # beside its node_modules, where node resolves imports
 }
 
 # The two builds: optimised with line tables (enough for a backtrace, a third cheaper to

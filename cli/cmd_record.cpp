@@ -140,6 +140,10 @@ void register_record(CLI::App& app, Runner& selected) {
   record->add_option("--bodies", options->record.body_globs,
                      "Body channels to record, as globs (default: every body)");
   record->add_flag("--devices", options->record.devices, "Record every device's state and command");
+  // The world's state is always recorded (play and replay need its clock); the flag is
+  // taken so that a command line written with it runs.
+  record->add_flag("--world")->description(
+      "The world's state: always recorded, with or without this flag");
   record->add_flag("--commands", options->record.commands,
                    "Record the commands sent to the recorded bodies");
   record->add_option(

@@ -7,6 +7,7 @@
 #include <sched.h>
 #include <signal.h>
 
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -17,6 +18,7 @@
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/record/mcap_reader.hpp"
+#include "afhub/record/mcap_writer.hpp"
 #include "afhub/shm_layout/body_command.hpp"
 #include "afhub/shm_layout/body_state.hpp"
 #include "afhub/shm_layout/channel_names.hpp"
@@ -26,6 +28,7 @@
 #include "model_files.hpp"
 #include "recorded_payloads.hpp"
 #include "strict_json.hpp"
+#include "text_contains.hpp"
 #include "web_client.hpp"
 
 namespace afhub::test {
@@ -235,12 +238,12 @@ TEST(Record, ARecorderPausedFor150MsMissesNoStep) {
   EXPECT_LT(largest_gap(file, "/afhub/arm/base/command"), 135u);
 }
 
-TEST(Record, AsAROS2BagItsJointStatesDecodeWithAnIndependentCdrReader) {
+TEST(Record, AsAROS2BagEveryMessageReadsWithFoxglovesDecodersAndJointStatesWithACdrReader) {
   SceneRun scene;
   ASSERT_TRUE(scene.ready()) << scene.logs();
   const std::string file = scene.dir("ros2.mcap");
-  const RunResult recorded =
-      run_afhub({"record", "-o", file, "--duration", "1", "--profile", "ros2", "--commands"}, 60s);
+  const RunResult recorded = run_afhub(
+      {"record", "-o", file, "--duration", "1", "--profile", "ros2", "--commands", "--world"}, 60s);
   ASSERT_EQ(recorded.exit_code, 0) << recorded.err;
   const RunResult check =
       run_command({"node", kChecker, file, "--jointstate", "/afhub/arm/base/joint_states"}, 120s);
@@ -256,7 +259,25 @@ TEST(Record, AsAROS2BagItsJointStatesDecodeWithAnIndependentCdrReader) {
             (std::set<std::string>{"sensor_msgs/msg/JointState", "geometry_msgs/msg/PoseStamped",
                                    "geometry_msgs/msg/TwistStamped",
                                    "geometry_msgs/msg/WrenchStamped", "rosgraph_msgs/msg/Clock"}));
-  for (const json& channel : out["channels"]) EXPECT_EQ(channel["messageEncoding"], "cdr");
+  for (const json& channel : out["channels"]) {
+    EXPECT_EQ(channel["messageEncoding"], "cdr");
+    // Every message read as Foxglove Studio reads a ROS 2 bag (its own decoders, from
+    // the schema's text), and written back by them to the same bytes.
+    EXPECT_EQ(out["ros2"]["decoded"].value(channel["topic"].get<std::string>(), 0),
+              channel["messages"].get<int>())
+        << channel["topic"];
+  }
+  EXPECT_TRUE(out["ros2"]["failed"].empty()) << out["ros2"]["failed"];
+  const json& first = out["ros2"]["first"];
+  const json& pose = first["geometry_msgs/msg/PoseStamped"];
+  EXPECT_EQ(pose["header"]["frame_id"], "world");
+  const json& q = pose["pose"]["orientation"];
+  double norm2 = 0.0;
+  for (const char* axis : {"x", "y", "z", "w"}) norm2 += std::pow(q[axis].get<double>(), 2);
+  EXPECT_NEAR(norm2, 1.0, 1e-9) << "a unit quaternion: " << q;
+  EXPECT_GT(first["rosgraph_msgs/msg/Clock"]["clock"]["sec"].get<double>() +
+                first["rosgraph_msgs/msg/Clock"]["clock"]["nanosec"].get<double>() * 1e-9,
+            0.1);
   // The first JointState: the body's joints by name, a value of each kind per joint, and
   // a stamp of simulated time.
   const json& joints = out["jointstate"];
@@ -282,6 +303,48 @@ TEST(Record, AsAROS2BagItsJointStatesDecodeWithAnIndependentCdrReader) {
   for (std::size_t j = 0; j < command["position"].size(); ++j)
     EXPECT_NEAR(command["position"][j].get<double>(), joints["position"][j].get<double>(), 0.05)
         << "joint " << j;
+}
+
+// The independent ROS 2 reader fails where Foxglove Studio would: a message longer or
+// shorter than its schema says, a schema whose text does not parse.
+TEST(Record, TheIndependentRos2ReaderRefusesMessagesItsSchemaDoesNotDescribe) {
+  afhub::testing::ModelFolder folder;
+  const std::string file = (folder.dir() / "bad_ros2.mcap").string();
+  {
+    mcap::Writer writer(file, {.profile = "ros2"});
+    const std::string clock_text = "builtin_interfaces/Time clock\n" + std::string(80, '=') +
+                                   "\nMSG: builtin_interfaces/Time\nint32 sec\nuint32 nanosec\n";
+    const std::string broken_text = "float64[ x\n";
+    const auto bytes = [](const std::string& text) {
+      return std::span(reinterpret_cast<const std::uint8_t*>(text.data()), text.size());
+    };
+    const std::uint16_t clock =
+        writer.add_schema("rosgraph_msgs/msg/Clock", "ros2msg", bytes(clock_text));
+    const std::uint16_t broken =
+        writer.add_schema("afhub_test/msg/Broken", "ros2msg", bytes(broken_text));
+    // CDR little-endian: sec 5, nanosec 7.
+    const std::vector<std::uint8_t> good{0, 1, 0, 0, 5, 0, 0, 0, 7, 0, 0, 0};
+    std::vector<std::uint8_t> longer = good;
+    longer.push_back(9);
+    const std::vector<std::uint8_t> shorter(good.begin(), good.begin() + 8);
+    const std::pair<const char*, const std::vector<std::uint8_t>*> cases[] = {
+        {"/good", &good}, {"/longer", &longer}, {"/shorter", &shorter}};
+    std::uint64_t time_ns = 1'000'000;
+    for (const auto& [topic, data] : cases)
+      writer.write({writer.add_channel(clock, topic, "cdr"), 0, time_ns, time_ns++, *data});
+    writer.write({writer.add_channel(broken, "/broken", "cdr"), 0, time_ns, time_ns, good});
+    writer.close();
+  }
+  const RunResult check = run_command({"node", kChecker, file}, 120s);
+  EXPECT_EQ(check.exit_code, 1) << check.out << check.err;
+  const json out = parse_json(check.out);
+  EXPECT_EQ(out["ros2"]["decoded"], json({{"/good", 1}}));
+  EXPECT_EQ(out["ros2"]["failed"], json({{"/longer", 1}, {"/shorter", 1}, {"/broken", 1}}));
+  EXPECT_EQ(out["ros2"]["first"]["rosgraph_msgs/msg/Clock"]["clock"],
+            json({{"sec", 5}, {"nanosec", 7}}));
+  for (const char* said : {"a message on /longer", "a message on /shorter",
+                           "afhub_test/msg/Broken (id 2) does not parse"})
+    EXPECT_TRUE(contains(check.err, said)) << said << " in\n" << check.err;
 }
 
 TEST(Record, ARecordingKilledMidWriteReadsToItsLastChunkAndRecoverIndexesIt) {

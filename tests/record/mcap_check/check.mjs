@@ -9,6 +9,8 @@
 //                 data-section CRC, footer offsets, chunk/message-index/chunk-index/summary-offset
 //                 consistency)
 //   3. indexed:   @mcap/core McapIndexedReader over a FileHandle, readMessages() over everything
+// and, in the linear pass, every CDR message under a ros2msg schema as Foxglove Studio reads
+// ROS 2 bags (ros2_decode.mjs): "ros2" in the JSON.
 //
 // Prints ONE JSON object on stdout and exits 0 when no problem was found.
 // Exits 1 (reason(s) on stderr) on any read error or problem; exits 2 on bad usage.
@@ -36,6 +38,8 @@ import { McapIndexedReader, McapStreamReader } from "@mcap/core";
 import lz4Decompress from "@foxglove/wasm-lz4";
 import * as zstd from "@foxglove/wasm-zstd";
 import { CdrReader, EncapsulationKind } from "@foxglove/cdr";
+
+import { Ros2Decoder } from "./ros2_decode.mjs";
 
 const OPCODE_NAMES = {
   0x01: "Header",
@@ -327,6 +331,7 @@ async function check(file, jointTopic) {
     let minLog, maxLog;
     let jointMessage;
     let first = true;
+    const ros2 = new Ros2Decoder(problem);
 
     const stream = new McapStreamReader({ includeChunks: true, validateCrcs: true, decompressHandlers });
     try {
@@ -365,7 +370,9 @@ async function check(file, jointTopic) {
             cs.seqs.push([rec.logTime, rec.sequence]);
             minLog = bigMin(minLog, rec.logTime);
             maxLog = bigMax(maxLog, rec.logTime);
-            if (jointTopic !== undefined && !jointMessage && channels.get(rec.channelId)?.topic === jointTopic) {
+            const channel = channels.get(rec.channelId);
+            if (channel) ros2.take(schemas.get(channel.schemaId), channel, rec.data);
+            if (jointTopic !== undefined && !jointMessage && channel?.topic === jointTopic) {
               jointMessage = { channelId: rec.channelId, data: rec.data.slice() };
             }
             break;
@@ -796,6 +803,8 @@ async function check(file, jointTopic) {
         }
       }
     }
+
+    if ([...schemas.values()].some((sc) => sc.encoding === "ros2msg")) out.ros2 = ros2.summary();
 
     out.ok = problems.length === 0;
     out.warnings = warnings;
