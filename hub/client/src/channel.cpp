@@ -94,17 +94,22 @@ void* RawWriter::loan(std::uint32_t bytes, bool* rewritten) noexcept {
 }
 
 std::int64_t RawWriter::publish(void* payload) noexcept {
+  const std::int64_t stamp_ns = monotonic_ns();
+  publish(payload, stamp_ns);
+  return stamp_ns;
+}
+
+void RawWriter::publish(void* payload, std::int64_t stamp_ns) noexcept {
   auto* header = static_cast<PayloadHeader*>(payload);
   header->layout_id = kLayoutId;
   header->kind = kind_;
   header->publisher_pid = pid_;
   header->sequence = ++sequence_;
-  const std::int64_t stamp = header->publish_stamp_ns = monotonic_ns();
+  header->publish_stamp_ns = stamp_ns;
   if (slot_kind_)
-    slot::end_update(slot_.entry->control, stamp);
+    slot::end_update(slot_.entry->control, stamp_ns);
   else
     port_->publisher.publish(payload);
-  return stamp;
 }
 
 bool RawWriter::has_readers() const noexcept {

@@ -35,7 +35,9 @@ struct PayloadHeader {
   std::uint64_t sequence{0};  // per publisher, starts at 1, +1 per publish
   std::uint64_t sim_step{0};  // state: step it describes; command: step it answers
   double sim_time_s{0.0};
-  std::int64_t publish_stamp_ns{0};  // monotonic_ns(): the same clock in every process
+  // monotonic_ns(), the same clock in every process: when the payload was published, or
+  // for a physics' body states, when the step's publishing began (one stamp a step).
+  std::int64_t publish_stamp_ns{0};
 };
 
 // The clock of every stamp and deadline in afhub: CLOCK_MONOTONIC, in nanoseconds.

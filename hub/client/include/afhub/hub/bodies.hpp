@@ -40,6 +40,9 @@ class BodyPublisher {
     return state;
   }
   void publish_state(BodyState* state) noexcept { state_.publish(state); }
+  void publish_state(BodyState* state, std::int64_t stamp_ns) noexcept {
+    state_.publish(state, stamp_ns);
+  }
   bool has_state_readers() const noexcept { return state_.raw().has_readers(); }
   // The newest command, or nullptr before the first; read in place.
   const BodyCommand* latest_command() noexcept { return command_.latest(); }

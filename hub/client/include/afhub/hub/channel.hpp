@@ -57,6 +57,9 @@ class RawWriter {
   // Stamps the header (layout, kind, pid, sequence, monotonic time) and publishes.
   // The caller sets header.sim_step and header.sim_time_s. Returns the stamp.
   std::int64_t publish(void* payload) noexcept;
+  // The same with a monotonic time read by the caller before it filled the payload:
+  // one read for many payloads published together (a physics' step).
+  void publish(void* payload, std::int64_t stamp_ns) noexcept;
 
   const ChannelId& channel() const { return channel_; }
   // Whether any reader is subscribed now (on a queue, each one costs every publish).
@@ -184,6 +187,7 @@ class Writer {
     return static_cast<T*>(chunk);
   }
   void publish(T* payload) noexcept { raw_.publish(payload); }
+  void publish(T* payload, std::int64_t stamp_ns) noexcept { raw_.publish(payload, stamp_ns); }
   RawWriter& raw() { return raw_; }
   const RawWriter& raw() const { return raw_; }
 
