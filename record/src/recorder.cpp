@@ -183,8 +183,13 @@ class Session {
       for (Recorded& recorded : recorded_) {
         if (recorded.taped_ns != 0 && now - recorded.taped_ns < kTapeFreshNs) {
           // Read from the tape; a reader that wakes the loop is still taken, or the
-          // waiter would find its update new at every wait and never sleep.
-          if (recorded.wakes) recorded.reader->latest();
+          // waiter would find its update new at every wait and never sleep. A state's
+          // reader holds its slot, a restarted physics' too: a physics tapes only the
+          // bodies whose state someone holds.
+          if (recorded.wakes)
+            recorded.reader->latest();
+          else
+            recorded.reader->hold_writers();
           continue;
         }
         const void* payload = recorded.reader->latest();

@@ -138,13 +138,43 @@ void report_step_times(benchmark::State& state, StepTimes& times) {
   state.counters["publish_p50_us"] = percentile(times.publish, 50);
 }
 
+// A recorder of `bodies` in the benchmark's process: the step tape's reader, drained
+// between steps (untimed), and a reader holding each body's state slot, as `afhub
+// record` holds those it records. The physics then copies those bodies' states, their
+// commands and the world state into the tape, which is what a recorder costs the step.
+struct TapeDrain {
+  StepTapeReader reader{world_instance()};
+  std::unique_ptr<StepTape> sample = std::make_unique<StepTape>();
+  std::vector<std::unique_ptr<LatestReader<BodyState>>> held;
+
+  explicit TapeDrain(const std::vector<BodySpec>& bodies) {
+    for (const BodySpec& body : bodies)
+      held.push_back(std::make_unique<LatestReader<BodyState>>(body_state_channel(body.channel)));
+  }
+
+  // Steps until a step's tape comes (after RouDi's discovery pass); false if none in 5 s.
+  bool connect(Simulation& sim, SimChannels& channels) {
+    return afhub::test::wait_until(
+        [&] {
+          sim.step();
+          channels.publish({});
+          for (auto& body : held) body->latest();  // holds its slot
+          return drain();
+        },
+        std::chrono::seconds(5));
+  }
+  bool drain() {
+    bool any = false;
+    while (reader.next(*sample)) any = true;
+    return any;
+  }
+};
+
 // One step of the physics alone, or the whole loop iteration of `afhub run`:
 // commands read, step, every body's state and the world state published, and the
 // display-rate chores after them, at 1 ms per step; `viewed`: with a viewer reading
 // the pose feed (which then goes out at 60 Hz, every ~17th step); `taped`: with a
-// recorder's step tape reader (the physics then copies each step's states, commands
-// and world state into the tape: what a recorder costs the step itself; the reader
-// drains it between steps, untimed).
+// recorder's step tape reader (TapeDrain).
 void BM_Step(benchmark::State& state, const std::string& file, bool publish, bool viewed,
              bool taped = false) {
   if (!have_shared_models(state)) return;
@@ -160,22 +190,9 @@ void BM_Step(benchmark::State& state, const std::string& file, bool publish, boo
                                  std::chrono::seconds(5)))
       state.SkipWithError("the viewer's reader did not connect");
   }
-  std::unique_ptr<StepTapeReader> tape;
-  const auto tape_sample = std::make_unique<StepTape>();
-  if (taped) {
-    tape = std::make_unique<StepTapeReader>(world_instance());
-    // Connected once a step's tape comes (after RouDi's discovery pass).
-    if (!afhub::test::wait_until(
-            [&] {
-              sim.step();
-              channels->publish({});
-              bool taped_one = false;
-              while (tape->next(*tape_sample)) taped_one = true;
-              return taped_one;
-            },
-            std::chrono::seconds(5)))
-      state.SkipWithError("the step tape reader did not connect");
-  }
+  std::unique_ptr<TapeDrain> tape;
+  if (taped && !(tape = std::make_unique<TapeDrain>(model.bodies))->connect(sim, *channels))
+    state.SkipWithError("the step tape reader did not connect");
   std::int64_t clock_ns = 0;
   // Each step's time as `afhub run` times it (commands in, step, states out; not the
   // display-rate chores after), for its tail: the mean hides a cost paid every 17th step.
@@ -183,9 +200,7 @@ void BM_Step(benchmark::State& state, const std::string& file, bool publish, boo
   for (auto _ : state) {
     timed_step(sim, channels.get(), times);
     if (channels) channels->publish_view(clock_ns += 1'000'000);
-    if (tape)
-      while (tape->next(*tape_sample)) {
-      }
+    if (tape) tape->drain();
   }
   state.counters["bodies"] = static_cast<double>(model.bodies.size());
   report_step_times(state, times);
@@ -239,9 +254,10 @@ BENCHMARK_CAPTURE(BM_LoopStep, four_bar_iterated, kFourBar, false)->Unit(benchma
 // Issue 30's goal: step p99 under 1 ms, publishing under 10 % of the step (the
 // published case's p50 against the physics alone's, in one run). The islands are
 // solved by two threads (physics/src/parallel_islands.hpp), or by the stepping thread
-// alone (`one_thread`): "helped" is the share of islands the helper solved.
+// alone (`one_thread`): "helped" is the share of islands the helper solved. `taped`:
+// with a recorder of that many bodies (TapeDrain), the first ones.
 void BM_StepThousandBodies(benchmark::State& state, bool publish, bool commanded,
-                           int solver_threads) {
+                           int solver_threads, std::size_t taped = 0) {
   afhub::testing::ModelFolder folder;
   Model model = load_adf_files({folder.write("arms.yaml", afhub::testing::arms_model(125, 8))});
   model.world.solver_threads = solver_threads;
@@ -253,6 +269,13 @@ void BM_StepThousandBodies(benchmark::State& state, bool publish, bool commanded
   if (commanded)
     for (const BodySpec& body : model.bodies)
       controller.push_back(std::make_unique<BodyClient>(body.channel));
+  std::unique_ptr<TapeDrain> tape;
+  if (taped > 0) {
+    const std::vector<BodySpec> recorded(
+        model.bodies.begin(), model.bodies.begin() + std::min(taped, model.bodies.size()));
+    if (!(tape = std::make_unique<TapeDrain>(recorded))->connect(sim, *channels))
+      state.SkipWithError("the step tape reader did not connect");
+  }
   StepTimes times(1 << 20);
   std::uint64_t step = 0;
   for (auto _ : state) {
@@ -262,6 +285,7 @@ void BM_StepThousandBodies(benchmark::State& state, bool publish, bool commanded
         body->publish_command(command);
       }
     timed_step(sim, channels.get(), times);
+    if (tape) tape->drain();
     ++step;
   }
   state.counters["bodies"] = static_cast<double>(model.bodies.size());
@@ -274,6 +298,10 @@ BENCHMARK_CAPTURE(BM_StepThousandBodies, physics, false, false, 2)->Unit(benchma
 BENCHMARK_CAPTURE(BM_StepThousandBodies, physics_one_thread, false, false, 1)
     ->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(BM_StepThousandBodies, published, true, false, 2)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_StepThousandBodies, published_taped, true, false, 2, 1000)
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_StepThousandBodies, published_taped_one, true, false, 2, 1)
+    ->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(BM_StepThousandBodies, published_commanded, true, true, 2)
     ->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(BM_StepThousandBodies, published_commanded_one_thread, true, true, 1)

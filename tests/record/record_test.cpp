@@ -17,6 +17,7 @@
 
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/hub_presence.hpp"
+#include "afhub/hub/step_tape.hpp"
 #include "afhub/record/mcap_reader.hpp"
 #include "afhub/record/mcap_writer.hpp"
 #include "afhub/shm_layout/body_command.hpp"
@@ -345,6 +346,61 @@ TEST(Record, TheIndependentRos2ReaderRefusesMessagesItsSchemaDoesNotDescribe) {
   for (const char* said : {"a message on /longer", "a message on /shorter",
                            "afhub_test/msg/Broken (id 2) does not parse"})
     EXPECT_TRUE(contains(check.err, said)) << said << " in\n" << check.err;
+}
+
+// The physics tapes the states of the bodies whose slot someone holds (a recorder holds
+// those it records, a controller its body), and the world state always: a recorder of
+// one body of a thousand does not make the physics copy the other 999 every step.
+TEST(Record, TheStepTapeCarriesTheBodiesSomeoneReadsAndTheWorld) {
+  SceneRun scene;  // its controller holds arm/base
+  ASSERT_TRUE(scene.ready()) << scene.logs();
+  StepTapeReader tape(world_instance());
+  const auto sample = std::make_unique<StepTape>();
+  // What the last complete step of the tape carried: each entry as "kind name".
+  auto last_step = [&] {
+    std::set<std::string> step, complete;
+    const auto give_up = std::chrono::steady_clock::now() + 5s;
+    while (complete.empty() && std::chrono::steady_clock::now() < give_up) {
+      while (tape.next(*sample)) {
+        if (sample->part == 0) step.clear();
+        for_each_tape_entry(
+            *sample, [&](PayloadKind kind, std::string_view name, const void*, std::uint32_t) {
+              step.insert(std::to_string(static_cast<int>(kind)) + " " + std::string(name));
+            });
+        if (sample->last_part) complete = step;
+      }
+      std::this_thread::sleep_for(2ms);
+    }
+    return complete;
+  };
+  const std::string state = std::to_string(static_cast<int>(PayloadKind::kBodyState)) + " ";
+  const std::string world =
+      std::to_string(static_cast<int>(PayloadKind::kWorldState)) + " " + world_instance();
+  auto states_of = [&](const std::set<std::string>& step) {
+    std::set<std::string> bodies;
+    for (const std::string& entry : step)
+      if (entry.starts_with(state)) bodies.insert(entry.substr(state.size()));
+    return bodies;
+  };
+  ASSERT_TRUE(wait_until([&] { return !last_step().empty(); }, 10s)) << "no step taped";
+  std::set<std::string> step = last_step();
+  EXPECT_EQ(states_of(step), std::set<std::string>{"afhub/arm/base"});
+  EXPECT_TRUE(step.contains(world)) << "the world state is always taped";
+  {
+    // A reader of link3's state: taped from the steps after it holds the slot.
+    LatestReader<BodyState> link3(body_state_channel("afhub/arm/link3"));
+    ASSERT_TRUE(wait_until([&] { return link3.latest() != nullptr; }, 5s));
+    EXPECT_TRUE(wait_until(
+        [&] {
+          return states_of(last_step()) ==
+                 std::set<std::string>{"afhub/arm/base", "afhub/arm/link3"};
+        },
+        5s))
+        << "link3 held but not taped";
+  }
+  EXPECT_TRUE(wait_until(
+      [&] { return states_of(last_step()) == std::set<std::string>{"afhub/arm/base"}; }, 5s))
+      << "link3 let go of but still taped";
 }
 
 TEST(Record, ARecordingKilledMidWriteReadsToItsLastChunkAndRecoverIndexesIt) {

@@ -247,6 +247,12 @@ bool RawLatestReader::grow_copies(std::uint32_t bytes) noexcept {
   return true;
 }
 
+void RawLatestReader::hold_writers() noexcept {
+  if (!slots_) return;
+  directory_->look();
+  if (directory_->generation() != bound_generation_) rebind_slots();
+}
+
 const void* RawLatestReader::latest_slot() noexcept {
   directory_->look();
   if (directory_->generation() != bound_generation_) rebind_slots();

@@ -1,5 +1,6 @@
-// StepTape: a physics' body states of one step, the commands it took for it and its
-// world state, for a reader that must see every step
+// StepTape: a physics' body states of one step (of the bodies whose state slot someone
+// holds), the commands it took for them and its world state, for a reader that must see
+// every step
 // (`afhub record`), on {"afhub", <world instance>, "step_tape"}. A state is a
 // latest-value slot: a reader that wakes a step late finds the newer state, and the one
 // before is gone. The tape is a queue of iceoryx samples instead, published after the

@@ -92,6 +92,9 @@ class RawLatestReader {
   // and unchanged until the next call. Invalid payloads are refused and counted.
   // From a slot it is this reader's checked copy.
   const void* latest() noexcept;
+  // Slot kinds: takes up a writer that came (or went) since the last look without
+  // reading anything, so that writers see this reader (has_readers()) between reads.
+  void hold_writers() noexcept;
   // Whether the last latest() call found a sample newer than the one before.
   bool updated() const { return updated_; }
   // The size in bytes of the payload latest() returned.
