@@ -254,8 +254,7 @@ void RawLatestReader::hold_writers() noexcept {
 }
 
 const void* RawLatestReader::latest_slot() noexcept {
-  directory_->look();
-  if (directory_->generation() != bound_generation_) rebind_slots();
+  hold_writers();
   if (held_slot_count_ == 0) return held_;
   // The writer that updated last; the others count as looked at (a wait then
   // sleeps until one of them updates again).

@@ -225,8 +225,8 @@ void SimChannels::publish(const WorldClock& clock) noexcept {
     state->refusal_reason = channel.refusal_reason;
     channel.publisher->publish_state(state, stamp_ns);
     // Only the bodies someone reads: a recorder holds the state slots of those it
-    // records (taping a thousand bodies' states for a recorder of one cost a seventh of
-    // the step); a body of no one's is not worth a copy.
+    // records (taping all of a thousand bodies for a recorder of one cost about 60 us of
+    // a 1.1 ms step); a body of no one's is not worth a copy.
     if (taping && channel.publisher->has_state_readers()) {
       const std::string& name = channel.soft ? sim_.model().soft_bodies[channel.index].channel
                                              : sim_.model().bodies[channel.index].channel;
