@@ -110,6 +110,42 @@ ThreadUse thread_use(Wait&& wait) {
 // channels (a futex) instead of spinning: over a 300 ms wait it uses almost no CPU,
 // where --spin polls all along (under SCHED_FIFO, starving the client it waits for).
 // An answer wakes it: the step goes ahead with no answer counted late.
+// A step's body states carry one publish stamp (one clock read a step, not one a body),
+// which grows from step to step.
+TEST(Run, AStepsStatesShareOnePublishStampThatGrowsByStep) {
+  afhub::testing::ModelFolder folder;
+  const physics::Model model = physics::load_adf_files(
+      {folder.write("balls.yaml",
+                    "bodies: [BODY a, BODY b]\nnamespace: /test/stamp/\n"
+                    "BODY a:\n  name: a\n  mass: 1\nBODY b:\n  name: b\n  mass: 1\n")});
+  physics::Simulation sim(model, 0.001);
+  physics::SimChannels channels(sim, 5.0);
+  BodyClient a(model.bodies[0].channel), b(model.bodies[1].channel);
+  auto step_stamps = [&](std::uint64_t step) -> std::pair<std::int64_t, std::int64_t> {
+    std::pair<std::int64_t, std::int64_t> stamps{0, -1};
+    wait_until(
+        [&] {
+          channels.publish({});
+          const BodyState* of_a = a.latest_state();
+          const BodyState* of_b = b.latest_state();
+          if (!of_a || !of_b || of_a->header.sim_step != step || of_b->header.sim_step != step)
+            return false;
+          stamps = {of_a->header.publish_stamp_ns, of_b->header.publish_stamp_ns};
+          return true;
+        },
+        5s);
+    return stamps;
+  };
+  sim.step();
+  const auto first = step_stamps(1);
+  EXPECT_GT(first.first, 0);
+  EXPECT_EQ(first.first, first.second);
+  sim.step();
+  const auto second = step_stamps(2);
+  EXPECT_EQ(second.first, second.second);
+  EXPECT_GT(second.first, first.first);
+}
+
 TEST(Run, LockstepWaitsAsleepUnlessSpinning) {
   afhub::testing::ModelFolder folder;
   const physics::Model model =
