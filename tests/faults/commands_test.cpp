@@ -47,6 +47,15 @@ struct ArmRun {
     return wait_until([&] { return world.latest() != nullptr; }, 10s);
   }
   const WorldState& now() { return *world.latest(); }
+  // A world state read after this call began. now() may hand back an old copy: a read
+  // that meets the physics mid-update keeps the last one (seconds old in a test that
+  // slept), so a count compared with another process's needs a newer step than that.
+  WorldState fresh() {
+    const std::uint64_t seen = now().header.sim_step;
+    EXPECT_TRUE(wait_until([&] { return now().header.sim_step > seen; }, 5s))
+        << "the world stayed at step " << seen;
+    return now();
+  }
   afhub::testing::ModelFolder folder;
   std::string log;
   std::unique_ptr<ScopedProcess> physics;
@@ -327,11 +336,13 @@ TEST(FaultsCommands, LateCommandsAreOneCountInTheWorldStatusAndTop) {
   // answered the state before the last.
   ScopedProcess controller(spawn_afhub({"ctl", "hold", "arm/base", "--rate", "500"}));
   ASSERT_TRUE(wait_until([&] { return run.now().commanded_steps > 500; }, 10s));
-  const std::uint64_t late_before = run.now().commanded_steps - run.now().answered_steps;
-  EXPECT_GT(late_before, run.now().commanded_steps / 4);
+  const WorldState before = run.fresh();
+  const std::uint64_t late_before = before.commanded_steps - before.answered_steps;
+  EXPECT_GT(late_before, before.commanded_steps / 4);
   std::this_thread::sleep_for(1500ms);  // the controller publishes its stats every second
   RunResult top = run_afhub({"top", "--json"});
-  const std::uint64_t late_after = run.now().commanded_steps - run.now().answered_steps;
+  const WorldState after = run.fresh();
+  const std::uint64_t late_after = after.commanded_steps - after.answered_steps;
   ASSERT_EQ(top.exit_code, 0) << top.err;
   const nlohmann::json loops = parse_json(top.out).at("loops");
   const nlohmann::json* loop = find_element(loops, "name", "ctl hold");
