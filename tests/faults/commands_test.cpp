@@ -47,13 +47,18 @@ struct ArmRun {
     return wait_until([&] { return world.latest() != nullptr; }, 10s);
   }
   const WorldState& now() { return *world.latest(); }
-  // A world state read after this call began. now() may hand back an old copy: a read
-  // that meets the physics mid-update keeps the last one (seconds old in a test that
-  // slept), so a count compared with another process's needs a newer step than that.
+  // A world state published after this call began. now() may hand back an old copy: a
+  // read that meets the physics mid-update keeps the last one, seconds old in a test
+  // that slept. The physics publishes every cycle, paused too.
   WorldState fresh() {
-    const std::uint64_t seen = now().header.sim_step;
-    EXPECT_TRUE(wait_until([&] { return now().header.sim_step > seen; }, 5s))
-        << "the world stayed at step " << seen;
+    world.latest();  // what came before this call
+    EXPECT_TRUE(wait_until(
+        [&] {
+          world.latest();
+          return world.updated();
+        },
+        5s))
+        << "no world state came";
     return now();
   }
   afhub::testing::ModelFolder folder;
@@ -194,16 +199,16 @@ TEST_P(WorldCommands, FromEveryWriterActOnceEachInOrder) {
   send(a, WorldAction::kPause);
   ASSERT_TRUE(wait_until([&] { return run.now().paused == 1; }, 5s));
   std::this_thread::sleep_for(50ms);
-  const std::uint64_t paused_at = run.now().header.sim_step;
+  const std::uint64_t paused_at = run.fresh().header.sim_step;
   std::this_thread::sleep_for(700ms);
-  EXPECT_EQ(run.now().header.sim_step, paused_at) << "steps asked for while running ran later";
+  EXPECT_EQ(run.fresh().header.sim_step, paused_at) << "steps asked for while running ran later";
   // Two writers' steps published back to back, within one physics cycle: both run.
   send(c, WorldAction::kStep, 5);
   send(d, WorldAction::kStep, 7);
   EXPECT_TRUE(wait_until([&] { return run.now().header.sim_step == paused_at + 12; }, 5s))
       << "stepped " << run.now().header.sim_step - paused_at << " of 12";
   std::this_thread::sleep_for(300ms);
-  EXPECT_EQ(run.now().header.sim_step, paused_at + 12);
+  EXPECT_EQ(run.fresh().header.sim_step, paused_at + 12);
   // `resume resume` from a third writer: each acts once (the world runs), then a
   // pause from the first stops it again.
   send(d, WorldAction::kResume);
@@ -317,7 +322,7 @@ TEST(FaultsCommands, APerBodyWatchdogOfTwoMillisecondsFiresForThatBodyAlone) {
     hold(base, 7);
     std::this_thread::sleep_for(10ms);
   }
-  EXPECT_GE(run.now().watchdog_expiries, 1u);
+  EXPECT_GE(run.fresh().watchdog_expiries, 1u);
   EXPECT_EQ(run.physics->stop(), 0);
   const std::string output = read_file(run.log);
   EXPECT_TRUE(contains(output, "no command for afhub/arm/link3 in 0.002 s")) << output;
