@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -16,6 +17,7 @@
 #include <fstream>
 #include <memory>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "afhub/hub/bodies.hpp"
@@ -157,6 +159,62 @@ TEST(Channel, LateJoinerGetsTheCurrentStateAtOnce) {
 
 // A reader holding a slot costs its writer nothing, subscribed or not: one that steps
 // aside still reads the slot it holds.
+// A reader meeting its writer mid-update: one whose copy is far behind the writer's last
+// whole update waits for the update in hand (a test once got a world state of 1.5 s
+// before); one that keeps up gets its copy at once.
+TEST(Channel, AReaderFarBehindWaitsForTheUpdateInHandOneKeepingUpDoesNot) {
+  BodyPublisher physics("test/behind");
+  BodyClient reader("test/behind");
+  ASSERT_TRUE(test::wait_until([&] { return reader.subscribed(); }, 2s));
+  std::uint64_t step = 0;
+  ASSERT_TRUE(publish_step(physics, ++step));
+  ASSERT_TRUE(test::wait_until([&] { return step_of(reader.latest_state()) == step; }, 2s));
+  struct Read {
+    bool began_mid, ended_mid;  // the call began, and returned, while the update went on
+    std::uint64_t step;
+  };
+  // The reader copies step `step`; `behind`: the writer publishes one more 10 ms later,
+  // unread. Then it begins an update and ends it 0.3 ms after the reader starts to read.
+  auto read_mid_update = [&](bool behind) {
+    reader.latest_state();
+    if (behind) {
+      std::this_thread::sleep_for(10ms);
+      publish_step(physics, ++step);
+    }
+    BodyState* update = physics.loan_state(0);
+    std::atomic<bool> reading{false}, finished{false};
+    std::thread writer([&] {
+      while (!reading.load()) std::this_thread::yield();
+      std::this_thread::sleep_for(300us);
+      update->header.sim_step = step + 1;
+      physics.publish_state(update);
+      finished.store(true);
+    });
+    reading.store(true);
+    Read read{};
+    read.began_mid = !finished.load();
+    read.step = step_of(reader.latest_state());
+    read.ended_mid = !finished.load();
+    writer.join();
+    ++step;
+    return read;
+  };
+  // Five tries each, as a loaded machine may delay either thread by more than 0.3 ms.
+  int waited = 0, not_held = 0;
+  for (int i = 0; i < 5; ++i) {
+    const Read read = read_mid_update(true);
+    if (read.began_mid && read.step == step) ++waited;
+    // The update in hand, or (the writer later than 2 ms) the copy before the unread one.
+    EXPECT_TRUE(read.step == step || read.step == step - 2) << read.step << " at step " << step;
+  }
+  EXPECT_GE(waited, 1) << "a reader far behind got its old copy every time";
+  for (int i = 0; i < 5; ++i) {
+    const Read read = read_mid_update(false);
+    if (read.ended_mid && read.step == step - 1) ++not_held;
+  }
+  EXPECT_GE(not_held, 1) << "a reader keeping up waited for the update every time";
+}
+
 TEST(Channel, AReaderKeepsReadingTheSlotItHoldsWhenItStepsAside) {
   BodyPublisher physics("test/step_aside");
   LatestReader<BodyState> probe(body_state_channel("test/step_aside"));

@@ -90,7 +90,10 @@ class RawLatestReader {
 
   // The newest valid payload, or nullptr before the first one. It stays valid
   // and unchanged until the next call. Invalid payloads are refused and counted.
-  // From a slot it is this reader's checked copy.
+  // From a slot it is this reader's checked copy. A slot's writer met mid-update
+  // leaves the copy before, unless that is over 5 ms older than the writer's last
+  // whole update: then the call waits up to 2 ms for the update in hand (a reader
+  // at 200 Hz or more never waits; an occasional one never gets a copy of seconds ago).
   const void* latest() noexcept;
   // Slot kinds: takes up a writer that came (or went) since the last look without
   // reading anything, so that writers see this reader (has_readers()) between reads.
@@ -131,6 +134,7 @@ class RawLatestReader {
   const void* held_ = nullptr;
   const void* retired_ = nullptr;  // replaced by held_, released on the next call
   std::uint32_t held_bytes_ = 0;
+  std::int64_t held_stamp_ns_ = 0;  // slots: the held copy's publish stamp
   bool updated_ = false;
   std::uint64_t refused_ = 0;
   std::unique_ptr<Port> port_;  // queue kinds
