@@ -4,12 +4,17 @@
 #      sine` commanding its arm, alternately without and with `afhub record --commands`
 #      running beside it (PAIRS pairs of runs, STEPS steps each): each run's step p50 and
 #      p99 from `afhub run --report`, and the ratio of the medians with and without.
+#      Then one run of as many steps as all those pairs, with the recorder started and
+#      stopped every 2 s: the steps (`afhub run --step-log`) while it records and while
+#      it does not, p50 and p99 of each. Both sides share the run, so the VM's drift from
+#      one run to the next (2x in p99) is not in their ratio.
 #   2. A thousand bodies at 1 kHz from `afhub synth --bodies 1000 --joints 8` (a stand-in
 #      for a physics, which takes about 1 ms a step for a thousand bodies on the project's
 #      2-core VM) recorded for SECONDS s: messages/s, MB/s into the file, dropped and
 #      missed updates, and the recorder's CPU (user + system time over wall time).
 #
 #   bench/record_bench.sh [SECONDS] [PAIRS] [STEPS] [BUILD_DIR]
+#       PHYSICS_ARGS="--fifo 50" (say): more options for the scene's `afhub run`
 #       (defaults: 60 s, 3 pairs, 10000 steps, build/dev)
 #
 # As root it runs in a private mount namespace (its own /tmp, /dev/shm, /run). The files
@@ -19,6 +24,7 @@ set -euo pipefail
 seconds=${1:-60}
 pairs=${2:-3}
 steps=${3:-10000}
+physics_args=${PHYSICS_ARGS:-}
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=$(cd "${4:-$root/build/dev}" && pwd)
 afhub=$build/bin/afhub
@@ -42,7 +48,7 @@ for pair in $(seq "$pairs"); do
   for recorded in 0 1; do
     report=$work/run-$pair-$recorded.json
     "$afhub" run --launch "$root/examples/models/launch.yaml" -l 0,1,2 --paused --steps "$steps" \
-      --report "$report" --no-autostart > "$work/run.log" 2>&1 &
+      --report "$report" --no-autostart $physics_args > "$work/run.log" 2>&1 &
     run=$!
     "$afhub" ctl sine arm/base --wait 30 > "$work/ctl.log" 2>&1 &
     ctl=$!
@@ -70,6 +76,55 @@ without = [float(x) for x in sys.argv[1].split()]
 with_ = [float(x) for x in sys.argv[2].split()]
 a, b = statistics.median(without), statistics.median(with_)
 print(f"median step p99: {a:.1f} us without, {b:.1f} us with the recorder: {b / a:.3f}x")
+PY
+
+toggle_steps=$((2 * pairs * steps))
+echo "== the example scene at 1 kHz, one run of $toggle_steps steps, the recorder on and off every 2 s"
+# CLOCK_MONOTONIC (the step log's clock) from bash's own clock, with no process started
+# inside the windows: the offset between the two, read once.
+offset_ns=$(python3 -c 'import time; print(time.time_ns() - time.monotonic_ns())')
+monotonic_ns() { echo $((${EPOCHREALTIME/./} * 1000 - offset_ns)); }
+"$afhub" run --launch "$root/examples/models/launch.yaml" -l 0,1,2 --paused --steps "$toggle_steps" \
+  --step-log "$work/steps.log" --no-autostart $physics_args > "$work/run.log" 2>&1 &
+run=$!
+"$afhub" ctl sine arm/base --wait 30 > "$work/ctl.log" 2>&1 &
+ctl=$!
+sleep 2
+"$afhub" world resume > /dev/null
+: > "$work/windows.txt"
+while kill -0 "$run" 2> /dev/null; do
+  on=$(monotonic_ns)
+  "$afhub" record -o "$work/toggle.mcap" --commands > "$work/toggle.log" 2>&1 &
+  recorder=$!
+  sleep 2
+  off=$(monotonic_ns)
+  kill -INT "$recorder" && wait "$recorder" || true
+  echo "$on $off $(monotonic_ns)" >> "$work/windows.txt"  # started, stopped, gone
+  sleep 2
+done
+wait "$run" || true
+kill "$ctl" 2> /dev/null || true
+wait "$ctl" 2> /dev/null || true
+python3 - "$work/steps.log" "$work/windows.txt" <<'PY'
+import sys
+steps = [tuple(map(float, line.split())) for line in open(sys.argv[1]).readlines()[1:]]
+windows = [tuple(map(int, line.split())) for line in open(sys.argv[2]) if line.strip()]
+# Recording: from 0.5 s after the recorder started (it has joined) until it was stopped;
+# not recording: from 0.3 s after it exited (its file closed) until the next start.
+on, off = [], []
+for i, (start, stop, gone) in enumerate(windows):
+    next_start = windows[i + 1][0] if i + 1 < len(windows) else float("inf")
+    on += [d for t, d in steps if start + 5e8 <= t <= stop]
+    off += [d for t, d in steps if gone + 3e8 <= t <= next_start]
+def percentile(values, q):
+    ordered = sorted(values)
+    return ordered[min(len(ordered) - 1, int(q * len(ordered)))]
+if not on or not off:
+    sys.exit("record_bench.sh: no steps in one of the windows")
+a50, a99, b50, b99 = percentile(off, .5), percentile(off, .99), percentile(on, .5), percentile(on, .99)
+print(f"not recording: {len(off)} steps, p50 {a50:.1f} us, p99 {a99:.1f} us")
+print(f"recording:     {len(on)} steps, p50 {b50:.1f} us, p99 {b99:.1f} us")
+print(f"step p99 with the recorder: {b99 / a99:.3f}x, p50 {b50 / a50:.3f}x ({len(windows)} windows)")
 PY
 
 echo "== a thousand bodies at 1 kHz (afhub synth, 8 joints: 1184-byte states), recorded for $seconds s"
