@@ -161,9 +161,21 @@ at_idle_priority() {
   chrt --idle -p 0 "$BASHPID" >/dev/null
   "$@"
 }
+# descendants PID: the pids of its children, theirs, and so on.
+descendants() {
+  local child
+  for child in $(cat /proc/"$1"/task/*/children 2>/dev/null); do
+    echo "$child"
+    descendants "$child"
+  done
+}
 print_phases() {
   local status=$?
-  [ -n "$BACKGROUND_PID" ] && kill "$BACKGROUND_PID" 2>/dev/null
+  # A phase that failed leaves none running beside it: the background one goes, with the
+  # build or tests it started (listed first, as killing it orphans them).
+  if [ -n "$BACKGROUND_PID" ]; then
+    kill $(descendants "$BACKGROUND_PID") "$BACKGROUND_PID" 2>/dev/null || true
+  fi
   [ ${#PHASES[@]} -gt 0 ] && printf 'run.sh: %s\n' "${PHASES[@]}" "$(printf '%-16s %4d s' total $SECONDS)"
   exit $status
 }
