@@ -120,7 +120,8 @@ def percentile(values, q):
     ordered = sorted(values)
     return ordered[min(len(ordered) - 1, int(q * len(ordered)))]
 if not on or not off:
-    sys.exit("record_bench.sh: no steps in one of the windows")
+    print("no steps in one of the windows: a longer run is needed (PAIRS x STEPS)")
+    sys.exit(0)
 a50, a99, b50, b99 = percentile(off, .5), percentile(off, .99), percentile(on, .5), percentile(on, .99)
 print(f"not recording: {len(off)} steps, p50 {a50:.1f} us, p99 {a99:.1f} us")
 print(f"recording:     {len(on)} steps, p50 {b50:.1f} us, p99 {b99:.1f} us")

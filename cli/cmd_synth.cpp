@@ -75,8 +75,8 @@ void step_body(SyntheticBody& body, std::size_t index, double t, double dt) {
 }
 
 // Returns the state published (this process's own slot), or nullptr when there was no room.
-const BodyState* publish_body(SyntheticBody& body, std::size_t index, std::uint64_t step,
-                              double t) {
+const BodyState* publish_body(SyntheticBody& body, std::size_t index, std::uint64_t step, double t,
+                              std::int64_t stamp_ns) {
   BodyState* state = body.channel->loan_state(static_cast<std::uint32_t>(body.joints.size()));
   if (!state) return nullptr;
   const double radius = 0.1 * static_cast<double>(index + 1);
@@ -95,7 +95,7 @@ const BodyState* publish_body(SyntheticBody& body, std::size_t index, std::uint6
     state->joints[j].position = body.joints[j].position;
     state->joints[j].velocity = body.joints[j].velocity;
   }
-  body.channel->publish_state(state);
+  body.channel->publish_state(state, stamp_ns);
   return state;
 }
 
@@ -165,10 +165,13 @@ int run_synth(const SynthOptions& options) {
     const bool stepping = control.take_step();
     const double t = static_cast<double>(step) * dt;
     const bool taping = stepping && tape.begin(step, t);
+    // As the physics: one stamp for the step's states, and on the tape the bodies
+    // someone reads.
+    const std::int64_t stamp_ns = monotonic_ns();
     for (std::size_t i = 0; i < bodies.size(); ++i) {
       if (stepping) step_body(bodies[i], i, t, dt);
-      const BodyState* state = publish_body(bodies[i], i, step, t);
-      if (state && taping)
+      const BodyState* state = publish_body(bodies[i], i, step, t, stamp_ns);
+      if (state && taping && bodies[i].channel->has_state_readers())
         tape.add(PayloadKind::kBodyState, channels[i], state,
                  static_cast<std::uint32_t>(body_state_bytes(options.joints)));
     }
