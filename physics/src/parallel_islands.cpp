@@ -67,15 +67,23 @@ void ParallelIslands::solve(ConstraintSolver& own, const std::vector<Island>& is
   }
   const std::uint32_t job = job_.load(std::memory_order_relaxed) + 1;
   solved_.store(0, std::memory_order_relaxed);
-  ticket_.store((std::uint64_t{job} << (2 * kCountBits)) | (std::uint64_t(count) << kCountBits),
+  // Front: the next island from the start (this thread's); back: one past the last
+  // left from the end (the helper's). Each thread tends to get the same islands every
+  // step, whose joints and solver data stay in its cache.
+  ticket_.store((std::uint64_t{job} << (2 * kCountBits)) | (std::uint64_t(count)),
                 std::memory_order_release);
   job_.store(job, std::memory_order_release);
   job_.notify_one();
+  std::uint64_t ticket = ticket_.load(std::memory_order_acquire);
   for (;;) {
-    const std::uint64_t taken = ticket_.fetch_add(1, std::memory_order_acq_rel) & kFieldMask;
-    if (taken >= static_cast<std::uint64_t>(count)) break;
-    solve_one(own, static_cast<int>(taken));
+    const std::uint64_t front = (ticket >> kCountBits) & kFieldMask, back = ticket & kFieldMask;
+    if (front >= back) break;
+    if (!ticket_.compare_exchange_weak(ticket, ticket + (std::uint64_t{1} << kCountBits),
+                                       std::memory_order_acq_rel))
+      continue;
+    solve_one(own, static_cast<int>(front));
     solved_.fetch_add(1, std::memory_order_release);
+    ticket = ticket_.load(std::memory_order_acquire);
   }
   // Only the island the helper is in the middle of, if any, is left. Should the
   // helper have been moved onto this thread's CPU, spinning would keep it off: yield.
@@ -97,12 +105,11 @@ void ParallelIslands::help() noexcept {
     seen = job_.load(std::memory_order_acquire);
     std::uint64_t ticket = ticket_.load(std::memory_order_acquire);
     for (;;) {
-      const std::uint64_t next = ticket & kFieldMask;
-      const std::uint64_t count = (ticket >> kCountBits) & kFieldMask;
+      const std::uint64_t front = (ticket >> kCountBits) & kFieldMask, back = ticket & kFieldMask;
       // Another job's ticket (a later one: this wake was late), or none left.
-      if ((ticket >> (2 * kCountBits)) != (seen & kJobMask) || next >= count) break;
-      if (ticket_.compare_exchange_weak(ticket, ticket + 1, std::memory_order_acq_rel)) {
-        solve_one(solver_, static_cast<int>(next));
+      if ((ticket >> (2 * kCountBits)) != (seen & kJobMask) || front >= back) break;
+      if (ticket_.compare_exchange_weak(ticket, ticket - 1, std::memory_order_acq_rel)) {
+        solve_one(solver_, static_cast<int>(back - 1));
         helped_.fetch_add(1, std::memory_order_relaxed);
         solved_.fetch_add(1, std::memory_order_release);
         ticket = ticket_.load(std::memory_order_acquire);

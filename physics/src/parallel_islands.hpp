@@ -10,12 +10,14 @@
 // so an island's result is the same whichever thread solves it: the step is
 // bit-identical to solving them one after another.
 //
-// The two threads take islands from one counter, so the stepping thread never waits
-// for a helper that wakes late (a sleeping vCPU takes tens of microseconds): it waits
-// only for the island the helper is in the middle of. The helper runs under the
-// stepping thread's scheduling policy and priority, on the CPUs it may run on; with
-// one CPU allowed (`afhub run --cpu`), or the helper refused that priority, the
-// stepping thread solves everything itself.
+// The two threads take islands from the two ends of one list, so the stepping thread
+// never waits for a helper that wakes late (a sleeping vCPU took 80 to 100 us on the
+// project's VM): it waits only for the island the helper is in the middle of. From the
+// ends, each thread tends to solve the same islands every step, whose joints stay in
+// its cache (0.94x the step of one shared counter, median of 7 interleaved rounds).
+// The helper runs under the stepping thread's scheduling policy and priority, on the
+// CPUs it may run on; with one CPU allowed (`afhub run --cpu`), or the helper refused
+// that priority, the stepping thread solves everything itself.
 #pragma once
 
 #include <sched.h>
@@ -63,8 +65,9 @@ class ParallelIslands {
   bool follow_stepping_thread() noexcept;
 
   // A job's islands are taken one at a time from `ticket_`: its job number (the top 24
-  // bits), its island count (20 bits) and the next island to take (20 bits), in one
-  // word, so that a late helper can never take an island of a job that has ended.
+  // bits), the next island from the start (20 bits, the stepping thread's) and one past
+  // the last left from the end (20 bits, the helper's), in one word, so that a late
+  // helper can never take an island of a job that has ended.
   std::atomic<std::uint64_t> ticket_{0};
   std::atomic<std::uint32_t> job_{0};  // the job's number; the helper sleeps on it
   std::atomic<int> solved_{0};         // islands of the job solved
