@@ -74,7 +74,9 @@ install_mcap_check() {
   if ! cmp -s "$source/package-lock.json" "$target/package-lock.json" || [ ! -d "$target/node_modules" ]; then
     mkdir -p "$target"
     cp "$source/package.json" "$source/package-lock.json" "$target/"
-    (cd "$target" && npm ci --no-audit --no-fund --loglevel=error)
+    # Its lock file stays only beside a whole install: a failed one is tried again.
+    (cd "$target" && npm ci --no-audit --no-fund --loglevel=error) ||
+      { rm -f "$target/package-lock.json"; return 1; }
   fi
   cp "$source"/*.mjs "$target/"  # beside its node_modules, where node resolves imports
 }
@@ -129,9 +131,14 @@ phase() {
   "$@"
   PHASES+=("$(printf '%-16s %4d s' "$name" $((SECONDS - start)))")
 }
-# background_phase NAME LOG COMMAND...: the same, started in the background with its
-# output in LOG; `finish_background_phase` waits for it, and shows LOG if it failed.
+# background_phase [--stoppable] NAME LOG COMMAND...: the same, started in the
+# background with its output in LOG; `finish_background_phase` waits for it, and shows
+# LOG if it failed. Should another phase fail meanwhile, a stoppable one (a build) is
+# ended at once with what it started; any other is waited for (an install ended midway
+# would leave dpkg or node_modules half done).
 background_phase() {
+  BACKGROUND_STOPPABLE=""
+  [ "$1" = "--stoppable" ] && BACKGROUND_STOPPABLE=1 && shift
   local name=$1 log=$2
   shift 2
   BACKGROUND_NAME=$name BACKGROUND_LOG=$log
@@ -153,7 +160,7 @@ finish_background_phase() {
   fi
   PHASES+=("$(printf '%-16s %4d s (beside the phases before it)' "$BACKGROUND_NAME" "$(cat "$BACKGROUND_LOG.seconds")")")
 }
-BACKGROUND_PID=""
+BACKGROUND_PID="" BACKGROUND_STOPPABLE=""
 APT_UPDATED=""
 # at_idle_priority COMMAND...: runs it only on CPU time nothing else wants (SCHED_IDLE,
 # inherited by its children): a test waking for its next 1 kHz period preempts it at once.
@@ -171,10 +178,12 @@ descendants() {
 }
 print_phases() {
   local status=$?
-  # A phase that failed leaves none running beside it: the background one goes, with the
-  # build or tests it started (listed first, as killing it orphans them).
-  if [ -n "$BACKGROUND_PID" ]; then
+  # A phase that failed leaves none running beside it: a stoppable background one goes
+  # with what it started (listed first, as killing it orphans them).
+  if [ -n "$BACKGROUND_PID" ] && [ -n "$BACKGROUND_STOPPABLE" ]; then
     kill $(descendants "$BACKGROUND_PID") "$BACKGROUND_PID" 2>/dev/null || true
+  elif [ -n "$BACKGROUND_PID" ]; then
+    wait "$BACKGROUND_PID" 2>/dev/null || true
   fi
   [ ${#PHASES[@]} -gt 0 ] && printf 'run.sh: %s\n' "${PHASES[@]}" "$(printf '%-16s %4d s' total $SECONDS)"
   exit $status
@@ -208,7 +217,7 @@ case "${1:-}" in
     # never delays them (beside the real-time tests, even at idle priority, it once made
     # half of them miss their bounds: docs/testing.md).
     phase real-time-tests run_tests build/release "$SLOTS" -L real-time
-    background_phase sanitize-build build/sanitize-build.log \
+    background_phase --stoppable sanitize-build build/sanitize-build.log \
       at_idle_priority build "${SANITIZE[@]}" -- sanitize_selection
     phase tests run_tests build/release "$SLOTS" -L integration -LE real-time
     finish_background_phase

@@ -83,7 +83,7 @@ echo "== the example scene at 1 kHz, one run of $toggle_steps steps, the recorde
 # CLOCK_MONOTONIC (the step log's clock) from bash's own clock, with no process started
 # inside the windows: the offset between the two, read once.
 offset_ns=$(python3 -c 'import time; print(time.time_ns() - time.monotonic_ns())')
-monotonic_ns() { echo $((${EPOCHREALTIME/./} * 1000 - offset_ns)); }
+monotonic_ns() { echo $((${EPOCHREALTIME//[!0-9]/} * 1000 - offset_ns)); }
 "$afhub" run --launch "$root/examples/models/launch.yaml" -l 0,1,2 --paused --steps "$toggle_steps" \
   --step-log "$work/steps.log" --no-autostart $physics_args > "$work/run.log" 2>&1 &
 run=$!
@@ -102,7 +102,7 @@ while kill -0 "$run" 2> /dev/null; do
   echo "$on $off $(monotonic_ns)" >> "$work/windows.txt"  # started, stopped, gone
   sleep 2
 done
-wait "$run" || true
+wait "$run"
 kill "$ctl" 2> /dev/null || true
 wait "$ctl" 2> /dev/null || true
 python3 - "$work/steps.log" "$work/windows.txt" <<'PY'

@@ -11,7 +11,7 @@
 // bit-identical to solving them one after another.
 //
 // The two threads take islands from the two ends of one list, so the stepping thread
-// never waits for a helper that wakes late (a sleeping vCPU took 80 to 100 us on the
+// never waits for a helper that wakes late (a sleeping vCPU took 80 to 110 us on the
 // project's VM): it waits only for the island the helper is in the middle of. From the
 // ends, each thread tends to solve the same islands every step, whose joints stay in
 // its cache (0.94x the step of one shared counter, median of 7 interleaved rounds).

@@ -157,11 +157,9 @@ TEST(Channel, LateJoinerGetsTheCurrentStateAtOnce) {
   EXPECT_EQ(step_of(late.latest_state()), 8u);
 }
 
-// A reader holding a slot costs its writer nothing, subscribed or not: one that steps
-// aside still reads the slot it holds.
-// A reader meeting its writer mid-update: one whose copy is far behind the writer's last
-// whole update waits for the update in hand (a test once got a world state of 1.5 s
-// before); one that keeps up gets its copy at once.
+// A state reader meeting its writer mid-update: one whose copy is far behind the
+// writer's last whole update waits for the update in hand (a test once got a world state
+// of 1.5 s before); one that keeps up gets its copy at once.
 TEST(Channel, AReaderFarBehindWaitsForTheUpdateInHandOneKeepingUpDoesNot) {
   BodyPublisher physics("test/behind");
   BodyClient reader("test/behind");
@@ -215,6 +213,8 @@ TEST(Channel, AReaderFarBehindWaitsForTheUpdateInHandOneKeepingUpDoesNot) {
   EXPECT_GE(not_held, 1) << "a reader keeping up waited for the update every time";
 }
 
+// A reader holding a slot costs its writer nothing, subscribed or not: one that steps
+// aside still reads the slot it holds.
 TEST(Channel, AReaderKeepsReadingTheSlotItHoldsWhenItStepsAside) {
   BodyPublisher physics("test/step_aside");
   LatestReader<BodyState> probe(body_state_channel("test/step_aside"));
@@ -282,7 +282,8 @@ TEST(Channel, TheNewestCommandOfSeveralWritersWins) {
 // A writer SIGKILLed in the middle of updating its slots (tests/support/
 // torn_slot_writer.cpp: a command to synth/body0, a state of torn/body) leaves them
 // torn: readers keep the last whole update, never the half-written one, without a
-// lock to repair or a wait; a new writer's slot is taken at once.
+// lock to repair (a state reader far behind waits for it once, 2 ms); a new writer's
+// slot is taken at once.
 TEST(Channel, AWriterKilledMidUpdateLeavesATornSlotThatReadersSkip) {
   BodyPublisher physics("synth/body0");
   BodyClient reader("torn/body");

@@ -36,13 +36,17 @@ void require_fits(const ChannelId& channel) {
                   "' must have 1 to 100 characters");
 }
 
-// A slot reader that meets its writer mid-update keeps its last copy, unless that copy
-// is this much older than the writer's last whole update: then it waits for the update
-// in hand, up to kTornWaitNs. A reader at 200 Hz or more never waits; one that looks
-// now and then never gets a copy of seconds ago (a writer preempted mid-update on a
-// loaded machine gave a test the world state of 1.5 s before).
+// A state reader's copy this much older than its writer's last whole update, and the
+// writer met mid-update: the update in hand is waited for, up to kTornWaitNs (see
+// RawLatestReader::latest(); a writer preempted mid-update on a loaded machine once gave
+// a test the world state of 1.5 s before).
 constexpr std::int64_t kStaleCopyNs = 5'000'000;
 constexpr std::int64_t kTornWaitNs = 2'000'000;
+
+bool is_state_kind(PayloadKind kind) {
+  return kind == PayloadKind::kBodyState || kind == PayloadKind::kWorldState ||
+         kind == PayloadKind::kScenePoses;
+}
 
 // later - earlier > limit, for any two stamps (a foreign writer's may be anything).
 bool apart_by_more_than(std::int64_t later, std::int64_t earlier, std::int64_t limit) noexcept {
@@ -142,7 +146,10 @@ RawLatestReader::Port::Port(const ChannelId& channel)
       }()) {}
 
 RawLatestReader::RawLatestReader(const ChannelId& channel, PayloadKind kind)
-    : channel_(channel), kind_(kind), slots_(is_slot_kind(kind)) {
+    : channel_(channel),
+      kind_(kind),
+      slots_(is_slot_kind(kind)),
+      waits_if_behind_(is_state_kind(kind)) {
   require_fits(channel);
   if (slots_) {
     directory_ = &slot_blocks::directory(kind);
@@ -295,7 +302,7 @@ const void* RawLatestReader::latest_slot() noexcept {
   slot::Read read =
       slot::read(control, slot.payload, slot.capacity, spare_.get(), observed_[newest], bytes);
   // Met mid-update for the first time (a writer killed in it is waited for once).
-  if (read == slot::Read::kTorn && observed_[newest] != seen &&
+  if (read == slot::Read::kTorn && waits_if_behind_ && observed_[newest] != seen &&
       apart_by_more_than(control.stamp_ns.load(std::memory_order_acquire), held_stamp_ns_,
                          kStaleCopyNs)) {
     const slot::Watch watch{&control, observed_[newest]};

@@ -90,10 +90,14 @@ class RawLatestReader {
 
   // The newest valid payload, or nullptr before the first one. It stays valid
   // and unchanged until the next call. Invalid payloads are refused and counted.
-  // From a slot it is this reader's checked copy. A slot's writer met mid-update
-  // leaves the copy before, unless that is over 5 ms older than the writer's last
-  // whole update: then the call waits up to 2 ms for the update in hand (a reader
-  // at 200 Hz or more never waits; an occasional one never gets a copy of seconds ago).
+  // From a slot it is this reader's checked copy. A writer met mid-update leaves the
+  // copy before, with one exception: a reader of states (bodies', the world's, the
+  // scene's poses: the physics writes them) whose copy is over 5 ms older than the
+  // writer's last whole update, one that missed the updates of 5 ms, waits for the
+  // update in hand, up to 2 ms, once per update met; so a reader that looks now and
+  // then does not get a copy of seconds ago unless the writer stays in its update
+  // longer. A reader that keeps up never waits, and neither does one of commands (the
+  // physics, which must not wait on a writer of lower priority).
   const void* latest() noexcept;
   // Slot kinds: takes up a writer that came (or went) since the last look without
   // reading anything, so that writers see this reader (has_readers()) between reads.
@@ -130,7 +134,8 @@ class RawLatestReader {
                       const char* problem) noexcept;
   ChannelId channel_;
   PayloadKind kind_;
-  bool slots_;  // is_slot_kind(kind_)
+  bool slots_;            // is_slot_kind(kind_)
+  bool waits_if_behind_;  // a state kind (see latest())
   const void* held_ = nullptr;
   const void* retired_ = nullptr;  // replaced by held_, released on the next call
   std::uint32_t held_bytes_ = 0;
