@@ -27,7 +27,7 @@ sleep 0.5
 phase failing false
 SCRIPT
   rm -f "$scratch/started"
-  bash "$scratch/phases.sh" > "$scratch/out.log" 2>&1
+  (cd "$scratch" && bash phases.sh > out.log 2>&1)  # whatever it writes, it writes there
   local exit_code=$?
   # The job touches "started" first: without it, run.sh's functions were not taken.
   if [ $exit_code -eq 0 ] || [ ! -e "$scratch/started" ]; then

@@ -49,7 +49,8 @@ struct ArmRun {
   const WorldState& now() { return *world.latest(); }
   // A world state published after this call began. now() may hand back an old copy: a
   // read that meets the physics mid-update keeps the last one, seconds old in a test
-  // that slept. The physics publishes every cycle, paused too.
+  // that slept, when the physics stays in its update longer than a reader waits (2 ms).
+  // The physics publishes every cycle, paused too.
   WorldState fresh() {
     world.latest();  // what came before this call
     EXPECT_TRUE(wait_until(
