@@ -7,7 +7,9 @@
 #      Then one run of as many steps as all those pairs, with the recorder started and
 #      stopped every 2 s: the steps (`afhub run --step-log`) while it records and while
 #      it does not, p50 and p99 of each. Both sides share the run, so the VM's drift from
-#      one run to the next (2x in p99) is not in their ratio.
+#      one run to the next (2x in p99) is not in their ratio. Then window by window: each
+#      recording window's p99 over the next window's without, and, as the measure's own
+#      noise, each window's without over its neighbour's without (medians, quartiles).
 #   2. A thousand bodies at 1 kHz from `afhub synth --bodies 1000 --joints 8` (a stand-in
 #      for a physics, which takes about 1 ms a step for a thousand bodies on the project's
 #      2-core VM) recorded for SECONDS s: messages/s, MB/s into the file, dropped and
@@ -106,7 +108,7 @@ wait "$run"
 kill "$ctl" 2> /dev/null || true
 wait "$ctl" 2> /dev/null || true
 python3 - "$work/steps.log" "$work/windows.txt" <<'PY'
-import sys
+import statistics, sys
 steps = [tuple(map(float, line.split())) for line in open(sys.argv[1]).readlines()[1:]]
 windows = [tuple(map(int, line.split())) for line in open(sys.argv[2]) if line.strip()]
 # Recording: from 0.5 s after the recorder started (it has joined) until it was stopped;
@@ -114,18 +116,31 @@ windows = [tuple(map(int, line.split())) for line in open(sys.argv[2]) if line.s
 on, off = [], []
 for i, (start, stop, gone) in enumerate(windows):
     next_start = windows[i + 1][0] if i + 1 < len(windows) else float("inf")
-    on += [d for t, d in steps if start + 5e8 <= t <= stop]
-    off += [d for t, d in steps if gone + 3e8 <= t <= next_start]
+    on.append([d for t, d in steps if start + 5e8 <= t <= stop])
+    off.append([d for t, d in steps if gone + 3e8 <= t <= next_start])
+on, off = [w for w in on if w], [w for w in off if w]
 def percentile(values, q):
     ordered = sorted(values)
     return ordered[min(len(ordered) - 1, int(q * len(ordered)))]
-if not on or not off:
-    print("no steps in one of the windows: a longer run is needed (PAIRS x STEPS)")
+if len(on) < 4 or len(off) < 4:
+    print("too few windows: a longer run is needed (PAIRS x STEPS)")
     sys.exit(0)
-a50, a99, b50, b99 = percentile(off, .5), percentile(off, .99), percentile(on, .5), percentile(on, .99)
-print(f"not recording: {len(off)} steps, p50 {a50:.1f} us, p99 {a99:.1f} us")
-print(f"recording:     {len(on)} steps, p50 {b50:.1f} us, p99 {b99:.1f} us")
+every_on, every_off = sum(on, []), sum(off, [])
+a50, a99 = percentile(every_off, .5), percentile(every_off, .99)
+b50, b99 = percentile(every_on, .5), percentile(every_on, .99)
+print(f"not recording: {len(every_off)} steps, p50 {a50:.1f} us, p99 {a99:.1f} us")
+print(f"recording:     {len(every_on)} steps, p50 {b50:.1f} us, p99 {b99:.1f} us")
 print(f"step p99 with the recorder: {b99 / a99:.3f}x, p50 {b50 / a50:.3f}x ({len(windows)} windows)")
+# Each window's p99 against its neighbour's, so that a burst of the VM's noise weighs
+# one window, not the pooled p99; the same between neighbouring windows without the
+# recorder is the noise of this measure, in the same run.
+def ratios(first, second):
+    return [percentile(x, .99) / percentile(y, .99) for x, y in zip(first, second)]
+def summary(values):
+    q = statistics.quantiles(values, n=4)
+    return f"median {statistics.median(values):.3f}x (quartiles {q[0]:.3f} to {q[2]:.3f}, {len(values)} pairs)"
+print("window by window, p99 recording / not (the window after):", summary(ratios(on, off)))
+print("window by window, p99 not / not (the next pair's), the noise:", summary(ratios(off[1::2], off[0::2])))
 PY
 
 echo "== a thousand bodies at 1 kHz (afhub synth, 8 joints: 1184-byte states), recorded for $seconds s"

@@ -229,19 +229,33 @@ void BM_LoopStep(benchmark::State& state, const std::string& file, bool direct) 
 // The example scene (`afhub run --launch examples/models/launch.yaml -l 0,1,2`: a
 // 7-joint arm, the remote-centre-of-motion arm's loops, a gripper, the floor) stepped
 // with its islands of joints solved directly and iterated, in one run.
-void BM_ExampleSceneStep(benchmark::State& state, bool direct) {
+void BM_ExampleSceneStep(benchmark::State& state, bool direct, bool publish = false,
+                         bool taped = false) {
   SceneRequest request;
   request.launch_file = AFHUB_EXAMPLE_MODELS "/launch.yaml";
   request.launch_indices = {0, 1, 2};
   Model model = load_scene(request);
   model.world.direct_solve = direct;
   Simulation sim(model, 0.001);
+  std::unique_ptr<SimChannels> channels;
+  if (publish) channels = std::make_unique<SimChannels>(sim, 0.5);
+  std::unique_ptr<TapeDrain> tape;
+  if (taped && !(tape = std::make_unique<TapeDrain>(model.bodies))->connect(sim, *channels))
+    state.SkipWithError("the step tape reader did not connect");
   StepTimes times(1 << 22);
-  for (auto _ : state) timed_step(sim, nullptr, times);
+  for (auto _ : state) {
+    timed_step(sim, channels.get(), times);
+    if (tape) tape->drain();
+  }
   report_step_times(state, times);
 }
 BENCHMARK_CAPTURE(BM_ExampleSceneStep, direct, true)->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(BM_ExampleSceneStep, iterated, false)->Unit(benchmark::kMicrosecond);
+// What `bench/record_bench.sh` measures across processes, in one: the scene's states
+// published, and taped for a recorder of all its bodies.
+BENCHMARK_CAPTURE(BM_ExampleSceneStep, published, true, true)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_ExampleSceneStep, published_taped, true, true, true)
+    ->Unit(benchmark::kMicrosecond);
 
 BENCHMARK_CAPTURE(BM_LoopStep, ecm_direct, kEcm, true)->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(BM_LoopStep, ecm_iterated, kEcm, false)->Unit(benchmark::kMicrosecond);
