@@ -234,7 +234,7 @@ class Session {
       if (check_payload(payload, bytes, kind) != PayloadError::kNone) return;
       Recorded& recorded = recorded_[index];
       recorded.taped_ns = now_ns;
-      sample(recorded, payload, bytes, now_ns);
+      sample(recorded, payload, bytes, now_ns, true);
     });
   }
 
@@ -271,9 +271,9 @@ class Session {
 
   // Copies a new sample into the buffer, or counts it dropped when the buffer is full.
   // Its log time is when it was read (`now_ns`): the file's order, which play follows;
-  // its publish time the writer's stamp.
-  void sample(Recorded& recorded, const void* payload, std::uint32_t bytes,
-              std::int64_t now_ns) noexcept {
+  // its publish time the writer's stamp. `taped`: it came from a physics' step tape.
+  void sample(Recorded& recorded, const void* payload, std::uint32_t bytes, std::int64_t now_ns,
+              bool taped = false) noexcept {
     PayloadHeader header;
     std::memcpy(&header, payload, sizeof header);  // checked by the reader: at least a header
     const std::uint64_t key = recorded.per_step ? header.sim_step : header.sequence;
@@ -302,7 +302,9 @@ class Session {
       }
       ++dropped_;
     }
-    if (same_writer && key > recorded.last + 1) missed_ += key - recorded.last - 1;
+    if (same_writer && key > recorded.last + 1)
+      (taped && recorded.kind == PayloadKind::kBodyCommand ? replaced_ : missed_) +=
+          key - recorded.last - 1;
     recorded.seen = true;
     recorded.publisher_pid = header.publisher_pid;
     recorded.last = key;
@@ -532,6 +534,7 @@ class Session {
     p.file_bytes = file_bytes_;
     p.dropped = dropped_;
     p.missed = missed_;
+    p.replaced = replaced_;
     p.buffered_bytes = queue_.waiting_bytes();
     return p;
   }
@@ -562,7 +565,7 @@ class Session {
   std::exception_ptr discover_error_;
   std::uint16_t next_channel_id_ = 1;
   std::atomic<std::int64_t> first_sample_ns_{0};
-  std::atomic<std::uint64_t> dropped_{0}, missed_{0}, channel_count_{0};
+  std::atomic<std::uint64_t> dropped_{0}, missed_{0}, replaced_{0}, channel_count_{0};
 
   // Between the threads.
   std::mutex writing_mutex_;  // held while the file is written

@@ -40,6 +40,9 @@ struct RecordProgress {
   // Updates published but never read, found by their steps (states) or sequence numbers
   // (commands, devices): the reading loop slept through them.
   std::uint64_t missed = 0;
+  // Commands a controller replaced before the physics took them (gaps in the commands
+  // its step tape brings): they never acted, and no recorder could have read them there.
+  std::uint64_t replaced = 0;
   std::uint64_t buffered_bytes = 0;
 };
 
