@@ -41,15 +41,14 @@ bool may_use_fifo(int priority) {
 
 std::string progress_line(const mcap::RecordProgress& p, double mb_per_s) {
   char line[200];
-  std::snprintf(line, sizeof line,
-                "recorded %.1f s  %llu channels  %llu messages  %.1f MB  %.1f MB/s  dropped %llu  "
-                "missed %llu  commands replaced %llu",
-                p.seconds, static_cast<unsigned long long>(p.channels),
-                static_cast<unsigned long long>(p.messages),
-                static_cast<double>(p.file_bytes) / 1e6, mb_per_s,
-                static_cast<unsigned long long>(p.dropped),
-                static_cast<unsigned long long>(p.missed),
-                static_cast<unsigned long long>(p.replaced));
+  std::snprintf(
+      line, sizeof line,
+      "recorded %.1f s  %llu channels  %llu messages  %.1f MB  %.1f MB/s  dropped %llu  "
+      "missed %llu  commands replaced %llu",
+      p.seconds, static_cast<unsigned long long>(p.channels),
+      static_cast<unsigned long long>(p.messages), static_cast<double>(p.file_bytes) / 1e6,
+      mb_per_s, static_cast<unsigned long long>(p.dropped),
+      static_cast<unsigned long long>(p.missed), static_cast<unsigned long long>(p.replaced));
   return line;
 }
 
