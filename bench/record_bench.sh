@@ -118,13 +118,15 @@ for i, (start, stop, gone) in enumerate(windows):
     next_start = windows[i + 1][0] if i + 1 < len(windows) else float("inf")
     on.append([d for t, d in steps if start + 5e8 <= t <= stop])
     off.append([d for t, d in steps if gone + 3e8 <= t <= next_start])
-on, off = [w for w in on if w], [w for w in off if w]
+# A window and the one after it without the recorder, both with steps in them.
+pairs = [(a, b) for a, b in zip(on, off) if a and b]
+if len(pairs) < 4:
+    print("too few windows: a longer run is needed (PAIRS x STEPS)")
+    sys.exit(0)
+on, off = [a for a, _ in pairs], [b for _, b in pairs]
 def percentile(values, q):
     ordered = sorted(values)
     return ordered[min(len(ordered) - 1, int(q * len(ordered)))]
-if len(on) < 4 or len(off) < 4:
-    print("too few windows: a longer run is needed (PAIRS x STEPS)")
-    sys.exit(0)
 every_on, every_off = sum(on, []), sum(off, [])
 a50, a99 = percentile(every_off, .5), percentile(every_off, .99)
 b50, b99 = percentile(every_on, .5), percentile(every_on, .99)
