@@ -8,8 +8,9 @@
 #      stopped every 2 s: the steps (`afhub run --step-log`) while it records and while
 #      it does not, p50 and p99 of each. Both sides share the run, so the VM's drift from
 #      one run to the next (2x in p99) is not in their ratio. Then window by window: each
-#      recording window's p99 over the next window's without, and, as the measure's own
-#      noise, each window's without over its neighbour's without (medians, quartiles).
+#      recording window's p50 and p99 over the mean of the windows without just before and
+#      after it, and, as the measure's own noise, the same for each window without against
+#      its two neighbours without (medians, quartiles).
 #   2. A thousand bodies at 1 kHz from `afhub synth --bodies 1000 --joints 8` (a stand-in
 #      for a physics, which takes about 1 ms a step for a thousand bodies on the project's
 #      2-core VM) recorded for SECONDS s: messages/s, MB/s into the file, dropped and
@@ -118,31 +119,33 @@ for i, (start, stop, gone) in enumerate(windows):
     next_start = windows[i + 1][0] if i + 1 < len(windows) else float("inf")
     on.append([d for t, d in steps if start + 5e8 <= t <= stop])
     off.append([d for t, d in steps if gone + 3e8 <= t <= next_start])
-# A window and the one after it without the recorder, both with steps in them.
-pairs = [(a, b) for a, b in zip(on, off) if a and b]
-if len(pairs) < 4:
-    print("too few windows: a longer run is needed (PAIRS x STEPS)")
-    sys.exit(0)
-on, off = [a for a, _ in pairs], [b for _, b in pairs]
 def percentile(values, q):
     ordered = sorted(values)
     return ordered[min(len(ordered) - 1, int(q * len(ordered)))]
 every_on, every_off = sum(on, []), sum(off, [])
+if not every_on or not every_off:
+    print("no steps in one of the windows: a longer run is needed (PAIRS x STEPS)")
+    sys.exit(0)
 a50, a99 = percentile(every_off, .5), percentile(every_off, .99)
 b50, b99 = percentile(every_on, .5), percentile(every_on, .99)
 print(f"not recording: {len(every_off)} steps, p50 {a50:.1f} us, p99 {a99:.1f} us")
 print(f"recording:     {len(every_on)} steps, p50 {b50:.1f} us, p99 {b99:.1f} us")
 print(f"step p99 with the recorder: {b99 / a99:.3f}x, p50 {b50 / a50:.3f}x ({len(windows)} windows)")
-# Each window's p99 against its neighbour's, so that a burst of the VM's noise weighs
-# one window, not the pooled p99; the same between neighbouring windows without the
-# recorder is the noise of this measure, in the same run.
-def ratios(first, second):
-    return [percentile(x, .99) / percentile(y, .99) for x, y in zip(first, second)]
+# Window by window, so that a burst of the VM's noise weighs one window rather than the
+# pooled p99: each recording window against the mean of the windows without it just
+# before and after (which cancels a drift); and, as the measure's own noise in the same
+# run, each window without against its two neighbours without.
+def against_neighbours(middle, before, after, q):
+    return [percentile(m, q) / ((percentile(b, q) + percentile(a, q)) / 2)
+            for m, b, a in zip(middle, before, after) if m and b and a]
 def summary(values):
+    if len(values) < 2:
+        return "too few windows"
     q = statistics.quantiles(values, n=4)
-    return f"median {statistics.median(values):.3f}x (quartiles {q[0]:.3f} to {q[2]:.3f}, {len(values)} pairs)"
-print("window by window, p99 recording / not (the window after):", summary(ratios(on, off)))
-print("window by window, p99 not / not (the next pair's), the noise:", summary(ratios(off[1::2], off[0::2])))
+    return f"median {statistics.median(values):.3f}x (quartiles {q[0]:.3f} to {q[2]:.3f}, {len(values)} windows)"
+for name, q in (("p50", .5), ("p99", .99)):
+    print(f"window by window, {name} recording / not:", summary(against_neighbours(on[1:], off, off[1:], q)))
+    print(f"window by window, {name} not / not (the noise):", summary(against_neighbours(off[1:], off, off[2:], q)))
 PY
 
 echo "== a thousand bodies at 1 kHz (afhub synth, 8 joints: 1184-byte states), recorded for $seconds s"

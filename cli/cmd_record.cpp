@@ -40,7 +40,7 @@ bool may_use_fifo(int priority) {
 }
 
 std::string progress_line(const mcap::RecordProgress& p, double mb_per_s) {
-  char line[200];
+  char line[256];
   std::snprintf(
       line, sizeof line,
       "recorded %.1f s  %llu channels  %llu messages  %.1f MB  %.1f MB/s  dropped %llu  "

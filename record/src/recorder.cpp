@@ -80,6 +80,8 @@ struct Recorded {
   PayloadKind kind{};
   std::string body;           // what the step tape names it: a body's channel, the world's instance
   std::int64_t taped_ns = 0;  // when the step tape last brought it
+  bool last_taped = false;    // its last sample came from the tape,
+  std::uint64_t tape_breaks = 0;  // after this many breaks in the tape
 };
 
 // A channel the reading loop has numbered, for the writing thread to add to the file.
@@ -226,16 +228,33 @@ class Session {
   // The states and commands of a step tape's sample, each checked as what it is (the
   // sample is this process's copy), for the channels recorded.
   void sample_tape(const StepTape& tape, std::int64_t now_ns) noexcept {
+    follow_tape(tape);
     std::size_t position = tape.first_entry;
     for_each_tape_entry(tape, [&](PayloadKind kind, std::string_view body, const void* payload,
                                   std::uint32_t bytes) {
       const std::size_t index = recorded_index(kind, body, position++);
       if (index >= recorded_.size()) return;  // not recorded, or not discovered yet
-      if (check_payload(payload, bytes, kind) != PayloadError::kNone) return;
+      if (check_payload(payload, bytes, kind) != PayloadError::kNone) {
+        ++tape_breaks_;
+        return;
+      }
       Recorded& recorded = recorded_[index];
       recorded.taped_ns = now_ns;
       sample(recorded, payload, bytes, now_ns, true);
     });
+  }
+
+  // Counts a break in the tape: parts its queue dropped (a reader further behind than
+  // it holds), a step the physics cut short, a world reset. A command missing across one
+  // may be the recorder's loss, not one its controller replaced.
+  void follow_tape(const StepTape& tape) noexcept {
+    const bool continues = tape_next_part_ == 0
+                               ? tape.part == 0 && tape.header.sim_step == tape_step_ + 1
+                               : tape.part == tape_next_part_ && tape.header.sim_step == tape_step_;
+    if (tape_seen_ && !continues) ++tape_breaks_;
+    tape_seen_ = true;
+    tape_step_ = tape.header.sim_step;
+    tape_next_part_ = tape.last_part ? 0 : tape.part + 1;
   }
 
   // The index in recorded_ of a tape's entry at `position` in its step (kNotRecorded
@@ -302,9 +321,14 @@ class Session {
       }
       ++dropped_;
     }
+    // Commands missing between two the tape brought, with no break in it between: the
+    // physics never took them (their controller replaced them first).
+    const bool replaced = taped && recorded.last_taped && recorded.tape_breaks == tape_breaks_ &&
+                          recorded.kind == PayloadKind::kBodyCommand;
     if (same_writer && key > recorded.last + 1)
-      (taped && recorded.kind == PayloadKind::kBodyCommand ? replaced_ : missed_) +=
-          key - recorded.last - 1;
+      (replaced ? replaced_ : missed_) += key - recorded.last - 1;
+    recorded.last_taped = taped;
+    recorded.tape_breaks = tape_breaks_;
     recorded.seen = true;
     recorded.publisher_pid = header.publisher_pid;
     recorded.last = key;
@@ -556,6 +580,12 @@ class Session {
   std::array<std::map<std::string, std::size_t, std::less<>>, 3> by_body_;
   // Each body's state and command, and the world's state.
   std::vector<TapePosition> tape_order_ = std::vector<TapePosition>(2 * kMaxBodies + 1);
+  // Where the tape is (follow_tape): the step of its last sample, the part expected next
+  // (0: the next step's first), and the breaks met.
+  bool tape_seen_ = false;
+  std::uint64_t tape_step_ = 0;
+  std::uint32_t tape_next_part_ = 0;
+  std::uint64_t tape_breaks_ = 0;
 
   // The discovery's, and what it hands over.
   std::set<std::string> known_;

@@ -170,6 +170,16 @@ struct TapeDrain {
   }
 };
 
+// A recorder of `bodies` on the physics' tape, which only a publishing physics writes;
+// nothing (the benchmark skipped) when its tape did not come.
+std::unique_ptr<TapeDrain> connect_tape(benchmark::State& state, Simulation& sim,
+                                        SimChannels* channels, std::vector<BodySpec> bodies) {
+  auto tape = std::make_unique<TapeDrain>(bodies);
+  if (channels && tape->connect(sim, *channels)) return tape;
+  state.SkipWithError("the step tape reader did not connect");
+  return nullptr;
+}
+
 // One step of the physics alone, or the whole loop iteration of `afhub run`:
 // commands read, step, every body's state and the world state published, and the
 // display-rate chores after them, at 1 ms per step; `viewed`: with a viewer reading
@@ -191,8 +201,7 @@ void BM_Step(benchmark::State& state, const std::string& file, bool publish, boo
       state.SkipWithError("the viewer's reader did not connect");
   }
   std::unique_ptr<TapeDrain> tape;
-  if (taped && !(tape = std::make_unique<TapeDrain>(model.bodies))->connect(sim, *channels))
-    state.SkipWithError("the step tape reader did not connect");
+  if (taped) tape = connect_tape(state, sim, channels.get(), model.bodies);
   std::int64_t clock_ns = 0;
   // Each step's time as `afhub run` times it (commands in, step, states out; not the
   // display-rate chores after), for its tail: the mean hides a cost paid every 17th step.
@@ -240,8 +249,7 @@ void BM_ExampleSceneStep(benchmark::State& state, bool direct, bool publish = fa
   std::unique_ptr<SimChannels> channels;
   if (publish) channels = std::make_unique<SimChannels>(sim, 0.5);
   std::unique_ptr<TapeDrain> tape;
-  if (taped && !(tape = std::make_unique<TapeDrain>(model.bodies))->connect(sim, *channels))
-    state.SkipWithError("the step tape reader did not connect");
+  if (taped) tape = connect_tape(state, sim, channels.get(), model.bodies);
   StepTimes times(1 << 22);
   for (auto _ : state) {
     timed_step(sim, channels.get(), times);
@@ -284,12 +292,10 @@ void BM_StepThousandBodies(benchmark::State& state, bool publish, bool commanded
     for (const BodySpec& body : model.bodies)
       controller.push_back(std::make_unique<BodyClient>(body.channel));
   std::unique_ptr<TapeDrain> tape;
-  if (taped > 0) {
-    const std::vector<BodySpec> recorded(
-        model.bodies.begin(), model.bodies.begin() + std::min(taped, model.bodies.size()));
-    if (!(tape = std::make_unique<TapeDrain>(recorded))->connect(sim, *channels))
-      state.SkipWithError("the step tape reader did not connect");
-  }
+  if (taped > 0)
+    tape = connect_tape(
+        state, sim, channels.get(),
+        {model.bodies.begin(), model.bodies.begin() + std::min(taped, model.bodies.size())});
   StepTimes times(1 << 20);
   std::uint64_t step = 0;
   for (auto _ : state) {
