@@ -266,7 +266,16 @@ TEST(Record, CommandsReplacedBeforeThePhysicsTookThemAreCountedApartFromMissed) 
       std::this_thread::sleep_for(1ms);
     }
   };
-  write_pairs(2000ms);
+  // Until the recorder writes (a first chunk: a loaded machine once took 4 s to start it),
+  // then for 1.5 s more.
+  const auto started = std::chrono::steady_clock::now();
+  std::error_code error;
+  while (!(std::filesystem::file_size(file, error) > 20'000 && !error)) {
+    ASSERT_LT(std::chrono::steady_clock::now() - started, 30s)
+        << read_file(scene.dir("record.log"));
+    write_pairs(100ms);
+  }
+  write_pairs(1500ms);
   ASSERT_EQ(kill(recorder.pid, SIGSTOP), 0);
   write_pairs(800ms);  // 256 steps queued at most: the physics' tape drops the rest
   ASSERT_EQ(kill(recorder.pid, SIGCONT), 0);
