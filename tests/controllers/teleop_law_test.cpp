@@ -39,9 +39,12 @@ Quaternion about_z(double angle) {
   return {0, 0, std::sin(angle / 2), std::cos(angle / 2)};
 }
 
+// A device sample; each one published kDt after the one before.
 DeviceState device_at(const Vec3& position, std::uint32_t buttons = 0,
                       Quaternion orientation = {}) {
+  static std::int64_t published_ns = 0;
   DeviceState device;
+  device.header.publish_stamp_ns = published_ns += static_cast<std::int64_t>(kDt * 1e9);
   device.pose.position_m = position;
   device.pose.orientation = orientation;
   device.buttons = buttons;
@@ -118,6 +121,34 @@ TEST(TeleopLaw, TheBodyWrenchIsAPdOnTheTargetError) {
   EXPECT_TRUE(near(out.body_target.position_m, v3(0.01, 0, 0), 1e-12));
   EXPECT_TRUE(
       near(out.body_wrench.force_n, v3(100 * (0.01 - 0.1) + 10 * (10.0 - 1.0), 0, 0), 1e-9));
+}
+
+TEST(TeleopLaw, TheTargetsVelocityIsTimedByTheDevicesSamplesNotTheCycles) {
+  // The device moves at 1 cm/s in x (the target at 10 cm/s); the body sits on the target,
+  // still, so the wrench is the D gain times the target's velocity.
+  TeleopLaw law(plain_params());
+  TeleopOutput out;
+  const double speed = 0.01;
+  auto sample = [&](std::int64_t ms) {
+    DeviceState device = device_at(v3(speed * static_cast<double>(ms) * 1e-3, 0, 0));
+    device.header.publish_stamp_ns = ms * 1'000'000;
+    return device;
+  };
+  auto cycle = [&](std::int64_t ms, double dt_s) {
+    const DeviceState device = sample(ms);
+    law.step(device, pose_at(v3(10 * device.pose.position_m.x, 0, 0)), {}, dt_s, out);
+    return out.body_wrench.force_n.x;
+  };
+  for (std::int64_t ms = 0; ms <= 10; ++ms) cycle(ms, kDt);  // anchored at x 0
+  const double on_time = 10 * 10 * speed;                    // D 10 x 0.1 m/s
+  EXPECT_NEAR(cycle(11, kDt), on_time, 1e-9);
+  // Both loops stalled 17 ms and catch up back to back: teleop's cycles 10 us apart see
+  // the driver's samples of its own catch-up (1 ms apart when it keeps its stamps' pace).
+  EXPECT_NEAR(cycle(28, 0.017), on_time, 1e-9);
+  for (std::int64_t ms = 29; ms <= 34; ++ms)
+    EXPECT_NEAR(cycle(ms, 10e-6), on_time, 1e-9) << "sample at " << ms << " ms";
+  // A cycle that finds no new sample keeps the velocity (the device still moves).
+  EXPECT_NEAR(cycle(34, kDt), on_time, 1e-9);
 }
 
 TEST(TeleopLaw, ClutchHoldsTheTargetAndReleasesWithoutAJump) {

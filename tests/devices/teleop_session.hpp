@@ -61,6 +61,10 @@ class TeleopSession {
   void kill_teleop() { kill(teleop_.pid, SIGKILL); }
   // SIGSTOP, SIGCONT or SIGKILL to the physics.
   void signal_physics(int signal) { kill(physics_.pid, signal); }
+  // The same to the physics, teleop and the driver, as a machine stalling them all does.
+  void signal_all(int signal) {
+    for (pid_t pid : {physics_.pid, teleop_.pid, driver_->pid}) kill(pid, signal);
+  }
   // SIGKILLs the driver (its readers keep its last state).
   void kill_driver() {
     kill(driver_->pid, SIGKILL);

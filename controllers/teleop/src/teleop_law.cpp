@@ -159,14 +159,22 @@ void TeleopLaw::step(const DeviceState& device, const Pose& body_pose, const Twi
   }
   was_clutched_ = clutched;
 
-  // The target's velocity by difference (none on the first cycle).
-  Vector3d target_velocity = Vector3d::Zero();
-  Vector3d target_angular = Vector3d::Zero();
-  if (have_target_ && timed) {
-    target_velocity = (target_position - to_eigen(previous_target.position_m)) / dt_s;
-    target_angular =
-        rotation_vector(target_rotation * to_eigen(previous_target.orientation).inverse()) / dt_s;
+  // The target's velocity by difference over the time between the device's samples, not
+  // between this loop's cycles: after a stall both loops catch up back to back, and a
+  // sample's motion over a cycle microseconds long was a kick of the body (once 4 cm
+  // off the circle). A cycle with no new sample keeps the last velocity; none while held.
+  const std::int64_t sample_ns = device.header.publish_stamp_ns;
+  if (clutched || !have_target_) {
+    target_velocity_ = target_angular_ = {};
+  } else if (sample_ns > sample_ns_) {
+    const double dt = static_cast<double>(sample_ns - sample_ns_) * 1e-9;
+    target_velocity_ = to_vec3((target_position - to_eigen(previous_target.position_m)) / dt);
+    target_angular_ = to_vec3(
+        rotation_vector(target_rotation * to_eigen(previous_target.orientation).inverse()) / dt);
   }
+  sample_ns_ = sample_ns;
+  const Vector3d target_velocity = to_eigen(target_velocity_);
+  const Vector3d target_angular = to_eigen(target_angular_);
   target_ = {to_vec3(target_position), to_quaternion(target_rotation)};
   have_target_ = true;
 

@@ -72,8 +72,9 @@ class TeleopLaw {
  public:
   explicit TeleopLaw(const TeleopParams& params);
 
-  // One cycle: the newest device sample, the body's newest pose and twist (world), the
-  // time since the previous cycle, and the multibody's contact wrench (world frame,
+  // One cycle: the newest device sample (its publish stamp times the target's velocity),
+  // the body's newest pose and twist (world), the time since the previous cycle (for the
+  // force's rate limit), and the multibody's contact wrench (world frame,
   // torque about the body's origin: subtree_contact_wrench) for contact feedback.
   void step(const DeviceState& device, const Pose& body_pose, const Twist& body_twist, double dt_s,
             TeleopOutput& out, const Wrench& body_contact = {}) noexcept;
@@ -100,6 +101,8 @@ class TeleopLaw {
   Pose anchor_;  // the device's pose (mapped into the world's axes) at the anchor
   Pose target_;  // the previous cycle's target
   bool have_target_{false};
+  std::int64_t sample_ns_{0};              // the publish stamp of the device sample behind target_
+  Vec3 target_velocity_, target_angular_;  // the target's, over the last two samples
   Wrench device_wrench_;  // the previous cycle's device wrench (for the jerk limit)
 };
 
