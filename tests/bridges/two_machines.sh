@@ -84,16 +84,28 @@ declare -A uri=([a]="$(cyclone_uri "$veth_a")" [b]="$(cyclone_uri "$veth_b")")
 declare -A netns=([a]=$ns_a [b]=$ns_b)
 
 # Each side's private /tmp keeps the source tree, ../shared, $work and the sourcing
-# script's arguments (the program, models) when they live under /tmp.
+# script's arguments (the program, models) when they live under /tmp. Its private /run
+# holds a mark once every mount is made: a command entering the side before that would
+# meet the host's hub (a demo's, say) instead of its own (seen on a loaded machine,
+# when this waited a fixed 0.5 s: the test hung until its timeout).
 root_dir=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
+private_mark=/run/afhub-test-side-$tag
 for side in a b; do
   ip netns exec "${netns[$side]}" unshare -m --propagation private bash -c \
-    'source "$0" && mount_private_tmp "$@" && mount -t tmpfs tmpfs /dev/shm &&
-     mount -t tmpfs tmpfs /run && exec sleep infinity' \
-    "$root_dir/tests/support/private_tmp.sh" "$root_dir" "$root_dir/../shared" "$work" "$@" &
+    'source "$0" && mount_private_tmp "${@:2}" && mount -t tmpfs tmpfs /dev/shm &&
+     mount -t tmpfs tmpfs /run && touch "$1" && exec sleep infinity' \
+    "$root_dir/tests/support/private_tmp.sh" "$private_mark" "$root_dir" "$root_dir/../shared" \
+    "$work" "$@" &
   holder[$side]=$!
 done
-sleep 0.5
+for side in a b; do
+  for _ in $(seq 300); do
+    nsenter -t "${holder[$side]}" -m -- test -e "$private_mark" 2>/dev/null && break
+    sleep 0.1
+  done
+  nsenter -t "${holder[$side]}" -m -- test -e "$private_mark" ||
+    { echo "$test_name: side $side's private namespaces not made within 30 s" >&2; exit 1; }
+done
 
 on() {
   local side=$1
