@@ -161,16 +161,22 @@ void TeleopLaw::step(const DeviceState& device, const Pose& body_pose, const Twi
 
   // The target's velocity by difference over the time between the device's samples, not
   // between this loop's cycles: after a stall both loops catch up back to back, and a
-  // sample's motion over a cycle microseconds long was a kick of the body (once 4 cm
-  // off the circle). A cycle with no new sample keeps the last velocity; none while held.
+  // sample's motion over a cycle microseconds long was a kick of the body (once 4 cm off
+  // the circle). Cycles with no new sample keep that velocity for one of the device's
+  // sample intervals, then assume no motion (a driver that stopped moves nothing).
   const std::int64_t sample_ns = device.header.publish_stamp_ns;
-  if (clutched || !have_target_) {
-    target_velocity_ = target_angular_ = {};
-  } else if (sample_ns > sample_ns_) {
-    const double dt = static_cast<double>(sample_ns - sample_ns_) * 1e-9;
-    target_velocity_ = to_vec3((target_position - to_eigen(previous_target.position_m)) / dt);
-    target_angular_ = to_vec3(
-        rotation_vector(target_rotation * to_eigen(previous_target.orientation).inverse()) / dt);
+  if (have_target_ && sample_ns > sample_ns_) {
+    sample_interval_s_ = static_cast<double>(sample_ns - sample_ns_) * 1e-9;
+    since_sample_s_ = 0.0;
+    target_velocity_ =
+        to_vec3((target_position - to_eigen(previous_target.position_m)) / sample_interval_s_);
+    target_angular_ =
+        to_vec3(rotation_vector(target_rotation * to_eigen(previous_target.orientation).inverse()) /
+                sample_interval_s_);
+  } else {
+    if (timed) since_sample_s_ += dt_s;
+    if (!have_target_ || since_sample_s_ > sample_interval_s_)
+      target_velocity_ = target_angular_ = {};
   }
   sample_ns_ = sample_ns;
   const Vector3d target_velocity = to_eigen(target_velocity_);

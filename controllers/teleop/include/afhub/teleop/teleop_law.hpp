@@ -101,8 +101,11 @@ class TeleopLaw {
   Pose anchor_;  // the device's pose (mapped into the world's axes) at the anchor
   Pose target_;  // the previous cycle's target
   bool have_target_{false};
-  std::int64_t sample_ns_{0};              // the publish stamp of the device sample behind target_
-  Vec3 target_velocity_, target_angular_;  // the target's, over the last two samples
+  // The device sample behind target_: its publish stamp, the interval since the one
+  // before, the cycles' time since it, and the target's velocity it gave.
+  std::int64_t sample_ns_{0};
+  double sample_interval_s_{0.0}, since_sample_s_{0.0};
+  Vec3 target_velocity_, target_angular_;
   Wrench device_wrench_;  // the previous cycle's device wrench (for the jerk limit)
 };
 
