@@ -166,7 +166,10 @@ void TeleopLaw::step(const DeviceState& device, const Pose& body_pose, const Twi
   // sample intervals, then assume no motion (a driver that stopped moves nothing).
   const std::int64_t sample_ns = device.header.publish_stamp_ns;
   if (have_target_ && sample_ns > sample_ns_) {
-    sample_interval_s_ = static_cast<double>(sample_ns - sample_ns_) * 1e-9;
+    // (In unsigned arithmetic: a forged stamp's difference may not fit a signed one.)
+    sample_interval_s_ = static_cast<double>(static_cast<std::uint64_t>(sample_ns) -
+                                             static_cast<std::uint64_t>(sample_ns_)) *
+                         1e-9;
     since_sample_s_ = 0.0;
     target_velocity_ =
         to_vec3((target_position - to_eigen(previous_target.position_m)) / sample_interval_s_);
