@@ -86,8 +86,8 @@ declare -A netns=([a]=$ns_a [b]=$ns_b)
 # Each side's private /tmp keeps the source tree, ../shared, $work and the sourcing
 # script's arguments (the program, models) when they live under /tmp. Its private /run
 # holds a mark once every mount is made: a command entering the side before that would
-# meet the host's hub (a demo's, say) instead of its own (seen on a loaded machine,
-# when this waited a fixed 0.5 s: the test hung until its timeout).
+# meet the host's hub (a demo's, say) instead of its own: with a fixed 0.5 s wait,
+# the likely cause of dds_two_machines hanging to its timeout beside a demo hub.
 root_dir=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
 private_mark=/run/afhub-test-side-$tag
 for side in a b; do
