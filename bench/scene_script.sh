@@ -2,7 +2,8 @@
 #   private_namespace "$0" "$@"   as root, re-runs the calling script in a private mount
 #                                 namespace (its own /tmp, /dev/shm and /run), so that its
 #                                 hub cannot meet another
-#   then: $work, a scratch folder, and $pids, the processes to stop, both cleaned on exit.
+#   then: $work, a scratch folder, and $pids, the processes to stop, both cleaned on exit
+#   (with every other job still running).
 
 private_namespace() {
   if [[ $(id -u) == 0 && -z ${AFHUB_BENCH_PRIVATE:-} ]]; then
@@ -21,7 +22,9 @@ private_namespace() {
 }
 
 cleanup() {
-  for pid in "${pids[@]}"; do kill "$pid" 2>/dev/null || true; done
+  # Those named, and any other job still running: a script that fails midway (set -e)
+  # may leave a paused physics, which the wait below would wait for forever.
+  for pid in "${pids[@]}" $(jobs -p); do kill "$pid" 2>/dev/null || true; done
   wait 2>/dev/null || true
   rm -rf "$work"
 }
