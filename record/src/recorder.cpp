@@ -23,6 +23,7 @@
 #include "afhub/shm_layout/payload_check.hpp"
 #include "afhub/shm_layout/scene.hpp"
 #include "afhub/shm_layout/world.hpp"
+#include "beside_physics.hpp"
 #include "record_queue.hpp"
 #include "recorded_payloads.hpp"
 #include "ros2_messages.hpp"
@@ -155,6 +156,7 @@ class Session {
  private:
   void read_loop(const std::function<bool()>& keep_going) {
     apply_realtime(options_.loop, "afhub record");
+    beside_.start(options_.loop.cpu < 0 && options_.loop.fifo_priority <= 0);
     LatestReader<WorldState> world(
         ChannelId{std::string(kService), world_instance(), std::string(kStateEvent)});
     // Every step's states, queued: what a late wake-up would miss in the states' slots.
@@ -176,9 +178,11 @@ class Session {
       else
         waiter.wait(kIdleWaitNs);
       now = monotonic_ns();
+      beside_.turned();
       take_discovered(waiter, untaped_waiter);
       world.latest();  // taken, so that the waiter sleeps until the next step
-      while (tape.next(*taped)) {
+      for (std::uint32_t drained = 1; tape.next(*taped); ++drained) {
+        beside_.follow(taped->header.publisher_pid, drained);
         sample_tape(*taped, now);
         taped_ns = now;
       }
@@ -353,6 +357,7 @@ class Session {
         const std::int64_t next_ns = monotonic_ns() + kDiscoveryPeriodNs;
         while (!reading_done_ && monotonic_ns() < next_ns) {
           usleep(10'000);
+          beside_.watch(monotonic_ns());
           if (monotonic_ns() >= next_progress_ns) {
             progress(snapshot());
             next_progress_ns += kProgressPeriodNs;
@@ -580,6 +585,9 @@ class Session {
   std::array<std::map<std::string, std::size_t, std::less<>>, 3> by_body_;
   // Each body's state and command, and the world's state.
   std::vector<TapePosition> tape_order_ = std::vector<TapePosition>(2 * kMaxBodies + 1);
+  // The reading loop on the physics' CPU while it is idle, and the discovering thread's
+  // watch that it still turns there.
+  BesidePhysics beside_;
   // Where the tape is (follow_tape): the step of its last sample, the part expected next
   // (0: the next step's first), and the breaks met.
   bool tape_seen_ = false;

@@ -836,6 +836,80 @@ TEST(Record, TheReadingLoopTakesNoCoreFromTheLoopsUnlessItReadsDevices) {
   EXPECT_EQ(stop_process(devices.pid, SIGINT), 0);
 }
 
+// The one CPU `pid` may run on, or -1 when it may run on several.
+int only_cpu(pid_t pid) {
+  cpu_set_t cpus;
+  if (sched_getaffinity(pid, sizeof cpus, &cpus) != 0 || CPU_COUNT(&cpus) != 1) return -1;
+  for (int cpu = 0; cpu < CPU_SETSIZE; ++cpu)
+    if (CPU_ISSET(cpu, &cpus)) return cpu;
+  return -1;
+}
+
+// A physics pinned under SCHED_FIFO leaves its CPU idle between steps: the reading loop
+// reads its tape there (record/src/beside_physics.hpp), unless told its own CPU, and
+// leaves when a restarted physics is not pinned.
+TEST(Record, TheReadingLoopReadsOnAPinnedRealTimePhysicsCpuAndFollowsItsRestart) {
+  cpu_set_t mine;
+  ASSERT_EQ(sched_getaffinity(0, sizeof mine, &mine), 0);
+  if (!CPU_ISSET(0, &mine) || !CPU_ISSET(1, &mine)) GTEST_SKIP() << "needs CPUs 0 and 1";
+  afhub::testing::ModelFolder folder;
+  const auto log = [&](const std::string& name) { return (folder.dir() / name).string(); };
+  const std::string arm = AFHUB_EXAMPLE_MODELS "/arm7.yaml";
+  auto physics = std::make_unique<ScopedProcess>(
+      spawn_afhub({"run", arm, "--no-autostart", "--fifo", "10", "--cpu", "0"}, log("pinned.log")));
+  ASSERT_TRUE(wait_until([&] { return sched_getscheduler(physics->pid) == SCHED_FIFO; }, 30s))
+      << read_file(log("pinned.log"));
+  ScopedProcess beside(spawn_afhub({"record", "-o", log("beside.mcap")}, log("beside.log")));
+  ScopedProcess chosen(
+      spawn_afhub({"record", "-o", log("chosen.mcap"), "--cpu", "1"}, log("chosen.log")));
+  ASSERT_TRUE(wait_until([&] { return only_cpu(beside.pid) == 0; }, 30s))
+      << read_file(log("beside.log"));
+  EXPECT_TRUE(contains(read_file(log("beside.log")), "reading on CPU 0, the physics'"));
+  // The chosen one has the tape too by now (both record the same bodies), and stays.
+  ASSERT_TRUE(wait_until([&] { return info_of(log("chosen.mcap"))["messages"] > 1000; }, 30s))
+      << read_file(log("chosen.log"));
+  EXPECT_EQ(only_cpu(chosen.pid), 1);
+
+  physics->stop();
+  physics = std::make_unique<ScopedProcess>(
+      spawn_afhub({"run", arm, "--no-autostart"}, log("unpinned.log")));
+  ASSERT_TRUE(wait_until(
+      [&] {
+        cpu_set_t cpus;
+        return sched_getaffinity(beside.pid, sizeof cpus, &cpus) == 0 && CPU_EQUAL(&cpus, &mine);
+      },
+      30s))
+      << read_file(log("beside.log")) << read_file(log("unpinned.log"));
+  EXPECT_EQ(stop_process(beside.pid, SIGINT), 0) << read_file(log("beside.log"));
+  EXPECT_EQ(stop_process(chosen.pid, SIGINT), 0) << read_file(log("chosen.log"));
+}
+
+// A pinned real-time physics that never sleeps (`--fast`) leaves the reading loop no
+// time on its CPU: the loop leaves it, and the recording goes on.
+TEST(Record, TheReadingLoopLeavesTheCpuOfAPhysicsThatNeverSleeps) {
+  cpu_set_t mine;
+  ASSERT_EQ(sched_getaffinity(0, sizeof mine, &mine), 0);
+  if (!CPU_ISSET(0, &mine) || !CPU_ISSET(1, &mine)) GTEST_SKIP() << "needs CPUs 0 and 1";
+  afhub::testing::ModelFolder folder;
+  const auto log = [&](const std::string& name) { return (folder.dir() / name).string(); };
+  ScopedProcess physics(spawn_afhub({"run", AFHUB_EXAMPLE_MODELS "/arm7.yaml", "--no-autostart",
+                                     "--fast", "--fifo", "10", "--cpu", "0"},
+                                    log("run.log")));
+  ASSERT_TRUE(wait_until([&] { return sched_getscheduler(physics.pid) == SCHED_FIFO; }, 30s))
+      << read_file(log("run.log"));
+  ScopedProcess recorder(spawn_afhub({"record", "-o", log("fast.mcap")}, log("record.log")));
+  ASSERT_TRUE(wait_until(
+      [&] { return contains(read_file(log("record.log")), "reading on the other CPUs again"); },
+      60s))
+      << read_file(log("record.log"));
+  EXPECT_EQ(only_cpu(recorder.pid), -1);
+  const auto messages = [&] { return info_of(log("fast.mcap"))["messages"].get<std::uint64_t>(); };
+  const std::uint64_t before = messages();
+  EXPECT_TRUE(wait_until([&] { return messages() > before + 1000; }, 30s))
+      << read_file(log("record.log"));
+  EXPECT_EQ(stop_process(recorder.pid, SIGINT), 0) << read_file(log("record.log"));
+}
+
 TEST(Record, BadFilesAndOptionsAreClearErrors) {
   afhub::testing::ModelFolder folder;
   const std::string text = (folder.dir() / "notes.mcap").string();
