@@ -26,6 +26,7 @@
 #include "afhub/shm_layout/layout_id.hpp"
 #include "afhub/shm_layout/world.hpp"
 #include "afhub_process.hpp"
+#include "beside_physics.hpp"
 #include "model_files.hpp"
 #include "recorded_payloads.hpp"
 #include "strict_json.hpp"
@@ -839,38 +840,58 @@ TEST(Record, TheReadingLoopTakesNoCoreFromTheLoopsUnlessItReadsDevices) {
 // The one CPU `pid` may run on, or -1 when it may run on several.
 int only_cpu(pid_t pid) {
   cpu_set_t cpus;
-  if (sched_getaffinity(pid, sizeof cpus, &cpus) != 0 || CPU_COUNT(&cpus) != 1) return -1;
-  for (int cpu = 0; cpu < CPU_SETSIZE; ++cpu)
-    if (CPU_ISSET(cpu, &cpus)) return cpu;
-  return -1;
+  if (sched_getaffinity(pid, sizeof cpus, &cpus) != 0) return -1;
+  return mcap::only_cpu(cpus).value_or(-1);
 }
 
 // A physics pinned under SCHED_FIFO leaves its CPU idle between steps: the reading loop
-// reads its tape there (record/src/beside_physics.hpp), unless told its own CPU, and
-// leaves when a restarted physics is not pinned.
-TEST(Record, TheReadingLoopReadsOnAPinnedRealTimePhysicsCpuAndFollowsItsRestart) {
+// reads its tape there (record/src/beside_physics.hpp), follows it to another CPU when
+// it restarts there, and leaves when it restarts unpinned; unless told its own CPU, or
+// allowed one only.
+TEST(Record, TheReadingLoopReadsOnAPinnedRealTimePhysicsCpuAndFollowsItsRestarts) {
   cpu_set_t mine;
   ASSERT_EQ(sched_getaffinity(0, sizeof mine, &mine), 0);
   if (!CPU_ISSET(0, &mine) || !CPU_ISSET(1, &mine)) GTEST_SKIP() << "needs CPUs 0 and 1";
   afhub::testing::ModelFolder folder;
   const auto log = [&](const std::string& name) { return (folder.dir() / name).string(); };
   const std::string arm = AFHUB_EXAMPLE_MODELS "/arm7.yaml";
-  auto physics = std::make_unique<ScopedProcess>(
-      spawn_afhub({"run", arm, "--no-autostart", "--fifo", "10", "--cpu", "0"}, log("pinned.log")));
-  ASSERT_TRUE(wait_until([&] { return sched_getscheduler(physics->pid) == SCHED_FIFO; }, 30s))
-      << read_file(log("pinned.log"));
+  const auto pinned_physics = [&](const std::string& cpu) {
+    auto physics = std::make_unique<ScopedProcess>(spawn_afhub(
+        {"run", arm, "--no-autostart", "--fifo", "10", "--cpu", cpu}, log("run" + cpu + ".log")));
+    EXPECT_TRUE(wait_until([&] { return only_cpu(physics->pid) == std::stoi(cpu); }, 30s))
+        << read_file(log("run" + cpu + ".log"));
+    return physics;
+  };
+  auto physics = pinned_physics("0");
+  ASSERT_EQ(sched_getscheduler(physics->pid), SCHED_FIFO) << read_file(log("run0.log"));
   ScopedProcess beside(spawn_afhub({"record", "-o", log("beside.mcap")}, log("beside.log")));
   ScopedProcess chosen(
       spawn_afhub({"record", "-o", log("chosen.mcap"), "--cpu", "1"}, log("chosen.log")));
-  ASSERT_TRUE(wait_until([&] { return only_cpu(beside.pid) == 0; }, 30s))
+  // A recorder allowed CPU 1 only (`taskset -c 1`): it stays there.
+  cpu_set_t one;
+  CPU_ZERO(&one);
+  CPU_SET(1, &one);
+  ASSERT_EQ(sched_setaffinity(0, sizeof one, &one), 0);
+  ScopedProcess confined(spawn_afhub({"record", "-o", log("confined.mcap")}, log("confined.log")));
+  ASSERT_EQ(sched_setaffinity(0, sizeof mine, &mine), 0);
+  const std::string joined = "reading on CPU 0, the physics'";
+  ASSERT_TRUE(wait_until([&] { return contains(read_file(log("beside.log")), joined); }, 30s))
       << read_file(log("beside.log"));
-  EXPECT_TRUE(contains(read_file(log("beside.log")), "reading on CPU 0, the physics'"));
-  // The chosen one has the tape too by now (both record the same bodies), and stays.
-  ASSERT_TRUE(wait_until([&] { return info_of(log("chosen.mcap"))["messages"] > 1000; }, 30s))
-      << read_file(log("chosen.log"));
+  EXPECT_EQ(only_cpu(beside.pid), 0);
+  // The other two have the tape too by now (all record the same bodies), and stay.
+  for (const std::string name : {"chosen", "confined"})
+    ASSERT_TRUE(wait_until([&] { return info_of(log(name + ".mcap"))["messages"] > 1000; }, 30s))
+        << read_file(log(name + ".log"));
   EXPECT_EQ(only_cpu(chosen.pid), 1);
+  EXPECT_EQ(only_cpu(confined.pid), 1);
+  EXPECT_FALSE(
+      contains(read_file(log("chosen.log")) + read_file(log("confined.log")), "reading on CPU"));
 
-  physics->stop();
+  physics.reset();
+  physics = pinned_physics("1");
+  EXPECT_TRUE(wait_until([&] { return only_cpu(beside.pid) == 1; }, 30s))
+      << read_file(log("beside.log"));
+  physics.reset();
   physics = std::make_unique<ScopedProcess>(
       spawn_afhub({"run", arm, "--no-autostart"}, log("unpinned.log")));
   ASSERT_TRUE(wait_until(
@@ -880,27 +901,34 @@ TEST(Record, TheReadingLoopReadsOnAPinnedRealTimePhysicsCpuAndFollowsItsRestart)
       },
       30s))
       << read_file(log("beside.log")) << read_file(log("unpinned.log"));
-  EXPECT_EQ(stop_process(beside.pid, SIGINT), 0) << read_file(log("beside.log"));
-  EXPECT_EQ(stop_process(chosen.pid, SIGINT), 0) << read_file(log("chosen.log"));
+  // It followed the restarts; it never left for want of time.
+  EXPECT_FALSE(contains(read_file(log("beside.log")), "other CPUs again"))
+      << read_file(log("beside.log"));
+  for (const pid_t pid : {beside.pid, chosen.pid, confined.pid})
+    EXPECT_EQ(stop_process(pid, SIGINT), 0);
 }
 
 // A pinned real-time physics that never sleeps (`--fast`) leaves the reading loop no
-// time on its CPU: the loop leaves it, and the recording goes on.
+// time on its CPU: the loop leaves it, and the recording goes on. (A test entry of its
+// own, with the machine to itself: record_beside_busy_physics.)
 TEST(Record, TheReadingLoopLeavesTheCpuOfAPhysicsThatNeverSleeps) {
   cpu_set_t mine;
   ASSERT_EQ(sched_getaffinity(0, sizeof mine, &mine), 0);
   if (!CPU_ISSET(0, &mine) || !CPU_ISSET(1, &mine)) GTEST_SKIP() << "needs CPUs 0 and 1";
   afhub::testing::ModelFolder folder;
   const auto log = [&](const std::string& name) { return (folder.dir() / name).string(); };
+  // Bounded, so that a failing test does not hold CPU 0 for long (about 20 us a step).
   ScopedProcess physics(spawn_afhub({"run", AFHUB_EXAMPLE_MODELS "/arm7.yaml", "--no-autostart",
-                                     "--fast", "--fifo", "10", "--cpu", "0"},
+                                     "--fast", "--steps", "2000000", "--fifo", "10", "--cpu", "0"},
                                     log("run.log")));
   ASSERT_TRUE(wait_until([&] { return sched_getscheduler(physics.pid) == SCHED_FIFO; }, 30s))
       << read_file(log("run.log"));
   ScopedProcess recorder(spawn_afhub({"record", "-o", log("fast.mcap")}, log("record.log")));
   ASSERT_TRUE(wait_until(
-      [&] { return contains(read_file(log("record.log")), "reading on the other CPUs again"); },
-      60s))
+      [&] {
+        return contains(read_file(log("record.log")), "reading on the recorder's other CPUs again");
+      },
+      30s))
       << read_file(log("record.log"));
   EXPECT_EQ(only_cpu(recorder.pid), -1);
   const auto messages = [&] { return info_of(log("fast.mcap"))["messages"].get<std::uint64_t>(); };
