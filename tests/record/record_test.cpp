@@ -784,9 +784,13 @@ TEST(Record, ADeviceIsRecordedAtItsOwnRateWithDevices) {
   afhub::testing::ModelFolder folder;
   const auto log = [&](const std::string& name) { return (folder.dir() / name).string(); };
   const std::string file = log("device.mcap");
-  // A device without a physics: its own 1 kHz loop wakes the recorder.
+  // A device without a physics: its own 1 kHz loop wakes the recorder. Under SCHED_FIFO,
+  // as a real device's driver runs: under the normal scheduler, on a machine busy with
+  // other tests, a late cycle can come just before the next, faster than a reader wakes
+  // (106 of 1895 updates overwritten before the recorder read them, in one CI run).
   ScopedProcess device(spawn_afhub(
-      {"device", "run", "virtual", "--name", "hand", "--circle", "0.05,2"}, log("device.log")));
+      {"device", "run", "virtual", "--name", "hand", "--circle", "0.05,2", "--fifo", "20"},
+      log("device.log")));
   ASSERT_TRUE(wait_until(
       [] { return run_afhub({"ls"}).out.find("device/hand") != std::string::npos; }, 20s))
       << read_file(log("device.log"));
