@@ -848,13 +848,19 @@ int only_cpu(pid_t pid) {
   return mcap::only_cpu(cpus).value_or(-1);
 }
 
+// The CPUs this test may run on (none when they cannot be read).
+cpu_set_t own_cpus() {
+  cpu_set_t cpus;
+  if (sched_getaffinity(0, sizeof cpus, &cpus) != 0) CPU_ZERO(&cpus);
+  return cpus;
+}
+
 // A physics pinned under SCHED_FIFO leaves its CPU idle between steps: the reading loop
 // reads its tape there (record/src/beside_physics.hpp), follows it to another CPU when
 // it restarts there, and leaves when it restarts unpinned; unless told its own CPU, or
 // allowed one only.
 TEST(Record, TheReadingLoopReadsOnAPinnedRealTimePhysicsCpuAndFollowsItsRestarts) {
-  cpu_set_t mine;
-  ASSERT_EQ(sched_getaffinity(0, sizeof mine, &mine), 0);
+  const cpu_set_t mine = own_cpus();
   if (!CPU_ISSET(0, &mine) || !CPU_ISSET(1, &mine)) GTEST_SKIP() << "needs CPUs 0 and 1";
   afhub::testing::ModelFolder folder;
   const auto log = [&](const std::string& name) { return (folder.dir() / name).string(); };
@@ -916,8 +922,7 @@ TEST(Record, TheReadingLoopReadsOnAPinnedRealTimePhysicsCpuAndFollowsItsRestarts
 // time on its CPU: the loop leaves it, and the recording goes on. (A test entry of its
 // own, with the machine to itself: record_beside_busy_physics.)
 TEST(Record, TheReadingLoopLeavesTheCpuOfAPhysicsThatNeverSleeps) {
-  cpu_set_t mine;
-  ASSERT_EQ(sched_getaffinity(0, sizeof mine, &mine), 0);
+  const cpu_set_t mine = own_cpus();
   if (!CPU_ISSET(0, &mine) || !CPU_ISSET(1, &mine)) GTEST_SKIP() << "needs CPUs 0 and 1";
   afhub::testing::ModelFolder folder;
   const auto log = [&](const std::string& name) { return (folder.dir() / name).string(); };
