@@ -48,11 +48,8 @@ int run_status(const StatusOptions& options) {
   while (!world_reader.latest() && std::chrono::steady_clock::now() < world_deadline)
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
   const WorldState* world = world_reader.latest();
-  // Loops found now deliver their last stats (history) once subscribed: a moment.
   LoopStatsReader loop_reader;
-  std::vector<LoopStats> loops = loop_reader.latest();
-  std::this_thread::sleep_for(std::chrono::milliseconds(50));
-  loops = loop_reader.latest();
+  const std::vector<LoopStats> loops = loop_reader.all(std::chrono::milliseconds(1100));
   if (options.json)
     std::printf("%s\n", status_json(health, bodies, world, loops).c_str());
   else

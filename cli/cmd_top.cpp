@@ -26,13 +26,7 @@ int run_top(const TopOptions& options) {
   if (!options.once && !options.json) survive_hub_loss("afhub top");
   connect_to_hub("top", HubPolicy::kRequire);
   LoopStatsReader reader;
-  // Loops publish once a second: the first table waits up to that long for them.
-  std::vector<LoopStats> loops;
-  for (int waited_ms = 0; waited_ms <= 1100 && !stop_requested(); waited_ms += 50) {
-    loops = reader.latest();
-    if (!loops.empty() && waited_ms >= 100) break;
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
-  }
+  std::vector<LoopStats> loops = reader.all(std::chrono::milliseconds(1100));
   for (;;) {
     if (options.json) {
       JsonWriter json;

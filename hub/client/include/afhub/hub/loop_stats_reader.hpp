@@ -2,6 +2,7 @@
 // service discovery: what `afhub status` and `afhub top` show.
 #pragma once
 
+#include <chrono>
 #include <map>
 #include <memory>
 #include <string>
@@ -18,6 +19,11 @@ class LoopStatsReader {
   // The newest stats of each live loop, ordered by process name. A loop that just
   // appeared may have published nothing yet: it is left out until it does.
   std::vector<LoopStats> latest();
+
+  // The same, for a reader just opened: waits until every live loop has delivered (a
+  // subscriber gets a loop's last stats on connecting, which iceoryx does for each reader
+  // in its own discovery round; a loop publishes once a second) or `limit` has passed.
+  std::vector<LoopStats> all(std::chrono::milliseconds limit);
 
  private:
   ChannelDiscovery discovery_;
