@@ -136,6 +136,7 @@ void expect_physics_loop_allocation_free(const std::vector<std::string>& files,
     sim.step();
     channels.publish({});
     channels.publish_view(std::int64_t{++cycle} * 1'000'000);
+    channels.prepare_next_step();
     if (viewer.latest() && viewer.updated()) ++viewer_updates;
     while (recorder.next(*tape)) taped_steps += tape->last_part;
     const BodyState* state = controller.latest_state();

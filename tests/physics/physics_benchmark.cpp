@@ -5,6 +5,7 @@
 #include <benchmark/benchmark.h>
 
 #include <linux/futex.h>
+#include <pthread.h>
 #include <signal.h>
 #include <sys/mman.h>
 #include <sys/syscall.h>
@@ -230,7 +231,10 @@ void BM_Step(benchmark::State& state, const std::string& file, bool publish, boo
   StepTimes times(1 << 22);
   for (auto _ : state) {
     timed_step(sim, channels.get(), times);
-    if (channels) channels->publish_view(clock_ns += 1'000'000);
+    if (channels) {
+      channels->publish_view(clock_ns += 1'000'000);
+      channels->prepare_next_step();
+    }
     if (tape) tape->drain();
   }
   state.counters["bodies"] = static_cast<double>(model.bodies.size());
@@ -260,8 +264,48 @@ void BM_LoopStep(benchmark::State& state, const std::string& file, bool direct) 
 // The example scene (`afhub run --launch examples/models/launch.yaml -l 0,1,2`: a
 // 7-joint arm, the remote-centre-of-motion arm's loops, a gripper, the floor) stepped
 // with its islands of joints solved directly and iterated, in one run.
+// How a recorder reads the scene's step tape: not at all; drained by the stepping thread
+// between steps; or from the other CPU every millisecond, as `afhub record` reads it
+// from another process, with or without the tape's next part readied between steps
+// (SimChannels::prepare_next_step, as `afhub run` does).
+enum class Tape { kNone, kSameThread, kOtherCpu, kOtherCpuUnprepared };
+
+// The stepping thread on CPU 0 and a reader draining the tape on CPU 1 until destroyed
+// (then the stepping thread may run where it ran before).
+struct OtherCpuDrain {
+  explicit OtherCpuDrain(TapeDrain& tape) {
+    pthread_getaffinity_np(pthread_self(), sizeof before, &before);
+    cpu_set_t cpus;
+    CPU_ZERO(&cpus);
+    CPU_SET(0, &cpus);
+    pinned = pthread_setaffinity_np(pthread_self(), sizeof cpus, &cpus) == 0;
+    reader = std::thread([this, &tape] {
+      cpu_set_t other;
+      CPU_ZERO(&other);
+      CPU_SET(1, &other);
+      pthread_setaffinity_np(pthread_self(), sizeof other, &other);
+      while (!stop.load()) {
+        tape.drain();
+        std::this_thread::sleep_for(std::chrono::milliseconds(1));
+      }
+    });
+  }
+  ~OtherCpuDrain() {
+    stop.store(true);
+    reader.join();
+    pthread_setaffinity_np(pthread_self(), sizeof before, &before);
+  }
+  cpu_set_t before{};
+  bool pinned = false;
+  std::atomic<bool> stop{false};
+  std::thread reader;
+};
+
+// The example scene (`afhub run --launch examples/models/launch.yaml -l 0,1,2`: a
+// 7-joint arm, the remote-centre-of-motion arm's loops, a gripper, the floor) stepped
+// with its islands of joints solved directly and iterated, in one run.
 void BM_ExampleSceneStep(benchmark::State& state, bool direct, bool publish = false,
-                         bool taped = false) {
+                         Tape taped = Tape::kNone) {
   SceneRequest request;
   request.launch_file = AFHUB_EXAMPLE_MODELS "/launch.yaml";
   request.launch_indices = {0, 1, 2};
@@ -271,11 +315,18 @@ void BM_ExampleSceneStep(benchmark::State& state, bool direct, bool publish = fa
   std::unique_ptr<SimChannels> channels;
   if (publish) channels = channels_for(sim);
   std::unique_ptr<TapeDrain> tape;
-  if (taped) tape = connect_tape(state, sim, channels.get(), model.bodies);
+  if (taped != Tape::kNone) tape = connect_tape(state, sim, channels.get(), model.bodies);
+  std::unique_ptr<OtherCpuDrain> other;
+  if (tape && taped != Tape::kSameThread) {
+    other = std::make_unique<OtherCpuDrain>(*tape);
+    if (!other->pinned || std::thread::hardware_concurrency() < 2)
+      state.SkipWithError("needs two CPUs");
+  }
   StepTimes times(1 << 22);
   for (auto _ : state) {
     timed_step(sim, channels.get(), times);
-    if (tape) tape->drain();
+    if (channels && taped != Tape::kOtherCpuUnprepared) channels->prepare_next_step();
+    if (taped == Tape::kSameThread) tape->drain();
   }
   report_step_times(state, times);
 }
@@ -284,7 +335,12 @@ BENCHMARK_CAPTURE(BM_ExampleSceneStep, iterated, false)->Unit(benchmark::kMicros
 // What `bench/record_bench.sh` measures across processes, in one: the scene's states
 // published, and taped for a recorder of all its bodies.
 BENCHMARK_CAPTURE(BM_ExampleSceneStep, published, true, true)->Unit(benchmark::kMicrosecond);
-BENCHMARK_CAPTURE(BM_ExampleSceneStep, published_taped, true, true, true)
+BENCHMARK_CAPTURE(BM_ExampleSceneStep, published_taped, true, true, Tape::kSameThread)
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_ExampleSceneStep, published_taped_other_cpu, true, true, Tape::kOtherCpu)
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_ExampleSceneStep, published_taped_other_cpu_unprepared, true, true,
+                  Tape::kOtherCpuUnprepared)
     ->Unit(benchmark::kMicrosecond);
 
 BENCHMARK_CAPTURE(BM_LoopStep, ecm_direct, kEcm, true)->Unit(benchmark::kMicrosecond);
@@ -327,6 +383,7 @@ void BM_StepThousandBodies(benchmark::State& state, bool publish, bool commanded
         body->publish_command(command);
       }
     timed_step(sim, channels.get(), times);
+    if (channels) channels->prepare_next_step();
     if (tape) tape->drain();
     ++step;
   }

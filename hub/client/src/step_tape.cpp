@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <cstring>
+#include <utility>
 
 #include "afhub/hub/hub_health.hpp"
 #include "afhub/shm_layout/channel_names.hpp"
@@ -35,7 +36,8 @@ bool StepTapeWriter::begin(std::uint64_t step, double time_s) noexcept {
 
 // A new part to fill, loaned whole so that it comes from the tape's own pool.
 bool StepTapeWriter::next_part() noexcept {
-  tape_ = static_cast<StepTape*>(writer_.loan(sizeof(StepTape)));
+  tape_ = part_ == 0 && prepared_ ? std::exchange(prepared_, nullptr)
+                                  : static_cast<StepTape*>(writer_.loan(sizeof(StepTape)));
   if (!tape_) {
     lost_ = true;  // shared memory exhausted: the rest of the step's tape is missed
     return false;
@@ -59,7 +61,7 @@ void StepTapeWriter::add(PayloadKind kind, std::string_view channel, const void*
     return;
   }
   if (tape_->data_bytes + need > tape_->data.size()) {
-    writer_.publish(tape_);
+    publish_part();
     if (!next_part()) return;
   }
   std::uint8_t* at = tape_->data.data() + tape_->data_bytes;
@@ -75,8 +77,19 @@ void StepTapeWriter::add(PayloadKind kind, std::string_view channel, const void*
 void StepTapeWriter::finish() noexcept {
   if (!tape_) return;
   tape_->last_part = lost_ ? 0 : 1;
-  writer_.publish(tape_);
+  publish_part();
   tape_ = nullptr;
+}
+
+void StepTapeWriter::publish_part() noexcept {
+  if (tape_->part == 0) first_part_bytes_ = tape_->data_bytes;
+  writer_.publish(tape_);
+}
+
+void StepTapeWriter::prepare() noexcept {
+  if (prepared_ || !writer_.has_readers()) return;
+  prepared_ = static_cast<StepTape*>(writer_.loan(sizeof(StepTape)));
+  if (prepared_) std::memset(prepared_->data.data(), 0, first_part_bytes_);
 }
 
 struct StepTapeReader::Port {

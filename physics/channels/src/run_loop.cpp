@@ -137,6 +137,7 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
       late_counted = channels->late_answers();
       stats->maybe_publish(now_ns, report.timing);
       channels->publish_view(now_ns);
+      channels->prepare_next_step();
     }
     rate.update(now_ns, report.steps, !control.halted());
     achieved_rate_hz = rate.rate_hz();

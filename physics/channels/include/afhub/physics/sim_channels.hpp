@@ -120,6 +120,9 @@ class SimChannels {
   // cycle's `after`, with the loop statistics): the states are out by then, and no
   // controller waits for it.
   void publish_view(std::int64_t now_ns) noexcept;
+  // Between steps, outside the timed step: readies the step tape's next part
+  // (StepTapeWriter::prepare) while a recorder reads the tape.
+  void prepare_next_step() noexcept { tape_.prepare(); }
   // The next world command not acted on before, oldest first, copied into `out`;
   // false when none waits. Commands published before this SimChannels existed (a
   // live writer's history seen by a restarted physics) are skipped.
