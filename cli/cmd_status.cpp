@@ -49,7 +49,7 @@ int run_status(const StatusOptions& options) {
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
   const WorldState* world = world_reader.latest();
   LoopStatsReader loop_reader;
-  const std::vector<LoopStats> loops = loop_reader.all(std::chrono::milliseconds(1100));
+  const std::vector<LoopStats> loops = loop_reader.all(std::chrono::seconds(2));
   if (options.json)
     std::printf("%s\n", status_json(health, bodies, world, loops).c_str());
   else

@@ -26,7 +26,7 @@ int run_top(const TopOptions& options) {
   if (!options.once && !options.json) survive_hub_loss("afhub top");
   connect_to_hub("top", HubPolicy::kRequire);
   LoopStatsReader reader;
-  std::vector<LoopStats> loops = reader.all(std::chrono::milliseconds(1100));
+  std::vector<LoopStats> loops = reader.all(std::chrono::seconds(2));
   for (;;) {
     if (options.json) {
       JsonWriter json;

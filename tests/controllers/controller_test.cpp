@@ -149,21 +149,16 @@ TEST(Controllers, KilledControllerTripsTheHoldWatchdogAndARestartTakesOver) {
   // Held: the joints stay where the watchdog found them, mid-swing, while the physics
   // runs on (after a moment to absorb the swing's speed).
   std::this_thread::sleep_for(300ms);
-  // A state holds its body's joints only (body_state_bytes): copied joint by joint.
-  const auto joint_positions = [&] {
-    const BodyState* state = base.latest_state();
-    std::array<double, 7> positions{};
-    for (int j = 0; j < 7; ++j) positions[j] = state->joints[j].position;
-    return positions;
-  };
-  const auto held_step = base.latest_state()->header.sim_step;
-  const std::array<double, 7> held = joint_positions();
+  // A state holds its body's joints only (body_state_bytes): copied as far as they go.
+  BodyState held, later;
+  copy_body_state(*base.latest_state(), held);
   // 500 steps on, counted in steps, not timed (the wait only bounds a hang).
-  EXPECT_TRUE(
-      wait_until([&] { return base.latest_state()->header.sim_step > held_step + 500; }, 10s))
+  EXPECT_TRUE(wait_until(
+      [&] { return base.latest_state()->header.sim_step > held.header.sim_step + 500; }, 10s))
       << "the physics stopped stepping";
-  const std::array<double, 7> later = joint_positions();
-  for (int j = 0; j < 7; ++j) EXPECT_NEAR(later[j], held[j], 0.005) << "joint " << j;
+  copy_body_state(*base.latest_state(), later);
+  for (int j = 0; j < 7; ++j)
+    EXPECT_NEAR(later.joints[j].position, held.joints[j].position, 0.005) << "joint " << j;
 
   // A restarted controller takes over: its commands arrive and none is refused. It
   // holds the machine's CPU wake-up latency limit at 0 while it runs (needs root).

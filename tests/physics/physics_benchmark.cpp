@@ -17,6 +17,7 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <future>
 #include <new>
 #include <string>
 #include <thread>
@@ -261,39 +262,44 @@ void BM_LoopStep(benchmark::State& state, const std::string& file, bool direct) 
   for (auto _ : state) timed_step(sim, nullptr, times);
   report_step_times(state, times);
 }
-// The example scene (`afhub run --launch examples/models/launch.yaml -l 0,1,2`: a
-// 7-joint arm, the remote-centre-of-motion arm's loops, a gripper, the floor) stepped
-// with its islands of joints solved directly and iterated, in one run.
+
 // How a recorder reads the scene's step tape: not at all; drained by the stepping thread
 // between steps; or from the other CPU every millisecond, as `afhub record` reads it
 // from another process, with or without the tape's next part readied between steps
 // (SimChannels::prepare_next_step, as `afhub run` does).
 enum class Tape { kNone, kSameThread, kOtherCpu, kOtherCpuUnprepared };
 
-// The stepping thread on CPU 0 and a reader draining the tape on CPU 1 until destroyed
-// (then the stepping thread may run where it ran before).
+// The stepping thread on the first CPU it may run on and a reader draining the tape on
+// the second until destroyed (then the stepping thread may run where it ran before).
+// `pinned`: both are where they should be (false with fewer than two CPUs allowed).
 struct OtherCpuDrain {
   explicit OtherCpuDrain(TapeDrain& tape) {
     pthread_getaffinity_np(pthread_self(), sizeof before, &before);
-    cpu_set_t cpus;
-    CPU_ZERO(&cpus);
-    CPU_SET(0, &cpus);
-    pinned = pthread_setaffinity_np(pthread_self(), sizeof cpus, &cpus) == 0;
-    reader = std::thread([this, &tape] {
-      cpu_set_t other;
-      CPU_ZERO(&other);
-      CPU_SET(1, &other);
-      pthread_setaffinity_np(pthread_self(), sizeof other, &other);
+    std::vector<int> allowed;
+    for (int cpu = 0; cpu < CPU_SETSIZE && allowed.size() < 2; ++cpu)
+      if (CPU_ISSET(cpu, &before)) allowed.push_back(cpu);
+    if (allowed.size() < 2 || !pin(pthread_self(), allowed[0])) return;
+    std::promise<bool> reader_pinned;
+    std::future<bool> reader_pinned_result = reader_pinned.get_future();
+    reader = std::thread([this, &tape, &reader_pinned, cpu = allowed[1]] {
+      reader_pinned.set_value(pin(pthread_self(), cpu));
       while (!stop.load()) {
         tape.drain();
         std::this_thread::sleep_for(std::chrono::milliseconds(1));
       }
     });
+    pinned = reader_pinned_result.get();
   }
   ~OtherCpuDrain() {
     stop.store(true);
-    reader.join();
+    if (reader.joinable()) reader.join();
     pthread_setaffinity_np(pthread_self(), sizeof before, &before);
+  }
+  static bool pin(pthread_t thread, int cpu) {
+    cpu_set_t cpus;
+    CPU_ZERO(&cpus);
+    CPU_SET(cpu, &cpus);
+    return pthread_setaffinity_np(thread, sizeof cpus, &cpus) == 0;
   }
   cpu_set_t before{};
   bool pinned = false;
@@ -319,8 +325,7 @@ void BM_ExampleSceneStep(benchmark::State& state, bool direct, bool publish = fa
   std::unique_ptr<OtherCpuDrain> other;
   if (tape && taped != Tape::kSameThread) {
     other = std::make_unique<OtherCpuDrain>(*tape);
-    if (!other->pinned || std::thread::hardware_concurrency() < 2)
-      state.SkipWithError("needs two CPUs");
+    if (!other->pinned) state.SkipWithError("needs two CPUs to run on");
   }
   StepTimes times(1 << 22);
   for (auto _ : state) {

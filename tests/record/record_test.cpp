@@ -163,10 +163,15 @@ TEST(Record, EveryBodyOfASceneUnderControlIsRecordedAndAnIndependentReaderAgrees
   const std::uint64_t steps = counts["/world/state"];
   EXPECT_GT(steps, 1000u) << "the physics ran for the 3 s recorded";
   const std::map<std::string, RecordedSpan> spans = recorded_spans(file);
+  ASSERT_TRUE(spans.contains("/world/state")) << info.dump();
   const RecordedSpan& world = spans.at("/world/state");
   for (const auto& [topic, channel] : by_topic) {
     if (channel["schema"] != "afhub.BodyState") continue;
     states.erase(topic);
+    if (!spans.contains(topic)) {
+      ADD_FAILURE() << topic << " has a channel and no message";
+      continue;
+    }
     const RecordedSpan& body = spans.at(topic);
     EXPECT_EQ(channel["skipped"], 0) << topic;
     EXPECT_EQ(body.messages, body.last_step - body.first_step + 1) << topic;

@@ -131,6 +131,10 @@ void RawWriter::publish(void* payload, std::int64_t stamp_ns) noexcept {
     port_->publisher.publish(payload);
 }
 
+void RawWriter::release(void* payload) noexcept {
+  if (!slot_kind_) port_->publisher.release(payload);
+}
+
 bool RawWriter::has_readers() const noexcept {
   if (slot_kind_) return slot_.entry && slot_.entry->readers.load(std::memory_order_relaxed) > 0;
   return port_->publisher.hasSubscribers();

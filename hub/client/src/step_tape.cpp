@@ -2,6 +2,7 @@
 #include "afhub/hub/step_tape.hpp"
 
 #include <algorithm>
+#include <cstddef>
 #include <cstdio>
 #include <cstring>
 #include <utility>
@@ -22,6 +23,10 @@ ChannelId tape_channel(const std::string& world_instance) {
 
 StepTapeWriter::StepTapeWriter(const std::string& world_instance)
     : writer_(tape_channel(world_instance), PayloadKind::kStepTape) {}
+
+StepTapeWriter::~StepTapeWriter() {
+  if (prepared_) writer_.release(prepared_);
+}
 
 bool StepTapeWriter::begin(std::uint64_t step, double time_s) noexcept {
   finish();  // a step left unfinished goes out as it is, never held
@@ -87,9 +92,14 @@ void StepTapeWriter::publish_part() noexcept {
 }
 
 void StepTapeWriter::prepare() noexcept {
-  if (prepared_ || !writer_.has_readers()) return;
+  if (!writer_.has_readers()) {
+    if (prepared_) writer_.release(std::exchange(prepared_, nullptr));
+    return;
+  }
+  if (prepared_) return;
   prepared_ = static_cast<StepTape*>(writer_.loan(sizeof(StepTape)));
-  if (prepared_) std::memset(prepared_->data.data(), 0, first_part_bytes_);
+  if (prepared_)
+    std::memset(static_cast<void*>(prepared_), 0, offsetof(StepTape, data) + first_part_bytes_);
 }
 
 struct StepTapeReader::Port {

@@ -61,6 +61,9 @@ class RawWriter {
   // one read for many payloads published together (a physics' step).
   void publish(void* payload, std::int64_t stamp_ns) noexcept;
 
+  // Gives back a payload loaned and not published (queue kinds).
+  void release(void* payload) noexcept;
+
   const ChannelId& channel() const { return channel_; }
   // Whether any reader is subscribed now (on a queue, each one costs every publish).
   bool has_readers() const noexcept;

@@ -22,7 +22,8 @@ class LoopStatsReader {
 
   // The same, for a reader just opened: waits until every live loop has delivered (a
   // subscriber gets a loop's last stats on connecting, which iceoryx does for each reader
-  // in its own discovery round; a loop publishes once a second) or `limit` has passed.
+  // in its own discovery round; a loop publishes a second into its run, then each second)
+  // or `limit` has passed. With no loop running it returns as soon as it can tell.
   std::vector<LoopStats> all(std::chrono::milliseconds limit);
 
  private:

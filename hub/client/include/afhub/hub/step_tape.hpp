@@ -16,6 +16,9 @@ namespace afhub {
 class StepTapeWriter {
  public:
   explicit StepTapeWriter(const std::string& world_instance);
+  ~StepTapeWriter();
+  StepTapeWriter(const StepTapeWriter&) = delete;
+  StepTapeWriter& operator=(const StepTapeWriter&) = delete;
 
   // Starts a step's tape when something reads it (false: nothing to write this step).
   bool begin(std::uint64_t step, double time_s) noexcept;
@@ -26,11 +29,12 @@ class StepTapeWriter {
   // Publishes the step's last part.
   void finish() noexcept;
   // Between steps, while something reads the tape: loans the next step's first part and
-  // writes over as many bytes as the last step's first part held. A part comes back to
-  // the physics after its reader's core has read it, and taking each of its lines back
-  // from that core cost the step: publishing the example scene took 1.1 us untaped, 8.1
-  // us taped for a reader on the other CPU, 2.0 us with the part readied here
-  // (physics_benchmark's ExampleSceneStep/published*, one run).
+  // writes over as many bytes as the last step's first part held (with no reader, gives
+  // back a part it holds). A part comes back to the physics after its reader's core has
+  // read it, and taking each of its lines back from that core cost the step: publishing
+  // the example scene took 1.2 us untaped, 7.5 to 8.1 us taped for a reader on the
+  // other CPU, 2.0 to 2.2 us with the part readied here (physics_benchmark's
+  // ExampleSceneStep/published*).
   void prepare() noexcept;
 
  private:
