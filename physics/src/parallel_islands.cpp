@@ -29,6 +29,7 @@ void ParallelIslands::solve_one(ConstraintSolver& solver, int island) noexcept {
   solver.solveGroup(bodies_ + i.first_body, i.body_count, i.manifolds, i.manifold_count,
                     i.constraint_count ? constraints_ + i.first_constraint : nullptr,
                     i.constraint_count, *info_, nullptr, nullptr);
+  if (after_) after_->island_solved(bodies_ + i.first_body, i.body_count);
 }
 
 // The stepping thread's scheduling and CPUs, given to the helper when they change (the
@@ -55,12 +56,13 @@ bool ParallelIslands::follow_stepping_thread() noexcept {
 
 void ParallelIslands::solve(ConstraintSolver& own, const std::vector<Island>& islands,
                             btCollisionObject** bodies, btTypedConstraint** constraints,
-                            const btContactSolverInfo& info) noexcept {
+                            const btContactSolverInfo& info, AfterIsland* after) noexcept {
   const int count = static_cast<int>(islands.size());
   islands_ = &islands;
   bodies_ = bodies;
   constraints_ = constraints;
   info_ = &info;
+  after_ = after;
   if (count < kMinIslands || count >= static_cast<int>(kFieldMask) || !follow_stepping_thread()) {
     for (int i = 0; i < count; ++i) solve_one(own, i);
     return;

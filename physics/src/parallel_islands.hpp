@@ -45,6 +45,16 @@ class ParallelIslands {
     int first_constraint, constraint_count;  // in the constraints array
   };
 
+  // Work on an island's bodies that has to wait for its solve, done by the thread
+  // that solved it straight after, while the bodies are in that thread's cache.
+  class AfterIsland {
+   public:
+    virtual void island_solved(btCollisionObject** bodies, int count) noexcept = 0;
+
+   protected:
+    ~AfterIsland() = default;
+  };
+
   // The helper's solver is made like the world's: ConstraintSolver(bodies, joints),
   // with the direct solve (islands are solved one at a time only with it).
   ParallelIslands(int bodies, int joints);
@@ -52,10 +62,11 @@ class ParallelIslands {
   ParallelIslands(const ParallelIslands&) = delete;
   ParallelIslands& operator=(const ParallelIslands&) = delete;
 
-  // Solves every island, `own` solving those the stepping thread takes; returns when
-  // all are solved.
+  // Solves every island, `own` solving those the stepping thread takes, each followed
+  // by `after` (if given) on the same thread; returns when all are done.
   void solve(ConstraintSolver& own, const std::vector<Island>& islands, btCollisionObject** bodies,
-             btTypedConstraint** constraints, const btContactSolverInfo& info) noexcept;
+             btTypedConstraint** constraints, const btContactSolverInfo& info,
+             AfterIsland* after) noexcept;
   // Islands the helper solved, since the start.
   std::uint64_t helped() const noexcept { return helped_.load(std::memory_order_relaxed); }
 
@@ -79,6 +90,7 @@ class ParallelIslands {
   btCollisionObject** bodies_ = nullptr;
   btTypedConstraint** constraints_ = nullptr;
   const btContactSolverInfo* info_ = nullptr;
+  AfterIsland* after_ = nullptr;
 
   // The stepping thread's policy, priority and CPUs, last applied to the helper.
   int policy_ = -1, priority_ = -1;

@@ -28,9 +28,50 @@ void ReservedWorld::solve_islands_in_parallel(int bodies, int joints, int object
   parallel_ = std::make_unique<ParallelIslands>(bodies, joints);
   islands_.reserve(objects);
   island_bodies_.reserve(objects);
+  integrated_.assign(objects, 0);
+  unintegrated_.reserve(objects);
+}
+
+// As Bullet's integrateTransformsInternal does for one body, unless the body is to be
+// swept for continuous collision (which reads the broadphase: left to the stepping
+// thread).
+void ReservedWorld::island_solved(btCollisionObject** bodies, int count) noexcept {
+  const btScalar dt = getSolverInfo().m_timeStep;
+  for (int i = 0; i < count; ++i) {
+    btRigidBody* body = btRigidBody::upcast(bodies[i]);
+    const auto index = static_cast<std::size_t>(bodies[i]->getWorldArrayIndex());
+    if (!body || index >= integrated_.size() || !body->isActive() ||
+        body->isStaticOrKinematicObject())
+      continue;
+    btTransform next;
+    body->predictIntegratedTransform(dt, next);
+    const btScalar threshold = body->getCcdSquareMotionThreshold();
+    if (getDispatchInfo().m_useContinuous && threshold != 0 &&
+        threshold < (next.getOrigin() - body->getWorldTransform().getOrigin()).length2())
+      continue;
+    body->setHitFraction(1);
+    body->proceedToTransform(next);
+    integrated_[index] = stamp_;
+  }
+}
+
+void ReservedWorld::integrateTransforms(btScalar dt) {
+  if (!parallel_ || m_applySpeculativeContactRestitution) {
+    btSoftRigidDynamicsWorld::integrateTransforms(dt);
+    return;
+  }
+  unintegrated_.clear();
+  for (int i = 0; i < m_nonStaticRigidBodies.size(); ++i) {
+    btRigidBody* body = m_nonStaticRigidBodies[i];
+    const auto index = static_cast<std::size_t>(body->getWorldArrayIndex());
+    if (index >= integrated_.size() || integrated_[index] != stamp_) unintegrated_.push_back(body);
+  }
+  if (!unintegrated_.empty())
+    integrateTransformsInternal(unintegrated_.data(), static_cast<int>(unintegrated_.size()), dt);
 }
 
 void ReservedWorld::solveConstraints(btContactSolverInfo& info) {
+  if (++stamp_ == 0) ++stamp_;  // 0: never integrated
   if (info.m_minimumSolverBatchSize > 1) {
     btSoftRigidDynamicsWorld::solveConstraints(info);
     return;
@@ -79,7 +120,8 @@ void ReservedWorld::solveConstraints(btContactSolverInfo& info) {
   m_islandManager->buildAndProcessIslands(getDispatcher(), this, &islands);
   if (parallel_)
     parallel_->solve(static_cast<ConstraintSolver&>(*m_constraintSolver), islands_,
-                     island_bodies_.data(), sorted_.data(), info);
+                     island_bodies_.data(), sorted_.data(), info,
+                     m_applySpeculativeContactRestitution ? nullptr : this);
   m_constraintSolver->allSolved(info, m_debugDrawer);
 }
 
