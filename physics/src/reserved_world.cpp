@@ -55,6 +55,17 @@ void ReservedWorld::island_solved(btCollisionObject** bodies, int count) noexcep
   }
 }
 
+void ReservedWorld::predictUnconstraintMotion(btScalar dt) {
+  if (getDispatchInfo().m_useContinuous) {
+    btSoftRigidDynamicsWorld::predictUnconstraintMotion(dt);
+    return;
+  }
+  for (int i = 0; i < m_nonStaticRigidBodies.size(); ++i)
+    if (!m_nonStaticRigidBodies[i]->isStaticOrKinematicObject())
+      m_nonStaticRigidBodies[i]->applyDamping(dt);
+  soft_solver_.predictMotion(static_cast<float>(dt));  // as Bullet's soft world does
+}
+
 void ReservedWorld::integrateTransforms(btScalar dt) {
   if (!parallel_ || m_applySpeculativeContactRestitution) {
     btSoftRigidDynamicsWorld::integrateTransforms(dt);

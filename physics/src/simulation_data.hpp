@@ -10,6 +10,7 @@
 //   simulation.cpp             construction, the step, reset
 #pragma once
 
+#include <BulletSoftBody/btDefaultSoftBodySolver.h>
 #include <BulletSoftBody/btSoftBodyRigidBodyCollisionConfiguration.h>
 #include <BulletSoftBody/btSoftRigidDynamicsWorld.h>
 
@@ -139,7 +140,8 @@ struct Simulation::Data {
   btCollisionDispatcher dispatcher{&collision_config};
   btDbvtBroadphase broadphase;
   ConstraintSolver solver;
-  ReservedWorld world{&dispatcher, &broadphase, &solver, &collision_config};
+  btDefaultSoftBodySolver soft_solver;
+  ReservedWorld world{&dispatcher, &broadphase, &solver, &collision_config, &soft_solver};
   CollisionFilter filter;
 
   std::vector<BodyData> bodies;
