@@ -14,7 +14,6 @@ constexpr std::uint64_t kJobMask = (std::uint64_t{1} << (64 - 2 * ParallelIsland
 constexpr int kSpinsBeforeYield = 4096;  // 0.1 to 0.3 ms of pauses: a few islands
 // Between jobs the helper naps this long at a time (await_job), for this long at most.
 constexpr std::chrono::nanoseconds kNap{20'000};
-constexpr std::chrono::microseconds kEarly{150};
 constexpr std::chrono::milliseconds kNapping{20};
 
 }  // namespace
@@ -80,8 +79,6 @@ void ParallelIslands::solve(ConstraintSolver& own, const std::vector<Island>& is
   }
   const std::uint32_t job = job_.load(std::memory_order_relaxed) + 1;
   solved_.store(0, std::memory_order_relaxed);
-  posted_.store(std::chrono::steady_clock::now().time_since_epoch().count(),
-                std::memory_order_relaxed);
   // Front: the next island from the start (this thread's); back: one past the last
   // left from the end (the helper's). Each thread tends to get the same islands every
   // step, whose joints and solver data stay in its cache.
@@ -114,41 +111,22 @@ void ParallelIslands::solve(ConstraintSolver& own, const std::vector<Island>& is
 
 // Returns once job_ has moved on from `seen`. Waking a thread asleep on a futex cost
 // the stepping thread 40 to 50 us a step on the project's VM (the interrupt to the
-// halted vCPU goes through the hypervisor), so between jobs the helper sleeps on
-// timers, which end on its own CPU, and the stepping thread's notify_one() finds no
-// one waiting and makes no system call: first until kEarly before the next job is
-// due (jobs come once a step: as far apart as the last two were posted, if under
-// kNapping), then
-// in naps of kNap. After kNapping without a job (a paused or slow world) it sleeps
-// until notified.
-void ParallelIslands::await_job(std::uint32_t seen) noexcept {
-  using Clock = std::chrono::steady_clock;
-  const auto arrived = [&] { return job_.load(std::memory_order_acquire) != seen; };
-  const Clock::time_point start = Clock::now();
-  if (job_interval_ > kEarly && job_interval_ < kNapping && !arrived()) {
-    const auto due = std::chrono::duration_cast<std::chrono::nanoseconds>(
-        (last_job_ + job_interval_ - kEarly).time_since_epoch());
-    const timespec until{static_cast<time_t>(due.count() / 1'000'000'000),
-                         static_cast<long>(due.count() % 1'000'000'000)};
-    if (due > start.time_since_epoch())
-      clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &until, nullptr);
-  }
-  while (!arrived()) {
-    if (Clock::now() - start > kNapping) {
+// halted vCPU goes through the hypervisor), so between jobs the helper naps in short
+// timed sleeps, which end on its own CPU's timer, and the stepping thread's
+// notify_one() finds no one waiting and makes no system call. Sleeping until shortly
+// before the next job was due instead (jobs come once a step) cost less CPU but made
+// the step's p99 worse: a long sleep lets the vCPU halt, and it wakes late. After
+// kNapping without a job (a paused or slow world) it sleeps until notified.
+void ParallelIslands::await_job(std::uint32_t seen) const noexcept {
+  const auto start = std::chrono::steady_clock::now();
+  while (job_.load(std::memory_order_acquire) == seen) {
+    if (std::chrono::steady_clock::now() - start > kNapping) {
       job_.wait(seen, std::memory_order_acquire);
-      break;
+      return;
     }
     const timespec nap{0, kNap.count()};
     nanosleep(&nap, nullptr);
   }
-  // The interval is taken to be the shortest lately: it follows a shorter one at once
-  // and a longer one by an eighth of the difference a job.
-  const Clock::time_point posted{Clock::duration(posted_.load(std::memory_order_relaxed))};
-  const Clock::duration interval = posted - last_job_;
-  job_interval_ = interval < job_interval_ || job_interval_ >= kNapping
-                      ? interval
-                      : job_interval_ + (interval - job_interval_) / 8;
-  last_job_ = posted;
 }
 
 void ParallelIslands::help() noexcept {

@@ -15,7 +15,7 @@
 // project's VM): it waits only for the island the helper is in the middle of. From the
 // ends, each thread tends to solve the same islands every step, whose joints stay in
 // its cache (0.94x the step of one shared counter, median of 7 interleaved rounds).
-// Between steps the helper sleeps on timers rather than waiting to be woken: waking it
+// Between steps the helper naps on a timer rather than waiting to be woken: waking it
 // cost the stepping thread 40 to 50 us a step on the project's VM (await_job in the
 // .cpp). Each island's bodies are integrated by the thread that solved it
 // (AfterIsland, reserved_world.hpp).
@@ -27,7 +27,6 @@
 #include <sched.h>
 
 #include <atomic>
-#include <chrono>
 #include <cstdint>
 #include <thread>
 #include <vector>
@@ -78,7 +77,7 @@ class ParallelIslands {
  private:
   void solve_one(ConstraintSolver& solver, int island) noexcept;
   void help() noexcept;
-  void await_job(std::uint32_t seen) noexcept;
+  void await_job(std::uint32_t seen) const noexcept;
   bool follow_stepping_thread() noexcept;
 
   // A job's islands are taken one at a time from `ticket_`: its job number (the top 24
@@ -102,12 +101,6 @@ class ParallelIslands {
   int policy_ = -1, priority_ = -1;
   cpu_set_t cpus_{};
   bool alone_ = false;  // the stepping thread may run on one CPU only
-
-  // When the last job was posted (steady_clock ticks); the helper's copy of it, and
-  // the time from the one before.
-  std::atomic<std::int64_t> posted_{0};
-  std::chrono::steady_clock::time_point last_job_{};
-  std::chrono::steady_clock::duration job_interval_{};
 
   ConstraintSolver solver_;
   std::thread helper_;

@@ -152,10 +152,10 @@ TEST(Islands, TwoThreadsSolveManyArmsBitForBitAsOneDoes) {
   EXPECT_GT(travel, 0.1);
 }
 
-// Between steps the helper sleeps on timers, due shortly before the next step's
-// islands, and after 20 ms without any on the job counter until the stepping thread
-// wakes it (physics/src/parallel_islands.cpp). Stepped at 1 kHz, then paused for
-// 60 ms, then stepped again: the helper solves islands in both runs.
+// Between steps the helper naps on a timer, and after 20 ms without islands sleeps on
+// the job counter until the stepping thread wakes it (physics/src/parallel_islands.cpp).
+// Stepped at 1 kHz, then paused for 60 ms, then stepped again: the helper solves
+// islands in both runs.
 TEST(Islands, TheHelperSolvesAtOneKilohertzAndAfterAPause) {
   cpu_set_t cpus;
   ASSERT_EQ(sched_getaffinity(0, sizeof cpus, &cpus), 0);
