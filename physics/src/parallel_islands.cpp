@@ -55,6 +55,8 @@ bool ParallelIslands::follow_stepping_thread() noexcept {
     return !alone_;
   policy_ = policy;
   priority_ = param.sched_priority;
+  job_policy_.store(policy, std::memory_order_relaxed);
+  job_priority_.store(param.sched_priority, std::memory_order_relaxed);
   cpus_ = cpus;
   // A helper refused the stepping thread's priority could wait behind it on its CPU
   // while it waits for the helper's island: then the stepping thread solves alone.
@@ -129,12 +131,27 @@ void ParallelIslands::await_job(std::uint32_t seen) const noexcept {
   }
 }
 
+// Under a real-time stepping thread, the helper takes its policy and priority only
+// while it solves (follow_stepping_thread gave them, proving it may): napping at that
+// priority would preempt whatever runs on the other CPU, a 1 kHz controller say, every
+// kNap. Napping under the normal scheduler, it waits for such a controller instead,
+// and the stepping thread solves the islands it does not come for.
+void ParallelIslands::schedule_helper(bool solving) const noexcept {
+  const int policy = job_policy_.load(std::memory_order_relaxed);
+  if (policy != SCHED_FIFO && policy != SCHED_RR) return;
+  sched_param param{};
+  param.sched_priority = solving ? job_priority_.load(std::memory_order_relaxed) : 0;
+  pthread_setschedparam(pthread_self(), solving ? policy : SCHED_OTHER, &param);
+}
+
 void ParallelIslands::help() noexcept {
   std::uint32_t seen = 0;
   for (;;) {
+    schedule_helper(false);
     await_job(seen);
     if (stopping_.load()) return;
     seen = job_.load(std::memory_order_acquire);
+    schedule_helper(true);
     std::uint64_t ticket = ticket_.load(std::memory_order_acquire);
     for (;;) {
       const std::uint64_t front = (ticket >> kCountBits) & kFieldMask, back = ticket & kFieldMask;

@@ -17,11 +17,12 @@
 // its cache (0.94x the step of one shared counter, median of 7 interleaved rounds).
 // Between steps the helper naps on a timer rather than waiting to be woken: waking it
 // cost the stepping thread 40 to 50 us a step on the project's VM (await_job in the
-// .cpp). Each island's bodies are integrated by the thread that solved it
+// .cpp). It naps under the normal scheduler, so that a real-time controller on the
+// other CPU is not preempted every nap, and solves under the stepping thread's
+// scheduling policy and priority, on the CPUs it may run on; with one CPU allowed
+// (`afhub run --cpu`), or the helper refused that priority, the stepping thread solves
+// everything itself. Each island's bodies are integrated by the thread that solved it
 // (AfterIsland, reserved_world.hpp).
-// The helper runs under the stepping thread's scheduling policy and priority, on the
-// CPUs it may run on; with one CPU allowed (`afhub run --cpu`), or the helper refused
-// that priority, the stepping thread solves everything itself.
 #pragma once
 
 #include <sched.h>
@@ -37,8 +38,8 @@ namespace afhub::physics {
 
 class ParallelIslands {
  public:
-  // Fewer islands than this are solved by the stepping thread alone: waking the
-  // helper costs more than it takes over.
+  // Fewer islands than this are solved by the stepping thread alone: handing them over
+  // costs more than the helper takes.
   static constexpr int kMinIslands = 16;
   static constexpr int kCountBits = 20;  // a step's islands: fewer than 2^20 (ticket_)
 
@@ -78,6 +79,7 @@ class ParallelIslands {
   void solve_one(ConstraintSolver& solver, int island) noexcept;
   void help() noexcept;
   void await_job(std::uint32_t seen) const noexcept;
+  void schedule_helper(bool solving) const noexcept;
   bool follow_stepping_thread() noexcept;
 
   // A job's islands are taken one at a time from `ticket_`: its job number (the top 24
@@ -97,8 +99,10 @@ class ParallelIslands {
   const btContactSolverInfo* info_ = nullptr;
   AfterIsland* after_ = nullptr;
 
-  // The stepping thread's policy, priority and CPUs, last applied to the helper.
+  // The stepping thread's policy, priority and CPUs, last applied to the helper; the
+  // first two also for the helper to read (schedule_helper), published with a job.
   int policy_ = -1, priority_ = -1;
+  std::atomic<int> job_policy_{SCHED_OTHER}, job_priority_{0};
   cpu_set_t cpus_{};
   bool alone_ = false;  // the stepping thread may run on one CPU only
 

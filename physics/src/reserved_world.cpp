@@ -66,6 +66,13 @@ void ReservedWorld::predictUnconstraintMotion(btScalar dt) {
   soft_solver_.predictMotion(static_cast<float>(dt));  // as Bullet's soft world does
 }
 
+void ReservedWorld::createPredictiveContacts(btScalar dt) {
+  if (getDispatchInfo().m_useContinuous)
+    btSoftRigidDynamicsWorld::createPredictiveContacts(dt);
+  else
+    releasePredictiveContacts();  // none are made; as Bullet, clear the last step's
+}
+
 void ReservedWorld::integrateTransforms(btScalar dt) {
   if (!parallel_ || m_applySpeculativeContactRestitution) {
     btSoftRigidDynamicsWorld::integrateTransforms(dt);
@@ -82,7 +89,7 @@ void ReservedWorld::integrateTransforms(btScalar dt) {
 }
 
 void ReservedWorld::solveConstraints(btContactSolverInfo& info) {
-  if (++stamp_ == 0) ++stamp_;  // 0: never integrated
+  ++stamp_;  // from 1: 0 is never integrated
   if (info.m_minimumSolverBatchSize > 1) {
     btSoftRigidDynamicsWorld::solveConstraints(info);
     return;

@@ -15,11 +15,12 @@ namespace afhub::physics {
 
 class ReservedWorld : public btSoftRigidDynamicsWorld, private ParallelIslands::AfterIsland {
  public:
+  // `soft_solver` must outlive the world.
   ReservedWorld(btDispatcher* dispatcher, btBroadphaseInterface* broadphase,
                 btConstraintSolver* solver, btCollisionConfiguration* collision_config,
-                btSoftBodySolver* soft_solver)
-      : btSoftRigidDynamicsWorld(dispatcher, broadphase, solver, collision_config, soft_solver),
-        soft_solver_(*soft_solver) {}
+                btSoftBodySolver& soft_solver)
+      : btSoftRigidDynamicsWorld(dispatcher, broadphase, solver, collision_config, &soft_solver),
+        soft_solver_(soft_solver) {}
   void reserve_constraints(int count);
   // Islands solved one at a time are solved by two threads at once when there are
   // many (parallel_islands.hpp), the world's solver being a ConstraintSolver(bodies,
@@ -41,14 +42,15 @@ class ReservedWorld : public btSoftRigidDynamicsWorld, private ParallelIslands::
   void solveConstraints(btContactSolverInfo& info) override;
   // With a helper, each island's bodies are moved to their new poses (Bullet's
   // integration) by the thread that solved the island, straight after, while they
-  // are in its cache (0.93x the step of 1000 bodies); integrateTransforms() does the
+  // are in its cache (0.94x the step of 1000 bodies); integrateTransforms() does the
   // rest, and all of it with speculative contact restitution on.
   void integrateTransforms(btScalar dt) override;
-  // Bullet damps each body's velocities and predicts its next pose, which only the
-  // sweep of continuous collision detection reads (the body's bounds grown to reach
-  // it). With continuous collision off, only the damping is done (a thousand bodies:
-  // about 40 us a step).
+  // Bullet damps each body's velocities and predicts its next pose, which only
+  // continuous collision detection reads (the body's bounds swept to reach it, and
+  // its predictive contacts). With continuous collision off, only the damping is done,
+  // and no predictive contact is looked for (a thousand bodies: about 40 us a step).
   void predictUnconstraintMotion(btScalar dt) override;
+  void createPredictiveContacts(btScalar dt) override;
 
  private:
   struct Keyed {
@@ -56,16 +58,16 @@ class ReservedWorld : public btSoftRigidDynamicsWorld, private ParallelIslands::
   };
   std::vector<Keyed> keyed_;
   std::vector<btTypedConstraint*> sorted_;
+  btSoftBodySolver& soft_solver_;  // the base class's, which it keeps to itself
   // With a helper: the step's islands, gathered before they are solved, and their
   // bodies (Bullet's list of an island's bodies lasts only for its callback).
-  btSoftBodySolver& soft_solver_;  // the base class's, which it keeps to itself
   std::unique_ptr<ParallelIslands> parallel_;
   std::vector<ParallelIslands::Island> islands_;
   std::vector<btCollisionObject*> island_bodies_;
   // Per collision object (its world array index): the step it was integrated in with
   // its island; the bodies left over for integrateTransforms().
-  std::vector<std::uint32_t> integrated_;
-  std::uint32_t stamp_ = 0;
+  std::vector<std::uint64_t> integrated_;
+  std::uint64_t stamp_ = 0;
   std::vector<btRigidBody*> unintegrated_;
 
   void island_solved(btCollisionObject** bodies, int count) noexcept override;

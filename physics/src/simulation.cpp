@@ -41,8 +41,8 @@ Simulation::Simulation(const Model& model, double dt_s)
   d.world.getSolverInfo().m_numIterations = model.world.max_iterations;
   // No body is swept for continuous collision (none has a CCD motion threshold), so
   // its bounds need not reach its predicted pose: the narrow phase meets contacts at
-  // the bodies' poses, within the 2 cm Bullet adds to every bound. Without the sweep
-  // the prediction is not made at all (ReservedWorld::predictUnconstraintMotion).
+  // the bodies' poses, within the 2 cm Bullet adds to every bound. Without it the
+  // poses Bullet predicts for it alone are not computed (ReservedWorld).
   d.world.getDispatchInfo().m_useContinuous = false;
   // Bullet's broadphase looks for each added body's overlaps at once, walking every
   // body it overlaps: bodies piled at one point made loading cubic (8000 took over

@@ -140,8 +140,8 @@ struct Simulation::Data {
   btCollisionDispatcher dispatcher{&collision_config};
   btDbvtBroadphase broadphase;
   ConstraintSolver solver;
-  btDefaultSoftBodySolver soft_solver;
-  ReservedWorld world{&dispatcher, &broadphase, &solver, &collision_config, &soft_solver};
+  btDefaultSoftBodySolver soft_solver;  // before the world, which uses it to the end
+  ReservedWorld world{&dispatcher, &broadphase, &solver, &collision_config, soft_solver};
   CollisionFilter filter;
 
   std::vector<BodyData> bodies;

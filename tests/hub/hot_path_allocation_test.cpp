@@ -12,8 +12,6 @@
 #include <atomic>
 #include <cmath>
 #include <cstdlib>
-#include <filesystem>
-#include <fstream>
 #include <memory>
 #include <new>
 #include <string>
@@ -35,6 +33,7 @@
 #include "heap_counter.hpp"
 #include "model_files.hpp"
 #include "shared_models.hpp"
+#include "threads.hpp"
 
 namespace afhub {
 namespace {
@@ -104,16 +103,6 @@ TEST(HotPath, SteadyStateLoopDoesNotAllocate) {
   EXPECT_EQ(physics.latest_command()->joints[6].value, static_cast<double>(100 + kCycles - 1));
 }
 
-// The id of this process's thread named `name`, or 0.
-pid_t thread_named(const std::string& name) {
-  for (const auto& task : std::filesystem::directory_iterator("/proc/self/task")) {
-    std::ifstream comm(task.path() / "comm");
-    std::string line;
-    if (std::getline(comm, line) && line == name) return std::stoi(task.path().filename());
-  }
-  return 0;
-}
-
 // The physics loop of `afhub run`: commands in, Bullet step (joint PID, closed
 // loops), states and world state out, and a controller reading `body`'s state and
 // writing position commands. `helped`: the world's islands are solved by two threads.
@@ -161,7 +150,7 @@ void expect_physics_loop_allocation_free(const std::vector<std::string>& files,
   // The solve's helper thread (physics/src/parallel_islands.hpp) counts too.
   std::atomic<long> helper_allocations{0};
   if (helped) {
-    const pid_t helper = thread_named("afhub-islands");
+    const pid_t helper = afhub::testing::thread_named("afhub-islands");
     ASSERT_NE(helper, 0) << "no thread afhub-islands: the islands are solved by one thread";
     test::count_allocations_of_thread(helper, &helper_allocations);
   }

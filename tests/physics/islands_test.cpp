@@ -4,6 +4,7 @@
 // (the MTM's loops 0.042 m open beside the SUJ) came from robots loaded where AMBF
 // draws them, at the origin, overlapping: the last test keeps that measurable. No hub.
 #include <gtest/gtest.h>
+#include <pthread.h>
 #include <sched.h>
 
 #include <algorithm>
@@ -19,6 +20,7 @@
 #include "afhub/physics/simulation.hpp"
 #include "model_files.hpp"
 #include "shared_models.hpp"
+#include "threads.hpp"
 
 namespace afhub::physics {
 namespace {
@@ -177,6 +179,42 @@ TEST(Islands, TheHelperSolvesAtOneKilohertzAndAfterAPause) {
   EXPECT_GT(paced(), 0u) << "stepped at 1 kHz";
   std::this_thread::sleep_for(std::chrono::milliseconds(60));
   EXPECT_GT(paced(), 0u) << "stepped at 1 kHz after a 60 ms pause";
+}
+
+// Under a real-time stepping thread, the helper naps under the normal scheduler and
+// takes the stepping thread's priority only while it solves: napping every 20 us at a
+// real-time priority would preempt a controller on the other CPU that often. Needs the
+// right to real-time scheduling (root, as the tests run).
+TEST(Islands, TheHelperOfARealTimeLoopNapsUnderTheNormalScheduler) {
+  cpu_set_t cpus;
+  ASSERT_EQ(sched_getaffinity(0, sizeof cpus, &cpus), 0);
+  if (CPU_COUNT(&cpus) < 2) GTEST_SKIP() << "this process may run on one CPU: no helper to test";
+  sched_param fifo{};
+  fifo.sched_priority = 10;
+  if (pthread_setschedparam(pthread_self(), SCHED_FIFO, &fifo) != 0)
+    GTEST_SKIP() << "SCHED_FIFO refused to this process";
+  afhub::testing::ModelFolder folder;
+  const Model model =
+      load_adf_files({folder.write("arms.yaml", afhub::testing::arms_model(16, 8))});
+  std::uint64_t helped = 0;
+  int napping_policy = -1;
+  {
+    Simulation sim(model, 0.001);
+    auto next = std::chrono::steady_clock::now();
+    for (int step = 0; step < 500; ++step) {
+      next += std::chrono::milliseconds(1);
+      std::this_thread::sleep_until(next);
+      sim.step();
+    }
+    helped = sim.islands_solved_by_helper();
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));  // between steps: napping
+    const pid_t helper = afhub::testing::thread_named("afhub-islands");
+    if (helper != 0) napping_policy = sched_getscheduler(helper);
+  }
+  const sched_param normal{};
+  pthread_setschedparam(pthread_self(), SCHED_OTHER, &normal);
+  EXPECT_GT(helped, 0u) << "the helper solved no island at 1 kHz";
+  EXPECT_EQ(napping_policy, SCHED_OTHER) << "-1: no thread afhub-islands found";
 }
 
 }  // namespace
