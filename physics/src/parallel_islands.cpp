@@ -34,12 +34,14 @@ ParallelIslands::~ParallelIslands() {
   helper_.join();
 }
 
-void ParallelIslands::solve_one(ConstraintSolver& solver, int island) noexcept {
+void ParallelIslands::run(int island, int thread) noexcept {
   const Island& i = (*islands_)[island];
+  ConstraintSolver& solver = thread == 0 ? *own_ : solver_;
   solver.solveGroup(bodies_ + i.first_body, i.body_count, i.manifolds, i.manifold_count,
                     i.constraint_count ? constraints_ + i.first_constraint : nullptr,
                     i.constraint_count, *info_, nullptr, nullptr);
   if (after_) after_->island_solved(bodies_ + i.first_body, i.body_count);
+  if (thread != 0) helped_.fetch_add(1, std::memory_order_relaxed);
 }
 
 // The stepping thread's scheduling and CPUs, given to the helper when they change (the
@@ -70,20 +72,30 @@ void ParallelIslands::solve(ConstraintSolver& own, const std::vector<Island>& is
                             btCollisionObject** bodies, btTypedConstraint** constraints,
                             const btContactSolverInfo& info, AfterIsland* after) noexcept {
   const int count = static_cast<int>(islands.size());
+  own_ = &own;
   islands_ = &islands;
   bodies_ = bodies;
   constraints_ = constraints;
   info_ = &info;
   after_ = after;
-  if (count < kMinIslands || count >= static_cast<int>(kFieldMask) || !follow_stepping_thread()) {
-    for (int i = 0; i < count; ++i) solve_one(own, i);
+  if (count < kMinIslands) {
+    for (int i = 0; i < count; ++i) run(i, 0);
     return;
   }
+  share(count, *this);
+}
+
+void ParallelIslands::share(int count, SharedWork& work) noexcept {
+  if (count < 2 || count >= static_cast<int>(kFieldMask) || !follow_stepping_thread()) {
+    for (int i = 0; i < count; ++i) work.run(i, 0);
+    return;
+  }
+  work_ = &work;
   const std::uint32_t job = job_.load(std::memory_order_relaxed) + 1;
-  solved_.store(0, std::memory_order_relaxed);
-  // Front: the next island from the start (this thread's); back: one past the last
-  // left from the end (the helper's). Each thread tends to get the same islands every
-  // step, whose joints and solver data stay in its cache.
+  done_.store(0, std::memory_order_relaxed);
+  // Front: the next item from the start (this thread's); back: one past the last left
+  // from the end (the helper's). Each thread tends to get the same items every step,
+  // whose data stay in its cache.
   ticket_.store((std::uint64_t{job} << (2 * kCountBits)) | (std::uint64_t(count)),
                 std::memory_order_release);
   job_.store(job, std::memory_order_release);
@@ -95,13 +107,13 @@ void ParallelIslands::solve(ConstraintSolver& own, const std::vector<Island>& is
     if (!ticket_.compare_exchange_weak(ticket, ticket + (std::uint64_t{1} << kCountBits),
                                        std::memory_order_acq_rel))
       continue;
-    solve_one(own, static_cast<int>(front));
-    solved_.fetch_add(1, std::memory_order_release);
+    work.run(static_cast<int>(front), 0);
+    done_.fetch_add(1, std::memory_order_release);
     ticket = ticket_.load(std::memory_order_acquire);
   }
-  // Only the island the helper is in the middle of, if any, is left. Should the
-  // helper have been moved onto this thread's CPU, spinning would keep it off: yield.
-  for (int spins = 0; solved_.load(std::memory_order_acquire) < count;) {
+  // Only the item the helper is in the middle of, if any, is left. Should the helper
+  // have been moved onto this thread's CPU, spinning would keep it off: yield.
+  for (int spins = 0; done_.load(std::memory_order_acquire) < count;) {
     if (spins < kSpinsBeforeYield) {
       ++spins;
       __builtin_ia32_pause();
@@ -158,9 +170,8 @@ void ParallelIslands::help() noexcept {
       // Another job's ticket (a later one: this wake was late), or none left.
       if ((ticket >> (2 * kCountBits)) != (seen & kJobMask) || front >= back) break;
       if (ticket_.compare_exchange_weak(ticket, ticket - 1, std::memory_order_acq_rel)) {
-        solve_one(solver_, static_cast<int>(back - 1));
-        helped_.fetch_add(1, std::memory_order_relaxed);
-        solved_.fetch_add(1, std::memory_order_release);
+        work_->run(static_cast<int>(back - 1), 1);
+        done_.fetch_add(1, std::memory_order_release);
         ticket = ticket_.load(std::memory_order_acquire);
       }
     }

@@ -22,7 +22,9 @@
 // scheduling policy and priority, on the CPUs it may run on; with one CPU allowed
 // (`afhub run --cpu`), or the helper refused that priority, the stepping thread solves
 // everything itself. Each island's bodies are integrated by the thread that solved it
-// (AfterIsland, reserved_world.hpp).
+// (AfterIsland, reserved_world.hpp). Other work of the step that splits into items
+// writing nothing in common is shared the same way (share(): the joints' readings after
+// the step, the states published).
 #pragma once
 
 #include <sched.h>
@@ -32,16 +34,17 @@
 #include <thread>
 #include <vector>
 
+#include "afhub/physics/shared_work.hpp"
 #include "constraint_solver.hpp"
 
 namespace afhub::physics {
 
-class ParallelIslands {
+class ParallelIslands final : private SharedWork {
  public:
   // Fewer islands than this are solved by the stepping thread alone: handing them over
   // costs more than the helper takes.
   static constexpr int kMinIslands = 16;
-  static constexpr int kCountBits = 20;  // a step's islands: fewer than 2^20 (ticket_)
+  static constexpr int kCountBits = 20;  // a job's items: fewer than 2^20 (ticket_)
 
   struct Island {
     int first_body, body_count;  // in the bodies array solve() is given
@@ -72,27 +75,35 @@ class ParallelIslands {
   void solve(ConstraintSolver& own, const std::vector<Island>& islands, btCollisionObject** bodies,
              btTypedConstraint** constraints, const btContactSolverInfo& info,
              AfterIsland* after) noexcept;
+  // Runs every item of `work`, the stepping thread taking them from the first, the
+  // helper from the last, as islands are; returns when all are done. With one CPU
+  // (see above), the stepping thread runs them all.
+  void share(int count, SharedWork& work) noexcept;
   // Islands the helper solved, since the start.
   std::uint64_t helped() const noexcept { return helped_.load(std::memory_order_relaxed); }
 
  private:
-  void solve_one(ConstraintSolver& solver, int island) noexcept;
+  void run(int island, int thread) noexcept override;  // solves one island
   void help() noexcept;
   void await_job(std::uint32_t seen) const noexcept;
   void schedule_helper(bool solving) const noexcept;
   bool follow_stepping_thread() noexcept;
 
-  // A job's islands are taken one at a time from `ticket_`: its job number (the top 24
-  // bits), the next island from the start (20 bits, the stepping thread's) and one past
-  // the last left from the end (20 bits, the helper's), in one word, so that a late
-  // helper can never take an island of a job that has ended.
+  // A job's items (islands, or another SharedWork's) are taken one at a time from
+  // `ticket_`: its job number (the top 24 bits), the next item from the start (20 bits,
+  // the stepping thread's) and one past the last left from the end (20 bits, the
+  // helper's), in one word, so that a late helper can never take an item of a job that
+  // has ended.
   std::atomic<std::uint64_t> ticket_{0};
   std::atomic<std::uint32_t> job_{0};  // the job's number; the helper waits for it to move
-  std::atomic<int> solved_{0};         // islands of the job solved
+  std::atomic<int> done_{0};           // items of the job done
   std::atomic<bool> stopping_{false};
   std::atomic<std::uint64_t> helped_{0};
 
-  // The job, written before its ticket is published, read after an island is taken.
+  // The job, written before its ticket is published, read after an item is taken.
+  SharedWork* work_ = nullptr;
+  // The islands being solved (run).
+  ConstraintSolver* own_ = nullptr;
   const std::vector<Island>* islands_ = nullptr;
   btCollisionObject** bodies_ = nullptr;
   btTypedConstraint** constraints_ = nullptr;

@@ -26,6 +26,26 @@ void reserve_overlapping_pairs(btOverlappingPairCache& cache, btDispatcher& disp
     cache.removeOverlappingPair(&proxies[0], &proxies[i], &dispatcher);
 }
 
+// The joints' readings after a step, a block of joints per item, taken by the stepping
+// thread and the islands' helper at once: each joint reads its two bodies and writes
+// only its own readings.
+class JointReadings final : public SharedWork {
+ public:
+  static constexpr std::size_t kJointsPerItem = 32;
+  explicit JointReadings(std::vector<std::unique_ptr<JointModel>>& joints) : joints_(joints) {}
+  int items() const {
+    return static_cast<int>((joints_.size() + kJointsPerItem - 1) / kJointsPerItem);
+  }
+  void run(int item, int) noexcept override {
+    const std::size_t first = static_cast<std::size_t>(item) * kJointsPerItem;
+    const std::size_t last = std::min(first + kJointsPerItem, joints_.size());
+    for (std::size_t j = first; j < last; ++j) joints_[j]->update_readings();
+  }
+
+ private:
+  std::vector<std::unique_ptr<JointModel>>& joints_;
+};
+
 }  // namespace
 
 Simulation::Simulation(const Model& model, double dt_s)
@@ -75,6 +95,9 @@ std::uint64_t Simulation::step_count() const noexcept {
 std::uint64_t Simulation::islands_solved_by_helper() const noexcept {
   return data_->world.islands_solved_by_helper();
 }
+void Simulation::share(int count, SharedWork& work) noexcept {
+  data_->world.share(count, work);
+}
 double Simulation::time_s() const noexcept {
   return static_cast<double>(data_->steps) * data_->dt_s;
 }
@@ -106,7 +129,8 @@ void Simulation::step() noexcept {
   ++d.steps;
   d.recover_non_finite();
   d.sum_contacts();
-  for (auto& joint : d.joints) joint->update_readings();
+  JointReadings readings(d.joints);
+  d.world.share(readings.items(), readings);
   d.read_sensors();
 }
 

@@ -8,6 +8,7 @@
 #include <sched.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -152,6 +153,47 @@ TEST(Islands, TwoThreadsSolveManyArmsBitForBitAsOneDoes) {
   double travel = 0;
   for (double q : alone.joints) travel = std::max(travel, std::abs(q));
   EXPECT_GT(travel, 0.1);
+}
+
+// Work a step shares with the islands' helper (Simulation::share: the joints' readings,
+// the states published): every item is run once, some by each thread. Each item takes
+// 20 us, so the helper, napping 20 us at a time between jobs, comes for some of them.
+TEST(Islands, SharedWorkRunsEveryItemOnceSomeOnEachThread) {
+  cpu_set_t cpus;
+  ASSERT_EQ(sched_getaffinity(0, sizeof cpus, &cpus), 0);
+  if (CPU_COUNT(&cpus) < 2) GTEST_SKIP() << "this process may run on one CPU: no helper to test";
+  afhub::testing::ModelFolder folder;
+  Model model = load_adf_files({folder.write("arms.yaml", afhub::testing::arms_model(16, 8))});
+  struct Items final : SharedWork {
+    std::vector<std::atomic<int>> runs = std::vector<std::atomic<int>>(64);
+    std::atomic<int> by_thread[2] = {0, 0};
+    void run(int item, int thread) noexcept override {
+      const auto until = std::chrono::steady_clock::now() + std::chrono::microseconds(20);
+      while (std::chrono::steady_clock::now() < until) {
+      }
+      runs[static_cast<std::size_t>(item)].fetch_add(1);
+      by_thread[thread].fetch_add(1);
+    }
+  };
+  for (int threads : {1, 2}) {
+    model.world.solver_threads = threads;
+    Simulation sim(model, 0.001);
+    int by_helper = 0;
+    // A loaded machine may keep the helper off its CPU for one job: a few are shared.
+    for (int job = 0; job < 20 && (threads == 1 || by_helper == 0); ++job) {
+      sim.step();  // the helper has solved islands, and naps
+      Items items;
+      sim.share(static_cast<int>(items.runs.size()), items);
+      for (std::size_t i = 0; i < items.runs.size(); ++i)
+        ASSERT_EQ(items.runs[i].load(), 1) << "item " << i << " with " << threads << " thread(s)";
+      EXPECT_GT(items.by_thread[0].load(), 0) << threads << " thread(s)";
+      by_helper += items.by_thread[1].load();
+    }
+    if (threads == 1)
+      EXPECT_EQ(by_helper, 0) << "a helper with one solver thread";
+    else
+      EXPECT_GT(by_helper, 0) << "the helper ran none of 20 jobs of 64 items of 20 us";
+  }
 }
 
 // Between steps the helper naps on a timer, and after 20 ms without islands sleeps on

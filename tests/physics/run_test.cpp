@@ -2,6 +2,7 @@
 // move it, refused NaN commands counted in the world state, the watchdog, the
 // launch file with -l, the report, and real-time pacing.
 #include <gtest/gtest.h>
+#include <sched.h>
 #include <signal.h>
 #include <sys/resource.h>
 #include <time.h>
@@ -9,6 +10,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
+#include <memory>
 #include <optional>
 #include <thread>
 #include <utility>
@@ -144,6 +147,56 @@ TEST(Run, AStepsStatesShareOnePublishStampThatGrowsByStep) {
   const auto second = step_stamps(2);
   EXPECT_EQ(second.first, second.second);
   EXPECT_GT(second.first, first.first);
+}
+
+// A thousand bodies' states are written by two threads at once, the stepping thread and
+// the islands' helper (SimChannels::publish, Simulation::share): each body's state holds
+// its own readings of the newest step, under the step's one stamp.
+TEST(Run, AThousandStatesWrittenByTwoThreadsAreEachTheirBodysReadings) {
+  cpu_set_t cpus;
+  ASSERT_EQ(sched_getaffinity(0, sizeof cpus, &cpus), 0);
+  if (CPU_COUNT(&cpus) < 2) GTEST_SKIP() << "this process may run on one CPU: no helper to test";
+  afhub::testing::ModelFolder folder;
+  const physics::Model model =
+      physics::load_adf_files({folder.write("arms.yaml", afhub::testing::arms_model(125, 8))});
+  physics::Simulation sim(model, 0.001);
+  physics::SimChannels channels(sim, 5.0);
+  std::vector<std::unique_ptr<BodyClient>> clients;
+  for (const physics::BodySpec& body : model.bodies)
+    clients.push_back(std::make_unique<BodyClient>(body.channel));
+  for (int step = 0; step < 50; ++step) {  // falling under gravity: every reading moves
+    sim.step();
+    channels.publish({});
+  }
+  // Until every reader has found its body's slot, in which it then reads each update.
+  ASSERT_TRUE(wait_until(
+      [&] {
+        channels.publish({});
+        return std::all_of(clients.begin(), clients.end(),
+                           [&](auto& client) { return client->latest_state() != nullptr; });
+      },
+      10s));
+  const auto reading = std::make_unique<physics::BodyReading>();
+  for (int step = 0; step < 5; ++step) {  // each published once
+    sim.step();
+    channels.publish({});
+    const std::int64_t stamp = clients[0]->latest_state()->header.publish_stamp_ns;
+    for (std::size_t b = 0; b < model.bodies.size(); ++b) {
+      const BodyState& state = *clients[b]->latest_state();
+      sim.read_body(b, *reading);
+      SCOPED_TRACE(model.bodies[b].channel);
+      ASSERT_EQ(state.header.sim_step, sim.step_count());
+      EXPECT_EQ(state.header.publish_stamp_ns, stamp);
+      EXPECT_EQ(std::memcmp(&state.pose, &reading->pose, sizeof state.pose), 0);
+      EXPECT_EQ(std::memcmp(&state.twist, &reading->twist, sizeof state.twist), 0);
+      ASSERT_EQ(state.joint_count, reading->joint_count);
+      for (std::uint32_t j = 0; j < state.joint_count; ++j) {
+        EXPECT_EQ(state.joints[j].position, reading->joint_positions[j]) << "joint " << j;
+        EXPECT_EQ(state.joints[j].velocity, reading->joint_velocities[j]) << "joint " << j;
+      }
+    }
+  }
+  EXPECT_GT(sim.islands_solved_by_helper(), 0u) << "no helper: the states had one writer";
 }
 
 TEST(Run, LockstepWaitsAsleepUnlessSpinning) {

@@ -23,6 +23,11 @@ namespace {
 // The wire and the core agree on capacities, so a copy never truncates what fits.
 static_assert(kBodyRayCapacity == kMaxSensorRaysPerBody);
 
+// Untaped, the states are written a block of channels at a time by the stepping thread
+// and the islands' helper at once (Simulation::share): each channel's reading, its slot
+// and its publisher are its own. A thousand bodies: publishing 151 -> N us.
+constexpr std::size_t kChannelsPerItem = 16;
+
 // A reading into a loaned state (its header is the caller's), within the joints
 // it was loaned for.
 void to_state(const BodyReading& reading, BodyState& state) noexcept {
@@ -205,39 +210,29 @@ void SimChannels::publish(const WorldClock& clock) noexcept {
   taped_step_ = step;
   // The step's states share one stamp, read before the first is filled: a clock read
   // per state was a quarter of publishing a thousand (28 ns each on the project's VM).
-  const std::int64_t stamp_ns = monotonic_ns();
-  for (Channel& channel : channels_) {
-    // Every field is set below: the slot's last update needs no defaults first.
-    BodyState* state = channel.publisher->rewrite_state(channel.joint_count);
-    if (!state) continue;  // shared memory exhausted: skip this step, never block
-    state->header.sim_step = step;
-    state->header.sim_time_s = time_s;
-    if (channel.soft)
-      sim_.read_soft_body(channel.index, reading_);
-    else
-      sim_.read_body(channel.index, reading_);
-    to_state(reading_, *state);
-    state->step_due_ns = clock.step_due_ns;
-    state->commanded_steps = static_cast<std::uint32_t>(channel.commanded_steps);
-    state->answered_steps = static_cast<std::uint32_t>(channel.answered_steps);
-    state->refused_commands = channel.refused;
-    state->refused_command_pid = channel.refused_pid;
-    state->refusal_reason = channel.refusal_reason;
-    channel.publisher->publish_state(state, stamp_ns);
-    // Only the bodies someone reads: a recorder holds the state slots of those it
-    // records (taping all of a thousand bodies for a recorder of one cost about 60 us of
-    // a 1.1 ms step); a body of no one's is not worth a copy.
-    if (taping && channel.publisher->has_state_readers()) {
-      const std::string& name = channel.soft ? sim_.model().soft_bodies[channel.index].channel
-                                             : sim_.model().bodies[channel.index].channel;
-      if (channel.taken_command)  // what this step answered, as it was taken
-        tape_.add(PayloadKind::kBodyCommand, name, channel.taken_command,
-                  channel.publisher->command_bytes());
-      // This process's own entry: read back as it was just published.
-      tape_.add(PayloadKind::kBodyState, name, state,
-                static_cast<std::uint32_t>(body_state_bytes(channel.joint_count)));
+  const StateStamp stamp{step, time_s, clock.step_due_ns, monotonic_ns()};
+  if (taping) {  // the tape is written in channel order, by this thread
+    for (Channel& channel : channels_) {
+      const BodyState* state = publish_state(channel, readings_[0], stamp);
+      // Only the bodies someone reads: a recorder holds the state slots of those it
+      // records (taping all of a thousand bodies for a recorder of one cost about 60 us
+      // of a 1.1 ms step); a body of no one's is not worth a copy.
+      if (state && channel.publisher->has_state_readers()) {
+        const std::string& name = channel.soft ? sim_.model().soft_bodies[channel.index].channel
+                                               : sim_.model().bodies[channel.index].channel;
+        if (channel.taken_command)  // what this step answered, as it was taken
+          tape_.add(PayloadKind::kBodyCommand, name, channel.taken_command,
+                    channel.publisher->command_bytes());
+        // This process's own entry: read back as it was just published.
+        tape_.add(PayloadKind::kBodyState, name, state,
+                  static_cast<std::uint32_t>(body_state_bytes(channel.joint_count)));
+      }
+      channel.taken_command = nullptr;
     }
-    if (new_step) channel.taken_command = nullptr;
+  } else {
+    StateWriting writing(*this, stamp, new_step);
+    sim_.share(static_cast<int>((channels_.size() + kChannelsPerItem - 1) / kChannelsPerItem),
+               writing);
   }
   if (WorldState* world = world_.loan()) {
     world->header.sim_step = step;
@@ -275,6 +270,42 @@ void SimChannels::publish(const WorldClock& clock) noexcept {
     if (taping) tape_.add(PayloadKind::kWorldState, world_instance_, world, sizeof *world);
   }
   if (taping) tape_.finish();
+}
+
+const BodyState* SimChannels::publish_state(Channel& channel, BodyReading& reading,
+                                            const StateStamp& stamp) noexcept {
+  // Every field is set below: the slot's last update needs no defaults first.
+  BodyState* state = channel.publisher->rewrite_state(channel.joint_count);
+  if (!state) return nullptr;  // shared memory exhausted: skip this step, never block
+  state->header.sim_step = stamp.step;
+  state->header.sim_time_s = stamp.time_s;
+  if (channel.soft)
+    sim_.read_soft_body(channel.index, reading);
+  else
+    sim_.read_body(channel.index, reading);
+  to_state(reading, *state);
+  state->step_due_ns = stamp.step_due_ns;
+  state->commanded_steps = static_cast<std::uint32_t>(channel.commanded_steps);
+  state->answered_steps = static_cast<std::uint32_t>(channel.answered_steps);
+  state->refused_commands = channel.refused;
+  state->refused_command_pid = channel.refused_pid;
+  state->refusal_reason = channel.refusal_reason;
+  channel.publisher->publish_state(state, stamp.stamp_ns);
+  return state;
+}
+
+SimChannels::StateWriting::StateWriting(SimChannels& channels, const StateStamp& stamp,
+                                        bool new_step)
+    : channels_(channels), stamp_(stamp), new_step_(new_step) {}
+
+void SimChannels::StateWriting::run(int item, int thread) noexcept {
+  const std::size_t first = static_cast<std::size_t>(item) * kChannelsPerItem;
+  const std::size_t last = std::min(first + kChannelsPerItem, channels_.channels_.size());
+  for (std::size_t c = first; c < last; ++c) {
+    Channel& channel = channels_.channels_[c];
+    channels_.publish_state(channel, channels_.readings_[thread], stamp_);
+    if (new_step_) channel.taken_command = nullptr;
+  }
 }
 
 bool SimChannels::next_world_command(WorldCommand& out) noexcept {

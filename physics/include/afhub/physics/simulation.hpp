@@ -14,6 +14,7 @@
 #include "afhub/physics/body_input.hpp"
 #include "afhub/physics/body_reading.hpp"
 #include "afhub/physics/model.hpp"
+#include "afhub/physics/shared_work.hpp"
 
 namespace afhub::physics {
 
@@ -113,6 +114,10 @@ class Simulation {
   // (physics/src/parallel_islands.hpp): 0 while the world has few, or while the
   // stepping thread may run on one CPU only.
   std::uint64_t islands_solved_by_helper() const noexcept;
+  // Runs every item of `work`, split between the calling thread (0) and, when the world
+  // solves its islands on two threads, their helper (1); returns when all are done.
+  // From the thread that steps, between steps: publishing a thousand bodies' readings.
+  void share(int count, SharedWork& work) noexcept;
   // Whether actuator `actuator` (an index into model().actuators) holds a body.
   bool actuator_engaged(std::size_t actuator) const noexcept;
 

@@ -210,6 +210,27 @@ class SimChannels {
   // One turn of holding a step: commands in, and the held step published again every
   // kRepublishWhileWaitingNs (`republish_ns`: when next). False on a stop signal.
   bool hold_step_turn(std::int64_t now_ns, std::int64_t& republish_ns) noexcept;
+  // What a step's states all say of it.
+  struct StateStamp {
+    std::uint64_t step = 0;
+    double time_s = 0.0;
+    std::int64_t step_due_ns = 0;
+    std::int64_t stamp_ns = 0;  // the publish stamp
+  };
+  // Reads the channel's body and writes its state; nullptr when its slot could not be had.
+  const BodyState* publish_state(Channel& channel, BodyReading& reading,
+                                 const StateStamp& stamp) noexcept;
+  // The step's states written by the stepping thread and the islands' helper at once.
+  class StateWriting final : public SharedWork {
+   public:
+    StateWriting(SimChannels& channels, const StateStamp& stamp, bool new_step);
+    void run(int item, int thread) noexcept override;
+
+   private:
+    SimChannels& channels_;
+    const StateStamp& stamp_;
+    bool new_step_;
+  };
   // Until a command comes (or `until_ns`): asleep on the waiter, or one sched_yield.
   void wait_for_commands(std::int64_t until_ns) noexcept;
   // "ambf/env/base, ambf/env/link1": the active bodies no lockstep client answers for.
@@ -223,8 +244,9 @@ class SimChannels {
   // below is opened, confirmed once the directory is out.
   std::vector<std::string> claimed_;
   std::vector<Channel> channels_;
-  BodyInput input_;      // the command being checked and applied, out of shared memory
-  BodyReading reading_;  // a body's readings on their way into its state
+  BodyInput input_;  // the command being checked and applied, out of shared memory
+  // A body's readings on their way into its state, one per thread writing states.
+  std::array<BodyReading, 2> readings_;
   DirectoryPublisher directory_;
   Writer<WorldState> world_;
   Writer<SceneDescription> scene_;        // published once: what a viewer draws
