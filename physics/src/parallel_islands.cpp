@@ -78,16 +78,24 @@ void ParallelIslands::solve(ConstraintSolver& own, const std::vector<Island>& is
   constraints_ = constraints;
   info_ = &info;
   after_ = after;
-  if (count < kMinIslands) {
-    for (int i = 0; i < count; ++i) run(i, 0);
+  // The stepping thread's scheduling is looked up once a step, here (system calls).
+  if (count < kMinItems || !follow_stepping_thread()) {
+    run_alone(count, *this);
     return;
   }
-  share(count, *this);
+  run_shared(count, *this);
 }
 
 void ParallelIslands::share(int count, SharedWork& work) noexcept {
-  if (count < 2 || count >= static_cast<int>(kFieldMask) || !follow_stepping_thread()) {
-    for (int i = 0; i < count; ++i) work.run(i, 0);
+  if (count < kMinItems || policy_ < 0 || alone_)
+    run_alone(count, work);
+  else
+    run_shared(count, work);
+}
+
+void ParallelIslands::run_shared(int count, SharedWork& work) noexcept {
+  if (count >= static_cast<int>(kFieldMask)) {
+    run_alone(count, work);
     return;
   }
   work_ = &work;
@@ -171,6 +179,7 @@ void ParallelIslands::help() noexcept {
       if ((ticket >> (2 * kCountBits)) != (seen & kJobMask) || front >= back) break;
       if (ticket_.compare_exchange_weak(ticket, ticket - 1, std::memory_order_acq_rel)) {
         work_->run(static_cast<int>(back - 1), 1);
+        if (work_ != this) shared_.fetch_add(1, std::memory_order_relaxed);
         done_.fetch_add(1, std::memory_order_release);
         ticket = ticket_.load(std::memory_order_acquire);
       }

@@ -41,9 +41,9 @@ namespace afhub::physics {
 
 class ParallelIslands final : private SharedWork {
  public:
-  // Fewer islands than this are solved by the stepping thread alone: handing them over
-  // costs more than the helper takes.
-  static constexpr int kMinIslands = 16;
+  // Fewer islands (or items of other work) than this are run by the stepping thread
+  // alone: handing them over costs more than the helper takes.
+  static constexpr int kMinItems = 16;
   static constexpr int kCountBits = 20;  // a job's items: fewer than 2^20 (ticket_)
 
   struct Island {
@@ -76,15 +76,18 @@ class ParallelIslands final : private SharedWork {
              btTypedConstraint** constraints, const btContactSolverInfo& info,
              AfterIsland* after) noexcept;
   // Runs every item of `work`, the stepping thread taking them from the first, the
-  // helper from the last, as islands are; returns when all are done. With one CPU
-  // (see above), the stepping thread runs them all.
+  // helper from the last, as islands are; returns when all are done. The stepping
+  // thread runs them all with fewer than kMinItems, and while the last solve() found it
+  // may use one CPU only (see above), or before any solve().
   void share(int count, SharedWork& work) noexcept;
-  // Islands the helper solved, since the start.
+  // Islands the helper solved, and items of other work it ran, since the start.
   std::uint64_t helped() const noexcept { return helped_.load(std::memory_order_relaxed); }
+  std::uint64_t shared() const noexcept { return shared_.load(std::memory_order_relaxed); }
 
  private:
   void run(int island, int thread) noexcept override;  // solves one island
   void help() noexcept;
+  void run_shared(int count, SharedWork& work) noexcept;
   void await_job(std::uint32_t seen) const noexcept;
   void schedule_helper(bool solving) const noexcept;
   bool follow_stepping_thread() noexcept;
@@ -98,7 +101,7 @@ class ParallelIslands final : private SharedWork {
   std::atomic<std::uint32_t> job_{0};  // the job's number; the helper waits for it to move
   std::atomic<int> done_{0};           // items of the job done
   std::atomic<bool> stopping_{false};
-  std::atomic<std::uint64_t> helped_{0};
+  std::atomic<std::uint64_t> helped_{0}, shared_{0};
 
   // The job, written before its ticket is published, read after an item is taken.
   SharedWork* work_ = nullptr;
@@ -110,8 +113,9 @@ class ParallelIslands final : private SharedWork {
   const btContactSolverInfo* info_ = nullptr;
   AfterIsland* after_ = nullptr;
 
-  // The stepping thread's policy, priority and CPUs, last applied to the helper; the
-  // first two also for the helper to read (schedule_helper), published with a job.
+  // The stepping thread's policy, priority and CPUs, as solve() last found them and
+  // applied them to the helper (-1: not yet); the first two also for the helper to read
+  // (schedule_helper), published with a job.
   int policy_ = -1, priority_ = -1;
   std::atomic<int> job_policy_{SCHED_OTHER}, job_priority_{0};
   cpu_set_t cpus_{};

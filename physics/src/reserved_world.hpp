@@ -30,12 +30,15 @@ class ReservedWorld : public btSoftRigidDynamicsWorld, private ParallelIslands::
   std::uint64_t islands_solved_by_helper() const noexcept {
     return parallel_ ? parallel_->helped() : 0;
   }
+  std::uint64_t items_shared_with_helper() const noexcept {
+    return parallel_ ? parallel_->shared() : 0;
+  }
   // `work` shared with the islands' helper, or run by this thread without one.
   void share(int count, SharedWork& work) noexcept {
     if (parallel_)
       parallel_->share(count, work);
     else
-      for (int i = 0; i < count; ++i) work.run(i, 0);
+      run_alone(count, work);
   }
 
  protected:

@@ -219,7 +219,7 @@ void Simulation::Data::mark_joint_islands() {
   // Groups of moving bodies joined by joints: islands, unless contacts join them.
   const auto groups = std::count_if(islands.begin(), islands.end(),
                                     [](const Island& island) { return island.bodies > 0; });
-  if (model.world.solver_threads > 1 && groups >= ParallelIslands::kMinIslands)
+  if (model.world.solver_threads > 1 && groups >= ParallelIslands::kMinItems)
     world.solve_islands_in_parallel(
         static_cast<int>(model.bodies.size()),
         static_cast<int>(model.joints.size() + model.actuators.size()),

@@ -95,6 +95,9 @@ std::uint64_t Simulation::step_count() const noexcept {
 std::uint64_t Simulation::islands_solved_by_helper() const noexcept {
   return data_->world.islands_solved_by_helper();
 }
+std::uint64_t Simulation::items_shared_with_helper() const noexcept {
+  return data_->world.items_shared_with_helper();
+}
 void Simulation::share(int count, SharedWork& work) noexcept {
   data_->world.share(count, work);
 }

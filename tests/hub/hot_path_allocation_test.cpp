@@ -5,7 +5,6 @@
 #include <gtest/gtest.h>
 
 #include <fcntl.h>
-#include <sched.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -107,9 +106,11 @@ TEST(HotPath, SteadyStateLoopDoesNotAllocate) {
 // The physics loop of `afhub run`: commands in, Bullet step (joint PID, closed
 // loops), states and world state out, and a controller reading `body`'s state and
 // writing position commands. `helped`: the world's islands are solved by two threads,
-// and with no recorder (whose tape is written by one) the states are written by both.
+// and unless `taped` (a recorder reads the step tape, written by one thread) the states
+// are written by both.
 void expect_physics_loop_allocation_free(const std::vector<std::string>& files,
-                                         const std::string& body, bool helped = false) {
+                                         const std::string& body, bool helped = false,
+                                         bool taped = true) {
   const physics::Model model = physics::load_adf_files(files);
   physics::Simulation sim(model, 0.001);
   physics::SimChannels channels(sim, 0.5);
@@ -119,7 +120,7 @@ void expect_physics_loop_allocation_free(const std::vector<std::string>& files,
       {std::string(kService), world_instance(), std::string(kScenePosesEvent)});
   // A recorder reading the step tape, which then goes out every step.
   std::optional<StepTapeReader> recorder;
-  if (!helped) recorder.emplace(world_instance());
+  if (taped) recorder.emplace(world_instance());
   const auto tape = std::make_unique<StepTape>();
   int cycle = 0;
   std::uint64_t viewer_updates = 0, taped_steps = 0;
@@ -150,6 +151,7 @@ void expect_physics_loop_allocation_free(const std::vector<std::string>& files,
   constexpr int kCycles = 5000;
   const std::uint64_t updates_before = viewer_updates, taped_before = taped_steps;
   const std::uint64_t helped_before = sim.islands_solved_by_helper();
+  const std::uint64_t shared_before = sim.items_shared_with_helper();
   // The solve's helper thread (physics/src/parallel_islands.hpp) counts too.
   std::atomic<long> helper_allocations{0};
   if (helped) {
@@ -163,6 +165,8 @@ void expect_physics_loop_allocation_free(const std::vector<std::string>& files,
   EXPECT_EQ(helper_allocations.load(), 0) << "by the helper, in " << kCycles << " physics cycles";
   if (helped) {
     EXPECT_GT(sim.islands_solved_by_helper(), helped_before) << "the helper solved no island";
+    if (!taped)
+      EXPECT_GT(sim.items_shared_with_helper(), shared_before) << "the helper wrote no state";
   }
   EXPECT_GE(viewer_updates - updates_before, 290u) << "the pose feed went out at 60 Hz";
   EXPECT_EQ(taped_steps - taped_before, recorder ? static_cast<std::uint64_t>(kCycles) : 0u)
@@ -178,15 +182,18 @@ TEST(HotPath, PhysicsLoopDoesNotAllocate) {
       {AFHUB_EXAMPLE_MODELS "/arm7.yaml", AFHUB_EXAMPLE_MODELS "/rcm.yaml"}, "afhub/arm/base");
 }
 
-// Sixteen arms of eight links: sixteen islands, solved by two threads
-// (physics/src/parallel_islands.hpp).
+// Sixteen arms of eight links, sixteen islands solved by two threads
+// (physics/src/parallel_islands.hpp), with a recorder; then 32 arms without one, whose
+// two threads also share the joints' readings and the states.
 TEST(HotPath, PhysicsLoopOfManyArmsSolvedByTwoThreadsDoesNotAllocate) {
-  cpu_set_t cpus;
-  ASSERT_EQ(sched_getaffinity(0, sizeof cpus, &cpus), 0);
-  if (CPU_COUNT(&cpus) < 2) GTEST_SKIP() << "this process may run on one CPU: no helper to test";
+  if (!afhub::testing::may_run_on_two_cpus())
+    GTEST_SKIP() << "this process may run on one CPU: no helper to test";
   const testing::ModelFolder folder;
   expect_physics_loop_allocation_free({folder.write("arms.yaml", testing::arms_model(16, 8))},
-                                      "arms/a0l0", true);
+                                      "arms/a0l0", true, true);
+  // 256 states: enough blocks of them to be shared (ParallelIslands::kMinItems).
+  expect_physics_loop_allocation_free({folder.write("arms32.yaml", testing::arms_model(32, 8))},
+                                      "arms/a0l0", true, false);
 }
 
 // The real AMBF models: mesh shapes, and the four-bar's loop.

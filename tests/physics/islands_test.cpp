@@ -104,9 +104,8 @@ TEST(Islands, RobotsLoadedOverlappingAtTheOriginChangeEachOther) {
 // takes it, so every body ends bit for bit where the stepping thread alone puts it.
 // 16 arms of 8 links, each driven to its own sinusoid, 2000 steps.
 TEST(Islands, TwoThreadsSolveManyArmsBitForBitAsOneDoes) {
-  cpu_set_t cpus;
-  ASSERT_EQ(sched_getaffinity(0, sizeof cpus, &cpus), 0);
-  if (CPU_COUNT(&cpus) < 2) GTEST_SKIP() << "this process may run on one CPU: no helper to test";
+  if (!afhub::testing::may_run_on_two_cpus())
+    GTEST_SKIP() << "this process may run on one CPU: no helper to test";
   constexpr int kArms = 16, kLinks = 8, kArmSteps = 2000;
   afhub::testing::ModelFolder folder;
   Model model =
@@ -159,9 +158,8 @@ TEST(Islands, TwoThreadsSolveManyArmsBitForBitAsOneDoes) {
 // the states published): every item is run once, some by each thread. Each item takes
 // 20 us, so the helper, napping 20 us at a time between jobs, comes for some of them.
 TEST(Islands, SharedWorkRunsEveryItemOnceSomeOnEachThread) {
-  cpu_set_t cpus;
-  ASSERT_EQ(sched_getaffinity(0, sizeof cpus, &cpus), 0);
-  if (CPU_COUNT(&cpus) < 2) GTEST_SKIP() << "this process may run on one CPU: no helper to test";
+  if (!afhub::testing::may_run_on_two_cpus())
+    GTEST_SKIP() << "this process may run on one CPU: no helper to test";
   afhub::testing::ModelFolder folder;
   Model model = load_adf_files({folder.write("arms.yaml", afhub::testing::arms_model(16, 8))});
   struct Items final : SharedWork {
@@ -201,9 +199,8 @@ TEST(Islands, SharedWorkRunsEveryItemOnceSomeOnEachThread) {
 // Stepped at 1 kHz, then paused for 60 ms, then stepped again: the helper solves
 // islands in both runs.
 TEST(Islands, TheHelperSolvesAtOneKilohertzAndAfterAPause) {
-  cpu_set_t cpus;
-  ASSERT_EQ(sched_getaffinity(0, sizeof cpus, &cpus), 0);
-  if (CPU_COUNT(&cpus) < 2) GTEST_SKIP() << "this process may run on one CPU: no helper to test";
+  if (!afhub::testing::may_run_on_two_cpus())
+    GTEST_SKIP() << "this process may run on one CPU: no helper to test";
   afhub::testing::ModelFolder folder;
   const Model model =
       load_adf_files({folder.write("arms.yaml", afhub::testing::arms_model(16, 8))});
@@ -228,9 +225,8 @@ TEST(Islands, TheHelperSolvesAtOneKilohertzAndAfterAPause) {
 // real-time priority would preempt a controller on the other CPU that often. Needs the
 // right to real-time scheduling (root, as the tests run).
 TEST(Islands, TheHelperOfARealTimeLoopNapsUnderTheNormalScheduler) {
-  cpu_set_t cpus;
-  ASSERT_EQ(sched_getaffinity(0, sizeof cpus, &cpus), 0);
-  if (CPU_COUNT(&cpus) < 2) GTEST_SKIP() << "this process may run on one CPU: no helper to test";
+  if (!afhub::testing::may_run_on_two_cpus())
+    GTEST_SKIP() << "this process may run on one CPU: no helper to test";
   sched_param fifo{};
   fifo.sched_priority = 10;
   if (pthread_setschedparam(pthread_self(), SCHED_FIFO, &fifo) != 0)

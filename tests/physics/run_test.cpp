@@ -2,15 +2,16 @@
 // move it, refused NaN commands counted in the world state, the watchdog, the
 // launch file with -l, the report, and real-time pacing.
 #include <gtest/gtest.h>
-#include <sched.h>
 #include <signal.h>
 #include <sys/resource.h>
+#include <sys/syscall.h>
 #include <time.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <fstream>
 #include <memory>
 #include <optional>
 #include <thread>
@@ -26,6 +27,7 @@
 #include "model_files.hpp"
 #include "shared_models.hpp"
 #include "strict_json.hpp"
+#include "threads.hpp"
 
 namespace afhub::test {
 namespace {
@@ -149,18 +151,29 @@ TEST(Run, AStepsStatesShareOnePublishStampThatGrowsByStep) {
   EXPECT_GT(second.first, first.first);
 }
 
+// `count` eight-link arms stepped and on their channels; two solver threads.
+struct ArmsOnChannels {
+  explicit ArmsOnChannels(int count)
+      : model(physics::load_adf_files(
+            {folder.write("arms.yaml", afhub::testing::arms_model(count, 8))})),
+        sim(model, 0.001),
+        channels(sim, 5.0) {}
+  afhub::testing::ModelFolder folder;
+  const physics::Model model;
+  physics::Simulation sim;
+  physics::SimChannels channels;
+};
+
 // A thousand bodies' states are written by two threads at once, the stepping thread and
 // the islands' helper (SimChannels::publish, Simulation::share): each body's state holds
 // its own readings of the newest step, under the step's one stamp.
 TEST(Run, AThousandStatesWrittenByTwoThreadsAreEachTheirBodysReadings) {
-  cpu_set_t cpus;
-  ASSERT_EQ(sched_getaffinity(0, sizeof cpus, &cpus), 0);
-  if (CPU_COUNT(&cpus) < 2) GTEST_SKIP() << "this process may run on one CPU: no helper to test";
-  afhub::testing::ModelFolder folder;
-  const physics::Model model =
-      physics::load_adf_files({folder.write("arms.yaml", afhub::testing::arms_model(125, 8))});
-  physics::Simulation sim(model, 0.001);
-  physics::SimChannels channels(sim, 5.0);
+  if (!afhub::testing::may_run_on_two_cpus())
+    GTEST_SKIP() << "this process may run on one CPU: no helper to test";
+  ArmsOnChannels arms(125);
+  const physics::Model& model = arms.model;
+  physics::Simulation& sim = arms.sim;
+  physics::SimChannels& channels = arms.channels;
   std::vector<std::unique_ptr<BodyClient>> clients;
   for (const physics::BodySpec& body : model.bodies)
     clients.push_back(std::make_unique<BodyClient>(body.channel));
@@ -177,9 +190,12 @@ TEST(Run, AThousandStatesWrittenByTwoThreadsAreEachTheirBodysReadings) {
       },
       10s));
   const auto reading = std::make_unique<physics::BodyReading>();
+  std::uint64_t by_helper = 0;            // of the states' blocks
   for (int step = 0; step < 5; ++step) {  // each published once
     sim.step();
+    const std::uint64_t before = sim.items_shared_with_helper();
     channels.publish({});
+    by_helper += sim.items_shared_with_helper() - before;
     const std::int64_t stamp = clients[0]->latest_state()->header.publish_stamp_ns;
     for (std::size_t b = 0; b < model.bodies.size(); ++b) {
       const BodyState& state = *clients[b]->latest_state();
@@ -196,7 +212,40 @@ TEST(Run, AThousandStatesWrittenByTwoThreadsAreEachTheirBodysReadings) {
       }
     }
   }
-  EXPECT_GT(sim.islands_solved_by_helper(), 0u) << "no helper: the states had one writer";
+  EXPECT_GT(by_helper, 0u) << "the helper wrote no state in 5 steps: nothing was compared";
+}
+
+// A paused world publishes its held step again every period without stepping; those
+// states are written by the stepping thread alone, so the islands' helper, given no
+// work, stops napping after 20 ms and sleeps until the next step (on a futex).
+TEST(Run, WhileTheWorldIsPausedTheIslandsHelperSleeps) {
+  if (!afhub::testing::may_run_on_two_cpus())
+    GTEST_SKIP() << "this process may run on one CPU: no helper to test";
+  ArmsOnChannels arms(16);
+  physics::Simulation& sim = arms.sim;
+  physics::SimChannels& channels = arms.channels;
+  for (int step = 0; step < 20; ++step) {
+    sim.step();
+    channels.publish({});
+  }
+  ASSERT_GT(sim.islands_solved_by_helper(), 0u) << "no helper";
+  const pid_t helper = afhub::testing::thread_named("afhub-islands");
+  ASSERT_NE(helper, 0);
+  // Its system call as /proc shows it: the first field is the call's number.
+  auto in_futex = [&] {
+    std::ifstream file("/proc/self/task/" + std::to_string(helper) + "/syscall");
+    long call = -1;
+    file >> call;
+    return call == SYS_futex;
+  };
+  const auto until = std::chrono::steady_clock::now() + 100ms;
+  bool slept = false;
+  while (std::chrono::steady_clock::now() < until) {  // paused: published every 1 ms
+    channels.publish({});
+    std::this_thread::sleep_for(1ms);
+    slept = in_futex();
+  }
+  EXPECT_TRUE(slept) << "the helper was not asleep after 100 ms of a paused world's publishing";
 }
 
 TEST(Run, LockstepWaitsAsleepUnlessSpinning) {

@@ -23,9 +23,10 @@ namespace {
 // The wire and the core agree on capacities, so a copy never truncates what fits.
 static_assert(kBodyRayCapacity == kMaxSensorRaysPerBody);
 
-// Untaped, the states are written a block of channels at a time by the stepping thread
-// and the islands' helper at once (Simulation::share): each channel's reading, its slot
-// and its publisher are its own. A thousand bodies: publishing 151 -> N us.
+// A new step's states, untaped, are written a block of channels at a time by the
+// stepping thread and the islands' helper at once (Simulation::share): each channel's
+// slot and publisher are its own, and each thread has a reading buffer. A thousand
+// bodies: publishing 0.58 to 0.70x (docs/performance.md).
 constexpr std::size_t kChannelsPerItem = 16;
 
 // A reading into a loaned state (its header is the caller's), within the joints
@@ -211,13 +212,17 @@ void SimChannels::publish(const WorldClock& clock) noexcept {
   // The step's states share one stamp, read before the first is filled: a clock read
   // per state was a quarter of publishing a thousand (28 ns each on the project's VM).
   const StateStamp stamp{step, time_s, clock.step_due_ns, monotonic_ns()};
-  if (taping) {  // the tape is written in channel order, by this thread
+  if (new_step && !taping) {
+    StateWriting writing(*this, stamp);
+    sim_.share(static_cast<int>((channels_.size() + kChannelsPerItem - 1) / kChannelsPerItem),
+               writing);
+  } else {  // the tape is written in channel order; a step published again is not shared
     for (Channel& channel : channels_) {
       const BodyState* state = publish_state(channel, readings_[0], stamp);
       // Only the bodies someone reads: a recorder holds the state slots of those it
       // records (taping all of a thousand bodies for a recorder of one cost about 60 us
       // of a 1.1 ms step); a body of no one's is not worth a copy.
-      if (state && channel.publisher->has_state_readers()) {
+      if (taping && state && channel.publisher->has_state_readers()) {
         const std::string& name = channel.soft ? sim_.model().soft_bodies[channel.index].channel
                                                : sim_.model().bodies[channel.index].channel;
         if (channel.taken_command)  // what this step answered, as it was taken
@@ -227,12 +232,8 @@ void SimChannels::publish(const WorldClock& clock) noexcept {
         tape_.add(PayloadKind::kBodyState, name, state,
                   static_cast<std::uint32_t>(body_state_bytes(channel.joint_count)));
       }
-      channel.taken_command = nullptr;
+      if (new_step) channel.taken_command = nullptr;
     }
-  } else {
-    StateWriting writing(*this, stamp, new_step);
-    sim_.share(static_cast<int>((channels_.size() + kChannelsPerItem - 1) / kChannelsPerItem),
-               writing);
   }
   if (WorldState* world = world_.loan()) {
     world->header.sim_step = step;
@@ -294,9 +295,8 @@ const BodyState* SimChannels::publish_state(Channel& channel, BodyReading& readi
   return state;
 }
 
-SimChannels::StateWriting::StateWriting(SimChannels& channels, const StateStamp& stamp,
-                                        bool new_step)
-    : channels_(channels), stamp_(stamp), new_step_(new_step) {}
+SimChannels::StateWriting::StateWriting(SimChannels& channels, const StateStamp& stamp)
+    : channels_(channels), stamp_(stamp) {}
 
 void SimChannels::StateWriting::run(int item, int thread) noexcept {
   const std::size_t first = static_cast<std::size_t>(item) * kChannelsPerItem;
@@ -304,7 +304,7 @@ void SimChannels::StateWriting::run(int item, int thread) noexcept {
   for (std::size_t c = first; c < last; ++c) {
     Channel& channel = channels_.channels_[c];
     channels_.publish_state(channel, channels_.readings_[thread], stamp_);
-    if (new_step_) channel.taken_command = nullptr;
+    channel.taken_command = nullptr;
   }
 }
 

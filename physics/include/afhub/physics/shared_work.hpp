@@ -14,4 +14,9 @@ class SharedWork {
   ~SharedWork() = default;
 };
 
+// Every item of `work` run by the calling thread, as thread 0.
+inline void run_alone(int count, SharedWork& work) noexcept {
+  for (int item = 0; item < count; ++item) work.run(item, 0);
+}
+
 }  // namespace afhub::physics

@@ -118,6 +118,8 @@ class Simulation {
   // solves its islands on two threads, their helper (1); returns when all are done.
   // From the thread that steps, between steps: publishing a thousand bodies' readings.
   void share(int count, SharedWork& work) noexcept;
+  // Items of such work (the joints' readings, the states) the helper ran since the start.
+  std::uint64_t items_shared_with_helper() const noexcept;
   // Whether actuator `actuator` (an index into model().actuators) holds a body.
   bool actuator_engaged(std::size_t actuator) const noexcept;
 
