@@ -165,8 +165,9 @@ void expect_physics_loop_allocation_free(const std::vector<std::string>& files,
   EXPECT_EQ(helper_allocations.load(), 0) << "by the helper, in " << kCycles << " physics cycles";
   if (helped) {
     EXPECT_GT(sim.islands_solved_by_helper(), helped_before) << "the helper solved no island";
-    if (!taped)
+    if (!taped) {
       EXPECT_GT(sim.items_shared_with_helper(), shared_before) << "the helper wrote no state";
+    }
   }
   EXPECT_GE(viewer_updates - updates_before, 290u) << "the pose feed went out at 60 Hz";
   EXPECT_EQ(taped_steps - taped_before, recorder ? static_cast<std::uint64_t>(kCycles) : 0u)

@@ -187,10 +187,11 @@ TEST(Islands, SharedWorkRunsEveryItemOnceSomeOnEachThread) {
       EXPECT_GT(items.by_thread[0].load(), 0) << threads << " thread(s)";
       by_helper += items.by_thread[1].load();
     }
-    if (threads == 1)
+    if (threads == 1) {
       EXPECT_EQ(by_helper, 0) << "a helper with one solver thread";
-    else
+    } else {
       EXPECT_GT(by_helper, 0) << "the helper ran none of 20 jobs of 64 items of 20 us";
+    }
   }
 }
 
