@@ -5,6 +5,8 @@
 // of every joint touching it or driven by it, are released, so a command that
 // caused it stops, and an actuator holding it or carried by it lets go.
 // Everything is kept in storage made when the world was built: no allocation.
+#include <atomic>
+
 #include "simulation_data.hpp"
 
 namespace afhub::physics {
@@ -39,13 +41,27 @@ void Simulation::Data::recover_non_finite() noexcept {
     nan_recoveries.last = event;
     ++nan_recoveries.count;
   };
-  for (std::size_t b = 0; b < bodies.size(); ++b) {
+  // Each body checked on both threads (the islands' helper's share): it is read and
+  // its own data written. The contact sums are cleared in the same pass for
+  // sum_contacts. The few bodies found not finite are recovered below, in order.
+  std::atomic<bool> any_non_finite{false};
+  share_each(world, static_cast<int>(bodies.size()), ReservedWorld::kBodiesPerItem,
+             [&](int b, int) {
+               BodyData& body = bodies[static_cast<std::size_t>(b)];
+               body.contact_force.setZero();
+               body.contact_moment_at_origin.setZero();
+               body.contact_count = 0;
+               body.finite = finite_body(*body.body);
+               if (body.finite)
+                 body.good_pose = body.body->getWorldTransform();
+               else
+                 any_non_finite.store(true, std::memory_order_relaxed);
+             });
+  const bool any = any_non_finite.load(std::memory_order_relaxed);
+  for (std::size_t b = 0; any && b < bodies.size(); ++b) {
     BodyData& body = bodies[b];
+    if (body.finite) continue;
     btRigidBody& rb = *body.body;
-    if (finite_body(rb)) {
-      body.good_pose = rb.getWorldTransform();
-      continue;
-    }
     count(b, false);
     rb.setWorldTransform(body.good_pose);
     rb.setInterpolationWorldTransform(body.good_pose);

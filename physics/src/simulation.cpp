@@ -26,26 +26,6 @@ void reserve_overlapping_pairs(btOverlappingPairCache& cache, btDispatcher& disp
     cache.removeOverlappingPair(&proxies[0], &proxies[i], &dispatcher);
 }
 
-// The joints' readings after a step, a block of joints per item, taken by the stepping
-// thread and the islands' helper at once: each joint reads its two bodies and writes
-// only its own readings.
-class JointReadings final : public SharedWork {
- public:
-  static constexpr std::size_t kJointsPerItem = 32;
-  explicit JointReadings(std::vector<std::unique_ptr<JointModel>>& joints) : joints_(joints) {}
-  int items() const {
-    return static_cast<int>((joints_.size() + kJointsPerItem - 1) / kJointsPerItem);
-  }
-  void run(int item, int) noexcept override {
-    const std::size_t first = static_cast<std::size_t>(item) * kJointsPerItem;
-    const std::size_t last = std::min(first + kJointsPerItem, joints_.size());
-    for (std::size_t j = first; j < last; ++j) joints_[j]->update_readings();
-  }
-
- private:
-  std::vector<std::unique_ptr<JointModel>>& joints_;
-};
-
 }  // namespace
 
 Simulation::Simulation(const Model& model, double dt_s)
@@ -120,7 +100,8 @@ std::vector<std::string> Simulation::gain_notes() const {
 
 void Simulation::step() noexcept {
   Data& d = *data_;
-  for (BodyData& body : d.bodies) d.apply_cartesian(body);
+  share_each(d.world, static_cast<int>(d.bodies.size()), ReservedWorld::kBodiesPerItem,
+             [&d](int b, int) { d.apply_cartesian(d.bodies[b]); });
   // A URDF <mimic> joint follows its leader's latest position, over any command.
   for (auto& joint : d.joints)
     if (const std::optional<Mimic>& mimic = joint->spec().mimic)
@@ -132,8 +113,9 @@ void Simulation::step() noexcept {
   ++d.steps;
   d.recover_non_finite();
   d.sum_contacts();
-  JointReadings readings(d.joints);
-  d.world.share(readings.items(), readings);
+  // Each joint reads its two bodies and writes only its own readings.
+  share_each(d.world, static_cast<int>(d.joints.size()), ReservedWorld::kJointsPerItem,
+             [&d](int j, int) { d.joints[j]->update_readings(); });
   d.read_sensors();
 }
 

@@ -71,6 +71,7 @@ struct BodyData {
   std::size_t first_ray = 0, ray_count = 0;  // into Data::rays
   std::vector<int> actuators;                // into Data::actuators, file order
   btTransform good_pose;                     // after the last step that left it finite
+  bool finite = true;                        // after the last step (recover_non_finite)
 };
 
 // A world file's light or camera, carried by its parent body when it has one.
@@ -187,6 +188,8 @@ struct Simulation::Data {
   int touching_body(int parent, const btVector3& point) const noexcept;
   void apply_cartesian(BodyData& body) noexcept;
   void read_sensors() noexcept;
+  // After a step: bodies left NaN or infinite recovered; every body's contact sums
+  // cleared, then summed from the manifolds (sum_contacts, after it).
   void recover_non_finite() noexcept;
   void sum_contacts() noexcept;
   void keep_good_state() noexcept;

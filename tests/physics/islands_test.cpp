@@ -154,6 +154,135 @@ TEST(Islands, TwoThreadsSolveManyArmsBitForBitAsOneDoes) {
   EXPECT_GT(travel, 0.1);
 }
 
+// Two layers of free boxes over a static floor, the upper layer falling onto the lower:
+// `columns` stacks of two, 0.15 m apart, so each stack is an island of contacts; from
+// x = 30 m, clear of arms_model's arms.
+std::string stacked_boxes_model(int columns) {
+  std::string text = "adf version: '1.0'\nnamespace: /boxes/\n";
+  text += "gravity: {x: 0.0, y: 0.0, z: -9.81}\nignore inter-collision: false\nbodies: [BODY floor";
+  for (int b = 0; b < 2 * columns; ++b) text += ", BODY b" + std::to_string(b);
+  text +=
+      "]\nBODY floor:\n  name: floor\n  mass: 0.0\n  shape: box\n"
+      "  geometry: {x: 8.0, y: 4.0, z: 0.1}\n"
+      "  location:\n    position: {x: 32, y: 1, z: -0.05}\n";
+  for (int b = 0; b < 2 * columns; ++b) {
+    const int column = b % columns;
+    char location[128];
+    std::snprintf(location, sizeof location, "{x: %.2f, y: %.2f, z: %.2f}",
+                  30 + 0.15 * (column % 25), 0.15 * (column / 25), b < columns ? 0.051 : 1.0);
+    text += "BODY b" + std::to_string(b) + ":\n  name: b" + std::to_string(b) +
+            "\n  mass: 1.0\n  inertia: {ix: 0.002, iy: 0.002, iz: 0.002}\n  shape: box\n"
+            "  geometry: {x: 0.1, y: 0.1, z: 0.1}\n  location:\n    position: " +
+            location + "\n";
+  }
+  return text;
+}
+
+// With many bodies, Bullet's work on each body before and after the solve is shared
+// with the islands' helper too: the damping, each object's bounds (handed to the
+// broadphase in order after), the finiteness checks and the contact sums' clearing,
+// and the bodies' Cartesian commands applied before the step.
+// 500 boxes pushed sideways, half of them dropped 0.85 m (4 m/s, 4 mm a step, at
+// impact), falling onto each other and a floor, where bounds and contacts decide the
+// motion, beside 16 arms (islands of joints: what has the world solved on two threads):
+// stepped by one thread and by two, every pose and every body's contact wrench are bit
+// for bit the same, and the helper did some of the shared work.
+TEST(Islands, TwoThreadsStepFallingBoxesBitForBitAsOneDoes) {
+  if (!afhub::testing::may_run_on_two_cpus())
+    GTEST_SKIP() << "this process may run on one CPU: no helper to test";
+  afhub::testing::ModelFolder folder;
+  Model model = load_adf_files({folder.write("arms.yaml", afhub::testing::arms_model(16, 8)),
+                                folder.write("boxes.yaml", stacked_boxes_model(250))});
+  struct Run {
+    std::vector<Pose> poses;
+    std::vector<Wrench> contacts;
+    std::uint32_t contact_points = 0;
+    std::uint64_t shared = 0;
+  };
+  auto run = [&](int solver_threads) {
+    model.world.solver_threads = solver_threads;
+    Simulation sim(model, 0.001);
+    // Every box pushed along x (a Cartesian force, applied before each step).
+    BodyInput push;
+    push.wrench.force_n = {0.5, 0, 0};
+    for (std::size_t b = 0; b < model.bodies.size(); ++b)
+      if (model.bodies[b].name.front() == 'b') {
+        EXPECT_EQ(sim.input_problem(b, push), nullptr);
+        sim.set_input(b, push);
+      }
+    for (int step = 0; step < 500; ++step) sim.step();
+    Run out;
+    BodyReading reading;
+    for (std::size_t b = 0; b < model.bodies.size(); ++b) {
+      sim.read_body(b, reading);
+      out.poses.push_back(reading.pose);
+      out.contacts.push_back(reading.contact_wrench);
+      out.contact_points += reading.contact_count;
+    }
+    out.shared = sim.items_shared_with_helper();
+    return out;
+  };
+  const Run alone = run(1), helped = run(2);
+  std::printf("items shared with the helper: %llu; contact points at the end: %u\n",
+              static_cast<unsigned long long>(helped.shared), alone.contact_points);
+  EXPECT_EQ(alone.shared, 0u);
+  EXPECT_GT(helped.shared, 0u) << "the helper ran no shared work: nothing was compared";
+  // Every box rests on the floor or on another: the contacts are in the comparison.
+  EXPECT_GE(alone.contact_points, 2u * 500u);
+  ASSERT_EQ(alone.poses.size(), helped.poses.size());
+  for (std::size_t b = 0; b < alone.poses.size(); ++b) {
+    EXPECT_EQ(std::memcmp(&alone.poses[b], &helped.poses[b], sizeof(Pose)), 0)
+        << model.bodies[b].name;
+    EXPECT_EQ(std::memcmp(&alone.contacts[b], &helped.contacts[b], sizeof(Wrench)), 0)
+        << model.bodies[b].name;
+  }
+  // The upper layer fell onto the lower: the comparison is of a world that moved.
+  EXPECT_LT(alone.poses.back().position_m.z, 0.17);
+}
+
+// The finiteness check after each step is shared too: a body left NaN is put back
+// whichever thread found it. Every box of the falling-boxes scene given a NaN force
+// (as a caller skipping input_problem would), or only the last box, twenty steps
+// running: after each, the world is finite, each box recovered, at its pose before
+// the step.
+TEST(Islands, BodiesLeftNanAreRecoveredWhicheverThreadCheckedThem) {
+  if (!afhub::testing::may_run_on_two_cpus())
+    GTEST_SKIP() << "this process may run on one CPU: no helper to test";
+  afhub::testing::ModelFolder folder;
+  Model model = load_adf_files({folder.write("arms.yaml", afhub::testing::arms_model(16, 8)),
+                                folder.write("boxes.yaml", stacked_boxes_model(250))});
+  model.world.solver_threads = 2;
+  Simulation sim(model, 0.001);
+  for (int step = 0; step < 20; ++step) sim.step();
+  std::vector<std::size_t> boxes;
+  for (std::size_t b = 0; b < model.bodies.size(); ++b)
+    if (model.bodies[b].name.front() == 'b') boxes.push_back(b);
+  BodyInput poison;
+  poison.wrench.force_n = {std::nan(""), 0, 0};
+  const std::uint64_t shared_before = sim.items_shared_with_helper();
+  // Even rounds poison every box; odd rounds only the last, which the helper, taking
+  // items from the end, checks in most steps.
+  for (int round = 0; round < 20; ++round) {
+    const std::vector<std::size_t> poisoned =
+        round % 2 ? std::vector<std::size_t>{boxes.back()} : boxes;
+    std::vector<Pose> before;
+    for (std::size_t b : poisoned) {
+      before.push_back(sim.body_pose(b));
+      sim.set_input(b, poison);
+    }
+    const std::uint64_t recovered = sim.nan_recoveries().count;
+    sim.step();
+    ASSERT_TRUE(sim.all_finite()) << "round " << round;
+    EXPECT_EQ(sim.nan_recoveries().count - recovered, poisoned.size()) << "round " << round;
+    for (std::size_t i = 0; i < poisoned.size(); ++i) {
+      const Pose after = sim.body_pose(poisoned[i]);
+      EXPECT_EQ(std::memcmp(&before[i], &after, sizeof(Pose)), 0)
+          << model.bodies[poisoned[i]].name << ", round " << round;
+    }
+  }
+  EXPECT_GT(sim.items_shared_with_helper(), shared_before) << "the helper ran no shared work";
+}
+
 // Work a step shares with the islands' helper (Simulation::share: the joints' readings,
 // the states published): every item is run once, some by each thread. Each item takes
 // 20 us, so the helper, napping 20 us at a time between jobs, comes for some of them.

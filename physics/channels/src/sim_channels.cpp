@@ -27,7 +27,7 @@ static_assert(kBodyRayCapacity == kMaxSensorRaysPerBody);
 // stepping thread and the islands' helper at once (Simulation::share): each channel's
 // slot and publisher are its own, and each thread has a reading buffer. A thousand
 // bodies: publishing 0.58 to 0.70x (docs/performance.md).
-constexpr std::size_t kChannelsPerItem = 16;
+constexpr int kChannelsPerItem = 16;
 
 // A reading into a loaned state (its header is the caller's), within the joints
 // it was loaned for.
@@ -213,9 +213,11 @@ void SimChannels::publish(const WorldClock& clock) noexcept {
   // per state was a quarter of publishing a thousand (28 ns each on the project's VM).
   const StateStamp stamp{step, time_s, clock.step_due_ns, monotonic_ns()};
   if (new_step && !taping) {
-    StateWriting writing(*this, stamp);
-    sim_.share(static_cast<int>((channels_.size() + kChannelsPerItem - 1) / kChannelsPerItem),
-               writing);
+    share_each(sim_, static_cast<int>(channels_.size()), kChannelsPerItem, [&](int c, int thread) {
+      Channel& channel = channels_[static_cast<std::size_t>(c)];
+      publish_state(channel, readings_[static_cast<std::size_t>(thread)], stamp);
+      channel.taken_command = nullptr;
+    });
   } else {  // the tape is written in channel order; a step published again is not shared
     for (Channel& channel : channels_) {
       const BodyState* state = publish_state(channel, readings_[0], stamp);
@@ -293,19 +295,6 @@ const BodyState* SimChannels::publish_state(Channel& channel, BodyReading& readi
   state->refusal_reason = channel.refusal_reason;
   channel.publisher->publish_state(state, stamp.stamp_ns);
   return state;
-}
-
-SimChannels::StateWriting::StateWriting(SimChannels& channels, const StateStamp& stamp)
-    : channels_(channels), stamp_(stamp) {}
-
-void SimChannels::StateWriting::run(int item, int thread) noexcept {
-  const std::size_t first = static_cast<std::size_t>(item) * kChannelsPerItem;
-  const std::size_t last = std::min(first + kChannelsPerItem, channels_.channels_.size());
-  for (std::size_t c = first; c < last; ++c) {
-    Channel& channel = channels_.channels_[c];
-    channels_.publish_state(channel, channels_.readings_[thread], stamp_);
-    channel.taken_command = nullptr;
-  }
 }
 
 bool SimChannels::next_world_command(WorldCommand& out) noexcept {

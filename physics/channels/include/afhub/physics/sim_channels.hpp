@@ -220,16 +220,6 @@ class SimChannels {
   // Reads the channel's body and writes its state; nullptr when its slot could not be had.
   const BodyState* publish_state(Channel& channel, BodyReading& reading,
                                  const StateStamp& stamp) noexcept;
-  // A new step's states written by the stepping thread and the islands' helper at once.
-  class StateWriting final : public SharedWork {
-   public:
-    StateWriting(SimChannels& channels, const StateStamp& stamp);
-    void run(int item, int thread) noexcept override;
-
-   private:
-    SimChannels& channels_;
-    const StateStamp& stamp_;
-  };
   // Until a command comes (or `until_ns`): asleep on the waiter, or one sched_yield.
   void wait_for_commands(std::int64_t until_ns) noexcept;
   // "ambf/env/base, ambf/env/link1": the active bodies no lockstep client answers for.
