@@ -90,8 +90,9 @@ void ReservedWorld::updateAabbs() {
     const Bounds& bounds = bounds_[static_cast<std::size_t>(i)];
     if (!bounds.update) continue;
     btCollisionObject& object = *m_collisionObjects[i];
-    // A moving body's bounds this large mean it blew up: Bullet takes it out of the
-    // simulation (recover_non_finite brings it back), without a word here.
+    // As Bullet: a moving object's bounds this large (a body blown up) are not handed
+    // to the broadphase, and the object is asked to leave the simulation, which an
+    // afhub body (never deactivated) refuses; check_bodies puts it back after the step.
     if (object.isStaticObject() || (bounds.max - bounds.min).length2() < btScalar(1e12))
       m_broadphasePairCache->setAabb(object.getBroadphaseHandle(), bounds.min, bounds.max,
                                      m_dispatcher1);

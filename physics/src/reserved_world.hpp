@@ -63,7 +63,7 @@ class ReservedWorld : public btSoftRigidDynamicsWorld, private ParallelIslands::
   // continuous collision detection reads (the body's bounds swept to reach it, and
   // its predictive contacts). With continuous collision off, only the damping is done,
   // and no predictive contact is looked for (a thousand bodies: about 40 us a step).
-  // The damping is shared with the islands' helper, a body each.
+  // The damping is shared with the islands' helper, in blocks of kBodiesPerItem.
   void predictUnconstraintMotion(btScalar dt) override;
   void createPredictiveContacts(btScalar dt) override;
   // With a helper and no continuous collision: each object's bounds computed by both
@@ -88,7 +88,8 @@ class ReservedWorld : public btSoftRigidDynamicsWorld, private ParallelIslands::
   std::vector<std::uint64_t> integrated_;
   std::uint64_t stamp_ = 0;
   std::vector<btRigidBody*> unintegrated_;
-  // Per collision object: its bounds this step, and whether they are to be updated.
+  // Per collision object: its bounds this step, and whether they are to be updated
+  // (always, in afhub: every object's bounds are, and its bodies never sleep).
   struct Bounds {
     btVector3 min, max;
     bool update = false;

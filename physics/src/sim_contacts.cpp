@@ -23,7 +23,7 @@ void add_contact(BodyData& body, const btVector3& force, const btVector3& at) {
 
 }  // namespace
 
-// The sums start at zero: recover_non_finite cleared them, in its pass over the bodies.
+// After check_bodies, which cleared the sums in its pass over the bodies.
 void Simulation::Data::sum_contacts() noexcept {
   const btScalar per_second = btScalar(1) / dt_s;
   const int manifolds = dispatcher.getNumManifolds();

@@ -34,16 +34,16 @@ void Simulation::Data::keep_good_state() noexcept {
       soft.good_positions[static_cast<std::size_t>(n)] = soft.body->m_nodes[n].m_x;
 }
 
-void Simulation::Data::recover_non_finite() noexcept {
+void Simulation::Data::check_bodies() noexcept {
   auto count = [&](std::size_t index, bool soft) {
     const NanEvent event{steps, index, soft};
     if (nan_recoveries.count == 0) nan_recoveries.first = event;
     nan_recoveries.last = event;
     ++nan_recoveries.count;
   };
-  // Each body checked on both threads (the islands' helper's share): it is read and
-  // its own data written. The contact sums are cleared in the same pass for
-  // sum_contacts. The few bodies found not finite are recovered below, in order.
+  // The bodies split between the stepping thread and the islands' helper (share_each):
+  // each is read and only its own data written. Its contact sums are cleared in the
+  // same pass, for sum_contacts. The few found not finite are recovered below, in order.
   std::atomic<bool> any_non_finite{false};
   share_each(world, static_cast<int>(bodies.size()), ReservedWorld::kBodiesPerItem,
              [&](int b, int) {

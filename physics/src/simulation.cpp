@@ -111,7 +111,7 @@ void Simulation::step() noexcept {
   d.world.stepSimulation(d.dt_s, 1, d.dt_s);
   d.broadphase.m_deferedcollide = false;  // the first step met the initial overlaps
   ++d.steps;
-  d.recover_non_finite();
+  d.check_bodies();
   d.sum_contacts();
   // Each joint reads its two bodies and writes only its own readings.
   share_each(d.world, static_cast<int>(d.joints.size()), ReservedWorld::kJointsPerItem,

@@ -184,7 +184,7 @@ TEST(HotPath, PhysicsLoopDoesNotAllocate) {
 }
 
 // Sixteen arms of eight links, sixteen islands solved by two threads
-// (physics/src/parallel_islands.hpp), with a recorder; then 64 arms without one, whose
+// (physics/src/parallel_islands.hpp), with a recorder; then 80 arms without one, whose
 // two threads also share Bullet's work on each body, the joints' readings and the states.
 TEST(HotPath, PhysicsLoopOfManyArmsSolvedByTwoThreadsDoesNotAllocate) {
   if (!afhub::testing::may_run_on_two_cpus())
@@ -192,8 +192,8 @@ TEST(HotPath, PhysicsLoopOfManyArmsSolvedByTwoThreadsDoesNotAllocate) {
   const testing::ModelFolder folder;
   expect_physics_loop_allocation_free({folder.write("arms.yaml", testing::arms_model(16, 8))},
                                       "arms/a0l0", true, true);
-  // 512 bodies: enough blocks of them to be shared (ParallelIslands::kMinItems).
-  expect_physics_loop_allocation_free({folder.write("arms64.yaml", testing::arms_model(64, 8))},
+  // 640 bodies: more blocks of them than ParallelIslands::kMinItems, so they are shared.
+  expect_physics_loop_allocation_free({folder.write("arms80.yaml", testing::arms_model(80, 8))},
                                       "arms/a0l0", true, false);
 }
 

@@ -156,15 +156,19 @@ TEST(Islands, TwoThreadsSolveManyArmsBitForBitAsOneDoes) {
 
 // Two layers of free boxes over a static floor, the upper layer falling onto the lower:
 // `columns` stacks of two, 0.15 m apart, so each stack is an island of contacts; from
-// x = 30 m, clear of arms_model's arms.
+// x = 30 m, clear of arms_model's arms. A static paddle stands beside the first row.
 std::string stacked_boxes_model(int columns) {
   std::string text = "adf version: '1.0'\nnamespace: /boxes/\n";
-  text += "gravity: {x: 0.0, y: 0.0, z: -9.81}\nignore inter-collision: false\nbodies: [BODY floor";
+  text += "gravity: {x: 0.0, y: 0.0, z: -9.81}\nignore inter-collision: false\n";
+  text += "bodies: [BODY floor, BODY paddle";
   for (int b = 0; b < 2 * columns; ++b) text += ", BODY b" + std::to_string(b);
   text +=
       "]\nBODY floor:\n  name: floor\n  mass: 0.0\n  shape: box\n"
       "  geometry: {x: 8.0, y: 4.0, z: 0.1}\n"
-      "  location:\n    position: {x: 32, y: 1, z: -0.05}\n";
+      "  location:\n    position: {x: 32, y: 1, z: -0.05}\n"
+      "BODY paddle:\n  name: paddle\n  mass: 0.0\n  shape: box\n"
+      "  geometry: {x: 0.05, y: 4.0, z: 0.4}\n"
+      "  location:\n    position: {x: 29.85, y: 1, z: 0.2}\n";
   for (int b = 0; b < 2 * columns; ++b) {
     const int column = b % columns;
     char location[128];
@@ -181,9 +185,11 @@ std::string stacked_boxes_model(int columns) {
 // With many bodies, Bullet's work on each body before and after the solve is shared
 // with the islands' helper too: the damping, each object's bounds (handed to the
 // broadphase in order after), the finiteness checks and the contact sums' clearing,
-// and the bodies' Cartesian commands applied before the step.
+// and the bodies' Cartesian commands applied before the step (a static body moved by
+// its pose command among them, whose bounds must follow it).
 // 500 boxes pushed sideways, half of them dropped 0.85 m (4 m/s, 4 mm a step, at
-// impact), falling onto each other and a floor, where bounds and contacts decide the
+// impact), falling onto each other and a floor, swept by a static paddle moved into
+// them 0.5 mm a step, where bounds and contacts decide the
 // motion, beside 16 arms (islands of joints: what has the world solved on two threads):
 // stepped by one thread and by two, every pose and every body's contact wrench are bit
 // for bit the same, and the helper did some of the shared work.
@@ -210,7 +216,16 @@ TEST(Islands, TwoThreadsStepFallingBoxesBitForBitAsOneDoes) {
         EXPECT_EQ(sim.input_problem(b, push), nullptr);
         sim.set_input(b, push);
       }
-    for (int step = 0; step < 500; ++step) sim.step();
+    std::size_t paddle = 0;
+    while (model.bodies[paddle].name != "paddle") ++paddle;
+    BodyInput sweep;
+    sweep.cartesian = CartesianMode::kPosition;
+    sweep.target_pose = sim.body_pose(paddle);
+    for (int step = 0; step < 500; ++step) {
+      sweep.target_pose.position_m.x += 0.0005;
+      sim.set_input(paddle, sweep);
+      sim.step();
+    }
     Run out;
     BodyReading reading;
     for (std::size_t b = 0; b < model.bodies.size(); ++b) {
