@@ -101,6 +101,32 @@ void ReservedWorld::updateAabbs() {
   }
 }
 
+void ReservedWorld::applyGravity() {
+  share_each(*this, m_nonStaticRigidBodies.size(), kBodiesPerItem, [this](int i, int) {
+    if (m_nonStaticRigidBodies[i]->isActive()) m_nonStaticRigidBodies[i]->applyGravity();
+  });
+}
+
+void ReservedWorld::saveKinematicState(btScalar dt) {
+  if (!parallel_) btSoftRigidDynamicsWorld::saveKinematicState(dt);
+}
+
+void ReservedWorld::synchronizeMotionStates() {
+  if (m_synchronizeAllMotionStates) {
+    btSoftRigidDynamicsWorld::synchronizeMotionStates();
+    return;
+  }
+  share_each(*this, m_nonStaticRigidBodies.size(), kBodiesPerItem, [this](int i, int) {
+    if (m_nonStaticRigidBodies[i]->isActive())
+      synchronizeSingleMotionState(m_nonStaticRigidBodies[i]);
+  });
+}
+
+void ReservedWorld::clearForces() {
+  share_each(*this, m_nonStaticRigidBodies.size(), kBodiesPerItem,
+             [this](int i, int) { m_nonStaticRigidBodies[i]->clearForces(); });
+}
+
 void ReservedWorld::createPredictiveContacts(btScalar dt) {
   if (getDispatchInfo().m_useContinuous)
     btSoftRigidDynamicsWorld::createPredictiveContacts(dt);

@@ -70,6 +70,13 @@ class ReservedWorld : public btSoftRigidDynamicsWorld, private ParallelIslands::
   // threads (its shape and pose read, a bound of its own written), then handed to the
   // broadphase in order by this thread, as Bullet's updateAabbs does.
   void updateAabbs() override;
+  // Bullet's other loops over every body, shared the same way when they call a method
+  // of each body (none has a kinematic state to save: a world with a kinematic body
+  // has no helper).
+  void applyGravity() override;
+  void saveKinematicState(btScalar dt) override;
+  void synchronizeMotionStates() override;
+  void clearForces() override;
 
  private:
   struct Keyed {
