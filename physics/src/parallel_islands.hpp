@@ -23,8 +23,8 @@
 // (`afhub run --cpu`), or the helper refused that priority, the stepping thread solves
 // everything itself. Each island's bodies are integrated by the thread that solved it
 // (AfterIsland, reserved_world.hpp). Other work of the step that splits into items
-// writing nothing in common is shared the same way (share(): Bullet's work on each body
-// before and after the solve, the joints' readings, the states published).
+// writing nothing in common is shared the same way (share(): the joints' readings after
+// the step, the states published).
 #pragma once
 
 #include <sched.h>

@@ -30,7 +30,6 @@ void ReservedWorld::solve_islands_in_parallel(int bodies, int joints, int object
   island_bodies_.reserve(objects);
   integrated_.assign(objects, 0);
   unintegrated_.reserve(objects);
-  bounds_.resize(objects);
 }
 
 // As Bullet's integrateTransformsInternal does for one body, unless the body is to be
@@ -61,70 +60,10 @@ void ReservedWorld::predictUnconstraintMotion(btScalar dt) {
     btSoftRigidDynamicsWorld::predictUnconstraintMotion(dt);
     return;
   }
-  share_each(*this, m_nonStaticRigidBodies.size(), kBodiesPerItem, [this, dt](int i, int) {
-    btRigidBody* body = m_nonStaticRigidBodies[i];
-    if (!body->isStaticOrKinematicObject()) body->applyDamping(dt);
-  });
+  for (int i = 0; i < m_nonStaticRigidBodies.size(); ++i)
+    if (!m_nonStaticRigidBodies[i]->isStaticOrKinematicObject())
+      m_nonStaticRigidBodies[i]->applyDamping(dt);
   soft_solver_.predictMotion(static_cast<float>(dt));  // as Bullet's soft world does
-}
-
-void ReservedWorld::updateAabbs() {
-  const int count = getNumCollisionObjects();
-  if (!parallel_ || getDispatchInfo().m_useContinuous || count > static_cast<int>(bounds_.size())) {
-    btSoftRigidDynamicsWorld::updateAabbs();
-    return;
-  }
-  // As Bullet: every bound widened by the distance at which contacts are kept.
-  const btVector3 margin(gContactBreakingThreshold, gContactBreakingThreshold,
-                         gContactBreakingThreshold);
-  share_each(*this, count, kBodiesPerItem, [&](int i, int) {
-    const btCollisionObject& object = *m_collisionObjects[i];
-    Bounds& bounds = bounds_[static_cast<std::size_t>(i)];
-    bounds.update = m_forceUpdateAllAabbs || object.isActive();
-    if (!bounds.update) return;
-    object.getCollisionShape()->getAabb(object.getWorldTransform(), bounds.min, bounds.max);
-    bounds.min -= margin;
-    bounds.max += margin;
-  });
-  for (int i = 0; i < count; ++i) {
-    const Bounds& bounds = bounds_[static_cast<std::size_t>(i)];
-    if (!bounds.update) continue;
-    btCollisionObject& object = *m_collisionObjects[i];
-    // As Bullet: a moving object's bounds this large (a body blown up) are not handed
-    // to the broadphase, and the object is asked to leave the simulation, which an
-    // afhub body (never deactivated) refuses; check_bodies puts it back after the step.
-    if (object.isStaticObject() || (bounds.max - bounds.min).length2() < btScalar(1e12))
-      m_broadphasePairCache->setAabb(object.getBroadphaseHandle(), bounds.min, bounds.max,
-                                     m_dispatcher1);
-    else
-      object.setActivationState(DISABLE_SIMULATION);
-  }
-}
-
-void ReservedWorld::applyGravity() {
-  share_each(*this, m_nonStaticRigidBodies.size(), kBodiesPerItem, [this](int i, int) {
-    if (m_nonStaticRigidBodies[i]->isActive()) m_nonStaticRigidBodies[i]->applyGravity();
-  });
-}
-
-void ReservedWorld::saveKinematicState(btScalar dt) {
-  if (!parallel_) btSoftRigidDynamicsWorld::saveKinematicState(dt);
-}
-
-void ReservedWorld::synchronizeMotionStates() {
-  if (m_synchronizeAllMotionStates) {
-    btSoftRigidDynamicsWorld::synchronizeMotionStates();
-    return;
-  }
-  share_each(*this, m_nonStaticRigidBodies.size(), kBodiesPerItem, [this](int i, int) {
-    if (m_nonStaticRigidBodies[i]->isActive())
-      synchronizeSingleMotionState(m_nonStaticRigidBodies[i]);
-  });
-}
-
-void ReservedWorld::clearForces() {
-  share_each(*this, m_nonStaticRigidBodies.size(), kBodiesPerItem,
-             [this](int i, int) { m_nonStaticRigidBodies[i]->clearForces(); });
 }
 
 void ReservedWorld::createPredictiveContacts(btScalar dt) {

@@ -33,10 +33,6 @@ class ReservedWorld : public btSoftRigidDynamicsWorld, private ParallelIslands::
   std::uint64_t items_shared_with_helper() const noexcept {
     return parallel_ ? parallel_->shared() : 0;
   }
-  // Work on each body (each collision object) or joint of a step is shared in items of
-  // this many: enough that taking one costs little beside its work, few enough that a
-  // thousand bodies make more than ParallelIslands::kMinItems.
-  static constexpr int kBodiesPerItem = 32, kJointsPerItem = 32;
   // `work` shared with the islands' helper, or run by this thread without one.
   void share(int count, SharedWork& work) noexcept {
     if (parallel_)
@@ -63,20 +59,8 @@ class ReservedWorld : public btSoftRigidDynamicsWorld, private ParallelIslands::
   // continuous collision detection reads (the body's bounds swept to reach it, and
   // its predictive contacts). With continuous collision off, only the damping is done,
   // and no predictive contact is looked for (a thousand bodies: about 40 us a step).
-  // The damping is shared with the islands' helper, in blocks of kBodiesPerItem.
   void predictUnconstraintMotion(btScalar dt) override;
   void createPredictiveContacts(btScalar dt) override;
-  // With a helper and no continuous collision: each object's bounds computed by both
-  // threads (its shape and pose read, a bound of its own written), then handed to the
-  // broadphase in order by this thread, as Bullet's updateAabbs does.
-  void updateAabbs() override;
-  // Bullet's other loops over every body, shared the same way when they call a method
-  // of each body (none has a kinematic state to save: a world with a kinematic body
-  // has no helper).
-  void applyGravity() override;
-  void saveKinematicState(btScalar dt) override;
-  void synchronizeMotionStates() override;
-  void clearForces() override;
 
  private:
   struct Keyed {
@@ -95,13 +79,6 @@ class ReservedWorld : public btSoftRigidDynamicsWorld, private ParallelIslands::
   std::vector<std::uint64_t> integrated_;
   std::uint64_t stamp_ = 0;
   std::vector<btRigidBody*> unintegrated_;
-  // Per collision object: its bounds this step, and whether they are to be updated
-  // (always, in afhub: every object's bounds are, and its bodies never sleep).
-  struct Bounds {
-    btVector3 min, max;
-    bool update = false;
-  };
-  std::vector<Bounds> bounds_;
 
   void island_solved(btCollisionObject** bodies, int count) noexcept override;
 };

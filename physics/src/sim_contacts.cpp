@@ -23,8 +23,12 @@ void add_contact(BodyData& body, const btVector3& force, const btVector3& at) {
 
 }  // namespace
 
-// After check_bodies, which cleared the sums in its pass over the bodies.
 void Simulation::Data::sum_contacts() noexcept {
+  for (BodyData& body : bodies) {
+    body.contact_force.setZero();
+    body.contact_moment_at_origin.setZero();
+    body.contact_count = 0;
+  }
   const btScalar per_second = btScalar(1) / dt_s;
   const int manifolds = dispatcher.getNumManifolds();
   for (int m = 0; m < manifolds; ++m) {

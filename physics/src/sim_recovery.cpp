@@ -5,8 +5,6 @@
 // of every joint touching it or driven by it, are released, so a command that
 // caused it stops, and an actuator holding it or carried by it lets go.
 // Everything is kept in storage made when the world was built: no allocation.
-#include <atomic>
-
 #include "simulation_data.hpp"
 
 namespace afhub::physics {
@@ -34,34 +32,20 @@ void Simulation::Data::keep_good_state() noexcept {
       soft.good_positions[static_cast<std::size_t>(n)] = soft.body->m_nodes[n].m_x;
 }
 
-void Simulation::Data::check_bodies() noexcept {
+void Simulation::Data::recover_non_finite() noexcept {
   auto count = [&](std::size_t index, bool soft) {
     const NanEvent event{steps, index, soft};
     if (nan_recoveries.count == 0) nan_recoveries.first = event;
     nan_recoveries.last = event;
     ++nan_recoveries.count;
   };
-  // The bodies split between the stepping thread and the islands' helper (share_each):
-  // each is read and only its own data written. Its contact sums are cleared in the
-  // same pass, for sum_contacts. The few found not finite are recovered below, in order.
-  std::atomic<bool> any_non_finite{false};
-  share_each(world, static_cast<int>(bodies.size()), ReservedWorld::kBodiesPerItem,
-             [&](int b, int) {
-               BodyData& body = bodies[static_cast<std::size_t>(b)];
-               body.contact_force.setZero();
-               body.contact_moment_at_origin.setZero();
-               body.contact_count = 0;
-               body.finite = finite_body(*body.body);
-               if (body.finite)
-                 body.good_pose = body.body->getWorldTransform();
-               else
-                 any_non_finite.store(true, std::memory_order_relaxed);
-             });
-  const bool any = any_non_finite.load(std::memory_order_relaxed);
-  for (std::size_t b = 0; any && b < bodies.size(); ++b) {
+  for (std::size_t b = 0; b < bodies.size(); ++b) {
     BodyData& body = bodies[b];
-    if (body.finite) continue;
     btRigidBody& rb = *body.body;
+    if (finite_body(rb)) {
+      body.good_pose = rb.getWorldTransform();
+      continue;
+    }
     count(b, false);
     rb.setWorldTransform(body.good_pose);
     rb.setInterpolationWorldTransform(body.good_pose);

@@ -26,6 +26,11 @@ void reserve_overlapping_pairs(btOverlappingPairCache& cache, btDispatcher& disp
     cache.removeOverlappingPair(&proxies[0], &proxies[i], &dispatcher);
 }
 
+// The joints' readings after a step are shared with the islands' helper in blocks of
+// this many joints (Simulation::share): each joint reads its two bodies and writes
+// only its own readings.
+constexpr int kJointsPerItem = 32;
+
 }  // namespace
 
 Simulation::Simulation(const Model& model, double dt_s)
@@ -100,8 +105,7 @@ std::vector<std::string> Simulation::gain_notes() const {
 
 void Simulation::step() noexcept {
   Data& d = *data_;
-  share_each(d.world, static_cast<int>(d.bodies.size()), ReservedWorld::kBodiesPerItem,
-             [&d](int b, int) { d.apply_cartesian(d.bodies[b]); });
+  for (BodyData& body : d.bodies) d.apply_cartesian(body);
   // A URDF <mimic> joint follows its leader's latest position, over any command.
   for (auto& joint : d.joints)
     if (const std::optional<Mimic>& mimic = joint->spec().mimic)
@@ -111,10 +115,9 @@ void Simulation::step() noexcept {
   d.world.stepSimulation(d.dt_s, 1, d.dt_s);
   d.broadphase.m_deferedcollide = false;  // the first step met the initial overlaps
   ++d.steps;
-  d.check_bodies();
+  d.recover_non_finite();
   d.sum_contacts();
-  // Each joint reads its two bodies and writes only its own readings.
-  share_each(d.world, static_cast<int>(d.joints.size()), ReservedWorld::kJointsPerItem,
+  share_each(d.world, static_cast<int>(d.joints.size()), kJointsPerItem,
              [&d](int j, int) { d.joints[j]->update_readings(); });
   d.read_sensors();
 }

@@ -71,7 +71,6 @@ struct BodyData {
   std::size_t first_ray = 0, ray_count = 0;  // into Data::rays
   std::vector<int> actuators;                // into Data::actuators, file order
   btTransform good_pose;                     // after the last step that left it finite
-  bool finite = true;  // after the last step (check_bodies; kept here: nothing allocated)
 };
 
 // A world file's light or camera, carried by its parent body when it has one.
@@ -188,9 +187,7 @@ struct Simulation::Data {
   int touching_body(int parent, const btVector3& point) const noexcept;
   void apply_cartesian(BodyData& body) noexcept;
   void read_sensors() noexcept;
-  // After a step: every body's contact sums cleared (sum_contacts adds to them, after
-  // it), and bodies left NaN or infinite recovered.
-  void check_bodies() noexcept;
+  void recover_non_finite() noexcept;
   void sum_contacts() noexcept;
   void keep_good_state() noexcept;
   Pose world_object_pose(const WorldObjectData& object) const noexcept;

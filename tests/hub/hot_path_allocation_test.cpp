@@ -184,16 +184,16 @@ TEST(HotPath, PhysicsLoopDoesNotAllocate) {
 }
 
 // Sixteen arms of eight links, sixteen islands solved by two threads
-// (physics/src/parallel_islands.hpp), with a recorder; then 80 arms without one, whose
-// two threads also share Bullet's work on each body, the joints' readings and the states.
+// (physics/src/parallel_islands.hpp), with a recorder; then 32 arms without one, whose
+// two threads also share the joints' readings and the states.
 TEST(HotPath, PhysicsLoopOfManyArmsSolvedByTwoThreadsDoesNotAllocate) {
   if (!afhub::testing::may_run_on_two_cpus())
     GTEST_SKIP() << "this process may run on one CPU: no helper to test";
   const testing::ModelFolder folder;
   expect_physics_loop_allocation_free({folder.write("arms.yaml", testing::arms_model(16, 8))},
                                       "arms/a0l0", true, true);
-  // 640 bodies: more blocks of them than ParallelIslands::kMinItems, so they are shared.
-  expect_physics_loop_allocation_free({folder.write("arms80.yaml", testing::arms_model(80, 8))},
+  // 256 states: enough blocks of them to be shared (ParallelIslands::kMinItems).
+  expect_physics_loop_allocation_free({folder.write("arms32.yaml", testing::arms_model(32, 8))},
                                       "arms/a0l0", true, false);
 }
 
