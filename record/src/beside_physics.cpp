@@ -41,7 +41,7 @@ void BesidePhysics::start(bool enabled) noexcept {
 void BesidePhysics::follow(std::uint32_t writer_pid, std::uint32_t taken) noexcept {
   if (!enabled_) return;
   if (writer_pid == judged_pid_) {
-    if (taken > kStepTapeQueue / 4) leave("the tape's queue was a quarter full");
+    if (taken > kStepTapeRingParts / 4) leave("a quarter of the tape's ring waited");
     return;
   }
   judged_pid_ = writer_pid;

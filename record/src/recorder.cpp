@@ -48,8 +48,9 @@ constexpr std::int64_t kChunkFlushPeriodNs = 1'000'000'000;  // what a kill -9 l
 constexpr useconds_t kWriterIdleUs = 5'000;
 // A body the physics' step tape brought within this long is read from the tape alone.
 constexpr std::int64_t kTapeFreshNs = 100'000'000;
-// While a tape comes, it is read this often (its queue holds 256 samples: 12 steps of a
-// thousand bodies, a quarter of a second of a world of forty).
+// While a tape comes, it is read every quarter of the time its ring holds at 1 kHz, and
+// at least this often: 4 ms for a world of up to forty bodies, whose step fills one
+// part, 1.9 ms for a thousand (21 parts a step).
 constexpr std::int64_t kTapePollNs = 4'000'000;
 
 std::int64_t realtime_ns() {
@@ -159,7 +160,7 @@ class Session {
     beside_.start(options_.loop.cpu < 0 && options_.loop.fifo_priority <= 0);
     LatestReader<WorldState> world(
         ChannelId{std::string(kService), world_instance(), std::string(kStateEvent)});
-    // Every step's states, queued: what a late wake-up would miss in the states' slots.
+    // Every step's states, kept a while: what a late wake-up would miss in the states' slots.
     StepTapeReader tape(world_instance());
     const auto taped = std::make_unique<StepTape>();
     // The loop sleeps on the slots of the world state and of the channels that wake it;
@@ -170,11 +171,12 @@ class Session {
     SampleWaiter waiter, untaped_waiter;
     waiter.attach(world.raw());
     const std::int64_t start_ns = monotonic_ns();
-    std::int64_t taped_ns = 0;  // when a tape sample last came
+    std::int64_t taped_ns = 0;  // when a tape part last came
+    std::int64_t tape_poll_ns = kTapePollNs;
     std::int64_t now = start_ns;
     while (keep_going() && !write_failed_ && !discover_failed_) {
       if (taped_ns != 0 && now - taped_ns < kTapeFreshNs)
-        untaped_waiter.wait(kTapePollNs);
+        untaped_waiter.wait(tape_poll_ns);
       else
         waiter.wait(kIdleWaitNs);
       now = monotonic_ns();
@@ -185,6 +187,9 @@ class Session {
         beside_.follow(taped->header.publisher_pid, drained);
         sample_tape(*taped, now);
         taped_ns = now;
+        if (taped->last_part)
+          tape_poll_ns = std::min<std::int64_t>(
+              kTapePollNs, kStepTapeRingParts * 1'000'000LL / 4 / (taped->part + 1));
       }
       for (Recorded& recorded : recorded_) {
         if (recorded.taped_ns != 0 && now - recorded.taped_ns < kTapeFreshNs) {
@@ -229,8 +234,8 @@ class Session {
     discovered_ready_.store(false, std::memory_order_release);
   }
 
-  // The states and commands of a step tape's sample, each checked as what it is (the
-  // sample is this process's copy), for the channels recorded.
+  // The states and commands of a step tape's part, each checked as what it is (the
+  // part is this process's copy), for the channels recorded.
   void sample_tape(const StepTape& tape, std::int64_t now_ns) noexcept {
     follow_tape(tape);
     std::size_t position = tape.first_entry;
@@ -248,8 +253,8 @@ class Session {
     });
   }
 
-  // Counts a break in the tape: parts its queue dropped (a reader further behind than
-  // it holds), a step the physics cut short, a world reset. A command missing across one
+  // Counts a break in the tape: parts its ring lost (a reader further behind than it
+  // holds), a step the physics cut short, a world reset. A command missing across one
   // may be the recorder's loss, not one its controller replaced.
   void follow_tape(const StepTape& tape) noexcept {
     const bool continues = tape_next_part_ == 0

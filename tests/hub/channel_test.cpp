@@ -22,6 +22,7 @@
 
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/hub_presence.hpp"
+#include "afhub/hub/step_tape.hpp"
 #include "afhub/rt/stop_signal.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "afhub/shm_layout/slot_block.hpp"
@@ -280,13 +281,29 @@ TEST(Channel, TheNewestCommandOfSeveralWritersWins) {
 }
 
 // A writer SIGKILLed in the middle of updating its slots (tests/support/
-// torn_slot_writer.cpp: a command to synth/body0, a state of torn/body) leaves them
-// torn: readers keep the last whole update, never the half-written one, without a
-// lock to repair (a state reader far behind waits for it once, 2 ms); a new writer's
-// slot is taken at once.
+// torn_slot_writer.cpp: a command to synth/body0, a state of torn/body, and its step
+// tape's next part) leaves them torn: readers keep the last whole update, never the
+// half-written one, without a lock to repair (a state reader far behind waits for it
+// once, 2 ms); a new writer's slot and tape are taken at once.
 TEST(Channel, AWriterKilledMidUpdateLeavesATornSlotThatReadersSkip) {
   BodyPublisher physics("synth/body0");
   BodyClient reader("torn/body");
+  StepTapeReader tape("torn");
+  const auto part = std::make_unique<StepTape>();
+  // The steps of the parts the tape gives, until it gives none for 50 ms.
+  const auto taped_steps = [&] {
+    std::vector<std::uint64_t> steps;
+    for (auto quiet = std::chrono::steady_clock::now() + 50ms;
+         std::chrono::steady_clock::now() < quiet;) {
+      if (!tape.next(*part)) {
+        std::this_thread::sleep_for(1ms);
+        continue;
+      }
+      steps.push_back(part->header.sim_step);
+      quiet = std::chrono::steady_clock::now() + 50ms;
+    }
+    return steps;
+  };
   const std::string go = "/tmp/torn_slot_go";
   std::filesystem::remove(go);
   const pid_t writer = test::spawn_command({AFHUB_TORN_SLOT_WRITER, go});
@@ -305,6 +322,8 @@ TEST(Channel, AWriterKilledMidUpdateLeavesATornSlotThatReadersSkip) {
   ASSERT_EQ(waitpid(writer, &status, 0), writer);
   ASSERT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL)
       << "torn_slot_writer did not die in its updates (exit " << WEXITSTATUS(status) << ")";
+  EXPECT_EQ(taped_steps(), std::vector<std::uint64_t>{1}) << "the whole step only, once";
+  EXPECT_EQ(tape.refused(), 0u) << "a torn part is skipped, not refused";
   ASSERT_TRUE(command && state);
   command = physics.latest_command();
   state = reader.latest_state();
@@ -322,6 +341,16 @@ TEST(Channel, AWriterKilledMidUpdateLeavesATornSlotThatReadersSkip) {
   BodyPublisher restarted("torn/body");
   ASSERT_TRUE(publish_step(restarted, 5));
   EXPECT_TRUE(test::wait_until([&] { return step_of(reader.latest_state()) == 5u; }, 2s));
+  // A restarted physics' tape is a ring of its own, read from its first part.
+  StepTapeWriter restarted_tape("torn");
+  ASSERT_TRUE(test::wait_until([&] { return restarted_tape.begin(6, 0.006); }, 2s));
+  BodyState taped{};
+  taped.joint_count = 1;
+  taped.header.sim_step = 6;
+  restarted_tape.add(PayloadKind::kBodyState, "torn/body", &taped, body_state_bytes(1));
+  restarted_tape.finish();
+  EXPECT_EQ(taped_steps(), std::vector<std::uint64_t>{6});
+  EXPECT_EQ(tape.refused(), 0u);
   BodyClient controller("synth/body0");
   BodyCommand* fresh = controller.loan_command(1);
   ASSERT_NE(fresh, nullptr);

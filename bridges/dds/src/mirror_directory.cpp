@@ -39,7 +39,8 @@ MirrorDirectory::MirrorDirectory(std::size_t max_entries)
     : writer_({std::string(kService), runtime_name(), std::string(kDirectoryEvent)},
               PayloadKind::kBodyDirectory),
       max_entries_(max_entries),
-      max_bytes_(largest_chunk_bytes() / 2) {
+      // A list past the largest tier is never loaned (loan_body_list), whatever the pools.
+      max_bytes_(std::min(largest_chunk_bytes(), kBodyListTiers.back()) / 2) {
   if (max_bytes_ == 0)
     throw Error(
         "the hub's health lists no mempools: cannot tell how large a directory of mirrored "
@@ -62,10 +63,10 @@ void MirrorDirectory::check_room(const BodyEntry& entry) const {
   if (const std::size_t bytes = bytes_with(entry); bytes > max_bytes_)
     throw Error("with its " + std::to_string(entry.joint_names.size()) +
                 " joint names, the directory of mirrored bodies would take " +
-                std::to_string(bytes) + " bytes, more than half the hub's largest chunk (" +
-                std::to_string(max_bytes_ * 2) +
-                " bytes); mirror fewer bodies (--bodies) or give the hub a larger pool (`afhub "
-                "hub --pool BYTES:COUNT`)");
+                std::to_string(bytes) +
+                " bytes, more than half the hub's largest chunk for a "
+                "catalog (" +
+                std::to_string(max_bytes_ * 2) + " bytes); mirror fewer bodies (--bodies)");
 }
 
 void MirrorDirectory::add(const BodyEntry& entry) {

@@ -3,8 +3,8 @@
 // neither aborts the bridge nor fills the hub: an entry is refused (with the reason)
 // when the mirror already has max_entries (room stays in the catalog for the hub's
 // own bodies), or when the directory with it would pass half the largest chunk the
-// hub's mempools hold (the catalog, which lists the local bodies too, is one chunk;
-// iceoryx aborts a process that loans a chunk larger than its largest pool).
+// hub's mempools hold for a catalog (the catalog, which lists the local bodies too, is
+// one chunk; iceoryx aborts a process that loans a chunk larger than its largest pool).
 #pragma once
 
 #include <cstddef>

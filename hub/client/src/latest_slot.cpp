@@ -25,22 +25,6 @@ void pause_briefly() noexcept {
 #endif
 }
 
-// The copy races with the writer by design: the sequence read after it says whether
-// it counts. ThreadSanitizer is told not to look at it (it would report every read);
-// its plain word loop keeps the compiler from calling the intercepted memcpy.
-#if defined(__SANITIZE_THREAD__)
-__attribute__((no_sanitize("thread"))) void copy_racing(void* out, const void* in,
-                                                        std::size_t bytes) noexcept {
-  auto* to = static_cast<volatile unsigned char*>(out);
-  const auto* from = static_cast<const volatile unsigned char*>(in);
-  for (std::size_t i = 0; i < bytes; ++i) to[i] = from[i];
-}
-#else
-void copy_racing(void* out, const void* in, std::size_t bytes) noexcept {
-  std::memcpy(out, in, bytes);
-}
-#endif
-
 std::uint32_t* futex_word(SlotControl* slot) noexcept {
   static_assert(sizeof(std::atomic<std::uint32_t>) == sizeof(std::uint32_t));
   return reinterpret_cast<std::uint32_t*>(&slot->sequence);
@@ -60,6 +44,21 @@ bool any_changed(std::span<const Watch> watches) noexcept {
 }
 
 }  // namespace
+
+// ThreadSanitizer is told not to look at the copy (it would report every read); its
+// plain word loop keeps the compiler from calling the intercepted memcpy.
+#if defined(__SANITIZE_THREAD__)
+__attribute__((no_sanitize("thread"))) void copy_racing(void* out, const void* in,
+                                                        std::size_t bytes) noexcept {
+  auto* to = static_cast<volatile unsigned char*>(out);
+  const auto* from = static_cast<const volatile unsigned char*>(in);
+  for (std::size_t i = 0; i < bytes; ++i) to[i] = from[i];
+}
+#else
+void copy_racing(void* out, const void* in, std::size_t bytes) noexcept {
+  std::memcpy(out, in, bytes);
+}
+#endif
 
 void init(SlotControl& slot) noexcept {
   slot.sequence.store(0, std::memory_order_relaxed);

@@ -12,6 +12,10 @@
 
 namespace afhub::slot {
 
+// Copies memory a writer may be writing at the same time: the sequence read after it
+// says whether the copy counts.
+void copy_racing(void* out, const void* in, std::size_t bytes) noexcept;
+
 // A fresh slot, before its chunk is published.
 void init(SlotControl& slot) noexcept;
 

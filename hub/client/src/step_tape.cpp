@@ -1,52 +1,92 @@
 // The ends of a world's step tape (see step_tape.hpp).
 #include "afhub/hub/step_tape.hpp"
 
-#include <algorithm>
+#include <unistd.h>
+
 #include <cstddef>
 #include <cstdio>
 #include <cstring>
 #include <utility>
 
 #include "afhub/hub/hub_health.hpp"
+#include "afhub/rt/clock.hpp"
 #include "afhub/shm_layout/channel_names.hpp"
+#include "afhub/shm_layout/layout_id.hpp"
 #include "afhub/shm_layout/payload_check.hpp"
 #include "iceoryx_posh/mepoo/chunk_header.hpp"
+#include "iceoryx_posh/popo/untyped_publisher.hpp"
 #include "iceoryx_posh/popo/untyped_subscriber.hpp"
+#include "tape_ring.hpp"
 
 namespace afhub {
 
 namespace {
-ChannelId tape_channel(const std::string& world_instance) {
-  return {std::string(kService), world_instance, std::string(kStepTapeEvent)};
+
+iox::capro::ServiceDescription tape_service(const std::string& world) {
+  auto id = [](std::string_view text) {
+    return iox::capro::IdString_t(iox::cxx::TruncateToCapacity, text.data(), text.size());
+  };
+  return {id(kService), id(world), id(kStepTapeEvent)};
 }
+
 }  // namespace
 
+struct StepTapeWriter::Port {
+  explicit Port(const std::string& world)
+      : publisher(tape_service(world), [] {
+          iox::popo::PublisherOptions options;
+          options.historyCapacity = 1;  // the ring, for readers that come later
+          return options;
+        }()) {}
+  iox::popo::UntypedPublisher publisher;
+};
+
 StepTapeWriter::StepTapeWriter(const std::string& world_instance)
-    : writer_(tape_channel(world_instance), PayloadKind::kStepTape) {}
+    : pid_(static_cast<std::uint32_t>(getpid())) {
+  require_publisher_ports(1, "writing the step tape of '" + world_instance + "'");
+  port_ = std::make_unique<Port>(world_instance);
+  took_publisher_port();
+}
 
 StepTapeWriter::~StepTapeWriter() {
-  if (prepared_) writer_.release(prepared_);
+  gave_back_publisher_port();
 }
 
 bool StepTapeWriter::begin(std::uint64_t step, double time_s) noexcept {
-  finish();  // a step left unfinished goes out as it is, never held
-  if (!writer_.has_readers()) return false;
+  finish();  // a step left unfinished is closed as it is, never held
+  if (!port_->publisher.hasSubscribers() || (!ring_ && !make_ring())) return false;
   step_ = step;
   time_s_ = time_s;
   part_ = 0;
   entries_ = 0;
   lost_ = false;
-  return next_part();
+  next_part();
+  return true;
 }
 
-// A new part to fill, loaned whole so that it comes from the tape's own pool.
-bool StepTapeWriter::next_part() noexcept {
-  tape_ = part_ == 0 && prepared_ ? std::exchange(prepared_, nullptr)
-                                  : static_cast<StepTape*>(writer_.loan(sizeof(StepTape)));
-  if (!tape_) {
-    lost_ = true;  // shared memory exhausted: the rest of the step's tape is missed
+// Loaned and published once, at a reader's first step: then written in place.
+bool StepTapeWriter::make_ring() noexcept {
+  auto loaned = port_->publisher.loan(sizeof(StepTapeRing), alignof(StepTapeRing));
+  if (loaned.has_error()) {
+    static bool said = false;  // a loop's every step would say it again
+    if (!std::exchange(said, true))
+      std::fprintf(stderr,
+                   "afhub: no shared memory for a step tape's ring (%zu bytes): the steps are "
+                   "not taped; the hub's pools hold two rings (`afhub hub --help`, pools)\n",
+                   sizeof(StepTapeRing));
     return false;
   }
+  ring_ = static_cast<StepTapeRing*>(loaned.value());
+  tape_ring::init(*ring_, monotonic_ns(), pid_);
+  port_->publisher.publish(ring_);
+  return true;
+}
+
+void StepTapeWriter::next_part() noexcept {
+  tape_ = next_opened_ ? &ring_->parts[next_ % kStepTapeRingParts].tape
+                       : &tape_ring::open(*ring_, next_);
+  next_opened_ = false;
+  ++next_;
   tape_->header.sim_step = step_;
   tape_->header.sim_time_s = time_s_;
   tape_->part = part_++;
@@ -54,20 +94,19 @@ bool StepTapeWriter::next_part() noexcept {
   tape_->first_entry = entries_;
   tape_->entry_count = 0;
   tape_->data_bytes = 0;
-  return true;
 }
 
 void StepTapeWriter::add(PayloadKind kind, std::string_view channel, const void* payload,
                          std::uint32_t bytes) noexcept {
-  if (lost_) return;  // the step's tape is cut short: its reader counts what it misses
+  if (lost_ || !tape_) return;  // the step's tape is cut short: its reader counts what it misses
   const std::size_t need = step_tape_entry_bytes(channel.size(), bytes);
-  if (!tape_ || need > tape_->data.size()) {  // cannot happen: a payload fits a part
+  if (need > tape_->data.size()) {  // cannot happen: a payload fits a part
     lost_ = true;
     return;
   }
   if (tape_->data_bytes + need > tape_->data.size()) {
-    publish_part();
-    if (!next_part()) return;
+    close_part();
+    next_part();
   }
   std::uint8_t* at = tape_->data.data() + tape_->data_bytes;
   const StepTapeEntry entry{static_cast<std::uint32_t>(channel.size()), bytes, kind, 0};
@@ -82,82 +121,118 @@ void StepTapeWriter::add(PayloadKind kind, std::string_view channel, const void*
 void StepTapeWriter::finish() noexcept {
   if (!tape_) return;
   tape_->last_part = lost_ ? 0 : 1;
-  publish_part();
+  close_part();
   tape_ = nullptr;
 }
 
-void StepTapeWriter::publish_part() noexcept {
+void StepTapeWriter::close_part() noexcept {
   if (tape_->part == 0) first_part_bytes_ = tape_->data_bytes;
-  writer_.publish(tape_);
+  PayloadHeader& header = tape_->header;
+  header.layout_id = kLayoutId;
+  header.kind = PayloadKind::kStepTape;
+  header.publisher_pid = pid_;
+  header.sequence = ++sequence_;
+  header.publish_stamp_ns = monotonic_ns();
+  tape_ring::close(*ring_, next_ - 1);
 }
 
 void StepTapeWriter::prepare() noexcept {
-  if (!writer_.has_readers()) {
-    if (prepared_) writer_.release(std::exchange(prepared_, nullptr));
-    return;
-  }
-  if (prepared_) return;
-  prepared_ = static_cast<StepTape*>(writer_.loan(sizeof(StepTape)));
-  if (prepared_)
-    std::memset(static_cast<void*>(prepared_), 0, offsetof(StepTape, data) + first_part_bytes_);
+  if (!ring_ || next_opened_ || tape_ || !port_->publisher.hasSubscribers()) return;
+  StepTape& next = tape_ring::open(*ring_, next_);
+  next_opened_ = true;
+  std::memset(static_cast<void*>(&next), 0, offsetof(StepTape, data) + first_part_bytes_);
 }
 
 struct StepTapeReader::Port {
   explicit Port(const std::string& world)
-      : subscriber(
-            {iox::capro::IdString_t(iox::cxx::TruncateToCapacity, kService.data(), kService.size()),
-             iox::capro::IdString_t(iox::cxx::TruncateToCapacity, world.data(), world.size()),
-             iox::capro::IdString_t(iox::cxx::TruncateToCapacity, kStepTapeEvent.data(),
-                                    kStepTapeEvent.size())},
-            [] {
-              iox::popo::SubscriberOptions options;
-              options.queueCapacity = kStepTapeQueue;
-              // The writer never waits: past the queue the oldest part goes.
-              options.queueFullPolicy = iox::popo::QueueFullPolicy::DISCARD_OLDEST_DATA;
-              return options;
-            }()) {}
+      : subscriber(tape_service(world), [] {
+          iox::popo::SubscriberOptions options;
+          options.queueCapacity = 1;  // a newer ring replaces a queued one
+          options.historyRequest = 1;
+          options.queueFullPolicy = iox::popo::QueueFullPolicy::DISCARD_OLDEST_DATA;
+          return options;
+        }()) {}
   iox::popo::UntypedSubscriber subscriber;
 };
 
-static_assert(kStepTapeQueue <= iox::MAX_SUBSCRIBER_QUEUE_CAPACITY);
-
-StepTapeReader::StepTapeReader(const std::string& world_instance) {
+StepTapeReader::StepTapeReader(const std::string& world_instance) : made_ns_(monotonic_ns()) {
   require_subscriber_ports(1, "reading the step tape of '" + world_instance + "'");
   port_ = std::make_unique<Port>(world_instance);
   took_subscriber_port();
 }
 
 StepTapeReader::~StepTapeReader() {
+  if (ring_) port_->subscriber.release(ring_);
+  if (next_ring_) port_->subscriber.release(next_ring_);
   gave_back_subscriber_port();
 }
 
-bool StepTapeReader::next(StepTape& out) noexcept {
+void StepTapeReader::refuse(const char* what, const char* why) noexcept {
+  if (refused_++ == 0)
+    std::fprintf(stderr, "afhub: refused a step tape's %s: %s (said once)\n", what, why);
+}
+
+// Takes a ring published since the last look (a restarted writer's), checked by its
+// copied id, to read once the one in hand has no more. True when a ring is in hand.
+bool StepTapeReader::take_rings() noexcept {
   for (;;) {
     auto taken = port_->subscriber.take();
-    if (taken.has_error()) return false;
-    const void* payload = taken.value();
-    const std::uint32_t chunk_bytes =
-        iox::mepoo::ChunkHeader::fromUserPayload(payload)->userPayloadSize();
-    // Copied before it is checked: its used part, as its copied header says.
-    std::uint32_t bytes = 0;
-    if (chunk_bytes >= offsetof(StepTape, data) && chunk_bytes <= sizeof out) {
-      std::memcpy(static_cast<void*>(&out), payload, offsetof(StepTape, data));
-      bytes = static_cast<std::uint32_t>(offsetof(StepTape, data)) +
-              std::min<std::uint32_t>(out.data_bytes, chunk_bytes - offsetof(StepTape, data));
-      std::memcpy(out.data.data(),
-                  static_cast<const std::uint8_t*>(payload) + offsetof(StepTape, data),
-                  bytes - offsetof(StepTape, data));
+    if (taken.has_error()) break;
+    const void* chunk = taken.value();
+    StepTapeRingId id;
+    std::memcpy(&id, chunk, sizeof id);
+    const char* why =
+        iox::mepoo::ChunkHeader::fromUserPayload(chunk)->userPayloadSize() != sizeof(StepTapeRing)
+            ? "its size is not a ring's"
+        : id.magic != kStepTapeRingMagic      ? "StepTapeRingId.magic"
+        : id.layout_id != kLayoutId           ? "StepTapeRingId.layout_id (another build)"
+        : id.part_count != kStepTapeRingParts ? "StepTapeRingId.part_count"
+                                              : nullptr;
+    if (why) {
+      refuse("ring", why);
+      port_->subscriber.release(chunk);
+      continue;
     }
-    port_->subscriber.release(payload);
-    const char* field = "";
-    const PayloadError error = bytes == 0
-                                   ? PayloadError::kTooSmall
-                                   : check_payload(&out, bytes, PayloadKind::kStepTape, &field);
-    if (error == PayloadError::kNone) return true;
-    if (refused_++ == 0)
-      std::fprintf(stderr, "afhub: refused a step tape sample: %s: %s (said once)\n", field,
-                   describe(error));
+    if (next_ring_) port_->subscriber.release(next_ring_);
+    next_ring_ = static_cast<const StepTapeRing*>(chunk);
   }
+  if (!ring_ && next_ring_) {
+    ring_ = std::exchange(next_ring_, nullptr);
+    cursor_ = ring_->id.made_ns > made_ns_ ? 0 : tape_ring::head(*ring_);
+  }
+  return ring_ != nullptr;
+}
+
+bool StepTapeReader::next(StepTape& out) noexcept {
+  // Laps and ring changes are few; the bound keeps a ring written absurdly from
+  // holding the caller.
+  for (int turns = 0; turns < 8 && take_rings();) {
+    std::uint32_t bytes = 0;
+    switch (tape_ring::read(*ring_, cursor_, out, bytes)) {
+      case tape_ring::Read::kCopied: {
+        ++cursor_;
+        const char* field = "";
+        const PayloadError error = check_payload(&out, bytes, PayloadKind::kStepTape, &field);
+        if (error == PayloadError::kNone) return true;
+        refuse(field, describe(error));
+        ++turns;
+        break;
+      }
+      case tape_ring::Read::kOverwritten:
+        cursor_ = tape_ring::resume_after_lap(*ring_, cursor_);
+        ++turns;
+        break;
+      case tape_ring::Read::kNotYet:
+        if (!next_ring_) return false;
+        // The writer of the ring in hand is gone: its last part read, on to the new one.
+        port_->subscriber.release(std::exchange(ring_, nullptr));
+        ring_ = std::exchange(next_ring_, nullptr);
+        cursor_ = 0;
+        ++turns;
+        break;
+    }
+  }
+  return false;
 }
 
 }  // namespace afhub

@@ -102,14 +102,12 @@ std::vector<MempoolSpec> default_mempools() {
       // each viewer; its faces once, kept the same way.
       {round_up8(soft_body_mesh_bytes(0)), 64, "soft body node positions"},
       {round_up8(soft_body_mesh_bytes(kMaxSoftBodyFaces)), 32, "soft body faces"},
-      // A recorder's queue of a world's step tape, the tape's history and the physics'
-      // loans: 19.7 MB, which keep a recorder of a world of up to about forty bodies
-      // (their states, commands and the world's state) from losing a step while it is a
-      // quarter of a second behind. Two recorders far behind at once share it: the
-      // physics' loans then fail and the steps they would have held are missed. (The hub
-      // writes every page at its start: with room for two queues, 35 MB, a CI run on the
-      // 2-core VM had a hub start and a hub stop too slow for two tests; this size passed.)
-      {round_up8(sizeof(StepTape)), kStepTapeQueue + 64, "step tapes (a recorder's queue)"},
+      // Step tapes' rings: a physics publishes one when a recorder first reads it, and a
+      // recorder holds a restarted physics' old one until it has read it: two, 19.7 MB,
+      // as the queue of samples they replaced took. (The hub writes every page at its
+      // start: with 35 MB here a CI run on the 2-core VM had a hub start and a hub stop
+      // too slow for two tests.) The iceoryx loan aligns the ring to 64 bytes.
+      {round_up8(sizeof(StepTapeRing) + alignof(StepTapeRing)), 2, "step tapes' rings"},
   };
   sort_by_size(pools);
   return pools;

@@ -1,16 +1,17 @@
 // StepTape: a physics' body states of one step (of the bodies whose state slot someone
 // holds), the commands it took for them and its world state, for a reader that must see
-// every step
-// (`afhub record`), on {"afhub", <world instance>, "step_tape"}. A state is a
+// every step (`afhub record`), on {"afhub", <world instance>, "step_tape"}. A state is a
 // latest-value slot: a reader that wakes a step late finds the newer state, and the one
-// before is gone. The tape is a queue of iceoryx samples instead, published after the
-// states and only while something subscribes: a subscriber's queue holds
-// kStepTapeQueue samples, so a reader that falls behind (a busy core, a pause) catches
-// up, and loses steps only when it falls further behind than its queue. A step's states
-// fill as many samples as they need, its parts, the last one marked.
+// before is gone. The tape keeps the last kStepTapeRingParts parts instead, in a ring
+// that the physics publishes once (when something first subscribes) and then writes in
+// place, each part under a sequence of its own (a seqlock): a reader that falls behind
+// (a busy core, a pause) catches up, and loses parts only when the writer laps it. No
+// iceoryx publish per step, and a reader costs the writer nothing. A step's states fill
+// as many parts as they need, the last one marked.
 #pragma once
 
 #include <array>
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 
@@ -19,12 +20,13 @@
 
 namespace afhub {
 
-// One sample, loaned whole so that it comes from a pool of its own
-// (hub/daemon/src/hub_mempools.cpp): about fifty 8-joint states.
+// One part: about fifty 8-joint states.
 inline constexpr std::size_t kStepTapeBytes = 60 * 1024;
-// A subscriber's queue: a quarter of a second at 1 kHz of a world whose states fit one
-// sample (iceoryx 2.0.3's largest queue).
-inline constexpr std::uint32_t kStepTapeQueue = 256;
+// The ring's parts: 160 ms at 1 kHz of a world whose states fit one part (up to about
+// forty bodies with their commands), 7 steps of a thousand bodies (21 parts a step). Two
+// rings take 19.7 MB of the hub's pools (hub/daemon/src/hub_mempools.cpp).
+inline constexpr std::uint32_t kStepTapeRingParts = 160;
+inline constexpr std::uint64_t kStepTapeRingMagic = 0x61666875622d7472ULL;  // "afhub-tr"
 
 // An entry of a tape's data: this header, the body's channel name (name_bytes, no
 // NUL; the world's instance for its state), then at the next multiple of 8 the payload
@@ -49,6 +51,30 @@ struct StepTape {
   std::array<std::uint8_t, kStepTapeBytes - sizeof(PayloadHeader) - 24> data{};
 };
 static_assert(sizeof(StepTape) == kStepTapeBytes);
+
+// What a ring is, written once before it is published.
+struct StepTapeRingId {
+  std::uint64_t magic{0};      // kStepTapeRingMagic
+  std::uint64_t layout_id{0};  // kLayoutId of the writer's build
+  std::int64_t made_ns{0};     // monotonic: a reader that came before starts at part 0
+  std::uint32_t writer_pid{0};
+  std::uint32_t part_count{0};  // kStepTapeRingParts
+};
+
+struct alignas(64) StepTapeRingPart {
+  // 0 before the ring's k-th part (counted from 0 since the ring was made) is written
+  // here, 2k+1 while the writer fills it, 2k+2 once it is whole.
+  std::atomic<std::uint64_t> sequence{0};
+  alignas(64) StepTape tape;
+};
+
+struct StepTapeRing {
+  StepTapeRingId id;
+  // Parts whole since the ring was made: where a reader that was lapped starts again.
+  alignas(64) std::atomic<std::uint64_t> written{0};
+  std::array<StepTapeRingPart, kStepTapeRingParts> parts;
+};
+static_assert(std::atomic<std::uint64_t>::is_always_lock_free);
 
 constexpr std::size_t round_up_to_8(std::size_t bytes) {
   return (bytes + 7) / 8 * 8;

@@ -1,14 +1,14 @@
 // The two ends of a world's step tape (shm_layout/step_tape.hpp): the physics writes
-// every step's states to it while a recorder reads; the recorder reads every sample in
-// order. Both are real-time safe once made: no heap, no exceptions.
+// every step's states to its ring while a recorder reads; the recorder reads every part
+// in order. Both are real-time safe once made: no heap, no exceptions.
 #pragma once
 
 #include <cstdint>
+#include <cstring>
 #include <memory>
 #include <string>
 #include <string_view>
 
-#include "afhub/hub/channel.hpp"
 #include "afhub/shm_layout/step_tape.hpp"
 
 namespace afhub {
@@ -21,34 +21,40 @@ class StepTapeWriter {
   StepTapeWriter& operator=(const StepTapeWriter&) = delete;
 
   // Starts a step's tape when something reads it (false: nothing to write this step).
+  // Publishes the ring at the first reader's first step.
   bool begin(std::uint64_t step, double time_s) noexcept;
   // Adds a body's state as published, or a command as taken (`bytes` of it), after
   // begin() said true.
   void add(PayloadKind kind, std::string_view channel, const void* payload,
            std::uint32_t bytes) noexcept;
-  // Publishes the step's last part.
+  // Makes the step's last part whole.
   void finish() noexcept;
-  // Between steps, while something reads the tape: loans the next step's first part and
-  // writes over as many bytes as the last step's first part held (with no reader, gives
-  // back a part it holds). A part comes back to the physics after its reader's core has
-  // read it, and taking each of its lines back from that core cost the step: publishing
-  // the example scene took 1.2 us untaped, 7.5 to 8.1 us taped for a reader on the
-  // other CPU, 2.0 to 2.2 us with the part readied here (physics_benchmark's
-  // ExampleSceneStep/published*).
+  // Between steps, while something reads the tape: opens the next step's first part and
+  // writes over as many bytes as the last step's first part held. The part's lines were
+  // last read by its reader's core, and taking each of them back during the step cost
+  // the step: publishing the example scene took 1.2 us untaped, 7.5 to 8.1 us taped for
+  // a reader on the other CPU, 2.0 to 2.2 us with the part readied here
+  // (physics_benchmark's ExampleSceneStep/published*, when the tape was a queue).
   void prepare() noexcept;
 
  private:
-  bool next_part() noexcept;
-  void publish_part() noexcept;
-  RawWriter writer_;
-  StepTape* tape_ = nullptr;            // the part being filled
-  StepTape* prepared_ = nullptr;        // loaned by prepare(), the next step's first part
+  bool make_ring() noexcept;
+  void next_part() noexcept;
+  void close_part() noexcept;
+  struct Port;
+  std::unique_ptr<Port> port_;
+  std::uint32_t pid_;
+  StepTapeRing* ring_ = nullptr;        // published once, written in place
+  std::uint64_t next_ = 0;              // the ring's next part
+  bool next_opened_ = false;            // by prepare()
+  StepTape* tape_ = nullptr;            // the part being filled, the ring's next_ - 1
   std::uint32_t first_part_bytes_ = 0;  // the data the last step's first part held
+  std::uint64_t sequence_ = 0;          // of the parts' headers
   std::uint64_t step_ = 0;
   double time_s_ = 0.0;
   std::uint32_t part_ = 0;
   std::uint32_t entries_ = 0;  // this step's, so far
-  bool lost_ = false;          // this step lost a part or an entry
+  bool lost_ = false;          // this step lost an entry
 };
 
 class StepTapeReader {
@@ -58,13 +64,23 @@ class StepTapeReader {
   StepTapeReader(const StepTapeReader&) = delete;
   StepTapeReader& operator=(const StepTapeReader&) = delete;
 
-  // The oldest sample not read yet, copied into `out` (its used part) and checked;
-  // false when none waits. Invalid samples are refused (said once, counted) and skipped.
+  // The oldest part not read yet, copied into `out` (its used part) and checked; false
+  // when none waits. Invalid parts and rings are refused (said once, counted) and
+  // skipped. Parts the writer overwrote before they were read are skipped: the parts
+  // read show the gap (StepTape::part, header.sim_step).
   bool next(StepTape& out) noexcept;
+  // Parts and rings refused so far.
+  std::uint64_t refused() const noexcept { return refused_; }
 
  private:
+  bool take_rings() noexcept;
+  void refuse(const char* what, const char* why) noexcept;
   struct Port;
   std::unique_ptr<Port> port_;
+  std::int64_t made_ns_;                     // a ring made after it is read from its start
+  const StepTapeRing* ring_ = nullptr;       // the ring read, held
+  const StepTapeRing* next_ring_ = nullptr;  // a newer one (a restarted writer), held
+  std::uint64_t cursor_ = 0;                 // the next part of ring_ to read
   std::uint64_t refused_ = 0;
 };
 
