@@ -140,14 +140,16 @@ bool RawWriter::has_readers() const noexcept {
   return port_->publisher.hasSubscribers();
 }
 
+iox::popo::SubscriberOptions newest_sample_only() noexcept {
+  iox::popo::SubscriberOptions options;
+  options.queueCapacity = 1;  // a newer sample replaces a queued one
+  options.historyRequest = 1;
+  options.queueFullPolicy = iox::popo::QueueFullPolicy::DISCARD_OLDEST_DATA;
+  return options;
+}
+
 RawLatestReader::Port::Port(const ChannelId& channel)
-    : subscriber(describe_channel(channel), [] {
-        iox::popo::SubscriberOptions options;
-        options.queueCapacity = 1;  // a newer sample replaces a queued one
-        options.historyRequest = 1;
-        options.queueFullPolicy = iox::popo::QueueFullPolicy::DISCARD_OLDEST_DATA;
-        return options;
-      }()) {}
+    : subscriber(describe_channel(channel), newest_sample_only()) {}
 
 RawLatestReader::RawLatestReader(const ChannelId& channel, PayloadKind kind)
     : channel_(channel),

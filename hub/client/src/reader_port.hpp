@@ -7,6 +7,10 @@
 
 namespace afhub {
 
+// A subscriber that keeps the newest sample only, and takes the last one published
+// before it came (a latest-value reader's, a step tape's ring).
+iox::popo::SubscriberOptions newest_sample_only() noexcept;
+
 struct RawLatestReader::Port {
   explicit Port(const ChannelId& channel);
   iox::popo::UntypedSubscriber subscriber;

@@ -16,6 +16,7 @@
 #include "iceoryx_posh/mepoo/chunk_header.hpp"
 #include "iceoryx_posh/popo/untyped_publisher.hpp"
 #include "iceoryx_posh/popo/untyped_subscriber.hpp"
+#include "reader_port.hpp"
 #include "tape_ring.hpp"
 
 namespace afhub {
@@ -144,14 +145,7 @@ void StepTapeWriter::prepare() noexcept {
 }
 
 struct StepTapeReader::Port {
-  explicit Port(const std::string& world)
-      : subscriber(tape_service(world), [] {
-          iox::popo::SubscriberOptions options;
-          options.queueCapacity = 1;  // a newer ring replaces a queued one
-          options.historyRequest = 1;
-          options.queueFullPolicy = iox::popo::QueueFullPolicy::DISCARD_OLDEST_DATA;
-          return options;
-        }()) {}
+  explicit Port(const std::string& world) : subscriber(tape_service(world), newest_sample_only()) {}
   iox::popo::UntypedSubscriber subscriber;
 };
 
