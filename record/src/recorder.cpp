@@ -49,8 +49,8 @@ constexpr useconds_t kWriterIdleUs = 5'000;
 // A body the physics' step tape brought within this long is read from the tape alone.
 constexpr std::int64_t kTapeFreshNs = 100'000'000;
 // While a tape comes, it is read every quarter of the time its ring holds at 1 kHz, and
-// at least this often: 4 ms for a world of up to forty bodies, whose step fills one
-// part, 1.9 ms for a thousand (21 parts a step).
+// at least this often: 4 ms for a world whose step fills one or a few parts, 2 ms for
+// a thousand bodies (about 38 parts a step).
 constexpr std::int64_t kTapePollNs = 4'000'000;
 
 std::int64_t realtime_ns() {

@@ -224,10 +224,11 @@ std::uint64_t largest_gap(const std::string& file, const std::string& topic);
 
 // A recorder stopped for 150 ms (a busy core, a debugger, a swapped page) misses no
 // body's step, no command the physics took and no world state: the physics' step tape
-// queues them (256 steps) until it reads again. A viewer's pose feed, read from its
-// latest-value slot, shows the pauses did happen. (Paused 200 ms, a recorder under the
-// sanitizers beside other tests once came back too late or read too slowly to catch up:
-// one step of every body lost, past the queue.)
+// keeps them (320 of this scene's steps) until it reads again. A viewer's pose feed,
+// read from its latest-value slot, shows the pauses did happen. (Paused 200 ms, a
+// recorder under the sanitizers beside other tests once came back too late or read too
+// slowly to catch up: one step of every body lost, past the 256 steps the tape held
+// then; with a ring of 160 of these steps, CI lost 68.)
 TEST(Record, ARecorderPausedFor150MsMissesNoStep) {
   SceneRun scene;
   ASSERT_TRUE(scene.ready()) << scene.logs();
@@ -314,7 +315,7 @@ TEST(Record, CommandsReplacedBeforeThePhysicsTookThemAreCountedApartFromMissed) 
   }
   write_pairs(1500ms);
   ASSERT_EQ(kill(recorder.pid, SIGSTOP), 0);
-  write_pairs(800ms);  // 256 steps queued at most: the physics' tape drops the rest
+  write_pairs(800ms);  // the tape's ring holds 320 steps: the rest are overwritten
   ASSERT_EQ(kill(recorder.pid, SIGCONT), 0);
   write_pairs(1500ms);
   ASSERT_EQ(stop_process(recorder.pid, SIGINT), 0) << read_file(scene.dir("record.log"));

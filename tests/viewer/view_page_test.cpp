@@ -173,6 +173,31 @@ class ViewPageTest : public ::testing::Test {
   static inline std::unique_ptr<Browser> browser_;
 };
 
+// A page opened before its world's physics runs shows an empty world, live, and the
+// scene once a physics comes. (The viewer served an empty body as the scene before a
+// physics: the page threw on it and never connected.)
+TEST_F(ViewPageTest, APageOpenedBeforeThePhysicsDrawsItsSceneWhenItComes) {
+  const View view = start_view({"--namespace", "later"});
+  browser_->clear_console();
+  ASSERT_TRUE(browser_->navigate(view.url + "/")) << browser_->problem();
+  ASSERT_TRUE(wait_until([] { return browser_->evaluate("window.afhub.frames > 10") == true; },
+                         std::chrono::seconds(30)))
+      << "frames drawn: " << browser_->evaluate("window.afhub.frames").dump() << " "
+      << browser_->problem();
+  EXPECT_EQ(browser_->evaluate("window.afhub.sceneBodies"), 0);
+
+  ScopedProcess physics(
+      spawn_afhub({"run", "--namespace", "later", kModels + "/arm7.yaml"}, dir_ + "/later.log"));
+  ASSERT_TRUE(wait_until(
+      [] {
+        return browser_->evaluate(
+                   "window.afhub.sceneBodies > 0 && window.afhub.bodiesInFrame > 0") == true;
+      },
+      std::chrono::seconds(30)))
+      << read_file(dir_ + "/later.log") << browser_->problem();
+  expect_clean_console();
+}
+
 TEST_F(ViewPageTest, AClickedBodyShowsItsJointPositionsAndPlotsThem) {
   ScopedProcess sine(spawn_afhub({"ctl", "sine", "arm/base", "--amplitude", "0.8", "--period", "2"},
                                  dir_ + "/sine_inspect.log"));

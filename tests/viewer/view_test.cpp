@@ -526,6 +526,39 @@ TEST_F(ViewTest, AScenesMeshesAreServedOnlyAsMeshFilesWithinItsModelFolders) {
             404);
 }
 
+// A viewer started before its world's physics serves a scene of nothing (valid JSON,
+// generation 0), then the physics' scene as a later generation. (It served an empty
+// body, which neither a page nor a test could parse.)
+TEST_F(ViewTest, BeforeAnySceneTheViewerServesOneOfNothing) {
+  View view = start_view({"--namespace", "later"});
+  ASSERT_GT(view.port, 0) << read_file(view.log);
+  const HttpReply before = http_request(view.port, "GET", "/scene.json");
+  EXPECT_EQ(before.status, 200);
+  const nlohmann::json nothing = parse_json(before.body);
+  EXPECT_EQ(nothing.at("generation"), 0);
+  EXPECT_TRUE(nothing.at("bodies").empty()) << before.body;
+  EXPECT_TRUE(nothing.at("lights").empty()) << before.body;
+
+  Writer<SceneDescription> writer(
+      {std::string(kService), world_instance("later"), std::string(kSceneEvent)});
+  SceneDescription* scene = writer.loan(scene_description_bytes(2));
+  ASSERT_NE(scene, nullptr);
+  scene->body_count = 2;
+  set_name(scene->bodies[0].channel, "later/first");
+  set_name(scene->bodies[1].channel, "later/second");
+  writer.publish(scene);
+  nlohmann::json after;
+  ASSERT_TRUE(wait_until(
+      [&] {
+        after = parse_json(http_request(view.port, "GET", "/scene.json").body);
+        return after.at("bodies").size() == 2;
+      },
+      std::chrono::seconds(10)))
+      << after.dump();
+  EXPECT_GT(after.at("generation").get<int>(), 0);
+  EXPECT_EQ(scene_index(after.dump(), "later/second"), 1);
+}
+
 // The resident memory of a process, in kB (0 when unknown).
 long resident_kb(pid_t pid) {
   const std::string status = read_file("/proc/" + std::to_string(pid) + "/status");

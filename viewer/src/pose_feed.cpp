@@ -40,7 +40,7 @@ PoseFeed::PoseFeed(const std::string& world)
     : scene_reader_({std::string(kService), world, std::string(kSceneEvent)}),
       world_reader_({std::string(kService), world, std::string(kStateEvent)}),
       poses_reader_({std::string(kService), world, std::string(kScenePosesEvent)}),
-      scene_(std::make_shared<ViewScene>()) {
+      scene_(std::make_shared<ViewScene>(no_scene())) {
   catalog_.wait(std::chrono::milliseconds(2000));
 }
 

@@ -2,6 +2,7 @@
 #include "afhub/viewer/view_scene.hpp"
 
 #include <filesystem>
+#include <memory>
 
 #include "afhub/hub/json_writer.hpp"
 
@@ -125,6 +126,10 @@ ViewScene view_scene_of(const SceneDescription& scene, std::uint32_t generation,
   json.end_array().end_object();
   out.json = json.str();
   return out;
+}
+
+ViewScene no_scene() {
+  return view_scene_of(*std::make_unique<SceneDescription>(), 0);  // its counts all 0
 }
 
 }  // namespace afhub::viewer

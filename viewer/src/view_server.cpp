@@ -105,7 +105,7 @@ bool write_frame(mg_connection* connection, Opcode opcode, std::string_view payl
 }  // namespace
 
 ViewServer::ViewServer(ServerOptions options)
-    : options_(std::move(options)), scene_(std::make_shared<ViewScene>()) {
+    : options_(std::move(options)), scene_(std::make_shared<ViewScene>(no_scene())) {
   if (options_.allow_commands && options_.token.empty())
     throw Error("the viewer allows commands only with a command token");
   mg_init_library(0);

@@ -139,8 +139,20 @@ function chooseCamera(cameras) {
   }
 }
 
+// Loads the scene. One that fails to load (the viewer stopping mid-reply) leaves the
+// generation as it was, so that the next frame tries again.
 async function loadScene() {
   loading = true;
+  try {
+    await readScene();
+  } catch (error) {
+    document.getElementById('status').textContent = 'the scene did not load: ' + error;
+  } finally {
+    loading = false;
+  }
+}
+
+async function readScene() {
   jointNames = await (await fetch('/joints.json', {cache: 'no-store'})).json();
   joints = [];
   const response = await fetch('/scene.json', {cache: 'no-store'});
@@ -196,7 +208,6 @@ async function loadScene() {
   window.afhub.sceneBodies = bodies.length;
   await pairedLoaded;
   chooseCamera(info.cameras);
-  loading = false;
 }
 
 function applyFrame(buffer) {

@@ -3,6 +3,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdio>
 #include <cstring>
@@ -22,6 +23,12 @@
 namespace afhub {
 
 namespace {
+
+// The largest entry fits a part, so add() never cuts a step short for one entry's size.
+static_assert(step_tape_entry_bytes(kMaxChannelNameLength,
+                                    std::max({body_state_bytes(kMaxJointsPerBody),
+                                              body_command_bytes(kMaxJointsPerBody),
+                                              sizeof(WorldState)})) <= sizeof(StepTape::data));
 
 iox::capro::ServiceDescription tape_service(const std::string& world) {
   auto id = [](std::string_view text) {
@@ -101,7 +108,7 @@ void StepTapeWriter::add(PayloadKind kind, std::string_view channel, const void*
                          std::uint32_t bytes) noexcept {
   if (lost_ || !tape_) return;  // the step's tape is cut short: its reader counts what it misses
   const std::size_t need = step_tape_entry_bytes(channel.size(), bytes);
-  if (need > tape_->data.size()) {  // cannot happen: a payload fits a part
+  if (need > tape_->data.size()) {  // cannot happen: see the static_assert above
     lost_ = true;
     return;
   }

@@ -20,12 +20,15 @@
 
 namespace afhub {
 
-// One part: about fifty 8-joint states.
-inline constexpr std::size_t kStepTapeBytes = 60 * 1024;
-// The ring's parts: 160 ms at 1 kHz of a world whose states fit one part (up to about
-// forty bodies with their commands), 7 steps of a thousand bodies (21 parts a step). Two
-// rings take 19.7 MB of the hub's pools (hub/daemon/src/hub_mempools.cpp).
-inline constexpr std::uint32_t kStepTapeRingParts = 160;
+// One part: the largest entry (a state of kMaxJointsPerBody joints, 25.7 KB with its
+// name) fits, with room to spare: about twenty-five 8-joint states. A step's states
+// start a part of their own, so smaller parts waste less of the ring on small worlds.
+inline constexpr std::size_t kStepTapeBytes = 32 * 1024;
+// The ring's parts: 320 ms at 1 kHz of a world whose step fits one part (the example
+// scene: 21 entries, 23.8 KB; a recorder must survive a pause of 150 ms and more), 8
+// steps of a thousand bodies (about 38 parts a step). Two rings take 21 MB of the hub's
+// pools (hub/daemon/src/hub_mempools.cpp).
+inline constexpr std::uint32_t kStepTapeRingParts = 320;
 inline constexpr std::uint64_t kStepTapeRingMagic = 0x61666875622d7472ULL;  // "afhub-tr"
 
 // An entry of a tape's data: this header, the body's channel name (name_bytes, no

@@ -28,4 +28,9 @@ struct ViewScene {
 ViewScene view_scene_of(const SceneDescription& scene, std::uint32_t generation,
                         const std::vector<const SoftBodyMesh*>& soft_faces = {});
 
+// What the viewer serves before it has read a scene: a scene of nothing, generation 0
+// (a page opened before the physics runs loads it, then the scene with the next
+// generation).
+ViewScene no_scene();
+
 }  // namespace afhub::viewer
