@@ -64,8 +64,7 @@ void MirrorDirectory::check_room(const BodyEntry& entry) const {
     throw Error("with its " + std::to_string(entry.joint_names.size()) +
                 " joint names, the directory of mirrored bodies would take " +
                 std::to_string(bytes) +
-                " bytes, more than half the hub's largest chunk for a "
-                "catalog (" +
+                " bytes, more than half the hub's largest chunk for a catalog (" +
                 std::to_string(max_bytes_ * 2) + " bytes); mirror fewer bodies (--bodies)");
 }
 

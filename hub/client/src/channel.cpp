@@ -18,7 +18,6 @@
 #include "slot_blocks.hpp"
 
 namespace afhub {
-namespace {
 
 iox::capro::ServiceDescription describe_channel(const ChannelId& channel) {
   using iox::capro::IdString_t;
@@ -28,6 +27,8 @@ iox::capro::ServiceDescription describe_channel(const ChannelId& channel) {
           IdString_t(TruncateToCapacity, channel.instance.c_str()),
           IdString_t(TruncateToCapacity, channel.event.c_str())};
 }
+
+namespace {
 
 void require_fits(const ChannelId& channel) {
   for (const std::string* part : {&channel.service, &channel.instance, &channel.event})

@@ -31,10 +31,7 @@ static_assert(step_tape_entry_bytes(kMaxChannelNameLength,
                                               sizeof(WorldState)})) <= sizeof(StepTape::data));
 
 iox::capro::ServiceDescription tape_service(const std::string& world) {
-  auto id = [](std::string_view text) {
-    return iox::capro::IdString_t(iox::cxx::TruncateToCapacity, text.data(), text.size());
-  };
-  return {id(kService), id(world), id(kStepTapeEvent)};
+  return describe_channel({std::string(kService), world, std::string(kStepTapeEvent)});
 }
 
 }  // namespace

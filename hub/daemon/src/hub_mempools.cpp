@@ -104,9 +104,10 @@ std::vector<MempoolSpec> default_mempools() {
       {round_up8(soft_body_mesh_bytes(kMaxSoftBodyFaces)), 32, "soft body faces"},
       // Step tapes' rings: a physics publishes one when a recorder first reads it, and a
       // recorder holds a restarted physics' old one until it has read it: two, 21 MB,
-      // about what the queue of samples they replaced took (19.7 MB). (The hub writes every page at
-      // its start: with 35 MB here a CI run on the 2-core VM had a hub start and a hub stop too
-      // slow for two tests.) The iceoryx loan aligns the ring to 64 bytes.
+      // about what the queue of samples they replaced took (19.7 MB). (The hub writes
+      // every page at its start: with 35 MB here a CI run on the 2-core VM had a hub
+      // start and a hub stop too slow for two tests.) The iceoryx loan aligns the ring
+      // to 64 bytes.
       {round_up8(sizeof(StepTapeRing) + alignof(StepTapeRing)), 2, "step tapes' rings"},
   };
   sort_by_size(pools);
