@@ -308,8 +308,16 @@ class Session {
     const bool same_writer = recorded.seen && recorded.publisher_pid == header.publisher_pid;
     // A paused physics' step again, or an update its tape brings after its slot did (or
     // the other way round). A world reset starts the steps again: that is recorded.
-    if (same_writer && (key == recorded.last || header.publish_stamp_ns <= recorded.last_stamp_ns))
+    if (same_writer &&
+        (key == recorded.last || header.publish_stamp_ns <= recorded.last_stamp_ns)) {
+      // The last one, read from its slot, now on the tape: the physics took it, and the
+      // tape brings every command taken after it, so a gap after it is one replaced.
+      if (taped && key == recorded.last && !recorded.last_taped) {
+        recorded.last_taped = true;
+        recorded.tape_breaks = tape_breaks_;
+      }
       return;
+    }
     QueuedMessage message;
     message.channel_id = recorded.channel_id;
     message.sequence = static_cast<std::uint32_t>(key);
