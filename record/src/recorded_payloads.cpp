@@ -9,6 +9,7 @@
 #include "afhub/shm_layout/device.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "afhub/shm_layout/layout_id.hpp"
+#include "afhub/shm_layout/packed_body_state.hpp"
 #include "afhub/shm_layout/payload_check.hpp"
 #include "afhub/shm_layout/scene.hpp"
 #include "afhub/shm_layout/scene_poses.hpp"
@@ -42,21 +43,9 @@ const RecordedPayload& payload_of(PayloadKind kind) {
 
 namespace {
 
-// A packed body state: its bytes up to the refusal reason; the reason (kept whole once a
-// command was refused, else left out); the first sensor_ray_count entries of each sensor
-// array; the joints. Its size tells whether the reason is there.
-constexpr std::size_t kReasonAt = offsetof(BodyState, refusal_reason);
-constexpr std::size_t kReasonBytes = offsetof(BodyState, sensor_distances_m) - kReasonAt;  // padded
-constexpr std::size_t kRayBytes = sizeof(double);
-
-std::size_t packed_state_bytes(bool reason, std::uint32_t rays, std::uint32_t joints) {
-  return kReasonAt + (reason ? kReasonBytes : 0) + 2 * rays * kRayBytes +
-         joints * sizeof(JointSample);
-}
-
-// The counts of a state (packed or not): they precede everything left out.
+// A state's counts, when `data` holds them within their capacities.
 bool state_counts(std::span<const std::uint8_t> data, std::uint32_t& rays, std::uint32_t& joints) {
-  if (data.size() < kReasonAt) return false;
+  if (data.size() < kPackedReasonAt) return false;
   std::memcpy(&rays, data.data() + offsetof(BodyState, sensor_ray_count), sizeof rays);
   std::memcpy(&joints, data.data() + offsetof(BodyState, joint_count), sizeof joints);
   return rays <= kMaxSensorRaysPerBody && joints <= kMaxJointsPerBody;
@@ -69,44 +58,34 @@ std::size_t pieces_for_file(std::span<const std::uint8_t> payload, PayloadKind k
   std::uint32_t rays = 0, joints = 0;
   if (kind != PayloadKind::kBodyState || !state_counts(payload, rays, joints) ||
       payload.size() != body_state_bytes(joints)) {
-    pieces[0] = payload;  // not a state as the layout has it: kept as it is (checked on reading)
+    pieces[0] = payload;  // packed already, or not a state: kept as it is (checked on reading)
     return 1;
   }
-  const bool reason = payload[kReasonAt] != 0;
-  pieces[0] = payload.first(kReasonAt + (reason ? kReasonBytes : 0));
-  pieces[1] = payload.subspan(offsetof(BodyState, sensor_distances_m), rays * kRayBytes);
-  pieces[2] = payload.subspan(offsetof(BodyState, sensor_ranges_m), rays * kRayBytes);
-  pieces[3] = payload.subspan(offsetof(BodyState, joints), joints * sizeof(JointSample));
-  return 4;
+  pieces = packed_pieces(*reinterpret_cast<const BodyState*>(payload.data()));
+  return pieces.size();
 }
 
 std::span<const std::uint8_t> checked_copy(std::span<const std::uint8_t> data, PayloadKind kind,
                                            std::vector<std::uint64_t>& buffer,
                                            const std::string& what) {
   std::uint32_t rays = 0, joints = 0;
-  const bool state = kind == PayloadKind::kBodyState && state_counts(data, rays, joints);
-  const bool packed = state && data.size() != body_state_bytes(joints) &&
-                      (data.size() == packed_state_bytes(true, rays, joints) ||
-                       data.size() == packed_state_bytes(false, rays, joints));
-  const std::size_t bytes = packed ? body_state_bytes(joints) : data.size();
+  const bool packed = kind == PayloadKind::kBodyState && state_counts(data, rays, joints) &&
+                      data.size() != body_state_bytes(joints);
+  const char* field = nullptr;
+  PayloadError error = PayloadError::kNone;
+  std::size_t bytes = data.size();
+  if (packed) {
+    error = check_packed_body_state(data.data(), data.size(), &field);
+    bytes = body_state_bytes(joints);
+  }
   buffer.assign(bytes / sizeof(std::uint64_t) + 1, 0);
   auto* out = reinterpret_cast<std::uint8_t*>(buffer.data());
   if (!packed) {
     std::memcpy(out, data.data(), data.size());
-  } else {
-    const bool reason = data.size() == packed_state_bytes(true, rays, joints);
-    const std::uint8_t* in = data.data();
-    const auto take = [&](std::size_t to, std::size_t n) {
-      std::memcpy(out + to, in, n);
-      in += n;
-    };
-    take(0, kReasonAt + (reason ? kReasonBytes : 0));
-    take(offsetof(BodyState, sensor_distances_m), rays * kRayBytes);
-    take(offsetof(BodyState, sensor_ranges_m), rays * kRayBytes);
-    take(offsetof(BodyState, joints), joints * sizeof(JointSample));
+    error = check_payload(out, bytes, kind, &field);
+  } else if (error == PayloadError::kNone) {
+    unpack_body_state(data, *reinterpret_cast<BodyState*>(out));
   }
-  const char* field = nullptr;
-  const PayloadError error = check_payload(out, bytes, kind, &field);
   if (error != PayloadError::kNone)
     throw Error(what + " is not a valid payload (" + field + "): " + describe(error));
   return {out, bytes};

@@ -11,6 +11,7 @@
 
 #include "afhub/record/mcap_writer.hpp"
 #include "afhub/shm_layout/header.hpp"
+#include "afhub/shm_layout/packed_body_state.hpp"
 
 namespace afhub::mcap {
 
@@ -30,13 +31,12 @@ const RecordedPayload& payload_of(PayloadKind kind);
 // The schema's data: what the bytes are, with the layout id that must match to read them.
 std::vector<std::uint8_t> payload_schema_text(const RecordedPayload& payload);
 
-// A payload as the file holds it. A body state of a thousand bodies is mostly empty
-// arrays (sensor rays past sensor_ray_count, a refusal reason while nothing was
-// refused: 676 of its 1184 bytes with 8 joints), which would double what is copied and
-// compressed: they are left out, and read back as zeros. Other payloads are kept as
-// published. The pieces of `payload` the file holds, in order, are put in `pieces`;
-// returns how many.
-using FilePieces = std::array<std::span<const std::uint8_t>, 4>;
+// A payload as the file holds it: a body state packed (shm_layout/packed_body_state.hpp:
+// a thousand bodies' states are mostly empty arrays, which would double what is copied
+// and compressed), read back with what was left out as zeros; other payloads, and a
+// state packed already (from a step tape), as they are. The pieces of `payload` the file
+// holds, in order, are put in `pieces`; returns how many.
+using FilePieces = PackedPieces;
 std::size_t pieces_for_file(std::span<const std::uint8_t> payload, PayloadKind kind,
                             FilePieces& pieces);
 

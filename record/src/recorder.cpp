@@ -20,6 +20,7 @@
 #include "afhub/record/mcap_writer.hpp"
 #include "afhub/shm_layout/device.hpp"
 #include "afhub/shm_layout/error.hpp"
+#include "afhub/shm_layout/packed_body_state.hpp"
 #include "afhub/shm_layout/payload_check.hpp"
 #include "afhub/shm_layout/scene.hpp"
 #include "afhub/shm_layout/world.hpp"
@@ -82,8 +83,11 @@ struct Recorded {
   PayloadKind kind{};
   std::string body;           // what the step tape names it: a body's channel, the world's instance
   std::int64_t taped_ns = 0;  // when the step tape last brought it
-  bool last_taped = false;    // its last sample came from the tape,
-  std::uint64_t tape_breaks = 0;  // after this many breaks in the tape
+  // A command: the tape brings every command the physics takes after its last one (that
+  // one came from the tape, or was read from its slot while its body was on the tape),
+  // unless the tape breaks: tape_breaks is the count of breaks then.
+  bool last_covered = false;
+  std::uint64_t tape_breaks = 0;
 };
 
 // A channel the reading loop has numbered, for the writing thread to add to the file.
@@ -242,13 +246,20 @@ class Session {
     for_each_tape_entry(tape, [&](PayloadKind kind, std::string_view body, const void* payload,
                                   std::uint32_t bytes) {
       const std::size_t index = recorded_index(kind, body, position++);
-      if (index >= recorded_.size()) return;  // not recorded, or not discovered yet
-      if (check_payload(payload, bytes, kind) != PayloadError::kNone) {
+      if (index >= recorded_.size()) return;               // not recorded, or not discovered yet
+      const bool state = kind == PayloadKind::kBodyState;  // packed
+      if ((state ? check_packed_body_state(payload, bytes) : check_payload(payload, bytes, kind)) !=
+          PayloadError::kNone) {
         ++tape_breaks_;
         return;
       }
       Recorded& recorded = recorded_[index];
       recorded.taped_ns = now_ns;
+      if (state && ros2_) {  // its encoders read whole states
+        const auto packed = std::span(static_cast<const std::uint8_t*>(payload), bytes);
+        bytes = static_cast<std::uint32_t>(unpack_body_state(packed, *unpacked_));
+        payload = unpacked_.get();
+      }
       sample(recorded, payload, bytes, now_ns, true);
     });
   }
@@ -311,9 +322,9 @@ class Session {
     if (same_writer &&
         (key == recorded.last || header.publish_stamp_ns <= recorded.last_stamp_ns)) {
       // The last one, read from its slot, now on the tape: the physics took it, and the
-      // tape brings every command taken after it, so a gap after it is one replaced.
-      if (taped && key == recorded.last && !recorded.last_taped) {
-        recorded.last_taped = true;
+      // tape brings every command taken after it.
+      if (taped && key == recorded.last && !recorded.last_covered) {
+        recorded.last_covered = true;
         recorded.tape_breaks = tape_breaks_;
       }
       return;
@@ -338,19 +349,30 @@ class Session {
       }
       ++dropped_;
     }
-    // Commands missing between two the tape brought, with no break in it between: the
-    // physics never took them (their controller replaced them first).
-    const bool replaced = taped && recorded.last_taped && recorded.tape_breaks == tape_breaks_ &&
-                          recorded.kind == PayloadKind::kBodyCommand;
+    // Commands missing before one the tape brought, covered by the tape with no break
+    // since the one before them: the physics never took them (their controller replaced
+    // them first).
+    const bool command = recorded.kind == PayloadKind::kBodyCommand;
+    const bool replaced =
+        command && taped && recorded.last_covered && recorded.tape_breaks == tape_breaks_;
     if (same_writer && key > recorded.last + 1)
       (replaced ? replaced_ : missed_) += key - recorded.last - 1;
-    recorded.last_taped = taped;
+    recorded.last_covered = command && (taped || body_on_tape(recorded.body));
     recorded.tape_breaks = tape_breaks_;
     recorded.seen = true;
     recorded.publisher_pid = header.publisher_pid;
     recorded.last = key;
     recorded.last_stamp_ns = header.publish_stamp_ns;
     if (first_sample_ns_ == 0) first_sample_ns_ = now_ns;
+  }
+
+  // Whether `body`'s state came on the tape: the physics then tapes every command it
+  // takes for it. A command read from its slot after this was published after the
+  // tape's parts read before it: a step that takes one after it is read later.
+  bool body_on_tape(const std::string& body) const noexcept {
+    const auto& states = by_body_[tape_kind_index(PayloadKind::kBodyState)];
+    const auto found = states.find(body);
+    return found != states.end() && recorded_[found->second].taped_ns != 0;
   }
 
   void discover_loop(const std::function<void(const RecordProgress&)>& progress) {
@@ -591,6 +613,7 @@ class Session {
 
   // The reading loop's.
   std::vector<Recorded> recorded_;
+  const std::unique_ptr<BodyState> unpacked_ = std::make_unique<BodyState>();  // a taped state
   // The index in recorded_ of each channel a tape brings, by tape_kind_index and name.
   static std::size_t tape_kind_index(PayloadKind kind) {
     return kind == PayloadKind::kBodyState ? 0 : kind == PayloadKind::kBodyCommand ? 1 : 2;

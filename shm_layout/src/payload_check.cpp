@@ -6,6 +6,7 @@
 
 #include "afhub/shm_layout/layout_id.hpp"
 #include "afhub/shm_layout/loop_stats.hpp"
+#include "afhub/shm_layout/packed_body_state.hpp"
 
 namespace afhub {
 namespace {
@@ -88,8 +89,8 @@ const char* step_tape_problem(const StepTape& tape, std::size_t bytes) noexcept 
       return "StepTapeEntry.name_bytes";
     std::size_t least = 0, most = 0;
     switch (entry.kind) {
-      case PayloadKind::kBodyState:
-        least = body_state_bytes(0), most = sizeof(BodyState);
+      case PayloadKind::kBodyState:  // packed
+        least = packed_body_state_bytes(false, 0, 0), most = sizeof(BodyState);
         break;
       case PayloadKind::kBodyCommand:
         least = body_command_bytes(0), most = sizeof(BodyCommand);
@@ -285,6 +286,34 @@ PayloadError check_payload(const void* data, std::size_t bytes, PayloadKind expe
   const auto* at = static_cast<const char*>(data);
   if (const char* count = count_beyond_capacity(at, bytes, expected))
     return fail(PayloadError::kCountTooLarge, count, field);
+  return PayloadError::kNone;
+}
+
+PayloadError check_packed_body_state(const void* data, std::size_t bytes,
+                                     const char** field) noexcept {
+  if (field) *field = "";
+  if (bytes < kPackedReasonAt) return fail(PayloadError::kTooSmall, "chunk size", field);
+  const auto* at = static_cast<const std::uint8_t*>(data);
+  PayloadHeader header;
+  std::memcpy(&header, at, sizeof header);
+  if (header.layout_id != kLayoutId)
+    return fail(PayloadError::kForeignLayout, "PayloadHeader.layout_id", field);
+  if (header.kind != PayloadKind::kBodyState)
+    return fail(PayloadError::kWrongKind, "PayloadHeader.kind", field);
+  std::uint32_t rays = 0, joints = 0;
+  std::memcpy(&joints, at + offsetof(BodyState, joint_count), sizeof joints);
+  std::memcpy(&rays, at + offsetof(BodyState, sensor_ray_count), sizeof rays);
+  if (joints > kMaxJointsPerBody)
+    return fail(PayloadError::kCountTooLarge, "BodyState.joint_count", field);
+  if (rays > kMaxSensorRaysPerBody)
+    return fail(PayloadError::kCountTooLarge, "BodyState.sensor_ray_count", field);
+  if (bytes == packed_body_state_bytes(true, rays, joints)) {
+    if (!std::memchr(at + kPackedReasonAt, '\0', kRefusalReasonSize))
+      return fail(PayloadError::kCountTooLarge, "BodyState.refusal_reason", field);
+    return PayloadError::kNone;
+  }
+  if (bytes != packed_body_state_bytes(false, rays, joints))
+    return fail(PayloadError::kCountTooLarge, "BodyState.joint_count", field);
   return PayloadError::kNone;
 }
 

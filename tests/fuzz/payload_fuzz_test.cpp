@@ -25,6 +25,7 @@
 #include "afhub/physics/adf_loader.hpp"
 #include "afhub/physics/simulation.hpp"
 #include "afhub/shm_layout/layout_id.hpp"
+#include "afhub/shm_layout/packed_body_state.hpp"
 #include "afhub/shm_layout/payload_check.hpp"
 #include "afhub/shm_layout/world_control.hpp"
 #include "afhub/teleop/teleop_law.hpp"
@@ -115,30 +116,42 @@ Seed body_list_seed(PayloadKind kind) {
   return {std::move(bytes), std::move(counts), {}};
 }
 
-// A step tape of a command taken and two states (named as a physics names its bodies),
-// at its used size.
+// A step tape of a command taken and two states packed (named as a physics names its
+// bodies), at its used size.
 Seed step_tape_seed(const BodyState& state, const BodyCommand& command) {
   static_assert(sizeof(BodyCommand) <= sizeof(BodyState));  // the consumer's copy holds either
   auto tape = std::make_unique<StepTape>(stamped<StepTape>());
   std::vector<std::size_t> counts = {offsetof(StepTape, entry_count),
                                      offsetof(StepTape, data_bytes)};
-  const auto add = [&](PayloadKind kind, const std::string& name, const void* payload,
-                       std::size_t bytes) {
+  const auto add = [&](PayloadKind kind, const std::string& name, const PackedPieces& pieces) {
+    std::size_t bytes = 0;
+    for (const auto& piece : pieces) bytes += piece.size();
     const StepTapeEntry entry{static_cast<std::uint32_t>(name.size()),
                               static_cast<std::uint32_t>(bytes), kind, 0};
+    const std::size_t entry_at = offsetof(StepTape, data) + tape->data_bytes;
+    const std::size_t payload_at = entry_at + step_tape_payload_offset(name.size());
+    counts.insert(counts.end(), {entry_at, entry_at + 4, entry_at + 8});  // its sizes, kind
+    if (kind == PayloadKind::kBodyState)
+      counts.insert(counts.end(), {payload_at + offsetof(BodyState, joint_count),
+                                   payload_at + offsetof(BodyState, sensor_ray_count)});
     std::uint8_t* at = tape->data.data() + tape->data_bytes;
-    counts.push_back(offsetof(StepTape, data) + tape->data_bytes);      // name_bytes
-    counts.push_back(offsetof(StepTape, data) + tape->data_bytes + 4);  // payload_bytes
-    counts.push_back(offsetof(StepTape, data) + tape->data_bytes + 8);  // kind
     std::memcpy(at, &entry, sizeof entry);
     std::memcpy(at + sizeof entry, name.data(), name.size());
-    std::memcpy(at + step_tape_payload_offset(name.size()), payload, bytes);
+    std::uint8_t* to = at + step_tape_payload_offset(name.size());
+    for (const auto& piece : pieces) {
+      if (!piece.empty()) std::memcpy(to, piece.data(), piece.size());
+      to += piece.size();
+    }
     tape->data_bytes += static_cast<std::uint32_t>(step_tape_entry_bytes(name.size(), bytes));
     ++tape->entry_count;
   };
-  add(PayloadKind::kBodyCommand, "arm/base", &command, body_command_bytes(command.joint_count));
-  add(PayloadKind::kBodyState, "arm/base", &state, body_state_bytes(state.joint_count));
-  add(PayloadKind::kBodyState, "arm/link1", &state, body_state_bytes(state.joint_count));
+  add(PayloadKind::kBodyCommand, "arm/base",
+      {std::span(reinterpret_cast<const std::uint8_t*>(&command),
+                 body_command_bytes(command.joint_count))});
+  add(PayloadKind::kBodyState, "arm/base", packed_pieces(state));
+  BodyState refused = state;  // packed with its reason
+  std::memcpy(refused.refusal_reason.data(), "NaN in position", 16);
+  add(PayloadKind::kBodyState, "arm/link1", packed_pieces(refused));
   tape->last_part = 1;
   return seed_of(*tape, std::move(counts), offsetof(StepTape, data) + tape->data_bytes);
 }
@@ -491,11 +504,15 @@ class Fuzzer {
               sink += name.size();
               auto copy = std::make_unique<BodyState>();
               std::memcpy(static_cast<void*>(copy.get()), bytes, size);
-              if (check_payload(copy.get(), size, entry_kind) != PayloadError::kNone) return;
-              if (entry_kind == PayloadKind::kBodyState)
-                sink += cli::state_json(info_, *copy).size();
-              else
+              if (entry_kind == PayloadKind::kBodyState) {  // packed
+                if (check_packed_body_state(copy.get(), size) != PayloadError::kNone) return;
+                auto state = std::make_unique<BodyState>();
+                unpack_body_state(
+                    std::span(reinterpret_cast<const std::uint8_t*>(copy.get()), size), *state);
+                sink += cli::state_json(info_, *state).size();
+              } else if (check_payload(copy.get(), size, entry_kind) == PayloadError::kNone) {
                 apply_command(*reinterpret_cast<const BodyCommand*>(copy.get()));
+              }
             });
         break;
       case PayloadKind::kSceneDescription:

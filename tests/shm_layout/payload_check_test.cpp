@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "afhub/shm_layout/layout_id.hpp"
+#include "afhub/shm_layout/packed_body_state.hpp"
 #include "afhub/shm_layout/world_control.hpp"
 
 namespace afhub {
@@ -396,6 +397,50 @@ TEST(PayloadCheck, ScenePosesHoldTheirBodiesAndJointValues) {
   poses->bodies[1] = {{}, {0, 0, 0, 1}, 0xFFFFFFFFU, 2};  // no wrap-around
   EXPECT_EQ(check_payload(poses.get(), bytes, PayloadKind::kScenePoses, &field),
             PayloadError::kCountTooLarge);
+}
+
+// A packed state (the step tape's form) is checked as a whole one is: its size must be
+// one of the two its counts allow (with or without the reason), its reason terminated.
+TEST(PayloadCheck, PackedStatesHoldWhatTheirCountsSay) {
+  auto state = std::make_unique<BodyState>(stamped<BodyState>(PayloadKind::kBodyState));
+  state->joint_count = 8;
+  state->sensor_ray_count = 2;
+  const auto packed = [&] {
+    std::vector<std::uint8_t> bytes;
+    for (const auto& piece : packed_pieces(*state))
+      bytes.insert(bytes.end(), piece.begin(), piece.end());
+    return bytes;
+  };
+  const char* field = nullptr;
+  std::vector<std::uint8_t> bytes = packed();
+  EXPECT_EQ(bytes.size(), packed_body_state_bytes(false, 2, 8));
+  EXPECT_EQ(check_packed_body_state(bytes.data(), bytes.size(), &field), PayloadError::kNone);
+  EXPECT_EQ(check_packed_body_state(bytes.data(), bytes.size() - 1, &field),
+            PayloadError::kCountTooLarge);
+  EXPECT_STREQ(field, "BodyState.joint_count");
+  EXPECT_EQ(check_packed_body_state(bytes.data(), kPackedReasonAt - 1, &field),
+            PayloadError::kTooSmall);
+  // A whole state is not a packed one.
+  EXPECT_EQ(check_packed_body_state(state.get(), body_state_bytes(8)),
+            PayloadError::kCountTooLarge);
+
+  std::memset(state->refusal_reason.data(), 'x', kRefusalReasonSize);  // unterminated
+  bytes = packed();
+  EXPECT_EQ(bytes.size(), packed_body_state_bytes(true, 2, 8));
+  EXPECT_EQ(check_packed_body_state(bytes.data(), bytes.size(), &field),
+            PayloadError::kCountTooLarge);
+  EXPECT_STREQ(field, "BodyState.refusal_reason");
+  state->refusal_reason.back() = '\0';
+  bytes = packed();
+  EXPECT_EQ(check_packed_body_state(bytes.data(), bytes.size()), PayloadError::kNone);
+
+  state->sensor_ray_count = kMaxSensorRaysPerBody + 1;
+  EXPECT_EQ(check_packed_body_state(state.get(), kPackedReasonAt, &field),
+            PayloadError::kCountTooLarge);
+  EXPECT_STREQ(field, "BodyState.sensor_ray_count");
+  state->sensor_ray_count = 0;
+  state->header.layout_id ^= 1;
+  EXPECT_EQ(check_packed_body_state(state.get(), kPackedReasonAt), PayloadError::kForeignLayout);
 }
 
 TEST(PayloadCheck, EveryErrorHasAnExplanation) {

@@ -27,7 +27,7 @@
 namespace afhub {
 
 // Bump when a field's meaning changes without its layout changing.
-inline constexpr std::uint64_t kLayoutRevision = 2;
+inline constexpr std::uint64_t kLayoutRevision = 3;  // 3: the step tape holds states packed
 
 namespace layout_detail {
 

@@ -33,8 +33,8 @@ inline constexpr std::uint64_t kStepTapeRingMagic = 0x61666875622d7472ULL;  // "
 
 // An entry of a tape's data: this header, the body's channel name (name_bytes, no
 // NUL; the world's instance for its state), then at the next multiple of 8 the payload
-// (payload_bytes): a state as published, or a command as the physics took it; the next
-// entry starts at the multiple of 8 after it.
+// (payload_bytes): a state packed (packed_body_state.hpp), a command as the physics
+// took it, the world state; the next entry starts at the multiple of 8 after it.
 struct StepTapeEntry {
   std::uint32_t name_bytes{0};
   std::uint32_t payload_bytes{0};

@@ -23,8 +23,8 @@ class StepTapeWriter {
   // Starts a step's tape when something reads it (false: nothing to write this step).
   // Publishes the ring at the first reader's first step.
   bool begin(std::uint64_t step, double time_s) noexcept;
-  // Adds a body's state as published, or a command as taken (`bytes` of it), after
-  // begin() said true.
+  // Adds a body's state as published (packed: shm_layout/packed_body_state.hpp), or a
+  // command as taken (`bytes` of it), after begin() said true.
   void add(PayloadKind kind, std::string_view channel, const void* payload,
            std::uint32_t bytes) noexcept;
   // Makes the step's last part whole.
