@@ -21,13 +21,14 @@
 namespace afhub {
 
 // One part: the largest entry (a state of kMaxJointsPerBody joints, 25.7 KB with its
-// name) fits, with room to spare: about twenty-five 8-joint states. A step's states
-// start a part of their own, so smaller parts waste less of the ring on small worlds.
+// name) fits, with room to spare: sixty 8-joint states, packed (544 bytes an entry). A
+// step's states start a part of their own, so smaller parts waste less of the ring on
+// small worlds.
 inline constexpr std::size_t kStepTapeBytes = 32 * 1024;
 // The ring's parts: 320 ms at 1 kHz of a world whose step fits one part (the example
-// scene: 21 entries, 23.8 KB; a recorder must survive a pause of 150 ms and more), 8
-// steps of a thousand bodies (about 38 parts a step). Two rings take 21 MB of the hub's
-// pools (hub/daemon/src/hub_mempools.cpp).
+// scene: 21 entries; a recorder must survive a pause of 150 ms and more), 18 steps of a
+// thousand 8-joint bodies (17 parts a step; 8 steps when states were taped whole). Two
+// rings take 21 MB of the hub's pools (hub/daemon/src/hub_mempools.cpp).
 inline constexpr std::uint32_t kStepTapeRingParts = 320;
 inline constexpr std::uint64_t kStepTapeRingMagic = 0x61666875622d7472ULL;  // "afhub-tr"
 
