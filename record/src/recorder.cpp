@@ -323,7 +323,7 @@ class Session {
         (key == recorded.last || header.publish_stamp_ns <= recorded.last_stamp_ns)) {
       // The last one, read from its slot, now on the tape: the physics took it, and the
       // tape brings every command taken after it.
-      if (taped && key == recorded.last && !recorded.last_covered) {
+      if (taped && key == recorded.last && recorded.kind == PayloadKind::kBodyCommand) {
         recorded.last_covered = true;
         recorded.tape_breaks = tape_breaks_;
       }
