@@ -9,6 +9,7 @@
 #include <exception>
 #include <fstream>
 #include <mutex>
+#include <optional>
 #include <set>
 #include <thread>
 
@@ -83,10 +84,13 @@ struct Recorded {
   PayloadKind kind{};
   std::string body;           // what the step tape names it: a body's channel, the world's instance
   std::int64_t taped_ns = 0;  // when the step tape last brought it
-  // A command: the tape brings every command the physics takes after its last one (that
-  // one came from the tape, or was read from its slot while its body was on the tape),
-  // unless the tape breaks: tape_breaks is the count of breaks then.
-  bool last_covered = false;
+  // A command: the physics takes those after its last one, if any, in steps after
+  // taken_after_step (the step the tape brought it at, or its body's state's step when
+  // it was read from its slot; none when that state was not seen).
+  std::optional<std::uint64_t> taken_after_step;
+  // A state: the step its run on the tape began at. Both counted in tape breaks
+  // (tape_breaks: the count then): a run ends at a break.
+  std::uint64_t taped_from_step = 0;
   std::uint64_t tape_breaks = 0;
 };
 
@@ -254,13 +258,17 @@ class Session {
         return;
       }
       Recorded& recorded = recorded_[index];
+      if (state && (recorded.taped_ns == 0 || recorded.tape_breaks != tape_breaks_)) {
+        recorded.taped_from_step = tape.header.sim_step;
+        recorded.tape_breaks = tape_breaks_;
+      }
       recorded.taped_ns = now_ns;
       if (state && ros2_) {  // its encoders read whole states
         const auto packed = std::span(static_cast<const std::uint8_t*>(payload), bytes);
         bytes = static_cast<std::uint32_t>(unpack_body_state(packed, *unpacked_));
         payload = unpacked_.get();
       }
-      sample(recorded, payload, bytes, now_ns, true);
+      sample(recorded, payload, bytes, now_ns, tape.header.sim_step);
     });
   }
 
@@ -310,9 +318,10 @@ class Session {
 
   // Copies a new sample into the buffer, or counts it dropped when the buffer is full.
   // Its log time is when it was read (`now_ns`): the file's order, which play follows;
-  // its publish time the writer's stamp. `taped`: it came from a physics' step tape.
+  // its publish time the writer's stamp. `tape_step`: it came from a physics' step tape,
+  // in that step.
   void sample(Recorded& recorded, const void* payload, std::uint32_t bytes, std::int64_t now_ns,
-              bool taped = false) noexcept {
+              std::optional<std::uint64_t> tape_step = std::nullopt) noexcept {
     PayloadHeader header;
     std::memcpy(&header, payload, sizeof header);  // checked by the reader: at least a header
     const std::uint64_t key = recorded.per_step ? header.sim_step : header.sequence;
@@ -321,10 +330,9 @@ class Session {
     // the other way round). A world reset starts the steps again: that is recorded.
     if (same_writer &&
         (key == recorded.last || header.publish_stamp_ns <= recorded.last_stamp_ns)) {
-      // The last one, read from its slot, now on the tape: the physics took it, and the
-      // tape brings every command taken after it.
-      if (taped && key == recorded.last && recorded.kind == PayloadKind::kBodyCommand) {
-        recorded.last_covered = true;
+      // The last one, read from its slot, now on the tape: the physics took it then.
+      if (tape_step && key == recorded.last && recorded.kind == PayloadKind::kBodyCommand) {
+        recorded.taken_after_step = tape_step;
         recorded.tape_breaks = tape_breaks_;
       }
       return;
@@ -349,16 +357,17 @@ class Session {
       }
       ++dropped_;
     }
-    // Commands missing before one the tape brought, covered by the tape with no break
-    // since the one before them: the physics never took them (their controller replaced
-    // them first).
+    // Commands missing before one the tape brought, in steps the tape covered: the
+    // physics never took them (their controller replaced them first).
     const bool command = recorded.kind == PayloadKind::kBodyCommand;
-    const bool replaced =
-        command && taped && recorded.last_covered && recorded.tape_breaks == tape_breaks_;
     if (same_writer && key > recorded.last + 1)
-      (replaced ? replaced_ : missed_) += key - recorded.last - 1;
-    recorded.last_covered = command && (taped || body_on_tape(recorded.body));
-    recorded.tape_breaks = tape_breaks_;
+      (command && tape_step && tape_covered_since_last(recorded, *tape_step) ? replaced_
+                                                                             : missed_) +=
+          key - recorded.last - 1;
+    if (command) {
+      recorded.taken_after_step = tape_step ? tape_step : state_step(recorded.body);
+      recorded.tape_breaks = tape_breaks_;
+    }
     recorded.seen = true;
     recorded.publisher_pid = header.publisher_pid;
     recorded.last = key;
@@ -366,13 +375,29 @@ class Session {
     if (first_sample_ns_ == 0) first_sample_ns_ = now_ns;
   }
 
-  // Whether `body`'s state came on the tape: the physics then tapes every command it
-  // takes for it. A command read from its slot after this was published after the
-  // tape's parts read before it: a step that takes one after it is read later.
-  bool body_on_tape(const std::string& body) const noexcept {
+  // Whether the tape brought, up to `tape_step`, every command the physics took for
+  // `command`'s body after its last one: its body's state on the tape since the step
+  // after that one's, with no break. (On a step's tape a body's command comes before its
+  // state: a run not begun yet begins at `tape_step`.)
+  bool tape_covered_since_last(const Recorded& command, std::uint64_t tape_step) const noexcept {
+    if (!command.taken_after_step || command.tape_breaks != tape_breaks_) return false;
+    const Recorded* state = state_of(command.body);
+    const bool run_begun = state && state->taped_ns != 0 && state->tape_breaks == tape_breaks_;
+    return (run_begun ? state->taped_from_step : tape_step) <= *command.taken_after_step + 1;
+  }
+
+  // The last step of `body`'s state the recorder read (none before the first): a
+  // command read from its slot after it is taken, if at all, in a later step.
+  std::optional<std::uint64_t> state_step(const std::string& body) const noexcept {
+    const Recorded* state = state_of(body);
+    if (!state || !state->seen) return std::nullopt;
+    return state->last;
+  }
+
+  const Recorded* state_of(const std::string& body) const noexcept {
     const auto& states = by_body_[tape_kind_index(PayloadKind::kBodyState)];
     const auto found = states.find(body);
-    return found != states.end() && recorded_[found->second].taped_ns != 0;
+    return found == states.end() ? nullptr : &recorded_[found->second];
   }
 
   void discover_loop(const std::function<void(const RecordProgress&)>& progress) {

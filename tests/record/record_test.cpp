@@ -341,11 +341,13 @@ TEST(Record, CommandsReplacedBeforeThePhysicsTookThemAreCountedApartFromMissed) 
 }
 
 // While the physics is paused the recorder reads commands from their slots (no tape
-// comes); on resuming, the physics takes the last of them first, and its tape brings
-// that one again. The commands the controller then replaces are counted replaced, not
-// missed: the body was on the tape when the recorder read the last one, so the tape
-// brings all the physics took since. (They were counted missed, one or more for each
-// body commanded across a pause.)
+// comes). Across the resume the recorder is stopped, and the physics takes a later
+// command than the last it read, the one between replaced: its body's state is on the
+// tape from the step after the one it read with the command, so the tape brings all
+// the physics took since. Then, a controller replacing one of each pair, the tape
+// brings the rest. None of these gaps is the recorder's loss: all count replaced.
+// (The first was counted missed, whenever a body joined the tape after the recorder
+// read its command from its slot, and a physics resumed late failed this in CI.)
 TEST(Record, ACommandReadFromItsSlotThenTakenAfterAPauseLeavesNoGapCountedMissed) {
   SceneRun scene;
   ASSERT_TRUE(scene.ready()) << scene.logs();
@@ -372,9 +374,15 @@ TEST(Record, ACommandReadFromItsSlotThenTakenAfterAPauseLeavesNoGapCountedMissed
     write(1, 1ms);
     std::this_thread::sleep_for(4ms);
   }
+  ASSERT_NE(writer.latest_state(), nullptr);
+  const std::uint64_t paused_at = writer.latest_state()->header.sim_step;
+  ASSERT_EQ(kill(recorder.pid, SIGSTOP), 0);
+  write(2, 1ms);  // the physics takes the second when it resumes
   ASSERT_EQ(run_afhub({"world", "resume"}).exit_code, 0);
-  // The last one taken and taped alone (or, the physics late, a later one first: its gap
-  // is one replaced too, the tape bringing all the physics took since the last read).
+  const bool stepped =
+      wait_until([&] { return writer.latest_state()->header.sim_step > paused_at + 2; }, 10s);
+  ASSERT_EQ(kill(recorder.pid, SIGCONT), 0);  // its tape holds 320 steps of one body
+  ASSERT_TRUE(stepped) << "the physics did not resume";
   std::this_thread::sleep_for(50ms);
   write(2, 1500ms);  // then two a millisecond: one replaced a step
   ASSERT_EQ(stop_process(recorder.pid, SIGINT), 0) << read_file(scene.dir("record.log"));
@@ -382,13 +390,17 @@ TEST(Record, ACommandReadFromItsSlotThenTakenAfterAPauseLeavesNoGapCountedMissed
   const long long missed = number_after(log, "missed ");
   const long long replaced = number_after(log, "commands replaced ");
   const json info = info_of(file);
-  long long command_gaps = -1;
-  for (const json& channel : info["channels"])
+  long long command_gaps = -1, other_gaps = 0;
+  for (const json& channel : info["channels"]) {
     if (channel["topic"] == "/afhub/rcm/base/command")
       command_gaps = channel["skipped"].get<long long>();
+    else
+      other_gaps += channel["skipped"].get<long long>();
+  }
   EXPECT_GT(replaced, 100) << log;
-  EXPECT_EQ(missed, 0) << log;
   EXPECT_EQ(replaced, command_gaps) << log << info.dump();
+  // The pose feed, read from its slot, may lose an update while the recorder is stopped.
+  EXPECT_EQ(missed, other_gaps) << log << info.dump();
 }
 
 TEST(Record, AsAROS2BagEveryMessageReadsWithFoxglovesDecodersAndJointStatesWithACdrReader) {
