@@ -40,8 +40,8 @@ bool may_use_fifo(int priority) {
 }
 
 std::string progress_line(const mcap::RecordProgress& p, double mb_per_s) {
-  char line[320];
-  const int length = std::snprintf(
+  char line[256];
+  std::snprintf(
       line, sizeof line,
       "recorded %.1f s  %llu channels  %llu messages  %.1f MB  %.1f MB/s  dropped %llu  "
       "missed %llu  commands replaced %llu",
@@ -49,10 +49,6 @@ std::string progress_line(const mcap::RecordProgress& p, double mb_per_s) {
       static_cast<unsigned long long>(p.messages), static_cast<double>(p.file_bytes) / 1e6,
       mb_per_s, static_cast<unsigned long long>(p.dropped),
       static_cast<unsigned long long>(p.missed), static_cast<unsigned long long>(p.replaced));
-  if (p.chunks_for_speed > 0 && length > 0 && static_cast<std::size_t>(length) < sizeof line)
-    std::snprintf(line + length, sizeof line - static_cast<std::size_t>(length),
-                  "  chunks in fast lz4 %llu (behind)",
-                  static_cast<unsigned long long>(p.chunks_for_speed));
   return line;
 }
 

@@ -32,13 +32,7 @@ std::optional<Compression> compression_named(std::string_view name) {
 // a second, -5 to 112 bytes and about 0.9 million.
 constexpr int kZstdLevel = -5;
 
-// LZ4 with acceleration 8 (its "fast" levels, as `lz4 --fast=8`): on the same states
-// (`lz4 -b`, `zstd -b`, one run) 2.3 GB/s to 5.8x, where LZ4's default made 1.7 GB/s
-// to 7.0x and zstd at -5 1.6 GB/s to 7.4x.
-constexpr int kLz4ForSpeedLevel = -8;
-
-Compressor::Compressor(Compression compression, bool for_speed)
-    : compression_(compression), for_speed_(for_speed) {
+Compressor::Compressor(Compression compression) : compression_(compression) {
   if (compression_ != Compression::kZstd) return;
   auto* context = ZSTD_createCCtx();
   if (!context) throw Error("no zstd compression context (out of memory)");
@@ -61,7 +55,6 @@ std::size_t Compressor::append(std::span<const std::uint8_t> in, std::vector<std
       return in.size();
     case Compression::kLz4: {
       LZ4F_preferences_t preferences{};
-      if (for_speed_) preferences.compressionLevel = kLz4ForSpeedLevel;
       preferences.frameInfo.contentSize = in.size();  // lets a reader size its buffer
       preferences.frameInfo.contentChecksumFlag =
           LZ4F_contentChecksumEnabled;  // the integrity check

@@ -180,11 +180,6 @@ void Writer::write(const Message& message, std::span<const std::span<const std::
 }
 
 void Writer::flush_chunk() {
-  if (!open_.records.empty() && options_.compression != Compression::kNone && options_.behind &&
-      options_.behind()) {
-    open_.for_speed = true;
-    ++chunks_for_speed_;
-  }
   if (!options_.background) {
     if (!open_.records.empty()) write_chunk(open_);
     write_out();
@@ -204,7 +199,6 @@ void Writer::flush_chunk() {
 
 void Writer::write_chunk(Chunk& chunk) {
   const std::uint64_t chunk_offset = offset();
-  const Compression compression = chunk.for_speed ? Compression::kLz4 : options_.compression;
   std::uint64_t compressed_size = 0;
   {
     RecordBuilder record(pending_, kChunk);
@@ -214,11 +208,11 @@ void Writer::write_chunk(Chunk& chunk) {
     record.u64(chunk.start_ns)
         .u64(chunk.end_ns)
         .u64(chunk.records.size())
-        .u32(compression == Compression::kNone ? crc32(chunk.records) : 0)
-        .str(compression_name(compression));
+        .u32(options_.compression == Compression::kNone ? crc32(chunk.records) : 0)
+        .str(compression_name(options_.compression));
     const std::size_t length_at = pending_.size();
     record.u64(0);  // the records' length, known once they are compressed in place
-    compressed_size = (chunk.for_speed ? for_speed_ : compressor_).append(chunk.records, pending_);
+    compressed_size = compressor_.append(chunk.records, pending_);
     std::memcpy(pending_.data() + length_at, &compressed_size, sizeof compressed_size);
   }
   const std::uint64_t chunk_length = offset() - chunk_offset;
@@ -242,13 +236,12 @@ void Writer::write_chunk(Chunk& chunk) {
     index.u32(static_cast<std::uint32_t>(message_index_offsets_.size() * 10));
     for (const auto& [channel, offset] : message_index_offsets_) index.u16(channel).u64(offset);
     index.u64(indexes_length)
-        .str(compression_name(compression))
+        .str(compression_name(options_.compression))
         .u64(compressed_size)
         .u64(chunk.records.size());
   }
   ++chunk_count_;
   chunk.records.clear();
-  chunk.for_speed = false;
   if (chunk_index_records_.size() >= options_.index_memory_bytes) spill_chunk_indexes();
 }
 

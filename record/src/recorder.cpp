@@ -45,10 +45,6 @@ constexpr int kWriterNice = 10;
 // second (kChunkFlushPeriodNs).
 constexpr std::size_t kChunkBytes = 4u << 20;
 constexpr std::int64_t kChunkFlushPeriodNs = 1'000'000'000;  // what a kill -9 loses at most
-// The writing thread is behind when this share of the buffer waits (32 MB of the default
-// 256: 60 ms of a thousand bodies, ten times what waits while it keeps up): its chunks
-// are then compressed for speed until it catches up.
-constexpr std::uint64_t kBehindShareOfBuffer = 8;
 // An idle writing thread looks for messages this often: each wake-up is a context switch
 // on a core a real-time loop may want (the reading loop hands them over every 4 ms).
 constexpr useconds_t kWriterIdleUs = 5'000;
@@ -120,7 +116,7 @@ class Session {
   Session(const RecordOptions& options)
       : options_(options),
         ros2_(options.profile == "ros2"),
-        writer_(options.output, writer_options(options)),
+        writer_(options.output, {options.profile, "afhub", options.compression, kChunkBytes, true}),
         queue_(options.buffer_bytes),
         realtime_offset_ns_(realtime_ns() - monotonic_ns()) {
     if (ros2_) {
@@ -532,7 +528,6 @@ class Session {
       }
     });
     messages_written_ = writer_.message_count();
-    chunks_for_speed_ = writer_.chunks_for_speed();
     file_bytes_ = writer_.file_bytes();
     return taken;
   }
@@ -619,16 +614,6 @@ class Session {
              }()}};
   }
 
-  Writer::Options writer_options(const RecordOptions& options) {
-    return {.profile = options.profile,
-            .compression = options.compression,
-            .chunk_bytes = kChunkBytes,
-            .background = true,
-            .behind = [this, behind_bytes = options.buffer_bytes / kBehindShareOfBuffer] {
-              return queue_.waiting_bytes() > behind_bytes;
-            }};
-  }
-
   RecordProgress snapshot() const {
     RecordProgress p;
     p.seconds =
@@ -639,7 +624,6 @@ class Session {
     p.dropped = dropped_;
     p.missed = missed_;
     p.replaced = replaced_;
-    p.chunks_for_speed = chunks_for_speed_;
     p.buffered_bytes = queue_.waiting_bytes();
     return p;
   }
@@ -700,7 +684,7 @@ class Session {
   std::vector<PayloadKind> kinds_;        // of each declared channel
   std::set<std::uint32_t> models_named_;  // the physics whose models are in the file
   std::vector<std::uint8_t> encoded_;
-  std::atomic<std::uint64_t> messages_written_{0}, file_bytes_{0}, chunks_for_speed_{0};
+  std::atomic<std::uint64_t> messages_written_{0}, file_bytes_{0};
 };
 
 // The session a hub loss finishes (set while one runs).

@@ -8,10 +8,8 @@
 
 #include <csignal>
 
-#include <algorithm>
 #include <filesystem>
 #include <fstream>
-#include <functional>
 
 #include "afhub/record/mcap_reader.hpp"
 #include "afhub/record/mcap_writer.hpp"
@@ -74,17 +72,10 @@ class McapFile : public ::testing::Test {
 
   // Two channels, `messages` messages each, in chunks of 16 KiB (compressed and written
   // by the writer's own thread, or not; their indexes held in memory up to
-  // `index_memory_bytes`); returns the chunks compressed for speed (`behind`).
-  std::uint64_t write_sample(const std::string& file, Compression compression,
-                             std::uint32_t messages, bool background = false,
-                             std::size_t index_memory_bytes = 16u << 20,
-                             std::function<bool()> behind = {}) {
-    Writer writer(file, {.profile = "afhub",
-                         .compression = compression,
-                         .chunk_bytes = 16 * 1024,
-                         .background = background,
-                         .index_memory_bytes = index_memory_bytes,
-                         .behind = std::move(behind)});
+  // `index_memory_bytes`).
+  void write_sample(const std::string& file, Compression compression, std::uint32_t messages,
+                    bool background = false, std::size_t index_memory_bytes = 16u << 20) {
+    Writer writer(file, {"afhub", "afhub", compression, 16 * 1024, background, index_memory_bytes});
     const std::uint8_t schema_text[] = {'s', 'c', 'h', 'e', 'm', 'a'};
     const auto schema = writer.add_schema("afhub.BodyState", "afhub-layout", schema_text);
     const auto a = writer.add_channel(schema, "/arm/base/state", "afhub", {{"joints", "3"}});
@@ -96,7 +87,6 @@ class McapFile : public ::testing::Test {
         writer.write({channel, s, 1'000'000ull * s, 1'000'000ull * s + 5, data});
       }
     writer.close();
-    return writer.chunks_for_speed();
   }
 
   void expect_sample(const Collected& read, std::uint32_t messages) {
@@ -136,39 +126,6 @@ TEST_F(McapFile, EveryMessageComesBackAsWrittenWithEachCompression) {
       EXPECT_EQ(read.metadata_records[0].second.at("layout_id"), "42");
       for (const auto& c : read.chunk_compressions) EXPECT_EQ(c, compression_name(compression));
       expect_sample(read, 2000);
-    }
-}
-
-// A writer behind seals its chunks in LZ4 at its fastest (here every third), which read
-// back as the rest; with no compression it never asks, and compresses none.
-TEST_F(McapFile, ChunksSealedWhileBehindAreInFastLz4AndComeBackAsWritten) {
-  for (const bool background : {false, true})
-    for (Compression compression : {Compression::kNone, Compression::kLz4, Compression::kZstd}) {
-      SCOPED_TRACE(std::string(compression_name(compression)) +
-                   (background ? " in the background" : ""));
-      const std::string file = path("behind.mcap");
-      int asked = 0;
-      const std::uint64_t for_speed = write_sample(file, compression, 2000, background, 16u << 20,
-                                                   [&] { return ++asked % 3 == 0; });
-      Collected read;
-      const ScanResult result = scan(file, read);
-      EXPECT_TRUE(result.complete) << result.cut_off;
-      expect_sample(read, 2000);
-      const auto in_lz4 = static_cast<std::uint64_t>(
-          std::count(read.chunk_compressions.begin(), read.chunk_compressions.end(), "lz4"));
-      if (compression == Compression::kNone) {
-        EXPECT_EQ(asked, 0);
-        EXPECT_EQ(for_speed, 0u);
-        continue;
-      }
-      // Asked as each chunk is sealed full; the last is written at close.
-      EXPECT_EQ(static_cast<std::size_t>(asked) + 1, read.chunk_compressions.size());
-      EXPECT_EQ(for_speed, static_cast<std::uint64_t>(asked / 3));
-      if (compression == Compression::kZstd)
-        EXPECT_EQ(in_lz4, for_speed);
-      else
-        EXPECT_EQ(in_lz4, read.chunk_compressions.size());
-      EXPECT_GT(for_speed, 3u);
     }
 }
 
@@ -240,10 +197,7 @@ TEST_F(McapFile, ADiskThatFillsUpLeavesAFileCutOffNotCorrupt) {
     small.rlim_cur = 100 * 1024 + 123;  // within a chunk
     std::string error;
     {
-      Writer writer(file, {.profile = "afhub",
-                           .compression = Compression::kNone,
-                           .chunk_bytes = 16 * 1024,
-                           .background = background});
+      Writer writer(file, {"afhub", "afhub", Compression::kNone, 16 * 1024, background});
       const auto schema = writer.add_schema("s", "e", {});
       const auto channel = writer.add_channel(schema, "/t", "afhub");
       setrlimit(RLIMIT_FSIZE, &small);

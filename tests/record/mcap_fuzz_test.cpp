@@ -42,8 +42,7 @@ void write_bytes(const fs::path& path, const std::vector<std::uint8_t>& bytes) {
 std::vector<std::uint8_t> seed(const fs::path& dir, Compression compression) {
   const fs::path path = dir / "seed.mcap";
   {
-    Writer writer(path.string(),
-                  {.profile = "afhub", .compression = compression, .chunk_bytes = 2048});
+    Writer writer(path.string(), {"afhub", "afhub", compression, 2048});
     const std::uint8_t text[] = {'s'};
     const auto schema = writer.add_schema("afhub.BodyState", "afhub-layout", text);
     const auto a = writer.add_channel(schema, "/a/state", "afhub", {{"joint_names", "j1,j2"}});

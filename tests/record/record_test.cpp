@@ -1059,36 +1059,6 @@ TEST(Record, TheReadingLoopLeavesTheCpuOfAPhysicsThatNeverSleeps) {
   EXPECT_EQ(stop_process(recorder.pid, SIGINT), 0) << read_file(log("record.log"));
 }
 
-// A writer behind (its recorder's buffer filling) seals chunks in LZ4 among the zstd
-// ones: the independent reader reads both, each chunk's index naming its own.
-TEST(Record, AFileWhoseWriterFellBehindReadsWithTheIndependentReader) {
-  afhub::testing::ModelFolder folder;
-  const std::string file = (folder.dir() / "behind.mcap").string();
-  int asked = 0;
-  {
-    mcap::Writer writer(file, {.profile = "afhub",
-                               .compression = mcap::Compression::kZstd,
-                               .chunk_bytes = 8 * 1024,
-                               .background = true,
-                               .behind = [&] { return ++asked % 2 == 0; }});
-    const std::uint8_t schema[] = {'s'};
-    const auto channel = writer.add_channel(writer.add_schema("s", "e", schema), "/t", "afhub");
-    std::vector<std::uint8_t> data(300);
-    for (std::uint32_t s = 1; s <= 1000; ++s) {
-      for (std::size_t i = 0; i < data.size(); ++i) data[i] = static_cast<std::uint8_t>(i * s);
-      writer.write({channel, s, 1'000'000ull * s, 1'000'000ull * s, data});
-    }
-    writer.close();
-    EXPECT_EQ(writer.chunks_for_speed(), static_cast<std::uint64_t>(asked / 2));
-  }
-  const json check = checked(file);
-  ASSERT_EQ(check["exit"], 0) << check["stderr"];
-  EXPECT_TRUE(check["ok"].get<bool>()) << check.dump();
-  EXPECT_EQ(check["indexedMessages"], 1000);
-  EXPECT_EQ(check["compression"], json::array({"lz4", "zstd"}));
-  EXPECT_GT(asked, 10);
-}
-
 TEST(Record, BadFilesAndOptionsAreClearErrors) {
   afhub::testing::ModelFolder folder;
   const std::string text = (folder.dir() / "notes.mcap").string();

@@ -19,11 +19,10 @@ std::string_view compression_name(Compression compression);
 std::optional<Compression> compression_named(std::string_view name);
 
 // Compresses `in` onto the end of `out`, and says how many bytes it added. Keeps its
-// codec's context between calls: one per thread. `for_speed` (LZ4 only): its fastest
-// setting, for a writer that is behind.
+// codec's context between calls: one per thread.
 class Compressor {
  public:
-  explicit Compressor(Compression compression, bool for_speed = false);
+  explicit Compressor(Compression compression);
   ~Compressor();
   Compressor(const Compressor&) = delete;
   Compressor& operator=(const Compressor&) = delete;
@@ -31,7 +30,6 @@ class Compressor {
 
  private:
   Compression compression_;
-  bool for_speed_;
   void* context_ = nullptr;  // ZSTD_CCtx
 };
 

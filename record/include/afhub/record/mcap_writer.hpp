@@ -9,7 +9,6 @@
 #include <condition_variable>
 #include <cstdint>
 #include <exception>
-#include <functional>
 #include <map>
 #include <mutex>
 #include <span>
@@ -47,11 +46,6 @@ class Writer {
     // temporary file beside the output until close: a chunk's index names each channel
     // in it (10 bytes each), and a thousand bodies make 570 chunks of 1 MiB a second.
     std::size_t index_memory_bytes = 16u << 20;
-    // Asked as each chunk is sealed: whether the writer's caller is behind (its buffer
-    // filling). That chunk is then compressed with LZ4 at its fastest (compression.cpp:
-    // 1.4x zstd's speed at 0.8x its ratio), so that a busy machine costs file size
-    // before it costs messages. Not asked with no compression.
-    std::function<bool()> behind = {};
   };
 
   // Creates (or truncates) `path`; throws afhub::Error naming the path and the reason.
@@ -78,10 +72,9 @@ class Writer {
   // The summary and footer; the file is complete afterwards.
   void close();
 
-  // Bytes written to the file so far, messages written, and chunks sealed while behind.
+  // Bytes written to the file so far, and messages written.
   std::uint64_t file_bytes() const { return written_.load(std::memory_order_relaxed); }
   std::uint64_t message_count() const { return message_count_; }
-  std::uint64_t chunks_for_speed() const { return chunks_for_speed_; }
 
  private:
   struct MetadataIndex {
@@ -106,7 +99,6 @@ class Writer {
     std::vector<std::vector<std::pair<std::uint64_t, std::uint64_t>>> entries;
     std::vector<std::uint16_t> channels;
     std::uint64_t start_ns = 0, end_ns = 0;
-    bool for_speed = false;  // sealed while behind
   };
 
   void write_schema(std::vector<std::uint8_t>& out, std::uint16_t id) const;
@@ -125,7 +117,6 @@ class Writer {
   Options options_;
   int fd_ = -1;
   Compressor compressor_;
-  Compressor for_speed_{Compression::kLz4, true};
   std::vector<std::uint8_t> pending_;  // file bytes not yet written: records since the last chunk
   std::uint64_t file_offset_ = 0;      // bytes written to the file
   std::atomic<std::uint64_t> written_{0};  // the same, for another thread to read
@@ -144,7 +135,6 @@ class Writer {
   std::vector<std::pair<std::uint16_t, std::uint64_t>> message_index_offsets_;
 
   std::uint64_t message_count_ = 0;
-  std::uint64_t chunks_for_speed_ = 0;
   std::uint64_t first_ns_ = 0, last_ns_ = 0;
   std::vector<std::uint64_t> channel_counts_;  // by channel id
   bool closed_ = false;

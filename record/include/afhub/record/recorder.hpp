@@ -43,8 +43,6 @@ struct RecordProgress {
   // Commands a controller replaced before the physics took them (gaps in the commands
   // its step tape brings): they never acted, and no recorder could have read them there.
   std::uint64_t replaced = 0;
-  // Chunks compressed with LZ4 at its fastest, the writing thread behind.
-  std::uint64_t chunks_for_speed = 0;
   std::uint64_t buffered_bytes = 0;
 };
 
