@@ -85,6 +85,19 @@ long long number_after(const std::string& text, const std::string& label) {
   return at == std::string::npos ? -1 : std::stoll(text.substr(at + label.size()));
 }
 
+// The updates skipped in channel `topic` of `info` (-1: no such channel), and in all the
+// others.
+std::pair<long long, long long> gaps_of(const json& info, const std::string& topic) {
+  long long in_topic = -1, elsewhere = 0;
+  for (const json& channel : info["channels"]) {
+    if (channel["topic"] == topic)
+      in_topic = channel["skipped"].get<long long>();
+    else
+      elsewhere += channel["skipped"].get<long long>();
+  }
+  return {in_topic, elsewhere};
+}
+
 // One channel of a recording: its messages, its first and last steps (a state's sequence
 // is its step) and when the recorder read its first.
 struct RecordedSpan {
@@ -326,13 +339,7 @@ TEST(Record, CommandsReplacedBeforeThePhysicsTookThemAreCountedApartFromMissed) 
   ASSERT_GE(replaced, 0) << log;
 
   const json info = info_of(file);
-  long long command_gaps = -1, other_gaps = 0;
-  for (const json& channel : info["channels"]) {
-    if (channel["topic"] == "/afhub/rcm/base/command")
-      command_gaps = channel["skipped"].get<long long>();
-    else
-      other_gaps += channel["skipped"].get<long long>();
-  }
+  const auto [command_gaps, other_gaps] = gaps_of(info, "/afhub/rcm/base/command");
   EXPECT_EQ(command_gaps + other_gaps, replaced + missed) << log;
   EXPECT_GT(replaced, 100) << "a command of each pair is replaced: " << log;
   EXPECT_GT(other_gaps, 0) << "the recorder's stop lost steps: " << info.dump();
@@ -390,13 +397,7 @@ TEST(Record, ACommandReadFromItsSlotThenTakenAfterAPauseLeavesNoGapCountedMissed
   const long long missed = number_after(log, "missed ");
   const long long replaced = number_after(log, "commands replaced ");
   const json info = info_of(file);
-  long long command_gaps = -1, other_gaps = 0;
-  for (const json& channel : info["channels"]) {
-    if (channel["topic"] == "/afhub/rcm/base/command")
-      command_gaps = channel["skipped"].get<long long>();
-    else
-      other_gaps += channel["skipped"].get<long long>();
-  }
+  const auto [command_gaps, other_gaps] = gaps_of(info, "/afhub/rcm/base/command");
   EXPECT_GT(replaced, 100) << log;
   EXPECT_EQ(replaced, command_gaps) << log << info.dump();
   // The pose feed, read from its slot, may lose an update while the recorder is stopped.
