@@ -372,15 +372,28 @@ TEST(Record, ACommandReadFromItsSlotThenTakenAfterAPauseLeavesNoGapCountedMissed
       std::this_thread::sleep_for(1ms);
     }
   };
-  // Paused: one command every 5 ms, each read from its slot, for a second after the
-  // recorder starts (it finds the channels within one).
-  ASSERT_TRUE(
-      wait_until([&] { return contains(read_file(scene.dir("record.log")), "writing"); }, 30s))
-      << read_file(scene.dir("record.log"));
-  for (int i = 0; i < 200; ++i) {
-    write(1, 1ms);
-    std::this_thread::sleep_for(4ms);
-  }
+  // Paused: one command every 5 ms, each read from its slot. First until the file holds
+  // the body's state and a command: the recorder reads both (under the sanitizers, on a
+  // loaded machine, it once read neither until the physics had resumed; then the
+  // commands the physics took before its tape carried the body were missed, rightly).
+  // Then for a second more.
+  const auto write_paused = [&](int commands) {
+    for (int i = 0; i < commands; ++i) {
+      write(1, 1ms);
+      std::this_thread::sleep_for(4ms);
+    }
+  };
+  const auto reading_both = [&] {
+    write_paused(20);
+    try {  // read as far as its last whole record while it is written
+      const auto spans = recorded_spans(file);
+      return spans.contains("/afhub/rcm/base/state") && spans.contains("/afhub/rcm/base/command");
+    } catch (const std::exception&) {  // not even its magic yet
+      return false;
+    }
+  };
+  ASSERT_TRUE(wait_until(reading_both, 60s)) << read_file(scene.dir("record.log"));
+  write_paused(200);
   ASSERT_NE(writer.latest_state(), nullptr);
   const std::uint64_t paused_at = writer.latest_state()->header.sim_step;
   ASSERT_EQ(kill(recorder.pid, SIGSTOP), 0);
