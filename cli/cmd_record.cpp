@@ -120,8 +120,9 @@ int run_record(RecordCliOptions& options) {
   std::fprintf(stderr, "%safhub record: %s\n", live ? "\n" : "", progress_line(end, mean).c_str());
   if (end.dropped > 0)
     std::fprintf(stderr,
-                 "afhub record: %llu messages were dropped: the disk did not keep up (a larger "
-                 "--buffer, a faster disk, or --compression lz4 helps)\n",
+                 "afhub record: %llu messages were dropped: compressing and writing them did "
+                 "not keep up (a larger --buffer absorbs a burst; a sustained rate needs most of "
+                 "a free core for the recorder, a disk as fast, or fewer bodies: --bodies)\n",
                  static_cast<unsigned long long>(end.dropped));
   return 0;
 }

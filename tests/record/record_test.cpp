@@ -3,9 +3,12 @@
 // reader and by an independent one (npm's @mcap/core, tests/record/mcap_check), which
 // must agree message for message. A recording SIGKILLed mid-write reads up to its last
 // chunk, and `record --recover` gives it its index back.
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <sched.h>
 #include <signal.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstring>
@@ -1071,6 +1074,48 @@ TEST(Record, TheReadingLoopLeavesTheCpuOfAPhysicsThatNeverSleeps) {
   EXPECT_TRUE(wait_until([&] { return messages() > before + 1000; }, 30s))
       << read_file(log("record.log"));
   EXPECT_EQ(stop_process(recorder.pid, SIGINT), 0) << read_file(log("record.log"));
+}
+
+// A file that cannot take the bytes as fast as they come: a named pipe held open and not
+// read, so that the writing thread blocks once the pipe is full. The 1 MB buffer fills,
+// the samples after it are dropped, counted and said; the reading loop goes on, and once
+// the pipe is read the file ends whole.
+TEST(Record, AWriterThatCannotKeepUpDropsWhatTheBufferCannotHoldCountedAndSaid) {
+  SceneRun scene;
+  ASSERT_TRUE(scene.ready()) << scene.logs();
+  const std::string pipe = scene.dir("slow.mcap"), file = scene.dir("drained.mcap");
+  ASSERT_EQ(mkfifo(pipe.c_str(), 0600), 0) << std::strerror(errno);
+  const int held = open(pipe.c_str(), O_RDWR);  // a reader that never reads
+  ASSERT_GE(held, 0) << std::strerror(errno);
+  ScopedProcess recorder(spawn_afhub({"record", "-o", pipe, "--buffer", "1", "--duration", "2"},
+                                     scene.dir("record.log")));
+  // The example scene's states fill 1 MB in about 0.1 s.
+  std::this_thread::sleep_for(3s);
+  EXPECT_EQ(exit_code_if_ended(recorder.pid), -1) << "it waits on the pipe, then finishes";
+  std::thread drain([&] {
+    const int in = open(pipe.c_str(), O_RDONLY);
+    std::ofstream out(file, std::ios::binary);
+    char bytes[1 << 16];
+    for (ssize_t n; in >= 0 && (n = read(in, bytes, sizeof bytes)) > 0;) out.write(bytes, n);
+    if (in >= 0) close(in);
+  });
+  close(held);  // the recorder is the pipe's last writer: its exit ends the drain
+  const int exit_code = wait_for_exit(recorder, 30s);
+  if (exit_code == -1) recorder.stop();
+  drain.join();
+  const std::string log = read_file(scene.dir("record.log"));
+  EXPECT_EQ(exit_code, 0) << log;
+  const long long dropped = number_after(log, "dropped ");
+  EXPECT_GT(dropped, 1000) << log;
+  EXPECT_TRUE(contains(log, std::to_string(dropped) +
+                                " messages were dropped: compressing and writing them did not "
+                                "keep up"))
+      << log;
+  const json info = info_of(file);
+  EXPECT_EQ(info["complete"], true) << info.dump();
+  std::smatch written;  // "... 103 channels  16756 messages  1.5 MB ..."
+  ASSERT_TRUE(std::regex_search(log, written, std::regex(R"((\d+) messages  )"))) << log;
+  EXPECT_EQ(info["messages"].get<long long>(), std::stoll(written[1])) << log;
 }
 
 TEST(Record, BadFilesAndOptionsAreClearErrors) {
