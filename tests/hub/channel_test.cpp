@@ -25,6 +25,8 @@
 #include "afhub/hub/step_tape.hpp"
 #include "afhub/rt/stop_signal.hpp"
 #include "afhub/shm_layout/error.hpp"
+#include "afhub/shm_layout/layout_id.hpp"
+#include "afhub/shm_layout/packed_body_state.hpp"
 #include "afhub/shm_layout/slot_block.hpp"
 #include "afhub_process.hpp"
 #include "latest_slot.hpp"
@@ -359,6 +361,72 @@ TEST(Channel, AWriterKilledMidUpdateLeavesATornSlotThatReadersSkip) {
   EXPECT_TRUE(test::wait_until(
       [&] { return physics.latest_command() && physics.latest_command()->joints[0].value == 0.7; },
       2s));
+}
+
+// Steps of several parts, each readied between steps (StepTapeWriter::prepare opens as
+// many parts as the step before took, and writes over them), read whole and in order:
+// steps of 3 parts, then 1, then 5, then 3 again, the reader reading after each step.
+TEST(Channel, StepsOfSeveralPartsReadiedBetweenStepsAreReadWholeAndInOrder) {
+  StepTapeWriter writer("parts");
+  StepTapeReader reader("parts");
+  const auto written = std::make_unique<BodyState>();
+  const auto read = std::make_unique<BodyState>();
+  const auto part = std::make_unique<StepTape>();
+  written->header.layout_id = kLayoutId;
+  written->header.kind = PayloadKind::kBodyState;
+  written->joint_count = 64;  // about 1.6 KB packed: 17 to 19 to a part
+  ASSERT_TRUE(test::wait_until([&] { return writer.begin(1, 0.001); }, 2s));
+  writer.finish();
+  while (reader.next(*part)) {
+  }
+  std::uint64_t step = 1;
+  for (const int states : {45, 5, 90, 45}) {
+    ++step;
+    writer.prepare();
+    ASSERT_TRUE(writer.begin(step, 0.001 * static_cast<double>(step)));
+    for (int i = 0; i < states; ++i) {
+      written->header.sim_step = step;
+      written->joints[0].position = static_cast<double>(i);
+      writer.add(PayloadKind::kBodyState, "parts/body" + std::to_string(i), written.get(),
+                 static_cast<std::uint32_t>(body_state_bytes(64)));
+    }
+    writer.finish();
+    std::uint32_t parts = 0, entries = 0;
+    bool last = false;
+    while (reader.next(*part)) {
+      EXPECT_FALSE(last) << "step " << step << ": a part after its last";
+      EXPECT_EQ(part->header.sim_step, step);
+      EXPECT_EQ(part->part, parts++);
+      EXPECT_EQ(part->first_entry, entries);
+      for_each_tape_entry(*part, [&](PayloadKind kind, std::string_view name, const void* payload,
+                                     std::uint32_t bytes) {
+        EXPECT_EQ(kind, PayloadKind::kBodyState);
+        EXPECT_EQ(name, "parts/body" + std::to_string(entries));
+        ASSERT_EQ(check_packed_body_state(payload, bytes), PayloadError::kNone);
+        unpack_body_state({static_cast<const std::uint8_t*>(payload), bytes}, *read);
+        EXPECT_EQ(read->header.sim_step, step);
+        EXPECT_EQ(read->joints[0].position, static_cast<double>(entries));
+        ++entries;
+      });
+      last = part->last_part != 0;
+    }
+    EXPECT_TRUE(last) << "step " << step << " ends whole";
+    EXPECT_EQ(entries, static_cast<std::uint32_t>(states));
+    // Each part holds the entries that fit it whole, in order.
+    std::uint32_t filled = 1;
+    for (std::size_t i = 0, used = 0; i < static_cast<std::size_t>(states); ++i) {
+      const std::size_t entry = step_tape_entry_bytes(("parts/body" + std::to_string(i)).size(),
+                                                      packed_body_state_bytes(false, 0, 64));
+      if (used + entry > part->data.size()) {
+        ++filled;
+        used = 0;
+      }
+      used += entry;
+    }
+    EXPECT_EQ(parts, filled) << "step " << step;
+    EXPECT_GT(parts, states > 40 ? 2u : 0u) << "step " << step;
+  }
+  EXPECT_EQ(reader.refused(), 0u);
 }
 
 // A writer built from other sources: same channel, another layout id (forged in its

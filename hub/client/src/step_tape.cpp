@@ -90,9 +90,12 @@ bool StepTapeWriter::make_ring() noexcept {
 }
 
 void StepTapeWriter::next_part() noexcept {
-  tape_ = next_opened_ ? &ring_->parts[next_ % kStepTapeRingParts].tape
-                       : &tape_ring::open(*ring_, next_);
-  next_opened_ = false;
+  if (prepared_ > 0) {
+    tape_ = &ring_->parts[next_ % kStepTapeRingParts].tape;
+    --prepared_;
+  } else {
+    tape_ = &tape_ring::open(*ring_, next_);
+  }
   ++next_;
   tape_->header.sim_step = step_;
   tape_->header.sim_time_s = time_s_;
@@ -141,12 +144,13 @@ void StepTapeWriter::add(PayloadKind kind, std::string_view channel, const void*
 void StepTapeWriter::finish() noexcept {
   if (!tape_) return;
   tape_->last_part = lost_ ? 0 : 1;
+  last_step_parts_ = part_;
+  last_part_bytes_ = tape_->data_bytes;
   close_part();
   tape_ = nullptr;
 }
 
 void StepTapeWriter::close_part() noexcept {
-  if (tape_->part == 0) first_part_bytes_ = tape_->data_bytes;
   PayloadHeader& header = tape_->header;
   header.layout_id = kLayoutId;
   header.kind = PayloadKind::kStepTape;
@@ -157,10 +161,15 @@ void StepTapeWriter::close_part() noexcept {
 }
 
 void StepTapeWriter::prepare() noexcept {
-  if (!ring_ || next_opened_ || tape_ || !port_->publisher.hasSubscribers()) return;
-  StepTape& next = tape_ring::open(*ring_, next_);
-  next_opened_ = true;
-  std::memset(static_cast<void*>(&next), 0, offsetof(StepTape, data) + first_part_bytes_);
+  if (!ring_ || prepared_ > 0 || tape_ || !port_->publisher.hasSubscribers()) return;
+  prepared_ = std::min(last_step_parts_, kMaxPreparedParts);
+  for (std::uint32_t p = 0; p < prepared_; ++p) {
+    StepTape& part = tape_ring::open(*ring_, next_ + p);
+    // A part before the step's last was filled up to an entry's size of its end.
+    const std::size_t bytes =
+        p + 1 == last_step_parts_ ? offsetof(StepTape, data) + last_part_bytes_ : sizeof part;
+    std::memset(static_cast<void*>(&part), 0, bytes);
+  }
 }
 
 struct StepTapeReader::Port {

@@ -14,7 +14,8 @@ void init(StepTapeRing& ring, std::int64_t made_ns, std::uint32_t writer_pid) no
 
 // Writer: opens the ring's `k`-th part (its sequence odd, so that a reader copying the
 // part it replaces finds its copy overwritten) and returns it to fill; close() makes it
-// whole. Parts are opened and closed in order, one at a time.
+// whole. Parts are opened in order and closed in order; a writer may open a few ahead
+// (StepTapeWriter::prepare) before it closes the first.
 StepTape& open(StepTapeRing& ring, std::uint64_t k) noexcept;
 void close(StepTapeRing& ring, std::uint64_t k) noexcept;
 

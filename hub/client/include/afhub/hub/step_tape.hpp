@@ -29,13 +29,18 @@ class StepTapeWriter {
            std::uint32_t bytes) noexcept;
   // Makes the step's last part whole.
   void finish() noexcept;
-  // Between steps, while something reads the tape: opens the next step's first part and
-  // writes over as many bytes as the last step's first part held. The part's lines were
-  // last read by its reader's core, and taking each of them back during the step cost
-  // the step: publishing the example scene took 1.2 us untaped, 7.5 to 8.1 us taped for
-  // a reader on the other CPU, 2.0 to 2.2 us with the part readied here
-  // (physics_benchmark's ExampleSceneStep/published*, when the tape was a queue).
+  // Between steps, while something reads the tape: opens the parts the next step will
+  // take (as many as the last step took, up to kMaxPreparedParts) and writes over the
+  // bytes the last step wrote in them. A part's lines were last read by its reader's
+  // core, or have left the caches since the ring's last lap, and taking each of them back
+  // during the step cost the step: publishing the example scene took 1.2 us untaped, 7.5
+  // to 8.1 us taped for a reader on the other CPU, 2.0 to 2.2 us with its part readied
+  // here (physics_benchmark's ExampleSceneStep/published*, when the tape was a queue).
   void prepare() noexcept;
+  // An eighth of the ring: a lapped reader starts again three quarters of the ring behind
+  // the writer (tape_ring::resume_after_lap), clear of the parts opened ahead. A step of
+  // more parts (over two thousand 8-joint bodies) has its first ones readied.
+  static constexpr std::uint32_t kMaxPreparedParts = kStepTapeRingParts / 8;
 
  private:
   bool make_ring() noexcept;
@@ -44,12 +49,13 @@ class StepTapeWriter {
   struct Port;
   std::unique_ptr<Port> port_;
   std::uint32_t pid_;
-  StepTapeRing* ring_ = nullptr;        // published once, written in place
-  std::uint64_t next_ = 0;              // the ring's next part
-  bool next_opened_ = false;            // by prepare()
-  StepTape* tape_ = nullptr;            // the part being filled, the ring's next_ - 1
-  std::uint32_t first_part_bytes_ = 0;  // the data the last step's first part held
-  std::uint64_t sequence_ = 0;          // of the parts' headers
+  StepTapeRing* ring_ = nullptr;       // published once, written in place
+  std::uint64_t next_ = 0;             // the ring's next part
+  std::uint32_t prepared_ = 0;         // parts from next_ on opened by prepare()
+  StepTape* tape_ = nullptr;           // the part being filled, the ring's next_ - 1
+  std::uint32_t last_step_parts_ = 0;  // the parts the last step took
+  std::uint32_t last_part_bytes_ = 0;  // the data the last of them held
+  std::uint64_t sequence_ = 0;         // of the parts' headers
   std::uint64_t step_ = 0;
   double time_s_ = 0.0;
   std::uint32_t part_ = 0;
