@@ -749,6 +749,83 @@ TEST(Record, APlayedRecordingIsSeenAsIfLiveAndPausesAndStepsUnderAfhubWorld) {
       << moved << " steps on";
 }
 
+// The messages `afhub play --start S --end E --bodies BODY` publishes, by their log times
+// in `file`: the world's state and scene poses and BODY's states logged S to E seconds
+// after the first of these, and the scene (a physics publishes it once: replayed
+// whenever it comes); the pass ends at the first message past E.
+long long played_in_window(const std::string& file, double start_s, double end_s,
+                           const std::string& body) {
+  struct Window : mcap::Visitor {
+    std::set<std::string> topics;
+    std::map<std::uint16_t, std::string> by_id;
+    double start_s = 0, end_s = 0;
+    std::uint64_t first_ns = 0;
+    long long played = 0;
+    bool ended = false;
+    void channel(const mcap::Channel& c) override { by_id[c.id] = c.topic; }
+    void message(const mcap::Message& m) override {
+      const std::string& topic = by_id[m.channel_id];
+      if (ended || !topics.contains(topic)) return;
+      if (first_ns == 0) first_ns = m.log_time_ns;
+      const double at_s =
+          static_cast<double>(static_cast<std::int64_t>(m.log_time_ns - first_ns)) * 1e-9;
+      if (at_s > end_s) {
+        ended = true;
+        return;
+      }
+      if (at_s >= start_s || topic == "/world/scene") ++played;
+    }
+  } window;
+  window.topics = {"/world/state", "/world/scene", "/world/scene_poses", "/" + body + "/state"};
+  window.start_s = start_s;
+  window.end_s = end_s;
+  mcap::scan(file, window);
+  return window.played;
+}
+
+// `afhub play`'s choices: a window of the recording (--start, --end), the bodies
+// (--bodies: only those are published), its pace (--rate 0.25 takes four times the
+// window, never less; --fast as fast as it can).
+TEST(Record, PlayPublishesTheWindowAndTheBodiesChosenAtTheRateChosen) {
+  SceneRun scene;
+  ASSERT_TRUE(scene.ready()) << scene.logs();
+  const std::string file = scene.dir("window.mcap");
+  ASSERT_EQ(run_afhub({"record", "-o", file, "--duration", "2"}, 60s).exit_code, 0);
+  scene.controller->stop();
+  scene.physics->stop();
+  const auto published = [](const std::string& log) { return number_after(log, "published "); };
+
+  const long long whole_window = played_in_window(file, 0.5, 1.5, "afhub/arm/link3");
+  EXPECT_GT(whole_window, 1800) << "a second of link3's states and of the world's";
+  const RunResult fast = run_afhub(
+      {"play", file, "--fast", "--start", "0.5", "--end", "1.5", "--bodies", "afhub/arm/link3"},
+      60s);
+  EXPECT_EQ(fast.exit_code, 0) << fast.err;
+  EXPECT_EQ(published(fast.err), whole_window) << fast.err;
+
+  LatestReader<BodyState> link3(body_state_channel("afhub/arm/link3"));
+  LatestReader<BodyState> link2(body_state_channel("afhub/arm/link2"));
+  const auto started = std::chrono::steady_clock::now();
+  ScopedProcess slow(spawn_afhub({"play", file, "--rate", "0.25", "--start", "0.5", "--end", "0.7",
+                                  "--bodies", "afhub/arm/link3"},
+                                 scene.dir("slow.log")));
+  std::uint64_t link3_updates = 0;
+  int exit_code = -1;
+  while ((exit_code = exit_code_if_ended(slow.pid)) == -1 &&
+         std::chrono::steady_clock::now() - started < 60s) {
+    if (link3.latest() && link3.updated()) ++link3_updates;
+    EXPECT_EQ(link2.latest(), nullptr) << "a body --bodies did not choose";
+    std::this_thread::sleep_for(5ms);
+  }
+  const auto took = std::chrono::steady_clock::now() - started;
+  const std::string log = read_file(scene.dir("slow.log"));
+  EXPECT_EQ(exit_code, 0) << log;
+  EXPECT_EQ(published(log), played_in_window(file, 0.5, 0.7, "afhub/arm/link3")) << log;
+  // A lower bound only: a loaded machine makes a play slower, never faster.
+  EXPECT_GE(took, 760ms) << "0.2 s of the recording at a quarter of its pace";
+  EXPECT_GT(link3_updates, 20u);
+}
+
 // A copy of `from` in which the commands answering steps from `step` on carry joint 0's
 // target moved by `delta`: what a changed gain does to a run.
 void copy_with_changed_commands(const std::string& from, const std::string& to, std::uint64_t step,
