@@ -10,6 +10,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -1193,6 +1194,29 @@ TEST(Record, AWriterThatCannotKeepUpDropsWhatTheBufferCannotHoldCountedAndSaid) 
   std::smatch written;  // "... 103 channels  16756 messages  1.5 MB ..."
   ASSERT_TRUE(std::regex_search(log, written, std::regex(R"((\d+) messages  )"))) << log;
   EXPECT_EQ(info["messages"].get<long long>(), std::stoll(written[1])) << log;
+}
+
+// On a terminal (a pseudo-terminal of script(1)), a live line rewritten in place twice a
+// second while it records: the time recorded, channels, messages, MB, MB/s and drops;
+// the messages go up from one to the next.
+TEST(Record, OnATerminalALiveLineShowsTheRecordingAsItGoes) {
+  SceneRun scene;
+  ASSERT_TRUE(scene.ready()) << scene.logs();
+  const std::string file = scene.dir("live.mcap");
+  const RunResult run = run_command(
+      {"script", "-qec", afhub_executable() + " record -o " + file + " --duration 3", "/dev/null"},
+      60s);
+  EXPECT_EQ(run.exit_code, 0) << run.out << run.err;
+  const std::regex live(
+      "\\r(recorded [0-9.]+ s  [0-9]+ channels  ([0-9]+) messages  [0-9.]+ MB  [0-9.]+ MB/s  "
+      "dropped [0-9]+)[^\\r\\n]*\\x1b\\[K");
+  std::vector<long long> messages;
+  for (auto it = std::sregex_iterator(run.out.begin(), run.out.end(), live);
+       it != std::sregex_iterator(); ++it)
+    messages.push_back(std::stoll((*it)[2]));
+  ASSERT_GE(messages.size(), 3u) << run.out;
+  EXPECT_TRUE(std::is_sorted(messages.begin(), messages.end())) << run.out;
+  EXPECT_GT(messages.back(), messages.front()) << run.out;
 }
 
 TEST(Record, BadFilesAndOptionsAreClearErrors) {
