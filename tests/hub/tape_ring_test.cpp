@@ -93,7 +93,7 @@ TEST(TapeRing, AReaderLappedByTheWriterNeverKeepsAMixedPartAndReadsInOrder) {
   EXPECT_EQ(tape_ring::head(*ring), kParts);
 }
 
-TEST(TapeRing, ALappedReaderStartsAgainAQuarterOfTheRingBehindTheWriter) {
+TEST(TapeRing, ALappedReaderStartsAgainAQuarterOfTheRingPastTheOldestPartKept) {
   const auto ring = fresh_ring();
   const std::uint64_t written = kStepTapeRingParts + 10;
   for (std::uint64_t k = 0; k < written; ++k) write_part(*ring, k);

@@ -28,8 +28,9 @@ enum class Read {
 // Copies the ring's `k`-th part into `out`, its header and its used data.
 Read read(const StepTapeRing& ring, std::uint64_t k, StepTape& out, std::uint32_t& bytes) noexcept;
 
-// Where a reader lapped at part `k` starts again: a quarter of the ring behind the
-// writer, so that it is not lapped again at once; past `k` whatever the ring says.
+// Where a reader lapped at part `k` starts again: a quarter of the ring past the oldest
+// part kept (three quarters behind the writer), so that it is not lapped again at once;
+// past `k` whatever the ring says.
 std::uint64_t resume_after_lap(const StepTapeRing& ring, std::uint64_t k) noexcept;
 
 // The part the writer will close next.
