@@ -290,7 +290,10 @@ TEST(Run, LockstepWaitsAsleepUnlessSpinning) {
       EXPECT_EQ(use.sleeps, 0) << "spinning";
     } else {
       EXPECT_GE(use.sleeps, 1) << "asleep";
-      EXPECT_LT(use.cpu_ms, 15.0) << "asleep";  // CPU time: a load lowers it, never raises it
+      // A tenth of the wait: each wake-up costs more CPU on a loaded machine (a CI run
+      // beside the sanitizers' build took 16.5 ms over 253 wake-ups), a spin all it gets
+      // (51 ms in that run).
+      EXPECT_LT(use.cpu_ms, 30.0) << "asleep";
     }
     // An answer from another thread ends the wait before the timeout.
     sim.step();
