@@ -1,7 +1,6 @@
 // `afhub record`: every body's state, the world's and the scene (and with options the
 // commands and devices) to an MCAP file at the rate it is published, until Ctrl-C or --duration.
 // `afhub record --recover FILE`: gives a file that was cut off its index back.
-#include <sys/resource.h>
 #include <unistd.h>
 
 #include <cmath>
@@ -29,15 +28,6 @@ struct RecordCliOptions {
   std::string recover;
   RealtimeOptions realtime;
 };
-
-// Low: above every normal process, below any real-time loop a user gave a priority.
-constexpr int kDefaultFifoPriority = 10;
-
-bool may_use_fifo(int priority) {
-  rlimit limit{};
-  return geteuid() == 0 ||
-         (getrlimit(RLIMIT_RTPRIO, &limit) == 0 && limit.rlim_cur >= static_cast<rlim_t>(priority));
-}
 
 std::string progress_line(const mcap::RecordProgress& p, double mb_per_s) {
   char line[256];
@@ -83,16 +73,12 @@ int run_record(RecordCliOptions& options) {
     throw Error("--buffer takes megabytes from 1 to 65536");
   options.record.buffer_bytes = static_cast<std::size_t>(options.buffer_mb * (1 << 20)) & ~7ull;
   set_realtime_options(options.realtime, options.record.loop);
-  // States, commands and the world state come on the physics' step tape, which holds
-  // the steps of a late reader: the loop runs under the normal scheduler, never taking
-  // a core from a physics or a controller that runs under it (under SCHED_FIFO it put
-  // the example scene's step p99 at 1.46x without the recorder; under the normal
-  // scheduler 0.92x, bench/record_bench.sh). A device's updates are read from its slot,
-  // which a loop kept asleep through an update misses: with --devices the loop runs
-  // under SCHED_FIFO where the system allows it.
-  if (options.record.devices && options.realtime.fifo_priority == 0 &&
-      may_use_fifo(kDefaultFifoPriority))
-    options.record.loop.fifo_priority = kDefaultFifoPriority;
+  // States, commands and the world state come on the physics' step tape, a device's
+  // updates on its driver's tape: each holds what a late reader missed, so the loop runs
+  // under the normal scheduler, never taking a core from a physics, a controller or a
+  // driver that runs under SCHED_FIFO (under SCHED_FIFO it put the example scene's step
+  // p99 at 1.46x without the recorder; under the normal scheduler 0.92x,
+  // bench/record_bench.sh).
   install_stop_signal_handlers();
   // A hub lost: the file is finished (the recorder's hook), and the process re-executes
   // to wait for the next hub and record into the next file: run.mcap, run.1.mcap, ...

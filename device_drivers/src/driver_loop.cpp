@@ -7,6 +7,7 @@
 
 #include "afhub/devices/safe_request.hpp"
 #include "afhub/hub/bodies.hpp"
+#include "afhub/hub/device_tape.hpp"
 #include "afhub/hub/hub_health.hpp"
 #include "afhub/hub/hub_loss.hpp"
 #include "afhub/hub/hub_presence.hpp"
@@ -52,8 +53,8 @@ class HookAttachment {
 // an error. Whatever ends it, the device's force was last set to zero (but when it is
 // gone) and it was made safe.
 DriveEnd drive(Device& device, const DriverOptions& options, Writer<DeviceState>& states,
-               LatestReader<DeviceCommand>& commands, LoopStatsPublisher& stats,
-               LoopTiming& timing) {
+               LatestReader<DeviceCommand>& commands, DeviceTapeWriter& tape,
+               LoopStatsPublisher& stats, LoopTiming& timing) {
   const HookAttachment attachment(device);
   const DeviceSpec spec = device.spec();
   SafetyLimits limits = options.safety;
@@ -94,6 +95,7 @@ DriveEnd drive(Device& device, const DriverOptions& options, Writer<DeviceState>
       state->command_stamp_ns = command->header.publish_stamp_ns;
     }
     states.publish(state);
+    tape.add(*state, command);
     return true;
   };
   try {
@@ -147,6 +149,7 @@ int run_driver(const DeviceOpener& open, const DriverOptions& options) {
                  "this driver (" + channel + ")");
   Writer<DeviceState> states(body_state_channel(channel));
   LatestReader<DeviceCommand> commands(body_command_channel(channel));
+  DeviceTapeWriter tape(channel);  // every cycle, for a recorder
   DirectoryPublisher directory;
   directory.add(make_device_entry(options.name));
   directory.publish();
@@ -159,7 +162,7 @@ int run_driver(const DeviceOpener& open, const DriverOptions& options) {
                channel.c_str(), 1e9 / static_cast<double>(options.loop.period_ns),
                static_cast<double>(options.safety.watchdog_ns) * 1e-6, spec.max_force_n);
   for (;;) {
-    const DriveEnd end = drive(*device, options, states, commands, stats, timing);
+    const DriveEnd end = drive(*device, options, states, commands, tape, stats, timing);
     if (end.how == DriveEnd::kStopped) return 0;
     device.reset();
     if (end.how == DriveEnd::kGone)

@@ -15,6 +15,7 @@
 
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/channel.hpp"
+#include "afhub/hub/device_tape.hpp"
 #include "afhub/hub/hub_loss.hpp"
 #include "afhub/hub/sample_waiter.hpp"
 #include "afhub/hub/step_tape.hpp"
@@ -92,6 +93,12 @@ struct Recorded {
   // (tape_breaks: the count then): a run ends at a break.
   std::uint64_t taped_from_step = 0;
   std::uint64_t tape_breaks = 0;
+  // A device's state: its tape (every cycle, and the commands its driver took), and the
+  // index in recorded_ of its command's channel (none before it is taken).
+  std::unique_ptr<DeviceTapeReader> device_tape;
+  std::size_t device_command = ~std::size_t{0};
+  // A device's command: its device's tape's lost() when it last brought one (none before).
+  std::optional<std::uint64_t> tape_lost;
 };
 
 // A channel the reading loop has numbered, for the writing thread to add to the file.
@@ -199,9 +206,11 @@ class Session {
           tape_poll_ns = std::min<std::int64_t>(
               kTapePollNs, kStepTapeRingParts * 1'000'000LL / 4 / (taped->part + 1));
       }
+      for (Recorded& recorded : recorded_)
+        if (recorded.device_tape) sample_device_tape(recorded, now);
       for (Recorded& recorded : recorded_) {
         if (recorded.taped_ns != 0 && now - recorded.taped_ns < kTapeFreshNs) {
-          // Read from the tape; a reader that wakes the loop is still taken, or the
+          // Read from a tape; a reader that wakes the loop is still taken, or the
           // waiter would find its update new at every wait and never sleep. A state's
           // reader holds its slot, a restarted physics' too: a physics tapes only the
           // bodies whose state someone holds.
@@ -235,11 +244,34 @@ class Session {
       if (recorded.wakes && recorded.body.empty()) untaped_waiter.attach(*recorded.reader);
       if (!recorded.body.empty())
         by_body_[tape_kind_index(recorded.kind)].emplace(recorded.body, recorded_.size());
+      // A device's command is added right after its state (discover()).
+      if (recorded.kind == PayloadKind::kDeviceCommand && !recorded_.empty() &&
+          recorded_.back().kind == PayloadKind::kDeviceState)
+        recorded_.back().device_command = recorded_.size();
       recorded_.push_back(std::move(recorded));
     }
     std::fill(tape_order_.begin(), tape_order_.end(), TapePosition{});  // a new one may be taped
     discovered_.clear();
     discovered_ready_.store(false, std::memory_order_release);
+  }
+
+  // The cycles a device's tape brought since the last look (checked by its reader): its
+  // states, and the commands its driver took. A gap in those commands, with no cycle
+  // lost between, is commands the driver never took (their writer replaced them first).
+  void sample_device_tape(Recorded& state, std::int64_t now_ns) noexcept {
+    Recorded* command =
+        state.device_command < recorded_.size() ? &recorded_[state.device_command] : nullptr;
+    while (state.device_tape->next(*device_cycle_)) {
+      state.taped_ns = now_ns;
+      sample(state, &device_cycle_->state, sizeof(DeviceState), now_ns);
+      if (!command) continue;
+      command->taped_ns = now_ns;
+      if (!device_cycle_->has_command) continue;
+      const std::uint64_t lost = state.device_tape->lost();
+      sample(*command, &device_cycle_->command, sizeof(DeviceCommand), now_ns, std::nullopt,
+             command->tape_lost == lost);
+      command->tape_lost = lost;
+    }
   }
 
   // The states and commands of a step tape's part, each checked as what it is (the
@@ -319,9 +351,10 @@ class Session {
   // Copies a new sample into the buffer, or counts it dropped when the buffer is full.
   // Its log time is when it was read (`now_ns`): the file's order, which play follows;
   // its publish time the writer's stamp. `tape_step`: it came from a physics' step tape,
-  // in that step.
+  // in that step. `gap_replaced`: a gap before it is commands never taken, not missed.
   void sample(Recorded& recorded, const void* payload, std::uint32_t bytes, std::int64_t now_ns,
-              std::optional<std::uint64_t> tape_step = std::nullopt) noexcept {
+              std::optional<std::uint64_t> tape_step = std::nullopt,
+              bool gap_replaced = false) noexcept {
     PayloadHeader header;
     std::memcpy(&header, payload, sizeof header);  // checked by the reader: at least a header
     const std::uint64_t key = recorded.per_step ? header.sim_step : header.sequence;
@@ -361,9 +394,9 @@ class Session {
     // physics never took them (their controller replaced them first).
     const bool command = recorded.kind == PayloadKind::kBodyCommand;
     if (same_writer && key > recorded.last + 1)
-      (command && tape_step && tape_covered_since_last(recorded, *tape_step) ? replaced_
-                                                                             : missed_) +=
-          key - recorded.last - 1;
+      (gap_replaced || (command && tape_step && tape_covered_since_last(recorded, *tape_step))
+           ? replaced_
+           : missed_) += key - recorded.last - 1;
     if (command) {
       recorded.taken_after_step = tape_step ? tape_step : state_step(recorded.body);
       recorded.tape_breaks = tape_breaks_;
@@ -465,6 +498,8 @@ class Session {
     recorded.once = kind == PayloadKind::kSceneDescription;
     recorded.kind = kind;
     recorded.body = std::move(body);
+    if (kind == PayloadKind::kDeviceState)
+      recorded.device_tape = std::make_unique<DeviceTapeReader>(id.instance);
     const std::lock_guard lock(discovered_mutex_);
     discovered_.push_back(std::move(recorded));
     discovered_ready_.store(true, std::memory_order_release);
@@ -639,6 +674,7 @@ class Session {
   // The reading loop's.
   std::vector<Recorded> recorded_;
   const std::unique_ptr<BodyState> unpacked_ = std::make_unique<BodyState>();  // a taped state
+  const std::unique_ptr<DeviceTape> device_cycle_ = std::make_unique<DeviceTape>();
   // The index in recorded_ of each channel a tape brings, by tape_kind_index and name.
   static std::size_t tape_kind_index(PayloadKind kind) {
     return kind == PayloadKind::kBodyState ? 0 : kind == PayloadKind::kBodyCommand ? 1 : 2;

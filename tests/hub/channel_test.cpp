@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "afhub/hub/bodies.hpp"
+#include "afhub/hub/device_tape.hpp"
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/hub/step_tape.hpp"
 #include "afhub/rt/stop_signal.hpp"
@@ -426,6 +427,73 @@ TEST(Channel, StepsOfSeveralPartsReadiedBetweenStepsAreReadWholeAndInOrder) {
     EXPECT_EQ(parts, filled) << "step " << step;
     EXPECT_GT(parts, states > 40 ? 2u : 0u) << "step " << step;
   }
+  EXPECT_EQ(reader.refused(), 0u);
+}
+
+// A device's tape: nothing is written until a reader comes; then every cycle, with the
+// command its driver took only when that is a new one; a reader lapped loses the oldest
+// cycles and says how many; a restarted driver's ring is read from its start once the
+// old one is read.
+TEST(Channel, ADevicesTapeHoldsEveryCycleAndEachNewCommandOnce) {
+  auto writer = std::make_unique<DeviceTapeWriter>("device/taped");
+  DeviceState state;
+  state.header.layout_id = kLayoutId;
+  state.header.kind = PayloadKind::kDeviceState;
+  DeviceCommand command;
+  command.header.layout_id = kLayoutId;
+  command.header.kind = PayloadKind::kDeviceCommand;
+  command.header.publisher_pid = 7;
+  std::uint64_t cycle = 0;
+  const auto run = [&](std::uint64_t cycles, DeviceTapeWriter& to) {
+    for (std::uint64_t c = 0; c < cycles; ++c, ++cycle) {
+      state.header.sequence = cycle;
+      command.header.sequence = cycle / 3;  // a new command every third cycle
+      to.add(state, &command);
+    }
+  };
+  run(10, *writer);  // nothing reads it
+  DeviceTapeReader reader("device/taped");
+  const auto part = std::make_unique<DeviceTape>();
+  ASSERT_TRUE(test::wait_until(
+      [&] {
+        run(1, *writer);
+        return reader.next(*part);
+      },
+      2s));
+  const std::uint64_t first = part->state.header.sequence;
+  EXPECT_GE(first, 10u) << "the cycles before a reader came are not taped";
+  run(99, *writer);
+  std::uint64_t expected = first + 1, commands = 0;
+  while (reader.next(*part)) {
+    EXPECT_EQ(part->state.header.sequence, expected++);
+    if (part->has_command) {
+      ++commands;
+      EXPECT_EQ(part->command.header.sequence, part->state.header.sequence / 3);
+      EXPECT_EQ(part->state.header.sequence % 3, 0u) << "a command taped again";
+    }
+  }
+  EXPECT_EQ(expected, cycle);
+  EXPECT_GE(commands, 32u);
+  EXPECT_EQ(reader.lost(), 0u);
+  // Lapped: 1000 cycles on a ring of 400, read after.
+  run(1000, *writer);
+  ASSERT_TRUE(reader.next(*part));
+  EXPECT_EQ(reader.lost(), part->state.header.sequence - expected);
+  EXPECT_EQ(part->state.header.sequence, cycle - (kDeviceTapeRingParts * 3 / 4))
+      << "three quarters of the ring behind the writer";
+  while (reader.next(*part)) {
+  }
+  // A restarted driver's ring, from its first cycle.
+  writer = std::make_unique<DeviceTapeWriter>("device/taped");
+  const std::uint64_t restarted = cycle;
+  ASSERT_TRUE(test::wait_until(
+      [&] {
+        run(1, *writer);
+        return reader.next(*part);
+      },
+      2s));
+  EXPECT_EQ(part->state.header.sequence, restarted);
+  EXPECT_TRUE(part->has_command) << "a new driver tapes the command it takes first";
   EXPECT_EQ(reader.refused(), 0u);
 }
 

@@ -21,6 +21,7 @@
 #include "afhub/devices/driver_loop.hpp"
 #include "afhub/devices/virtual_device.hpp"
 #include "afhub/hub/bodies.hpp"
+#include "afhub/hub/device_tape.hpp"
 #include "afhub/hub/loop_stats_publisher.hpp"
 #include "afhub/hub/step_tape.hpp"
 #include "afhub/physics/adf_loader.hpp"
@@ -518,6 +519,7 @@ TEST(HotPath, TeleopLoopDoesNotAllocate) {
   // contacts and the force's ramp. The cycles are counted by the teleop's commands.
   LatestReader<DeviceState> device_state(body_state_channel(device_channel_name(device)));
   LatestReader<DeviceCommand> teleop_commands(body_command_channel(device_channel_name(device)));
+  DeviceTapeReader device_tape(device_channel_name(device));  // the driver tapes every cycle
   const auto sequence = [&] {
     const DeviceCommand* command = teleop_commands.latest();
     return command ? command->header.sequence : 0;
@@ -540,6 +542,9 @@ TEST(HotPath, TeleopLoopDoesNotAllocate) {
   const DeviceState* state = device_state.latest();
   const bool device_live = state && state->gate == ForceGate::kApplying &&
                            monotonic_ns() - state->header.publish_stamp_ns < 100'000'000;
+  const auto taped = std::make_unique<DeviceTape>();
+  std::uint64_t taped_cycles = 0;
+  while (device_tape.next(*taped)) ++taped_cycles;
 
   teleop_thread.join();
   driver_thread.join();
@@ -553,6 +558,7 @@ TEST(HotPath, TeleopLoopDoesNotAllocate) {
                                << " steady-state teleoperation cycles";
   EXPECT_EQ(driver_counted, 0) << "heap allocations in the driver's loop over " << last - first
                                << " teleoperation cycles";
+  EXPECT_GT(taped_cycles + device_tape.lost(), kMeasured) << "the driver taped its cycles";
   EXPECT_GT(latency.to_device_force.size(), static_cast<std::size_t>(kMeasured));
   EXPECT_EQ(channels.rejected_commands(), 0u);
 }

@@ -1,9 +1,11 @@
-// The step tape's ring on its own (hub/client/src/tape_ring.hpp): a reader copying
-// parts while the writer writes and laps it never keeps a mixed part and reads them in
-// order; a lapped reader starts again behind the writer; a part never closed (its
-// writer killed) is not read. Built twice: with the unit tests (under ASan and UBSan)
-// and alone under ThreadSanitizer (tape_ring_tsan).
+// A tape's ring on its own (hub/client/src/tape_ring.hpp): a reader copying parts
+// while the writer writes and laps it never keeps a mixed part and reads them in order
+// (a step tape's ring and a device's); a lapped reader starts again behind the writer;
+// a part never closed (its writer killed) is not read. Built twice: with the unit tests
+// (under ASan and UBSan) and alone under ThreadSanitizer (tape_ring_tsan).
 #include "tape_ring.hpp"
+
+#include "afhub/shm_layout/device_tape.hpp"
 
 #include <gtest/gtest.h>
 
@@ -28,28 +30,50 @@ void write_part(StepTapeRing& ring, std::uint64_t k) {
   tape_ring::close(ring, k);
 }
 
-bool all_words_are(const StepTape& part, std::uint64_t k) {
-  for (std::uint32_t at = 0; at < kDataBytes; at += sizeof k) {
+bool all_words_are(const std::uint8_t* data, std::size_t bytes, std::uint64_t k) {
+  for (std::size_t at = 0; at + sizeof k <= bytes; at += sizeof k) {
     std::uint64_t word = 0;
-    std::memcpy(&word, part.data.data() + at, sizeof word);
+    std::memcpy(&word, data + at, sizeof word);
     if (word != k) return false;
   }
   return true;
 }
 
-std::unique_ptr<StepTapeRing> fresh_ring() {
-  auto ring = std::make_unique<StepTapeRing>();
+// Whether `part`, `bytes` of it copied, is part k whole.
+bool is_part(const StepTape& part, std::uint32_t bytes, std::uint64_t k) {
+  return part.header.sim_step == k && bytes == offsetof(StepTape, data) + kDataBytes &&
+         all_words_are(part.data.data(), kDataBytes, k);
+}
+
+// A device's part k: every word of it k.
+void write_part(DeviceTapeRing& ring, std::uint64_t k) {
+  DeviceTape& part = tape_ring::open(ring, k);
+  for (std::size_t at = 0; at + sizeof k <= sizeof part; at += sizeof k)
+    std::memcpy(reinterpret_cast<std::uint8_t*>(&part) + at, &k, sizeof k);
+  tape_ring::close(ring, k);
+}
+
+bool is_part(const DeviceTape& part, std::uint32_t bytes, std::uint64_t k) {
+  return bytes == sizeof part &&
+         all_words_are(reinterpret_cast<const std::uint8_t*>(&part), sizeof part, k);
+}
+
+template <class Ring = StepTapeRing>
+std::unique_ptr<Ring> fresh_ring() {
+  auto ring = std::make_unique<Ring>();
   tape_ring::init(*ring, 1, 1);
   return ring;
 }
 
-TEST(TapeRing, AReaderLappedByTheWriterNeverKeepsAMixedPartAndReadsInOrder) {
-  const auto ring = fresh_ring();
-  constexpr std::uint64_t kParts = 100 * kStepTapeRingParts;
+template <class Ring>
+void a_lapped_reader_never_keeps_a_mixed_part_and_reads_in_order() {
+  const auto ring = fresh_ring<Ring>();
+  constexpr std::uint64_t kRing = Ring::kPartCount;
+  constexpr std::uint64_t kParts = 100 * kRing;
   std::atomic<bool> done{false};
   std::uint64_t copied = 0, laps = 0, mixed = 0, out_of_order = 0;
   std::thread reader([&] {
-    const auto part = std::make_unique<StepTape>();
+    const auto part = std::make_unique<typename Ring::PartType>();
     std::uint64_t cursor = 0;
     // The reader trails the writer by almost the whole ring, so that the writer often
     // replaces the part it is copying; once it stops until the writer has lapped it, as
@@ -57,9 +81,9 @@ TEST(TapeRing, AReaderLappedByTheWriterNeverKeepsAMixedPartAndReadsInOrder) {
     bool stopped = false;
     for (;;) {
       const bool last_look = done.load(std::memory_order_acquire);
-      std::uint64_t behind = kStepTapeRingParts - 1;
-      if (!stopped && cursor >= kStepTapeRingParts / 2) {
-        behind = kStepTapeRingParts + 1;
+      std::uint64_t behind = kRing - 1;
+      if (!stopped && cursor >= kRing / 2) {
+        behind = kRing + 1;
         stopped = true;
       }
       while (tape_ring::head(*ring) < cursor + behind && !done.load(std::memory_order_acquire))
@@ -68,9 +92,11 @@ TEST(TapeRing, AReaderLappedByTheWriterNeverKeepsAMixedPartAndReadsInOrder) {
       switch (tape_ring::read(*ring, cursor, *part, bytes)) {
         case tape_ring::Read::kCopied:
           ++copied;
-          if (part->header.sim_step != cursor) ++out_of_order;
-          if (bytes != offsetof(StepTape, data) + kDataBytes || !all_words_are(*part, cursor))
-            ++mixed;
+          // A part of another k whole is out of order, anything else mixed.
+          if (!is_part(*part, bytes, cursor))
+            ++(is_part(*part, bytes, cursor - 1) || is_part(*part, bytes, cursor + kRing)
+                   ? out_of_order
+                   : mixed);
           ++cursor;
           continue;
         case tape_ring::Read::kOverwritten:
@@ -89,8 +115,16 @@ TEST(TapeRing, AReaderLappedByTheWriterNeverKeepsAMixedPartAndReadsInOrder) {
   EXPECT_EQ(mixed, 0u) << "parts copied while the writer replaced them, kept";
   EXPECT_EQ(out_of_order, 0u);
   EXPECT_GT(laps, 0u) << "the writer lapped a stopped reader: it must have found out";
-  EXPECT_GE(copied, kStepTapeRingParts / 2) << "the parts kept after its last lap at least";
+  EXPECT_GE(copied, kRing / 2) << "the parts kept after its last lap at least";
   EXPECT_EQ(tape_ring::head(*ring), kParts);
+}
+
+TEST(TapeRing, AReaderLappedByTheWriterNeverKeepsAMixedPartAndReadsInOrder) {
+  a_lapped_reader_never_keeps_a_mixed_part_and_reads_in_order<StepTapeRing>();
+}
+
+TEST(TapeRing, ADevicesRingTooNeverGivesAMixedPartOrOneOutOfOrder) {
+  a_lapped_reader_never_keeps_a_mixed_part_and_reads_in_order<DeviceTapeRing>();
 }
 
 TEST(TapeRing, ALappedReaderStartsAgainAQuarterOfTheRingPastTheOldestPartKept) {
@@ -106,8 +140,7 @@ TEST(TapeRing, ALappedReaderStartsAgainAQuarterOfTheRingPastTheOldestPartKept) {
   const std::uint64_t resumed = tape_ring::resume_after_lap(*ring, 0);
   EXPECT_EQ(resumed, written - (kStepTapeRingParts - kStepTapeRingParts / 4));
   ASSERT_EQ(tape_ring::read(*ring, resumed, *part, bytes), tape_ring::Read::kCopied);
-  EXPECT_EQ(part->header.sim_step, resumed);
-  EXPECT_TRUE(all_words_are(*part, resumed));
+  EXPECT_TRUE(is_part(*part, bytes, resumed));
   EXPECT_EQ(tape_ring::read(*ring, written, *part, bytes), tape_ring::Read::kNotYet);
   // Whatever the ring says of itself (a count behind the reader's), a lapped reader
   // moves on.

@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -27,6 +28,7 @@
 #include "afhub/shm_layout/body_command.hpp"
 #include "afhub/shm_layout/body_state.hpp"
 #include "afhub/shm_layout/channel_names.hpp"
+#include "afhub/shm_layout/device.hpp"
 #include "afhub/shm_layout/layout_id.hpp"
 #include "afhub/shm_layout/world.hpp"
 #include "afhub_process.hpp"
@@ -987,35 +989,67 @@ TEST(Record, BodiesThatAppearLaterAndAPhysicsRestartedAreRecorded) {
   EXPECT_GT(read.steps.size(), 2000u);
 }
 
-TEST(Record, ADeviceIsRecordedAtItsOwnRateWithDevices) {
+TEST(Record, ADeviceIsRecordedEveryCycleWithTheCommandsItTookThroughAPauseWithDevices) {
   afhub::testing::ModelFolder folder;
   const auto log = [&](const std::string& name) { return (folder.dir() / name).string(); };
   const std::string file = log("device.mcap");
-  // A device without a physics: its own 1 kHz loop wakes the recorder. Under SCHED_FIFO,
-  // as a real device's driver runs: under the normal scheduler, on a machine busy with
-  // other tests, a late cycle can come just before the next, faster than a reader wakes
-  // (106 of 1895 updates overwritten before the recorder read them, in one CI run).
+  // A device without a physics, under the normal scheduler, and a teleop's commands
+  // (no force) written about every millisecond.
   ScopedProcess device(spawn_afhub(
-      {"device", "run", "virtual", "--name", "hand", "--circle", "0.05,2", "--fifo", "20"},
-      log("device.log")));
+      {"device", "run", "virtual", "--name", "hand", "--circle", "0.05,2"}, log("device.log")));
   ASSERT_TRUE(wait_until(
       [] { return run_afhub({"ls"}).out.find("device/hand") != std::string::npos; }, 20s))
       << read_file(log("device.log"));
-  const RunResult recorded = run_afhub({"record", "-o", file, "--devices", "--duration", "2"}, 60s);
-  ASSERT_EQ(recorded.exit_code, 0) << recorded.err;
+  std::atomic<bool> writing{true};
+  std::atomic<std::uint64_t> written{0};
+  std::thread teleop([&] {
+    Writer<DeviceCommand> commands(body_command_channel("device/hand"));
+    while (writing) {
+      if (DeviceCommand* command = commands.loan()) {
+        command->enable = 0;
+        commands.publish(command);
+        ++written;
+      }
+      std::this_thread::sleep_for(1ms);
+    }
+  });
+  ScopedProcess recorder(spawn_afhub({"record", "-o", file, "--devices"}, log("record.log")));
+  // Paused once it records (its first chunk is in the file), for half the device's
+  // tape: its slots hold the last update only, its tape the last 400.
+  ASSERT_TRUE(wait_until(
+      [&] {
+        std::error_code error;
+        return std::filesystem::file_size(file, error) > 10'000 && !error;
+      },
+      30s))
+      << read_file(log("record.log"));
+  ASSERT_EQ(kill(recorder.pid, SIGSTOP), 0);
+  std::this_thread::sleep_for(200ms);
+  ASSERT_EQ(kill(recorder.pid, SIGCONT), 0);
+  std::this_thread::sleep_for(1s);
+  ASSERT_EQ(stop_process(recorder.pid, SIGINT), 0) << read_file(log("record.log"));
+  writing = false;
+  teleop.join();
+
   const json info = info_of(file);
   std::map<std::string, json> channels;
   for (const json& channel : info["channels"]) channels[channel["topic"]] = channel;
   ASSERT_TRUE(channels.count("/device/hand/state")) << info.dump();
   EXPECT_EQ(channels["/device/hand/state"]["schema"], "afhub.DeviceState");
-  // The device's updates are in the file: the recorder missed at most 5 % of them (a
-  // gap in their sequence). Its loop's own rate is the device's business (on a machine
-  // busy with other tests it once ran at 895 Hz).
-  const json& hand = channels["/device/hand/state"];
-  EXPECT_GT(hand["rate_hz"].get<double>(), 500.0) << info.dump();
-  EXPECT_LE(hand["skipped"].get<std::uint64_t>() * 20, hand["messages"].get<std::uint64_t>())
-      << info.dump();
   EXPECT_EQ(channels["/device/hand/command"]["schema"], "afhub.DeviceCommand");
+  // Every cycle of the device is in the file, the pause's too. Its loop's own rate is
+  // the device's business (on a machine busy with other tests it once ran at 895 Hz).
+  const json& hand = channels["/device/hand/state"];
+  EXPECT_EQ(hand["skipped"], 0) << info.dump();
+  EXPECT_GT(hand["messages"].get<std::uint64_t>(), 1000u) << info.dump();
+  EXPECT_GT(hand["rate_hz"].get<double>(), 500.0) << info.dump();
+  // The commands the driver took: a gap is one the teleop replaced before the driver's
+  // next cycle, never one the recorder missed.
+  const std::string said = read_file(log("record.log"));
+  EXPECT_EQ(number_after(said, "missed "), 0) << said;
+  const auto commands = channels["/device/hand/command"]["messages"].get<std::uint64_t>();
+  EXPECT_GT(commands, 500u) << info.dump();
+  EXPECT_LE(commands, written.load());
   // Without --devices, none.
   const RunResult bodies_only =
       run_afhub({"record", "-o", log("none.mcap"), "--duration", "0.5"}, 60s);
@@ -1023,18 +1057,16 @@ TEST(Record, ADeviceIsRecordedAtItsOwnRateWithDevices) {
   EXPECT_EQ(info_of(log("none.mcap")).dump().find("/device/hand"), std::string::npos);
 }
 
-// States and commands come on the step tape, which holds a late reader's steps: the
-// reading loop then stays under the normal scheduler, never taking a core from a
-// physics or controller running under it. A device's updates come from its slot,
-// which a late loop misses: with --devices it runs under SCHED_FIFO (as root here).
-TEST(Record, TheReadingLoopTakesNoCoreFromTheLoopsUnlessItReadsDevices) {
+// States and commands come on the physics' step tape, a device's updates on its
+// driver's tape, which hold a late reader's steps and cycles: the reading loop stays
+// under the normal scheduler, never taking a core from a physics, a controller or a
+// driver running under it.
+TEST(Record, TheReadingLoopTakesNoCoreFromTheLoops) {
   afhub::testing::ModelFolder folder;
   const auto log = [&](const std::string& name) { return (folder.dir() / name).string(); };
   ScopedProcess taped(spawn_afhub({"record", "-o", log("taped.mcap")}, log("taped.log")));
   ScopedProcess devices(
       spawn_afhub({"record", "-o", log("devices.mcap"), "--devices"}, log("devices.log")));
-  ASSERT_TRUE(wait_until([&] { return sched_getscheduler(devices.pid) == SCHED_FIFO; }, 30s))
-      << read_file(log("devices.log"));
   // Both files are open, so both loops have set their scheduling by now.
   ASSERT_TRUE(wait_until(
       [&] {
@@ -1044,6 +1076,7 @@ TEST(Record, TheReadingLoopTakesNoCoreFromTheLoopsUnlessItReadsDevices) {
       30s));
   std::this_thread::sleep_for(1s);
   EXPECT_EQ(sched_getscheduler(taped.pid), SCHED_OTHER) << read_file(log("taped.log"));
+  EXPECT_EQ(sched_getscheduler(devices.pid), SCHED_OTHER) << read_file(log("devices.log"));
   EXPECT_EQ(stop_process(taped.pid, SIGINT), 0);
   EXPECT_EQ(stop_process(devices.pid, SIGINT), 0);
 }

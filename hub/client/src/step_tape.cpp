@@ -1,4 +1,4 @@
-// The ends of a world's step tape (see step_tape.hpp).
+// The writing end of a world's step tape (see step_tape.hpp).
 #include "afhub/hub/step_tape.hpp"
 
 #include <unistd.h>
@@ -11,15 +11,9 @@
 
 #include "afhub/hub/hub_health.hpp"
 #include "afhub/rt/clock.hpp"
-#include "afhub/shm_layout/channel_names.hpp"
-#include "afhub/shm_layout/layout_id.hpp"
 #include "afhub/shm_layout/packed_body_state.hpp"
-#include "afhub/shm_layout/payload_check.hpp"
-#include "iceoryx_posh/mepoo/chunk_header.hpp"
 #include "iceoryx_posh/popo/untyped_publisher.hpp"
-#include "iceoryx_posh/popo/untyped_subscriber.hpp"
-#include "reader_port.hpp"
-#include "tape_ring.hpp"
+#include "tape_ports.hpp"
 
 namespace afhub {
 
@@ -32,19 +26,11 @@ static_assert(step_tape_entry_bytes(kMaxChannelNameLength,
                                               body_command_bytes(kMaxJointsPerBody),
                                               sizeof(WorldState)})) <= sizeof(StepTape::data));
 
-iox::capro::ServiceDescription tape_service(const std::string& world) {
-  return describe_channel({std::string(kService), world, std::string(kStepTapeEvent)});
-}
-
 }  // namespace
 
 struct StepTapeWriter::Port {
   explicit Port(const std::string& world)
-      : publisher(tape_service(world), [] {
-          iox::popo::PublisherOptions options;
-          options.historyCapacity = 1;  // the ring, for readers that come later
-          return options;
-        }()) {}
+      : publisher(tape_service<StepTapeRing>(world), ring_publisher_options()) {}
   iox::popo::UntypedPublisher publisher;
 };
 
@@ -61,31 +47,15 @@ StepTapeWriter::~StepTapeWriter() {
 
 bool StepTapeWriter::begin(std::uint64_t step, double time_s) noexcept {
   finish();  // a step left unfinished is closed as it is, never held
-  if (!port_->publisher.hasSubscribers() || (!ring_ && !make_ring())) return false;
+  if (!port_->publisher.hasSubscribers()) return false;
+  // Published once, at a reader's first step: then written in place.
+  if (!ring_ && !(ring_ = publish_ring<StepTapeRing>(port_->publisher, pid_))) return false;
   step_ = step;
   time_s_ = time_s;
   part_ = 0;
   entries_ = 0;
   lost_ = false;
   next_part();
-  return true;
-}
-
-// Loaned and published once, at a reader's first step: then written in place.
-bool StepTapeWriter::make_ring() noexcept {
-  auto loaned = port_->publisher.loan(sizeof(StepTapeRing), alignof(StepTapeRing));
-  if (loaned.has_error()) {
-    static bool said = false;  // a loop's every step would say it again
-    if (!std::exchange(said, true))
-      std::fprintf(stderr,
-                   "afhub: no shared memory for a step tape's ring (%zu bytes): the steps are "
-                   "not taped; the hub's pools hold two rings (`afhub hub --help`, pools)\n",
-                   sizeof(StepTapeRing));
-    return false;
-  }
-  ring_ = static_cast<StepTapeRing*>(loaned.value());
-  tape_ring::init(*ring_, monotonic_ns(), pid_);
-  port_->publisher.publish(ring_);
   return true;
 }
 
@@ -170,91 +140,6 @@ void StepTapeWriter::prepare() noexcept {
         p + 1 == last_step_parts_ ? offsetof(StepTape, data) + last_part_bytes_ : sizeof part;
     std::memset(static_cast<void*>(&part), 0, bytes);
   }
-}
-
-struct StepTapeReader::Port {
-  explicit Port(const std::string& world) : subscriber(tape_service(world), newest_sample_only()) {}
-  iox::popo::UntypedSubscriber subscriber;
-};
-
-StepTapeReader::StepTapeReader(const std::string& world_instance) : made_ns_(monotonic_ns()) {
-  require_subscriber_ports(1, "reading the step tape of '" + world_instance + "'");
-  port_ = std::make_unique<Port>(world_instance);
-  took_subscriber_port();
-}
-
-StepTapeReader::~StepTapeReader() {
-  if (ring_) port_->subscriber.release(ring_);
-  if (next_ring_) port_->subscriber.release(next_ring_);
-  gave_back_subscriber_port();
-}
-
-void StepTapeReader::refuse(const char* what, const char* why) noexcept {
-  if (refused_++ == 0)
-    std::fprintf(stderr, "afhub: refused a step tape's %s: %s (said once)\n", what, why);
-}
-
-// Takes a ring published since the last look (a restarted writer's), checked by its
-// copied id, to read once the one in hand has no more. True when a ring is in hand.
-bool StepTapeReader::take_rings() noexcept {
-  for (;;) {
-    auto taken = port_->subscriber.take();
-    if (taken.has_error()) break;
-    const void* chunk = taken.value();
-    StepTapeRingId id;
-    std::memcpy(&id, chunk, sizeof id);
-    const char* why =
-        iox::mepoo::ChunkHeader::fromUserPayload(chunk)->userPayloadSize() != sizeof(StepTapeRing)
-            ? "its size is not a ring's"
-        : id.magic != kStepTapeRingMagic      ? "StepTapeRingId.magic"
-        : id.layout_id != kLayoutId           ? "StepTapeRingId.layout_id (another build)"
-        : id.part_count != kStepTapeRingParts ? "StepTapeRingId.part_count"
-                                              : nullptr;
-    if (why) {
-      refuse("ring", why);
-      port_->subscriber.release(chunk);
-      continue;
-    }
-    if (next_ring_) port_->subscriber.release(next_ring_);
-    next_ring_ = static_cast<const StepTapeRing*>(chunk);
-  }
-  if (!ring_ && next_ring_) {
-    ring_ = std::exchange(next_ring_, nullptr);
-    cursor_ = ring_->id.made_ns > made_ns_ ? 0 : tape_ring::head(*ring_);
-  }
-  return ring_ != nullptr;
-}
-
-bool StepTapeReader::next(StepTape& out) noexcept {
-  // Laps and ring changes are few; the bound keeps a ring written absurdly from
-  // holding the caller.
-  for (int turns = 0; turns < 8 && take_rings();) {
-    std::uint32_t bytes = 0;
-    switch (tape_ring::read(*ring_, cursor_, out, bytes)) {
-      case tape_ring::Read::kCopied: {
-        ++cursor_;
-        const char* field = "";
-        const PayloadError error = check_payload(&out, bytes, PayloadKind::kStepTape, &field);
-        if (error == PayloadError::kNone) return true;
-        refuse(field, describe(error));
-        ++turns;
-        break;
-      }
-      case tape_ring::Read::kOverwritten:
-        cursor_ = tape_ring::resume_after_lap(*ring_, cursor_);
-        ++turns;
-        break;
-      case tape_ring::Read::kNotYet:
-        if (!next_ring_) return false;
-        // The writer of the ring in hand is gone: its last part read, on to the new one.
-        port_->subscriber.release(std::exchange(ring_, nullptr));
-        ring_ = std::exchange(next_ring_, nullptr);
-        cursor_ = 0;
-        ++turns;
-        break;
-    }
-  }
-  return false;
 }
 
 }  // namespace afhub

@@ -10,6 +10,7 @@
 #include "afhub/shm_layout/body_command.hpp"
 #include "afhub/shm_layout/body_state.hpp"
 #include "afhub/shm_layout/catalog.hpp"
+#include "afhub/shm_layout/device_tape.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "afhub/shm_layout/health.hpp"
 #include "afhub/shm_layout/loop_stats.hpp"
@@ -70,12 +71,18 @@ std::vector<MempoolSpec> default_mempools() {
   // Catalogs and directories are loaned at their real size, and iceoryx takes a chunk
   // from the smallest pool that fits it, whatever its type: each holds a chunk in its
   // writer's history, and three in each reader.
+  static_assert(sizeof(DeviceTapeRing) + alignof(DeviceTapeRing) <=
+                    block_pool(kSlotBlockTiers[2]) &&
+                sizeof(DeviceTapeRing) > block_pool(kSlotBlockTiers[1]));
   std::vector<MempoolSpec> pools = {
       {128, 512, "world commands, small iceoryx samples"},
       {block_pool(kSlotBlockTiers[0]), 1024, "first blocks of slots (a writer's first 16 KiB)"},
       {block_pool(kSlotBlockTiers[1]), 256,
        "second blocks of slots, and blocks of one state of up to kMaxJointsPerBody joints"},
-      {block_pool(kSlotBlockTiers[2]), 64, "third blocks of slots, and a large scene's pose feed"},
+      // Devices' tapes' rings (256 KB) too: a driver publishes one when a recorder first
+      // reads it; 8 more chunks, for four devices recorded, each restarted once.
+      {block_pool(kSlotBlockTiers[2]), 64 + 8,
+       "third blocks of slots, a large scene's pose feed, devices' tapes' rings"},
       {block_pool(kSlotBlockTiers[3]), 16, "blocks of slots of a writer of hundreds of channels"},
       {round_up8(sizeof(Health)), 128, "hub health"},
       {round_up8(sizeof(LoopStats)), 256, "loop stats"},

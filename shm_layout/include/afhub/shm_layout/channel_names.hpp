@@ -20,7 +20,10 @@ inline constexpr std::string_view kHealthEvent = "health";
 inline constexpr std::string_view kSceneEvent = "scene";  // {"afhub", <world instance>, "scene"}
 // {"afhub", <world instance>, "scene_poses"}: shm_layout/scene_poses.hpp
 inline constexpr std::string_view kScenePosesEvent = "scene_poses";
+// Tapes: {"afhub", <world instance>, "step_tape"} (shm_layout/step_tape.hpp) and
+// {"afhub", <device channel>, "tape"} (shm_layout/device_tape.hpp).
 inline constexpr std::string_view kStepTapeEvent = "step_tape";
+inline constexpr std::string_view kDeviceTapeEvent = "tape";
 // {"afhub", <soft body channel>, "soft_faces" | "soft_nodes"}: shm_layout/soft_body.hpp
 inline constexpr std::string_view kSoftFacesEvent = "soft_faces";
 inline constexpr std::string_view kSoftNodesEvent = "soft_nodes";

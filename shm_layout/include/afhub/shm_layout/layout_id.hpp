@@ -14,6 +14,7 @@
 #include "afhub/shm_layout/body_state.hpp"
 #include "afhub/shm_layout/catalog.hpp"
 #include "afhub/shm_layout/device.hpp"
+#include "afhub/shm_layout/device_tape.hpp"
 #include "afhub/shm_layout/health.hpp"
 #include "afhub/shm_layout/loop_stats.hpp"
 #include "afhub/shm_layout/scene.hpp"
@@ -294,11 +295,18 @@ inline constexpr std::uint64_t kLayoutId = layout_detail::mix({
     kStepTapeRingParts,
     AFHUB_OFF(StepTapeRing, written),
     AFHUB_OFF(StepTapeRing, parts),
-    sizeof(StepTapeRingId),
-    AFHUB_OFF(StepTapeRingId, made_ns),
-    AFHUB_OFF(StepTapeRingId, part_count),
-    sizeof(StepTapeRingPart),
-    AFHUB_OFF(StepTapeRingPart, tape),
+    sizeof(TapeRingId),
+    AFHUB_OFF(TapeRingId, made_ns),
+    AFHUB_OFF(TapeRingId, part_count),
+    sizeof(TapeRingPart<StepTape>),
+    AFHUB_OFF(TapeRingPart<StepTape>, tape),
+    sizeof(DeviceTape),
+    AFHUB_OFF(DeviceTape, command),
+    AFHUB_OFF(DeviceTape, has_command),
+    sizeof(DeviceTapeRing),
+    kDeviceTapeRingParts,
+    AFHUB_OFF(DeviceTapeRing, written),
+    AFHUB_OFF(DeviceTapeRing, parts),
     sizeof(SlotControl),
     AFHUB_OFF(SlotControl, sleeping),
     AFHUB_OFF(SlotControl, stamp_ns),
@@ -336,5 +344,6 @@ static_assert(layout_detail::is_shm_payload<SceneDescription>);
 static_assert(layout_detail::is_shm_payload<SoftBodyMesh>);
 static_assert(layout_detail::is_shm_payload<ScenePoses>);
 static_assert(layout_detail::is_shm_payload<StepTape>);
+static_assert(layout_detail::is_shm_payload<DeviceTape>);
 
 }  // namespace afhub

@@ -3,20 +3,16 @@
 // every step (`afhub record`), on {"afhub", <world instance>, "step_tape"}. A state is a
 // latest-value slot: a reader that wakes a step late finds the newer state, and the one
 // before is gone. The tape keeps the last kStepTapeRingParts parts instead, in a ring
-// that the physics publishes once (when something first subscribes) and then writes in
-// place, each part under a sequence of its own (a seqlock): a reader that falls behind
-// (a busy core, a pause) catches up, and loses parts only when the writer laps it. No
-// iceoryx publish per step, and a reader costs the writer nothing. A step's states fill
-// as many parts as they need, the last one marked.
+// (tape_ring.hpp). A step's states fill as many parts as they need, the last one marked.
 #pragma once
 
 #include <array>
-#include <atomic>
 #include <cstddef>
 #include <cstdint>
 
 #include "afhub/shm_layout/header.hpp"
 #include "afhub/shm_layout/limits.hpp"
+#include "afhub/shm_layout/tape_ring.hpp"
 
 namespace afhub {
 
@@ -56,29 +52,7 @@ struct StepTape {
 };
 static_assert(sizeof(StepTape) == kStepTapeBytes);
 
-// What a ring is, written once before it is published.
-struct StepTapeRingId {
-  std::uint64_t magic{0};      // kStepTapeRingMagic
-  std::uint64_t layout_id{0};  // kLayoutId of the writer's build
-  std::int64_t made_ns{0};     // monotonic: a reader that came before starts at part 0
-  std::uint32_t writer_pid{0};
-  std::uint32_t part_count{0};  // kStepTapeRingParts
-};
-
-struct alignas(64) StepTapeRingPart {
-  // 0 before the ring's k-th part (counted from 0 since the ring was made) is written
-  // here, 2k+1 while the writer fills it, 2k+2 once it is whole.
-  std::atomic<std::uint64_t> sequence{0};
-  alignas(64) StepTape tape;
-};
-
-struct StepTapeRing {
-  StepTapeRingId id;
-  // Parts whole since the ring was made: where a reader that was lapped starts again.
-  alignas(64) std::atomic<std::uint64_t> written{0};
-  std::array<StepTapeRingPart, kStepTapeRingParts> parts;
-};
-static_assert(std::atomic<std::uint64_t>::is_always_lock_free);
+using StepTapeRing = TapeRing<StepTape, kStepTapeRingParts, kStepTapeRingMagic>;
 
 constexpr std::size_t round_up_to_8(std::size_t bytes) {
   return (bytes + 7) / 8 * 8;

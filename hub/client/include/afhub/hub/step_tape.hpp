@@ -1,6 +1,6 @@
-// The two ends of a world's step tape (shm_layout/step_tape.hpp): the physics writes
-// every step's states to its ring while a recorder reads; the recorder reads every part
-// in order. Both are real-time safe once made: no heap, no exceptions.
+// The writing end of a world's step tape (shm_layout/step_tape.hpp): the physics writes
+// every step's states to its ring while a recorder reads (StepTapeReader,
+// tape_reader.hpp). Real-time safe once made: no heap, no exceptions.
 #pragma once
 
 #include <cstdint>
@@ -9,6 +9,7 @@
 #include <string>
 #include <string_view>
 
+#include "afhub/hub/tape_reader.hpp"
 #include "afhub/shm_layout/step_tape.hpp"
 
 namespace afhub {
@@ -43,7 +44,6 @@ class StepTapeWriter {
   static constexpr std::uint32_t kMaxPreparedParts = kStepTapeRingParts / 8;
 
  private:
-  bool make_ring() noexcept;
   void next_part() noexcept;
   void close_part() noexcept;
   struct Port;
@@ -61,33 +61,6 @@ class StepTapeWriter {
   std::uint32_t part_ = 0;
   std::uint32_t entries_ = 0;  // this step's, so far
   bool lost_ = false;          // this step lost an entry
-};
-
-class StepTapeReader {
- public:
-  explicit StepTapeReader(const std::string& world_instance);
-  ~StepTapeReader();
-  StepTapeReader(const StepTapeReader&) = delete;
-  StepTapeReader& operator=(const StepTapeReader&) = delete;
-
-  // The oldest part not read yet, copied into `out` (its used part) and checked; false
-  // when none waits. Invalid parts and rings are refused (said once, counted) and
-  // skipped. Parts the writer overwrote before they were read are skipped: the parts
-  // read show the gap (StepTape::part, header.sim_step).
-  bool next(StepTape& out) noexcept;
-  // Parts and rings refused so far.
-  std::uint64_t refused() const noexcept { return refused_; }
-
- private:
-  bool take_rings() noexcept;
-  void refuse(const char* what, const char* why) noexcept;
-  struct Port;
-  std::unique_ptr<Port> port_;
-  std::int64_t made_ns_;                     // a ring made after it is read from its start
-  const StepTapeRing* ring_ = nullptr;       // the ring read, held
-  const StepTapeRing* next_ring_ = nullptr;  // a newer one (a restarted writer), held
-  std::uint64_t cursor_ = 0;                 // the next part of ring_ to read
-  std::uint64_t refused_ = 0;
 };
 
 // Calls `visit(PayloadKind kind, std::string_view channel, const void* payload,
