@@ -179,21 +179,25 @@ class Session {
     StepTapeReader tape(world_instance());
     const auto taped = std::make_unique<StepTape>();
     // The loop sleeps on the slots of the world state and of the channels that wake it;
-    // while a step tape comes, only on those the tape does not bring (devices) and for
-    // kTapePollNs at most: a reader asleep on a slot costs its writer a futex wake (an
-    // interrupt to the sleeper's core) every update, which put the physics' step p99
-    // at 1.5 to 5x without the recorder on the 2-core VM.
+    // while a step tape comes, for kTapePollNs at most and only on the slots of devices
+    // whose own tape does not come (on none when every device's does): a reader asleep
+    // on a slot costs its writer a futex wake (an interrupt to the sleeper's core) every
+    // update, which put the physics' step p99 at 1.5 to 5x without the recorder on the
+    // 2-core VM.
     SampleWaiter waiter, untaped_waiter;
+    bool devices_taped = false;  // every device's updates come on its tape
     waiter.attach(world.raw());
     const std::int64_t start_ns = monotonic_ns();
     std::int64_t taped_ns = 0;  // when a tape part last came
     std::int64_t tape_poll_ns = kTapePollNs;
     std::int64_t now = start_ns;
     while (keep_going() && !write_failed_ && !discover_failed_) {
-      if (taped_ns != 0 && now - taped_ns < kTapeFreshNs)
-        untaped_waiter.wait(tape_poll_ns);
-      else
+      if (taped_ns == 0 || now - taped_ns >= kTapeFreshNs)
         waiter.wait(kIdleWaitNs);
+      else if (devices_taped)
+        sleep_until_ns(now + tape_poll_ns);
+      else
+        untaped_waiter.wait(tape_poll_ns);
       now = monotonic_ns();
       beside_.turned();
       take_discovered(waiter, untaped_waiter);
@@ -208,8 +212,11 @@ class Session {
       }
       for (Recorded& recorded : recorded_)
         if (recorded.device_tape) sample_device_tape(recorded, now);
+      devices_taped = true;
       for (Recorded& recorded : recorded_) {
-        if (recorded.taped_ns != 0 && now - recorded.taped_ns < kTapeFreshNs) {
+        const bool fresh = recorded.taped_ns != 0 && now - recorded.taped_ns < kTapeFreshNs;
+        if (recorded.wakes && recorded.body.empty() && !fresh) devices_taped = false;
+        if (fresh) {
           // Read from a tape; a reader that wakes the loop is still taken, or the
           // waiter would find its update new at every wait and never sleep. A state's
           // reader holds its slot, a restarted physics' too: a physics tapes only the

@@ -1057,6 +1057,59 @@ TEST(Record, ADeviceIsRecordedEveryCycleWithTheCommandsItTookThroughAPauseWithDe
   EXPECT_EQ(info_of(log("none.mcap")).dump().find("/device/hand"), std::string::npos);
 }
 
+// The voluntary context switches of all of `pid`'s threads so far (each a sleep).
+std::uint64_t voluntary_switches(pid_t pid) {
+  std::uint64_t total = 0;
+  for (const auto& task :
+       std::filesystem::directory_iterator("/proc/" + std::to_string(pid) + "/task")) {
+    std::ifstream status(task.path() / "status");
+    for (std::string line; std::getline(status, line);)
+      if (line.rfind("voluntary_ctxt_switches:", 0) == 0)
+        total += std::stoull(line.substr(line.find(':') + 1));
+  }
+  return total;
+}
+
+// With a physics' step tape and a device's tape coming, the reading loop sleeps on no
+// slot: a device's 1 kHz updates do not wake it (each wake-up costs the driver a futex
+// call and the recorder a context switch). Its threads' sleeps are counted: the reading
+// loop reads the tapes every 4 ms, the writing thread looks every 5 ms, the discovery
+// every 10 ms (about 610 a second in all); woken by each device update, 1400.
+TEST(Record, ADevicesTapeDoesNotWakeTheRecorderEachCycle) {
+  SceneRun scene;
+  ASSERT_TRUE(scene.ready()) << scene.logs();
+  ScopedProcess device(spawn_afhub(
+      {"device", "run", "virtual", "--name", "hand", "--circle", "0.05,2"}, scene.dir("dev.log")));
+  ASSERT_TRUE(wait_until(
+      [] { return run_afhub({"ls"}).out.find("device/hand") != std::string::npos; }, 20s))
+      << read_file(scene.dir("dev.log"));
+  const std::string file = scene.dir("taped.mcap");
+  ScopedProcess recorder(spawn_afhub({"record", "-o", file, "--devices"}, scene.dir("rec.log")));
+  // Recording: its first chunk is in the file, a second after its first message.
+  ASSERT_TRUE(wait_until(
+      [&] {
+        std::error_code error;
+        return std::filesystem::file_size(file, error) > 100'000 && !error;
+      },
+      30s))
+      << read_file(scene.dir("rec.log"));
+  const std::uint64_t before = voluntary_switches(recorder.pid);
+  std::this_thread::sleep_for(2s);
+  const std::uint64_t slept = voluntary_switches(recorder.pid) - before;
+  ASSERT_EQ(stop_process(recorder.pid, SIGINT), 0) << read_file(scene.dir("rec.log"));
+  EXPECT_LT(slept, 2000u) << "woken by the device's updates";
+  // The device was recorded, every cycle.
+  const json info = info_of(file);
+  bool found = false;
+  for (const json& channel : info["channels"]) {
+    if (channel["topic"] != "/device/hand/state") continue;
+    found = true;
+    EXPECT_GT(channel["messages"].get<std::uint64_t>(), 1000u) << info.dump();
+    EXPECT_EQ(channel["skipped"], 0) << info.dump();
+  }
+  EXPECT_TRUE(found) << info.dump();
+}
+
 // States and commands come on the physics' step tape, a device's updates on its
 // driver's tape, which hold a late reader's steps and cycles: the reading loop stays
 // under the normal scheduler, never taking a core from a physics, a controller or a
