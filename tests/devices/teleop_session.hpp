@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "afhub/hub/channel.hpp"
+#include "afhub/rt/clock.hpp"
 #include "afhub/rt/percentile.hpp"
 #include "afhub/shm_layout/body_state.hpp"
 #include "afhub/shm_layout/channel_names.hpp"
@@ -55,6 +56,27 @@ class TeleopSession {
         [&] {
           const DeviceState* d = device_.latest();
           return body_.latest() && d && d->gate == ForceGate::kApplying;
+        },
+        20s);
+  }
+  // Once teleop is in the loop, a new driver, its trajectory from its start: teleop holds
+  // the palm while it has none and anchors it at the new one's first sample, so that a
+  // scripted trajectory runs whole however late teleop bound (under the sanitizers it
+  // once bound after a trajectory had ended). True once the new driver applies force.
+  bool restart_driver_once_running() {
+    using namespace std::chrono_literals;
+    if (!wait_running()) return false;
+    const std::string gone = "no sample from " + device_channel_name(setup_.device);
+    const int gone_before = occurrences(teleop_log(), gone);
+    kill_driver();
+    if (!wait_until([&] { return occurrences(teleop_log(), gone) > gone_before; }, 10s))
+      return false;
+    const std::int64_t restarted_at = monotonic_ns();
+    start_driver();
+    return wait_until(
+        [&] {
+          const DeviceState* d = device_.latest();
+          return d && d->header.publish_stamp_ns > restarted_at && d->gate == ForceGate::kApplying;
         },
         20s);
   }
