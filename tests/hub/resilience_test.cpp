@@ -139,7 +139,7 @@ void expect_hub_survives_client_dead_holding_port_locks(const char* linger) {
       [] {
         return run_afhub({"echo", "synth/body0", "-n", "1"}).exit_code == 0;
       },
-      5s));
+      30s));
 
   const pid_t holder = spawn_command({AFHUB_PORT_LOCK_HOLDER, linger});
   int status = 0;
@@ -148,7 +148,9 @@ void expect_hub_survives_client_dead_holding_port_locks(const char* linger) {
       << "port_lock_holder did not die holding the locks (exit " << WEXITSTATUS(status) << ")";
 
   // RouDi notices the death after 1.5 s without keep-alives and cleans up; from
-  // then on the hub serves new clients, and synth publishes at its full rate again.
+  // then on the hub serves new clients, and synth publishes again (over 500 Hz: its
+  // loop skips the periods it was late for, so a busy machine takes some of its 1 kHz;
+  // one blocked on the dead client's lock publishes nothing).
   std::this_thread::sleep_for(2s);
   RunResult ls;
   const bool served = wait_until(
@@ -158,7 +160,7 @@ void expect_hub_survives_client_dead_holding_port_locks(const char* linger) {
         const nlohmann::json bodies = parse_json(ls.out);
         const nlohmann::json* body = find_element(bodies, "body", "synth/body0");
         return body && body->at("rate_hz").is_number() &&  // null until measured
-               body->at("rate_hz").get<double>() > 900.0;
+               body->at("rate_hz").get<double>() > 500.0;
       },
       10s);
   const std::string hub_log = read_file("/tmp/afhub-test-hub.log");
@@ -199,7 +201,7 @@ TEST(Resilience, KilledClientRestartsWhileOthersKeepWorking) {
       [] {
         return run_afhub({"echo", "synth/body1", "-n", "1"}).exit_code == 0;
       },
-      5s));
+      30s));
 
   SteadyClient steady;
   // A jthread: a failed assertion below still stops and joins it.
@@ -229,10 +231,10 @@ TEST(Resilience, KilledClientRestartsWhileOthersKeepWorking) {
               return command &&
                      command->header.publisher_pid == static_cast<std::uint32_t>(client.pid);
             },
-            5s);
+            30s);
         ASSERT_TRUE(attached)
             << "round " << round
-            << ": the restarted client's commands did not arrive in 5 s. Its log:\n"
+            << ": the restarted client's commands did not arrive in 30 s. Its log:\n"
             << tail(read_file(client_log)) << "\nThe hub's log:\n"
             << tail(read_file("/tmp/afhub-test-hub.log"));
         slowest_reattach_s = std::max(

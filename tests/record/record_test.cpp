@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 #include <sched.h>
 #include <signal.h>
+#include <sys/ioctl.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -1256,8 +1257,17 @@ TEST(Record, AWriterThatCannotKeepUpDropsWhatTheBufferCannotHoldCountedAndSaid) 
   ASSERT_GE(held, 0) << std::strerror(errno);
   ScopedProcess recorder(spawn_afhub({"record", "-o", pipe, "--buffer", "1", "--duration", "2"},
                                      scene.dir("record.log")));
-  // The example scene's states fill 1 MB in about 0.1 s.
-  std::this_thread::sleep_for(3s);
+  // The pipe full (64 KiB: the recorder's writing thread now waits on it), then its 2 s
+  // recorded, counted from its first message, which came before; the example scene's
+  // states fill 1 MB in about 0.1 s.
+  ASSERT_TRUE(wait_until(
+      [&] {
+        int queued = 0;
+        return ioctl(held, FIONREAD, &queued) == 0 && queued >= 60'000;
+      },
+      60s))
+      << read_file(scene.dir("record.log"));
+  std::this_thread::sleep_for(2500ms);
   EXPECT_EQ(exit_code_if_ended(recorder.pid), -1) << "it waits on the pipe, then finishes";
   std::thread drain([&] {
     const int in = open(pipe.c_str(), O_RDONLY);
