@@ -56,10 +56,16 @@ fi
 grep -q "nothing on $base/joint_states" "$work/wrong.txt" || fail "the wrong type did not miss joint_states"
 
 echo "4. a JointState command moves the named joints; positions match afhub echo"
-spawn command "$reader" command "$base" base-link1=0.6,link2-link3=-0.4 --seconds 5
+# Compared once the arm is there (the writer runs on while the reader reads): a busy
+# machine takes longer than the 3 s it takes here.
+spawn command "$reader" command "$base" base-link1=0.6,link2-link3=-0.4 --seconds 12
 command=$spawned
-sleep 3
-"$afhub" echo "$body" --json --count 1 | jq -c '.joint_positions' >"$work/echo.json"
+for _ in $(seq 32); do
+  sleep 0.25
+  "$afhub" echo "$body" --json --count 1 | jq -c '.joint_positions' >"$work/echo.json"
+  jq -e '(.[0] - 0.6 | fabs) < 0.01 and (.[2] + 0.4 | fabs) < 0.01' "$work/echo.json" >/dev/null &&
+    break
+done
 "$reader" read "$base" --seconds 3 | jq -c 'select(.topic | endswith("/joint_states")) | .position' \
   >"$work/dds.json"
 echo "  afhub echo: $(cat "$work/echo.json")"
