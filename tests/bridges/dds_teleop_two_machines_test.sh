@@ -220,4 +220,17 @@ echo "  B's device applies the 1.5 N commanded on A"
 # A's mirrored device shows the device's state, seen on A.
 on a "$afhub" echo device/probe --json --count 1 | jq -e '.model == "virtual"' >/dev/null ||
   fail "A's mirror of device/probe does not carry its spec"
+# Recorded on A from the mirror's own tape: every state it mirrored, a recorder held
+# stopped for 100 ms included.
+spawn a probe_record "$afhub" record -o /tmp/probe.mcap --devices --duration 3
+recorder=$spawned
+sleep 1.5
+kill -STOP "$recorder"
+sleep 0.1
+kill -CONT "$recorder"
+wait "$recorder" || fail "recording A's mirror of device/probe failed: $(cat "$work/probe_record.log")"
+on a "$afhub" info /tmp/probe.mcap --json >"$work/probe_info.json"
+jq -e '.channels[] | select(.topic == "/device/probe/state") | .messages > 100 and .skipped == 0'   "$work/probe_info.json" >/dev/null ||
+  fail "the recording of A's mirror of device/probe skipped states: $(jq -c '.channels[] | select(.topic == "/device/probe/state")' "$work/probe_info.json")"
+echo "  A's mirror of device/probe recorded: $(jq -r '.channels[] | select(.topic == "/device/probe/state") | "\(.messages) states, \(.skipped) skipped"' "$work/probe_info.json")"
 echo "$test_name: PASS"

@@ -247,7 +247,8 @@ MirrorClaims::Install DeviceWorldBridge::claim_device(const std::string& channel
   require_chunks({written_as_slot(sizeof(DeviceState))}, "mirroring " + channel);
   auto device = std::make_shared<MirroredDevice>(
       MirroredDevice{channel, std::make_unique<Writer<DeviceState>>(body_state_channel(channel)),
-                     std::make_unique<LatestReader<DeviceCommand>>(body_command_channel(channel))});
+                     std::make_unique<LatestReader<DeviceCommand>>(body_command_channel(channel)),
+                     std::make_unique<DeviceTapeWriter>(channel)});
   directory_->add(entry);
   return [this, device] {
     mirrored_.push_back(std::move(*device));
@@ -274,6 +275,7 @@ void DeviceWorldBridge::mirror_devices() noexcept {
       state->gate = ForceGate::kNoCommand;  // a loaned chunk must go somewhere
     }
     device->state->publish(state);
+    device->tape->add(*state, nullptr);
     ++counters_.states_in;
   }
   // Commands written here to mirrored devices go to their driver, stamped with their

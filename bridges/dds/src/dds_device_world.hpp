@@ -23,6 +23,7 @@
 #include "afhub/bridges/dds_bridge.hpp"
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/channel.hpp"
+#include "afhub/hub/device_tape.hpp"
 #include "afhub/hub/world_command_queue.hpp"
 #include "afhub/shm_layout/device.hpp"
 #include "afhub/shm_layout/world.hpp"
@@ -76,6 +77,7 @@ class DeviceWorldBridge {
     std::string channel;
     std::unique_ptr<Writer<DeviceState>> state;
     std::unique_ptr<LatestReader<DeviceCommand>> command;
+    std::unique_ptr<DeviceTapeWriter> tape;  // every state mirrored, for a recorder
   };
   void mirror_devices() noexcept;
   void ask_for_device(const char* channel) noexcept;
