@@ -137,7 +137,8 @@ class ViewPageTest : public ::testing::Test {
   // Clicks where `channel`'s body is drawn (the centre of its bounding box).
   static void click_body(const std::string& channel) {
     // A point of the screen whose first hit is this body: its box's centre may be
-    // behind another link once the arm has moved.
+    // behind another link once the arm has moved, or under a panel the page shows
+    // (a click there never reaches the scene).
     const nlohmann::json at = browser_->evaluate(
         "(() => { const b = bodies.find((b) => b.userData.channel === '" + channel +
         "'); const box = new THREE.Box3().setFromObject(b); const r = new THREE.Raycaster();"
@@ -149,8 +150,9 @@ class ViewPageTest : public ::testing::Test {
         "   box.min.z + (box.max.z - box.min.z) * (0.1 + 0.1 * k)).project(camera);"
         "  r.setFromCamera(new THREE.Vector2(p.x, p.y), camera);"
         "  const hit = r.intersectObjects(bodies, true)[0];"
-        "  if (hit && owner(hit.object) === b)"
-        "   return [(p.x + 1) / 2 * innerWidth, (1 - p.y) / 2 * innerHeight]; }"
+        "  const x = (p.x + 1) / 2 * innerWidth, y = (1 - p.y) / 2 * innerHeight;"
+        "  if (hit && owner(hit.object) === b &&"
+        "      document.elementFromPoint(x, y) === renderer.domElement) return [x, y]; }"
         " return 'no point of the screen shows ' + b.userData.channel; })()");
     ASSERT_TRUE(at.is_array() && at.size() == 2U) << at.dump() << " " << browser_->problem();
     browser_->click(at.at(0).get<double>(), at.at(1).get<double>());
