@@ -110,7 +110,7 @@ kill "$ctl" 2> /dev/null || true
 wait "$ctl" 2> /dev/null || true
 python3 - "$work/steps.log" "$work/windows.txt" <<'PY'
 import statistics, sys
-steps = [tuple(map(float, line.split())) for line in open(sys.argv[1]).readlines()[1:]]
+steps = [tuple(map(float, line.split()[:2])) for line in open(sys.argv[1]).readlines()[1:]]
 windows = [tuple(map(int, line.split())) for line in open(sys.argv[2]) if line.strip()]
 # Recording: from 0.5 s after the recorder started (it has joined) until it was stopped;
 # not recording: from 0.3 s after it exited (its file closed) until the next start.

@@ -142,7 +142,7 @@ tick = float(tick)
 def steps(path):
     with open(path) as f:
         next(f)
-        return [(int(begin), float(us)) for begin, us in (line.split() for line in f)]
+        return [(int(begin), float(us)) for begin, us, *_ in (line.split() for line in f)]
 watched, twin = steps(watched_file), steps(twin_file)
 def percentile(values, q):  # afhub's one rule (rt/percentile.hpp): nearest rank
     values = sorted(values)

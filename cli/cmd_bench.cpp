@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "afhub/bench/bench.hpp"
+#include "afhub/bench/bodies_bench.hpp"
 #include "afhub/bench/wake_bench.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "commands.hpp"
@@ -120,6 +121,27 @@ int run_wake_bench(const WakeBenchOptions& cli) {
   return 0;
 }
 
+struct BodiesBenchOptions {
+  bench::BodiesOptions bench;
+  bool quick = false;
+};
+
+int run_bodies_bench(BodiesBenchOptions cli) {
+  bench::BodiesOptions& options = cli.bench;
+  if (cli.quick) options.seconds = 5.0;
+  if (options.arms < 1 || options.arms > 500 || options.links < 2 || options.links > 16)
+    throw Error("--arms takes 1 to 500 and --links 2 to 16");
+  if (!(options.seconds >= 2.0 && options.seconds <= 3600.0))
+    throw Error("--seconds takes 2 to 3600");
+  bench::start_bench_hub_if_none();
+  const bench::BodiesResult result = bench::run_bodies_bench(options);
+  std::printf("%s", bench::bodies_table(options, result).c_str());
+  const std::vector<std::string> failures = bench::bodies_failures(result);
+  for (const std::string& failure : failures)
+    std::fprintf(stderr, "afhub bench: FAILED: %s\n", failure.c_str());
+  return failures.empty() ? 0 : 1;
+}
+
 }  // namespace
 
 void register_bench(CLI::App& app, Runner& selected) {
@@ -180,8 +202,22 @@ void register_bench(CLI::App& app, Runner& selected) {
   wake->callback([&selected, wake_options] {
     selected = [wake_options] { return run_wake_bench(*wake_options); };
   });
-  bench->callback([&selected, options, dds, wake] {
-    if (dds->parsed() || wake->parsed())
+  auto bodies_options = std::make_shared<BodiesBenchOptions>();
+  auto* bodies = bench->add_subcommand(
+      "bodies",
+      "A world of many bodies at 1 kHz across processes: `afhub run` on a generated scene of "
+      "arms (125 of 8 links: a thousand bodies) and one controller process commanding every "
+      "body each period, in phase with the physics. Each step's commands, physics and "
+      "publishing as the physics timed them, and the commands in time.");
+  bodies->add_flag("--quick", bodies_options->quick, "5 s measured instead of 20");
+  bodies->add_option("--arms", bodies_options->bench.arms, "Arms in the scene (default 125)");
+  bodies->add_option("--links", bodies_options->bench.links, "Links per arm (default 8)");
+  bodies->add_option("--seconds", bodies_options->bench.seconds, "Seconds measured (default 20)");
+  bodies->callback([&selected, bodies_options] {
+    selected = [bodies_options] { return run_bodies_bench(*bodies_options); };
+  });
+  bench->callback([&selected, options, dds, wake, bodies] {
+    if (dds->parsed() || wake->parsed() || bodies->parsed())
       return;  // CLI11 runs the parent's callback after the subcommand's
     selected = [options] { return run_bench(*options); };
   });

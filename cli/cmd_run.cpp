@@ -198,9 +198,10 @@ int run_run(const RunCliOptions& options) {
   }
   if (!options.step_log_file.empty()) {
     std::ofstream out(options.step_log_file);
-    out << "begin_ns step_us\n";
+    out << "begin_ns step_us commands_us publish_us\n";
     for (const physics::StepSample& sample : report.step_log)
-      out << sample.begin_ns << ' ' << sample.duration_us << '\n';
+      out << sample.begin_ns << ' ' << sample.duration_us << ' ' << sample.commands_us << ' '
+          << sample.publish_us << '\n';
     if (!out) throw Error("cannot write the step log to " + options.step_log_file);
   }
   return report.nan_detected ? 1 : 0;
@@ -283,8 +284,9 @@ void register_run(CLI::App& app, Runner& selected) {
   run->add_option("--report", options->report_file,
                   "Write a JSON report at the end (steps, step times, poses, joints)");
   run->add_option("--step-log", options->step_log_file,
-                  "Write each step's start (CLOCK_MONOTONIC ns) and duration (us) at the end, "
-                  "one line a step (with --steps: the log is sized before the first step)");
+                  "Write each step's start (CLOCK_MONOTONIC ns), duration with its states "
+                  "published, the body commands read before it and the publishing (us) at the "
+                  "end, one line a step (with --steps: the log is sized before the first step)");
   run->add_flag("--offline", options->offline,
                 "Simulate without a hub: no channels (for reports and measurements)");
   add_no_autostart_option(run, options->no_autostart);

@@ -185,6 +185,56 @@ TEST(Bench, WakeMeasuresEveryRealTimeSetting) {
   EXPECT_TRUE(contains(bad.err, "--seconds takes 0.1 to 3600 seconds")) << bad.err;
 }
 
+// The many-body world across processes, small: each step's phases come from the
+// physics' own step log, the commands counted from its world state. No bound on a
+// time is asserted (they are this machine's), only what holds on any machine.
+TEST_F(BenchOwnHub, BodiesTimesEachStepsPhasesAcrossProcesses) {
+  const RunResult run =
+      run_afhub({"bench", "bodies", "--arms", "4", "--links", "3", "--seconds", "2"}, 120s);
+  ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
+  EXPECT_EQ(probe_roudi(), RoudiPresence::kAbsent) << "the bench left its hub running";
+  EXPECT_FALSE(contains(run.err, "FAILED")) << run.err;
+  double steps = 0;
+  ASSERT_EQ(
+      std::sscanf(run.out.c_str(), "4 arms of 3 links, 12 bodies at 1 kHz, %lf steps", &steps), 1)
+      << run.out;
+  EXPECT_GT(steps, 100.0) << run.out;
+  const auto row = [&](const char* name, double& p50, double& p99) {
+    const std::size_t at = run.out.find(name);
+    ASSERT_NE(at, std::string::npos) << name << " missing:\n" << run.out;
+    ASSERT_EQ(std::sscanf(run.out.c_str() + at + std::strlen(name), "%lf %lf", &p50, &p99), 2)
+        << name << ":\n"
+        << run.out;
+    EXPECT_LE(p50, p99) << name;
+  };
+  double whole50 = 0, whole99 = 0, commands50 = 0, commands99 = 0, physics50 = 0, physics99 = 0,
+         publish50 = 0, publish99 = 0, controller50 = 0, controller99 = 0;
+  row("the whole step", whole50, whole99);
+  row("commands read and applied", commands50, commands99);
+  row("physics (Bullet's step)", physics50, physics99);
+  row("states published", publish50, publish99);
+  row("The controller writing every command, us", controller50, controller99);
+  // Every step's whole is the sum of its phases, so each phase's median is at most the
+  // whole's; every step read commands and published states.
+  for (const double phase : {commands50, physics50, publish50}) EXPECT_LE(phase, whole50);
+  EXPECT_GT(commands50, 0.0) << run.out;
+  EXPECT_GT(publish50, 0.0) << run.out;
+  EXPECT_GT(controller50, 0.0) << run.out;
+  double in_time = 0, body_steps = 0;
+  const std::size_t at = run.out.find("Commands in time for the next step: ");
+  ASSERT_NE(at, std::string::npos) << run.out;
+  ASSERT_EQ(std::sscanf(run.out.c_str() + at, "Commands in time for the next step: %lf %% of %lf",
+                        &in_time, &body_steps),
+            2)
+      << run.out;
+  EXPECT_GE(body_steps, 12.0 * 100) << "the physics counted few commanded steps:\n" << run.out;
+  EXPECT_TRUE(contains(run.out, "Goals: set for 1000 bodies or more")) << run.out;
+
+  const RunResult bad = run_afhub({"bench", "bodies", "--arms", "0"});
+  EXPECT_EQ(bad.exit_code, 1);
+  EXPECT_TRUE(contains(bad.err, "--arms takes 1 to 500 and --links 2 to 16")) << bad.err;
+}
+
 TEST(Bench, BadArgumentsAreRefusedClearly) {
   RunResult run = run_afhub({"bench", "--transports", "afhub,zeromq", "--loop-seconds", "0"});
   EXPECT_EQ(run.exit_code, 1);

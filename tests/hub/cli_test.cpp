@@ -127,13 +127,15 @@ TEST(Cli, RunWritesAStepLog) {
   std::istringstream lines(read_file(log));
   std::string header;
   std::getline(lines, header);
-  EXPECT_EQ(header, "begin_ns step_us");
+  EXPECT_EQ(header, "begin_ns step_us commands_us publish_us");
   long long begin = 0, previous = 0;
-  double duration = 0.0;
+  double duration = 0.0, commands = 0.0, publish = 0.0;
   int steps = 0;
-  while (lines >> begin >> duration) {
+  while (lines >> begin >> duration >> commands >> publish) {
     EXPECT_GT(begin, previous) << "line " << steps + 2;
     EXPECT_GT(duration, 0.0) << "line " << steps + 2;
+    EXPECT_EQ(commands, 0.0) << "line " << steps + 2;  // offline: no channels, no commands
+    EXPECT_LT(publish, duration) << "line " << steps + 2;
     previous = begin;
     ++steps;
   }

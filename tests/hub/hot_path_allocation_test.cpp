@@ -17,6 +17,7 @@
 #include <string>
 #include <thread>
 
+#include "afhub/bench/arms_scene.hpp"
 #include "afhub/controllers/joint_targets.hpp"
 #include "afhub/devices/driver_loop.hpp"
 #include "afhub/devices/virtual_device.hpp"
@@ -191,10 +192,10 @@ TEST(HotPath, PhysicsLoopOfManyArmsSolvedByTwoThreadsDoesNotAllocate) {
   if (!afhub::testing::may_run_on_two_cpus())
     GTEST_SKIP() << "this process may run on one CPU: no helper to test";
   const testing::ModelFolder folder;
-  expect_physics_loop_allocation_free({folder.write("arms.yaml", testing::arms_model(16, 8))},
+  expect_physics_loop_allocation_free({folder.write("arms.yaml", bench::arms_scene(16, 8))},
                                       "arms/a0l0", true, true);
   // 256 states: enough blocks of them to be shared (ParallelIslands::kMinItems).
-  expect_physics_loop_allocation_free({folder.write("arms32.yaml", testing::arms_model(32, 8))},
+  expect_physics_loop_allocation_free({folder.write("arms32.yaml", bench::arms_scene(32, 8))},
                                       "arms/a0l0", true, false);
 }
 

@@ -17,6 +17,7 @@
 #include <thread>
 #include <vector>
 
+#include "afhub/bench/arms_scene.hpp"
 #include "afhub/physics/scene_loader.hpp"
 #include "afhub/physics/simulation.hpp"
 #include "model_files.hpp"
@@ -109,7 +110,7 @@ TEST(Islands, TwoThreadsSolveManyArmsBitForBitAsOneDoes) {
   constexpr int kArms = 16, kLinks = 8, kArmSteps = 2000;
   afhub::testing::ModelFolder folder;
   Model model =
-      load_adf_files({folder.write("arms.yaml", afhub::testing::arms_model(kArms, kLinks))});
+      load_adf_files({folder.write("arms.yaml", afhub::bench::arms_scene(kArms, kLinks))});
   struct Run {
     std::vector<Pose> poses;
     std::vector<double> joints;
@@ -156,7 +157,7 @@ TEST(Islands, TwoThreadsSolveManyArmsBitForBitAsOneDoes) {
 
 // Two layers of free boxes over a static floor, the upper layer falling onto the lower:
 // `columns` stacks of two, 0.15 m apart, so each stack is an island of contacts; from
-// x = 30 m, clear of arms_model's arms. A static paddle stands beside the first row.
+// x = 30 m, clear of the arms of arms_scene. A static paddle stands beside the first row.
 std::string stacked_boxes_model(int columns) {
   std::string text = "adf version: '1.0'\nnamespace: /boxes/\n";
   text += "gravity: {x: 0.0, y: 0.0, z: -9.81}\nignore inter-collision: false\n";
@@ -192,7 +193,7 @@ TEST(Islands, TwoThreadsStepFallingBoxesBitForBitAsOneDoes) {
   if (!afhub::testing::may_run_on_two_cpus())
     GTEST_SKIP() << "this process may run on one CPU: no helper to test";
   afhub::testing::ModelFolder folder;
-  Model model = load_adf_files({folder.write("arms.yaml", afhub::testing::arms_model(16, 8)),
+  Model model = load_adf_files({folder.write("arms.yaml", afhub::bench::arms_scene(16, 8)),
                                 folder.write("boxes.yaml", stacked_boxes_model(250))});
   struct Run {
     std::vector<Pose> poses;
@@ -257,7 +258,7 @@ TEST(Islands, SharedWorkRunsEveryItemOnceSomeOnEachThread) {
   if (!afhub::testing::may_run_on_two_cpus())
     GTEST_SKIP() << "this process may run on one CPU: no helper to test";
   afhub::testing::ModelFolder folder;
-  Model model = load_adf_files({folder.write("arms.yaml", afhub::testing::arms_model(16, 8))});
+  Model model = load_adf_files({folder.write("arms.yaml", afhub::bench::arms_scene(16, 8))});
   struct Items final : SharedWork {
     std::vector<std::atomic<int>> runs = std::vector<std::atomic<int>>(64);
     std::atomic<int> by_thread[2] = {0, 0};
@@ -301,8 +302,7 @@ TEST(Islands, TheHelperSolvesAtOneKilohertzAndAfterAPause) {
   if (!afhub::testing::may_run_on_two_cpus())
     GTEST_SKIP() << "this process may run on one CPU: no helper to test";
   afhub::testing::ModelFolder folder;
-  const Model model =
-      load_adf_files({folder.write("arms.yaml", afhub::testing::arms_model(16, 8))});
+  const Model model = load_adf_files({folder.write("arms.yaml", afhub::bench::arms_scene(16, 8))});
   Simulation sim(model, 0.001);
   auto paced = [&] {
     const std::uint64_t before = sim.islands_solved_by_helper();
@@ -331,8 +331,7 @@ TEST(Islands, TheHelperOfARealTimeLoopNapsUnderTheNormalScheduler) {
   if (pthread_setschedparam(pthread_self(), SCHED_FIFO, &fifo) != 0)
     GTEST_SKIP() << "SCHED_FIFO refused to this process";
   afhub::testing::ModelFolder folder;
-  const Model model =
-      load_adf_files({folder.write("arms.yaml", afhub::testing::arms_model(16, 8))});
+  const Model model = load_adf_files({folder.write("arms.yaml", afhub::bench::arms_scene(16, 8))});
   std::uint64_t helped = 0;
   int napping_policy = -1;
   {

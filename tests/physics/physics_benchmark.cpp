@@ -23,6 +23,7 @@
 #include <thread>
 #include <vector>
 
+#include "afhub/bench/arms_scene.hpp"
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/hub/step_tape.hpp"
 #include "afhub/physics/adf_loader.hpp"
@@ -364,7 +365,7 @@ BENCHMARK_CAPTURE(BM_LoopStep, four_bar_iterated, kFourBar, false)->Unit(benchma
 void BM_StepThousandBodies(benchmark::State& state, bool publish, bool commanded,
                            int solver_threads, std::size_t taped = 0) {
   afhub::testing::ModelFolder folder;
-  Model model = load_adf_files({folder.write("arms.yaml", afhub::testing::arms_model(125, 8))});
+  Model model = load_adf_files({folder.write("arms.yaml", afhub::bench::arms_scene(125, 8))});
   model.world.solver_threads = solver_threads;
   Simulation sim(model, 0.001);
   const std::uint64_t helped_before = sim.islands_solved_by_helper();

@@ -18,6 +18,7 @@
 #include <utility>
 #include <vector>
 
+#include "afhub/bench/arms_scene.hpp"
 #include "afhub/hub/bodies.hpp"
 #include "afhub/physics/adf_loader.hpp"
 #include "afhub/physics/run_loop.hpp"
@@ -155,7 +156,7 @@ TEST(Run, AStepsStatesShareOnePublishStampThatGrowsByStep) {
 struct ArmsOnChannels {
   explicit ArmsOnChannels(int count)
       : model(physics::load_adf_files(
-            {folder.write("arms.yaml", afhub::testing::arms_model(count, 8))})),
+            {folder.write("arms.yaml", afhub::bench::arms_scene(count, 8))})),
         sim(model, 0.001),
         channels(sim, 5.0) {}
   afhub::testing::ModelFolder folder;

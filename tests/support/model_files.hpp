@@ -46,43 +46,4 @@ inline std::string passive_spheres_at_origin(int count) {
   return text;
 }
 
-// A generated scene of `arms` arms of `links` links each, every link an active body
-// (a state slot each) and every joint a revolute one under a PD controller: 125 arms of
-// 8 links are the thousand bodies of issue 30. The arms stand 1 m apart, each base fixed.
-inline std::string arms_model(int arms, int links) {
-  std::string text = "adf version: '1.0'\nnamespace: /arms/\n";
-  text += "gravity: {x: 0.0, y: 0.0, z: -9.81}\nignore inter-collision: true\nbodies: [";
-  for (int a = 0; a < arms; ++a)
-    for (int l = 0; l < links; ++l)
-      text += (a || l ? ", " : "") + std::string("BODY a") + std::to_string(a) + "l" +
-              std::to_string(l);
-  text += "]\njoints: [";
-  for (int a = 0; a < arms; ++a)
-    for (int l = 1; l < links; ++l)
-      text += (a || l > 1 ? ", " : "") + std::string("JOINT a") + std::to_string(a) + "j" +
-              std::to_string(l);
-  text += "]\n";
-  for (int a = 0; a < arms; ++a) {
-    const std::string arm = "a" + std::to_string(a);
-    const std::string x = std::to_string(a % 12), y = std::to_string(a / 12);
-    for (int l = 0; l < links; ++l)
-      text += "BODY " + arm + "l" + std::to_string(l) + ":\n  name: " + arm + "l" +
-              std::to_string(l) + "\n  mass: " + (l ? "1.0" : "0.0") +
-              "\n  inertia: {ix: 0.01, iy: 0.01, iz: 0.01}\n  shape: box\n"
-              "  geometry: {x: 0.05, y: 0.05, z: 0.1}\n  location:\n    position: {x: " +
-              x + ", y: " + y + ", z: " + std::to_string(0.1 * l) + "}\n";
-    for (int l = 1; l < links; ++l)
-      text += "JOINT " + arm + "j" + std::to_string(l) + ":\n  name: " + arm + "j" +
-              std::to_string(l) + "\n  parent: BODY " + arm + "l" + std::to_string(l - 1) +
-              "\n  child: BODY " + arm + "l" + std::to_string(l) +
-              "\n  type: revolute\n  parent pivot: {x: 0, y: 0, z: 0.05}\n"
-              "  parent axis: {x: 0, y: " +
-              (l % 2 ? "1" : "0") + ", z: " + (l % 2 ? "0" : "1") +
-              "}\n  child pivot: {x: 0, y: 0, z: -0.05}\n  child axis: {x: 0, y: " +
-              (l % 2 ? "1" : "0") + ", z: " + (l % 2 ? "0" : "1") +
-              "}\n  controller: {P: 50.0, I: 0.0, D: 2.0}\n";
-  }
-  return text;
-}
-
 }  // namespace afhub::testing

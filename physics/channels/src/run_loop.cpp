@@ -82,12 +82,14 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
   pacing.clock = options.clock;
   pacing.grid_origin_ns = start_ns;
   LoopCycle cycle;
+  std::int64_t commands_ns = 0;  // reading and applying this period's body commands
   // Each step's deadline, published with its states: controllers wake in phase with it.
   std::int64_t step_due_ns = 0;
   cycle.deadline_ns = &step_due_ns;
   // Commands in: the world's (pause, resume, step, reset), then the bodies'; in
   // lockstep, the clients' answers to the current step.
   cycle.wait = [&] {
+    commands_ns = 0;
     if (!channels || hub_lost()) return true;
     // Every world command from every writer, in order, each once.
     while (channels->next_world_command(world_command))
@@ -98,7 +100,9 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
         rate.restart();
       }
     if (channels->lockstep() && !control.paused) return channels->await_lockstep();
-    channels->apply_commands(monotonic_ns());
+    const std::int64_t begin_ns = monotonic_ns();
+    channels->apply_commands(begin_ns);
+    commands_ns = monotonic_ns() - begin_ns;
     return true;
   };
   // One step, and the states out.
@@ -106,6 +110,7 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
     // The hub is gone: hold, neither stepping nor publishing, until the re-exec.
     if (channels && hub_lost()) return true;
     const std::int64_t begin_ns = monotonic_ns();
+    std::int64_t stepped_ns = begin_ns;
     const bool stepping = control.take_step();
     if (stepping) {
       sim.step();
@@ -116,17 +121,21 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
         report.nan_detected = true;  // said after the loop
         return false;
       }
+      stepped_ns = monotonic_ns();
     }
     if (channels)
       channels->publish({static_cast<double>(clock_ns() - start_ns) * 1e-9, achieved_rate_hz,
                          control.halted(), pacing.period_ns > 0 ? step_due_ns : 0,
                          pacing.period_ns});
     if (stepping) {
-      const std::int64_t duration_ns = monotonic_ns() - begin_ns;
-      report.step_time.record(duration_ns);
+      const std::int64_t end_ns = monotonic_ns();
+      report.step_time.record(end_ns - begin_ns);
+      const auto us = [](std::int64_t ns) {
+        return static_cast<float>(static_cast<double>(ns) * 1e-3);
+      };
       if (report.step_log.size() < report.step_log.capacity())
         report.step_log.push_back(
-            {begin_ns, static_cast<float>(static_cast<double>(duration_ns) * 1e-3)});
+            {begin_ns, us(end_ns - begin_ns), us(commands_ns), us(end_ns - stepped_ns)});
     }
     return options.steps == 0 || report.steps < options.steps;
   };

@@ -54,10 +54,14 @@ struct JointError {
 };
 
 // One step of the step log: when it began (CLOCK_MONOTONIC ns) and how long the
-// loop iteration took (the step_time histogram's measure).
+// loop iteration took (the step_time histogram's measure: the step and its states
+// published), with the phases around it: the body commands read and applied before
+// it (0 in lockstep, where the wait is for the answers), and the publishing.
 struct StepSample {
   std::int64_t begin_ns = 0;
   float duration_us = 0.0F;
+  float commands_us = 0.0F;
+  float publish_us = 0.0F;
 };
 
 struct RunReport {
