@@ -212,14 +212,25 @@ void SimChannels::publish(const WorldClock& clock) noexcept {
   // The step's states share one stamp, read before the first is filled: a clock read
   // per state was a quarter of publishing a thousand (28 ns each on the project's VM).
   const StateStamp stamp{step, time_s, clock.step_due_ns, monotonic_ns()};
+  const int count = static_cast<int>(channels_.size());
   if (new_step && !taping) {
-    share_each(sim_, static_cast<int>(channels_.size()), kChannelsPerItem, [&](int c, int thread) {
+    share_each(sim_, count, kChannelsPerItem, [&](int c, int thread) {
+      // The state slots were last read by other cores (controllers, viewers): their
+      // lines are asked for a few bodies ahead, within this thread's block (the
+      // other thread may be writing the next block).
+      const int block_end = std::min(count, (c / kChannelsPerItem + 1) * kChannelsPerItem);
+      const int ahead = c + static_cast<int>(kPrefetchAhead);
+      for (int k = c % kChannelsPerItem == 0 ? c + 1 : ahead; k <= ahead && k < block_end; ++k)
+        channels_[static_cast<std::size_t>(k)].publisher->prefetch_state_update();
       Channel& channel = channels_[static_cast<std::size_t>(c)];
       publish_state(channel, readings_[static_cast<std::size_t>(thread)], stamp);
       channel.taken_command = nullptr;
     });
   } else {  // the tape is written in channel order; a step published again is not shared
-    for (Channel& channel : channels_) {
+    for (std::size_t c = 0; c < channels_.size(); ++c) {
+      if (c + kPrefetchAhead < channels_.size())
+        channels_[c + kPrefetchAhead].publisher->prefetch_state_update();
+      Channel& channel = channels_[c];
       const BodyState* state = publish_state(channel, readings_[0], stamp);
       // Only the bodies someone reads: a recorder holds the state slots of those it
       // records (taping all of a thousand bodies for a recorder of one cost about 60 us

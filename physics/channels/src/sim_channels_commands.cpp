@@ -10,7 +10,12 @@
 namespace afhub::physics {
 
 void SimChannels::apply_commands(std::int64_t now_ns) noexcept {
-  for (Channel& channel : channels_) {
+  for (std::size_t c = 0; c < channels_.size(); ++c) {
+    Channel& channel = channels_[c];
+    // The command slots were last written by a controller on another core: asked for
+    // a few bodies ahead, their lines come while this one is read.
+    if (c + kPrefetchAhead < channels_.size())
+      channels_[c + kPrefetchAhead].publisher->prefetch_command();
     if (channel.soft) continue;  // soft bodies take no commands
     const BodyCommand* command = channel.publisher->latest_command();
     if (command && channel.publisher->command_updated()) {

@@ -44,6 +44,10 @@ class BodyPublisher {
     state_.publish(state, stamp_ns);
   }
   bool has_state_readers() const noexcept { return state_.raw().has_readers(); }
+  // Hints for a loop over many bodies, a few bodies ahead (RawWriter::prefetch_update,
+  // RawLatestReader::prefetch).
+  void prefetch_state_update() const noexcept { state_.raw().prefetch_update(); }
+  void prefetch_command() const noexcept { command_.raw().prefetch(); }
   // The newest command, or nullptr before the first; read in place.
   const BodyCommand* latest_command() noexcept { return command_.latest(); }
   bool command_updated() const { return command_.updated(); }

@@ -65,6 +65,11 @@ class RawWriter {
   void release(void* payload) noexcept;
 
   const ChannelId& channel() const { return channel_; }
+  // Slot kinds: asks the CPU for the lines the next update writes (its control and as
+  // many payload bytes as the last update), to own them by the time it does. A hint
+  // for a loop over many writers: what another core read of the last update costs a
+  // round trip per line, and asked for a few writers ahead those trips overlap.
+  void prefetch_update() const noexcept;
   // Whether any reader is subscribed now (on a queue, each one costs every publish).
   bool has_readers() const noexcept;
   // The next publish carries sequence `last` + 1. A short-lived writer of commands
@@ -105,6 +110,10 @@ class RawLatestReader {
   // Slot kinds: takes up a writer that came (or went) since the last look without
   // reading anything, so that writers see this reader (has_readers()) between reads.
   void hold_writers() noexcept;
+  // Slot kinds: asks the CPU for the lines latest() reads first (each held entry's
+  // control and the payload bytes of the last copy), as prefetch_update() does for a
+  // writer: a hint, with no effect on what latest() returns.
+  void prefetch() const noexcept;
   // Whether the last latest() call found a sample newer than the one before.
   bool updated() const { return updated_; }
   // The size in bytes of the payload latest() returned.
@@ -221,6 +230,7 @@ class LatestReader {
   const T* latest() noexcept { return static_cast<const T*>(raw_.latest()); }
   bool updated() const { return raw_.updated(); }
   RawLatestReader& raw() { return raw_; }
+  const RawLatestReader& raw() const { return raw_; }
 
  private:
   RawLatestReader raw_;
