@@ -106,6 +106,9 @@ class BodyClient {
     return command;
   }
   void publish_command(BodyCommand* command) noexcept { command_.publish(command); }
+  // Hints for a loop over many bodies, a few bodies ahead (as BodyPublisher's).
+  void prefetch_state() const noexcept { state_.raw().prefetch(); }
+  void prefetch_command_update() const noexcept { command_.raw().prefetch_update(); }
   // A reader (the physics, once it has found this writer's slot) holds the command slot.
   bool command_has_readers() const noexcept { return command_.raw().has_readers(); }
   const std::string& channel() const { return channel_; }
