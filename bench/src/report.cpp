@@ -245,8 +245,8 @@ std::string results_table(const BenchResults& results) {
            (afhub_1m / afhub_1k <= 2.0 ? "met\n" : "NOT met\n");
   if (loop.skipped.empty())
     out += format("  commands in time for the next step %.1f %% (goal >= %.0f %%): ",
-                  100.0 * loop.deadline_hit_ratio(), 100.0 * kMinInTimeRatio) +
-           (loop.deadline_hit_ratio() >= kMinInTimeRatio ? "met\n" : "NOT met\n");
+                  100.0 * loop.deadline_hit_ratio(), 100.0 * kInTimeGoal) +
+           (loop.deadline_hit_ratio() >= kInTimeGoal ? "met\n" : "NOT met\n");
   if (loop.skipped.empty() && loop.cyclictest_skipped.empty()) {
     const double mine = loop.controller_wake.percentile_us(0.99);
     const double floor = loop.cyclictest_wake.percentile_us(0.99);

@@ -133,7 +133,7 @@ TEST(Bench, StarvedBodyStatesFailTheBench) {
       contains(run.err, "The physics ended (exit code 1)") && contains(run.err, pool);
   EXPECT_TRUE(dropped || refused) << run.err;
   if (dropped) {
-    EXPECT_TRUE(contains(run.out, "(goal >= 90 %): NOT met")) << run.out;
+    EXPECT_TRUE(contains(run.out, "(goal >= 99 %): NOT met")) << run.out;
   }
   std::printf("the physics %s\n", dropped ? "dropped states" : "was refused at start");
   EXPECT_EQ(probe_roudi(), RoudiPresence::kRunning) << "the bench stopped a hub it did not start";
