@@ -136,23 +136,29 @@ class ViewPageTest : public ::testing::Test {
 
   // Clicks where `channel`'s body is drawn (the centre of its bounding box).
   static void click_body(const std::string& channel) {
-    // A point of the screen whose first hit is this body: its box's centre may be
-    // behind another link once the arm has moved, or under a panel the page shows
-    // (a click there never reaches the scene).
+    // A whole pixel of the screen whose first hit is this body, and its neighbours' 3 px
+    // away too: its box's centre may be behind another link once the arm has moved, or
+    // under a panel the page shows (a click there never reaches the scene); and a point
+    // at the body's edge, where the click may land a fraction of a pixel off, can pick
+    // what lies beside it (a fresh CI run clicked the base for 15 s and kept link3).
     const nlohmann::json at = browser_->evaluate(
         "(() => { const b = bodies.find((b) => b.userData.channel === '" + channel +
         "'); const box = new THREE.Box3().setFromObject(b); const r = new THREE.Raycaster();"
         " const owner = (o) => { while (o && o.userData.channel === undefined) o = o.parent;"
         " return o; };"
+        " const shows = (x, y) => { r.setFromCamera(new THREE.Vector2(x / innerWidth * 2 - 1,"
+        "   -(y / innerHeight) * 2 + 1), camera);"
+        "  const hit = r.intersectObjects(bodies, true)[0];"
+        "  return hit && owner(hit.object) === b &&"
+        "   document.elementFromPoint(x, y) === renderer.domElement; };"
         " for (let i = 0; i <= 8; i++) for (let j = 0; j <= 8; j++) for (let k = 0; k <= 8; k++) {"
         "  const p = new THREE.Vector3(box.min.x + (box.max.x - box.min.x) * (0.1 + 0.1 * i),"
         "   box.min.y + (box.max.y - box.min.y) * (0.1 + 0.1 * j),"
         "   box.min.z + (box.max.z - box.min.z) * (0.1 + 0.1 * k)).project(camera);"
-        "  r.setFromCamera(new THREE.Vector2(p.x, p.y), camera);"
-        "  const hit = r.intersectObjects(bodies, true)[0];"
-        "  const x = (p.x + 1) / 2 * innerWidth, y = (1 - p.y) / 2 * innerHeight;"
-        "  if (hit && owner(hit.object) === b &&"
-        "      document.elementFromPoint(x, y) === renderer.domElement) return [x, y]; }"
+        "  const x = Math.round((p.x + 1) / 2 * innerWidth),"
+        "   y = Math.round((1 - p.y) / 2 * innerHeight);"
+        "  if ([[0, 0], [-3, 0], [3, 0], [0, -3], [0, 3]].every(([dx, dy]) =>"
+        "      shows(x + dx, y + dy))) return [x, y]; }"
         " return 'no point of the screen shows ' + b.userData.channel; })()");
     ASSERT_TRUE(at.is_array() && at.size() == 2U) << at.dump() << " " << browser_->problem();
     browser_->click(at.at(0).get<double>(), at.at(1).get<double>());
