@@ -416,6 +416,12 @@ void JointModel::update_readings() noexcept {
       break;
   }
   position_ = position + spec_.joint_offset_rad;
+  const btTransform pivot_in_parent = parent_.getWorldTransform() * frame_in_parent_;
+  btVector3 gap =
+      pivot_in_parent.invXform(child_.getWorldTransform() * frame_in_child_.getOrigin());
+  for (int i = 0; i < 3; ++i)
+    if (free_linear_[i]) gap[i] = 0;
+  pivot_gap_m_ = gap.length();
   // Fixed, p2p and six dof joints have no axis to read along; a cone twist reads its twist.
   if (!has_axis() && spec_.type != JointType::kConeTwist) {
     velocity_ = effort_ = 0.0;
@@ -446,15 +452,6 @@ void JointModel::update_readings() noexcept {
 void JointModel::restart_readings() noexcept {
   hinge_read_ = false;
   update_readings();
-}
-
-double JointModel::pivot_gap_m() const noexcept {
-  const btTransform a = parent_.getWorldTransform() * frame_in_parent_;
-  const btVector3 b = child_.getWorldTransform() * frame_in_child_.getOrigin();
-  btVector3 local = a.invXform(b);
-  for (int i = 0; i < 3; ++i)
-    if (free_linear_[i]) local[i] = 0;
-  return local.length();
 }
 
 }  // namespace afhub::physics

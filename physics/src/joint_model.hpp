@@ -41,7 +41,7 @@ class JointModel {
     return true;
   }
   void apply_control() noexcept;
-  // Reads position, velocity and effort after a step.
+  // Reads position, velocity, effort and pivot gap after a step.
   void update_readings() noexcept;
   // Forgets the turns counted so far (after the bodies were put back), then reads.
   void restart_readings() noexcept;
@@ -50,8 +50,9 @@ class JointModel {
   double velocity() const { return velocity_; }
   double effort() const { return effort_; }  // N m or N; 0 without `enable feedback`
   // Distance between the parent's and the child's pivot along the joint's locked
-  // directions (a prismatic joint's slide does not count), in metres.
-  double pivot_gap_m() const noexcept;
+  // directions (a prismatic joint's slide does not count), in metres, as read after
+  // the last step: read with the other readings, on whichever thread reads them.
+  double pivot_gap_m() const noexcept { return pivot_gap_m_; }
   // The PID gains in use: the file's, or lower when the file's cannot be stable at
   // this step for the bodies the joint moves (see the constructor).
   const Pid& gains() const { return gains_; }
@@ -88,7 +89,7 @@ class JointModel {
   double hinge_reading_ = 0.0, hinge_angle_ = 0.0;
   bool hinge_read_ = false;
 
-  double position_ = 0.0, velocity_ = 0.0, effort_ = 0.0;
+  double position_ = 0.0, velocity_ = 0.0, effort_ = 0.0, pivot_gap_m_ = 0.0;
 };
 
 }  // namespace afhub::physics
