@@ -12,6 +12,7 @@
 #include <span>
 
 #include "afhub/bench/arms_scene.hpp"
+#include "afhub/bench/bench.hpp"
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/channel.hpp"
 #include "afhub/hub/hub_presence.hpp"
@@ -32,7 +33,24 @@ namespace {
 // Steps after every body is first commanded that are left out: the physics' first
 // answers to a controller that has just joined.
 constexpr std::int64_t kSettleNs = 500'000'000;
-constexpr std::size_t kPrefetchAhead = 4;
+// The physics writes its step log once stopped: a minute of steps takes a second.
+constexpr int kPhysicsStopMs = 60'000;
+
+// The run's files, removed however it ends; the physics' log stays when an error
+// names it.
+struct RunFiles {
+  std::string scene, step_log, physics_log;
+  bool keep_physics_log = false;
+  ~RunFiles() {
+    std::error_code ignored;
+    for (const std::string* path : {&scene, &step_log}) std::filesystem::remove(*path, ignored);
+    if (!keep_physics_log) std::filesystem::remove(physics_log, ignored);
+  }
+  Error physics_error(const std::string& what) {
+    keep_physics_log = true;
+    return Error(what + "; see " + physics_log);
+  }
+};
 
 // One body held where its joints were first seen: a command each cycle answering its
 // newest state.
@@ -59,13 +77,6 @@ std::vector<StepPhases> read_step_log(const std::string& path, std::int64_t from
   return steps;
 }
 
-std::string physics_said(const std::string& log_path, const char* what) {
-  std::ifstream in(log_path);
-  for (std::string line; std::getline(in, line);)
-    if (line.find(what) != std::string::npos) return line;
-  return "";
-}
-
 std::string line(const char* pattern, double a, double b = 0, double c = 0, double d = 0) {
   char text[256];
   std::snprintf(text, sizeof text, pattern, a, b, c, d);
@@ -86,13 +97,13 @@ float percentile(const std::vector<StepPhases>& steps, double q, Phase phase) {
 BodiesResult run_bodies_bench(const BodiesOptions& options) {
   connect_to_hub("bench", HubPolicy::kRequire);
   const std::string prefix = "/tmp/afhub-bench-" + std::to_string(getpid());
-  const std::string scene = prefix + "-arms.yaml", step_log = prefix + "-steps.txt",
-                    physics_log = prefix + "-physics.log";
-  std::ofstream(scene) << arms_scene(options.arms, options.links);
+  RunFiles files{prefix + "-arms.yaml", prefix + "-steps.txt", prefix + "-physics.log"};
+  std::ofstream(files.scene) << arms_scene(options.arms, options.links);
   BodiesResult result;
   std::vector<std::unique_ptr<HeldBody>> bodies;
-  for (const physics::BodySpec& body : physics::load_adf_files({scene}).bodies)
+  for (const physics::BodySpec& body : physics::load_adf_files({files.scene}).bodies)
     bodies.push_back(std::make_unique<HeldBody>(body.channel));
+  if (bodies.empty()) throw Error("the generated scene has no body");
   result.bodies = static_cast<int>(bodies.size());
   std::fprintf(stderr, "afhub bench: %d arms of %d links (%d bodies) at 1 kHz for %.0f s\n",
                options.arms, options.links, result.bodies, options.seconds);
@@ -101,9 +112,9 @@ BodiesResult run_bodies_bench(const BodiesOptions& options) {
   const std::string priority = std::to_string(options.fifo_priority);
   const auto log_steps = static_cast<std::uint64_t>((options.seconds + 120.0) * 1000.0);
   ChildProcess physics(
-      {this_executable(), "run", scene, "--no-autostart", "--fifo", priority, "--lock-memory",
-       "--steps", std::to_string(log_steps), "--step-log", step_log},
-      physics_log);
+      {this_executable(), "run", files.scene, "--no-autostart", "--fifo", priority, "--lock-memory",
+       "--steps", std::to_string(log_steps), "--step-log", files.step_log},
+      files.physics_log);
   // Every body's first state, before the loop starts (loading a thousand takes seconds).
   for (const std::int64_t give_up = monotonic_ns() + 60'000'000'000;;) {
     const bool all = std::all_of(bodies.begin(), bodies.end(),
@@ -111,10 +122,10 @@ BodiesResult run_bodies_bench(const BodiesOptions& options) {
     if (all) break;
     if (stop_requested()) throw Error("interrupted");
     if (!physics.running())
-      throw Error("the physics ended (exit code " + std::to_string(physics.wait(0)) +
-                  ") before publishing every body; see " + physics_log);
+      throw files.physics_error("the physics ended (exit code " + std::to_string(physics.wait(0)) +
+                                ") before publishing every body");
     if (monotonic_ns() > give_up)
-      throw Error("not every body published a state within 60 s; see " + physics_log);
+      throw files.physics_error("not every body published a state within 60 s");
     sleep_until_ns(monotonic_ns() + 10'000'000);
   }
 
@@ -131,16 +142,16 @@ BodiesResult run_bodies_bench(const BodiesOptions& options) {
   LoopCycle cycle;
   phase.attach(loop, cycle);
   std::int64_t first_ns = 0, last_ns = 0;
-  bool settled = false;
+  bool settled = false, physics_gone = false;
   std::uint64_t commanded_before = 0, answered_before = 0;
   cycle.work = [&] {
     const std::int64_t begin_ns = monotonic_ns();
     if (const BodyState* state = phased.latest_state()) phase.follow(*state);
     for (std::size_t b = 0; b < bodies.size(); ++b) {
       // A few bodies ahead, as the physics does: their slots' lines come meanwhile.
-      if (b + kPrefetchAhead < bodies.size()) {
-        bodies[b + kPrefetchAhead]->client.prefetch_state();
-        bodies[b + kPrefetchAhead]->client.prefetch_command_update();
+      if (b + kBodyPrefetchAhead < bodies.size()) {
+        bodies[b + kBodyPrefetchAhead]->client.prefetch_state();
+        bodies[b + kBodyPrefetchAhead]->client.prefetch_command_update();
       }
       HeldBody* body = bodies[b].get();
       const BodyState* state = body->client.latest_state();
@@ -176,21 +187,26 @@ BodiesResult run_bodies_bench(const BodiesOptions& options) {
       settled = true;
     }
     result.controller_compute.record(last_ns - begin_ns);
-    return !stop_requested();
+    // Once a second: a physics gone is not waited for until the run's end.
+    if (timing.cycles() % 1000 == 999 && !physics.running()) physics_gone = true;
+    return !stop_requested() && !physics_gone;
   };
   run_periodic(loop, timing, cycle);
   if (stop_requested()) throw Error("interrupted");
+  if (physics_gone)
+    throw files.physics_error("the physics ended (exit code " + std::to_string(physics.wait(0)) +
+                              ") during the run");
+  result.controller_overruns = timing.overruns();
   if (const WorldState* now = world.latest()) {
     result.commanded_steps = now->commanded_steps - commanded_before;
     result.answered_steps = now->answered_steps - answered_before;
   }
-  const int exit_code = physics.stop();  // SIGTERM: it writes its step log, then exits
+  // SIGTERM: it writes its step log, then exits.
+  const int exit_code = physics.stop(kPhysicsStopMs);
   if (exit_code != 0 && exit_code != 128 + SIGTERM)
-    throw Error("the physics exited with code " + std::to_string(exit_code) + "; see " +
-                physics_log);
-  result.steps = read_step_log(step_log, first_ns + kSettleNs, last_ns);
-  result.physics_dropped = physics_said(physics_log, "shared memory exhausted");
-  for (const std::string& path : {scene, step_log, physics_log}) std::filesystem::remove(path);
+    throw files.physics_error("the physics exited with code " + std::to_string(exit_code));
+  result.steps = read_step_log(files.step_log, first_ns + kSettleNs, last_ns);
+  result.physics_dropped = first_line_with(files.physics_log, "shared memory exhausted");
   return result;
 }
 
@@ -209,7 +225,7 @@ std::string bodies_table(const BodiesOptions& options, const BodiesResult& resul
   };
   row("  the whole step", [](const StepPhases& s) { return s.total(); });
   row("  commands read and applied", [](const StepPhases& s) { return s.commands; });
-  row("  physics (Bullet's step)", [](const StepPhases& s) { return s.physics; });
+  row("  physics (Bullet's step, joint records)", [](const StepPhases& s) { return s.physics; });
   row("  states published", [](const StepPhases& s) { return s.publish; });
   const double compute_p50 = result.controller_compute.percentile_ns(0.5) * 1e-3,
                compute_p99 = result.controller_compute.percentile_ns(0.99) * 1e-3;
@@ -221,6 +237,8 @@ std::string bodies_table(const BodiesOptions& options, const BodiesResult& resul
               result.commanded_steps);
   if (result.refused_loans)
     out += line("Commands not written (no shared memory): %.0f\n", result.refused_loans);
+  if (result.controller_overruns)
+    out += line("Periods the controller missed (overruns): %.0f\n", result.controller_overruns);
 
   const double step_p99 = percentile(steps, 0.99, [](const StepPhases& s) { return s.total(); });
   const double step_p50 = percentile(steps, 0.5, [](const StepPhases& s) { return s.total(); });
@@ -232,6 +250,9 @@ std::string bodies_table(const BodiesOptions& options, const BodiesResult& resul
   out += line("  publishing %.1f %% of the step at the median (goal < 10 %%): ",
               100.0 * publish_p50 / step_p50) +
          (publish_p50 < 0.1 * step_p50 ? "met\n" : "NOT met\n");
+  out += line("  commands in time for the next step %.1f %% (goal >= %.0f %%): ", in_time,
+              100.0 * kInTimeGoal) +
+         (in_time >= 100.0 * kInTimeGoal ? "met\n" : "NOT met\n");
   return out;
 }
 

@@ -5,6 +5,8 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <fstream>
+
 #include "afhub/rt/process_spawn.hpp"
 
 namespace afhub::bench {
@@ -38,12 +40,19 @@ bool ChildProcess::running() {
   return wait(0) == -1;
 }
 
-int ChildProcess::stop() {
+int ChildProcess::stop(int grace_ms) {
   if (pid_ < 0) return exit_code_;
   kill(pid_, SIGTERM);
-  if (wait(5000) != -1) return exit_code_;
+  if (wait(grace_ms) != -1) return exit_code_;
   kill(pid_, SIGKILL);
   return wait(5000);
+}
+
+std::string first_line_with(const std::string& path, const std::string& text) {
+  std::ifstream in(path);
+  for (std::string line; std::getline(in, line);)
+    if (line.find(text) != std::string::npos) return line;
+  return "";
 }
 
 }  // namespace afhub::bench

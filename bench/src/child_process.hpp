@@ -23,13 +23,16 @@ class ChildProcess {
   // Waits up to timeout_ms for the exit; returns the exit code, 128 + signal when
   // killed, or -1 when still running.
   int wait(int timeout_ms);
-  // SIGTERM, then SIGKILL after 5 s; returns the exit code as wait() does.
-  int stop();
+  // SIGTERM, then SIGKILL after `grace_ms`; returns the exit code as wait() does.
+  int stop(int grace_ms = 5000);
   bool running();
 
  private:
   pid_t pid_ = -1;
   int exit_code_ = -1;
 };
+
+// The first line of the file at `path` that holds `text` (what a child said), or "".
+std::string first_line_with(const std::string& path, const std::string& text);
 
 }  // namespace afhub::bench

@@ -56,14 +56,6 @@ std::string read_text(const std::string& path) {
   return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
-// The physics' line saying it could not publish (a pool out of chunks), or "".
-std::string dropped_line(const std::string& log_path) {
-  std::ifstream in(log_path);
-  for (std::string line; std::getline(in, line);)
-    if (line.find("shared memory exhausted") != std::string::npos) return line;
-  return "";
-}
-
 }  // namespace
 
 void run_loop_bench(const BenchOptions& options, LoopResult& result) {
@@ -126,7 +118,7 @@ void run_loop_bench(const BenchOptions& options, LoopResult& result) {
   if (stop_requested()) throw Error("interrupted");  // cyclictest runs on: not waited for
   result.controller_wake = timing.wake_latency();
   physics.stop();
-  result.physics_dropped = dropped_line(prefix + "-physics.log");
+  result.physics_dropped = first_line_with(prefix + "-physics.log", "shared memory exhausted");
   std::filesystem::remove(prefix + "-physics.log");
   if (cyclictest) {
     if (cyclictest->wait(10'000) == -1)

@@ -198,7 +198,10 @@ TEST_F(BenchOwnHub, BodiesTimesEachStepsPhasesAcrossProcesses) {
   ASSERT_EQ(
       std::sscanf(run.out.c_str(), "4 arms of 3 links, 12 bodies at 1 kHz, %lf steps", &steps), 1)
       << run.out;
+  // 2 s measured at 1 kHz: a physics cannot take many more steps than milliseconds
+  // pass (a catch-up after a stall makes up at most 100), and some were measured.
   EXPECT_GT(steps, 100.0) << run.out;
+  EXPECT_LE(steps, 2200.0) << "steps from outside the measured window:\n" << run.out;
   const auto row = [&](const char* name, double& p50, double& p99) {
     const std::size_t at = run.out.find(name);
     ASSERT_NE(at, std::string::npos) << name << " missing:\n" << run.out;
@@ -211,13 +214,13 @@ TEST_F(BenchOwnHub, BodiesTimesEachStepsPhasesAcrossProcesses) {
          publish50 = 0, publish99 = 0, controller50 = 0, controller99 = 0;
   row("the whole step", whole50, whole99);
   row("commands read and applied", commands50, commands99);
-  row("physics (Bullet's step)", physics50, physics99);
+  row("physics (Bullet's step, joint records)", physics50, physics99);
   row("states published", publish50, publish99);
   row("The controller writing every command, us", controller50, controller99);
-  // Every step's whole is the sum of its phases, so each phase's median is at most the
-  // whole's; every step read commands and published states.
-  for (const double phase : {commands50, physics50, publish50}) EXPECT_LE(phase, whole50);
+  // Each phase took time in most steps: commands were read, the world stepped, states
+  // published (a phase left unmeasured reads 0).
   EXPECT_GT(commands50, 0.0) << run.out;
+  EXPECT_GT(physics50, 0.0) << run.out;
   EXPECT_GT(publish50, 0.0) << run.out;
   EXPECT_GT(controller50, 0.0) << run.out;
   double in_time = 0, body_steps = 0;
@@ -229,10 +232,16 @@ TEST_F(BenchOwnHub, BodiesTimesEachStepsPhasesAcrossProcesses) {
       << run.out;
   EXPECT_GE(body_steps, 12.0 * 100) << "the physics counted few commanded steps:\n" << run.out;
   EXPECT_TRUE(contains(run.out, "Goals: set for 1000 bodies or more")) << run.out;
+  // Its scene, step log and the physics' log are gone with it (this /tmp is the test's).
+  for (const auto& entry : std::filesystem::directory_iterator("/tmp"))
+    EXPECT_FALSE(entry.path().filename().string().starts_with("afhub-bench-")) << entry.path();
 
   const RunResult bad = run_afhub({"bench", "bodies", "--arms", "0"});
   EXPECT_EQ(bad.exit_code, 1);
   EXPECT_TRUE(contains(bad.err, "--arms takes 1 to 500 and --links 2 to 16")) << bad.err;
+  const RunResult both = run_afhub({"bench", "bodies", "--quick", "--seconds", "3"});
+  EXPECT_NE(both.exit_code, 0);
+  EXPECT_TRUE(contains(both.err, "excludes")) << both.err;
 }
 
 TEST(Bench, BadArgumentsAreRefusedClearly) {

@@ -134,7 +134,7 @@ class ViewPageTest : public ::testing::Test {
     }
   }
 
-  // Clicks where `channel`'s body is drawn (the centre of its bounding box).
+  // Clicks where `channel`'s body is drawn and nothing else is near.
   static void click_body(const std::string& channel) {
     // A whole pixel of the screen whose first hit is this body, and its neighbours' 3 px
     // away too: its box's centre may be behind another link once the arm has moved, or
@@ -159,7 +159,7 @@ class ViewPageTest : public ::testing::Test {
         "   y = Math.round((1 - p.y) / 2 * innerHeight);"
         "  if ([[0, 0], [-3, 0], [3, 0], [0, -3], [0, 3]].every(([dx, dy]) =>"
         "      shows(x + dx, y + dy))) return [x, y]; }"
-        " return 'no point of the screen shows ' + b.userData.channel; })()");
+        " return 'no pixel shows ' + b.userData.channel + ' with 3 px of it around'; })()");
     ASSERT_TRUE(at.is_array() && at.size() == 2U) << at.dump() << " " << browser_->problem();
     browser_->click(at.at(0).get<double>(), at.at(1).get<double>());
   }

@@ -216,10 +216,11 @@ void SimChannels::publish(const WorldClock& clock) noexcept {
   if (new_step && !taping) {
     share_each(sim_, count, kChannelsPerItem, [&](int c, int thread) {
       // The state slots were last read by other cores (controllers, viewers): their
-      // lines are asked for a few bodies ahead, within this thread's block (the
-      // other thread may be writing the next block).
+      // lines are asked for a few bodies ahead, within this thread's block (share_each
+      // hands a thread whole blocks of kChannelsPerItem from a multiple of it; another
+      // block's writer may be in loan() on the other thread).
       const int block_end = std::min(count, (c / kChannelsPerItem + 1) * kChannelsPerItem);
-      const int ahead = c + static_cast<int>(kPrefetchAhead);
+      const int ahead = c + static_cast<int>(kBodyPrefetchAhead);
       for (int k = c % kChannelsPerItem == 0 ? c + 1 : ahead; k <= ahead && k < block_end; ++k)
         channels_[static_cast<std::size_t>(k)].publisher->prefetch_state_update();
       Channel& channel = channels_[static_cast<std::size_t>(c)];
@@ -228,8 +229,8 @@ void SimChannels::publish(const WorldClock& clock) noexcept {
     });
   } else {  // the tape is written in channel order; a step published again is not shared
     for (std::size_t c = 0; c < channels_.size(); ++c) {
-      if (c + kPrefetchAhead < channels_.size())
-        channels_[c + kPrefetchAhead].publisher->prefetch_state_update();
+      if (c + kBodyPrefetchAhead < channels_.size())
+        channels_[c + kBodyPrefetchAhead].publisher->prefetch_state_update();
       Channel& channel = channels_[c];
       const BodyState* state = publish_state(channel, readings_[0], stamp);
       // Only the bodies someone reads: a recorder holds the state slots of those it

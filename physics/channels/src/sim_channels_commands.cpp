@@ -14,8 +14,8 @@ void SimChannels::apply_commands(std::int64_t now_ns) noexcept {
     Channel& channel = channels_[c];
     // The command slots were last written by a controller on another core: asked for
     // a few bodies ahead, their lines come while this one is read.
-    if (c + kPrefetchAhead < channels_.size())
-      channels_[c + kPrefetchAhead].publisher->prefetch_command();
+    if (c + kBodyPrefetchAhead < channels_.size())
+      channels_[c + kBodyPrefetchAhead].publisher->prefetch_command();
     if (channel.soft) continue;  // soft bodies take no commands
     const BodyCommand* command = channel.publisher->latest_command();
     if (command && channel.publisher->command_updated()) {

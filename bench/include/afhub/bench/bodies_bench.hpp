@@ -32,6 +32,7 @@ struct BodiesResult {
   std::uint64_t commanded_steps = 0, answered_steps = 0;  // body-steps, from the world state
   LatencyHistogram controller_compute;                    // a cycle's commands written, ns
   std::uint64_t refused_loans = 0;                        // commands not written: no shared memory
+  std::uint64_t controller_overruns = 0;                  // periods the controller's loop missed
   // What the physics said when it could not publish a state; empty when it did.
   std::string physics_dropped;
 };

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstddef>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -18,6 +19,11 @@
 #include "afhub/shm_layout/catalog.hpp"
 
 namespace afhub {
+
+// How many bodies ahead a loop over many bodies' slots gives the prefetch hints below
+// (BodyPublisher::prefetch_command, BodyClient::prefetch_state, ...): far enough for
+// a body's lines to come while the bodies before it are read or written.
+inline constexpr std::size_t kBodyPrefetchAhead = 4;
 
 // The owner publishes state every period, paused or not, into the body's state slot
 // (see channel.hpp); a reader that joins gets the current state at once.

@@ -66,9 +66,9 @@ class RawWriter {
 
   const ChannelId& channel() const { return channel_; }
   // Slot kinds: asks the CPU for the lines the next update writes (its control and as
-  // many payload bytes as the last update), to own them by the time it does. A hint
-  // for a loop over many writers: what another core read of the last update costs a
-  // round trip per line, and asked for a few writers ahead those trips overlap.
+  // many payload bytes as the largest loan so far), to own them by the time it does.
+  // A hint for a loop over many writers: what another core read of the last update
+  // costs a round trip per line, and asked for a few writers ahead those trips overlap.
   void prefetch_update() const noexcept;
   // Whether any reader is subscribed now (on a queue, each one costs every publish).
   bool has_readers() const noexcept;

@@ -145,9 +145,6 @@ class SimChannels {
   int report_events(std::FILE* out);
 
  private:
-  // How many bodies ahead a loop over the bodies' slots asks for their lines
-  // (BodyPublisher::prefetch_command, prefetch_state_update).
-  static constexpr std::size_t kPrefetchAhead = 4;
   // Publishes the scene description once, keeping it for viewers that join later.
   void publish_scene();
   // Publishes each soft body's faces once, keeping them for viewers that join later.
