@@ -62,8 +62,22 @@ void ReservedWorld::predictUnconstraintMotion(btScalar dt) {
   }
   for (int i = 0; i < m_nonStaticRigidBodies.size(); ++i)
     if (!m_nonStaticRigidBodies[i]->isStaticOrKinematicObject())
-      m_nonStaticRigidBodies[i]->applyDamping(dt);
+      damping_.apply(*m_nonStaticRigidBodies[i], dt);
   soft_solver_.predictMotion(static_cast<float>(dt));  // as Bullet's soft world does
+}
+
+void BodyDamping::apply(btRigidBody& body, btScalar dt) noexcept {
+  body.setLinearVelocity(body.getLinearVelocity() * linear_.of(body.getLinearDamping(), dt));
+  body.setAngularVelocity(body.getAngularVelocity() * angular_.of(body.getAngularDamping(), dt));
+}
+
+btScalar BodyDamping::Factor::of(btScalar new_damping, btScalar new_dt) noexcept {
+  if (new_damping != damping || new_dt != dt) {
+    damping = new_damping;
+    dt = new_dt;
+    factor = btPow(btScalar(1) - damping, dt);
+  }
+  return factor;
 }
 
 void ReservedWorld::createPredictiveContacts(btScalar dt) {

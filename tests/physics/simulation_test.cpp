@@ -15,6 +15,7 @@
 #include "afhub/physics/adf_loader.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "model_files.hpp"
+#include "reserved_world.hpp"
 #include "shared_models.hpp"
 
 namespace afhub::physics {
@@ -637,6 +638,37 @@ TEST(CommandBounds, AWatchdogReleasesOnlyWhatItsBodyCommanded) {
   for (int joint : below_link3) EXPECT_EQ(sim.joint_driver(joint), -1);
   for (std::size_t k = 0; k < 3; ++k)
     EXPECT_EQ(sim.joint_driver(below_base[k]), static_cast<int>(base));
+}
+
+// The damping of every step, with one power per distinct damping, is Bullet's own bit
+// for bit: bodies of several dampings (the defaults, none, heavy), in an order that
+// changes the power kept, against btRigidBody::applyDamping on a twin.
+TEST(BodyDampingTest, IsBulletsApplyDampingBitForBit) {
+  btSphereShape shape(0.1);
+  const btScalar dampings[][2] = {{0.04, 0.1}, {0.0, 0.0}, {0.5, 0.9}, {0.04, 0.1}, {0.3, 0.1}};
+  BodyDamping damping;
+  for (const btScalar dt : {btScalar(0.001), btScalar(0.0005)})
+    for (int i = 0; i < 5; ++i) {
+      btRigidBody::btRigidBodyConstructionInfo info(1.0, nullptr, &shape,
+                                                    btVector3(0.01, 0.01, 0.01));
+      info.m_linearDamping = dampings[i][0];
+      info.m_angularDamping = dampings[i][1];
+      btRigidBody ours(info), bullets(info);
+      const btVector3 v(1.5 + i, -2.25, 0.125 * i), w(-0.5, 3.0 + i, 7.0);
+      for (btRigidBody* body : {&ours, &bullets}) {
+        body->setLinearVelocity(v);
+        body->setAngularVelocity(w);
+      }
+      damping.apply(ours, dt);
+      bullets.applyDamping(dt);
+      for (int k = 0; k < 3; ++k) {
+        EXPECT_EQ(ours.getLinearVelocity()[k], bullets.getLinearVelocity()[k]) << i << " " << k;
+        EXPECT_EQ(ours.getAngularVelocity()[k], bullets.getAngularVelocity()[k]) << i << " " << k;
+      }
+      if (dampings[i][0] > 0) {
+        EXPECT_LT(ours.getLinearVelocity().length(), v.length()) << i;
+      }
+    }
 }
 
 }  // namespace
