@@ -8,6 +8,7 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <memory>
 #include <utility>
 
@@ -95,6 +96,7 @@ void run_ping_pong(const BenchOptions& options, BenchResults& results) {
   const std::string session = std::to_string(getpid());
   std::unique_ptr<ChildProcess> rosmaster;
   std::vector<Peer> peers;
+  std::vector<std::string> peer_logs;  // one per peer started
   for (const std::string& name : options.transports)
     if (!parse_transport(name))
       throw Error("unknown transport '" + name +
@@ -137,8 +139,8 @@ void run_ping_pong(const BenchOptions& options, BenchResults& results) {
         this_executable(), "bench", "--peer",     name,
         "--session",       session, "--peer-cpu", std::to_string(pong_cpu())};
     if (options.touch) peer_args.push_back("--touch");
-    peer.process = std::make_unique<ChildProcess>(
-        peer_args, "/tmp/afhub-bench-" + session + "-" + name + ".log");
+    peer_logs.push_back("/tmp/afhub-bench-" + session + "-" + name + ".log");
+    peer.process = std::make_unique<ChildProcess>(peer_args, peer_logs.back());
     peer.end->connect(monotonic_ns() + kConnectTimeoutNs);
     peers.push_back(std::move(peer));
   }
@@ -169,6 +171,8 @@ void run_ping_pong(const BenchOptions& options, BenchResults& results) {
     }
   }
   pin_to_cpu(-1);
+  // Kept only when the run failed: what a peer said is then the reason.
+  for (const std::string& log : peer_logs) std::filesystem::remove(log);
 }
 
 int run_peer(const std::string& transport, const std::string& session, int cpu, bool touch) {
