@@ -26,6 +26,7 @@
 #include "afhub/shm_layout/error.hpp"
 #include "afhub/shm_layout/world.hpp"
 #include "child_process.hpp"
+#include "format.hpp"
 
 namespace afhub::bench {
 namespace {
@@ -75,12 +76,6 @@ std::vector<StepPhases> read_step_log(const std::string& path, std::int64_t from
   while (in >> begin >> step >> commands >> publish)
     if (begin >= from_ns && begin <= to_ns) steps.push_back({commands, step - publish, publish});
   return steps;
-}
-
-std::string line(const char* pattern, double a, double b = 0, double c = 0, double d = 0) {
-  char text[256];
-  std::snprintf(text, sizeof text, pattern, a, b, c, d);
-  return text;
 }
 
 template <typename Phase>
@@ -212,8 +207,8 @@ BodiesResult run_bodies_bench(const BodiesOptions& options) {
 
 std::string bodies_table(const BodiesOptions& options, const BodiesResult& result) {
   const auto& steps = result.steps;
-  std::string out = line("%.0f arms of %.0f links, %.0f bodies at 1 kHz, %.0f steps measured",
-                         options.arms, options.links, result.bodies, steps.size());
+  std::string out = format("%.0f arms of %.0f links, %.0f bodies at 1 kHz, %.0f steps measured",
+                           options.arms, options.links, result.bodies, steps.size());
   out += "; one controller process commanding every body each period, in phase\n\n";
   if (steps.empty()) return out + "No step measured.\n";
   out += "Each step as the physics timed it, us      p50       p99\n";
@@ -230,28 +225,28 @@ std::string bodies_table(const BodiesOptions& options, const BodiesResult& resul
   const double compute_p50 = result.controller_compute.percentile_ns(0.5) * 1e-3,
                compute_p99 = result.controller_compute.percentile_ns(0.99) * 1e-3;
   out +=
-      line("The controller writing every command, us  %7.1f   %7.1f\n", compute_p50, compute_p99);
+      format("The controller writing every command, us  %7.1f   %7.1f\n", compute_p50, compute_p99);
   const double in_time =
       result.commanded_steps ? 100.0 * result.answered_steps / result.commanded_steps : 0.0;
-  out += line("Commands in time for the next step: %.2f %% of %.0f body-steps\n", in_time,
-              result.commanded_steps);
+  out += format("Commands in time for the next step: %.2f %% of %.0f body-steps\n", in_time,
+                result.commanded_steps);
   if (result.refused_loans)
-    out += line("Commands not written (no shared memory): %.0f\n", result.refused_loans);
+    out += format("Commands not written (no shared memory): %.0f\n", result.refused_loans);
   if (result.controller_overruns)
-    out += line("Periods the controller missed (overruns): %.0f\n", result.controller_overruns);
+    out += format("Periods the controller missed (overruns): %.0f\n", result.controller_overruns);
 
   const double step_p99 = percentile(steps, 0.99, [](const StepPhases& s) { return s.total(); });
   const double step_p50 = percentile(steps, 0.5, [](const StepPhases& s) { return s.total(); });
   const double publish_p50 = percentile(steps, 0.5, [](const StepPhases& s) { return s.publish; });
   if (result.bodies < 1000) return out + "\nGoals: set for 1000 bodies or more (--arms 125)\n";
   out += "\nGoals (issue 30)\n";
-  out += line("  step p99 %.0f us (goal < 1000 us): ", step_p99) +
+  out += format("  step p99 %.0f us (goal < 1000 us): ", step_p99) +
          (step_p99 < 1000.0 ? "met\n" : "NOT met\n");
-  out += line("  publishing %.1f %% of the step at the median (goal < 10 %%): ",
-              100.0 * publish_p50 / step_p50) +
+  out += format("  publishing %.1f %% of the step at the median (goal < 10 %%): ",
+                100.0 * publish_p50 / step_p50) +
          (publish_p50 < 0.1 * step_p50 ? "met\n" : "NOT met\n");
-  out += line("  commands in time for the next step %.1f %% (goal >= %.0f %%): ", in_time,
-              100.0 * kInTimeGoal) +
+  out += format("  commands in time for the next step %.1f %% (goal >= %.0f %%): ", in_time,
+                100.0 * kInTimeGoal) +
          (in_time >= 100.0 * kInTimeGoal ? "met\n" : "NOT met\n");
   return out;
 }

@@ -89,11 +89,21 @@ int free_port() {
   return ntohs(address.sin_port);
 }
 
+// A folder of this run's own, removed with what is in it when the run ends.
+struct OwnFolder {
+  std::string path;
+  ~OwnFolder() {
+    std::error_code ignored;
+    if (!path.empty()) std::filesystem::remove_all(path, ignored);
+  }
+};
+
 }  // namespace
 
 void run_ping_pong(const BenchOptions& options, BenchResults& results) {
   install_stop_signal_handlers();
   const std::string session = std::to_string(getpid());
+  OwnFolder ros_home;  // declared first: removed after rosmaster has stopped
   std::unique_ptr<ChildProcess> rosmaster;
   std::vector<Peer> peers;
   std::vector<std::string> peer_logs;  // one per peer started
@@ -117,9 +127,10 @@ void run_ping_pong(const BenchOptions& options, BenchResults& results) {
       setenv("ROS_IP", "127.0.0.1", 1);
       // Its logs, wherever HOME is: in a folder of this run's own (a fixed name in /tmp
       // could be a symlink planted by another user).
-      char ros_home[] = "/tmp/afhub-bench-ros-XXXXXX";
-      if (!mkdtemp(ros_home)) throw Error("cannot make a folder for rosmaster's logs in /tmp");
-      setenv("ROS_HOME", ros_home, 1);
+      char folder[] = "/tmp/afhub-bench-ros-XXXXXX";
+      if (!mkdtemp(folder)) throw Error("cannot make a folder for rosmaster's logs in /tmp");
+      ros_home.path = folder;
+      setenv("ROS_HOME", folder, 1);
       rosmaster = std::make_unique<ChildProcess>(
           std::vector<std::string>{"rosmaster", "--core", "-p", port});
     }

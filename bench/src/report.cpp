@@ -12,6 +12,7 @@
 #include "afhub/rt/percentile.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "child_process.hpp"
+#include "format.hpp"
 
 namespace afhub::bench {
 namespace {
@@ -64,12 +65,6 @@ Distribution one_way_of(const BenchResults& results, const std::string& name, st
 
 double median_of(const BenchResults& results, const std::string& name, std::uint32_t bytes) {
   return one_way_of(results, name, bytes).p50_us;
-}
-
-std::string format(const char* pattern, double a, double b = 0.0, double c = 0.0) {
-  char line[256];
-  std::snprintf(line, sizeof line, pattern, a, b, c);
-  return line;
 }
 
 }  // namespace
