@@ -59,11 +59,14 @@ void ConstraintSolver::enable_direct_solve() {
   sides_.resize(K);
   next_side_.resize(2 * K);
   body_rows_.reserve(body_capacity_);
+  body_first_row_.reserve(body_capacity_);
   equality_.reserve(K);
   bounded_.reserve(K);
   row_.resize(K);
   bounded_slot_.resize(K);
   dependent_.resize(K);
+  row_first_.resize(K);
+  at_or_after_.resize(K);
   first_.resize(K);
   last_.resize(K);
   for (auto* matrix : {&a_, &shape_, &factor_, &null_, &gram_, &w_, &schur_}) matrix->resize(K * K);
@@ -157,14 +160,18 @@ void ConstraintSolver::factor(bool find_dependent) noexcept {
   // the rows meeting at each body (a list per body), so that an open chain's rows
   // cost their neighbours, not the whole island.
   body_rows_.assign(m_tmpSolverBodyPool.size(), -1);
+  body_first_row_.assign(m_tmpSolverBodyPool.size(), -1);
   for (int i = 0; i < rows_; ++i) {
     std::fill_n(&a_[i * K], rows_, 0.0);
     if (find_dependent) std::fill_n(&shape_[i * K], rows_, 0.0);
+    row_first_[i] = i;
     for (int s = 0; s < 2; ++s) {
       const Side& side = sides_[i][s];
       if (!side.moves) continue;
       next_side_[2 * i + s] = body_rows_[side.body];
       body_rows_[side.body] = 2 * i + s;
+      if (body_first_row_[side.body] < 0) body_first_row_[side.body] = i;
+      row_first_[i] = std::min(row_first_[i], body_first_row_[side.body]);
     }
   }
   for (const int first : body_rows_)
@@ -249,8 +256,14 @@ void ConstraintSolver::factor(bool find_dependent) noexcept {
 void ConstraintSolver::cholesky(const double* m, bool judge) noexcept {
   const int ne = static_cast<int>(equality_.size());
   double* l = factor_.data();
+  // Row k's first nonzero is looked for from the first equality row at or after its
+  // row_first_: a chain's rows skip the whole island before them.
+  for (int r = rows_ - 1, position = ne; r >= 0; --r) {
+    if (position > 0 && equality_[position - 1] == r) --position;
+    at_or_after_[r] = position;
+  }
   for (int k = 0; k < ne; ++k) {
-    int first = 0;
+    int first = at_or_after_[row_first_[equality_[k]]];
     while (first < k && m[equality_[k] * K + equality_[first]] == 0.0) ++first;
     first_[k] = first;
     last_[k] = k;

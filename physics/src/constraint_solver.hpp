@@ -73,6 +73,9 @@ class ConstraintSolver : public btSequentialImpulseConstraintSolver {
   // The row sides (2 row + side) meeting at each solver body, as lists: the first
   // per body, the next per side; -1 ends.
   std::vector<int> body_rows_, next_side_;
+  std::vector<int> body_first_row_;      // per solver body: the first row meeting it
+  std::vector<int> row_first_;           // per row: A's row is zero before this row
+  std::vector<int> at_or_after_;         // per row: the first equality row at or after it
   std::vector<int> equality_, bounded_;  // row indices
   std::vector<bool> dependent_;          // per equality row: implied by the rows before it
   std::vector<int> first_;               // per equality row: its first nonzero in A
