@@ -56,7 +56,7 @@ ConstraintSolver::ConstraintSolver(int bodies, int joints) : body_capacity_(bodi
 }
 
 void ConstraintSolver::enable_direct_solve() {
-  sides_.resize(K);
+  sides_.resize(2 * K);
   next_side_.resize(2 * K);
   body_rows_.reserve(body_capacity_);
   body_first_row_.reserve(body_capacity_);
@@ -136,10 +136,10 @@ void ConstraintSolver::factor(bool find_dependent) noexcept {
       }
       return out;
     };
-    sides_[i] = {side(row.m_solverBodyIdA, row.m_contactNormal1, row.m_relpos1CrossNormal,
-                      row.m_angularComponentA),
-                 side(row.m_solverBodyIdB, row.m_contactNormal2, row.m_relpos2CrossNormal,
-                      row.m_angularComponentB)};
+    sides_[2 * i] = side(row.m_solverBodyIdA, row.m_contactNormal1, row.m_relpos1CrossNormal,
+                         row.m_angularComponentA);
+    sides_[2 * i + 1] = side(row.m_solverBodyIdB, row.m_contactNormal2, row.m_relpos2CrossNormal,
+                             row.m_angularComponentB);
   }
   equality_.clear();
   bounded_.clear();
@@ -162,11 +162,11 @@ void ConstraintSolver::factor(bool find_dependent) noexcept {
   body_rows_.assign(m_tmpSolverBodyPool.size(), -1);
   body_first_row_.assign(m_tmpSolverBodyPool.size(), -1);
   for (int i = 0; i < rows_; ++i) {
-    std::fill_n(&a_[i * K], rows_, 0.0);
-    if (find_dependent) std::fill_n(&shape_[i * K], rows_, 0.0);
+    std::fill_n(&a_[i * K], i + 1, 0.0);
+    if (find_dependent) std::fill_n(&shape_[i * K], i + 1, 0.0);
     row_first_[i] = i;
     for (int s = 0; s < 2; ++s) {
-      const Side& side = sides_[i][s];
+      const Side& side = sides_[2 * i + s];
       if (!side.moves) continue;
       next_side_[2 * i + s] = body_rows_[side.body];
       body_rows_[side.body] = 2 * i + s;
@@ -177,16 +177,14 @@ void ConstraintSolver::factor(bool find_dependent) noexcept {
   for (const int first : body_rows_)
     for (int e = first; e >= 0; e = next_side_[e])
       for (int f = e; f >= 0; f = next_side_[f]) {
-        const Side& se = sides_[e / 2][e % 2];
-        const Side& sf = sides_[f / 2][f % 2];
+        const Side& se = sides_[e];
+        const Side& sf = sides_[f];
         const int i = e / 2, j = f / 2;
         const double mass = dot(se.normal, sf.linear) + dot(se.turn, sf.angular);
         a_[i * K + j] += mass;
-        if (i != j) a_[j * K + i] += mass;
         if (!find_dependent) continue;
         const double shape = dot(se.normal, sf.normal) + dot(se.turn, sf.turn) * turn_weight;
         shape_[i * K + j] += shape;
-        if (i != j) shape_[j * K + i] += shape;
       }
   for (int i = 0; i < rows_; ++i) {
     const btSolverConstraint& ri = *row_[i].row;
@@ -217,7 +215,7 @@ void ConstraintSolver::factor(bool find_dependent) noexcept {
   for (int k = 0; k < ne; ++k) {
     if (!dependent_[k]) continue;
     double* n = &null_[nulls_ * K];
-    for (int j = 0; j < ne; ++j) n[j] = a_[equality_[j] * K + equality_[k]];
+    for (int j = 0; j < ne; ++j) n[j] = a(equality_[j], equality_[k]);
     solve_kept(n);
     for (int j = 0; j < ne; ++j) n[j] = -n[j];
     n[k] = 1.0;
@@ -236,13 +234,13 @@ void ConstraintSolver::factor(bool find_dependent) noexcept {
   const int nb = static_cast<int>(bounded_.size());
   for (int b = 0; b < nb; ++b) {
     double* w = &w_[b * K];
-    for (int k = 0; k < ne; ++k) w[k] = a_[bounded_[b] * K + equality_[k]];
+    for (int k = 0; k < ne; ++k) w[k] = a(bounded_[b], equality_[k]);
     solve_equality(w);
   }
   for (int b1 = 0; b1 < nb; ++b1)
     for (int b2 = 0; b2 < nb; ++b2) {
-      double sum = a_[bounded_[b1] * K + bounded_[b2]];
-      for (int k = 0; k < ne; ++k) sum -= a_[bounded_[b1] * K + equality_[k]] * w_[b2 * K + k];
+      double sum = a(bounded_[b1], bounded_[b2]);
+      for (int k = 0; k < ne; ++k) sum -= a(bounded_[b1], equality_[k]) * w_[b2 * K + k];
       schur_[b1 * K + b2] = sum;
     }
 }
@@ -361,7 +359,7 @@ bool ConstraintSolver::solve_rows() noexcept {
   double* x = bounded_solution_.data();
   for (int b = 0; b < nb; ++b) {
     double sum = residual_[bounded_[b]];
-    for (int k = 0; k < ne; ++k) sum -= a_[bounded_[b] * K + equality_[k]] * y[k];
+    for (int k = 0; k < ne; ++k) sum -= a(bounded_[b], equality_[k]) * y[k];
     reduced_rhs_[b] = sum;
     x[b] = 0.0;
   }

@@ -17,7 +17,6 @@
 
 #include <btBulletDynamicsCommon.h>
 
-#include <array>
 #include <vector>
 
 namespace afhub::physics {
@@ -69,7 +68,7 @@ class ConstraintSolver : public btSequentialImpulseConstraintSolver {
   int rows_ = 0;
   std::vector<Row> row_;
   std::vector<int> bounded_slot_;  // per row: its place in bounded_, or -1
-  std::vector<std::array<Side, 2>> sides_;
+  std::vector<Side> sides_;        // per row side: 2 row + side
   // The row sides (2 row + side) meeting at each solver body, as lists: the first
   // per body, the next per side; -1 ends.
   std::vector<int> body_rows_, next_side_;
@@ -81,8 +80,14 @@ class ConstraintSolver : public btSequentialImpulseConstraintSolver {
   std::vector<int> first_;               // per equality row: its first nonzero in A
   std::vector<int> last_;                // per column of the factor: its last row
   int nulls_ = 0;                        // dependent equality rows
+  // A's entry (i, j), from its lower triangle.
+  double a(int i, int j) const noexcept {
+    return i >= j ? a_[i * kMaxDirectRows + j] : a_[j * kMaxDirectRows + i];
+  }
+
   // Dense, row-major, kMaxDirectRows wide: the rows' effective mass A and their
-  // shape matrix (factor(): which rows a loop repeats is judged on it); the Cholesky
+  // shape matrix (factor(): which rows a loop repeats is judged on it), both
+  // symmetric and kept as their lower triangles (row >= column); the Cholesky
   // factor of its equality block's kept rows; the null vectors of the dependent
   // rows and their Gram matrix's factor; W = A_ee^+ A_eb; the bounded rows' Schur
   // complement S = A_bb - A_be W.
