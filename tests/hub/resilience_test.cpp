@@ -39,16 +39,15 @@ std::int64_t now_ns();
 // bug this test is for) would show as 10 to 50 chunks, far above this allowance.
 constexpr std::uint32_t kIceoryxKillWindowChunks = 2;
 
-// True when `after` holds at most `allowance` more chunks than `before`, in total,
-// and never fewer than `before` in any pool.
+// True when `after` holds at most `allowance` more chunks than `before`, summed over
+// the pools that hold more. A pool holding fewer is no leak: `before` may have caught
+// a sample in flight (a fresh CI run saw one pool at 2 chunks before, 1 after).
 bool within_allowance(const std::vector<std::uint32_t>& before,
                       const std::vector<std::uint32_t>& after, std::uint32_t allowance) {
   if (after.size() != before.size()) return false;
   std::uint32_t extra = 0;
-  for (std::size_t i = 0; i < before.size(); ++i) {
-    if (after[i] < before[i]) return false;
-    extra += after[i] - before[i];
-  }
+  for (std::size_t i = 0; i < before.size(); ++i)
+    if (after[i] > before[i]) extra += after[i] - before[i];
   return extra <= allowance;
 }
 
@@ -286,7 +285,8 @@ TEST(Resilience, KilledClientRestartsWhileOthersKeepWorking) {
               after_text.c_str());
   if (settled && !exact)
     std::printf(
-        "a kill landed inside iceoryx's take/release window (see kIceoryxKillWindowChunks)\n");
+        "the pools differ from before within the allowance: a kill inside iceoryx's "
+        "take/release window (see kIceoryxKillWindowChunks), or a sample in flight before\n");
   EXPECT_TRUE(settled) << "chunks leaked: before [" << before_text << "] after [" << after_text
                        << "]";
 

@@ -130,11 +130,37 @@ pid_t spawn_wrapped_afhub(const std::vector<std::string>& wrapper,
   return spawn_process(argv, options);
 }
 
+namespace {
+
+// What each thread of a process that would not stop is doing, from /proc: its name,
+// where the kernel holds it (wchan) and its system call (number and arguments).
+std::string threads_of(pid_t pid) {
+  std::string out;
+  const std::string task = "/proc/" + std::to_string(pid) + "/task";
+  std::error_code error;
+  for (const auto& entry : std::filesystem::directory_iterator(task, error)) {
+    auto line = [&](const char* file) {
+      std::string text = read_file((entry.path() / file).string());
+      while (!text.empty() && (text.back() == '\n' || text.back() == '\0')) text.pop_back();
+      return text;
+    };
+    out += "  thread " + entry.path().filename().string() + " (" + line("comm") + "): wchan " +
+           line("wchan") + ", syscall " + line("syscall") + "\n";
+  }
+  return out;
+}
+
+}  // namespace
+
 int stop_process(pid_t pid, int signal, std::chrono::milliseconds timeout) {
   kill(pid, signal);
   int status = 0;
   bool exited = wait_until([&] { return waitpid(pid, &status, WNOHANG) == pid; }, timeout);
   if (!exited) {
+    // Said before the kill: a process that ignores its stop is a bug to find.
+    std::fprintf(stderr, "stop_process: pid %d did not exit within %lld ms of signal %d:\n%s",
+                 static_cast<int>(pid), static_cast<long long>(timeout.count()), signal,
+                 threads_of(pid).c_str());
     kill(pid, SIGKILL);
     waitpid(pid, &status, 0);
   }
