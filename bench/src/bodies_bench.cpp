@@ -26,7 +26,7 @@
 #include "afhub/shm_layout/error.hpp"
 #include "afhub/shm_layout/world.hpp"
 #include "child_process.hpp"
-#include "format.hpp"
+#include "text_format.hpp"
 
 namespace afhub::bench {
 namespace {

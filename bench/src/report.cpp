@@ -12,7 +12,7 @@
 #include "afhub/rt/percentile.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "child_process.hpp"
-#include "format.hpp"
+#include "text_format.hpp"
 
 namespace afhub::bench {
 namespace {
