@@ -198,10 +198,10 @@ int run_run(const RunCliOptions& options) {
   }
   if (!options.step_log_file.empty()) {
     std::ofstream out(options.step_log_file);
-    out << "begin_ns step_us commands_us publish_us\n";
+    out << "begin_ns step_us commands_us publish_us due_ns late\n";
     for (const physics::StepSample& sample : report.step_log)
       out << sample.begin_ns << ' ' << sample.duration_us << ' ' << sample.commands_us << ' '
-          << sample.publish_us << '\n';
+          << sample.publish_us << ' ' << sample.due_ns << ' ' << sample.late << '\n';
     if (!out) throw Error("cannot write the step log to " + options.step_log_file);
   }
   return report.nan_detected ? 1 : 0;

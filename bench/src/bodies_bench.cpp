@@ -34,8 +34,6 @@ namespace {
 // Steps after every body is first commanded that are left out: the physics' first
 // answers to a controller that has just joined.
 constexpr std::int64_t kSettleNs = 500'000'000;
-// The physics writes its step log once stopped: a minute of steps takes a second.
-constexpr int kPhysicsStopMs = 60'000;
 
 // The run's files, removed however it ends; the physics' log stays when an error
 // names it.
@@ -61,22 +59,6 @@ struct HeldBody {
   std::vector<double> hold;  // its joints' first positions
   bool seen = false;
 };
-
-// The physics' step log: begin_ns step_us commands_us publish_us, one line a step.
-std::vector<StepPhases> read_step_log(const std::string& path, std::int64_t from_ns,
-                                      std::int64_t to_ns) {
-  std::ifstream in(path);
-  std::string header;
-  if (!std::getline(in, header) || header != "begin_ns step_us commands_us publish_us")
-    throw Error("the physics wrote no step log to " + path + " (its first line: \"" + header +
-                "\")");
-  std::vector<StepPhases> steps;
-  long long begin = 0;
-  float step = 0, commands = 0, publish = 0;
-  while (in >> begin >> step >> commands >> publish)
-    if (begin >= from_ns && begin <= to_ns) steps.push_back({commands, step - publish, publish});
-  return steps;
-}
 
 template <typename Phase>
 float percentile(const std::vector<StepPhases>& steps, double q, Phase phase) {
@@ -200,7 +182,10 @@ BodiesResult run_bodies_bench(const BodiesOptions& options) {
   const int exit_code = physics.stop(kPhysicsStopMs);
   if (exit_code != 0 && exit_code != 128 + SIGTERM)
     throw files.physics_error("the physics exited with code " + std::to_string(exit_code));
-  result.steps = read_step_log(files.step_log, first_ns + kSettleNs, last_ns);
+  const std::vector<LoggedStep> logged =
+      read_step_log(files.step_log, first_ns + kSettleNs, last_ns);
+  for (const LoggedStep& step : logged) result.steps.push_back(step.phases);
+  result.late = late_commands(logged);
   result.physics_dropped = first_line_with(files.physics_log, "shared memory exhausted");
   return result;
 }
@@ -230,6 +215,7 @@ std::string bodies_table(const BodiesOptions& options, const BodiesResult& resul
       result.commanded_steps ? 100.0 * result.answered_steps / result.commanded_steps : 0.0;
   out += format("Commands in time for the next step: %.2f %% of %.0f body-steps\n", in_time,
                 result.commanded_steps);
+  out += late_commands_text(result.late, result.bodies);
   if (result.refused_loans)
     out += format("Commands not written (no shared memory): %.0f\n", result.refused_loans);
   if (result.controller_overruns)

@@ -18,6 +18,7 @@
 #include "afhub/controllers/joint_targets.hpp"
 #include "afhub/hub/channel.hpp"
 #include "afhub/hub/hub_presence.hpp"
+#include "afhub/rt/clock.hpp"
 #include "afhub/rt/process_spawn.hpp"
 #include "afhub/rt/stop_signal.hpp"
 #include "afhub/shm_layout/error.hpp"
@@ -65,9 +66,20 @@ void run_loop_bench(const BenchOptions& options, LoopResult& result) {
   const std::string priority = std::to_string(options.fifo_priority);
   std::fprintf(stderr, "afhub bench: 1 kHz loop for %.0f s against %s\n", options.loop_seconds,
                options.model.c_str());
-  ChildProcess physics({this_executable(), "run", options.model, "--no-autostart", "--fifo",
-                        priority, "--lock-memory"},
-                       prefix + "-physics.log");
+  // Its step log holds every step of the run (the physics is stopped once the loop is
+  // done): it tells the late commands apart.
+  const struct StepLogFile {
+    std::string path;
+    ~StepLogFile() {
+      std::error_code ignored;
+      std::filesystem::remove(path, ignored);
+    }
+  } step_log{prefix + "-steps.txt"};  // removed however the run ends, after the physics
+  const auto log_steps = static_cast<std::uint64_t>((options.loop_seconds + 120.0) * 1000.0);
+  ChildProcess physics(
+      {this_executable(), "run", options.model, "--no-autostart", "--fifo", priority,
+       "--lock-memory", "--steps", std::to_string(log_steps), "--step-log", step_log.path},
+      prefix + "-physics.log");
 
   const auto cycles = static_cast<std::uint64_t>(options.loop_seconds * 1e9 / kControllerPeriodNs);
   std::unique_ptr<ChildProcess> cyclictest;
@@ -91,6 +103,7 @@ void run_loop_bench(const BenchOptions& options, LoopResult& result) {
   LoopTiming timing;
   // The counters at the start are read on the first cycle, once the physics runs.
   bool started = false;
+  std::int64_t started_ns = 0;
   std::uint64_t commanded_before = 0, answered_before = 0;
   const ControllerCycle hold = joint_position_controller(hold_targets());
   const auto cycle = [&](const BodyState& state, BodyCommand& command) {
@@ -99,6 +112,7 @@ void run_loop_bench(const BenchOptions& options, LoopResult& result) {
         commanded_before = now->commanded_steps;
         answered_before = now->answered_steps;
         started = true;
+        started_ns = monotonic_ns();
       }
     hold(state, command);
   };
@@ -111,15 +125,17 @@ void run_loop_bench(const BenchOptions& options, LoopResult& result) {
                 std::to_string(physics.wait(0)) + "); it said:\n" +
                 read_text(prefix + "-physics.log"));
   }
+  const std::int64_t finished_ns = monotonic_ns();
   if (const WorldState* now = world.latest()) {
     result.commanded_steps = now->commanded_steps - commanded_before;
     result.answered_steps = now->answered_steps - answered_before;
   }
   if (stop_requested()) throw Error("interrupted");  // cyclictest runs on: not waited for
   result.controller_wake = timing.wake_latency();
-  physics.stop();
+  physics.stop(kPhysicsStopMs);  // SIGTERM: it writes its step log, then exits
   result.physics_dropped = first_line_with(prefix + "-physics.log", "shared memory exhausted");
   std::filesystem::remove(prefix + "-physics.log");
+  result.late = late_commands(read_step_log(step_log.path, started_ns, finished_ns));
   if (cyclictest) {
     if (cyclictest->wait(10'000) == -1)
       throw Error("cyclictest did not finish 10 s after the loop; see " + prefix +

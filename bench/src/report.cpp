@@ -197,6 +197,7 @@ std::string results_table(const BenchResults& results) {
     }
     out += format("Commands in time for the next step: %.2f %% of %.0f steps\n",
                   100.0 * loop.deadline_hit_ratio(), static_cast<double>(loop.commanded_steps));
+    out += late_commands_text(loop.late, 1);  // one body commanded
   }
 
   // The goals this machine is held to, met or not.

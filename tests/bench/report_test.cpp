@@ -101,8 +101,21 @@ TEST(BenchReport, TableGivesRatiosToAfhubAndTheGoalsVerdicts) {
   EXPECT_TRUE(contains(table, "vs uds 60.00 us: 1.2x lower (goal 1.5x): NOT met")) << table;
   EXPECT_TRUE(contains(table, "1 MiB is 1.00x its median at 1 KiB (goal <= 2): met")) << table;
   EXPECT_TRUE(contains(table, "99.95 % of 20000 steps")) << table;
+  EXPECT_FALSE(contains(table, "late by the physics' step log")) << table;  // none was late
   // The loop's p99 is 20.6 us against cyclictest's 19.1 (bins' highest values): within 2x.
   EXPECT_TRUE(contains(table, "loop p99 wake-up 21 us vs cyclictest 19 us: 1.08x (goal <= 2): met"))
+      << table;
+}
+
+// The late commands told apart, from the physics' step log.
+TEST(BenchReport, TableSaysWhichLateCommandsCameWithThePhysicsBehind) {
+  BenchResults results = known_results();
+  results.loop.late = {10, 7, 3, 2, 19'900};
+  const std::string table = results_table(results);
+  EXPECT_TRUE(contains(table,
+                       "10 late by the physics' step log: 7 at a step it began over 0.3 ms behind "
+                       "its grid, or the step after (it fell behind 3 times, 2 of them waking up "
+                       "late: the machine held it); at the other 19900 steps, 99.98 % in time"))
       << table;
 }
 

@@ -115,8 +115,9 @@ TEST(Cli, DemoPrintsTheViewersUrlWhichServesTheScene) {
   EXPECT_EQ(run_afhub({"hub", "stop"}).exit_code, 0);
 }
 
-// --step-log: one line per step, its start and duration, for measurements in windows
-// of one run (bench/viewer_cost.sh); it needs --steps, which sizes it.
+// --step-log: one line per step, its start and duration, its point on the grid and the
+// commands late for it, for measurements in windows of one run (bench/viewer_cost.sh,
+// `afhub bench bodies`); it needs --steps, which sizes it.
 TEST(Cli, RunWritesAStepLog) {
   char pattern[] = "/tmp/afhub_step_log_XXXXXX";
   ASSERT_NE(mkdtemp(pattern), nullptr);
@@ -127,16 +128,24 @@ TEST(Cli, RunWritesAStepLog) {
   std::istringstream lines(read_file(log));
   std::string header;
   std::getline(lines, header);
-  EXPECT_EQ(header, "begin_ns step_us commands_us publish_us");
-  long long begin = 0, previous = 0;
+  EXPECT_EQ(header, "begin_ns step_us commands_us publish_us due_ns late");
+  long long begin = 0, previous = 0, due = 0, previous_due = 0;
   double duration = 0.0, commands = 0.0, publish = 0.0;
+  unsigned late = 0;
   int steps = 0;
-  while (lines >> begin >> duration >> commands >> publish) {
+  while (lines >> begin >> duration >> commands >> publish >> due >> late) {
     EXPECT_GT(begin, previous) << "line " << steps + 2;
     EXPECT_GT(duration, 0.0) << "line " << steps + 2;
     EXPECT_EQ(commands, 0.0) << "line " << steps + 2;  // offline: no channels, no commands
     EXPECT_LT(publish, duration) << "line " << steps + 2;
+    EXPECT_GE(begin, due) << "line " << steps + 2;  // a step starts once it is due
+    if (steps > 0) {  // on the 1 ms grid: the next point, or one past the periods skipped
+      EXPECT_GT(due, previous_due) << "line " << steps + 2;
+      EXPECT_EQ((due - previous_due) % 1'000'000, 0) << "line " << steps + 2;
+    }
+    EXPECT_EQ(late, 0U) << "line " << steps + 2;  // nothing under command
     previous = begin;
+    previous_due = due;
     ++steps;
   }
   EXPECT_EQ(steps, 300);

@@ -123,6 +123,8 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
       }
       stepped_ns = monotonic_ns();
     }
+    const std::uint64_t commanded = channels ? channels->commanded_steps() : 0;
+    const std::uint64_t answered = channels ? channels->answered_steps() : 0;
     if (channels)
       channels->publish({static_cast<double>(clock_ns() - start_ns) * 1e-9, achieved_rate_hz,
                          control.halted(), pacing.period_ns > 0 ? step_due_ns : 0,
@@ -135,7 +137,11 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
       };
       if (report.step_log.size() < report.step_log.capacity())
         report.step_log.push_back(
-            {begin_ns, us(end_ns - begin_ns), us(commands_ns), us(end_ns - stepped_ns)});
+            {begin_ns, us(end_ns - begin_ns), us(commands_ns), us(end_ns - stepped_ns),
+             pacing.period_ns > 0 ? step_due_ns : 0,
+             channels ? static_cast<std::uint32_t>((channels->commanded_steps() - commanded) -
+                                                   (channels->answered_steps() - answered))
+                      : 0});
     }
     return options.steps == 0 || report.steps < options.steps;
   };

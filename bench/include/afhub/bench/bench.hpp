@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "afhub/bench/distribution.hpp"
+#include "afhub/bench/step_log.hpp"
 
 namespace afhub::bench {
 
@@ -53,6 +54,7 @@ struct LoopResult {
   std::string cyclictest_skipped;
   LatencyHistogram cyclictest_wake;  // its maximum exact, as cyclictest reports it
   std::uint64_t commanded_steps = 0, answered_steps = 0;
+  LateCommands late;  // from the physics' step log
   // What the physics said when it could not publish a state (a pool out of chunks):
   // empty when it published every step.
   std::string physics_dropped;

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "afhub/bench/step_log.hpp"
 #include "afhub/rt/latency_histogram.hpp"
 
 namespace afhub::bench {
@@ -20,16 +21,11 @@ struct BodiesOptions {
   int fifo_priority = 80;     // the physics' and the controller's SCHED_FIFO priority
 };
 
-// One step as the physics timed it, in us.
-struct StepPhases {
-  float commands = 0, physics = 0, publish = 0;
-  float total() const { return commands + physics + publish; }
-};
-
 struct BodiesResult {
   int bodies = 0;
   std::vector<StepPhases> steps;  // those taken while every body was commanded
   std::uint64_t commanded_steps = 0, answered_steps = 0;  // body-steps, from the world state
+  LateCommands late;                                      // from the step log
   LatencyHistogram controller_compute;                    // a cycle's commands written, ns
   std::uint64_t refused_loans = 0;                        // commands not written: no shared memory
   std::uint64_t controller_overruns = 0;                  // periods the controller's loop missed

@@ -62,6 +62,8 @@ struct StepSample {
   float duration_us = 0.0F;
   float commands_us = 0.0F;
   float publish_us = 0.0F;
+  std::int64_t due_ns = 0;  // its point on the grid (0 with --fast)
+  std::uint32_t late = 0;   // bodies under command whose command did not answer the step before
 };
 
 struct RunReport {
