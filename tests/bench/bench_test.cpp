@@ -47,12 +47,13 @@ TEST_F(BenchOwnHub, ShortRunMeasuresEveryTransportAndTheLoop) {
   EXPECT_TRUE(contains(run.out, "One-way latency, median")) << run.out;
   EXPECT_TRUE(contains(run.out, "Goals")) << run.out;
   EXPECT_TRUE(contains(run.err, "latency round 2 of 2")) << run.err;  // progress
-  // Nothing of it left in /tmp (the test binary's own): rosmaster's home and the peers'
-  // logs, kept only when a run fails, go with it.
+  // Nothing of it left in /tmp (the test binary's own): rosmaster's home, the physics'
+  // step log and the peers' logs, kept only when a run fails, go with it.
   for (const auto& entry : std::filesystem::directory_iterator("/tmp")) {
     const std::string name = entry.path().filename().string();
     EXPECT_FALSE(name.starts_with("afhub-bench-ros-") ||
-                 (name.starts_with("afhub-bench-") && name.ends_with(".log")))
+                 (name.starts_with("afhub-bench-") &&
+                  (name.ends_with(".log") || name.ends_with("-steps.txt"))))
         << entry.path();
   }
 
