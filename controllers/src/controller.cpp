@@ -55,7 +55,8 @@ void run_free(BodyClient& body, const ControllerOptions& options, const Controll
       }
       sleep_until_ns(monotonic_ns() + 1'000'000);
     }
-    phase.emplace(after_ns, [&body] { return body.latest_state(); });
+    phase.emplace(
+        after_ns, [&body] { return body.latest_state(); }, &body.state_reader());
   }
   // Late commands as the physics counts them for this body (its state carries the
   // body's steps under command and those answered in time), so that this loop's
@@ -64,16 +65,21 @@ void run_free(BodyClient& body, const ControllerOptions& options, const Controll
   std::uint32_t physics_pid = 0;
   LoopCycle steps;
   if (phase) phase->attach(loop, steps);
+  const auto respond = [&](const BodyState& state) {
+    const std::uint32_t late = state.commanded_steps - state.answered_steps;
+    if (state.header.publisher_pid == physics_pid)
+      timing.count_late(static_cast<std::uint32_t>(late - physics_late));
+    if (phase) phase->follow(state);  // a new physics, on a grid of its own
+    physics_pid = state.header.publisher_pid;
+    physics_late = late;
+    answer(body, state, cycle, false);
+  };
   steps.work = [&] {
     const BodyState* state = body.latest_state();
     if (!state) return true;
-    const std::uint32_t late = state->commanded_steps - state->answered_steps;
-    if (state->header.publisher_pid == physics_pid)
-      timing.count_late(static_cast<std::uint32_t>(late - physics_late));
-    if (phase) phase->follow(*state);  // a new physics, on a grid of its own
-    physics_pid = state->header.publisher_pid;
-    physics_late = late;
-    answer(body, *state, cycle, false);
+    respond(*state);
+    // A physics catching up after a stall: each of its late steps answered as it comes.
+    while (phase && (state = phase->next_while_catching_up(*state))) respond(*state);
     return true;
   };
   steps.after = [&](std::int64_t now) { stats.maybe_publish(now, timing); };

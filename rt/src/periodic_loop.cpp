@@ -9,6 +9,7 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <utility>
 
 #include "afhub/rt/clock.hpp"
 #include "afhub/rt/cpu_wake_latency.hpp"
@@ -104,7 +105,8 @@ void run_periodic(const LoopOptions& options, LoopTiming& timing, const LoopCycl
     const std::int64_t began = clock.now_ns();
     const bool go_on = cycle.work();
     const std::int64_t finished = clock.now_ns();
-    timing.record(period > 0 ? woke - scheduled : 0, finished - began);
+    const std::int64_t waited = cycle.waited_ns ? std::exchange(*cycle.waited_ns, 0) : 0;
+    timing.record(period > 0 ? woke - scheduled : 0, finished - began - waited);
     scheduled += period;
     if (period > 0 && finished >= scheduled) {
       if (options.overrun == OverrunPolicy::kSkip) {

@@ -1,9 +1,11 @@
 // A free-running controller's phase (controllers/controller.hpp): its grid point is a
 // fixed time after the physics' step was due, from the due time the state carries, or
-// from the publish stamp when the physics is not paced by the clock; and the states
-// that move a running loop onto another grid (hub/step_phase.hpp).
+// from the publish stamp when the physics is not paced by the clock; the states that
+// move a running loop onto another grid; and a physics behind its grid followed state
+// by state (hub/step_phase.hpp).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <utility>
 
 #include "afhub/controllers/controller.hpp"
@@ -74,6 +76,76 @@ TEST(StepPhase, APhysicsStartedOverOrAnotherOneMovesTheLoopToItsGrid) {
   // --fast, or a DDS mirror: no due times, the same grid on.
   PhasedLoop fast(11, 3, 0, 8'000'000'000);
   EXPECT_EQ(fast.follow(11, 4, 0, 8'000'010'000), 0);
+}
+
+// The follow is checked on a clock the test drives: a sleep jumps to its deadline.
+class SteppedClock final : public LoopClock {
+ public:
+  std::int64_t now = 10'000'000'000;
+  std::int64_t now_ns() noexcept override { return now; }
+  void sleep_until_ns(std::int64_t deadline_ns) noexcept override {
+    now = std::max(now, deadline_ns);
+  }
+};
+
+// A loop whose cycle is due at `kCycle` has answered a state; `newer` is what the
+// physics publishes next, seen from the reads given by `comes_at_read` on.
+struct FollowingLoop {
+  static constexpr std::int64_t kPeriod = 1'000'000, kCycle = 10'000'000'000;
+  SteppedClock clock;
+  BodyState answered, newer;
+  std::size_t reads = 0, comes_at_read = ~std::size_t{0};
+  StepPhase phase{500'000, [this]() -> const BodyState* {
+                    return ++reads >= comes_at_read ? &newer : &answered;
+                  }};
+  LoopOptions options;
+  LoopCycle cycle;
+
+  FollowingLoop(std::int64_t answered_due_ns) {
+    answered.header.sim_step = 40;
+    answered.step_due_ns = answered_due_ns;
+    newer = answered;
+    newer.header.sim_step = 41;
+    options.period_ns = kPeriod;
+    options.clock = &clock;
+    phase.attach(options, cycle);
+    *cycle.deadline_ns = kCycle;
+    clock.now = kCycle + 30'000;  // the loop woke and answered
+    reads = 0;
+  }
+  const BodyState* next() { return phase.next_while_catching_up(answered); }
+  std::int64_t waited() { return std::exchange(*cycle.waited_ns, 0); }
+};
+
+TEST(StepPhase, APhysicsOnItsGridIsNotFollowed) {
+  // The loop answers half a period after the step was due: the next is not due yet.
+  FollowingLoop loop(FollowingLoop::kCycle - 500'000);
+  loop.comes_at_read = 1;
+  EXPECT_EQ(loop.next(), nullptr);
+  EXPECT_EQ(loop.reads, 0u) << "no state read, no wait";
+  EXPECT_EQ(loop.waited(), 0);
+  // Stopped 0.2 s ago, beyond what a physics catches up: it skips to its grid.
+  FollowingLoop stopped(FollowingLoop::kCycle - 200'000'000);
+  stopped.comes_at_read = 1;
+  EXPECT_EQ(stopped.next(), nullptr);
+  EXPECT_EQ(stopped.reads, 0u);
+}
+
+TEST(StepPhase, APhysicsBehindItsGridIsFollowedStateByState) {
+  // Held 5 ms: its next step was due long ago, so it runs at once.
+  FollowingLoop loop(FollowingLoop::kCycle - 5'000'000);
+  loop.comes_at_read = 3;  // two 20 us polls find the state answered, the third a new one
+  EXPECT_EQ(loop.next(), &loop.newer);
+  EXPECT_EQ(loop.reads, 3u);
+  EXPECT_EQ(loop.waited(), 40'000) << "the wait, left out of the cycle's compute time";
+}
+
+TEST(StepPhase, AFollowEndsBeforeTheLoopsNextCycle) {
+  // No new state: the wait ends 20 us before the next cycle, which answers as usual.
+  FollowingLoop loop(FollowingLoop::kCycle - 5'000'000);
+  EXPECT_EQ(loop.next(), nullptr);
+  EXPECT_EQ(loop.clock.now, FollowingLoop::kCycle + FollowingLoop::kPeriod - 20'000);
+  EXPECT_EQ(loop.waited(), FollowingLoop::kPeriod - 20'000 - 30'000);
 }
 
 }  // namespace

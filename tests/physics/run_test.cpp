@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <thread>
@@ -22,6 +23,7 @@
 #include "afhub/hub/bodies.hpp"
 #include "afhub/physics/adf_loader.hpp"
 #include "afhub/physics/run_loop.hpp"
+#include "afhub/rt/clock.hpp"
 #include "afhub/shm_layout/channel_names.hpp"
 #include "afhub/shm_layout/world.hpp"
 #include "afhub_process.hpp"
@@ -311,6 +313,85 @@ TEST(Run, LockstepWaitsAsleepUnlessSpinning) {
     answering.join();
     EXPECT_EQ(channels.late_answers(), late + 1) << (spin ? "spinning" : "asleep");
   }
+}
+
+TEST(Run, AStepHandsOffOnlyBehindItsGridAndWithTimeToSpare) {
+  constexpr std::int64_t kDue = 5'000'000'000, kPeriod = 1'000'000;
+  const physics::PreviousStep on_time{kDue - kPeriod + 30'000, 25'000};
+  EXPECT_FALSE(physics::hands_off(kDue, kDue + 60'000, on_time, kPeriod)) << "on its grid";
+  EXPECT_TRUE(physics::hands_off(kDue, kDue + 3'000'000, on_time, kPeriod)) << "woke 3 ms late";
+  EXPECT_FALSE(physics::hands_off(kDue, kDue + 200'000, on_time, kPeriod)) << "0.2 ms: in bounds";
+  const physics::PreviousStep catching_up{kDue + 10'000, 25'000};
+  EXPECT_TRUE(physics::hands_off(kDue, kDue + 12'000, catching_up, kPeriod))
+      << "the step before ended after this one was due";
+  const physics::PreviousStep overloaded{kDue + 60'000, 1'050'000};
+  EXPECT_FALSE(physics::hands_off(kDue, kDue + 62'000, overloaded, kPeriod))
+      << "its own steps fill the period";
+  EXPECT_FALSE(physics::hands_off(kDue, kDue + 5'000'000, {kDue - 400'000, 201'000}, kPeriod))
+      << "a step longer than the hand-off";
+}
+
+// Catching up, a step waits for the answer of a controller in phase (its commands in
+// time) to the state before it; a controller that misses that wait is not waited for
+// again until a command of its is in time again. Judged by the physics' own count of
+// commands in time: a step taken without waiting misses an answer sent 20 ms later.
+TEST(Run, CatchingUpAStepWaitsForTheControllersInPhaseUntilOneMisses) {
+  afhub::testing::ModelFolder folder;
+  const physics::Model model =
+      physics::load_adf_files({folder.write("ball.yaml",
+                                            "bodies: [BODY ball]\nnamespace: /test/phase/\n"
+                                            "BODY ball:\n  name: ball\n  mass: 1\n")});
+  physics::Simulation sim(model, 0.001);
+  physics::SimChannels channels(sim, 5.0);
+  BodyClient client(model.bodies[0].channel);
+  auto send = [&](std::uint64_t step) {
+    BodyCommand* command = client.loan_command(0);
+    ASSERT_NE(command, nullptr);
+    command->header.sim_step = step;
+    client.publish_command(command);
+  };
+  // The next step, its command applied after `wait`: whether it was in time.
+  auto step_in_time = [&](const std::function<void()>& wait) {
+    wait();
+    channels.apply_commands(monotonic_ns());
+    sim.step();
+    const std::uint64_t answered = channels.answered_steps();
+    channels.publish({});
+    return channels.answered_steps() == answered + 1;
+  };
+  auto answer_later = [&](std::uint64_t step) {
+    return std::thread([&, step] {
+      std::this_thread::sleep_for(20ms);
+      send(step);
+    });
+  };
+  // In phase: a command in time (once the physics has found the command's writer).
+  auto in_time_once_found = [&] {
+    return wait_until(
+        [&] {
+          send(sim.step_count());
+          return step_in_time([] {});
+        },
+        5s);
+  };
+  channels.publish({});
+  ASSERT_TRUE(in_time_once_found());
+
+  std::thread answering = answer_later(sim.step_count());
+  EXPECT_TRUE(step_in_time([&] { channels.await_answers_in_phase(5'000'000'000); }))
+      << "the step waited for the answer";
+  answering.join();
+  // No answer: the wait ends at its timeout, and the step is late.
+  EXPECT_FALSE(step_in_time([&] { channels.await_answers_in_phase(30'000'000); }));
+  // Out of phase now: not waited for.
+  answering = answer_later(sim.step_count());
+  EXPECT_FALSE(step_in_time([&] { channels.await_answers_in_phase(5'000'000'000); }));
+  answering.join();
+  // A command in time puts it back in phase.
+  ASSERT_TRUE(in_time_once_found());
+  answering = answer_later(sim.step_count());
+  EXPECT_TRUE(step_in_time([&] { channels.await_answers_in_phase(5'000'000'000); }));
+  answering.join();
 }
 
 TEST(Run, KukaOnChannelsObeysCommandsRefusesNanAndTripsTheWatchdog) {

@@ -344,6 +344,31 @@ TEST(PeriodicLoop, TheTimeAfterTheWorkIsCounted) {
   EXPECT_EQ(timing.compute().max_us(), 0.0);
 }
 
+// Time the work says it spent waiting (a controller following a catching-up physics)
+// is not compute time.
+TEST(PeriodicLoop, TheWorkTimeSpentWaitingIsNotComputeTime) {
+  FakeClock clock;
+  LoopOptions options;
+  options.period_ns = 1'000'000;
+  options.max_cycles = 10;
+  options.clock = &clock;
+  LoopTiming timing;
+  std::int64_t waited = 0;
+  LoopCycle cycle;
+  cycle.waited_ns = &waited;
+  cycle.work = [&] {
+    clock.now += 100'000;  // computing
+    waited = 600'000;      // then waiting
+    clock.now += waited;
+    return true;
+  };
+  run_periodic(options, timing, cycle);
+  EXPECT_EQ(timing.cycles(), 10u);
+  EXPECT_DOUBLE_EQ(timing.compute().max_us(), 100.0);
+  EXPECT_EQ(waited, 0) << "set back for the next cycle";
+  EXPECT_EQ(timing.overruns(), 0u);
+}
+
 TEST(LoopTiming, EmptyHistogramReadsZero) {
   LoopTiming timing;
   LoopStats stats;

@@ -47,6 +47,13 @@ void record_tracking(const Simulation& sim, RunReport& report) noexcept {
 
 }  // namespace
 
+bool hands_off(std::int64_t due_ns, std::int64_t now_ns, const PreviousStep& previous,
+               std::int64_t period_ns) noexcept {
+  const std::int64_t hand_off_ns = period_ns / kHandOffsPerPeriod;
+  const bool behind = previous.end_ns > due_ns || now_ns - due_ns > hand_off_ns;
+  return behind && previous.took_ns <= hand_off_ns;
+}
+
 void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
               RunReport& report) {
   const auto period_ns = static_cast<std::int64_t>(sim.dt_s() * 1e9);
@@ -83,6 +90,7 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
   pacing.grid_origin_ns = start_ns;
   LoopCycle cycle;
   std::int64_t commands_ns = 0;  // reading and applying this period's body commands
+  PreviousStep previous;
   // Each step's deadline, published with its states: controllers wake in phase with it.
   std::int64_t step_due_ns = 0;
   cycle.deadline_ns = &step_due_ns;
@@ -100,6 +108,11 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
         rate.restart();
       }
     if (channels->lockstep() && !control.paused) return channels->await_lockstep();
+    // Behind the grid (after a stall), the controllers in phase follow the physics
+    // catching up, answering each state as it comes: given time for it.
+    if (!control.paused && step_due_ns > 0 &&
+        hands_off(step_due_ns, clock_ns(), previous, period_ns))
+      channels->await_answers_in_phase(period_ns / kHandOffsPerPeriod);
     const std::int64_t begin_ns = monotonic_ns();
     channels->apply_commands(begin_ns);
     commands_ns = monotonic_ns() - begin_ns;
@@ -129,8 +142,9 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
       channels->publish({static_cast<double>(clock_ns() - start_ns) * 1e-9, achieved_rate_hz,
                          control.halted(), pacing.period_ns > 0 ? step_due_ns : 0,
                          pacing.period_ns});
+    const std::int64_t end_ns = monotonic_ns();
+    previous = {clock_ns(), end_ns - begin_ns};
     if (stepping) {
-      const std::int64_t end_ns = monotonic_ns();
       report.step_time.record(end_ns - begin_ns);
       const auto us = [](std::int64_t ns) {
         return static_cast<float>(static_cast<double>(ns) * 1e-3);

@@ -170,6 +170,7 @@ SimChannels::SimChannels(Simulation& sim, double watchdog_s, std::string_view na
                  kMaxSceneJointValues, joint_values);
   scene_joint_values_ = static_cast<std::uint32_t>(std::min(joint_values, kMaxSceneJointValues));
   lockstep_pids_.reserve(channels_.size());
+  attach_command_waiter();  // past its capacity, the waits for commands poll
   publish_scene();
   publish_soft_faces();
   directory_.publish();
@@ -201,6 +202,7 @@ void SimChannels::publish(const WorldClock& clock) noexcept {
       if (channel.applied_answer_step + 1 == step) {
         ++answered_steps_;
         ++channel.answered_steps;
+        channel.in_phase = true;
       }
     }
   }

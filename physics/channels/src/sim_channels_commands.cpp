@@ -148,6 +148,7 @@ void SimChannels::forget_commands() noexcept {
     channel.commanded = false;
     channel.answered_step = 0;
     channel.applied_answer_step = 0;
+    channel.in_phase = false;
     channel.misses = 0;
   }
   timeliness_step_ = 0;

@@ -1,5 +1,6 @@
-// The simulation's channels: the lockstep barrier (answers, joins and drops) and
-// waiting for lockstep clients before the first step.
+// The simulation's channels: the lockstep barrier (answers, joins and drops),
+// waiting for lockstep clients before the first step, and catch-up's wait for the
+// controllers in phase.
 #include <sched.h>
 
 #include <algorithm>
@@ -21,21 +22,26 @@ std::string format_seconds(double seconds) {
 
 }  // namespace
 
+bool SimChannels::attach_command_waiter() {
+  waiter_ = std::make_unique<SampleWaiter>();
+  for (Channel& channel : channels_)
+    if (!channel.soft && !waiter_->attach(channel.publisher->command_reader())) {
+      waiter_.reset();
+      return false;
+    }
+  return true;
+}
+
 void SimChannels::enable_lockstep(const LockstepOptions& options) {
   lockstep_ = true;
   lockstep_options_ = options;
-  waiter_.reset();
-  if (options.spin) return;
-  waiter_ = std::make_unique<SampleWaiter>();
-  for (Channel& channel : channels_) {
-    if (channel.soft || waiter_->attach(channel.publisher->command_reader())) continue;
+  if (options.spin)
+    waiter_.reset();
+  else if (!waiter_)
     std::fprintf(stderr,
                  "afhub run: the lockstep wait can sleep on at most %zu bodies' commands; this "
                  "model has more, so it polls instead (as with --spin)\n",
                  SampleWaiter::kCapacity);
-    waiter_.reset();
-    return;
-  }
 }
 
 void SimChannels::wait_for_commands(std::int64_t until_ns) noexcept {
@@ -165,6 +171,23 @@ bool SimChannels::await_lockstep() noexcept {
     ++dropped_;
   }
   return true;
+}
+
+void SimChannels::await_answers_in_phase(std::int64_t timeout_ns) noexcept {
+  const std::uint64_t step = sim_.step_count();
+  const std::int64_t until_ns = monotonic_ns() + timeout_ns;
+  const auto pending = [step](const Channel& channel) {
+    return channel.in_phase && channel.commanded && channel.applied_answer_step != step;
+  };
+  for (;;) {
+    const std::int64_t now = monotonic_ns();
+    apply_commands(now);
+    if (std::none_of(channels_.begin(), channels_.end(), pending) || stop_requested()) return;
+    if (now >= until_ns) break;
+    wait_for_commands(until_ns);
+  }
+  for (Channel& channel : channels_)
+    if (pending(channel)) channel.in_phase = false;
 }
 
 }  // namespace afhub::physics

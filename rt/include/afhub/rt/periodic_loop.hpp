@@ -84,6 +84,10 @@ struct LoopCycle {
   // Optional: each cycle's deadline is written here before it runs (on the loop's
   // clock; the physics stamps its steps with it).
   std::int64_t* deadline_ns = nullptr;
+  // Optional: how long the work waited for something (a controller following a
+  // catching-up physics, step by step), written by the work: left out of its compute
+  // time, and set back to 0.
+  std::int64_t* waited_ns = nullptr;
   // Optional: a grid point the cycle writes here (a controller following a restarted
   // physics' phase): the loop keeps to that grid from the next cycle on, and sets it
   // back to 0.

@@ -2,10 +2,10 @@
 // runner by absolute deadlines (start + k * dt, never re-based, so there is no
 // drift) or run as fast as possible. After a stall (the overrun policy, as the
 // controllers have it): kCatchUp runs the late steps back to back, at most
-// max_catch_up_ns of them, skipping the rest; kSkip skips them all and goes on at
-// the grid's next point. Commands in and states out through
-// SimChannels when given; world commands (pause, resume, step, reset) obeyed; in lockstep, each
-// step waits for the lockstep clients' answers. Measures what the report needs.
+// max_catch_up_ns of them, skipping the rest, each handed off to the controllers in
+// phase (hands_off); kSkip skips them all and goes on at the grid's next point. Commands in and
+// states out through SimChannels when given; world commands (pause, resume, step, reset) obeyed; in
+// lockstep, each step waits for the lockstep clients' answers. Measures what the report needs.
 #pragma once
 
 #include <cstdint>
@@ -79,6 +79,24 @@ struct RunReport {
   // by default): the loop never grows it, so it never allocates.
   std::vector<StepSample> step_log;
 };
+
+// The step before, as the next step's hand-off judges it.
+struct PreviousStep {
+  std::int64_t end_ns = 0;   // when its states were out, on the loop's clock
+  std::int64_t took_ns = 0;  // stepping and publishing
+};
+
+// A step's hand-off waits at most this fraction of the period.
+inline constexpr std::int64_t kHandOffsPerPeriod = 5;
+
+// Whether a step due at `due_ns`, starting at `now_ns`, first waits for the answers of
+// the controllers in phase (SimChannels::await_answers_in_phase): when it is behind its
+// grid (due before the step before was out, or woken over the hand-off late: after a
+// stall), unless steps take longer than the hand-off. Catch-up, waits included, then
+// still runs at 2.5 times the clock or more, and an overloaded physics, its steps
+// filling their period, never waits.
+bool hands_off(std::int64_t due_ns, std::int64_t now_ns, const PreviousStep& previous,
+               std::int64_t period_ns) noexcept;
 
 // Runs until options.steps, a stop signal, or with options.stop_on_nan a NaN (then
 // report.nan_detected).

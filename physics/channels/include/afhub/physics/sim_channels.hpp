@@ -12,6 +12,9 @@
 // every writer once, in order, keyed by (publisher pid, sequence).
 // Needs connect_to_hub() first.
 //
+// Catch-up (await_answers_in_phase): a step run late, back to back with the one
+// before, waits a moment for the answers of the controllers in phase.
+//
 // Lockstep (enable_lockstep): a body whose command is marked lockstep and answers
 // the current step joins the barrier; await_lockstep() then holds the step until
 // every body in the barrier has an answer for it. A body whose answer is later than
@@ -97,6 +100,13 @@ class SimChannels {
   // Applies commands as they come until every body in the barrier has answered the
   // current step, or the timeout. False when a stop signal came while waiting.
   bool await_lockstep() noexcept;
+  // Before a step of a free-running world behind its grid (after a stall it runs its
+  // late steps back to back): applies commands as they come until each body whose
+  // controller is in phase (its commands were in time, and it has not missed this wait
+  // since) has an answer to the current step, or for `timeout_ns`. A controller that follows
+  // a catching-up physics (hub/step_phase.hpp) so stays in time; one that does not
+  // costs this wait once.
+  void await_answers_in_phase(std::int64_t timeout_ns) noexcept;
 
   // After a world reset (the simulation's inputs cleared, its steps from 0): no body
   // is under command, and no lockstep answer or timeliness count carries across.
@@ -187,7 +197,8 @@ class SimChannels {
     std::uint32_t lockstep_pid = 0;         // the lockstep client answering for this body; 0: none
     std::uint64_t answered_step = 0;        // lockstep: the step this client answered last
     std::uint64_t applied_answer_step = 0;  // the step the command being applied answers
-    int misses = 0;                         // late steps in a row
+    bool in_phase = false;  // a command in time since the last missed await_answers_in_phase
+    int misses = 0;         // late steps in a row
     // The command taken since the last publish (the reader's checked copy), for the tape.
     const BodyCommand* taken_command = nullptr;
   };
@@ -222,6 +233,8 @@ class SimChannels {
                                  const StateStamp& stamp) noexcept;
   // Until a command comes (or `until_ns`): asleep on the waiter, or one sched_yield.
   void wait_for_commands(std::int64_t until_ns) noexcept;
+  // Readies waiter_ on every body's commands; false (no waiter) past its capacity.
+  bool attach_command_waiter();
   // "ambf/env/base, ambf/env/link1": the active bodies no lockstep client answers for.
   std::string bodies_without_client() const;
   void fill_objects(std::array<WorldObjectPose, kMaxWorldObjects>& out,
@@ -252,7 +265,7 @@ class SimChannels {
   std::uint64_t rejected_ = 0, expiries_ = 0, stale_ = 0;
   bool lockstep_ = false;
   LockstepOptions lockstep_options_;
-  std::unique_ptr<SampleWaiter> waiter_;  // lockstep without spin: the command readers
+  std::unique_ptr<SampleWaiter> waiter_;  // the command readers; none: waits poll
   std::uint64_t late_answers_ = 0, dropped_ = 0;
   // Lockstep clients: each pid in the barrier with its number of bodies (room for
   // one per channel, made at construction), and how many pids there are.
