@@ -271,8 +271,9 @@ void register_run(CLI::App& app, Runner& selected) {
   run->add_option("--overrun", options->overrun,
                   "After a stall (the process descheduled or stopped): catch-up (the default) "
                   "runs the late steps back to back, at most --max-catch-up of them, skipping "
-                  "the rest (no controller answers those in time); skip goes on at the next "
-                  "period, the steps missed skipped (no burst, for haptics)");
+                  "the rest, each waiting up to a fifth of the period for the controllers in "
+                  "phase to answer the step before; skip goes on at the next period, the steps "
+                  "missed skipped (no burst, for haptics)");
   run->add_option("--mesh-fallback", options->mesh_fallback,
                   "A body whose collision mesh cannot be used (corrupt, or it crashes or hangs "
                   "the mesh reader): refuse (the default) refuses the model; box makes the body "
