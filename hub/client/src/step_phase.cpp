@@ -67,7 +67,7 @@ const BodyState* StepPhase::next_while_catching_up(const BodyState& answered) no
   const std::int64_t behind = began - answered.step_due_ns;
   if (answered.step_due_ns <= 0 || behind < period_ns_ || behind > kMaxCatchUpNs) return nullptr;
   // Until just before the loop's next cycle, which answers the newest state and
-  // follows again: the loop is never asleep while the physics catches up.
+  // follows again: no gap in which a new state waits for the loop's grid.
   const std::int64_t until =
       deadline_ns_ + ((began - deadline_ns_) / period_ns_ + 1) * period_ns_ - kFollowMarginNs;
   const std::uint64_t step = answered.header.sim_step;  // `answered` may be rewritten below
