@@ -29,6 +29,7 @@ class State:
     time: float
     stamp_ns: int
     step_due_ns: int
+    command_answered_step: int
     sequence: int
     publisher_pid: int
     position: npt.NDArray[np.float64]

@@ -229,6 +229,11 @@ void register_state(py::module_& module) {
           "When its step was due on the physics' clock (CLOCK_MONOTONIC ns); 0 when the "
           "physics is not paced by the clock (--fast) or the state came from another machine.")
       .def_property_readonly(
+          "command_answered_step", [](const State& s) { return s->command_answered_step; },
+          "The step whose state the command in force during this step answered; -1 with "
+          "none in force. step - 1 - command_answered_step: how many steps old that state "
+          "was.")
+      .def_property_readonly(
           "sequence", [](const State& s) { return s->header.sequence; },
           "Its publisher's sequence number.")
       .def_property_readonly("publisher_pid",

@@ -2,8 +2,10 @@
 
 #include <signal.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
+#include <iterator>
 #include <map>
 #include <memory>
 #include <vector>
@@ -79,23 +81,44 @@ class ChannelMap : public Visitor {
   std::map<std::uint16_t, std::pair<PayloadKind, std::string>> channels_;
 };
 
-// First pass: every recorded command, by the step it answered.
+// First pass: every recorded command, by its body and the step it answered, and when
+// each took effect: the steps at which a body's recorded state shows another command
+// in force (BodyState::command_answered_step). In a lockstep run that is the step
+// after the one it answered, unless it came late (the physics went on without it) or
+// was replaced before it was taken.
 class CommandLoader : public ChannelMap {
  public:
   using ChannelMap::ChannelMap;
-  struct Command {
-    std::string body;
-    std::vector<std::uint8_t> bytes;
+  // Per body: the recorded commands by the step they answered, and the command in force
+  // from each step at which it changed (-1: none).
+  struct Body {
+    std::map<std::uint64_t, std::vector<std::uint8_t>> commands;
+    std::map<std::uint64_t, std::int64_t> in_force_from;
+    std::int64_t last_in_force = -1;
   };
-  std::map<std::uint64_t, std::vector<Command>> by_step;
+  std::map<std::string, Body> bodies;
+  std::uint64_t last_change = 0;  // the last step at which some body's command changed
+  bool any_command = false;
 
   void message(const Message& message) override {
     const auto* channel = of(message);
-    if (!channel || channel->first != PayloadKind::kBodyCommand) return;
-    const auto command = check(message, PayloadKind::kBodyCommand);
-    PayloadHeader header;
-    std::memcpy(&header, command.data(), sizeof header);  // checked: at least a header
-    by_step[header.sim_step].push_back({channel->second, {command.begin(), command.end()}});
+    if (!channel) return;
+    if (channel->first == PayloadKind::kBodyCommand) {
+      const auto command = check(message, PayloadKind::kBodyCommand);
+      PayloadHeader header;
+      std::memcpy(&header, command.data(), sizeof header);  // checked: at least a header
+      bodies[channel->second].commands[header.sim_step].assign(command.begin(), command.end());
+      any_command = true;
+    } else if (channel->first == PayloadKind::kBodyState) {
+      const auto state = check(message, PayloadKind::kBodyState);
+      BodyState recorded;
+      std::memcpy(&recorded, state.data(), std::min(state.size(), sizeof recorded));
+      Body& body = bodies[channel->second];
+      if (recorded.command_answered_step == body.last_in_force) return;
+      body.in_force_from[recorded.header.sim_step] = recorded.command_answered_step;
+      body.last_in_force = recorded.command_answered_step;
+      last_change = std::max(last_change, recorded.header.sim_step);
+    }
   }
 };
 
@@ -105,7 +128,7 @@ class Replayer : public ChannelMap {
   Replayer(const std::string& file, const CommandLoader& commands,
            const std::function<bool()>& keep_going)
       : ChannelMap(file),
-        commands_(commands.by_step),
+        commands_(commands),
         keep_going_(keep_going),
         world_(ChannelId{std::string(kService), world_instance(), std::string(kStateEvent)}) {
     waiter_.attach(world_.raw());
@@ -156,9 +179,8 @@ class Replayer : public ChannelMap {
                   ", the physics is at step " + std::to_string(world->header.sim_step) +
                   ": a replay needs a recording from the physics' first step (start `afhub "
                   "record` before the physics steps) and a physics just started");
-    if (commands_.empty() || commands_.begin()->first != first_step)
-      throw Error("the recording has no command answering its first step " +
-                  std::to_string(first_step) + ": was it recorded with --commands, in lockstep?");
+    if (!commands_.any_command)
+      throw Error("the recording has no commands: was it recorded with --commands, in lockstep?");
     step_ = first_step;
     started_ = true;
     resume_after_first_ = world->paused;
@@ -200,26 +222,44 @@ class Replayer : public ChannelMap {
     throw Error("the paused physics did not resume within 10 s");
   }
 
-  // Answers step_ with its recorded commands and waits for the next step.
+  // Answers step_ with the commands in force at the next step in the recording and
+  // waits for that step. A body whose command did not change (its client was late, or
+  // the command held) gets the same one again, which changes nothing.
   void advance() {
-    const auto commands = commands_.find(step_);
-    // Past the last command the recorded physics went on without its client: the replay
-    // ends with the commands.
-    if (step_ > commands_.rbegin()->first) throw Stop{};
-    if (commands == commands_.end())
-      throw Error("no command answering step " + std::to_string(step_) +
-                  " is in the recording (the recorder missed it): the run cannot be reproduced "
-                  "from here");
-    for (const CommandLoader::Command& command : commands->second) {
-      RawWriter& writer = command_writer(command.body);
-      void* payload = writer.loan(static_cast<std::uint32_t>(command.bytes.size()));
-      if (!payload) throw Error("no shared memory left for a command to " + command.body);
-      std::memcpy(payload, command.bytes.data(), command.bytes.size());
-      static_cast<BodyCommand*>(payload)->lockstep = 1;
+    const std::uint64_t next = step_ + 1;
+    // Past the last change the recorded physics went on without new commands (its
+    // client gone): the replay ends there.
+    if (next > commands_.last_change) throw Stop{};
+    for (const auto& [name, body] : commands_.bodies) {
+      const auto change = body.in_force_from.upper_bound(next);
+      if (change == body.in_force_from.begin()) continue;  // not commanded yet
+      const std::int64_t answered = std::prev(change)->second;
+      if (answered < 0)
+        throw Error("the recorded physics let go of " + name + " at step " +
+                    std::to_string(std::prev(change)->first) +
+                    " (its command watchdog expired): a replay cannot reproduce that");
+      const auto command = body.commands.find(static_cast<std::uint64_t>(answered));
+      if (command == body.commands.end())
+        throw Error("the command to " + name + " answering step " + std::to_string(answered) +
+                    ", in force at step " + std::to_string(next) +
+                    ", is not in the recording (the recorder missed it): the run cannot be "
+                    "reproduced from here");
+      RawWriter& writer = command_writer(name);
+      void* payload = writer.loan(static_cast<std::uint32_t>(command->second.size()));
+      if (!payload) throw Error("no shared memory left for a command to " + name);
+      std::memcpy(payload, command->second.data(), command->second.size());
+      auto* sent = static_cast<BodyCommand*>(payload);
+      sent->header.sim_step = step_;  // the answer the replaying physics waits for
+      sent->lockstep = 1;
       writer.publish(payload);
     }
-    if (resume_after_first_) resume();
-    const std::uint64_t next = step_ + 1;
+    if (resume_after_first_) {
+      if (commands_out_.empty())
+        throw Error("the recorded physics took step " + std::to_string(next) +
+                    " with no command in force: a replay reproduces a run commanded from "
+                    "its first step (was a command's watchdog let go while it was paused?)");
+      resume();
+    }
     const std::uint32_t pid = physics_pid_;
     wait_for_world(
         [next, pid](const WorldState& w) {
@@ -268,7 +308,7 @@ class Replayer : public ChannelMap {
     return *writer;
   }
 
-  const std::map<std::uint64_t, std::vector<CommandLoader::Command>>& commands_;
+  const CommandLoader& commands_;
   const std::function<bool()>& keep_going_;
   LatestReader<WorldState> world_;
   SampleWaiter waiter_;

@@ -35,6 +35,7 @@ TEST(DdsConvert, StateRoundTripsEveryField) {
   from->step_due_ns = 987000000;
   from->commanded_steps = 77;
   from->answered_steps = 76;
+  from->command_answered_step = 4240;
   from->sensor_ray_count = 3;
   from->sensor_distances_m[0] = 0.5;
   from->sensor_distances_m[2] = -1;
@@ -70,6 +71,7 @@ TEST(DdsConvert, StateRoundTripsEveryField) {
   EXPECT_EQ(to->principal_inertia_kgm2.y, 0.2);
   EXPECT_EQ(to->commanded_steps, 77u);
   EXPECT_EQ(to->answered_steps, 76u);
+  EXPECT_EQ(to->command_answered_step, 4240);
   EXPECT_EQ(to->sensor_ray_count, 3u);
   EXPECT_EQ(to->sensor_distances_m[2], -1);
   ASSERT_EQ(to->joint_count, 7u);

@@ -281,8 +281,7 @@ TEST_F(WithSynth, CmdKeepsSendingPastTheWatchdogAndUnnamedJointsHold) {
   // (Its 0.5 rad sinusoid would move it by tenths of a radian; held, it moved 1.02e-6 once.)
   EXPECT_NEAR(later[1], first[1], 1e-4) << "the unnamed joint moved";
   EXPECT_EQ(wait_for_exit(commander, 0ms), -1) << "cmd stopped by itself: " << read_file(log);
-  EXPECT_EQ(stop_process(commander.pid, SIGINT), 0);
-  commander.pid = -1;
+  EXPECT_EQ(commander.stop(SIGINT), 0);
   const std::string said = read_file(log);
   EXPECT_TRUE(contains(said, "commanding synth/body0 at 100 Hz until Ctrl-C")) << said;
   EXPECT_TRUE(contains(said, "body0-joint0 -> 0.3, body0-joint2 -> -0.1")) << said;

@@ -72,8 +72,7 @@ TEST(StartTogether, ControllerStartedBeforeTheHubAndThePhysicsAttaches) {
   EXPECT_EQ(occurrences(said, "waiting up to"), 2) << "once for the hub, once for the body\n"
                                                    << said;
   EXPECT_TRUE(contains(said, "commanding afhub/arm/base every 1.000 ms")) << said;
-  EXPECT_EQ(stop_process(controller.pid, SIGINT), 0) << read_file(ctl_log);
-  controller.pid = -1;
+  EXPECT_EQ(controller.stop(SIGINT), 0) << read_file(ctl_log);
   EXPECT_EQ(physics.stop(), 0) << read_file(run_log);
   EXPECT_EQ(hub.stop(), 0);
 }

@@ -72,8 +72,7 @@ TEST(DriverHubLoss, ForceGoesToZeroBeforeTheDriverReattachesAndPublishesAgain) {
   ASSERT_TRUE(wait_until([] { return find(force_log(), "force") >= 0; }, 20s)) << log_text();
 
   const std::int64_t killed_ns = monotonic_ns();
-  stop_process(hub.pid, SIGKILL);
-  hub.pid = -1;
+  hub.stop(SIGKILL);
   // The driver re-executes: its new image opens the device again.
   ASSERT_TRUE(wait_until([] { return find(force_log(), "open", 1) >= 0; }, 10s)) << log_text();
   const std::vector<LogLine> lines = force_log();

@@ -440,8 +440,7 @@ TEST(HubLoss, ARecordingEndsCompleteWhenTheHubGoesAndGoesOnIntoTheNextFile) {
   ASSERT_TRUE(wait_until([] { return probe_roudi() == RoudiPresence::kRunning; }, kHubStartWait));
   EXPECT_TRUE(wait_until([&] { return info(next).second > 1000; }, 60s)) << read_file(log);
   EXPECT_NE(read_file(log).find("waiting for a hub"), std::string::npos) << read_file(log);
-  EXPECT_EQ(stop_process(recorder.pid, SIGINT), 0) << read_file(log);
-  recorder.pid = -1;
+  EXPECT_EQ(recorder.stop(SIGINT), 0) << read_file(log);
   EXPECT_TRUE(info(next).first) << read_file(log);
   EXPECT_EQ(physics.stop(), 0);
 }

@@ -109,8 +109,7 @@ TEST(Cli, DemoPrintsTheViewersUrlWhichServesTheScene) {
       [&] { return contains(read_file(opened), ":" + std::to_string(port) + "/"); }, 10s))
       << "the browser was not opened on the viewer's URL: '" << read_file(opened) << "'";
   // It stops its viewer and physics first: under load that took over 5 s once.
-  EXPECT_EQ(stop_process(demo.pid, SIGTERM, 30s), 0) << read_file(log);
-  demo.pid = -1;
+  EXPECT_EQ(demo.stop(SIGTERM, 30s), 0) << read_file(log);
   EXPECT_EQ(http_request(port, "GET", "/").status, 0) << "the viewer outlived the demo";
   EXPECT_EQ(run_afhub({"hub", "stop"}).exit_code, 0);
 }
@@ -283,16 +282,14 @@ TEST(Cli, SecondHubIsRefusedAndStopWorks) {
 
   RunResult stop = run_afhub({"hub", "stop"});
   EXPECT_EQ(stop.exit_code, 0) << stop.err;
-  EXPECT_EQ(stop_process(hub.pid, 0), 0) << "the hub did not exit 0 on `afhub hub stop`";
-  hub.pid = -1;
+  EXPECT_EQ(hub.stop(0), 0) << "the hub did not exit 0 on `afhub hub stop`";
   EXPECT_FALSE(running_hub_pid());
 }
 
 TEST(Cli, HubStopsCleanlyOnSigint) {
   expect_no_hub();
   ScopedProcess hub(start_test_hub());
-  EXPECT_EQ(stop_process(hub.pid, SIGINT), 0);
-  hub.pid = -1;
+  EXPECT_EQ(hub.stop(SIGINT), 0);
 }
 
 TEST(Cli, PublishersStartAHubUnlessToldNotTo) {
@@ -380,8 +377,7 @@ TEST_F(CliWithBodies, CmdDrivesTheJointsOfABody) {
       },
       5s);
   EXPECT_TRUE(converged) << run_afhub({"echo", "synth/body0", "-n", "1", "--json"}).out;
-  EXPECT_EQ(stop_process(commander.pid, SIGINT), 0);
-  commander.pid = -1;
+  EXPECT_EQ(commander.stop(SIGINT), 0);
 }
 
 TEST_F(CliWithBodies, CmdExplainsBadInput) {

@@ -42,8 +42,7 @@ TEST(Pause, KilledProcessesAreCleanedUpFilesIncluded) {
     ScopedProcess top = spawn_afhub({"top"});
     const std::string lock = "/tmp/afhub-top-" + std::to_string(top.pid) + ".lock";
     ASSERT_TRUE(wait_until([&] { return std::filesystem::exists(lock); }, 10s)) << lock;
-    stop_process(top.pid, SIGKILL);
-    top.pid = -1;
+    top.stop(SIGKILL);
   }
   // Each killed runtime left a socket and a lock; the hub removes them.
   EXPECT_TRUE(wait_until([] { return files_starting_with("afhub-top-") == 0; }, 15s))
@@ -51,8 +50,7 @@ TEST(Pause, KilledProcessesAreCleanedUpFilesIncluded) {
   const std::string hub_log = read_file("/tmp/afhub-test-hub.log");
   EXPECT_TRUE(contains(hub_log, "is gone; removed its ports and chunks")) << hub_log;
   EXPECT_EQ(run_afhub({"hub", "stop"}).exit_code, 0);
-  EXPECT_EQ(stop_process(hub.pid, 0), 0);
-  hub.pid = -1;
+  EXPECT_EQ(hub.stop(0), 0);
 }
 
 TEST(Pause, HubStopListsAttachedProcessesAndAsksForForce) {
@@ -70,8 +68,7 @@ TEST(Pause, HubStopListsAttachedProcessesAndAsksForForce) {
   EXPECT_TRUE(still_running(hub.pid));
   const RunResult forced = run_afhub({"hub", "stop", "--force"});
   EXPECT_EQ(forced.exit_code, 0) << forced.err;
-  EXPECT_EQ(stop_process(hub.pid, 0), 0);
-  hub.pid = -1;
+  EXPECT_EQ(hub.stop(0), 0);
 }
 
 // A lock file removed from under a live process (a tmp cleaner, an `rm`) says nothing
@@ -91,13 +88,11 @@ TEST(Pause, ALiveProcessWhoseLockFileWasRemovedKeepsItsPorts) {
   EXPECT_TRUE(still_running(top.pid));
 
   // Killed, it is removed all the same: by its pid.
-  stop_process(top.pid, SIGKILL);
-  top.pid = -1;
+  top.stop(SIGKILL);
   EXPECT_TRUE(wait_until([&] { return contains(read_file("/tmp/afhub-test-hub.log"), gone); }, 5s))
       << read_file("/tmp/afhub-test-hub.log");
   EXPECT_EQ(run_afhub({"hub", "stop"}).exit_code, 0);
-  EXPECT_EQ(stop_process(hub.pid, 0), 0);
-  hub.pid = -1;
+  EXPECT_EQ(hub.stop(0), 0);
 }
 
 // Last: this test attaches itself to the hub (an iceoryx runtime lives as long as
@@ -166,8 +161,7 @@ TEST(Pause, StoppedProcessesCarryOnWhenResumed) {
   EXPECT_EQ(controller.stop(), 0);
   EXPECT_EQ(physics.stop(), 0);
   EXPECT_EQ(run_afhub({"hub", "stop", "--force"}).exit_code, 0);  // this test is attached
-  EXPECT_EQ(stop_process(hub.pid, 0), 0);
-  hub.pid = -1;
+  EXPECT_EQ(hub.stop(0), 0);
 }
 
 }  // namespace

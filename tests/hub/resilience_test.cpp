@@ -241,8 +241,7 @@ TEST(Resilience, KilledClientRestartsWhileOthersKeepWorking) {
             std::chrono::duration<double>(std::chrono::steady_clock::now() - spawned).count());
         std::this_thread::sleep_for(std::chrono::milliseconds(random() % 100));
       }
-      stop_process(client.pid, SIGKILL);
-      client.pid = -1;
+      client.stop(SIGKILL);
       // The other client gets fresh states through every round: counted, not timed
       // (the wait only bounds a stall of the state stream).
       ASSERT_TRUE(wait_until([&] { return steady.fresh_states > fresh_at_start; }, 5s))

@@ -451,10 +451,10 @@ TEST(PayloadCheck, EveryErrorHasAnExplanation) {
 
 TEST(Layout, PayloadsFitTheirMempoolsAndStaySmall) {
   // Sent at their real size: a body of up to 64 joints stays within 2 KB, the
-  // contact wrench, the last refusal's sender and reason and its sensor rays' ranges
-  // (2520 B), and one of kMaxJointsPerBody within the hub's largest body tier
-  // (hub_mempools.cpp).
-  EXPECT_LE(body_state_bytes(64), 2048u + 56u + 168u + 8u * kMaxSensorRaysPerBody);
+  // contact wrench, the last refusal's sender and reason, its sensor rays' ranges and
+  // the step its command in force answered (2536 B), and one of kMaxJointsPerBody
+  // within the hub's largest body tier (hub_mempools.cpp).
+  EXPECT_LE(body_state_bytes(64), 2048u + 56u + 168u + 8u * kMaxSensorRaysPerBody + 8u);
   EXPECT_LE(body_command_bytes(64), 1280u);
   EXPECT_EQ(body_state_bytes(kMaxJointsPerBody), sizeof(BodyState));
   EXPECT_LE(body_command_bytes(kMaxJointsPerBody), body_state_bytes(kMaxJointsPerBody));

@@ -167,9 +167,9 @@ int stop_process(pid_t pid, int signal, std::chrono::milliseconds timeout) {
   return exit_code_of(status);
 }
 
-int ScopedProcess::stop() {
+int ScopedProcess::stop(int signal, std::chrono::milliseconds timeout) {
   if (pid <= 0) return 0;
-  int code = stop_process(pid, SIGTERM);
+  int code = stop_process(pid, signal, timeout);
   pid = -1;
   return code;
 }

@@ -5,6 +5,7 @@
 #include <sys/types.h>
 
 #include <chrono>
+#include <csignal>
 #include <string>
 #include <vector>
 
@@ -52,8 +53,10 @@ struct ScopedProcess {
   ScopedProcess(const ScopedProcess&) = delete;
   ScopedProcess& operator=(const ScopedProcess&) = delete;
   ~ScopedProcess() { stop(); }
-  // Stops it now; returns its exit code (0 when it was already stopped).
-  int stop();
+  // Stops it now with `signal` (0: waits for it to end by itself), as stop_process;
+  // returns its exit code (0 when it was already stopped). Stopped once: its pid is
+  // then forgotten, so the destructor never signals a pid the system gave another.
+  int stop(int signal = SIGTERM, std::chrono::milliseconds timeout = std::chrono::seconds(5));
   pid_t pid;
 };
 

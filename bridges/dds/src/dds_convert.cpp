@@ -42,6 +42,7 @@ void to_dds(std::string_view channel, const BodyState& state,
   sample.principal_inertia_kgm2 = to_dds(state.principal_inertia_kgm2);
   sample.commanded_steps = state.commanded_steps;
   sample.answered_steps = state.answered_steps;
+  sample.command_answered_step = state.command_answered_step;
   sample.contact_count = state.contact_count;
   const std::uint32_t rays = std::min<std::uint32_t>(state.sensor_ray_count, kMaxSensorRaysPerBody);
   std::copy_n(state.sensor_distances_m.data(), rays, sample.sensor_distances_m._buffer);
@@ -84,6 +85,7 @@ void from_dds(const afhub_dds_BodyState& sample, BodyState& state) noexcept {
   state.step_due_ns = 0;  // a due time on the other machine's clock means nothing here
   state.commanded_steps = sample.commanded_steps;
   state.answered_steps = sample.answered_steps;
+  state.command_answered_step = sample.command_answered_step;
   state.contact_count = sample.contact_count;
   state.sensor_ray_count =
       std::min<std::uint32_t>(sample.sensor_distances_m._length, kMaxSensorRaysPerBody);

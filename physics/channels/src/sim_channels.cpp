@@ -196,6 +196,10 @@ void SimChannels::publish(const WorldClock& clock) noexcept {
   if (step != timeliness_step_) {  // once per step taken, not per publish while paused
     timeliness_step_ = step;
     for (Channel& channel : channels_) {
+      // Fixed when the step is taken: a step published again while the physics waits
+      // may meet a command already taken for the next one.
+      channel.state_command_step =
+          channel.commanded ? static_cast<std::int64_t>(channel.applied_answer_step) : -1;
       if (!channel.commanded) continue;
       ++commanded_steps_;
       ++channel.commanded_steps;
@@ -304,6 +308,7 @@ const BodyState* SimChannels::publish_state(Channel& channel, BodyReading& readi
   state->step_due_ns = stamp.step_due_ns;
   state->commanded_steps = static_cast<std::uint32_t>(channel.commanded_steps);
   state->answered_steps = static_cast<std::uint32_t>(channel.answered_steps);
+  state->command_answered_step = channel.state_command_step;
   state->refused_commands = channel.refused;
   state->refused_command_pid = channel.refused_pid;
   state->refusal_reason = channel.refusal_reason;

@@ -148,6 +148,7 @@ void SimChannels::forget_commands() noexcept {
     channel.commanded = false;
     channel.answered_step = 0;
     channel.applied_answer_step = 0;
+    channel.state_command_step = -1;
     channel.in_phase = false;
     channel.misses = 0;
   }

@@ -1,9 +1,10 @@
 // `afhub play --commands-into-physics`: reproduces a lockstep run from its recording.
 // A new physics of the same models, started with `afhub run ... --lockstep --wait-for 1`,
-// gets the recorded commands as a lockstep client, each answering the step it answered
-// in the recording; every step, each body's state is compared with the recorded one,
-// field by field and bit for bit. The first state that differs is named: its step, its
-// body and its field.
+// gets the recorded commands as a lockstep client, each applied at the step it took
+// effect in the recording (each recorded state names the command in force, so a late
+// answer is applied as late as it was); every step, each body's state is compared with
+// the recorded one, field by field and bit for bit. The first state that differs is
+// named: its step, its body and its field.
 #pragma once
 
 #include <cstdint>

@@ -91,6 +91,7 @@ inline constexpr std::uint64_t kLayoutId = layout_detail::mix({
     offsetof(JointSample, velocity),
     offsetof(JointSample, effort),
     AFHUB_OFF(BodyState, step_due_ns),
+    AFHUB_OFF(BodyState, command_answered_step),
     AFHUB_OFF(BodyState, sensor_ray_count),
     AFHUB_OFF(BodyState, sensor_distances_m),
     AFHUB_OFF(BodyState, sensor_ranges_m),

@@ -197,6 +197,8 @@ class SimChannels {
     std::uint32_t lockstep_pid = 0;         // the lockstep client answering for this body; 0: none
     std::uint64_t answered_step = 0;        // lockstep: the step this client answered last
     std::uint64_t applied_answer_step = 0;  // the step the command being applied answers
+    // BodyState::command_answered_step of the last step taken (-1: no command in force).
+    std::int64_t state_command_step = -1;
     bool in_phase = false;  // a command in time since the last missed await_answers_in_phase
     int misses = 0;         // late steps in a row
     // The command taken since the last publish (the reader's checked copy), for the tape.
