@@ -59,6 +59,7 @@ class Loop {
     const std::int64_t end_ns = seconds > 0.0 ? deadline_after(seconds, "seconds") : 0;
     stop_ = false;
     error_ = nullptr;
+    callbacks_ = 0;
     LoopTiming timing;
     LoopStats final_stats;
     const std::int64_t start_ns = monotonic_ns();
@@ -85,7 +86,9 @@ class Loop {
     final_stats.period_s = static_cast<double>(options_.period_ns) * 1e-9;
     final_stats.lockstep = lockstep_;
     final_stats.header.publisher_pid = static_cast<std::uint32_t>(getpid());
-    return loop_stats_dict(final_stats);
+    py::dict report = loop_stats_dict(final_stats);
+    report["callbacks"] = callbacks_;
+    return report;
   }
 
   void stop() { stop_ = true; }
@@ -94,6 +97,7 @@ class Loop {
   // Runs the callback under the GIL; false ends the loop (it returned False, stop()
   // was called, or it raised: the exception is raised again by run()).
   bool call(const BodyState* state) {
+    ++callbacks_;
     py::gil_scoped_acquire acquire;
     try {
       const py::object result = state ? callback_(State(*state)) : callback_();
@@ -124,21 +128,31 @@ class Loop {
     std::optional<StepPhase> phase;
     const std::int64_t after_ns = after_step_offset_ns(after_step_ns_, options.period_ns);
     if (body_ && after_ns >= 0) {
-      phase.emplace(after_ns, [this] { return body_->client().latest_state(); });
+      phase.emplace(
+          after_ns, [this] { return body_->client().latest_state(); },
+          &body_->client().state_reader());
       phase->attach(options, cycle);
     }
+    const auto respond = [&](const BodyState& state) {
+      const std::uint32_t late = state.commanded_steps - state.answered_steps;
+      if (state.header.publisher_pid == physics_pid)
+        timing.count_late(static_cast<std::uint32_t>(late - physics_late));
+      if (phase) phase->follow(state);
+      physics_pid = state.header.publisher_pid;
+      physics_late = late;
+      return call(&state);
+    };
     cycle.work = [&] {
       if (end_ns && monotonic_ns() >= end_ns) return false;
       if (!body_) return call(nullptr);
       const BodyState* state = body_->client().latest_state();
       if (!state) return !signals_pending();
-      const std::uint32_t late = state->commanded_steps - state->answered_steps;
-      if (state->header.publisher_pid == physics_pid)
-        timing.count_late(static_cast<std::uint32_t>(late - physics_late));
-      if (phase) phase->follow(*state);
-      physics_pid = state->header.publisher_pid;
-      physics_late = late;
-      return call(state);
+      if (!respond(*state)) return false;
+      // A physics catching up after a stall: each of its late steps answered as it
+      // comes (see controller.cpp), each a call of the function beyond the cycle's.
+      while (phase && (state = phase->next_while_catching_up(*state)))
+        if (!respond(*state)) return false;
+      return true;
     };
     cycle.after = [&](std::int64_t now) { stats.maybe_publish(now, timing); };
     run_periodic(options, timing, cycle);
@@ -180,6 +194,7 @@ class Loop {
   LoopOptions options_;
   std::int64_t after_step_ns_;     // an offset, kAfterStepHalfPeriod or kAfterStepUnaligned
   std::atomic<bool> stop_{false};  // stop() may come from another thread
+  std::uint64_t callbacks_ = 0;    // calls of the function in this run()
   std::exception_ptr error_;
 };
 
@@ -217,7 +232,10 @@ void register_loop(py::module_& module) {
       .def("run", &Loop::run, py::arg("cycles") = 0, py::arg("seconds") = 0.0,
            "Runs until `cycles` cycles or `seconds` have passed (0: no limit), the callback "
            "ends it, or it raises. Returns the loop's statistics (as afhub.loop_stats() gives "
-           "them) over the whole run. SCHED_FIFO, CPU and memory locking, when asked for, "
+           "them) over the whole run, and 'callbacks': the function's calls, which can be more "
+           "than the cycles: with a body, when the physics catches up after a stall (runs "
+           "the steps it missed back to back), each of its late states is answered as it "
+           "comes, within the cycle. SCHED_FIFO, CPU and memory locking, when asked for, "
            "apply to the calling thread and stay after run() returns.")
       .def("stop", &Loop::stop,
            "Ends the loop after the current cycle; from the callback or any other thread.");

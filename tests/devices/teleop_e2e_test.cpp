@@ -137,13 +137,19 @@ TEST(TeleopEndToEnd, TheGripperFollowsThroughStallsOfTheWholeMachine) {
       pause_ms(100);
     }
   });
+  const std::uint32_t commanded = teleop.palm().commanded_steps;
+  const std::uint32_t answered = teleop.palm().answered_steps;
   const Following f = measure_following(teleop, kScale, 2000);
   measuring = false;
   stall.join();
+  const double in_time = static_cast<double>(teleop.palm().answered_steps - answered) /
+                         std::max(1U, teleop.palm().commanded_steps - commanded);
   std::printf(
       "stalls: %d of 12 ms; palm radius %.4f m, deviation RMS %.4f m, p99 %.4f m, worst %.4f m; "
-      "%d pairs judged, %d left out (stalest state read %.1f ms old)\n",
-      stalls, f.body_radius, f.rms, f.p99, f.worst, f.judged, f.left_out, f.stalest_ms);
+      "%d pairs judged, %d left out (stalest state read %.1f ms old); %.1f %% of the palm's "
+      "commands in time for the next step\n",
+      stalls, f.body_radius, f.rms, f.p99, f.worst, f.judged, f.left_out, f.stalest_ms,
+      100 * in_time);
   SKIP_REAL_TIME_BOUNDS_IN_SANITIZED_BUILD();
   ASSERT_GE(f.judged, 1000) << "the machine was too busy to judge the following\n" << teleop.logs();
   // The palm lags the device by a stall (12 ms at 0.31 m/s: 4 mm) and catches up

@@ -220,14 +220,20 @@ int run_teleop(const TeleopOptions& options, TeleopLatency* latency) {
   BodyClient& phased = links.front()->body;
   if (const std::int64_t after_ns = after_step_offset_ns(options.after_step_ns, loop.period_ns);
       after_ns >= 0) {
-    phase.emplace(after_ns, [&phased] { return phased.latest_state(); });
+    phase.emplace(
+        after_ns, [&phased] { return phased.latest_state(); }, &phased.state_reader());
     phase->attach(loop, steps);
   }
   steps.work = [&] {
-    const std::int64_t now = monotonic_ns();
-    if (phase)
-      if (const BodyState* state = phased.latest_state()) phase->follow(*state);
-    for (auto& link : links) cycle(*link, now, latency, most);
+    const BodyState* state = phase ? phased.latest_state() : nullptr;
+    do {
+      if (state) phase->follow(*state);
+      const std::int64_t now = monotonic_ns();
+      for (auto& link : links) cycle(*link, now, latency, most);
+      // A physics catching up after a stall: each of its late states answered as it
+      // comes (see controller.cpp), a cycle of every link each; the law's dt is the
+      // time that passed, so its force limits hold.
+    } while (state && (state = phase->next_while_catching_up(*state)));
     return true;
   };
   steps.after = [&](std::int64_t now) { stats.maybe_publish(now, timing); };
