@@ -97,7 +97,9 @@ class CommandLoader : public ChannelMap {
     std::int64_t last_in_force = -1;
   };
   std::map<std::string, Body> bodies;
-  std::uint64_t last_change = 0;  // the last step at which some body's command changed
+  // The last step at which a new command took effect (a command let go after it, its
+  // client gone, is past the replay's end).
+  std::uint64_t last_change = 0;
   bool any_command = false;
 
   void message(const Message& message) override {
@@ -117,7 +119,8 @@ class CommandLoader : public ChannelMap {
       if (recorded.command_answered_step == body.last_in_force) return;
       body.in_force_from[recorded.header.sim_step] = recorded.command_answered_step;
       body.last_in_force = recorded.command_answered_step;
-      last_change = std::max(last_change, recorded.header.sim_step);
+      if (recorded.command_answered_step >= 0)
+        last_change = std::max(last_change, recorded.header.sim_step);
     }
   }
 };
@@ -227,8 +230,8 @@ class Replayer : public ChannelMap {
   // the command held) gets the same one again, which changes nothing.
   void advance() {
     const std::uint64_t next = step_ + 1;
-    // Past the last change the recorded physics went on without new commands (its
-    // client gone): the replay ends there.
+    // Past the last new command the recorded physics went on without (its client
+    // gone): the replay ends there.
     if (next > commands_.last_change) throw Stop{};
     for (const auto& [name, body] : commands_.bodies) {
       const auto change = body.in_force_from.upper_bound(next);

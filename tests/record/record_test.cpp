@@ -823,6 +823,7 @@ TEST(Record, PlayPublishesTheWindowAndTheBodiesChosenAtTheRateChosen) {
     EXPECT_EQ(link2.latest(), nullptr) << "a body --bodies did not choose";
     std::this_thread::sleep_for(5ms);
   }
+  if (exit_code != -1) slow.pid = -1;  // reaped
   const auto took = std::chrono::steady_clock::now() - started;
   const std::string log = read_file(scene.dir("slow.log"));
   EXPECT_EQ(exit_code, 0) << log;
@@ -1264,8 +1265,8 @@ TEST(Record, TheReadingLoopReadsOnAPinnedRealTimePhysicsCpuAndFollowsItsRestarts
   // It followed the restarts; it never left for want of time.
   EXPECT_FALSE(contains(read_file(log("beside.log")), "other CPUs again"))
       << read_file(log("beside.log"));
-  for (const pid_t pid : {beside.pid, chosen.pid, confined.pid})
-    EXPECT_EQ(stop_process(pid, SIGINT), 0);
+  for (ScopedProcess* recorder : {&beside, &chosen, &confined})
+    EXPECT_EQ(recorder->stop(SIGINT), 0);
 }
 
 // A pinned real-time physics that never sleeps (`--fast`) leaves the reading loop no
