@@ -76,6 +76,7 @@ std::string state_json(const BodyEntry& entry, const BodyState& state, const Sta
   json.key("sim_time_s").value(state.header.sim_time_s);
   json.key("publish_stamp_ns").value(static_cast<long long>(state.header.publish_stamp_ns));
   json.key("publisher_pid").value(static_cast<long long>(state.header.publisher_pid));
+  json.key("command_answered_step").value(static_cast<long long>(state.command_answered_step));
   if (fields.pose) {
     json.key("position_m");
     vec3(json, state.pose.position_m);

@@ -379,8 +379,11 @@ TEST_F(WithSynth, EchoRateLimitsByThePublishStamps) {
   ASSERT_EQ(limited.exit_code, 0) << limited.err;
   std::vector<double> stamps;  // one JSON document a line
   std::istringstream lines(limited.out);
-  for (std::string line; std::getline(lines, line);)
-    stamps.push_back(parse_json(line).at("publish_stamp_ns").get<double>());
+  for (std::string line; std::getline(lines, line);) {
+    const nlohmann::json state = parse_json(line);
+    stamps.push_back(state.at("publish_stamp_ns").get<double>());
+    EXPECT_EQ(state.at("command_answered_step"), -1) << "synth's bodies take no command";
+  }
   ASSERT_EQ(stamps.size(), 3u) << limited.out;
   // At most 5 a second: the states printed were published at least 0.2 s apart
   // (at 1 kHz, every state would be about 1 ms after the last).
