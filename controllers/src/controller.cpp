@@ -75,11 +75,12 @@ void run_free(BodyClient& body, const ControllerOptions& options, const Controll
     answer(body, state, cycle, false);
   };
   steps.work = [&] {
-    const BodyState* state = body.latest_state();
-    if (!state) return true;
-    respond(*state);
     // A physics catching up after a stall: each of its late steps answered as it comes.
-    while (phase && (state = phase->next_while_catching_up(*state))) respond(*state);
+    for (const BodyState* state = body.latest_state(); state;) {
+      const StepPhase::Answered answered = StepPhase::Answered::of(*state);
+      respond(*state);
+      state = phase ? phase->next_while_catching_up(answered) : nullptr;
+    }
     return true;
   };
   steps.after = [&](std::int64_t now) { stats.maybe_publish(now, timing); };

@@ -147,11 +147,13 @@ class Loop {
       if (!body_) return call(nullptr);
       const BodyState* state = body_->client().latest_state();
       if (!state) return !signals_pending();
-      if (!respond(*state)) return false;
       // A physics catching up after a stall: each of its late steps answered as it
       // comes (see controller.cpp), each a call of the function beyond the cycle's.
-      while (phase && (state = phase->next_while_catching_up(*state)))
+      while (state) {
+        const StepPhase::Answered answered = StepPhase::Answered::of(*state);
         if (!respond(*state)) return false;
+        state = phase ? phase->next_while_catching_up(answered) : nullptr;
+      }
       return true;
     };
     cycle.after = [&](std::int64_t now) { stats.maybe_publish(now, timing); };

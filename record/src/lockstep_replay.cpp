@@ -85,7 +85,8 @@ class ChannelMap : public Visitor {
 // each took effect: the steps at which a body's recorded state shows another command
 // in force (BodyState::command_answered_step). In a lockstep run that is the step
 // after the one it answered, unless it came late (the physics went on without it) or
-// was replaced before it was taken.
+// was replaced before it was taken. One run only: a world reset or another physics
+// (a body's steps going back, or another publisher) ends what is loaded.
 class CommandLoader : public ChannelMap {
  public:
   using ChannelMap::ChannelMap;
@@ -95,16 +96,19 @@ class CommandLoader : public ChannelMap {
     std::map<std::uint64_t, std::vector<std::uint8_t>> commands;
     std::map<std::uint64_t, std::int64_t> in_force_from;
     std::int64_t last_in_force = -1;
+    std::uint64_t last_step = 0;
+    std::uint32_t publisher_pid = 0;  // 0: no state yet
   };
   std::map<std::string, Body> bodies;
-  // The last step at which a new command took effect (a command let go after it, its
-  // client gone, is past the replay's end).
-  std::uint64_t last_change = 0;
+  // The first and last steps at which a new command took effect (0: none); a command
+  // let go after the last, its client gone, is past the replay's end.
+  std::uint64_t first_change = 0, last_change = 0;
   bool any_command = false;
+  bool run_ended = false;  // a reset or another physics came: the rest is not loaded
 
   void message(const Message& message) override {
     const auto* channel = of(message);
-    if (!channel) return;
+    if (!channel || run_ended) return;
     if (channel->first == PayloadKind::kBodyCommand) {
       const auto command = check(message, PayloadKind::kBodyCommand);
       PayloadHeader header;
@@ -116,11 +120,21 @@ class CommandLoader : public ChannelMap {
       BodyState recorded;
       std::memcpy(&recorded, state.data(), std::min(state.size(), sizeof recorded));
       Body& body = bodies[channel->second];
+      const std::uint64_t step = recorded.header.sim_step;
+      if (body.publisher_pid != 0 &&
+          (step <= body.last_step || recorded.header.publisher_pid != body.publisher_pid)) {
+        run_ended = true;
+        return;
+      }
+      body.last_step = step;
+      body.publisher_pid = recorded.header.publisher_pid;
       if (recorded.command_answered_step == body.last_in_force) return;
-      body.in_force_from[recorded.header.sim_step] = recorded.command_answered_step;
+      body.in_force_from[step] = recorded.command_answered_step;
       body.last_in_force = recorded.command_answered_step;
-      if (recorded.command_answered_step >= 0)
-        last_change = std::max(last_change, recorded.header.sim_step);
+      if (recorded.command_answered_step >= 0) {
+        last_change = std::max(last_change, step);
+        first_change = first_change == 0 ? step : std::min(first_change, step);
+      }
     }
   }
 };
@@ -184,6 +198,13 @@ class Replayer : public ChannelMap {
                   "record` before the physics steps) and a physics just started");
     if (!commands_.any_command)
       throw Error("the recording has no commands: was it recorded with --commands, in lockstep?");
+    if (commands_.first_change != first_step + 1)
+      throw Error(
+          commands_.first_change == 0
+              ? "no recorded state shows a command in force: was it recorded by this afhub?"
+              : "the recorded physics took step " + std::to_string(first_step + 1) +
+                    " with no command in force: a replay reproduces a run commanded from its "
+                    "first step (was a command's watchdog let go while it was paused?)");
     step_ = first_step;
     started_ = true;
     resume_after_first_ = world->paused;
@@ -227,7 +248,7 @@ class Replayer : public ChannelMap {
 
   // Answers step_ with the commands in force at the next step in the recording and
   // waits for that step. A body whose command did not change (its client was late, or
-  // the command held) gets the same one again, which changes nothing.
+  // it sent nothing new) gets an answer that keeps its command in force.
   void advance() {
     const std::uint64_t next = step_ + 1;
     // Past the last new command the recorded physics went on without (its client
@@ -247,29 +268,38 @@ class Replayer : public ChannelMap {
                     ", in force at step " + std::to_string(next) +
                     ", is not in the recording (the recorder missed it): the run cannot be "
                     "reproduced from here");
+      // What the recorded client sent new, or an answer that keeps the command in force:
+      // sent again, a command is not always without effect (an actuator grabs anew).
+      const auto last_sent = sent_.find(name);
+      const bool keep = last_sent != sent_.end() && last_sent->second == answered;
+      sent_[name] = answered;
+      const std::size_t bytes = keep ? body_command_bytes(0) : command->second.size();
       RawWriter& writer = command_writer(name);
-      void* payload = writer.loan(static_cast<std::uint32_t>(command->second.size()));
+      void* payload = writer.loan(static_cast<std::uint32_t>(bytes));
       if (!payload) throw Error("no shared memory left for a command to " + name);
-      std::memcpy(payload, command->second.data(), command->second.size());
+      if (keep)
+        std::memset(payload, 0, bytes);
+      else
+        std::memcpy(payload, command->second.data(), bytes);
       auto* sent = static_cast<BodyCommand*>(payload);
       sent->header.sim_step = step_;  // the answer the replaying physics waits for
-      sent->lockstep = 1;
+      sent->lockstep = keep ? BodyCommand::kLockstepKeep : 1;
       writer.publish(payload);
     }
-    if (resume_after_first_) {
-      if (commands_out_.empty())
-        throw Error("the recorded physics took step " + std::to_string(next) +
-                    " with no command in force: a replay reproduces a run commanded from "
-                    "its first step (was a command's watchdog let go while it was paused?)");
-      resume();
-    }
+    if (resume_after_first_) resume();
     const std::uint32_t pid = physics_pid_;
-    wait_for_world(
+    const WorldState* world = wait_for_world(
         [next, pid](const WorldState& w) {
           return w.header.publisher_pid == pid && w.header.sim_step >= next;
         },
         "the physics did not take step " + std::to_string(next) +
             " within 10 s of the commands answering step " + std::to_string(step_));
+    // A replay held past the physics' client timeout is not the run recorded.
+    if (world->late_answers > 0)
+      throw Error(
+          "the physics took a step without this replay's answer (the replay was held "
+          "past its --client-timeout, on a busy machine?): start it with a longer "
+          "--client-timeout and replay again");
     step_ = next;
     ++result.steps;
   }
@@ -317,6 +347,7 @@ class Replayer : public ChannelMap {
   SampleWaiter waiter_;
   std::map<std::string, std::unique_ptr<LatestReader<BodyState>>> states_;
   std::map<std::string, std::unique_ptr<RawWriter>> commands_out_;
+  std::map<std::string, std::int64_t> sent_;  // per body: what its last command answered
   bool started_ = false;
   bool resume_after_first_ = false;
   std::uint32_t physics_pid_ = 0;  // the physics replayed into

@@ -113,7 +113,9 @@ struct FollowingLoop {
     clock.now = kCycle + 30'000;  // the loop woke and answered
     reads = 0;
   }
-  const BodyState* next() { return phase.next_while_catching_up(answered); }
+  const BodyState* next() {
+    return phase.next_while_catching_up(StepPhase::Answered::of(answered));
+  }
   std::int64_t waited() { return std::exchange(*cycle.waited_ns, 0); }
 };
 

@@ -116,13 +116,14 @@ void judge_body(Link& link, const BodyState* state, std::int64_t now) {
                  name);
 }
 
-// One cycle of one link: newest samples in, the two commands out.
-void cycle(Link& link, std::int64_t now, TeleopLatency* latency, std::size_t most) {
+// One cycle of one link: newest samples in, the two commands out. Returns the body's
+// state the cycle answered, or nullptr.
+const BodyState* cycle(Link& link, std::int64_t now, TeleopLatency* latency, std::size_t most) {
   const DeviceState* device = link.device_state.latest();
   const BodyState* state = link.body.latest_state();
-  if (hub_lost()) return;  // the driver's watchdog zeroes the force
+  if (hub_lost()) return nullptr;  // the driver's watchdog zeroes the force
   judge_body(link, state, now);
-  if (!device || !state) return;  // the same
+  if (!device || !state) return nullptr;  // the same
   if (latency && device->command_sequence > link.last_reported_command &&
       device->command_sequence <= link.commands_sent &&
       device->command_sequence + kInFlight > link.commands_sent) {
@@ -174,6 +175,7 @@ void cycle(Link& link, std::int64_t now, TeleopLatency* latency, std::size_t mos
     ++link.commands_sent;
     link.sample_stamp_of[link.commands_sent % kInFlight] = device->header.publish_stamp_ns;
   }
+  return state;
 }
 
 }  // namespace
@@ -225,16 +227,20 @@ int run_teleop(const TeleopOptions& options, TeleopLatency* latency) {
     phase->attach(loop, steps);
   }
   steps.work = [&] {
-    const BodyState* state = phase ? phased.latest_state() : nullptr;
-    do {
-      if (state) phase->follow(*state);
+    // A physics catching up after a stall: each of its late states answered as it
+    // comes (see controller.cpp), a cycle of every link each; the law's dt is the time
+    // that passed, so its force limits hold.
+    for (;;) {
       const std::int64_t now = monotonic_ns();
-      for (auto& link : links) cycle(*link, now, latency, most);
-      // A physics catching up after a stall: each of its late states answered as it
-      // comes (see controller.cpp), a cycle of every link each; the law's dt is the
-      // time that passed, so its force limits hold.
-    } while (state && (state = phase->next_while_catching_up(*state)));
-    return true;
+      const BodyState* answered = cycle(*links.front(), now, latency, most);
+      StepPhase::Answered copy;
+      if (phase && answered) {
+        phase->follow(*answered);
+        copy = StepPhase::Answered::of(*answered);
+      }
+      for (std::size_t i = 1; i < links.size(); ++i) cycle(*links[i], now, latency, most);
+      if (!phase || !answered || !phase->next_while_catching_up(copy)) return true;
+    }
   };
   steps.after = [&](std::int64_t now) { stats.maybe_publish(now, timing); };
   run_periodic(loop, timing, steps);

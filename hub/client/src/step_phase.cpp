@@ -60,7 +60,7 @@ void StepPhase::remember(const BodyState& state) noexcept {
   last_step_ = state.header.sim_step;
 }
 
-const BodyState* StepPhase::next_while_catching_up(const BodyState& answered) noexcept {
+const BodyState* StepPhase::next_while_catching_up(Answered answered) noexcept {
   // Its next step not due yet, the physics is on its grid; behind it by more than it
   // makes up, it skips to the grid (rt's LoopOptions::max_catch_up_ns, by default).
   const std::int64_t began = now_ns();
@@ -70,11 +70,10 @@ const BodyState* StepPhase::next_while_catching_up(const BodyState& answered) no
   // follows again: no gap in which a new state waits for the loop's grid.
   const std::int64_t until =
       deadline_ns_ + ((began - deadline_ns_) / period_ns_ + 1) * period_ns_ - kFollowMarginNs;
-  const std::uint64_t step = answered.header.sim_step;  // `answered` may be rewritten below
   const BodyState* next = nullptr;
   for (std::int64_t now = began; !stop_requested() && now < until; now = now_ns()) {
     const BodyState* state = latest_();
-    if (state && state->header.sim_step != step) {
+    if (state && state->header.sim_step != answered.step) {
       next = state;
       break;
     }

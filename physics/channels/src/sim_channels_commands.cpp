@@ -18,7 +18,14 @@ void SimChannels::apply_commands(std::int64_t now_ns) noexcept {
       channels_[c + kBodyPrefetchAhead].publisher->prefetch_command();
     if (channel.soft) continue;  // soft bodies take no commands
     const BodyCommand* command = channel.publisher->latest_command();
-    if (command && channel.publisher->command_updated()) {
+    const bool updated = command && channel.publisher->command_updated();
+    if (updated && command->lockstep == BodyCommand::kLockstepKeep) {
+      // An answer alone: the command in force, and its watchdog, go on.
+      if (lockstep_)
+        note_lockstep_answer(channel,
+                             {command->header.sim_step, command->header.publisher_pid, true});
+      if (channel.commanded) channel.last_command_ns = now_ns;
+    } else if (updated) {
       // Copied out of shared memory once, then checked, then applied.
       channel.taken_command = command;
       to_input(*command, input_);

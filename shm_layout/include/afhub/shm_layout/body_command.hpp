@@ -31,6 +31,9 @@ struct BodyCommand {
   CartesianCommandType cartesian_type{CartesianCommandType::kForce};
   // 1: written by a lockstep client, answering the state of step header.sim_step;
   // a lockstep physics waits for it before stepping (see `afhub run --lockstep`).
+  // kLockstepKeep: an answer that changes nothing: the command in force stays (a
+  // replay's step on which the recorded client sent nothing new).
+  static constexpr std::uint8_t kLockstepKeep = 2;
   std::uint8_t lockstep{0};
   std::array<std::uint8_t, 2> reserved{};
   // Joint command i drives the i-th joint of the body's state; entries

@@ -45,10 +45,10 @@ struct BodyState {
   // clock (--fast) or the state was not published on this machine (a DDS mirror).
   std::int64_t step_due_ns{0};
   // The step whose state the command in force during this step answered (that
-  // command's header.sim_step), or -1 with none in force (none yet, or its watchdog
-  // expired): header.sim_step - 1 - command_answered_step is how many steps old the
-  // state it answered was. A lockstep replay applies each recorded command at the step
-  // it took effect in, late ones included (afhub play --commands-into-physics).
+  // command's header.sim_step), or -1 with none in force (none yet, its watchdog
+  // expired, or the world reset): header.sim_step - 1 - command_answered_step is how
+  // many steps old the state it answered was. A lockstep replay applies each recorded
+  // command at the step it took effect in (afhub play --commands-into-physics).
   std::int64_t command_answered_step{-1};
   // Descendant joints in the catalog's order; entries [0, joint_count) are valid
   // and the only ones in the chunk.

@@ -59,7 +59,16 @@ class StepPhase {
   // once. nullptr when the physics is on its grid (or so far behind that it skips to
   // it), or no state came before the loop's next cycle is near. The loop's period is
   // taken for the physics'. The wait is left out of the cycle's compute time.
-  const BodyState* next_while_catching_up(const BodyState& answered) noexcept;
+  // `answered` is copied before the answer (Answered::of): answering may read the
+  // body's reader again, which rewrites the state it returned before.
+  struct Answered {
+    std::uint64_t step = 0;
+    std::int64_t step_due_ns = 0;
+    static Answered of(const BodyState& state) noexcept {
+      return {state.header.sim_step, state.step_due_ns};
+    }
+  };
+  const BodyState* next_while_catching_up(Answered answered) noexcept;
 
  private:
   bool wait_for_late_step() const;
