@@ -231,14 +231,15 @@ void register_loop(py::module_& module) {
            py::arg("cpu") = -1, py::arg("lock_memory") = false,
            py::arg("after_step_us") = py::none(), py::arg("unaligned") = false,
            py::keep_alive<1, 4>())
-      .def("run", &Loop::run, py::arg("cycles") = 0, py::arg("seconds") = 0.0,
-           "Runs until `cycles` cycles or `seconds` have passed (0: no limit), the callback "
-           "ends it, or it raises. Returns the loop's statistics (as afhub.loop_stats() gives "
-           "them) over the whole run, and 'callbacks': the function's calls, which can be more "
-           "than the cycles: with a body, when the physics catches up after a stall (runs "
-           "the steps it missed back to back), each of its late states is answered as it "
-           "comes, within the cycle. SCHED_FIFO, CPU and memory locking, when asked for, "
-           "apply to the calling thread and stay after run() returns.")
+      .def(
+          "run", &Loop::run, py::arg("cycles") = 0, py::arg("seconds") = 0.0,
+          "Runs until `cycles` cycles or `seconds` have passed (0: no limit), the callback "
+          "ends it, or it raises. Returns the loop's statistics (as afhub.loop_stats() gives "
+          "them) over the whole run, and 'callbacks': the function's calls, which can be more "
+          "than the cycles: with a body, in phase, when the physics catches up after a stall (runs "
+          "the steps it missed back to back), each of its late states is answered as it "
+          "comes, within the cycle. SCHED_FIFO, CPU and memory locking, when asked for, "
+          "apply to the calling thread and stay after run() returns.")
       .def("stop", &Loop::stop,
            "Ends the loop after the current cycle; from the callback or any other thread.");
 }

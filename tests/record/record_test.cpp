@@ -17,6 +17,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <regex>
 #include <set>
 #include <thread>
@@ -876,15 +877,14 @@ void copy_with_changed_commands(const std::string& from, const std::string& to, 
   ASSERT_GT(copy.changed, 100u);
 }
 
-// The steps the recorded physics took for `body` on a command that answered an older
-// state than the one just before: its lockstep client was late or gone, and the step
-// went on with the command in force.
-std::vector<std::uint64_t> steps_without_an_answer(const std::string& file,
-                                                   const std::string& body) {
-  struct Takes : mcap::Visitor {
+// Each recorded step of `body`: the step whose state its command in force answered
+// (BodyState::command_answered_step).
+std::map<std::uint64_t, std::int64_t> commands_in_force(const std::string& file,
+                                                        const std::string& body) {
+  struct InForce : mcap::Visitor {
     std::string topic;
     std::uint16_t id = 0;
-    std::vector<std::uint64_t> late;
+    std::map<std::uint64_t, std::int64_t> by_step;
     void channel(const mcap::Channel& c) override {
       if (c.topic == topic) id = c.id;
     }
@@ -892,14 +892,12 @@ std::vector<std::uint64_t> steps_without_an_answer(const std::string& file,
       if (m.channel_id != id) return;
       BodyState state;
       std::memcpy(&state, m.data.data(), std::min(m.data.size(), sizeof state));
-      if (state.command_answered_step >= 0 &&
-          static_cast<std::uint64_t>(state.command_answered_step) + 1 < state.header.sim_step)
-        late.push_back(state.header.sim_step);
+      by_step[state.header.sim_step] = state.command_answered_step;
     }
-  } takes;
-  takes.topic = "/afhub/" + body + "/state";
-  mcap::scan(file, takes);
-  return takes.late;
+  } in_force;
+  in_force.topic = "/afhub/" + body + "/state";
+  mcap::scan(file, in_force);
+  return in_force.by_step;
 }
 
 // The controller is stopped past the physics' client timeout once in the run: the
@@ -966,7 +964,15 @@ TEST(Record, ALockstepRunIsReproducedBitIdenticallyAndAChangedGainIsCaughtAtItsS
   controller.stop();
   EXPECT_EQ(recorder.stop(SIGINT), 0) << read_file(log("record.log"));
   physics.reset();
-  EXPECT_GE(steps_without_an_answer(file, "arm/base").size(), 3u);
+  // The steps taken on a command that answered an older state than the one before:
+  // the client late or gone, the step went on with the command in force.
+  const auto in_force = commands_in_force(file, "arm/base");
+  EXPECT_GE(std::count_if(in_force.begin(), in_force.end(),
+                          [](const auto& entry) {
+                            return entry.second >= 0 &&
+                                   static_cast<std::uint64_t>(entry.second) + 1 < entry.first;
+                          }),
+            3);
   const std::string recorded = read_file(log("record.log"));
   // Every step's states, commands and world state (the physics' step tape).
   const json lockstep_info = info_of(file);
@@ -984,7 +990,11 @@ TEST(Record, ALockstepRunIsReproducedBitIdenticallyAndAChangedGainIsCaughtAtItsS
   const long long steps = number_after(replay.out, "reproduced bit-identically: ");
   EXPECT_GT(steps, 700) << replay.out;
 
-  // A gain changed at step 300: the commands answering step 300 act at step 301.
+  // A gain changed at step 300: the commands answering step 300 act at step 301 (or
+  // later, had the client been late there).
+  const auto changed_from = std::find_if(in_force.begin(), in_force.end(),
+                                         [](const auto& entry) { return entry.second >= 300; });
+  ASSERT_NE(changed_from, in_force.end());
   const std::string changed = (folder.dir() / "changed.mcap").string();
   copy_with_changed_commands(file, changed, 300, 1e-3);
   // The replay's physics gone first: started while it still runs, the new one could
@@ -995,7 +1005,8 @@ TEST(Record, ALockstepRunIsReproducedBitIdenticallyAndAChangedGainIsCaughtAtItsS
   RunResult diverged =
       run_afhub({"play", changed, "--commands-into-physics", "--wait", "10"}, 120s);
   EXPECT_EQ(diverged.exit_code, 1) << diverged.out << diverged.err;
-  EXPECT_EQ(number_after(diverged.out, "diverges at step "), 301)
+  EXPECT_EQ(number_after(diverged.out, "diverges at step "),
+            static_cast<long long>(changed_from->first))
       << diverged.out << diverged.err << read_file(log("changed.log"));
   EXPECT_NE(diverged.out.find("afhub/arm/"), std::string::npos) << diverged.out;
 }
