@@ -900,6 +900,44 @@ std::map<std::uint64_t, std::int64_t> commands_in_force(const std::string& file,
   return in_force.by_step;
 }
 
+// `afhub run` of the example arm in lockstep, started paused (resumed by `afhub world
+// resume`, or by a replay) or waiting for one client. A step of 4 ms: each command stays
+// in its slot a step, until the next one; the recorder has that long to read it, on a
+// machine where other tests' loops run under SCHED_FIFO too. A watchdog past the
+// controller's stops: a command let go is not replayed.
+std::unique_ptr<ScopedProcess> lockstep_arm(const std::string& log, bool paused,
+                                            const std::string& client_timeout_ms = "100") {
+  std::vector<std::string> args{"run",        AFHUB_EXAMPLE_MODELS "/arm7.yaml",
+                                "--lockstep", "--dt",
+                                "0.004",      "--watchdog",
+                                "10",         "--no-autostart"};
+  args.insert(args.end(), {"--client-timeout", client_timeout_ms});
+  args.insert(args.end(), paused ? std::initializer_list<std::string>{"--paused"}
+                                 : std::initializer_list<std::string>{"--wait-for", "1"});
+  return std::make_unique<ScopedProcess>(spawn_afhub(args, log));
+}
+
+// Waits until the recording `file` lists the channel `topic`: the recorder reads it.
+bool recording_lists(const std::string& file, const std::string& topic) {
+  return wait_until(
+      [&] {
+        return run_afhub({"info", file}).out.find(topic) != std::string::npos;
+      },
+      30s);
+}
+
+// Waits until the recording `file` holds a first message of `topic`.
+bool recorded_any(const std::string& file, const std::string& topic) {
+  return wait_until(
+      [&] {
+        const json info = info_of(file);
+        for (const json& channel : info["channels"])
+          if (channel["topic"] == topic) return channel["messages"] > 0;
+        return false;
+      },
+      30s);
+}
+
 // The controller is stopped past the physics' client timeout once in the run: the
 // physics goes on without it (late answers, then the client dropped) under the command
 // in force, until the controller answers again. The replay applies each command at
@@ -907,46 +945,21 @@ std::map<std::uint64_t, std::int64_t> commands_in_force(const std::string& file,
 TEST(Record, ALockstepRunIsReproducedBitIdenticallyAndAChangedGainIsCaughtAtItsStep) {
   afhub::testing::ModelFolder folder;
   const std::string file = (folder.dir() / "lockstep.mcap").string();
-  const std::string arm = AFHUB_EXAMPLE_MODELS "/arm7.yaml";
   const auto log = [&](const std::string& name) { return (folder.dir() / name).string(); };
   LatestReader<WorldState> world(
       ChannelId{std::string(kService), std::string(kWorldInstance), std::string(kStateEvent)});
-  const auto lockstep_physics = [&](const std::string& name, bool paused = false) {
-    // A step of 4 ms: each command stays in its slot a step, until the next one; the
-    // recorder has that long to read it, on a machine where other tests' loops run under
-    // SCHED_FIFO too.
-    // A watchdog past the controller's stop: a command let go is not replayed.
-    std::vector<std::string> args{"run",   arm,          "--lockstep", "--dt",
-                                  "0.004", "--watchdog", "10",         "--no-autostart"};
-    args.insert(args.end(), paused ? std::initializer_list<std::string>{"--paused"}
-                                   : std::initializer_list<std::string>{"--wait-for", "1"});
-    return std::make_unique<ScopedProcess>(spawn_afhub(args, log(name)));
-  };
 
   // Recorded from the physics' first step: the recorder is there before it steps.
   ScopedProcess recorder(
       spawn_afhub({"record", "-o", file, "--commands", "--fifo", "90"}, log("record.log")));
-  auto physics = lockstep_physics("run.log", true);
-  ASSERT_TRUE(wait_until(
-      [&] {
-        const RunResult info = run_afhub({"info", file});
-        return info.out.find("/afhub/arm/base/command") != std::string::npos;
-      },
-      30s))
+  auto physics = lockstep_arm(log("run.log"), true);
+  ASSERT_TRUE(recording_lists(file, "/afhub/arm/base/command"))
       << read_file(log("record.log")) << read_file(log("run.log"));
   // A reader connects to a new writer within RouDi's discovery period (about 100 ms):
   // the physics starts paused until the recorder holds the controller's first command,
   // so that none is overwritten before it is read.
   ScopedProcess controller(spawn_afhub({"ctl", "sine", "arm/base", "--lockstep"}, log("ctl.log")));
-  ASSERT_TRUE(wait_until(
-      [&] {
-        const json info = info_of(file);
-        for (const json& channel : info["channels"])
-          if (channel["topic"] == "/afhub/arm/base/command") return channel["messages"] > 0;
-        return false;
-      },
-      30s))
-      << read_file(log("ctl.log"));
+  ASSERT_TRUE(recorded_any(file, "/afhub/arm/base/command")) << read_file(log("ctl.log"));
   ASSERT_EQ(run_afhub({"world", "resume"}).exit_code, 0);
   ASSERT_TRUE(
       wait_until([&] { return world.latest() && world.latest()->header.sim_step > 400; }, 60s))
@@ -983,7 +996,7 @@ TEST(Record, ALockstepRunIsReproducedBitIdenticallyAndAChangedGainIsCaughtAtItsS
 
   // The same model, the recorded commands: every state of every step as recorded (the
   // physics started paused, as the docs advise, and resumed by the replay).
-  physics = lockstep_physics("replay.log", true);
+  physics = lockstep_arm(log("replay.log"), true);
   RunResult replay = run_afhub({"play", file, "--commands-into-physics", "--wait", "10"}, 120s);
   EXPECT_EQ(replay.exit_code, 0) << replay.out << replay.err << read_file(log("replay.log"))
                                  << run_afhub({"status"}).out;
@@ -1001,7 +1014,7 @@ TEST(Record, ALockstepRunIsReproducedBitIdenticallyAndAChangedGainIsCaughtAtItsS
   // meet its bodies taken and end (a fresh CI run: play exited 1 saying nothing on
   // stdout).
   physics.reset();
-  physics = lockstep_physics("changed.log");
+  physics = lockstep_arm(log("changed.log"), false);
   RunResult diverged =
       run_afhub({"play", changed, "--commands-into-physics", "--wait", "10"}, 120s);
   EXPECT_EQ(diverged.exit_code, 1) << diverged.out << diverged.err;
@@ -1009,6 +1022,90 @@ TEST(Record, ALockstepRunIsReproducedBitIdenticallyAndAChangedGainIsCaughtAtItsS
             static_cast<long long>(changed_from->first))
       << diverged.out << diverged.err << read_file(log("changed.log"));
   EXPECT_NE(diverged.out.find("afhub/arm/"), std::string::npos) << diverged.out;
+}
+
+// A lockstep client late on two steps in a row, each time past the client timeout:
+// the physics steps on without it twice, and the answer to the first of the two
+// states, which comes while the physics waits for the second, takes effect a step
+// later than an answer in time would. The replay applies it at that step.
+TEST(Record, ALateAnswerTakenAStepLateIsReplayedAtTheStepItTookEffect) {
+  afhub::testing::ModelFolder folder;
+  const std::string file = (folder.dir() / "late.mcap").string();
+  const auto log = [&](const std::string& name) { return (folder.dir() / name).string(); };
+  LatestReader<WorldState> world(
+      ChannelId{std::string(kService), std::string(kWorldInstance), std::string(kStateEvent)});
+  ScopedProcess recorder(
+      spawn_afhub({"record", "-o", file, "--commands", "--fifo", "90"}, log("record.log")));
+  // Late by L on both steps, with the client timeout T: T < L for the physics to go
+  // on, and 2 L < 3 T for the client to answer before a third miss drops it. 100 ms of
+  // room on each side, for a loaded machine.
+  const std::string timeout_ms = "400";
+  constexpr auto kLate = 500ms;
+  constexpr std::uint64_t kLateStep = 200;
+  auto physics = lockstep_arm(log("run.log"), true, timeout_ms);
+  ASSERT_TRUE(recording_lists(file, "/afhub/arm/base/command"))
+      << read_file(log("record.log")) << read_file(log("run.log"));
+
+  // The client: a position target for every joint, answering each newest state.
+  std::atomic<bool> stop{false};
+  std::thread client([&] {
+    BodyClient base("afhub/arm/base");
+    std::int64_t answered = -1;
+    while (!stop) {
+      const BodyState* state = base.latest_state();
+      if (!state || static_cast<std::int64_t>(state->header.sim_step) == answered) {
+        std::this_thread::sleep_for(100us);
+        continue;
+      }
+      const std::uint64_t step = state->header.sim_step;
+      const std::uint32_t joints = state->joint_count;
+      if (step == kLateStep || step == kLateStep + 1) std::this_thread::sleep_for(kLate);
+      BodyCommand* command = base.loan_command(joints);
+      if (!command) continue;
+      for (std::uint32_t j = 0; j < joints; ++j)
+        command->joints[j] = {0.3 * std::sin(0.02 * static_cast<double>(step) + j),
+                              JointCommandType::kPosition};
+      command->header.sim_step = step;
+      command->lockstep = 1;
+      base.publish_command(command);
+      answered = static_cast<std::int64_t>(step);
+    }
+  });
+  const auto end_client = [&] {
+    stop = true;
+    client.join();
+  };
+  if (!recorded_any(file, "/afhub/arm/base/command")) {
+    end_client();
+    FAIL() << read_file(log("record.log"));
+  }
+  ASSERT_EQ(run_afhub({"world", "resume"}).exit_code, 0);
+  const bool stepped =
+      wait_until([&] { return world.latest() && world.latest()->header.sim_step > 300; }, 60s);
+  end_client();
+  ASSERT_TRUE(stepped) << read_file(log("run.log"));
+  EXPECT_EQ(world.latest()->late_answers, 2u) << read_file(log("run.log"));
+  EXPECT_EQ(world.latest()->dropped_clients, 0u) << read_file(log("run.log"));
+  EXPECT_EQ(recorder.stop(SIGINT), 0) << read_file(log("record.log"));
+  physics.reset();
+
+  // Which command each recorded step took: the one answering its step before (in time),
+  // except on the two steps the client was late: step 201 went on under the command
+  // answering 199, and the answer to 200 took effect at 202.
+  const auto in_force = commands_in_force(file, "arm/base");
+  for (std::uint64_t step = 2; step <= 300; ++step) {
+    const std::int64_t expected = step == kLateStep + 1   ? kLateStep - 1
+                                  : step == kLateStep + 2 ? kLateStep
+                                                          : step - 1;
+    ASSERT_EQ(in_force.count(step), 1u) << "step " << step << " was not recorded";
+    EXPECT_EQ(in_force.at(step), expected) << "at step " << step;
+  }
+
+  physics = lockstep_arm(log("replay.log"), true, timeout_ms);
+  const RunResult replay =
+      run_afhub({"play", file, "--commands-into-physics", "--wait", "10"}, 120s);
+  EXPECT_EQ(replay.exit_code, 0) << replay.out << replay.err << read_file(log("replay.log"));
+  EXPECT_GT(number_after(replay.out, "reproduced bit-identically: "), 300) << replay.out;
 }
 
 TEST(Record, BodiesThatAppearLaterAndAPhysicsRestartedAreRecorded) {
