@@ -13,6 +13,7 @@
 #include "afhub/hub/hub_loss.hpp"
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/hub/loop_stats_publisher.hpp"
+#include "afhub/hub/physics_late_commands.hpp"
 #include "afhub/hub/sample_waiter.hpp"
 #include "afhub/hub/startup_wait.hpp"
 #include "afhub/rt/stop_signal.hpp"
@@ -58,20 +59,12 @@ void run_free(BodyClient& body, const ControllerOptions& options, const Controll
     phase.emplace(
         after_ns, [&body] { return body.latest_state(); }, &body.state_reader());
   }
-  // Late commands as the physics counts them for this body (its state carries the
-  // body's steps under command and those answered in time), so that this loop's
-  // stats, `afhub top` and `afhub status` agree. A restarted physics counts from 0.
-  std::uint32_t physics_late = 0;  // modulo 2^32, as the state carries it
-  std::uint32_t physics_pid = 0;
+  PhysicsLateCommands late_commands;
   LoopCycle steps;
   if (phase) phase->attach(loop, steps);
   const auto respond = [&](const BodyState& state) {
-    const std::uint32_t late = state.commanded_steps - state.answered_steps;
-    if (state.header.publisher_pid == physics_pid)
-      timing.count_late(static_cast<std::uint32_t>(late - physics_late));
+    timing.count_late(late_commands.newly_late(state));
     if (phase) phase->follow(state);  // a new physics, on a grid of its own
-    physics_pid = state.header.publisher_pid;
-    physics_late = late;
     answer(body, state, cycle, false);
   };
   steps.work = [&] {

@@ -12,6 +12,7 @@
 #include <optional>
 
 #include "afhub/hub/loop_stats_publisher.hpp"
+#include "afhub/hub/physics_late_commands.hpp"
 #include "afhub/hub/sample_waiter.hpp"
 #include "afhub/hub/step_phase.hpp"
 #include "afhub/rt/clock.hpp"
@@ -121,8 +122,7 @@ class Loop {
                 LoopStatsPublisher& stats) {
     LoopOptions options = options_;
     options.max_cycles = cycles;
-    // Late commands as the physics counts them for the body (see controller.cpp).
-    std::uint32_t physics_late = 0, physics_pid = 0;
+    PhysicsLateCommands late_commands;
     LoopCycle cycle;
     // With a body, woken after_step_ns after each of its steps is due (see StepPhase).
     std::optional<StepPhase> phase;
@@ -134,12 +134,8 @@ class Loop {
       phase->attach(options, cycle);
     }
     const auto respond = [&](const BodyState& state) {
-      const std::uint32_t late = state.commanded_steps - state.answered_steps;
-      if (state.header.publisher_pid == physics_pid)
-        timing.count_late(static_cast<std::uint32_t>(late - physics_late));
+      timing.count_late(late_commands.newly_late(state));
       if (phase) phase->follow(state);
-      physics_pid = state.header.publisher_pid;
-      physics_late = late;
       return call(&state);
     };
     cycle.work = [&] {

@@ -8,6 +8,7 @@
 #include <iterator>
 #include <map>
 #include <memory>
+#include <set>
 #include <vector>
 
 #include "afhub/hub/channel.hpp"
@@ -71,6 +72,13 @@ class ChannelMap : public Visitor {
   std::span<const std::uint8_t> check(const Message& message, PayloadKind kind) {
     return checked_copy(message.data, kind, aligned_, file_ + ": a recorded payload");
   }
+  // The message as a checked body state, copied out (the joints past its count zero).
+  BodyState body_state(const Message& message) {
+    const auto bytes = check(message, PayloadKind::kBodyState);
+    BodyState state;
+    std::memcpy(&state, bytes.data(), std::min(bytes.size(), sizeof state));
+    return state;
+  }
 
   std::string file_;
 
@@ -93,7 +101,8 @@ class CommandLoader : public ChannelMap {
   // Per body: the recorded commands by the step they answered, and the command in force
   // from each step at which it changed (-1: none).
   struct Body {
-    std::map<std::uint64_t, std::vector<std::uint8_t>> commands;
+    std::map<std::uint64_t, std::vector<std::uint8_t>> commands;  // the first for each
+    std::set<std::uint64_t> answered_twice;  // steps two different commands answered
     std::map<std::uint64_t, std::int64_t> in_force_from;
     std::int64_t last_in_force = -1;
     std::uint64_t last_step = 0;
@@ -113,12 +122,16 @@ class CommandLoader : public ChannelMap {
       const auto command = check(message, PayloadKind::kBodyCommand);
       PayloadHeader header;
       std::memcpy(&header, command.data(), sizeof header);  // checked: at least a header
-      bodies[channel->second].commands[header.sim_step].assign(command.begin(), command.end());
+      Body& body = bodies[channel->second];
+      const auto [kept, first] =
+          body.commands.try_emplace(header.sim_step, command.begin(), command.end());
+      // Another answer to the same step (headers aside, as their stamps differ).
+      if (!first && !std::equal(kept->second.begin() + sizeof header, kept->second.end(),
+                                command.begin() + sizeof header, command.end()))
+        body.answered_twice.insert(header.sim_step);
       any_command = true;
     } else if (channel->first == PayloadKind::kBodyState) {
-      const auto state = check(message, PayloadKind::kBodyState);
-      BodyState recorded;
-      std::memcpy(&recorded, state.data(), std::min(state.size(), sizeof recorded));
+      const BodyState recorded = body_state(message);
       Body& body = bodies[channel->second];
       const std::uint64_t step = recorded.header.sim_step;
       if (body.publisher_pid != 0 &&
@@ -154,9 +167,7 @@ class Replayer : public ChannelMap {
   void message(const Message& message) override {
     const auto* channel = of(message);
     if (!channel || channel->first != PayloadKind::kBodyState) return;
-    const auto state = check(message, PayloadKind::kBodyState);
-    BodyState recorded;
-    std::memcpy(&recorded, state.data(), std::min(state.size(), sizeof recorded));
+    const BodyState recorded = body_state(message);
     const std::uint64_t step = recorded.header.sim_step;
     if (!started_) start(step);
     while (step_ < step) advance();
@@ -268,6 +279,12 @@ class Replayer : public ChannelMap {
                     ", in force at step " + std::to_string(next) +
                     ", is not in the recording (the recorder missed it): the run cannot be "
                     "reproduced from here");
+      if (body.answered_twice.count(static_cast<std::uint64_t>(answered)))
+        throw Error("two different commands to " + name + " answered step " +
+                    std::to_string(answered) + ", and one of them was in force at step " +
+                    std::to_string(next) +
+                    ": the recording cannot say which (a lockstep client answers a step once: "
+                    "was it recorded in lockstep, with one client for the body?)");
       // What the recorded client sent new, or an answer that keeps the command in force:
       // sent again, a command is not always without effect (an actuator grabs anew).
       const auto last_sent = sent_.find(name);

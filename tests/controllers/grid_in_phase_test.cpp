@@ -2,13 +2,15 @@
 // fixed time after the physics' step was due, from the due time the state carries, or
 // from the publish stamp when the physics is not paced by the clock; the states that
 // move a running loop onto another grid; and a physics behind its grid followed state
-// by state (hub/step_phase.hpp).
+// by state (hub/step_phase.hpp); the late commands a loop takes from the physics' counts
+// (hub/physics_late_commands.hpp).
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <utility>
 
 #include "afhub/controllers/controller.hpp"
+#include "afhub/hub/physics_late_commands.hpp"
 #include "afhub/hub/step_phase.hpp"
 
 namespace afhub {
@@ -148,6 +150,29 @@ TEST(StepPhase, AFollowEndsBeforeTheLoopsNextCycle) {
   EXPECT_EQ(loop.next(), nullptr);
   EXPECT_EQ(loop.clock.now, FollowingLoop::kCycle + FollowingLoop::kPeriod - 20'000);
   EXPECT_EQ(loop.waited(), FollowingLoop::kPeriod - 20'000 - 30'000);
+}
+
+TEST(PhysicsLateCommands, TheGrowthOfThePhysicsCountIsTakenAcrossItsWrapAndARestart) {
+  PhysicsLateCommands late;
+  BodyState state;
+  state.header.publisher_pid = 100;
+  state.commanded_steps = 50;
+  state.answered_steps = 40;
+  EXPECT_EQ(late.newly_late(state), 0u) << "the first state: what came before is not ours";
+  state.commanded_steps = 60;
+  state.answered_steps = 47;
+  EXPECT_EQ(late.newly_late(state), 3u);
+  // Both counts wrapped past 2^32, 2 more late.
+  state.commanded_steps = 5;
+  state.answered_steps = 0xFFFFFFFFu - 9;  // late: 5 - (2^32 - 10) = 15 (mod 2^32)
+  EXPECT_EQ(late.newly_late(state), 2u);
+  // A restarted physics: its own counts from 0, none of them late for this loop yet.
+  state.header.publisher_pid = 200;
+  state.commanded_steps = 30;
+  state.answered_steps = 10;
+  EXPECT_EQ(late.newly_late(state), 0u);
+  state.commanded_steps = 31;
+  EXPECT_EQ(late.newly_late(state), 1u);
 }
 
 }  // namespace

@@ -835,17 +835,20 @@ TEST(Record, PlayPublishesTheWindowAndTheBodiesChosenAtTheRateChosen) {
 }
 
 // A copy of `from` in which the commands answering steps from `step` on carry joint 0's
-// target moved by `delta`: what a changed gain does to a run.
+// target moved by `delta`: what a changed gain does to a run. `second_answer`: instead,
+// the command answering `step` is followed by a second one, its joint 0 moved by
+// `delta`: two different answers to one step, which no lockstep client sends.
 void copy_with_changed_commands(const std::string& from, const std::string& to, std::uint64_t step,
-                                double delta) {
+                                double delta, bool second_answer = false) {
   struct Copy : mcap::Visitor {
     mcap::Writer writer;
     std::uint64_t from_step;
     double delta;
+    bool second_answer;
     std::set<std::uint16_t> commands;
     std::uint64_t changed = 0;
-    Copy(const std::string& path, std::uint64_t s, double d)
-        : writer(path, {}), from_step(s), delta(d) {}
+    Copy(const std::string& path, std::uint64_t s, double d, bool second)
+        : writer(path, {}), from_step(s), delta(d), second_answer(second) {}
     void schema(const mcap::Schema& schema) override {
       writer.add_schema(schema.name, schema.encoding, schema.data);
     }
@@ -861,8 +864,11 @@ void copy_with_changed_commands(const std::string& from, const std::string& to, 
       std::vector<std::uint8_t> data(message.data.begin(), message.data.end());
       BodyCommand command;
       std::memcpy(&command, data.data(), std::min(data.size(), sizeof command));
-      if (commands.count(message.channel_id) && command.header.sim_step >= from_step &&
-          command.joint_count > 0) {
+      const bool chosen = commands.count(message.channel_id) && command.joint_count > 0 &&
+                          (second_answer ? command.header.sim_step == from_step
+                                         : command.header.sim_step >= from_step);
+      if (chosen && second_answer) writer.write(message);
+      if (chosen) {
         command.joints[0].value += delta;
         std::memcpy(data.data(), &command, data.size());
         ++changed;
@@ -871,10 +877,10 @@ void copy_with_changed_commands(const std::string& from, const std::string& to, 
       copy.data = data;
       writer.write(copy);
     }
-  } copy(to, step, delta);
+  } copy(to, step, delta, second_answer);
   mcap::scan(from, copy);
   copy.writer.close();
-  ASSERT_GT(copy.changed, 100u);
+  ASSERT_GT(copy.changed, second_answer ? 0u : 100u);
 }
 
 // Each recorded step of `body`: the step whose state its command in force answered
@@ -1022,6 +1028,19 @@ TEST(Record, ALockstepRunIsReproducedBitIdenticallyAndAChangedGainIsCaughtAtItsS
             static_cast<long long>(changed_from->first))
       << diverged.out << diverged.err << read_file(log("changed.log"));
   EXPECT_NE(diverged.out.find("afhub/arm/"), std::string::npos) << diverged.out;
+
+  // Two different commands answering the step whose answer took effect there: which
+  // one was in force, the recording cannot say.
+  const std::string twice = (folder.dir() / "twice.mcap").string();
+  copy_with_changed_commands(file, twice, changed_from->second, 1e-3, true);
+  physics.reset();
+  physics = lockstep_arm(log("twice.log"), false);
+  const RunResult ambiguous =
+      run_afhub({"play", twice, "--commands-into-physics", "--wait", "10"}, 120s);
+  EXPECT_EQ(ambiguous.exit_code, 1) << ambiguous.out << ambiguous.err;
+  EXPECT_TRUE(contains(ambiguous.err, "two different commands to afhub/arm/base answered step " +
+                                          std::to_string(changed_from->second)))
+      << ambiguous.out << ambiguous.err;
 }
 
 // A lockstep client late on two steps in a row, each time past the client timeout:
