@@ -6,6 +6,7 @@
 
 #include <linux/futex.h>
 #include <pthread.h>
+#include <sched.h>
 #include <signal.h>
 #include <sys/mman.h>
 #include <sys/syscall.h>
@@ -354,6 +355,58 @@ BENCHMARK_CAPTURE(BM_LoopStep, ecm_iterated, kEcm, false)->Unit(benchmark::kMicr
 BENCHMARK_CAPTURE(BM_LoopStep, four_bar_direct, kFourBar, true)->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(BM_LoopStep, four_bar_iterated, kFourBar, false)->Unit(benchmark::kMicrosecond);
 
+// Every body's state read by a thread on another CPU after each step, as a controller
+// process reads them: what each line a step writes then costs to take back from that
+// CPU's cache. The stepping thread runs on CPU 0, the reader spins on CPU 1 (with the
+// islands solved by the stepping thread alone, nothing else needs CPU 1).
+class StatesReadElsewhere {
+ public:
+  explicit StatesReadElsewhere(const std::vector<BodySpec>& bodies) {
+    for (const BodySpec& body : bodies)
+      readers_.push_back(std::make_unique<BodyClient>(body.channel));
+    for (auto& reader : readers_)
+      afhub::test::wait_until([&] { return reader->subscribed(); }, std::chrono::seconds(5));
+    sched_getaffinity(0, sizeof saved_, &saved_);
+    pin(0);
+    thread_ = std::thread([this] {
+      pin(1);
+      for (std::uint64_t seen = 0; !stop_.load(std::memory_order_relaxed);) {
+        const std::uint64_t step = published_.load(std::memory_order_acquire);
+        if (step == seen) continue;
+        for (auto& reader : readers_)
+          if (const BodyState* read = reader->latest_state()) sum_ += read->pose.position_m.z;
+        seen = step;
+        read_.store(step, std::memory_order_release);
+      }
+    });
+  }
+  ~StatesReadElsewhere() {
+    stop_ = true;
+    thread_.join();
+    sched_setaffinity(0, sizeof saved_, &saved_);
+  }
+  // After a step is published (untimed): the reader reads it all.
+  void read_step(std::uint64_t step) {
+    published_.store(step, std::memory_order_release);
+    while (read_.load(std::memory_order_acquire) != step) {
+    }
+  }
+
+ private:
+  static void pin(int cpu) {
+    cpu_set_t set;
+    CPU_ZERO(&set);
+    CPU_SET(cpu, &set);
+    sched_setaffinity(0, sizeof set, &set);
+  }
+  std::vector<std::unique_ptr<BodyClient>> readers_;
+  cpu_set_t saved_;
+  std::thread thread_;
+  std::atomic<std::uint64_t> published_{0}, read_{0};
+  std::atomic<bool> stop_{false};
+  double sum_ = 0.0;
+};
+
 // The thousand bodies at 1 kHz: one step of 125 eight-link arms, as the physics alone,
 // with every state and the world state published, and with every body commanded each
 // step by one controller in this process (its 1000 command slots in a few blocks).
@@ -363,7 +416,7 @@ BENCHMARK_CAPTURE(BM_LoopStep, four_bar_iterated, kFourBar, false)->Unit(benchma
 // alone (`one_thread`): "helped" is the share of islands the helper solved. `taped`:
 // with a recorder of that many bodies (TapeDrain), the first ones.
 void BM_StepThousandBodies(benchmark::State& state, bool publish, bool commanded,
-                           int solver_threads, std::size_t taped = 0) {
+                           int solver_threads, std::size_t taped = 0, bool read_elsewhere = false) {
   afhub::testing::ModelFolder folder;
   Model model = load_adf_files({folder.write("arms.yaml", afhub::bench::arms_scene(125, 8))});
   model.world.solver_threads = solver_threads;
@@ -380,6 +433,8 @@ void BM_StepThousandBodies(benchmark::State& state, bool publish, bool commanded
     tape = connect_tape(
         state, sim, channels.get(),
         {model.bodies.begin(), model.bodies.begin() + std::min(taped, model.bodies.size())});
+  std::unique_ptr<StatesReadElsewhere> reader;
+  if (read_elsewhere) reader = std::make_unique<StatesReadElsewhere>(model.bodies);
   StepTimes times(1 << 20);
   std::uint64_t step = 0;
   for (auto _ : state) {
@@ -392,6 +447,7 @@ void BM_StepThousandBodies(benchmark::State& state, bool publish, bool commanded
     if (channels) channels->prepare_next_step();
     if (tape) tape->drain();
     ++step;
+    if (reader) reader->read_step(step);
   }
   state.counters["bodies"] = static_cast<double>(model.bodies.size());
   state.counters["helped"] =
@@ -406,6 +462,8 @@ BENCHMARK_CAPTURE(BM_StepThousandBodies, published, true, false, 2)->Unit(benchm
 BENCHMARK_CAPTURE(BM_StepThousandBodies, published_taped, true, false, 2, 1000)
     ->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(BM_StepThousandBodies, published_taped_one, true, false, 2, 1)
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_StepThousandBodies, published_read_elsewhere, true, false, 1, 0, true)
     ->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(BM_StepThousandBodies, published_commanded, true, true, 2)
     ->Unit(benchmark::kMicrosecond);

@@ -140,10 +140,15 @@ void* RawWriter::loan(std::uint32_t bytes, bool* rewritten) noexcept {
 }
 
 void RawWriter::prefetch_update() const noexcept {
+  prefetch_update(0, slot_loaned_bytes_);
+}
+
+void RawWriter::prefetch_update(std::uint32_t from, std::uint32_t to) const noexcept {
   if (!slot_.entry || !kHasPrefetchw) return;
   prefetch_for_writing(&slot_.entry->control);
   const auto* payload = static_cast<const unsigned char*>(slot_.payload);
-  for (std::uint32_t at = 0; at < slot_loaned_bytes_; at += kCacheLineBytes)
+  for (std::uint32_t at = from & ~(kCacheLineBytes - 1); at < std::min(to, slot_loaned_bytes_);
+       at += kCacheLineBytes)
     prefetch_for_writing(payload + at);
 }
 

@@ -310,8 +310,11 @@ const BodyState* SimChannels::publish_state(Channel& channel, BodyReading& readi
   state->answered_steps = static_cast<std::uint32_t>(channel.answered_steps);
   state->command_answered_step = channel.state_command_step;
   state->refused_commands = channel.refused;
-  state->refused_command_pid = channel.refused_pid;
-  state->refusal_reason = channel.refusal_reason;
+  // Written when they change only: a line written is taken from every reader's cache.
+  if (state->refused_command_pid != channel.refused_pid)
+    state->refused_command_pid = channel.refused_pid;
+  if (state->refusal_reason != channel.refusal_reason)
+    state->refusal_reason = channel.refusal_reason;
   channel.publisher->publish_state(state, stamp.stamp_ns);
   return state;
 }

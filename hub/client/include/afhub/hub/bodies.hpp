@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstddef>
+#include <cstdint>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -52,7 +53,13 @@ class BodyPublisher {
   bool has_state_readers() const noexcept { return state_.raw().has_readers(); }
   // Hints for a loop over many bodies, a few bodies ahead (RawWriter::prefetch_update,
   // RawLatestReader::prefetch).
-  void prefetch_state_update() const noexcept { state_.raw().prefetch_update(); }
+  // A physics' step: the lines it writes every step (SimChannels::publish_state), not
+  // those of the sensor rays and the last refused command, rewritten only when they
+  // change, which the readers then keep in their caches.
+  void prefetch_state_update() const noexcept {
+    state_.raw().prefetch_update(0, offsetof(BodyState, refused_command_pid));
+    state_.raw().prefetch_update(offsetof(BodyState, joints), UINT32_MAX);
+  }
   void prefetch_command() const noexcept { command_.raw().prefetch(); }
   // The newest command, or nullptr before the first; read in place.
   const BodyCommand* latest_command() noexcept { return command_.latest(); }
