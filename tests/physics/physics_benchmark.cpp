@@ -24,6 +24,12 @@
 #include <thread>
 #include <vector>
 
+#include <BulletDynamics/Featherstone/btMultiBody.h>
+#include <BulletDynamics/Featherstone/btMultiBodyConstraintSolver.h>
+#include <BulletDynamics/Featherstone/btMultiBodyDynamicsWorld.h>
+#include <BulletDynamics/Featherstone/btMultiBodyLinkCollider.h>
+#include <btBulletDynamicsCommon.h>
+
 #include "afhub/bench/arms_scene.hpp"
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/hub/step_tape.hpp"
@@ -434,6 +440,10 @@ void BM_StepThousandBodies(benchmark::State& state, bool publish, bool commanded
         state, sim, channels.get(),
         {model.bodies.begin(), model.bodies.begin() + std::min(taped, model.bodies.size())});
   std::unique_ptr<StatesReadElsewhere> reader;
+  if (read_elsewhere && std::thread::hardware_concurrency() < 2) {
+    state.SkipWithError("needs two CPUs");
+    return;
+  }
   if (read_elsewhere) reader = std::make_unique<StatesReadElsewhere>(model.bodies);
   StepTimes times(1 << 20);
   std::uint64_t step = 0;
@@ -469,6 +479,68 @@ BENCHMARK_CAPTURE(BM_StepThousandBodies, published_commanded, true, true, 2)
     ->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(BM_StepThousandBodies, published_commanded_one_thread, true, true, 1)
     ->Unit(benchmark::kMicrosecond);
+
+// The same 125 arms as Featherstone multibodies (Bullet's btMultiBody, reduced
+// coordinates: 7 revolute links on a fixed base each, their PD as joint torques, one
+// collider per link colliding with nothing, as the arms ignore each other): what the
+// thousand bodies' physics would cost with the arms' joints as coordinates instead of
+// constraints. A measure for that design choice, not a path afhub runs
+// (docs/performance.md).
+void BM_StepThousandBodiesAsMultibodies(benchmark::State& state) {
+  constexpr int kArms = 125, kLinks = 8;
+  btDefaultCollisionConfiguration configuration;
+  btCollisionDispatcher dispatcher(&configuration);
+  btDbvtBroadphase broadphase;
+  btMultiBodyConstraintSolver solver;
+  btMultiBodyDynamicsWorld world(&dispatcher, &broadphase, &solver, &configuration);
+  world.setGravity(btVector3(0, 0, -9.81));
+  btBoxShape box(btVector3(0.025, 0.025, 0.05));
+  std::vector<std::unique_ptr<btMultiBody>> arms;
+  std::vector<std::unique_ptr<btMultiBodyLinkCollider>> colliders;
+  for (int a = 0; a < kArms; ++a) {
+    auto arm = std::make_unique<btMultiBody>(kLinks - 1, 0.0, btVector3(0, 0, 0), true, false);
+    arm->setBasePos(btVector3(a % 12, a / 12, 0));
+    arm->setWorldToBaseRot(btQuaternion::getIdentity());
+    for (int l = 1; l < kLinks; ++l)  // axes alternating between y and z, as arms_scene's
+      arm->setupRevolute(l - 1, 1.0, btVector3(0.01, 0.01, 0.01), l - 2,
+                         btQuaternion::getIdentity(),
+                         l % 2 ? btVector3(0, 1, 0) : btVector3(0, 0, 1), btVector3(0, 0, 0.05),
+                         btVector3(0, 0, 0.05), true);
+    arm->finalizeMultiDof();
+    arm->setLinearDamping(0);
+    arm->setAngularDamping(0);
+    world.addMultiBody(arm.get());
+    for (int l = -1; l < kLinks - 1; ++l) {
+      auto& collider =
+          colliders.emplace_back(std::make_unique<btMultiBodyLinkCollider>(arm.get(), l));
+      collider->setCollisionShape(&box);
+      btTransform pose = btTransform::getIdentity();
+      pose.setOrigin(btVector3(a % 12, a / 12, 0.1 * (l + 1)));
+      collider->setWorldTransform(pose);
+      world.addCollisionObject(collider.get(), 1, 0);
+      if (l < 0)
+        arm->setBaseCollider(collider.get());
+      else
+        arm->getLink(l).m_collider = collider.get();
+    }
+    arms.push_back(std::move(arm));
+  }
+  StepTimes times(1 << 20);
+  for (auto _ : state) {
+    const std::int64_t begin_ns = monotonic_ns();
+    for (auto& arm : arms)
+      for (int l = 0; l < kLinks - 1; ++l)
+        arm->addJointTorque(l, -50.0 * arm->getJointPos(l) - 2.0 * arm->getJointVel(l));
+    world.stepSimulation(0.001, 0, 0.001);
+    const auto took = static_cast<float>(monotonic_ns() - begin_ns) * 1e-3F;
+    if (times.total.size() == times.total.capacity()) continue;
+    for (auto* phase : {&times.total, &times.physics}) phase->push_back(took);
+    for (auto* phase : {&times.commands, &times.publish}) phase->push_back(0.0F);
+  }
+  state.counters["bodies"] = kArms * kLinks;
+  report_step_times(state, times);
+}
+BENCHMARK(BM_StepThousandBodiesAsMultibodies)->Unit(benchmark::kMicrosecond);
 
 // Publishing alone: one step's ten body states (a ten-link chain, so each body
 // carries its descendant joints) and the world state. Argument: readers per body.
