@@ -8,7 +8,6 @@
 #include <iterator>
 #include <map>
 #include <memory>
-#include <set>
 #include <vector>
 
 #include "afhub/hub/channel.hpp"
@@ -101,8 +100,9 @@ class CommandLoader : public ChannelMap {
   // Per body: the recorded commands by the step they answered, and the command in force
   // from each step at which it changed (-1: none).
   struct Body {
-    std::map<std::uint64_t, std::vector<std::uint8_t>> commands;  // the first for each
-    std::set<std::uint64_t> answered_twice;  // steps two different commands answered
+    // The different answers to each step (headers aside: their stamps differ), as
+    // recorded: one in a lockstep run.
+    std::map<std::uint64_t, std::vector<std::vector<std::uint8_t>>> commands;
     std::map<std::uint64_t, std::int64_t> in_force_from;
     std::int64_t last_in_force = -1;
     std::uint64_t last_step = 0;
@@ -122,13 +122,13 @@ class CommandLoader : public ChannelMap {
       const auto command = check(message, PayloadKind::kBodyCommand);
       PayloadHeader header;
       std::memcpy(&header, command.data(), sizeof header);  // checked: at least a header
-      Body& body = bodies[channel->second];
-      const auto [kept, first] =
-          body.commands.try_emplace(header.sim_step, command.begin(), command.end());
-      // Another answer to the same step (headers aside, as their stamps differ).
-      if (!first && !std::equal(kept->second.begin() + sizeof header, kept->second.end(),
-                                command.begin() + sizeof header, command.end()))
-        body.answered_twice.insert(header.sim_step);
+      auto& answers = bodies[channel->second].commands[header.sim_step];
+      const auto same = [&](const std::vector<std::uint8_t>& answer) {
+        return std::equal(answer.begin() + sizeof header, answer.end(),
+                          command.begin() + sizeof header, command.end());
+      };
+      if (std::none_of(answers.begin(), answers.end(), same))
+        answers.emplace_back(command.begin(), command.end());
       any_command = true;
     } else if (channel->first == PayloadKind::kBodyState) {
       const BodyState recorded = body_state(message);
@@ -137,6 +137,7 @@ class CommandLoader : public ChannelMap {
       if (body.publisher_pid != 0 &&
           (step <= body.last_step || recorded.header.publisher_pid != body.publisher_pid)) {
         run_ended = true;
+        forget_commands_from(recorded.header.publish_stamp_ns);
         return;
       }
       body.last_step = step;
@@ -149,6 +150,20 @@ class CommandLoader : public ChannelMap {
         first_change = first_change == 0 ? step : std::min(first_change, step);
       }
     }
+  }
+
+ private:
+  // The commands published once the next run began (its first state's stamp) answer
+  // that run's states: recorded before its first state (the recorder finds a restarted
+  // physics' slots later than a client it knows), they are not this run's.
+  void forget_commands_from(std::int64_t stamp_ns) {
+    for (auto& [name, body] : bodies)
+      for (auto& [step, answers] : body.commands)
+        std::erase_if(answers, [&](const std::vector<std::uint8_t>& answer) {
+          PayloadHeader header;
+          std::memcpy(&header, answer.data(), sizeof header);
+          return header.publish_stamp_ns >= stamp_ns;
+        });
   }
 };
 
@@ -273,31 +288,32 @@ class Replayer : public ChannelMap {
         throw Error("the recorded physics let go of " + name + " at step " +
                     std::to_string(std::prev(change)->first) +
                     " (its command watchdog expired): a replay cannot reproduce that");
-      const auto command = body.commands.find(static_cast<std::uint64_t>(answered));
-      if (command == body.commands.end())
+      const auto answers = body.commands.find(static_cast<std::uint64_t>(answered));
+      if (answers == body.commands.end() || answers->second.empty())
         throw Error("the command to " + name + " answering step " + std::to_string(answered) +
                     ", in force at step " + std::to_string(next) +
                     ", is not in the recording (the recorder missed it): the run cannot be "
                     "reproduced from here");
-      if (body.answered_twice.count(static_cast<std::uint64_t>(answered)))
+      if (answers->second.size() > 1)
         throw Error("two different commands to " + name + " answered step " +
                     std::to_string(answered) + ", and one of them was in force at step " +
                     std::to_string(next) +
-                    ": the recording cannot say which (a lockstep client answers a step once: "
+                    ": the recording cannot say which (a lockstep client answers each step once: "
                     "was it recorded in lockstep, with one client for the body?)");
       // What the recorded client sent new, or an answer that keeps the command in force:
       // sent again, a command is not always without effect (an actuator grabs anew).
       const auto last_sent = sent_.find(name);
       const bool keep = last_sent != sent_.end() && last_sent->second == answered;
       sent_[name] = answered;
-      const std::size_t bytes = keep ? body_command_bytes(0) : command->second.size();
+      const std::vector<std::uint8_t>& command = answers->second.front();
+      const std::size_t bytes = keep ? body_command_bytes(0) : command.size();
       RawWriter& writer = command_writer(name);
       void* payload = writer.loan(static_cast<std::uint32_t>(bytes));
       if (!payload) throw Error("no shared memory left for a command to " + name);
       if (keep)
         std::memset(payload, 0, bytes);
       else
-        std::memcpy(payload, command->second.data(), bytes);
+        std::memcpy(payload, command.data(), bytes);
       auto* sent = static_cast<BodyCommand*>(payload);
       sent->header.sim_step = step_;  // the answer the replaying physics waits for
       sent->lockstep = keep ? BodyCommand::kLockstepKeep : 1;

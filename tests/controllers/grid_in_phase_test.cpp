@@ -162,7 +162,7 @@ TEST(PhysicsLateCommands, TheGrowthOfThePhysicsCountIsTakenAcrossItsWrapAndARest
   state.commanded_steps = 60;
   state.answered_steps = 47;
   EXPECT_EQ(late.newly_late(state), 3u);
-  // Both counts wrapped past 2^32, 2 more late.
+  // The steps under command wrapped past 2^32: 2 more late.
   state.commanded_steps = 5;
   state.answered_steps = 0xFFFFFFFFu - 9;  // late: 5 - (2^32 - 10) = 15 (mod 2^32)
   EXPECT_EQ(late.newly_late(state), 2u);

@@ -363,19 +363,24 @@ BENCHMARK_CAPTURE(BM_LoopStep, four_bar_iterated, kFourBar, false)->Unit(benchma
 
 // Every body's state read by a thread on another CPU after each step, as a controller
 // process reads them: what each line a step writes then costs to take back from that
-// CPU's cache. The stepping thread runs on CPU 0, the reader spins on CPU 1 (with the
-// islands solved by the stepping thread alone, nothing else needs CPU 1).
+// CPU's cache. The stepping thread runs on the first CPU this process may use, the
+// reader spins on the second (with the islands solved by the stepping thread alone,
+// nothing else needs it).
 class StatesReadElsewhere {
  public:
+  // False when this process may use fewer than two CPUs.
+  static bool possible() { return first_two_cpus().second >= 0; }
+
   explicit StatesReadElsewhere(const std::vector<BodySpec>& bodies) {
     for (const BodySpec& body : bodies)
       readers_.push_back(std::make_unique<BodyClient>(body.channel));
     for (auto& reader : readers_)
       afhub::test::wait_until([&] { return reader->subscribed(); }, std::chrono::seconds(5));
+    const auto [stepping, reading] = first_two_cpus();
     sched_getaffinity(0, sizeof saved_, &saved_);
-    pin(0);
-    thread_ = std::thread([this] {
-      pin(1);
+    pin(stepping);
+    thread_ = std::thread([this, reading = reading] {
+      pin(reading);
       for (std::uint64_t seen = 0; !stop_.load(std::memory_order_relaxed);) {
         const std::uint64_t step = published_.load(std::memory_order_acquire);
         if (step == seen) continue;
@@ -399,6 +404,14 @@ class StatesReadElsewhere {
   }
 
  private:
+  static std::pair<int, int> first_two_cpus() {
+    cpu_set_t allowed;
+    std::pair<int, int> cpus{-1, -1};
+    if (sched_getaffinity(0, sizeof allowed, &allowed) != 0) return cpus;
+    for (int cpu = 0; cpu < CPU_SETSIZE && cpus.second < 0; ++cpu)
+      if (CPU_ISSET(cpu, &allowed)) (cpus.first < 0 ? cpus.first : cpus.second) = cpu;
+    return cpus;
+  }
   static void pin(int cpu) {
     cpu_set_t set;
     CPU_ZERO(&set);
@@ -440,7 +453,7 @@ void BM_StepThousandBodies(benchmark::State& state, bool publish, bool commanded
         state, sim, channels.get(),
         {model.bodies.begin(), model.bodies.begin() + std::min(taped, model.bodies.size())});
   std::unique_ptr<StatesReadElsewhere> reader;
-  if (read_elsewhere && std::thread::hardware_concurrency() < 2) {
+  if (read_elsewhere && !StatesReadElsewhere::possible()) {
     state.SkipWithError("needs two CPUs");
     return;
   }
@@ -492,11 +505,12 @@ void BM_StepThousandBodiesAsMultibodies(benchmark::State& state) {
   btCollisionDispatcher dispatcher(&configuration);
   btDbvtBroadphase broadphase;
   btMultiBodyConstraintSolver solver;
-  btMultiBodyDynamicsWorld world(&dispatcher, &broadphase, &solver, &configuration);
-  world.setGravity(btVector3(0, 0, -9.81));
+  // Declared before the world, which meets its colliders again when it goes.
   btBoxShape box(btVector3(0.025, 0.025, 0.05));
   std::vector<std::unique_ptr<btMultiBody>> arms;
   std::vector<std::unique_ptr<btMultiBodyLinkCollider>> colliders;
+  btMultiBodyDynamicsWorld world(&dispatcher, &broadphase, &solver, &configuration);
+  world.setGravity(btVector3(0, 0, -9.81));
   for (int a = 0; a < kArms; ++a) {
     auto arm = std::make_unique<btMultiBody>(kLinks - 1, 0.0, btVector3(0, 0, 0), true, false);
     arm->setBasePos(btVector3(a % 12, a / 12, 0));

@@ -18,8 +18,10 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <regex>
 #include <set>
+#include <stdexcept>
 #include <thread>
 
 #include "afhub/hub/bodies.hpp"
@@ -834,53 +836,99 @@ TEST(Record, PlayPublishesTheWindowAndTheBodiesChosenAtTheRateChosen) {
   EXPECT_GT(link3_updates, 20u);
 }
 
-// A copy of `from` in which the commands answering steps from `step` on carry joint 0's
-// target moved by `delta`: what a changed gain does to a run. `second_answer`: instead,
-// the command answering `step` is followed by a second one, its joint 0 moved by
-// `delta`: two different answers to one step, which no lockstep client sends.
+// What copy_with_changed_commands changes in a lockstep recording of the arm.
+enum class CommandChange {
+  // The commands answering steps from `step` on carry joint 0's target moved by
+  // `delta`: what a changed gain does to a run.
+  kFromStep,
+  // The command answering `step` is followed by a second one, joint 0 moved: two
+  // different answers to one step, which no lockstep client sends.
+  kSecondAnswer,
+  // After the last message, a next run: a restarted physics' first state (step 0), and
+  // recorded before it (the recorder finds a new physics' slots later than a client's),
+  // its client's answer to step `step` of that run, joint 0 moved.
+  kNextRunAnswer,
+};
+
 void copy_with_changed_commands(const std::string& from, const std::string& to, std::uint64_t step,
-                                double delta, bool second_answer = false) {
+                                double delta, CommandChange change = CommandChange::kFromStep) {
   struct Copy : mcap::Visitor {
     mcap::Writer writer;
-    std::uint64_t from_step;
+    std::uint64_t step;
     double delta;
-    bool second_answer;
-    std::set<std::uint16_t> commands;
+    CommandChange change;
+    std::uint16_t base_command = 0, base_state = 0;  // the channels of arm/base
+    std::vector<std::uint8_t> answer, last_state;    // of arm/base
+    mcap::Message last{};
     std::uint64_t changed = 0;
-    Copy(const std::string& path, std::uint64_t s, double d, bool second)
-        : writer(path, {}), from_step(s), delta(d), second_answer(second) {}
+    Copy(const std::string& path, std::uint64_t s, double d, CommandChange c)
+        : writer(path, {}), step(s), delta(d), change(c) {}
     void schema(const mcap::Schema& schema) override {
       writer.add_schema(schema.name, schema.encoding, schema.data);
     }
     void channel(const mcap::Channel& channel) override {
       writer.add_channel(channel.schema_id, channel.topic, channel.message_encoding,
                          channel.metadata);
-      if (channel.topic.ends_with("/command")) commands.insert(channel.id);
+      if (channel.topic == "/afhub/arm/base/command") base_command = channel.id;
+      if (channel.topic == "/afhub/arm/base/state") base_state = channel.id;
     }
     void metadata(const std::string& name, const mcap::Metadata& metadata) override {
       writer.add_metadata(name, metadata);
     }
     void message(const mcap::Message& message) override {
+      last = message;
       std::vector<std::uint8_t> data(message.data.begin(), message.data.end());
+      if (message.channel_id == base_state) last_state = data;
       BodyCommand command;
       std::memcpy(&command, data.data(), std::min(data.size(), sizeof command));
-      const bool chosen = commands.count(message.channel_id) && command.joint_count > 0 &&
-                          (second_answer ? command.header.sim_step == from_step
-                                         : command.header.sim_step >= from_step);
-      if (chosen && second_answer) writer.write(message);
-      if (chosen) {
-        command.joints[0].value += delta;
-        std::memcpy(data.data(), &command, data.size());
-        ++changed;
-      }
+      const bool answers_step =
+          message.channel_id == base_command && command.header.sim_step == step;
+      if (answers_step) answer = data;
+      const bool chosen = message.channel_id == base_command &&
+                          (change == CommandChange::kFromStep
+                               ? command.header.sim_step >= step
+                               : answers_step && change == CommandChange::kSecondAnswer);
+      if (chosen && change == CommandChange::kSecondAnswer) writer.write(message);
+      if (chosen) moved(data);
       mcap::Message copy = message;
       copy.data = data;
       writer.write(copy);
     }
-  } copy(to, step, delta, second_answer);
+    void moved(std::vector<std::uint8_t>& data) {
+      BodyCommand command;
+      std::memcpy(&command, data.data(), std::min(data.size(), sizeof command));
+      command.joints[0].value += delta;
+      std::memcpy(data.data(), &command, data.size());
+      ++changed;
+    }
+    void finish() {
+      if (change == CommandChange::kNextRunAnswer && !answer.empty() && !last_state.empty()) {
+        BodyState state;
+        std::memcpy(&state, last_state.data(), std::min(last_state.size(), sizeof state));
+        state.header.sim_step = 0;
+        state.header.publish_stamp_ns += 1'000'000'000;  // a second after the run's last
+        std::memcpy(last_state.data(), &state, last_state.size());
+        moved(answer);
+        BodyCommand command;
+        std::memcpy(&command, answer.data(), std::min(answer.size(), sizeof command));
+        command.header.publish_stamp_ns = state.header.publish_stamp_ns + 1'000'000;
+        std::memcpy(answer.data(), &command, answer.size());
+        mcap::Message next = last;
+        next.channel_id = base_command;
+        next.log_time_ns = next.publish_time_ns = last.log_time_ns + 1'000'000'000;
+        next.data = answer;
+        writer.write(next);
+        next.channel_id = base_state;
+        next.log_time_ns = next.publish_time_ns = next.log_time_ns + 1'000'000;
+        next.data = last_state;
+        writer.write(next);
+      }
+      writer.close();
+    }
+  } copy(to, step, delta, change);
   mcap::scan(from, copy);
-  copy.writer.close();
-  ASSERT_GT(copy.changed, second_answer ? 0u : 100u);
+  copy.finish();
+  ASSERT_GT(copy.changed, change == CommandChange::kFromStep ? 100u : 0u);
 }
 
 // Each recorded step of `body`: the step whose state its command in force answered
@@ -1032,7 +1080,7 @@ TEST(Record, ALockstepRunIsReproducedBitIdenticallyAndAChangedGainIsCaughtAtItsS
   // Two different commands answering the step whose answer took effect there: which
   // one was in force, the recording cannot say.
   const std::string twice = (folder.dir() / "twice.mcap").string();
-  copy_with_changed_commands(file, twice, changed_from->second, 1e-3, true);
+  copy_with_changed_commands(file, twice, changed_from->second, 1e-3, CommandChange::kSecondAnswer);
   physics.reset();
   physics = lockstep_arm(log("twice.log"), false);
   const RunResult ambiguous =
@@ -1041,6 +1089,18 @@ TEST(Record, ALockstepRunIsReproducedBitIdenticallyAndAChangedGainIsCaughtAtItsS
   EXPECT_TRUE(contains(ambiguous.err, "two different commands to afhub/arm/base answered step " +
                                           std::to_string(changed_from->second)))
       << ambiguous.out << ambiguous.err;
+
+  // A restarted physics whose client's answer to the same step was recorded before its
+  // first state: that answer is the next run's, not another one of this run's.
+  const std::string restarted = (folder.dir() / "restarted.mcap").string();
+  copy_with_changed_commands(file, restarted, changed_from->second, 1e-3,
+                             CommandChange::kNextRunAnswer);
+  physics.reset();
+  physics = lockstep_arm(log("restarted.log"), false);
+  const RunResult first_run =
+      run_afhub({"play", restarted, "--commands-into-physics", "--wait", "10"}, 120s);
+  EXPECT_EQ(first_run.exit_code, 0) << first_run.out << first_run.err;
+  EXPECT_EQ(number_after(first_run.out, "reproduced bit-identically: "), steps) << first_run.out;
 }
 
 // A lockstep client late on two steps in a row, each time past the client timeout:
@@ -1055,56 +1115,74 @@ TEST(Record, ALateAnswerTakenAStepLateIsReplayedAtTheStepItTookEffect) {
       ChannelId{std::string(kService), std::string(kWorldInstance), std::string(kStateEvent)});
   ScopedProcess recorder(
       spawn_afhub({"record", "-o", file, "--commands", "--fifo", "90"}, log("record.log")));
-  // Late by L on both steps, with the client timeout T: T < L for the physics to go
-  // on, and 2 L < 3 T for the client to answer before a third miss drops it. 100 ms of
-  // room on each side, for a loaded machine.
+  // A client timeout long enough for a loaded machine: the client answers each state
+  // within it, except the two it holds back.
   const std::string timeout_ms = "400";
-  constexpr auto kLate = 500ms;
   constexpr std::uint64_t kLateStep = 200;
   auto physics = lockstep_arm(log("run.log"), true, timeout_ms);
   ASSERT_TRUE(recording_lists(file, "/afhub/arm/base/command"))
       << read_file(log("record.log")) << read_file(log("run.log"));
 
-  // The client: a position target for every joint, answering each newest state.
-  std::atomic<bool> stop{false};
-  std::thread client([&] {
-    BodyClient base("afhub/arm/base");
-    std::int64_t answered = -1;
-    while (!stop) {
-      const BodyState* state = base.latest_state();
-      if (!state || static_cast<std::int64_t>(state->header.sim_step) == answered) {
-        std::this_thread::sleep_for(100us);
-        continue;
+  // The client: a position target for every joint, answering each newest state, except
+  // that it holds its answers to steps 200 and 201 until the physics has gone on without
+  // them (states 201, then 202, published): late past the timeout by the physics' own
+  // account, whatever the machine's load.
+  std::string client_error;
+  std::jthread client([&](std::stop_token stop) {
+    try {
+      BodyClient base("afhub/arm/base");
+      const auto answer = [&](std::uint64_t step, std::uint32_t joints) {
+        BodyCommand* command = base.loan_command(joints);
+        if (!command) throw std::runtime_error("no command to loan");
+        for (std::uint32_t j = 0; j < joints; ++j)
+          command->joints[j] = {0.3 * std::sin(0.02 * static_cast<double>(step) + j),
+                                JointCommandType::kPosition};
+        command->header.sim_step = step;
+        command->lockstep = 1;
+        base.publish_command(command);
+      };
+      std::int64_t seen = -1;
+      std::optional<std::pair<std::uint64_t, std::uint32_t>> held;  // step, joints
+      while (!stop.stop_requested()) {
+        const BodyState* state = base.latest_state();
+        if (!state || static_cast<std::int64_t>(state->header.sim_step) == seen) {
+          std::this_thread::sleep_for(100us);
+          continue;
+        }
+        const std::uint64_t step = state->header.sim_step;
+        const std::uint32_t joints = state->joint_count;
+        seen = static_cast<std::int64_t>(step);
+        if (held && step > held->first) {
+          answer(held->first, held->second);
+          held.reset();
+        }
+        if (step == kLateStep || step == kLateStep + 1)
+          held = {step, joints};
+        else
+          answer(step, joints);
       }
-      const std::uint64_t step = state->header.sim_step;
-      const std::uint32_t joints = state->joint_count;
-      if (step == kLateStep || step == kLateStep + 1) std::this_thread::sleep_for(kLate);
-      BodyCommand* command = base.loan_command(joints);
-      if (!command) continue;
-      for (std::uint32_t j = 0; j < joints; ++j)
-        command->joints[j] = {0.3 * std::sin(0.02 * static_cast<double>(step) + j),
-                              JointCommandType::kPosition};
-      command->header.sim_step = step;
-      command->lockstep = 1;
-      base.publish_command(command);
-      answered = static_cast<std::int64_t>(step);
+    } catch (const std::exception& error) {
+      client_error = error.what();
     }
   });
-  const auto end_client = [&] {
-    stop = true;
-    client.join();
-  };
-  if (!recorded_any(file, "/afhub/arm/base/command")) {
-    end_client();
-    FAIL() << read_file(log("record.log"));
-  }
+  ASSERT_TRUE(recorded_any(file, "/afhub/arm/base/command")) << read_file(log("record.log"));
   ASSERT_EQ(run_afhub({"world", "resume"}).exit_code, 0);
-  const bool stepped =
-      wait_until([&] { return world.latest() && world.latest()->header.sim_step > 300; }, 60s);
-  end_client();
-  ASSERT_TRUE(stepped) << read_file(log("run.log"));
-  EXPECT_EQ(world.latest()->late_answers, 2u) << read_file(log("run.log"));
-  EXPECT_EQ(world.latest()->dropped_clients, 0u) << read_file(log("run.log"));
+  std::uint64_t late = 0, dropped = 0;  // read while the client still answers
+  ASSERT_TRUE(wait_until(
+      [&] {
+        const WorldState* now = world.latest();
+        if (!now || now->header.sim_step <= 300) return false;
+        late = now->late_answers;
+        dropped = now->dropped_clients;
+        return true;
+      },
+      60s))
+      << read_file(log("run.log"));
+  client.request_stop();
+  client.join();
+  EXPECT_EQ(client_error, "");
+  EXPECT_EQ(late, 2u) << read_file(log("run.log"));
+  EXPECT_EQ(dropped, 0u) << read_file(log("run.log"));
   EXPECT_EQ(recorder.stop(SIGINT), 0) << read_file(log("record.log"));
   physics.reset();
 

@@ -140,16 +140,19 @@ void* RawWriter::loan(std::uint32_t bytes, bool* rewritten) noexcept {
 }
 
 void RawWriter::prefetch_update() const noexcept {
-  prefetch_update(0, slot_loaned_bytes_);
+  prefetch_update({{0, slot_loaned_bytes_}});
 }
 
-void RawWriter::prefetch_update(std::uint32_t from, std::uint32_t to) const noexcept {
+void RawWriter::prefetch_update(std::initializer_list<ByteRange> ranges) const noexcept {
   if (!slot_.entry || !kHasPrefetchw) return;
   prefetch_for_writing(&slot_.entry->control);
-  const auto* payload = static_cast<const unsigned char*>(slot_.payload);
-  for (std::uint32_t at = from & ~(kCacheLineBytes - 1); at < std::min(to, slot_loaned_bytes_);
-       at += kCacheLineBytes)
-    prefetch_for_writing(payload + at);
+  const auto* payload = static_cast<const unsigned char*>(slot_.payload);  // line-aligned
+  for (const ByteRange& range : ranges) {
+    const std::uint32_t to = std::min(range.to, slot_loaned_bytes_);
+    if (range.from >= to) continue;
+    for (std::uint32_t at = range.from & ~(kCacheLineBytes - 1); at < to; at += kCacheLineBytes)
+      prefetch_for_writing(payload + at);
+  }
 }
 
 std::int64_t RawWriter::publish(void* payload) noexcept {

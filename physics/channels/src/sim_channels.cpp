@@ -46,7 +46,10 @@ void to_state(const BodyReading& reading, BodyState& state) noexcept {
   state.sensor_ray_count = reading.ray_count;
   for (std::uint32_t r = 0; r < reading.ray_count; ++r) {
     state.sensor_distances_m[r] = reading.ray_distances_m[r];
-    state.sensor_ranges_m[r] = reading.ray_ranges_m[r];
+    // A range stays as the model set it: rewritten, its line would leave the readers'
+    // caches every step (BodyPublisher::prefetch_state_update).
+    if (state.sensor_ranges_m[r] != reading.ray_ranges_m[r])
+      state.sensor_ranges_m[r] = reading.ray_ranges_m[r];
   }
 }
 
@@ -134,6 +137,9 @@ SimChannels::SimChannels(Simulation& sim, double watchdog_s, std::string_view na
     channel.watchdog_ns = watchdog_ns;
     for (const ActuatorSpec& actuator : model.actuators)
       if (actuator.parent == static_cast<int>(b)) ++channel.actuator_count;
+    for (const SensorSpec& sensor : model.sensors)
+      if (sensor.parent == static_cast<int>(b))
+        channel.ray_count += static_cast<std::uint32_t>(sensor.rays.size());
     channels_.push_back(std::move(channel));
   }
   for (std::size_t s = 0; s < model.soft_bodies.size(); ++s) {
@@ -228,7 +234,7 @@ void SimChannels::publish(const WorldClock& clock) noexcept {
       const int block_end = std::min(count, (c / kChannelsPerItem + 1) * kChannelsPerItem);
       const int ahead = c + static_cast<int>(kBodyPrefetchAhead);
       for (int k = c % kChannelsPerItem == 0 ? c + 1 : ahead; k <= ahead && k < block_end; ++k)
-        channels_[static_cast<std::size_t>(k)].publisher->prefetch_state_update();
+        channels_[static_cast<std::size_t>(k)].prefetch_state_update();
       Channel& channel = channels_[static_cast<std::size_t>(c)];
       publish_state(channel, readings_[static_cast<std::size_t>(thread)], stamp);
       channel.taken_command = nullptr;
@@ -236,7 +242,7 @@ void SimChannels::publish(const WorldClock& clock) noexcept {
   } else {  // the tape is written in channel order; a step published again is not shared
     for (std::size_t c = 0; c < channels_.size(); ++c) {
       if (c + kBodyPrefetchAhead < channels_.size())
-        channels_[c + kBodyPrefetchAhead].publisher->prefetch_state_update();
+        channels_[c + kBodyPrefetchAhead].prefetch_state_update();
       Channel& channel = channels_[c];
       const BodyState* state = publish_state(channel, readings_[0], stamp);
       // Only the bodies someone reads: a recorder holds the state slots of those it

@@ -53,12 +53,16 @@ class BodyPublisher {
   bool has_state_readers() const noexcept { return state_.raw().has_readers(); }
   // Hints for a loop over many bodies, a few bodies ahead (RawWriter::prefetch_update,
   // RawLatestReader::prefetch).
-  // A physics' step: the lines it writes every step (SimChannels::publish_state), not
-  // those of the sensor rays and the last refused command, rewritten only when they
-  // change, which the readers then keep in their caches.
-  void prefetch_state_update() const noexcept {
-    state_.raw().prefetch_update(0, offsetof(BodyState, refused_command_pid));
-    state_.raw().prefetch_update(offsetof(BodyState, joints), UINT32_MAX);
+  // A physics' step, of a body with `rays` sensor rays: the lines it writes every step
+  // (SimChannels::publish_state). Not those of the rays' ranges and the last refused
+  // command, rewritten only when they change, which the readers then keep in their
+  // caches.
+  void prefetch_state_update(std::uint32_t rays) const noexcept {
+    constexpr std::uint32_t distances = offsetof(BodyState, sensor_distances_m);
+    state_.raw().prefetch_update(
+        {{0, offsetof(BodyState, refused_command_pid)},
+         {distances, distances + rays * static_cast<std::uint32_t>(sizeof(double))},
+         {offsetof(BodyState, joints), UINT32_MAX}});
   }
   void prefetch_command() const noexcept { command_.raw().prefetch(); }
   // The newest command, or nullptr before the first; read in place.

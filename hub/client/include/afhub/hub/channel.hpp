@@ -16,6 +16,7 @@
 #include <array>
 #include <cstdint>
 #include <cstring>
+#include <initializer_list>
 #include <memory>
 #include <new>
 #include <optional>
@@ -70,9 +71,12 @@ class RawWriter {
   // A hint for a loop over many writers: what another core read of the last update
   // costs a round trip per line, and asked for a few writers ahead those trips overlap.
   void prefetch_update() const noexcept;
-  // The same for the payload bytes [from, to) only: a writer that leaves the other
-  // lines as they were leaves them in the readers' caches too.
-  void prefetch_update(std::uint32_t from, std::uint32_t to) const noexcept;
+  // The same for these payload bytes only, each [from, to): a writer that leaves the
+  // other lines as they were leaves them in the readers' caches too.
+  struct ByteRange {
+    std::uint32_t from, to;
+  };
+  void prefetch_update(std::initializer_list<ByteRange> ranges) const noexcept;
   // Whether any reader is subscribed now (on a queue, each one costs every publish).
   bool has_readers() const noexcept;
   // The next publish carries sequence `last` + 1. A short-lived writer of commands

@@ -183,6 +183,7 @@ class SimChannels {
     std::unique_ptr<BodyPublisher> publisher;
     std::uint32_t joint_count = 0;
     std::uint32_t actuator_count = 0;
+    std::uint32_t ray_count = 0;  // its sensors' rays
     std::int64_t watchdog_ns = 0;
     std::int64_t last_command_ns = 0;  // the publish stamp of the command being applied
     bool commanded = false;            // a command is being applied (the watchdog is armed)
@@ -203,6 +204,7 @@ class SimChannels {
     int misses = 0;         // late steps in a row
     // The command taken since the last publish (the reader's checked copy), for the tape.
     const BodyCommand* taken_command = nullptr;
+    void prefetch_state_update() const noexcept { publisher->prefetch_state_update(ray_count); }
   };
   // The notice to fill for `event`, or nullptr when a said-once event was noted already.
   static Notice* note(Channel& channel, Event event, std::uint32_t pid) noexcept;
