@@ -361,43 +361,52 @@ BENCHMARK_CAPTURE(BM_LoopStep, ecm_iterated, kEcm, false)->Unit(benchmark::kMicr
 BENCHMARK_CAPTURE(BM_LoopStep, four_bar_direct, kFourBar, true)->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(BM_LoopStep, four_bar_iterated, kFourBar, false)->Unit(benchmark::kMicrosecond);
 
-// Every body's state read by a thread on another CPU after each step, as a controller
-// process reads them: what each line a step writes then costs to take back from that
-// CPU's cache. The stepping thread runs on the first CPU this process may use, the
-// reader spins on the second (with the islands solved by the stepping thread alone,
-// nothing else needs it).
-class StatesReadElsewhere {
+// A controller on another CPU: after each step a thread there reads every body's state
+// and, with `commands`, writes every body's command (its joints held where they are),
+// as a controller process of them all would: what each line a step writes, and each
+// line of a command, then costs to take across. The stepping thread runs on the first CPU this
+// process may use, the reader spins on the second (with the islands solved by the stepping thread
+// alone, nothing else needs it).
+class ControllerElsewhere {
  public:
   // False when this process may use fewer than two CPUs.
   static bool possible() { return first_two_cpus().second >= 0; }
 
-  explicit StatesReadElsewhere(const std::vector<BodySpec>& bodies) {
+  ControllerElsewhere(const std::vector<BodySpec>& bodies, bool commands) {
     for (const BodySpec& body : bodies)
-      readers_.push_back(std::make_unique<BodyClient>(body.channel));
-    for (auto& reader : readers_)
+      bodies_.push_back(std::make_unique<BodyClient>(body.channel));
+    for (auto& reader : bodies_)
       afhub::test::wait_until([&] { return reader->subscribed(); }, std::chrono::seconds(5));
     const auto [stepping, reading] = first_two_cpus();
     sched_getaffinity(0, sizeof saved_, &saved_);
     pin(stepping);
-    thread_ = std::thread([this, reading = reading] {
+    thread_ = std::thread([this, reading = reading, commands] {
       pin(reading);
       for (std::uint64_t seen = 0; !stop_.load(std::memory_order_relaxed);) {
         const std::uint64_t step = published_.load(std::memory_order_acquire);
         if (step == seen) continue;
-        for (auto& reader : readers_)
-          if (const BodyState* read = reader->latest_state()) sum_ += read->pose.position_m.z;
+        for (auto& body : bodies_) {
+          const BodyState* read = body->latest_state();
+          if (!read || !commands) continue;
+          BodyCommand* command = body->loan_command(read->joint_count);
+          if (!command) continue;
+          for (std::uint32_t j = 0; j < read->joint_count; ++j)
+            command->joints[j] = {read->joints[j].position, JointCommandType::kPosition};
+          command->header.sim_step = read->header.sim_step;
+          body->publish_command(command);
+        }
         seen = step;
         read_.store(step, std::memory_order_release);
       }
     });
   }
-  ~StatesReadElsewhere() {
+  ~ControllerElsewhere() {
     stop_ = true;
     thread_.join();
     sched_setaffinity(0, sizeof saved_, &saved_);
   }
-  // After a step is published (untimed): the reader reads it all.
-  void read_step(std::uint64_t step) {
+  // After a step is published (untimed): the controller answers it all.
+  void answer_step(std::uint64_t step) {
     published_.store(step, std::memory_order_release);
     while (read_.load(std::memory_order_acquire) != step) {
     }
@@ -418,13 +427,15 @@ class StatesReadElsewhere {
     CPU_SET(cpu, &set);
     sched_setaffinity(0, sizeof set, &set);
   }
-  std::vector<std::unique_ptr<BodyClient>> readers_;
+  std::vector<std::unique_ptr<BodyClient>> bodies_;
   cpu_set_t saved_;
   std::thread thread_;
   std::atomic<std::uint64_t> published_{0}, read_{0};
   std::atomic<bool> stop_{false};
-  double sum_ = 0.0;
 };
+
+// Who reads the states and writes the commands on another CPU (ControllerElsewhere).
+enum class Elsewhere { kNone, kReads, kCommands };
 
 // The thousand bodies at 1 kHz: one step of 125 eight-link arms, as the physics alone,
 // with every state and the world state published, and with every body commanded each
@@ -433,9 +444,11 @@ class StatesReadElsewhere {
 // published case's p50 against the physics alone's, in one run). The islands are
 // solved by two threads (physics/src/parallel_islands.hpp), or by the stepping thread
 // alone (`one_thread`): "helped" is the share of islands the helper solved. `taped`:
-// with a recorder of that many bodies (TapeDrain), the first ones.
+// with a recorder of that many bodies (TapeDrain), the first ones. `elsewhere`: the
+// states read, or read and answered, by a controller on another CPU.
 void BM_StepThousandBodies(benchmark::State& state, bool publish, bool commanded,
-                           int solver_threads, std::size_t taped = 0, bool read_elsewhere = false) {
+                           int solver_threads, std::size_t taped = 0,
+                           Elsewhere elsewhere = Elsewhere::kNone) {
   afhub::testing::ModelFolder folder;
   Model model = load_adf_files({folder.write("arms.yaml", afhub::bench::arms_scene(125, 8))});
   model.world.solver_threads = solver_threads;
@@ -452,12 +465,14 @@ void BM_StepThousandBodies(benchmark::State& state, bool publish, bool commanded
     tape = connect_tape(
         state, sim, channels.get(),
         {model.bodies.begin(), model.bodies.begin() + std::min(taped, model.bodies.size())});
-  std::unique_ptr<StatesReadElsewhere> reader;
-  if (read_elsewhere && !StatesReadElsewhere::possible()) {
+  std::unique_ptr<ControllerElsewhere> other_cpu;
+  if (elsewhere != Elsewhere::kNone && !ControllerElsewhere::possible()) {
     state.SkipWithError("needs two CPUs");
     return;
   }
-  if (read_elsewhere) reader = std::make_unique<StatesReadElsewhere>(model.bodies);
+  if (elsewhere != Elsewhere::kNone)
+    other_cpu =
+        std::make_unique<ControllerElsewhere>(model.bodies, elsewhere == Elsewhere::kCommands);
   StepTimes times(1 << 20);
   std::uint64_t step = 0;
   for (auto _ : state) {
@@ -470,7 +485,7 @@ void BM_StepThousandBodies(benchmark::State& state, bool publish, bool commanded
     if (channels) channels->prepare_next_step();
     if (tape) tape->drain();
     ++step;
-    if (reader) reader->read_step(step);
+    if (other_cpu) other_cpu->answer_step(step);
   }
   state.counters["bodies"] = static_cast<double>(model.bodies.size());
   state.counters["helped"] =
@@ -486,7 +501,11 @@ BENCHMARK_CAPTURE(BM_StepThousandBodies, published_taped, true, false, 2, 1000)
     ->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(BM_StepThousandBodies, published_taped_one, true, false, 2, 1)
     ->Unit(benchmark::kMicrosecond);
-BENCHMARK_CAPTURE(BM_StepThousandBodies, published_read_elsewhere, true, false, 1, 0, true)
+BENCHMARK_CAPTURE(BM_StepThousandBodies, published_read_elsewhere, true, false, 1, 0,
+                  Elsewhere::kReads)
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_StepThousandBodies, published_commanded_elsewhere, true, false, 1, 0,
+                  Elsewhere::kCommands)
     ->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(BM_StepThousandBodies, published_commanded, true, true, 2)
     ->Unit(benchmark::kMicrosecond);
