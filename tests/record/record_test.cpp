@@ -1563,8 +1563,10 @@ TEST(Record, OnATerminalALiveLineShowsTheRecordingAsItGoes) {
   SceneRun scene;
   ASSERT_TRUE(scene.ready()) << scene.logs();
   const std::string file = scene.dir("live.mcap");
+  // The line is told every 0.5 s beside the catalog's reading, which on a loaded CI run
+  // took about 3 s to make the scene's readers: 6 s leaves room for three lines after it.
   const RunResult run = run_command(
-      {"script", "-qec", afhub_executable() + " record -o " + file + " --duration 3", "/dev/null"},
+      {"script", "-qec", afhub_executable() + " record -o " + file + " --duration 6", "/dev/null"},
       60s);
   EXPECT_EQ(run.exit_code, 0) << run.out << run.err;
   const std::regex live(
