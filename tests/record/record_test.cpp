@@ -364,7 +364,9 @@ TEST(Record, CommandsReplacedBeforeThePhysicsTookThemAreCountedApartFromMissed) 
 // the physics took since. Then, a controller replacing one of each pair, the tape
 // brings the rest. None of these gaps is the recorder's loss: all count replaced.
 // (The first was counted missed, whenever a body joined the tape after the recorder
-// read its command from its slot, and a physics resumed late failed this in CI.)
+// read its command from its slot, and a physics resumed late failed this in CI. So was
+// it when the stop fell between the recorder's draining of the tape and its reading of
+// the slots: about 1 run in 10.)
 TEST(Record, ACommandReadFromItsSlotThenTakenAfterAPauseLeavesNoGapCountedMissed) {
   SceneRun scene;
   ASSERT_TRUE(scene.ready()) << scene.logs();
