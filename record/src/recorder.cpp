@@ -89,15 +89,15 @@ struct Recorded {
   // taken_after_step (the step the tape brought it at, or its body's state's step when
   // it was read from its slot; none when that state was not seen).
   std::optional<std::uint64_t> taken_after_step;
-  // A command read from its slot after a gap: whether the physics took any of the gap is
-  // known only from the tape drained after that read (it may have stepped between the
-  // last drain and the read), so the gap is counted then (resolve_slot_gaps).
+  // A gap before a command read from its slot: whether the physics took any of it is
+  // known only from the tape after the read (the physics may have stepped between the
+  // recorder's last look at the tape and the read). Counted when the tape brings that
+  // command, or when a later one comes (settle_slot_gap).
   struct SlotGap {
     std::uint64_t count = 0;
     std::uint64_t from = 0;                   // the sequence before the gap
     std::optional<std::uint64_t> after_step;  // the taken_after_step and tape_breaks of
     std::uint64_t tape_breaks = 0;            // the command before the gap
-    std::optional<std::uint64_t> taken_step;  // when the tape brought the command read
     bool gap_taken = false;                   // the tape brought one of the gap
   };
   std::optional<SlotGap> slot_gap;
@@ -203,17 +203,6 @@ class Session {
     std::int64_t taped_ns = 0;  // when a tape part last came
     std::int64_t tape_poll_ns = kTapePollNs;
     std::int64_t now = start_ns;
-    const auto drain_tape = [&] {
-      for (std::uint32_t drained = 1; tape.next(*taped); ++drained) {
-        beside_.follow(taped->header.publisher_pid, drained);
-        sample_tape(*taped, now);
-        taped_ns = now;
-        if (taped->last_part)
-          tape_poll_ns = std::min<std::int64_t>(
-              kTapePollNs, kStepTapeRingParts * 1'000'000LL / 4 / (taped->part + 1));
-      }
-      resolve_slot_gaps();
-    };
     while (keep_going() && !write_failed_ && !discover_failed_) {
       if (taped_ns == 0 || now - taped_ns >= kTapeFreshNs)
         waiter.wait(kIdleWaitNs);
@@ -224,8 +213,19 @@ class Session {
       now = monotonic_ns();
       beside_.turned();
       take_discovered(waiter, untaped_waiter);
-      world.latest();  // taken, so that the waiter sleeps until the next step
-      drain_tape();
+      // Taken, so that the waiter sleeps until the next step.
+      const WorldState* world_state = world.latest();
+      paused_at_step_ = world_state && world_state->paused
+                            ? std::optional(world_state->header.sim_step)
+                            : std::nullopt;
+      for (std::uint32_t drained = 1; tape.next(*taped); ++drained) {
+        beside_.follow(taped->header.publisher_pid, drained);
+        sample_tape(*taped, now);
+        taped_ns = now;
+        if (taped->last_part)
+          tape_poll_ns = std::min<std::int64_t>(
+              kTapePollNs, kStepTapeRingParts * 1'000'000LL / 4 / (taped->part + 1));
+      }
       for (Recorded& recorded : recorded_)
         if (recorded.device_tape) sample_device_tape(recorded, now);
       devices_taped = true;
@@ -253,8 +253,8 @@ class Session {
           now - since >= static_cast<std::int64_t>(options_.duration_s * 1e9))
         break;
     }
-    now = monotonic_ns();
-    drain_tape();  // the last gaps read from slots are counted after it
+    for (Recorded& recorded : recorded_)
+      if (recorded.slot_gap) settle_slot_gap(recorded, std::nullopt);
   }
 
   // Channels the discovery found, taken when its lock is free (never waited for). A
@@ -392,10 +392,9 @@ class Session {
       if (tape_step && key == recorded.last && recorded.kind == PayloadKind::kBodyCommand) {
         recorded.taken_after_step = tape_step;
         recorded.tape_breaks = tape_breaks_;
-        if (recorded.slot_gap && !recorded.slot_gap->taken_step)
-          recorded.slot_gap->taken_step = tape_step;
+        if (recorded.slot_gap) settle_slot_gap(recorded, tape_step);
       }
-      // One of the gap before the last one: the physics took it, and the file lacks it.
+      // One of the gap before it: the physics took it, and the file lacks it.
       if (tape_step && recorded.slot_gap && key > recorded.slot_gap->from && key < recorded.last)
         recorded.slot_gap->gap_taken = true;
       return;
@@ -421,19 +420,18 @@ class Session {
       ++dropped_;
     }
     // Commands missing before one the tape brought, in steps the tape covered: the
-    // physics never took them (their controller replaced them first).
+    // physics never took them (their controller replaced them first). Before one read
+    // from its slot: counted later, from the tape.
     const bool command = recorded.kind == PayloadKind::kBodyCommand;
+    if (recorded.slot_gap) settle_slot_gap(recorded, tape_step);
     if (same_writer && key > recorded.last + 1) {
       const std::uint64_t gap = key - recorded.last - 1;
-      if (command && !tape_step) {
-        slot_gaps_ += !recorded.slot_gap;
+      if (command && !tape_step)
         recorded.slot_gap = Recorded::SlotGap{.count = gap,
                                               .from = recorded.last,
                                               .after_step = recorded.taken_after_step,
-                                              .tape_breaks = recorded.tape_breaks,
-                                              .taken_step = std::nullopt,
-                                              .gap_taken = false};
-      } else
+                                              .tape_breaks = recorded.tape_breaks};
+      else
         (gap_replaced || (command && tape_covered_since(recorded.body, recorded.taken_after_step,
                                                         recorded.tape_breaks, tape_step))
              ? replaced_
@@ -450,11 +448,11 @@ class Session {
     if (first_sample_ns_ == 0) first_sample_ns_ = now_ns;
   }
 
-  // Whether the tape brought every command the physics took for `body` after a command
-  // taken after `after_step` (counted at `breaks` tape breaks): its body's state on the
-  // tape since the step after that, with no break. On a step's tape a body's command
-  // comes before its state: a run not begun yet begins at `taken_step`, the step the
-  // tape brought the next command at; with none, the physics must not have stepped.
+  // Whether the tape brought every command the physics took for `body` after one taken
+  // after `after_step` (at `breaks` tape breaks): its body's state on the tape since the
+  // step after that, with no break. On a step's tape a body's command comes before its
+  // state: a run not begun yet begins at `taken_step`, the step the tape brought the
+  // next command at. With neither, the physics must be paused at `after_step`.
   bool tape_covered_since(const std::string& body, std::optional<std::uint64_t> after_step,
                           std::uint64_t breaks,
                           std::optional<std::uint64_t> taken_step) const noexcept {
@@ -462,23 +460,19 @@ class Session {
     const Recorded* state = state_of(body);
     const bool run_begun = state && state->taped_ns != 0 && state->tape_breaks == tape_breaks_;
     if (run_begun) return state->taped_from_step <= *after_step + 1;
-    return taken_step ? *taken_step <= *after_step + 1 : state_step(body) == after_step;
+    if (taken_step) return *taken_step <= *after_step + 1;
+    return paused_at_step_ == after_step;
   }
 
-  // Counts the gaps before commands read from their slots, now that the tape drained
-  // after those reads says whether the physics took any of them.
-  void resolve_slot_gaps() noexcept {
-    if (slot_gaps_ == 0) return;
-    slot_gaps_ = 0;
-    for (Recorded& recorded : recorded_) {
-      if (!recorded.slot_gap) continue;
-      const Recorded::SlotGap& gap = *recorded.slot_gap;
-      (!gap.gap_taken &&
-               tape_covered_since(recorded.body, gap.after_step, gap.tape_breaks, gap.taken_step)
-           ? replaced_
-           : missed_) += gap.count;
-      recorded.slot_gap.reset();
-    }
+  // Counts the gap before a command read from its slot, replaced when the tape brought
+  // none of it and covered the steps since the command before it (see SlotGap).
+  // `taken_step`: the tape brought the command read, or a later one, at that step.
+  void settle_slot_gap(Recorded& command, std::optional<std::uint64_t> taken_step) noexcept {
+    const Recorded::SlotGap& gap = *command.slot_gap;
+    (!gap.gap_taken && tape_covered_since(command.body, gap.after_step, gap.tape_breaks, taken_step)
+         ? replaced_
+         : missed_) += gap.count;
+    command.slot_gap.reset();
   }
 
   // The last step of `body`'s state the recorder read (none before the first): a
@@ -763,7 +757,7 @@ class Session {
   std::uint16_t next_channel_id_ = 1;
   std::atomic<std::int64_t> first_sample_ns_{0};
   std::atomic<std::uint64_t> dropped_{0}, missed_{0}, replaced_{0}, channel_count_{0};
-  std::size_t slot_gaps_ = 0;  // commands with a slot_gap
+  std::optional<std::uint64_t> paused_at_step_;  // the world's step while it is paused
 
   // Between the threads.
   std::mutex writing_mutex_;  // held while the file is written
