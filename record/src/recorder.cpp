@@ -230,7 +230,8 @@ class Session {
         if (recorded.device_tape) sample_device_tape(recorded, now);
       devices_taped = true;
       for (Recorded& recorded : recorded_) {
-        const bool fresh = recorded.taped_ns != 0 && now - recorded.taped_ns < kTapeFreshNs;
+        const bool fresh = (recorded.taped_ns != 0 && now - recorded.taped_ns < kTapeFreshNs) ||
+                           on_tape_only(recorded);
         if (recorded.wakes && recorded.body.empty() && !fresh) devices_taped = false;
         if (fresh) {
           // Read from a tape; a reader that wakes the loop is still taken, or the
@@ -446,6 +447,17 @@ class Session {
     recorded.last = key;
     recorded.last_stamp_ns = header.publish_stamp_ns;
     if (first_sample_ns_ == 0) first_sample_ns_ = now_ns;
+  }
+
+  // A command to a body on the tape of a physics that is not paused: it comes on the
+  // tape when the physics takes it, however late (a physics stopped mid-step tapes the
+  // command it took only when it goes on). One read from its slot meanwhile is one not
+  // taken yet, and may be newer than one the tape has still to bring, which would then
+  // be dropped as older.
+  bool on_tape_only(const Recorded& command) const noexcept {
+    if (command.kind != PayloadKind::kBodyCommand || paused_at_step_) return false;
+    const Recorded* state = state_of(command.body);
+    return state && state->taped_ns != 0 && state->tape_breaks == tape_breaks_;
   }
 
   // Whether the tape brought every command the physics took for `body` after one taken
