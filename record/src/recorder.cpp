@@ -51,6 +51,9 @@ constexpr std::int64_t kChunkFlushPeriodNs = 1'000'000'000;  // what a kill -9 l
 constexpr useconds_t kWriterIdleUs = 5'000;
 // A body the physics' step tape brought within this long is read from the tape alone.
 constexpr std::int64_t kTapeFreshNs = 100'000'000;
+// A physics whose tape brought nothing for this long is taken for stopped or gone: its
+// bodies' commands are read from their slots again (see on_tape_only).
+constexpr std::int64_t kTapeStalledNs = 2'000'000'000;
 // While a tape comes, it is read every quarter of the time its ring holds at 1 kHz, and
 // at least this often: 4 ms up to 18 parts a step (a thousand 8-joint bodies take 17),
 // less for larger worlds.
@@ -92,7 +95,7 @@ struct Recorded {
   // A gap before a command read from its slot: whether the physics took any of it is
   // known only from the tape after the read (the physics may have stepped between the
   // recorder's last look at the tape and the read). Counted when the tape brings that
-  // command, or when a later one comes (settle_slot_gap).
+  // command, when a later one comes, or at the end (settle_slot_gap).
   struct SlotGap {
     std::uint64_t count = 0;
     std::uint64_t from = 0;                   // the sequence before the gap
@@ -231,7 +234,7 @@ class Session {
       devices_taped = true;
       for (Recorded& recorded : recorded_) {
         const bool fresh = (recorded.taped_ns != 0 && now - recorded.taped_ns < kTapeFreshNs) ||
-                           on_tape_only(recorded);
+                           (now - taped_ns < kTapeStalledNs && on_tape_only(recorded));
         if (recorded.wakes && recorded.body.empty() && !fresh) devices_taped = false;
         if (fresh) {
           // Read from a tape; a reader that wakes the loop is still taken, or the
@@ -451,9 +454,9 @@ class Session {
 
   // A command to a body on the tape of a physics that is not paused: it comes on the
   // tape when the physics takes it, however late (a physics stopped mid-step tapes the
-  // command it took only when it goes on). One read from its slot meanwhile is one not
-  // taken yet, and may be newer than one the tape has still to bring, which would then
-  // be dropped as older.
+  // command it took only when it goes on; read_loop stops waiting after
+  // kTapeStalledNs). One read from its slot meanwhile may not be taken yet, and may be
+  // newer than one the tape has still to bring, which would then be dropped as older.
   bool on_tape_only(const Recorded& command) const noexcept {
     if (command.kind != PayloadKind::kBodyCommand || paused_at_step_) return false;
     const Recorded* state = state_of(command.body);
@@ -769,7 +772,8 @@ class Session {
   std::uint16_t next_channel_id_ = 1;
   std::atomic<std::int64_t> first_sample_ns_{0};
   std::atomic<std::uint64_t> dropped_{0}, missed_{0}, replaced_{0}, channel_count_{0};
-  std::optional<std::uint64_t> paused_at_step_;  // the world's step while it is paused
+  // The world's step while it is paused, as read at the start of the loop's turn.
+  std::optional<std::uint64_t> paused_at_step_;
 
   // Between the threads.
   std::mutex writing_mutex_;  // held while the file is written

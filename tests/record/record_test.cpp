@@ -456,7 +456,7 @@ TEST(Record, ACommandReadFromItsSlotThenTakenAfterAPauseLeavesNoGapCountedMissed
 // replaced. (The recorder read a command from its slot once the tape had brought none
 // for 100 ms; then a command taken before the stop, on the tape only after it, was
 // dropped as older than one read from the slot: a sanitizer CI run's lockstep replay
-// found one missing.)
+// found one missing.) Once the physics is gone, the slot is read again.
 TEST(Record, CommandsWrittenWhileThePhysicsIsStoppedAreRecordedOnlyOnceTaken) {
   SceneRun scene;
   ASSERT_TRUE(scene.ready()) << scene.logs();
@@ -487,13 +487,18 @@ TEST(Record, CommandsWrittenWhileThePhysicsIsStoppedAreRecordedOnlyOnceTaken) {
   write_for(300ms);
   ASSERT_EQ(kill(scene.physics->pid, SIGSTOP), 0);
   std::vector<std::uint32_t> replaced_while_stopped;
-  for (int i = 0; i < 5; ++i) {
+  for (int i = 0; i < 4; ++i) {          // 600 ms, within the 2 s it waits for a stalled tape
     std::this_thread::sleep_for(150ms);  // past the 100 ms the recorder waited for the tape
     replaced_while_stopped.push_back(write());
   }
   replaced_while_stopped.pop_back();  // the physics may take the last when it resumes
   ASSERT_EQ(kill(scene.physics->pid, SIGCONT), 0);
   write_for(300ms);
+  // Killed, the physics tapes nothing more: 2 s on, a command is read from its slot.
+  ASSERT_EQ(kill(scene.physics->pid, SIGKILL), 0);
+  std::this_thread::sleep_for(2500ms);
+  const std::uint32_t after_kill = write();
+  std::this_thread::sleep_for(200ms);
   ASSERT_EQ(recorder.stop(SIGINT), 0) << read_file(scene.dir("record.log"));
 
   struct Sequences : mcap::Visitor {
@@ -511,6 +516,7 @@ TEST(Record, CommandsWrittenWhileThePhysicsIsStoppedAreRecordedOnlyOnceTaken) {
     EXPECT_NE(sequence, 0u);
     EXPECT_FALSE(recorded.seen.contains(sequence)) << "command " << sequence;
   }
+  EXPECT_TRUE(recorded.seen.contains(after_kill)) << "command " << after_kill;
   const std::string log = read_file(scene.dir("record.log"));
   const json info = info_of(file);
   const auto [command_gaps, other_gaps] = gaps_of(info, "/afhub/rcm/base/command");
