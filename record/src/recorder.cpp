@@ -458,8 +458,12 @@ class Session {
   // kTapeStalledNs). One read from its slot meanwhile may not be taken yet, and may be
   // newer than one the tape has still to bring, which would then be dropped as older.
   bool on_tape_only(const Recorded& command) const noexcept {
-    if (command.kind != PayloadKind::kBodyCommand || paused_at_step_) return false;
-    const Recorded* state = state_of(command.body);
+    return command.kind == PayloadKind::kBodyCommand && !paused_at_step_ &&
+           on_tape_run(state_of(command.body));
+  }
+
+  // Whether a body's state has come on the tape since its last break.
+  bool on_tape_run(const Recorded* state) const noexcept {
     return state && state->taped_ns != 0 && state->tape_breaks == tape_breaks_;
   }
 
@@ -473,8 +477,7 @@ class Session {
                           std::optional<std::uint64_t> taken_step) const noexcept {
     if (!after_step || breaks != tape_breaks_) return false;
     const Recorded* state = state_of(body);
-    const bool run_begun = state && state->taped_ns != 0 && state->tape_breaks == tape_breaks_;
-    if (run_begun) return state->taped_from_step <= *after_step + 1;
+    if (on_tape_run(state)) return state->taped_from_step <= *after_step + 1;
     if (taken_step) return *taken_step <= *after_step + 1;
     return paused_at_step_ == after_step;
   }
