@@ -108,6 +108,25 @@ std::pair<long long, long long> gaps_of(const json& info, const std::string& top
   return {in_topic, elsewhere};
 }
 
+// The sequence numbers of a recording's messages on `topic` (a state's is its step), in
+// the file's order.
+std::vector<std::uint64_t> recorded_sequences(const std::string& file, const std::string& topic) {
+  struct Sequences : mcap::Visitor {
+    std::string topic;
+    std::uint16_t id = 0;
+    std::vector<std::uint64_t> sequences;
+    void channel(const mcap::Channel& c) override {
+      if (c.topic == topic) id = c.id;
+    }
+    void message(const mcap::Message& m) override {
+      if (m.channel_id == id) sequences.push_back(m.sequence);
+    }
+  } read;
+  read.topic = topic;
+  mcap::scan(file, read);
+  return read.sequences;
+}
+
 // One channel of a recording: its messages, its first and last steps (a state's sequence
 // is its step) and when the recorder read its first.
 struct RecordedSpan {
@@ -501,22 +520,13 @@ TEST(Record, CommandsWrittenWhileThePhysicsIsStoppedAreRecordedOnlyOnceTaken) {
   std::this_thread::sleep_for(200ms);
   ASSERT_EQ(recorder.stop(SIGINT), 0) << read_file(scene.dir("record.log"));
 
-  struct Sequences : mcap::Visitor {
-    std::uint16_t id = 0;
-    std::set<std::uint32_t> seen;
-    void channel(const mcap::Channel& c) override {
-      if (c.topic == "/afhub/rcm/base/command") id = c.id;
-    }
-    void message(const mcap::Message& m) override {
-      if (m.channel_id == id) seen.insert(m.sequence);
-    }
-  } recorded;
-  mcap::scan(file, recorded);
+  const std::vector<std::uint64_t> sequences = recorded_sequences(file, "/afhub/rcm/base/command");
+  const std::set<std::uint64_t> recorded(sequences.begin(), sequences.end());
   for (const std::uint32_t sequence : replaced_while_stopped) {
     EXPECT_NE(sequence, 0u);
-    EXPECT_FALSE(recorded.seen.contains(sequence)) << "command " << sequence;
+    EXPECT_FALSE(recorded.contains(sequence)) << "command " << sequence;
   }
-  EXPECT_TRUE(recorded.seen.contains(after_kill)) << "command " << after_kill;
+  EXPECT_TRUE(recorded.contains(after_kill)) << "command " << after_kill;
   const std::string log = read_file(scene.dir("record.log"));
   const json info = info_of(file);
   const auto [command_gaps, other_gaps] = gaps_of(info, "/afhub/rcm/base/command");
@@ -1332,22 +1342,12 @@ TEST(Record, BodiesThatAppearLaterAndAPhysicsRestartedAreRecorded) {
   }
   EXPECT_EQ(recorder.stop(SIGINT), 0) << read_file(log("record.log"));
   // The steps go up, start again from the restarted physics' first, and go up again.
-  struct Steps : mcap::Visitor {
-    std::uint16_t id = 0;
-    std::vector<std::uint64_t> steps;
-    void channel(const mcap::Channel& c) override {
-      if (c.topic == "/afhub/arm/base/state") id = c.id;
-    }
-    void message(const mcap::Message& m) override {
-      if (m.channel_id == id) steps.push_back(m.sequence);
-    }
-  } read;
-  mcap::scan(file, read);
+  const std::vector<std::uint64_t> steps = recorded_sequences(file, "/afhub/arm/base/state");
   std::size_t restarts = 0;
-  for (std::size_t i = 1; i < read.steps.size(); ++i)
-    if (read.steps[i] < read.steps[i - 1]) ++restarts;
+  for (std::size_t i = 1; i < steps.size(); ++i)
+    if (steps[i] < steps[i - 1]) ++restarts;
   EXPECT_EQ(restarts, 1u);
-  EXPECT_GT(read.steps.size(), 2000u);
+  EXPECT_GT(steps.size(), 2000u);
 }
 
 TEST(Record, ADeviceIsRecordedEveryCycleWithTheCommandsItTookThroughAPauseWithDevices) {
