@@ -1573,9 +1573,9 @@ TEST(Record, TheReadingLoopReadsOnAPinnedRealTimePhysicsCpuAndFollowsItsRestarts
       },
       30s))
       << read_file(log("beside.log")) << read_file(log("unpinned.log"));
-  // It followed the restarts; it never left for want of time.
-  EXPECT_FALSE(contains(read_file(log("beside.log")), "other CPUs again"))
-      << read_file(log("beside.log"));
+  // Whether it also left a physics' CPU for want of time depends on the machine's load
+  // (a loaded CI run held it there past a quarter of the ring): not checked here. The
+  // NeverSleeps test causes that leave on purpose.
   for (ScopedProcess* recorder : {&beside, &chosen, &confined})
     EXPECT_EQ(recorder->stop(SIGINT), 0);
 }
