@@ -213,6 +213,7 @@ void SimChannels::publish(const WorldClock& clock) noexcept {
         ++answered_steps_;
         ++channel.answered_steps;
         channel.in_phase = true;
+        channel.phase_misses = 0;
       }
     }
   }

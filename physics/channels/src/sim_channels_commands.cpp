@@ -157,6 +157,7 @@ void SimChannels::forget_commands() noexcept {
     channel.applied_answer_step = 0;
     channel.state_command_step = -1;
     channel.in_phase = false;
+    channel.phase_misses = 0;
     channel.misses = 0;
   }
   timeliness_step_ = 0;

@@ -187,7 +187,10 @@ void SimChannels::await_answers_in_phase(std::int64_t timeout_ns) noexcept {
     wait_for_commands(until_ns);
   }
   for (Channel& channel : channels_)
-    if (pending(channel)) channel.in_phase = false;
+    if (pending(channel) && ++channel.phase_misses >= kPhaseMisses) {
+      channel.in_phase = false;
+      channel.phase_misses = 0;
+    }
 }
 
 }  // namespace afhub::physics

@@ -103,10 +103,15 @@ class SimChannels {
   // Before a step of a free-running world behind its grid (after a stall it runs its
   // late steps back to back): applies commands as they come until each body whose
   // controller is in phase (its commands were in time, and it has not missed this wait
-  // since) has an answer to the current step, or for `timeout_ns`. A controller that follows
-  // a catching-up physics (hub/step_phase.hpp) so stays in time; one that does not
-  // costs this wait once.
+  // kPhaseMisses times in a row since) has an answer to the current step, or for
+  // `timeout_ns`. A controller that follows a catching-up physics (hub/step_phase.hpp)
+  // so stays in time, also when it wakes from the same stall a little after the
+  // physics; one that does not costs this wait kPhaseMisses times.
   void await_answers_in_phase(std::int64_t timeout_ns) noexcept;
+  // A controller woken by the same stall as the physics may take a few hand-offs to
+  // answer (Python's loop after a 30 ms stop of both: its first answer 0.2 to 1 ms
+  // after the physics resumed, on the project's VM).
+  static constexpr int kPhaseMisses = 3;
 
   // After a world reset (the simulation's inputs cleared, its steps from 0): no body
   // is under command, and no lockstep answer or timeliness count carries across.
@@ -200,8 +205,9 @@ class SimChannels {
     std::uint64_t applied_answer_step = 0;  // the step the command being applied answers
     // BodyState::command_answered_step of the last step taken (-1: no command in force).
     std::int64_t state_command_step = -1;
-    bool in_phase = false;  // a command in time since the last missed await_answers_in_phase
-    int misses = 0;         // late steps in a row
+    bool in_phase = false;  // a command in time since kPhaseMisses missed hand-offs in a row
+    int phase_misses = 0;   // await_answers_in_phase's timeouts in a row
+    int misses = 0;         // late lockstep steps in a row
     // The command taken since the last publish (the reader's checked copy), for the tape.
     const BodyCommand* taken_command = nullptr;
     void prefetch_state_update() const noexcept { publisher->prefetch_state_update(ray_count); }
