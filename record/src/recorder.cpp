@@ -86,7 +86,10 @@ struct Recorded {
   std::uint64_t last = 0;          // its last step (per_step) or sequence
   std::int64_t last_stamp_ns = 0;  // its last publish stamp: a writer's own clock, always newer
   PayloadKind kind{};
-  std::string body;           // what the step tape names it: a body's channel, the world's instance
+  std::string body;  // what the step tape names it: a body's channel, the world's instance
+  // A body's command: the index in recorded_ of its body's state (none before it is
+  // taken), so that the reading loop's turn looks up no name.
+  std::size_t body_state = ~std::size_t{0};
   std::int64_t taped_ns = 0;  // when the step tape last brought it
   // A command: the physics takes those after its last one, if any, in steps after
   // taken_after_step (the step the tape brought it at, or its body's state's step when
@@ -271,8 +274,7 @@ class Session {
     for (Recorded& recorded : discovered_) {
       if (recorded.wakes) waiter.attach(*recorded.reader);
       if (recorded.wakes && recorded.body.empty()) untaped_waiter.attach(*recorded.reader);
-      if (!recorded.body.empty())
-        by_body_[tape_kind_index(recorded.kind)].emplace(recorded.body, recorded_.size());
+      if (!recorded.body.empty()) link_body(recorded, recorded_.size());
       // A device's command is added right after its state (discover()).
       if (recorded.kind == PayloadKind::kDeviceCommand && !recorded_.empty() &&
           recorded_.back().kind == PayloadKind::kDeviceState)
@@ -436,13 +438,13 @@ class Session {
                                               .after_step = recorded.taken_after_step,
                                               .tape_breaks = recorded.tape_breaks};
       else
-        (gap_replaced || (command && tape_covered_since(recorded.body, recorded.taken_after_step,
+        (gap_replaced || (command && tape_covered_since(recorded, recorded.taken_after_step,
                                                         recorded.tape_breaks, tape_step))
              ? replaced_
              : missed_) += gap;
     }
     if (command) {
-      recorded.taken_after_step = tape_step ? tape_step : state_step(recorded.body);
+      recorded.taken_after_step = tape_step ? tape_step : state_step(recorded);
       recorded.tape_breaks = tape_breaks_;
     }
     recorded.seen = true;
@@ -459,7 +461,7 @@ class Session {
   // newer than one the tape has still to bring, which would then be dropped as older.
   bool on_tape_only(const Recorded& command) const noexcept {
     return command.kind == PayloadKind::kBodyCommand && !paused_at_step_ &&
-           on_tape_run(state_of(command.body));
+           on_tape_run(state_of(command));
   }
 
   // Whether a body's state has come on the tape since its last break.
@@ -467,16 +469,16 @@ class Session {
     return state && state->taped_ns != 0 && state->tape_breaks == tape_breaks_;
   }
 
-  // Whether the tape brought every command the physics took for `body` after one taken
-  // after `after_step` (at `breaks` tape breaks): its body's state on the tape since the
-  // step after that, with no break. On a step's tape a body's command comes before its
+  // Whether the tape brought every command the physics took for `command`'s body after
+  // one taken after `after_step` (at `breaks` tape breaks): its body's state on the tape
+  // since the step after that, with no break. On a step's tape a body's command comes before its
   // state: a run not begun yet begins at `taken_step`, the step the tape brought the
   // next command at. With neither, the physics must be paused at `after_step`.
-  bool tape_covered_since(const std::string& body, std::optional<std::uint64_t> after_step,
+  bool tape_covered_since(const Recorded& command, std::optional<std::uint64_t> after_step,
                           std::uint64_t breaks,
                           std::optional<std::uint64_t> taken_step) const noexcept {
     if (!after_step || breaks != tape_breaks_) return false;
-    const Recorded* state = state_of(body);
+    const Recorded* state = state_of(command);
     if (on_tape_run(state)) return state->taped_from_step <= *after_step + 1;
     if (taken_step) return *taken_step <= *after_step + 1;
     return paused_at_step_ == after_step;
@@ -487,24 +489,38 @@ class Session {
   // `taken_step`: the tape brought the command read, or a later one, at that step.
   void settle_slot_gap(Recorded& command, std::optional<std::uint64_t> taken_step) noexcept {
     const Recorded::SlotGap& gap = *command.slot_gap;
-    (!gap.gap_taken && tape_covered_since(command.body, gap.after_step, gap.tape_breaks, taken_step)
+    (!gap.gap_taken && tape_covered_since(command, gap.after_step, gap.tape_breaks, taken_step)
          ? replaced_
          : missed_) += gap.count;
     command.slot_gap.reset();
   }
 
-  // The last step of `body`'s state the recorder read (none before the first): a
-  // command read from its slot after it is taken, if at all, in a later step.
-  std::optional<std::uint64_t> state_step(const std::string& body) const noexcept {
-    const Recorded* state = state_of(body);
+  // The last step of `command`'s body's state the recorder read (none before the first):
+  // a command read from its slot after it is taken, if at all, in a later step.
+  std::optional<std::uint64_t> state_step(const Recorded& command) const noexcept {
+    const Recorded* state = state_of(command);
     if (!state || !state->seen) return std::nullopt;
     return state->last;
   }
 
-  const Recorded* state_of(const std::string& body) const noexcept {
-    const auto& states = by_body_[tape_kind_index(PayloadKind::kBodyState)];
-    const auto found = states.find(body);
-    return found == states.end() ? nullptr : &recorded_[found->second];
+  const Recorded* state_of(const Recorded& command) const noexcept {
+    return command.body_state < recorded_.size() ? &recorded_[command.body_state] : nullptr;
+  }
+
+  // Indexes a taped channel about to be recorded_[index] by its body, and links a body's
+  // command and state, whichever comes first.
+  void link_body(Recorded& recorded, std::size_t index) {
+    if (!by_body_[tape_kind_index(recorded.kind)].emplace(recorded.body, index).second) return;
+    const bool state = recorded.kind == PayloadKind::kBodyState;
+    if (!state && recorded.kind != PayloadKind::kBodyCommand) return;
+    const auto& other =
+        by_body_[tape_kind_index(state ? PayloadKind::kBodyCommand : PayloadKind::kBodyState)];
+    const auto found = other.find(recorded.body);
+    if (found == other.end()) return;
+    if (state)
+      recorded_[found->second].body_state = index;
+    else
+      recorded.body_state = found->second;
   }
 
   void discover_loop(const std::function<void(const RecordProgress&)>& progress) {

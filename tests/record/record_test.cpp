@@ -1361,11 +1361,11 @@ TEST(Record, ADeviceIsRecordedEveryCycleWithTheCommandsItTookThroughAPauseWithDe
   ASSERT_TRUE(wait_until(
       [] { return run_afhub({"ls"}).out.find("device/hand") != std::string::npos; }, 20s))
       << read_file(log("device.log"));
-  std::atomic<bool> writing{true};
   std::atomic<std::uint64_t> written{0};
-  std::thread teleop([&] {
+  // Stopped and joined however the test leaves (a failed assertion too).
+  std::jthread teleop([&](std::stop_token writing) {
     Writer<DeviceCommand> commands(body_command_channel("device/hand"));
-    while (writing) {
+    while (!writing.stop_requested()) {
       if (DeviceCommand* command = commands.loan()) {
         command->enable = 0;
         commands.publish(command);
@@ -1390,7 +1390,7 @@ TEST(Record, ADeviceIsRecordedEveryCycleWithTheCommandsItTookThroughAPauseWithDe
   ASSERT_EQ(kill(recorder.pid, SIGCONT), 0);
   std::this_thread::sleep_for(1s);
   ASSERT_EQ(recorder.stop(SIGINT), 0) << read_file(log("record.log"));
-  writing = false;
+  teleop.request_stop();
   teleop.join();
 
   const json info = info_of(file);

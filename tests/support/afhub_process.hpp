@@ -36,10 +36,13 @@ pid_t spawn_wrapped_afhub(const std::vector<std::string>& wrapper,
                           const std::vector<std::string>& args,
                           const std::string& log_path = "/dev/null");
 
+// How long a stop waits by default: an exit that unmaps a process's memory took over
+// 5 s on a loaded machine (a recorder's, beside two busy loops and a build).
+inline constexpr std::chrono::milliseconds kStopTimeout = std::chrono::seconds(15);
+
 // Sends `signal`, waits up to `timeout` for the exit, SIGKILLs after that; returns
 // the exit code (128 + signal when killed by one).
-int stop_process(pid_t pid, int signal,
-                 std::chrono::milliseconds timeout = std::chrono::seconds(5));
+int stop_process(pid_t pid, int signal, std::chrono::milliseconds timeout = kStopTimeout);
 
 // Stops (SIGTERM, then SIGKILL) every child of this process still running and
 // describes each ("pid: command line"). A test binary calls it last: a client left
@@ -56,7 +59,7 @@ struct ScopedProcess {
   // Stops it now with `signal` (0: waits for it to end by itself), as stop_process;
   // returns its exit code (0 when it was already stopped). Stopped once: its pid is
   // then forgotten, so the destructor never signals a pid the system gave another.
-  int stop(int signal = SIGTERM, std::chrono::milliseconds timeout = std::chrono::seconds(5));
+  int stop(int signal = SIGTERM, std::chrono::milliseconds timeout = kStopTimeout);
   pid_t pid;
 };
 
