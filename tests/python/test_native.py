@@ -251,7 +251,8 @@ def test_loop_follows_a_physics_catching_up(physics):
 
     # From a process of its own that only sleeps between its signals: a thread of this
     # one took the interpreter from the loop as both resumed, and a shell's `sleep` took
-    # its CPU (6 to 57 states followed in six runs; 49 to 108 in eight this way).
+    # its CPU (6 to 57 states followed in six runs; 10 to 74 in eight this way, 49 to
+    # 108 with the physics waiting for three missed hand-offs, SimChannels::kPhaseMisses).
     stalling = subprocess.Popen([sys.executable, '-c', f"""import os, signal, time
 time.sleep(1)
 for _ in range(3):
