@@ -109,8 +109,7 @@ class SimChannels {
   // physics; one that does not costs this wait kPhaseMisses times.
   void await_answers_in_phase(std::int64_t timeout_ns) noexcept;
   // A controller woken by the same stall as the physics may take a few hand-offs to
-  // answer: Python's loop, after three 30 ms stops of both, answered 10 to 74 late
-  // states in eight runs when the first miss dropped it, 49 to 108 with three.
+  // answer (measured in docs/performance.md, "The 1 kHz loop").
   static constexpr int kPhaseMisses = 3;
 
   // After a world reset (the simulation's inputs cleared, its steps from 0): no body
