@@ -69,7 +69,7 @@ TEST_F(PidNamespaceTest, HubInItsOwnPidNamespaceKeepsItsClients) {
   const RunResult stop = run_afhub({"hub", "stop", "--force"});
   EXPECT_EQ(stop.exit_code, 0) << stop.err;
   EXPECT_TRUE(contains(stop.err, "stopped the hub")) << stop.err;
-  EXPECT_EQ(wait_for_exit(hub, 5s), 0) << read_file(hub_log_);
+  EXPECT_EQ(wait_for_exit(hub, kStopTimeout), 0) << read_file(hub_log_);
 }
 
 // A client in a child pid namespace is pid 1 there, a pid that always exists for the

@@ -518,62 +518,103 @@ BENCHMARK_CAPTURE(BM_StepThousandBodies, published_commanded_one_thread, true, t
 // thousand bodies' physics would cost with the arms' joints as coordinates instead of
 // constraints. A measure for that design choice, not a path afhub runs
 // (docs/performance.md).
-void BM_StepThousandBodiesAsMultibodies(benchmark::State& state) {
-  constexpr int kArms = 125, kLinks = 8;
-  btDefaultCollisionConfiguration configuration;
-  btCollisionDispatcher dispatcher(&configuration);
-  btDbvtBroadphase broadphase;
-  btMultiBodyConstraintSolver solver;
-  // Declared before the world, which meets its colliders again when it goes.
-  btBoxShape box(btVector3(0.025, 0.025, 0.05));
-  std::vector<std::unique_ptr<btMultiBody>> arms;
-  std::vector<std::unique_ptr<btMultiBodyLinkCollider>> colliders;
-  btMultiBodyDynamicsWorld world(&dispatcher, &broadphase, &solver, &configuration);
-  world.setGravity(btVector3(0, 0, -9.81));
-  for (int a = 0; a < kArms; ++a) {
-    auto arm = std::make_unique<btMultiBody>(kLinks - 1, 0.0, btVector3(0, 0, 0), true, false);
-    arm->setBasePos(btVector3(a % 12, a / 12, 0));
-    arm->setWorldToBaseRot(btQuaternion::getIdentity());
-    for (int l = 1; l < kLinks; ++l)  // axes alternating between y and z, as arms_scene's
-      arm->setupRevolute(l - 1, 1.0, btVector3(0.01, 0.01, 0.01), l - 2,
-                         btQuaternion::getIdentity(),
-                         l % 2 ? btVector3(0, 1, 0) : btVector3(0, 0, 1), btVector3(0, 0, 0.05),
-                         btVector3(0, 0, 0.05), true);
-    arm->finalizeMultiDof();
-    arm->setLinearDamping(0);
-    arm->setAngularDamping(0);
-    world.addMultiBody(arm.get());
-    for (int l = -1; l < kLinks - 1; ++l) {
-      auto& collider =
-          colliders.emplace_back(std::make_unique<btMultiBodyLinkCollider>(arm.get(), l));
-      collider->setCollisionShape(&box);
-      btTransform pose = btTransform::getIdentity();
-      pose.setOrigin(btVector3(a % 12, a / 12, 0.1 * (l + 1)));
-      collider->setWorldTransform(pose);
-      world.addCollisionObject(collider.get(), 1, 0);
-      if (l < 0)
-        arm->setBaseCollider(collider.get());
-      else
-        arm->getLink(l).m_collider = collider.get();
+class MultibodyArms {
+ public:
+  static constexpr int kLinks = 8;
+  // Arms [first, first + count) of the 125, placed as arms_scene places them.
+  MultibodyArms(int first, int count) {
+    world_.setGravity(btVector3(0, 0, -9.81));
+    for (int a = first; a < first + count; ++a) {
+      auto arm = std::make_unique<btMultiBody>(kLinks - 1, 0.0, btVector3(0, 0, 0), true, false);
+      arm->setBasePos(btVector3(a % 12, a / 12, 0));
+      arm->setWorldToBaseRot(btQuaternion::getIdentity());
+      for (int l = 1; l < kLinks; ++l)  // axes alternating between y and z, as arms_scene's
+        arm->setupRevolute(l - 1, 1.0, btVector3(0.01, 0.01, 0.01), l - 2,
+                           btQuaternion::getIdentity(),
+                           l % 2 ? btVector3(0, 1, 0) : btVector3(0, 0, 1), btVector3(0, 0, 0.05),
+                           btVector3(0, 0, 0.05), true);
+      arm->finalizeMultiDof();
+      arm->setLinearDamping(0);
+      arm->setAngularDamping(0);
+      world_.addMultiBody(arm.get());
+      for (int l = -1; l < kLinks - 1; ++l) {
+        auto& collider =
+            colliders_.emplace_back(std::make_unique<btMultiBodyLinkCollider>(arm.get(), l));
+        collider->setCollisionShape(&box_);
+        btTransform pose = btTransform::getIdentity();
+        pose.setOrigin(btVector3(a % 12, a / 12, 0.1 * (l + 1)));
+        collider->setWorldTransform(pose);
+        world_.addCollisionObject(collider.get(), 1, 0);
+        if (l < 0)
+          arm->setBaseCollider(collider.get());
+        else
+          arm->getLink(l).m_collider = collider.get();
+      }
+      arms_.push_back(std::move(arm));
     }
-    arms.push_back(std::move(arm));
   }
-  StepTimes times(1 << 20);
-  for (auto _ : state) {
-    const std::int64_t begin_ns = monotonic_ns();
-    for (auto& arm : arms)
+  void step() {
+    for (auto& arm : arms_)
       for (int l = 0; l < kLinks - 1; ++l)
         arm->addJointTorque(l, -50.0 * arm->getJointPos(l) - 2.0 * arm->getJointVel(l));
-    world.stepSimulation(0.001, 0, 0.001);
+    world_.stepSimulation(0.001, 0, 0.001);
+  }
+
+ private:
+  btDefaultCollisionConfiguration configuration_;
+  btCollisionDispatcher dispatcher_{&configuration_};
+  btDbvtBroadphase broadphase_;
+  btMultiBodyConstraintSolver solver_;
+  // Declared before the world, which meets its colliders again when it goes.
+  btBoxShape box_{btVector3(0.025, 0.025, 0.05)};
+  std::vector<std::unique_ptr<btMultiBody>> arms_;
+  std::vector<std::unique_ptr<btMultiBodyLinkCollider>> colliders_;
+  btMultiBodyDynamicsWorld world_{&dispatcher_, &broadphase_, &solver_, &configuration_};
+};
+
+// `threads` 2: the arms split between two worlds, the second stepped by a helper
+// spinning on another CPU, as the islands' helper does: the most that stepping the
+// multibodies on both threads could give (the broadphase and the colliders' bounds,
+// serial in one world, are shared too).
+void BM_StepThousandBodiesAsMultibodies(benchmark::State& state, int threads) {
+  constexpr int kArms = 125;
+  const int helped = threads == 2 ? kArms / 2 : 0;
+  MultibodyArms own(0, kArms - helped);
+  std::unique_ptr<MultibodyArms> other;
+  std::atomic<std::uint64_t> asked{0}, done{0};
+  std::atomic<bool> stop{false};
+  std::jthread helper;
+  if (helped > 0) {
+    other = std::make_unique<MultibodyArms>(kArms - helped, helped);
+    helper = std::jthread([&] {
+      for (std::uint64_t stepped = 0; !stop.load(std::memory_order_relaxed);) {
+        if (asked.load(std::memory_order_acquire) == stepped) continue;
+        other->step();
+        done.store(++stepped, std::memory_order_release);
+      }
+    });
+  }
+  StepTimes times(1 << 20);
+  std::uint64_t step = 0;
+  for (auto _ : state) {
+    const std::int64_t begin_ns = monotonic_ns();
+    ++step;
+    if (other) asked.store(step, std::memory_order_release);
+    own.step();
+    while (other && done.load(std::memory_order_acquire) != step) {
+    }
     const auto took = static_cast<float>(monotonic_ns() - begin_ns) * 1e-3F;
     if (times.total.size() == times.total.capacity()) continue;
     for (auto* phase : {&times.total, &times.physics}) phase->push_back(took);
     for (auto* phase : {&times.commands, &times.publish}) phase->push_back(0.0F);
   }
-  state.counters["bodies"] = kArms * kLinks;
+  stop = true;
+  state.counters["bodies"] = kArms * MultibodyArms::kLinks;
   report_step_times(state, times);
 }
-BENCHMARK(BM_StepThousandBodiesAsMultibodies)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_StepThousandBodiesAsMultibodies, one_thread, 1)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_StepThousandBodiesAsMultibodies, two_threads, 2)
+    ->Unit(benchmark::kMicrosecond);
 
 // Publishing alone: one step's ten body states (a ten-link chain, so each body
 // carries its descendant joints) and the world state. Argument: readers per body.

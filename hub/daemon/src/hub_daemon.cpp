@@ -337,7 +337,11 @@ int run_hub_daemon(const HubOptions& options) {
   // Clients still attached publish until they see the hub gone, each publish inside
   // its port's lock: RouDi's destructor would take the ports apart under them, and
   // abort on a lock a client holds (pthread_mutex_destroy: EBUSY). Their memory is
-  // unlinked; the process ends without taking it apart.
+  // unlinked; the process ends without taking it apart. The lock goes first: an exiting
+  // process's memory is unmapped before its files are closed, and `afhub hub stop`, a
+  // new hub and the clients wait for the lock, not for that (a loaded CI machine took
+  // over 5 s between SIGTERM and the lock's release).
+  close(lock.fd);
   _exit(0);
 }
 
@@ -381,10 +385,10 @@ int stop_hub(bool force) {
                  std::strerror(errno));
     return 1;
   }
-  auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+  auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(15);
   while (running_hub_pid()) {
     if (std::chrono::steady_clock::now() > deadline) {
-      std::fprintf(stderr, "afhub hub stop: the hub (pid %d) did not stop within 5 s\n", *pid);
+      std::fprintf(stderr, "afhub hub stop: the hub (pid %d) did not stop within 15 s\n", *pid);
       return 1;
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
