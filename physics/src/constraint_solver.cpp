@@ -80,7 +80,7 @@ btScalar ConstraintSolver::solveGroupCacheFriendlyIterations(
     btTypedConstraint** constraints, int numConstraints, const btContactSolverInfo& info,
     btIDebugDraw* debug_drawer) {
   const auto iterate = [&] {
-    return btSequentialImpulseConstraintSolver::solveGroupCacheFriendlyIterations(
+    return btMultiBodyConstraintSolver::solveGroupCacheFriendlyIterations(
         bodies, numBodies, manifolds, numManifolds, constraints, numConstraints, info,
         debug_drawer);
   };

@@ -15,13 +15,14 @@
 //   than kMaxDirectRows rows is iterated like the rest.
 #pragma once
 
+#include <BulletDynamics/Featherstone/btMultiBodyConstraintSolver.h>
 #include <btBulletDynamicsCommon.h>
 
 #include <vector>
 
 namespace afhub::physics {
 
-class ConstraintSolver : public btSequentialImpulseConstraintSolver {
+class ConstraintSolver : public btMultiBodyConstraintSolver {
  public:
   // Mark a joint of an island of joints (user constraint type): one that holds a
   // closed loop, whose repeated rows the solve looks for, or a tree.

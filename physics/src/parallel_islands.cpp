@@ -37,9 +37,10 @@ ParallelIslands::~ParallelIslands() {
 void ParallelIslands::run(int island, int thread) noexcept {
   const Island& i = (*islands_)[island];
   ConstraintSolver& solver = thread == 0 ? *own_ : solver_;
-  solver.solveGroup(bodies_ + i.first_body, i.body_count, i.manifolds, i.manifold_count,
-                    i.constraint_count ? constraints_ + i.first_constraint : nullptr,
-                    i.constraint_count, *info_, nullptr, nullptr);
+  // A multibody solver reads the group's multibody constraints, which only this sets.
+  solver.solveMultiBodyGroup(bodies_ + i.first_body, i.body_count, i.manifolds, i.manifold_count,
+                             i.constraint_count ? constraints_ + i.first_constraint : nullptr,
+                             i.constraint_count, nullptr, 0, *info_, nullptr, nullptr);
   if (after_) after_->island_solved(bodies_ + i.first_body, i.body_count);
   if (thread != 0) helped_.fetch_add(1, std::memory_order_relaxed);
 }

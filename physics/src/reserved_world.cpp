@@ -15,6 +15,17 @@ int island_of(const btTypedConstraint& constraint) {
 
 }  // namespace
 
+ReservedWorld::ReservedWorld(btDispatcher* dispatcher, btBroadphaseInterface* broadphase,
+                             btMultiBodyConstraintSolver* solver,
+                             btCollisionConfiguration* collision_config,
+                             btSoftBodySolver& soft_solver)
+    : btSoftMultiBodyDynamicsWorld(dispatcher, broadphase, solver, collision_config, &soft_solver),
+      soft_solver_(soft_solver) {
+  // Bullet's multibody world asks for two friction directions per contact; the rigid
+  // world, which afhub's contacts were tuned in and tested with, for one.
+  getSolverInfo().m_solverMode &= ~SOLVER_USE_2_FRICTION_DIRECTIONS;
+}
+
 void ReservedWorld::reserve_constraints(int count) {
   m_constraints.reserve(count);
   m_sortedConstraints.reserve(count);
@@ -57,7 +68,7 @@ void ReservedWorld::island_solved(btCollisionObject** bodies, int count) noexcep
 
 void ReservedWorld::predictUnconstraintMotion(btScalar dt) {
   if (getDispatchInfo().m_useContinuous) {
-    btSoftRigidDynamicsWorld::predictUnconstraintMotion(dt);
+    btSoftMultiBodyDynamicsWorld::predictUnconstraintMotion(dt);
     return;
   }
   for (int i = 0; i < m_nonStaticRigidBodies.size(); ++i)
@@ -82,14 +93,14 @@ btScalar BodyDamping::Factor::of(btScalar new_damping, btScalar new_dt) noexcept
 
 void ReservedWorld::createPredictiveContacts(btScalar dt) {
   if (getDispatchInfo().m_useContinuous)
-    btSoftRigidDynamicsWorld::createPredictiveContacts(dt);
+    btSoftMultiBodyDynamicsWorld::createPredictiveContacts(dt);
   else
     releasePredictiveContacts();  // none are made; as Bullet, clear the last step's
 }
 
 void ReservedWorld::integrateTransforms(btScalar dt) {
   if (!parallel_ || m_applySpeculativeContactRestitution) {
-    btSoftRigidDynamicsWorld::integrateTransforms(dt);
+    btSoftMultiBodyDynamicsWorld::integrateTransforms(dt);
     return;
   }
   unintegrated_.clear();
@@ -105,7 +116,7 @@ void ReservedWorld::integrateTransforms(btScalar dt) {
 void ReservedWorld::solveConstraints(btContactSolverInfo& info) {
   ++stamp_;  // from 1: 0 is never integrated
   if (info.m_minimumSolverBatchSize > 1) {
-    btSoftRigidDynamicsWorld::solveConstraints(info);
+    btSoftMultiBodyDynamicsWorld::solveConstraints(info);
     return;
   }
   keyed_.clear();
@@ -125,9 +136,10 @@ void ReservedWorld::solveConstraints(btContactSolverInfo& info) {
                        int manifold_count, int island) override {
       const auto& keyed = world.keyed_;
       if (island < 0) {  // islands not split: everything at once
-        world.m_constraintSolver->solveGroup(bodies, body_count, manifolds, manifold_count,
-                                             world.sorted_.data(), static_cast<int>(keyed.size()),
-                                             info, world.m_debugDrawer, world.getDispatcher());
+        world.m_multiBodyConstraintSolver->solveMultiBodyGroup(
+            bodies, body_count, manifolds, manifold_count, world.sorted_.data(),
+            static_cast<int>(keyed.size()), nullptr, 0, info, world.m_debugDrawer,
+            world.getDispatcher());
         return;
       }
       const auto in =
@@ -141,9 +153,9 @@ void ReservedWorld::solveConstraints(btContactSolverInfo& info) {
         world.island_bodies_.insert(world.island_bodies_.end(), bodies, bodies + body_count);
         return;
       }
-      world.m_constraintSolver->solveGroup(bodies, body_count, manifolds, manifold_count,
-                                           count ? &world.sorted_[first] : nullptr, count, info,
-                                           world.m_debugDrawer, world.getDispatcher());
+      world.m_multiBodyConstraintSolver->solveMultiBodyGroup(
+          bodies, body_count, manifolds, manifold_count, count ? &world.sorted_[first] : nullptr,
+          count, nullptr, 0, info, world.m_debugDrawer, world.getDispatcher());
     }
   } islands(*this, info);
   m_constraintSolver->prepareSolve(getNumCollisionObjects(), getDispatcher()->getNumManifolds());

@@ -1,10 +1,13 @@
 // The Bullet world the simulation steps: room for every constraint it may hold at
 // once, and islands handed to the solver one at a time without Bullet's search for
-// each island's constraints.
+// each island's constraints. A multibody world with no multibody in it yet: open chains
+// in reduced coordinates (Bullet's btMultiBody) are the next step for a thousand
+// bodies (docs/performance.md); meanwhile it steps every model bit for bit as the
+// rigid world did.
 #pragma once
 
 #include <BulletSoftBody/btSoftBodySolvers.h>
-#include <BulletSoftBody/btSoftRigidDynamicsWorld.h>
+#include <BulletSoftBody/btSoftMultiBodyDynamicsWorld.h>
 
 #include <memory>
 #include <vector>
@@ -29,14 +32,12 @@ class BodyDamping {
   Factor linear_, angular_;
 };
 
-class ReservedWorld : public btSoftRigidDynamicsWorld, private ParallelIslands::AfterIsland {
+class ReservedWorld : public btSoftMultiBodyDynamicsWorld, private ParallelIslands::AfterIsland {
  public:
   // `soft_solver` must outlive the world.
   ReservedWorld(btDispatcher* dispatcher, btBroadphaseInterface* broadphase,
-                btConstraintSolver* solver, btCollisionConfiguration* collision_config,
-                btSoftBodySolver& soft_solver)
-      : btSoftRigidDynamicsWorld(dispatcher, broadphase, solver, collision_config, &soft_solver),
-        soft_solver_(soft_solver) {}
+                btMultiBodyConstraintSolver* solver, btCollisionConfiguration* collision_config,
+                btSoftBodySolver& soft_solver);
   void reserve_constraints(int count);
   // Islands solved one at a time are solved by two threads at once when there are
   // many (parallel_islands.hpp), the world's solver being a ConstraintSolver(bodies,
