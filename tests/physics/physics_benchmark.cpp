@@ -573,9 +573,9 @@ class MultibodyArms {
 };
 
 // `threads` 2: the arms split between two worlds, the second stepped by a helper
-// spinning on another CPU, as the islands' helper does: the most that stepping the
-// multibodies on both threads could give (the broadphase and the colliders' bounds,
-// serial in one world, are shared too).
+// spinning on another CPU (the islands' helper sleeps between steps): the most that
+// stepping the multibodies on both threads could give (the broadphase and the
+// colliders' bounds, serial in one world, are shared too).
 void BM_StepThousandBodiesAsMultibodies(benchmark::State& state, int threads) {
   constexpr int kArms = 125;
   const int helped = threads == 2 ? kArms / 2 : 0;
