@@ -4,6 +4,7 @@
 // sim_sensors_actuators.cpp).
 #include "afhub/physics/simulation.hpp"
 
+#include "bullet_allocator.hpp"
 #include "simulation_data.hpp"
 
 namespace afhub::physics {
@@ -35,6 +36,7 @@ constexpr int kJointsPerItem = 32;
 
 Simulation::Simulation(const Model& model, double dt_s)
     : data_(std::make_unique<Data>(model, dt_s)) {
+  reuse_bullet_scratch();
   Data& d = *data_;
   const int bodies = static_cast<int>(model.bodies.size() + model.soft_bodies.size());
   reserve_overlapping_pairs(*d.broadphase.getOverlappingPairCache(), d.dispatcher,

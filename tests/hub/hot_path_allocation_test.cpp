@@ -199,6 +199,25 @@ TEST(HotPath, PhysicsLoopOfManyArmsSolvedByTwoThreadsDoesNotAllocate) {
                                       "arms/a0l0", true, false);
 }
 
+// The example cloth dropped on the floor, a soft body's nodes stepped, collided and
+// published, beside the arm, out of its reach: the arm coming near it would make new
+// pairs of colliding objects (a first contact, not the steady state this tests).
+TEST(HotPath, PhysicsLoopWithASoftBodyDoesNotAllocate) {
+  const testing::ModelFolder folder;
+  std::string cloth = test::read_file(AFHUB_EXAMPLE_MODELS "/cloth.yaml");
+  for (const auto& [from, to] :
+       {std::pair<std::string, std::string>{"./cloth.obj", AFHUB_EXAMPLE_MODELS "/cloth.obj"},
+        {"{x: 0.8, y: 0.6, z: 1.0}", "{x: -1.4, y: 1.4, z: 0.5}"}}) {
+    const std::size_t at = cloth.find(from);
+    ASSERT_NE(at, std::string::npos) << from << " not in cloth.yaml";
+    cloth.replace(at, from.size(), to);
+  }
+  expect_physics_loop_allocation_free(
+      {AFHUB_EXAMPLE_MODELS "/arm7.yaml", AFHUB_EXAMPLE_MODELS "/floor.yaml",
+       folder.write("cloth.yaml", cloth)},
+      "afhub/arm/base");
+}
+
 // The real AMBF models: mesh shapes, and the four-bar's loop.
 TEST(HotPath, PhysicsLoopOnAmbfModelsDoesNotAllocate) {
   SKIP_WITHOUT_SHARED_MODELS();
