@@ -213,6 +213,8 @@ void register_bench(CLI::App& app, Runner& selected) {
   auto* quick = bodies->add_flag("--quick", bodies_options->quick, "5 s measured instead of 20");
   bodies->add_option("--arms", bodies_options->bench.arms, "Arms in the scene (default 125)");
   bodies->add_option("--links", bodies_options->bench.links, "Links per arm (default 8)");
+  bodies->add_flag("--reduced-coordinates", bodies_options->bench.reduced_coordinates,
+                   "Run the physics with --reduced-coordinates: each arm a multibody");
   bodies
       ->add_option("--seconds", bodies_options->bench.seconds,
                    "Seconds measured (default 20, at most 600)")

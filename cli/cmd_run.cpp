@@ -44,6 +44,7 @@ struct RunCliOptions {
   RealtimeOptions realtime;
   bool stop_on_nan = false;
   bool paused = false;
+  bool reduced_coordinates = false;
   std::string overrun = "catch-up";
   double max_catch_up_ms = 100.0;
   std::string mesh_fallback = "refuse";
@@ -127,6 +128,7 @@ int run_run(const RunCliOptions& options) {
     const std::vector<double> g = parse_numbers(options.gravity, "--gravity", 3);
     physics::override_gravity(model, {g[0], g[1], g[2]});
   }
+  model.world.reduced_coordinates = options.reduced_coordinates;
 
   if (options.mesh_fallback == "box")
     for (const std::string& warning : physics::fall_back_to_boxes(model))
@@ -142,6 +144,11 @@ int run_run(const RunCliOptions& options) {
   }
   physics::Simulation& sim = *built;
   for (const std::string& note : sim.gain_notes()) std::fprintf(stderr, "%s\n", note.c_str());
+  if (options.reduced_coordinates)
+    std::fprintf(stderr,
+                 "afhub run: %zu of %zu bodies in reduced coordinates, as links of open chains "
+                 "on static bodies; the rest in maximal coordinates\n",
+                 sim.links_in_reduced_coordinates(), model.bodies.size());
   std::unique_ptr<physics::SimChannels> channels;
   if (!options.offline) {
     // A lost hub: the loop holds (no step, no state out), then the process re-executes,
@@ -239,6 +246,12 @@ void register_run(CLI::App& app, Runner& selected) {
                   "model files' `gravity` (by AMBF's rule a file's gravity wins over the world's)");
   add_gain_options(run, options->gains);
   add_urdf_options(run, options->urdf);
+  run->add_flag("--reduced-coordinates", options->reduced_coordinates,
+                "Simulate each open chain hanging from a static body (an arm on its base) in "
+                "joint coordinates, Bullet's multibody: no constraint rows hold it together, "
+                "and many arms step in about half the time. Closed loops, free-floating "
+                "robots, springs and bodies with actuators stay as they are. A link then "
+                "takes no velocity command (docs/performance.md)");
   run->add_option("--dt", options->dt_s, "Fixed step in seconds (default 0.001)");
   run->add_flag("--fast", options->fast, "Step as fast as possible instead of in real time");
   add_count_option(run, "--steps", options->steps,

@@ -82,16 +82,19 @@ BodiesResult run_bodies_bench(const BodiesOptions& options) {
     bodies.push_back(std::make_unique<HeldBody>(body.channel));
   if (bodies.empty()) throw Error("the generated scene has no body");
   result.bodies = static_cast<int>(bodies.size());
-  std::fprintf(stderr, "afhub bench: %d arms of %d links (%d bodies) at 1 kHz for %.0f s\n",
-               options.arms, options.links, result.bodies, options.seconds);
+  std::fprintf(stderr, "afhub bench: %d arms of %d links (%d bodies) at 1 kHz for %.0f s%s\n",
+               options.arms, options.links, result.bodies, options.seconds,
+               options.reduced_coordinates ? ", in reduced coordinates" : "");
 
   // The log holds every step of the run: the physics is stopped once the loop is done.
   const std::string priority = std::to_string(options.fifo_priority);
   const auto log_steps = static_cast<std::uint64_t>((options.seconds + 120.0) * 1000.0);
-  ChildProcess physics(
-      {this_executable(), "run", files.scene, "--no-autostart", "--fifo", priority, "--lock-memory",
-       "--steps", std::to_string(log_steps), "--step-log", files.step_log},
-      files.physics_log);
+  std::vector<std::string> run = {this_executable(), "run",         files.scene,
+                                  "--no-autostart",  "--fifo",      priority,
+                                  "--lock-memory",   "--steps",     std::to_string(log_steps),
+                                  "--step-log",      files.step_log};
+  if (options.reduced_coordinates) run.push_back("--reduced-coordinates");
+  ChildProcess physics(run, files.physics_log);
   // Every body's first state, before the loop starts (loading a thousand takes seconds).
   for (const std::int64_t give_up = monotonic_ns() + 60'000'000'000;;) {
     const bool all = std::all_of(bodies.begin(), bodies.end(),
@@ -196,6 +199,7 @@ std::string bodies_table(const BodiesOptions& options, const BodiesResult& resul
   const auto& steps = result.steps;
   std::string out = format("%.0f arms of %.0f links, %.0f bodies at 1 kHz, %.0f steps measured",
                            options.arms, options.links, result.bodies, steps.size());
+  if (options.reduced_coordinates) out += ", in reduced coordinates";
   out += "; one controller process commanding every body each period, in phase\n\n";
   if (steps.empty()) return out + "No step measured.\n";
   out += "Each step as the physics timed it, us      p50       p99\n";

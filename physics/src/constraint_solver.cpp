@@ -93,7 +93,13 @@ btScalar ConstraintSolver::solveGroupCacheFriendlyIterations(
     direct |= type == kInLoopIsland || type == kInTreeIsland;
     find_dependent |= type != kInTreeIsland;
   }
-  if (!direct || a_.empty()) return iterate();
+  // A multibody's rows (a chain in reduced coordinates touching the island) are not
+  // in the pools below: such an island is iterated.
+  const bool multibody_rows = m_multiBodyNonContactConstraints.size() > 0 ||
+                              m_multiBodyNormalContactConstraints.size() > 0 ||
+                              m_multiBodyFrictionContactConstraints.size() > 0 ||
+                              m_multiBodyTorsionalFrictionContactConstraints.size() > 0;
+  if (!direct || a_.empty() || multibody_rows) return iterate();
   // Every row of the island: joints, then contacts, then their friction and rolling
   // friction (bounded by the contact's own impulse).
   btConstraintArray& joints = m_tmpSolverNonContactConstraintPool;

@@ -77,7 +77,7 @@ void set_six_dof_limits(btGeneric6DofSpring2Constraint& c, const JointSpec& spec
 
 JointModel::JointModel(const JointSpec& spec, btRigidBody& parent, btRigidBody& child,
                        const btTransform& parent_com_from_mesh,
-                       const btTransform& child_com_from_mesh, double dt_s)
+                       const btTransform& child_com_from_mesh, double dt_s, bool reduced)
     : spec_(spec), parent_(parent), child_(child), dt_s_(dt_s), gains_(spec.controller) {
   axis_index_ = constraint_axis(spec.type);
   // AMBF's frames, in each body's centre-of-mass frame: the parent's frame turns the
@@ -101,6 +101,11 @@ JointModel::JointModel(const JointSpec& spec, btRigidBody& parent, btRigidBody& 
   frame_in_child_ = child_com_from_mesh * btTransform(in_child, to_bt(spec.child_pivot_m));
   const btTransform& a = frame_in_parent_;
   const btTransform& b = frame_in_child_;
+  if (reduced) {
+    if (spec.type == JointType::kPrismatic) free_linear_[0] = true;
+    limit_gains();
+    return;  // attach() reads it
+  }
 
   switch (spec.type) {
     case JointType::kRevolute:
@@ -208,6 +213,45 @@ JointModel::JointModel(const JointSpec& spec, btRigidBody& parent, btRigidBody& 
   update_readings();
 }
 
+// A revolute joint's limits are held as a hinge's would be (a range of a turn or more
+// is none); in reduced coordinates the limit rows act only once the joint would cross
+// a limit within the step, the speculative limit apply_control() makes for a hinge.
+void JointModel::attach(btMultiBody& body, int link) {
+  multibody_ = &body;
+  link_ = link;
+  if (has_axis()) motor_ = std::make_unique<btMultiBodyJointMotor>(&body, link, 0.0, 0.0);
+  const bool limited = spec_.limit_low && (spec_.type == JointType::kPrismatic ||
+                                           (spec_.type == JointType::kRevolute &&
+                                            *spec_.limit_high - *spec_.limit_low < 2.0 * SIMD_PI));
+  if (limited) {
+    limit_ = std::make_unique<btMultiBodyJointLimitConstraint>(&body, link, *spec_.limit_low,
+                                                               *spec_.limit_high);
+    limit_->setMaxAppliedImpulse(BT_LARGE_FLOAT);  // Bullet's default, 100 N s, would give way
+  }
+  // Their rows' storage, which Bullet would otherwise make in the first step (and
+  // their applied impulses cannot be read before).
+  for (btMultiBodyConstraint* c : {static_cast<btMultiBodyConstraint*>(motor_.get()),
+                                   static_cast<btMultiBodyConstraint*>(limit_.get())})
+    if (c) c->finalizeMultiDof();
+  update_readings();
+}
+
+double JointModel::coordinate_as_placed() const {
+  const btTransform relative = (parent_.getWorldTransform() * frame_in_parent_).inverse() *
+                               (child_.getWorldTransform() * frame_in_child_);
+  switch (spec_.type) {
+    case JointType::kRevolute:
+    case JointType::kContinuous: {
+      const btVector3 x = relative.getBasis().getColumn(0);  // the child's x, about the z axis
+      return std::atan2(x.y(), x.x());
+    }
+    case JointType::kPrismatic:
+      return relative.getOrigin().x();
+    default:
+      return 0.0;
+  }
+}
+
 // An effort PID is explicit: with the step dt and an inertia I at the joint, a
 // gain P beyond about I / dt^2 (or D beyond I / dt) makes it blow up, which AMBF
 // users meet as "joint control explodes with high gains". The gains are capped at
@@ -274,6 +318,11 @@ void JointModel::release() noexcept {
 }
 
 void JointModel::set_motor(bool on, double velocity, double max_impulse) noexcept {
+  if (motor_) {
+    motor_->setVelocityTarget(velocity);
+    motor_->setMaxAppliedImpulse(on ? max_impulse : 0.0);
+    return;
+  }
   const double max_force = max_impulse / dt_s_;
   switch (spec_.type) {
     case JointType::kRevolute:
@@ -302,6 +351,10 @@ void JointModel::set_motor(bool on, double velocity, double max_impulse) noexcep
 }
 
 void JointModel::apply_effort(double effort) noexcept {
+  if (multibody_) {
+    multibody_->addJointTorque(link_, effort);
+    return;
+  }
   const btVector3 axis = world_axis();
   if (rotational()) {
     child_.applyTorque(axis * effort);
@@ -358,7 +411,7 @@ void JointModel::apply_control() noexcept {
   // Bullet holds a limit only once it is crossed, so a fast joint went a step's
   // travel past it. A joint that would cross a limit within this step is braked by
   // its motor instead, to arrive on the limit (a speculative limit).
-  if (spec_.limit_low &&
+  if (spec_.limit_low && !multibody_ &&
       (spec_.type == JointType::kRevolute || spec_.type == JointType::kPrismatic)) {
     const double q = position_ - spec_.joint_offset_rad;
     const double next = q + velocity_ * dt_s_;
@@ -378,6 +431,10 @@ void JointModel::apply_control() noexcept {
 }
 
 void JointModel::update_readings() noexcept {
+  if (multibody_) {
+    update_reduced_readings();
+    return;
+  }
   double position = 0.0;
   switch (spec_.type) {
     case JointType::kRevolute:
@@ -447,6 +504,23 @@ void JointModel::update_readings() noexcept {
   } else {
     effort_ = 0.0;
   }
+}
+
+// A link's coordinate cannot open: no pivot gap. The effort felt is what was applied
+// and what the motor and the limit rows pushed with in the step.
+void JointModel::update_reduced_readings() noexcept {
+  pivot_gap_m_ = 0.0;
+  if (spec_.type == JointType::kFixed) {
+    position_ = velocity_ = effort_ = 0.0;
+    return;
+  }
+  position_ = multibody_->getJointPos(link_) + spec_.joint_offset_rad;
+  velocity_ = multibody_->getJointVel(link_);
+  effort_ = 0.0;
+  if (!spec_.enable_feedback) return;
+  double impulse = motor_->getAppliedImpulse(0);
+  if (limit_) impulse += limit_->getAppliedImpulse(0) - limit_->getAppliedImpulse(1);
+  effort_ = applied_effort_ + impulse / dt_s_;
 }
 
 void JointModel::restart_readings() noexcept {

@@ -1,8 +1,12 @@
 // One ADF joint in Bullet: its constraint, built with the paper's Algorithm 2
 // frames; its readings (position, velocity, effort, pivot gap); and its control
-// (effort, PID position, motor velocity), applied before each step.
+// (effort, PID position, motor velocity), applied before each step. A joint of a
+// chain in reduced coordinates (chains.hpp) is a link's joint coordinate instead of a
+// constraint: the same frames, readings and control, through the multibody.
 #pragma once
 
+#include <BulletDynamics/Featherstone/btMultiBodyJointLimitConstraint.h>
+#include <BulletDynamics/Featherstone/btMultiBodyJointMotor.h>
 #include <btBulletDynamicsCommon.h>
 
 #include <memory>
@@ -15,13 +19,29 @@ namespace afhub::physics {
 
 class JointModel {
  public:
-  // `*_com_from_mesh`: each body's mesh frame seen from its centre of mass.
+  // `*_com_from_mesh`: each body's mesh frame seen from its centre of mass. `reduced`:
+  // no constraint is made; the joint is a link's until attach().
   JointModel(const JointSpec& spec, btRigidBody& parent, btRigidBody& child,
              const btTransform& parent_com_from_mesh, const btTransform& child_com_from_mesh,
-             double dt_s);
+             double dt_s, bool reduced = false);
 
-  btTypedConstraint& constraint() { return *constraint_; }
+  // The constraint, or nullptr for a joint in reduced coordinates.
+  btTypedConstraint* constraint() { return constraint_.get(); }
   const JointSpec& spec() const { return spec_; }
+
+  // In reduced coordinates: the joint frame in the parent's and the child's centre-of-
+  // mass frames (the joint reads zero where they meet: its axis is their z, or x for a
+  // prismatic joint), and the coordinate the bodies' poses as built give it.
+  const btTransform& frame_in_parent() const { return frame_in_parent_; }
+  const btTransform& frame_in_child() const { return frame_in_child_; }
+  btVector3 axis_in_child() const { return frame_in_child_.getBasis().getColumn(axis_index_); }
+  double coordinate_as_placed() const;
+  // Makes the joint link `link`'s of `body`, with a motor and, for a revolute or
+  // prismatic joint with limits, its limits, which the world then holds (motor(),
+  // limit()).
+  void attach(btMultiBody& body, int link);
+  btMultiBodyConstraint* motor() { return motor_.get(); }
+  btMultiBodyConstraint* limit() { return limit_.get(); }
 
   // Whether the joint has one axis to command (has_joint_axis): a command to a joint
   // without one (fixed, p2p, cone twist, six dof) is ignored, never fed to a PID.
@@ -66,6 +86,7 @@ class JointModel {
   btVector3 world_axis() const;
   void apply_effort(double effort) noexcept;
   void set_motor(bool on, double velocity, double max_impulse) noexcept;
+  void update_reduced_readings() noexcept;
 
   JointSpec spec_;
   btRigidBody& parent_;
@@ -75,6 +96,11 @@ class JointModel {
   bool free_linear_[3] = {false, false, false};
   std::unique_ptr<btTypedConstraint> constraint_;
   btJointFeedback feedback_{};
+  // In reduced coordinates: the chain and the link the joint moves.
+  btMultiBody* multibody_ = nullptr;
+  int link_ = -1;
+  std::unique_ptr<btMultiBodyJointMotor> motor_;
+  std::unique_ptr<btMultiBodyJointLimitConstraint> limit_;
   double dt_s_;
   Pid gains_;
   double damping_ = 0.0;

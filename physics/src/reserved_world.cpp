@@ -31,6 +31,10 @@ void ReservedWorld::reserve_constraints(int count) {
   m_sortedConstraints.reserve(count);
   keyed_.reserve(count);
   sorted_.reserve(count);
+  // A joint of a chain in reduced coordinates has a motor and limits (JointModel::attach).
+  m_sortedMultiBodyConstraints.reserve(2 * count);
+  multibody_keyed_.reserve(2 * count);
+  multibody_sorted_.reserve(2 * count);
 }
 
 void ReservedWorld::solve_islands_in_parallel(int bodies, int joints, int objects) {
@@ -113,20 +117,48 @@ void ReservedWorld::integrateTransforms(btScalar dt) {
     integrateTransformsInternal(unintegrated_.data(), static_cast<int>(unintegrated_.size()), dt);
 }
 
+// What Bullet's multibody world does before its solve (solveExternalForces), less its
+// sort of every multibody constraint by island, comparing through two virtual calls
+// (10 % of 125 arms' step): each island's are found below instead. Each multibody's
+// velocities under the forces on it, before its rows are solved. Debian's Bullet is
+// built with BT_USE_VIRTUAL_CLEARFORCES_AND_GRAVITY: gravity is added by
+// applyGravity() and the forces cleared by clearForces(), both in stepSimulation (the
+// pendulum tests of tests/physics/reduced_coordinates_test.cpp would see it otherwise).
+void ReservedWorld::step_multibodies_unconstrained(const btContactSolverInfo& info) {
+  if (m_multiBodies.size() == 0) return;
+  forwardKinematics();
+  clearMultiBodyConstraintForces();
+  for (int i = 0; i < m_multiBodies.size(); ++i)
+    m_multiBodies[i]->computeAccelerationsArticulatedBodyAlgorithmMultiDof(
+        info.m_timeStep, m_scratch_r, m_scratch_v, m_scratch_m, false,
+        info.m_jointFeedbackInWorldSpace, info.m_jointFeedbackInJointFrame);
+}
+
 void ReservedWorld::solveConstraints(btContactSolverInfo& info) {
   ++stamp_;  // from 1: 0 is never integrated
   if (info.m_minimumSolverBatchSize > 1) {
     btSoftMultiBodyDynamicsWorld::solveConstraints(info);
     return;
   }
+  step_multibodies_unconstrained(info);
+  const auto by_island = [](const Keyed& x, const Keyed& y) {
+    return x.island != y.island ? x.island < y.island : x.index < y.index;
+  };
   keyed_.clear();
   for (int i = 0; i < m_constraints.size(); ++i)
     keyed_.push_back({island_of(*m_constraints[i]), i});
-  std::sort(keyed_.begin(), keyed_.end(), [](const Keyed& x, const Keyed& y) {
-    return x.island != y.island ? x.island < y.island : x.index < y.index;
-  });
+  std::sort(keyed_.begin(), keyed_.end(), by_island);
   sorted_.clear();
   for (const Keyed& k : keyed_) sorted_.push_back(m_constraints[k.index]);
+  multibody_keyed_.clear();
+  for (int i = 0; i < m_multiBodyConstraints.size(); ++i) {
+    const btMultiBodyConstraint& c = *m_multiBodyConstraints[i];
+    multibody_keyed_.push_back({c.getIslandIdA() >= 0 ? c.getIslandIdA() : c.getIslandIdB(), i});
+  }
+  std::sort(multibody_keyed_.begin(), multibody_keyed_.end(), by_island);
+  multibody_sorted_.clear();
+  for (const Keyed& k : multibody_keyed_)
+    multibody_sorted_.push_back(m_multiBodyConstraints[k.index]);
 
   struct Islands : btSimulationIslandManager::IslandCallback {
     ReservedWorld& world;
@@ -138,15 +170,13 @@ void ReservedWorld::solveConstraints(btContactSolverInfo& info) {
       if (island < 0) {  // islands not split: everything at once
         world.m_multiBodyConstraintSolver->solveMultiBodyGroup(
             bodies, body_count, manifolds, manifold_count, world.sorted_.data(),
-            static_cast<int>(keyed.size()), nullptr, 0, info, world.m_debugDrawer,
+            static_cast<int>(keyed.size()), world.multibody_sorted_.data(),
+            static_cast<int>(world.multibody_sorted_.size()), info, world.m_debugDrawer,
             world.getDispatcher());
         return;
       }
-      const auto in =
-          std::equal_range(keyed.begin(), keyed.end(), Keyed{island, 0},
-                           [](const Keyed& x, const Keyed& y) { return x.island < y.island; });
-      const auto first = static_cast<int>(in.first - keyed.begin());
-      const auto count = static_cast<int>(in.second - in.first);
+      const auto [first, count] = range(keyed, island);
+      const auto [multibody_first, multibody_count] = range(world.multibody_keyed_, island);
       if (world.parallel_) {
         world.islands_.push_back({static_cast<int>(world.island_bodies_.size()), body_count,
                                   manifolds, manifold_count, first, count});
@@ -155,7 +185,15 @@ void ReservedWorld::solveConstraints(btContactSolverInfo& info) {
       }
       world.m_multiBodyConstraintSolver->solveMultiBodyGroup(
           bodies, body_count, manifolds, manifold_count, count ? &world.sorted_[first] : nullptr,
-          count, nullptr, 0, info, world.m_debugDrawer, world.getDispatcher());
+          count, multibody_count ? &world.multibody_sorted_[multibody_first] : nullptr,
+          multibody_count, info, world.m_debugDrawer, world.getDispatcher());
+    }
+    // The first of `island`'s entries in `keyed` (sorted by island), and their count.
+    static std::pair<int, int> range(const std::vector<Keyed>& keyed, int island) {
+      const auto in =
+          std::equal_range(keyed.begin(), keyed.end(), Keyed{island, 0},
+                           [](const Keyed& x, const Keyed& y) { return x.island < y.island; });
+      return {static_cast<int>(in.first - keyed.begin()), static_cast<int>(in.second - in.first)};
     }
   } islands(*this, info);
   m_constraintSolver->prepareSolve(getNumCollisionObjects(), getDispatcher()->getNumManifolds());
@@ -167,6 +205,9 @@ void ReservedWorld::solveConstraints(btContactSolverInfo& info) {
                      island_bodies_.data(), sorted_.data(), info,
                      m_applySpeculativeContactRestitution ? nullptr : this);
   m_constraintSolver->allSolved(info, m_debugDrawer);
+  // The velocity changes the solve gave each multibody, applied (as Bullet's own
+  // multibody world does after its islands).
+  for (int i = 0; i < m_multiBodies.size(); ++i) m_multiBodies[i]->processDeltaVeeMultiDof2();
 }
 
 }  // namespace afhub::physics

@@ -1,9 +1,8 @@
 // The Bullet world the simulation steps: room for every constraint it may hold at
 // once, and islands handed to the solver one at a time without Bullet's search for
-// each island's constraints. A multibody world with no multibody in it yet: open chains
-// in reduced coordinates (Bullet's btMultiBody) are the next step for a thousand
-// bodies (docs/performance.md); meanwhile it steps every model bit for bit as the
-// rigid world did.
+// each island's constraints. A multibody world: open chains in reduced coordinates
+// (Bullet's btMultiBody, sim_chains.cpp) are stepped with the rigid bodies; a world
+// without one steps bit for bit as the rigid world did.
 #pragma once
 
 #include <BulletSoftBody/btSoftBodySolvers.h>
@@ -70,7 +69,8 @@ class ReservedWorld : public btSoftMultiBodyDynamicsWorld, private ParallelIslan
   // With a helper, each island's bodies are moved to their new poses (Bullet's
   // integration) by the thread that solved the island, straight after, while they
   // are in its cache (0.94x the step of 1000 bodies); integrateTransforms() does the
-  // rest, and all of it with speculative contact restitution on.
+  // rest, and all of it with speculative contact restitution on. (Not with a
+  // multibody: sim_build.cpp.)
   void integrateTransforms(btScalar dt) override;
   // Bullet damps each body's velocities and predicts its next pose, which only
   // continuous collision detection reads (the body's bounds swept to reach it, and
@@ -85,8 +85,9 @@ class ReservedWorld : public btSoftMultiBodyDynamicsWorld, private ParallelIslan
   struct Keyed {
     int island, index;  // the island the constraint is in; its place in m_constraints
   };
-  std::vector<Keyed> keyed_;
+  std::vector<Keyed> keyed_, multibody_keyed_;
   std::vector<btTypedConstraint*> sorted_;
+  std::vector<btMultiBodyConstraint*> multibody_sorted_;
   btSoftBodySolver& soft_solver_;  // the base class's, which it keeps to itself
   // With a helper: the step's islands, gathered before they are solved, and their
   // bodies (Bullet's list of an island's bodies lasts only for its callback).
@@ -100,6 +101,7 @@ class ReservedWorld : public btSoftMultiBodyDynamicsWorld, private ParallelIslan
   std::vector<btRigidBody*> unintegrated_;
 
   void island_solved(btCollisionObject** bodies, int count) noexcept override;
+  void step_multibodies_unconstrained(const btContactSolverInfo& info);
   BodyDamping damping_;
 };
 

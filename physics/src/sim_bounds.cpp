@@ -83,6 +83,15 @@ const char* Simulation::input_problem(std::size_t index, const BodyInput& input)
   std::uint32_t actuators = static_cast<std::uint32_t>(d.bodies[index].actuators.size());
   const auto joints = static_cast<std::uint32_t>(d.model.descendant_joints[index].size());
   if (const char* problem = physics::input_problem(input, joints, actuators)) return problem;
+  // A chain's link moves only as its joints let it: it can be pushed, not given a
+  // velocity (a twist, or a pose through a PID whose output is a velocity).
+  if (d.bodies[index].chain >= 0 &&
+      (input.cartesian == CartesianMode::kVelocity ||
+       (input.cartesian == CartesianMode::kPosition &&
+        d.model.bodies[index].controller_output == ControllerOutput::kVelocity)))
+    return "the body is a link of a chain in reduced coordinates (--reduced-coordinates), "
+           "which takes no velocity: command a wrench, a pose with a force controller, or "
+           "its joints";
   const InputBounds& bound = d.bounds[index];
   char* text = d.problem.data();
   const std::size_t size = d.problem.size();

@@ -92,6 +92,12 @@ void Simulation::Data::build_bodies() {
   }
   const std::vector<TriangleMesh> meshes = load_body_meshes(requests);
   bodies.resize(model.bodies.size());
+  for (std::size_t c = 0; c < chain_plans.size(); ++c)
+    for (std::size_t l = 0; l < chain_plans[c].joints.size(); ++l) {
+      BodyData& link = bodies[model.joints[chain_plans[c].joints[l]].child];
+      link.chain = static_cast<int>(c);
+      link.link = static_cast<int>(l);
+    }
   for (std::size_t i = 0; i < model.bodies.size(); ++i) {
     const BodySpec& spec = model.bodies[i];
     BodyData& body = bodies[i];
@@ -152,7 +158,7 @@ void Simulation::Data::build_bodies() {
     body.body->setUserIndex(static_cast<int>(i));
     body.body->setActivationState(DISABLE_DEACTIVATION);  // controllers expect live bodies
     if (spec.gravity_mps2) body.body->setFlags(body.body->getFlags() | BT_DISABLE_WORLD_GRAVITY);
-    world.addRigidBody(body.body.get());
+    if (body.chain < 0) world.addRigidBody(body.body.get());  // a link's is its mirror
     if (spec.gravity_mps2) body.body->setGravity(to_bt(*spec.gravity_mps2));
   }
 }
@@ -162,9 +168,12 @@ void Simulation::Data::build_joints() {
     BodyData& parent = bodies[spec.parent];
     BodyData& child = bodies[spec.child];
     joints.push_back(std::make_unique<JointModel>(spec, *parent.body, *child.body,
-                                                  parent.com_from_mesh, child.com_from_mesh, dt_s));
-    world.addConstraint(&joints.back()->constraint(), spec.ignore_inter_collision);
+                                                  parent.com_from_mesh, child.com_from_mesh, dt_s,
+                                                  child.chain >= 0));
+    if (btTypedConstraint* constraint = joints.back()->constraint())
+      world.addConstraint(constraint, spec.ignore_inter_collision);
   }
+  build_chains();
   mark_joint_islands();
 }
 
@@ -184,33 +193,40 @@ void Simulation::Data::mark_joint_islands() {
     while (group[b] != b) b = group[b] = group[group[b]];
     return b;
   };
-  for (const JointSpec& spec : model.joints)
-    if (bodies[spec.parent].dynamic && bodies[spec.child].dynamic)
+  // A chain's joints are coordinates, not constraints (sim_chains.cpp): not solved here.
+  auto solved = [&](std::size_t j) {
+    const JointSpec& spec = model.joints[j];
+    return joints[j]->constraint() && (bodies[spec.parent].dynamic || bodies[spec.child].dynamic);
+  };
+  for (std::size_t j = 0; j < model.joints.size(); ++j) {
+    const JointSpec& spec = model.joints[j];
+    if (solved(j) && bodies[spec.parent].dynamic && bodies[spec.child].dynamic)
       group[root(spec.parent)] = root(spec.child);
+  }
   struct Island {
     int bodies = 0, joints = 0;
     bool grounded = false;
   };
   std::vector<Island> islands(bodies.size());
   for (std::size_t b = 0; b < bodies.size(); ++b)
-    if (bodies[b].dynamic) ++islands[root(static_cast<int>(b))].bodies;
+    if (bodies[b].dynamic && bodies[b].chain < 0) ++islands[root(static_cast<int>(b))].bodies;
   auto island_of = [&](const JointSpec& spec) {
     return root(bodies[spec.parent].dynamic ? spec.parent : spec.child);
   };
-  for (const JointSpec& spec : model.joints) {
-    if (!bodies[spec.parent].dynamic && !bodies[spec.child].dynamic) continue;
+  for (std::size_t j = 0; j < model.joints.size(); ++j) {
+    if (!solved(j)) continue;
+    const JointSpec& spec = model.joints[j];
     Island& island = islands[island_of(spec)];
     ++island.joints;
     island.grounded |= !bodies[spec.parent].dynamic || !bodies[spec.child].dynamic;
   }
   bool any = false;
   for (std::size_t j = 0; j < model.joints.size(); ++j) {
-    const JointSpec& spec = model.joints[j];
-    if (!bodies[spec.parent].dynamic && !bodies[spec.child].dynamic) continue;
-    const Island& island = islands[island_of(spec)];
+    if (!solved(j)) continue;
+    const Island& island = islands[island_of(model.joints[j])];
     const bool loop = island.joints >= island.bodies + (island.grounded ? 1 : 0);
-    joints[j]->constraint().setUserConstraintType(loop ? ConstraintSolver::kInLoopIsland
-                                                       : ConstraintSolver::kInTreeIsland);
+    joints[j]->constraint()->setUserConstraintType(loop ? ConstraintSolver::kInLoopIsland
+                                                        : ConstraintSolver::kInTreeIsland);
     any = true;
   }
   if (!any) return;
@@ -219,7 +235,8 @@ void Simulation::Data::mark_joint_islands() {
   // Groups of moving bodies joined by joints: islands, unless contacts join them.
   const auto groups = std::count_if(islands.begin(), islands.end(),
                                     [](const Island& island) { return island.bodies > 0; });
-  if (model.world.solver_threads > 1 && groups >= ParallelIslands::kMinItems)
+  // Islands with a chain's rows are solved by the stepping thread only: not yet shared.
+  if (model.world.solver_threads > 1 && groups >= ParallelIslands::kMinItems && chains.empty())
     world.solve_islands_in_parallel(
         static_cast<int>(model.bodies.size()),
         static_cast<int>(model.joints.size() + model.actuators.size()),

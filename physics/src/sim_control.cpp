@@ -77,14 +77,25 @@ int Simulation::joint_driver(std::size_t joint) const noexcept {
   return data_->joint_driver[joint];
 }
 
+// A force at the centre of mass and a torque, on a rigid body or a chain's link.
+void Simulation::Data::push(BodyData& body, const btVector3& force,
+                            const btVector3& torque) noexcept {
+  if (body.chain >= 0) {
+    chains[body.chain].body->addLinkForce(body.link, force);
+    chains[body.chain].body->addLinkTorque(body.link, torque);
+  } else {
+    body.body->applyCentralForce(force);
+    body.body->applyTorque(torque);
+  }
+}
+
 void Simulation::Data::apply_cartesian(BodyData& body) noexcept {
   body.applied = {};
   if (!body.commanded) return;
   btRigidBody& rb = *body.body;
   switch (body.type) {
     case CartesianMode::kForce:
-      rb.applyCentralForce(body.force);
-      rb.applyTorque(body.torque);
+      push(body, body.force, body.torque);
       body.applied = {from_bt(body.force), from_bt(body.torque)};
       break;
     case CartesianMode::kVelocity:
@@ -93,8 +104,10 @@ void Simulation::Data::apply_cartesian(BodyData& body) noexcept {
       break;
     case CartesianMode::kPosition: {
       const btTransform target_com = body.target * body.com_from_mesh.inverse();
-      if (!body.dynamic) {  // static bodies are moved, as upstream
+      if (!body.dynamic) {  // static bodies are moved, as upstream, with their chains
         rb.setWorldTransform(target_com);
+        for (ChainData& chain : chains)
+          if (chain.base == rb.getUserIndex()) chain.body->setBaseWorldTransform(target_com);
         break;
       }
       const btTransform& now = rb.getWorldTransform();
@@ -121,8 +134,7 @@ void Simulation::Data::apply_cartesian(BodyData& body) noexcept {
       const btVector3 angular =
           a.p * angular_error + a.i * body.angular_integral + a.d * angular_rate;
       if (spec.controller_output == ControllerOutput::kForce) {
-        rb.applyCentralForce(linear);
-        rb.applyTorque(angular);
+        push(body, linear, angular);
         body.applied = {from_bt(linear), from_bt(angular)};
       } else {
         rb.setLinearVelocity(linear);

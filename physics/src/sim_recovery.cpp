@@ -4,6 +4,8 @@
 // velocity too would often replay the blow-up. Its Cartesian input, and the inputs
 // of every joint touching it or driven by it, are released, so a command that
 // caused it stops, and an actuator holding it or carried by it lets go.
+// A link of a chain in reduced coordinates takes its whole chain back to the chain's
+// last good joint coordinates, at rest.
 // Everything is kept in storage made when the world was built: no allocation.
 #include "simulation_data.hpp"
 
@@ -23,16 +25,30 @@ bool finite_soft_body(const btSoftBody& soft) {
   return true;
 }
 
+void keep_good_coordinates(ChainData& chain) {
+  for (int l = 0; l < chain.body->getNumLinks(); ++l)
+    chain.good_q[l] = chain.body->getLink(l).m_dofCount ? chain.body->getJointPos(l) : 0;
+}
+
 }  // namespace
 
 void Simulation::Data::keep_good_state() noexcept {
   for (BodyData& body : bodies) body.good_pose = body.body->getWorldTransform();
+  for (ChainData& chain : chains) keep_good_coordinates(chain);
   for (SoftBodyData& soft : soft_bodies)
     for (int n = 0; n < soft.body->m_nodes.size(); ++n)
       soft.good_positions[static_cast<std::size_t>(n)] = soft.body->m_nodes[n].m_x;
 }
 
 void Simulation::Data::recover_non_finite() noexcept {
+  // Bullet takes an object out of the simulation when its bounds overflow, and its
+  // contacts may hold NaN impulses that would warm-start the next step.
+  auto refresh = [&](btCollisionObject& object) {
+    object.forceActivationState(DISABLE_DEACTIVATION);
+    world.updateSingleAabb(&object);
+    if (btBroadphaseProxy* proxy = object.getBroadphaseHandle())
+      world.getBroadphase()->getOverlappingPairCache()->cleanProxyFromPairs(proxy, &dispatcher);
+  };
   auto count = [&](std::size_t index, bool soft) {
     const NanEvent event{steps, index, soft};
     if (nan_recoveries.count == 0) nan_recoveries.first = event;
@@ -47,19 +63,20 @@ void Simulation::Data::recover_non_finite() noexcept {
       continue;
     }
     count(b, false);
-    rb.setWorldTransform(body.good_pose);
-    rb.setInterpolationWorldTransform(body.good_pose);
-    rb.setLinearVelocity(btVector3(0, 0, 0));
-    rb.setAngularVelocity(btVector3(0, 0, 0));
-    rb.setInterpolationLinearVelocity(btVector3(0, 0, 0));
-    rb.setInterpolationAngularVelocity(btVector3(0, 0, 0));
-    rb.clearForces();
-    // Bullet takes a body out of the simulation when its bounds overflow, and its
-    // contacts may hold NaN impulses that would warm-start the next step.
-    rb.forceActivationState(DISABLE_DEACTIVATION);
-    world.updateSingleAabb(&rb);
-    if (btBroadphaseProxy* proxy = rb.getBroadphaseHandle())
-      world.getBroadphase()->getOverlappingPairCache()->cleanProxyFromPairs(proxy, &dispatcher);
+    if (body.chain < 0) {
+      rb.setWorldTransform(body.good_pose);
+      rb.setInterpolationWorldTransform(body.good_pose);
+      rb.setLinearVelocity(btVector3(0, 0, 0));
+      rb.setAngularVelocity(btVector3(0, 0, 0));
+      rb.setInterpolationLinearVelocity(btVector3(0, 0, 0));
+      rb.setInterpolationAngularVelocity(btVector3(0, 0, 0));
+      rb.clearForces();
+      refresh(rb);
+    } else if (ChainData& chain = chains[body.chain]; chain.restored_at != steps) {
+      chain.restored_at = steps;
+      place_chain(chain, chain.good_q);
+      for (auto& collider : chain.colliders) refresh(*collider);
+    }
     // Its commands (Cartesian, and the joints it drives), and those of the joints
     // touching it, fall to zero.
     body.commanded = false;
@@ -74,6 +91,8 @@ void Simulation::Data::recover_non_finite() noexcept {
     for (ActuatorData& actuator : actuators)
       if (actuator.parent == index || actuator.held == index) actuate(actuator, false);
   }
+  for (ChainData& chain : chains)
+    if (chain.restored_at != steps) keep_good_coordinates(chain);
   for (std::size_t s = 0; s < soft_bodies.size(); ++s) {
     SoftBodyData& data = soft_bodies[s];
     btSoftBody& soft = *data.body;

@@ -67,7 +67,8 @@ int Simulation::Data::touching_body(int parent, const btVector3& point) const no
   const btVector3 reach(probe.getRadius(), probe.getRadius(), probe.getRadius());
   for (std::size_t b = 0; b < bodies.size(); ++b) {
     const btRigidBody& body = *bodies[b].body;
-    if (static_cast<int>(b) == parent || !(body.getInvMass() > 0)) continue;
+    // A link of a chain in reduced coordinates is no rigid body to hold.
+    if (static_cast<int>(b) == parent || !(body.getInvMass() > 0) || bodies[b].chain >= 0) continue;
     btVector3 low, high;
     body.getAabb(low, high);
     if (!TestAabbAgainstAabb2(low, high, point - reach, point + reach)) continue;

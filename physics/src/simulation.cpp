@@ -108,6 +108,7 @@ std::vector<std::string> Simulation::gain_notes() const {
 void Simulation::step() noexcept {
   Data& d = *data_;
   for (BodyData& body : d.bodies) d.apply_cartesian(body);
+  d.drive_chains();
   // A URDF <mimic> joint follows its leader's latest position, over any command.
   for (auto& joint : d.joints)
     if (const std::optional<Mimic>& mimic = joint->spec().mimic)
@@ -117,6 +118,7 @@ void Simulation::step() noexcept {
   d.world.stepSimulation(d.dt_s, 1, d.dt_s);
   d.broadphase.m_deferedcollide = false;  // the first step met the initial overlaps
   ++d.steps;
+  for (ChainData& chain : d.chains) d.mirror_chain(chain);
   d.recover_non_finite();
   d.sum_contacts();
   share_each(d.world, static_cast<int>(d.joints.size()), kJointsPerItem,
@@ -136,6 +138,10 @@ void Simulation::reset() noexcept {
     body.contact_force.setZero();
     body.contact_moment_at_origin.setZero();
     body.contact_count = 0;
+  }
+  for (ChainData& chain : d.chains) {
+    chain.body->setBaseWorldTransform(d.bodies[chain.base].body->getWorldTransform());
+    d.place_chain(chain, chain.initial_q);
   }
   for (std::size_t b = 0; b < d.bodies.size(); ++b) clear_input(b);
   for (auto& joint : d.joints) joint->release();

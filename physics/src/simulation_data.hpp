@@ -2,6 +2,7 @@
 // Bullet world and, per body, joint, soft body, sensor ray and actuator, what the
 // stages keep between steps. Internal to the simulation; its stages are
 //   sim_build.cpp              the Bullet objects, made once from the Model
+//   sim_chains.cpp             open chains in reduced coordinates
 //   sim_control.cpp            inputs: checked, then applied before each step
 //   sim_sensors_actuators.cpp  proximity rays and constraint actuators
 //   sim_contacts.cpp           each body's net contact wrench after a step
@@ -10,6 +11,7 @@
 //   simulation.cpp             construction, the step, reset
 #pragma once
 
+#include <BulletDynamics/Featherstone/btMultiBodyLinkCollider.h>
 #include <BulletSoftBody/btDefaultSoftBodySolver.h>
 #include <BulletSoftBody/btSoftBodyRigidBodyCollisionConfiguration.h>
 
@@ -21,6 +23,7 @@
 #include <vector>
 
 #include "afhub/physics/simulation.hpp"
+#include "chains.hpp"
 #include "collision_shapes.hpp"
 #include "constraint_solver.hpp"
 #include "frames.hpp"
@@ -48,10 +51,13 @@ inline btTransform from_pose(const Pose& pose) {
   return btTransform(rotation.normalized(), to_bt(pose.position_m));
 }
 
-// A rigid body and its current Cartesian command.
+// A rigid body and its current Cartesian command. A link of a chain in reduced
+// coordinates keeps its btRigidBody out of the world, as the link's mirror: it takes
+// the link's pose and velocities after each step, and is read as any body is.
 struct BodyData {
   CollisionShape shape;
   std::unique_ptr<btRigidBody> body;
+  int chain = -1, link = -1;  // in Data::chains, a link of it
   btTransform com_from_mesh;  // the mesh frame seen from the centre of mass
   btTransform initial_com;
   bool dynamic = false;
@@ -70,6 +76,31 @@ struct BodyData {
   std::size_t first_ray = 0, ray_count = 0;  // into Data::rays
   std::vector<int> actuators;                // into Data::actuators, file order
   btTransform good_pose;                     // after the last step that left it finite
+};
+
+// An open chain in reduced coordinates (chains.hpp): a btMultiBody with a fixed base at
+// its static body's centre of mass, and a collider per link with the link's body's
+// shape. Per link, what Bullet's multibody does not do as the rigid world does, applied
+// as forces before each step: the body's own gravity where it differs from the
+// world's, and its damping (btRigidBody scales its velocities by (1 - damping)^dt a
+// step: a force of -rate m v, rate = -ln(1 - damping), decays them alike).
+struct ChainData {
+  struct Link {
+    int body = -1;
+    btScalar linear_rate = 0, angular_rate = 0;  // 1/s
+    btVector3 gravity_correction{0, 0, 0};       // N
+  };
+  int base = -1;
+  std::vector<Link> links;
+  std::unique_ptr<btMultiBody> body;
+  std::vector<std::unique_ptr<btMultiBodyLinkCollider>> colliders;
+  std::vector<btScalar> initial_q, good_q;
+  std::uint64_t restored_at = ~std::uint64_t{0};  // the step a NaN recovery put it back in
+  // Scratch: each link's velocities in its own frame, the base's first; and Bullet's
+  // forward kinematics' (reserved at build: a step allocates nothing).
+  std::vector<btVector3> omega, velocity;
+  btAlignedObjectArray<btQuaternion> world_to_local;
+  btAlignedObjectArray<btVector3> local_origin;
 };
 
 // A world file's light or camera, carried by its parent body when it has one.
@@ -105,7 +136,11 @@ struct Ray {
 // Rigid bodies carry their index in user index 1; soft bodies carry -1.
 class CollisionFilter : public btOverlapFilterCallback {
  public:
-  explicit CollisionFilter(const Model& model) : model_(model) {}
+  explicit CollisionFilter(const Model& model)
+      : model_(model), ignored_base_(model.bodies.size(), -1) {}
+  // A chain's first link and its static base, when their joint ignores their
+  // collisions: a link is no rigid body, so the joint cannot say it (chains.hpp).
+  void ignore_base(int link, int base) { ignored_base_[link] = base; }
   bool needBroadphaseCollision(btBroadphaseProxy* a, btBroadphaseProxy* b) const override {
     if (!(a->m_collisionFilterGroup & b->m_collisionFilterMask) ||
         !(b->m_collisionFilterGroup & a->m_collisionFilterMask))
@@ -113,6 +148,7 @@ class CollisionFilter : public btOverlapFilterCallback {
     const int i = static_cast<const btCollisionObject*>(a->m_clientObject)->getUserIndex();
     const int j = static_cast<const btCollisionObject*>(b->m_clientObject)->getUserIndex();
     if (i < 0 || j < 0) return true;
+    if (ignored_base_[i] == j || ignored_base_[j] == i) return false;
     const BodySpec& x = model_.bodies[i];
     const BodySpec& y = model_.bodies[j];
     if (x.file_index == y.file_index && model_.file_ignores_inter_collision[x.file_index])
@@ -128,6 +164,7 @@ class CollisionFilter : public btOverlapFilterCallback {
 
  private:
   const Model& model_;
+  std::vector<int> ignored_base_;  // per body
 };
 
 struct Simulation::Data {
@@ -152,6 +189,8 @@ struct Simulation::Data {
   std::vector<Ray> rays;
   std::vector<ActuatorData> actuators;
   std::vector<WorldObjectData> lights, cameras;
+  std::vector<ChainPlan> chain_plans;  // what build_chains() makes
+  std::vector<ChainData> chains;
   NanRecoveries nan_recoveries;
   btSphereShape probe{0.01};  // what an actuator feels for: 1 cm around its point
 
@@ -160,14 +199,23 @@ struct Simulation::Data {
         dt_s(dt),
         solver(static_cast<int>(m.bodies.size()),
                static_cast<int>(m.joints.size() + m.actuators.size())),
-        filter(m) {}
+        filter(m),
+        chain_plans(m.world.reduced_coordinates ? plan_chains(m) : std::vector<ChainPlan>{}) {}
   ~Data() {
-    for (auto& joint : joints) world.removeConstraint(&joint->constraint());
+    for (auto& joint : joints) {
+      if (joint->constraint()) world.removeConstraint(joint->constraint());
+      for (btMultiBodyConstraint* c : {joint->motor(), joint->limit()})
+        if (c) world.removeMultiBodyConstraint(c);
+    }
+    for (ChainData& chain : chains) {
+      for (auto& collider : chain.colliders) world.removeCollisionObject(collider.get());
+      world.removeMultiBody(chain.body.get());
+    }
     for (auto& actuator : actuators)
       if (actuator.hold) world.removeConstraint(actuator.hold);
     // A build that failed part-way (a mesh it could not read) leaves bodies unmade.
     for (auto& body : bodies)
-      if (body.body) world.removeRigidBody(body.body.get());
+      if (body.body && body.chain < 0) world.removeRigidBody(body.body.get());
     for (auto& soft : soft_bodies) {
       world.removeSoftBody(soft.body);
       delete soft.body;
@@ -176,6 +224,7 @@ struct Simulation::Data {
 
   void build_bodies();
   void build_joints();
+  void build_chains();
   void mark_joint_islands();
   void build_soft_bodies();
   void build_sensors();
@@ -185,6 +234,10 @@ struct Simulation::Data {
   void actuate(ActuatorData& actuator, bool engage) noexcept;
   int touching_body(int parent, const btVector3& point) const noexcept;
   void apply_cartesian(BodyData& body) noexcept;
+  void push(BodyData& body, const btVector3& force, const btVector3& torque) noexcept;
+  void drive_chains() noexcept;
+  void mirror_chain(ChainData& chain) noexcept;
+  void place_chain(ChainData& chain, const std::vector<btScalar>& q) noexcept;
   void read_sensors() noexcept;
   void recover_non_finite() noexcept;
   void sum_contacts() noexcept;

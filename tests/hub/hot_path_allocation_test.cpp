@@ -109,12 +109,16 @@ TEST(HotPath, SteadyStateLoopDoesNotAllocate) {
 // loops), states and world state out, and a controller reading `body`'s state and
 // writing position commands. `helped`: the world's islands are solved by two threads,
 // and unless `taped` (a recorder reads the step tape, written by one thread) the states
-// are written by both.
+// are written by both. `reduced`: open chains in reduced coordinates.
 void expect_physics_loop_allocation_free(const std::vector<std::string>& files,
                                          const std::string& body, bool helped = false,
-                                         bool taped = true) {
-  const physics::Model model = physics::load_adf_files(files);
+                                         bool taped = true, bool reduced = false) {
+  physics::Model model = physics::load_adf_files(files);
+  model.world.reduced_coordinates = reduced;
   physics::Simulation sim(model, 0.001);
+  if (reduced) {
+    ASSERT_GT(sim.links_in_reduced_coordinates(), 0u);
+  }
   physics::SimChannels channels(sim, 0.5);
   BodyClient controller(body);
   // A viewer reading the pose feed, which then goes out every ~17 cycles of 1 ms.
@@ -197,6 +201,16 @@ TEST(HotPath, PhysicsLoopOfManyArmsSolvedByTwoThreadsDoesNotAllocate) {
   // 256 states: enough blocks of them to be shared (ParallelIslands::kMinItems).
   expect_physics_loop_allocation_free({folder.write("arms32.yaml", bench::arms_scene(32, 8))},
                                       "arms/a0l0", true, false);
+}
+
+// The arms as chains in reduced coordinates (physics/src/sim_chains.cpp), with the
+// example arm, its loops and its prismatic insertion beside them (in maximal
+// coordinates: the islands of both kinds solved in one step).
+TEST(HotPath, PhysicsLoopOfArmsInReducedCoordinatesDoesNotAllocate) {
+  const testing::ModelFolder folder;
+  expect_physics_loop_allocation_free(
+      {folder.write("arms.yaml", bench::arms_scene(16, 8)), AFHUB_EXAMPLE_MODELS "/rcm.yaml"},
+      "arms/a0l0", false, true, true);
 }
 
 // The example cloth dropped on the floor, a soft body's nodes stepped, collided and

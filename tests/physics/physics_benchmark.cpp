@@ -445,13 +445,15 @@ enum class Elsewhere { kNone, kReads, kCommands };
 // solved by two threads (physics/src/parallel_islands.hpp), or by the stepping thread
 // alone (`one_thread`): "helped" is the share of islands the helper solved. `taped`:
 // with a recorder of that many bodies (TapeDrain), the first ones. `elsewhere`: the
-// states read, or read and answered, by a controller on another CPU.
+// states read, or read and answered, by a controller on another CPU. `reduced`: each
+// arm a chain in reduced coordinates (`afhub run --reduced-coordinates`).
 void BM_StepThousandBodies(benchmark::State& state, bool publish, bool commanded,
                            int solver_threads, std::size_t taped = 0,
-                           Elsewhere elsewhere = Elsewhere::kNone) {
+                           Elsewhere elsewhere = Elsewhere::kNone, bool reduced = false) {
   afhub::testing::ModelFolder folder;
   Model model = load_adf_files({folder.write("arms.yaml", afhub::bench::arms_scene(125, 8))});
   model.world.solver_threads = solver_threads;
+  model.world.reduced_coordinates = reduced;
   Simulation sim(model, 0.001);
   const std::uint64_t helped_before = sim.islands_solved_by_helper();
   std::unique_ptr<SimChannels> channels;
@@ -496,6 +498,9 @@ void BM_StepThousandBodies(benchmark::State& state, bool publish, bool commanded
 BENCHMARK_CAPTURE(BM_StepThousandBodies, physics, false, false, 2)->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(BM_StepThousandBodies, physics_one_thread, false, false, 1)
     ->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_StepThousandBodies, physics_reduced, false, false, 2, 0, Elsewhere::kNone,
+                  true)
+    ->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(BM_StepThousandBodies, published, true, false, 2)->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(BM_StepThousandBodies, published_taped, true, false, 2, 1000)
     ->Unit(benchmark::kMicrosecond);
@@ -511,13 +516,17 @@ BENCHMARK_CAPTURE(BM_StepThousandBodies, published_commanded, true, true, 2)
     ->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(BM_StepThousandBodies, published_commanded_one_thread, true, true, 1)
     ->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_StepThousandBodies, published_commanded_reduced, true, true, 2, 0,
+                  Elsewhere::kNone, true)
+    ->Unit(benchmark::kMicrosecond);
 
 // The same 125 arms as Featherstone multibodies (Bullet's btMultiBody, reduced
 // coordinates: 7 revolute links on a fixed base each, their PD as joint torques, one
 // collider per link colliding with nothing, as the arms ignore each other): what the
 // thousand bodies' physics would cost with the arms' joints as coordinates instead of
-// constraints. A measure for that design choice, not a path afhub runs
-// (docs/performance.md).
+// constraints, built with Bullet alone: the floor for `afhub run --reduced-coordinates`
+// (`ThousandBodies/physics_reduced`), which adds what afhub does around a body (its
+// readings, damping, gravity, contacts) (docs/performance.md).
 class MultibodyArms {
  public:
   static constexpr int kLinks = 8;

@@ -577,6 +577,27 @@ TEST(Run, AtPlacesAFileAndRefusesBadValues) {
   }
 }
 
+// --reduced-coordinates: the arm's chain on its static mount becomes a multibody, the
+// remote-centre-of-motion arm's loops stay as they were, and `run` says which.
+TEST(Run, ReducedCoordinatesTakeTheOpenChainsAndSaySo) {
+  afhub::testing::ModelFolder folder;
+  const std::string report = (folder.dir() / "report.json").string();
+  RunResult run = run_afhub(
+      {"run", AFHUB_EXAMPLE_MODELS "/arm7.yaml", AFHUB_EXAMPLE_MODELS "/rcm.yaml",
+       "--reduced-coordinates", "--offline", "--fast", "--steps", "300", "--report", report},
+      60s);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_TRUE(contains(run.err, "afhub run: 8 of 17 bodies in reduced coordinates")) << run.err;
+  const nlohmann::json joints = parse_json(read_file(report)).at("joints");
+  // A joint coordinate cannot open; the loops' joints can, a little.
+  EXPECT_EQ(joints.at("afhub/arm/link3-link4").at("max_pivot_gap_m").get<double>(), 0.0);
+  double loops = 0;
+  for (const auto& [name, joint] : joints.items())
+    if (name.rfind("afhub/rcm/", 0) == 0)
+      loops = std::max(loops, joint.at("max_pivot_gap_m").get<double>());
+  EXPECT_GT(loops, 0.0);
+}
+
 TEST(Run, CheckAndRunTakeALaunchFileAndRefuseItWithNoModelPicked) {
   const std::string launch = AFHUB_EXAMPLE_MODELS "/launch.yaml";
   RunResult picked = run_afhub({"check", "--launch", launch, "-l", "0,2"}, 60s);

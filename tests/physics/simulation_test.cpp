@@ -145,10 +145,12 @@ TEST(Simulation, PendulumPeriodMatchesTheAnalyticValue) {
   EXPECT_NEAR(measured, expected, 0.02 * expected);
 }
 
-TEST(Simulation, KukaJointsReachTheirTargetsUnderTheirPid) {
-  SKIP_WITHOUT_SHARED_MODELS();
-  const Model model = load_adf_files({kMultiBodies + "robots/blender-kuka.yaml"});
+// `reduced`: the arm a chain in reduced coordinates (reduced_coordinates_test.cpp).
+void expect_kuka_reaches_its_targets(bool reduced) {
+  Model model = load_adf_files({kMultiBodies + "robots/blender-kuka.yaml"});
+  model.world.reduced_coordinates = reduced;
   Simulation sim(model, 0.001);
+  EXPECT_EQ(sim.links_in_reduced_coordinates() >= 7, reduced);
   const std::array<double, 7> targets = {0.5, -0.4, 0.3, 0.6, -0.5, 0.4, 0.7};
   BodyInput command{};
   command.joint_count = 7;
@@ -163,6 +165,16 @@ TEST(Simulation, KukaJointsReachTheirTargetsUnderTheirPid) {
   for (std::size_t j = 0; j < 7; ++j)
     EXPECT_NEAR(sim.joint_position(joints[j]), targets[j], 0.01) << model.joints[joints[j]].name;
   EXPECT_LT(gap, 0.002);
+}
+
+TEST(Simulation, KukaJointsReachTheirTargetsUnderTheirPid) {
+  SKIP_WITHOUT_SHARED_MODELS();
+  expect_kuka_reaches_its_targets(false);
+}
+
+TEST(Simulation, KukaJointsReachTheirTargetsInReducedCoordinates) {
+  SKIP_WITHOUT_SHARED_MODELS();
+  expect_kuka_reaches_its_targets(true);
 }
 
 // The watchdog's two policies after the KUKA was driven to a pose: zero effort lets

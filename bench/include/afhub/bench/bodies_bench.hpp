@@ -16,9 +16,10 @@
 namespace afhub::bench {
 
 struct BodiesOptions {
-  int arms = 125, links = 8;  // 1000 bodies
-  double seconds = 20.0;      // measured, after the controller commands every body
-  int fifo_priority = 80;     // the physics' and the controller's SCHED_FIFO priority
+  int arms = 125, links = 8;         // 1000 bodies
+  double seconds = 20.0;             // measured, after the controller commands every body
+  int fifo_priority = 80;            // the physics' and the controller's SCHED_FIFO priority
+  bool reduced_coordinates = false;  // `afhub run --reduced-coordinates`: the arms as multibodies
 };
 
 struct BodiesResult {

@@ -224,6 +224,12 @@ struct WorldSpec {
   // stepping thread when there are many (physics/src/parallel_islands.hpp); 1, the
   // stepping thread alone.
   int solver_threads = 2;
+  // Open chains hanging from a static body are simulated in reduced coordinates
+  // (Bullet's btMultiBody: a joint coordinate per joint, no constraint rows to hold
+  // them together), which steps many arms in about half the time (docs/performance.md).
+  // Which chains qualify: physics/src/chains.hpp. Off by default: `afhub run
+  // --reduced-coordinates`.
+  bool reduced_coordinates = false;
   std::vector<WorldObjectSpec> lights, cameras;
 };
 

@@ -94,6 +94,9 @@ class Simulation {
   double joint_position(std::size_t joint) const noexcept;
   double joint_velocity(std::size_t joint) const noexcept;
   double joint_pivot_gap_m(std::size_t joint) const noexcept;
+  // Bodies simulated as links of open chains in reduced coordinates
+  // (WorldSpec::reduced_coordinates); 0 without.
+  std::size_t links_in_reduced_coordinates() const noexcept;
   // The position joint `joint` is commanded to (as joint_position), or false when
   // it has no position command now.
   bool joint_position_target(std::size_t joint, double& target) const noexcept;

@@ -1,0 +1,76 @@
+#include "chains.hpp"
+
+#include <numeric>
+
+namespace afhub::physics {
+namespace {
+
+bool reducible(const JointSpec& joint) {
+  const bool kind = joint.type == JointType::kRevolute || joint.type == JointType::kContinuous ||
+                    joint.type == JointType::kPrismatic || joint.type == JointType::kFixed;
+  return kind && !joint.erp && !joint.cfm;
+}
+
+}  // namespace
+
+std::vector<ChainPlan> plan_chains(const Model& model) {
+  const std::size_t bodies = model.bodies.size();
+  auto moves = [&](int b) { return model.bodies[b].mass_kg > 0.0; };
+  // Moving bodies joined by joints, as groups (union-find).
+  std::vector<int> group(bodies);
+  std::iota(group.begin(), group.end(), 0);
+  auto root = [&](int b) {
+    while (group[b] != b) b = group[b] = group[group[b]];
+    return b;
+  };
+  for (const JointSpec& joint : model.joints)
+    if (moves(joint.parent) && moves(joint.child)) group[root(joint.parent)] = root(joint.child);
+  struct Group {
+    int bodies = 0, inner_joints = 0, base_joints = 0, base_joint = -1;
+    bool reducible = true;
+  };
+  std::vector<Group> groups(bodies);
+  for (std::size_t b = 0; b < bodies; ++b)
+    if (moves(static_cast<int>(b))) ++groups[root(static_cast<int>(b))].bodies;
+  for (std::size_t j = 0; j < model.joints.size(); ++j) {
+    const JointSpec& joint = model.joints[j];
+    if (!moves(joint.parent) && !moves(joint.child)) continue;
+    Group& g = groups[root(moves(joint.child) ? joint.child : joint.parent)];
+    g.reducible &= reducible(joint);
+    if (moves(joint.parent) && moves(joint.child)) {
+      ++g.inner_joints;
+    } else {
+      ++g.base_joints;
+      g.base_joint = static_cast<int>(j);
+      g.reducible &= moves(joint.child);  // from the static body outwards
+    }
+  }
+  for (const ActuatorSpec& actuator : model.actuators)
+    if (moves(actuator.parent)) groups[root(actuator.parent)].reducible = false;
+
+  // Each qualifying tree's links, breadth first from its base joint: a joint whose
+  // parent is not yet a link points inwards, and the tree does not qualify.
+  std::vector<ChainPlan> chains;
+  for (std::size_t b = 0; b < bodies; ++b) {
+    const Group& g = groups[b];
+    if (root(static_cast<int>(b)) != static_cast<int>(b) || !moves(static_cast<int>(b)) ||
+        !g.reducible || g.base_joints != 1 || g.inner_joints != g.bodies - 1)
+      continue;
+    ChainPlan chain;
+    chain.base = model.joints[g.base_joint].parent;
+    chain.joints.push_back(g.base_joint);
+    chain.parent.push_back(-1);
+    for (std::size_t next = 0; next < chain.joints.size(); ++next) {
+      const int body = model.joints[chain.joints[next]].child;
+      for (std::size_t j = 0; j < model.joints.size(); ++j)
+        if (model.joints[j].parent == body) {
+          chain.joints.push_back(static_cast<int>(j));
+          chain.parent.push_back(static_cast<int>(next));
+        }
+    }
+    if (static_cast<int>(chain.joints.size()) == g.bodies) chains.push_back(std::move(chain));
+  }
+  return chains;
+}
+
+}  // namespace afhub::physics
