@@ -12,7 +12,10 @@ namespace {
 constexpr std::uint64_t kFieldMask = (std::uint64_t{1} << ParallelIslands::kCountBits) - 1;
 constexpr std::uint64_t kJobMask = (std::uint64_t{1} << (64 - 2 * ParallelIslands::kCountBits)) - 1;
 constexpr int kSpinsBeforeYield = 4096;  // 0.1 to 0.3 ms of pauses: a few islands
-// Between jobs the helper naps this long at a time (await_job), for this long at most.
+// Between jobs the helper first spins this long (a step's jobs follow each other
+// closely: the islands, then the chains' mirrors and the joints' readings), then naps
+// this long at a time (await_job), for this long at most.
+constexpr std::chrono::nanoseconds kSpin{30'000};
 constexpr std::chrono::nanoseconds kNap{20'000};
 constexpr std::chrono::milliseconds kNapping{20};
 
@@ -37,11 +40,15 @@ ParallelIslands::~ParallelIslands() {
 void ParallelIslands::run(int island, int thread) noexcept {
   const Island& i = (*islands_)[island];
   ConstraintSolver& solver = thread == 0 ? *own_ : solver_;
+  around_->island_to_solve(bodies_ + i.first_body, i.body_count, thread);
   // A multibody solver reads the group's multibody constraints, which only this sets.
-  solver.solveMultiBodyGroup(bodies_ + i.first_body, i.body_count, i.manifolds, i.manifold_count,
-                             i.constraint_count ? constraints_ + i.first_constraint : nullptr,
-                             i.constraint_count, nullptr, 0, *info_, nullptr, nullptr);
-  if (after_) after_->island_solved(bodies_ + i.first_body, i.body_count);
+  solver.solveMultiBodyGroup(
+      bodies_ + i.first_body, i.body_count, i.manifolds, i.manifold_count,
+      i.constraint_count ? constraints_ + i.first_constraint : nullptr, i.constraint_count,
+      i.multibody_constraint_count ? multibody_constraints_ + i.first_multibody_constraint
+                                   : nullptr,
+      i.multibody_constraint_count, *info_, nullptr, nullptr);
+  around_->island_solved(bodies_ + i.first_body, i.body_count, thread);
   if (thread != 0) helped_.fetch_add(1, std::memory_order_relaxed);
 }
 
@@ -71,14 +78,16 @@ bool ParallelIslands::follow_stepping_thread() noexcept {
 
 void ParallelIslands::solve(ConstraintSolver& own, const std::vector<Island>& islands,
                             btCollisionObject** bodies, btTypedConstraint** constraints,
-                            const btContactSolverInfo& info, AfterIsland* after) noexcept {
+                            btMultiBodyConstraint** multibody_constraints,
+                            const btContactSolverInfo& info, AroundIsland& around) noexcept {
   const int count = static_cast<int>(islands.size());
   own_ = &own;
   islands_ = &islands;
   bodies_ = bodies;
   constraints_ = constraints;
+  multibody_constraints_ = multibody_constraints;
   info_ = &info;
-  after_ = after;
+  around_ = &around;
   // The stepping thread's scheduling is looked up once a step, here (system calls).
   if (count < kMinItems || !follow_stepping_thread()) {
     run_alone(count, *this);
@@ -143,7 +152,12 @@ void ParallelIslands::run_shared(int count, SharedWork& work) noexcept {
 void ParallelIslands::await_job(std::uint32_t seen) const noexcept {
   const auto start = std::chrono::steady_clock::now();
   while (job_.load(std::memory_order_acquire) == seen) {
-    if (std::chrono::steady_clock::now() - start > kNapping) {
+    const auto waited = std::chrono::steady_clock::now() - start;
+    if (waited < kSpin) {
+      __builtin_ia32_pause();
+      continue;
+    }
+    if (waited > kNapping) {
       job_.wait(seen, std::memory_order_acquire);
       return;
     }

@@ -3,9 +3,10 @@
 // own (reserved_world.hpp), and their solve was 70 % of the step on one core.
 //
 // Islands share nothing the solve writes: each moves only its own bodies, contacts
-// and joints (static bodies are read, never written; Bullet writes to a kinematic
-// body from every island it touches: none is made, and a world with one is solved by
-// one thread). Bullet's one global written, a count of deep contacts' split-impulse
+// and joints, and its multibodies (a chain in reduced coordinates lies wholly in one
+// island); static bodies are read, never written (Bullet writes to a kinematic body
+// from every island it touches: none is made, and a world with one is solved by one
+// thread). Bullet's one global written, a count of deep contacts' split-impulse
 // corrections that nothing reads, may be raced on. Each thread has its own solver,
 // so an island's result is the same whichever thread solves it: the step is
 // bit-identical to solving them one after another.
@@ -21,10 +22,11 @@
 // other CPU is not preempted every nap, and solves under the stepping thread's
 // scheduling policy and priority, on the CPUs it may run on; with one CPU allowed
 // (`afhub run --cpu`), or the helper refused that priority, the stepping thread solves
-// everything itself. Each island's bodies are integrated by the thread that solved it
-// (AfterIsland, reserved_world.hpp). Other work of the step that splits into items
-// writing nothing in common is shared the same way (share(): the joints' readings after
-// the step, the states published).
+// everything itself. Each island's multibodies are readied for its solve, and its
+// bodies integrated after, by the thread that solves it (AroundIsland,
+// reserved_world.hpp). Other work of the step that splits into items
+// writing nothing in common is shared the same way (share(): the chains' mirrors and the
+// joints' readings after the step, the states published).
 #pragma once
 
 #include <sched.h>
@@ -50,17 +52,19 @@ class ParallelIslands final : private SharedWork {
     int first_body, body_count;  // in the bodies array solve() is given
     btPersistentManifold** manifolds;
     int manifold_count;
-    int first_constraint, constraint_count;  // in the constraints array
+    int first_constraint, constraint_count;                      // in the constraints array
+    int first_multibody_constraint, multibody_constraint_count;  // in the multibody ones
   };
 
-  // Work on an island's bodies that has to wait for its solve, done by the thread
-  // that solved it straight after, while the bodies are in that thread's cache.
-  class AfterIsland {
+  // Work on an island's bodies just before and just after its solve, done by the
+  // thread that solves it, while the bodies are in that thread's cache.
+  class AroundIsland {
    public:
-    virtual void island_solved(btCollisionObject** bodies, int count) noexcept = 0;
+    virtual void island_to_solve(btCollisionObject** bodies, int count, int thread) noexcept = 0;
+    virtual void island_solved(btCollisionObject** bodies, int count, int thread) noexcept = 0;
 
    protected:
-    ~AfterIsland() = default;
+    ~AroundIsland() = default;
   };
 
   // The helper's solver is made like the world's: ConstraintSolver(bodies, joints),
@@ -70,11 +74,11 @@ class ParallelIslands final : private SharedWork {
   ParallelIslands(const ParallelIslands&) = delete;
   ParallelIslands& operator=(const ParallelIslands&) = delete;
 
-  // Solves every island, `own` solving those the stepping thread takes, each followed
-  // by `after` (if given) on the same thread; returns when all are done.
+  // Solves every island, `own` solving those the stepping thread takes, each between
+  // `around`'s two calls on the same thread; returns when all are done.
   void solve(ConstraintSolver& own, const std::vector<Island>& islands, btCollisionObject** bodies,
-             btTypedConstraint** constraints, const btContactSolverInfo& info,
-             AfterIsland* after) noexcept;
+             btTypedConstraint** constraints, btMultiBodyConstraint** multibody_constraints,
+             const btContactSolverInfo& info, AroundIsland& around) noexcept;
   // Runs every item of `work`, the stepping thread taking them from the first, the
   // helper from the last, as islands are; returns when all are done. The stepping
   // thread runs them all with fewer than kMinItems, and while the last solve() found it
@@ -110,8 +114,9 @@ class ParallelIslands final : private SharedWork {
   const std::vector<Island>* islands_ = nullptr;
   btCollisionObject** bodies_ = nullptr;
   btTypedConstraint** constraints_ = nullptr;
+  btMultiBodyConstraint** multibody_constraints_ = nullptr;
   const btContactSolverInfo* info_ = nullptr;
-  AfterIsland* after_ = nullptr;
+  AroundIsland* around_ = nullptr;
 
   // The stepping thread's policy, priority and CPUs, as solve() last found them and
   // applied them to the helper (-1: not yet); the first two also for the helper to read

@@ -1,6 +1,7 @@
 #include "reserved_world.hpp"
 
 #include <BulletCollision/CollisionDispatch/btSimulationIslandManager.h>
+#include <BulletDynamics/Featherstone/btMultiBodyLinkCollider.h>
 
 #include <algorithm>
 
@@ -37,6 +38,13 @@ void ReservedWorld::reserve_constraints(int count) {
   multibody_sorted_.reserve(2 * count);
 }
 
+void ReservedWorld::addMultiBody(btMultiBody* body, int group, int mask) {
+  body->setUserIndex(m_multiBodies.size());
+  readied_.push_back(0);
+  advanced_.push_back(0);
+  btSoftMultiBodyDynamicsWorld::addMultiBody(body, group, mask);
+}
+
 void ReservedWorld::solve_islands_in_parallel(int bodies, int joints, int objects) {
   for (int i = 0; i < getNumCollisionObjects(); ++i)
     if (getCollisionObjectArray()[i]->isKinematicObject()) return;
@@ -47,12 +55,25 @@ void ReservedWorld::solve_islands_in_parallel(int bodies, int joints, int object
   unintegrated_.reserve(objects);
 }
 
+void ReservedWorld::island_to_solve(btCollisionObject** bodies, int count, int thread) noexcept {
+  for (int i = 0; i < count; ++i)
+    if (const btMultiBodyLinkCollider* link = btMultiBodyLinkCollider::upcast(bodies[i]))
+      if (readied_[link->m_multiBody->getUserIndex()] != stamp_) ready(*link->m_multiBody, thread);
+}
+
 // As Bullet's integrateTransformsInternal does for one body, unless the body is to be
 // swept for continuous collision (which reads the broadphase: left to the stepping
-// thread).
-void ReservedWorld::island_solved(btCollisionObject** bodies, int count) noexcept {
+// thread), or speculative contact restitution is on (integrateTransforms() does it);
+// a multibody's links advance it, once.
+void ReservedWorld::island_solved(btCollisionObject** bodies, int count, int thread) noexcept {
   const btScalar dt = getSolverInfo().m_timeStep;
   for (int i = 0; i < count; ++i) {
+    if (const btMultiBodyLinkCollider* link = btMultiBodyLinkCollider::upcast(bodies[i])) {
+      btMultiBody& multibody = *link->m_multiBody;
+      if (advanced_[multibody.getUserIndex()] != stamp_) advance(multibody, thread);
+      continue;
+    }
+    if (m_applySpeculativeContactRestitution) continue;
     btRigidBody* body = btRigidBody::upcast(bodies[i]);
     const auto index = static_cast<std::size_t>(bodies[i]->getWorldArrayIndex());
     if (!body || index >= integrated_.size() || !body->isActive() ||
@@ -68,6 +89,36 @@ void ReservedWorld::island_solved(btCollisionObject** bodies, int count) noexcep
     body->proceedToTransform(next);
     integrated_[index] = stamp_;
   }
+}
+
+// What Bullet's multibody world does before its solve (solveExternalForces), for one
+// multibody, before its island's solve: its links' frames, and its velocities under
+// the forces on it. (Less Bullet's sort of every multibody constraint by island,
+// comparing through two virtual calls, 10 % of 125 arms' step: each island's are found
+// by solveConstraints() instead.) Debian's Bullet is built with
+// BT_USE_VIRTUAL_CLEARFORCES_AND_GRAVITY: gravity is added by applyGravity() and the
+// forces cleared by clearForces(), both in stepSimulation (the pendulum tests of
+// tests/physics/reduced_coordinates_test.cpp would see it otherwise).
+void ReservedWorld::ready(btMultiBody& body, int thread) noexcept {
+  readied_[body.getUserIndex()] = stamp_;
+  MultibodyScratch& scratch = scratch_[thread];
+  const btContactSolverInfo& info = getSolverInfo();
+  body.clearConstraintForces();
+  body.forwardKinematics(scratch.world_to_local, scratch.local_origin);
+  body.computeAccelerationsArticulatedBodyAlgorithmMultiDof(
+      info.m_timeStep, scratch.r, scratch.v, scratch.m, false, info.m_jointFeedbackInWorldSpace,
+      info.m_jointFeedbackInJointFrame);
+}
+
+// After its island's solve: the velocity changes the solve gave it applied, then its
+// joints moved by its velocities and its links' colliders placed (what Bullet's
+// multibody world does for every multibody after the solve and in its integration).
+void ReservedWorld::advance(btMultiBody& body, int thread) noexcept {
+  advanced_[body.getUserIndex()] = stamp_;
+  MultibodyScratch& scratch = scratch_[thread];
+  body.processDeltaVeeMultiDof2();
+  body.stepPositionsMultiDof(getSolverInfo().m_timeStep);
+  body.updateCollisionObjectWorldTransforms(scratch.world_to_local, scratch.local_origin);
 }
 
 void ReservedWorld::predictUnconstraintMotion(btScalar dt) {
@@ -103,8 +154,13 @@ void ReservedWorld::createPredictiveContacts(btScalar dt) {
 }
 
 void ReservedWorld::integrateTransforms(btScalar dt) {
+  for (int i = 0; i < m_multiBodies.size(); ++i)  // any no island held
+    if (advanced_[i] != stamp_) {
+      if (readied_[i] != stamp_) ready(*m_multiBodies[i], 0);
+      advance(*m_multiBodies[i], 0);
+    }
   if (!parallel_ || m_applySpeculativeContactRestitution) {
-    btSoftMultiBodyDynamicsWorld::integrateTransforms(dt);
+    btDiscreteDynamicsWorld::integrateTransforms(dt);  // the rigid bodies
     return;
   }
   unintegrated_.clear();
@@ -117,30 +173,13 @@ void ReservedWorld::integrateTransforms(btScalar dt) {
     integrateTransformsInternal(unintegrated_.data(), static_cast<int>(unintegrated_.size()), dt);
 }
 
-// What Bullet's multibody world does before its solve (solveExternalForces), less its
-// sort of every multibody constraint by island, comparing through two virtual calls
-// (10 % of 125 arms' step): each island's are found below instead. Each multibody's
-// velocities under the forces on it, before its rows are solved. Debian's Bullet is
-// built with BT_USE_VIRTUAL_CLEARFORCES_AND_GRAVITY: gravity is added by
-// applyGravity() and the forces cleared by clearForces(), both in stepSimulation (the
-// pendulum tests of tests/physics/reduced_coordinates_test.cpp would see it otherwise).
-void ReservedWorld::step_multibodies_unconstrained(const btContactSolverInfo& info) {
-  if (m_multiBodies.size() == 0) return;
-  forwardKinematics();
-  clearMultiBodyConstraintForces();
-  for (int i = 0; i < m_multiBodies.size(); ++i)
-    m_multiBodies[i]->computeAccelerationsArticulatedBodyAlgorithmMultiDof(
-        info.m_timeStep, m_scratch_r, m_scratch_v, m_scratch_m, false,
-        info.m_jointFeedbackInWorldSpace, info.m_jointFeedbackInJointFrame);
-}
-
 void ReservedWorld::solveConstraints(btContactSolverInfo& info) {
   ++stamp_;  // from 1: 0 is never integrated
   if (info.m_minimumSolverBatchSize > 1) {
-    btSoftMultiBodyDynamicsWorld::solveConstraints(info);
+    btSoftMultiBodyDynamicsWorld::solveConstraints(info);  // its multibodies readied too
+    std::fill(readied_.begin(), readied_.end(), stamp_);
     return;
   }
-  step_multibodies_unconstrained(info);
   const auto by_island = [](const Keyed& x, const Keyed& y) {
     return x.island != y.island ? x.island < y.island : x.index < y.index;
   };
@@ -168,6 +207,7 @@ void ReservedWorld::solveConstraints(btContactSolverInfo& info) {
                        int manifold_count, int island) override {
       const auto& keyed = world.keyed_;
       if (island < 0) {  // islands not split: everything at once
+        world.island_to_solve(bodies, body_count, 0);
         world.m_multiBodyConstraintSolver->solveMultiBodyGroup(
             bodies, body_count, manifolds, manifold_count, world.sorted_.data(),
             static_cast<int>(keyed.size()), world.multibody_sorted_.data(),
@@ -179,10 +219,12 @@ void ReservedWorld::solveConstraints(btContactSolverInfo& info) {
       const auto [multibody_first, multibody_count] = range(world.multibody_keyed_, island);
       if (world.parallel_) {
         world.islands_.push_back({static_cast<int>(world.island_bodies_.size()), body_count,
-                                  manifolds, manifold_count, first, count});
+                                  manifolds, manifold_count, first, count, multibody_first,
+                                  multibody_count});
         world.island_bodies_.insert(world.island_bodies_.end(), bodies, bodies + body_count);
         return;
       }
+      world.island_to_solve(bodies, body_count, 0);
       world.m_multiBodyConstraintSolver->solveMultiBodyGroup(
           bodies, body_count, manifolds, manifold_count, count ? &world.sorted_[first] : nullptr,
           count, multibody_count ? &world.multibody_sorted_[multibody_first] : nullptr,
@@ -202,12 +244,8 @@ void ReservedWorld::solveConstraints(btContactSolverInfo& info) {
   m_islandManager->buildAndProcessIslands(getDispatcher(), this, &islands);
   if (parallel_)
     parallel_->solve(static_cast<ConstraintSolver&>(*m_constraintSolver), islands_,
-                     island_bodies_.data(), sorted_.data(), info,
-                     m_applySpeculativeContactRestitution ? nullptr : this);
+                     island_bodies_.data(), sorted_.data(), multibody_sorted_.data(), info, *this);
   m_constraintSolver->allSolved(info, m_debugDrawer);
-  // The velocity changes the solve gave each multibody, applied (as Bullet's own
-  // multibody world does after its islands).
-  for (int i = 0; i < m_multiBodies.size(); ++i) m_multiBodies[i]->processDeltaVeeMultiDof2();
 }
 
 }  // namespace afhub::physics

@@ -31,13 +31,15 @@ class BodyDamping {
   Factor linear_, angular_;
 };
 
-class ReservedWorld : public btSoftMultiBodyDynamicsWorld, private ParallelIslands::AfterIsland {
+class ReservedWorld : public btSoftMultiBodyDynamicsWorld, private ParallelIslands::AroundIsland {
  public:
   // `soft_solver` must outlive the world.
   ReservedWorld(btDispatcher* dispatcher, btBroadphaseInterface* broadphase,
                 btMultiBodyConstraintSolver* solver, btCollisionConfiguration* collision_config,
                 btSoftBodySolver& soft_solver);
   void reserve_constraints(int count);
+  // Numbers each multibody (its user index) for the step's bookkeeping.
+  void addMultiBody(btMultiBody* body, int group, int mask) override;
   // Islands solved one at a time are solved by two threads at once when there are
   // many (parallel_islands.hpp), the world's solver being a ConstraintSolver(bodies,
   // joints) with the direct solve; `objects`: the collision objects it will hold. Not
@@ -69,8 +71,9 @@ class ReservedWorld : public btSoftMultiBodyDynamicsWorld, private ParallelIslan
   // With a helper, each island's bodies are moved to their new poses (Bullet's
   // integration) by the thread that solved the island, straight after, while they
   // are in its cache (0.94x the step of 1000 bodies); integrateTransforms() does the
-  // rest, and all of it with speculative contact restitution on. (Not with a
-  // multibody: sim_build.cpp.)
+  // rest, and all of it with speculative contact restitution on. A multibody is
+  // readied for its island's solve and advanced after it so, with or without a helper
+  // (ready(), advance()).
   void integrateTransforms(btScalar dt) override;
   // Bullet damps each body's velocities and predicts its next pose, which only
   // continuous collision detection reads (the body's bounds swept to reach it, and
@@ -100,9 +103,23 @@ class ReservedWorld : public btSoftMultiBodyDynamicsWorld, private ParallelIslan
   std::uint64_t stamp_ = 0;
   std::vector<btRigidBody*> unintegrated_;
 
-  void island_solved(btCollisionObject** bodies, int count) noexcept override;
-  void step_multibodies_unconstrained(const btContactSolverInfo& info);
+  void island_to_solve(btCollisionObject** bodies, int count, int thread) noexcept override;
+  void island_solved(btCollisionObject** bodies, int count, int thread) noexcept override;
+  void ready(btMultiBody& body, int thread) noexcept;
+  void advance(btMultiBody& body, int thread) noexcept;
   BodyDamping damping_;
+  // Per thread (0 the stepping thread, 1 the islands' helper): scratch for a
+  // multibody's kinematics and dynamics, of which Bullet's world keeps one.
+  struct MultibodyScratch {
+    btAlignedObjectArray<btQuaternion> world_to_local;
+    btAlignedObjectArray<btVector3> local_origin;
+    btAlignedObjectArray<btScalar> r;
+    btAlignedObjectArray<btVector3> v;
+    btAlignedObjectArray<btMatrix3x3> m;
+  };
+  MultibodyScratch scratch_[2];
+  // Per multibody: the step it was readied for, and advanced in.
+  std::vector<std::uint64_t> readied_, advanced_;
 };
 
 }  // namespace afhub::physics

@@ -229,14 +229,17 @@ void Simulation::Data::mark_joint_islands() {
                                                         : ConstraintSolver::kInTreeIsland);
     any = true;
   }
-  if (!any) return;
-  solver.enable_direct_solve();
-  world.getSolverInfo().m_minimumSolverBatchSize = 1;
-  // Groups of moving bodies joined by joints: islands, unless contacts join them.
+  if (any) {
+    solver.enable_direct_solve();
+    world.getSolverInfo().m_minimumSolverBatchSize = 1;
+  }
+  // Groups of moving bodies joined by joints, and chains: islands, unless contacts
+  // join them.
   const auto groups = std::count_if(islands.begin(), islands.end(),
-                                    [](const Island& island) { return island.bodies > 0; });
-  // Islands with a chain's rows are solved by the stepping thread only: not yet shared.
-  if (model.world.solver_threads > 1 && groups >= ParallelIslands::kMinItems && chains.empty())
+                                    [](const Island& island) { return island.bodies > 0; }) +
+                      static_cast<std::ptrdiff_t>(chains.size());
+  if ((any || !chains.empty()) && model.world.solver_threads > 1 &&
+      groups >= ParallelIslands::kMinItems)
     world.solve_islands_in_parallel(
         static_cast<int>(model.bodies.size()),
         static_cast<int>(model.joints.size() + model.actuators.size()),

@@ -16,6 +16,10 @@ namespace {
 // bounded far away.
 constexpr btScalar kLargeImpulse = BT_LARGE_FLOAT;
 
+// Chains are shared between the two threads in blocks of this many (an eight-link arm's
+// mirror is about a microsecond).
+constexpr int kChainsPerItem = 4;
+
 btScalar damping_rate(btScalar damping) {
   return damping <= 0 ? 0 : -std::log(std::max<btScalar>(1 - damping, 1e-6));
 }
@@ -37,36 +41,36 @@ void Simulation::Data::build_chains() {
       const JointModel& joint = *joints[j];
       const int b = model.joints[j].child;
       const btRigidBody& rb = *bodies[b].body;
-      const btScalar mass = 1 / rb.getInvMass();
-      btVector3 inertia(0, 0, 0);
+      ChainData::Link& link = chain.links.emplace_back();
+      link.body = b;
+      link.mass = 1 / rb.getInvMass();
       for (int i = 0; i < 3; ++i)
-        if (rb.getInvInertiaDiagLocal()[i] > 0) inertia[i] = 1 / rb.getInvInertiaDiagLocal()[i];
-      // At q = 0 the joint frames meet: the child's frame, in the parent's, is a b^-1.
+        if (rb.getInvInertiaDiagLocal()[i] > 0)
+          link.inertia[i] = 1 / rb.getInvInertiaDiagLocal()[i];
+      // At q = 0 the joint frames meet: the child's frame, in the parent's, is a c^-1.
       const btTransform& a = joint.frame_in_parent();
       const btTransform& c = joint.frame_in_child();
       const btQuaternion parent_to_child = (a * c.inverse()).getRotation().inverse();
       const bool apart = model.joints[j].ignore_inter_collision;
       switch (model.joints[j].type) {
         case JointType::kPrismatic:
-          mb.setupPrismatic(l, mass, inertia, plan.parent[l], parent_to_child,
+          mb.setupPrismatic(l, link.mass, link.inertia, plan.parent[l], parent_to_child,
                             joint.axis_in_child(), a.getOrigin(), -c.getOrigin(), apart);
           break;
         case JointType::kFixed:
-          mb.setupFixed(l, mass, inertia, plan.parent[l], parent_to_child, a.getOrigin(),
+          mb.setupFixed(l, link.mass, link.inertia, plan.parent[l], parent_to_child, a.getOrigin(),
                         -c.getOrigin(), apart);
           break;
         default:  // revolute, continuous
-          mb.setupRevolute(l, mass, inertia, plan.parent[l], parent_to_child, joint.axis_in_child(),
-                           a.getOrigin(), -c.getOrigin(), apart);
+          mb.setupRevolute(l, link.mass, link.inertia, plan.parent[l], parent_to_child,
+                           joint.axis_in_child(), a.getOrigin(), -c.getOrigin(), apart);
           break;
       }
       const BodySpec& spec = model.bodies[b];
-      ChainData::Link& link = chain.links.emplace_back();
-      link.body = b;
       link.linear_rate = damping_rate(rb.getLinearDamping());
       link.angular_rate = damping_rate(rb.getAngularDamping());
       if (spec.gravity_mps2)
-        link.gravity_correction = mass * (to_bt(*spec.gravity_mps2) - world_gravity);
+        link.gravity_correction = link.mass * (to_bt(*spec.gravity_mps2) - world_gravity);
     }
     mb.finalizeMultiDof();
     mb.setHasSelfCollision(true);  // as rigid bodies: all but the joints' own pairs
@@ -74,7 +78,7 @@ void Simulation::Data::build_chains() {
     mb.setAngularDamping(0);
     mb.setMaxCoordinateVelocity(SIMD_INFINITY);
     mb.setMaxAppliedImpulse(kLargeImpulse);
-    world.addMultiBody(&mb);
+    world.addMultiBody(&mb, btBroadphaseProxy::DefaultFilter, btBroadphaseProxy::AllFilter);
     for (int l = 0; l < links; ++l) {
       const btRigidBody& rb = *bodies[chain.links[l].body].body;
       auto& collider =
@@ -130,7 +134,8 @@ void Simulation::Data::place_chain(ChainData& chain, const std::vector<btScalar>
   mirror_chain(chain);
 }
 
-// Each link's body takes the link's pose, and its velocities turned into the world.
+// Each link's body takes the link's pose, and its velocities turned into the world;
+// then the forces of the coming step are added.
 void Simulation::Data::mirror_chain(ChainData& chain) noexcept {
   chain.body->compTreeLinkVelocities(chain.omega.data(), chain.velocity.data());
   for (std::size_t l = 0; l < chain.links.size(); ++l) {
@@ -140,27 +145,27 @@ void Simulation::Data::mirror_chain(ChainData& chain) noexcept {
     rb.setLinearVelocity(pose.getBasis() * chain.velocity[l + 1]);
     rb.setAngularVelocity(pose.getBasis() * chain.omega[l + 1]);
   }
+  drive_chain(chain);
 }
 
-// Before a step: each link's gravity correction and damping, from the velocities the
-// last step left.
-void Simulation::Data::drive_chains() noexcept {
-  for (ChainData& chain : chains)
-    for (std::size_t l = 0; l < chain.links.size(); ++l) {
-      const ChainData::Link& link = chain.links[l];
-      const btRigidBody& rb = *bodies[link.body].body;
-      const btScalar mass = 1 / rb.getInvMass();
-      const btMatrix3x3& turn = rb.getWorldTransform().getBasis();
-      const btVector3 spin = turn.transpose() * rb.getAngularVelocity();
-      btVector3 inertia_spin(0, 0, 0);
-      for (int i = 0; i < 3; ++i)
-        if (rb.getInvInertiaDiagLocal()[i] > 0)
-          inertia_spin[i] = spin[i] / rb.getInvInertiaDiagLocal()[i];
-      const int index = static_cast<int>(l);
-      chain.body->addLinkForce(
-          index, link.gravity_correction - link.linear_rate * mass * rb.getLinearVelocity());
-      chain.body->addLinkTorque(index, -link.angular_rate * (turn * inertia_spin));
-    }
+// Each link's gravity correction and damping for the coming step, from the velocities
+// the last one left (mirror_chain: Bullet has cleared the last step's forces).
+void Simulation::Data::drive_chain(ChainData& chain) noexcept {
+  for (std::size_t l = 0; l < chain.links.size(); ++l) {
+    const ChainData::Link& link = chain.links[l];
+    const btRigidBody& rb = *bodies[link.body].body;
+    const btMatrix3x3& turn = rb.getWorldTransform().getBasis();
+    const btVector3 momentum = link.inertia * (turn.transpose() * rb.getAngularVelocity());
+    const int index = static_cast<int>(l);
+    chain.body->addLinkForce(
+        index, link.gravity_correction - link.linear_rate * link.mass * rb.getLinearVelocity());
+    chain.body->addLinkTorque(index, -link.angular_rate * (turn * momentum));
+  }
+}
+
+void Simulation::Data::mirror_chains() noexcept {
+  share_each(world, static_cast<int>(chains.size()), kChainsPerItem,
+             [this](int c, int) { mirror_chain(chains[c]); });
 }
 
 }  // namespace afhub::physics

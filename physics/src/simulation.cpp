@@ -108,7 +108,6 @@ std::vector<std::string> Simulation::gain_notes() const {
 void Simulation::step() noexcept {
   Data& d = *data_;
   for (BodyData& body : d.bodies) d.apply_cartesian(body);
-  d.drive_chains();
   // A URDF <mimic> joint follows its leader's latest position, over any command.
   for (auto& joint : d.joints)
     if (const std::optional<Mimic>& mimic = joint->spec().mimic)
@@ -118,7 +117,7 @@ void Simulation::step() noexcept {
   d.world.stepSimulation(d.dt_s, 1, d.dt_s);
   d.broadphase.m_deferedcollide = false;  // the first step met the initial overlaps
   ++d.steps;
-  for (ChainData& chain : d.chains) d.mirror_chain(chain);
+  d.mirror_chains();
   d.recover_non_finite();
   d.sum_contacts();
   share_each(d.world, static_cast<int>(d.joints.size()), kJointsPerItem,

@@ -87,6 +87,8 @@ struct BodyData {
 struct ChainData {
   struct Link {
     int body = -1;
+    btScalar mass = 0;
+    btVector3 inertia{0, 0, 0};                  // principal, as the body's
     btScalar linear_rate = 0, angular_rate = 0;  // 1/s
     btVector3 gravity_correction{0, 0, 0};       // N
   };
@@ -235,7 +237,8 @@ struct Simulation::Data {
   int touching_body(int parent, const btVector3& point) const noexcept;
   void apply_cartesian(BodyData& body) noexcept;
   void push(BodyData& body, const btVector3& force, const btVector3& torque) noexcept;
-  void drive_chains() noexcept;
+  void drive_chain(ChainData& chain) noexcept;
+  void mirror_chains() noexcept;
   void mirror_chain(ChainData& chain) noexcept;
   void place_chain(ChainData& chain, const std::vector<btScalar>& q) noexcept;
   void read_sensors() noexcept;

@@ -103,14 +103,15 @@ TEST(Islands, RobotsLoadedOverlappingAtTheOriginChangeEachOther) {
 // A world of many islands of joints has them solved by two threads at once
 // (physics/src/parallel_islands.hpp). Each island is solved alike whichever thread
 // takes it, so every body ends bit for bit where the stepping thread alone puts it.
-// 16 arms of 8 links, each driven to its own sinusoid, 2000 steps.
-TEST(Islands, TwoThreadsSolveManyArmsBitForBitAsOneDoes) {
-  if (!afhub::testing::may_run_on_two_cpus())
-    GTEST_SKIP() << "this process may run on one CPU: no helper to test";
+// 16 arms of 8 links, each driven to its own sinusoid, 2000 steps. `reduced`: each arm
+// a chain in reduced coordinates, whose forward dynamics, damping and readings the two
+// threads share too.
+void expect_arms_bit_for_bit_on_two_threads(bool reduced) {
   constexpr int kArms = 16, kLinks = 8, kArmSteps = 2000;
   afhub::testing::ModelFolder folder;
   Model model =
       load_adf_files({folder.write("arms.yaml", afhub::bench::arms_scene(kArms, kLinks))});
+  model.world.reduced_coordinates = reduced;
   struct Run {
     std::vector<Pose> poses;
     std::vector<double> joints;
@@ -119,6 +120,7 @@ TEST(Islands, TwoThreadsSolveManyArmsBitForBitAsOneDoes) {
   auto run = [&](int solver_threads) {
     model.world.solver_threads = solver_threads;
     Simulation sim(model, 0.001);
+    EXPECT_EQ(sim.links_in_reduced_coordinates(), reduced ? kArms * (kLinks - 1u) : 0u);
     BodyInput input;
     input.joint_count = kLinks - 1;
     for (int j = 0; j < kLinks - 1; ++j) input.joint_modes[j] = JointMode::kPosition;
@@ -153,6 +155,18 @@ TEST(Islands, TwoThreadsSolveManyArmsBitForBitAsOneDoes) {
   double travel = 0;
   for (double q : alone.joints) travel = std::max(travel, std::abs(q));
   EXPECT_GT(travel, 0.1);
+}
+
+TEST(Islands, TwoThreadsSolveManyArmsBitForBitAsOneDoes) {
+  if (!afhub::testing::may_run_on_two_cpus())
+    GTEST_SKIP() << "this process may run on one CPU: no helper to test";
+  expect_arms_bit_for_bit_on_two_threads(false);
+}
+
+TEST(Islands, TwoThreadsStepManyArmsInReducedCoordinatesBitForBitAsOneDoes) {
+  if (!afhub::testing::may_run_on_two_cpus())
+    GTEST_SKIP() << "this process may run on one CPU: no helper to test";
+  expect_arms_bit_for_bit_on_two_threads(true);
 }
 
 // Two layers of free boxes over a static floor, the upper layer falling onto the lower:
