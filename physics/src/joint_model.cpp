@@ -102,7 +102,6 @@ JointModel::JointModel(const JointSpec& spec, btRigidBody& parent, btRigidBody& 
   const btTransform& a = frame_in_parent_;
   const btTransform& b = frame_in_child_;
   if (reduced) {
-    if (spec.type == JointType::kPrismatic) free_linear_[0] = true;
     limit_gains();
     return;  // attach() reads it
   }

@@ -1090,6 +1090,10 @@ std::map<std::uint64_t, std::int64_t> commands_in_force(const std::string& file,
   return in_force.by_step;
 }
 
+// A physics that a replay drives waits this long for it: nothing there depends on the
+// replay being dropped, and a loaded machine held one past 100 ms.
+const std::string kReplayClientTimeoutMs = "10000";
+
 // `afhub run` of the example arm in lockstep, started paused (resumed by `afhub world
 // resume`, or by a replay) or waiting for one client. A step of 4 ms: each command stays
 // in its slot a step, until the next one; the recorder has that long to read it, on a
@@ -1195,7 +1199,7 @@ TEST(Record, ALockstepRunIsReproducedBitIdenticallyAndAChangedGainIsCaughtAtItsS
 
   // The same model, the recorded commands: every state of every step as recorded (the
   // physics started paused, as the docs advise, and resumed by the replay).
-  physics = lockstep_arm(log("replay.log"), true);
+  physics = lockstep_arm(log("replay.log"), true, kReplayClientTimeoutMs);
   RunResult replay = run_afhub({"play", file, "--commands-into-physics", "--wait", "10"}, 120s);
   EXPECT_EQ(replay.exit_code, 0) << replay.out << replay.err << read_file(log("replay.log"))
                                  << run_afhub({"status"}).out;
@@ -1213,7 +1217,7 @@ TEST(Record, ALockstepRunIsReproducedBitIdenticallyAndAChangedGainIsCaughtAtItsS
   // meet its bodies taken and end (a fresh CI run: play exited 1 saying nothing on
   // stdout).
   physics.reset();
-  physics = lockstep_arm(log("changed.log"), false);
+  physics = lockstep_arm(log("changed.log"), false, kReplayClientTimeoutMs);
   RunResult diverged =
       run_afhub({"play", changed, "--commands-into-physics", "--wait", "10"}, 120s);
   EXPECT_EQ(diverged.exit_code, 1) << diverged.out << diverged.err;
@@ -1227,7 +1231,7 @@ TEST(Record, ALockstepRunIsReproducedBitIdenticallyAndAChangedGainIsCaughtAtItsS
   const std::string twice = (folder.dir() / "twice.mcap").string();
   copy_with_changed_commands(file, twice, changed_from->second, 1e-3, CommandChange::kSecondAnswer);
   physics.reset();
-  physics = lockstep_arm(log("twice.log"), false);
+  physics = lockstep_arm(log("twice.log"), false, kReplayClientTimeoutMs);
   const RunResult ambiguous =
       run_afhub({"play", twice, "--commands-into-physics", "--wait", "10"}, 120s);
   EXPECT_EQ(ambiguous.exit_code, 1) << ambiguous.out << ambiguous.err;
@@ -1241,7 +1245,7 @@ TEST(Record, ALockstepRunIsReproducedBitIdenticallyAndAChangedGainIsCaughtAtItsS
   copy_with_changed_commands(file, restarted, changed_from->second, 1e-3,
                              CommandChange::kNextRunAnswer);
   physics.reset();
-  physics = lockstep_arm(log("restarted.log"), false);
+  physics = lockstep_arm(log("restarted.log"), false, kReplayClientTimeoutMs);
   const RunResult first_run =
       run_afhub({"play", restarted, "--commands-into-physics", "--wait", "10"}, 120s);
   EXPECT_EQ(first_run.exit_code, 0) << first_run.out << first_run.err;
