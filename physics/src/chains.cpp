@@ -1,6 +1,6 @@
 #include "chains.hpp"
 
-#include <numeric>
+#include "body_groups.hpp"
 
 namespace afhub::physics {
 namespace {
@@ -16,15 +16,11 @@ bool reducible(const JointSpec& joint) {
 std::vector<ChainPlan> plan_chains(const Model& model) {
   const std::size_t bodies = model.bodies.size();
   auto moves = [&](int b) { return model.bodies[b].mass_kg > 0.0; };
-  // Moving bodies joined by joints, as groups (union-find).
-  std::vector<int> group(bodies);
-  std::iota(group.begin(), group.end(), 0);
-  auto root = [&](int b) {
-    while (group[b] != b) b = group[b] = group[group[b]];
-    return b;
-  };
+  // Moving bodies joined by joints, as groups.
+  BodyGroups joined(bodies);
+  auto root = [&](int b) { return joined.root(b); };
   for (const JointSpec& joint : model.joints)
-    if (moves(joint.parent) && moves(joint.child)) group[root(joint.parent)] = root(joint.child);
+    if (moves(joint.parent) && moves(joint.child)) joined.join(joint.parent, joint.child);
   struct Group {
     int bodies = 0, inner_joints = 0, base_joints = 0, base_joint = -1;
     bool reducible = true;
@@ -50,6 +46,9 @@ std::vector<ChainPlan> plan_chains(const Model& model) {
 
   // Each qualifying tree's links, breadth first from its base joint: a joint whose
   // parent is not yet a link points inwards, and the tree does not qualify.
+  std::vector<std::vector<int>> joints_from(bodies);  // by parent body
+  for (std::size_t j = 0; j < model.joints.size(); ++j)
+    joints_from[model.joints[j].parent].push_back(static_cast<int>(j));
   std::vector<ChainPlan> chains;
   for (std::size_t b = 0; b < bodies; ++b) {
     const Group& g = groups[b];
@@ -62,11 +61,10 @@ std::vector<ChainPlan> plan_chains(const Model& model) {
     chain.parent.push_back(-1);
     for (std::size_t next = 0; next < chain.joints.size(); ++next) {
       const int body = model.joints[chain.joints[next]].child;
-      for (std::size_t j = 0; j < model.joints.size(); ++j)
-        if (model.joints[j].parent == body) {
-          chain.joints.push_back(static_cast<int>(j));
-          chain.parent.push_back(static_cast<int>(next));
-        }
+      for (int j : joints_from[body]) {
+        chain.joints.push_back(j);
+        chain.parent.push_back(static_cast<int>(next));
+      }
     }
     if (static_cast<int>(chain.joints.size()) == g.bodies) chains.push_back(std::move(chain));
   }

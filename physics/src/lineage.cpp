@@ -7,7 +7,8 @@
 #include "afhub/physics/lineage.hpp"
 
 #include <algorithm>
-#include <numeric>
+
+#include "body_groups.hpp"
 
 namespace afhub::physics {
 
@@ -45,20 +46,10 @@ void compute_lineage(Model& model) {
   }
 
   // Loops = edges - vertices + components, over bodies connected by joints.
-  std::vector<int> group(body_count);
-  std::iota(group.begin(), group.end(), 0);
-  auto root = [&](int b) {
-    while (group[b] != b) b = group[b] = group[group[b]];
-    return b;
-  };
+  BodyGroups groups(model.bodies.size());
   int loops = 0;
-  for (const JointSpec& joint : model.joints) {
-    int a = root(joint.parent), b = root(joint.child);
-    if (a == b)
-      ++loops;
-    else
-      group[a] = b;
-  }
+  for (const JointSpec& joint : model.joints)
+    if (!groups.join(joint.parent, joint.child)) ++loops;
   model.closed_loop_count = loops;
 }
 

@@ -5,10 +5,10 @@
 #include <BulletSoftBody/btSoftBodyHelpers.h>
 
 #include <map>
-#include <numeric>
 
 #include "afhub/shm_layout/error.hpp"
 #include "afhub/shm_layout/limits.hpp"
+#include "body_groups.hpp"
 #include "simulation_data.hpp"
 
 namespace afhub::physics {
@@ -187,12 +187,7 @@ void Simulation::Data::build_joints() {
 // not marked, and makes the solve look too.
 void Simulation::Data::mark_joint_islands() {
   if (!model.world.direct_solve) return;
-  std::vector<int> group(bodies.size());
-  std::iota(group.begin(), group.end(), 0);
-  auto root = [&](int b) {
-    while (group[b] != b) b = group[b] = group[group[b]];
-    return b;
-  };
+  BodyGroups joined(bodies.size());
   // A chain's joints are coordinates, not constraints (sim_chains.cpp): not solved here.
   auto solved = [&](std::size_t j) {
     const JointSpec& spec = model.joints[j];
@@ -201,7 +196,7 @@ void Simulation::Data::mark_joint_islands() {
   for (std::size_t j = 0; j < model.joints.size(); ++j) {
     const JointSpec& spec = model.joints[j];
     if (solved(j) && bodies[spec.parent].dynamic && bodies[spec.child].dynamic)
-      group[root(spec.parent)] = root(spec.child);
+      joined.join(spec.parent, spec.child);
   }
   struct Island {
     int bodies = 0, joints = 0;
@@ -209,9 +204,10 @@ void Simulation::Data::mark_joint_islands() {
   };
   std::vector<Island> islands(bodies.size());
   for (std::size_t b = 0; b < bodies.size(); ++b)
-    if (bodies[b].dynamic && bodies[b].chain < 0) ++islands[root(static_cast<int>(b))].bodies;
+    if (bodies[b].dynamic && bodies[b].chain < 0)
+      ++islands[joined.root(static_cast<int>(b))].bodies;
   auto island_of = [&](const JointSpec& spec) {
-    return root(bodies[spec.parent].dynamic ? spec.parent : spec.child);
+    return joined.root(bodies[spec.parent].dynamic ? spec.parent : spec.child);
   };
   for (std::size_t j = 0; j < model.joints.size(); ++j) {
     if (!solved(j)) continue;
