@@ -364,27 +364,32 @@ BENCHMARK_CAPTURE(BM_LoopStep, four_bar_iterated, kFourBar, false)->Unit(benchma
 // A controller on another CPU: after each step a thread there reads every body's state
 // and, with `commands`, writes every body's command (its joints held where they are),
 // as a controller process of them all would: what each line a step writes, and each
-// line of a command, then costs to take across. The stepping thread runs on the first CPU this
-// process may use, the reader spins on the second (with the islands solved by the stepping thread
-// alone, nothing else needs it).
+// line of a command, then costs to take across. The reader runs on the second CPU this
+// process may use. It spins there, the stepping thread on the first (with the islands
+// solved by the stepping thread alone, nothing else needs it); or, `asleep`, it sleeps
+// between steps, as a controller process does, and the stepping thread and the
+// islands' helper run on either CPU.
 class ControllerElsewhere {
  public:
   // False when this process may use fewer than two CPUs.
   static bool possible() { return first_two_cpus().second >= 0; }
 
-  ControllerElsewhere(const std::vector<BodySpec>& bodies, bool commands) {
+  ControllerElsewhere(const std::vector<BodySpec>& bodies, bool commands, bool asleep) {
     for (const BodySpec& body : bodies)
       bodies_.push_back(std::make_unique<BodyClient>(body.channel));
     for (auto& reader : bodies_)
       afhub::test::wait_until([&] { return reader->subscribed(); }, std::chrono::seconds(5));
     const auto [stepping, reading] = first_two_cpus();
     sched_getaffinity(0, sizeof saved_, &saved_);
-    pin(stepping);
-    thread_ = std::thread([this, reading = reading, commands] {
+    if (!asleep) pin(stepping);
+    thread_ = std::thread([this, reading = reading, commands, asleep] {
       pin(reading);
       for (std::uint64_t seen = 0; !stop_.load(std::memory_order_relaxed);) {
         const std::uint64_t step = published_.load(std::memory_order_acquire);
-        if (step == seen) continue;
+        if (step == seen) {
+          if (asleep) published_.wait(seen, std::memory_order_acquire);
+          continue;
+        }
         for (auto& body : bodies_) {
           const BodyState* read = body->latest_state();
           if (!read || !commands) continue;
@@ -402,12 +407,15 @@ class ControllerElsewhere {
   }
   ~ControllerElsewhere() {
     stop_ = true;
+    published_.fetch_add(1, std::memory_order_release);
+    published_.notify_one();
     thread_.join();
     sched_setaffinity(0, sizeof saved_, &saved_);
   }
   // After a step is published (untimed): the controller answers it all.
   void answer_step(std::uint64_t step) {
     published_.store(step, std::memory_order_release);
+    published_.notify_one();
     while (read_.load(std::memory_order_acquire) != step) {
     }
   }
@@ -434,8 +442,9 @@ class ControllerElsewhere {
   std::atomic<bool> stop_{false};
 };
 
-// Who reads the states and writes the commands on another CPU (ControllerElsewhere).
-enum class Elsewhere { kNone, kReads, kCommands };
+// Who reads the states and writes the commands on another CPU (ControllerElsewhere):
+// spinning there, or asleep between steps.
+enum class Elsewhere { kNone, kReads, kCommands, kCommandsAsleep };
 
 // The thousand bodies at 1 kHz: one step of 125 eight-link arms, as the physics alone,
 // with every state and the world state published, and with every body commanded each
@@ -445,7 +454,9 @@ enum class Elsewhere { kNone, kReads, kCommands };
 // solved by two threads (physics/src/parallel_islands.hpp), or by the stepping thread
 // alone (`one_thread`): "helped" is the share of islands the helper solved. `taped`:
 // with a recorder of that many bodies (TapeDrain), the first ones. `elsewhere`: the
-// states read, or read and answered, by a controller on another CPU. `reduced`: each
+// states read, or read and answered, by a controller on another CPU (spinning there, the
+// islands solved by the stepping thread alone; or asleep between steps, as a controller
+// process is, with the helper beside it). `reduced`: each
 // arm a chain in reduced coordinates (`afhub run --reduced-coordinates`).
 void BM_StepThousandBodies(benchmark::State& state, bool publish, bool commanded,
                            int solver_threads, std::size_t taped = 0,
@@ -473,8 +484,8 @@ void BM_StepThousandBodies(benchmark::State& state, bool publish, bool commanded
     return;
   }
   if (elsewhere != Elsewhere::kNone)
-    other_cpu =
-        std::make_unique<ControllerElsewhere>(model.bodies, elsewhere == Elsewhere::kCommands);
+    other_cpu = std::make_unique<ControllerElsewhere>(model.bodies, elsewhere != Elsewhere::kReads,
+                                                      elsewhere == Elsewhere::kCommandsAsleep);
   StepTimes times(1 << 20);
   std::uint64_t step = 0;
   for (auto _ : state) {
@@ -511,6 +522,15 @@ BENCHMARK_CAPTURE(BM_StepThousandBodies, published_read_elsewhere, true, false, 
     ->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(BM_StepThousandBodies, published_commanded_elsewhere, true, false, 1, 0,
                   Elsewhere::kCommands)
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_StepThousandBodies, published_commanded_asleep_elsewhere, true, false, 2, 0,
+                  Elsewhere::kCommandsAsleep)
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_StepThousandBodies, published_commanded_asleep_elsewhere_one_thread, true,
+                  false, 1, 0, Elsewhere::kCommandsAsleep)
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_StepThousandBodies, published_commanded_asleep_elsewhere_reduced, true, false,
+                  2, 0, Elsewhere::kCommandsAsleep, true)
     ->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(BM_StepThousandBodies, published_commanded, true, true, 2)
     ->Unit(benchmark::kMicrosecond);
