@@ -1,12 +1,17 @@
 #include "reserved_world.hpp"
 
 #include <BulletCollision/CollisionDispatch/btSimulationIslandManager.h>
+#include <BulletCollision/NarrowPhaseCollision/btPersistentManifold.h>
 #include <BulletDynamics/Featherstone/btMultiBodyLinkCollider.h>
 
 #include <algorithm>
 
 namespace afhub::physics {
 namespace {
+
+// Collision objects whose bounds one thread makes at a time (updateAabbs): fewer than
+// 16 items (ParallelIslands::kMinItems) are made by the stepping thread alone.
+constexpr int kObjectsPerItem = 32;
 
 // As Bullet tells a constraint's island: its first body's, unless that is static.
 int island_of(const btTypedConstraint& constraint) {
@@ -53,6 +58,7 @@ void ReservedWorld::solve_islands_in_parallel(int bodies, int joints, int object
   island_bodies_.reserve(objects);
   integrated_.assign(objects, 0);
   unintegrated_.reserve(objects);
+  bounds_.resize(objects);
 }
 
 void ReservedWorld::island_to_solve(btCollisionObject** bodies, int count, int thread) noexcept {
@@ -144,6 +150,45 @@ btScalar BodyDamping::Factor::of(btScalar new_damping, btScalar new_dt) noexcept
     factor = btPow(btScalar(1) - damping, dt);
   }
   return factor;
+}
+
+void ReservedWorld::updateAabbs() {
+  const int count = m_collisionObjects.size();
+  if (!parallel_ || count > static_cast<int>(bounds_.size())) {
+    btSoftMultiBodyDynamicsWorld::updateAabbs();
+    return;
+  }
+  // Bullet's updateSingleAabb, in two parts. A shape's bounds read only the shape.
+  share_each(*this, count, kObjectsPerItem, [this](int i, int) {
+    const btCollisionObject& object = *m_collisionObjects[i];
+    Bounds& bounds = bounds_[static_cast<std::size_t>(i)];
+    bounds.update = m_forceUpdateAllAabbs || object.isActive();
+    if (!bounds.update) return;
+    const btVector3 margin(gContactBreakingThreshold, gContactBreakingThreshold,
+                           gContactBreakingThreshold);
+    object.getCollisionShape()->getAabb(object.getWorldTransform(), bounds.min, bounds.max);
+    bounds.min -= margin;
+    bounds.max += margin;
+    if (getDispatchInfo().m_useContinuous &&
+        object.getInternalType() == btCollisionObject::CO_RIGID_BODY &&
+        !object.isStaticOrKinematicObject()) {
+      btVector3 min, max;
+      object.getCollisionShape()->getAabb(object.getInterpolationWorldTransform(), min, max);
+      bounds.min.setMin(min - margin);
+      bounds.max.setMax(max + margin);
+    }
+  });
+  for (int i = 0; i < count; ++i) {
+    const Bounds& bounds = bounds_[static_cast<std::size_t>(i)];
+    if (!bounds.update) continue;
+    btCollisionObject& object = *m_collisionObjects[i];
+    // As Bullet: a moving object whose bounds overflow leaves the simulation.
+    if (object.isStaticObject() || (bounds.max - bounds.min).length2() < btScalar(1e12))
+      m_broadphasePairCache->setAabb(object.getBroadphaseHandle(), bounds.min, bounds.max,
+                                     m_dispatcher1);
+    else
+      object.setActivationState(DISABLE_SIMULATION);
+  }
 }
 
 void ReservedWorld::createPredictiveContacts(btScalar dt) {

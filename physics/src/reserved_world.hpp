@@ -83,6 +83,11 @@ class ReservedWorld : public btSoftMultiBodyDynamicsWorld, private ParallelIslan
   // step).
   void predictUnconstraintMotion(btScalar dt) override;
   void createPredictiveContacts(btScalar dt) override;
+  // Each collision object's bounds, as Bullet's updateSingleAabb makes them, made by
+  // both threads at once with a helper, then handed to the broadphase in the objects'
+  // order by this one (the broadphase's tree is one structure): the same bits. Bullet
+  // does it all on one thread: for a thousand colliders, 8 % of the step in a profile.
+  void updateAabbs() override;
 
  private:
   struct Keyed {
@@ -102,6 +107,12 @@ class ReservedWorld : public btSoftMultiBodyDynamicsWorld, private ParallelIslan
   std::vector<std::uint64_t> integrated_;
   std::uint64_t stamp_ = 0;
   std::vector<btRigidBody*> unintegrated_;
+  // Per collision object: its bounds for updateAabbs(), and whether they are updated.
+  struct Bounds {
+    btVector3 min, max;
+    bool update = false;
+  };
+  std::vector<Bounds> bounds_;
 
   void island_to_solve(btCollisionObject** bodies, int count, int thread) noexcept override;
   void island_solved(btCollisionObject** bodies, int count, int thread) noexcept override;

@@ -16,10 +16,6 @@ namespace {
 // bounded far away.
 constexpr btScalar kLargeImpulse = BT_LARGE_FLOAT;
 
-// Chains are shared between the two threads in blocks of this many (an eight-link arm's
-// mirror is about a microsecond).
-constexpr int kChainsPerItem = 4;
-
 btScalar damping_rate(btScalar damping) {
   return damping <= 0 ? 0 : -std::log(std::max<btScalar>(1 - damping, 1e-6));
 }

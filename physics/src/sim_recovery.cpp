@@ -12,6 +12,10 @@
 namespace afhub::physics {
 namespace {
 
+// Bodies checked by one thread at a time (Simulation::share): each check reads the
+// body and keeps its good pose, nothing else.
+constexpr int kBodiesPerItem = 32;
+
 bool finite_body(const btRigidBody& rb) {
   const btTransform& t = rb.getWorldTransform();
   const btMatrix3x3& basis = t.getBasis();
@@ -55,10 +59,18 @@ void Simulation::Data::recover_non_finite() noexcept {
     nan_recoveries.last = event;
     ++nan_recoveries.count;
   };
+  // Every body checked, and its pose kept when finite, by both threads; then, in order,
+  // those the step left non-finite are put back.
+  share_each(world, static_cast<int>(bodies.size()), kBodiesPerItem, [this](int b, int) {
+    BodyData& body = bodies[static_cast<std::size_t>(b)];
+    body.left_finite = finite_body(*body.body);
+    if (body.left_finite) body.good_pose = body.body->getWorldTransform();
+  });
   for (std::size_t b = 0; b < bodies.size(); ++b) {
     BodyData& body = bodies[b];
+    if (body.left_finite) continue;
     btRigidBody& rb = *body.body;
-    if (finite_body(rb)) {
+    if (finite_body(rb)) {  // a link whose chain was put back for a link before it
       body.good_pose = rb.getWorldTransform();
       continue;
     }
@@ -91,8 +103,10 @@ void Simulation::Data::recover_non_finite() noexcept {
     for (ActuatorData& actuator : actuators)
       if (actuator.parent == index || actuator.held == index) actuate(actuator, false);
   }
-  for (ChainData& chain : chains)
+  share_each(world, static_cast<int>(chains.size()), kChainsPerItem, [this](int c, int) {
+    ChainData& chain = chains[static_cast<std::size_t>(c)];
     if (chain.restored_at != steps) keep_good_coordinates(chain);
+  });
   for (std::size_t s = 0; s < soft_bodies.size(); ++s) {
     SoftBodyData& data = soft_bodies[s];
     btSoftBody& soft = *data.body;

@@ -76,6 +76,7 @@ struct BodyData {
   std::size_t first_ray = 0, ray_count = 0;  // into Data::rays
   std::vector<int> actuators;                // into Data::actuators, file order
   btTransform good_pose;                     // after the last step that left it finite
+  bool left_finite = true;                   // by the last step (recover_non_finite)
 };
 
 // An open chain in reduced coordinates (chains.hpp): a btMultiBody with a fixed base at
@@ -168,6 +169,10 @@ class CollisionFilter : public btOverlapFilterCallback {
   const Model& model_;
   std::vector<int> ignored_base_;  // per body
 };
+
+// Work on chains is shared between the two threads (Simulation::share) in blocks of
+// this many (an eight-link arm's mirror is about a microsecond).
+constexpr int kChainsPerItem = 4;
 
 struct Simulation::Data {
   const Model& model;
