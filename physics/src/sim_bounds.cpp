@@ -79,11 +79,6 @@ const InputBounds& Simulation::input_bounds(std::size_t body) const noexcept {
 }
 
 const char* Simulation::input_problem(std::size_t index, const BodyInput& input) const noexcept {
-  return input_problem(index, input, data_->problem);
-}
-
-const char* Simulation::input_problem(std::size_t index, const BodyInput& input,
-                                      std::span<char> text_out) const noexcept {
   const Data& d = *data_;
   std::uint32_t actuators = static_cast<std::uint32_t>(d.bodies[index].actuators.size());
   const auto joints = static_cast<std::uint32_t>(d.model.descendant_joints[index].size());
@@ -98,8 +93,8 @@ const char* Simulation::input_problem(std::size_t index, const BodyInput& input,
            "which takes no velocity: command a wrench, a pose with a force controller, or "
            "its joints";
   const InputBounds& bound = d.bounds[index];
-  char* text = text_out.data();
-  const std::size_t size = text_out.size();
+  char* text = d.problem.data();
+  const std::size_t size = d.problem.size();
   // Only the fields the Cartesian mode uses are applied, but all are checked: a
   // command carries one meaning, and a huge unused value is a sender's bug too.
   const Vec3& p = input.target_pose.position_m;

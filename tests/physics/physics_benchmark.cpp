@@ -526,9 +526,6 @@ BENCHMARK_CAPTURE(BM_StepThousandBodies, published_commanded_elsewhere, true, fa
 BENCHMARK_CAPTURE(BM_StepThousandBodies, published_commanded_asleep_elsewhere, true, false, 2, 0,
                   Elsewhere::kCommandsAsleep)
     ->Unit(benchmark::kMicrosecond);
-BENCHMARK_CAPTURE(BM_StepThousandBodies, published_commanded_asleep_elsewhere_one_thread, true,
-                  false, 1, 0, Elsewhere::kCommandsAsleep)
-    ->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(BM_StepThousandBodies, published_commanded_asleep_elsewhere_reduced, true, false,
                   2, 0, Elsewhere::kCommandsAsleep, true)
     ->Unit(benchmark::kMicrosecond);

@@ -7,7 +7,6 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <array>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -278,13 +277,9 @@ void Directory::watch() {
 
 void Directory::look() noexcept {
   // At the first look of each round: every reader of the round sees what it found.
-  // Looks are counted per thread: the readers of one kind read on two threads at once
-  // (the physics' command readers, shared with its islands' helper) would otherwise
-  // pass one counter's line between their cores at every read.
-  static thread_local std::array<std::uint32_t, kKinds> looks{};
   const std::uint32_t readers =
       std::max<std::uint32_t>(readers_.load(std::memory_order_relaxed), 1);
-  refresh(looks[static_cast<std::size_t>(kind_) % kKinds]++ % readers == 0);
+  refresh(looks_.fetch_add(1, std::memory_order_relaxed) % readers == 0);
 }
 
 void Directory::refresh(bool now) noexcept {

@@ -92,7 +92,6 @@ class Directory {
   std::size_t bind_locked(const std::string& key, Found* out, std::size_t max, bool pin);
 
   PayloadKind kind_;
-  static constexpr std::size_t kKinds = 32;  // above every PayloadKind's value
   struct Port;
   std::unique_ptr<Port> port_;
   std::mutex mutex_;
@@ -101,6 +100,7 @@ class Directory {
   std::atomic<std::uint64_t> generation_{0};
   std::atomic<std::int64_t> last_look_tick_{-1};
   std::atomic<std::uint32_t> readers_{0};
+  std::atomic<std::uint32_t> looks_{0};
   std::size_t next_liveness_check_ = 0;
   std::int64_t last_liveness_tick_ = -1;
   bool reported_ = false;

@@ -9,114 +9,72 @@
 
 namespace afhub::physics {
 
-// Two passes. The first, shared by the stepping thread and the islands' helper
-// (Simulation::share), copies each body's command out of shared memory and checks it:
-// what a thousand bodies' commands cost is mostly there, in lines that come from the
-// controller's core. Each channel's reader and finding are its own, and each thread
-// has its own input to check. The second, in channel order on this thread, applies
-// what the first found: bodies' commands may drive the same joints (a base's and a
-// link's), and the last in channel order wins, as it always has.
 void SimChannels::apply_commands(std::int64_t now_ns) noexcept {
-  const int count = static_cast<int>(channels_.size());
-  share_each(sim_, count, kChannelsPerItem, [&](int c, int thread) {
-    // The command slots were last written by a controller on another core.
-    ask_ahead(c, [](const Channel& next) { next.publisher->prefetch_command(); });
-    find_command(channels_[static_cast<std::size_t>(c)], inputs_[static_cast<std::size_t>(thread)],
-                 now_ns);
-  });
-  for (Channel& channel : channels_) take_command(channel, now_ns);
-}
-
-void SimChannels::find_command(Channel& channel, BodyInput& input, std::int64_t now_ns) noexcept {
-  channel.found = Found::kNothing;
-  if (channel.soft) return;  // soft bodies take no commands
-  const BodyCommand* command = channel.publisher->latest_command();
-  if (!command || !channel.publisher->command_updated()) return;
-  channel.found_command = command;  // copied out of shared memory once, then checked
-  if (command->lockstep == BodyCommand::kLockstepKeep) {
-    channel.found = Found::kKeep;
-    return;
-  }
-  // Its age by its publish stamp (the same monotonic clock in every process), not by
-  // when this process first saw it. A stamp from the future (a forged or broken
-  // writer) is no fresher than an old one: past a small allowance it is ignored too,
-  // or it would hold the watchdog off for as long as it is ahead.
-  const std::int64_t stamp_ns = command->header.publish_stamp_ns;
-  std::int64_t age_ns = now_ns - stamp_ns;
-  if (age_ns < -kFutureStampAllowanceNs) {
-    // Or published after `now_ns` was read, this thread preempted meanwhile (for
-    // milliseconds on a loaded machine): judged again by the clock as it is now.
-    now_ns = monotonic_ns();
-    age_ns = now_ns - stamp_ns;
-  }
-  to_input(*command, input);
-  if (age_ns > channel.watchdog_ns || age_ns < -kFutureStampAllowanceNs) {
-    channel.found = Found::kStale;
-    channel.found_ns = age_ns;
-  } else if (const char* problem =
-                 sim_.input_problem(channel.index, input, channel.refusal_reason)) {
-    if (problem != channel.refusal_reason.data()) set_name(channel.refusal_reason, problem);
-    channel.found = Found::kRefused;
-  } else {
-    channel.found = Found::kApply;
-    channel.found_ns = std::min(stamp_ns, now_ns);
-  }
-}
-
-void SimChannels::take_command(Channel& channel, std::int64_t now_ns) noexcept {
-  const BodyCommand* command = channel.found_command;
-  switch (channel.found) {
-    case Found::kNothing:
-      break;
-    case Found::kKeep:  // an answer alone: the command in force, and its watchdog, go on
+  for (std::size_t c = 0; c < channels_.size(); ++c) {
+    Channel& channel = channels_[c];
+    // The command slots were last written by a controller on another core: asked for
+    // a few bodies ahead, their lines come while this one is read.
+    if (c + kBodyPrefetchAhead < channels_.size())
+      channels_[c + kBodyPrefetchAhead].publisher->prefetch_command();
+    if (channel.soft) continue;  // soft bodies take no commands
+    const BodyCommand* command = channel.publisher->latest_command();
+    const bool updated = command && channel.publisher->command_updated();
+    if (updated && command->lockstep == BodyCommand::kLockstepKeep) {
+      // An answer alone: the command in force, and its watchdog, go on.
       if (lockstep_)
         note_lockstep_answer(channel,
                              {command->header.sim_step, command->header.publisher_pid, true});
       if (channel.commanded) channel.last_command_ns = now_ns;
-      break;
-    case Found::kStale:
+    } else if (updated) {
+      // Copied out of shared memory once, then checked, then applied.
       channel.taken_command = command;
-      ++stale_;
-      if (Notice* notice = note(channel, kStale, command->header.publisher_pid))
-        notice->seconds = static_cast<double>(channel.found_ns) * 1e-9;
-      break;
-    case Found::kRefused:
-      channel.taken_command = command;
-      ++rejected_;
-      ++channel.refused;
-      channel.refused_pid = command->header.publisher_pid;
-      if (Notice* notice = note(channel, kRejected, command->header.publisher_pid))
-        set_name(notice->why, channel.refusal_reason.data());
-      break;
-    case Found::kApply: {
-      channel.taken_command = command;
-      BodyInput& input = inputs_[0];
-      to_input(*command, input);
-      // Entries for joints without an axis are refused and counted; the rest applies.
-      if (const char* entry = sim_.axisless_entry(channel.index, input)) {
-        ++rejected_;
-        if (Notice* notice = note(channel, kAxisless, command->header.publisher_pid))
-          set_name(notice->why, entry);
+      to_input(*command, input_);
+      const Answer answer{command->header.sim_step, command->header.publisher_pid,
+                          command->lockstep != 0};
+      // Its age by its publish stamp (the same monotonic clock in every process),
+      // not by when this process first saw it. A stamp from the future (a forged or
+      // broken writer) is no fresher than an old one: past a small allowance it is
+      // ignored too, or it would hold the watchdog off for as long as it is ahead.
+      const std::int64_t stamp_ns = command->header.publish_stamp_ns;
+      std::int64_t age_ns = now_ns - stamp_ns;
+      if (age_ns < -kFutureStampAllowanceNs) {
+        // Or published after `now_ns` was read, this thread preempted meanwhile (for
+        // milliseconds on a loaded machine): judged again by the clock as it is now.
+        now_ns = monotonic_ns();
+        age_ns = now_ns - stamp_ns;
       }
-      if (lockstep_ && command->lockstep != 0)
-        note_lockstep_answer(channel,
-                             {command->header.sim_step, command->header.publisher_pid, true});
-      channel.applied_answer_step = command->header.sim_step;
-      sim_.set_input(channel.index, input);
-      channel.last_command_ns = channel.found_ns;
-      channel.commanded = true;
-      break;
+      if (age_ns > channel.watchdog_ns || age_ns < -kFutureStampAllowanceNs) {
+        ++stale_;
+        if (Notice* notice = note(channel, kStale, answer.pid))
+          notice->seconds = static_cast<double>(age_ns) * 1e-9;
+      } else if (const char* problem = sim_.input_problem(channel.index, input_)) {
+        ++rejected_;
+        ++channel.refused;
+        channel.refused_pid = answer.pid;
+        set_name(channel.refusal_reason, problem);
+        if (Notice* notice = note(channel, kRejected, answer.pid)) set_name(notice->why, problem);
+      } else {
+        // Entries for joints without an axis are refused and counted; the rest applies.
+        if (const char* entry = sim_.axisless_entry(channel.index, input_)) {
+          ++rejected_;
+          if (Notice* notice = note(channel, kAxisless, answer.pid)) set_name(notice->why, entry);
+        }
+        if (lockstep_ && answer.lockstep) note_lockstep_answer(channel, answer);
+        channel.applied_answer_step = answer.step;
+        sim_.set_input(channel.index, input_);
+        channel.last_command_ns = std::min(stamp_ns, now_ns);
+        channel.commanded = true;
+      }
     }
-  }
-  channel.found = Found::kNothing;
-  if (channel.commanded && now_ns - channel.last_command_ns > channel.watchdog_ns) {
-    if (channel.hold_on_watchdog)
-      sim_.hold_joints(channel.index);
-    else
-      sim_.clear_input(channel.index);
-    channel.commanded = false;
-    ++expiries_;
-    note(channel, kExpired, 0);
+    if (channel.commanded && now_ns - channel.last_command_ns > channel.watchdog_ns) {
+      if (channel.hold_on_watchdog)
+        sim_.hold_joints(channel.index);
+      else
+        sim_.clear_input(channel.index);
+      channel.commanded = false;
+      ++expiries_;
+      note(channel, kExpired, 0);
+    }
   }
 }
 

@@ -8,7 +8,6 @@
 #include <array>
 #include <cstdint>
 #include <memory>
-#include <span>
 #include <string>
 #include <vector>
 
@@ -54,10 +53,6 @@ class Simulation {
   // the value and the bound ("joint 3 (link3-link4) effort 1e+308 is beyond its
   // bound of 2180 N m"); the text stays valid until the next call.
   const char* input_problem(std::size_t body, const BodyInput& input) const noexcept;
-  // The same, a text it makes written into `text` (cut to fit), so that several
-  // threads may check inputs at once (each body's command, SimChannels).
-  const char* input_problem(std::size_t body, const BodyInput& input,
-                            std::span<char> text) const noexcept;
   const InputBounds& input_bounds(std::size_t body) const noexcept;
   // nullptr when no entry of `input` (checked with input_problem first) asks
   // something of a joint without an axis (fixed, p2p, cone twist, six dof: see

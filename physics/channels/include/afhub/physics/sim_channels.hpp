@@ -33,7 +33,6 @@
 // (the scene and the viewers' feeds).
 #pragma once
 
-#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <cstdio>
@@ -182,10 +181,6 @@ class SimChannels {
     int misses = 0;               // kDropped: late steps in a row
     std::array<char, 160> why{};  // kRejected, kAxisless: the problem
   };
-  // A body's command slot, as apply_commands' first pass found it: nothing new, an
-  // answer that keeps the command in force, a stale command, a refused one (its reason
-  // in the channel's refusal_reason), or one to apply.
-  enum class Found : std::uint8_t { kNothing, kKeep, kStale, kRefused, kApply };
   struct Channel {
     std::size_t index = 0;  // into model bodies, or soft bodies when `soft`
     bool soft = false;
@@ -214,10 +209,6 @@ class SimChannels {
     int misses = 0;         // late lockstep steps in a row
     // The command taken since the last publish (the reader's checked copy), for the tape.
     const BodyCommand* taken_command = nullptr;
-    // What apply_commands' first pass found in the command slot, for its second.
-    Found found = Found::kNothing;
-    const BodyCommand* found_command = nullptr;  // kKeep, kApply: the reader's checked copy
-    std::int64_t found_ns = 0;  // kApply: its stamp (not after the clock); kStale: its age
     void prefetch_state_update() const noexcept { publisher->prefetch_state_update(ray_count); }
   };
   // The notice to fill for `event`, or nullptr when a said-once event was noted already.
@@ -264,30 +255,7 @@ class SimChannels {
   // below is opened, confirmed once the directory is out.
   std::vector<std::string> claimed_;
   std::vector<Channel> channels_;
-  // Work on every channel (states published, commands found) is shared between the
-  // stepping thread and the islands' helper a block of channels at a time
-  // (Simulation::share): each channel's slots and reader are its own, and each thread
-  // has its own buffers. A thousand bodies' states: publishing 0.58 to 0.70x
-  // (docs/performance.md).
-  static constexpr int kChannelsPerItem = 16;
-  // In such a block, at channel `c`: `ask` for the lines of the channel a few ahead
-  // (kBodyPrefetchAhead; of each of them at the block's start), so that they come
-  // while this one is worked on. Within the block only: the next block's channels may
-  // be in the other thread's hands.
-  template <class Ask>
-  void ask_ahead(int c, Ask ask) const noexcept {
-    const int count = static_cast<int>(channels_.size());
-    const int block_end = std::min(count, (c / kChannelsPerItem + 1) * kChannelsPerItem);
-    const int ahead = c + static_cast<int>(kBodyPrefetchAhead);
-    for (int k = c % kChannelsPerItem == 0 ? c + 1 : ahead; k <= ahead && k < block_end; ++k)
-      ask(channels_[static_cast<std::size_t>(k)]);
-  }
-  // The command being checked, out of shared memory, one per thread checking commands;
-  // the first also the one being applied.
-  std::array<BodyInput, 2> inputs_;
-  // apply_commands' two passes.
-  void find_command(Channel& channel, BodyInput& input, std::int64_t now_ns) noexcept;
-  void take_command(Channel& channel, std::int64_t now_ns) noexcept;
+  BodyInput input_;  // the command being checked and applied, out of shared memory
   // A body's readings on their way into its state, one per thread writing states.
   std::array<BodyReading, 2> readings_;
   DirectoryPublisher directory_;
