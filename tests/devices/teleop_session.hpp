@@ -98,11 +98,9 @@ class TeleopSession {
     args.insert(args.end(), setup_.driver_args.begin(), setup_.driver_args.end());
     driver_ = std::make_unique<ScopedProcess>(spawn_afhub(args, setup_.log + ".device"));
   }
-  // A new device driver (its trajectory from its start) and a new teleoperation process.
-  void restart_device_and_teleop() {
+  // A new teleoperation process, bound to the running driver.
+  void restart_teleop() {
     teleop_.stop();
-    driver_->stop();
-    start_driver();
     teleop_.pid = spawn_afhub(teleop_args(), setup_.log + ".teleop");
   }
   // The newest device state not seen before, or nullptr.
