@@ -1,5 +1,6 @@
 #include "chains.hpp"
 
+#include "afhub/physics/lineage.hpp"
 #include "body_groups.hpp"
 
 namespace afhub::physics {
@@ -18,7 +19,6 @@ std::vector<ChainPlan> plan_chains(const Model& model) {
   auto moves = [&](int b) { return model.bodies[b].mass_kg > 0.0; };
   // Moving bodies joined by joints, as groups.
   BodyGroups joined(bodies);
-  auto root = [&](int b) { return joined.root(b); };
   for (const JointSpec& joint : model.joints)
     if (moves(joint.parent) && moves(joint.child)) joined.join(joint.parent, joint.child);
   struct Group {
@@ -27,11 +27,11 @@ std::vector<ChainPlan> plan_chains(const Model& model) {
   };
   std::vector<Group> groups(bodies);
   for (std::size_t b = 0; b < bodies; ++b)
-    if (moves(static_cast<int>(b))) ++groups[root(static_cast<int>(b))].bodies;
+    if (moves(static_cast<int>(b))) ++groups[joined.root(static_cast<int>(b))].bodies;
   for (std::size_t j = 0; j < model.joints.size(); ++j) {
     const JointSpec& joint = model.joints[j];
     if (!moves(joint.parent) && !moves(joint.child)) continue;
-    Group& g = groups[root(moves(joint.child) ? joint.child : joint.parent)];
+    Group& g = groups[joined.root(moves(joint.child) ? joint.child : joint.parent)];
     g.reducible &= reducible(joint);
     if (moves(joint.parent) && moves(joint.child)) {
       ++g.inner_joints;
@@ -42,17 +42,15 @@ std::vector<ChainPlan> plan_chains(const Model& model) {
     }
   }
   for (const ActuatorSpec& actuator : model.actuators)
-    if (moves(actuator.parent)) groups[root(actuator.parent)].reducible = false;
+    if (moves(actuator.parent)) groups[joined.root(actuator.parent)].reducible = false;
 
   // Each qualifying tree's links, breadth first from its base joint: a joint whose
   // parent is not yet a link points inwards, and the tree does not qualify.
-  std::vector<std::vector<int>> joints_from(bodies);  // by parent body
-  for (std::size_t j = 0; j < model.joints.size(); ++j)
-    joints_from[model.joints[j].parent].push_back(static_cast<int>(j));
+  const std::vector<std::vector<int>> joints_from = joints_by_parent(model);
   std::vector<ChainPlan> chains;
   for (std::size_t b = 0; b < bodies; ++b) {
     const Group& g = groups[b];
-    if (root(static_cast<int>(b)) != static_cast<int>(b) || !moves(static_cast<int>(b)) ||
+    if (joined.root(static_cast<int>(b)) != static_cast<int>(b) || !moves(static_cast<int>(b)) ||
         !g.reducible || g.base_joints != 1 || g.inner_joints != g.bodies - 1)
       continue;
     ChainPlan chain;

@@ -12,11 +12,16 @@
 
 namespace afhub::physics {
 
+std::vector<std::vector<int>> joints_by_parent(const Model& model) {
+  std::vector<std::vector<int>> joints(model.bodies.size());
+  for (int j = 0; j < static_cast<int>(model.joints.size()); ++j)
+    joints[model.joints[j].parent].push_back(j);
+  return joints;
+}
+
 void compute_lineage(Model& model) {
   const int body_count = static_cast<int>(model.bodies.size());
-  std::vector<std::vector<int>> joints_from(body_count);
-  for (int j = 0; j < static_cast<int>(model.joints.size()); ++j)
-    joints_from[model.joints[j].parent].push_back(j);
+  const std::vector<std::vector<int>> joints_from = joints_by_parent(model);
 
   model.descendant_joints.assign(body_count, {});
   // Marks stamped with the body being walked, so that each walk costs what it

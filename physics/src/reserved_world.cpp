@@ -159,13 +159,13 @@ void ReservedWorld::updateAabbs() {
     return;
   }
   // Bullet's updateSingleAabb, in two parts. A shape's bounds read only the shape.
-  share_each(*this, count, kObjectsPerItem, [this](int i, int) {
+  const btVector3 margin(gContactBreakingThreshold, gContactBreakingThreshold,
+                         gContactBreakingThreshold);
+  share_each(*this, count, kObjectsPerItem, [this, &margin](int i, int) {
     const btCollisionObject& object = *m_collisionObjects[i];
     Bounds& bounds = bounds_[static_cast<std::size_t>(i)];
     bounds.update = m_forceUpdateAllAabbs || object.isActive();
     if (!bounds.update) return;
-    const btVector3 margin(gContactBreakingThreshold, gContactBreakingThreshold,
-                           gContactBreakingThreshold);
     object.getCollisionShape()->getAabb(object.getWorldTransform(), bounds.min, bounds.max);
     bounds.min -= margin;
     bounds.max += margin;
