@@ -1184,17 +1184,20 @@ TEST(Record, ALockstepRunIsReproducedBitIdenticallyAndAChangedGainIsCaughtAtItsS
   // Every step's states, commands and world state (the physics' step tape). A command
   // may be missing only as replaced: the controller, woken from its stop, answered the
   // state it had read before it, then the newest one, before the physics stepped (a CI
-  // run recorded one such).
+  // run recorded one such). The pose feed, 60 a second, is read from its slot, not the
+  // tape: a recorder held up 17 ms misses one (4 in a CI run), and counts it missed.
   const json lockstep_info = info_of(file);
-  long long commands_skipped = 0;
+  long long commands_skipped = 0, poses_skipped = 0;
   for (const json& channel : lockstep_info["channels"]) {
     if (channel["schema"] == "afhub.BodyCommand") {
       commands_skipped += channel["skipped"].get<long long>();
-    } else if (channel["schema"] != "afhub.ScenePoses") {
+    } else if (channel["schema"] == "afhub.ScenePoses") {
+      poses_skipped += channel["skipped"].get<long long>();
+    } else {
       EXPECT_EQ(channel["skipped"], 0) << channel["topic"] << "\n" << recorded;
     }
   }
-  EXPECT_EQ(number_after(recorded, "missed "), 0) << recorded;
+  EXPECT_EQ(number_after(recorded, "missed "), poses_skipped) << recorded;
   EXPECT_EQ(number_after(recorded, "commands replaced "), commands_skipped) << recorded;
 
   // The same model, the recorded commands: every state of every step as recorded (the
