@@ -67,6 +67,21 @@ struct SceneRun {
     return wait_until([&] { return world.latest() && world.latest()->commanded_steps > 200; }, 60s);
   }
   std::string logs() const { return read_file(dir("run.log")) + read_file(dir("ctl.log")); }
+  // Records `file` until the physics has taken `steps` steps since the recorder listed
+  // the arm's link3 (`afhub record --duration` is the clock's: a CI run beside other
+  // tests recorded 369 steps in 2 s). False on a timeout or a failed recorder.
+  bool record_steps(const std::string& file, std::uint64_t steps) {
+    ScopedProcess recorder(spawn_afhub({"record", "-o", file}, dir("record.log")));
+    LatestReader<WorldState> world(
+        ChannelId{std::string(kService), std::string(kWorldInstance), std::string(kStateEvent)});
+    const auto lists_link3 = [&] {
+      return run_afhub({"info", file}).out.find("/afhub/arm/link3/state") != std::string::npos;
+    };
+    if (!wait_until(lists_link3, 30s) || !world.latest()) return false;
+    const std::uint64_t from = world.latest()->header.sim_step;
+    return wait_until([&] { return world.latest()->header.sim_step >= from + steps; }, 60s) &&
+           recorder.stop(SIGINT) == 0;
+  }
 
   afhub::testing::ModelFolder folder;
   std::unique_ptr<ScopedProcess> physics, controller;
@@ -811,7 +826,7 @@ TEST(Record, APlayedRecordingIsSeenAsIfLiveAndPausesAndStepsUnderAfhubWorld) {
   SceneRun scene;
   ASSERT_TRUE(scene.ready()) << scene.logs();
   const std::string file = scene.dir("played.mcap");
-  ASSERT_EQ(run_afhub({"record", "-o", file, "--duration", "2"}, 60s).exit_code, 0);
+  ASSERT_TRUE(scene.record_steps(file, 2000)) << read_file(scene.dir("record.log"));
   scene.controller->stop();
   scene.physics->stop();
   const auto recorded = recorded_joints(file, "afhub/arm/link3");
