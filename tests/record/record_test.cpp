@@ -68,8 +68,8 @@ struct SceneRun {
   }
   std::string logs() const { return read_file(dir("run.log")) + read_file(dir("ctl.log")); }
   // Records `file` until the physics has taken `steps` steps since the recorder listed
-  // the arm's link3 (`afhub record --duration` is the clock's: a CI run beside other
-  // tests recorded 369 steps in 2 s). False on a timeout or a failed recorder.
+  // the arm's link3 (`afhub record --duration` is the clock's: beside three other tests
+  // and a busy loop it recorded 369 steps in 2 s). False on a timeout or a failed recorder.
   bool record_steps(const std::string& file, std::uint64_t steps) {
     ScopedProcess recorder(spawn_afhub({"record", "-o", file}, dir("record.log")));
     LatestReader<WorldState> world(
