@@ -52,6 +52,15 @@ using nlohmann::json;
 const std::string kScene = AFHUB_EXAMPLE_MODELS "/launch.yaml";
 const std::string kChecker = AFHUB_MCAP_CHECK;
 
+// Waits until the recording `file` lists the channel `topic`: the recorder reads it.
+bool recording_lists(const std::string& file, const std::string& topic) {
+  return wait_until(
+      [&] {
+        return run_afhub({"info", file}).out.find(topic) != std::string::npos;
+      },
+      30s);
+}
+
 // The scene's physics and a controller holding the arm, on the test's hub.
 struct SceneRun {
   SceneRun() {
@@ -74,10 +83,7 @@ struct SceneRun {
     ScopedProcess recorder(spawn_afhub({"record", "-o", file}, dir("record.log")));
     LatestReader<WorldState> world(
         ChannelId{std::string(kService), std::string(kWorldInstance), std::string(kStateEvent)});
-    const auto lists_link3 = [&] {
-      return run_afhub({"info", file}).out.find("/afhub/arm/link3/state") != std::string::npos;
-    };
-    if (!wait_until(lists_link3, 30s) || !world.latest()) return false;
+    if (!recording_lists(file, "/afhub/arm/link3/state") || !world.latest()) return false;
     const std::uint64_t from = world.latest()->header.sim_step;
     return wait_until([&] { return world.latest()->header.sim_step >= from + steps; }, 60s) &&
            recorder.stop(SIGINT) == 0;
@@ -1124,15 +1130,6 @@ std::unique_ptr<ScopedProcess> lockstep_arm(const std::string& log, bool paused,
   args.insert(args.end(), paused ? std::initializer_list<std::string>{"--paused"}
                                  : std::initializer_list<std::string>{"--wait-for", "1"});
   return std::make_unique<ScopedProcess>(spawn_afhub(args, log));
-}
-
-// Waits until the recording `file` lists the channel `topic`: the recorder reads it.
-bool recording_lists(const std::string& file, const std::string& topic) {
-  return wait_until(
-      [&] {
-        return run_afhub({"info", file}).out.find(topic) != std::string::npos;
-      },
-      30s);
 }
 
 // Waits until the recording `file` holds a first message of `topic`.
