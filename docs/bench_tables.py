@@ -70,8 +70,12 @@ def loop_table(first, second):
                  for f in fields)
         return f"| {name} | " + " | ".join(cells) + " |"
 
+    def name(run):
+        return "the `--touch` run" if run["settings"]["touch"] else "the stamps-alone run"
+
+    seconds = first["settings"]["loop_seconds"]
     return "\n".join([
-        "| 1 kHz loop, 60 s, wake-up latency (us), the stamps-alone run / the `--touch` run "
+        f"| 1 kHz loop, {seconds:g} s, wake-up latency (us), {name(first)} / {name(second)} "
         "| p50 | p99 | p99.9 | max |",
         "| --- | --- | --- | --- | --- |",
         row("afhub controller beside `afhub run` on the example arm", "afhub_us"),
