@@ -375,6 +375,7 @@ class ControllerElsewhere {
   static bool possible() { return first_two_cpus().second >= 0; }
 
   ControllerElsewhere(const std::vector<BodySpec>& bodies, bool commands, bool asleep) {
+    answer_us_.reserve(1 << 20);
     for (const BodySpec& body : bodies)
       bodies_.push_back(std::make_unique<BodyClient>(body.channel));
     for (auto& reader : bodies_)
@@ -390,7 +391,14 @@ class ControllerElsewhere {
           if (asleep) published_.wait(seen, std::memory_order_acquire);
           continue;
         }
-        for (auto& body : bodies_) {
+        const std::int64_t begin_ns = monotonic_ns();
+        for (std::size_t b = 0; b < bodies_.size(); ++b) {
+          // A few bodies ahead, as a controller process does (bench/src/bodies_bench.cpp).
+          if (b + kBodyPrefetchAhead < bodies_.size()) {
+            bodies_[b + kBodyPrefetchAhead]->prefetch_state();
+            if (commands) bodies_[b + kBodyPrefetchAhead]->prefetch_command_update();
+          }
+          BodyClient* body = bodies_[b].get();
           const BodyState* read = body->latest_state();
           if (!read || !commands) continue;
           BodyCommand* command = body->loan_command(read->joint_count);
@@ -400,6 +408,8 @@ class ControllerElsewhere {
           command->header.sim_step = read->header.sim_step;
           body->publish_command(command);
         }
+        if (answer_us_.size() < answer_us_.capacity())
+          answer_us_.push_back(static_cast<float>(monotonic_ns() - begin_ns) * 1e-3F);
         seen = step;
         read_.store(step, std::memory_order_release);
       }
@@ -419,6 +429,13 @@ class ControllerElsewhere {
     while (read_.load(std::memory_order_acquire) != step) {
     }
   }
+  // The median time the controller took to read (and answer) a step's states, us;
+  // after answer_step, whose wait orders the controller's records before it.
+  float answer_p50_us() {
+    if (answer_us_.empty()) return 0.0F;
+    std::sort(answer_us_.begin(), answer_us_.end());
+    return answer_us_[answer_us_.size() / 2];
+  }
 
  private:
   static std::pair<int, int> first_two_cpus() {
@@ -437,6 +454,7 @@ class ControllerElsewhere {
   }
   std::vector<std::unique_ptr<BodyClient>> bodies_;
   cpu_set_t saved_;
+  std::vector<float> answer_us_;  // written by thread_ alone until the last answer_step
   std::thread thread_;
   std::atomic<std::uint64_t> published_{0}, read_{0};
   std::atomic<bool> stop_{false};
@@ -504,6 +522,7 @@ void BM_StepThousandBodies(benchmark::State& state, bool publish, bool commanded
   state.counters["helped"] =
       static_cast<double>(sim.islands_solved_by_helper() - helped_before) / (125.0 * step);
   if (channels) state.counters["published"] = static_cast<double>(channels->channel_count());
+  if (other_cpu) state.counters["controller_p50_us"] = other_cpu->answer_p50_us();
   report_step_times(state, times);
 }
 BENCHMARK_CAPTURE(BM_StepThousandBodies, physics, false, false, 2)->Unit(benchmark::kMicrosecond);
@@ -536,6 +555,30 @@ BENCHMARK_CAPTURE(BM_StepThousandBodies, published_commanded_one_thread, true, t
 BENCHMARK_CAPTURE(BM_StepThousandBodies, published_commanded_reduced, true, true, 2, 0,
                   Elsewhere::kNone, true)
     ->Unit(benchmark::kMicrosecond);
+
+// What reading the thousand bodies' states costs a controller on another CPU, without
+// the physics' step between: every state published, then all of them read there (and,
+// with `commands`, answered), each publish. controller_p50_us is the reader's time for
+// one publish's states: the read path alone, steadier than beside the step.
+void BM_ReadThousandStates(benchmark::State& state, bool commands) {
+  if (!ControllerElsewhere::possible()) {
+    state.SkipWithError("needs two CPUs");
+    return;
+  }
+  afhub::testing::ModelFolder folder;
+  Model model = load_adf_files({folder.write("arms.yaml", afhub::bench::arms_scene(125, 8))});
+  Simulation sim(model, 0.001);
+  const std::unique_ptr<SimChannels> channels = channels_for(sim);
+  ControllerElsewhere other_cpu(model.bodies, commands, false);
+  std::uint64_t published = 0;
+  for (auto _ : state) {
+    channels->publish({});
+    other_cpu.answer_step(++published);
+  }
+  state.counters["controller_p50_us"] = other_cpu.answer_p50_us();
+}
+BENCHMARK_CAPTURE(BM_ReadThousandStates, read, false)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_ReadThousandStates, answered, true)->Unit(benchmark::kMicrosecond);
 
 // The same 125 arms as Featherstone multibodies (Bullet's btMultiBody, reduced
 // coordinates: 7 revolute links on a fixed base each, their PD as joint torques, one
