@@ -57,8 +57,10 @@ struct ControllerOptions {
   bool survive_hub_loss = true;
 };
 
-// `state` is the body's newest state; `command` starts zeroed. Both live in shared
-// memory: no copy. Runs in the real-time loop: do not allocate or block in it.
+// `state` is the body's newest state: this process's checked copy of its slot, valid
+// until the cycle returns. `command` is written in place in the body's command slot
+// in shared memory, and starts zeroed. Runs in the real-time loop: do not allocate or
+// block in it.
 using ControllerCycle = std::function<void(const BodyState& state, BodyCommand& command)>;
 
 // Connects to the hub, opens the body and runs `cycle` until Ctrl-C or SIGTERM

@@ -65,7 +65,8 @@ class BodyPublisher {
          {offsetof(BodyState, joints), UINT32_MAX}});
   }
   void prefetch_command() const noexcept { command_.raw().prefetch(); }
-  // The newest command, or nullptr before the first; read in place.
+  // The newest command, or nullptr before the first: this process's checked copy of
+  // its slot, valid and unchanged until the next call.
   const BodyCommand* latest_command() noexcept { return command_.latest(); }
   bool command_updated() const { return command_.updated(); }
   std::uint32_t command_bytes() { return command_.raw().latest_bytes(); }
@@ -107,7 +108,8 @@ class BodyClient {
   // Throws afhub::Error listing the body's joint names when it has no such joint.
   std::size_t joint_index(std::string_view name);
 
-  // The newest state, or nullptr before the first; read in place.
+  // The newest state, or nullptr before the first: this process's checked copy of
+  // its slot, valid and unchanged until the next call.
   const BodyState* latest_state() noexcept { return state_.latest(); }
   bool state_updated() const { return state_.updated(); }
   // Connected to the owner's state channel: every state published from now on arrives.
