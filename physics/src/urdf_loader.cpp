@@ -17,6 +17,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <regex>
 #include <set>
 #include <sstream>
@@ -49,8 +50,12 @@ class CollectedLog : public console_bridge::OutputHandler {
   CollectedLog& operator=(const CollectedLog&) = delete;
   void log(const std::string& text, console_bridge::LogLevel level, const char*, int) override {
     if (level >= console_bridge::CONSOLE_BRIDGE_LOG_WARN) messages.push_back(text);
+    if (level >= console_bridge::CONSOLE_BRIDGE_LOG_ERROR) errors = true;
   }
   std::vector<std::string> messages;
+  // urdfdom drops an element it cannot read (a mass of "nan", a cylinder without its
+  // radius), says so as an error and still returns the robot: refused here all the same.
+  bool errors = false;
 };
 
 // The file's XML elements, for their lines: the robot, each link and joint by name.
@@ -64,9 +69,52 @@ SourceLocation location_of(const std::string& path, const TiXmlBase& node) {
   return {path, std::max(1, node.Row()), std::max(1, node.Column())};
 }
 
+// TinyXML parses an element's children by recursion: 50 000 nested elements
+// overflowed the stack of `afhub check`. A URDF nests a few (robot, link, visual,
+// geometry, mesh).
+constexpr int kMaxXmlDepth = 1000;
+
+// Where `text` first nests elements deeper than kMaxXmlDepth, or nullopt. Reads the
+// tags alone (comments, CDATA, declarations and quoted values skipped); what it
+// misreads, TinyXML reports next.
+std::optional<std::size_t> too_deep_at(const std::string& text) {
+  int depth = 0;
+  for (std::size_t i = text.find('<'); i != std::string::npos; i = text.find('<', i)) {
+    const std::size_t tag = i;
+    if (text.compare(i, 4, "<!--") == 0) {
+      i = text.find("-->", i);
+    } else if (text.compare(i, 9, "<![CDATA[") == 0) {
+      i = text.find("]]>", i);
+    } else if (text.compare(i, 2, "<?") == 0 || text.compare(i, 2, "<!") == 0) {
+      i = text.find('>', i);
+    } else if (text.compare(i, 2, "</") == 0) {
+      --depth;
+      i = text.find('>', i);
+    } else {  // a start tag, to its '>' outside quotes
+      char quote = 0;
+      for (++i; i < text.size() && (quote || text[i] != '>'); ++i)
+        if (quote ? text[i] == quote : text[i] == '"' || text[i] == '\'')
+          quote = quote ? 0 : text[i];
+      if (i < text.size() && text[i - 1] != '/' && ++depth > kMaxXmlDepth) return tag;
+    }
+    if (i == std::string::npos || i >= text.size()) break;
+    ++i;
+  }
+  return std::nullopt;
+}
+
 // Reads the text as XML: a file that is not well-formed, or has no <robot>, is an
 // error at the place TinyXML stopped.
 void read_xml(const std::string& path, const std::string& text, XmlElements& xml) {
+  if (const std::optional<std::size_t> at = too_deep_at(text)) {
+    const auto line_start = text.rfind('\n', *at);
+    const auto line = 1 + std::count(text.begin(), text.begin() + static_cast<long>(*at), '\n');
+    const auto column = *at - (line_start == std::string::npos ? 0 : line_start + 1) + 1;
+    fail({path, static_cast<int>(line), static_cast<int>(column)},
+         "XML elements nested deeper than " + std::to_string(kMaxXmlDepth) +
+             " levels here; a URDF nests a few (robot, link, visual, geometry): is the file "
+             "generated as meant?");
+  }
   xml.document.SetTabSize(1);  // columns count characters
   xml.document.Parse(text.c_str(), nullptr, TIXML_ENCODING_UTF8);
   if (xml.document.Error()) {
@@ -173,6 +221,14 @@ class UrdfReader {
         dir_(fs::path(path).parent_path().string()),
         options_(options),
         model_(model) {}
+  // urdfdom's links hold their children by shared_ptr: a link its own child (refused in
+  // place_links) would keep itself, and the links below, alive for good.
+  ~UrdfReader() {
+    if (robot_)
+      for (const auto& [name, link] : robot_->links_) link->child_links.clear();
+  }
+  UrdfReader(const UrdfReader&) = delete;
+  UrdfReader& operator=(const UrdfReader&) = delete;
 
   void load() {
     const std::string text = read_text(path_);
@@ -185,7 +241,7 @@ class UrdfReader {
     {
       CollectedLog log;
       robot_ = urdf::parseURDF(text);
-      if (!robot_) {
+      if (!robot_ || log.errors) {
         std::string why = log.messages.empty() ? "urdfdom refused it" : log.messages.front();
         for (std::size_t i = 1; i < log.messages.size(); ++i) why += "; " + log.messages[i];
         while (!why.empty() && why.back() == '.') why.pop_back();
@@ -225,16 +281,46 @@ class UrdfReader {
     if (warned_.insert(key).second) warn(line, what);
   }
 
-  // Each link's world pose at the zero configuration, from the root down.
+  // A value within the bounds an ADF file has for it (file_reader.hpp), or an error at
+  // `at` naming `what`: past them Bullet's arithmetic overflows while stepping.
+  static void require_within(double value, double low, double high, const SourceLocation& at,
+                             const std::string& what) {
+    if (value >= low && value <= high) return;
+    fail(at, what + " is " + yaml::number_text(value) + "; give a number from " +
+                 yaml::number_text(low) + " to " + yaml::number_text(high));
+  }
+  // A shape's size: above 0, at most kMaxLengthM.
+  static void require_size(double value, const SourceLocation& at, const std::string& what) {
+    if (value > 0.0 && value <= kMaxLengthM) return;
+    fail(at, what + " is " + yaml::number_text(value) + "; give a size above 0 and at most " +
+                 yaml::number_text(kMaxLengthM) + " m");
+  }
+
+  // Each link's world pose at the zero configuration, from the root down. urdfdom
+  // takes a link that is the child of two joints (of itself, even) as long as one root
+  // is left: refused here, where the walk would place it twice, or forever.
   void place_links() {
     std::vector<urdf::LinkConstSharedPtr> stack{robot_->getRoot()};
     world_[robot_->getRoot()->name] = btTransform::getIdentity();
+    std::map<std::string, std::string> parent_joint;  // of each link placed
     while (!stack.empty()) {
       const urdf::LinkConstSharedPtr link = stack.back();
       stack.pop_back();
       for (const auto& joint : link->child_joints) {
-        world_[joint->child_link_name] =
-            world_[link->name] * to_bt(joint->parent_to_joint_origin_transform);
+        const std::string& child = joint->child_link_name;
+        if (child == link->name)
+          fail(joint_at(joint->name), "joint '" + joint->name + "' has link '" + child +
+                                          "' as both its parent and its child; a joint "
+                                          "joins two different links");
+        const auto [first, placed] = parent_joint.emplace(child, joint->name);
+        if (!placed)
+          fail(joint_at(joint->name),
+               "joint '" + joint->name + "' makes link '" + child +
+                   "' a child a second time: it is the child of joint '" + first->second +
+                   "'. A URDF's links form a tree, each the child of one joint: remove one "
+                   "of the two (for a closed loop, convert the robot with `afhub convert` and "
+                   "close it with an ADF joint)");
+        world_[child] = world_[link->name] * to_bt(joint->parent_to_joint_origin_transform);
         stack.push_back(robot_->getLink(joint->child_link_name));
       }
     }
@@ -263,19 +349,25 @@ class UrdfReader {
     return {s.x, s.y, s.z};
   }
 
-  // A box, cylinder or sphere at `origin` in the link frame; false for a mesh.
-  static bool primitive(const urdf::Geometry& geometry, const urdf::Pose& origin,
-                        ShapeSpec& shape) {
+  // A box, cylinder or sphere of `link` at `origin` in its frame; false for a mesh.
+  bool primitive(const urdf::Geometry& geometry, const urdf::Pose& origin, const std::string& link,
+                 ShapeSpec& shape) const {
     shape.offset = placement(to_bt(origin));
+    const SourceLocation at = link_at(link);
+    const std::string what = "link '" + link + "': <";
     switch (geometry.type) {
       case urdf::Geometry::BOX: {
         const auto& box = static_cast<const urdf::Box&>(geometry);
+        for (const double side : {box.dim.x, box.dim.y, box.dim.z})
+          require_size(side, at, what + "box size> side");
         shape.kind = ShapeKind::kBox;
         shape.box_size_m = {box.dim.x, box.dim.y, box.dim.z};
         return true;
       }
       case urdf::Geometry::CYLINDER: {
         const auto& cylinder = static_cast<const urdf::Cylinder&>(geometry);
+        require_size(cylinder.radius, at, what + "cylinder radius>");
+        require_size(cylinder.length, at, what + "cylinder length>");
         shape.kind = ShapeKind::kCylinder;
         shape.radius_m = cylinder.radius;
         shape.height_m = cylinder.length;
@@ -283,6 +375,8 @@ class UrdfReader {
         return true;
       }
       case urdf::Geometry::SPHERE:
+        require_size(static_cast<const urdf::Sphere&>(geometry).radius, at,
+                     what + "sphere radius>");
         shape.kind = ShapeKind::kSphere;
         shape.radius_m = static_cast<const urdf::Sphere&>(geometry).radius;
         return true;
@@ -311,7 +405,7 @@ class UrdfReader {
         body.color_rgba = std::array<double, 4>{c.r, c.g, c.b, c.a};
       }
       ShapeSpec shape;
-      if (primitive(*visual->geometry, visual->origin, shape))
+      if (primitive(*visual->geometry, visual->origin, link.name, shape))
         body.visual_shapes.push_back(shape);
       else
         visuals.push_back(link_mesh(*visual->geometry, visual->origin, "visual"));
@@ -319,7 +413,7 @@ class UrdfReader {
     for (const auto& collision : link.collision_array) {
       if (!collision->geometry) continue;
       ShapeSpec shape;
-      if (primitive(*collision->geometry, collision->origin, shape))
+      if (primitive(*collision->geometry, collision->origin, link.name, shape))
         body.collision_shapes.push_back(shape);
       else
         collisions.push_back(link_mesh(*collision->geometry, collision->origin, "collision"));
@@ -359,9 +453,16 @@ class UrdfReader {
       return;
     }
     const urdf::Inertial& in = *link.inertial;
-    if (!(in.mass >= 0.0) || in.mass > kMaxMassKg)
-      fail(link_at(link.name), "link '" + link.name + "': mass " + std::to_string(in.mass) +
-                                   " kg; give a mass from 0 to 1e6 kg");
+    const std::string what = "link '" + link.name + "': <";
+    require_within(in.mass, 0.0, kMaxMassKg, link_at(link.name), what + "mass> (kg)");
+    for (const auto& [name, value] : {std::pair{"ixx", in.ixx},
+                                      {"ixy", in.ixy},
+                                      {"ixz", in.ixz},
+                                      {"iyy", in.iyy},
+                                      {"iyz", in.iyz},
+                                      {"izz", in.izz}})
+      require_within(value, -yaml::kMaxMagnitude, yaml::kMaxMagnitude, link_at(link.name),
+                     what + "inertia> " + name);
     body.mass_kg = in.mass;
     Eigen::Matrix3d tensor;
     tensor << in.ixx, in.ixy, in.ixz, in.ixy, in.iyy, in.iyz, in.ixz, in.iyz, in.izz;
@@ -477,8 +578,20 @@ class UrdfReader {
       joint.parent = body_index_.at(urdf_joint->parent_link_name);
       joint.child = body_index_.at(urdf_joint->child_link_name);
       read_type(*urdf_joint, joint);
+      const urdf::Vector3& axis = urdf_joint->axis;
+      if ((has_joint_axis(joint.type) || urdf_joint->type == urdf::Joint::PLANAR) &&
+          !(std::sqrt(axis.x * axis.x + axis.y * axis.y + axis.z * axis.z) > 1e-12))
+        fail(joint.where, "joint '" + joint.name +
+                              "': its <axis> is zero; give the direction it turns or slides "
+                              "about, e.g. <axis xyz=\"0 0 1\"/>");
+      const urdf::Vector3& at = urdf_joint->parent_to_joint_origin_transform.position;
+      for (const double coordinate : {at.x, at.y, at.z})
+        require_within(coordinate, -kMaxLengthM, kMaxLengthM, joint.where,
+                       "joint '" + joint.name + "': <origin xyz> (m)");
       place_joint(*urdf_joint, joint);
       if (urdf_joint->dynamics) {
+        require_within(urdf_joint->dynamics->damping, -yaml::kMaxMagnitude, yaml::kMaxMagnitude,
+                       joint.where, "joint '" + joint.name + "': <dynamics damping>");
         joint.damping = std::max(0.0, urdf_joint->dynamics->damping);
         if (urdf_joint->dynamics->friction != 0.0)
           warn_once("friction", line,
@@ -502,6 +615,10 @@ class UrdfReader {
         fail(joint.where, "joint '" + joint.name +
                               "': <mimic> needs a revolute, continuous or prismatic joint "
                               "following another");
+      require_within(urdf_joint->mimic->multiplier, -yaml::kMaxMagnitude, yaml::kMaxMagnitude,
+                     joint.where, "joint '" + joint.name + "': <mimic multiplier>");
+      require_within(urdf_joint->mimic->offset, -yaml::kMaxMagnitude, yaml::kMaxMagnitude,
+                     joint.where, "joint '" + joint.name + "': <mimic offset>");
       joint.mimic = Mimic{leader->second, urdf_joint->mimic->multiplier, urdf_joint->mimic->offset};
     }
     // A chain of mimics that comes back to itself would never settle.
@@ -525,8 +642,8 @@ class UrdfReader {
         if (limits) {
           if (limits->lower > limits->upper)
             fail(joint.where, "joint '" + joint.name + "': <limit> lower " +
-                                  std::to_string(limits->lower) + " is above upper " +
-                                  std::to_string(limits->upper) + "; swap them");
+                                  yaml::number_text(limits->lower) + " is above upper " +
+                                  yaml::number_text(limits->upper) + "; swap them");
           joint.limit_low = limits->lower;
           joint.limit_high = limits->upper;
         }
@@ -554,6 +671,14 @@ class UrdfReader {
       }
       default:
         fail(joint.where, "joint '" + joint.name + "' has an unknown type");
+    }
+    if (limits) {
+      const std::string what = "joint '" + joint.name + "': <limit ";
+      require_within(limits->effort, 0.0, yaml::kMaxMagnitude, joint.where, what + "effort>");
+      require_within(limits->velocity, 0.0, yaml::kMaxMagnitude, joint.where, what + "velocity>");
+      for (const auto& [name, value] :
+           {std::pair{"lower>", limits->lower}, {"upper>", limits->upper}})
+        require_within(value, -yaml::kMaxMagnitude, yaml::kMaxMagnitude, joint.where, what + name);
     }
     // URDF's effort limit, as the motor's impulse per step at the default 1 kHz step.
     if (limits && limits->effort > 0 && has_joint_axis(joint.type))

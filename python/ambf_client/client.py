@@ -162,13 +162,17 @@ class Client:
     def _run_publishers(self):
         period = 1.0 / self._rate_hz
         deadline = time.monotonic()
+        told = {}  # each handle's last fault, said once rather than at the thread's rate
         while self._running:
             for handle in list(self._objects.values()):
                 if handle.is_active():
                     try:
                         handle.run_publisher()
+                        told.pop(handle.get_name(), None)
                     except Exception as error:  # the hub gone, memory exhausted: say, go on
-                        print(f'ambf_client: {handle.get_name()}: {error}', file=sys.stderr)
+                        if told.get(handle.get_name()) != str(error):
+                            told[handle.get_name()] = str(error)
+                            print(f'ambf_client: {handle.get_name()}: {error}', file=sys.stderr)
             deadline += period
             time.sleep(max(0.0, deadline - time.monotonic()))
 

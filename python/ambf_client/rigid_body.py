@@ -5,6 +5,7 @@ watchdog never releases it while the script sleeps or waits on input()). As in A
 wrench not set again within ``time_out`` seconds is cleared: forces and torques must be
 refreshed; joint and pose commands hold."""
 
+import copy
 import sys
 import threading
 import time
@@ -219,11 +220,12 @@ class RigidBody(Handle):
 
     def _set_joints(self, pairs, kind):
         with self._lock:
+            held = self._held()
             self._joints_for()
             for idx, value in pairs:
                 self._joint_cmds[idx] = float(value)
                 self._joint_types[idx] = kind
-        self._apply_command()
+        self._apply_command(held)
 
     def _set_joint(self, joint_name_or_idx, value, kind):
         idx = self._index(joint_name_or_idx)
@@ -260,10 +262,11 @@ class RigidBody(Handle):
 
     def set_wrench(self, wrench):
         with self._lock:
+            held = self._held()
             self._cartesian = 'force'
             self._wrench = Wrench(Vector3(*_xyz(wrench.force)), Vector3(*_xyz(wrench.torque)))
             self._wrench_cmd_set = True
-        self._apply_command()
+        self._apply_command(held)
 
     def set_force(self, fx, fy, fz):
         self.set_wrench(Wrench(Vector3(fx, fy, fz), self.get_torque_command()))
@@ -276,11 +279,12 @@ class RigidBody(Handle):
 
     def set_pose(self, pose):
         with self._lock:
+            held = self._held()
             self._cartesian = 'position'
             self._pose = Pose(Point(*_xyz(pose.position)),
                               Quaternion(*_xyzw(pose.orientation)))
             self._pose_cmd_set = True
-        self._apply_command()
+        self._apply_command(held)
 
     def set_pos(self, px, py, pz):
         self.set_pose(Pose(Point(px, py, pz), self.get_rot_command()))
@@ -301,10 +305,11 @@ class RigidBody(Handle):
 
     def set_twist(self, twist):
         with self._lock:
+            held = self._held()
             self._cartesian = 'velocity'
             self._twist = Twist(Vector3(*_xyz(twist.linear)), Vector3(*_xyz(twist.angular)))
             self._twist_cmd_set = True
-        self._apply_command()
+        self._apply_command(held)
 
     def set_linear_vel(self, vx, vy, vz):
         self.set_twist(Twist(Vector3(vx, vy, vz), self.get_angular_velocity_command()))
@@ -318,18 +323,37 @@ class RigidBody(Handle):
     def set_actuator(self, index, engage):
         """Engages or releases the body's actuator `index` (an Actuator handle calls it)."""
         with self._lock:
+            held = self._held()
             if not self._actuators:
                 self._actuators = [False] * len(self._body.actuator_names)
             self._actuators[index] = bool(engage)
-        self._apply_command()
+        self._apply_command(held)
 
-    def _apply_command(self):
+    # What the handle's command is made of (the setters change it; run_publisher sends it).
+    _COMMAND = ('_joint_cmds', '_joint_types', '_cartesian', '_wrench', '_pose', '_twist',
+                '_pose_cmd_set', '_twist_cmd_set', '_wrench_cmd_set', '_actuators')
+
+    def _held(self):
+        """The command as it is, to put back (under the lock)."""
+        return {name: copy.copy(getattr(self, name)) for name in self._COMMAND}
+
+    def _apply_command(self, held):
+        """Sends the command a setter just changed. Values refused before anything is sent
+        (not finite, too many joints: ValueError) put back the command `held` before the
+        change, so that the next setter and the client's thread send that one, not the
+        refused values again."""
         # Every command feeds the wrench's watchdog, as in AMBF.
         now = time.monotonic()
         with self._lock:
             self._active = True
             self._last_command = now
-        self.run_publisher(now)
+        try:
+            self.run_publisher(now)
+        except ValueError:
+            with self._lock:
+                for name, value in held.items():
+                    setattr(self, name, value)
+            raise
 
     def run_publisher(self, now=None):
         """Sends the command this handle holds (the client's thread calls it at its rate).

@@ -21,8 +21,14 @@ void register_loop(py::module_& module);
 void register_world(py::module_& module);
 
 // Joins the hub once per process (as "afhub-python-<pid>"), waiting up to `wait_s` for
-// it; throws afhub::Error saying how to start one when none runs.
+// it; throws afhub::Error saying how to start one when none runs, or require_hub's.
 void ensure_connected(double wait_s = 0.0);
+
+// Throws afhub::Error once the hub this process joined went away: a process cannot
+// re-attach to another (iceoryx's runtime is one per process), and what it would read
+// is frozen. Called before every use of the hub, so that none meets iceoryx's fatal
+// errors after the loss.
+void require_hub();
 
 // Exactly `size` finite numbers from any Python sequence or array; ValueError naming
 // `what` otherwise.

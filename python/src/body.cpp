@@ -70,6 +70,7 @@ Body::Body(const std::string& name, double wait_s)
 }
 
 py::object Body::read(double wait_s) {
+  require_hub();
   const BodyState* sample = client_.latest_state();
   if (!sample && wait_s > 0.0) {
     const std::int64_t give_up = deadline_after(wait_s, "wait_s");
@@ -90,6 +91,7 @@ py::object Body::read(double wait_s) {
 }
 
 State Body::wait_next(std::optional<std::uint64_t> after_step, double timeout_s) {
+  require_hub();
   const std::int64_t give_up = deadline_after(timeout_s, "timeout_s");
   const BodyState* sample = nullptr;
   {
@@ -101,7 +103,7 @@ State Body::wait_next(std::optional<std::uint64_t> after_step, double timeout_s)
       if (sample && (after_step ? sample->header.sim_step > *after_step : client_.state_updated()))
         break;
       const std::int64_t left = give_up - monotonic_ns();
-      if (left <= 0) {
+      if (left <= 0 || hub_lost()) {
         sample = nullptr;
         break;
       }
@@ -110,6 +112,7 @@ State Body::wait_next(std::optional<std::uint64_t> after_step, double timeout_s)
   }
   if (!sample) {
     if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+    require_hub();
     throw Error("no new state came from " + channel_ + " in " +
                 py::str(py::float_(timeout_s)).cast<std::string>() +
                 " s: is its simulation running (or paused, or waiting for lockstep clients)? "
@@ -145,8 +148,8 @@ void Body::send(std::uint32_t joint_count, const Fill& fill) {
     throw py::value_error("the command gives " + std::to_string(joint_count) +
                           " joint values but body " + channel_ + " has " +
                           std::to_string(entry_.info.joint_count) + " joints (see `afhub ls`)");
+  require_hub();
   check_refused();
-  if (hub_lost()) throw Error("the hub is gone: the command was not sent");
   BodyCommand* command = client_.loan_command(joint_count);
   if (!command) throw Error("shared memory is exhausted: the command was not sent");
   fill(*command);

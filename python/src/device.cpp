@@ -39,6 +39,7 @@ class Device {
   const std::string& channel() const { return channel_; }
 
   std::optional<py::dict> read(double wait_s) {
+    require_hub();
     const DeviceState* s = state_.latest();
     if (!s && wait_s > 0.0) {
       const std::int64_t give_up = deadline_after(wait_s, "wait_s");
@@ -75,7 +76,7 @@ class Device {
     const Vec3 t = torque.is_none() ? Vec3{} : to_vec3(torque, "torque");
     if (!std::isfinite(gripper_force))
       throw py::value_error("gripper_force is not a finite number: nothing was sent");
-    if (hub_lost()) throw Error("the hub is gone: the command was not sent");
+    require_hub();
     DeviceCommand* command = command_.loan();
     if (!command) throw Error("shared memory is exhausted: the command was not sent");
     command->wrench.force_n = f;

@@ -11,6 +11,7 @@
 #include <memory>
 #include <optional>
 
+#include "afhub/hub/hub_loss.hpp"
 #include "afhub/hub/loop_stats_publisher.hpp"
 #include "afhub/hub/physics_late_commands.hpp"
 #include "afhub/hub/sample_waiter.hpp"
@@ -57,7 +58,7 @@ class Loop {
 
   py::dict run(std::uint64_t cycles, double seconds) {
     ensure_connected();
-    const std::int64_t end_ns = seconds > 0.0 ? deadline_after(seconds, "seconds") : 0;
+    const std::int64_t end_ns = seconds != 0.0 ? deadline_after(seconds, "seconds") : 0;
     stop_ = false;
     error_ = nullptr;
     callbacks_ = 0;
@@ -110,6 +111,17 @@ class Loop {
     return !stop_;
   }
 
+  // False once the hub went away: the loop ends, and run() raises require_hub's error.
+  bool hub_still_here() {
+    if (!hub_lost()) return true;
+    try {
+      require_hub();
+    } catch (...) {
+      error_ = std::current_exception();
+    }
+    return false;
+  }
+
   // Between cycles that run no Python: Ctrl-C still reaches the loop.
   bool signals_pending() {
     py::gil_scoped_acquire acquire;
@@ -140,6 +152,7 @@ class Loop {
     };
     cycle.work = [&] {
       if (end_ns && monotonic_ns() >= end_ns) return false;
+      if (!hub_still_here()) return false;
       if (!body_) return call(nullptr);
       const BodyState* state = body_->client().latest_state();
       if (!state) return !signals_pending();
@@ -168,6 +181,7 @@ class Loop {
       const BodyState* state = body_->client().latest_state();
       const std::int64_t now = monotonic_ns();
       if (end_ns && now >= end_ns) return;
+      if (!hub_still_here()) return;
       stats.maybe_publish(now, timing);
       if (!state || (answered_any && state->header.sim_step == last_step)) {
         waiter.wait(10'000'000);

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "afhub/hub/bodies.hpp"
+#include "afhub/hub/hub_loss.hpp"
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/hub/loop_stats_reader.hpp"
 #include "afhub/rt/clock.hpp"
@@ -18,11 +19,20 @@
 namespace afhub::python {
 
 void ensure_connected(double wait_s) {
+  require_hub();
   if (!runtime_name().empty()) return;
   if (!(wait_s >= 0.0 && wait_s <= 1e6)) throw py::value_error("wait_s takes 0 to 1e6 seconds");
   py::gil_scoped_release release;
+  notice_hub_loss("python");
   connect_to_hub("python", HubPolicy::kRequire,
                  std::chrono::milliseconds(static_cast<std::int64_t>(wait_s * 1000.0)));
+}
+
+void require_hub() {
+  if (hub_lost())
+    throw Error(
+        "the hub this process joined went away: a process cannot join another one (iceoryx "
+        "allows one per process), so start the script again once a hub runs");
 }
 
 py::array_t<double> finite_values(const py::handle& values, const char* what,

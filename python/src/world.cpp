@@ -40,6 +40,7 @@ class World {
 
   // The newest world state; the world state is published every step, paused or not.
   WorldState state(double wait_s) {
+    require_hub();
     const std::int64_t give_up = deadline_after(wait_s, "wait_s");
     const WorldState* state = reader_.latest();
     if (!state) {
@@ -58,6 +59,7 @@ class World {
 
   // Sends `action` and waits until the world state shows it done; says what happened.
   std::string act(WorldAction action, std::uint32_t steps, double timeout_s) {
+    require_hub();
     const std::int64_t give_up = deadline_after(timeout_s, "timeout_s");
     if (action == WorldAction::kStep && (steps == 0 || steps > kMaxWorldStepsPerCommand))
       throw py::value_error("step takes a number of steps from 1 to " +

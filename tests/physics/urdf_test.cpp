@@ -497,6 +497,43 @@ TEST(Urdf, MalformedAndInvalidFilesAreErrorsAtTheirLine) {
        "link=\"a\"/>\n    <child link=\"b\"/>\n    <limit lower=\"-1\" upper=\"one\" "
        "effort=\"1\" velocity=\"1\"/>\n  </joint>\n",
        ":8:5: error: not a valid URDF", "upper value (one) is not a valid float"},
+      // urdfdom drops an element it cannot read, says so and returns the robot.
+      {"nan_mass.urdf",
+       "  <link name=\"b\">\n    <inertial>\n      <mass value=\"nan\"/>\n    </inertial>\n  "
+       "</link>\n",
+       ":6:7: error: not a valid URDF", "mass [nan] is not a float"},
+      // Values Bullet's arithmetic cannot take, within an ADF file's bounds.
+      {"zero_box.urdf",
+       "  <link name=\"b\">\n    <collision><geometry><box size=\"0 1 1\"/></geometry>"
+       "</collision>\n  </link>\n  <joint name=\"j\" type=\"fixed\">\n    <parent link=\"a\"/>\n"
+       "    <child link=\"b\"/>\n  </joint>\n",
+       ":4:3: error: link 'b': <box size> side is 0", "give a size above 0"},
+      {"zero_axis.urdf",
+       "  <link name=\"b\"/>\n  <joint name=\"j\" type=\"revolute\">\n    <parent link=\"a\"/>\n"
+       "    <child link=\"b\"/>\n    <axis xyz=\"0 0 0\"/>\n    <limit lower=\"-1\" upper=\"1\" "
+       "effort=\"1\" velocity=\"1\"/>\n  </joint>\n",
+       ":5:3: error: joint 'j': its <axis> is zero", "<axis xyz=\"0 0 1\"/>"},
+      {"huge_effort.urdf",
+       "  <link name=\"b\"/>\n  <joint name=\"j\" type=\"revolute\">\n    <parent link=\"a\"/>\n"
+       "    <child link=\"b\"/>\n    <axis xyz=\"0 0 1\"/>\n    <limit lower=\"-1\" upper=\"1\" "
+       "effort=\"1e300\" velocity=\"1\"/>\n  </joint>\n",
+       ":5:3: error: joint 'j': <limit effort> is 1e+300", "give a number from 0 to 1e+09"},
+      // urdfdom takes these two (one root is left); the walk from the root refuses them.
+      {"own_child.urdf",
+       "  <link name=\"b\"/>\n  <joint name=\"ab\" type=\"fixed\">\n    <parent "
+       "link=\"a\"/>\n    <child link=\"b\"/>\n  </joint>\n  <joint name=\"bb\" "
+       "type=\"fixed\">\n    <parent link=\"b\"/>\n    <child link=\"b\"/>\n  </joint>\n",
+       ":9:3: error: joint 'bb' has link 'b' as both its parent and its child",
+       "a joint joins two different links"},
+      {"two_parents.urdf",
+       "  <link name=\"b\"/>\n  <link name=\"c\"/>\n  <joint name=\"ab\" type=\"fixed\">\n"
+       "    <parent link=\"a\"/>\n    <child link=\"b\"/>\n  </joint>\n  <joint name=\"ac\" "
+       "type=\"fixed\">\n    <parent link=\"a\"/>\n    <child link=\"c\"/>\n  </joint>\n"
+       "  <joint name=\"cb\" type=\"fixed\">\n    <parent link=\"c\"/>\n    <child "
+       "link=\"b\"/>\n  </joint>\n",
+       ":14:3: error: joint 'cb' makes link 'b' a child a second time: it is the child of "
+       "joint 'ab'",
+       "remove one of the two"},
   };
   for (const Bad& bad : cases) {
     SCOPED_TRACE(bad.name);
@@ -510,6 +547,26 @@ TEST(Urdf, MalformedAndInvalidFilesAreErrorsAtTheirLine) {
             not_robot.path +
                 ":2:1: error: the top element is not <robot name=\"...\">; is this "
                 "a URDF file?");
+}
+
+// TinyXML reads nested elements by recursion: 50 000 levels crashed the loader (stack
+// overflow). Refused before it parses, at the element past the limit; comments and
+// quoted values holding '>' are not counted.
+TEST(Urdf, ElementsNestedPastTheLimitAreAnErrorNotACrash) {
+  const std::string before = "<!-- <x> <x> --><y a=\"x>\" b='/>'/>";
+  std::string deep = before;
+  for (int i = 0; i < 50'000; ++i) deep += "<x>";
+  for (int i = 0; i < 50'000; ++i) deep += "</x>";
+  const WrittenFile file("deep.urdf",
+                         "<?xml version=\"1.0\"?>\n<robot name=\"r\">\n  <link "
+                         "name=\"a\"/>\n" +
+                             deep + "\n</robot>\n");
+  // <robot> is the first level: the 1000th <x> the 1001st, after the comment and <y/>.
+  const std::size_t column = before.size() + 999 * 3 + 1;
+  const std::string error = load_error(file.path);
+  EXPECT_TRUE(error.starts_with(file.path + ":4:" + std::to_string(column) +
+                                ": error: XML elements nested deeper than 1000 levels"))
+      << error;
 }
 
 // Several collision meshes on one link, each at its <origin>, beside a sphere: one

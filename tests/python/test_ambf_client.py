@@ -113,6 +113,43 @@ def test_example_script_moves_the_arm_and_the_gripper(physics, tmp_path):
     assert 'joints 7' in output and 'DONE' in output
 
 
+def test_a_refused_value_leaves_the_command_held_before(physics, tmp_path):
+    """A setter given a value that is not finite raises ValueError and sends nothing; the
+    handle keeps the command it held, so the next setter works and the client's thread
+    re-sends that one. (The NaN used to stay in the handle: every later setter raised, and
+    the thread said so 120 times a second.)"""
+    run = physics(EXAMPLES / 'arm7.yaml')
+    arm = run.wait_for_body('arm/base')
+    script = Script(tmp_path, """
+        import math
+        from ambf_client import Client
+
+        _client = Client('afhub_test')
+        _client.connect()
+        base = _client.get_obj_handle('arm/base')
+        base.set_joint_pos(0, 0.3)
+        for refused in (lambda: base.set_pos(math.nan, 0, 0),
+                        lambda: base.set_joint_pos(1, math.inf)):
+            try:
+                refused()
+            except ValueError as error:
+                print('refused:', error)
+        base.set_joint_pos(0, 0.5)
+        print('STAGE 1: commanded; press enter')
+        input()
+        _client.clean_up()
+        print('DONE')
+    """)
+    script.read_until('STAGE 1')
+    wait_until(lambda: abs(arm.wait_next().joint_positions[0] - 0.5) < 0.03, 15,
+               'joint 0 reached the target set after the refused ones')
+    assert held_for(arm, lambda s: abs(s.joint_positions[0] - 0.5) < 0.03, 1.0)
+    script.enter()
+    output = script.finish()
+    assert output.count('refused:') == 2 and 'nothing was sent' in output, output
+    assert 'ambf_client: ' not in output, output  # the client's thread sent without a fault
+
+
 def test_names_handles_and_unsupported_calls(physics, tmp_path):
     run = physics(EXAMPLES / 'arm7.yaml')
     run.wait_for_body('arm/base')

@@ -3,6 +3,7 @@ there): reading, commanding with effects checked in the simulation, the world's 
 loops and their statistics, lockstep's determinism, and every error's message."""
 
 import os
+import pathlib
 import subprocess
 import sys
 import threading
@@ -287,6 +288,70 @@ def test_loop_ends_on_false_and_raises_what_the_callback_raised():
         afhub.Loop(1000, fail, after_step_us=100, unaligned=True)
     with pytest.raises(ValueError, match='lockstep loop answers a body'):
         afhub.Loop(0, fail, lockstep=True)
+    # A negative or NaN length is refused, not taken as no limit (it never returned).
+    for seconds in (-1.0, float('nan')):
+        with pytest.raises(ValueError, match='seconds takes 0 to 1e6 seconds'):
+            afhub.Loop(1000, fail).run(seconds=seconds)
+
+
+# A script whose hub is SIGKILLed under it: every call after the loss raises afhub.Error
+# (iceoryx's fatal errors aborted the interpreter, SIGABRT), read() too (what it would
+# return is frozen), and the script ends as it chooses. Its own hub, in private
+# namespaces of its own, so that the session's hub lives on.
+AFTER_LOSS = '''
+import os, time, afhub
+body = afhub.Body('arm/base', wait_s=30)
+assert body.read(wait_s=10) is not None
+print('ready', flush=True)
+while not os.path.exists('/tmp/gone'):  # made once the hub is SIGKILLed
+    time.sleep(0.01)
+calls = {
+    'read': lambda: body.read(),
+    'wait_next': lambda: body.wait_next(timeout_s=1),
+    'set_joint_positions': lambda: body.set_joint_positions([0.1]),
+    'World.pause': lambda: afhub.World().pause(),
+    'bodies': afhub.bodies,
+    'catalog': afhub.catalog,
+    'Body': lambda: afhub.Body('arm/link1'),
+    'Loop.run': lambda: afhub.Loop(1000, lambda: True).run(seconds=1),
+}
+for name, call in calls.items():
+    try:
+        call()
+        print(name, 'returned', flush=True)
+    except afhub.Error as error:
+        print(name, 'raised afhub.Error:', error, flush=True)
+print('the script ends', flush=True)
+'''
+LOSE_THE_HUB = '''
+"$AFHUB" hub > /tmp/hub.log 2>&1 & hub=$!
+for _ in $(seq 100); do "$AFHUB" status > /dev/null 2>&1 && break; sleep 0.1; done
+"$AFHUB" run --no-autostart "$ARM" > /tmp/run.log 2>&1 & run=$!
+"$PYTHON" -c "$SCRIPT" > /tmp/script.log 2>&1 & script=$!
+for _ in $(seq 600); do grep -q ready /tmp/script.log && break; sleep 0.1; done
+kill -9 $hub
+sleep 1
+touch /tmp/gone
+wait $script
+echo "exit code $?" >> /tmp/script.log
+kill -9 $run
+cat /tmp/script.log
+'''
+
+
+def test_calls_after_the_hub_went_away_raise_and_the_script_lives():
+    support = pathlib.Path(__file__).resolve().parents[1] / 'support'
+    env = {**os.environ, 'AFHUB': AFHUB, 'ARM': str(ARM.resolve()), 'PYTHON': sys.executable,
+           'SCRIPT': AFTER_LOSS}
+    env.pop('AFHUB_PRIVATE_NAMESPACES')  # namespaces of its own, inside the session's
+    out = subprocess.run(['bash', support / 'private_namespaces.sh', 'bash', '-c', LOSE_THE_HUB],
+                         env=env, capture_output=True, text=True, timeout=180).stdout
+    assert 'ready' in out, out
+    for call in ('read', 'wait_next', 'set_joint_positions', 'World.pause', 'bodies', 'catalog',
+                 'Body', 'Loop.run'):
+        assert f'{call} raised afhub.Error: the hub this process joined went away' in out, out
+    assert 'the script ends' in out and 'exit code 0' in out, out
+    assert 'cannot re-attach to another' in out, out  # said once, when the loss is noticed
 
 
 def lockstep_run(physics, tmp_path, run_index):

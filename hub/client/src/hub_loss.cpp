@@ -35,6 +35,15 @@ void survive_hub_loss(const std::string& who) {
   }
   hub_loss::prepare_self_reexec();  // after unsetenv: the next image gets a fresh count
   hub_loss::install_iceoryx_error_handler();
+  s.reexecs = true;
+  s.armed = true;
+}
+
+void notice_hub_loss(const std::string& who) {
+  hub_loss::State& s = hub_loss::state();
+  if (s.armed) return;
+  s.who = who;
+  hub_loss::install_iceoryx_error_handler();
   s.armed = true;
 }
 

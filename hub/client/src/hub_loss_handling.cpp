@@ -45,6 +45,13 @@ LossHandling handle_loss(const char* why) noexcept {
       }
     }
   }
+  if (!s.reexecs) {
+    std::fprintf(stderr,
+                 "%s: the hub%s went away (%s); this process cannot re-attach to another: "
+                 "start it again once a hub runs\n",
+                 s.who.c_str(), hub, why);
+    return LossHandling::kCarriesOn;
+  }
   std::fprintf(stderr,
                "%s: the hub%s went away (%s); outputs made safe, re-attaching when a hub "
                "comes back\n",

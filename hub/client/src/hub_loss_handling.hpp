@@ -6,11 +6,12 @@
 
 namespace afhub::hub_loss {
 
-enum class LossHandling { kOtherThread, kStopping };
+enum class LossHandling { kOtherThread, kStopping, kCarriesOn };
 
 // On the first thread to call it: hub_lost() turns true, the on_hub_lost() hooks run,
 // the loss is said on stderr with `why`, and the process re-executes, unless it is
-// stopping anyway (kStopping). kOtherThread: another thread handles the loss.
+// stopping anyway (kStopping) or does not re-execute (kCarriesOn: notice_hub_loss).
+// kOtherThread: another thread handles the loss.
 LossHandling handle_loss(const char* why) noexcept;
 
 // A thread that meets the loss while another one handles it waits for the exec, or,

@@ -22,7 +22,8 @@ inline constexpr const char* kReattachVariable = "AFHUB_REATTACH";
 inline constexpr std::int64_t kReattachPollNs = 10'000'000;
 
 struct State {
-  std::atomic<bool> armed{false};     // opted in (survive_hub_loss)
+  std::atomic<bool> armed{false};     // opted in (survive_hub_loss or notice_hub_loss)
+  std::atomic<bool> reexecs{false};   // survive_hub_loss: re-attaches by re-executing
   std::atomic<bool> lost{false};      // hub_lost()
   std::atomic<bool> handling{false};  // one thread handles a loss; the others wait for the exec
   std::atomic<bool> exiting{false};   // the process is exiting on its own: never re-execute it

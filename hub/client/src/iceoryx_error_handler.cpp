@@ -47,13 +47,24 @@ void on_iceoryx_error(const iox::Error error, const std::function<void()> callba
     if (callback) callback();
     return;
   }
-  if (state().handling) wait_for_reexec();
+  // iceoryx's call cannot go on past a fatal error, nor can a process that does not
+  // re-execute re-attach: it ends here, saying why.
+  const auto end_without_hub = [&] {
+    std::fprintf(stderr, "%s: iceoryx: %s after the hub went away: ending this process\n",
+                 who.c_str(), name);
+    _exit(1);
+  };
+  if (state().handling) {
+    if (!state().reexecs) end_without_hub();
+    wait_for_reexec();
+  }
   for (const std::int64_t give_up = monotonic_ns() + kFatalErrorGraceNs; monotonic_ns() < give_up;
        sleep_ns(kReattachPollNs)) {
     if (!hub_gone()) continue;
     char why[160];
     std::snprintf(why, sizeof why, "iceoryx: %s", name);
     if (handle_loss(why) == LossHandling::kStopping) _exit(0);
+    if (!state().reexecs) end_without_hub();
     wait_for_reexec();
   }
   std::fprintf(stderr, "%s: fatal iceoryx error %s, with the hub still up\n", who.c_str(), name);

@@ -27,13 +27,22 @@ namespace afhub {
 // ("afhub ctl"). The arguments to re-execute with are read from /proc/self/cmdline now.
 void survive_hub_loss(const std::string& who);
 
+// Opts in a process that cannot re-execute itself (a Python interpreter, with its
+// script's state) to noticing the loss alone: hub_lost() turns true and the hooks run,
+// as above, and the process carries on without re-attaching, its calls that need the
+// hub refusing (afhub's Python module raises afhub.Error). A fatal iceoryx error after
+// the loss (a call that raced with its notice) ends it with a message saying so,
+// instead of iceoryx's assertion.
+void notice_hub_loss(const std::string& who);
+
 // Runs `make_safe` when the hub is lost, before the re-exec, on the thread that noticed
 // the loss (the watcher, or any thread whose iceoryx call failed). It must not use the
 // hub's channels, must not throw, and should be quick: it stands between the loss and
 // the outputs being safe.
 void on_hub_lost(std::function<void()> make_safe);
 
-// True once the hub is lost, until the re-exec: loops stop writing. Real-time safe.
+// True once the hub is lost, until the re-exec (for good with notice_hub_loss): loops
+// stop writing. Real-time safe.
 bool hub_lost() noexcept;
 
 // 0 at a normal start; after a hub loss, how many times this process re-attached.
