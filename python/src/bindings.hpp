@@ -9,6 +9,7 @@
 #include <optional>
 #include <string>
 
+#include "afhub/shm_layout/error.hpp"
 #include "afhub/shm_layout/geometry.hpp"
 
 namespace afhub::python {
@@ -24,11 +25,12 @@ void register_world(py::module_& module);
 // it; throws afhub::Error saying how to start one when none runs, or require_hub's.
 void ensure_connected(double wait_s = 0.0);
 
-// Throws afhub::Error once the hub this process joined went away: a process cannot
+// Throws hub_gone() once the hub this process joined went away: a process cannot
 // re-attach to another (iceoryx's runtime is one per process), and what it would read
 // is frozen. Called before every use of the hub, so that none meets iceoryx's fatal
 // errors after the loss.
 void require_hub();
+Error hub_gone();
 
 // Exactly `size` finite numbers from any Python sequence or array; ValueError naming
 // `what` otherwise.

@@ -111,14 +111,10 @@ class Loop {
     return !stop_;
   }
 
-  // False once the hub went away: the loop ends, and run() raises require_hub's error.
+  // False once the hub went away: the loop ends, and run() raises hub_gone().
   bool hub_still_here() {
     if (!hub_lost()) return true;
-    try {
-      require_hub();
-    } catch (...) {
-      error_ = std::current_exception();
-    }
+    error_ = std::make_exception_ptr(hub_gone());
     return false;
   }
 

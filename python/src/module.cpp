@@ -29,10 +29,13 @@ void ensure_connected(double wait_s) {
 }
 
 void require_hub() {
-  if (hub_lost())
-    throw Error(
-        "the hub this process joined went away: a process cannot join another one (iceoryx "
-        "allows one per process), so start the script again once a hub runs");
+  if (hub_lost()) throw hub_gone();
+}
+
+Error hub_gone() {
+  return Error(
+      "the hub this process joined went away: a process cannot join another one (iceoryx "
+      "allows one per process), so start the script again once a hub runs");
 }
 
 py::array_t<double> finite_values(const py::handle& values, const char* what,

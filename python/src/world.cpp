@@ -7,6 +7,7 @@
 
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/channel.hpp"
+#include "afhub/hub/hub_loss.hpp"
 #include "afhub/rt/clock.hpp"
 #include "afhub/shm_layout/channel_names.hpp"
 #include "afhub/shm_layout/error.hpp"
@@ -79,7 +80,7 @@ class World {
     const std::uint64_t target_step = before.header.sim_step + steps;
     std::uint64_t previous_step = before.header.sim_step;
     py::gil_scoped_release release;
-    while (monotonic_ns() < give_up) {
+    while (monotonic_ns() < give_up && !hub_lost()) {
       const WorldState* now = reader_.latest();
       if (now && reader_.updated()) {
         switch (action) {
@@ -107,6 +108,7 @@ class World {
       }
       sleep_until_ns(monotonic_ns() + 200'000);
     }
+    require_hub();
     throw Error("the command was sent but the simulation did not act on it within " +
                 std::to_string(timeout_s) +
                 " s: is it stalled, or waiting for lockstep clients? (`afhub status`)");
