@@ -59,6 +59,13 @@ def held_for(body, check, seconds):
     return True
 
 
+def joint_0_reaches_and_holds(body, target, what):
+    """Joint 0 of `body` reaches `target` (within 0.03) and holds it for a second."""
+    wait_until(lambda: abs(body.wait_next().joint_positions[0] - target) < 0.03, 15,
+               f'{what}: reached')
+    assert held_for(body, lambda s: abs(s.joint_positions[0] - target) < 0.03, 1.0), what
+
+
 def test_example_script_moves_the_arm_and_the_gripper(physics, tmp_path):
     run = physics('--launch', LAUNCH, '-l', '0,2')
     arm = run.wait_for_body('arm/base')
@@ -141,9 +148,7 @@ def test_a_refused_value_leaves_the_command_held_before(physics, tmp_path):
         print('DONE')
     """)
     script.read_until('STAGE 1')
-    wait_until(lambda: abs(arm.wait_next().joint_positions[0] - 0.5) < 0.03, 15,
-               'joint 0 reached the target set after the refused ones')
-    assert held_for(arm, lambda s: abs(s.joint_positions[0] - 0.5) < 0.03, 1.0)
+    joint_0_reaches_and_holds(arm, 0.5, 'the target set after the refused ones')
     script.enter()
     output = script.finish()
     assert output.count('refused:') == 2 and 'nothing was sent' in output, output
@@ -211,9 +216,7 @@ def test_ecm_by_ambf_names(physics, tmp_path):
         c.clean_up()
     """)
     script.read_until('STAGE 1')
-    wait_until(lambda: abs(ecm.wait_next().joint_positions[0] - 0.3) < 0.03, 15,
-               'the ECM joint 0 reached 0.3')
-    assert held_for(ecm, lambda s: abs(s.joint_positions[0] - 0.3) < 0.03, 1.0)
+    joint_0_reaches_and_holds(ecm, 0.3, 'the ECM joint 0 at 0.3')
     script.enter()
     output = script.finish()
     assert "'/ambf/env/ecm/baselink'" in output
