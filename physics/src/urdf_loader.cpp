@@ -334,7 +334,8 @@ class UrdfReader {
       fail(link_at(link), "link '" + link + "': " + role + " mesh '" + mesh.filename +
                               "' was not found; looked in:" + looked +
                               ". Give its package's folder with --package-path DIR");
-    return resolved;
+    // Absolute: a file converted to ADF (`afhub convert -o elsewhere/`) finds it too.
+    return fs::absolute(resolved).lexically_normal().string();
   }
 
   // A mesh's scale per axis, each positive and within the bound ADF scales have.

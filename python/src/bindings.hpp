@@ -9,6 +9,7 @@
 #include <optional>
 #include <string>
 
+#include "afhub/hub/bodies.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "afhub/shm_layout/geometry.hpp"
 
@@ -31,6 +32,11 @@ void ensure_connected(double wait_s = 0.0);
 // errors after the loss.
 void require_hub();
 Error hub_gone();
+
+// The catalog entry of the body or device `name`, waiting up to `wait_s` for it to
+// come (connecting first); afhub::Error when none comes, or hub_gone() when the hub
+// went away meanwhile.
+BodyEntry wait_for_entry(const std::string& name, double wait_s);
 
 // Exactly `size` finite numbers from any Python sequence or array; ValueError naming
 // `what` otherwise.

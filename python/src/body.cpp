@@ -51,10 +51,7 @@ py::object State::joint_column(std::size_t member) const {
 
 Body::Body(const std::string& name, double wait_s)
     : entry_([&] {
-        ensure_connected();
-        const std::int64_t give_up = deadline_after(wait_s, "wait_s");
-        py::gil_scoped_release release;
-        BodyEntry entry = wait_for_body(name, "afhub python", give_up, "wait longer with wait_s");
+        BodyEntry entry = wait_for_entry(name, wait_s);
         if (entry.info.kind == ChannelKind::kDevice)
           throw Error("'" + std::string(name_of(entry.info.channel)) +
                       "' is a device, not a body: open it with afhub.Device");

@@ -38,6 +38,18 @@ Error hub_gone() {
       "allows one per process), so start the script again once a hub runs");
 }
 
+BodyEntry wait_for_entry(const std::string& name, double wait_s) {
+  ensure_connected();
+  const std::int64_t give_up = deadline_after(wait_s, "wait_s");
+  py::gil_scoped_release release;
+  try {
+    return wait_for_body(name, "afhub python", give_up, "wait longer with wait_s");
+  } catch (const Error&) {
+    require_hub();  // what the catalog of a hub gone says is beside the point
+    throw;
+  }
+}
+
 py::array_t<double> finite_values(const py::handle& values, const char* what,
                                   std::optional<std::size_t> size) {
   auto array = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(values);

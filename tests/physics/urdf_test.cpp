@@ -549,6 +549,23 @@ TEST(Urdf, MalformedAndInvalidFilesAreErrorsAtTheirLine) {
                 "a URDF file?");
 }
 
+// A mesh named relative to the URDF, the URDF named relative to the working folder (as
+// `afhub convert arm.urdf -o elsewhere/arm.yaml` from its folder): the mesh's path is
+// absolute, so that the ADF written elsewhere finds it (it said "meshes/cube.obj").
+TEST(Urdf, MeshPathsAreAbsoluteWhereverTheFileIsNamedFrom) {
+  const fs::path before = fs::current_path();
+  fs::current_path(kModels);
+  std::string mesh;
+  try {
+    mesh = load("arm.urdf").bodies[2].collision_mesh;
+  } catch (...) {
+    fs::current_path(before);
+    throw;
+  }
+  fs::current_path(before);
+  EXPECT_EQ(mesh, (fs::absolute(kModels) / "meshes/cube.obj").lexically_normal().string());
+}
+
 // TinyXML reads nested elements by recursion: 50 000 levels crashed the loader (stack
 // overflow). Refused before it parses, at the element past the limit; comments and
 // quoted values holding '>' are not counted.

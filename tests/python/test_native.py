@@ -4,6 +4,7 @@ loops and their statistics, lockstep's determinism, and every error's message.""
 
 import os
 import pathlib
+import re
 import subprocess
 import sys
 import threading
@@ -299,12 +300,27 @@ def test_loop_ends_on_false_and_raises_what_the_callback_raised():
 # return is frozen), and the script ends as it chooses. Its own hub, in private
 # namespaces of its own, so that the session's hub lives on.
 AFTER_LOSS = '''
-import os, time, afhub
+import os, threading, time, afhub
 body = afhub.Body('arm/base', wait_s=30)
 assert body.read(wait_s=10) is not None
+waited = {}
+
+
+def wait_for_a_missing_body():  # waiting when the hub goes
+    start = time.monotonic()
+    try:
+        afhub.Body('arm/nowhere', wait_s=60)
+    except afhub.Error as error:
+        waited['error'], waited['s'] = str(error), time.monotonic() - start
+
+
+waiter = threading.Thread(target=wait_for_a_missing_body)
+waiter.start()
 print('ready', flush=True)
 while not os.path.exists('/tmp/gone'):  # made once the hub is SIGKILLed
     time.sleep(0.01)
+waiter.join()
+print('Body(wait_s=60) raised afhub.Error:', waited['error'], 'after', round(waited['s']), 's')
 calls = {
     'read': lambda: body.read(),
     'wait_next': lambda: body.wait_next(timeout_s=1),
@@ -347,9 +363,11 @@ def test_calls_after_the_hub_went_away_raise_and_the_script_lives():
     out = subprocess.run(['bash', support / 'private_namespaces.sh', 'bash', '-c', LOSE_THE_HUB],
                          env=env, capture_output=True, text=True, timeout=180).stdout
     assert 'ready' in out, out
-    for call in ('read', 'wait_next', 'set_joint_positions', 'World.pause', 'bodies', 'catalog',
+    for call in ('Body(wait_s=60)', 'read', 'wait_next', 'set_joint_positions', 'World.pause', 'bodies', 'catalog',
                  'Body', 'Loop.run'):
         assert f'{call} raised afhub.Error: the hub this process joined went away' in out, out
+    waited = re.search(r'after (\d+) s', out)
+    assert waited and int(waited.group(1)) < 30, out  # the wait ended with the hub
     assert 'the script ends' in out and 'exit code 0' in out, out
     assert 'cannot re-attach to another' in out, out  # said once, when the loss is noticed
 

@@ -15,6 +15,7 @@
 #include <unordered_map>
 
 #include "afhub/hub/hub_files.hpp"
+#include "afhub/hub/hub_loss.hpp"
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/rt/stop_signal.hpp"
 #include "afhub/shm_layout/error.hpp"
@@ -300,7 +301,7 @@ BodyEntry wait_for_body(const std::string& query, const std::string& who, std::i
     try {
       return catalog.resolve(query);
     } catch (const Error& error) {
-      if (monotonic_ns() > give_up_ns || stop_requested()) {
+      if (monotonic_ns() > give_up_ns || stop_requested() || hub_lost()) {
         if (!said) throw;
         throw Error(std::string(error.what()) + " (waited for it" +
                     (hint.empty() ? "" : "; " + hint) + ")");

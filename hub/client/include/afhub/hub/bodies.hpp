@@ -200,7 +200,7 @@ class CatalogReader {
 // the physics that owns the body, or re-attached to a hub before it, waits for it
 // until `give_up_ns` (CLOCK_MONOTONIC; INT64_MAX: until it comes), saying so once on
 // stderr as `who`. Throws afhub::Error when it is still missing then (adding `hint`
-// to the message when it waited), or on Ctrl-C.
+// to the message when it waited), on Ctrl-C, or once the hub is lost.
 BodyEntry wait_for_body(const std::string& query, const std::string& who, std::int64_t give_up_ns,
                         const std::string& hint = "");
 
