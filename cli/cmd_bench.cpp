@@ -36,6 +36,7 @@ struct BenchCliOptions {
 void write_file(const std::string& path, const std::string& text) {
   std::ofstream out(path);
   out << text;
+  out.close();
   if (!out) throw Error("cannot write " + path);
 }
 

@@ -86,8 +86,7 @@ int run_check(const CheckOptions& options) {
   }
   std::string gravity_source = options.world_file.empty() ? "default" : options.world_file;
   if (!options.gravity.empty()) {
-    const std::vector<double> g = parse_numbers(options.gravity, "--gravity", 3);
-    physics::override_gravity(model, {g[0], g[1], g[2]});
+    physics::override_gravity(model, parse_gravity(options.gravity));
     gravity_source = "--gravity";
   }
   for (const auto& warning : model.warnings) std::fprintf(stderr, "%s\n", warning.c_str());

@@ -24,6 +24,7 @@
 #include "afhub/shm_layout/error.hpp"
 #include "commands.hpp"
 #include "format.hpp"
+#include "time_options.hpp"
 
 namespace afhub::cli {
 namespace {
@@ -309,8 +310,8 @@ int run_cmd(const CmdOptions& options) {
   install_stop_signal_handlers();
   // --repeat 0 meant once before cmd kept sending by default: it still does.
   const bool once = options.once || options.repeat_hz == 0.0;
-  if (options.repeat_hz < 0.0 || !std::isfinite(options.repeat_hz) || options.repeat_hz > 100'000.0)
-    throw Error("--repeat must be a rate in Hz above 0 and at most 100000 (0: --once)");
+  const std::int64_t period_ns =
+      once ? 0 : period_ns_of_rate(options.repeat_hz, "--rate (0: --once)");
   if (options.others != "hold" && options.others != "release")
     throw Error("--others takes hold or release");
   if (!once) survive_hub_loss("afhub cmd");
@@ -339,7 +340,6 @@ int run_cmd(const CmdOptions& options) {
   }
   std::fprintf(stderr, "afhub cmd: commanding %s at %g Hz until Ctrl-C%s%s\n", channel.c_str(),
                options.repeat_hz, joints.empty() ? "" : ": ", joints.c_str());
-  const auto period_ns = static_cast<std::int64_t>(1e9 / options.repeat_hz);
   std::int64_t next = monotonic_ns();
   std::uint64_t failed = 0;
   while (!stop_requested()) {

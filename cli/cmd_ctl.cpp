@@ -1,5 +1,6 @@
 // `afhub ctl sine|hold|track`: the shipped joint controllers, each a process on the
 // periodic loop (or in lockstep with the physics).
+#include <algorithm>
 #include <cmath>
 #include <memory>
 
@@ -8,6 +9,7 @@
 #include "commands.hpp"
 #include "connection_options.hpp"
 #include "loop_options.hpp"
+#include "time_options.hpp"
 
 namespace afhub::cli {
 namespace {
@@ -73,14 +75,17 @@ void register_ctl(CLI::App& app, Runner& selected) {
   sine_command->callback([&selected, sine] {
     selected = [sine] {
       if (!std::isfinite(sine->amplitude_rad)) throw Error("--amplitude must be a finite number");
-      if (!(sine->period_s > 0.0 && std::isfinite(sine->period_s)))
-        throw Error("--period must be a positive number of seconds");
-      for (int joint : sine->joints)
+      ns_of_seconds(sine->period_s, "--period", 0.001);
+      ControllerOptions controller = controller_options(*sine, "ctl sine");
+      for (int joint : sine->joints) {
         if (joint < 0 || joint >= static_cast<int>(kMaxJointsPerBody))
           throw Error("--joints: " + std::to_string(joint) + " is not a joint index");
-      return run_controller(controller_options(*sine, "ctl sine"),
-                            joint_position_controller(
-                                sine_targets(sine->amplitude_rad, sine->period_s, sine->joints)));
+        controller.joints_needed =
+            std::max(controller.joints_needed, static_cast<std::uint32_t>(joint) + 1);
+      }
+      controller.joints_needed_by = "--joints";
+      return run_controller(controller, joint_position_controller(sine_targets(
+                                            sine->amplitude_rad, sine->period_s, sine->joints)));
     };
   });
 
@@ -102,7 +107,10 @@ void register_ctl(CLI::App& app, Runner& selected) {
   track_command->callback([&selected, track] {
     selected = [track] {
       JointTrajectory trajectory = read_trajectory_csv(track->trajectory_file);
-      return run_controller(controller_options(*track, "ctl track"),
+      ControllerOptions controller = controller_options(*track, "ctl track");
+      controller.joints_needed = static_cast<std::uint32_t>(trajectory.rows.front().size());
+      controller.joints_needed_by = track->trajectory_file + " (a column for each joint)";
+      return run_controller(controller,
                             joint_position_controller(track_targets(std::move(trajectory))));
     };
   });

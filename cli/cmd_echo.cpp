@@ -14,6 +14,7 @@
 #include "connection_options.hpp"
 #include "count_option.hpp"
 #include "format.hpp"
+#include "time_options.hpp"
 
 namespace afhub::cli {
 namespace {
@@ -50,7 +51,7 @@ void print_each(LatestReader<T>& reader, const std::string& channel, const EchoO
       ++printed;
     } else if (options.count != 0 && monotonic_ns() - last_sample_ns >
                                          static_cast<std::int64_t>(options.timeout_s * 1e9)) {
-      throw Error("no state from " + channel + " for " + std::to_string(options.timeout_s) +
+      throw Error("no state from " + channel + " for " + option_number(options.timeout_s) +
                   " s; is its publisher paused or gone?");
     }
     sleep_until_ns(monotonic_ns() + 200'000);
@@ -58,14 +59,13 @@ void print_each(LatestReader<T>& reader, const std::string& channel, const EchoO
 }
 
 int run_echo(const EchoOptions& options) {
-  if (options.rate_hz < 0.0 || !std::isfinite(options.rate_hz))
-    throw Error("--rate takes a rate in Hz above 0");
+  // Rate limited by the states' publish stamps: printed states are at least a period apart.
+  const std::int64_t min_gap_ns =
+      options.rate_hz == 0.0 ? 0 : period_ns_of_rate(options.rate_hz, "--rate (0: every state)");
+  ns_of_seconds(options.timeout_s, "--timeout", 0.001);
   const StateFields fields = !options.fields.empty() ? parse_state_fields(options.fields)
                              : options.json          ? StateFields{}
                                                      : default_text_fields();
-  // Rate limited by the states' publish stamps: printed states are at least a period apart.
-  const std::int64_t min_gap_ns =
-      options.rate_hz > 0.0 ? static_cast<std::int64_t>(1e9 / options.rate_hz) : 0;
   install_stop_signal_handlers();
   survive_hub_loss("afhub echo");
   const StartupWait wait(options.wait_s);

@@ -47,6 +47,11 @@ int run_play(PlayCliOptions& options) {
   std::fprintf(stderr, "afhub play: published %llu messages in %u complete pass%s\n",
                static_cast<unsigned long long>(report.published), report.passes,
                report.passes == 1 ? "" : "es");
+  if (!report.cut_off.empty())
+    std::fprintf(stderr,
+                 "afhub play: warning: %s was cut off (%s): played up to there; `afhub record "
+                 "--recover` gives it its index\n",
+                 options.play.file.c_str(), report.cut_off.c_str());
   return 0;
 }
 

@@ -23,9 +23,14 @@ void register_plot(CLI::App& app, Runner& selected) {
   plot->add_option("--out,-o", options->out, "A .png or .svg file (default: text on stdout)");
   plot->callback([&selected, options] {
     selected = [options] {
-      const std::size_t states = mcap::plot(*options);
+      const mcap::PlotReport report = mcap::plot(*options);
       if (!options->out.empty())
-        std::printf("wrote %s: %zu states\n", options->out.c_str(), states);
+        std::printf("wrote %s: %zu states\n", options->out.c_str(), report.states);
+      if (!report.cut_off.empty())
+        std::fprintf(stderr,
+                     "afhub plot: warning: %s was cut off (%s): plotted up to there; `afhub "
+                     "record --recover` gives it its index\n",
+                     options->file.c_str(), report.cut_off.c_str());
       return 0;
     };
   });

@@ -16,6 +16,7 @@
 #include "afhub/shm_layout/error.hpp"
 #include "commands.hpp"
 #include "realtime_options.hpp"
+#include "time_options.hpp"
 
 namespace afhub::cli {
 namespace {
@@ -52,11 +53,16 @@ std::string numbered(const std::string& path, unsigned n) {
 
 int run_recover(const std::string& path) {
   const mcap::ScanResult result = mcap::recover(path);
-  std::printf("%s: %s; rewrote %llu messages in %llu chunks with a summary and index\n",
-              path.c_str(),
-              result.complete ? "was complete" : ("was cut off: " + result.cut_off).c_str(),
-              static_cast<unsigned long long>(result.messages),
-              static_cast<unsigned long long>(result.chunks));
+  if (result.complete)
+    std::printf("%s: complete (%llu messages in %llu chunks, with its summary): left as it is\n",
+                path.c_str(), static_cast<unsigned long long>(result.messages),
+                static_cast<unsigned long long>(result.chunks));
+  else
+    std::printf(
+        "%s: was cut off: %s; rewrote %llu messages in %llu chunks with a summary and "
+        "index\n",
+        path.c_str(), result.cut_off.c_str(), static_cast<unsigned long long>(result.messages),
+        static_cast<unsigned long long>(result.chunks));
   return 0;
 }
 
@@ -67,8 +73,7 @@ int run_record(RecordCliOptions& options) {
   if (!compression)
     throw Error("--compression takes none, lz4 or zstd, not " + options.compression);
   options.record.compression = *compression;
-  if (!(options.record.duration_s >= 0.0) || !std::isfinite(options.record.duration_s))
-    throw Error("--duration takes seconds, 0 or more (0: until Ctrl-C)");
+  ns_of_seconds(options.record.duration_s, "--duration (0: until Ctrl-C)");
   if (!(options.buffer_mb >= 1.0 && options.buffer_mb <= 65536.0))
     throw Error("--buffer takes megabytes from 1 to 65536");
   options.record.buffer_bytes = static_cast<std::size_t>(options.buffer_mb * (1 << 20)) & ~7ull;

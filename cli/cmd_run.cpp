@@ -125,8 +125,7 @@ int run_run(const RunCliOptions& options) {
   apply_gain_options(model, options.gains);  // names as the files give them: before --namespace
   if (!options.name_space.empty()) physics::prefix_channels(model, options.name_space);
   if (!options.gravity.empty()) {
-    const std::vector<double> g = parse_numbers(options.gravity, "--gravity", 3);
-    physics::override_gravity(model, {g[0], g[1], g[2]});
+    physics::override_gravity(model, parse_gravity(options.gravity));
   }
   model.world.reduced_coordinates = options.reduced_coordinates;
 
@@ -201,6 +200,7 @@ int run_run(const RunCliOptions& options) {
   if (!options.report_file.empty()) {
     std::ofstream out(options.report_file);
     out << physics::report_json(report, sim);
+    out.close();  // its last bytes written now, so that a full disk is said
     if (!out) throw Error("cannot write the report to " + options.report_file);
   }
   if (!options.step_log_file.empty()) {
@@ -209,6 +209,7 @@ int run_run(const RunCliOptions& options) {
     for (const physics::StepSample& sample : report.step_log)
       out << sample.begin_ns << ' ' << sample.duration_us << ' ' << sample.commands_us << ' '
           << sample.publish_us << ' ' << sample.due_ns << ' ' << sample.late << '\n';
+    out.close();
     if (!out) throw Error("cannot write the step log to " + options.step_log_file);
   }
   return report.nan_detected ? 1 : 0;

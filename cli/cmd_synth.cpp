@@ -21,6 +21,7 @@
 #include "commands.hpp"
 #include "connection_options.hpp"
 #include "count_option.hpp"
+#include "time_options.hpp"
 
 namespace afhub::cli {
 namespace {
@@ -104,8 +105,7 @@ int run_synth(const SynthOptions& options) {
     throw Error("--bodies must be between 1 and " + std::to_string(kMaxBodies));
   if (options.joints > kMaxJointsPerBody)
     throw Error("--joints must be at most " + std::to_string(kMaxJointsPerBody));
-  if (!(options.rate_hz > 0.0 && options.rate_hz <= 100'000.0))
-    throw Error("--rate must be between 0 and 100000 Hz");
+  const std::int64_t period_ns = period_ns_of_rate(options.rate_hz, "--rate");
   install_stop_signal_handlers();
   survive_hub_loss("afhub synth");
   connect_to_hub("synth", hub_policy(options.no_autostart));
@@ -144,7 +144,6 @@ int run_synth(const SynthOptions& options) {
   StepTapeWriter tape{std::string(kWorldInstance)};  // as the physics, for a recorder
 
   const double dt = 1.0 / options.rate_hz;
-  const auto period_ns = static_cast<std::int64_t>(1e9 * dt);
   const std::int64_t start_ns = monotonic_ns();
   std::int64_t next_ns = start_ns;
   std::uint64_t step = 0;

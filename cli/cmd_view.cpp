@@ -83,6 +83,7 @@ void send_hub_lost_frames(viewer::ViewServer& server, std::int64_t period_ns,
 
 int run_view(const ViewOptions& options) {
   if (options.port < 0 || options.port > 65535) throw Error("--port takes 0 to 65535");
+  viewer::require_ip_address(options.bind);
   if (!(options.rate_hz >= 1.0 && options.rate_hz <= 240.0))
     throw Error("--rate takes 1 to 240 frames per second");
   // Any machine that reaches the address could drive the robot (the token travels in
@@ -151,8 +152,8 @@ int run_view(const ViewOptions& options) {
   viewer::PoseFeed feed(world_instance(options.name_space));
   // With commands, the URL carries the token: only a page opened at it may command.
   const std::string query = options.allow_commands ? "?token=" + server_options.token : "";
-  std::printf("afhub view: http://%s:%d/%s (%s; Ctrl-C stops)\n", options.bind.c_str(),
-              server.port(), query.c_str(),
+  std::printf("afhub view: http://%s:%d/%s (%s; Ctrl-C stops)\n",
+              viewer::url_host(options.bind).c_str(), server.port(), query.c_str(),
               !options.allow_commands ? "read-only: no commands"
               : remote_commands       ? "commands allowed, INSECURE: from other machines too"
                                       : "commands allowed from this URL only");

@@ -48,11 +48,11 @@ std::string device_state_text(const BodyEntry& entry, const DeviceState& state);
 std::string rate_text(double rate_hz);
 bool rate_measured(double rate_hz);
 
-// Parses "a,b,c" into finite numbers; throws afhub::Error naming `flag` when a value
-// is not a number, is NaN or Inf, or when the count is not `expected` (0: any count).
 // The non-empty items of a comma-separated list: "a,,b" -> {a, b}.
 std::vector<std::string> split_commas(const std::string& text);
 
+// Parses "a,b,c" into finite numbers; throws afhub::Error naming `flag` when a value
+// is not a number, is NaN or Inf, or when the count is not `expected` (0: any count).
 std::vector<double> parse_numbers(std::string_view text, std::string_view flag,
                                   std::size_t expected);
 

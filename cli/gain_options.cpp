@@ -1,8 +1,11 @@
 // Joint gains from the command line (see gain_options.hpp).
 #include "gain_options.hpp"
 
+#include <cmath>
+
 #include "afhub/physics/gain_overrides.hpp"
 #include "afhub/shm_layout/error.hpp"
+#include "afhub/yaml/yaml_reader.hpp"
 #include "format.hpp"
 
 namespace afhub::cli {
@@ -23,8 +26,9 @@ void add_gain_options(CLI::App* command, GainOptions& options) {
 }
 
 physics::Pid parse_gains(std::string_view text, std::string_view option) {
-  const std::string usage =
-      std::string(option) + " takes P,I,D: three finite numbers, none negative, e.g. 1000,0,10";
+  const std::string usage = std::string(option) +
+                            " takes P,I,D: three numbers from 0 to 1e9 (a model file's bound), "
+                            "e.g. 1000,0,10";
   std::vector<double> numbers;
   try {
     numbers = parse_numbers(text, option, 3);
@@ -32,8 +36,18 @@ physics::Pid parse_gains(std::string_view text, std::string_view option) {
     throw Error(usage + "; got '" + std::string(text) + "'");
   }
   for (const double number : numbers)
-    if (number < 0.0) throw Error(usage + "; got '" + std::string(text) + "'");
+    if (number < 0.0 || number > yaml::kMaxMagnitude)
+      throw Error(usage + "; got '" + std::string(text) + "'");
   return {numbers[0], numbers[1], numbers[2]};
+}
+
+Vec3 parse_gravity(std::string_view text) {
+  const std::vector<double> g = parse_numbers(text, "--gravity", 3);
+  for (const double value : g)
+    if (std::abs(value) > yaml::kMaxMagnitude)
+      throw Error("--gravity: " + std::string(text) +
+                  " is beyond a model file's bound of 1e9 m/s^2 per axis");
+  return {g[0], g[1], g[2]};
 }
 
 void apply_gain_options(physics::Model& model, const GainOptions& options) {

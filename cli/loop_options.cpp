@@ -5,6 +5,7 @@
 
 #include "afhub/shm_layout/error.hpp"
 #include "count_option.hpp"
+#include "time_options.hpp"
 
 namespace afhub::cli {
 
@@ -35,10 +36,8 @@ std::int64_t after_step_ns(const PhaseOptions& options, std::int64_t period_ns) 
 }
 
 void set_loop_rate_options(const LoopRateOptions& options, LoopOptions& loop) {
-  if (!(options.rate_hz > 0.0 && options.rate_hz <= 100'000.0))
-    throw Error("--rate must be between 0 and 100000 Hz");
+  loop.period_ns = period_ns_of_rate(options.rate_hz, "--rate");
   set_realtime_options(options.realtime, loop);
-  loop.period_ns = static_cast<std::int64_t>(std::llround(1e9 / options.rate_hz));
   loop.max_cycles = options.cycles;
 }
 

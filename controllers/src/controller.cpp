@@ -3,6 +3,7 @@
 #include "afhub/rt/clock.hpp"
 
 #include <sched.h>
+#include <unistd.h>
 
 #include <cstdio>
 #include <memory>
@@ -22,9 +23,46 @@
 namespace afhub {
 namespace {
 
+// The physics' refusals of this process's commands, which a body's state counts with
+// the last one's sender and reason: said on stderr, the first at once and then at most
+// once a second, so that a controller whose commands are all refused (a target beyond
+// a joint's bound) does not run on in silence. No allocation: it runs in the loop.
+class RefusalNotice {
+ public:
+  explicit RefusalNotice(const std::string& who) : who_(who) {}
+
+  void look(const BodyState& state, std::int64_t now_ns) {
+    const std::uint32_t count = state.refused_commands;
+    const std::uint32_t newly = seen_any_ ? count - seen_ : 0;
+    seen_ = count;
+    seen_any_ = true;
+    if (newly == 0 || state.refused_command_pid != pid_) return;
+    unsaid_ += newly;
+    if (now_ns < next_say_ns_) return;
+    const std::string_view reason = name_of(state.refusal_reason);
+    std::fprintf(stderr,
+                 "%s: the physics refused %llu command%s of this controller (nothing of %s was "
+                 "applied), the last: %.*s\n",
+                 who_.c_str(), static_cast<unsigned long long>(unsaid_), unsaid_ == 1 ? "" : "s",
+                 unsaid_ == 1 ? "it" : "them", static_cast<int>(reason.size()), reason.data());
+    unsaid_ = 0;
+    next_say_ns_ = now_ns + 1'000'000'000;
+  }
+
+ private:
+  const std::string& who_;
+  const std::uint32_t pid_ = static_cast<std::uint32_t>(getpid());
+  std::uint32_t seen_ = 0;
+  bool seen_any_ = false;
+  std::uint64_t unsaid_ = 0;
+  std::int64_t next_say_ns_ = 0;
+};
+
 // Fills and publishes one command answering `state`.
-void answer(BodyClient& body, const BodyState& state, const ControllerCycle& cycle, bool lockstep) {
+void answer(BodyClient& body, const BodyState& state, const ControllerCycle& cycle, bool lockstep,
+            RefusalNotice& refusals) {
   if (hub_lost()) return;  // outputs safe: no command into a hub that is gone
+  refusals.look(state, monotonic_ns());
   BodyCommand* command = body.loan_command(state.joint_count);
   if (!command) return;  // shared memory exhausted: the watchdog covers a lasting shortage
   cycle(state, *command);
@@ -36,7 +74,7 @@ void answer(BodyClient& body, const BodyState& state, const ControllerCycle& cyc
 
 // Free-running: every period, the newest state in, a command out.
 void run_free(BodyClient& body, const ControllerOptions& options, const ControllerCycle& cycle,
-              LoopTiming& timing, LoopStatsPublisher& stats) {
+              LoopTiming& timing, LoopStatsPublisher& stats, RefusalNotice& refusals) {
   LoopOptions loop = options.loop;
   const std::int64_t after_ns = after_step_offset_ns(options.after_step_ns, loop.period_ns);
   std::optional<StepPhase> phase;
@@ -65,7 +103,7 @@ void run_free(BodyClient& body, const ControllerOptions& options, const Controll
   const auto respond = [&](const BodyState& state) {
     timing.count_late(late_commands.newly_late(state));
     if (phase) phase->follow(state);  // a new physics, on a grid of its own
-    answer(body, state, cycle, false);
+    answer(body, state, cycle, false, refusals);
   };
   steps.work = [&] {
     // A physics catching up after a stall: each of its late steps answered as it comes.
@@ -84,7 +122,7 @@ void run_free(BodyClient& body, const ControllerOptions& options, const Controll
 // channel until then (a futex post wakes it in microseconds), or with `spin`
 // polling with a yield. The sleep ends every 10 ms to publish stats and see a stop.
 void run_lockstep(BodyClient& body, const ControllerOptions& options, const ControllerCycle& cycle,
-                  LoopTiming& timing, LoopStatsPublisher& stats) {
+                  LoopTiming& timing, LoopStatsPublisher& stats, RefusalNotice& refusals) {
   std::unique_ptr<SampleWaiter> waiter;
   if (!options.spin) {
     waiter = std::make_unique<SampleWaiter>();
@@ -107,7 +145,7 @@ void run_lockstep(BodyClient& body, const ControllerOptions& options, const Cont
     const std::uint64_t step = state->header.sim_step;
     // Steps skipped since the last answer went ahead without this controller.
     if (answered_any && step > last_step + 1) timing.count_late(step - last_step - 1);
-    answer(body, *state, cycle, true);
+    answer(body, *state, cycle, true, refusals);
     timing.record(0, monotonic_ns() - now);
     answered_any = true;
     last_step = step;
@@ -126,6 +164,10 @@ int run_controller(const ControllerOptions& options, const ControllerCycle& cycl
   wait.connect_to_hub("ctl");
   const BodyEntry entry = wait.wait_for_body(options.body, who);
   const std::string channel(name_of(entry.info.channel));
+  if (options.joints_needed > entry.info.joint_count)
+    throw Error(options.joints_needed_by + " needs " + std::to_string(options.joints_needed) +
+                " joints, and " + channel + " has " + std::to_string(entry.info.joint_count) +
+                " (`afhub ls` lists each body's joints)");
   BodyClient body(entry);
   require_chunks({written_as_slot(body_command_bytes(entry.info.joint_count)),
                   published_each_cycle(sizeof(LoopStats))},
@@ -134,14 +176,15 @@ int run_controller(const ControllerOptions& options, const ControllerCycle& cycl
   LoopTiming& timing = timing_out ? *timing_out : own_timing;
   const RealtimeGrant grant = apply_realtime(options.loop, who.c_str());
   LoopStatsPublisher stats(options.name, channel, options.loop.period_ns, options.lockstep, grant);
+  RefusalNotice refusals(who);
   if (options.lockstep) {
     std::fprintf(stderr, "%s: commanding %s in lockstep with the physics\n", who.c_str(),
                  channel.c_str());
-    run_lockstep(body, options, cycle, timing, stats);
+    run_lockstep(body, options, cycle, timing, stats, refusals);
   } else {
     std::fprintf(stderr, "%s: commanding %s every %.3f ms\n", who.c_str(), channel.c_str(),
                  static_cast<double>(options.loop.period_ns) * 1e-6);
-    run_free(body, options, cycle, timing, stats);
+    run_free(body, options, cycle, timing, stats, refusals);
   }
   return 0;
 }

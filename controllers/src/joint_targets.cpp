@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "afhub/shm_layout/error.hpp"
+#include "afhub/yaml/input_file.hpp"
 
 namespace afhub {
 
@@ -72,6 +73,8 @@ JointTargetFunction sine_targets(double amplitude_rad, double period_s, std::vec
 
 namespace {
 
+constexpr std::uintmax_t kMaxTrajectoryFileBytes = 1u << 30;
+
 // A number, or nothing when `text` is not entirely one.
 bool parse_number(const std::string& text, double& value) {
   std::size_t used = 0;
@@ -95,6 +98,9 @@ std::vector<std::string> split_fields(const std::string& line) {
 }  // namespace
 
 JointTrajectory read_trajectory_csv(const std::string& path) {
+  // A regular file of a bounded size (not /dev/zero, which never ends): an hour of
+  // seven joints at 1 kHz is about 300 MB.
+  yaml::check_input_file(path, kMaxTrajectoryFileBytes, "a trajectory (CSV)");
   std::ifstream in(path);
   if (!in) throw Error(path + ": error: cannot open the trajectory file");
   JointTrajectory trajectory;

@@ -50,7 +50,7 @@ void read_block_head(const FileReader& file, const YAML::Node& block, const std:
   spec.identifier = identifier;
   spec.where = file.at(block);
   if (!block.IsMap()) fail(spec.where, "'" + identifier + "' must be a map of " + kind + " keys");
-  file.warn_unknown_keys(block, keys, identifier);
+  file.check_keys(block, keys, identifier);
   spec.name = file.text(file.require(block, "name", spec.where), "name");
 }
 

@@ -83,6 +83,17 @@ std::vector<PlacedMesh> read_placed_meshes(const FileReader& file, const YAML::N
   return meshes;
 }
 
+// A color component: 0 to 1 (a color file's named colors are 0 to 255).
+void optional_component(const FileReader& file, const YAML::Node& map, const char* key, double& out,
+                        const std::string& what) {
+  if (YAML::Node value = map[key]) {
+    out = file.non_negative(value, what);
+    if (out > 1.0)
+      fail(file.at(value),
+           "'" + what + "' is " + value.Scalar() + "; a component is from 0 to 1 (255 is 1)");
+  }
+}
+
 // Colors are kept for a future viewer: `color rgba`, `color components` or a named `color`.
 void read_color(const FileReader& file, const YAML::Node& block, BodySpec& body) {
   if (YAML::Node rgba = block["color rgba"]) {
@@ -90,7 +101,7 @@ void read_color(const FileReader& file, const YAML::Node& block, BodySpec& body)
     std::array<double, 4> color{0.0, 0.0, 0.0, 1.0};
     const char* keys[4] = {"r", "g", "b", "a"};
     for (int i = 0; i < 4; ++i)
-      file.optional_non_negative(rgba, keys[i], color[i], std::string("color rgba.") + keys[i]);
+      optional_component(file, rgba, keys[i], color[i], std::string("color rgba.") + keys[i]);
     body.color_rgba = color;
   } else if (YAML::Node components = block["color components"]) {
     file.require_map(components, "color components", "{diffuse: {r, g, b}, transparency: 1}");
@@ -99,11 +110,10 @@ void read_color(const FileReader& file, const YAML::Node& block, BodySpec& body)
       file.require_map(diffuse, "color components.diffuse", "{r: 1, g: 0, b: 0}");
       const char* keys[3] = {"r", "g", "b"};
       for (int i = 0; i < 3; ++i)
-        file.optional_non_negative(diffuse, keys[i], color[i],
-                                   std::string("color components.diffuse.") + keys[i]);
+        optional_component(file, diffuse, keys[i], color[i],
+                           std::string("color components.diffuse.") + keys[i]);
     }
-    file.optional_non_negative(components, "transparency", color[3],
-                               "color components.transparency");
+    optional_component(file, components, "transparency", color[3], "color components.transparency");
     body.color_rgba = color;
   }
   if (YAML::Node name = block["color"]) body.color_name = file.text(name, "color");
@@ -136,6 +146,15 @@ BodySpec read_body(const FileReader& file, const YAML::Node& block, const std::s
     Vec3 value = file.vec3(inertia, "inertia", "ix", "iy", "iz");
     if (value.x < 0 || value.y < 0 || value.z < 0)
       fail(file.at(inertia), "'inertia' components must not be negative");
+    // Principal inertias of any mass distribution: each at most the sum of the others.
+    // Bullet takes others, and spins such a body in ways no real one does. 1 % of room:
+    // CAD exports round.
+    const double most = std::max({value.x, value.y, value.z});
+    if (most > 1.01 * (value.x + value.y + value.z - most))
+      file.warn(inertia, "'inertia' (" + yaml::number_text(value.x) + ", " +
+                             yaml::number_text(value.y) + ", " + yaml::number_text(value.z) +
+                             ") has one component larger than the other two together, which no "
+                             "rigid body has; check the values and their order");
     body.inertia_kgm2 = value;
   }
   if (YAML::Node offset = block["inertial offset"])
@@ -160,7 +179,10 @@ BodySpec read_body(const FileReader& file, const YAML::Node& block, const std::s
     file.optional_non_negative(damping, "angular", body.angular_damping, "damping.angular");
   }
   file.optional_non_negative(block, "restitution", body.restitution, "restitution");
-  file.optional_non_negative(block, "collision margin", body.collision_margin, "collision margin");
+  if (YAML::Node margin = block["collision margin"]) {
+    file.non_negative(margin, "collision margin");
+    body.collision_margin = file.bounded(margin, "collision margin", kMaxLengthM, "m");
+  }
   if (YAML::Node groups = block["collision groups"]) {
     if (!groups.IsSequence())
       fail(file.at(groups), "'collision groups' must be a list of integers 0..999");

@@ -10,9 +10,9 @@
 #include <map>
 #include <memory>
 #include <mutex>
-#include <set>
 
 #include "afhub/shm_layout/error.hpp"
+#include "afhub/shm_layout/limits.hpp"
 #include "afhub/yaml/input_file.hpp"
 #include "mesh_reader.hpp"
 
@@ -187,11 +187,11 @@ std::vector<TriangleMesh> load_body_meshes(const std::vector<MeshRequest>& reque
 }
 
 std::size_t check_meshes(const Model& model) {
-  std::set<MeshKey> seen;
+  std::map<MeshKey, std::size_t> request_of;
   std::vector<MeshRequest> requests;
   auto add = [&](const std::string& path, const Vec3& scale, const SourceLocation& where,
                  const std::string& owner) {
-    if (!path.empty() && seen.insert(mesh_key(path, scale)).second)
+    if (!path.empty() && request_of.try_emplace(mesh_key(path, scale), requests.size()).second)
       requests.push_back({path, scale, where, owner});
   };
   for (const BodySpec& body : model.bodies) {
@@ -205,8 +205,24 @@ std::size_t check_meshes(const Model& model) {
   }
   for (const SoftBodySpec& soft : model.soft_bodies)
     add(soft.mesh, uniform_scale(soft.scale), soft.where, "soft body '" + soft.identifier + "'");
-  load_body_meshes(requests);
+  const std::vector<TriangleMesh> meshes = load_body_meshes(requests);
+  for (const SoftBodySpec& soft : model.soft_bodies)
+    if (!soft.mesh.empty())
+      check_soft_body_mesh(soft,
+                           meshes[request_of.at(mesh_key(soft.mesh, uniform_scale(soft.scale)))]);
   return requests.size();
+}
+
+void check_soft_body_mesh(const SoftBodySpec& soft, const TriangleMesh& mesh) {
+  std::size_t nodes = 0;
+  for (const auto& triangle : mesh.triangles)
+    for (unsigned vertex : triangle) nodes = std::max<std::size_t>(nodes, vertex + std::size_t{1});
+  if (nodes <= kMaxSoftBodyNodes && mesh.triangles.size() <= kMaxSoftBodyFaces) return;
+  throw Error(soft.where.str() + ": error: soft body '" + soft.identifier + "' has " +
+              std::to_string(nodes) + " nodes and " + std::to_string(mesh.triangles.size()) +
+              " faces; afhub takes at most " + std::to_string(kMaxSoftBodyNodes) + " nodes and " +
+              std::to_string(kMaxSoftBodyFaces) +
+              " faces per soft body (what a viewer draws): simplify its mesh (" + soft.mesh + ")");
 }
 
 MeshMassProperties mass_properties(const TriangleMesh& mesh) {

@@ -1,6 +1,9 @@
 // Small helpers of the model (see model.hpp).
 #include "afhub/physics/model.hpp"
 
+#include <algorithm>
+#include <filesystem>
+
 #include "afhub/shm_layout/channel_names.hpp"
 #include "frames.hpp"
 
@@ -68,6 +71,25 @@ bool has_joint_axis(JointType type) {
 
 Vec3 effective_gravity(const Model& model, std::size_t body) {
   return model.bodies[body].gravity_mps2.value_or(model.world.gravity_mps2);
+}
+
+std::vector<std::string> model_files(const Model& model) {
+  std::vector<std::string> files;
+  const auto add = [&](const std::string& file) {
+    std::error_code ignored;
+    if (!file.empty())
+      files.push_back(std::filesystem::absolute(file, ignored).lexically_normal().string());
+  };
+  for (const BodySpec& body : model.bodies) add(body.where.file);
+  for (const JointSpec& joint : model.joints) add(joint.where.file);
+  for (const SoftBodySpec& soft : model.soft_bodies) add(soft.where.file);
+  for (const SensorSpec& sensor : model.sensors) add(sensor.where.file);
+  for (const ActuatorSpec& actuator : model.actuators) add(actuator.where.file);
+  add(model.world.file);
+  for (const std::string& file : model.other_files) add(file);
+  std::sort(files.begin(), files.end());
+  files.erase(std::unique(files.begin(), files.end()), files.end());
+  return files;
 }
 
 void override_gravity(Model& model, const Vec3& gravity_mps2) {

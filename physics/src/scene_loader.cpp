@@ -56,7 +56,23 @@ WorldObjectSpec read_world_object(const FileReader& file, const YAML::Node& bloc
     if (YAML::Node target = block["look at"]) look_at = file.position(target, "look at");
     object.direction = {look_at.x - object.position_m.x, look_at.y - object.position_m.y,
                         look_at.z - object.position_m.z};
-    if (YAML::Node up = block["up"]) object.up = file.axis(up, "up");
+    const double reach = std::hypot(object.direction.x, object.direction.y, object.direction.z);
+    if (reach < 1e-9)
+      fail(file.at(block["look at"] ? block["look at"] : block),
+           "camera '" + identifier +
+               "' looks at its own location: give it a 'look at' "
+               "elsewhere");
+    if (YAML::Node up = block["up"]) {
+      object.up = file.axis(up, "up");
+      const Vec3& d = object.direction;
+      const Vec3& u = object.up;
+      const double cross =
+          std::hypot(d.y * u.z - d.z * u.y, d.z * u.x - d.x * u.z, d.x * u.y - d.y * u.x);
+      if (cross < 1e-6 * reach * std::hypot(u.x, u.y, u.z))
+        fail(file.at(up), "camera '" + identifier +
+                              "': 'up' is along the direction it looks, so its image has no "
+                              "up; give an 'up' across the view");
+    }
   } else {
     object.direction = {0.0, 0.0, -1.0};
     if (YAML::Node direction = block["direction"])
@@ -84,11 +100,25 @@ std::string load_world(const std::string& path, Model& model) {
       fail(file.at(iterations), "'max iterations' must be an integer from 1 to 1000");
     world.max_iterations = static_cast<int>(value);
   }
+  // A model or a launch file given as the world would load nothing of it, silently.
+  for (const char* key : {"bodies", "joints", "soft bodies", "sensors", "actuators"})
+    if (YAML::Node node = root[key])
+      file.warn(node, "'" + std::string(key) +
+                          "' is a model file's key: a world file's models are not loaded. Give "
+                          "this file as a model, or name it as the world's 'environment'");
+  for (const char* key : {"world config", "multibody configs"})
+    if (YAML::Node node = root[key])
+      file.warn(node, "'" + std::string(key) +
+                          "' is a launch file's key: this world file is not read as one; give "
+                          "a launch file with --launch");
   const yaml::MapIndex index(file, root);
   for (const char* kind : {"lights", "cameras"}) {
     const bool camera = std::string(kind) == "cameras";
     auto& objects = camera ? world.cameras : world.lights;
     for (const auto& [identifier, listed, block] : header_list(file, index, kind)) {
+      for (const WorldObjectSpec& earlier : objects)
+        if (earlier.key == identifier)
+          fail(file.at(listed), "'" + identifier + "' is listed twice in '" + kind + "'");
       // The world state carries a fixed number of each (shm_layout/limits.hpp).
       if (objects.size() == kMaxWorldObjects)
         fail(file.at(listed), "more than " + std::to_string(kMaxWorldObjects) + " " + kind +

@@ -7,7 +7,6 @@
 #include <map>
 
 #include "afhub/shm_layout/error.hpp"
-#include "afhub/shm_layout/limits.hpp"
 #include "body_groups.hpp"
 #include "simulation_data.hpp"
 
@@ -246,6 +245,7 @@ void Simulation::Data::build_soft_bodies() {
   for (const SoftBodySpec& spec : model.soft_bodies) {
     const TriangleMesh mesh =
         load_body_mesh(spec.mesh, spec.scale, spec.where, "soft body '" + spec.identifier + "'");
+    check_soft_body_mesh(spec, mesh);
     const btTransform place = to_transform(spec.location);
     std::vector<btScalar> vertices;
     for (const auto& v : mesh.vertices) {
@@ -259,17 +259,6 @@ void Simulation::Data::build_soft_bodies() {
     btSoftBody* soft = btSoftBodyHelpers::CreateFromTriMesh(
         world.getWorldInfo(), vertices.data(), triangles.data(),
         static_cast<int>(mesh.triangles.size()), false);
-    // A viewer draws at most so many (shm_layout/soft_body.hpp): say it at load.
-    if (soft->m_nodes.size() > static_cast<int>(kMaxSoftBodyNodes) ||
-        soft->m_faces.size() > static_cast<int>(kMaxSoftBodyFaces)) {
-      const std::string counts = std::to_string(soft->m_nodes.size()) + " nodes and " +
-                                 std::to_string(soft->m_faces.size()) + " faces";
-      delete soft;
-      throw Error(spec.where.str() + ": error: soft body '" + spec.identifier + "' has " + counts +
-                  "; afhub takes at most " + std::to_string(kMaxSoftBodyNodes) + " nodes and " +
-                  std::to_string(kMaxSoftBodyFaces) + " faces per soft body: simplify its mesh (" +
-                  spec.mesh + ")");
-    }
     configure_soft_body(*soft, spec);
     soft->setTotalMass(spec.mass_kg);
     for (int node : spec.fixed_nodes) {

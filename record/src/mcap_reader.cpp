@@ -37,6 +37,7 @@ class File {
     std::error_code error;
     size_ = std::filesystem::file_size(path, error);
     if (error) throw Error("cannot read " + path + ": " + error.message());
+    ends_with_footer_ = read_ending();
   }
   ~File() { std::fclose(file_); }
   File(const File&) = delete;
@@ -54,12 +55,30 @@ class File {
   std::uint64_t at() const { return at_; }
   std::uint64_t size() const { return size_; }
   const std::string& path() const { return path_; }
+  // The file ends as a finished MCAP file does: a footer record, then the magic. Such a
+  // file was not cut off, so a record running past its end is corruption.
+  bool ends_with_footer() const { return ends_with_footer_; }
 
  private:
+  bool read_ending() {
+    constexpr std::size_t kFooterRecord = kRecordPrefix + 20;  // two offsets and a CRC
+    std::uint8_t ending[kFooterRecord + sizeof kMagic];
+    if (size_ < sizeof kMagic + sizeof ending) return false;
+    const bool read = std::fseek(file_, -static_cast<long>(sizeof ending), SEEK_END) == 0 &&
+                      std::fread(ending, 1, sizeof ending, file_) == sizeof ending;
+    if (std::fseek(file_, 0, SEEK_SET) != 0)
+      throw Error("cannot read " + path_ + ": " + std::strerror(errno));
+    std::uint64_t length = 0;
+    std::memcpy(&length, ending + 1, sizeof length);
+    return read && ending[0] == kFooter && length == 20 &&
+           std::memcmp(ending + kFooterRecord, kMagic, sizeof kMagic) == 0;
+  }
+
   std::string path_;
   std::FILE* file_;
   std::uint64_t size_ = 0;
   std::uint64_t at_ = 0;
+  bool ends_with_footer_ = false;
 };
 
 // A chunk's uncompressed size checked against what its records can hold, before that
@@ -133,12 +152,21 @@ class Scanner {
       std::memcpy(&length, prefix + 1, sizeof length);
       const std::string what = opcode_name(opcode) + " record at byte " + std::to_string(at);
       const std::uint64_t left = file_.size() - file_.at();
-      if (length > left)
-        return cut(what + " says it holds " + std::to_string(length) + " bytes, the file has " +
-                   std::to_string(left) + " after it");
+      // Past the bound first: a cut file's last record says its true length, which
+      // no writer makes this large; a length that is is corrupt, not cut.
       if (length > kMaxRecordBytes)
         throw Error(file_.path() + ": " + what + " holds " + std::to_string(length) +
-                    " bytes, more than afhub reads in one record (256 MiB)");
+                    " bytes, more than afhub reads in one record (256 MiB): a corrupt file, "
+                    "or one made by a tool writing larger records");
+      if (length > left) {
+        const std::string overrun = what + " says it holds " + std::to_string(length) +
+                                    " bytes, the file has " + std::to_string(left) + " after it";
+        if (file_.ends_with_footer())
+          throw Error(file_.path() + ": " + overrun +
+                      ", yet the file ends with its footer: it was not cut off but is corrupt "
+                      "there");
+        return cut(overrun);
+      }
       if (first && opcode != kHeader)
         throw Error(file_.path() + ": the first record is a " + what +
                     ", not the header the spec requires");
@@ -163,6 +191,12 @@ class Scanner {
     if (!file_.read(magic) || std::memcmp(magic, kMagic, sizeof kMagic) != 0)
       return cut("the footer at byte " + std::to_string(footer_at) +
                  " is not followed by MCAP's closing magic bytes");
+    if (file_.at() != file_.size())
+      throw Error(file_.path() + ": " + std::to_string(file_.size() - file_.at()) +
+                  " bytes follow the closing magic at byte " + std::to_string(file_.at()) +
+                  ": not one MCAP file (two joined together?); cut them apart, e.g. with `head "
+                  "-c " +
+                  std::to_string(file_.at()) + "`");
     result_.complete = true;
     return result_;
   }
@@ -335,6 +369,10 @@ ScanResult recover(const std::string& path) {
   } catch (...) {
     std::filesystem::remove(temporary);
     throw;
+  }
+  if (result.complete) {  // nothing to recover: the original stays as it was
+    std::filesystem::remove(temporary);
+    return result;
   }
   std::error_code error;
   std::filesystem::rename(temporary, path, error);

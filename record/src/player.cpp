@@ -1,5 +1,7 @@
 #include "afhub/record/player.hpp"
 
+#include <algorithm>
+#include <cstdio>
 #include <cstring>
 #include <map>
 #include <memory>
@@ -43,9 +45,21 @@ class Player : public Visitor {
   void pass() {
     pass_start_ns_ = 0;
     first_log_ns_ = 0;
-    scan(options_.file, *this);
+    in_range_ = 0;
+    cut_off_ = scan(options_.file, *this).cut_off;
+    if (!layout_checked_)
+      throw Error(options_.file + " holds no recording of `afhub record` (no afhub metadata" +
+                  (cut_off_.empty() ? std::string(")") : "; it was cut off: " + cut_off_ + ")"));
+    if (in_range_ == 0 && options_.start_s > 0.0) {
+      char text[160];
+      std::snprintf(text, sizeof text,
+                    "--start %g s is past the recording's last state, at %.3f s from its first",
+                    options_.start_s, last_at_s_);
+      throw Error(text);
+    }
   }
   std::uint64_t published() const { return published_; }
+  const std::string& cut_off() const { return cut_off_; }
 
   void header(const std::string& profile, const std::string&) override {
     if (!profile.empty())
@@ -105,8 +119,10 @@ class Player : public Visitor {
         static_cast<double>(static_cast<std::int64_t>(message.log_time_ns - first_log_ns_)) * 1e-9;
     // The scene is published once by a physics: replayed whenever it comes.
     const bool once = replayed.kind == PayloadKind::kSceneDescription;
+    last_at_s_ = std::max(last_at_s_, at_s);
     if (!once && at_s < options_.start_s) return;
     if (options_.end_s > 0.0 && at_s > options_.end_s) throw EndOfPass{false};
+    if (!once) ++in_range_;
 
     const auto payload = checked_copy(message.data, replayed.kind, aligned_,
                                       options_.file + ": a message on " + replayed.topic);
@@ -199,6 +215,9 @@ class Player : public Visitor {
   std::map<std::uint16_t, PayloadKind> kinds_;
   std::map<std::uint16_t, Replayed> replayed_;
   bool layout_checked_ = false;
+  std::string cut_off_;
+  std::uint64_t in_range_ = 0;  // states of this pass within --start and --end
+  double last_at_s_ = 0.0;
   std::vector<std::uint64_t> aligned_;
   std::uint64_t published_ = 0;
 
@@ -216,8 +235,10 @@ class Player : public Visitor {
 }  // namespace
 
 PlayReport play(const PlayOptions& options, const std::function<bool()>& keep_going) {
-  if (!(options.rate >= 0.0) || options.rate > 1e6)
-    throw Error("--rate takes a factor above 0 (2: twice as fast), or 0: as fast as possible");
+  if (!(options.rate == 0.0 || (options.rate >= 1e-3 && options.rate <= 1e6)))
+    throw Error(
+        "--rate takes a factor from 0.001 to 1e6 (2: twice as fast), or 0: as fast as "
+        "possible");
   if (!(options.start_s >= 0.0) || !(options.end_s >= 0.0) ||
       (options.end_s > 0.0 && options.end_s <= options.start_s))
     throw Error("--start and --end take seconds from the recording's start, --end after --start");
@@ -232,6 +253,7 @@ PlayReport play(const PlayOptions& options, const std::function<bool()>& keep_go
     ++report.passes;
   } while (options.loop && keep_going());
   report.published = player.published();
+  report.cut_off = player.cut_off();
   return report;
 }
 

@@ -148,14 +148,14 @@ void run_gnuplot(const std::string& script, const std::string& log) {
 
 }  // namespace
 
-std::size_t plot(const PlotOptions& options) {
+PlotReport plot(const PlotOptions& options) {
   if (options.fields.empty()) throw Error(std::string("--fields: name one of ") + kPlotFields);
   for (const std::string& field : options.fields) panel_of(field, {});  // checked before reading
   const std::string extension = std::filesystem::path(options.out).extension().string();
   if (!options.out.empty() && extension != ".png" && extension != ".svg")
     throw Error("--out " + options.out + ": plot writes .png or .svg files");
   Series series(options);
-  scan(options.file, series);
+  const ScanResult scanned = scan(options.file, series);
   series.require_one();
   if (series.rows.empty()) throw Error(options.file + " holds no state of " + series.body);
 
@@ -197,7 +197,7 @@ std::size_t plot(const PlotOptions& options) {
     throw;
   }
   std::filesystem::remove_all(dir);
-  return series.rows.size();
+  return {series.rows.size(), scanned.cut_off};
 }
 
 }  // namespace afhub::mcap

@@ -48,10 +48,10 @@ std::string body_channel_name(std::string_view name_space, std::string_view body
 
 std::string channel_name_problem(std::string_view name) {
   if (name.empty()) return "the channel name is empty";
-  if (name.size() > kMaxChannelNameLength)
-    return "the channel name '" + std::string(name) + "' has " + std::to_string(name.size()) +
-           " characters; iceoryx allows at most " + std::to_string(kMaxChannelNameLength) +
-           ": shorten the namespace or the body name";
+  if (name.size() > kMaxChannelNameLength)  // its start is enough to find it (a 10 MB name)
+    return "the channel name '" + std::string(name.substr(0, kMaxChannelNameLength)) + "...' has " +
+           std::to_string(name.size()) + " characters; iceoryx allows at most " +
+           std::to_string(kMaxChannelNameLength) + ": shorten the namespace or the body name";
   for (char c : name)
     if (!allowed_char(c))
       return "the channel name '" + std::string(name) + "' contains '" + std::string(1, c) +

@@ -134,6 +134,25 @@ TEST(BadInputCli, NumericOptionsOutOfRangeAreRefused) {
       {{"echo", "arm", "--count", "-5"}, "--count"},
       {{"synth", "--bodies", "-1"}, "--bodies"},
       {{"world", "step", "4294967296"}, "N"},
+      // Periods and spans past an int64 of nanoseconds came out negative: a loop at
+      // 1e-10 Hz spun at full speed, a 1e10 s recording ended at once.
+      {{"cmd", "arm", "--joint", "0=0.1", "--rate", "1e-10"}, "--rate"},
+      {{"ctl", "hold", "arm", "--rate", "1e-12"}, "--rate"},
+      {{"ctl", "sine", "arm", "--period", "1e-308"}, "--period"},
+      {{"synth", "--rate", "1e-12"}, "--rate"},
+      {{"echo", "arm", "-n", "5", "--timeout", "nan"}, "--timeout"},
+      {{"echo", "arm", "--rate", "1e-308"}, "--rate"},
+      {{"record", "--duration", "1e10"}, "--duration"},
+      // civetweb read 999.1.1.1 as 231.1.1.1 and listened there.
+      {{"view", "--bind", "999.1.1.1"}, "--bind"},
+      // Debian's civetweb has no IPv6: said, not "the port is in use".
+      {{"view", "--bind", "::1"}, "listens on IPv4 only"},
+      // Files that never end were read until memory ran out.
+      {{"hub", "--dry-run", "--mempools", "/dev/zero"}, "not a regular file"},
+      {{"ctl", "track", "arm", "/dev/zero"}, "not a regular file"},
+      // Every body went NaN each step.
+      {{"run", kArm, "--offline", "--gravity", "0,0,-1e308"}, "--gravity"},
+      {{"run", kArm, "--offline", "--default-gains", "1e308,0,0"}, "--default-gains"},
   };
   for (const Case& c : cases) {
     RunResult result = run_afhub(c.args, std::chrono::seconds(10));
@@ -148,6 +167,18 @@ TEST(BadInputCli, NumericOptionsOutOfRangeAreRefused) {
   // In range, they are taken.
   RunResult ten = run_afhub({"run", kArm, "--offline", "--fast", "--steps", "10"});
   EXPECT_EQ(ten.exit_code, 0) << ten.err;
+}
+
+// A short step log went to the stream's buffer and was lost unsaid when the disk was
+// full: its close is checked.
+TEST(BadInputCli, ALogOrReportThatCannotBeWrittenIsAnError) {
+  for (const std::string option : {"--step-log", "--report"}) {
+    const RunResult full =
+        run_afhub({"run", kArm, "--offline", "--fast", "--steps", "200", option, "/dev/full"},
+                  std::chrono::seconds(60));
+    EXPECT_EQ(full.exit_code, 1) << option << ": " << full.err;
+    EXPECT_TRUE(contains(full.err, "cannot write the")) << option << ": " << full.err;
+  }
 }
 
 // `cmd arm/base --joint base-link1=1e9` used to say "commanding" and keep sending while
@@ -180,6 +211,35 @@ TEST(BadInputCli, CmdStopsWithThePhysicsRefusalOfItsCommand) {
   // A command within the bounds is taken.
   const RunResult taken = run_afhub({"cmd", "arm/base", "--joint", "base-link1=0.1", "--once"});
   EXPECT_EQ(taken.exit_code, 0) << taken.err;
+
+  // A controller whose every command is refused says so (it printed only "commanding"),
+  // at most once a second.
+  const RunResult sine =
+      run_afhub({"ctl", "sine", "arm/base", "--amplitude", "1e308", "--cycles", "2500"},
+                std::chrono::seconds(60));
+  EXPECT_EQ(sine.exit_code, 0) << sine.err;
+  EXPECT_TRUE(contains(sine.err, "afhub ctl sine: the physics refused ")) << sine.err;
+  EXPECT_TRUE(contains(sine.err, " of this controller (nothing of")) << sine.err;
+  EXPECT_TRUE(contains(sine.err, "applied), the last: joint 0 (base-link1) position")) << sine.err;
+  EXPECT_TRUE(contains(sine.err, "is beyond its bound of")) << sine.err;
+  std::size_t said = 0;
+  for (std::size_t at = 0; (at = sine.err.find("the physics refused", at)) != std::string::npos;
+       ++at)
+    ++said;
+  EXPECT_GE(said, 2u) << sine.err;  // the first, then the count a second later
+  EXPECT_LE(said, 4u) << sine.err;
+  // Joints the body does not have are refused before the first command.
+  const RunResult joints =
+      run_afhub({"ctl", "sine", "arm/base", "--joints", "99"}, std::chrono::seconds(30));
+  EXPECT_EQ(joints.exit_code, 1) << joints.err;
+  EXPECT_TRUE(contains(joints.err, "--joints needs 100 joints, and afhub/arm/base has 7"))
+      << joints.err;
+  const std::string trajectory = (folder.dir() / "eight.csv").string();
+  std::ofstream(trajectory) << "0,0,0,0,0,0,0,0,0\n1,0,0,0,0,0,0,0,0.1\n";
+  const RunResult track =
+      run_afhub({"ctl", "track", "arm/base", trajectory}, std::chrono::seconds(30));
+  EXPECT_EQ(track.exit_code, 1) << track.err;
+  EXPECT_TRUE(contains(track.err, "needs 8 joints, and afhub/arm/base has 7")) << track.err;
   EXPECT_EQ(physics.stop(), 0) << read_file(log);
   EXPECT_EQ(hub.stop(), 0);
 }

@@ -211,7 +211,7 @@ TEST_F(BadInputDevices, BadStructureGivesLocatedErrors) {
   EXPECT_TRUE(contains(error_of("input devices: Falcon\n"),
                        path() + ":1:16: error: 'input devices' must be a list"));
   EXPECT_TRUE(contains(error_of("input devices: [Falcon\n"), path() + ":"));
-  EXPECT_TRUE(contains(error_of(""), path() + ":1:1: error: the file is empty"));
+  EXPECT_TRUE(contains(error_of(""), path() + ":1:1: error: the file holds nothing"));
   EXPECT_TRUE(contains(error_of("input devices: [Falcon, Falcon]\nFalcon:\n  hardware name: F\n"
                                 "  root link: palm\n"),
                        path() + ":1:25: error: 'Falcon' is listed twice"));

@@ -90,7 +90,7 @@ TEST_F(BrokenFiles, EachProblemIsLocatedAndExplained) {
     std::string text, expected;
   };
   const std::vector<Case> cases = {
-      {"", "model.yaml:1:1: error: the file is empty"},
+      {"", "model.yaml:1:1: error: the file holds nothing"},
       {"bodies: [BODY a\n", "model.yaml:2:1: error: YAML syntax"},
       {"- a\n- b\n", "error: expected an ADF file"},
       {"bodies: BODY a\n", "model.yaml:1:9: error: 'bodies' must be a list"},
@@ -114,6 +114,13 @@ TEST_F(BrokenFiles, EachProblemIsLocatedAndExplained) {
        "model.yaml:5:10: error: unknown shape 'blob'"},
       {"bodies: [BODY a]\nBODY a:\n  name: a\n  mass: 1\n  location: {position: {x: 1, y: 2}}\n",
        "error: 'location.position' is missing 'z'"},
+      // yaml-cpp took the first of two, most readers the last.
+      {"bodies: [BODY a]\nBODY a:\n  name: a\n  mass: 0.25\n  mass: 99\n",
+       "model.yaml:5:3: error: 'mass' is written twice in BODY a"},
+      {"bodies: [BODY a]\nBODY a:\n  name: a\n  mass: 1\n  color rgba: {r: 1e8}\n",
+       "model.yaml:5:19: error: 'color rgba.r' is 1e8; a component is from 0 to 1"},
+      {"bodies: [BODY a]\nBODY a:\n  name: a\n  mass: 1\n  collision margin: 1e8\n",
+       "model.yaml:5:21: error: 'collision margin' is 1e8, beyond the bound of"},
       {"bodies: [BODY a]\nBODY a:\n  name: a\n  mass: 1\n  collision groups: [1000]\n",
        "model.yaml:5:22: error: collision groups are integers from 0 to 999"},
       {"bodies: [BODY a]\nBODY a:\n  name: a\n  mass: 1\n  inertia: {ix: 1, iy: -1, iz: 1}\n",
@@ -128,6 +135,24 @@ TEST_F(BrokenFiles, EachProblemIsLocatedAndExplained) {
     EXPECT_NE(message.find(c.expected), std::string::npos) << "file:\n"
                                                            << c.text << "\nmessage: " << message;
   }
+}
+
+// Principal inertias no body has (one larger than the other two together) load, with a
+// warning at them; a flat plate's (one equal to the others' sum) loads without.
+TEST_F(BrokenFiles, InertiasNoRigidBodyHasAreAWarning) {
+  const auto warnings_of = [&](const std::string& inertia) {
+    std::ofstream(dir_ / "model.yaml") << "bodies: [BODY a]\nBODY a:\n  name: a\n  mass: 1\n"
+                                          "  inertia: "
+                                       << inertia << "\n";
+    return load_adf_files({(dir_ / "model.yaml").string()}).warnings;
+  };
+  const std::vector<std::string> impossible = warnings_of("{ix: 1, iy: 0.001, iz: 0.001}");
+  ASSERT_EQ(impossible.size(), 1u);
+  EXPECT_NE(impossible[0].find("model.yaml:5:12: warning: 'inertia' (1, 0.001, 0.001) has one "
+                               "component larger than the other two together"),
+            std::string::npos)
+      << impossible[0];
+  EXPECT_TRUE(warnings_of("{ix: 0.5, iy: 0.5, iz: 1}").empty());
 }
 
 TEST_F(BrokenFiles, ShapeSensorSoftBodyAndActuatorProblemsAreLocatedAndExplained) {

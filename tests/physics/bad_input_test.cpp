@@ -415,5 +415,45 @@ TEST_F(BadInput, EveryPerBodyCapacityIsEnforcedWithItsLocation) {
       << message;
 }
 
+// A world file's cameras and lists, and a model or launch file given as the world
+// (each was taken silently: a camera with no view, a light twice, no bodies loaded).
+TEST_F(BadInput, AWorldFilesCamerasListsAndKeysAreChecked) {
+  const auto scene_with = [&](const std::string& world) {
+    SceneRequest request;
+    request.world_file = folder_.write("world.yaml", world);
+    request.adf_files = {folder_.write("one.yaml", "bodies: [BODY a]\n" + body("a"))};
+    return request;
+  };
+  const auto error_of_world = [&](const std::string& world) -> std::string {
+    try {
+      load_scene(scene_with(world));
+    } catch (const Error& error) {
+      return error.what();
+    }
+    return "";
+  };
+  const std::string camera = "cameras: [c]\nc:\n  location: {x: 1, y: 2, z: 3}\n";
+  EXPECT_TRUE(contains(error_of_world(camera + "  look at: {x: 1, y: 2, z: 3}\n"),
+                       "world.yaml:4:12: error: camera 'c' looks at its own location"))
+      << error_of_world(camera + "  look at: {x: 1, y: 2, z: 3}\n");
+  const std::string along = camera + "  look at: {x: 1, y: 2, z: 0}\n  up: {x: 0, y: 0, z: 1}\n";
+  EXPECT_TRUE(contains(error_of_world(along), "world.yaml:5:7: error: camera 'c': 'up' is along"))
+      << error_of_world(along);
+  const std::string twice = "lights: [l, l]\nl:\n  name: key\n";
+  EXPECT_TRUE(contains(error_of_world(twice), "world.yaml:1:13: error: 'l' is listed twice in"))
+      << error_of_world(twice);
+  // Looking down with an up across the view loads.
+  EXPECT_EQ(error_of_world(camera + "  look at: {x: 1, y: 2, z: 0}\n  up: {x: 1, y: 0, z: 0}\n"),
+            "");
+
+  const Model model =
+      load_scene(scene_with("bodies: [BODY b]\n" + body("b") + "world config: w.yaml\n"));
+  ASSERT_EQ(model.warnings.size(), 2u);
+  EXPECT_TRUE(contains(model.warnings[0], "world.yaml:1:9: warning: 'bodies' is a model file's"))
+      << model.warnings[0];
+  EXPECT_TRUE(contains(model.warnings[1], "world.yaml:5:15: warning: 'world config' is a launch"))
+      << model.warnings[1];
+}
+
 }  // namespace
 }  // namespace afhub::physics

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <filesystem>
 
 #include "afhub/physics/adf_loader.hpp"
 #include "afhub/physics/scene_loader.hpp"
@@ -113,6 +114,29 @@ TEST_F(SceneScope, AReferenceAcrossFilesResolvesWhenUnique) {
   ASSERT_EQ(model.joints.size(), 3u);
   EXPECT_EQ(model.bodies[model.joints[2].parent].channel, "ambf/env/ecm/toollink");
   EXPECT_EQ(model.bodies[model.joints[2].child].channel, "ambf/env/ball");
+}
+
+// A recording names the files a run came from: one holding only a joint, a sensor, an
+// actuator or a soft body is one of them.
+TEST_F(SceneScope, TheModelsFilesAreEveryFileABlockCameFromEachOnce) {
+  const std::string bridge = folder_.write(
+      "bridge.yaml", joint_between("/ambf/env/ecm/BODY tool link", "/ambf/env/psm/BODY tool link"));
+  const std::string sensor =
+      folder_.write("sensor.yaml",
+                    "sensors: [SENSOR far]\nSENSOR far:\n  name: far\n  type: Proximity\n"
+                    "  parent: /ambf/env/psm/BODY base link\n"
+                    "  array: [{offset: {x: 0, y: 0, z: 0}, direction: {x: 0, y: 1, z: 0}}]\n");
+  const std::string actuator =
+      folder_.write("actuator.yaml",
+                    "actuators: [ACTUATOR hold]\nACTUATOR hold:\n  name: hold\n"
+                    "  type: Constraint\n  parent: /ambf/env/ecm/BODY base link\n");
+  const std::string cloth = AFHUB_EXAMPLE_MODELS "/cloth.yaml";
+  const Model model = load_adf_files({psm_, ecm_, bridge, sensor, actuator, cloth});
+  std::vector<std::string> expected{psm_, ecm_, bridge, sensor, actuator, cloth};
+  for (std::string& file : expected)
+    file = std::filesystem::absolute(file).lexically_normal().string();
+  std::sort(expected.begin(), expected.end());
+  EXPECT_EQ(model_files(model), expected);
 }
 
 TEST_F(SceneScope, AnAmbiguousReferenceIsALocatedErrorListingTheCandidates) {

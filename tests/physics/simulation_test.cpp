@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "afhub/physics/adf_loader.hpp"
+#include "afhub/physics/mesh.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "model_files.hpp"
 #include "reserved_world.hpp"
@@ -385,33 +386,42 @@ TEST(Simulation, ClothWithFixedCornersHangsInsteadOfFalling) {
   EXPECT_LT(drop, 1.0);   // but hangs from its corners: free fall would be 19.6 m
 }
 
+// 65 x 65 = 4225 nodes, just past kMaxSoftBodyNodes (4096); 220 x 220 = 48 400, past
+// where Bullet's builder overflows its nodes x nodes table (a crash before the check
+// came first).
 TEST(Simulation, ASoftBodyWithMoreNodesThanAViewerTakesIsRefusedAtLoad) {
-  testing::ModelFolder folder;
-  std::string obj;
-  const int n = 65;  // 4225 nodes: more than kMaxSoftBodyNodes (4096)
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < n; ++j)
-      obj += "v " + std::to_string(j * 0.01) + " " + std::to_string(i * 0.01) + " 0\n";
-  for (int i = 0; i + 1 < n; ++i)
-    for (int j = 0; j + 1 < n; ++j) {
-      const int a = i * n + j + 1, b = a + 1, c = a + n;  // OBJ is 1-based
-      obj += "f " + std::to_string(a) + " " + std::to_string(b) + " " + std::to_string(c) + "\n";
-      obj +=
-          "f " + std::to_string(b) + " " + std::to_string(c + 1) + " " + std::to_string(c) + "\n";
-    }
-  folder.write("big.obj", obj);
-  const Model model =
-      load_adf_files({folder.write("big.yaml",
-                                   "soft bodies: [SOFTBODY big]\nSOFTBODY big:\n  name: big\n"
-                                   "  mass: 0.5\n  mesh: big.obj\n")});
-  try {
-    Simulation sim(model, 0.001);
-    FAIL() << "a soft body of 4225 nodes loaded";
-  } catch (const afhub::Error& error) {
-    const std::string message = error.what();
-    EXPECT_NE(message.find("big.yaml:"), std::string::npos) << message;
-    EXPECT_NE(message.find("has 4225 nodes"), std::string::npos) << message;
-    EXPECT_NE(message.find("at most 4096 nodes"), std::string::npos) << message;
+  for (const int n : {65, 220}) {
+    testing::ModelFolder folder;
+    std::string obj;
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j)
+        obj += "v " + std::to_string(j * 0.01) + " " + std::to_string(i * 0.01) + " 0\n";
+    for (int i = 0; i + 1 < n; ++i)
+      for (int j = 0; j + 1 < n; ++j) {
+        const int a = i * n + j + 1, b = a + 1, c = a + n;  // OBJ is 1-based
+        obj += "f " + std::to_string(a) + " " + std::to_string(b) + " " + std::to_string(c) + "\n";
+        obj +=
+            "f " + std::to_string(b) + " " + std::to_string(c + 1) + " " + std::to_string(c) + "\n";
+      }
+    folder.write("big.obj", obj);
+    const Model model =
+        load_adf_files({folder.write("big.yaml",
+                                     "soft bodies: [SOFTBODY big]\nSOFTBODY big:\n  name: big\n"
+                                     "  mass: 0.5\n  mesh: big.obj\n")});
+    const std::string nodes = "has " + std::to_string(n * n) + " nodes";
+    auto expect_refused = [&](const std::function<void()>& load, const char* what) {
+      try {
+        load();
+        ADD_FAILURE() << what << " took a soft body of " << n * n << " nodes";
+      } catch (const afhub::Error& error) {
+        const std::string message = error.what();
+        EXPECT_NE(message.find("big.yaml:"), std::string::npos) << message;
+        EXPECT_NE(message.find(nodes), std::string::npos) << message;
+        EXPECT_NE(message.find("at most 4096 nodes"), std::string::npos) << message;
+      }
+    };
+    expect_refused([&] { check_meshes(model); }, "check_meshes");
+    expect_refused([&] { Simulation sim(model, 0.001); }, "Simulation");
   }
 }
 

@@ -249,14 +249,13 @@ TEST_F(McapFile, BadFilesAreErrorsSayingWhatAndWhere) {
   EXPECT_NE(scan_error(file).find("is not an MCAP file"), std::string::npos);
   EXPECT_NE(scan_error(path("missing.mcap")).find("cannot open"), std::string::npos);
 
-  // The header's length made absurd: more than the file, so a cut-off file, said where.
+  // The header's length made absurd: corrupt, whether the file ends or not.
   write_sample(file, Compression::kNone, 10);
   overwrite(file, 9, {0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0x7f});
-  Collected read;
-  const ScanResult huge = scan(file, read);
-  EXPECT_FALSE(huge.complete);
-  EXPECT_NE(huge.cut_off.find("header record at byte 8 says it holds"), std::string::npos)
-      << huge.cut_off;
+  EXPECT_NE(scan_error(file).find("header record at byte 8 holds 9223372036854775807 bytes, more "
+                                  "than afhub reads in one record"),
+            std::string::npos)
+      << scan_error(file);
 
   // A byte flipped inside the first chunk's records: its CRC says so.
   write_sample(file, Compression::kNone, 100);
@@ -296,6 +295,62 @@ TEST_F(McapFile, BadFilesAreErrorsSayingWhatAndWhere) {
   overwrite(file, 8, {0x05});
   EXPECT_NE(scan_error(file).find("not the header the spec requires"), std::string::npos)
       << scan_error(file);
+}
+
+// A record running past the end is a cut only in a file that does not end with its
+// footer; in one that does, it is corruption, and --recover leaves the file as it is
+// (it rewrote it from the records before, losing the rest). So do bytes after the end.
+TEST_F(McapFile, AFinishedFileWithALengthTooLongIsCorruptNotCutAndRecoverKeepsIt) {
+  const std::string file = path("finished.mcap");
+  write_sample(file, Compression::kZstd, 3000);
+  const std::string whole = file_bytes(file);
+  ASSERT_TRUE(recover(file).complete);  // left as it is
+  EXPECT_EQ(file_bytes(file), whole);
+
+  // The first chunk's length one byte more than the rest of the file holds.
+  std::uint64_t chunk_at = 0;
+  for (std::uint64_t at = 8;;) {  // walk the records to the first chunk
+    std::uint64_t length = 0;
+    std::memcpy(&length, whole.data() + at + 1, sizeof length);
+    if (whole[at] == 0x06) {
+      chunk_at = at;
+      break;
+    }
+    at += 9 + length;
+  }
+  const std::uint64_t past = whole.size() - chunk_at - 9 + 1;
+  std::vector<std::uint8_t> length(8);
+  std::memcpy(length.data(), &past, sizeof past);
+  overwrite(file, chunk_at + 1, length);
+  const std::string corrupt = file_bytes(file);
+  const std::string error = scan_error(file);
+  EXPECT_NE(error.find("chunk record at byte " + std::to_string(chunk_at) + " says it holds"),
+            std::string::npos)
+      << error;
+  EXPECT_NE(error.find("ends with its footer: it was not cut off but is corrupt"),
+            std::string::npos)
+      << error;
+  EXPECT_THROW(recover(file), Error);
+  EXPECT_EQ(file_bytes(file), corrupt);
+  EXPECT_FALSE(fs::exists(file + ".recovering"));
+
+  // The same file cut short of its footer: then the same length is a cut.
+  fs::resize_file(file, whole.size() - 100);
+  Collected read;
+  const ScanResult cut = scan(file, read);
+  EXPECT_FALSE(cut.complete);
+  EXPECT_NE(cut.cut_off.find("chunk record at byte " + std::to_string(chunk_at)), std::string::npos)
+      << cut.cut_off;
+
+  // Two recordings joined: not one file.
+  { std::ofstream(file, std::ios::binary) << whole << whole; }
+  EXPECT_NE(scan_error(file).find(std::to_string(whole.size()) +
+                                  " bytes follow the closing magic at byte " +
+                                  std::to_string(whole.size())),
+            std::string::npos)
+      << scan_error(file);
+  EXPECT_THROW(recover(file), Error);
+  EXPECT_EQ(fs::file_size(file), 2 * whole.size());
 }
 
 TEST_F(McapFile, AChunkOfAnUnknownCompressionIsAnErrorNamingIt) {

@@ -971,6 +971,20 @@ TEST(Record, PlayPublishesTheWindowAndTheBodiesChosenAtTheRateChosen) {
       60s);
   EXPECT_EQ(fast.exit_code, 0) << fast.err;
   EXPECT_EQ(published(fast.err), whole_window) << fast.err;
+  // A window past the end plays nothing, and says so.
+  const RunResult past = run_afhub({"play", file, "--fast", "--start", "100"}, 60s);
+  EXPECT_EQ(past.exit_code, 1) << past.err;
+  EXPECT_NE(past.err.find("--start 100 s is past the recording's last state"), std::string::npos)
+      << past.err;
+  // A file cut off plays to where it was cut, and says it was.
+  const std::string cut = scene.dir("cut.mcap");
+  std::filesystem::copy_file(file, cut);
+  std::filesystem::resize_file(cut, std::filesystem::file_size(cut) * 3 / 5);
+  const RunResult cut_play = run_afhub({"play", cut, "--fast"}, 60s);
+  EXPECT_EQ(cut_play.exit_code, 0) << cut_play.err;
+  EXPECT_GT(published(cut_play.err), 0) << cut_play.err;
+  EXPECT_NE(cut_play.err.find("warning: " + cut + " was cut off"), std::string::npos)
+      << cut_play.err;
 
   LatestReader<BodyState> link3(body_state_channel("afhub/arm/link3"));
   LatestReader<BodyState> link2(body_state_channel("afhub/arm/link2"));
@@ -1780,6 +1794,17 @@ TEST(Record, BadFilesAndOptionsAreClearErrors) {
   RunResult played = run_afhub({"play", other});
   EXPECT_EQ(played.exit_code, 1);
   EXPECT_NE(played.err.find("another payload layout"), std::string::npos) << played.err;
+
+  RunResult slowest = run_afhub({"play", other, "--rate", "1e-308"});
+  EXPECT_EQ(slowest.exit_code, 1);
+  EXPECT_NE(slowest.err.find("--rate takes a factor from 0.001"), std::string::npos) << slowest.err;
+
+  // MCAP's magic and nothing else: not a recording to play (it played 0 messages, exit 0).
+  const std::string magic = (folder.dir() / "magic.mcap").string();
+  std::ofstream(magic, std::ios::binary) << "\x89MCAP0\r\n";
+  RunResult empty = run_afhub({"play", magic});
+  EXPECT_EQ(empty.exit_code, 1) << empty.err;
+  EXPECT_NE(empty.err.find("holds no recording of `afhub record`"), std::string::npos) << empty.err;
 
   RunResult missing = run_afhub({"info", (folder.dir() / "absent.mcap").string()});
   EXPECT_NE(missing.exit_code, 0);

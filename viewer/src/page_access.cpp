@@ -26,8 +26,7 @@ bool is_wildcard(std::string_view bind) {
 // in brackets), and localhost for 127.0.0.1.
 std::vector<std::string> host_names(std::string_view bind) {
   std::vector<std::string> names;
-  names.push_back(bind.find(':') == std::string_view::npos ? std::string(bind)
-                                                           : "[" + std::string(bind) + "]");
+  names.push_back(url_host(bind));
   if (bind == "127.0.0.1") names.emplace_back("localhost");
   return names;
 }
@@ -50,6 +49,20 @@ std::string random_token() {
     token += kHex[byte & 15];
   }
   return token;
+}
+
+void require_ip_address(std::string_view address) {
+  const std::string text(address);
+  in_addr v4{};
+  in6_addr v6{};
+  if (inet_pton(AF_INET, text.c_str(), &v4) != 1 && inet_pton(AF_INET6, text.c_str(), &v6) != 1)
+    throw Error("--bind takes an IP address of this machine (127.0.0.1, 0.0.0.0 for all), got '" +
+                text + "'");
+}
+
+std::string url_host(std::string_view address) {
+  return address.find(':') == std::string_view::npos ? std::string(address)
+                                                     : "[" + std::string(address) + "]";
 }
 
 bool is_loopback(std::string_view address) {

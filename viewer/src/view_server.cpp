@@ -109,7 +109,12 @@ ViewServer::ViewServer(ServerOptions options)
   if (options_.allow_commands && options_.token.empty())
     throw Error("the viewer allows commands only with a command token");
   mg_init_library(0);
-  const std::string listen = options_.bind + ":" + std::to_string(options_.port);
+  constexpr unsigned kIpv6Feature = 8;  // civetweb's feature bit
+  if (options_.bind.find(':') != std::string::npos && !mg_check_feature(kIpv6Feature))
+    throw Error("cannot listen on " + options_.bind +
+                ": the civetweb afhub is built with listens on IPv4 only (Debian's is built "
+                "without IPv6); bind to 127.0.0.1, or 0.0.0.0 for every interface");
+  const std::string listen = url_host(options_.bind) + ":" + std::to_string(options_.port);
   // No document root: civetweb serves no file by itself, only what the handler sends.
   // Each connection has a worker thread of its own (a page's WebSocket keeps its
   // thread), so that an address may hold only kConnectionsPerAddress of them, and a

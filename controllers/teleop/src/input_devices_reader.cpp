@@ -38,7 +38,7 @@ int button(const Reader& reader, const YAML::Node& node, const std::string& what
 Vec3 vec3(const Reader& reader, const YAML::Node& node, const std::string& what, const char* a,
           const char* b, const char* c, double bound) {
   reader.require_map(node, what, std::string("{") + a + ": 0, " + b + ": 0, " + c + ": 0}");
-  reader.warn_unknown_keys(node, {a, b, c}, "'" + what + "'");
+  reader.check_keys(node, {a, b, c}, "'" + what + "'");
   Vec3 out;
   double* slots[3] = {&out.x, &out.y, &out.z};
   const char* keys[3] = {a, b, c};
@@ -55,7 +55,7 @@ Vec3 vec3(const Reader& reader, const YAML::Node& node, const std::string& what,
 
 Gains read_gains(const Reader& reader, const YAML::Node& node, const std::string& what) {
   reader.require_map(node, what, "{P: 100, D: 5}");
-  reader.warn_unknown_keys(node, {"P", "D"}, "'" + what + "'");
+  reader.check_keys(node, {"P", "D"}, "'" + what + "'");
   Gains gains;
   if (const YAML::Node p = node["P"]) gains.p = reader.non_negative(p, what + ".P");
   if (const YAML::Node d = node["D"]) gains.d = reader.non_negative(d, what + ".D");
@@ -64,7 +64,7 @@ Gains read_gains(const Reader& reader, const YAML::Node& node, const std::string
 
 CartesianGains read_controller_gain(const Reader& reader, const YAML::Node& node) {
   reader.require_map(node, "controller gain", "{linear: {P: 100, D: 5}, angular: {P: 10, D: 1}}");
-  reader.warn_unknown_keys(node, {"linear", "angular"}, "'controller gain'");
+  reader.check_keys(node, {"linear", "angular"}, "'controller gain'");
   CartesianGains gains;
   if (const YAML::Node linear = node["linear"])
     gains.linear = read_gains(reader, linear, "controller gain.linear");
@@ -75,7 +75,7 @@ CartesianGains read_controller_gain(const Reader& reader, const YAML::Node& node
 
 void read_haptic_gain(const Reader& reader, const YAML::Node& node, InputDeviceSpec& spec) {
   reader.require_map(node, "haptic gain", "{linear: 10.0, angular: 0.0}");
-  reader.warn_unknown_keys(node, {"linear", "angular"}, "'haptic gain'");
+  reader.check_keys(node, {"linear", "angular"}, "'haptic gain'");
   if (const YAML::Node linear = node["linear"])
     spec.haptic_gain_linear = reader.non_negative(linear, "haptic gain.linear");
   if (const YAML::Node angular = node["angular"])
@@ -85,7 +85,7 @@ void read_haptic_gain(const Reader& reader, const YAML::Node& node, InputDeviceS
 void read_location(const Reader& reader, const YAML::Node& node, InputDeviceSpec& spec) {
   reader.require_map(node, "location",
                      "{position: {x: 0, y: 0, z: 0}, orientation: {r: 0, p: 0, y: 0}}");
-  reader.warn_unknown_keys(node, {"position", "orientation"}, "'location'");
+  reader.check_keys(node, {"position", "orientation"}, "'location'");
   if (const YAML::Node position = node["position"])
     spec.location.position_m =
         vec3(reader, position, "location.position", "x", "y", "z", kMaxLengthM);
@@ -97,7 +97,7 @@ void read_location(const Reader& reader, const YAML::Node& node, InputDeviceSpec
 
 void read_buttons(const Reader& reader, const YAML::Node& node, ButtonMapping& buttons) {
   reader.require_map(node, "button mapping", "{a1: 0, a2: 1, g1: -1, next mode: 2, prev mode: 3}");
-  reader.warn_unknown_keys(node, {"a1", "a2", "g1", "next mode", "prev mode"}, "'button mapping'");
+  reader.check_keys(node, {"a1", "a2", "g1", "next mode", "prev mode"}, "'button mapping'");
   const std::pair<const char*, int*> keys[] = {{"a1", &buttons.clutch},
                                                {"a2", &buttons.camera},
                                                {"g1", &buttons.gripper},
@@ -144,7 +144,7 @@ InputDeviceSpec read_device(const Reader& reader, const fs::path& folder,
                            "'hardware name', not " +
                            yaml::kind_of(block));
   yaml::MapIndex index(reader, block);  // refuses a key written twice
-  reader.warn_unknown_keys(block, kDeviceKeys, "the device '" + identifier + "'");
+  reader.check_keys(block, kDeviceKeys, "the device '" + identifier + "'");
   InputDeviceSpec spec;
   spec.identifier = identifier;
   spec.where = reader.where(block);

@@ -20,6 +20,7 @@
 #include "afhub/shm_layout/soft_body.hpp"
 #include "afhub/shm_layout/step_tape.hpp"
 #include "afhub/shm_layout/world.hpp"
+#include "afhub/yaml/input_file.hpp"
 
 namespace afhub {
 namespace {
@@ -149,6 +150,7 @@ std::vector<MempoolSpec> with_bench_pools(std::vector<MempoolSpec> pools) {
 }
 
 std::vector<MempoolSpec> read_mempool_file(const std::string& path) {
+  yaml::check_input_file(path, 1u << 20, "a mempool file");  // a regular file, not /dev/zero
   std::ifstream in(path);
   if (!in) throw Error("cannot read the mempool file " + path);
   std::vector<MempoolSpec> pools;

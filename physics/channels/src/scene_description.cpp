@@ -113,24 +113,11 @@ std::filesystem::path model_folder(const std::string& model_file, const std::str
   return common;
 }
 
-// Lists the model files the bodies, joints and world came from, and the launch file, each
-// once, absolute.
+// Names the files the model came from (model_files), as many as the scene holds.
 void fill_model_files(const Model& model, SceneDescription& scene,
                       std::vector<std::string>& warnings) {
-  std::vector<std::string> files;
-  const auto add = [&](const std::string& file) {
-    std::error_code ignored;
-    if (!file.empty())
-      files.push_back(std::filesystem::absolute(file, ignored).lexically_normal().string());
-  };
-  for (const BodySpec& body : model.bodies) add(body.where.file);
-  for (const JointSpec& joint : model.joints) add(joint.where.file);
-  add(model.world.file);
-  for (const std::string& file : model.other_files) add(file);
-  std::sort(files.begin(), files.end());
-  files.erase(std::unique(files.begin(), files.end()), files.end());
   scene.model_file_count = 0;
-  for (const std::string& file : files) {
+  for (const std::string& file : model_files(model)) {
     if (scene.model_file_count == kMaxSceneModelFiles ||
         !copy_text(file, scene.model_files[scene.model_file_count])) {
       warnings.push_back("a recording does not name " + file + ": the scene description lists " +

@@ -5,6 +5,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 
@@ -64,13 +65,22 @@ std::string read_input_file(const std::string& path, std::uintmax_t max_bytes,
                             const std::string& what) {
   Descriptor file;
   const std::uintmax_t size = open_checked(path, max_bytes, what, file);
-  std::string text(static_cast<std::size_t>(size), '\0');
+  // Read to the end, which may lie past the size a file gives (0 for /proc's, or one
+  // growing while read): within the bound.
+  std::string text(static_cast<std::size_t>(size) + 1, '\0');
   std::size_t done = 0;
-  while (done < text.size()) {
+  for (;;) {
+    if (done == text.size()) {
+      if (done > max_bytes)
+        refuse(path, "the file holds more than the " + megabytes(max_bytes) + " afhub reads for " +
+                         what + "; is it the right file?");
+      text.resize(static_cast<std::size_t>(
+          std::min<std::uintmax_t>(max_bytes + 1, std::uintmax_t{text.size()} * 2 + 4096)));
+    }
     const ssize_t got = ::read(file.fd, text.data() + done, text.size() - done);
     if (got < 0 && errno == EINTR) continue;
     if (got < 0) refuse(path, std::string("cannot read it: ") + std::strerror(errno));
-    if (got == 0) break;  // shrank while being read
+    if (got == 0) break;
     done += static_cast<std::size_t>(got);
   }
   text.resize(done);

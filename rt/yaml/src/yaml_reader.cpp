@@ -136,7 +136,9 @@ YAML::Node parse(const std::string& path, const std::string& text) {
 
 YAML::Node load_map(const std::string& path, const std::string& what) {
   const YAML::Node root = parse(path, read_input_file(path, kMaxYamlFileBytes, what));
-  if (root.IsNull()) throw Error(path + ":1:1: error: the file is empty; expected " + what);
+  if (root.IsNull())
+    throw Error(path + ":1:1: error: the file holds nothing (empty, or comments only); expected " +
+                what);
   if (!root.IsMap()) throw Error(path + ":1:1: error: expected " + what + ", not " + kind_of(root));
   return root;
 }
@@ -155,10 +157,14 @@ void Reader::warn(const YAML::Node& node, const std::string& what) const {
   warnings_->push_back(where(node) + ": warning: " + what);
 }
 
-void Reader::warn_unknown_keys(const YAML::Node& map, const std::set<std::string>& known,
-                               const std::string& owner) const {
+void Reader::check_keys(const YAML::Node& map, const std::set<std::string>& known,
+                        const std::string& owner) const {
+  std::set<std::string> seen;
   for (const auto& entry : map) {
     const std::string key = entry.first.Scalar();
+    if (!seen.insert(key).second)
+      fail(entry.first, "'" + key + "' is written twice in " + owner +
+                            ": which one is meant would be a guess; keep one");
     if (!known.count(key))
       warn(entry.first, "unknown key '" + key + "' in " + owner + " is ignored");
   }

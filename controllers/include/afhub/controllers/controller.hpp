@@ -55,6 +55,10 @@ struct ControllerOptions {
   // register more "make outputs safe" steps with on_hub_lost()). false: the process
   // ends on a lost hub, as a plain iceoryx client does.
   bool survive_hub_loss = true;
+  // The body must have at least this many joints (0: any), or the controller refuses
+  // to start, naming `joints_needed_by` ("--joints", "the trajectory's columns").
+  std::uint32_t joints_needed = 0;
+  std::string joints_needed_by;
 };
 
 // `state` is the body's newest state: this process's checked copy of its slot, valid

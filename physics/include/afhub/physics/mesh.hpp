@@ -71,8 +71,16 @@ struct MeshOrError {
 std::vector<MeshOrError> try_load_body_meshes(const std::vector<MeshRequest>& requests);
 
 // Reads every mesh the model names once (what `afhub check` does, so that it
-// finds the mesh problems `afhub run` would); returns how many were read.
+// finds the mesh problems `afhub run` would), and checks each soft body's against
+// check_soft_body_mesh; returns how many were read.
 std::size_t check_meshes(const Model& model);
+
+// Throws afhub::Error at the soft body's block when its mesh would make more nodes
+// (the highest vertex index used, plus one) or faces than the hub's soft body payload
+// carries (kMaxSoftBodyNodes, kMaxSoftBodyFaces). Checked before Bullet builds the
+// body: its builder allocates nodes x nodes flags, gigabytes past 40 000 nodes, and
+// overflows an int (a crash) past 46 340.
+void check_soft_body_mesh(const SoftBodySpec& soft, const TriangleMesh& mesh);
 
 // A 3x3 matrix, row-major.
 using Matrix3 = std::array<double, 9>;

@@ -241,7 +241,7 @@ struct Model {
   std::vector<SensorSpec> sensors;
   std::vector<ActuatorSpec> actuators;
   std::vector<bool> file_ignores_inter_collision;  // per loaded file
-  // Files read besides the bodies', joints' and world's: the launch file and its color
+  // Files read besides the blocks' and the world's: the launch file and its color
   // config (a recording names every file a run came from).
   std::vector<std::string> other_files;
   // For each body, every joint below it (paper Algorithm 1), each once, in file
@@ -258,6 +258,10 @@ struct Model {
 // Gravity, by AMBF's rule: a body's own `gravity` wins, then its file's header
 // `gravity` (already copied into the body's by the loader), then the world file's.
 Vec3 effective_gravity(const Model& model, std::size_t body);
+// Every file the model came from (each block's, the world's, other_files), absolute,
+// each once, sorted: what a recording names.
+std::vector<std::string> model_files(const Model& model);
+
 // `afhub run --gravity`: one gravity for the world and every body, over both rules.
 void override_gravity(Model& model, const Vec3& gravity_mps2);
 

@@ -48,12 +48,14 @@ struct ScanResult {
 inline constexpr std::uint64_t kMaxRecordBytes = 256ull << 20;
 
 // Reads `path` from the start. Throws afhub::Error for a file that cannot be opened, is
-// not MCAP, or is corrupt.
+// not MCAP, or is corrupt: a record past kMaxRecordBytes, one running past the end of a
+// file that ends with its footer (so was not cut off), bytes after the closing magic.
 ScanResult scan(const std::string& path, Visitor& visitor);
 
 // Rewrites `path` from its complete records: a file that was cut off gets its
 // summary and index back (what it lost past its last complete chunk stays lost).
-// Writes beside it and renames over it. Returns the scan of the original.
+// Writes beside it and renames over it; a complete file is left as it is, and a corrupt
+// one is an error that leaves it too. Returns the scan of the original.
 ScanResult recover(const std::string& path);
 
 }  // namespace afhub::mcap

@@ -23,6 +23,7 @@ struct PlayOptions {
 struct PlayReport {
   std::uint64_t published = 0;
   unsigned passes = 0;  // complete passes through the range
+  std::string cut_off;  // the file was cut off there, and played up to it ("": it was not)
 };
 
 // Plays until the range ends (each pass, with options.loop, until `keep_going()` is

@@ -18,8 +18,13 @@ struct PlotOptions {
   std::string out;  // .png or .svg; "": text on stdout
 };
 
+struct PlotReport {
+  std::size_t states = 0;  // plotted
+  std::string cut_off;     // the file was cut off there, and plotted up to it ("": not cut)
+};
+
 // Throws afhub::Error for a body the file does not hold, an unknown field, a file that
-// cannot be read, or gnuplot missing or failing. Returns the number of states plotted.
-std::size_t plot(const PlotOptions& options);
+// cannot be read, or gnuplot missing or failing.
+PlotReport plot(const PlotOptions& options);
 
 }  // namespace afhub::mcap

@@ -22,6 +22,13 @@ std::string random_token();
 // Whether `address` (an IPv4 or IPv6 literal) is a loopback address.
 bool is_loopback(std::string_view address);
 
+// Throws afhub::Error unless `address` is an IPv4 or IPv6 literal as inet_pton reads
+// it: civetweb would listen on 231.1.1.1 for "999.1.1.1" (each part taken mod 256).
+void require_ip_address(std::string_view address);
+
+// `address` as a URL or a listening port names it: an IPv6 one in brackets.
+std::string url_host(std::string_view address);
+
 // "" when a request with these headers (nullptr: absent) may be served by a server
 // bound to `bind`:`port`; else why not, for a 403.
 std::string origin_problem(std::string_view bind, int port, const char* host, const char* origin);

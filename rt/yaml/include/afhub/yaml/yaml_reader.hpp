@@ -45,9 +45,10 @@ class Reader {
   std::string where(const YAML::Node& node) const;
   [[noreturn]] void fail(const YAML::Node& node, const std::string& what) const;
   void warn(const YAML::Node& node, const std::string& what) const;
-  // Warns of each key of `map` not in `known`; `owner` names the map.
-  void warn_unknown_keys(const YAML::Node& map, const std::set<std::string>& known,
-                         const std::string& owner) const;
+  // Warns of each key of `map` not in `known`, and refuses a key written twice (yaml-cpp
+  // would take the first, most readers the last); `owner` names the map.
+  void check_keys(const YAML::Node& map, const std::set<std::string>& known,
+                  const std::string& owner) const;
 
   // A finite number of at most kMaxMagnitude in magnitude.
   double number(const YAML::Node& node, const std::string& what) const;
