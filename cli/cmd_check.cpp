@@ -89,6 +89,7 @@ int run_check(const CheckOptions& options) {
     physics::override_gravity(model, parse_gravity(options.gravity));
     gravity_source = "--gravity";
   }
+  apply_gain_options(model, options.gains);  // refused before the report, as gravity
   for (const auto& warning : model.warnings) std::fprintf(stderr, "%s\n", warning.c_str());
   double total_mass = 0.0;
   for (const auto& body : model.bodies) total_mass += body.mass_kg;
@@ -104,7 +105,6 @@ int run_check(const CheckOptions& options) {
   for (const std::string& note : model.notes) std::printf("%s\n", note.c_str());
   std::printf("meshes read: %zu\n", meshes);
   print_gravity(model, gravity_source);
-  apply_gain_options(model, options.gains);
   print_default_gains(model);
   // The gains in use need the bodies' inertias: the world is built, not stepped.
   try {

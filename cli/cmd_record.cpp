@@ -53,16 +53,17 @@ std::string numbered(const std::string& path, unsigned n) {
 
 int run_recover(const std::string& path) {
   const mcap::ScanResult result = mcap::recover(path);
-  if (result.complete)
+  if (result.indexed)
     std::printf("%s: complete (%llu messages in %llu chunks, with its summary): left as it is\n",
                 path.c_str(), static_cast<unsigned long long>(result.messages),
                 static_cast<unsigned long long>(result.chunks));
   else
-    std::printf(
-        "%s: was cut off: %s; rewrote %llu messages in %llu chunks with a summary and "
-        "index\n",
-        path.c_str(), result.cut_off.c_str(), static_cast<unsigned long long>(result.messages),
-        static_cast<unsigned long long>(result.chunks));
+    std::printf("%s: %s; rewrote %llu messages in %llu chunks with a summary and index\n",
+                path.c_str(),
+                result.complete ? "complete but without a summary"
+                                : ("was cut off: " + result.cut_off).c_str(),
+                static_cast<unsigned long long>(result.messages),
+                static_cast<unsigned long long>(result.chunks));
   return 0;
 }
 

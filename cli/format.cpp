@@ -216,10 +216,14 @@ std::vector<double> parse_numbers(std::string_view text, std::string_view flag,
     char* parsed_end = nullptr;
     errno = 0;
     double value = std::strtod(item.c_str(), &parsed_end);
-    if (item.empty() || *parsed_end != '\0' || errno == ERANGE || !std::isfinite(value))
+    if (item.empty() || *parsed_end != '\0' || errno == ERANGE || !std::isfinite(value)) {
+      std::string example = "0.1";
+      for (std::size_t i = 1; i < std::max<std::size_t>(expected, 2); ++i)
+        example += ",0." + std::to_string(i + 1);
       throw Error(std::string(flag) + ": '" + item +
                   "' is not a finite number; give comma-separated numbers, e.g. " +
-                  std::string(flag) + " 0.1,0.2");
+                  std::string(flag) + " " + example);
+    }
     values.push_back(value);
     start = end + 1;
   }

@@ -174,7 +174,10 @@ class Scanner {
       content_.resize(length);
       if (!file_.read(content_)) return cut(what + " is cut off");
       FieldReader fields(content_, file_.path() + ": " + what);
-      if (opcode == kFooter) return finish(at);
+      if (opcode == kFooter) {
+        result_.indexed = fields.u64("summary_start") != 0;
+        return finish(at);
+      }
       if (opcode == kDataEnd) data_ended = true;
       if (!data_ended) data_record(opcode, fields, at);
     }
@@ -370,9 +373,11 @@ ScanResult recover(const std::string& path) {
     std::filesystem::remove(temporary);
     throw;
   }
-  if (result.complete) {  // nothing to recover: the original stays as it was
+  if ((result.complete && result.indexed) || (!result.complete && result.messages == 0)) {
     std::filesystem::remove(temporary);
-    return result;
+    if (result.complete) return result;  // nothing to recover: the original stays as it was
+    throw Error(path + ": nothing to recover: no message before it was cut off (" + result.cut_off +
+                ")");
   }
   std::error_code error;
   std::filesystem::rename(temporary, path, error);

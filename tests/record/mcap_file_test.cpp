@@ -351,6 +351,24 @@ TEST_F(McapFile, AFinishedFileWithALengthTooLongIsCorruptNotCutAndRecoverKeepsIt
       << scan_error(file);
   EXPECT_THROW(recover(file), Error);
   EXPECT_EQ(fs::file_size(file), 2 * whole.size());
+
+  // MCAP's magic alone: nothing to recover (it became an empty recording), left as it is.
+  { std::ofstream(file, std::ios::binary) << whole.substr(0, 8); }
+  EXPECT_THROW(recover(file), Error);
+  EXPECT_EQ(fs::file_size(file), 8u);
+
+  // Complete, but its footer points at no summary: recover gives it one.
+  { std::ofstream(file, std::ios::binary) << whole; }
+  overwrite(file, whole.size() - 8 - 20, std::vector<std::uint8_t>(8, 0));  // summary_start
+  Collected unindexed;
+  const ScanResult before = scan(file, unindexed);
+  EXPECT_TRUE(before.complete);
+  EXPECT_FALSE(before.indexed);
+  EXPECT_TRUE(recover(file).complete);
+  Collected reindexed;
+  const ScanResult after = scan(file, reindexed);
+  EXPECT_TRUE(after.indexed);
+  EXPECT_EQ(after.messages, before.messages);
 }
 
 TEST_F(McapFile, AChunkOfAnUnknownCompressionIsAnErrorNamingIt) {

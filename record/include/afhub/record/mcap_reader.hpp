@@ -39,6 +39,7 @@ class Visitor {
 
 struct ScanResult {
   bool complete = false;  // the data section ended and the footer and closing magic follow
+  bool indexed = false;   // complete, and its footer points at a summary
   std::string cut_off;    // why the scan stopped early, where ("" when complete)
   std::uint64_t chunks = 0, messages = 0;
 };
@@ -54,8 +55,9 @@ ScanResult scan(const std::string& path, Visitor& visitor);
 
 // Rewrites `path` from its complete records: a file that was cut off gets its
 // summary and index back (what it lost past its last complete chunk stays lost).
-// Writes beside it and renames over it; a complete file is left as it is, and a corrupt
-// one is an error that leaves it too. Returns the scan of the original.
+// Writes beside it and renames over it; a complete file with its summary is left as it
+// is, and a corrupt one, or one with no message, is an error that leaves it too. Returns
+// the scan of the original.
 ScanResult recover(const std::string& path);
 
 }  // namespace afhub::mcap
