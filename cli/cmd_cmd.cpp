@@ -311,7 +311,7 @@ int run_cmd(const CmdOptions& options) {
   // --repeat 0 meant once before cmd kept sending by default: it still does.
   const bool once = options.once || options.repeat_hz == 0.0;
   const std::int64_t period_ns =
-      once ? 0 : period_ns_of_rate(options.repeat_hz, "--rate (0: --once)");
+      once ? 0 : period_ns_of_rate(options.repeat_hz, "--repeat (--rate; 0: --once)");
   if (options.others != "hold" && options.others != "release")
     throw Error("--others takes hold or release");
   if (!once) survive_hub_loss("afhub cmd");
