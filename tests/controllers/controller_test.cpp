@@ -246,7 +246,8 @@ TEST(Controllers, BadArgumentsGetClearErrors) {
   EXPECT_TRUE(contains(missing_body.err, "wait longer with --wait")) << missing_body.err;
   RunResult missing_file = run_afhub({"ctl", "track", "base", folder.dir().string() + "/x.csv"});
   EXPECT_EQ(missing_file.exit_code, 1);
-  EXPECT_TRUE(contains(missing_file.err, "cannot open the trajectory file")) << missing_file.err;
+  EXPECT_TRUE(contains(missing_file.err, "x.csv: error: no such file; expected a trajectory (CSV)"))
+      << missing_file.err;
   RunResult bad_rate = run_afhub({"ctl", "hold", "base", "--rate", "0"});
   EXPECT_EQ(bad_rate.exit_code, 1);
   EXPECT_TRUE(contains(bad_rate.err, "--rate")) << bad_rate.err;
