@@ -17,7 +17,10 @@ class WatchedDevice : public Device {
   DeviceSpec spec() const override { return {}; }
   DeviceSample exchange(const DeviceOutput&) override {
     ++inside;
-    while (stuck) std::this_thread::yield();
+    while (stuck) {
+      held = true;
+      std::this_thread::yield();
+    }
     if (made_safe > 0) ++exchanges_after_safe;
     --inside;
     ++exchanges;
@@ -30,6 +33,7 @@ class WatchedDevice : public Device {
   }
   std::atomic<int> inside{0}, exchanges{0}, made_safe{0}, overlaps{0}, exchanges_after_safe{0};
   std::atomic<bool> stuck{false};
+  std::atomic<bool> held{false};  // an exchange saw `stuck` and waits
   std::thread::id safe_thread;
 };
 
@@ -82,7 +86,9 @@ TEST(SafeRequest, ALoopStuckInAnExchangeLeavesItToTheRequester) {
   WatchedDevice& device = running.device;
   while (device.exchanges < 10) std::this_thread::yield();
   device.stuck = true;
-  while (device.inside == 0) std::this_thread::yield();
+  // Held, not merely inside: an exchange that read `stuck` just before it was set would
+  // end, and the loop would then serve the request itself (seen once under ASan).
+  while (!device.held) std::this_thread::yield();
   EXPECT_EQ(running.request.request(20'000'000), MadeSafeBy::kRequester);
   EXPECT_EQ(device.made_safe, 1);
   EXPECT_EQ(device.safe_thread, std::this_thread::get_id());
