@@ -1,5 +1,6 @@
-// The body's states are stale when their stamp is old or when no new one came for the
-// stale time, whichever is first; a new physics (its sequence from 1) is fresh at once.
+// The body's physics is silent when its newest state's stamp is old or when no new one
+// came for the stale time, whichever is first; not stepping when states come but their
+// step stays; a new physics (its sequence from 1) is live at once.
 #include "afhub/teleop/state_freshness.hpp"
 
 #include <gtest/gtest.h>
@@ -8,38 +9,59 @@ namespace afhub::teleop {
 namespace {
 
 constexpr std::int64_t kOneMs = 1'000'000;
+constexpr auto kLive = PhysicsLiveness::kLive;
+constexpr auto kSilent = PhysicsLiveness::kSilent;
+constexpr auto kNotStepping = PhysicsLiveness::kNotStepping;
 
-TEST(StateFreshness, APhysicsThatStopsIsStaleOnceItsNewestStateIsOlderThanTheBound) {
+TEST(StateFreshness, APhysicsThatStopsIsSilentOnceItsNewestStateIsOlderThanTheBound) {
   StateFreshness freshness(50 * kOneMs);
   std::int64_t now = 1000 * kOneMs;
   std::uint64_t sequence = 1;
   for (; sequence < 100; ++sequence, now += kOneMs)
-    EXPECT_FALSE(freshness.stale(sequence, now, now));  // a state each cycle
+    EXPECT_EQ(freshness.judge(sequence, now, sequence, now), kLive);  // a step each cycle
   const std::int64_t last = now - kOneMs;
   --sequence;
-  EXPECT_FALSE(freshness.stale(sequence, last, last + 50 * kOneMs));
-  EXPECT_TRUE(freshness.stale(sequence, last, last + 51 * kOneMs));
+  EXPECT_EQ(freshness.judge(sequence, last, sequence, last + 50 * kOneMs), kLive);
+  EXPECT_EQ(freshness.judge(sequence, last, sequence, last + 51 * kOneMs), kSilent);
   // A state published late but seen now is judged by its stamp.
-  EXPECT_TRUE(freshness.stale(sequence + 1, last + kOneMs, last + 60 * kOneMs));
-  // A restarted physics: sequence from 1 again, fresh at once.
-  EXPECT_FALSE(freshness.stale(1, last + 61 * kOneMs, last + 61 * kOneMs));
+  EXPECT_EQ(freshness.judge(sequence + 1, last + kOneMs, sequence + 1, last + 60 * kOneMs),
+            kSilent);
+  // A restarted physics: sequence and step from 1 again, live at once.
+  EXPECT_EQ(freshness.judge(1, last + 61 * kOneMs, 1, last + 61 * kOneMs), kLive);
 }
 
-TEST(StateFreshness, AFrozenStampFromTheFutureGoesStaleByThisLoopsClock) {
+TEST(StateFreshness, AFrozenStampFromTheFutureGoesSilentByThisLoopsClock) {
   StateFreshness freshness(50 * kOneMs);
   const std::int64_t now = 1000 * kOneMs;
   const std::int64_t future = now + 3'600'000 * kOneMs;  // an hour ahead: a faulty writer
-  EXPECT_FALSE(freshness.stale(7, future, now));
-  EXPECT_FALSE(freshness.stale(7, future, now + 50 * kOneMs));
-  EXPECT_TRUE(freshness.stale(7, future, now + 51 * kOneMs));
+  EXPECT_EQ(freshness.judge(7, future, 7, now), kLive);
+  EXPECT_EQ(freshness.judge(7, future, 7, now + 50 * kOneMs), kLive);
+  EXPECT_EQ(freshness.judge(7, future, 7, now + 51 * kOneMs), kSilent);
 }
 
 TEST(StateFreshness, ALoopThatWasDescheduledJudgesOnReturnNotAfterMoreCycles) {
   StateFreshness freshness(50 * kOneMs);
   const std::int64_t now = 1000 * kOneMs;
-  EXPECT_FALSE(freshness.stale(5, now, now));
+  EXPECT_EQ(freshness.judge(5, now, 5, now), kLive);
   // The loop did not run for 80 ms and the physics published nothing meanwhile.
-  EXPECT_TRUE(freshness.stale(5, now, now + 80 * kOneMs));
+  EXPECT_EQ(freshness.judge(5, now, 5, now + 80 * kOneMs), kSilent);
+}
+
+TEST(StateFreshness, StatesThatComeWithoutANewStepAreNotSteppingUntilOneSteps) {
+  StateFreshness freshness(50 * kOneMs);
+  std::int64_t now = 1000 * kOneMs;
+  const std::uint64_t step = 300;
+  // Paused at step 300: a new state every millisecond, the same step.
+  std::uint64_t sequence = 1;
+  for (int ms = 0; ms <= 50; ++ms, ++sequence, now += kOneMs)
+    EXPECT_EQ(freshness.judge(sequence, now, step, now), kLive) << ms;
+  EXPECT_EQ(freshness.judge(sequence, now, step, now), kNotStepping);
+  // Fresh states do not make it live; silence wins over not stepping.
+  EXPECT_EQ(freshness.judge(sequence + 1, now + kOneMs, step, now + kOneMs), kNotStepping);
+  EXPECT_EQ(freshness.judge(sequence + 1, now + kOneMs, step, now + 60 * kOneMs), kSilent);
+  // One step (`afhub world step`, a resume): live again at once.
+  now += 61 * kOneMs;
+  EXPECT_EQ(freshness.judge(sequence + 2, now, step + 1, now), kLive);
 }
 
 }  // namespace

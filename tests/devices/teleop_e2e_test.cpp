@@ -489,7 +489,8 @@ TEST(TeleopEndToEnd, ADeviceNeverPushesOnAStoppedOrDeadPhysics) {
 
   // Back: teleop says so, and the driver ramps the force in from zero (0.2 s to full).
   ASSERT_TRUE(wait_until(
-      [&] { return contains(teleop.teleop_log(), "afhub/gripper/palm's states are back"); }, 5s))
+      [&] { return contains(teleop.teleop_log(), "afhub/gripper/palm's physics steps again"); },
+      5s))
       << teleop.logs();
   double first_force = -1.0;
   ASSERT_TRUE(wait_until(
@@ -504,6 +505,16 @@ TEST(TeleopEndToEnd, ADeviceNeverPushesOnAStoppedOrDeadPhysics) {
       << teleop.logs();
   ASSERT_TRUE(wait_until([&] { return pushing_up(teleop); }, 20s)) << teleop.logs();
 
+  // A paused world publishes its states on, unmoving, while the device moves on: the
+  // force it would render grew to the file's maximum. No force while paused.
+  const std::string paused_said = "afhub/gripper/palm has not moved a step";
+  const std::int64_t paused_at = monotonic_ns();
+  ASSERT_EQ(run_afhub({"world", "pause"}).exit_code, 0);
+  const Frozen paused = watch_force(teleop, paused_at, 3000);
+  ASSERT_EQ(run_afhub({"world", "resume"}).exit_code, 0);
+  EXPECT_EQ(occurrences(teleop.teleop_log(), paused_said), 1) << teleop.teleop_log();
+  ASSERT_TRUE(wait_until([&] { return pushing_up(teleop); }, 20s)) << teleop.logs();
+
   const int said_before_kill = occurrences(teleop.teleop_log(), said);
   const std::int64_t killed_at = monotonic_ns();
   teleop.signal_physics(SIGKILL);
@@ -512,11 +523,12 @@ TEST(TeleopEndToEnd, ADeviceNeverPushesOnAStoppedOrDeadPhysics) {
 
   std::printf(
       "physics stopped: force zero %.1f ms after SIGSTOP, then %d of %d device states with a "
-      "force; resumed: first force %.3f N; physics killed: zero %.1f ms after SIGKILL, then %d "
-      "of %d with a force\n",
-      stopped.to_zero_ms, stopped.pushing, stopped.states, first_force, killed.to_zero_ms,
-      killed.pushing, killed.states);
-  for (const Frozen& frozen : {stopped, killed}) {
+      "force; resumed: first force %.3f N; world paused: zero %.1f ms after the pause, then %d "
+      "of %d with a force; physics killed: zero %.1f ms after SIGKILL, then %d of %d with a "
+      "force\n",
+      stopped.to_zero_ms, stopped.pushing, stopped.states, first_force, paused.to_zero_ms,
+      paused.pushing, paused.states, killed.to_zero_ms, killed.pushing, killed.states);
+  for (const Frozen& frozen : {stopped, paused, killed}) {
     ASSERT_GE(frozen.to_zero_ms, 0.0) << "the device kept pushing" << teleop.logs();
     EXPECT_GT(frozen.states, 300) << "the driver stopped publishing" << teleop.logs();
     EXPECT_EQ(frozen.pushing, 0) << "the device pushed again on a gone physics" << teleop.logs();

@@ -68,8 +68,8 @@ struct Link {
   std::int64_t last_cycle_ns{0};
   bool held{false};  // the device's samples are stale: the body is held
   bool seen_state{false};
-  bool body_stale{false};          // the body's states are stale: the device gets no force
-  std::uint64_t commands_sent{0};  // = the sequence of our last DeviceCommand
+  PhysicsLiveness physics{PhysicsLiveness::kLive};  // not live: the device gets no force
+  std::uint64_t commands_sent{0};                   // = the sequence of our last DeviceCommand
   std::uint64_t last_reported_command{0};
   std::array<std::int64_t, kInFlight> sample_stamp_of{};  // by command sequence % kInFlight
 };
@@ -95,25 +95,33 @@ void wait_for_device(Link& link, const std::string& who, std::int64_t give_up_ns
   }
 }
 
-// Whether the body's states still come (its newest, or none once there was one: a
-// dead physics' channel can go away), said once each way.
+// Whether the body's physics is live (its newest state; none once there was one: a
+// dead physics' channel can go away), said once at each change.
 void judge_body(Link& link, const BodyState* state, std::int64_t now) {
   if (state) link.seen_state = true;
-  const bool stale = state ? link.state_freshness.stale(state->header.sequence,
-                                                        state->header.publish_stamp_ns, now)
-                           : link.seen_state;
-  if (stale == link.body_stale) return;
-  link.body_stale = stale;
+  const PhysicsLiveness liveness =
+      state ? link.state_freshness.judge(state->header.sequence, state->header.publish_stamp_ns,
+                                         state->header.sim_step, now)
+      : link.seen_state ? PhysicsLiveness::kSilent
+                        : PhysicsLiveness::kLive;
+  if (liveness == link.physics) return;
+  link.physics = liveness;
   const char* name = link.binding->device_name.c_str();
   const char* body = link.binding->body.c_str();
-  if (stale)
+  const double stale_ms = static_cast<double>(link.stale_ns) * 1e-6;
+  if (liveness == PhysicsLiveness::kSilent)
     std::fprintf(stderr,
                  "afhub teleop: no state from %s for %.0f ms (its physics stopped or died?): "
                  "no force on device/%s until states come back\n",
-                 body, static_cast<double>(link.stale_ns) * 1e-6, name);
+                 body, stale_ms, name);
+  else if (liveness == PhysicsLiveness::kNotStepping)
+    std::fprintf(stderr,
+                 "afhub teleop: %s has not moved a step for %.0f ms (its world is paused?): no "
+                 "force on device/%s until it steps again\n",
+                 body, stale_ms, name);
   else
-    std::fprintf(stderr, "afhub teleop: %s's states are back: force on device/%s ramps in\n", body,
-                 name);
+    std::fprintf(stderr, "afhub teleop: %s's physics steps again: force on device/%s ramps in\n",
+                 body, name);
 }
 
 // One cycle of one link: newest samples in, the two commands out. Returns the body's
@@ -170,7 +178,7 @@ const BodyState* cycle(Link& link, std::int64_t now, TeleopLatency* latency, std
       latency->to_body_command.push_back(monotonic_ns() - device->header.publish_stamp_ns);
   }
   if (DeviceCommand* command = link.device_command.loan()) {
-    fill_device_command(link.out, !link.body_stale, *command);
+    fill_device_command(link.out, link.physics == PhysicsLiveness::kLive, *command);
     link.device_command.publish(command);
     ++link.commands_sent;
     link.sample_stamp_of[link.commands_sent % kInFlight] = device->header.publish_stamp_ns;

@@ -1,27 +1,40 @@
-// Whether the simulated body's states still come: a device may push only on a live
-// physics. A state is stale once its publish stamp is older than stale_ns, or once
-// this loop has seen no new state (a new sequence or stamp) for stale_ns by its own
-// clock (a stamp from the future is no fresher). Unlike DeviceFreshness this does not
-// wait for the loop's own cycles: a false alarm on a busy machine costs a force ramp,
-// a missed one pushes the operator's hand against a frozen or dead simulation.
+// Whether the simulated body's physics is live: a device may push only on a physics that
+// steps. Silent: the newest state's publish stamp is older than stale_ns, or this loop
+// has seen no new state (a new sequence or stamp) for stale_ns by its own clock (a stamp
+// from the future is no fresher): the physics stopped or died. Not stepping: states come,
+// but their step has not changed for stale_ns: the world is paused (or a lockstep physics
+// waits), and a device moving on would pull ever harder on a body that cannot follow.
+// Unlike DeviceFreshness this does not wait for the loop's own cycles: a false alarm on a
+// busy machine costs a force ramp, a missed one pushes the operator's hand against a
+// frozen or dead simulation.
 #pragma once
 
 #include <cstdint>
 
 namespace afhub::teleop {
 
+enum class PhysicsLiveness : std::uint8_t { kLive, kSilent, kNotStepping };
+
 class StateFreshness {
  public:
   explicit StateFreshness(std::int64_t stale_ns) noexcept : stale_ns_(stale_ns) {}
 
-  // Once per cycle with the newest state's sequence and publish stamp: true while stale.
-  bool stale(std::uint64_t sequence, std::int64_t stamp_ns, std::int64_t now_ns) noexcept {
+  // Once per cycle with the newest state's sequence, publish stamp and step.
+  PhysicsLiveness judge(std::uint64_t sequence, std::int64_t stamp_ns, std::uint64_t step,
+                        std::int64_t now_ns) noexcept {
     if (sequence != sequence_ || stamp_ns != stamp_ns_ || seen_ns_ < 0) {
       sequence_ = sequence;
       stamp_ns_ = stamp_ns;
       seen_ns_ = now_ns;
     }
-    return now_ns - stamp_ns > stale_ns_ || now_ns - seen_ns_ > stale_ns_;
+    if (step != step_ || stepped_ns_ < 0) {
+      step_ = step;
+      stepped_ns_ = now_ns;
+    }
+    if (now_ns - stamp_ns > stale_ns_ || now_ns - seen_ns_ > stale_ns_)
+      return PhysicsLiveness::kSilent;
+    return now_ns - stepped_ns_ > stale_ns_ ? PhysicsLiveness::kNotStepping
+                                            : PhysicsLiveness::kLive;
   }
 
  private:
@@ -29,6 +42,8 @@ class StateFreshness {
   std::uint64_t sequence_{0};
   std::int64_t stamp_ns_{0};
   std::int64_t seen_ns_{-1};  // when this loop first saw the newest state; -1: none yet
+  std::uint64_t step_{0};
+  std::int64_t stepped_ns_{-1};  // when this loop first saw the newest step; -1: none yet
 };
 
 }  // namespace afhub::teleop
