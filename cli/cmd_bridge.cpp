@@ -10,6 +10,7 @@
 
 #include "afhub/bridges/dds_bridge.hpp"
 #include "afhub/bridges/dds_bridge_config.hpp"
+#include "afhub/rt/cpu_wake_latency.hpp"
 #include "commands.hpp"
 
 namespace afhub::cli {
@@ -125,7 +126,8 @@ void register_bridge(CLI::App& app, Runner& selected) {
               "(/dev/cpu_dma_latency, as cyclictest does; root): 0 keeps them polling "
               "instead of sleeping, so that each message wakes its reader at once, for an "
               "idle core's power; on a VM, where a sleeping vCPU wakes in tens of us, it "
-              "brings the bridges' cost near raw DDS's (default: leave them)");
+              "brings the bridges' cost near raw DDS's (default: leave them)")
+      ->check(CLI::Range(0, kMaxCpuWakeLatencyUs));
   add_setting(dds, *cli, "--body-rate", &DdsOptions::body_rate_hz,
               "Send each body's state at most this often, newest wins (Hz; default 0: "
               "every new state)");

@@ -7,6 +7,7 @@
 
 #include "afhub/physics/adf_loader.hpp"
 #include "afhub/physics/adf_writer.hpp"
+#include "afhub/physics/mesh.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "commands.hpp"
 #include "urdf_options.hpp"
@@ -25,6 +26,8 @@ int run_convert(const ConvertOptions& options) {
   physics::Model model;
   try {
     physics::load_adf_files_into({options.urdf_file}, model, options.urdf);
+    // What convert writes, `afhub run` loads: a mesh it cannot read is refused here.
+    physics::check_meshes(model);
   } catch (const Error& error) {
     std::fprintf(stderr, "%s\n", error.what());
     return 1;

@@ -51,7 +51,7 @@ void print_each(LatestReader<T>& reader, const std::string& channel, const EchoO
       ++printed;
     } else if (options.count != 0 && monotonic_ns() - last_sample_ns >
                                          static_cast<std::int64_t>(options.timeout_s * 1e9)) {
-      throw Error("no state from " + channel + " for " + option_number(options.timeout_s) +
+      throw Error("no state from " + channel + " for " + yaml::number_text(options.timeout_s) +
                   " s; is its publisher paused or gone?");
     }
     sleep_until_ns(monotonic_ns() + 200'000);

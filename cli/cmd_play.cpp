@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <string>
 
 #include "afhub/hub/startup_wait.hpp"
 #include "afhub/record/lockstep_replay.hpp"
@@ -20,9 +21,18 @@ struct PlayCliOptions {
   double wait_s = 0.0;
 };
 
+void warn_if_cut_off(const std::string& file, const std::string& cut_off) {
+  if (!cut_off.empty())
+    std::fprintf(stderr,
+                 "afhub play: warning: %s was cut off (%s): played up to there; `afhub record "
+                 "--recover` gives it its index\n",
+                 file.c_str(), cut_off.c_str());
+}
+
 int run_replay(const PlayCliOptions& options) {
   const mcap::ReplayCheck check =
       mcap::replay_into_physics(options.play.file, [] { return !stop_requested(); });
+  warn_if_cut_off(options.play.file, check.cut_off);
   if (check.diverged) {
     std::printf("diverges at step %llu: %s %s (%llu steps and %llu states identical before it)\n",
                 static_cast<unsigned long long>(check.step), check.body.c_str(),
@@ -47,11 +57,7 @@ int run_play(PlayCliOptions& options) {
   std::fprintf(stderr, "afhub play: published %llu messages in %u complete pass%s\n",
                static_cast<unsigned long long>(report.published), report.passes,
                report.passes == 1 ? "" : "es");
-  if (!report.cut_off.empty())
-    std::fprintf(stderr,
-                 "afhub play: warning: %s was cut off (%s): played up to there; `afhub record "
-                 "--recover` gives it its index\n",
-                 options.play.file.c_str(), report.cut_off.c_str());
+  warn_if_cut_off(options.play.file, report.cut_off);
   return 0;
 }
 

@@ -13,13 +13,15 @@ void add_realtime_options(CLI::App* command, RealtimeOptions& options, const std
   command->add_option("--cpu", options.cpu, "Pin " + loop + " to this CPU");
   command->add_flag("--lock-memory", options.lock_memory,
                     "mlockall and pre-fault, so " + loop + " takes no page faults");
-  command->add_option("--cpu-wake-latency", options.cpu_wake_latency_us,
-                      "Hold this machine's CPU wake-up latency limit at this many microseconds "
-                      "while running (/dev/cpu_dma_latency, as cyclictest does; 0 to " +
-                          std::to_string(kMaxCpuWakeLatencyUs) +
-                          "): at 0 idle CPUs poll instead of sleeping, so " + loop +
-                          " wakes on time, at the cost of busy idle cores. Needs root; says "
-                          "so if refused");
+  command
+      ->add_option("--cpu-wake-latency", options.cpu_wake_latency_us,
+                   "Hold this machine's CPU wake-up latency limit at this many microseconds "
+                   "while running (/dev/cpu_dma_latency, as cyclictest does; 0 to " +
+                       std::to_string(kMaxCpuWakeLatencyUs) +
+                       "): at 0 idle CPUs poll instead of sleeping, so " + loop +
+                       " wakes on time, at the cost of busy idle cores. Needs root; says "
+                       "so if refused")
+      ->check(CLI::Range(0, kMaxCpuWakeLatencyUs));  // -1, the default, means unset
 }
 
 void set_realtime_options(const RealtimeOptions& options, LoopOptions& loop) {

@@ -6,10 +6,10 @@
 
 #include <cmath>
 #include <cstdint>
-#include <cstdio>
 #include <string>
 
 #include "afhub/shm_layout/error.hpp"
+#include "afhub/yaml/yaml_reader.hpp"
 
 namespace afhub::cli {
 
@@ -17,25 +17,19 @@ inline constexpr double kMinRateHz = 0.001;      // a period of 1000 s
 inline constexpr double kMaxRateHz = 100'000.0;  // 10 us: a loop's own work is about that
 inline constexpr double kMaxSeconds = 1e7;       // 116 days: a run, a recording, a timeout
 
-inline std::string option_number(double value) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%g", value);
-  return text;
-}
-
 // The period of `rate_hz`, from kMinRateHz to kMaxRateHz.
 inline std::int64_t period_ns_of_rate(double rate_hz, const std::string& option) {
   if (!(rate_hz >= kMinRateHz && rate_hz <= kMaxRateHz))
-    throw Error(option + " takes a rate from " + option_number(kMinRateHz) + " to " +
-                option_number(kMaxRateHz) + " Hz, got " + option_number(rate_hz));
+    throw Error(option + " takes a rate from " + yaml::number_text(kMinRateHz) + " to " +
+                yaml::number_text(kMaxRateHz) + " Hz, got " + yaml::number_text(rate_hz));
   return std::llround(1e9 / rate_hz);
 }
 
 // `seconds` from `min_s` to kMaxSeconds (a duration, a timeout) in nanoseconds.
 inline std::int64_t ns_of_seconds(double seconds, const std::string& option, double min_s = 0.0) {
   if (!(seconds >= min_s && seconds <= kMaxSeconds))
-    throw Error(option + " takes seconds from " + option_number(min_s) + " to " +
-                option_number(kMaxSeconds) + ", got " + option_number(seconds));
+    throw Error(option + " takes seconds from " + yaml::number_text(min_s) + " to " +
+                yaml::number_text(kMaxSeconds) + ", got " + yaml::number_text(seconds));
   return std::llround(seconds * 1e9);
 }
 

@@ -31,13 +31,14 @@ class RefusalNotice {
  public:
   explicit RefusalNotice(const std::string& who) : who_(who) {}
 
-  void look(const BodyState& state, std::int64_t now_ns) {
+  void look(const BodyState& state) {
     const std::uint32_t count = state.refused_commands;
     const std::uint32_t newly = seen_any_ ? count - seen_ : 0;
     seen_ = count;
     seen_any_ = true;
     if (newly == 0 || state.refused_command_pid != pid_) return;
     unsaid_ += newly;
+    const std::int64_t now_ns = monotonic_ns();  // read only when there is a refusal to say
     if (now_ns < next_say_ns_) return;
     const std::string_view reason = name_of(state.refusal_reason);
     std::fprintf(stderr,
@@ -62,7 +63,7 @@ class RefusalNotice {
 void answer(BodyClient& body, const BodyState& state, const ControllerCycle& cycle, bool lockstep,
             RefusalNotice& refusals) {
   if (hub_lost()) return;  // outputs safe: no command into a hub that is gone
-  refusals.look(state, monotonic_ns());
+  refusals.look(state);
   BodyCommand* command = body.loan_command(state.joint_count);
   if (!command) return;  // shared memory exhausted: the watchdog covers a lasting shortage
   cycle(state, *command);

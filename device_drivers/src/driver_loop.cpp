@@ -2,7 +2,9 @@
 #include "afhub/devices/driver_loop.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
+#include <initializer_list>
 #include <thread>
 
 #include "afhub/devices/safe_request.hpp"
@@ -49,6 +51,53 @@ class HookAttachment {
   HookAttachment& operator=(const HookAttachment&) = delete;
 };
 
+// A sample that is not all finite numbers (a reading gone wrong) is not published:
+// readers would take it as a pose (a NaN stays in teleop's anchor for good), and every
+// reader refuses such a state anyway. Said on stderr, the first at once, then counted
+// at most once a second; no allocation (the loop's path).
+class NonFiniteSamples {
+ public:
+  explicit NonFiniteSamples(const std::string& name) : name_(name) {}
+
+  // True when `sample` is to be dropped.
+  bool drop(const DeviceSample& sample, std::int64_t now_ns) noexcept {
+    const char* field = non_finite_field(sample);
+    if (!field) return false;
+    ++unsaid_;
+    if (now_ns >= next_say_ns_) {
+      std::fprintf(stderr,
+                   "afhub device %s: %llu sample%s of the device not published: %s is not a "
+                   "finite number (a faulty reading; readers see the last good sample age)\n",
+                   name_.c_str(), static_cast<unsigned long long>(unsaid_), unsaid_ == 1 ? "" : "s",
+                   field);
+      unsaid_ = 0;
+      next_say_ns_ = now_ns + 1'000'000'000;
+    }
+    return true;
+  }
+
+ private:
+  static const char* non_finite_field(const DeviceSample& s) noexcept {
+    const auto finite = [](std::initializer_list<double> values) {
+      return std::all_of(values.begin(), values.end(), [](double v) { return std::isfinite(v); });
+    };
+    const Pose& p = s.pose;
+    if (!finite({p.position_m.x, p.position_m.y, p.position_m.z, p.orientation.x, p.orientation.y,
+                 p.orientation.z, p.orientation.w}))
+      return "its pose";
+    const Twist& t = s.velocity;
+    if (!finite({t.linear_mps.x, t.linear_mps.y, t.linear_mps.z, t.angular_radps.x,
+                 t.angular_radps.y, t.angular_radps.z}))
+      return "its velocity";
+    if (!std::isfinite(s.gripper_angle_rad)) return "its gripper angle";
+    return nullptr;
+  }
+
+  const std::string& name_;
+  std::uint64_t unsaid_ = 0;
+  std::int64_t next_say_ns_ = 0;
+};
+
 // Runs the loop on an open device until a stop, the cycle limit, the device's loss or
 // an error. Whatever ends it, the device's force was last set to zero (but when it is
 // gone) and it was made safe.
@@ -60,6 +109,7 @@ DriveEnd drive(Device& device, const DriverOptions& options, Writer<DeviceState>
   SafetyLimits limits = options.safety;
   limits.cycle_ns = options.loop.period_ns;
   ForceSafety safety(spec, limits);
+  NonFiniteSamples non_finite(options.name);
   DriveEnd end;
   // One cycle: the output decided from the newest command, the device exchanged with,
   // its state published. Returns false when the device went away or failed.
@@ -80,6 +130,7 @@ DriveEnd drive(Device& device, const DriverOptions& options, Writer<DeviceState>
       return false;
     }
     if (hub_lost()) return true;  // outputs safe: nothing into a hub that is gone
+    if (non_finite.drop(sample, monotonic_ns())) return true;
     DeviceState* state = states.loan();
     if (!state) return true;  // shared memory exhausted: readers see a stale stamp
     state->spec = spec;

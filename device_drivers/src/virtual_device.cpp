@@ -9,11 +9,11 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <fstream>
 #include <numbers>
 #include <sstream>
 
 #include "afhub/shm_layout/error.hpp"
+#include "afhub/yaml/input_file.hpp"
 
 namespace afhub::devices {
 namespace {
@@ -30,6 +30,10 @@ void log_line(int fd, const char* format, Values... values) noexcept {
   }
 }
 
+constexpr std::uintmax_t kMaxTrajectoryFileBytes = 1u << 30;
+constexpr double kMaxTrajectoryReachM = 10.0;  // as a circle's radius
+constexpr double kMaxTrajectorySeconds = 1e7;  // 116 days, as the command line's spans
+
 Vec3 lerp(const Vec3& a, const Vec3& b, double f) {
   return {a.x + (b.x - a.x) * f, a.y + (b.y - a.y) * f, a.z + (b.z - a.z) * f};
 }
@@ -37,8 +41,9 @@ Vec3 lerp(const Vec3& a, const Vec3& b, double f) {
 }  // namespace
 
 std::vector<TrajectoryPoint> read_trajectory_csv(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw Error(path + ": cannot read the trajectory (missing or unreadable)");
+  // A regular file of a bounded size (not /dev/zero, which never ends): an hour at
+  // 1 kHz is about 150 MB.
+  std::istringstream in(yaml::read_input_file(path, kMaxTrajectoryFileBytes, "a trajectory (CSV)"));
   std::vector<TrajectoryPoint> points;
   std::string line;
   for (int number = 1; std::getline(in, line); ++number) {
@@ -64,6 +69,15 @@ std::vector<TrajectoryPoint> read_trajectory_csv(const std::string& path) {
     if (values.size() < 4 || values.size() > 6)
       throw Error(where + "expected 4 to 6 values (t, x, y, z[, buttons[, gripper]]), found " +
                   std::to_string(values.size()));
+    // Within a desk's reach, as a circle's radius: interpolating between points near
+    // the largest doubles overflowed to a pose that was not finite.
+    for (int axis = 1; axis <= 3; ++axis)
+      if (std::abs(values[axis]) > kMaxTrajectoryReachM)
+        throw Error(where + "position " + std::to_string(values[axis]) + " m is beyond " +
+                    std::to_string(kMaxTrajectoryReachM) + " m from the device's origin");
+    if (values[0] < 0.0 || values[0] > kMaxTrajectorySeconds)
+      throw Error(where + "time " + std::to_string(values[0]) + " s is outside 0 to " +
+                  std::to_string(kMaxTrajectorySeconds) + " s");
     TrajectoryPoint point;
     point.t_s = values[0];
     point.position = {values[1], values[2], values[3]};
@@ -73,7 +87,12 @@ std::vector<TrajectoryPoint> read_trajectory_csv(const std::string& path) {
                     std::to_string(values[4]));
       point.buttons = static_cast<std::uint32_t>(values[4]);
     }
-    if (values.size() > 5) point.gripper_angle_rad = values[5];
+    if (values.size() > 5) {
+      if (std::abs(values[5]) > 2 * std::numbers::pi)
+        throw Error(where + "the gripper angle " + std::to_string(values[5]) +
+                    " rad is beyond a turn (2 pi)");
+      point.gripper_angle_rad = values[5];
+    }
     if (!points.empty() && point.t_s <= points.back().t_s)
       throw Error(where + "time " + std::to_string(point.t_s) +
                   " s does not come after the line before's " + std::to_string(points.back().t_s) +

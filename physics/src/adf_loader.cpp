@@ -109,6 +109,8 @@ void load_file(const std::string& path, const YAML::Node& root, Model& model, Un
   const yaml::MapIndex index(file, root);
   auto key = [&](const char* name) { return index.find(name); };
 
+  // Not otherwise read (every AMBF file says 1.0), but a list or a map there is a slip.
+  if (const YAML::Node* version = key("adf version")) file.text(*version, "adf version");
   FileContext context;
   context.dir = fs::path(path).parent_path();
   context.name_space = kDefaultNamespace;

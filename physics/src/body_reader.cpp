@@ -146,11 +146,7 @@ BodySpec read_body(const FileReader& file, const YAML::Node& block, const std::s
     Vec3 value = file.vec3(inertia, "inertia", "ix", "iy", "iz");
     if (value.x < 0 || value.y < 0 || value.z < 0)
       fail(file.at(inertia), "'inertia' components must not be negative");
-    // Principal inertias of any mass distribution: each at most the sum of the others.
-    // Bullet takes others, and spins such a body in ways no real one does. 1 % of room:
-    // CAD exports round.
-    const double most = std::max({value.x, value.y, value.z});
-    if (most > 1.01 * (value.x + value.y + value.z - most))
+    if (!possible_principal_inertias(value))
       file.warn(inertia, "'inertia' (" + yaml::number_text(value.x) + ", " +
                              yaml::number_text(value.y) + ", " + yaml::number_text(value.z) +
                              ") has one component larger than the other two together, which no "

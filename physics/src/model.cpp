@@ -73,6 +73,20 @@ Vec3 effective_gravity(const Model& model, std::size_t body) {
   return model.bodies[body].gravity_mps2.value_or(model.world.gravity_mps2);
 }
 
+bool possible_principal_inertias(const Vec3& inertia_kgm2) {
+  const Vec3& i = inertia_kgm2;
+  const double most = std::max({i.x, i.y, i.z});
+  return most <= 1.01 * (i.x + i.y + i.z - most);
+}
+
+int world_object_parent(const Model& model, const WorldObjectSpec& object) {
+  if (object.parent.empty()) return -1;
+  const std::string identifier = object.parent.substr(object.parent.find_last_of('/') + 1);
+  for (std::size_t b = 0; b < model.bodies.size(); ++b)
+    if (model.bodies[b].identifier == identifier) return static_cast<int>(b);
+  return -1;
+}
+
 std::vector<std::string> model_files(const Model& model) {
   std::vector<std::string> files;
   const auto add = [&](const std::string& file) {

@@ -78,8 +78,24 @@ WorldObjectSpec read_world_object(const FileReader& file, const YAML::Node& bloc
     if (YAML::Node direction = block["direction"])
       object.direction = file.axis(direction, "direction");
   }
-  if (YAML::Node parent = block["parent"]) object.parent = file.text(parent, "parent");
+  if (YAML::Node parent = block["parent"]) {
+    object.parent = file.text(parent, "parent");
+    object.parent_at = file.at(parent);
+  }
   return object;
+}
+
+// A light or camera whose parent names no body loaded stays in the world frame, as in
+// AMBF: said, since it was meant to move with that body.
+void warn_parents_not_loaded(Model& model) {
+  for (const auto* objects : {&model.world.lights, &model.world.cameras})
+    for (const WorldObjectSpec& object : *objects) {
+      if (!object.parent.empty() && world_object_parent(model, object) < 0)
+        model.warnings.push_back(object.parent_at.str() + ": warning: '" + object.key +
+                                 "' has the parent '" + object.parent +
+                                 "', which names no body loaded; it stays where the world "
+                                 "file puts it, in the world frame");
+    }
 }
 
 // Reads the world file into model.world; returns its environment ADF, if any.
@@ -319,6 +335,7 @@ Model load_scene(const SceneRequest& request) {
   if (adf_files.empty())
     throw Error("nothing to simulate: give ADF files, or --launch FILE with -l indices");
   load_adf_files_into(adf_files, model, request.urdf);
+  warn_parents_not_loaded(model);
   placements.insert(placements.end(), request.placements.begin(), request.placements.end());
   std::vector<bool> placed(adf_files.size(), false);
   for (const FilePlacement& placement : placements)

@@ -66,15 +66,6 @@ btQuaternion look_rotation(const Vec3& direction, const Vec3& up) {
   return rotation;
 }
 
-// "/ambf/env/BODY LightCone" names the body whose identifier is "BODY LightCone".
-int find_parent(const Model& model, const std::string& parent) {
-  if (parent.empty()) return -1;
-  const std::string identifier = parent.substr(parent.find_last_of('/') + 1);
-  for (std::size_t b = 0; b < model.bodies.size(); ++b)
-    if (model.bodies[b].identifier == identifier) return static_cast<int>(b);
-  return -1;
-}
-
 }  // namespace
 
 void Simulation::Data::build_bodies() {
@@ -330,7 +321,7 @@ void Simulation::Data::build_actuators() {
 void Simulation::Data::build_world_objects() {
   auto build = [&](const std::vector<WorldObjectSpec>& specs, std::vector<WorldObjectData>& out) {
     for (const WorldObjectSpec& spec : specs)
-      out.push_back({find_parent(model, spec.parent),
+      out.push_back({world_object_parent(model, spec),
                      btTransform(look_rotation(spec.direction, spec.up), to_bt(spec.position_m))});
   };
   build(model.world.lights, lights);

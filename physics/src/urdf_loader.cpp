@@ -344,8 +344,8 @@ class UrdfReader {
     for (double axis : {s.x, s.y, s.z})
       if (!(axis > 0) || axis > kMaxScale)
         fail(link_at(link), "link '" + link + "': mesh '" + mesh.filename + "' has scale " +
-                                std::to_string(s.x) + " " + std::to_string(s.y) + " " +
-                                std::to_string(s.z) +
+                                yaml::number_text(s.x) + " " + yaml::number_text(s.y) + " " +
+                                yaml::number_text(s.z) +
                                 "; give each axis a scale above 0 and at most 1000");
     return {s.x, s.y, s.z};
   }
@@ -483,6 +483,13 @@ class UrdfReader {
         placement(btTransform(origin.getBasis() * principal, origin.getOrigin()));
     body.inertia_kgm2 =
         Vec3{std::max(moments[0], 0.0), std::max(moments[1], 0.0), std::max(moments[2], 0.0)};
+    if (!possible_principal_inertias(*body.inertia_kgm2))
+      warn(link_at(link.name).line,
+           "link '" + link.name + "': its <inertia> has principal moments (" +
+               yaml::number_text(moments[0]) + ", " + yaml::number_text(moments[1]) + ", " +
+               yaml::number_text(moments[2]) +
+               ") of which one is larger than the other two together, which no rigid body has; "
+               "check ixx..izz");
   }
 
   void read_links() {

@@ -79,8 +79,8 @@ std::string resolve_uri(const std::string& uri, const std::string& urdf_dir,
   if (const char* ros = std::getenv("ROS_PACKAGE_PATH"))
     for (const std::string& folder : split(ros, ':')) roots.emplace_back(folder);
   std::error_code error;
-  fs::path up = fs::absolute(fs::path(urdf_dir.empty() ? "." : urdf_dir), error);
-  for (; !up.empty(); up = up.parent_path()) {
+  const fs::path up_from = fs::absolute(fs::path(urdf_dir.empty() ? "." : urdf_dir), error);
+  for (fs::path up = up_from; !up.empty(); up = up.parent_path()) {
     roots.push_back(up);
     if (up == up.parent_path()) break;
   }
@@ -92,7 +92,7 @@ std::string resolve_uri(const std::string& uri, const std::string& urdf_dir,
       "' (a folder of that name, or whose package.xml names it) in --package-path "
       "folders, ROS_PACKAGE_PATH (" +
       std::string(std::getenv("ROS_PACKAGE_PATH") ? std::getenv("ROS_PACKAGE_PATH") : "unset") +
-      "), or " + fs::path(urdf_dir).string() + " and the folders above it";
+      "), or " + up_from.string() + " and the folders above it";
   return {};
 }
 

@@ -17,6 +17,16 @@ from .unrendered import Camera, Light
 from .world import World
 
 
+def _publish_rate(rate_hz):
+    """The rate commands are sent again at: refreshed slower than 10 Hz, a body would be
+    released by the physics' watchdog (0.5 s by default) between two sends."""
+    rate_hz = float(rate_hz)
+    if not 10.0 <= rate_hz <= 100000.0:
+        raise ValueError(f'default_publish_rate takes 10 to 100000 Hz, got {rate_hz}: commands '
+                         'sent less often than the watchdog period (0.5 s) let a body go')
+    return rate_hz
+
+
 class Client:
     def __init__(self, client_name='ambf_client'):
         self._client_name = client_name
@@ -35,13 +45,13 @@ class Client:
     # ----- connecting -----
     def connect(self, default_publish_rate=120):
         """Joins the hub, reads the catalog and starts the thread re-sending commands."""
+        self._rate_hz = _publish_rate(default_publish_rate)
         afhub.connect(wait_s=float(os.environ.get('AFHUB_WAIT', '0')))
-        self._rate_hz = float(default_publish_rate)
         self._read_catalog()
         self.start()
 
     def create_objs_from_rostopics(self, publish_rate):
-        self._rate_hz = float(publish_rate)
+        self._rate_hz = _publish_rate(publish_rate)
         self._read_catalog()
 
     def start(self):
@@ -56,7 +66,7 @@ class Client:
         self.connect(self._rate_hz)
 
     def set_publish_rate(self, rate):
-        self._rate_hz = float(rate)
+        self._rate_hz = _publish_rate(rate)
 
     def _read_catalog(self):
         self._names, self._parts = [], {}

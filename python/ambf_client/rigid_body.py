@@ -6,6 +6,7 @@ wrench not set again within ``time_out`` seconds is cleared: forces and torques 
 refreshed; joint and pose commands hold."""
 
 import copy
+import operator
 import sys
 import threading
 import time
@@ -18,6 +19,16 @@ from .handle import Handle
 
 _EFFORT, _POSITION, _VELOCITY = afhub.JointType.EFFORT, afhub.JointType.POSITION, \
     afhub.JointType.VELOCITY
+
+
+def _whole(idx):
+    """A joint index as an int (a numpy integer too), or None: a bool, a float, a name."""
+    if isinstance(idx, bool):
+        return None
+    try:
+        return operator.index(idx)
+    except TypeError:
+        return None
 
 
 def _unsupported(call, why):
@@ -121,7 +132,7 @@ class RigidBody(Handle):
 
     def is_joint_idx_valid(self, joint_idx):
         n = len(self._joint_names)
-        if isinstance(joint_idx, int) and 0 <= joint_idx < n:
+        if _whole(joint_idx) is not None and 0 <= joint_idx < n:
             return True
         print(f'ERROR! Requested Joint Idx of "{joint_idx}" outside valid range [0 - {n - 1}]')
         return False
@@ -130,7 +141,7 @@ class RigidBody(Handle):
         if isinstance(joint_name_or_idx, str):
             idx = self.get_joint_idx_from_name(joint_name_or_idx)
             return idx
-        return joint_name_or_idx if self.is_joint_idx_valid(joint_name_or_idx) else None
+        return _whole(joint_name_or_idx) if self.is_joint_idx_valid(joint_name_or_idx) else None
 
     def _joint_value(self, joint_name_or_idx, field):
         idx = self._index(joint_name_or_idx)
@@ -219,11 +230,13 @@ class RigidBody(Handle):
             self._joint_types = [_EFFORT] * n
 
     def _set_joints(self, pairs, kind):
+        # Every value made a number before any is kept: a refused call changes nothing.
+        pairs = [(idx, float(value)) for idx, value in pairs]
         with self._lock:
             held = self._held()
             self._joints_for()
             for idx, value in pairs:
-                self._joint_cmds[idx] = float(value)
+                self._joint_cmds[idx] = value
                 self._joint_types[idx] = kind
         self._apply_command(held)
 
@@ -243,13 +256,15 @@ class RigidBody(Handle):
 
     def _set_multiple(self, values, index_list, kind):
         n = len(self._joint_names)
-        index_list = list(index_list or [])
+        values = list(values)
+        index_list = [] if index_list is None else list(index_list)
+        # As AMBF: no indices, or not one per value, command joints 0, 1, ... in order.
         if len(index_list) == 0 or len(values) != len(index_list):
             index_list = list(range(n))
-        elif max(index_list) + 1 > n or min(index_list) < 0:
-            print(f'Requested Joint index is out of range with joints {n}')
+        elif any(_whole(idx) is None or not 0 <= idx < n for idx in index_list):
+            print(f'Requested Joint index is out of range with joints {n}: {index_list}')
             return
-        self._set_joints(zip(index_list, values), kind)
+        self._set_joints(zip([_whole(idx) for idx in index_list], values), kind)
 
     def set_multiple_joint_pos(self, q_list, index_list=None):
         self._set_multiple(q_list, index_list, _POSITION)
@@ -339,7 +354,7 @@ class RigidBody(Handle):
 
     def _apply_command(self, held):
         """Sends the command a setter just changed. Values refused before anything is sent
-        (not finite, too many joints: ValueError) put back the command `held` before the
+        (not finite, too many joints: ValueError, or any other error) put back the command `held` before the
         change, so that the next setter and the client's thread send that one, not the
         refused values again."""
         # Every command feeds the wrench's watchdog, as in AMBF.
@@ -349,7 +364,7 @@ class RigidBody(Handle):
             self._last_command = now
         try:
             self.run_publisher(now)
-        except ValueError:
+        except Exception:
             with self._lock:
                 for name, value in held.items():
                     setattr(self, name, value)

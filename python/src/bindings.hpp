@@ -6,6 +6,8 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
+#include <cstdint>
+#include <exception>
 #include <optional>
 #include <string>
 
@@ -51,5 +53,20 @@ py::array view(const double* first, std::size_t count, std::size_t stride, py::h
 
 // Seconds to a CLOCK_MONOTONIC deadline; ValueError unless 0 <= seconds <= 1e6.
 std::int64_t deadline_after(double seconds, const char* what);
+
+// Ctrl-C during a wait with the GIL released: a signal's Python handler runs only under
+// the GIL, so the wait looks for it, at most every 20 ms (a look takes the GIL).
+// pending() keeps the exception (KeyboardInterrupt) for raise_if_pending(), which raises
+// it once the GIL is held again.
+class SignalWatch {
+ public:
+  bool pending();           // without the GIL
+  void raise_if_pending();  // with the GIL
+  static constexpr std::int64_t kLookEveryNs = 20'000'000;
+
+ private:
+  std::int64_t next_look_ns_ = 0;
+  std::exception_ptr error_;
+};
 
 }  // namespace afhub::python

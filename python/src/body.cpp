@@ -71,9 +71,13 @@ py::object Body::read(double wait_s) {
   const BodyState* sample = client_.latest_state();
   if (!sample && wait_s > 0.0) {
     const std::int64_t give_up = deadline_after(wait_s, "wait_s");
-    py::gil_scoped_release release;
-    while (!(sample = client_.latest_state()) && monotonic_ns() < give_up)
-      sleep_until_ns(monotonic_ns() + 1'000'000);
+    SignalWatch signals;
+    {
+      py::gil_scoped_release release;
+      while (!(sample = client_.latest_state()) && monotonic_ns() < give_up && !signals.pending())
+        sleep_until_ns(monotonic_ns() + 1'000'000);
+    }
+    signals.raise_if_pending();
   }
   if (!sample) return py::none();
   // The same sample as last time (by its writer and sequence): the same State.
@@ -91,6 +95,7 @@ State Body::wait_next(std::optional<std::uint64_t> after_step, double timeout_s)
   require_hub();
   const std::int64_t give_up = deadline_after(timeout_s, "timeout_s");
   const BodyState* sample = nullptr;
+  SignalWatch signals;
   {
     py::gil_scoped_release release;
     SampleWaiter waiter;
@@ -100,15 +105,15 @@ State Body::wait_next(std::optional<std::uint64_t> after_step, double timeout_s)
       if (sample && (after_step ? sample->header.sim_step > *after_step : client_.state_updated()))
         break;
       const std::int64_t left = give_up - monotonic_ns();
-      if (left <= 0 || hub_lost()) {
+      if (left <= 0 || hub_lost() || signals.pending()) {
         sample = nullptr;
         break;
       }
       waiter.wait(std::min<std::int64_t>(left, 10'000'000));
     }
   }
+  signals.raise_if_pending();
   if (!sample) {
-    if (PyErr_CheckSignals() != 0) throw py::error_already_set();
     require_hub();
     throw Error("no new state came from " + channel_ + " in " +
                 py::str(py::float_(timeout_s)).cast<std::string>() +
@@ -373,7 +378,11 @@ void register_body(py::module_& module) {
                   py::isinstance<JointCommandType>(joint_types)) {
                 types.assign(static_cast<std::size_t>(values.size()), joint_type_of(joint_types));
               } else {
-                for (const py::handle item : joint_types) types.push_back(joint_type_of(item));
+                // Read up to one past what it needs: an endless iterator ends too.
+                for (const py::handle item : joint_types) {
+                  types.push_back(joint_type_of(item));
+                  if (types.size() > static_cast<std::size_t>(values.size())) break;
+                }
                 if (types.size() != static_cast<std::size_t>(values.size()))
                   throw py::value_error("joint_types gives " + std::to_string(types.size()) +
                                         " types for " + std::to_string(values.size()) +
@@ -381,12 +390,20 @@ void register_body(py::module_& module) {
               }
             }
             std::vector<std::uint8_t> actuate;
-            if (!actuators.is_none())
-              for (const py::handle item : actuators)
-                actuate.push_back(py::reinterpret_borrow<py::object>(item).cast<bool>() ? 1 : 0);
-            if (actuate.size() > kMaxActuatorsPerBody)
-              throw py::value_error("actuators takes at most " +
-                                    std::to_string(kMaxActuatorsPerBody) + " flags");
+            if (!actuators.is_none()) {
+              if (py::isinstance<py::str>(actuators))
+                throw py::value_error("actuators takes a sequence of True/False flags");
+              const py::object numpy_bool = py::module_::import("numpy").attr("bool_");
+              for (const py::handle item : actuators) {
+                if (actuate.size() == kMaxActuatorsPerBody)
+                  throw py::value_error("actuators takes at most " +
+                                        std::to_string(kMaxActuatorsPerBody) + " flags");
+                if (!py::isinstance<py::bool_>(item) && !py::isinstance(item, numpy_bool))
+                  throw py::value_error("actuators[" + std::to_string(actuate.size()) + "] is " +
+                                        py::repr(item).cast<std::string>() + ", not True or False");
+                actuate.push_back(item.cast<bool>() ? 1 : 0);
+              }
+            }
             // A pose given in part keeps the rest of the newest one.
             Pose pose;
             if (c.position || c.orientation) {

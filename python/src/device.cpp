@@ -40,9 +40,13 @@ class Device {
     const DeviceState* s = state_.latest();
     if (!s && wait_s > 0.0) {
       const std::int64_t give_up = deadline_after(wait_s, "wait_s");
-      py::gil_scoped_release release;
-      while (!(s = state_.latest()) && monotonic_ns() < give_up)
-        sleep_until_ns(monotonic_ns() + 1'000'000);
+      SignalWatch signals;
+      {
+        py::gil_scoped_release release;
+        while (!(s = state_.latest()) && monotonic_ns() < give_up && !signals.pending())
+          sleep_until_ns(monotonic_ns() + 1'000'000);
+      }
+      signals.raise_if_pending();
     }
     if (!s) return std::nullopt;
     py::dict out;

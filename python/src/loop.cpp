@@ -37,8 +37,10 @@ class Loop {
         name_(std::move(name)) {
     if (lockstep && !body_)
       throw py::value_error("a lockstep loop answers a body's steps: give body=afhub.Body(...)");
-    if (!lockstep && !(rate_hz > 0.0 && rate_hz <= 100'000.0))
-      throw py::value_error("rate_hz takes a rate above 0 and at most 100000 Hz");
+    // As the command line's loops: a period up to 1000 s; past an int64 of nanoseconds
+    // (1e-10 Hz) it came out negative and the loop spun.
+    if (!lockstep && !(rate_hz >= 0.001 && rate_hz <= 100'000.0))
+      throw py::value_error("rate_hz takes a rate from 0.001 to 100000 Hz");
     if (fifo_priority < 0 || fifo_priority > 99)
       throw py::value_error("fifo_priority takes 0 (the normal scheduler) to 99");
     options_.period_ns = lockstep ? 0 : static_cast<std::int64_t>(1e9 / rate_hz);
@@ -82,6 +84,7 @@ class Loop {
           static_cast<double>(std::max<std::int64_t>(1, monotonic_ns() - start_ns));
     }
     if (body_) body_->set_lockstep(false);
+    signals_.raise_if_pending();
     if (error_) std::rethrow_exception(error_);
     set_name(final_stats.name, name_);
     if (body_) set_name(final_stats.body, body_->channel());
@@ -118,18 +121,41 @@ class Loop {
     return false;
   }
 
-  // Between cycles that run no Python: Ctrl-C still reaches the loop.
-  bool signals_pending() {
-    py::gil_scoped_acquire acquire;
-    if (PyErr_CheckSignals() == 0) return false;
-    error_ = std::make_exception_ptr(py::error_already_set());
-    return true;
-  }
+  // The loop's clock: the real one, sleeping a long period in slices, so that Ctrl-C,
+  // stop() and the end of run(seconds=) are seen within SignalWatch's 20 ms at any rate,
+  // not a period (1000 s at 0.001 Hz) later. Short sleeps (1 kHz) take no GIL.
+  class SlicedClock : public LoopClock {
+   public:
+    SlicedClock(Loop& loop, std::int64_t end_ns) : loop_(loop), end_ns_(end_ns) {}
+    std::int64_t now_ns() noexcept override { return monotonic_ns(); }
+    void sleep_until_ns(std::int64_t deadline_ns) noexcept override {
+      for (std::int64_t now = monotonic_ns(); now < deadline_ns && !ended_; now = monotonic_ns()) {
+        if (deadline_ns - now <= SignalWatch::kLookEveryNs) {
+          afhub::sleep_until_ns(deadline_ns);
+          return;
+        }
+        afhub::sleep_until_ns(now + SignalWatch::kLookEveryNs);
+        ended_ = (end_ns_ && monotonic_ns() >= end_ns_) || loop_.stop_ || loop_.signals_pending();
+      }
+    }
+    // The loop ends instead of running the cycle it slept for.
+    bool ended() const noexcept { return ended_; }
+
+   private:
+    Loop& loop_;
+    std::int64_t end_ns_;
+    bool ended_ = false;
+  };
+
+  // Between cycles that run no Python: Ctrl-C still reaches the loop (raised by run()).
+  bool signals_pending() { return signals_.pending(); }
 
   void run_free(std::uint64_t cycles, std::int64_t end_ns, LoopTiming& timing,
                 LoopStatsPublisher& stats) {
     LoopOptions options = options_;
     options.max_cycles = cycles;
+    SlicedClock clock(*this, end_ns);
+    options.clock = &clock;
     PhysicsLateCommands late_commands;
     LoopCycle cycle;
     // With a body, woken after_step_ns after each of its steps is due (see StepPhase).
@@ -162,6 +188,9 @@ class Loop {
       return true;
     };
     cycle.after = [&](std::int64_t now) { stats.maybe_publish(now, timing); };
+    cycle.wait = [&clock, in_phase = std::move(cycle.wait)] {
+      return !clock.ended() && (!in_phase || in_phase());
+    };
     run_periodic(options, timing, cycle);
   }
 
@@ -204,6 +233,7 @@ class Loop {
   std::atomic<bool> stop_{false};  // stop() may come from another thread
   std::uint64_t callbacks_ = 0;    // calls of the function in this run()
   std::exception_ptr error_;
+  SignalWatch signals_;
 };
 
 }  // namespace

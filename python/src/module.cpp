@@ -5,6 +5,7 @@
 #include <cmath>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "afhub/hub/bodies.hpp"
@@ -38,7 +39,19 @@ Error hub_gone() {
       "allows one per process), so start the script again once a hub runs");
 }
 
+namespace {
+
+// A name with a NUL in it names no channel, and a message naming it would end there.
+void require_no_nul(const std::string& name) {
+  if (name.find('\0') != std::string::npos)
+    throw py::value_error("a name has no NUL character; got one at index " +
+                          std::to_string(name.find('\0')));
+}
+
+}  // namespace
+
 BodyEntry wait_for_entry(const std::string& name, double wait_s) {
+  require_no_nul(name);
   ensure_connected();
   const std::int64_t give_up = deadline_after(wait_s, "wait_s");
   py::gil_scoped_release release;
@@ -52,9 +65,16 @@ BodyEntry wait_for_entry(const std::string& name, double wait_s) {
 
 py::array_t<double> finite_values(const py::handle& values, const char* what,
                                   std::optional<std::size_t> size) {
-  auto array = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(values);
-  if (!array || array.ndim() != 1)
+  // Real numbers only: numpy would cast strings, booleans, dates (days as radians) and
+  // complex numbers (their imaginary part dropped).
+  const py::array given = py::array::ensure(values);
+  if (!given || given.ndim() != 1)
     throw py::value_error(std::string(what) + " takes a sequence of numbers");
+  if (const char kind = given.dtype().kind(); kind != 'f' && kind != 'i' && kind != 'u')
+    throw py::value_error(std::string(what) + " takes a sequence of real numbers, not of " +
+                          py::str(given.dtype()).cast<std::string>());
+  auto array = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(given);
+  if (!array) throw py::value_error(std::string(what) + " takes a sequence of numbers");
   if (size && static_cast<std::size_t>(array.size()) != *size)
     throw py::value_error(std::string(what) + " takes " + std::to_string(*size) + " numbers, not " +
                           std::to_string(array.size()));
@@ -87,6 +107,21 @@ std::int64_t deadline_after(double seconds, const char* what) {
   if (!(seconds >= 0.0 && seconds <= 1e6))
     throw py::value_error(std::string(what) + " takes 0 to 1e6 seconds");
   return monotonic_ns() + static_cast<std::int64_t>(seconds * 1e9);
+}
+
+bool SignalWatch::pending() {
+  if (error_) return true;
+  const std::int64_t now = monotonic_ns();
+  if (now < next_look_ns_) return false;
+  next_look_ns_ = now + kLookEveryNs;
+  py::gil_scoped_acquire acquire;
+  if (PyErr_CheckSignals() == 0) return false;
+  error_ = std::make_exception_ptr(py::error_already_set());
+  return true;
+}
+
+void SignalWatch::raise_if_pending() {
+  if (error_) std::rethrow_exception(std::exchange(error_, nullptr));
 }
 
 namespace {
@@ -207,6 +242,7 @@ PYBIND11_MODULE(afhub, module) {
   module.def(
       "resolve",
       [](const std::string& name) {
+        require_no_nul(name);
         return std::string(afhub::name_of(catalog_reader().resolve(name).info.channel));
       },
       py::arg("name"),

@@ -3,6 +3,7 @@
 // confirms them.
 #include <algorithm>
 #include <cstdio>
+#include <optional>
 #include <string>
 
 #include "afhub/hub/bodies.hpp"
@@ -45,9 +46,13 @@ class World {
     const std::int64_t give_up = deadline_after(wait_s, "wait_s");
     const WorldState* state = reader_.latest();
     if (!state) {
-      py::gil_scoped_release release;
-      while (!(state = reader_.latest()) && monotonic_ns() < give_up)
-        sleep_until_ns(monotonic_ns() + 1'000'000);
+      SignalWatch signals;
+      {
+        py::gil_scoped_release release;
+        while (!(state = reader_.latest()) && monotonic_ns() < give_up && !signals.pending())
+          sleep_until_ns(monotonic_ns() + 1'000'000);
+      }
+      signals.raise_if_pending();
     }
     if (!state)
       throw Error(
@@ -77,37 +82,19 @@ class World {
     command->step_count = steps;
     writer_.publish(command);
 
-    const std::uint64_t target_step = before.header.sim_step + steps;
     std::uint64_t previous_step = before.header.sim_step;
-    py::gil_scoped_release release;
-    while (monotonic_ns() < give_up && !hub_lost()) {
-      const WorldState* now = reader_.latest();
-      if (now && reader_.updated()) {
-        switch (action) {
-          case WorldAction::kPause:
-            if (now->paused) return (before.paused ? "already paused " : "paused ") + at(*now);
-            break;
-          case WorldAction::kResume:
-            if (!now->paused) return (before.paused ? "resumed " : "already running ") + at(*now);
-            break;
-          case WorldAction::kStep:
-            if (now->header.sim_step >= target_step)
-              return "stepped " + std::to_string(steps) + (steps == 1 ? " step" : " steps") +
-                     ": now paused " + at(*now);
-            break;
-          case WorldAction::kReset:
-            // The step count goes back to 0; from step 0 there is nothing to see.
-            if (now->header.sim_step < previous_step || before.header.sim_step == 0)
-              return "reset from step " + std::to_string(previous_step) + ": now " + at(*now) +
-                     (now->paused ? ", paused" : "");
-            previous_step = now->header.sim_step;
-            break;
-          case WorldAction::kNone:
-            return "";
-        }
+    std::optional<std::string> done;
+    SignalWatch signals;
+    {
+      py::gil_scoped_release release;
+      while (!done && monotonic_ns() < give_up && !hub_lost() && !signals.pending()) {
+        const WorldState* now = reader_.latest();
+        if (now && reader_.updated()) done = shown(action, before, steps, previous_step, *now);
+        if (!done) sleep_until_ns(monotonic_ns() + 200'000);
       }
-      sleep_until_ns(monotonic_ns() + 200'000);
     }
+    signals.raise_if_pending();
+    if (done) return *done;
     require_hub();
     throw Error("the command was sent but the simulation did not act on it within " +
                 std::to_string(timeout_s) +
@@ -115,6 +102,35 @@ class World {
   }
 
  private:
+  // What `now` says of the action sent at `before`, once it shows it done.
+  static std::optional<std::string> shown(WorldAction action, const WorldState& before,
+                                          std::uint32_t steps, std::uint64_t& previous_step,
+                                          const WorldState& now) {
+    switch (action) {
+      case WorldAction::kPause:
+        if (now.paused) return (before.paused ? "already paused " : "paused ") + at(now);
+        break;
+      case WorldAction::kResume:
+        if (!now.paused) return (before.paused ? "resumed " : "already running ") + at(now);
+        break;
+      case WorldAction::kStep:
+        if (now.header.sim_step >= before.header.sim_step + steps)
+          return "stepped " + std::to_string(steps) + (steps == 1 ? " step" : " steps") +
+                 ": now paused " + at(now);
+        break;
+      case WorldAction::kReset:
+        // The step count goes back to 0; from step 0 there is nothing to see.
+        if (now.header.sim_step < previous_step || before.header.sim_step == 0)
+          return "reset from step " + std::to_string(previous_step) + ": now " + at(now) +
+                 (now.paused ? ", paused" : "");
+        previous_step = now.header.sim_step;
+        break;
+      case WorldAction::kNone:
+        return "";
+    }
+    return std::nullopt;
+  }
+
   LatestReader<WorldState> reader_;
   Writer<WorldCommand> writer_;
 };

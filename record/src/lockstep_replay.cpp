@@ -391,8 +391,9 @@ class Replayer : public ChannelMap {
 
 ReplayCheck replay_into_physics(const std::string& file, const std::function<bool()>& keep_going) {
   CommandLoader commands(file);
-  scan(file, commands);
+  const std::string cut_off = scan(file, commands).cut_off;
   Replayer replayer(file, commands, keep_going);
+  replayer.result.cut_off = cut_off;
   try {
     scan(file, replayer);
   } catch (const Stop&) {

@@ -39,15 +39,11 @@ class File {
     if (error) throw Error("cannot read " + path + ": " + error.message());
     ends_with_footer_ = read_ending();
   }
-  ~File() { std::fclose(file_); }
-  File(const File&) = delete;
-  File& operator=(const File&) = delete;
-
   // Reads exactly `out.size()` bytes, or false at the end of the file.
   bool read(std::span<std::uint8_t> out) {
     if (out.empty()) return true;
-    const std::size_t n = std::fread(out.data(), 1, out.size(), file_);
-    if (n != out.size() && std::ferror(file_))
+    const std::size_t n = std::fread(out.data(), 1, out.size(), file_.get());
+    if (n != out.size() && std::ferror(file_.get()))
       throw Error("cannot read " + path_ + ": " + std::strerror(errno));
     at_ += n;
     return n == out.size();
@@ -64,9 +60,9 @@ class File {
     constexpr std::size_t kFooterRecord = kRecordPrefix + 20;  // two offsets and a CRC
     std::uint8_t ending[kFooterRecord + sizeof kMagic];
     if (size_ < sizeof kMagic + sizeof ending) return false;
-    const bool read = std::fseek(file_, -static_cast<long>(sizeof ending), SEEK_END) == 0 &&
-                      std::fread(ending, 1, sizeof ending, file_) == sizeof ending;
-    if (std::fseek(file_, 0, SEEK_SET) != 0)
+    const bool read = std::fseek(file_.get(), -static_cast<long>(sizeof ending), SEEK_END) == 0 &&
+                      std::fread(ending, 1, sizeof ending, file_.get()) == sizeof ending;
+    if (std::fseek(file_.get(), 0, SEEK_SET) != 0)
       throw Error("cannot read " + path_ + ": " + std::strerror(errno));
     std::uint64_t length = 0;
     std::memcpy(&length, ending + 1, sizeof length);
@@ -75,7 +71,10 @@ class File {
   }
 
   std::string path_;
-  std::FILE* file_;
+  struct Closer {
+    void operator()(std::FILE* file) const { std::fclose(file); }
+  };
+  std::unique_ptr<std::FILE, Closer> file_;  // closed on every error path too
   std::uint64_t size_ = 0;
   std::uint64_t at_ = 0;
   bool ends_with_footer_ = false;

@@ -331,7 +331,8 @@ const char* describe(PayloadError error) noexcept {
       return "the channel carries another payload type than expected; check the channel name "
              "and that the writer uses the afhub client library";
     case PayloadError::kCountTooLarge:
-      return "a count in the payload exceeds its capacity; the writer is faulty or foreign";
+      return "a field of the payload is out of its range (a count beyond its capacity, a value "
+             "no reader takes, or a number that is not finite); the writer is faulty or foreign";
   }
   return "unknown payload error";
 }

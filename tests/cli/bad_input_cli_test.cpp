@@ -46,6 +46,23 @@ TEST(BadInputCli, ABrokenMeshIsAnErrorForCheckAndRunNotACrash) {
   }
 }
 
+// `afhub convert` wrote an ADF file naming a mesh that `check` and `run` refuse.
+TEST(BadInputCli, ConvertRefusesAMeshCheckWouldRefuse) {
+  afhub::testing::ModelFolder folder;
+  folder.write("garbage.stl", "this is not a mesh\n");
+  const std::string robot = folder.write(
+      "robot.urdf",
+      "<?xml version=\"1.0\"?>\n<robot name=\"r\">\n  <link name=\"a\">\n    <collision>"
+      "<geometry><mesh filename=\"garbage.stl\"/></geometry></collision>\n  </link>\n"
+      "</robot>\n");
+  const std::string written = (folder.dir() / "robot.yaml").string();
+  const RunResult convert = run_afhub({"convert", robot, "-o", written});
+  EXPECT_EQ(convert.exit_code, 1) << convert.err;
+  EXPECT_TRUE(contains(convert.err, "robot.urdf:3:3: error: ")) << convert.err;
+  EXPECT_TRUE(contains(convert.err, "garbage.stl")) << convert.err;
+  EXPECT_FALSE(std::filesystem::exists(written)) << "nothing written";
+}
+
 TEST(BadInputCli, AnUnreadableModelOrADirectoryIsSaidSo) {
   afhub::testing::ModelFolder folder;
   const std::string model = folder.write("locked.yaml", "bodies: []\n");
@@ -153,6 +170,9 @@ TEST(BadInputCli, NumericOptionsOutOfRangeAreRefused) {
       // Every body went NaN each step.
       {{"run", kArm, "--offline", "--gravity", "0,0,-1e308"}, "--gravity"},
       {{"run", kArm, "--offline", "--default-gains", "1e308,0,0"}, "--default-gains"},
+      // -1 is the option's "unset" default, and was taken when written.
+      {{"run", kArm, "--offline", "--cpu-wake-latency", "-1"}, "--cpu-wake-latency"},
+      {{"bridge", "dds", "--check", "--export", "--cpu-wake-latency", "-1"}, "--cpu-wake-latency"},
   };
   for (const Case& c : cases) {
     RunResult result = run_afhub(c.args, std::chrono::seconds(10));

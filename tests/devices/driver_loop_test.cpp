@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <memory>
 #include <stdexcept>
 
@@ -153,6 +154,41 @@ TEST(DriverLoop, OnAStopTheLastStateIsAtZeroForce) {
   ASSERT_NE(last, nullptr);
   EXPECT_EQ(last->gate, ForceGate::kStopping);
   EXPECT_EQ(last->applied.force_n.z, 0.0);
+}
+
+// A reading gone wrong: every other sample's position is not a number.
+class GlitchyDevice : public FleetingDevice {
+ public:
+  using FleetingDevice::FleetingDevice;
+  DeviceSample exchange(const DeviceOutput& output) override {
+    DeviceSample sample = FleetingDevice::exchange(output);
+    if (++exchanged_ % 2 == 0) sample.pose.position_m.x = std::nan("");
+    return sample;
+  }
+
+ private:
+  int exchanged_ = 0;
+};
+
+TEST(DriverLoop, ASampleThatIsNotFiniteIsNotPublishedAndSaid) {
+  Counts counts;
+  LatestReader<DeviceState> states(body_state_channel(device_channel_name("glitchy")));
+  DriverOptions options = options_for("glitchy");
+  options.loop.max_cycles = 200;
+  ::testing::internal::CaptureStderr();
+  const int code = run_driver([&] { return std::make_unique<GlitchyDevice>(counts, 0); }, options);
+  const std::string said = ::testing::internal::GetCapturedStderr();
+  EXPECT_EQ(code, 0);
+  const DeviceState* last = states.latest();
+  ASSERT_NE(last, nullptr) << "readers refuse a state that is not finite: none came";
+  EXPECT_TRUE(std::isfinite(last->pose.position_m.x));
+  // 200 cycles and the last one at zero force: the 100 finite samples published.
+  EXPECT_EQ(counts.exchanges, 201);
+  EXPECT_EQ(last->header.sequence, 101U);
+  EXPECT_NE(said.find("afhub device glitchy: 1 sample of the device not published: its pose is "
+                      "not a finite number"),
+            std::string::npos)
+      << said;
 }
 
 }  // namespace

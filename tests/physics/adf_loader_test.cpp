@@ -94,6 +94,11 @@ TEST_F(BrokenFiles, EachProblemIsLocatedAndExplained) {
       {"bodies: [BODY a\n", "model.yaml:2:1: error: YAML syntax"},
       {"- a\n- b\n", "error: expected an ADF file"},
       {"bodies: BODY a\n", "model.yaml:1:9: error: 'bodies' must be a list"},
+      // A second document went unread, without a word.
+      {"bodies: [BODY a]\nBODY a: {name: a, mass: 1}\n---\nbodies: [BODY b]\n",
+       "model.yaml:3: error: a second YAML document begins here"},
+      {"adf version: [9]\nbodies: [BODY a]\nBODY a: {name: a, mass: 1}\n",
+       "model.yaml:1:14: error: 'adf version' must be text, not a list"},
       {"bodies: [BODY a]\n",
        "model.yaml:1:10: error: 'BODY a' is listed in 'bodies' but the file has no"},
       {"bodies: [BODY a]\nBODY a:\n  mass: 1.0\n", "model.yaml:3:3: error: missing 'name'"},

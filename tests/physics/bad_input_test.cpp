@@ -453,6 +453,17 @@ TEST_F(BadInput, AWorldFilesCamerasListsAndKeysAreChecked) {
       << model.warnings[0];
   EXPECT_TRUE(contains(model.warnings[1], "world.yaml:5:15: warning: 'world config' is a launch"))
       << model.warnings[1];
+
+  // A camera whose parent is not loaded stays in the world frame: said; one whose parent
+  // is loaded, not.
+  const std::string look = camera + "  look at: {x: 0, y: 0, z: 0}\n";
+  const Model unparented = load_scene(scene_with(look + "  parent: /ambf/env/BODY nothere\n"));
+  ASSERT_EQ(unparented.warnings.size(), 1u);
+  EXPECT_TRUE(contains(unparented.warnings[0],
+                       "world.yaml:5:11: warning: 'c' has the parent '/ambf/env/BODY nothere', "
+                       "which names no body loaded"))
+      << unparented.warnings[0];
+  EXPECT_TRUE(load_scene(scene_with(look + "  parent: /ambf/env/BODY a\n")).warnings.empty());
 }
 
 }  // namespace

@@ -542,6 +542,19 @@ TEST(Urdf, MalformedAndInvalidFilesAreErrorsAtTheirLine) {
     EXPECT_TRUE(error.starts_with(file.path + bad.where)) << error;
     EXPECT_NE(error.find(bad.what), std::string::npos) << error;
   }
+  // Moments no rigid body has load, with a warning, as in an ADF file.
+  const WrittenFile flat(
+      "flat.urdf",
+      head +
+          "  <link name=\"b\">\n    <inertial>\n      <mass value=\"1\"/>\n      <inertia "
+          "ixx=\"1\" iyy=\"1\" izz=\"5\" ixy=\"0\" ixz=\"0\" iyz=\"0\"/>\n    </inertial>\n"
+          "  </link>\n  <joint name=\"j\" type=\"fixed\">\n    <parent link=\"a\"/>\n    "
+          "<child link=\"b\"/>\n  </joint>\n</robot>\n");
+  const Model flat_model = load(flat.path);
+  ASSERT_EQ(flat_model.warnings.size(), 1u);
+  EXPECT_TRUE(flat_model.warnings[0].starts_with(
+      flat.path + ":4:1: warning: link 'b': its <inertia> has principal moments (1, 1, 5)"))
+      << flat_model.warnings[0];
   const WrittenFile not_robot("not_robot.urdf", "<?xml version=\"1.0\"?>\n<model name=\"m\"/>\n");
   EXPECT_EQ(load_error(not_robot.path),
             not_robot.path +

@@ -129,19 +129,29 @@ def test_a_refused_value_leaves_the_command_held_before(physics, tmp_path):
     arm = run.wait_for_body('arm/base')
     script = Script(tmp_path, """
         import math
+        import numpy
         from ambf_client import Client
 
         _client = Client('afhub_test')
         _client.connect()
         base = _client.get_obj_handle('arm/base')
         base.set_joint_pos(0, 0.3)
+        base.set_multiple_joint_pos([0.2, 0.2], numpy.array([1, 2]))  # numpy indices too
+        # A value that is no number after a good one: the good one is not kept either.
         for refused in (lambda: base.set_pos(math.nan, 0, 0),
-                        lambda: base.set_joint_pos(1, math.inf)):
+                        lambda: base.set_joint_pos(1, math.inf),
+                        lambda: base.set_multiple_joint_pos([0.7, 'oops'], [1, 2]),
+                        lambda: base.set_multiple_joint_pos([0.7, None], [1, 2])):
             try:
                 refused()
+            except (ValueError, TypeError) as error:
+                print('refused:', error)
+        for rate in (0, -5, math.nan, 1e-9):
+            try:
+                _client.set_publish_rate(rate)
             except ValueError as error:
                 print('refused:', error)
-        base.set_joint_pos(0, 0.5)
+        base.set_joint_pos(numpy.int64(0), 0.5)
         print('STAGE 1: commanded; press enter')
         input()
         _client.clean_up()
@@ -149,9 +159,12 @@ def test_a_refused_value_leaves_the_command_held_before(physics, tmp_path):
     """)
     script.read_until('STAGE 1')
     joint_0_reaches_and_holds(arm, 0.5, 'the target set after the refused ones')
+    assert held_for(arm, lambda s: abs(s.joint_positions[1] - 0.2) < 0.03, 1.0), \
+        'joint 1 holds the target before the refused values'
     script.enter()
     output = script.finish()
-    assert output.count('refused:') == 2 and 'nothing was sent' in output, output
+    assert output.count('refused:') == 8 and 'nothing was sent' in output, output
+    assert output.count('default_publish_rate takes 10 to 100000 Hz') == 4, output
     assert 'ambf_client: ' not in output, output  # the client's thread sent without a fault
 
 

@@ -2,9 +2,11 @@
 there): reading, commanding with effects checked in the simulation, the world's clock,
 loops and their statistics, lockstep's determinism, and every error's message."""
 
+import itertools
 import os
 import pathlib
 import re
+import signal
 import subprocess
 import sys
 import threading
@@ -123,10 +125,21 @@ def test_errors_say_what_is_wrong(physics, tmp_path):
     copy.wait_for_body('copy/afhub/arm/base')
     with pytest.raises(afhub.Error, match="no live body is named 'nothing'.*afhub/arm/base"):
         afhub.Body('nothing')
+    with pytest.raises(ValueError, match='a name has no NUL character; got one at index 8'):
+        afhub.Body('arm/base\x00junk')
     with pytest.raises(afhub.Error, match='copy/afhub/arm/base.*afhub/arm/base|afhub/arm/base.*copy'):
         afhub.Body('arm/base')  # two bodies end so: the message lists both
     with pytest.raises(ValueError, match=r'values\[1\] is nan, not a finite number'):
         base.set_joint_positions([0.0, float('nan')])
+    # numpy cast these: dates as days, the imaginary part dropped, text and booleans read.
+    for garbage in (np.array(['2020-01-01'], dtype='datetime64[D]'), np.array([1 + 2j]),
+                    ['0.5'], [True]):
+        with pytest.raises(ValueError, match='takes a sequence of real numbers, not of'):
+            base.set_joint_positions(garbage)
+    with pytest.raises(ValueError, match=r"actuators\[0\] is 'abc', not True or False"):
+        base.command(actuators=['abc'])
+    with pytest.raises(ValueError, match='joint_types gives 2 types for 1 joint_values'):
+        base.command([0.1], itertools.repeat('position'))  # an endless iterator ends
     with pytest.raises(ValueError, match='gives 8 joint values but body afhub/arm/base has 7'):
         base.set_joint_efforts([0.0] * 8)
     with pytest.raises(ValueError, match='one Cartesian mode'):
@@ -293,6 +306,50 @@ def test_loop_ends_on_false_and_raises_what_the_callback_raised():
     for seconds in (-1.0, float('nan')):
         with pytest.raises(ValueError, match='seconds takes 0 to 1e6 seconds'):
             afhub.Loop(1000, fail).run(seconds=seconds)
+
+
+INTERRUPTED = '''
+import sys, afhub
+body = afhub.Body('arm/base', wait_s=30)
+waits = {
+    'wait_next': lambda: body.wait_next(after_step=10**15, timeout_s=600),
+    'World.resume': lambda: afhub.World().resume(timeout_s=600),
+    'Loop.run': lambda: afhub.Loop(0.001, lambda: True).run(seconds=600),
+}
+print('ready', flush=True)
+try:
+    waits[sys.argv[1]]()
+except KeyboardInterrupt:
+    print('KeyboardInterrupt', flush=True)
+'''
+
+
+def test_ctrl_c_ends_every_wait_and_a_slow_loop_ends_at_its_length(physics):
+    """Ctrl-C reached a script waiting in wait_next() or a World call only at the timeout
+    (up to 1e6 s), and a Loop sleeping a long period only after it; a Loop run for a
+    length shorter than its period slept the period out. A rate past what a period of
+    int64 nanoseconds holds came out negative, and the loop spun."""
+    run = physics(ARM)
+    run.wait_for_body('arm/base')
+    for wait in ('wait_next', 'World.resume', 'Loop.run'):
+        if wait == 'World.resume':
+            run.process.send_signal(signal.SIGSTOP)  # the world cannot act
+        script = subprocess.Popen([sys.executable, '-c', INTERRUPTED, wait], text=True,
+                                  stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
+        try:
+            assert script.stdout.readline().strip() == 'ready', wait
+            time.sleep(0.3)  # inside the wait
+            script.send_signal(signal.SIGINT)
+            output, _ = script.communicate(timeout=60)  # bounds a hang only
+        finally:
+            script.kill()
+            run.process.send_signal(signal.SIGCONT)
+        assert 'KeyboardInterrupt' in output, f'{wait}: {output}'
+    report = afhub.Loop(0.01, lambda: True).run(seconds=0.2)  # one period is 100 s
+    assert report['cycles'] == 0, report
+    for rate in (1e-10, 0.0009, 100001):
+        with pytest.raises(ValueError, match='rate_hz takes a rate from 0.001 to 100000 Hz'):
+            afhub.Loop(rate, lambda: True)
 
 
 # A script whose hub is SIGKILLed under it: every call after the loss raises afhub.Error

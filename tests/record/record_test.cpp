@@ -1282,6 +1282,20 @@ TEST(Record, ALockstepRunIsReproducedBitIdenticallyAndAChangedGainIsCaughtAtItsS
       run_afhub({"play", restarted, "--commands-into-physics", "--wait", "10"}, 120s);
   EXPECT_EQ(first_run.exit_code, 0) << first_run.out << first_run.err;
   EXPECT_EQ(number_after(first_run.out, "reproduced bit-identically: "), steps) << first_run.out;
+
+  // A recording cut off is reproduced up to its cut, and says it was cut.
+  const std::string cut = (folder.dir() / "cut.mcap").string();
+  std::filesystem::copy_file(file, cut);
+  std::filesystem::resize_file(cut, std::filesystem::file_size(cut) * 3 / 5);
+  physics.reset();
+  physics = lockstep_arm(log("cut.log"), false, kReplayClientTimeoutMs);
+  const RunResult cut_run =
+      run_afhub({"play", cut, "--commands-into-physics", "--wait", "10"}, 120s);
+  EXPECT_EQ(cut_run.exit_code, 0) << cut_run.out << cut_run.err;
+  const long long cut_steps = number_after(cut_run.out, "reproduced bit-identically: ");
+  EXPECT_GT(cut_steps, 0) << cut_run.out;
+  EXPECT_LT(cut_steps, steps) << cut_run.out;
+  EXPECT_TRUE(contains(cut_run.err, "warning: " + cut + " was cut off")) << cut_run.err;
 }
 
 // A lockstep client late on two steps in a row, each time past the client timeout:

@@ -21,6 +21,7 @@
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/shm_layout/channel_names.hpp"
 #include "afhub/shm_layout/scene.hpp"
+#include "afhub/shm_layout/world.hpp"
 #include "afhub/viewer/joint_commander.hpp"
 #include "afhub_process.hpp"
 #include "strict_json.hpp"
@@ -320,6 +321,23 @@ TEST_F(ViewTest, AJointCommandMovesTheJointOnlyWithAllowCommands) {
   ASSERT_TRUE(wait_until([&] { return (state = base.latest_state()) != nullptr; },
                          std::chrono::seconds(2)));
   EXPECT_NEAR(state->joints[0].position, target, 0.05);
+
+  // A world command is answered once the world shows it: a step sent right after a
+  // pause's answer finds the world paused, and each step's answer finds it stepped.
+  LatestReader<WorldState> world(
+      {std::string(kService), std::string(kWorldInstance), std::string(kStateEvent)});
+  ASSERT_EQ(view.post("/world?action=pause").status, 200);
+  ASSERT_TRUE(world.latest());
+  EXPECT_TRUE(world.latest()->paused);
+  const std::uint64_t paused_at = world.latest()->header.sim_step;
+  for (int i = 1; i <= 3; ++i) {
+    const HttpReply stepped = view.post("/world?action=step");
+    ASSERT_EQ(stepped.status, 200) << stepped.body;
+    EXPECT_GE(world.latest()->header.sim_step, paused_at + i);
+  }
+  ASSERT_EQ(view.post("/world?action=resume").status, 200);
+  EXPECT_FALSE(world.latest()->paused);
+  EXPECT_EQ(view.post("/world?action=step").status, 400) << "running again at the answer";
 }
 
 // Another site's page in the operator's browser (a cross-site request, or DNS

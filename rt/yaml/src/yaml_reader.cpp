@@ -41,11 +41,12 @@ class CostScan : public YAML::EventHandler {
  public:
   explicit CostScan(const std::string& path) : path_(path) {}
 
-  void OnDocumentStart(const YAML::Mark&) override {}
+  void OnDocumentStart(const YAML::Mark& mark) override { start_ = mark; }
   void OnDocumentEnd() override {}
   void OnNull(const YAML::Mark& mark, YAML::anchor_t anchor) override { leaf(mark, anchor); }
   void OnScalar(const YAML::Mark& mark, const std::string&, YAML::anchor_t anchor,
                 const std::string&) override {
+    holds_something_ = true;
     leaf(mark, anchor);
   }
   void OnAlias(const YAML::Mark& mark, YAML::anchor_t anchor) override {
@@ -54,6 +55,7 @@ class CostScan : public YAML::EventHandler {
       refuse(mark,
              "this alias names a list or map that contains it, which would repeat "
              "without end; write the repeated part out");
+    holds_something_ = true;
     add(mark, size);
   }
   void OnSequenceStart(const YAML::Mark& mark, const std::string&, YAML::anchor_t anchor,
@@ -66,6 +68,10 @@ class CostScan : public YAML::EventHandler {
     open(mark, anchor);
   }
   void OnMapEnd() override { close(); }
+
+  // Where the document began, and whether it holds more than a null.
+  const YAML::Mark& start() const { return start_; }
+  bool holds_something() const { return holds_something_ || nodes_ > 1; }
 
  private:
   static constexpr std::size_t kOpen = 0;  // an anchored node not yet ended
@@ -112,6 +118,8 @@ class CostScan : public YAML::EventHandler {
   }
 
   const std::string& path_;
+  YAML::Mark start_;
+  bool holds_something_ = false;
   std::size_t nodes_ = 0;
   std::vector<Opened> opened_;
   std::vector<std::size_t> anchored_;  // by anchor: its node's size, kOpen until it ends
@@ -125,6 +133,11 @@ YAML::Node parse(const std::string& path, const std::string& text) {
     YAML::Parser parser(stream);
     CostScan cost(path);
     parser.HandleNextDocument(cost);
+    // yaml-cpp reads the first document: a second one would go unread.
+    if (CostScan second(path); parser.HandleNextDocument(second) && second.holds_something())
+      throw Error(path + ":" + std::to_string(second.start().line + 1) +
+                  ": error: a second YAML document begins here; afhub reads one document per "
+                  "file: put this one in a file of its own");
     return YAML::Load(text);
   } catch (const YAML::ParserException& error) {
     throw Error(path + ":" + std::to_string(error.mark.line + 1) + ":" +

@@ -210,6 +210,7 @@ struct WorldObjectSpec {
   Vec3 direction;  // light direction, or camera look-at minus location
   Vec3 up{0.0, 0.0, 1.0};
   std::string parent;  // empty: world frame
+  SourceLocation parent_at;
 };
 
 struct WorldSpec {
@@ -261,6 +262,15 @@ Vec3 effective_gravity(const Model& model, std::size_t body);
 // Every file the model came from (each block's, the world's, other_files), absolute,
 // each once, sorted: what a recording names.
 std::vector<std::string> model_files(const Model& model);
+
+// The body a light's or camera's `parent` names ("/ambf/env/BODY LightCone": the body
+// "BODY LightCone"), or -1 when none is loaded.
+int world_object_parent(const Model& model, const WorldObjectSpec& object);
+
+// Whether principal inertias are those of some mass distribution: each at most the sum
+// of the others, with 1 % of room (CAD exports round). Bullet takes others, and spins
+// such a body in ways no real one does: the model readers warn.
+bool possible_principal_inertias(const Vec3& inertia_kgm2);
 
 // `afhub run --gravity`: one gravity for the world and every body, over both rules.
 void override_gravity(Model& model, const Vec3& gravity_mps2);

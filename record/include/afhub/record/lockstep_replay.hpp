@@ -20,6 +20,7 @@ struct ReplayCheck {
   std::uint64_t step = 0;  // the first step whose state differs
   std::string body;        // its body
   std::string field;       // "joints[2].position: recorded 0.31, replayed 0.30"
+  std::string cut_off;     // why and where the file was cut off; empty for a whole file
 };
 
 // Needs connect_to_hub() and the physics waiting at step 0. Throws afhub::Error for a

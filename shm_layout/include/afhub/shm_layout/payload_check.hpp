@@ -16,7 +16,9 @@ enum class PayloadError : std::uint8_t {
   kTooSmall,       // chunk shorter than the payload it claims to be
   kForeignLayout,  // written by a build with another kLayoutId
   kWrongKind,      // another payload type on this channel
-  kCountTooLarge,  // a count beyond the payload's capacity or the chunk's bytes
+  // A field out of its range: a count beyond the payload's capacity or the chunk's
+  // bytes, an unknown enum value, a pose or force that is not finite.
+  kCountTooLarge,
 };
 
 // Checks `bytes` bytes at `data` as a payload of `expected` kind. When `field` is

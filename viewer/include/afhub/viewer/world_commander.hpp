@@ -1,8 +1,7 @@
 // The page's pause, resume, step and reset buttons (`afhub view --allow-commands`):
 // a request "action=pause|resume|step|reset" sends one WorldCommand on the world's
-// command channel, as `afhub world` does, without waiting: the page sees the
-// result in the pose frames (the paused flag, the simulation time). Called from
-// the server's threads.
+// command channel, as `afhub world` does, and answers once a world state shows that
+// the world acted (at most 1 s). Called from the server's threads.
 #pragma once
 
 #include <mutex>
@@ -18,10 +17,12 @@ class WorldCommander {
   // Needs connect_to_hub(); `world` is the world's channel instance (world_instance()).
   explicit WorldCommander(const std::string& world);
 
-  // Returns "" when the command was sent, else what is wrong with the request.
+  // Returns "" when the world acted, else what is wrong.
   std::string run(const std::string& query);
 
  private:
+  std::string wait_until_shown(WorldAction action, std::uint64_t step_before, std::int64_t sent_ns);
+
   std::mutex mutex_;
   Writer<WorldCommand> writer_;
   LatestReader<WorldState> state_;
