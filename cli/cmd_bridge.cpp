@@ -22,6 +22,7 @@ struct BridgeCliOptions {
   std::string config;
   bool best_effort = false;
   bool check = false;
+  bool cpu_wake_latency_given = false;  // written (then -1 is refused)
   DdsOptions flags;
   // Each setting's flag, with how it goes over the config file's setting when given.
   std::vector<std::pair<const CLI::Option*, std::function<void(DdsOptions&)>>> overrides;
@@ -45,6 +46,8 @@ CLI::Option* add_setting(CLI::App* dds, BridgeCliOptions& cli, const std::string
 
 // The file's settings, then each flag given on the command line over them.
 DdsOptions merged(const BridgeCliOptions& cli) {
+  if (cli.cpu_wake_latency_given)
+    check_cpu_wake_latency_option(cli.flags.cpu_wake_latency_us, true);
   DdsOptions options = cli.flags;
   if (!cli.config.empty()) {
     options = bridges::read_dds_bridge_config(cli.config);
@@ -127,7 +130,7 @@ void register_bridge(CLI::App& app, Runner& selected) {
               "instead of sleeping, so that each message wakes its reader at once, for an "
               "idle core's power; on a VM, where a sleeping vCPU wakes in tens of us, it "
               "brings the bridges' cost near raw DDS's (default: leave them)")
-      ->check(CLI::Range(0, kMaxCpuWakeLatencyUs));
+      ->each([cli](const std::string&) { cli->cpu_wake_latency_given = true; });
   add_setting(dds, *cli, "--body-rate", &DdsOptions::body_rate_hz,
               "Send each body's state at most this often, newest wins (Hz; default 0: "
               "every new state)");

@@ -57,7 +57,7 @@ void register_hub(CLI::App& app, Runner& selected) {
                   "default only the hub's user and its own group can");
   auto* stop = hub->add_subcommand(
       "stop",
-      "Stop the running hub (SIGTERM, waits up to 5 s). With processes attached it lists them "
+      "Stop the running hub (SIGTERM, waits up to 15 s). With processes attached it lists them "
       "and stops only with --force.");
   stop->add_flag("--force", options->force, "Stop the hub even with processes attached");
   hub->require_subcommand(0, 1);

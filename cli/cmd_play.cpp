@@ -5,6 +5,7 @@
 #include <memory>
 #include <string>
 
+#include "afhub/hub/hub_loss.hpp"
 #include "afhub/hub/startup_wait.hpp"
 #include "afhub/record/lockstep_replay.hpp"
 #include "afhub/record/player.hpp"
@@ -49,6 +50,9 @@ int run_replay(const PlayCliOptions& options) {
 int run_play(PlayCliOptions& options) {
   if (options.fast) options.play.rate = 0.0;
   install_stop_signal_handlers();
+  // A hub lost: the process re-executes, waits for the next hub and plays again from
+  // the start (a replay into a physics, of the physics there then).
+  survive_hub_loss("afhub play");
   const StartupWait wait(options.wait_s);
   wait.connect_to_hub("play");
   if (options.into_physics) return run_replay(options);

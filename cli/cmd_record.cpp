@@ -131,7 +131,8 @@ void register_record(CLI::App& app, Runner& selected) {
   record->add_option("-o,--output", options->record.output, "The MCAP file to write")
       ->capture_default_str();
   record->add_option("--bodies", options->record.body_globs,
-                     "Body channels to record, as globs (default: every body)");
+                     "Body channels to record, as globs on the full name or its end after a "
+                     "'/' (arm/*, base; default: every body)");
   record->add_flag("--devices", options->record.devices, "Record every device's state and command");
   // The world's state is always recorded (play and replay need its clock); the flag is
   // taken so that a command line written with it runs.

@@ -60,7 +60,7 @@ int run_run(const RunCliOptions& options) {
     throw Error("--watchdog must be 0.002 to 3600 seconds, got " +
                 std::to_string(options.watchdog_s));
   if (!(options.client_timeout_ms > 0.0 && options.client_timeout_ms <= 60'000.0))
-    throw Error("--client-timeout must be between 0 and 60000 ms");
+    throw Error("--client-timeout must be above 0 and at most 60000 ms");
   if (!options.lockstep && options.spin)
     throw Error("--spin needs --lockstep: it is how the physics waits for lockstep answers");
   if (!options.lockstep && options.wait_for > 0)

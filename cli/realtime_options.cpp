@@ -21,13 +21,13 @@ void add_realtime_options(CLI::App* command, RealtimeOptions& options, const std
                        "): at 0 idle CPUs poll instead of sleeping, so " + loop +
                        " wakes on time, at the cost of busy idle cores. Needs root; says "
                        "so if refused")
-      ->check(CLI::Range(0, kMaxCpuWakeLatencyUs));  // -1, the default, means unset
+      ->each([&options](const std::string&) { options.cpu_wake_latency_given = true; });
 }
 
 void set_realtime_options(const RealtimeOptions& options, LoopOptions& loop) {
   if (options.fifo_priority < 0 || options.fifo_priority > 99)
     throw Error("--fifo takes a SCHED_FIFO priority from 1 to 99");
-  check_cpu_wake_latency_option(options.cpu_wake_latency_us);
+  check_cpu_wake_latency_option(options.cpu_wake_latency_us, options.cpu_wake_latency_given);
   loop.fifo_priority = options.fifo_priority;
   loop.cpu = options.cpu;
   loop.lock_memory = options.lock_memory;

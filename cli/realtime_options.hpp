@@ -13,7 +13,8 @@ struct RealtimeOptions {
   int fifo_priority = 0;
   int cpu = -1;
   bool lock_memory = false;
-  int cpu_wake_latency_us = -1;
+  int cpu_wake_latency_us = -1;         // -1: leave the CPUs as they are
+  bool cpu_wake_latency_given = false;  // written (then -1 is refused)
 };
 
 // `loop` names the loop in the help ("the loop", "the physics loop").

@@ -1,5 +1,8 @@
 #include "afhub/record/mcap_reader.hpp"
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -11,6 +14,7 @@
 
 #include "afhub/shm_layout/error.hpp"
 #include "mcap_bytes.hpp"
+#include "recording_lock.hpp"
 
 namespace afhub::mcap {
 
@@ -32,7 +36,16 @@ std::string opcode_name(std::uint8_t opcode) {
 // The file, read in order.
 class File {
  public:
-  explicit File(const std::string& path) : path_(path), file_(std::fopen(path.c_str(), "rb")) {
+  // Opening a FIFO waited for a writer, for good.
+  static const std::string& regular_file(const std::string& path) {
+    std::error_code error;
+    if (std::filesystem::exists(path, error) && !std::filesystem::is_regular_file(path, error))
+      throw Error(path + " is not a regular file; expected a recording (.mcap)");
+    return path;
+  }
+
+  explicit File(const std::string& path)
+      : path_(path), file_(std::fopen(regular_file(path).c_str(), "rb")) {
     if (!file_) throw Error("cannot open " + path + ": " + std::strerror(errno));
     std::error_code error;
     size_ = std::filesystem::file_size(path, error);
@@ -286,7 +299,11 @@ class Scanner {
 // Copies what it reads into a new file, its ids mapped to the writer's.
 class Copier : public Visitor {
  public:
-  explicit Copier(const std::string& path) : path_(path) {}
+  // `original` is left as it is when the copy fails.
+  Copier(const std::string& path, const std::string& original) : path_(path) {
+    options_.when_write_fails = "the recovery is given up, and " + original +
+                                " left as it was; it needs free space about its size";
+  }
   void header(const std::string& profile, const std::string& library) override {
     options_.profile = profile;
     options_.library = library;
@@ -362,10 +379,19 @@ ScanResult scan(const std::string& path, Visitor& visitor) {
 }
 
 ScanResult recover(const std::string& path) {
+  // Held until the file is replaced: a recorder still writing it would go on into the
+  // file replaced, unlinked.
+  const int held = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);  // a FIFO too
+  if (held < 0) throw Error("cannot open " + path + ": " + std::strerror(errno));
+  const struct Closer {
+    int fd;
+    ~Closer() { ::close(fd); }
+  } closer{held};
+  lock_recording(held, path);
   const std::string temporary = path + ".recovering";
   ScanResult result;
   try {
-    Copier copier(temporary);
+    Copier copier(temporary, path);
     result = scan(path, copier);
     copier.close();
   } catch (...) {

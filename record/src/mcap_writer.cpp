@@ -1,6 +1,7 @@
 #include "afhub/record/mcap_writer.hpp"
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -12,6 +13,7 @@
 
 #include "afhub/shm_layout/error.hpp"
 #include "mcap_bytes.hpp"
+#include "recording_lock.hpp"
 
 namespace afhub::mcap {
 namespace {
@@ -35,8 +37,18 @@ std::size_t write_all(int fd, std::span<const std::uint8_t> bytes) {
 
 Writer::Writer(const std::string& path, Options options)
     : path_(path), options_(std::move(options)), compressor_(options_.compression) {
-  fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  // Emptied once locked: another recorder's file is not cut under it.
+  fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_CLOEXEC, 0644);
   if (fd_ < 0) throw Error("cannot create " + path + ": " + std::strerror(errno));
+  try {
+    lock_recording(fd_, path);
+    struct stat info {};
+    if (::fstat(fd_, &info) == 0 && S_ISREG(info.st_mode) && ::ftruncate(fd_, 0) != 0)
+      throw Error("cannot empty " + path + ": " + std::strerror(errno));
+  } catch (...) {
+    ::close(fd_);
+    throw;
+  }
   pending_.insert(pending_.end(), std::begin(kMagic), std::end(kMagic));
   RecordBuilder(pending_, kHeader).str(options_.profile).str(options_.library);
   write_out();  // from now on the file reads as MCAP, cut off
@@ -265,6 +277,15 @@ void Writer::spill_chunk_indexes() {
 
 void Writer::write_out() {
   if (failed_) throw Error("cannot write " + path_ + " any more: an earlier write failed");
+  // A file deleted while recording takes every byte written to it with it: said, not
+  // recorded on into nothing.
+  if (struct stat info{}; ::fstat(fd_, &info) == 0 && S_ISREG(info.st_mode) && info.st_nlink == 0) {
+    failed_ = true;
+    pending_.clear();
+    throw Error("cannot write " + path_ +
+                ": the file was deleted while being written; what "
+                "was recorded in it is gone");
+  }
   const std::size_t done = write_all(fd_, pending_);
   if (done < pending_.size()) {
     // What was written stays; nothing is written after it, so that the file ends at
@@ -274,8 +295,8 @@ void Writer::write_out() {
     file_offset_ += done;
     written_.store(file_offset_, std::memory_order_relaxed);
     pending_.clear();
-    throw Error("cannot write " + path_ + ": " + std::strerror(error) +
-                " (the file keeps its complete chunks; `afhub record --recover` indexes them)");
+    throw Error("cannot write " + path_ + ": " + std::strerror(error) + " (" +
+                options_.when_write_fails + ")");
   }
   file_offset_ += pending_.size();
   written_.store(file_offset_, std::memory_order_relaxed);

@@ -9,6 +9,7 @@
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/body_claims.hpp"
 #include "afhub/hub/channel.hpp"
+#include "afhub/hub/hub_loss.hpp"
 #include "afhub/hub/world_command_queue.hpp"
 #include "afhub/record/mcap_reader.hpp"
 #include "afhub/rt/clock.hpp"
@@ -153,6 +154,10 @@ class Player : public Visitor {
     const bool new_step = steps && step != current_step_;
     while (true) {
       if (!keep_going_()) throw EndOfPass{true};
+      if (hub_lost()) {  // nothing into a hub that is gone: held until the re-exec
+        sleep_until_ns(monotonic_ns() + 10'000'000);
+        continue;
+      }
       take_world_commands();
       if (!paused_ || !new_step || steps_allowed_ > 0) break;
       publish_paused_world();

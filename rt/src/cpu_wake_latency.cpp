@@ -14,8 +14,8 @@
 
 namespace afhub {
 
-void check_cpu_wake_latency_option(int microseconds) {
-  if (microseconds < -1 || microseconds > kMaxCpuWakeLatencyUs)
+void check_cpu_wake_latency_option(int microseconds, bool given) {
+  if (microseconds < (given ? 0 : -1) || microseconds > kMaxCpuWakeLatencyUs)
     throw Error("--cpu-wake-latency must be 0 to " + std::to_string(kMaxCpuWakeLatencyUs) +
                 " microseconds");
 }

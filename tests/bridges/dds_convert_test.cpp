@@ -133,6 +133,10 @@ TEST(DdsConvert, BodyGlobsMatchChannelNames) {
   EXPECT_TRUE(matches_any("afhub/arm/base", {"afhub/arm/*"}));
   EXPECT_TRUE(matches_any("afhub/arm/base", {"x", "*base"}));
   EXPECT_FALSE(matches_any("afhub/env/box", {"afhub/arm/*"}));
+  // The end of a name after a '/', as the command line takes names.
+  EXPECT_TRUE(matches_any("afhub/arm/base", {"arm/base"}));
+  EXPECT_TRUE(matches_any("afhub/arm/base", {"base"}));
+  EXPECT_FALSE(matches_any("afhub/arm/base", {"rm/base"}));
 }
 
 }  // namespace

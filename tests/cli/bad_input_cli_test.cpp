@@ -3,6 +3,7 @@
 // connects and `run` is refused before it would. And `afhub cmd` with values the
 // physics refuses (with a hub and the physics of its own).
 #include <gtest/gtest.h>
+#include <signal.h>
 #include <unistd.h>
 
 #include <filesystem>
@@ -44,6 +45,19 @@ TEST(BadInputCli, ABrokenMeshIsAnErrorForCheckAndRunNotACrash) {
         contains(result.err, "model.yaml:3:3: error: body 'BODY a': its mesh cannot be used"))
         << args[0] << ": " << result.err;
   }
+}
+
+// A stopped hub does not answer registration: every new client waited 60 s for it, then
+// aborted in iceoryx. Said at once.
+TEST(BadInputCli, AStoppedHubIsSaidAtOnce) {
+  ScopedProcess hub(start_test_hub());
+  ASSERT_EQ(kill(hub.pid, SIGSTOP), 0);
+  const RunResult ls = run_afhub({"ls"}, std::chrono::seconds(30));
+  ASSERT_EQ(kill(hub.pid, SIGCONT), 0);
+  EXPECT_EQ(ls.exit_code, 1) << ls.err;
+  EXPECT_TRUE(contains(ls.err, "the hub (pid " + std::to_string(hub.pid) + ") is stopped"))
+      << ls.err;
+  EXPECT_EQ(run_afhub({"ls"}).exit_code, 0) << "running on, it answers";
 }
 
 // `afhub convert` wrote an ADF file naming a mesh that `check` and `run` refuse.

@@ -10,6 +10,7 @@
 #include <array>
 #include <cmath>
 #include <fstream>
+#include <optional>
 #include <thread>
 
 #include "afhub/hub/bodies.hpp"
@@ -29,23 +30,49 @@ using namespace std::chrono_literals;
 // The project's own 7-DOF arm: these tests need no AMBF corpus.
 const std::string kArm = AFHUB_EXAMPLE_MODELS "/arm7.yaml";
 
-// One lockstep run of the arm driven by `afhub ctl sine`; returns the report.
-std::string lockstep_sine_run(const afhub::testing::ModelFolder& folder, int run) {
+// One lockstep run of the arm driven by `afhub ctl sine`; returns the report. With
+// `second_after`, a second arm beside it (afhub/arm/base1), held by a second client
+// (`ctl hold`) that joins that long after the first.
+std::string lockstep_sine_run(const afhub::testing::ModelFolder& folder, int run,
+                              std::optional<std::chrono::milliseconds> second_after = {}) {
   const std::string report = (folder.dir() / ("report" + std::to_string(run) + ".json")).string();
   const std::string log = (folder.dir() / "run.log").string();
   // A client that misses a step's deadline is dropped for that step (100 ms by default):
   // on a loaded machine that would make the runs differ for a reason that is not the
   // physics', so the deadline here is a minute.
-  ScopedProcess physics(
-      spawn_afhub({"run", kArm, "--no-autostart", "--lockstep", "--wait-for", "1",
-                   "--client-timeout", "60000", "--fast", "--steps", "3000", "--report", report},
-                  log));
+  std::vector<std::string> args = {"run",
+                                   kArm,
+                                   "--no-autostart",
+                                   "--lockstep",
+                                   "--wait-for",
+                                   second_after ? "2" : "1",
+                                   "--client-timeout",
+                                   "60000",
+                                   "--fast",
+                                   "--steps",
+                                   "3000",
+                                   "--report",
+                                   report};
+  if (second_after)
+    args.insert(args.end(), {kArm, "--at", kArm + "=0,0,0", "--at", kArm + "=1,0,0"});
+  ScopedProcess physics(spawn_afhub(args, log));
   BodyClient base("afhub/arm/base");
   EXPECT_TRUE(wait_until([&] { return base.latest_state() != nullptr; }, 10s)) << read_file(log);
-  ScopedProcess controller(
-      spawn_afhub({"ctl", "sine", "base", "--lockstep", "--period", "1", "--amplitude", "0.4"}));
+  ScopedProcess controller(spawn_afhub(
+      {"ctl", "sine", "arm/base", "--lockstep", "--period", "1", "--amplitude", "0.4"}));
+  std::optional<ScopedProcess> second;
+  if (second_after) {
+    std::this_thread::sleep_for(*second_after);
+    second.emplace(spawn_afhub({"ctl", "hold", "arm/base1", "--lockstep"}));
+  }
   EXPECT_EQ(wait_for_exit(physics, 30s), 0) << read_file(log);
   return read_file(report);
+}
+
+// Poses and joints are written in full (shortest round-trip) precision: equal text is
+// equal bits. Times differ from run to run and are left out.
+std::string trajectory(const std::string& report) {
+  return report.substr(0, report.find("\"max_joint_error_m\""));
 }
 
 TEST(Lockstep, SameModelSameControllerGivesBitIdenticalRuns) {
@@ -53,17 +80,26 @@ TEST(Lockstep, SameModelSameControllerGivesBitIdenticalRuns) {
   const std::string first = lockstep_sine_run(folder, 1);
   const std::string second = lockstep_sine_run(folder, 2);
   ASSERT_TRUE(contains(first, "\"steps\":3000")) << first;
-  // Poses and joints are written in full (shortest round-trip) precision: equal
-  // text is equal bits. Times differ from run to run and are left out.
-  const auto trajectory = [](const std::string& report) {
-    return report.substr(0, report.find("\"max_joint_error_m\""));
-  };
   EXPECT_EQ(trajectory(first), trajectory(second));
   // And the controller did drive the arm: joint 2 is 0.4 sin(2 pi 3 + pi/7 * ...) away
   // from where it started, which is far from zero.
   const double q1 =
       parse_json(first).at("joints").at("afhub/arm/link1-link2").at("position").get<double>();
   EXPECT_GT(std::abs(q1), 0.05) << first;
+}
+
+// Step 0 held for a second client that came 1.5 s after the first: the first one's
+// command to step 0 was expired by its body's watchdog (0.5 s) meanwhile, so step 0 ran
+// without it, and the run depended on when the second came.
+TEST(Lockstep, AClientThatAnsweredTheHeldStepIsNotTimedOutWhileOthersJoin) {
+  afhub::testing::ModelFolder folder;
+  const std::string together = lockstep_sine_run(folder, 1, 0ms);
+  const std::string later = lockstep_sine_run(folder, 2, 1500ms);
+  ASSERT_TRUE(contains(later, "\"steps\":3000")) << later;
+  const std::string log = read_file((folder.dir() / "run.log").string());
+  EXPECT_TRUE(contains(log, "joined the barrier for afhub/arm/base1 at step 0")) << log;
+  EXPECT_FALSE(contains(log, "no command for")) << log;
+  EXPECT_EQ(trajectory(together), trajectory(later));
 }
 
 TEST(Lockstep, KilledClientIsDroppedTheWorldGoesOnAndARestartedClientRejoins) {

@@ -449,6 +449,21 @@ TEST(HubLoss, ARecordingEndsCompleteWhenTheHubGoesAndGoesOnIntoTheNextFile) {
   EXPECT_EQ(recorder.stop(SIGINT), 0) << read_file(log);
   EXPECT_TRUE(info(next).first) << read_file(log);
   EXPECT_EQ(physics.stop(), 0);
+
+  // The recording played on a loop outlives its hub too (it ran on, writing into the
+  // hub that was gone, and never came back).
+  const std::string play_log = "/tmp/afhub-fault-play.log";
+  ScopedProcess player = spawn_afhub({"play", file, "--loop"}, play_log);
+  const auto played = [] { return contains(run_afhub({"ls"}, 5s).out, "afhub/arm/base"); };
+  ASSERT_TRUE(wait_until(played, 30s)) << read_file(play_log);
+  kill(hub.pid, SIGKILL);
+  waitpid(hub.pid, nullptr, 0);
+  hub.pid = spawn_afhub({"hub"}, "/tmp/afhub-test-hub.log");
+  ASSERT_TRUE(wait_until([] { return probe_roudi() == RoudiPresence::kRunning; }, kHubStartWait));
+  EXPECT_TRUE(wait_until(played, 60s)) << read_file(play_log);
+  EXPECT_NE(read_file(play_log).find("waiting for a hub"), std::string::npos)
+      << read_file(play_log);
+  EXPECT_EQ(player.stop(SIGINT), 0) << read_file(play_log);
 }
 
 TEST(HubLoss, TheViewerSaysTheHubIsLostThenServesLiveFramesAgain) {

@@ -1823,6 +1823,50 @@ TEST(Record, BadFilesAndOptionsAreClearErrors) {
   RunResult missing = run_afhub({"info", (folder.dir() / "absent.mcap").string()});
   EXPECT_NE(missing.exit_code, 0);
   EXPECT_NE(missing.err.find("absent.mcap"), std::string::npos) << missing.err;
+
+  // A FIFO: opening it waited for a writer, for good.
+  const std::string fifo = (folder.dir() / "fifo.mcap").string();
+  ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+  for (const std::vector<std::string>& args :
+       {std::vector<std::string>{"info", fifo}, {"record", "--recover", fifo}}) {
+    const RunResult piped = run_afhub(args, 10s);
+    EXPECT_EQ(piped.exit_code, 1) << args[0] << ": " << piped.err;
+    EXPECT_NE(piped.err.find("is not a regular file"), std::string::npos) << piped.err;
+  }
+}
+
+// One writer per file: a second recorder on the file truncated and interleaved the
+// first's (both said they recorded), a recovery under a live recorder replaced the file
+// it went on writing, and a file deleted while recording was recorded on into nothing.
+TEST(Record, ARecordingsFileHasOneWriterAndItsDeletionIsAnError) {
+  afhub::testing::ModelFolder folder;
+  const std::string file = (folder.dir() / "held.mcap").string();
+  auto first = std::make_unique<mcap::Writer>(file, mcap::Writer::Options{});
+  try {
+    mcap::Writer second(file, {});
+    ADD_FAILURE() << "a second writer opened the file";
+  } catch (const std::exception& error) {
+    EXPECT_NE(std::string(error.what()).find("is being written by another process"),
+              std::string::npos)
+        << error.what();
+  }
+  const RunResult recover = run_afhub({"record", "--recover", file});
+  EXPECT_EQ(recover.exit_code, 1) << recover.err;
+  EXPECT_NE(recover.err.find("is being written by another process"), std::string::npos)
+      << recover.err;
+  first->close();
+  first.reset();
+  EXPECT_EQ(run_afhub({"info", file}).exit_code, 0) << "the first writer's file is whole";
+
+  mcap::Writer deleted(file, {});
+  std::filesystem::remove(file);
+  try {
+    deleted.close();
+    ADD_FAILURE() << "a file deleted while written was closed as if recorded";
+  } catch (const std::exception& error) {
+    EXPECT_NE(std::string(error.what()).find("was deleted while being written"), std::string::npos)
+        << error.what();
+  }
 }
 
 }  // namespace

@@ -322,8 +322,13 @@ BodyEntry wait_for_body(const std::string& query, const std::string& who, std::i
 }
 
 bool matches_any(const std::string& channel, const std::vector<std::string>& globs) {
-  for (const std::string& glob : globs)
+  for (const std::string& glob : globs) {
     if (fnmatch(glob.c_str(), channel.c_str(), 0) == 0) return true;
+    // Its end after a '/', as names are given elsewhere (`afhub echo arm/base`).
+    for (std::size_t slash = channel.find('/'); slash != std::string::npos;
+         slash = channel.find('/', slash + 1))
+      if (fnmatch(glob.c_str(), channel.c_str() + slash + 1, 0) == 0) return true;
+  }
   return false;
 }
 

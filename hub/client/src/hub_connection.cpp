@@ -2,6 +2,8 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <fstream>
+#include <optional>
 #include <string>
 
 #include "afhub/hub/hub_files.hpp"
@@ -18,6 +20,22 @@
 
 namespace afhub {
 namespace {
+
+// A hub stopped (SIGSTOP, a debugger) does not answer registration: iceoryx waited 60 s
+// for it, then aborted. Refused at once instead, naming it, when this process sees its pid.
+void require_hub_not_stopped() {
+  const std::optional<pid_t> pid = running_hub_pid();
+  if (!pid || *pid <= 0) return;
+  std::ifstream stat("/proc/" + std::to_string(*pid) + "/stat");
+  std::string line;
+  if (!std::getline(stat, line) || line.rfind(')') == std::string::npos) return;
+  const std::size_t state_at = line.rfind(')') + 2;  // "pid (name) S ..."
+  if (state_at < line.size() && (line[state_at] == 'T' || line[state_at] == 't'))
+    throw Error("the hub (pid " + std::to_string(*pid) +
+                ") is stopped (SIGSTOP, or a debugger holds it), so it cannot register this "
+                "process: let it run on (`kill -CONT " +
+                std::to_string(*pid) + "`) and try again");
+}
 
 std::string& runtime_name_storage() {
   static std::string name;
@@ -45,6 +63,7 @@ void connect_to_hub(const std::string& role, HubPolicy policy, std::chrono::mill
   // (iceoryx would, with a warning).
   if (reattaching) unlink(("/tmp/" + name).c_str());
   require_hub_access();
+  require_hub_not_stopped();
   claim_runtime_lock_file("/tmp/" + name + ".lock");
   {
     const StopEndsBlockingCall stoppable;

@@ -388,7 +388,10 @@ int stop_hub(bool force) {
   auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(15);
   while (running_hub_pid()) {
     if (std::chrono::steady_clock::now() > deadline) {
-      std::fprintf(stderr, "afhub hub stop: the hub (pid %d) did not stop within 15 s\n", *pid);
+      std::fprintf(stderr,
+                   "afhub hub stop: the hub (pid %d) did not stop within 15 s (a stopped "
+                   "process takes SIGTERM only once it runs on: `kill -CONT %d`)\n",
+                   *pid, *pid);
       return 1;
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(10));

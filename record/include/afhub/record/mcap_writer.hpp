@@ -46,6 +46,9 @@ class Writer {
     // temporary file beside the output until close: a chunk's index names each channel
     // in it (10 bytes each), and a thousand bodies make 570 chunks of 1 MiB a second.
     std::size_t index_memory_bytes = 16u << 20;
+    // What a failed write leaves, said after its cause.
+    std::string when_write_fails =
+        "the file keeps its complete chunks; `afhub record --recover` indexes them";
   };
 
   // Creates (or truncates) `path`; throws afhub::Error naming the path and the reason.

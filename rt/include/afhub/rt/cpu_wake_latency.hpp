@@ -13,9 +13,9 @@ constexpr const char* kCpuWakeLatencyDevice = "/dev/cpu_dma_latency";
 // 1 kHz loop would notice.
 constexpr int kMaxCpuWakeLatencyUs = 1000;
 
-// The option's value: afhub::Error unless -1 (leave the CPUs as they are) or 0 to
-// kMaxCpuWakeLatencyUs.
-void check_cpu_wake_latency_option(int microseconds);
+// The option's value: afhub::Error unless 0 to kMaxCpuWakeLatencyUs, or -1 (leave the
+// CPUs as they are) when not `given` (the option's default: written, it is refused).
+void check_cpu_wake_latency_option(int microseconds, bool given = false);
 
 // Asks for wake-ups within `microseconds` until this process exits (the kernel drops
 // the request when the file closes, however the process ends). False, said on stderr

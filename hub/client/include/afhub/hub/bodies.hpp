@@ -204,8 +204,10 @@ class CatalogReader {
 BodyEntry wait_for_body(const std::string& query, const std::string& who, std::int64_t give_up_ns,
                         const std::string& hint = "");
 
-// Whether `channel` matches one of `globs` (fnmatch patterns: '*' crosses '/'), as the options
-// that choose bodies (`afhub record --bodies`, the DDS bridge's `bodies`) take them.
+// Whether `channel`, or its end after one of its '/', matches one of `globs` (fnmatch
+// patterns: '*' crosses '/'), as the options that choose bodies (`afhub record --bodies`,
+// the DDS bridge's `bodies`) take them: "arm/base" and "base" choose "afhub/arm/base", as
+// the command line names bodies.
 bool matches_any(const std::string& channel, const std::vector<std::string>& globs);
 
 // Writes `text` into a fixed name buffer, cut to fit, NUL-terminated.
