@@ -76,15 +76,16 @@ TEST_F(Access, APlantedRoudiSocketIsRefusedAtOnce) {
   EXPECT_TRUE(contains(ls.err, "no afhub hub holds its lock")) << ls.err;
 }
 
-// A hub that does not answer (stopped) leaves a new client waiting inside iceoryx:
-// SIGTERM still ends it (synth handles SIGTERM itself, as a flag its loop polls).
+// A hub that does not answer (stopped): a new client given --wait waits for it, saying
+// so, and SIGTERM ends it (without --wait it is refused at once: bad_input_cli_test).
 TEST_F(Access, SigtermEndsAClientWaitingOnAHubThatDoesNotAnswer) {
   ScopedProcess hub = spawn_afhub({"hub"}, hub_log_);
   ASSERT_TRUE(hub_up()) << read_file(hub_log_);
   kill(hub.pid, SIGSTOP);
-  ScopedProcess ls =
-      spawn_afhub({"synth", "--bodies", "1", "--no-autostart"}, "/tmp/afhub-access-ls.log");
-  std::this_thread::sleep_for(1s);  // it is registering by now
+  ScopedProcess ls = spawn_afhub({"echo", "arm/base", "--wait", "60"}, "/tmp/afhub-access-ls.log");
+  ASSERT_TRUE(wait_until(
+      [] { return contains(read_file("/tmp/afhub-access-ls.log"), "waiting up to 60 s"); }, 20s))
+      << read_file("/tmp/afhub-access-ls.log");
   EXPECT_EQ(exit_code_if_ended(ls.pid), -1)
       << "it did not wait: " << read_file("/tmp/afhub-access-ls.log");
   kill(ls.pid, SIGTERM);

@@ -2,13 +2,16 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cstdio>
 #include <fstream>
 #include <optional>
 #include <string>
+#include <thread>
 
 #include "afhub/hub/hub_files.hpp"
 #include "afhub/hub/hub_health.hpp"
 #include "afhub/hub/hub_presence.hpp"
+#include "afhub/rt/clock.hpp"
 #include "afhub/rt/stop_signal.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "afhub/shm_layout/header.hpp"
@@ -21,20 +24,37 @@
 namespace afhub {
 namespace {
 
-// A hub stopped (SIGSTOP, a debugger) does not answer registration: iceoryx waited 60 s
-// for it, then aborted. Refused at once instead, naming it, when this process sees its pid.
-void require_hub_not_stopped() {
+// Whether the hub, when this process sees its pid, is stopped (SIGSTOP, a debugger).
+std::optional<pid_t> stopped_hub() {
   const std::optional<pid_t> pid = running_hub_pid();
-  if (!pid || *pid <= 0) return;
+  if (!pid || *pid <= 0) return std::nullopt;
   std::ifstream stat("/proc/" + std::to_string(*pid) + "/stat");
   std::string line;
-  if (!std::getline(stat, line) || line.rfind(')') == std::string::npos) return;
+  if (!std::getline(stat, line) || line.rfind(')') == std::string::npos) return std::nullopt;
   const std::size_t state_at = line.rfind(')') + 2;  // "pid (name) S ..."
-  if (state_at < line.size() && (line[state_at] == 'T' || line[state_at] == 't'))
-    throw Error("the hub (pid " + std::to_string(*pid) +
-                ") is stopped (SIGSTOP, or a debugger holds it), so it cannot register this "
-                "process: let it run on (`kill -CONT " +
-                std::to_string(*pid) + "`) and try again");
+  if (state_at < line.size() && (line[state_at] == 'T' || line[state_at] == 't')) return pid;
+  return std::nullopt;
+}
+
+// A stopped hub does not answer registration: iceoryx waited 60 s for it, then aborted.
+// Waited for up to `wait` instead (a stop signal ends the wait and the process, exit
+// 0), then refused naming it.
+void wait_while_hub_stopped(const std::string& who, std::chrono::milliseconds wait) {
+  const StopEndsBlockingCall stoppable;
+  const std::int64_t give_up = monotonic_ns() + static_cast<std::int64_t>(wait.count()) * 1'000'000;
+  for (bool said = false; const std::optional<pid_t> pid = stopped_hub();) {
+    const std::string hub = "the hub (pid " + std::to_string(*pid) +
+                            ") is stopped (SIGSTOP, or a "
+                            "debugger holds it), so it cannot register this process";
+    if (monotonic_ns() >= give_up)
+      throw Error(hub + ": let it run on (`kill -CONT " + std::to_string(*pid) +
+                  "`) and try again");
+    if (!said)
+      std::fprintf(stderr, "%s: %s; waiting up to %.3g s for it to run on\n", who.c_str(),
+                   hub.c_str(), static_cast<double>(wait.count()) * 1e-3);
+    said = true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
 }
 
 std::string& runtime_name_storage() {
@@ -63,7 +83,7 @@ void connect_to_hub(const std::string& role, HubPolicy policy, std::chrono::mill
   // (iceoryx would, with a warning).
   if (reattaching) unlink(("/tmp/" + name).c_str());
   require_hub_access();
-  require_hub_not_stopped();
+  if (!reattaching) wait_while_hub_stopped("afhub " + role, wait);
   claim_runtime_lock_file("/tmp/" + name + ".lock");
   {
     const StopEndsBlockingCall stoppable;
