@@ -66,13 +66,13 @@ void SimChannels::apply_commands(std::int64_t now_ns) noexcept {
         channel.commanded = true;
       }
     }
-    // A lockstep client that answered the step the physics holds is not silent, however
-    // long the step is held for the others (--wait-for, a late client): its command to
-    // step 0 expired when the last client came 0.5 s later, and the run depended on when.
-    const bool answered_held_step =
-        lockstep_ && channel.lockstep_pid != 0 && channel.answered_step == sim_.step_count();
-    if (channel.commanded && !answered_held_step &&
-        now_ns - channel.last_command_ns > channel.watchdog_ns) {
+    // A lockstep client's command does not age while the physics holds a step for it or
+    // for the others: the simulation waits. Its silence is the barrier's to judge
+    // (--client-timeout); once it has missed a step, the watchdog's too. (Its command to
+    // step 0 expired when the last client came 0.5 s later, and a client stalled on a
+    // loaded machine lost its command while the physics held the step for it.)
+    const bool held_for = lockstep_ && channel.lockstep_pid != 0 && channel.misses == 0;
+    if (channel.commanded && !held_for && now_ns - channel.last_command_ns > channel.watchdog_ns) {
       if (channel.hold_on_watchdog)
         sim_.hold_joints(channel.index);
       else
