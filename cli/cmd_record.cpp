@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -86,6 +87,9 @@ int run_record(RecordCliOptions& options) {
   // p99 at 1.46x without the recorder; under the normal scheduler 0.92x,
   // bench/record_bench.sh).
   install_stop_signal_handlers();
+  // Its lines on a pipe closed early (`afhub record 2>&1 | head`) are lost, not the file:
+  // SIGPIPE ended the recorder there, the file cut off.
+  std::signal(SIGPIPE, SIG_IGN);
   // A hub lost: the file is finished (the recorder's hook), and the process re-executes
   // to wait for the next hub and record into the next file: run.mcap, run.1.mcap, ...
   survive_hub_loss("afhub record");

@@ -11,6 +11,7 @@
 
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/hub_presence.hpp"
+#include "afhub/hub/world_action_watch.hpp"
 #include "afhub/hub/world_command_queue.hpp"
 #include "afhub/rt/clock.hpp"
 #include "afhub/rt/stop_signal.hpp"
@@ -49,11 +50,6 @@ WorldState first_world_state(LatestReader<WorldState>& reader) {
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
   }
   return *reader.latest();
-}
-
-void print_state(const char* what, const WorldState& state) {
-  std::printf("%s at step %llu (t = %.3f s)\n", what,
-              static_cast<unsigned long long>(state.header.sim_step), state.header.sim_time_s);
 }
 
 // Whether `later`, from another writer, undoes what `mine` did: the world can act on
@@ -146,51 +142,17 @@ int run_world(WorldAction action, const WorldOptions& options) {
   if (!command) throw Error("shared memory is exhausted: the world command was not sent");
   command->action = action;
   command->step_count = options.steps;
-  writer.publish(command);
+  const std::int64_t sent_ns = writer.publish(command);
   undone.sent(sequence + 1);
 
-  // Confirmed by the world state: the paused flag, or the step count.
-  const std::uint64_t target_step = before.header.sim_step + options.steps;
-  std::uint64_t previous_step = before.header.sim_step;
+  WorldActionWatch watch(action, options.steps, before, sent_ns);
   const std::int64_t give_up = monotonic_ns() + static_cast<std::int64_t>(options.timeout_s * 1e9);
   while (!stop_requested() && monotonic_ns() < give_up) {
     const WorldState* state = reader.latest();
     if (state && reader.updated()) {
-      switch (action) {
-        case WorldAction::kPause:
-          if (state->paused) {
-            print_state(before.paused ? "already paused" : "paused", *state);
-            return 0;
-          }
-          break;
-        case WorldAction::kResume:
-          if (!state->paused) {
-            print_state(before.paused ? "resumed" : "already running", *state);
-            return 0;
-          }
-          break;
-        case WorldAction::kStep:
-          if (state->header.sim_step >= target_step) {
-            std::printf("stepped %u step%s: now paused at step %llu (t = %.3f s)\n", options.steps,
-                        options.steps == 1 ? "" : "s",
-                        static_cast<unsigned long long>(state->header.sim_step),
-                        state->header.sim_time_s);
-            return 0;
-          }
-          break;
-        case WorldAction::kReset:
-          // The step count goes back to 0; from step 0 there is nothing to see.
-          if (state->header.sim_step < previous_step || before.header.sim_step == 0) {
-            std::printf("reset from step %llu: now at step %llu (t = %.3f s)%s\n",
-                        static_cast<unsigned long long>(previous_step),
-                        static_cast<unsigned long long>(state->header.sim_step),
-                        state->header.sim_time_s, state->paused ? ", paused" : "");
-            return 0;
-          }
-          previous_step = state->header.sim_step;
-          break;
-        case WorldAction::kNone:
-          return 0;
+      if (const std::optional<std::string> said = watch.shown(*state)) {
+        std::printf("%s\n", said->c_str());
+        return 0;
       }
       if (undone.by_now(*state)) {
         std::printf(

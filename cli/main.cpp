@@ -1,5 +1,6 @@
 // afhub: the one command-line front door.
 #include <cstdio>
+#include <cstring>
 #include <exception>
 #include <string>
 
@@ -75,14 +76,19 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& error) {
     return app.exit(error);
   }
+  // A message located in a file says "path:line: error: ..." itself: not "error" twice.
+  const auto say = [&](const char* what) {
+    std::fprintf(stderr, "afhub %s: %s%s\n", command(app).c_str(),
+                 std::strstr(what, ": error: ") ? "" : "error: ", what);
+  };
   try {
     return selected ? selected() : 2;
   } catch (const afhub::Error& error) {
-    std::fprintf(stderr, "afhub %s: error: %s\n", command(app).c_str(), error.what());
+    say(error.what());
     return 1;
   } catch (const std::exception& error) {
     // Not one of afhub's own messages (a library's): said as it is, never std::terminate.
-    std::fprintf(stderr, "afhub %s: error: %s\n", command(app).c_str(), error.what());
+    say(error.what());
     return 1;
   } catch (...) {
     std::fprintf(stderr, "afhub %s: error: an unknown exception\n", command(app).c_str());

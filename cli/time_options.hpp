@@ -8,20 +8,19 @@
 #include <cstdint>
 #include <string>
 
+#include "afhub/rt/periodic_loop.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "afhub/yaml/yaml_reader.hpp"
 
 namespace afhub::cli {
 
-inline constexpr double kMinRateHz = 0.001;      // a period of 1000 s
-inline constexpr double kMaxRateHz = 100'000.0;  // 10 us: a loop's own work is about that
-inline constexpr double kMaxSeconds = 1e7;       // 116 days: a run, a recording, a timeout
+inline constexpr double kMaxSeconds = 1e7;  // 116 days: a run, a recording, a timeout
 
-// The period of `rate_hz`, from kMinRateHz to kMaxRateHz.
+// The period of `rate_hz`, from kMinLoopRateHz to kMaxLoopRateHz.
 inline std::int64_t period_ns_of_rate(double rate_hz, const std::string& option) {
-  if (!(rate_hz >= kMinRateHz && rate_hz <= kMaxRateHz))
-    throw Error(option + " takes a rate from " + yaml::number_text(kMinRateHz) + " to " +
-                yaml::number_text(kMaxRateHz) + " Hz, got " + yaml::number_text(rate_hz));
+  if (!(rate_hz >= kMinLoopRateHz && rate_hz <= kMaxLoopRateHz))
+    throw Error(option + " takes a rate from " + yaml::number_text(kMinLoopRateHz) + " to " +
+                yaml::number_text(kMaxLoopRateHz) + " Hz, got " + yaml::number_text(rate_hz));
   return std::llround(1e9 / rate_hz);
 }
 

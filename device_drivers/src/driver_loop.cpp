@@ -1,10 +1,7 @@
 // The device driver's loop (see driver_loop.hpp).
 #include "afhub/devices/driver_loop.hpp"
 
-#include <algorithm>
-#include <cmath>
 #include <cstdio>
-#include <initializer_list>
 #include <thread>
 
 #include "afhub/devices/safe_request.hpp"
@@ -17,6 +14,7 @@
 #include "afhub/hub/startup_wait.hpp"
 #include "afhub/rt/stop_signal.hpp"
 #include "afhub/shm_layout/error.hpp"
+#include "afhub/shm_layout/payload_check.hpp"
 
 namespace afhub::devices {
 namespace {
@@ -61,7 +59,8 @@ class NonFiniteSamples {
 
   // True when `sample` is to be dropped.
   bool drop(const DeviceSample& sample, std::int64_t now_ns) noexcept {
-    const char* field = non_finite_field(sample);
+    const char* field =
+        device_reading_problem(sample.pose, sample.velocity, sample.gripper_angle_rad);
     if (!field) return false;
     ++unsaid_;
     if (now_ns >= next_say_ns_) {
@@ -77,22 +76,6 @@ class NonFiniteSamples {
   }
 
  private:
-  static const char* non_finite_field(const DeviceSample& s) noexcept {
-    const auto finite = [](std::initializer_list<double> values) {
-      return std::all_of(values.begin(), values.end(), [](double v) { return std::isfinite(v); });
-    };
-    const Pose& p = s.pose;
-    if (!finite({p.position_m.x, p.position_m.y, p.position_m.z, p.orientation.x, p.orientation.y,
-                 p.orientation.z, p.orientation.w}))
-      return "its pose";
-    const Twist& t = s.velocity;
-    if (!finite({t.linear_mps.x, t.linear_mps.y, t.linear_mps.z, t.angular_radps.x,
-                 t.angular_radps.y, t.angular_radps.z}))
-      return "its velocity";
-    if (!std::isfinite(s.gripper_angle_rad)) return "its gripper angle";
-    return nullptr;
-  }
-
   const std::string& name_;
   std::uint64_t unsaid_ = 0;
   std::int64_t next_say_ns_ = 0;

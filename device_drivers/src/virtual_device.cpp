@@ -14,6 +14,7 @@
 
 #include "afhub/shm_layout/error.hpp"
 #include "afhub/yaml/input_file.hpp"
+#include "afhub/yaml/yaml_reader.hpp"
 
 namespace afhub::devices {
 namespace {
@@ -73,30 +74,30 @@ std::vector<TrajectoryPoint> read_trajectory_csv(const std::string& path) {
     // the largest doubles overflowed to a pose that was not finite.
     for (int axis = 1; axis <= 3; ++axis)
       if (std::abs(values[axis]) > kMaxTrajectoryReachM)
-        throw Error(where + "position " + std::to_string(values[axis]) + " m is beyond " +
-                    std::to_string(kMaxTrajectoryReachM) + " m from the device's origin");
+        throw Error(where + "position " + yaml::number_text(values[axis]) + " m is beyond " +
+                    yaml::number_text(kMaxTrajectoryReachM) + " m from the device's origin");
     if (values[0] < 0.0 || values[0] > kMaxTrajectorySeconds)
-      throw Error(where + "time " + std::to_string(values[0]) + " s is outside 0 to " +
-                  std::to_string(kMaxTrajectorySeconds) + " s");
+      throw Error(where + "time " + yaml::number_text(values[0]) + " s is outside 0 to " +
+                  yaml::number_text(kMaxTrajectorySeconds) + " s");
     TrajectoryPoint point;
     point.t_s = values[0];
     point.position = {values[1], values[2], values[3]};
     if (values.size() > 4) {
       if (values[4] < 0 || values[4] > 0xffffffff || values[4] != std::floor(values[4]))
         throw Error(where + "buttons must be a bit mask (a whole number from 0), found " +
-                    std::to_string(values[4]));
+                    yaml::number_text(values[4]));
       point.buttons = static_cast<std::uint32_t>(values[4]);
     }
     if (values.size() > 5) {
       if (std::abs(values[5]) > 2 * std::numbers::pi)
-        throw Error(where + "the gripper angle " + std::to_string(values[5]) +
+        throw Error(where + "the gripper angle " + yaml::number_text(values[5]) +
                     " rad is beyond a turn (2 pi)");
       point.gripper_angle_rad = values[5];
     }
     if (!points.empty() && point.t_s <= points.back().t_s)
-      throw Error(where + "time " + std::to_string(point.t_s) +
-                  " s does not come after the line before's " + std::to_string(points.back().t_s) +
-                  " s");
+      throw Error(where + "time " + yaml::number_text(point.t_s) +
+                  " s does not come after the line before's " +
+                  yaml::number_text(points.back().t_s) + " s");
     points.push_back(point);
   }
   if (points.empty()) throw Error(path + ": the trajectory has no points");

@@ -51,6 +51,10 @@ Quaternion to_quaternion(const py::handle& values, const char* what);  // x, y, 
 // alive by `owner`.
 py::array view(const double* first, std::size_t count, std::size_t stride, py::handle owner);
 
+// ValueError when `name` holds a NUL: it names no channel, and a message naming it would
+// end there.
+void require_no_nul(const std::string& name);
+
 // Seconds to a CLOCK_MONOTONIC deadline; ValueError unless 0 <= seconds <= 1e6.
 std::int64_t deadline_after(double seconds, const char* what);
 
@@ -60,7 +64,7 @@ std::int64_t deadline_after(double seconds, const char* what);
 // it once the GIL is held again.
 class SignalWatch {
  public:
-  bool pending();           // without the GIL
+  bool pending() noexcept;  // without the GIL
   void raise_if_pending();  // with the GIL
   static constexpr std::int64_t kLookEveryNs = 20'000'000;
 

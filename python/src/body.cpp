@@ -68,9 +68,9 @@ Body::Body(const std::string& name, double wait_s)
 
 py::object Body::read(double wait_s) {
   require_hub();
+  const std::int64_t give_up = deadline_after(wait_s, "wait_s");  // checked, waited or not
   const BodyState* sample = client_.latest_state();
   if (!sample && wait_s > 0.0) {
-    const std::int64_t give_up = deadline_after(wait_s, "wait_s");
     SignalWatch signals;
     {
       py::gil_scoped_release release;

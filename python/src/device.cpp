@@ -37,9 +37,9 @@ class Device {
 
   std::optional<py::dict> read(double wait_s) {
     require_hub();
+    const std::int64_t give_up = deadline_after(wait_s, "wait_s");  // checked, waited or not
     const DeviceState* s = state_.latest();
     if (!s && wait_s > 0.0) {
-      const std::int64_t give_up = deadline_after(wait_s, "wait_s");
       SignalWatch signals;
       {
         py::gil_scoped_release release;

@@ -7,6 +7,7 @@
 #include <algorithm>
 
 #include <atomic>
+#include <cstdio>
 #include <exception>
 #include <memory>
 #include <optional>
@@ -37,10 +38,12 @@ class Loop {
         name_(std::move(name)) {
     if (lockstep && !body_)
       throw py::value_error("a lockstep loop answers a body's steps: give body=afhub.Body(...)");
-    // As the command line's loops: a period up to 1000 s; past an int64 of nanoseconds
-    // (1e-10 Hz) it came out negative and the loop spun.
-    if (!lockstep && !(rate_hz >= 0.001 && rate_hz <= 100'000.0))
-      throw py::value_error("rate_hz takes a rate from 0.001 to 100000 Hz");
+    if (!lockstep && !(rate_hz >= kMinLoopRateHz && rate_hz <= kMaxLoopRateHz)) {
+      char bounds[96];
+      std::snprintf(bounds, sizeof bounds, "rate_hz takes a rate from %g to %g Hz", kMinLoopRateHz,
+                    kMaxLoopRateHz);
+      throw py::value_error(bounds);
+    }
     if (fifo_priority < 0 || fifo_priority > 99)
       throw py::value_error("fifo_priority takes 0 (the normal scheduler) to 99");
     options_.period_ns = lockstep ? 0 : static_cast<std::int64_t>(1e9 / rate_hz);
@@ -148,7 +151,7 @@ class Loop {
   };
 
   // Between cycles that run no Python: Ctrl-C still reaches the loop (raised by run()).
-  bool signals_pending() { return signals_.pending(); }
+  bool signals_pending() noexcept { return signals_.pending(); }
 
   void run_free(std::uint64_t cycles, std::int64_t end_ns, LoopTiming& timing,
                 LoopStatsPublisher& stats) {

@@ -39,16 +39,11 @@ Error hub_gone() {
       "allows one per process), so start the script again once a hub runs");
 }
 
-namespace {
-
-// A name with a NUL in it names no channel, and a message naming it would end there.
 void require_no_nul(const std::string& name) {
   if (name.find('\0') != std::string::npos)
     throw py::value_error("a name has no NUL character; got one at index " +
                           std::to_string(name.find('\0')));
 }
-
-}  // namespace
 
 BodyEntry wait_for_entry(const std::string& name, double wait_s) {
   require_no_nul(name);
@@ -109,14 +104,18 @@ std::int64_t deadline_after(double seconds, const char* what) {
   return monotonic_ns() + static_cast<std::int64_t>(seconds * 1e9);
 }
 
-bool SignalWatch::pending() {
+bool SignalWatch::pending() noexcept {
   if (error_) return true;
   const std::int64_t now = monotonic_ns();
   if (now < next_look_ns_) return false;
   next_look_ns_ = now + kLookEveryNs;
-  py::gil_scoped_acquire acquire;
-  if (PyErr_CheckSignals() == 0) return false;
-  error_ = std::make_exception_ptr(py::error_already_set());
+  try {
+    py::gil_scoped_acquire acquire;
+    if (PyErr_CheckSignals() == 0) return false;
+    error_ = std::make_exception_ptr(py::error_already_set());
+  } catch (...) {  // no memory to hold the Python error: raised as that instead
+    error_ = std::current_exception();
+  }
   return true;
 }
 

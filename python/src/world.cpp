@@ -2,13 +2,13 @@
 // (pause, resume, step N, reset), each confirmed by the world state as `afhub world`
 // confirms them.
 #include <algorithm>
-#include <cstdio>
 #include <optional>
 #include <string>
 
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/channel.hpp"
 #include "afhub/hub/hub_loss.hpp"
+#include "afhub/hub/world_action_watch.hpp"
 #include "afhub/rt/clock.hpp"
 #include "afhub/shm_layout/channel_names.hpp"
 #include "afhub/shm_layout/error.hpp"
@@ -23,17 +23,11 @@ ChannelId world_channel(const std::string& name_space, std::string_view event) {
   return {std::string(kService), world_instance(name_space), std::string(event)};
 }
 
-std::string at(const WorldState& state) {
-  char text[96];
-  std::snprintf(text, sizeof text, "at step %llu (t = %.3f s)",
-                static_cast<unsigned long long>(state.header.sim_step), state.header.sim_time_s);
-  return text;
-}
-
 class World {
  public:
   explicit World(const std::string& name_space)
-      : reader_((ensure_connected(), world_channel(name_space, kStateEvent))),
+      : reader_((require_no_nul(name_space), ensure_connected(),
+                 world_channel(name_space, kStateEvent))),
         writer_(world_channel(name_space, kCommandEvent)) {
     // The simulation acts on each sequence number once: start past any number an
     // earlier writer could have used.
@@ -80,16 +74,15 @@ class World {
     if (!command) throw Error("shared memory is exhausted: the world command was not sent");
     command->action = action;
     command->step_count = steps;
-    writer_.publish(command);
+    WorldActionWatch watch(action, steps, before, writer_.publish(command));
 
-    std::uint64_t previous_step = before.header.sim_step;
     std::optional<std::string> done;
     SignalWatch signals;
     {
       py::gil_scoped_release release;
       while (!done && monotonic_ns() < give_up && !hub_lost() && !signals.pending()) {
         const WorldState* now = reader_.latest();
-        if (now && reader_.updated()) done = shown(action, before, steps, previous_step, *now);
+        if (now && reader_.updated()) done = watch.shown(*now);
         if (!done) sleep_until_ns(monotonic_ns() + 200'000);
       }
     }
@@ -102,35 +95,6 @@ class World {
   }
 
  private:
-  // What `now` says of the action sent at `before`, once it shows it done.
-  static std::optional<std::string> shown(WorldAction action, const WorldState& before,
-                                          std::uint32_t steps, std::uint64_t& previous_step,
-                                          const WorldState& now) {
-    switch (action) {
-      case WorldAction::kPause:
-        if (now.paused) return (before.paused ? "already paused " : "paused ") + at(now);
-        break;
-      case WorldAction::kResume:
-        if (!now.paused) return (before.paused ? "resumed " : "already running ") + at(now);
-        break;
-      case WorldAction::kStep:
-        if (now.header.sim_step >= before.header.sim_step + steps)
-          return "stepped " + std::to_string(steps) + (steps == 1 ? " step" : " steps") +
-                 ": now paused " + at(now);
-        break;
-      case WorldAction::kReset:
-        // The step count goes back to 0; from step 0 there is nothing to see.
-        if (now.header.sim_step < previous_step || before.header.sim_step == 0)
-          return "reset from step " + std::to_string(previous_step) + ": now " + at(now) +
-                 (now.paused ? ", paused" : "");
-        previous_step = now.header.sim_step;
-        break;
-      case WorldAction::kNone:
-        return "";
-    }
-    return std::nullopt;
-  }
-
   LatestReader<WorldState> reader_;
   Writer<WorldCommand> writer_;
 };

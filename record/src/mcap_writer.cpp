@@ -45,13 +45,13 @@ Writer::Writer(const std::string& path, Options options)
     struct stat info {};
     if (::fstat(fd_, &info) == 0 && S_ISREG(info.st_mode) && ::ftruncate(fd_, 0) != 0)
       throw Error("cannot empty " + path + ": " + std::strerror(errno));
-  } catch (...) {
+    pending_.insert(pending_.end(), std::begin(kMagic), std::end(kMagic));
+    RecordBuilder(pending_, kHeader).str(options_.profile).str(options_.library);
+    write_out();   // from now on the file reads as MCAP, cut off
+  } catch (...) {  // no destructor runs for an object that was never made
     ::close(fd_);
     throw;
   }
-  pending_.insert(pending_.end(), std::begin(kMagic), std::end(kMagic));
-  RecordBuilder(pending_, kHeader).str(options_.profile).str(options_.library);
-  write_out();  // from now on the file reads as MCAP, cut off
 }
 
 Writer::~Writer() {

@@ -3,7 +3,9 @@
 #include <sys/resource.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
+#include <cstdio>
 #include <cstring>
 #include <ctime>
 #include <exception>
@@ -556,10 +558,12 @@ class Session {
   // Readers for the catalog's bodies (and devices) that match and are not recorded yet.
   void discover(CatalogReader& catalog) {
     const BodyList& list = catalog.latest();
+    std::vector<std::string> bodies;
     for (std::uint32_t i = 0; i < list.body_count; ++i) {
       const BodyEntry entry = entry_of(list, i);
       const std::string channel(name_of(entry.info.channel));
       const bool device = entry.info.kind == ChannelKind::kDevice;
+      if (!device) bodies.push_back(channel);
       if (device ? !options_.devices : !matches_any(channel, options_.body_globs)) continue;
       if (!known_.insert(channel).second) continue;
       const Metadata metadata =
@@ -570,6 +574,25 @@ class Session {
         add(body_command_channel(channel),
             device ? PayloadKind::kDeviceCommand : PayloadKind::kBodyCommand, metadata, true,
             device ? std::string() : channel);
+    }
+    say_unmatched_globs(bodies);
+  }
+
+  // A --bodies glob that matches none of the hub's bodies (a typo recorded nothing and
+  // said nothing), said once, when there are bodies to match.
+  void say_unmatched_globs(const std::vector<std::string>& bodies) {
+    if (bodies.empty()) return;
+    for (const std::string& glob : options_.body_globs) {
+      if (!globs_looked_at_.insert(glob).second) continue;
+      if (std::any_of(bodies.begin(), bodies.end(),
+                      [&](const std::string& body) { return matches_any(body, {glob}); }))
+        continue;
+      std::string some;
+      for (std::size_t i = 0; i < bodies.size() && i < 4; ++i) some += (i ? ", " : "") + bodies[i];
+      std::fprintf(stderr,
+                   "afhub record: --bodies '%s' matches none of the hub's %zu bodies (%s%s): "
+                   "none is recorded for it unless such a body comes (`afhub ls` lists them)\n",
+                   glob.c_str(), bodies.size(), some.c_str(), bodies.size() > 4 ? ", ..." : "");
     }
   }
 
@@ -784,6 +807,7 @@ class Session {
 
   // The discovery's, and what it hands over.
   std::set<std::string> known_;
+  std::set<std::string> globs_looked_at_;  // each --bodies glob, once there were bodies
   std::mutex discovered_mutex_;
   std::vector<Recorded> discovered_;
   std::atomic<bool> discovered_ready_{false}, discover_failed_{false};

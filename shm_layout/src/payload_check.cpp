@@ -220,18 +220,7 @@ const char* count_beyond_capacity(const char* at, std::size_t bytes, PayloadKind
     case PayloadKind::kDeviceState: {
       const auto* state = reinterpret_cast<const DeviceState*>(at);
       if (state->gate > ForceGate::kStopping) return "DeviceState.gate";
-      // Readers (teleop's law, renderings) take the pose as numbers: a NaN would stay
-      // in a law's anchor for good.
-      const Pose& p = state->pose;
-      for (double v : {p.position_m.x, p.position_m.y, p.position_m.z, p.orientation.x,
-                       p.orientation.y, p.orientation.z, p.orientation.w})
-        if (!std::isfinite(v)) return "DeviceState.pose";
-      const Twist& t = state->velocity;
-      for (double v : {t.linear_mps.x, t.linear_mps.y, t.linear_mps.z, t.angular_radps.x,
-                       t.angular_radps.y, t.angular_radps.z})
-        if (!std::isfinite(v)) return "DeviceState.velocity";
-      if (!std::isfinite(state->gripper_angle_rad)) return "DeviceState.gripper_angle_rad";
-      return nullptr;
+      return device_reading_problem(state->pose, state->velocity, state->gripper_angle_rad);
     }
     case PayloadKind::kDeviceCommand: {
       const auto* command = reinterpret_cast<const DeviceCommand*>(at);
@@ -272,6 +261,20 @@ PayloadError fail(PayloadError error, const char* what, const char** field) noex
 }
 
 }  // namespace
+
+// Readers (teleop's law, renderings) take the pose as numbers: a NaN would stay in a
+// law's anchor for good.
+const char* device_reading_problem(const Pose& pose, const Twist& velocity,
+                                   double gripper_angle_rad) noexcept {
+  for (double v : {pose.position_m.x, pose.position_m.y, pose.position_m.z, pose.orientation.x,
+                   pose.orientation.y, pose.orientation.z, pose.orientation.w})
+    if (!std::isfinite(v)) return "DeviceState.pose";
+  for (double v : {velocity.linear_mps.x, velocity.linear_mps.y, velocity.linear_mps.z,
+                   velocity.angular_radps.x, velocity.angular_radps.y, velocity.angular_radps.z})
+    if (!std::isfinite(v)) return "DeviceState.velocity";
+  if (!std::isfinite(gripper_angle_rad)) return "DeviceState.gripper_angle_rad";
+  return nullptr;
+}
 
 PayloadError check_payload(const void* data, std::size_t bytes, PayloadKind expected,
                            const char** field) noexcept {

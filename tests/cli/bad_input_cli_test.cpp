@@ -96,6 +96,11 @@ TEST(BadInputCli, AnUnreadableModelOrADirectoryIsSaidSo) {
     EXPECT_EQ(directory.exit_code, 1) << directory.err;
     EXPECT_TRUE(contains(directory.err, "this is a directory")) << directory.err;
   }
+  // A message located in its file says "error" once (it said "error: /dev/zero: error:").
+  const RunResult device = run_afhub({"device", "run", "virtual", "--trajectory", "/dev/zero"});
+  EXPECT_EQ(device.exit_code, 1) << device.err;
+  EXPECT_TRUE(contains(device.err, "afhub device: /dev/zero: error: this is not a regular file"))
+      << device.err;
 }
 
 TEST(BadInputCli, CheckRefusesWhatRunWouldRefuse) {

@@ -200,10 +200,17 @@ TEST(TrajectoryCsvTest, BadLinesAreLocated) {
   EXPECT_NE(error_of("# nothing\n").find("has no points"), std::string::npos);
   EXPECT_NE(error_of("0,0,0,0,1.5\n").find("buttons must be a bit mask"), std::string::npos);
   // Points near the largest doubles interpolated to a pose that was not finite.
-  EXPECT_NE(error_of("0,1e308,0,0\n1,-1e308,0,0\n").find("bad.csv:1: position 1"),
-            std::string::npos)
+  EXPECT_NE(
+      error_of("0,1e308,0,0\n1,-1e308,0,0\n").find("bad.csv:1: position 1e+308 m is beyond 10 m"),
+      std::string::npos)
       << error_of("0,1e308,0,0\n");
   EXPECT_NE(error_of("-1,0,0,0\n").find("bad.csv:1: time -1"), std::string::npos);
+  // Times that differ past the sixth digit read apart.
+  EXPECT_NE(error_of("1.0000002,0,0,0\n1.0000001,0,0,0\n")
+                .find("bad.csv:2: time 1.0000001 s does not come after the line before's "
+                      "1.0000002 s"),
+            std::string::npos)
+      << error_of("1.0000002,0,0,0\n1.0000001,0,0,0\n");
   EXPECT_NE(error_of("0,0,0,0,0,1e300\n").find("the gripper angle"), std::string::npos);
   // A file that never ends was read until memory ran out.
   std::string never_ends;

@@ -185,8 +185,8 @@ TEST(DriverLoop, ASampleThatIsNotFiniteIsNotPublishedAndSaid) {
   // 200 cycles and the last one at zero force: the 100 finite samples published.
   EXPECT_EQ(counts.exchanges, 201);
   EXPECT_EQ(last->header.sequence, 101U);
-  EXPECT_NE(said.find("afhub device glitchy: 1 sample of the device not published: its pose is "
-                      "not a finite number"),
+  EXPECT_NE(said.find("afhub device glitchy: 1 sample of the device not published: "
+                      "DeviceState.pose is not a finite number"),
             std::string::npos)
       << said;
 }

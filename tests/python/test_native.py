@@ -127,6 +127,11 @@ def test_errors_say_what_is_wrong(physics, tmp_path):
         afhub.Body('nothing')
     with pytest.raises(ValueError, match='a name has no NUL character; got one at index 8'):
         afhub.Body('arm/base\x00junk')
+    with pytest.raises(ValueError, match='a name has no NUL character; got one at index 1'):
+        afhub.World('a\x00b')
+    for wait in (float('nan'), -1.0):  # checked whether or not a state is there to wait for
+        with pytest.raises(ValueError, match='wait_s takes 0 to 1e6 seconds'):
+            base.read(wait_s=wait)
     with pytest.raises(afhub.Error, match='copy/afhub/arm/base.*afhub/arm/base|afhub/arm/base.*copy'):
         afhub.Body('arm/base')  # two bodies end so: the message lists both
     with pytest.raises(ValueError, match=r'values\[1\] is nan, not a finite number'):

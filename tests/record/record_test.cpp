@@ -1783,6 +1783,22 @@ TEST(Record, OnATerminalALiveLineShowsTheRecordingAsItGoes) {
   EXPECT_GT(messages.back(), messages.front()) << run.out;
 }
 
+// Its lines on a pipe closed early (`afhub record 2>&1 | head`): SIGPIPE ended the
+// recorder at its first line, before it had made the file (exit 141).
+TEST(Record, APipeClosedOnItsLinesLosesTheLinesNotTheRecording) {
+  SceneRun scene;
+  ASSERT_TRUE(scene.ready()) << scene.logs();
+  const std::string file = scene.dir("piped.mcap");
+  const RunResult run = run_command({"bash", "-c",
+                                     afhub_executable() + " record -o " + file +
+                                         " --duration 2 2>&1 | true; exit ${PIPESTATUS[0]}"},
+                                    60s);
+  EXPECT_EQ(run.exit_code, 0) << run.out << run.err;
+  const json info = info_of(file);
+  EXPECT_TRUE(info.value("complete", false)) << info.dump();
+  EXPECT_GT(info.value("messages", 0), 1000) << info.dump();
+}
+
 TEST(Record, BadFilesAndOptionsAreClearErrors) {
   afhub::testing::ModelFolder folder;
   const std::string text = (folder.dir() / "notes.mcap").string();
@@ -1838,6 +1854,31 @@ TEST(Record, BadFilesAndOptionsAreClearErrors) {
 // One writer per file: a second recorder on the file truncated and interleaved the
 // first's (both said they recorded), a recovery under a live recorder replaced the file
 // it went on writing, and a file deleted while recording was recorded on into nothing.
+// --bodies takes a body as every command names it (the channel's end after a '/'), and a
+// glob that matches none of the hub's bodies is said: `--bodies nosuch` recorded no body
+// and said nothing.
+TEST(Record, BodiesAreChosenByTheirNamesAndAGlobMatchingNoneIsSaid) {
+  SceneRun scene;
+  ASSERT_TRUE(scene.ready()) << scene.logs();
+  const std::string file = scene.dir("chosen.mcap");
+  ScopedProcess recorder(
+      spawn_afhub({"record", "-o", file, "--bodies", "rcm/base", "--bodies", "nosuch"},
+                  scene.dir("record.log")));
+  ASSERT_TRUE(recording_lists(file, "/afhub/rcm/base/state")) << read_file(scene.dir("record.log"));
+  ASSERT_EQ(recorder.stop(SIGINT), 0) << read_file(scene.dir("record.log"));
+  const std::string log = read_file(scene.dir("record.log"));
+  EXPECT_NE(log.find("--bodies 'nosuch' matches none of the hub's"), std::string::npos) << log;
+  EXPECT_EQ(log.find("--bodies 'rcm/base' matches none"), std::string::npos) << log;
+  const json info = info_of(file);
+  std::vector<std::string> bodies;
+  for (const json& channel : info["channels"]) {
+    const std::string topic = channel["topic"];
+    if (topic.ends_with("/state") && topic.find("/world") == std::string::npos)
+      bodies.push_back(topic);
+  }
+  EXPECT_EQ(bodies, std::vector<std::string>{"/afhub/rcm/base/state"});
+}
+
 TEST(Record, ARecordingsFileHasOneWriterAndItsDeletionIsAnError) {
   afhub::testing::ModelFolder folder;
   const std::string file = (folder.dir() / "held.mcap").string();

@@ -40,29 +40,21 @@ std::string WorldCommander::run(const std::string& query) {
   if (!command) return "no shared memory for a world command";
   command->action = chosen;
   command->step_count = 1;
-  const std::uint64_t step_before = state->header.sim_step;
-  const std::int64_t sent_ns = monotonic_ns();
-  writer_.publish(command);
-  return wait_until_shown(chosen, step_before, sent_ns);
+  const WorldState before = *state;
+  const std::int64_t sent_ns = writer_.publish(command);
+  WorldActionWatch watch(chosen, 1, before, sent_ns);
+  return wait_until_shown(watch, sent_ns);
 }
 
-// The world acts on a command at its next step. Answered once a world state shows it, so
-// that a request sent after this one's answer finds the world changed (a step right
-// after a pause found the world still running).
-std::string WorldCommander::wait_until_shown(WorldAction action, std::uint64_t step_before,
-                                             std::int64_t sent_ns) {
+// Answered once a world state shows the command done, so that a request sent after this
+// one's answer finds the world changed (a step right after a pause found the world still
+// running).
+std::string WorldCommander::wait_until_shown(WorldActionWatch& watch, std::int64_t sent_ns) {
   constexpr std::int64_t kWaitNs = 1'000'000'000;
-  int states_after_sending = 0;
   for (const std::int64_t give_up = sent_ns + kWaitNs; monotonic_ns() < give_up;
        std::this_thread::sleep_for(std::chrono::microseconds(200))) {
     const WorldState* state = state_.latest();
-    if (!state || !state_.updated()) continue;
-    if (state->header.publish_stamp_ns > sent_ns) ++states_after_sending;
-    const bool shown = action == WorldAction::kPause    ? state->paused
-                       : action == WorldAction::kResume ? !state->paused
-                       : action == WorldAction::kStep   ? state->header.sim_step > step_before
-                                                        : states_after_sending >= 2;  // reset
-    if (shown) return "";
+    if (state && state_.updated() && watch.shown(*state)) return "";
   }
   return "sent, but the world has not shown it within 1 s: the physics is stalled, or "
          "another client undid it";

@@ -44,6 +44,12 @@ class LoopClock {
   virtual void sleep_until_ns(std::int64_t deadline_ns) noexcept = 0;
 };
 
+// The rates a loop is given from outside (the command line, Python): a period up to
+// 1000 s (past an int64 of nanoseconds, at 1e-10 Hz, it came out negative and the loop
+// spun), down to 10 us (a loop's own work is about that).
+inline constexpr double kMinLoopRateHz = 0.001;
+inline constexpr double kMaxLoopRateHz = 100'000.0;
+
 struct LoopOptions {
   std::int64_t period_ns = 1'000'000;  // 0: as fast as possible (no sleeping, no overruns)
   OverrunPolicy overrun = OverrunPolicy::kSkip;

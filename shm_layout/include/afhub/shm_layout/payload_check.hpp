@@ -7,6 +7,7 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "afhub/shm_layout/geometry.hpp"
 #include "afhub/shm_layout/header.hpp"
 
 namespace afhub {
@@ -26,6 +27,12 @@ enum class PayloadError : std::uint8_t {
 // when the payload is valid.
 PayloadError check_payload(const void* data, std::size_t bytes, PayloadKind expected,
                            const char** field = nullptr) noexcept;
+
+// The field of a device's reading that check_payload refuses in a DeviceState (a number
+// that is not finite: "DeviceState.pose"), or nullptr: its driver checks a sample with it
+// before publishing.
+const char* device_reading_problem(const Pose& pose, const Twist& velocity,
+                                   double gripper_angle_rad) noexcept;
 
 // One line for the user: what is wrong with the payload and what to do about it.
 const char* describe(PayloadError error) noexcept;

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "afhub/hub/channel.hpp"
+#include "afhub/hub/world_action_watch.hpp"
 #include "afhub/shm_layout/world.hpp"
 
 namespace afhub::viewer {
@@ -21,7 +22,7 @@ class WorldCommander {
   std::string run(const std::string& query);
 
  private:
-  std::string wait_until_shown(WorldAction action, std::uint64_t step_before, std::int64_t sent_ns);
+  std::string wait_until_shown(WorldActionWatch& watch, std::int64_t sent_ns);
 
   std::mutex mutex_;
   Writer<WorldCommand> writer_;

@@ -21,7 +21,9 @@ inline constexpr double kMaxMagnitude = 1e9;
 // What a node is, for messages: "a map", "a list", "a value" or "nothing".
 const char* kind_of(const YAML::Node& node);
 
-// `value` as messages write bounds ("1e+09", "0.001").
+// `value` as messages write numbers ("1e+09", "0.001"): in six significant digits, or as
+// many more as it takes to read back the same number (two times a trajectory said were
+// out of order differed past the sixth, and read the same).
 std::string number_text(double value);
 
 // Parses `text`, the contents of `path`; a syntax error says file:line:col. A file

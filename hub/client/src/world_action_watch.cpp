@@ -1,0 +1,55 @@
+// See world_action_watch.hpp.
+#include "afhub/hub/world_action_watch.hpp"
+
+#include <cstdio>
+
+namespace afhub {
+namespace {
+
+std::string at(const WorldState& state) {
+  char text[96];
+  std::snprintf(text, sizeof text, "at step %llu (t = %.3f s)",
+                static_cast<unsigned long long>(state.header.sim_step), state.header.sim_time_s);
+  return text;
+}
+
+}  // namespace
+
+WorldActionWatch::WorldActionWatch(WorldAction action, std::uint32_t steps,
+                                   const WorldState& before, std::int64_t sent_ns)
+    : action_(action),
+      steps_(steps),
+      before_(before),
+      sent_ns_(sent_ns),
+      previous_step_(before.header.sim_step) {}
+
+std::optional<std::string> WorldActionWatch::shown(const WorldState& now) {
+  if (now.header.publish_stamp_ns > sent_ns_) ++states_after_sending_;
+  switch (action_) {
+    case WorldAction::kPause:
+      if (now.paused) return (before_.paused ? "already paused " : "paused ") + at(now);
+      break;
+    case WorldAction::kResume:
+      if (!now.paused) return (before_.paused ? "resumed " : "already running ") + at(now);
+      break;
+    case WorldAction::kStep:
+      if (now.header.sim_step >= before_.header.sim_step + steps_)
+        return "stepped " + std::to_string(steps_) + (steps_ == 1 ? " step" : " steps") +
+               ": now paused " + at(now);
+      break;
+    case WorldAction::kReset:
+      // The step count goes back to 0. From step 0 there is nothing to see: the second
+      // state published after sending comes from a step that read the command.
+      if (now.header.sim_step < previous_step_ ||
+          (before_.header.sim_step == 0 && states_after_sending_ >= 2))
+        return "reset from step " + std::to_string(previous_step_) + ": now " + at(now) +
+               (now.paused ? ", paused" : "");
+      previous_step_ = now.header.sim_step;
+      break;
+    case WorldAction::kNone:
+      return "";
+  }
+  return std::nullopt;
+}
+
+}  // namespace afhub
