@@ -142,10 +142,10 @@ int run_world(WorldAction action, const WorldOptions& options) {
   if (!command) throw Error("shared memory is exhausted: the world command was not sent");
   command->action = action;
   command->step_count = options.steps;
-  const std::int64_t sent_ns = writer.publish(command);
+  writer.publish(command);
   undone.sent(sequence + 1);
 
-  WorldActionWatch watch(action, options.steps, before, sent_ns);
+  WorldActionWatch watch(action, options.steps, before, monotonic_ns());
   const std::int64_t give_up = monotonic_ns() + static_cast<std::int64_t>(options.timeout_s * 1e9);
   while (!stop_requested() && monotonic_ns() < give_up) {
     const WorldState* state = reader.latest();

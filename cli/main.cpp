@@ -4,7 +4,6 @@
 #include <exception>
 #include <string>
 
-#include "afhub/shm_layout/error.hpp"
 #include "commands.hpp"
 
 namespace {
@@ -83,11 +82,8 @@ int main(int argc, char** argv) {
   };
   try {
     return selected ? selected() : 2;
-  } catch (const afhub::Error& error) {
-    say(error.what());
-    return 1;
   } catch (const std::exception& error) {
-    // Not one of afhub's own messages (a library's): said as it is, never std::terminate.
+    // afhub's own messages, and a library's said as they are: never std::terminate.
     say(error.what());
     return 1;
   } catch (...) {

@@ -14,6 +14,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -483,13 +484,14 @@ class UrdfReader {
         placement(btTransform(origin.getBasis() * principal, origin.getOrigin()));
     body.inertia_kgm2 =
         Vec3{std::max(moments[0], 0.0), std::max(moments[1], 0.0), std::max(moments[2], 0.0)};
-    if (!possible_principal_inertias(*body.inertia_kgm2))
+    if (!possible_principal_inertias(*body.inertia_kgm2)) {
+      char computed[96];  // six digits: a computation's last digits are noise
+      std::snprintf(computed, sizeof computed, "%g, %g, %g", moments[0], moments[1], moments[2]);
       warn(link_at(link.name).line,
-           "link '" + link.name + "': its <inertia> has principal moments (" +
-               yaml::number_text(moments[0]) + ", " + yaml::number_text(moments[1]) + ", " +
-               yaml::number_text(moments[2]) +
+           "link '" + link.name + "': its <inertia> has principal moments (" + computed +
                ") of which one is larger than the other two together, which no rigid body has; "
                "check ixx..izz");
+    }
   }
 
   void read_links() {

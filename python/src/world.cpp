@@ -74,7 +74,8 @@ class World {
     if (!command) throw Error("shared memory is exhausted: the world command was not sent");
     command->action = action;
     command->step_count = steps;
-    WorldActionWatch watch(action, steps, before, writer_.publish(command));
+    writer_.publish(command);
+    WorldActionWatch watch(action, steps, before, monotonic_ns());
 
     std::optional<std::string> done;
     SignalWatch signals;

@@ -126,6 +126,33 @@ TEST(Lockstep, AClientIsNotTimedOutWhileThePhysicsHoldsAStepForItOrOthers) {
   EXPECT_EQ(trajectory(together), trajectory(stalled));
 }
 
+// Steps taken while the world is paused (`afhub world step`) do not wait for the barrier:
+// the command of a lockstep client that died meanwhile is expired by its body's watchdog,
+// as any writer's (a rule that spared every lockstep client in the barrier kept it on
+// for good).
+TEST(Lockstep, StepsTakenWhilePausedExpireADeadClientsCommand) {
+  afhub::testing::ModelFolder folder;
+  const std::string log = (folder.dir() / "run.log").string();
+  ScopedProcess physics(spawn_afhub(
+      {"run", kArm, "--no-autostart", "--lockstep", "--wait-for", "1", "--client-timeout", "60000"},
+      log));
+  LatestReader<WorldState> world = world_reader();
+  ASSERT_TRUE(wait_until([&] { return world.latest() != nullptr; }, 10s)) << read_file(log);
+  ScopedProcess client(spawn_afhub({"ctl", "hold", "base", "--lockstep"}));
+  ASSERT_TRUE(wait_until([&] { return world.latest()->header.sim_step > 300; }, 10s))
+      << read_file(log);
+  const RunResult pause = run_afhub({"world", "pause"});
+  ASSERT_EQ(pause.exit_code, 0) << pause.err;
+  kill(client.pid, SIGKILL);
+  waitpid(client.pid, nullptr, 0);
+  client.pid = -1;
+  const RunResult steps = run_afhub({"world", "step", "1000", "--timeout", "30"});
+  ASSERT_EQ(steps.exit_code, 0) << steps.err;  // 1 s of steps at 1 kHz: past the 0.5 s watchdog
+  EXPECT_TRUE(wait_until([&] { return world.latest()->watchdog_expiries >= 1; }, 5s))
+      << read_file(log);
+  EXPECT_EQ(physics.stop(), 0);
+}
+
 TEST(Lockstep, KilledClientIsDroppedTheWorldGoesOnAndARestartedClientRejoins) {
   afhub::testing::ModelFolder folder;
   const std::string log = (folder.dir() / "run.log").string();

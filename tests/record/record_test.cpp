@@ -1851,9 +1851,6 @@ TEST(Record, BadFilesAndOptionsAreClearErrors) {
   }
 }
 
-// One writer per file: a second recorder on the file truncated and interleaved the
-// first's (both said they recorded), a recovery under a live recorder replaced the file
-// it went on writing, and a file deleted while recording was recorded on into nothing.
 // --bodies takes a body as every command names it (the channel's end after a '/'), and a
 // glob that matches none of the hub's bodies is said: `--bodies nosuch` recorded no body
 // and said nothing.
@@ -1879,6 +1876,9 @@ TEST(Record, BodiesAreChosenByTheirNamesAndAGlobMatchingNoneIsSaid) {
   EXPECT_EQ(bodies, std::vector<std::string>{"/afhub/rcm/base/state"});
 }
 
+// One writer per file: a second recorder on the file truncated and interleaved the
+// first's (both said they recorded), a recovery under a live recorder replaced the file
+// it went on writing, and a file deleted while recording was recorded on into nothing.
 TEST(Record, ARecordingsFileHasOneWriterAndItsDeletionIsAnError) {
   afhub::testing::ModelFolder folder;
   const std::string file = (folder.dir() / "held.mcap").string();

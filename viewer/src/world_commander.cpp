@@ -41,17 +41,17 @@ std::string WorldCommander::run(const std::string& query) {
   command->action = chosen;
   command->step_count = 1;
   const WorldState before = *state;
-  const std::int64_t sent_ns = writer_.publish(command);
-  WorldActionWatch watch(chosen, 1, before, sent_ns);
-  return wait_until_shown(watch, sent_ns);
+  writer_.publish(command);
+  WorldActionWatch watch(chosen, 1, before, monotonic_ns());
+  return wait_until_shown(watch);
 }
 
 // Answered once a world state shows the command done, so that a request sent after this
 // one's answer finds the world changed (a step right after a pause found the world still
 // running).
-std::string WorldCommander::wait_until_shown(WorldActionWatch& watch, std::int64_t sent_ns) {
+std::string WorldCommander::wait_until_shown(WorldActionWatch& watch) {
   constexpr std::int64_t kWaitNs = 1'000'000'000;
-  for (const std::int64_t give_up = sent_ns + kWaitNs; monotonic_ns() < give_up;
+  for (const std::int64_t give_up = monotonic_ns() + kWaitNs; monotonic_ns() < give_up;
        std::this_thread::sleep_for(std::chrono::microseconds(200))) {
     const WorldState* state = state_.latest();
     if (state && state_.updated() && watch.shown(*state)) return "";

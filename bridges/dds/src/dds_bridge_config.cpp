@@ -5,8 +5,6 @@
 #include <net/if.h>
 
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 #include <sstream>
 
 #include "afhub/rt/cpu_wake_latency.hpp"
@@ -145,16 +143,6 @@ DdsBridgeOptions read_dds_bridge_config(const std::string& path, const DdsBridge
 
 namespace {
 
-// The shortest text that reads back as `value`.
-std::string number_text(double value) {
-  char text[32];
-  for (int digits = 6; digits <= 17; ++digits) {
-    std::snprintf(text, sizeof text, "%.*g", digits, value);
-    if (std::strtod(text, nullptr) == value) break;
-  }
-  return text;
-}
-
 std::string quoted_list(const std::vector<std::string>& globs) {
   std::string out = "[";
   for (std::size_t i = 0; i < globs.size(); ++i)
@@ -177,14 +165,14 @@ std::string render_dds_bridge_config(const DdsBridgeOptions& options) {
       << "devices: " << quoted_list(options.device_globs) << "\n"
       << "world: " << flag(options.world) << "\n"
       << "qos: " << (options.reliable ? "reliable" : "best-effort") << "\n"
-      << "rate: " << number_text(options.rate_hz) << "\n"
+      << "rate: " << yaml::number_text(options.rate_hz) << "\n"
       << "spin: " << flag(options.spin) << "\n";
   if (options.cpu_wake_latency_us >= 0)
     out << "cpu-wake-latency: " << options.cpu_wake_latency_us << "\n";
-  out << "rate-limits: {bodies: " << number_text(options.body_rate_hz)
-      << ", devices: " << number_text(options.device_rate_hz)
-      << ", world: " << number_text(options.world_rate_hz) << "}\n"
-      << "max-command-age: " << number_text(options.max_command_age_s) << "\n"
+  out << "rate-limits: {bodies: " << yaml::number_text(options.body_rate_hz)
+      << ", devices: " << yaml::number_text(options.device_rate_hz)
+      << ", world: " << yaml::number_text(options.world_rate_hz) << "}\n"
+      << "max-command-age: " << yaml::number_text(options.max_command_age_s) << "\n"
       << "max-mirrored: " << options.max_mirrored << "\n";
   if (!options.profile.empty()) out << "profile: " << options.profile << "\n";
   if (!options.ros2_prefix.empty()) out << "ros2-prefix: " << options.ros2_prefix << "\n";

@@ -19,7 +19,8 @@ WorldActionWatch::WorldActionWatch(WorldAction action, std::uint32_t steps,
                                    const WorldState& before, std::int64_t sent_ns)
     : action_(action),
       steps_(steps),
-      before_(before),
+      paused_before_(before.paused != 0),
+      step_before_(before.header.sim_step),
       sent_ns_(sent_ns),
       previous_step_(before.header.sim_step) {}
 
@@ -27,21 +28,19 @@ std::optional<std::string> WorldActionWatch::shown(const WorldState& now) {
   if (now.header.publish_stamp_ns > sent_ns_) ++states_after_sending_;
   switch (action_) {
     case WorldAction::kPause:
-      if (now.paused) return (before_.paused ? "already paused " : "paused ") + at(now);
+      if (now.paused) return (paused_before_ ? "already paused " : "paused ") + at(now);
       break;
     case WorldAction::kResume:
-      if (!now.paused) return (before_.paused ? "resumed " : "already running ") + at(now);
+      if (!now.paused) return (paused_before_ ? "resumed " : "already running ") + at(now);
       break;
     case WorldAction::kStep:
-      if (now.header.sim_step >= before_.header.sim_step + steps_)
+      if (now.header.sim_step >= step_before_ + steps_)
         return "stepped " + std::to_string(steps_) + (steps_ == 1 ? " step" : " steps") +
                ": now paused " + at(now);
       break;
     case WorldAction::kReset:
-      // The step count goes back to 0. From step 0 there is nothing to see: the second
-      // state published after sending comes from a step that read the command.
-      if (now.header.sim_step < previous_step_ ||
-          (before_.header.sim_step == 0 && states_after_sending_ >= 2))
+      // The step count goes back to 0; from step 0 it cannot (see the header).
+      if (now.header.sim_step < previous_step_ || (step_before_ == 0 && states_after_sending_ >= 2))
         return "reset from step " + std::to_string(previous_step_) + ": now " + at(now) +
                (now.paused ? ", paused" : "");
       previous_step_ = now.header.sim_step;

@@ -9,7 +9,7 @@
 
 namespace afhub::physics {
 
-void SimChannels::apply_commands(std::int64_t now_ns) noexcept {
+void SimChannels::apply_commands(std::int64_t now_ns, bool holding) noexcept {
   for (std::size_t c = 0; c < channels_.size(); ++c) {
     Channel& channel = channels_[c];
     // The command slots were last written by a controller on another core: asked for
@@ -66,12 +66,15 @@ void SimChannels::apply_commands(std::int64_t now_ns) noexcept {
         channel.commanded = true;
       }
     }
-    // A lockstep client's command does not age while the physics holds a step for it or
-    // for the others: the simulation waits. Its silence is the barrier's to judge
-    // (--client-timeout); once it has missed a step, the watchdog's too. (Its command to
-    // step 0 expired when the last client came 0.5 s later, and a client stalled on a
-    // loaded machine lost its command while the physics held the step for it.)
-    const bool held_for = lockstep_ && channel.lockstep_pid != 0 && channel.misses == 0;
+    // A lockstep client's command does not age while the barrier holds a step, for it or
+    // for the others, nor on the step it answered, taken when the hold ends: the
+    // simulation waits. Its silence is the barrier's to judge (--client-timeout); once it
+    // has missed a step, or steps go on without it (`world step` while paused), the
+    // watchdog's too. (Its command to step 0 expired when the last client came 0.5 s
+    // later, and a client stalled on a loaded machine lost its command while the physics
+    // held the step for it.)
+    const bool held_for = lockstep_ && channel.lockstep_pid != 0 && channel.misses == 0 &&
+                          (holding || channel.answered_step == sim_.step_count());
     if (channel.commanded && !held_for && now_ns - channel.last_command_ns > channel.watchdog_ns) {
       if (channel.hold_on_watchdog)
         sim_.hold_joints(channel.index);

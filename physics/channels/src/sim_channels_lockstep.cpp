@@ -86,7 +86,7 @@ void SimChannels::set_lockstep_pid(Channel& channel, std::uint32_t pid) noexcept
 }
 
 bool SimChannels::hold_step_turn(std::int64_t now_ns, std::int64_t& republish_ns) noexcept {
-  apply_commands(now_ns);
+  apply_commands(now_ns, true);
   if (stop_requested()) return false;
   // The held step again, freshly stamped: readers that judge a physics by its stamps
   // (`afhub status`, `world pause`, a controller's phase) see it alive while it waits.

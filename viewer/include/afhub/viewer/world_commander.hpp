@@ -22,7 +22,7 @@ class WorldCommander {
   std::string run(const std::string& query);
 
  private:
-  std::string wait_until_shown(WorldActionWatch& watch, std::int64_t sent_ns);
+  std::string wait_until_shown(WorldActionWatch& watch);
 
   std::mutex mutex_;
   Writer<WorldCommand> writer_;

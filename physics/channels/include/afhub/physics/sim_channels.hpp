@@ -115,8 +115,9 @@ class SimChannels {
   // After a world reset (the simulation's inputs cleared, its steps from 0): no body
   // is under command, and no lockstep answer or timeliness count carries across.
   void forget_commands() noexcept;
-  // Reads each body's newest command, applies it, and runs the watchdogs.
-  void apply_commands(std::int64_t now_ns) noexcept;
+  // Reads each body's newest command, applies it, and runs the watchdogs. `holding`: the
+  // lockstep barrier holds the step (a lockstep client's command does not age then).
+  void apply_commands(std::int64_t now_ns, bool holding = false) noexcept;
   // The world's clock as published with the states.
   struct WorldClock {
     double wall_time_s = 0.0;
