@@ -413,6 +413,8 @@ bool live_frames(FrameCounter& page, std::chrono::milliseconds timeout) {
 TEST(HubLoss, ARecordingEndsCompleteWhenTheHubGoesAndGoesOnIntoTheNextFile) {
   const std::string log = "/tmp/afhub-fault-record.log", file = "/tmp/afhub-fault-record.mcap",
                     next = "/tmp/afhub-fault-record.1.mcap";
+  // An earlier run's files would pass for this run's before its recorder registered.
+  for (const std::string& path : {log, file, next}) unlink(path.c_str());
   ScopedProcess hub(start_test_hub());
   ASSERT_GT(hub.pid, 0);
   ScopedProcess physics =
@@ -530,6 +532,58 @@ TEST(HubLoss, TheViewerSaysTheHubIsLostThenServesLiveFramesAgain) {
   }
   EXPECT_EQ(view.stop(), 0) << tail(read_file(view_log));
   EXPECT_EQ(physics.stop(), 0);
+}
+
+// Whether `pid` is stopped (SIGSTOP): /proc/PID/stat's state after the command's ")".
+bool stopped(pid_t pid) {
+  const std::string stat = read_file("/proc/" + std::to_string(pid) + "/stat");
+  const std::size_t end = stat.rfind(')');
+  return end != std::string::npos && end + 2 < stat.size() && stat[end + 2] == 'T';
+}
+
+// A hub SIGKILLed while a process registers with it (the process held just before it
+// sends its registration: tests/faults/stop_before_registration.c). iceoryx alone waited
+// 60 s and aborted, or waited on. A process that outlives its hub (`afhub synth`) waits
+// for the next hub and attaches to it; another (`afhub ls`) says so and exits with code 1.
+TEST(HubLoss, AHubKilledWhileAProcessRegistersIsSeen) {
+  const std::string marker = "/tmp/afhub-fault-registration-stopped";
+  for (const bool outlives : {false, true}) {
+    SCOPED_TRACE(outlives ? "afhub synth" : "afhub ls");
+    const std::string log = "/tmp/afhub-fault-registration.log";
+    unlink(marker.c_str());
+    ScopedProcess hub(start_test_hub());
+    ASSERT_GT(hub.pid, 0);
+    const std::vector<std::string> args =
+        outlives ? std::vector<std::string>{"synth", "--bodies", "2", "--no-autostart"}
+                 : std::vector<std::string>{"ls"};
+    ScopedProcess client = spawn_wrapped_afhub({"env", "LD_PRELOAD=" AFHUB_STOP_BEFORE_REGISTRATION,
+                                                "AFHUB_TEST_STOP_BEFORE_REGISTRATION=" + marker},
+                                               args, log);
+    ASSERT_TRUE(wait_until([&] { return stopped(client.pid); }, 20s)) << read_file(log);
+    ASSERT_TRUE(contains(read_file(log), "stop_before_registration: stopped")) << read_file(log);
+    kill(hub.pid, SIGKILL);
+    waitpid(hub.pid, nullptr, 0);
+    hub.pid = -1;
+    kill(client.pid, SIGCONT);
+    if (!outlives) {
+      EXPECT_EQ(wait_for_exit(client, 20s), 1) << read_file(log);
+      EXPECT_TRUE(contains(read_file(log), "went away while registering this process"))
+          << read_file(log);
+      continue;
+    }
+    ASSERT_TRUE(wait_until(
+        [&] { return contains(read_file(log), "waiting for a hub to re-attach to"); }, 20s))
+        << read_file(log);
+    EXPECT_TRUE(contains(read_file(log), "went away (while registering this process)"))
+        << read_file(log);
+    hub.pid = start_test_hub();
+    ASSERT_GT(hub.pid, 0);
+    EXPECT_TRUE(wait_until([&] { return contains(read_file(log), "re-attached to the hub"); }, 20s))
+        << read_file(log);
+    EXPECT_TRUE(wait_until([] { return contains(run_afhub({"ls"}, 5s).out, "synth"); }, 20s))
+        << run_afhub({"ls"}, 5s).out << read_file(log);
+    EXPECT_EQ(client.stop(SIGINT), 0) << read_file(log);
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(Faults, HubRestart, ::testing::Values(false, true),

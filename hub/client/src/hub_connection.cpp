@@ -20,6 +20,7 @@
 #include "iceoryx_hoofs/log/logmanager.hpp"
 #include "iceoryx_posh/runtime/posh_runtime.hpp"
 #include "pool_exhaustion_filter.hpp"
+#include "registration_guard.hpp"
 
 namespace afhub {
 namespace {
@@ -87,6 +88,7 @@ void connect_to_hub(const std::string& role, HubPolicy policy, std::chrono::mill
   claim_runtime_lock_file("/tmp/" + name + ".lock");
   {
     const StopEndsBlockingCall stoppable;
+    const RegistrationGuard guard("afhub " + role);
     iox::runtime::PoshRuntime::initRuntime(iox::RuntimeName_t(iox::cxx::TruncateToCapacity, name));
   }
   runtime_name_storage() = name;

@@ -9,6 +9,7 @@
 #include "iceoryx_posh/popo/wait_set.hpp"
 #include "latest_slot.hpp"
 #include "reader_port.hpp"
+#include "slot_blocks.hpp"
 
 namespace afhub {
 namespace {
