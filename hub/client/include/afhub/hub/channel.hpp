@@ -217,7 +217,7 @@ class Writer {
     if (!rewritten) std::memcpy(chunk, &default_payload(), bytes);
     return static_cast<T*>(chunk);
   }
-  std::int64_t publish(T* payload) noexcept { return raw_.publish(payload); }
+  void publish(T* payload) noexcept { raw_.publish(payload); }
   void publish(T* payload, std::int64_t stamp_ns) noexcept { raw_.publish(payload, stamp_ns); }
   RawWriter& raw() { return raw_; }
   const RawWriter& raw() const { return raw_; }
