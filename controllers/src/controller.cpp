@@ -8,6 +8,8 @@
 #include <cstdio>
 #include <memory>
 #include <optional>
+#include <thread>
+#include <vector>
 
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/hub_health.hpp"
@@ -18,7 +20,9 @@
 #include "afhub/hub/sample_waiter.hpp"
 #include "afhub/hub/startup_wait.hpp"
 #include "afhub/rt/stop_signal.hpp"
+#include "afhub/shm_layout/channel_names.hpp"
 #include "afhub/shm_layout/error.hpp"
+#include "afhub/shm_layout/world.hpp"
 
 namespace afhub {
 namespace {
@@ -119,6 +123,49 @@ void run_free(BodyClient& body, const ControllerOptions& options, const Controll
   run_periodic(loop, timing, steps);
 }
 
+// Whether the physics publishing `body` steps in lockstep, as its world state says: the
+// world of a namespace the body's name starts with ("", "a", "a/b" for "a/b/c": `afhub
+// run --namespace`) that the body's publisher publishes. nullopt when none says so
+// within a second: `afhub synth` and `afhub play` publish no world.
+std::optional<bool> publisher_steps_in_lockstep(BodyClient& body, const std::string& channel) {
+  std::vector<std::unique_ptr<LatestReader<WorldState>>> worlds;
+  const auto add_world = [&](std::string_view name_space) {
+    worlds.push_back(std::make_unique<LatestReader<WorldState>>(
+        ChannelId{std::string(kService), world_instance(name_space), std::string(kStateEvent)}));
+  };
+  add_world({});
+  for (std::size_t slash = channel.find('/'); slash != std::string::npos;
+       slash = channel.find('/', slash + 1))
+    add_world(std::string_view(channel).substr(0, slash));
+  for (const std::int64_t give_up = monotonic_ns() + 1'000'000'000;
+       monotonic_ns() < give_up && !stop_requested();
+       std::this_thread::sleep_for(std::chrono::milliseconds(2))) {
+    const BodyState* state = body.latest_state();
+    if (!state) continue;
+    for (auto& world : worlds)
+      if (const WorldState* now = world->latest();
+          now && now->header.publisher_pid == state->header.publisher_pid)
+        return now->lockstep != 0;
+  }
+  return std::nullopt;
+}
+
+// What a lockstep controller says at start: whether the physics waits for it.
+void say_lockstep(BodyClient& body, const std::string& channel, const std::string& who) {
+  const std::optional<bool> lockstep = publisher_steps_in_lockstep(body, channel);
+  if (lockstep == true)
+    std::fprintf(stderr, "%s: commanding %s in lockstep with the physics\n", who.c_str(),
+                 channel.c_str());
+  else
+    std::fprintf(stderr,
+                 "%s: answering each state of %s as it comes, but %s: it does not wait for "
+                 "these answers (`afhub run --lockstep` would)\n",
+                 who.c_str(), channel.c_str(),
+                 lockstep.has_value()
+                     ? "its physics steps on its own clock, not in lockstep"
+                     : "no world state from its publisher says it steps in lockstep");
+}
+
 // Lockstep: answer each new step as soon as its state arrives, asleep on the state
 // channel until then (a futex post wakes it in microseconds), or with `spin`
 // polling with a yield. The sleep ends every 10 ms to publish stats and see a stop.
@@ -179,8 +226,7 @@ int run_controller(const ControllerOptions& options, const ControllerCycle& cycl
   LoopStatsPublisher stats(options.name, channel, options.loop.period_ns, options.lockstep, grant);
   RefusalNotice refusals(who);
   if (options.lockstep) {
-    std::fprintf(stderr, "%s: commanding %s in lockstep with the physics\n", who.c_str(),
-                 channel.c_str());
+    say_lockstep(body, channel, who);
     run_lockstep(body, options, cycle, timing, stats, refusals);
   } else {
     std::fprintf(stderr, "%s: commanding %s every %.3f ms\n", who.c_str(), channel.c_str(),

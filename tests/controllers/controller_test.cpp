@@ -153,6 +153,28 @@ TEST(Lockstep, StepsTakenWhilePausedExpireADeadClientsCommand) {
   EXPECT_EQ(physics.stop(), 0);
 }
 
+// A lockstep client says whether its physics waits for it: it read "in lockstep" even
+// against a physics run without --lockstep, which never waits.
+TEST(Lockstep, AClientSaysWhetherItsPhysicsWaitsForIt) {
+  for (const bool lockstep : {false, true}) {
+    std::vector<std::string> args = {"run", kArm, "--no-autostart"};
+    if (lockstep) args.push_back("--lockstep");
+    ScopedProcess physics(spawn_afhub(args));
+    BodyClient base("afhub/arm/base");
+    ASSERT_TRUE(wait_until([&] { return base.latest_state() != nullptr; }, 10s));
+    const RunResult client =
+        run_afhub({"ctl", "hold", "base", "--lockstep", "--cycles", "100"}, 30s);
+    EXPECT_EQ(client.exit_code, 0) << client.err;
+    EXPECT_EQ(contains(client.err, "commanding afhub/arm/base in lockstep with the physics"),
+              lockstep)
+        << client.err;
+    EXPECT_EQ(contains(client.err, "its physics steps on its own clock, not in lockstep"),
+              !lockstep)
+        << client.err;
+    EXPECT_EQ(physics.stop(), 0);
+  }
+}
+
 TEST(Lockstep, KilledClientIsDroppedTheWorldGoesOnAndARestartedClientRejoins) {
   afhub::testing::ModelFolder folder;
   const std::string log = (folder.dir() / "run.log").string();
