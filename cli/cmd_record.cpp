@@ -108,9 +108,13 @@ int run_record(RecordCliOptions& options) {
     last_bytes = p.file_bytes;
     if (live) std::fprintf(stderr, "\r%s\033[K", progress_line(p, rate).c_str());
   };
-  std::fprintf(stderr, "afhub record: writing %s (Ctrl-C stops)\n", options.record.output.c_str());
+  // Said once the file is this recorder's: a second recorder on it is refused instead.
+  const auto opened = [&] {
+    std::fprintf(stderr, "afhub record: writing %s (Ctrl-C stops)\n",
+                 options.record.output.c_str());
+  };
   const mcap::RecordProgress end = mcap::record(
-      options.record, [] { return !stop_requested(); }, report);
+      options.record, [] { return !stop_requested(); }, report, opened);
   const double mean =
       end.seconds > 0.0 ? static_cast<double>(end.file_bytes) / 1e6 / end.seconds : 0;
   std::fprintf(stderr, "%safhub record: %s\n", live ? "\n" : "", progress_line(end, mean).c_str());

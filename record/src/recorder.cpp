@@ -859,11 +859,13 @@ ActiveSession::~ActiveSession() {
 }  // namespace
 
 RecordProgress record(const RecordOptions& options, const std::function<bool()>& keep_going,
-                      const std::function<void(const RecordProgress&)>& progress) {
+                      const std::function<void(const RecordProgress&)>& progress,
+                      const std::function<void()>& opened) {
   if (!options.profile.empty() && options.profile != "ros2")
     throw Error("--profile takes ros2 (ROS 2 messages in CDR), not " + options.profile +
                 "; without it afhub records its own payloads");
   Session session(options);
+  if (opened) opened();
   return session.run(keep_going, progress);
 }
 

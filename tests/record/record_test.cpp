@@ -1895,6 +1895,11 @@ TEST(Record, ARecordingsFileHasOneWriterAndItsDeletionIsAnError) {
   EXPECT_EQ(recover.exit_code, 1) << recover.err;
   EXPECT_NE(recover.err.find("is being written by another process"), std::string::npos)
       << recover.err;
+  // A second recorder is refused before it says it writes the file.
+  const RunResult again = run_afhub({"record", "-o", file, "--duration", "1"});
+  EXPECT_EQ(again.exit_code, 1) << again.err;
+  EXPECT_TRUE(contains(again.err, "is being written by another process")) << again.err;
+  EXPECT_FALSE(contains(again.err, "writing " + file)) << again.err;
   first->close();
   first.reset();
   EXPECT_EQ(run_afhub({"info", file}).exit_code, 0) << "the first writer's file is whole";

@@ -47,9 +47,11 @@ struct RecordProgress {
 };
 
 // Records until `keep_going()` says false or options.duration_s has passed (see there),
-// reporting to `progress` about twice a second and once at the end.
+// reporting to `progress` about twice a second and once at the end, and to `opened` once
+// the file is open and this process its one writer.
 // Needs connect_to_hub(). Throws afhub::Error when the file cannot be written.
 RecordProgress record(const RecordOptions& options, const std::function<bool()>& keep_going,
-                      const std::function<void(const RecordProgress&)>& progress);
+                      const std::function<void(const RecordProgress&)>& progress,
+                      const std::function<void()>& opened = {});
 
 }  // namespace afhub::mcap
