@@ -229,6 +229,33 @@ TEST(Lockstep, KilledClientIsDroppedTheWorldGoesOnAndARestartedClientRejoins) {
   EXPECT_TRUE(contains(output, "dropped from the barrier")) << output;
   EXPECT_TRUE(contains(output, "lockstep client pid " + std::to_string(second.pid) + " joined"))
       << output;
+  EXPECT_FALSE(contains(output, "two lockstep clients")) << output;  // one after the other
+}
+
+// Two lockstep clients on one body: the physics takes whichever command came last, so
+// the run depends on their timing. It said nothing; now it says so, once.
+TEST(Lockstep, TwoClientsOnOneBodyAreSaid) {
+  afhub::testing::ModelFolder folder;
+  const std::string log = (folder.dir() / "run.log").string();
+  ScopedProcess physics(spawn_afhub({"run", kArm, "--no-autostart", "--lockstep", "--paused",
+                                     "--client-timeout", "60000", "--fast", "--steps", "3000"},
+                                    log));
+  // Both in their loops before the world runs: a fast run would end before a late one.
+  const std::string hold_log = (folder.dir() / "hold.log").string(),
+                    sine_log = (folder.dir() / "sine.log").string();
+  ScopedProcess hold(spawn_afhub({"ctl", "hold", "base", "--lockstep"}, hold_log));
+  ScopedProcess sine(spawn_afhub({"ctl", "sine", "base", "--lockstep"}, sine_log));
+  ASSERT_TRUE(wait_until(
+      [&] {
+        return contains(read_file(hold_log), "in lockstep with the physics") &&
+               contains(read_file(sine_log), "in lockstep with the physics");
+      },
+      20s))
+      << read_file(hold_log) << read_file(sine_log);
+  ASSERT_EQ(run_afhub({"world", "resume"}).exit_code, 0);
+  EXPECT_EQ(wait_for_exit(physics, 60s), 0) << read_file(log);
+  const std::string output = read_file(log);
+  EXPECT_EQ(occurrences(output, "two lockstep clients command afhub/arm/base"), 1) << output;
 }
 
 TEST(Controllers, KilledControllerTripsTheHoldWatchdogAndARestartTakesOver) {

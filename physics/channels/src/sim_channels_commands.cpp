@@ -59,7 +59,10 @@ void SimChannels::apply_commands(std::int64_t now_ns, bool holding) noexcept {
           ++rejected_;
           if (Notice* notice = note(channel, kAxisless, answer.pid)) set_name(notice->why, entry);
         }
-        if (lockstep_ && answer.lockstep) note_lockstep_answer(channel, answer);
+        if (lockstep_ && answer.lockstep) {
+          note_second_client(channel, answer.pid);
+          note_lockstep_answer(channel, answer);
+        }
         channel.applied_answer_step = answer.step;
         sim_.set_input(channel.index, input_);
         channel.last_command_ns = std::min(stamp_ns, now_ns);
@@ -139,6 +142,13 @@ int SimChannels::report_events(std::FILE* out) {
                        body, static_cast<double>(channel.watchdog_ns) * 1e-9,
                        channel.hold_on_watchdog ? "its joints hold their positions"
                                                 : "its wrench and the efforts it drove are zero");
+          break;
+        case kShared:
+          std::fprintf(out,
+                       "afhub run: two lockstep clients command %s, pids %u and %u: each step "
+                       "takes whichever command came last, so the run depends on their timing "
+                       "(said once per body); run one lockstep client per body\n",
+                       body, n.other_pid, n.pid);
           break;
         case kJoined:
           std::fprintf(out,

@@ -2,6 +2,7 @@
 // waiting for lockstep clients before the first step, and catch-up's wait for the
 // controllers in phase.
 #include <sched.h>
+#include <signal.h>
 
 #include <algorithm>
 #include <cstdio>
@@ -49,6 +50,15 @@ void SimChannels::wait_for_commands(std::int64_t until_ns) noexcept {
     waiter_->wait(until_ns - monotonic_ns());
   else
     sched_yield();
+}
+
+void SimChannels::note_second_client(Channel& channel, std::uint32_t pid) noexcept {
+  const Notice& said = channel.notices[kShared];
+  if (said.said || said.pending || channel.lockstep_pid == 0 || channel.lockstep_pid == pid) return;
+  // Unless the client in the barrier missed a step or is gone: a client restarted after a
+  // kill answers before the dead one is dropped.
+  if (channel.misses > 0 || kill(static_cast<pid_t>(channel.lockstep_pid), 0) != 0) return;
+  note(channel, kShared, pid)->other_pid = channel.lockstep_pid;
 }
 
 void SimChannels::note_lockstep_answer(Channel& channel, const Answer& answer) noexcept {

@@ -167,17 +167,19 @@ class SimChannels {
   // publish_view's two parts.
   void publish_scene_poses() noexcept;
   void publish_soft_nodes() noexcept;
-  // An event to say from outside the loop. Refusals, stale commands and expiries are
-  // said once per body (a short watchdog may fire every few ms); joins and drops each time.
+  // An event to say from outside the loop. Refusals, stale commands, expiries and a
+  // second lockstep client are said once per body (a short watchdog may fire every few
+  // ms, two clients alternate every step); joins and drops each time.
   // How far ahead of this process's clock a command's stamp may be: every process
   // reads the same CLOCK_MONOTONIC, so only a read racing the publish on another core.
   static constexpr std::int64_t kFutureStampAllowanceNs = 1'000'000;
-  enum Event { kStale, kRejected, kAxisless, kExpired, kJoined, kDropped, kEventKinds };
+  enum Event { kStale, kRejected, kAxisless, kExpired, kShared, kJoined, kDropped, kEventKinds };
   struct Notice {
     bool pending = false;  // noted since the last report
     bool said = false;
     std::uint32_t pid = 0;
     double seconds = 0.0;         // kStale: the command's age (< 0: from the future)
+    std::uint32_t other_pid = 0;  // kShared: the client in the barrier
     std::uint64_t step = 0;       // kJoined: the step it joined at
     int misses = 0;               // kDropped: late steps in a row
     std::array<char, 160> why{};  // kRejected, kAxisless: the problem
@@ -214,7 +216,7 @@ class SimChannels {
   };
   // The notice to fill for `event`, or nullptr when a said-once event was noted already.
   static Notice* note(Channel& channel, Event event, std::uint32_t pid) noexcept;
-  static bool said_once(Event event) { return event <= kExpired; }
+  static bool said_once(Event event) { return event <= kShared; }
   // Puts `channel` in the barrier for client `pid` (0: out of it), keeping the count.
   void set_lockstep_pid(Channel& channel, std::uint32_t pid) noexcept;
   // The world's clock as last published, for publishing a held step again.
@@ -226,6 +228,8 @@ class SimChannels {
     std::uint32_t pid = 0;
     bool lockstep = false;
   };
+  // Notes a lockstep answer from `pid` while another live client answers for the body.
+  void note_second_client(Channel& channel, std::uint32_t pid) noexcept;
   void note_lockstep_answer(Channel& channel, const Answer& answer) noexcept;
   Channel& active_channel(const std::string& body, const char* option);
   // One turn of holding a step: commands in, and the held step published again every
