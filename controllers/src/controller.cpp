@@ -125,8 +125,8 @@ void run_free(BodyClient& body, const ControllerOptions& options, const Controll
 
 // Whether the physics publishing `body` steps in lockstep, as its world state says: the
 // world of a namespace the body's name starts with ("", "a", "a/b" for "a/b/c": `afhub
-// run --namespace`) that the body's publisher publishes. nullopt when none says so
-// within a second: `afhub synth` and `afhub play` publish no world.
+// run --namespace`) that the body's publisher publishes. nullopt when none comes within
+// a second (a publisher of bodies without a world, or one stalled).
 std::optional<bool> publisher_steps_in_lockstep(BodyClient& body, const std::string& channel) {
   std::vector<std::unique_ptr<LatestReader<WorldState>>> worlds;
   const auto add_world = [&](std::string_view name_space) {
