@@ -61,16 +61,19 @@ std::int64_t deadline_after(double seconds, const char* what);
 // Ctrl-C during a wait with the GIL released: a signal's Python handler runs only under
 // the GIL, so the wait looks for it, at most every 20 ms (a look takes the GIL).
 // pending() keeps the exception (KeyboardInterrupt) for raise_if_pending(), which raises
-// it once the GIL is held again.
+// it once the GIL is held again. One state for the process, kept by its main thread
+// (the only one Python runs signal handlers on; elsewhere nothing is pending): a Ctrl-C
+// seen by any wait, the hub client's own included, is raised by the next
+// raise_if_pending(), never lost between two watches.
 class SignalWatch {
  public:
   bool pending() noexcept;  // without the GIL
   void raise_if_pending();  // with the GIL
   static constexpr std::int64_t kLookEveryNs = 20'000'000;
-
- private:
-  std::int64_t next_look_ns_ = 0;
-  std::exception_ptr error_;
 };
+
+// Makes a pending Ctrl-C end the hub client's own waits too (for a hub, for a body: they
+// look at stop_requested()). Called once, at import.
+void watch_interrupts_in_waits();
 
 }  // namespace afhub::python

@@ -62,6 +62,17 @@ class Loop {
   }
 
   py::dict run(std::uint64_t cycles, double seconds) {
+    // Checked and set under the GIL. Run again from its own callback it nested loops
+    // until the stack overflowed (a segfault); from two threads, two ran at once.
+    if (running_)
+      throw std::runtime_error(
+          "this Loop is running already (run() from its own callback, or from another "
+          "thread): make another Loop, or return False from the callback to end this one");
+    running_ = true;
+    const struct Ran {
+      bool& running;
+      ~Ran() { running = false; }
+    } ran{running_};
     ensure_connected();
     const std::int64_t end_ns = seconds != 0.0 ? deadline_after(seconds, "seconds") : 0;
     stop_ = false;
@@ -237,6 +248,7 @@ class Loop {
   std::uint64_t callbacks_ = 0;    // calls of the function in this run()
   std::exception_ptr error_;
   SignalWatch signals_;
+  bool running_ = false;
 };
 
 }  // namespace

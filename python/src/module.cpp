@@ -13,6 +13,7 @@
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/hub/loop_stats_reader.hpp"
 #include "afhub/rt/clock.hpp"
+#include "afhub/rt/stop_signal.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "bindings.hpp"
 #include "errors.hpp"
@@ -23,10 +24,15 @@ void ensure_connected(double wait_s) {
   require_hub();
   if (!runtime_name().empty()) return;
   if (!(wait_s >= 0.0 && wait_s <= 1e6)) throw py::value_error("wait_s takes 0 to 1e6 seconds");
-  py::gil_scoped_release release;
-  notice_hub_loss("python");
-  connect_to_hub("python", HubPolicy::kRequire,
-                 std::chrono::milliseconds(static_cast<std::int64_t>(wait_s * 1000.0)));
+  try {
+    py::gil_scoped_release release;
+    notice_hub_loss("python");
+    connect_to_hub("python", HubPolicy::kRequire,
+                   std::chrono::milliseconds(static_cast<std::int64_t>(wait_s * 1000.0)));
+  } catch (const Error&) {
+    SignalWatch().raise_if_pending();  // Ctrl-C ended the wait
+    throw;
+  }
 }
 
 void require_hub() {
@@ -49,11 +55,12 @@ BodyEntry wait_for_entry(const std::string& name, double wait_s) {
   require_no_nul(name);
   ensure_connected();
   const std::int64_t give_up = deadline_after(wait_s, "wait_s");
-  py::gil_scoped_release release;
   try {
+    py::gil_scoped_release release;
     return wait_for_body(name, "afhub python", give_up, "wait longer with wait_s");
   } catch (const Error&) {
-    require_hub();  // what the catalog of a hub gone says is beside the point
+    SignalWatch().raise_if_pending();  // Ctrl-C ended the wait
+    require_hub();                     // what the catalog of a hub gone says is beside the point
     throw;
   }
 }
@@ -104,23 +111,52 @@ std::int64_t deadline_after(double seconds, const char* what) {
   return monotonic_ns() + static_cast<std::int64_t>(seconds * 1e9);
 }
 
+namespace {
+
+struct InterruptState {
+  unsigned long main_thread = 0;  // PyThread_get_thread_ident() of Python's main thread
+  std::int64_t next_look_ns = 0;
+  std::exception_ptr error;
+};
+
+InterruptState& interrupts() {
+  static InterruptState state;
+  return state;
+}
+
+bool on_main_thread() noexcept {
+  return PyThread_get_thread_ident() == interrupts().main_thread;
+}
+
+}  // namespace
+
 bool SignalWatch::pending() noexcept {
-  if (error_) return true;
+  if (!on_main_thread()) return false;
+  InterruptState& state = interrupts();
+  if (state.error) return true;
   const std::int64_t now = monotonic_ns();
-  if (now < next_look_ns_) return false;
-  next_look_ns_ = now + kLookEveryNs;
+  if (now < state.next_look_ns) return false;
+  state.next_look_ns = now + kLookEveryNs;
   try {
     py::gil_scoped_acquire acquire;
     if (PyErr_CheckSignals() == 0) return false;
-    error_ = std::make_exception_ptr(py::error_already_set());
+    state.error = std::make_exception_ptr(py::error_already_set());
   } catch (...) {  // no memory to hold the Python error: raised as that instead
-    error_ = std::current_exception();
+    state.error = std::current_exception();
   }
   return true;
 }
 
 void SignalWatch::raise_if_pending() {
-  if (error_) std::rethrow_exception(std::exchange(error_, nullptr));
+  if (!on_main_thread()) return;
+  if (std::exception_ptr error = std::exchange(interrupts().error, nullptr))
+    std::rethrow_exception(error);
+}
+
+void watch_interrupts_in_waits() {
+  interrupts().main_thread =
+      py::module_::import("threading").attr("main_thread")().attr("ident").cast<unsigned long>();
+  set_stop_source([]() noexcept { return SignalWatch().pending(); });
 }
 
 namespace {
@@ -195,6 +231,7 @@ PYBIND11_MODULE(afhub, module) {
       "Errors are afhub.Error with the command line's messages; a command the physics "
       "refused raises afhub.CommandRefused; bad arguments raise ValueError.";
   register_errors(module);
+  watch_interrupts_in_waits();
   // pybind11 binds numpy's C API on first use, under a static guard that a thread
   // blocks on while holding the GIL: the importing thread does it now, before any other
   // thread (ambf_client's publisher) can race it into a deadlock.

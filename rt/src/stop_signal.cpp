@@ -10,6 +10,7 @@ namespace afhub {
 namespace {
 std::atomic<bool> g_stop{false};
 std::atomic<int> g_blocking_calls{0};
+std::atomic<bool (*)() noexcept> g_stop_source{nullptr};
 extern "C" void on_stop_signal(int) {
   g_stop = true;
   if (g_blocking_calls > 0) _exit(0);  // stuck in a call that never looks at the flag
@@ -26,7 +27,13 @@ void install_stop_signal_handlers() {
 }
 
 bool stop_requested() {
-  return g_stop;
+  if (g_stop) return true;
+  bool (*const source)() noexcept = g_stop_source;
+  return source && source();
+}
+
+void set_stop_source(bool (*requested)() noexcept) {
+  g_stop_source = requested;
 }
 
 StopEndsBlockingCall::StopEndsBlockingCall() {

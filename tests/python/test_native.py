@@ -307,6 +307,12 @@ def test_loop_ends_on_false_and_raises_what_the_callback_raised():
         afhub.Loop(1000, fail, after_step_us=100, unaligned=True)
     with pytest.raises(ValueError, match='lockstep loop answers a body'):
         afhub.Loop(0, fail, lockstep=True)
+    # Run again from its own callback, it nested until the stack overflowed (a segfault).
+    # Twice: a run that ended leaves the loop free to run again.
+    loop = afhub.Loop(1000, lambda: loop.run(cycles=1))
+    for _ in range(2):
+        with pytest.raises(RuntimeError, match='this Loop is running already'):
+            loop.run(cycles=2)
     # A negative or NaN length is refused, not taken as no limit (it never returned).
     for seconds in (-1.0, float('nan')):
         with pytest.raises(ValueError, match='seconds takes 0 to 1e6 seconds'):
@@ -320,6 +326,7 @@ waits = {
     'wait_next': lambda: body.wait_next(after_step=10**15, timeout_s=600),
     'World.resume': lambda: afhub.World().resume(timeout_s=600),
     'Loop.run': lambda: afhub.Loop(0.001, lambda: True).run(seconds=600),
+    'Body(wait_s)': lambda: afhub.Body('arm/nowhere', wait_s=600),
 }
 print('ready', flush=True)
 try:
@@ -330,13 +337,13 @@ except KeyboardInterrupt:
 
 
 def test_ctrl_c_ends_every_wait_and_a_slow_loop_ends_at_its_length(physics):
-    """Ctrl-C reached a script waiting in wait_next() or a World call only at the timeout
-    (up to 1e6 s), and a Loop sleeping a long period only after it; a Loop run for a
+    """Ctrl-C reached a script waiting in wait_next(), a World call or for a body only at
+    the timeout (up to 1e6 s), and a Loop sleeping a long period only after it; a Loop run for a
     length shorter than its period slept the period out. A rate past what a period of
     int64 nanoseconds holds came out negative, and the loop spun."""
     run = physics(ARM)
     run.wait_for_body('arm/base')
-    for wait in ('wait_next', 'World.resume', 'Loop.run'):
+    for wait in ('wait_next', 'World.resume', 'Loop.run', 'Body(wait_s)'):
         if wait == 'World.resume':
             run.process.send_signal(signal.SIGSTOP)  # the world cannot act
         script = subprocess.Popen([sys.executable, '-c', INTERRUPTED, wait], text=True,
