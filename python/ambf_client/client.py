@@ -3,6 +3,7 @@ afhub's catalog, and the world's cameras and lights in its world state, instead 
 topics; hands out handles to them, and re-sends every handle's command at the publish
 rate from a background thread."""
 
+import atexit
 import os
 import sys
 import threading
@@ -41,6 +42,7 @@ class Client:
         self._rate_hz = 120.0
         self._thread = None
         self._running = False
+        self._exit_hooked = False
 
     # ----- connecting -----
     def connect(self, default_publish_rate=120):
@@ -49,6 +51,9 @@ class Client:
         afhub.connect(wait_s=float(os.environ.get('AFHUB_WAIT', '0')))
         self._read_catalog()
         self.start()
+        if not self._exit_hooked:  # a script that ends throttling leaves the world running
+            atexit.register(self._release_world)
+            self._exit_hooked = True
 
     def create_objs_from_rostopics(self, publish_rate):
         self._rate_hz = _publish_rate(publish_rate)
@@ -135,8 +140,13 @@ class Client:
         """A handle to the body named a_name: its full AMBF name ('/ambf/env/ecm/baselink'),
         a part of it after a '/' ('ecm/baselink', 'baselink'), any part that only one body's
         name holds, or 'World'. None when none or several match, saying which (as AMBF)."""
+        if not isinstance(a_name, str):
+            raise TypeError(f'get_obj_handle takes a name (str), not {type(a_name).__name__}')
         if a_name in ('World', 'world', '/ambf/env/World'):
             return self.get_world_handle()
+        if self._thread is None:  # its setters would send once, then nothing would
+            raise RuntimeError('get_obj_handle: the client is not connected: call connect() '
+                               "first (its thread sends the handles' commands at its rate)")
         name, problem = self._find(a_name)
         if name is None:  # a body whose physics started after connect()
             self._read_catalog()
@@ -206,7 +216,13 @@ class Client:
         if self._thread is not None and self._thread is not threading.current_thread():
             self._thread.join()
         self._thread = None
-        for name in self._objects:
+        for name, handle in self._objects.items():
             print('Closing publisher for: ', name)
+            handle.close()
         self._objects.clear()
+        self._release_world()
+
+    def _release_world(self):
+        if self._world is not None:
+            self._world.release_throttling()
 

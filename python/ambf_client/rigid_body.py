@@ -357,6 +357,7 @@ class RigidBody(Handle):
         (not finite, too many joints: ValueError, or any other error) put back the command `held` before the
         change, so that the next setter and the client's thread send that one, not the
         refused values again."""
+        self.require_open()
         # Every command feeds the wrench's watchdog, as in AMBF.
         now = time.monotonic()
         with self._lock:
@@ -402,4 +403,7 @@ def _xyz(v):
 
 
 def _xyzw(q):
-    return (q.x, q.y, q.z, q.w) if hasattr(q, 'w') else tuple(q)
+    xyzw = (q.x, q.y, q.z, q.w) if hasattr(q, 'w') else tuple(q)
+    if len(xyzw) != 4:  # three values became (x, y, z, 1), a rotation nobody asked for
+        raise ValueError(f'a quaternion takes four values x, y, z, w, not {len(xyzw)}')
+    return xyzw

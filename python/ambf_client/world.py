@@ -2,6 +2,8 @@
 client-driven stepping (AMBF's step throttling), which afhub gives by pausing the world
 and stepping it from update()."""
 
+import operator
+
 import afhub
 
 from .handle import Handle
@@ -45,10 +47,27 @@ class World(Handle):
             self._world.resume()
         self._throttling = data
 
+    def release_throttling(self):
+        """The world runs on, as AMBF's world does once its throttling client goes quiet:
+        the client calls it when cleaned up and when the script ends. A physics that is
+        gone has nothing to resume: said, not raised."""
+        if not self._throttling:
+            return
+        self._throttling = False
+        try:
+            self._world.resume(timeout_s=1.0)
+        except afhub.Error as error:
+            print(f'ambf_client: the world paused for throttling was not resumed: {error}')
+
     def set_num_step_skips(self, n):
-        if n <= 0 or n > 100:
-            raise ValueError('set_num_step_skips takes 1 to 100 steps')
-        self._step_skips = int(n)
+        try:
+            steps = None if isinstance(n, bool) else operator.index(n)
+        except TypeError:
+            steps = None
+        if steps is None or not 1 <= steps <= 100:
+            raise ValueError(f'set_num_step_skips takes a whole number of steps, 1 to 100, '
+                             f'not {n!r}')
+        self._step_skips = steps
 
     def update(self):
         """With throttling: advances the world by the step skips and waits until it has."""

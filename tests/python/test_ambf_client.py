@@ -211,6 +211,62 @@ def test_names_handles_and_unsupported_calls(physics, tmp_path):
     assert 'no_such_body NAMED OBJECT NOT FOUND' in output
 
 
+def test_misuse_is_refused_and_throttling_ends_with_the_script(physics, tmp_path):
+    """Found by fault injection: a handle got before connect(), or kept after clean_up(),
+    took setters that were sent once and never again (the watchdog let the arm fall); a
+    throttled script that ended left the world paused for good; three values to set_rot
+    became a quaternion (x, y, z, 1); a step skip of 0.5 became 0."""
+    run = physics(EXAMPLES / 'arm7.yaml')
+    run.wait_for_body('arm/base')
+    script = Script(tmp_path, """
+        from ambf_client import Client
+        c = Client()
+        for call, error in ((lambda: c.get_obj_handle('arm/base'), RuntimeError),
+                            (lambda: c.get_obj_handle(None), TypeError)):
+            try:
+                call()
+                raise SystemExit('not refused')
+            except error as refused:
+                print('refused:', refused)
+        c.connect()
+        a = c.get_obj_handle('arm/base')
+        try:
+            a.set_rot([0, 0, 1])
+            raise SystemExit('set_rot took three values')
+        except ValueError as refused:
+            print('refused:', refused)
+        w = c.get_world_handle()
+        for skips in (0.5, 2.5, '5', True, 0, 101):
+            try:
+                w.set_num_step_skips(skips)
+                raise SystemExit(f'set_num_step_skips took {skips!r}')
+            except ValueError:
+                pass
+        c.clean_up()
+        try:
+            a.set_joint_pos(0, 0.2)
+            raise SystemExit('a cleaned-up handle took a setter')
+        except RuntimeError as refused:
+            print('refused:', refused)
+        c.connect()
+        w = c.get_world_handle()
+        w.enable_throttling(True)
+        w.update()
+        print('THROTTLED', flush=True)
+        raise SystemExit(0)  # ends throttled, without clean_up()
+    """)
+    script.read_until('THROTTLED')
+    output = script.finish()
+    assert output.count('refused:') == 4, output
+    assert 'the client is not connected: call connect() first' in output
+    assert 'a quaternion takes four values' in output
+    assert "this handle's client was cleaned up" in output
+    world = afhub.World()
+    step = world.sim_step()
+    wait_until(lambda: world.sim_step() > step + 100, 5, 'the world running on after the script')
+    assert not world.state()['paused']
+
+
 @needs_shared_models()
 def test_ecm_by_ambf_names(physics, tmp_path):
     run = physics(ECM)
