@@ -301,6 +301,13 @@ class UrdfReader {
   // takes a link that is the child of two joints (of itself, even) as long as one root
   // is left: refused here, where the walk would place it twice, or forever.
   void place_links() {
+    // Before the walk: a link its own child is not below the root at all (urdfdom takes
+    // another link for the root), and the walk would never reach it.
+    for (const auto& [name, joint] : robot_->joints_)
+      if (joint->parent_link_name == joint->child_link_name)
+        fail(joint_at(name), "joint '" + name + "' has link '" + joint->child_link_name +
+                                 "' as both its parent and its child; a joint joins two "
+                                 "different links");
     std::vector<urdf::LinkConstSharedPtr> stack{robot_->getRoot()};
     world_[robot_->getRoot()->name] = btTransform::getIdentity();
     std::map<std::string, std::string> parent_joint;  // of each link placed
@@ -309,10 +316,6 @@ class UrdfReader {
       stack.pop_back();
       for (const auto& joint : link->child_joints) {
         const std::string& child = joint->child_link_name;
-        if (child == link->name)
-          fail(joint_at(joint->name), "joint '" + joint->name + "' has link '" + child +
-                                          "' as both its parent and its child; a joint "
-                                          "joins two different links");
         const auto [first, placed] = parent_joint.emplace(child, joint->name);
         if (!placed)
           fail(joint_at(joint->name),
@@ -325,6 +328,12 @@ class UrdfReader {
         stack.push_back(robot_->getLink(joint->child_link_name));
       }
     }
+    for (const auto& [name, link] : robot_->links_)
+      if (!world_.contains(name))
+        fail(link_at(name), "link '" + name + "' is not below the root link '" +
+                                robot_->getRoot()->name +
+                                "': its joints close a cycle. A URDF's links form one tree "
+                                "from the root, each the child of one joint");
   }
 
   std::string mesh_path(const urdf::Mesh& mesh, const std::string& link, const char* role) {

@@ -525,6 +525,18 @@ TEST(Urdf, MalformedAndInvalidFilesAreErrorsAtTheirLine) {
        "type=\"fixed\">\n    <parent link=\"b\"/>\n    <child link=\"b\"/>\n  </joint>\n",
        ":9:3: error: joint 'bb' has link 'b' as both its parent and its child",
        "a joint joins two different links"},
+      // urdfdom takes the other link for the root: 'map::at' was all that was said.
+      {"own_child_alone.urdf",
+       "  <link name=\"b\"/>\n  <joint name=\"bb\" type=\"fixed\">\n    <parent "
+       "link=\"b\"/>\n    <child link=\"b\"/>\n  </joint>\n",
+       ":5:3: error: joint 'bb' has link 'b' as both its parent and its child",
+       "a joint joins two different links"},
+      {"cycle.urdf",
+       "  <link name=\"b\"/>\n  <link name=\"c\"/>\n  <joint name=\"bc\" type=\"fixed\">\n"
+       "    <parent link=\"b\"/>\n    <child link=\"c\"/>\n  </joint>\n  <joint name=\"cb\" "
+       "type=\"fixed\">\n    <parent link=\"c\"/>\n    <child link=\"b\"/>\n  </joint>\n",
+       ":4:3: error: link 'b' is not below the root link 'a': its joints close a cycle",
+       "each the child of one joint"},
       {"two_parents.urdf",
        "  <link name=\"b\"/>\n  <link name=\"c\"/>\n  <joint name=\"ab\" type=\"fixed\">\n"
        "    <parent link=\"a\"/>\n    <child link=\"b\"/>\n  </joint>\n  <joint name=\"ac\" "
