@@ -142,6 +142,11 @@ BodySpec read_body(const FileReader& file, const YAML::Node& block, const std::s
   if (body.mass_kg > kMaxMassKg)
     fail(file.at(mass), "'mass' is " + mass.Scalar() + " kg, beyond the bound of " +
                             yaml::number_text(kMaxMassKg) + " kg for a model");
+  if (body.mass_kg > 0.0 && body.mass_kg < kMinMovingMassKg)
+    fail(file.at(mass), "'mass' is " + mass.Scalar() + " kg, below the " +
+                            yaml::number_text(kMinMovingMassKg) +
+                            " kg a moving body needs (Bullet divides by it); give 'mass: 0' "
+                            "for a static body");
   if (YAML::Node inertia = block["inertia"]) {
     Vec3 value = file.vec3(inertia, "inertia", "ix", "iy", "iz");
     if (value.x < 0 || value.y < 0 || value.z < 0)

@@ -8,7 +8,8 @@
 //   any number                    |x| <= 1e9 (yaml::kMaxMagnitude: gains, impulses, ...)
 //   lengths: positions, offsets,  |x| <= 1e5 m (100 km)
 //     pivots, shape sizes
-//   mass                          <= 1e6 kg
+//   mass                          <= 1e6 kg; a moving body's at least 1e-9 kg (Bullet
+//                                 divides by it: 1e-300 kg blew an arm apart, 1 km)
 //   scale                         > 0 and <= 1e3
 #pragma once
 
@@ -28,6 +29,7 @@ namespace afhub::physics {
 
 inline constexpr double kMaxLengthM = 1e5;
 inline constexpr double kMaxMassKg = 1e6;
+inline constexpr double kMinMovingMassKg = 1e-9;  // a microgram
 inline constexpr double kMaxScale = 1e3;
 
 [[noreturn]] inline void fail(const SourceLocation& where, const std::string& what) {

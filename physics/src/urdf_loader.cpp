@@ -466,6 +466,10 @@ class UrdfReader {
     const urdf::Inertial& in = *link.inertial;
     const std::string what = "link '" + link.name + "': <";
     require_within(in.mass, 0.0, kMaxMassKg, link_at(link.name), what + "mass> (kg)");
+    if (in.mass > 0.0 && in.mass < kMinMovingMassKg)
+      fail(link_at(link.name), what + "mass> is " + yaml::number_text(in.mass) + " kg, below the " +
+                                   yaml::number_text(kMinMovingMassKg) +
+                                   " kg a moving link needs (Bullet divides by it)");
     for (const auto& [name, value] : {std::pair{"ixx", in.ixx},
                                       {"ixy", in.ixy},
                                       {"ixz", in.ixz},

@@ -294,6 +294,9 @@ TEST_F(BadInput, AbsurdValuesAreRefusedWithTheirLocation) {
       {"  mass: 1e308\n", "model.yaml:4:9: error: 'mass' is 1e308, beyond"},
       {"  mass: 1e7\n", "model.yaml:4:9: error: 'mass' is 1e7 kg, beyond the bound of 1e+06 kg"},
       {"  mass: .nan\n", "model.yaml:4:9: error: 'mass' must be finite"},
+      // Taken, it blew the arm apart (a joint error of 1 km) with no warning.
+      {"  mass: 1e-300\n",
+       "model.yaml:4:9: error: 'mass' is 1e-300 kg, below the 1e-09 kg a moving body needs"},
       {"  mass: 1\n  location: {position: {x: 1e308, y: 0, z: 0}}\n",
        "model.yaml:5:28: error: 'location.position.x' is 1e308, beyond"},
       {"  mass: 1\n  location: {position: {x: 1e6, y: 0, z: 0}}\n",

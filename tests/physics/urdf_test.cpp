@@ -498,6 +498,13 @@ TEST(Urdf, MalformedAndInvalidFilesAreErrorsAtTheirLine) {
        "effort=\"1\" velocity=\"1\"/>\n  </joint>\n",
        ":8:5: error: not a valid URDF", "upper value (one) is not a valid float"},
       // urdfdom drops an element it cannot read, says so and returns the robot.
+      {"tiny_mass.urdf",
+       "  <link name=\"b\">\n    <inertial>\n      <mass value=\"1e-300\"/>\n      <inertia "
+       "ixx=\"1\" ixy=\"0\" ixz=\"0\" iyy=\"1\" iyz=\"0\" izz=\"1\"/>\n    </inertial>\n  "
+       "</link>\n  <joint name=\"j\" type=\"fixed\">\n    <parent link=\"a\"/>\n    <child "
+       "link=\"b\"/>\n  </joint>\n",
+       ":4:3: error: link 'b': <mass> is 1e-300 kg, below the 1e-09 kg a moving link needs",
+       "Bullet divides by it"},
       {"nan_mass.urdf",
        "  <link name=\"b\">\n    <inertial>\n      <mass value=\"nan\"/>\n    </inertial>\n  "
        "</link>\n",
