@@ -2,8 +2,10 @@
 #include "loop_options.hpp"
 
 #include <cmath>
+#include <cstdio>
 
 #include "afhub/shm_layout/error.hpp"
+#include "afhub/yaml/yaml_reader.hpp"
 #include "count_option.hpp"
 #include "time_options.hpp"
 
@@ -26,13 +28,19 @@ void add_phase_options(CLI::App* command, PhaseOptions& options, const char* wha
 }
 
 std::int64_t after_step_ns(const PhaseOptions& options, std::int64_t period_ns) {
-  if (options.after_step_us >= 0.0 && options.unaligned)
+  if (options.after_step_us && options.unaligned)
     throw Error("--after-step and --unaligned exclude each other: keep one");
   if (options.unaligned) return kAfterStepUnaligned;
-  if (options.after_step_us < 0.0) return kAfterStepHalfPeriod;
-  if (options.after_step_us * 1e3 >= static_cast<double>(period_ns))
-    throw Error("--after-step must be shorter than the loop's period");
-  return std::llround(options.after_step_us * 1e3);
+  if (!options.after_step_us) return kAfterStepHalfPeriod;
+  // NaN and negative offsets were taken as "not given" or rounded to garbage.
+  const double us = *options.after_step_us;
+  if (!(us >= 0.0 && us * 1e3 < static_cast<double>(period_ns))) {
+    char text[160];
+    std::snprintf(text, sizeof text, "--after-step takes 0 up to the loop's period (%g us), not %s",
+                  period_ns * 1e-3, yaml::number_text(us).c_str());
+    throw Error(text);
+  }
+  return std::llround(us * 1e3);
 }
 
 void set_loop_rate_options(const LoopRateOptions& options, LoopOptions& loop) {

@@ -2,6 +2,8 @@
 // loop of the command line (ctl, teleop, device run, device force) is paced.
 #pragma once
 
+#include <optional>
+
 #include <CLI/CLI.hpp>
 #include <cstdint>
 
@@ -25,7 +27,7 @@ void set_loop_rate_options(const LoopRateOptions& options, LoopOptions& loop);
 // --after-step and --unaligned: when a loop reading a body wakes against its physics'
 // steps (afhub/hub/step_phase.hpp), for ctl's controllers and teleop.
 struct PhaseOptions {
-  double after_step_us = -1.0;  // -1: half the period
+  std::optional<double> after_step_us;  // none: half the period
   bool unaligned = false;
 };
 

@@ -46,6 +46,8 @@ class Loop {
     }
     if (fifo_priority < 0 || fifo_priority > 99)
       throw py::value_error("fifo_priority takes 0 (the normal scheduler) to 99");
+    if (cpu < -1) throw py::value_error("cpu takes a CPU's number, or -1 for any CPU");
+    require_no_nul(name_);
     options_.period_ns = lockstep ? 0 : static_cast<std::int64_t>(1e9 / rate_hz);
     if (after_step_us && unaligned)
       throw py::value_error("after_step_us and unaligned=True exclude each other");

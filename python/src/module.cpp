@@ -21,9 +21,10 @@
 namespace afhub::python {
 
 void ensure_connected(double wait_s) {
+  // Checked first: connected already, connect(wait_s=nan) returned as if it were good.
+  if (!(wait_s >= 0.0 && wait_s <= 1e6)) throw py::value_error("wait_s takes 0 to 1e6 seconds");
   require_hub();
   if (!runtime_name().empty()) return;
-  if (!(wait_s >= 0.0 && wait_s <= 1e6)) throw py::value_error("wait_s takes 0 to 1e6 seconds");
   try {
     py::gil_scoped_release release;
     notice_hub_loss("python");

@@ -387,10 +387,17 @@ TEST(Controllers, BadArgumentsGetClearErrors) {
   RunResult bad_rate = run_afhub({"ctl", "hold", "base", "--rate", "0"});
   EXPECT_EQ(bad_rate.exit_code, 1);
   EXPECT_TRUE(contains(bad_rate.err, "--rate")) << bad_rate.err;
-  RunResult long_phase = run_afhub({"ctl", "hold", "base", "--after-step", "1000"});
-  EXPECT_EQ(long_phase.exit_code, 1);
-  EXPECT_TRUE(contains(long_phase.err, "--after-step must be shorter than the loop's period"))
-      << long_phase.err;
+  // NaN and negative offsets were taken (as "not given", or rounded to garbage).
+  for (const char* phase : {"1000", "nan", "-5"}) {
+    RunResult bad_phase = run_afhub({"ctl", "hold", "base", "--after-step", phase});
+    EXPECT_EQ(bad_phase.exit_code, 1) << phase;
+    EXPECT_TRUE(contains(bad_phase.err, "--after-step takes 0 up to the loop's period (1000 us)"))
+        << bad_phase.err;
+  }
+  // No name is no late body: refused at once (it waited the whole --wait).
+  RunResult no_name = run_afhub({"ctl", "hold", "", "--wait", "600"}, 10s);
+  EXPECT_EQ(no_name.exit_code, 1) << no_name.err;
+  EXPECT_TRUE(contains(no_name.err, "no body name given")) << no_name.err;
   RunResult both = run_afhub({"ctl", "hold", "base", "--after-step", "100", "--unaligned"});
   EXPECT_EQ(both.exit_code, 1);
   EXPECT_TRUE(contains(both.err, "--after-step and --unaligned exclude each other")) << both.err;

@@ -132,6 +132,12 @@ def test_errors_say_what_is_wrong(physics, tmp_path):
     for wait in (float('nan'), -1.0):  # checked whether or not a state is there to wait for
         with pytest.raises(ValueError, match='wait_s takes 0 to 1e6 seconds'):
             base.read(wait_s=wait)
+        with pytest.raises(ValueError, match='wait_s takes 0 to 1e6 seconds'):
+            afhub.connect(wait_s=wait)  # connected already, it returned
+    with pytest.raises(ValueError, match='cpu takes a CPU'):
+        afhub.Loop(1000, lambda: True, cpu=-5)
+    with pytest.raises(ValueError, match='a name has no NUL character; got one at index 1'):
+        afhub.Loop(1000, lambda: True, name='a\x00b')  # was cut to 'a'
     with pytest.raises(afhub.Error, match='copy/afhub/arm/base.*afhub/arm/base|afhub/arm/base.*copy'):
         afhub.Body('arm/base')  # two bodies end so: the message lists both
     with pytest.raises(ValueError, match=r'values\[1\] is nan, not a finite number'):

@@ -294,6 +294,7 @@ BodyEntry CatalogReader::resolve(std::string_view query) {
 
 BodyEntry wait_for_body(const std::string& query, const std::string& who, std::int64_t give_up_ns,
                         const std::string& hint) {
+  if (query.empty()) resolve_body(query, {});  // throws at once: no name is no late body
   CatalogReader catalog;
   catalog.wait(std::chrono::milliseconds(1000));
   bool said = false;
