@@ -62,6 +62,24 @@ class Player : public Visitor {
   std::uint64_t published() const { return published_; }
   const std::string& cut_off() const { return cut_off_; }
 
+  // A --bodies glob that matches none of the recording's bodies (a typo replayed no body
+  // and said nothing), said once the first pass has seen them all.
+  void say_unmatched_globs() const {
+    for (const std::string& glob : options_.body_globs) {
+      if (std::any_of(recorded_bodies_.begin(), recorded_bodies_.end(),
+                      [&](const std::string& body) { return matches_any(body, {glob}); }))
+        continue;
+      std::string some;  // the first four, as " (a, b, c, d, ...)"
+      for (std::size_t i = 0; i < recorded_bodies_.size() && i < 4; ++i)
+        some += (i ? ", " : " (") + recorded_bodies_[i];
+      if (!some.empty()) some += recorded_bodies_.size() > 4 ? ", ...)" : ")";
+      std::fprintf(stderr,
+                   "afhub play: --bodies '%s' matches none of the recording's %zu bodies%s: "
+                   "none was replayed for it (`afhub info FILE` lists them)\n",
+                   glob.c_str(), recorded_bodies_.size(), some.c_str());
+    }
+  }
+
   void header(const std::string& profile, const std::string&) override {
     if (!profile.empty())
       throw Error(options_.file + " was recorded with --profile " + profile +
@@ -89,6 +107,7 @@ class Player : public Visitor {
     replayed.topic = channel.topic;
     switch (replayed.kind) {
       case PayloadKind::kBodyState: {
+        recorded_bodies_.push_back(instance->second);
         if (!matches_any(instance->second, options_.body_globs)) return;
         check_room_for_bodies({instance->second}, 1);
         directory_.add(make_body_entry(instance->second, joint_names_in(channel.metadata)));
@@ -225,6 +244,7 @@ class Player : public Visitor {
   double last_at_s_ = 0.0;
   std::vector<std::uint64_t> aligned_;
   std::uint64_t published_ = 0;
+  std::vector<std::string> recorded_bodies_;  // every body state channel, in file order
 
   std::uint64_t first_log_ns_ = 0;
   std::int64_t pass_start_ns_ = 0;  // when the range's start was (would have been) published
@@ -255,7 +275,7 @@ PlayReport play(const PlayOptions& options, const std::function<bool()>& keep_go
     } catch (const EndOfPass& end) {
       if (end.stop) break;
     }
-    ++report.passes;
+    if (++report.passes == 1) player.say_unmatched_globs();
   } while (options.loop && keep_going());
   report.published = player.published();
   report.cut_off = player.cut_off();

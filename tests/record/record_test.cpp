@@ -971,6 +971,11 @@ TEST(Record, PlayPublishesTheWindowAndTheBodiesChosenAtTheRateChosen) {
       60s);
   EXPECT_EQ(fast.exit_code, 0) << fast.err;
   EXPECT_EQ(published(fast.err), whole_window) << fast.err;
+  EXPECT_FALSE(contains(fast.err, "matches none")) << fast.err;
+  // A glob matching no recorded body replayed none and said nothing.
+  const RunResult typo = run_afhub({"play", file, "--fast", "--bodies", "nope*"}, 60s);
+  EXPECT_EQ(typo.exit_code, 0) << typo.err;
+  EXPECT_TRUE(contains(typo.err, "--bodies 'nope*' matches none of the recording's")) << typo.err;
   // A window past the end plays nothing, and says so.
   const RunResult past = run_afhub({"play", file, "--fast", "--start", "100"}, 60s);
   EXPECT_EQ(past.exit_code, 1) << past.err;
