@@ -14,6 +14,7 @@
 #include "hub_loss_watcher.hpp"
 #include "hub_reattach.hpp"
 #include "iceoryx_error_handler.hpp"
+#include "keepalive_sink.hpp"
 #include "self_reexec.hpp"
 
 namespace afhub {
@@ -92,6 +93,7 @@ void watch_attached_hub(std::int64_t hub_seen_ns) {
     s.attached_hub = hub->instance;
     s.attached_hub_pid = hub->pid;
   }
+  if (!s.reexecs) s.roudi_fd = find_roudi_socket();
   if (s.reattach_count > 0)
     std::fprintf(stderr,
                  "%s: re-attached to the hub (pid %d), %.0f ms after it answered and %.2f s after "

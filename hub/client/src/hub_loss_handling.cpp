@@ -10,6 +10,7 @@
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/rt/stop_signal.hpp"
 #include "hub_loss_state.hpp"
+#include "keepalive_sink.hpp"
 #include "self_reexec.hpp"
 
 namespace afhub::hub_loss {
@@ -50,6 +51,7 @@ LossHandling handle_loss(const char* why) noexcept {
                  "%s: the hub%s went away (%s); this process cannot re-attach to another: "
                  "start it again once a hub runs\n",
                  s.who.c_str(), hub, why);
+    sink_keepalives(s.roudi_fd);
     return LossHandling::kCarriesOn;
   }
   std::fprintf(stderr,

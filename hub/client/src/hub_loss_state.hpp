@@ -29,6 +29,7 @@ struct State {
   std::atomic<bool> exiting{false};   // the process is exiting on its own: never re-execute it
   std::atomic<std::uint64_t> attached_hub{0};  // the instance of the hub attached to
   std::atomic<pid_t> attached_hub_pid{0};
+  int roudi_fd = -1;  // notice_hub_loss: this process's socket to RouDi, once attached
   // From AFHUB_REATTACH, at the opt-in: 0 at a normal start.
   unsigned reattach_count = 0;
   std::uint64_t lost_hub = 0;   // the instance the previous image lost (0: not an afhub hub)
