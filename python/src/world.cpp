@@ -58,10 +58,12 @@ class World {
   }
 
   // Sends `action` and waits until the world state shows it done; says what happened.
-  std::string act(WorldAction action, std::uint32_t steps, double timeout_s) {
+  // `steps` wide: a count past 2^32, or negative, is refused with its bounds (pybind's own
+  // error named no bound).
+  std::string act(WorldAction action, std::int64_t steps, double timeout_s) {
     require_hub();
     const std::int64_t give_up = deadline_after(timeout_s, "timeout_s");
-    if (action == WorldAction::kStep && (steps == 0 || steps > kMaxWorldStepsPerCommand))
+    if (action == WorldAction::kStep && (steps < 1 || steps > kMaxWorldStepsPerCommand))
       throw py::value_error("step takes a number of steps from 1 to " +
                             std::to_string(kMaxWorldStepsPerCommand) +
                             "; to run on, World.resume()");
@@ -73,9 +75,9 @@ class World {
     WorldCommand* command = writer_.loan();
     if (!command) throw Error("shared memory is exhausted: the world command was not sent");
     command->action = action;
-    command->step_count = steps;
+    command->step_count = static_cast<std::uint32_t>(steps);
     writer_.publish(command);
-    WorldActionWatch watch(action, steps, before, monotonic_ns());
+    WorldActionWatch watch(action, static_cast<std::uint32_t>(steps), before, monotonic_ns());
 
     std::optional<std::string> done;
     SignalWatch signals;
@@ -165,7 +167,7 @@ void register_world(py::module_& module) {
           py::arg("timeout_s") = 5.0, "Steps again after a pause.")
       .def(
           "step",
-          [](World& world, std::uint32_t steps, double timeout_s) {
+          [](World& world, std::int64_t steps, double timeout_s) {
             return world.act(WorldAction::kStep, steps, timeout_s);
           },
           py::arg("steps") = 1, py::arg("timeout_s") = 5.0,
