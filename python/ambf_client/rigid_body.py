@@ -6,10 +6,13 @@ wrench not set again within ``time_out`` seconds is cleared: forces and torques 
 refreshed; joint and pose commands hold."""
 
 import copy
+import numbers
 import operator
 import sys
 import threading
 import time
+
+import numpy as np
 
 import afhub
 
@@ -29,6 +32,14 @@ def _whole(idx):
         return operator.index(idx)
     except TypeError:
         return None
+
+
+def _real(value):
+    """A joint value as a float: a real number (numpy's too), not text or a bool, which
+    float() would read ('0.5' as 0.5, True as 1)."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+        raise ValueError(f'a joint value is a real number, not {value!r}')
+    return float(value)
 
 
 def _unsupported(call, why):
@@ -231,7 +242,7 @@ class RigidBody(Handle):
 
     def _set_joints(self, pairs, kind):
         # Every value made a number before any is kept: a refused call changes nothing.
-        pairs = [(idx, float(value)) for idx, value in pairs]
+        pairs = [(idx, _real(value)) for idx, value in pairs]
         with self._lock:
             held = self._held()
             self._joints_for()

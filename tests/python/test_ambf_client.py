@@ -215,7 +215,8 @@ def test_misuse_is_refused_and_throttling_ends_with_the_script(physics, tmp_path
     """Found by fault injection: a handle got before connect(), or kept after clean_up(),
     took setters that were sent once and never again (the watchdog let the arm fall); a
     throttled script that ended left the world paused for good; three values to set_rot
-    became a quaternion (x, y, z, 1); a step skip of 0.5 became 0."""
+    became a quaternion (x, y, z, 1); a step skip of 0.5 became 0; a joint value True or
+    '0.5' was read as a number."""
     run = physics(EXAMPLES / 'arm7.yaml')
     run.wait_for_body('arm/base')
     script = Script(tmp_path, """
@@ -235,6 +236,12 @@ def test_misuse_is_refused_and_throttling_ends_with_the_script(physics, tmp_path
             raise SystemExit('set_rot took three values')
         except ValueError as refused:
             print('refused:', refused)
+        for value in (True, '0.5', None):  # float() read the first two as 1 and 0.5
+            try:
+                a.set_joint_pos(0, value)
+                raise SystemExit(f'set_joint_pos took {value!r}')
+            except ValueError:
+                pass
         w = c.get_world_handle()
         for skips in (0.5, 2.5, '5', True, 0, 101):
             try:
