@@ -133,10 +133,14 @@ std::optional<bool> publisher_steps_in_lockstep(BodyClient& body, const std::str
     worlds.push_back(std::make_unique<LatestReader<WorldState>>(
         ChannelId{std::string(kService), world_instance(name_space), std::string(kStateEvent)}));
   };
-  add_world({});
-  for (std::size_t slash = channel.find('/'); slash != std::string::npos;
-       slash = channel.find('/', slash + 1))
-    add_world(std::string_view(channel).substr(0, slash));
+  try {
+    add_world({});
+    for (std::size_t slash = channel.find('/'); slash != std::string::npos;
+         slash = channel.find('/', slash + 1))
+      add_world(std::string_view(channel).substr(0, slash));
+  } catch (const Error&) {  // a hub short of ports: a message is not worth the controller
+    return std::nullopt;
+  }
   for (const std::int64_t give_up = monotonic_ns() + 1'000'000'000;
        monotonic_ns() < give_up && !stop_requested();
        std::this_thread::sleep_for(std::chrono::milliseconds(2))) {
@@ -153,6 +157,7 @@ std::optional<bool> publisher_steps_in_lockstep(BodyClient& body, const std::str
 // What a lockstep controller says at start: whether the physics waits for it.
 void say_lockstep(BodyClient& body, const std::string& channel, const std::string& who) {
   const std::optional<bool> lockstep = publisher_steps_in_lockstep(body, channel);
+  if (stop_requested()) return;
   if (lockstep == true)
     std::fprintf(stderr, "%s: commanding %s in lockstep with the physics\n", who.c_str(),
                  channel.c_str());
@@ -220,13 +225,13 @@ int run_controller(const ControllerOptions& options, const ControllerCycle& cycl
   require_chunks({written_as_slot(body_command_bytes(entry.info.joint_count)),
                   published_each_cycle(sizeof(LoopStats))},
                  "this controller (commanding " + channel + ")");
+  if (options.lockstep) say_lockstep(body, channel, who);  // its readers before memory is locked
   LoopTiming own_timing;  // preallocated before memory is locked and the loop starts
   LoopTiming& timing = timing_out ? *timing_out : own_timing;
   const RealtimeGrant grant = apply_realtime(options.loop, who.c_str());
   LoopStatsPublisher stats(options.name, channel, options.loop.period_ns, options.lockstep, grant);
   RefusalNotice refusals(who);
   if (options.lockstep) {
-    say_lockstep(body, channel, who);
     run_lockstep(body, options, cycle, timing, stats, refusals);
   } else {
     std::fprintf(stderr, "%s: commanding %s every %.3f ms\n", who.c_str(), channel.c_str(),

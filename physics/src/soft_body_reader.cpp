@@ -52,6 +52,10 @@ SoftBodySpec read_soft_body(const FileReader& file, const YAML::Node& block,
   if (soft.mass_kg > kMaxMassKg)
     fail(file.at(mass), "'mass' is " + mass.Scalar() + " kg, beyond the bound of " +
                             yaml::number_text(kMaxMassKg) + " kg for a model");
+  if (soft.mass_kg < kMinMovingMassKg)
+    fail(file.at(mass), "'mass' is " + mass.Scalar() + " kg, below the " +
+                            yaml::number_text(kMinMovingMassKg) +
+                            " kg a moving body needs (Bullet divides by it)");
   if (YAML::Node location = block["location"]) soft.location = file.placement(location, "location");
   if (YAML::Node scale = block["scale"]) {
     positive(file, scale, "scale");

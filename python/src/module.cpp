@@ -132,7 +132,7 @@ bool on_main_thread() noexcept {
 }  // namespace
 
 bool SignalWatch::pending() noexcept {
-  if (!on_main_thread()) return false;
+  if (!on_main_thread() || !Py_IsInitialized()) return false;
   InterruptState& state = interrupts();
   if (state.error) return true;
   const std::int64_t now = monotonic_ns();
@@ -158,6 +158,9 @@ void watch_interrupts_in_waits() {
   interrupts().main_thread =
       py::module_::import("threading").attr("main_thread")().attr("ident").cast<unsigned long>();
   set_stop_source([]() noexcept { return SignalWatch().pending(); });
+  // Not once the interpreter is going: a wait at exit (the hub client's) ends on its own.
+  py::module_::import("atexit").attr("register")(
+      py::cpp_function([] { set_stop_source(nullptr); }));
 }
 
 namespace {

@@ -294,7 +294,8 @@ BodyEntry CatalogReader::resolve(std::string_view query) {
 
 BodyEntry wait_for_body(const std::string& query, const std::string& who, std::int64_t give_up_ns,
                         const std::string& hint) {
-  if (query.empty()) resolve_body(query, {});  // throws at once: no name is no late body
+  // No name ('', '/', ' ') is no late body: refused at once.
+  if (body_channel_name({}, query).empty()) resolve_body({}, {});
   CatalogReader catalog;
   catalog.wait(std::chrono::milliseconds(1000));
   bool said = false;

@@ -93,7 +93,10 @@ void watch_attached_hub(std::int64_t hub_seen_ns) {
     s.attached_hub = hub->instance;
     s.attached_hub_pid = hub->pid;
   }
-  if (!s.reexecs) s.roudi_fd = find_roudi_socket();
+  if (!s.reexecs) {
+    s.roudi_socket = find_roudi_socket();
+    s.runtime_name = runtime_name();
+  }
   if (s.reattach_count > 0)
     std::fprintf(stderr,
                  "%s: re-attached to the hub (pid %d), %.0f ms after it answered and %.2f s after "

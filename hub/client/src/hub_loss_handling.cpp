@@ -51,7 +51,7 @@ LossHandling handle_loss(const char* why) noexcept {
                  "%s: the hub%s went away (%s); this process cannot re-attach to another: "
                  "start it again once a hub runs\n",
                  s.who.c_str(), hub, why);
-    sink_keepalives(s.roudi_fd);
+    sink_keepalives(s.roudi_socket, s.runtime_name.c_str());
     return LossHandling::kCarriesOn;
   }
   std::fprintf(stderr,

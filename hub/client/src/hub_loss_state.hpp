@@ -14,6 +14,8 @@
 #include <string>
 #include <vector>
 
+#include "keepalive_sink.hpp"
+
 namespace afhub::hub_loss {
 
 // What the process before a re-exec tells the next image: "COUNT:LOST_HUB:LOST_AT_NS".
@@ -29,7 +31,10 @@ struct State {
   std::atomic<bool> exiting{false};   // the process is exiting on its own: never re-execute it
   std::atomic<std::uint64_t> attached_hub{0};  // the instance of the hub attached to
   std::atomic<pid_t> attached_hub_pid{0};
-  int roudi_fd = -1;  // notice_hub_loss: this process's socket to RouDi, once attached
+  // notice_hub_loss: this process's socket to RouDi and its runtime's name, once attached
+  // (before the watcher starts; read by whichever thread handles the loss).
+  RoudiSocket roudi_socket;
+  std::string runtime_name;
   // From AFHUB_REATTACH, at the opt-in: 0 at a normal start.
   unsigned reattach_count = 0;
   std::uint64_t lost_hub = 0;   // the instance the previous image lost (0: not an afhub hub)

@@ -59,10 +59,7 @@ void SimChannels::apply_commands(std::int64_t now_ns, bool holding) noexcept {
           ++rejected_;
           if (Notice* notice = note(channel, kAxisless, answer.pid)) set_name(notice->why, entry);
         }
-        if (lockstep_ && answer.lockstep) {
-          note_second_client(channel, answer.pid);
-          note_lockstep_answer(channel, answer);
-        }
+        if (lockstep_ && answer.lockstep) note_lockstep_answer(channel, answer);
         channel.applied_answer_step = answer.step;
         sim_.set_input(channel.index, input_);
         channel.last_command_ns = std::min(stamp_ns, now_ns);

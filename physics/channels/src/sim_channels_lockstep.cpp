@@ -2,7 +2,6 @@
 // waiting for lockstep clients before the first step, and catch-up's wait for the
 // controllers in phase.
 #include <sched.h>
-#include <signal.h>
 
 #include <algorithm>
 #include <cstdio>
@@ -52,16 +51,18 @@ void SimChannels::wait_for_commands(std::int64_t until_ns) noexcept {
     sched_yield();
 }
 
-void SimChannels::note_second_client(Channel& channel, std::uint32_t pid) noexcept {
-  const Notice& said = channel.notices[kShared];
-  if (said.said || said.pending || channel.lockstep_pid == 0 || channel.lockstep_pid == pid) return;
-  // Unless the client in the barrier missed a step or is gone: a client restarted after a
-  // kill answers before the dead one is dropped.
-  if (channel.misses > 0 || kill(static_cast<pid_t>(channel.lockstep_pid), 0) != 0) return;
-  note(channel, kShared, pid)->other_pid = channel.lockstep_pid;
+void SimChannels::note_answer_pid(Channel& channel, std::uint32_t pid) noexcept {
+  // Two live clients alternate (A, B, A); a client restarted after a kill answers alone
+  // after the dead one (A, B, B), and gets a new pid.
+  if (pid == channel.last_answer_pid) return;
+  if (pid == channel.answer_pid_before)
+    if (Notice* notice = note(channel, kShared, pid)) notice->other_pid = channel.last_answer_pid;
+  channel.answer_pid_before = channel.last_answer_pid;
+  channel.last_answer_pid = pid;
 }
 
 void SimChannels::note_lockstep_answer(Channel& channel, const Answer& answer) noexcept {
+  note_answer_pid(channel, answer.pid);
   channel.answered_step = answer.step;
   if (answer.step != sim_.step_count()) return;  // an old step: no (re)join
   if (channel.lockstep_pid != answer.pid) {

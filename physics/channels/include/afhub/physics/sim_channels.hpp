@@ -210,6 +210,8 @@ class SimChannels {
     bool in_phase = false;  // a command in time since kPhaseMisses missed hand-offs in a row
     int phase_misses = 0;   // await_answers_in_phase's timeouts in a row
     int misses = 0;         // late lockstep steps in a row
+    // The last two clients that answered for this body, the last one first.
+    std::uint32_t last_answer_pid = 0, answer_pid_before = 0;
     // The command taken since the last publish (the reader's checked copy), for the tape.
     const BodyCommand* taken_command = nullptr;
     void prefetch_state_update() const noexcept { publisher->prefetch_state_update(ray_count); }
@@ -228,8 +230,8 @@ class SimChannels {
     std::uint32_t pid = 0;
     bool lockstep = false;
   };
-  // Notes a lockstep answer from `pid` while another live client answers for the body.
-  void note_second_client(Channel& channel, std::uint32_t pid) noexcept;
+  // Notes which client answered: two that alternate on one body are said.
+  void note_answer_pid(Channel& channel, std::uint32_t pid) noexcept;
   void note_lockstep_answer(Channel& channel, const Answer& answer) noexcept;
   Channel& active_channel(const std::string& body, const char* option);
   // One turn of holding a step: commands in, and the held step published again every
