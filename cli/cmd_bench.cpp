@@ -161,8 +161,9 @@ void register_bench(CLI::App& app, Runner& selected) {
                     "Draw latency CDFs and the loop's jitter histogram into this PNG (gnuplot)");
   bench->add_option(
       "--transports", options->transports,
-      "Transports to compare, comma-separated (default afhub,afhub-slot,dds,dds-shm,uds,ros1; "
-      "dds-shm: Cyclone DDS with its shared memory through the hub)");
+      "Transports to compare, comma-separated (default "
+      "afhub,afhub-slot,shm-floor,dds,dds-shm,uds,ros1; shm-floor: bare shared memory, the "
+      "machine's floor; dds-shm: Cyclone DDS with its shared memory through the hub)");
   add_count_option(bench, "--rounds", options->rounds, "Interleaved rounds (default 20, quick 5)");
   add_count_option(bench, "--pings", options->pings,
                    "Round trips per transport, size and round (default 500, quick 200)");

@@ -16,6 +16,7 @@ SIZES = [64, 1024, 16384, 262144, 1048576]
 ROWS = [
     ("afhub", None, "afhub (queue)"),
     ("afhub-slot", "afhub-slot (states, commands)", "afhub-slot"),
+    ("shm-floor", "bare shared memory (the floor)", "bare shared memory"),
     ("dds", "Cyclone DDS", "Cyclone DDS"),
     ("dds-shm", "Cyclone DDS, its shared memory on", "Cyclone DDS, shared memory"),
     ("uds", "Unix sockets", "Unix sockets"),

@@ -110,7 +110,7 @@ void run_ping_pong(const BenchOptions& options, BenchResults& results) {
   for (const std::string& name : options.transports)
     if (!parse_transport(name))
       throw Error("unknown transport '" + name +
-                  "': choose from afhub, afhub-slot, dds, dds-shm, uds, ros1");
+                  "': choose from afhub, afhub-slot, shm-floor, dds, dds-shm, uds, ros1");
   results.transports.reserve(options.transports.size());
   for (const std::string& name : options.transports) {
     const std::optional<TransportKind> kind = parse_transport(name);

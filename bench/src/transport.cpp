@@ -16,6 +16,8 @@ const char* transport_name(TransportKind kind) {
       return "afhub";
     case TransportKind::kAfhubSlot:
       return "afhub-slot";
+    case TransportKind::kShmFloor:
+      return "shm-floor";
     case TransportKind::kDds:
       return "dds";
     case TransportKind::kDdsShm:
@@ -29,8 +31,9 @@ const char* transport_name(TransportKind kind) {
 }
 
 std::optional<TransportKind> parse_transport(const std::string& name) {
-  for (TransportKind kind : {TransportKind::kAfhub, TransportKind::kAfhubSlot, TransportKind::kDds,
-                             TransportKind::kDdsShm, TransportKind::kUds, TransportKind::kRos1})
+  for (TransportKind kind :
+       {TransportKind::kAfhub, TransportKind::kAfhubSlot, TransportKind::kShmFloor,
+        TransportKind::kDds, TransportKind::kDdsShm, TransportKind::kUds, TransportKind::kRos1})
     if (name == transport_name(kind)) return kind;
   return std::nullopt;
 }
@@ -61,6 +64,9 @@ std::unique_ptr<Transport> open_transport(TransportKind kind, Side side, const s
     case TransportKind::kDds:
     case TransportKind::kDdsShm:
       opened = open_dds_transport(side, session, kind == TransportKind::kDdsShm);
+      break;
+    case TransportKind::kShmFloor:
+      opened = open_floor_transport(side, session);
       break;
     case TransportKind::kUds:
       opened = open_uds_transport(side, session);

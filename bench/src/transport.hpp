@@ -12,7 +12,7 @@
 
 namespace afhub::bench {
 
-enum class TransportKind { kAfhub, kAfhubSlot, kDds, kDdsShm, kUds, kRos1 };
+enum class TransportKind { kAfhub, kAfhubSlot, kShmFloor, kDds, kDdsShm, kUds, kRos1 };
 enum class Side { kPing, kPong };
 
 struct Message {
@@ -73,6 +73,8 @@ inline constexpr std::uint32_t kMinPayloadBytes = 64;
 // The transports, each in its own file.
 // A queue of samples, or (`slot`) a latest-value slot.
 std::unique_ptr<Transport> open_afhub_transport(Side side, const std::string& session, bool slot);
+// Bare shared memory, no afhub code: the floor of the slots' figures.
+std::unique_ptr<Transport> open_floor_transport(Side side, const std::string& session);
 std::unique_ptr<Transport> open_uds_transport(Side side, const std::string& session);
 // `shared_memory`: Cyclone's iceoryx transport through the running hub (dds-shm).
 std::unique_ptr<Transport> open_dds_transport(Side side, const std::string& session,

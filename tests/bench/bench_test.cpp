@@ -46,6 +46,8 @@ TEST_F(BenchOwnHub, ShortRunMeasuresEveryTransportAndTheLoop) {
   EXPECT_FALSE(contains(run.err, "FAILED")) << run.err;
   EXPECT_TRUE(contains(run.out, "One-way latency, median")) << run.out;
   EXPECT_TRUE(contains(run.out, "Goals")) << run.out;
+  // The slot is set against the machine's floor measured in the same run.
+  EXPECT_TRUE(contains(run.out, "afhub-slot against shm-floor (bare shared memory")) << run.out;
   EXPECT_TRUE(contains(run.err, "latency round 2 of 2")) << run.err;  // progress
   // Nothing of it left in /tmp (the test binary's own): rosmaster's home, the physics'
   // step log and the peers' logs, kept only when a run fails, go with it.
@@ -59,7 +61,7 @@ TEST_F(BenchOwnHub, ShortRunMeasuresEveryTransportAndTheLoop) {
 
   const nlohmann::json json = parse_json(read_file(json_path));
   const nlohmann::json& transports = json.at("transports");
-  for (const char* name : {"afhub", "afhub-slot", "dds", "dds-shm", "uds", "ros1"}) {
+  for (const char* name : {"afhub", "afhub-slot", "shm-floor", "dds", "dds-shm", "uds", "ros1"}) {
     ASSERT_TRUE(transports.contains(name)) << name << " missing: " << read_file(json_path);
     for (const char* bytes : {"64", "1024", "16384", "262144", "1048576"}) {
       const nlohmann::json& one_way = transports.at(name).at(bytes);
@@ -105,14 +107,14 @@ TEST_F(BenchOwnHub, TouchWritesAndReadsEveryByte) {
   afhub::testing::ModelFolder folder;
   const std::string json_path = (folder.dir() / "bench.json").string();
   const RunResult run =
-      run_afhub({"bench", "--touch", "--transports", "afhub,afhub-slot,dds,dds-shm,uds", "--rounds",
-                 "2", "--pings", "10", "--loop-seconds", "0", "--json", json_path},
+      run_afhub({"bench", "--touch", "--transports", "afhub,afhub-slot,shm-floor,dds,dds-shm,uds",
+                 "--rounds", "2", "--pings", "10", "--loop-seconds", "0", "--json", json_path},
                 180s);
   ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
   EXPECT_TRUE(contains(run.out, "Messages: every byte written by the sender and read")) << run.out;
   const nlohmann::json json = parse_json(read_file(json_path));
   EXPECT_EQ(json.at("settings").at("touch"), true) << read_file(json_path);
-  for (const char* name : {"afhub", "afhub-slot", "dds", "dds-shm", "uds"})
+  for (const char* name : {"afhub", "afhub-slot", "shm-floor", "dds", "dds-shm", "uds"})
     EXPECT_EQ(json.at("transports").at(name).at("1048576").at("samples"), 40) << name;
 }
 
@@ -264,7 +266,8 @@ TEST(Bench, BadArgumentsAreRefusedClearly) {
   EXPECT_EQ(run.exit_code, 1);
   EXPECT_TRUE(contains(
       run.err,
-      "unknown transport 'zeromq': choose from afhub, afhub-slot, dds, dds-shm, uds, ros1"))
+      "unknown transport 'zeromq': choose from afhub, afhub-slot, shm-floor, dds, dds-shm, uds, "
+      "ros1"))
       << run.err;
   run = run_afhub({"bench", "--loop-seconds", "1"});
   EXPECT_EQ(run.exit_code, 1);

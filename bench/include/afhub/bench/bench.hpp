@@ -18,7 +18,8 @@ namespace afhub::bench {
 inline const std::vector<std::uint32_t> kPayloadSizes = {64, 1024, 16384, 262144, 1048576};
 
 struct BenchOptions {
-  std::vector<std::string> transports = {"afhub", "afhub-slot", "dds", "dds-shm", "uds", "ros1"};
+  std::vector<std::string> transports = {"afhub",   "afhub-slot", "shm-floor", "dds",
+                                         "dds-shm", "uds",        "ros1"};
   std::uint32_t rounds = 20;            // interleaved rounds over every transport and size
   std::uint32_t pings_per_round = 500;  // round trips per transport, size and round
   std::uint32_t warmup_pings = 200;     // per transport and size, before the first round
