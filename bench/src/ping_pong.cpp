@@ -48,16 +48,26 @@ struct Peer {
   TransportKind kind;
   std::unique_ptr<Transport> end;
   std::unique_ptr<ChildProcess> process;
+  std::string log;  // what the peer process says
 };
+
+// The peer did not answer: when it has ended, what it said (its log is kept).
+[[noreturn]] void fail_silent(Peer& peer, const std::string& what) {
+  std::string message =
+      std::string(transport_name(peer.kind)) + ": the peer did not answer " + what;
+  if (!peer.process->running()) {
+    const std::string said = first_line_with(peer.log, "error");
+    message += said.empty() ? "; it exited (see " + peer.log + ")" : "; it exited: " + said;
+  }
+  throw Error(message);
+}
 
 // Sends ping `round` and waits for its pong, dropping stale ones.
 Message exchange(Peer& peer, std::uint32_t bytes, std::uint64_t round, std::int64_t& sent_ns) {
   sent_ns = peer.end->send(bytes, round, 0);
   for (;;) {
     std::optional<Message> pong = peer.end->receive(sent_ns + kAnswerTimeoutNs);
-    if (!pong)
-      throw Error(std::string(transport_name(peer.kind)) + ": the peer did not answer a " +
-                  std::to_string(bytes) + " byte ping within 10 s");
+    if (!pong) fail_silent(peer, "a " + std::to_string(bytes) + " byte ping within 10 s");
     if (pong->round == round) return *pong;
     if (stop_requested()) throw Error("stopped");
   }
@@ -71,8 +81,9 @@ void handshake(Peer& peer, std::uint64_t& round) {
     peer.end->send(kMinPayloadBytes, asked, 0);
     for (std::int64_t until = monotonic_ns() + 100'000'000; monotonic_ns() < until;)
       if (auto pong = peer.end->receive(until); pong && pong->round == asked) return;
-    if (monotonic_ns() > give_up || stop_requested())
-      throw Error(std::string(transport_name(peer.kind)) + ": the peer did not answer in 20 s");
+    if (stop_requested()) throw Error("interrupted");
+    if (!peer.process->running()) fail_silent(peer, "its first pings");
+    if (monotonic_ns() > give_up) fail_silent(peer, "in 20 s");
   }
 }
 
@@ -145,13 +156,14 @@ void run_ping_pong(const BenchOptions& options, BenchResults& results) {
       continue;
     }
     std::fprintf(stderr, "afhub bench: starting the %s peer\n", name.c_str());
-    Peer peer{&result, *kind, std::move(end), nullptr};
+    Peer peer{&result, *kind, std::move(end), nullptr,
+              "/tmp/afhub-bench-" + session + "-" + name + ".log"};
     std::vector<std::string> peer_args{
         this_executable(), "bench", "--peer",     name,
         "--session",       session, "--peer-cpu", std::to_string(pong_cpu())};
     if (options.touch) peer_args.push_back("--touch");
-    peer_logs.push_back("/tmp/afhub-bench-" + session + "-" + name + ".log");
-    peer.process = std::make_unique<ChildProcess>(peer_args, peer_logs.back());
+    peer_logs.push_back(peer.log);
+    peer.process = std::make_unique<ChildProcess>(peer_args, peer.log);
     peer.end->connect(monotonic_ns() + kConnectTimeoutNs);
     peers.push_back(std::move(peer));
   }

@@ -118,6 +118,22 @@ TEST_F(BenchOwnHub, TouchWritesAndReadsEveryByte) {
     EXPECT_EQ(json.at("transports").at(name).at("1048576").at("samples"), 40) << name;
 }
 
+// A peer killed in the middle of the run: the bench ends at its next ping, naming the
+// transport whose peer is gone and keeping its log, instead of a bare "did not answer".
+TEST_F(BenchOwnHub, AKilledPeerIsSaid) {
+  afhub::testing::ModelFolder folder;
+  const std::string log = (folder.dir() / "bench.log").string();
+  ScopedProcess bench(spawn_afhub(
+      {"bench", "--transports", "uds,shm-floor", "--rounds", "1000", "--loop-seconds", "0"}, log));
+  ASSERT_TRUE(wait_until([&] { return contains(read_file(log), "latency round 1 of"); }, 60s))
+      << read_file(log);
+  ASSERT_EQ(run_command({"pkill", "-KILL", "-f", "bench --peer shm-floor"}).exit_code, 0);
+  EXPECT_EQ(wait_for_exit(bench, 30s), 1) << read_file(log);
+  const std::string said = read_file(log);
+  EXPECT_TRUE(contains(said, "shm-floor: the peer did not answer a ")) << said;
+  EXPECT_TRUE(contains(said, "; it exited (see /tmp/afhub-bench-")) << said;
+}
+
 // A hub whose pools starve the body states (`--pool` of 6 chunks just large enough for
 // the example arm's state slots, below the body tiers: they all come from it, one per
 // body of the 8): the bench fails loudly, naming the pool, instead of reporting "met"
