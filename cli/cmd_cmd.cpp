@@ -112,10 +112,9 @@ std::map<std::size_t, double> named_joint_targets(const CmdOptions& options, con
                   (names.empty() ? std::string("shoulder") : names.front()) + "=0.3; got '" + item +
                   "'");
     const std::string joint = item.substr(0, equals);
-    char* end = nullptr;
     const std::string text = item.substr(equals + 1);
-    const double value = std::strtod(text.c_str(), &end);
-    if (text.empty() || *end != '\0' || !std::isfinite(value))
+    const std::optional<double> value = parse_finite(text);
+    if (!value)
       throw Error("--joint " + item + ": '" + text + "' is not a finite number; e.g. --joint " +
                   joint + "=0.3");
     std::size_t index = 0;
@@ -128,7 +127,7 @@ std::map<std::size_t, double> named_joint_targets(const CmdOptions& options, con
     } else {
       index = body.joint_index(joint);  // the error lists the body's joints
     }
-    if (!targets.emplace(index, value).second)
+    if (!targets.emplace(index, *value).second)
       throw Error("--joint names joint " + std::to_string(index) + " (" + names[index] + ") twice");
   }
   return targets;

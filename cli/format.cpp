@@ -3,7 +3,7 @@
 
 #include <algorithm>
 #include <array>
-#include <cerrno>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -204,6 +204,21 @@ std::string rate_text(double rate_hz) {
   return text;
 }
 
+std::optional<double> parse_finite(std::string_view text) {
+  // Spaces around it ("1, 2, 3") and a sign '+' are taken, as strtod took them.
+  const std::size_t first = text.find_first_not_of(' ');
+  if (first == std::string_view::npos) return std::nullopt;
+  text = text.substr(first, text.find_last_not_of(' ') - first + 1);
+  if (text.size() > 1 && text[0] == '+' && text[1] != '-') text.remove_prefix(1);
+  double value = 0.0;
+  // Decimal forms only: no hexadecimal.
+  const auto [end, error] =
+      std::from_chars(text.data(), text.data() + text.size(), value, std::chars_format::general);
+  if (error != std::errc() || end != text.data() + text.size() || !std::isfinite(value))
+    return std::nullopt;
+  return value;
+}
+
 std::vector<double> parse_numbers(std::string_view text, std::string_view flag,
                                   std::size_t expected) {
   std::vector<double> values;
@@ -213,10 +228,8 @@ std::vector<double> parse_numbers(std::string_view text, std::string_view flag,
     std::size_t end = rest.find(',', start);
     if (end == std::string::npos) end = rest.size();
     std::string item = rest.substr(start, end - start);
-    char* parsed_end = nullptr;
-    errno = 0;
-    double value = std::strtod(item.c_str(), &parsed_end);
-    if (item.empty() || *parsed_end != '\0' || errno == ERANGE || !std::isfinite(value)) {
+    const std::optional<double> value = parse_finite(item);
+    if (!value) {
       std::string example = "0.1";
       for (std::size_t i = 1; i < std::max<std::size_t>(expected, 2); ++i)
         example += ",0." + std::to_string(i + 1);
@@ -224,7 +237,7 @@ std::vector<double> parse_numbers(std::string_view text, std::string_view flag,
                   "' is not a finite number; give comma-separated numbers, e.g. " +
                   std::string(flag) + " " + example);
     }
-    values.push_back(value);
+    values.push_back(*value);
     start = end + 1;
   }
   if (expected != 0 && values.size() != expected)

@@ -312,6 +312,9 @@ TEST_F(WithSynth, CmdExplainsBadJoints) {
            {{"cmd", "body0", "--joint", "99999999999999999999=0.3"}, "indices 0 to 2"},
            {{"cmd", "body0", "--joint", "0.3"}, "--joint takes NAME=VALUE"},
            {{"cmd", "body0", "--joint", "0=x"}, "'x' is not a finite number; e.g. --joint 0=0.3"},
+           // strtod read these as 16 and 0.
+           {{"cmd", "body0", "--joint", "0=0x10"}, "'0x10' is not a finite number"},
+           {{"cmd", "body0", "--joint", "0=1e-400"}, "'1e-400' is not a finite number"},
            {{"cmd", "body0", "--joint", "body0-joint1=abc"},
             "--joint body0-joint1=abc: 'abc' is not a finite number; e.g. --joint "
             "body0-joint1=0.3"},
@@ -325,6 +328,10 @@ TEST_F(WithSynth, CmdExplainsBadJoints) {
     EXPECT_TRUE(contains(result.err, bad.message))
         << "expected '" << bad.message << "' in: " << result.err;
   }
+  // Numbers as strtod took them, spaces around and a sign '+', are still taken.
+  const RunResult spaced =
+      run_afhub({"cmd", "body0", "--joint-pos", " 0.1, +0.2,-3e-1 ", "--once"});
+  EXPECT_EQ(spaced.exit_code, 0) << spaced.err;
 }
 
 TEST_F(WithSynth, ClientAddressesJointsByName) {

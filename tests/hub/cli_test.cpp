@@ -391,6 +391,7 @@ TEST_F(CliWithBodies, CmdExplainsBadInput) {
            {{"cmd", "nobody", "--force", "1,2,3"}, "no live body is named 'nobody'"},
            {{"cmd", "body", "--force", "1,2,3"}, "no live body"},
            {{"cmd", "body0", "--joint-pos", "1,nan"}, "'nan' is not a finite number"},
+           {{"cmd", "body0", "--joint-pos", "1,0x10,2"}, "'0x10' is not a finite number"},
            {{"cmd", "body0", "--joint-pos", "1,2,3,4"}, "has 3 joints"},
            {{"cmd", "body0", "--force", "1,2"}, "--force takes 3 numbers"},
            {{"cmd", "body0", "--pose", "0,0,0,0,0,0", "--force", "1,0,0"}, "two Cartesian modes"},
