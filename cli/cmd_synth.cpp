@@ -158,7 +158,10 @@ int run_synth(const SynthOptions& options) {
       continue;
     }
     while (world_commands.next(world_command))
-      if (control.apply(world_command)) step = 0;
+      if (control.apply(world_command, monotonic_ns())) step = 0;
+    if (const std::uint32_t holder = control.lapse(monotonic_ns()))
+      std::fprintf(stderr, kPauseLapsedFormat, "afhub synth", holder,
+                   static_cast<unsigned>(control.hold_ns / 1'000'000));
     // Published every period, paused or not, like the physics: the state
     // channels keep no history for late joiners.
     const bool stepping = control.take_step();

@@ -184,7 +184,8 @@ class Client:
         deadline = time.monotonic()
         told = {}  # each handle's last fault, said once rather than at the thread's rate
         while self._running:
-            for handle in list(self._objects.values()):
+            world = [self._world] if self._world is not None else []
+            for handle in list(self._objects.values()) + world:
                 if handle.is_active():
                     try:
                         handle.run_publisher()

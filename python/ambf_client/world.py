@@ -3,10 +3,17 @@ client-driven stepping (AMBF's step throttling), which afhub gives by pausing th
 and stepping it from update()."""
 
 import operator
+import time
 
 import afhub
 
 from .handle import Handle
+
+# The throttling client's pause is held: it lasts while the client's publisher thread
+# renews it, and lapses a second after the script dies or stalls (AMBF's world runs on
+# once its throttling client goes quiet). Renewed five times a second.
+THROTTLING_HOLD_S = 1.0
+RENEW_EVERY_S = 0.2
 
 
 class World(Handle):
@@ -15,6 +22,7 @@ class World(Handle):
         self._world = afhub.World()
         self._throttling = False
         self._step_skips = 1
+        self._renewed = 0.0  # time.monotonic() of the last renewal
 
     def set_name(self, name):
         self._name = name
@@ -42,7 +50,8 @@ class World(Handle):
         runs on in real time."""
         data = bool(data)
         if data and not self._throttling:
-            self._world.pause()
+            self._world.pause(hold_s=THROTTLING_HOLD_S)
+            self._renewed = time.monotonic()
         elif not data and self._throttling:
             self._world.resume()
         self._throttling = data
@@ -75,7 +84,10 @@ class World(Handle):
             self._world.step(self._step_skips)
 
     def run_publisher(self):
-        """Nothing to re-send: world commands act once each."""
+        """Called by the client's publisher thread: renews the throttling pause."""
+        if self._throttling and time.monotonic() - self._renewed >= RENEW_EVERY_S:
+            self._world.hold()
+            self._renewed = time.monotonic()
 
     def clear_cmd(self):
         self.enable_throttling(False)

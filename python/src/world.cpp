@@ -2,6 +2,7 @@
 // (pause, resume, step N, reset), each confirmed by the world state as `afhub world`
 // confirms them.
 #include <algorithm>
+#include <cmath>
 #include <optional>
 #include <string>
 
@@ -60,9 +61,13 @@ class World {
   // Sends `action` and waits until the world state shows it done; says what happened.
   // `steps` wide: a count past 2^32, or negative, is refused with its bounds (pybind's own
   // error named no bound).
-  std::string act(WorldAction action, std::int64_t steps, double timeout_s) {
+  std::string act(WorldAction action, std::int64_t steps, double timeout_s, double hold_s = 0.0) {
     require_hub();
     const std::int64_t give_up = deadline_after(timeout_s, "timeout_s");
+    if (!(hold_s == 0.0 || (hold_s >= 0.001 && hold_s <= kMaxPauseHoldMs / 1000.0)))
+      throw py::value_error("hold_s takes 0 (paused until resumed) or 0.001 to " +
+                            std::to_string(kMaxPauseHoldMs / 1000) + " s, not " +
+                            py::str(py::float_(hold_s)).cast<std::string>());
     if (action == WorldAction::kStep && (steps < 1 || steps > kMaxWorldStepsPerCommand))
       throw py::value_error("step takes a number of steps from 1 to " +
                             std::to_string(kMaxWorldStepsPerCommand) +
@@ -76,6 +81,7 @@ class World {
     if (!command) throw Error("shared memory is exhausted: the world command was not sent");
     command->action = action;
     command->step_count = static_cast<std::uint32_t>(steps);
+    command->hold_ms = static_cast<std::uint32_t>(std::lround(hold_s * 1000.0));
     writer_.publish(command);
     WorldActionWatch watch(action, static_cast<std::uint32_t>(steps), before, monotonic_ns());
 
@@ -95,6 +101,15 @@ class World {
     throw Error("the command was sent but the simulation did not act on it within " +
                 std::to_string(timeout_s) +
                 " s: is it stalled, or waiting for lockstep clients? (`afhub status`)");
+  }
+
+  // Renews this process's held pause: a command that does nothing else.
+  void hold() {
+    require_hub();
+    WorldCommand* command = writer_.loan();
+    if (!command) throw Error("shared memory is exhausted: the pause was not renewed");
+    command->action = WorldAction::kNone;
+    writer_.publish(command);
   }
 
  private:
@@ -155,10 +170,16 @@ void register_world(py::module_& module) {
           "Simulated time, s.")
       .def(
           "pause",
-          [](World& world, double timeout_s) {
-            return world.act(WorldAction::kPause, 1, timeout_s);
+          [](World& world, double timeout_s, double hold_s) {
+            return world.act(WorldAction::kPause, 1, timeout_s, hold_s);
           },
-          py::arg("timeout_s") = 5.0, "Stops stepping; states are still published.")
+          py::arg("timeout_s") = 5.0, py::arg("hold_s") = 0.0,
+          "Stops stepping; states are still published. hold_s > 0: a held pause, which "
+          "lasts only while this process's world commands (step, hold) keep coming less "
+          "than hold_s apart: should the script die or stall, the world runs on.")
+      .def("hold", &World::hold,
+           "Renews this process's held pause (pause(hold_s=...)); call it more often than "
+           "hold_s, from any thread.")
       .def(
           "resume",
           [](World& world, double timeout_s) {

@@ -242,6 +242,8 @@ const char* count_beyond_capacity(const char* at, std::size_t bytes, PayloadKind
       return step_tape_problem(*reinterpret_cast<const StepTape*>(at), bytes);
     case PayloadKind::kWorldCommand: {
       const auto* command = reinterpret_cast<const WorldCommand*>(at);
+      if (command->action > WorldAction::kReset) return "WorldCommand.action";
+      if (command->hold_ms > kMaxPauseHoldMs) return "WorldCommand.hold_ms";
       if (command->action == WorldAction::kStep &&
           (command->step_count == 0 || command->step_count > kMaxWorldStepsPerCommand))
         return "WorldCommand.step_count";

@@ -12,6 +12,7 @@
 #include <thread>
 
 #include "afhub/hub/bodies.hpp"
+#include "afhub/hub/hub_files.hpp"
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/shm_layout/world.hpp"
 #include "afhub_process.hpp"
@@ -58,7 +59,10 @@ TEST(Pause, HubStopListsAttachedProcessesAndAsksForForce) {
   ASSERT_GT(hub.pid, 0);
   ScopedProcess top(spawn_afhub({"top"}));
   const std::string name = "afhub-top-" + std::to_string(top.pid);
-  ASSERT_TRUE(wait_until([&] { return std::filesystem::exists("/tmp/" + name + ".lock"); }, 10s));
+  // Attached once its runtime holds the lock (made first, locked after: beside a busy
+  // machine the file alone once let the stop through). Read from /proc/locks: a probe
+  // taking the lock could fail the runtime's own.
+  ASSERT_TRUE(wait_until([&] { return flock_holder("/tmp/" + name + ".lock") == top.pid; }, 10s));
   const RunResult refused = run_afhub({"hub", "stop"});
   EXPECT_EQ(refused.exit_code, 1);
   EXPECT_TRUE(contains(refused.err, "attached to the hub")) << refused.err;

@@ -274,6 +274,39 @@ def test_misuse_is_refused_and_throttling_ends_with_the_script(physics, tmp_path
     assert not world.state()['paused']
 
 
+def test_a_throttled_script_killed_lets_the_world_run_on(physics, tmp_path):
+    """A throttling client's pause is held: while the script lives (idle between updates,
+    its publisher thread renewing the hold) the world stays paused; SIGKILLed, with no
+    atexit to resume it, the world runs on once the hold lapses, and the physics says so.
+    Before, the world stayed paused for good."""
+    run = physics(EXAMPLES / 'arm7.yaml')
+    run.wait_for_body('arm/base')
+    script = Script(tmp_path, """
+        import time
+        from ambf_client import Client
+        c = Client()
+        c.connect()
+        w = c.get_world_handle()
+        w.enable_throttling(True)
+        w.update()
+        print('THROTTLED', flush=True)
+        time.sleep(60)
+    """)
+    script.read_until('THROTTLED')
+    world = afhub.World()
+    step = world.sim_step()
+    idle_until = time.monotonic() + 2.0  # twice the hold
+    while time.monotonic() < idle_until:
+        assert world.state()['paused'] and world.sim_step() == step, 'the hold lapsed too soon'
+        time.sleep(0.05)
+    script.process.kill()
+    script.process.wait(timeout=10)
+    wait_until(lambda: world.sim_step() > step + 100, 10, 'the world running on after the kill')
+    assert not world.state()['paused']
+    wait_until(lambda: 'lapsed, nothing from it for 1000 ms' in run.log(), 5,
+               'the physics saying why it runs on:\n' + run.log())
+
+
 @needs_shared_models()
 def test_ecm_by_ambf_names(physics, tmp_path):
     run = physics(ECM)

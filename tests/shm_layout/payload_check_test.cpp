@@ -155,27 +155,91 @@ TEST(PayloadCheck, RefusesAWorldStepOfNoneOrBeyondTheBound) {
             PayloadError::kNone);
 }
 
+TEST(PayloadCheck, RefusesAnUnknownWorldActionAndAHoldBeyondAMinute) {
+  auto command = stamped<WorldCommand>(PayloadKind::kWorldCommand);
+  command.action = WorldAction::kPause;
+  command.hold_ms = kMaxPauseHoldMs;
+  const char* field = "unset";
+  EXPECT_EQ(check_payload(&command, sizeof command, PayloadKind::kWorldCommand, &field),
+            PayloadError::kNone)
+      << field;
+  command.hold_ms = kMaxPauseHoldMs + 1;
+  EXPECT_NE(check_payload(&command, sizeof command, PayloadKind::kWorldCommand, &field),
+            PayloadError::kNone);
+  EXPECT_STREQ(field, "WorldCommand.hold_ms");
+  command.hold_ms = 0;
+  command.action = static_cast<WorldAction>(5);
+  EXPECT_NE(check_payload(&command, sizeof command, PayloadKind::kWorldCommand, &field),
+            PayloadError::kNone);
+  EXPECT_STREQ(field, "WorldCommand.action");
+}
+
 TEST(WorldControl, PauseEndsTheStepsStillToRunAndStepsAreBounded) {
   WorldControl control;
   WorldCommand command;
   command.action = WorldAction::kPause;
-  control.apply(command);
+  control.apply(command, 0);
   EXPECT_TRUE(control.halted());
   command.action = WorldAction::kStep;
   command.step_count = 3;
-  control.apply(command);
+  control.apply(command, 0);
   EXPECT_FALSE(control.halted()) << "a world running its steps is not standing still";
   EXPECT_TRUE(control.take_step());
   command.action = WorldAction::kPause;
-  control.apply(command);
+  control.apply(command, 0);
   EXPECT_TRUE(control.halted());
   EXPECT_FALSE(control.take_step()) << "the pause did not stop the steps in progress";
   // Steps asked for one after another never add up past the bound.
   command.action = WorldAction::kStep;
   command.step_count = kMaxWorldStepsPerCommand;
-  control.apply(command);
-  control.apply(command);
+  control.apply(command, 0);
+  control.apply(command, 0);
   EXPECT_EQ(control.steps_to_run, kMaxWorldStepsPerCommand);
+}
+
+// A held pause lasts while its holder's commands keep coming within the hold, and
+// lapses (the world runs on) once they stop; a plain pause never lapses.
+TEST(WorldControl, AHeldPauseLapsesOnceItsHolderIsQuiet) {
+  constexpr std::int64_t kMs = 1'000'000;
+  WorldControl control;
+  WorldCommand hold;
+  hold.header.publisher_pid = 42;
+  hold.action = WorldAction::kPause;
+  hold.hold_ms = 500;
+  control.apply(hold, 0);
+  EXPECT_TRUE(control.halted());
+  EXPECT_EQ(control.lapse(500 * kMs), 0u) << "lapsed at its hold, not after it";
+  // Any command of the holder's renews it: a step, or a word that does nothing.
+  WorldCommand word = hold;
+  word.action = WorldAction::kNone;
+  control.apply(word, 400 * kMs);
+  WorldCommand step = hold;
+  step.action = WorldAction::kStep;
+  control.apply(step, 800 * kMs);
+  EXPECT_TRUE(control.take_step());
+  EXPECT_EQ(control.lapse(1200 * kMs), 0u);
+  // Another process's commands do not.
+  WorldCommand other = word;
+  other.header.publisher_pid = 43;
+  control.apply(other, 1250 * kMs);
+  EXPECT_EQ(control.lapse(1301 * kMs), 42u);
+  EXPECT_FALSE(control.paused) << "the world did not run on";
+  EXPECT_EQ(control.lapse(5000 * kMs), 0u) << "said twice";
+
+  // A plain pause, a user's, takes over a held one and holds until resumed.
+  control.apply(hold, 0);
+  WorldCommand plain = other;
+  plain.action = WorldAction::kPause;
+  plain.hold_ms = 0;
+  control.apply(plain, 100 * kMs);
+  EXPECT_EQ(control.lapse(60'000 * kMs), 0u);
+  EXPECT_TRUE(control.paused);
+  // A resume ends a hold: nothing lapses later.
+  control.apply(hold, 0);
+  WorldCommand resume = hold;
+  resume.action = WorldAction::kResume;
+  control.apply(resume, 10 * kMs);
+  EXPECT_EQ(control.lapse(60'000 * kMs), 0u);
 }
 
 TEST(PayloadCheck, RefusesABodyListWhoseBodyCountsTooManyJoints) {

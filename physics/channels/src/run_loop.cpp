@@ -61,6 +61,7 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
   WorldControl control;
   control.paused = options.start_paused;
   WorldCommand world_command;
+  std::uint32_t lapsed_holder = 0;  // a held pause's holder gone quiet, to be said
   double achieved_rate_hz = 0.0;
   std::uint64_t late_counted = 0;
   report.joint_errors.resize(sim.model().joints.size());
@@ -101,12 +102,13 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
     if (!channels || hub_lost()) return true;
     // Every world command from every writer, in order, each once.
     while (channels->next_world_command(world_command))
-      if (control.apply(world_command)) {
+      if (control.apply(world_command, clock_ns())) {
         // The world, the lockstep barrier's answers and the rate window start again.
         sim.reset();
         channels->forget_commands();
         rate.restart();
       }
+    if (const std::uint32_t holder = control.lapse(clock_ns())) lapsed_holder = holder;
     if (channels->lockstep() && !control.paused) return channels->await_lockstep();
     // Behind the grid (after a stall), the controllers in phase follow the physics
     // catching up, answering each state as it comes: given time for it.
@@ -170,6 +172,11 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
     }
     rate.update(now_ns, report.steps, !control.halted());
     achieved_rate_hz = rate.rate_hz();
+    if (lapsed_holder != 0) {
+      std::fprintf(stderr, kPauseLapsedFormat, "afhub run", lapsed_holder,
+                   static_cast<unsigned>(control.hold_ns / 1'000'000));
+      lapsed_holder = 0;
+    }
     if (channels && now_ns >= next_report_ns) {
       channels->report_events(stderr);
       next_report_ns = now_ns + 1'000'000'000;

@@ -167,6 +167,7 @@ inline constexpr std::uint64_t kLayoutId = layout_detail::mix({
     sizeof(WorldCommand),
     AFHUB_OFF(WorldCommand, action),
     AFHUB_OFF(WorldCommand, step_count),
+    AFHUB_OFF(WorldCommand, hold_ms),
     sizeof(BodyInfo),
     AFHUB_OFF(BodyInfo, channel),
     AFHUB_OFF(BodyInfo, owner),

@@ -78,6 +78,10 @@ inline constexpr std::size_t kMaxActuatorsPerBody = 8;
 // a resume; a world that steps for hours while it says "paused" misleads every reader.
 inline constexpr std::uint32_t kMaxWorldStepsPerCommand = 1'000'000;
 
+// A held pause's longest silence (WorldCommand.hold_ms): a minute. A holder quiet for
+// longer is gone, not computing.
+inline constexpr std::uint32_t kMaxPauseHoldMs = 60'000;
+
 // Lights and cameras whose poses the world state carries.
 inline constexpr std::size_t kMaxWorldObjects = 8;
 

@@ -77,6 +77,12 @@ struct WorldCommand {
   PayloadHeader header;
   WorldAction action{WorldAction::kNone};
   std::uint32_t step_count{1};
+  // kPause: 0, paused until resumed; N, a held pause, which lasts while its publisher's
+  // commands (any action, kNone included) keep coming less than N ms apart. A client
+  // that pauses the world to step it (AMBF's step throttling) holds its pause: should it
+  // die or stall, the world runs on, as AMBF's does once its throttling client is quiet.
+  std::uint32_t hold_ms{0};
+  std::uint32_t reserved{0};
 };
 
 }  // namespace afhub
