@@ -205,10 +205,10 @@ std::string rate_text(double rate_hz) {
 }
 
 std::optional<double> parse_finite(std::string_view text) {
-  // Spaces around it ("1, 2, 3") and a sign '+' are taken, as strtod took them.
-  const std::size_t first = text.find_first_not_of(' ');
+  // Blanks around it ("1, 2, 3") and a sign '+' are taken.
+  const std::size_t first = text.find_first_not_of(" \t\n");
   if (first == std::string_view::npos) return std::nullopt;
-  text = text.substr(first, text.find_last_not_of(' ') - first + 1);
+  text = text.substr(first, text.find_last_not_of(" \t\n") - first + 1);
   if (text.size() > 1 && text[0] == '+' && text[1] != '-') text.remove_prefix(1);
   double value = 0.0;
   // Decimal forms only: no hexadecimal.

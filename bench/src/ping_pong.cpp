@@ -24,6 +24,7 @@ namespace {
 
 constexpr std::int64_t kAnswerTimeoutNs = 10'000'000'000;
 constexpr std::int64_t kConnectTimeoutNs = 20'000'000'000;
+constexpr std::int64_t kPeerLookNs = 100'000'000;
 
 // Pins the calling thread to `cpu`, or lets it run anywhere again (-1). Best
 // effort: an unpinned run is still a valid run.
@@ -62,14 +63,18 @@ struct Peer {
   throw Error(message);
 }
 
-// Sends ping `round` and waits for its pong, dropping stale ones.
+// Sends ping `round` and waits for its pong, dropping stale ones. Looks every 100 ms
+// whether the peer still runs.
 Message exchange(Peer& peer, std::uint32_t bytes, std::uint64_t round, std::int64_t& sent_ns) {
   sent_ns = peer.end->send(bytes, round, 0);
-  for (;;) {
-    std::optional<Message> pong = peer.end->receive(sent_ns + kAnswerTimeoutNs);
-    if (!pong) fail_silent(peer, "a " + std::to_string(bytes) + " byte ping within 10 s");
-    if (pong->round == round) return *pong;
+  for (std::int64_t look_ns = sent_ns + kPeerLookNs;; look_ns += kPeerLookNs) {
+    std::optional<Message> pong = peer.end->receive(look_ns);
+    if (pong && pong->round == round) return *pong;
     if (stop_requested()) throw Error("stopped");
+    if (pong) continue;
+    if (!peer.process->running()) fail_silent(peer, "a " + std::to_string(bytes) + " byte ping");
+    if (look_ns - sent_ns >= kAnswerTimeoutNs)
+      fail_silent(peer, "a " + std::to_string(bytes) + " byte ping within 10 s");
   }
 }
 

@@ -221,9 +221,10 @@ std::string results_table(const BenchResults& results) {
                slot_1k, slot_1k_p99) +
            (slot_1k <= 0.4 && slot_1k_p99 <= 1.0 ? "met\n" : "NOT met\n");
     // The same messages over bare shared memory in the same seconds: what this machine
-    // allows any shared-memory transport.
+    // allows any shared-memory transport. Only when both move every byte: without --touch
+    // the floor moves one cache line, where the slot's reader copies the whole payload.
     const Distribution floor = one_way_of(results, "shm-floor", 1024);
-    if (floor.p50_us > 0.0)
+    if (floor.p50_us > 0.0 && results.options.touch)
       out += format(
                  "  1 KiB, afhub-slot against shm-floor (bare shared memory, the machine's "
                  "floor, %.2f us / %.2f us): median %.2fx, p99 %.2fx the floor",
@@ -277,6 +278,20 @@ std::vector<std::string> failures(const BenchResults& results) {
   return found;
 }
 
+std::vector<std::pair<double, std::uint64_t>> histogram_rows(const LatencyHistogram& h) {
+  std::map<std::int64_t, std::uint64_t> counts;  // by upper edge, ns
+  const std::size_t last =
+      std::min(LatencyHistogram::bin_of(h.max_ns()), LatencyHistogram::kBins - 1);
+  for (std::size_t bin = 0; bin <= last; ++bin) {
+    const std::int64_t edge = LatencyHistogram::highest_ns(bin) + 1;
+    counts[edge < 128'000 ? (edge + 999) / 1000 * 1000 : edge] += h.bin_count(bin);
+  }
+  std::vector<std::pair<double, std::uint64_t>> rows;
+  for (const auto& [edge, count] : counts)
+    rows.emplace_back(static_cast<double>(edge) * 1e-3, count);
+  return rows;
+}
+
 void write_plot(const BenchResults& results, const std::string& png_path) {
   if (access("/usr/bin/gnuplot", X_OK) != 0)
     throw Error("--plot needs gnuplot: install Debian's gnuplot-nox");
@@ -319,13 +334,7 @@ void write_plot(const BenchResults& results, const std::string& png_path) {
                                const std::string& title) {
       const std::string data = dir + "/loop-" + file + ".dat";
       std::ofstream out(data);
-      // One line per bin up to the maximum's, at the bin's upper edge. Above 256 ns a bin
-      // is 1/128 of a power of two: as wide on the log scale as its neighbours.
-      const std::size_t last =
-          std::min(LatencyHistogram::bin_of(h.max_ns()), LatencyHistogram::kBins - 1);
-      for (std::size_t bin = 0; bin <= last; ++bin)
-        out << static_cast<double>(LatencyHistogram::highest_ns(bin) + 1) * 1e-3 << " "
-            << h.bin_count(bin) << "\n";
+      for (const auto& [edge_us, count] : histogram_rows(h)) out << edge_us << " " << count << "\n";
       return "'" + data + "' with steps lw 2 title '" + title + "'";
     };
     script << "plot " << histogram(loop.controller_wake, "afhub", "afhub controller");

@@ -49,15 +49,24 @@ class FloorTransport : public Transport {
  public:
   FloorTransport(Side side, const std::string& session) : side_(side), name_(file_name(session)) {
     if (side_ == Side::kPing) {
-      // The ping side makes the file; the peer opens it once started (connect).
+      // The ping side makes the file; the peer opens it once started (connect). A file of
+      // this name is an earlier bench's of the same pid, killed: replaced.
+      shm_unlink(name_.c_str());
       const int fd = shm_open(name_.c_str(), O_CREAT | O_EXCL | O_RDWR | O_CLOEXEC, 0600);
       if (fd < 0) fail_floor("cannot make /dev/shm" + name_);
-      owner_ = true;
-      if (ftruncate(fd, kFileBytes) != 0) {
-        close(fd);
-        fail_floor("cannot size /dev/shm" + name_);
+      try {
+        if (ftruncate(fd, kFileBytes) != 0) {
+          const int error = errno;
+          close(fd);
+          errno = error;
+          fail_floor("cannot size /dev/shm" + name_);
+        }
+        map(fd);
+      } catch (...) {
+        shm_unlink(name_.c_str());
+        throw;
       }
-      map(fd);
+      owner_ = true;
     }
   }
 
@@ -75,7 +84,13 @@ class FloorTransport : public Transport {
       usleep(10'000);
     }
     struct stat status {};
-    if (fstat(fd, &status) != 0 || static_cast<std::size_t>(status.st_size) != kFileBytes) {
+    if (fstat(fd, &status) != 0) {
+      const int error = errno;
+      close(fd);
+      errno = error;
+      fail_floor("cannot look at /dev/shm" + name_);
+    }
+    if (static_cast<std::size_t>(status.st_size) != kFileBytes) {
       close(fd);
       throw Error("shm-floor: /dev/shm" + name_ + " is not the bench's file (its size is " +
                   std::to_string(status.st_size) + " bytes)");
@@ -102,8 +117,8 @@ class FloorTransport : public Transport {
       if (round != seen_) {
         seen_ = round;
         if (round == written_) answered_ = round;
-        // The other process's number, read once and checked before use.
-        const std::uint32_t bytes = in_->bytes;
+        // The other process's number, read once (volatile: never again) and checked.
+        const std::uint32_t bytes = *static_cast<volatile const std::uint32_t*>(&in_->bytes);
         if (bytes < sizeof(LaneHead) || bytes > kLaneBytes)
           throw Error("shm-floor: a message of " + std::to_string(bytes) +
                       " bytes is out of range");
@@ -118,7 +133,9 @@ class FloorTransport : public Transport {
  private:
   void map(int fd) {
     void* mapped = mmap(nullptr, kFileBytes, PROT_READ | PROT_WRITE, MAP_SHARED, fd, 0);
+    const int error = errno;
     close(fd);
+    errno = error;
     if (mapped == MAP_FAILED) fail_floor("cannot map /dev/shm" + name_);
     base_ = static_cast<char*>(mapped);
     // Lane 0 carries pings, lane 1 pongs.

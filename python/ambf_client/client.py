@@ -110,6 +110,9 @@ class Client:
         return (['World'] if self._names else []) + list(self._names) + list(self._parts)
 
     def get_world_handle(self):
+        if self._thread is None:  # a throttling pause is held by its thread
+            raise RuntimeError('get_world_handle: the client is not connected: call connect() '
+                               'first (its thread keeps the throttling pause held)')
         if self._world is None:
             self._world = World('World')
             self._world.set_active()
@@ -142,11 +145,11 @@ class Client:
         name holds, or 'World'. None when none or several match, saying which (as AMBF)."""
         if not isinstance(a_name, str):
             raise TypeError(f'get_obj_handle takes a name (str), not {type(a_name).__name__}')
-        if a_name in ('World', 'world', '/ambf/env/World'):
-            return self.get_world_handle()
         if self._thread is None:  # its setters would send once, then nothing would
             raise RuntimeError('get_obj_handle: the client is not connected: call connect() '
                                "first (its thread sends the handles' commands at its rate)")
+        if a_name in ('World', 'world', '/ambf/env/World'):
+            return self.get_world_handle()
         name, problem = self._find(a_name)
         if name is None:  # a body whose physics started after connect()
             self._read_catalog()
@@ -226,4 +229,6 @@ class Client:
     def _release_world(self):
         if self._world is not None:
             self._world.release_throttling()
+            self._world.close()
+            self._world = None
 

@@ -48,6 +48,7 @@ class World(Handle):
         """True: the world advances only when the client calls update(), by
         set_num_step_skips() steps each time (the world is paused in between); False: it
         runs on in real time."""
+        self.require_open()
         data = bool(data)
         if data and not self._throttling:
             self._world.pause(hold_s=THROTTLING_HOLD_S)
@@ -79,8 +80,12 @@ class World(Handle):
         self._step_skips = steps
 
     def update(self):
-        """With throttling: advances the world by the step skips and waits until it has."""
+        """With throttling: advances the world by the step skips and waits until it has.
+        A hold that lapsed while the script stalled is taken again first."""
+        self.require_open()
         if self._throttling:
+            if not self._world.state()['paused']:
+                self._world.pause(hold_s=THROTTLING_HOLD_S)
             self._world.step(self._step_skips)
 
     def run_publisher(self):

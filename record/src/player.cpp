@@ -17,6 +17,7 @@
 #include "afhub/shm_layout/error.hpp"
 #include "afhub/shm_layout/payload_check.hpp"
 #include "afhub/shm_layout/world.hpp"
+#include "afhub/shm_layout/world_control.hpp"
 #include "recorded_payloads.hpp"
 
 namespace afhub::mcap {
@@ -178,15 +179,15 @@ class Player : public Visitor {
         continue;
       }
       take_world_commands();
-      if (!paused_ || !new_step || steps_allowed_ > 0) break;
+      if (!pause_.paused || !new_step || steps_allowed_ > 0) break;
       publish_paused_world();
       sleep_until_ns(monotonic_ns() + 1'000'000);
     }
     if (new_step) {
       current_step_ = step;
-      if (paused_) --steps_allowed_;
+      if (pause_.paused) --steps_allowed_;
     }
-    if (paused_ || options_.rate == 0.0) return;
+    if (pause_.paused || options_.rate == 0.0) return;
     const std::int64_t offset_ns =
         static_cast<std::int64_t>((at_s - options_.start_s) * 1e9 / options_.rate);
     if (pass_start_ns_ == 0) pass_start_ns_ = monotonic_ns() - offset_ns;
@@ -197,25 +198,26 @@ class Player : public Visitor {
     }
   }
 
+  // Pause and resume (and a held pause's holder) as the physics keeps them, and steps
+  // while paused; a reset does nothing: a recording cannot go back.
   void take_world_commands() {
     WorldCommand command;
     while (world_commands_.next(command)) {
-      switch (command.action) {
-        case WorldAction::kPause:
-          paused_ = true;
-          break;
-        case WorldAction::kResume:
-          pass_start_ns_ = 0;  // the next message sets the time base again
-          paused_ = false;
-          steps_allowed_ = 0;
-          break;
-        case WorldAction::kStep:
-          if (paused_) steps_allowed_ += command.step_count;
-          break;
-        default:
-          break;  // a reset: a recording cannot go back
-      }
+      const bool was_paused = pause_.paused;
+      pause_.apply(command, monotonic_ns());
+      if (command.action == WorldAction::kResume) run_on();
+      if (command.action == WorldAction::kStep && was_paused) steps_allowed_ += command.step_count;
     }
+    if (const std::uint32_t holder = pause_.lapse(monotonic_ns())) {
+      std::fprintf(stderr, kPauseLapsedFormat, "afhub play", holder,
+                   static_cast<unsigned>(pause_.hold_ns / 1'000'000));
+      run_on();
+    }
+  }
+
+  void run_on() {
+    pass_start_ns_ = 0;  // the next message sets the time base again
+    steps_allowed_ = 0;
   }
 
   // While paused, the world state says so (as a physics publishes it, paused or not).
@@ -249,7 +251,7 @@ class Player : public Visitor {
   std::uint64_t first_log_ns_ = 0;
   std::int64_t pass_start_ns_ = 0;  // when the range's start was (would have been) published
 
-  bool paused_ = false;
+  WorldControl pause_;
   std::uint64_t steps_allowed_ = 0;
   std::uint64_t current_step_ = ~0ull;
   std::vector<std::uint8_t> last_world_;

@@ -2,6 +2,9 @@
 // and the table's ratios and goal verdicts.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <map>
+
 #include "afhub/bench/bench.hpp"
 #include "strict_json.hpp"
 #include "text_contains.hpp"
@@ -117,6 +120,53 @@ TEST(BenchReport, TableSaysWhichLateCommandsCameWithThePhysicsBehind) {
                        "its grid, or the step after (it fell behind 3 times, 2 of them waking up "
                        "late: the machine held it); at the other 19900 steps, 99.98 % in time"))
       << table;
+}
+
+// The slot against the bare floor of the same run: only when both move every byte
+// (--touch); without it the floor moves one cache line and the slot the whole payload.
+TEST(BenchReport, TheSlotIsSetAgainstTheFloorOnlyWhenEveryByteMoves) {
+  BenchResults results = known_results();
+  results.transports.push_back(transport("afhub-slot", 0.01));  // 0.50 us at the median
+  results.transports.push_back(transport("shm-floor", 0.007));  // 0.35 us
+  results.options.touch = true;
+  std::string table = results_table(results);
+  EXPECT_TRUE(contains(table,
+                       "afhub-slot against shm-floor (bare shared memory, the machine's floor, "
+                       "0.35 us / 0.69 us): median 1.43x, p99 1.43x the floor\n"))
+      << table;
+  results.transports.back() = transport("shm-floor", 0.01 * 0.9);  // 0.45 us
+  table = results_table(results);
+  EXPECT_TRUE(contains(table, "the floor; the 0.4 us goal is below it on this machine")) << table;
+  results.options.touch = false;
+  table = results_table(results);
+  EXPECT_FALSE(contains(table, "against shm-floor")) << table;
+}
+
+// The plot's wake-up histogram: at cyclictest's resolution (whole microseconds) below
+// 128 us, its counts are in consecutive rows; finer, 16 and 17 us had eight empty bins
+// between them, and the curve of a log scale vanished.
+TEST(BenchReport, TheLoopsHistogramIsDrawnAtWholeMicrosecondsBelow128) {
+  LatencyHistogram h;
+  h.record(16'000, 500);
+  h.record(17'000, 300);
+  h.record(200'000, 1);
+  const auto rows = histogram_rows(h);
+  std::map<double, std::uint64_t> by_edge(rows.begin(), rows.end());
+  EXPECT_EQ(by_edge.size(), rows.size()) << "an edge twice";
+  EXPECT_EQ(by_edge.at(17.0), 500u);  // 16.000 us falls in (16, 17]
+  EXPECT_EQ(by_edge.at(18.0), 300u);
+  for (const auto& [edge, count] : rows) {
+    if (edge < 128.0) {
+      EXPECT_EQ(edge, std::floor(edge)) << "not a whole microsecond";
+    }
+    if (edge > 18.0 && edge < 128.0) {
+      EXPECT_EQ(count, 0u) << edge;
+    }
+  }
+  std::uint64_t total = 0;
+  for (const auto& row : rows) total += row.second;
+  EXPECT_EQ(total, 801u);
+  EXPECT_GT(rows.back().first, 200.0);  // the last row holds the maximum
 }
 
 }  // namespace

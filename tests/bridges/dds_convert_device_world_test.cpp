@@ -139,7 +139,9 @@ TEST(DdsConvertDeviceWorld, WorldStateRoundTripsEveryField) {
 TEST(DdsConvertDeviceWorld, WorldCommandRoundTripsAndUnknownActionsAreRefused) {
   WorldCommand from;
   fill(from);
-  from.action = WorldAction::kStep;
+  from.action = WorldAction::kPause;
+  from.hold_ms = 1000;  // a held pause keeps its hold on the other machine
+  from.reserved = 0;    // not carried
   afhub_dds_WorldCommand sample{}, received{};
   to_dds("world", from, sample);
   expect_header_on_sample(from.header, sample);
@@ -151,6 +153,9 @@ TEST(DdsConvertDeviceWorld, WorldCommandRoundTripsAndUnknownActionsAreRefused) {
   expected.header = carried(from.header);
   expect_same_bytes(expected, to);
   received.action = 5;
+  EXPECT_FALSE(from_dds(received, to));
+  received.action = 1;
+  received.hold_ms = kMaxPauseHoldMs + 1;
   EXPECT_FALSE(from_dds(received, to));
 }
 

@@ -328,7 +328,7 @@ TEST_F(WithSynth, CmdExplainsBadJoints) {
     EXPECT_TRUE(contains(result.err, bad.message))
         << "expected '" << bad.message << "' in: " << result.err;
   }
-  // Numbers as strtod took them, spaces around and a sign '+', are still taken.
+  // Blanks around a number and a sign '+' are taken.
   const RunResult spaced =
       run_afhub({"cmd", "body0", "--joint-pos", " 0.1, +0.2,-3e-1 ", "--once"});
   EXPECT_EQ(spaced.exit_code, 0) << spaced.err;

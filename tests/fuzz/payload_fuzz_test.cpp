@@ -212,7 +212,8 @@ std::vector<Seed> make_seeds() {
               body_command_bytes(command.joint_count)),
       seed_of(world, {offsetof(WorldState, light_count), offsetof(WorldState, camera_count),
                       offsetof(WorldState, body_count)}),
-      seed_of(world_command, {offsetof(WorldCommand, action), offsetof(WorldCommand, step_count)}),
+      seed_of(world_command, {offsetof(WorldCommand, action), offsetof(WorldCommand, step_count),
+                              offsetof(WorldCommand, hold_ms)}),
       body_list_seed(PayloadKind::kBodyDirectory),
       body_list_seed(PayloadKind::kCatalog),
       seed_of(health, {offsetof(Health, process_count), offsetof(Health, mempool_count)}),
@@ -440,8 +441,8 @@ class Fuzzer {
       case PayloadKind::kWorldCommand: {
         WorldControl control;
         control.paused = random_() % 2;
-        control.apply(*reinterpret_cast<const WorldCommand*>(data));
-        sink += control.take_step();
+        control.apply(*reinterpret_cast<const WorldCommand*>(data), 0);
+        sink += control.take_step() + control.lapse(random_());
         break;
       }
       case PayloadKind::kBodyDirectory: {

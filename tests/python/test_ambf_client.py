@@ -3,6 +3,7 @@ unchanged but for how they are started, against the project's models and the ECM
 AMBF corpus. The effects are checked in the simulation, from this process, while the
 script waits on input()."""
 
+import signal
 import subprocess
 import sys
 import textwrap
@@ -223,6 +224,7 @@ def test_misuse_is_refused_and_throttling_ends_with_the_script(physics, tmp_path
         from ambf_client import Client
         c = Client()
         for call, error in ((lambda: c.get_obj_handle('arm/base'), RuntimeError),
+                            (lambda: c.get_world_handle(), RuntimeError),
                             (lambda: c.get_obj_handle(None), TypeError)):
             try:
                 call()
@@ -250,11 +252,12 @@ def test_misuse_is_refused_and_throttling_ends_with_the_script(physics, tmp_path
             except ValueError:
                 pass
         c.clean_up()
-        try:
-            a.set_joint_pos(0, 0.2)
-            raise SystemExit('a cleaned-up handle took a setter')
-        except RuntimeError as refused:
-            print('refused:', refused)
+        for call in (lambda: a.set_joint_pos(0, 0.2), lambda: w.enable_throttling(True)):
+            try:
+                call()
+                raise SystemExit('a cleaned-up handle took a setter')
+            except RuntimeError as refused:
+                print('refused:', refused)
         c.connect()
         w = c.get_world_handle()
         w.enable_throttling(True)
@@ -264,7 +267,7 @@ def test_misuse_is_refused_and_throttling_ends_with_the_script(physics, tmp_path
     """)
     script.read_until('THROTTLED')
     output = script.finish()
-    assert output.count('refused:') == 4, output
+    assert output.count('refused:') == 6, output
     assert 'the client is not connected: call connect() first' in output
     assert 'a quaternion takes four values' in output
     assert "this handle's client was cleaned up" in output
@@ -276,9 +279,10 @@ def test_misuse_is_refused_and_throttling_ends_with_the_script(physics, tmp_path
 
 def test_a_throttled_script_killed_lets_the_world_run_on(physics, tmp_path):
     """A throttling client's pause is held: while the script lives (idle between updates,
-    its publisher thread renewing the hold) the world stays paused; SIGKILLed, with no
-    atexit to resume it, the world runs on once the hold lapses, and the physics says so.
-    Before, the world stayed paused for good."""
+    its publisher thread renewing the hold) the world stays paused; stopped (SIGSTOP), the
+    hold lapses and the world runs on, and the script's next update() pauses it again;
+    SIGKILLed, with no atexit to resume it, the world runs on once more, and the physics
+    says so. Before, a killed script left the world paused for good."""
     run = physics(EXAMPLES / 'arm7.yaml')
     run.wait_for_body('arm/base')
     script = Script(tmp_path, """
@@ -290,6 +294,9 @@ def test_a_throttled_script_killed_lets_the_world_run_on(physics, tmp_path):
         w.enable_throttling(True)
         w.update()
         print('THROTTLED', flush=True)
+        input()
+        w.update()  # the world ran on while the script was stopped
+        print('STEPPED', flush=True)
         time.sleep(60)
     """)
     script.read_until('THROTTLED')
@@ -299,12 +306,23 @@ def test_a_throttled_script_killed_lets_the_world_run_on(physics, tmp_path):
     while time.monotonic() < idle_until:
         assert world.state()['paused'] and world.sim_step() == step, 'the hold lapsed too soon'
         time.sleep(0.05)
+
+    def runs_on(what):
+        start = world.sim_step()
+        wait_until(lambda: world.sim_step() > start + 100, 10, what)
+        assert not world.state()['paused']
+
+    script.process.send_signal(signal.SIGSTOP)
+    runs_on('the world running on while the script is stopped')
+    script.process.send_signal(signal.SIGCONT)
+    script.enter()
+    script.read_until('STEPPED')
+    assert world.state()['paused'], 'the update after the lapse did not pause the world again'
     script.process.kill()
     script.process.wait(timeout=10)
-    wait_until(lambda: world.sim_step() > step + 100, 10, 'the world running on after the kill')
-    assert not world.state()['paused']
-    wait_until(lambda: 'lapsed, nothing from it for 1000 ms' in run.log(), 5,
-               'the physics saying why it runs on:\n' + run.log())
+    runs_on('the world running on after the kill')
+    wait_until(lambda: run.log().count('lapsed, nothing from it for 1000 ms') == 2, 5,
+               'the physics saying twice why it runs on')
 
 
 @needs_shared_models()

@@ -911,6 +911,27 @@ TEST(Record, APlayedRecordingIsSeenAsIfLiveAndPausesAndStepsUnderAfhubWorld) {
       },
       5s))
       << moved << " steps on";
+
+  // A held pause that nobody renews (a throttling script killed) lapses: the play runs
+  // on, and says so.
+  Writer<WorldCommand> world(
+      {std::string(kService), std::string(kWorldInstance), std::string(kCommandEvent)});
+  WorldCommand* held = world.loan();
+  ASSERT_NE(held, nullptr);
+  held->action = WorldAction::kPause;
+  held->hold_ms = 300;
+  world.publish(held);
+  EXPECT_TRUE(wait_until(
+      [&] {
+        return contains(read_file(scene.dir("play.log")),
+                        "afhub play: the world's pause held by process " +
+                            std::to_string(getpid()) + " lapsed, nothing from it for 300 ms");
+      },
+      10s))
+      << read_file(scene.dir("play.log"));
+  const std::uint64_t lapsed_at = link3.latest()->header.sim_step;
+  EXPECT_TRUE(wait_until([&] { return link3.latest()->header.sim_step != lapsed_at; }, 5s))
+      << "the play did not run on";
 }
 
 // The messages `afhub play --start S --end E --bodies BODY` publishes, by their log times

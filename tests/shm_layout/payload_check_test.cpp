@@ -160,6 +160,11 @@ TEST(PayloadCheck, RefusesAnUnknownWorldActionAndAHoldBeyondAMinute) {
   command.action = WorldAction::kPause;
   command.hold_ms = kMaxPauseHoldMs;
   const char* field = "unset";
+  // A hold with no holder to renew it.
+  EXPECT_NE(check_payload(&command, sizeof command, PayloadKind::kWorldCommand, &field),
+            PayloadError::kNone);
+  EXPECT_STREQ(field, "WorldCommand.hold_ms");
+  command.header.publisher_pid = 42;
   EXPECT_EQ(check_payload(&command, sizeof command, PayloadKind::kWorldCommand, &field),
             PayloadError::kNone)
       << field;
@@ -240,6 +245,12 @@ TEST(WorldControl, AHeldPauseLapsesOnceItsHolderIsQuiet) {
   resume.action = WorldAction::kResume;
   control.apply(resume, 10 * kMs);
   EXPECT_EQ(control.lapse(60'000 * kMs), 0u);
+  // Nor does a held pause make a plain one lapse (`afhub world pause`, then a throttling
+  // script that dies).
+  control.apply(plain, 0);
+  control.apply(hold, 0);
+  EXPECT_EQ(control.lapse(60'000 * kMs), 0u);
+  EXPECT_TRUE(control.paused);
 }
 
 TEST(PayloadCheck, RefusesABodyListWhoseBodyCountsTooManyJoints) {

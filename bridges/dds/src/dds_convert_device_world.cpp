@@ -143,13 +143,17 @@ void to_dds(std::string_view channel, const WorldCommand& command,
   sample.header = to_dds(command.header);
   sample.action = static_cast<std::uint32_t>(command.action);
   sample.step_count = command.step_count;
+  sample.hold_ms = command.hold_ms;
 }
 
 bool from_dds(const afhub_dds_WorldCommand& sample, WorldCommand& command) noexcept {
-  if (sample.action > static_cast<std::uint32_t>(WorldAction::kReset)) return false;
+  if (sample.action > static_cast<std::uint32_t>(WorldAction::kReset) ||
+      sample.hold_ms > kMaxPauseHoldMs)
+    return false;
   from_dds(sample.header, command.header);
   command.action = static_cast<WorldAction>(sample.action);
   command.step_count = sample.step_count;
+  command.hold_ms = sample.hold_ms;
   return true;
 }
 

@@ -96,5 +96,10 @@ inline constexpr double kMinInTimeRatio = 0.9;
 inline constexpr double kInTimeGoal = 0.99;
 std::vector<std::string> failures(const BenchResults& results);
 void write_plot(const BenchResults& results, const std::string& png_path);
+// A loop's wake-up histogram as the plot draws it: (upper edge in us, count) per bin up
+// to the maximum's. Above 128 us a bin is 1/128 of a power of two, as wide on the log
+// scale as its neighbours; below, bins are merged into whole microseconds, cyclictest's
+// resolution (finer, its counts fall in one bin of several and its curve vanishes).
+std::vector<std::pair<double, std::uint64_t>> histogram_rows(const LatencyHistogram& h);
 
 }  // namespace afhub::bench

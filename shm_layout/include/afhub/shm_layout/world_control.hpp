@@ -32,12 +32,17 @@ struct WorldControl {
       held_until_ns = now_ns + hold_ns;
     switch (command.action) {
       case WorldAction::kPause:  // also ends single steps still to run
+        // A plain pause (a user's) takes over a held one and holds until resumed; a held
+        // pause never makes a plain one lapse. The last holder holds.
+        if (command.hold_ms == 0 || (paused && holder_pid == 0)) {
+          holder_pid = 0;
+        } else {
+          holder_pid = command.header.publisher_pid;
+          hold_ns = static_cast<std::int64_t>(command.hold_ms) * 1'000'000;
+          held_until_ns = now_ns + hold_ns;
+        }
         paused = true;
         steps_to_run = 0;
-        // A plain pause (a user's) takes over a held one, and holds until resumed.
-        holder_pid = command.hold_ms != 0 ? command.header.publisher_pid : 0;
-        hold_ns = static_cast<std::int64_t>(command.hold_ms) * 1'000'000;
-        held_until_ns = now_ns + hold_ns;
         break;
       case WorldAction::kResume:
         paused = false;
