@@ -45,6 +45,14 @@ std::string file_name(const std::string& session) {
   throw Error("shm-floor: " + what + ": " + std::strerror(errno));
 }
 
+// As fail_floor, closing `fd` first (errno kept: it says why).
+[[noreturn]] void fail_closing(int fd, const std::string& what) {
+  const int error = errno;
+  close(fd);
+  errno = error;
+  fail_floor(what);
+}
+
 class FloorTransport : public Transport {
  public:
   FloorTransport(Side side, const std::string& session) : side_(side), name_(file_name(session)) {
@@ -55,12 +63,7 @@ class FloorTransport : public Transport {
       const int fd = shm_open(name_.c_str(), O_CREAT | O_EXCL | O_RDWR | O_CLOEXEC, 0600);
       if (fd < 0) fail_floor("cannot make /dev/shm" + name_);
       try {
-        if (ftruncate(fd, kFileBytes) != 0) {
-          const int error = errno;
-          close(fd);
-          errno = error;
-          fail_floor("cannot size /dev/shm" + name_);
-        }
+        if (ftruncate(fd, kFileBytes) != 0) fail_closing(fd, "cannot size /dev/shm" + name_);
         map(fd);
       } catch (...) {
         shm_unlink(name_.c_str());
@@ -84,12 +87,7 @@ class FloorTransport : public Transport {
       usleep(10'000);
     }
     struct stat status {};
-    if (fstat(fd, &status) != 0) {
-      const int error = errno;
-      close(fd);
-      errno = error;
-      fail_floor("cannot look at /dev/shm" + name_);
-    }
+    if (fstat(fd, &status) != 0) fail_closing(fd, "cannot look at /dev/shm" + name_);
     if (static_cast<std::size_t>(status.st_size) != kFileBytes) {
       close(fd);
       throw Error("shm-floor: /dev/shm" + name_ + " is not the bench's file (its size is " +
@@ -133,10 +131,8 @@ class FloorTransport : public Transport {
  private:
   void map(int fd) {
     void* mapped = mmap(nullptr, kFileBytes, PROT_READ | PROT_WRITE, MAP_SHARED, fd, 0);
-    const int error = errno;
+    if (mapped == MAP_FAILED) fail_closing(fd, "cannot map /dev/shm" + name_);
     close(fd);
-    errno = error;
-    if (mapped == MAP_FAILED) fail_floor("cannot map /dev/shm" + name_);
     base_ = static_cast<char*>(mapped);
     // Lane 0 carries pings, lane 1 pongs.
     const auto lane = [&](std::size_t i) {
