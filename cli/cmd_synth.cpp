@@ -184,7 +184,7 @@ int run_synth(const SynthOptions& options) {
       state->wall_time_s = static_cast<double>(monotonic_ns() - start_ns) * 1e-9;
       state->achieved_rate_hz = achieved_rate_hz;
       state->body_count = static_cast<std::uint32_t>(bodies.size());
-      state->paused = control.halted();
+      control.describe_pause(*state);
       world.publish(state);
       if (taping)
         tape.add(PayloadKind::kWorldState, std::string(kWorldInstance), state, sizeof *state);

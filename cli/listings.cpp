@@ -103,6 +103,10 @@ std::string status_json(const Health& health, const BodyList& catalog, const Wor
         .value(world->achieved_rate_hz)
         .key("paused")
         .value(world->paused != 0)
+        .key("paused_by_pid")
+        .value(static_cast<unsigned long long>(world->paused_by_pid))
+        .key("pause_held")
+        .value(world->pause_held != 0)
         .key("rejected_commands")
         .value(static_cast<unsigned long long>(world->rejected_commands))
         .key("watchdog_expiries")
@@ -153,6 +157,13 @@ std::string status_json(const Health& health, const BodyList& catalog, const Wor
 
 std::string status_text(const Health& health, const BodyList& catalog, const WorldState* world,
                         const std::vector<LoopStats>& loops) {
+  // Whose pause, and whether it lapses once its holder goes quiet (WorldCommand.hold_ms).
+  const auto pause_text = [](const WorldState& state) -> std::string {
+    if (!state.paused) return "";
+    if (state.paused_by_pid == 0) return " (paused)";
+    return " (paused by pid " + std::to_string(state.paused_by_pid) +
+           (state.pause_held ? ", a held pause: it lapses once that process goes quiet)" : ")");
+  };
   std::string out;
   appendf(out, "hub: pid %u, up %.1f s, %u bodies, %u processes\n", health.header.publisher_pid,
           health.hub_uptime_s, health.body_count, health.process_count);
@@ -161,7 +172,7 @@ std::string status_text(const Health& health, const BodyList& catalog, const Wor
             "world: step %llu, sim time %.3f s, %.1f steps/s%s, %llu commands refused, %llu "
             "stale, %llu watchdog expiries\n",
             static_cast<unsigned long long>(world->header.sim_step), world->header.sim_time_s,
-            world->achieved_rate_hz, world->paused ? " (paused)" : "",
+            world->achieved_rate_hz, pause_text(*world).c_str(),
             static_cast<unsigned long long>(world->rejected_commands),
             static_cast<unsigned long long>(world->stale_commands),
             static_cast<unsigned long long>(world->watchdog_expiries));

@@ -126,6 +126,8 @@ py::dict state_dict(const WorldState& s) {
   out["achieved_rate_hz"] = s.achieved_rate_hz;
   out["body_count"] = s.body_count;
   out["paused"] = s.paused != 0;
+  out["paused_by_pid"] = s.paused_by_pid;
+  out["pause_held"] = s.pause_held != 0;
   out["lockstep"] = s.lockstep != 0;
   out["rejected_commands"] = s.rejected_commands;
   out["watchdog_expiries"] = s.watchdog_expiries;
@@ -158,7 +160,9 @@ void register_world(py::module_& module) {
           "state", [](World& world, double wait_s) { return state_dict(world.state(wait_s)); },
           py::arg("wait_s") = 2.0,
           "The newest world state as a dict: step, time (simulated s), stamp_ns, wall_time, "
-          "achieved_rate_hz, body_count, paused, lockstep, rejected_commands, "
+          "achieved_rate_hz, body_count, paused, paused_by_pid (whose pause is in force, 0 "
+          "when running), pause_held (it lapses once that process goes quiet), lockstep, "
+          "rejected_commands, "
           "watchdog_expiries, stale_commands, lockstep_clients, late_answers, "
           "dropped_clients, nan_recoveries, and the names of the world file's lights and "
           "cameras.")

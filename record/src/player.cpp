@@ -229,7 +229,8 @@ class Player : public Visitor {
         world_writer_->loan(static_cast<std::uint32_t>(last_world_.size())));
     if (!world) return;
     std::memcpy(world, last_world_.data(), last_world_.size());
-    world->paused = 1;
+    pause_.describe_pause(*world);
+    world->paused = 1;  // its single steps are counted apart (steps_allowed_)
     world->lockstep = 0;
     world_writer_->publish(world);
   }

@@ -104,8 +104,7 @@ TEST(DdsConvertDeviceWorld, DeviceCommandRoundTripsEveryField) {
 TEST(DdsConvertDeviceWorld, WorldStateRoundTripsEveryField) {
   auto from = std::make_unique<WorldState>();
   fill(*from);
-  std::memset(from->reserved, 0, sizeof from->reserved);
-  from->reserved2 = 0;
+  from->reserved = 0;
   set_text(from->last_nan_body, "afhub/arm/link3");
   from->light_count = 3;
   from->camera_count = kMaxWorldObjects;  // full

@@ -110,8 +110,10 @@ def test_world_pause_step_resume_reset(physics):
     for steps in (0, -1, 2**40):  # the last two were pybind's "incompatible arguments"
         with pytest.raises(ValueError, match='step takes a number of steps from 1 to'):
             world.step(steps)
-    assert world.state()['paused']
+    state = world.state()
+    assert state['paused'] and state['paused_by_pid'] == os.getpid() and not state['pause_held']
     assert world.resume().startswith('resumed')
+    assert world.state()['paused_by_pid'] == 0
     with pytest.raises(afhub.Error, match='the world is running, so there is nothing to step'):
         world.step(1)
     # A held pause lasts while it is renewed, and lapses once it is not.
@@ -125,6 +127,9 @@ def test_world_pause_step_resume_reset(physics):
         world.hold()
         time.sleep(0.1)
     assert world.state()['paused'] and world.sim_step() == held, 'the renewed hold lapsed'
+    assert world.state()['pause_held'] and world.state()['paused_by_pid'] == os.getpid()
+    status = subprocess.run([AFHUB, 'status'], capture_output=True, text=True, timeout=30)
+    assert f'(paused by pid {os.getpid()}, a held pause' in status.stdout, status.stdout + status.stderr
     wait_until(lambda: not world.state()['paused'], 10, 'the hold lapsing once not renewed')
     wait_until(lambda: world.sim_step() > 100, 10, 'the world ran past step 100')
     assert world.reset().startswith('reset from step')

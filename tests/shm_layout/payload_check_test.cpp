@@ -6,6 +6,7 @@
 #include <cstring>
 #include <functional>
 #include <memory>
+#include <tuple>
 #include <vector>
 
 #include "afhub/shm_layout/layout_id.hpp"
@@ -251,6 +252,36 @@ TEST(WorldControl, AHeldPauseLapsesOnceItsHolderIsQuiet) {
   control.apply(hold, 0);
   EXPECT_EQ(control.lapse(60'000 * kMs), 0u);
   EXPECT_TRUE(control.paused);
+}
+
+// The world state names whose pause is in force, and whether it is held.
+TEST(WorldControl, TheWorldStateSaysWhosePauseIsInForce) {
+  WorldControl control;
+  WorldState world;
+  WorldCommand plain;
+  plain.header.publisher_pid = 7;
+  plain.action = WorldAction::kPause;
+  WorldCommand hold = plain;
+  hold.header.publisher_pid = 42;
+  hold.hold_ms = 500;
+  WorldCommand resume = plain;
+  resume.action = WorldAction::kResume;
+  const auto said = [&] {
+    control.describe_pause(world);
+    return std::tuple(world.paused != 0, world.paused_by_pid, world.pause_held != 0);
+  };
+  EXPECT_EQ(said(), std::tuple(false, 0u, false));
+  control.apply(hold, 0);
+  EXPECT_EQ(said(), std::tuple(true, 42u, true));
+  control.apply(plain, 0);  // takes the held one over
+  EXPECT_EQ(said(), std::tuple(true, 7u, false));
+  control.apply(hold, 0);  // the plain one stays in force
+  EXPECT_EQ(said(), std::tuple(true, 7u, false));
+  control.apply(resume, 0);
+  EXPECT_EQ(said(), std::tuple(false, 0u, false));
+  control.apply(hold, 0);
+  control.lapse(600'000'000);
+  EXPECT_EQ(said(), std::tuple(false, 0u, false)) << "a lapsed pause still named";
 }
 
 TEST(PayloadCheck, RefusesABodyListWhoseBodyCountsTooManyJoints) {

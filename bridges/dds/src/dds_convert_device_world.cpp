@@ -51,6 +51,8 @@ void copy_world_values(const From& from, To& to) noexcept {
   to.body_count = from.body_count;
   to.paused = from.paused;
   to.lockstep = from.lockstep;
+  to.pause_held = from.pause_held;
+  to.paused_by_pid = from.paused_by_pid;
   to.rejected_commands = from.rejected_commands;
   to.watchdog_expiries = from.watchdog_expiries;
   to.stale_commands = from.stale_commands;

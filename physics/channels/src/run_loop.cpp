@@ -3,6 +3,8 @@
 
 #include "afhub/physics/rate_meter.hpp"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -60,6 +62,7 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
   auto clock_ns = [&] { return options.clock ? options.clock->now_ns() : monotonic_ns(); };
   WorldControl control;
   control.paused = options.start_paused;
+  if (control.paused) control.paused_by_pid = static_cast<std::uint32_t>(getpid());
   WorldCommand world_command;
   std::uint32_t lapsed_holder = 0;  // a held pause's holder gone quiet, to be said
   double achieved_rate_hz = 0.0;
@@ -72,7 +75,7 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
   if (channels)
     stats = std::make_unique<LoopStatsPublisher>("run", "", options.fast ? 0 : period_ns,
                                                  channels->lockstep(), options.grant);
-  if (channels) channels->publish({0.0, 0.0, control.halted()});  // step 0: the model as loaded
+  if (channels) channels->publish({0.0, 0.0, control});  // step 0: the model as loaded
   // The wait for lockstep clients before the first step is setup: the clock starts after it.
   if (channels && channels->lockstep() && !channels->wait_for_clients()) return;
   const std::int64_t start_ns = clock_ns();
@@ -142,8 +145,7 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
     const std::uint64_t answered = channels ? channels->answered_steps() : 0;
     if (channels)
       channels->publish({static_cast<double>(clock_ns() - start_ns) * 1e-9, achieved_rate_hz,
-                         control.halted(), pacing.period_ns > 0 ? step_due_ns : 0,
-                         pacing.period_ns});
+                         control, pacing.period_ns > 0 ? step_due_ns : 0, pacing.period_ns});
     const std::int64_t end_ns = monotonic_ns();
     previous = {clock_ns(), end_ns - begin_ns};
     if (stepping) {

@@ -270,7 +270,7 @@ void SimChannels::publish(const WorldClock& clock) noexcept {
     world->step_due_ns = clock.step_due_ns;
     world->step_period_ns = clock.step_period_ns;
     world->body_count = static_cast<std::uint32_t>(channels_.size());
-    world->paused = clock.paused;
+    clock.control.describe_pause(*world);
     world->rejected_commands = rejected_;
     world->watchdog_expiries = expiries_;
     world->stale_commands = stale_;

@@ -148,6 +148,8 @@ inline constexpr std::uint64_t kLayoutId = layout_detail::mix({
     AFHUB_OFF(WorldState, body_count),
     AFHUB_OFF(WorldState, paused),
     AFHUB_OFF(WorldState, lockstep),
+    AFHUB_OFF(WorldState, pause_held),
+    AFHUB_OFF(WorldState, paused_by_pid),
     AFHUB_OFF(WorldState, lockstep_clients),
     AFHUB_OFF(WorldState, late_answers),
     AFHUB_OFF(WorldState, dropped_clients),

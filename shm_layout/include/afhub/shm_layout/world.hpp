@@ -31,7 +31,11 @@ struct WorldState {
   std::uint32_t body_count{0};
   std::uint8_t paused{0};
   std::uint8_t lockstep{0};  // stepping waits for the lockstep clients
-  std::uint8_t reserved[2]{};
+  // While paused: whether the pause is held (WorldCommand.hold_ms: it lapses once its
+  // holder goes quiet), and the pid of the process whose pause command is in force (a
+  // physics started paused: its own; over DDS: the bridge's on the physics' machine).
+  std::uint8_t pause_held{0};
+  std::uint8_t reserved{0};
   // Commands refused since the start (NaN or Inf, a value beyond the body's physical
   // bounds, a joint index beyond the body's joints), watchdog expiries (a body's
   // commands stopped for too long), and commands not applied because they were
@@ -42,7 +46,7 @@ struct WorldState {
   // Lockstep: clients in the barrier now, steps taken without a late client's
   // answer, and clients dropped from the barrier after repeated misses.
   std::uint32_t lockstep_clients{0};
-  std::uint32_t reserved2{0};
+  std::uint32_t paused_by_pid{0};
   std::uint64_t late_answers{0};
   std::uint64_t dropped_clients{0};
   // Command timeliness, summed over the bodies under command: steps taken, and

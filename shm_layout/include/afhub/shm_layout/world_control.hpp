@@ -19,6 +19,7 @@ inline constexpr const char* kPauseLapsedFormat =
 
 struct WorldControl {
   bool paused = false;
+  std::uint32_t paused_by_pid = 0;  // whose pause is in force
   std::uint64_t steps_to_run = 0;
   // A held pause (WorldCommand.hold_ms): its holder (0: none) and when it lapses unless
   // a command of the holder's comes first.
@@ -33,11 +34,11 @@ struct WorldControl {
     switch (command.action) {
       case WorldAction::kPause:  // also ends single steps still to run
         // A plain pause (a user's) takes over a held one and holds until resumed; a held
-        // pause never makes a plain one lapse. The last holder holds.
-        if (command.hold_ms == 0 || (paused && holder_pid == 0)) {
-          holder_pid = 0;
-        } else {
-          holder_pid = command.header.publisher_pid;
+        // pause asked for while plainly paused leaves the plain one in force. The last
+        // holder holds.
+        if (command.hold_ms == 0 || !paused || holder_pid != 0) {
+          paused_by_pid = command.header.publisher_pid;
+          holder_pid = command.hold_ms == 0 ? 0 : paused_by_pid;
           hold_ns = static_cast<std::int64_t>(command.hold_ms) * 1'000'000;
           held_until_ns = now_ns + hold_ns;
         }
@@ -46,6 +47,7 @@ struct WorldControl {
         break;
       case WorldAction::kResume:
         paused = false;
+        paused_by_pid = 0;
         steps_to_run = 0;
         holder_pid = 0;
         break;
@@ -73,6 +75,7 @@ struct WorldControl {
     const std::uint32_t holder = holder_pid;
     holder_pid = 0;
     paused = false;
+    paused_by_pid = 0;
     steps_to_run = 0;
     return holder;
   }
@@ -80,6 +83,13 @@ struct WorldControl {
   // What the world state says: paused only while no single steps are left to run (a
   // world running `world step N` is not standing still).
   bool halted() const noexcept { return paused && steps_to_run == 0; }
+
+  // The world state's pause fields: paused, whose pause and whether it is held.
+  void describe_pause(WorldState& world) const noexcept {
+    world.paused = halted();
+    world.paused_by_pid = paused ? paused_by_pid : 0;
+    world.pause_held = paused && holder_pid != 0;
+  }
 
   // Whether to advance this cycle; a single step asked for while paused is used up.
   bool take_step() noexcept {

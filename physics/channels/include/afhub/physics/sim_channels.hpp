@@ -50,6 +50,7 @@
 #include "afhub/shm_layout/scene_poses.hpp"
 #include "afhub/shm_layout/soft_body.hpp"
 #include "afhub/shm_layout/world.hpp"
+#include "afhub/shm_layout/world_control.hpp"
 
 namespace afhub {
 class SampleWaiter;
@@ -122,7 +123,7 @@ class SimChannels {
   struct WorldClock {
     double wall_time_s = 0.0;
     double achieved_rate_hz = 0.0;
-    bool paused = false;
+    WorldControl control;  // paused or not, and by whom
     // The step's deadline on the loop's grid, and its period (0, 0: not paced).
     std::int64_t step_due_ns = 0, step_period_ns = 0;
   };
