@@ -22,6 +22,7 @@
 #include "afhub/rt/clock.hpp"
 #include "afhub/rt/stop_signal.hpp"
 #include "afhub/shm_layout/error.hpp"
+#include "afhub/yaml/number_text.hpp"
 #include "commands.hpp"
 #include "format.hpp"
 #include "time_options.hpp"
@@ -113,7 +114,7 @@ std::map<std::size_t, double> named_joint_targets(const CmdOptions& options, con
                   "'");
     const std::string joint = item.substr(0, equals);
     const std::string text = item.substr(equals + 1);
-    const std::optional<double> value = parse_finite(text);
+    const std::optional<double> value = yaml::parse_finite(text);
     if (!value)
       throw Error("--joint " + item + ": '" + text + "' is not a finite number; e.g. --joint " +
                   joint + "=0.3");

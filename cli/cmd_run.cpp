@@ -12,6 +12,7 @@
 #include "afhub/rt/periodic_loop.hpp"
 #include "afhub/rt/stop_signal.hpp"
 #include "afhub/shm_layout/error.hpp"
+#include "afhub/yaml/number_text.hpp"
 #include "commands.hpp"
 #include "connection_options.hpp"
 #include "count_option.hpp"
@@ -91,18 +92,12 @@ int run_run(const RunCliOptions& options) {
   for (const std::string& list : options.watchdog_bodies)
     for (const std::string& entry : split_commas(list)) {
       const std::size_t equals = entry.rfind('=');
-      double seconds = 0.0;
-      std::size_t used = 0;
-      try {
-        if (equals != std::string::npos) seconds = std::stod(entry.substr(equals + 1), &used);
-      } catch (const std::exception&) {
-        used = 0;
-      }
-      if (equals == std::string::npos || equals == 0 || used == 0 ||
-          used != entry.size() - equals - 1)
+      const std::optional<double> seconds =
+          equals == std::string::npos ? std::nullopt : yaml::parse_finite(entry.substr(equals + 1));
+      if (equals == 0 || !seconds)
         throw Error("--watchdog-body takes BODY=SECONDS, e.g. arm/link3=0.002; got '" + entry +
                     "'");
-      watchdog_bodies.emplace_back(entry.substr(0, equals), seconds);
+      watchdog_bodies.emplace_back(entry.substr(0, equals), *seconds);
     }
   physics::SceneRequest request;
   request.launch_file = options.launch_file;

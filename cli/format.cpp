@@ -3,7 +3,6 @@
 
 #include <algorithm>
 #include <array>
-#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -13,6 +12,7 @@
 #include "afhub/hub/json_writer.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "afhub/shm_layout/force_gate_name.hpp"
+#include "afhub/yaml/number_text.hpp"
 
 namespace afhub::cli {
 namespace {
@@ -204,21 +204,6 @@ std::string rate_text(double rate_hz) {
   return text;
 }
 
-std::optional<double> parse_finite(std::string_view text) {
-  // Blanks around it ("1, 2, 3") and a sign '+' are taken.
-  const std::size_t first = text.find_first_not_of(" \t\n");
-  if (first == std::string_view::npos) return std::nullopt;
-  text = text.substr(first, text.find_last_not_of(" \t\n") - first + 1);
-  if (text.size() > 1 && text[0] == '+' && text[1] != '-') text.remove_prefix(1);
-  double value = 0.0;
-  // Decimal forms only: no hexadecimal.
-  const auto [end, error] =
-      std::from_chars(text.data(), text.data() + text.size(), value, std::chars_format::general);
-  if (error != std::errc() || end != text.data() + text.size() || !std::isfinite(value))
-    return std::nullopt;
-  return value;
-}
-
 std::vector<double> parse_numbers(std::string_view text, std::string_view flag,
                                   std::size_t expected) {
   std::vector<double> values;
@@ -228,7 +213,7 @@ std::vector<double> parse_numbers(std::string_view text, std::string_view flag,
     std::size_t end = rest.find(',', start);
     if (end == std::string::npos) end = rest.size();
     std::string item = rest.substr(start, end - start);
-    const std::optional<double> value = parse_finite(item);
+    const std::optional<double> value = yaml::parse_finite(item);
     if (!value) {
       std::string example = "0.1";
       for (std::size_t i = 1; i < std::max<std::size_t>(expected, 2); ++i)

@@ -52,11 +52,6 @@ bool rate_measured(double rate_hz);
 // The non-empty items of a comma-separated list: "a,,b" -> {a, b}.
 std::vector<std::string> split_commas(const std::string& text);
 
-// A decimal number as written on a command line ("0.3", "-1e-3", " +2 "): nothing when
-// the text is anything else (hexadecimal, "inf", "nan") or beyond a double's range,
-// which strtod read as 16, an infinity or 0.
-std::optional<double> parse_finite(std::string_view text);
-
 // Parses "a,b,c" into finite numbers; throws afhub::Error naming `flag` when a value
 // is not a number, is NaN or Inf, or when the count is not `expected` (0: any count).
 std::vector<double> parse_numbers(std::string_view text, std::string_view flag,

@@ -10,6 +10,7 @@
 
 #include "afhub/shm_layout/error.hpp"
 #include "afhub/yaml/input_file.hpp"
+#include "afhub/yaml/number_text.hpp"
 
 namespace afhub {
 
@@ -75,18 +76,6 @@ namespace {
 
 constexpr std::uintmax_t kMaxTrajectoryFileBytes = 1u << 30;
 
-// A number, or nothing when `text` is not entirely one.
-bool parse_number(const std::string& text, double& value) {
-  std::size_t used = 0;
-  try {
-    value = std::stod(text, &used);
-  } catch (const std::exception&) {
-    return false;
-  }
-  while (used < text.size() && std::isspace(static_cast<unsigned char>(text[used]))) ++used;
-  return used == text.size();
-}
-
 std::vector<std::string> split_fields(const std::string& line) {
   std::vector<std::string> fields;
   std::stringstream stream(line);
@@ -111,21 +100,19 @@ JointTrajectory read_trajectory_csv(const std::string& path) {
     if (line.find_first_not_of(" \t") == std::string::npos || line[0] == '#') continue;
     const std::string where = path + ":" + std::to_string(number) + ": error: ";
     const std::vector<std::string> fields = split_fields(line);
-    double time_s = 0.0;
-    if (header_allowed && !parse_number(fields[0], time_s)) {
+    if (header_allowed && !yaml::parse_finite(fields[0])) {
       header_allowed = false;
       continue;
     }
     header_allowed = false;
     std::vector<double> values;
     for (std::size_t f = 0; f < fields.size(); ++f) {
-      double value = 0.0;
-      if (!parse_number(fields[f], value))
+      const std::optional<double> value = yaml::parse_finite(fields[f]);
+      if (!value)
         throw Error(where + "column " + std::to_string(f + 1) + " is '" + fields[f] +
-                    "', not a number; each row is time,q0,q1,... in seconds and rad or m");
-      if (!std::isfinite(value))
-        throw Error(where + "column " + std::to_string(f + 1) + " is not finite");
-      values.push_back(value);
+                    "', not a finite decimal number; each row is time,q0,q1,... in seconds and "
+                    "rad or m");
+      values.push_back(*value);
     }
     if (values.size() < 2)
       throw Error(where + "a row needs a time and at least one joint position");

@@ -14,6 +14,7 @@
 
 #include "afhub/shm_layout/error.hpp"
 #include "afhub/yaml/input_file.hpp"
+#include "afhub/yaml/number_text.hpp"
 #include "afhub/yaml/yaml_reader.hpp"
 
 namespace afhub::devices {
@@ -56,10 +57,9 @@ std::vector<TrajectoryPoint> read_trajectory_csv(const std::string& path) {
     std::string field;
     bool numeric = true;
     while (fields >> field) {
-      char* end = nullptr;
-      const double value = std::strtod(field.c_str(), &end);
-      numeric = numeric && *end == '\0' && std::isfinite(value);
-      values.push_back(value);
+      const std::optional<double> value = yaml::parse_finite(field);
+      numeric = numeric && value;
+      values.push_back(value.value_or(0.0));
     }
     const std::string where = path + ":" + std::to_string(number) + ": ";
     if (!numeric) {

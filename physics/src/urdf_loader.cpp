@@ -104,18 +104,36 @@ std::optional<std::size_t> too_deep_at(const std::string& text) {
   return std::nullopt;
 }
 
+SourceLocation location_at(const std::string& path, const std::string& text, std::size_t at) {
+  const auto line_start = text.rfind('\n', at);
+  const auto line = 1 + std::count(text.begin(), text.begin() + static_cast<long>(at), '\n');
+  const auto column = at - (line_start == std::string::npos ? 0 : line_start + 1) + 1;
+  return {path, static_cast<int>(line), static_cast<int>(column)};
+}
+
+// Where a DOCTYPE declares entities or elements ("<!DOCTYPE robot [ ... ]>"), or nullopt.
+// TinyXML (and so urdfdom, and ROS) reads no such declarations: it stopped at them and
+// the file seemed to have no <robot>.
+std::optional<std::size_t> doctype_subset_at(const std::string& text) {
+  const std::size_t doctype = text.find("<!DOCTYPE");
+  if (doctype == std::string::npos) return std::nullopt;
+  const std::size_t bracket = text.find('[', doctype), end = text.find('>', doctype);
+  if (bracket < end) return doctype;
+  return std::nullopt;
+}
+
 // Reads the text as XML: a file that is not well-formed, or has no <robot>, is an
 // error at the place TinyXML stopped.
 void read_xml(const std::string& path, const std::string& text, XmlElements& xml) {
-  if (const std::optional<std::size_t> at = too_deep_at(text)) {
-    const auto line_start = text.rfind('\n', *at);
-    const auto line = 1 + std::count(text.begin(), text.begin() + static_cast<long>(*at), '\n');
-    const auto column = *at - (line_start == std::string::npos ? 0 : line_start + 1) + 1;
-    fail({path, static_cast<int>(line), static_cast<int>(column)},
+  if (const std::optional<std::size_t> at = too_deep_at(text))
+    fail(location_at(path, text, *at),
          "XML elements nested deeper than " + std::to_string(kMaxXmlDepth) +
              " levels here; a URDF nests a few (robot, link, visual, geometry): is the file "
              "generated as meant?");
-  }
+  if (const std::optional<std::size_t> at = doctype_subset_at(text))
+    fail(location_at(path, text, *at),
+         "this DOCTYPE declares entities or elements ([...]), which URDF readers (urdfdom, as "
+         "ROS) do not read; write the values in place of the entities and remove the [...]");
   xml.document.SetTabSize(1);  // columns count characters
   xml.document.Parse(text.c_str(), nullptr, TIXML_ENCODING_UTF8);
   if (xml.document.Error()) {
@@ -337,6 +355,10 @@ class UrdfReader {
   }
 
   std::string mesh_path(const urdf::Mesh& mesh, const std::string& link, const char* role) {
+    if (urdf_files::leaves_its_package(mesh.filename))
+      fail(link_at(link), "link '" + link + "': " + role + " mesh '" + mesh.filename +
+                              "' leads out of its package; a package:// path names a file "
+                              "inside the package (package://NAME/meshes/part.stl)");
     std::string looked;
     std::string resolved =
         urdf_files::resolve_uri(mesh.filename, dir_, options_.package_paths, looked);

@@ -62,6 +62,15 @@ std::string checked(const fs::path& path, std::string& looked) {
 
 }  // namespace
 
+bool leaves_its_package(const std::string& uri) {
+  const std::string package_scheme = "package://";
+  if (uri.rfind(package_scheme, 0) != 0) return false;
+  const std::size_t slash = uri.find('/', package_scheme.size());
+  if (slash == std::string::npos) return false;
+  const fs::path inside = fs::path(uri.substr(slash + 1)).lexically_normal();
+  return !inside.empty() && *inside.begin() == "..";
+}
+
 std::string resolve_uri(const std::string& uri, const std::string& urdf_dir,
                         const std::vector<std::string>& package_paths, std::string& looked) {
   looked.clear();

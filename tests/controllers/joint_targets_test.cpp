@@ -83,12 +83,13 @@ TEST(JointControllers, BadTrajectoryFilesSayWhereAndWhat) {
     const char* text;
     const char* expected;
   } cases[] = {
-      {"0,1\n1,x\n", "path.csv:2: error: column 2 is 'x', not a number"},
+      {"0,1\n1,x\n", "path.csv:2: error: column 2 is 'x', not a finite decimal number"},
+      {"0,1\n1,0x10\n", "path.csv:2: error: column 2 is '0x10', not a finite decimal number"},
       {"0,1\n0,2\n", "path.csv:2: error: time 0 does not increase"},
       {"0,1,2\n1,2\n", "path.csv:2: error: this row has 1 joint positions, the first had 2"},
       {"0\n", "path.csv:1: error: a row needs a time and at least one joint position"},
       {"t,q\n", "path.csv: error: no trajectory rows"},
-      {"0,nan\n", "path.csv:1: error: column 2 is not finite"},
+      {"0,1\n1,nan\n", "path.csv:2: error: column 2 is 'nan', not a finite decimal number"},
   };
   for (const auto& c : cases) {
     const std::string file = folder.write("path.csv", c.text);

@@ -196,6 +196,9 @@ TEST(TrajectoryCsvTest, BadLinesAreLocated) {
       << error_of("0,0,0,0\n0,1,1,1\n");
   EXPECT_NE(error_of("0,0,0\n").find("bad.csv:1: expected 4 to 6 values"), std::string::npos);
   EXPECT_NE(error_of("0,0,0,0\n1,0,x,0\n").find("bad.csv:2: expected numbers"), std::string::npos);
+  // strtod read it as 16.
+  EXPECT_NE(error_of("0,0,0,0\n1,0,0x10,0\n").find("bad.csv:2: expected numbers"),
+            std::string::npos);
   EXPECT_NE(error_of("0,0,0,0,-1\n").find("buttons must be a bit mask"), std::string::npos);
   EXPECT_NE(error_of("# nothing\n").find("has no points"), std::string::npos);
   EXPECT_NE(error_of("0,0,0,0,1.5\n").find("buttons must be a bit mask"), std::string::npos);

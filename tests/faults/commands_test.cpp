@@ -333,6 +333,11 @@ TEST(FaultsCommands, APerBodyWatchdogOfTwoMillisecondsFiresForThatBodyAlone) {
       {"run", kArm, "--no-autostart", "--steps", "1", "--watchdog-body", "arm/link3=0.0001"});
   EXPECT_NE(bad.exit_code, 0);
   EXPECT_TRUE(contains(bad.err, "0.002 to 3600")) << bad.err;
+  // Decimal only: strtod read it as 1 s.
+  RunResult hex = run_afhub(
+      {"run", kArm, "--no-autostart", "--steps", "1", "--watchdog-body", "arm/link3=0x1"});
+  EXPECT_NE(hex.exit_code, 0);
+  EXPECT_TRUE(contains(hex.err, "--watchdog-body takes BODY=SECONDS")) << hex.err;
 }
 
 TEST(FaultsCommands, LateCommandsAreOneCountInTheWorldStatusAndTop) {

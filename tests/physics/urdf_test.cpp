@@ -579,6 +579,30 @@ TEST(Urdf, MalformedAndInvalidFilesAreErrorsAtTheirLine) {
             not_robot.path +
                 ":2:1: error: the top element is not <robot name=\"...\">; is this "
                 "a URDF file?");
+  // Declarations in a DOCTYPE are said as such (they were "not <robot>" at 1:1); a
+  // DOCTYPE without them loads.
+  const std::string robot = "<robot name=\"r\">\n  <link name=\"a\"/>\n</robot>\n";
+  const WrittenFile entities("entities.urdf",
+                             "<?xml version=\"1.0\"?>\n<!DOCTYPE robot [\n  <!ENTITY len "
+                             "\"0.5\">\n]>\n" +
+                                 robot);
+  const std::string declared = load_error(entities.path);
+  EXPECT_TRUE(declared.starts_with(entities.path + ":2:1: error: this DOCTYPE declares entities"))
+      << declared;
+  const WrittenFile plain("doctype.urdf", "<?xml version=\"1.0\"?>\n<!DOCTYPE robot>\n" + robot);
+  EXPECT_EQ(load(plain.path).bodies.size(), 1u);
+  // A package:// path that climbs out of its package is refused, not followed.
+  const WrittenFile climbing(
+      "climbing.urdf", head +
+                           "  <link name=\"b\">\n    <visual><geometry><mesh "
+                           "filename=\"package://bad/../../../etc/passwd\"/></geometry></"
+                           "visual>\n  </link>\n  <joint name=\"j\" type=\"fixed\">\n    "
+                           "<parent link=\"a\"/>\n    <child link=\"b\"/>\n  </joint>\n</robot>\n");
+  const std::string climbed = load_error(climbing.path);
+  EXPECT_TRUE(climbed.starts_with(climbing.path + ":4:3: error: link 'b': visual mesh "
+                                                  "'package://bad/../../../etc/passwd' leads out "
+                                                  "of its package"))
+      << climbed;
 }
 
 // A mesh named relative to the URDF, the URDF named relative to the working folder (as

@@ -298,6 +298,7 @@ TEST_F(ViewTest, AJointCommandMovesTheJointOnlyWithAllowCommands) {
   EXPECT_EQ(http_request(view.port, "GET", "/options.json").body, R"({"commands":true})");
   EXPECT_EQ(view.post("/command?body=afhub/arm/base&joint=99&value=0.5").status, 400);
   EXPECT_EQ(view.post("/command?body=afhub/arm/base&joint=0&value=nan").status, 400);
+  EXPECT_EQ(view.post("/command?body=afhub/arm/base&joint=0&value=0x10").status, 400);
   EXPECT_EQ(http_request(view.port, "GET", "/command?body=afhub/arm/base&joint=0&value=0.5").status,
             405);
   // World commands: a known action, and a step only while paused.

@@ -9,6 +9,7 @@
 
 #include "afhub/hub/hub_health.hpp"
 #include "afhub/shm_layout/channel_names.hpp"
+#include "afhub/yaml/number_text.hpp"
 
 namespace afhub::viewer {
 namespace {
@@ -80,8 +81,8 @@ std::string JointCommander::run(const std::string& query) {
   char* end = nullptr;
   const unsigned long joint = std::strtoul(joint_text.c_str(), &end, 10);
   if (*end != '\0' || joint_text[0] == '-') return "joint: a joint index, got " + joint_text;
-  const double value = std::strtod(value_text.c_str(), &end);
-  if (*end != '\0' || !std::isfinite(value)) return "value: a finite number, got " + value_text;
+  const std::optional<double> value = yaml::parse_finite(value_text);
+  if (!value) return "value: a finite number, got " + value_text;
 
   std::shared_ptr<Client> client;
   try {
@@ -118,7 +119,7 @@ std::string JointCommander::run(const std::string& query) {
   if (!command) return "no shared memory for a command";
   for (std::uint32_t j = 0; j < state->joint_count; ++j)
     command->joints[j] = {
-        j == joint ? value : state->joints[j].position, JointCommandType::kPosition, {}};
+        j == joint ? *value : state->joints[j].position, JointCommandType::kPosition, {}};
   command->header.sim_step = state->header.sim_step;
   client->client.publish_command(command);
   return "";

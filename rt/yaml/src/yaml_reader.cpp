@@ -27,15 +27,6 @@ const char* kind_of(const YAML::Node& node) {
   }
 }
 
-std::string number_text(double value) {
-  char text[32];
-  for (int digits = 6; digits <= 17; ++digits) {
-    std::snprintf(text, sizeof text, "%.*g", digits, value);
-    if (std::strtod(text, nullptr) == value) break;
-  }
-  return text;
-}
-
 namespace {
 
 // A file's cost read from the parser's events, without building its tree: its nodes

@@ -12,6 +12,8 @@
 #include <unordered_map>
 #include <vector>
 
+#include "afhub/yaml/number_text.hpp"
+
 namespace afhub::yaml {
 
 // No value in afhub's files comes near this; one past it (1e308, say) overflows
@@ -20,11 +22,6 @@ inline constexpr double kMaxMagnitude = 1e9;
 
 // What a node is, for messages: "a map", "a list", "a value" or "nothing".
 const char* kind_of(const YAML::Node& node);
-
-// `value` as messages write numbers ("1e+09", "0.001"): in six significant digits, or as
-// many more as it takes to read back the same number (two times a trajectory said were
-// out of order differed past the sixth, and read the same).
-std::string number_text(double value);
 
 // Parses `text`, the contents of `path`; a syntax error says file:line:col. A file
 // past kMaxYamlNodes or kMaxYamlDepth (shm_layout/limits.hpp) is refused at the node
