@@ -33,11 +33,12 @@ const std::string kArm = AFHUB_EXAMPLE_MODELS "/arm7.yaml";
 // One lockstep run of the arm driven by `afhub ctl sine`; returns the report, the
 // physics' log in run<run>.log. With `second_after`, a second arm beside it
 // (afhub/arm/base1), held by a second client (`ctl hold`) that joins that long after the
-// first. With `sine_stopped_for`, the sine client is stopped (SIGSTOP) that long at step
-// 1000 or later.
+// first. With `stopped_for`, the sine client (or with `physics_stopped` the physics, once
+// it holds a step for the client) is stopped (SIGSTOP) that long at step 1000 or later.
 std::string lockstep_sine_run(const afhub::testing::ModelFolder& folder, int run,
                               std::optional<std::chrono::milliseconds> second_after = {},
-                              std::optional<std::chrono::milliseconds> sine_stopped_for = {}) {
+                              std::optional<std::chrono::milliseconds> stopped_for = {},
+                              bool physics_stopped = false) {
   const std::string report = (folder.dir() / ("report" + std::to_string(run) + ".json")).string();
   const std::string log = (folder.dir() / ("run" + std::to_string(run) + ".log")).string();
   // A client that misses a step's deadline is dropped for that step (100 ms by default):
@@ -68,7 +69,7 @@ std::string lockstep_sine_run(const afhub::testing::ModelFolder& folder, int run
     std::this_thread::sleep_for(*second_after);
     second.emplace(spawn_afhub({"ctl", "hold", "arm/base1", "--lockstep"}));
   }
-  if (sine_stopped_for) {
+  if (stopped_for) {
     EXPECT_TRUE(wait_until(
         [&] {
           const BodyState* state = base.latest_state();
@@ -77,9 +78,16 @@ std::string lockstep_sine_run(const afhub::testing::ModelFolder& folder, int run
         30s))
         << read_file(log);
     kill(controller.pid, SIGSTOP);
-    std::this_thread::sleep_for(*sine_stopped_for);
+    if (physics_stopped) {
+      // The physics stopped while it holds a step for the client, which answers then:
+      // the answer is `stopped_for` old when the physics reads it.
+      std::this_thread::sleep_for(100ms);
+      kill(physics.pid, SIGSTOP);
+      kill(controller.pid, SIGCONT);
+    }
+    std::this_thread::sleep_for(*stopped_for);
     EXPECT_LT(base.latest_state()->header.sim_step, 3000u) << "the run ended before the stop";
-    kill(controller.pid, SIGCONT);
+    kill(physics_stopped ? physics.pid : controller.pid, SIGCONT);
   }
   EXPECT_EQ(wait_for_exit(physics, 30s), 0) << read_file(log);
   return read_file(report);
@@ -109,21 +117,26 @@ TEST(Lockstep, SameModelSameControllerGivesBitIdenticalRuns) {
 // without it, and the run depended on when the second came. And a client stalled for
 // longer than the watchdog while the physics holds a step for it (a loaded CI machine
 // once; here stopped for a second): the simulation waits, so its command does not age.
+// Nor does an answer that came while the physics itself was stopped (it was ignored as
+// older than its body's watchdog, and the step went on without it).
 TEST(Lockstep, AClientIsNotTimedOutWhileThePhysicsHoldsAStepForItOrOthers) {
   afhub::testing::ModelFolder folder;
   const std::string together = lockstep_sine_run(folder, 1, 0ms);
   const std::string later = lockstep_sine_run(folder, 2, 1500ms);
   const std::string stalled = lockstep_sine_run(folder, 3, 0ms, 1000ms);
-  ASSERT_TRUE(contains(later, "\"steps\":3000")) << later;
-  ASSERT_TRUE(contains(stalled, "\"steps\":3000")) << stalled;
-  for (int run : {1, 2, 3}) {
+  const std::string physics_stalled = lockstep_sine_run(folder, 4, 0ms, 1000ms, true);
+  for (const std::string* report : {&later, &stalled, &physics_stalled})
+    ASSERT_TRUE(contains(*report, "\"steps\":3000")) << *report;
+  for (int run : {1, 2, 3, 4}) {
     const std::string log =
         read_file((folder.dir() / ("run" + std::to_string(run) + ".log")).string());
     EXPECT_TRUE(contains(log, "joined the barrier for afhub/arm/base1 at step 0")) << log;
     EXPECT_FALSE(contains(log, "no command for")) << "run " << run << ":\n" << log;
+    EXPECT_FALSE(contains(log, "ignored a command")) << "run " << run << ":\n" << log;
   }
   EXPECT_EQ(trajectory(together), trajectory(later));
   EXPECT_EQ(trajectory(together), trajectory(stalled));
+  EXPECT_EQ(trajectory(together), trajectory(physics_stalled));
 }
 
 // Steps taken while the world is paused (`afhub world step`) do not wait for the barrier:

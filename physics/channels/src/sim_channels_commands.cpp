@@ -43,7 +43,13 @@ void SimChannels::apply_commands(std::int64_t now_ns, bool holding) noexcept {
         now_ns = monotonic_ns();
         age_ns = now_ns - stamp_ns;
       }
-      if (age_ns > channel.watchdog_ns || age_ns < -kFutureStampAllowanceNs) {
+      // A lockstep answer to the step the barrier holds is as fresh as the step, however
+      // long the physics was stopped before it read it (it was ignored as old, and the
+      // step went on without it).
+      const bool answers_held_step =
+          lockstep_ && answer.lockstep && answer.step == sim_.step_count();
+      if ((age_ns > channel.watchdog_ns && !answers_held_step) ||
+          age_ns < -kFutureStampAllowanceNs) {
         ++stale_;
         if (Notice* notice = note(channel, kStale, answer.pid))
           notice->seconds = static_cast<double>(age_ns) * 1e-9;
