@@ -2,6 +2,7 @@
 // run` loads to the same bodies, joints and poses, for a user to add what URDF cannot
 // say (closed loops, soft bodies, sensors, actuators).
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <memory>
 
@@ -23,6 +24,13 @@ struct ConvertOptions {
 int run_convert(const ConvertOptions& options) {
   if (!physics::is_urdf_path(options.urdf_file))
     throw Error("'" + options.urdf_file + "' is not a .urdf file; afhub convert reads URDF");
+  // The same file by another name (or a link to it) would be overwritten by its own ADF.
+  std::error_code same_error;
+  if (std::filesystem::equivalent(options.urdf_file, options.output_file, same_error))
+    throw Error("-o " + options.output_file +
+                " is the URDF file itself; write the ADF beside "
+                "it, e.g. -o " +
+                std::filesystem::path(options.urdf_file).replace_extension(".yaml").string());
   physics::Model model;
   try {
     physics::load_adf_files_into({options.urdf_file}, model, options.urdf);

@@ -30,6 +30,7 @@
 #include "afhub/shm_layout/error.hpp"
 #include "commands.hpp"
 #include "example_models.hpp"
+#include "time_options.hpp"
 
 namespace afhub::cli {
 namespace {
@@ -199,6 +200,7 @@ void draw(CatalogReader& catalog, std::vector<std::unique_ptr<BodyClient>>& clie
 }
 
 int run_demo(const DemoOptions& options) {
+  ns_of_seconds(options.seconds, "--seconds (0: until Ctrl-C)");  // -1 ran for good
   install_stop_signal_handlers();
   std::vector<std::string> run_arguments;
   if (options.model.empty()) {

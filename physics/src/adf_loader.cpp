@@ -127,6 +127,19 @@ void load_file(const std::string& path, const YAML::Node& root, Model& model, Un
   if (const YAML::Node* ignore = key("ignore inter-collision"))
     ignore_inter_collision = file.flag(*ignore, "ignore inter-collision");
   model.file_ignores_inter_collision.push_back(ignore_inter_collision);
+  // A launch or world file given as a model loaded nothing and ran an empty world.
+  if (!key("bodies") && !key("joints") && !key("soft bodies")) {
+    if (key("multibody configs"))
+      throw Error(path +
+                  ":1:1: error: this is a launch file ('multibody configs'), not a model: "
+                  "give it with --launch " +
+                  path + " -l 0,1 (the indices of the models to load)");
+    if (key("lights") || key("cameras") || key("environment") || key("enclosure"))
+      throw Error(path +
+                  ":1:1: error: this is a world file (lights, cameras, environment), "
+                  "not a model: give it with --world " +
+                  path + " beside the model files");
+  }
   if (!key("bodies") && !key("joints") && !key("soft bodies"))
     model.warnings.push_back(
         path + ":1:1: warning: no 'bodies' or 'joints' list: nothing is loaded from this file");

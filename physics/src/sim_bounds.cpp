@@ -105,7 +105,10 @@ const char* Simulation::input_problem(std::size_t index, const BodyInput& input)
     return text;
   }
   const Quaternion& q = input.target_pose.orientation;
-  if (q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w > 4.0) {
+  const double norm2 = q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w;
+  // Zero (an unfilled ROS Pose) was taken as the identity; refused when it is applied,
+  // as senders that fill no pose leave it zero.
+  if (norm2 > 4.0 || (norm2 < 0.25 && input.cartesian == CartesianMode::kPosition)) {
     std::snprintf(text, size,
                   "pose orientation (%g, %g, %g, %g) is no rotation: a quaternion's norm is 1", q.x,
                   q.y, q.z, q.w);

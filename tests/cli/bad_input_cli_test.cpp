@@ -77,6 +77,32 @@ TEST(BadInputCli, ConvertRefusesAMeshCheckWouldRefuse) {
   EXPECT_FALSE(std::filesystem::exists(written)) << "nothing written";
 }
 
+// A negative --seconds ran synth and the demo until killed; record's --duration refused it.
+TEST(BadInputCli, NegativeSecondsAreRefusedNotForever) {
+  for (const std::string command : {"synth", "demo"}) {
+    const RunResult result = run_afhub({command, "--seconds", "-1"});
+    EXPECT_EQ(result.exit_code, 1) << command << ": " << result.err;
+    EXPECT_TRUE(contains(result.err, "--seconds (0: until Ctrl-C) takes seconds from 0"))
+        << command << ": " << result.err;
+  }
+}
+
+// `-o` naming the URDF itself (or a link to it) replaced the robot with its ADF.
+TEST(BadInputCli, ConvertRefusesToWriteOverItsOwnInput) {
+  afhub::testing::ModelFolder folder;
+  const std::string text =
+      "<?xml version=\"1.0\"?>\n<robot name=\"r\">\n  <link name=\"a\"/>\n</robot>\n";
+  const std::string robot = folder.write("robot.urdf", text);
+  const std::string link = (folder.dir() / "link.urdf").string();
+  std::filesystem::create_symlink(robot, link);
+  for (const std::string& output : {robot, link}) {
+    const RunResult convert = run_afhub({"convert", robot, "-o", output});
+    EXPECT_EQ(convert.exit_code, 1) << convert.err;
+    EXPECT_TRUE(contains(convert.err, "is the URDF file itself")) << convert.err;
+  }
+  EXPECT_EQ(read_file(robot), text) << "the URDF was overwritten";
+}
+
 TEST(BadInputCli, AnUnreadableModelOrADirectoryIsSaidSo) {
   afhub::testing::ModelFolder folder;
   const std::string model = folder.write("locked.yaml", "bodies: []\n");

@@ -182,6 +182,20 @@ TEST_F(BadInput, ADirectoryGivenAsAModelSaysSo) {
   EXPECT_TRUE(contains(message, "this is a directory; expected an ADF file")) << message;
 }
 
+// A launch or a world file given as a model loaded nothing: `afhub run` ran an empty
+// world and `afhub check` said it was fine.
+TEST_F(BadInput, ALaunchOrWorldFileGivenAsAModelSaysHowToGiveIt) {
+  const std::string launch = folder_.write("launch.yaml", "multibody configs: [./arm.yaml]\n");
+  const std::string world = folder_.write("world.yaml", "lights: []\ncameras: []\n");
+  const std::string launch_message = error_of({launch});
+  EXPECT_TRUE(contains(launch_message, launch + ":1:1: error: this is a launch file"))
+      << launch_message;
+  EXPECT_TRUE(contains(launch_message, "--launch " + launch + " -l 0,1")) << launch_message;
+  const std::string world_message = error_of({world});
+  EXPECT_TRUE(contains(world_message, "this is a world file")) << world_message;
+  EXPECT_TRUE(contains(world_message, "--world " + world)) << world_message;
+}
+
 // The fastest of three; with `build`, the simulation is built too.
 double cpu_seconds_to_load(const std::string& path, bool build = false) {
   double best = 1e9;

@@ -596,6 +596,12 @@ TEST(CommandBounds, FiniteExtremeCommandsAreRefusedNamingTheField) {
       {"angular velocity", [](BodyInput& in) { in.twist.angular_radps.x = 1e308; }},
       {"pose position", [](BodyInput& in) { in.target_pose.position_m.z = 1e308; }},
       {"pose orientation", [](BodyInput& in) { in.target_pose.orientation.w = 1e308; }},
+      // Zero (an unfilled ROS Pose) was taken as the identity.
+      {"pose orientation (0, 0, 0, 0) is no rotation",
+       [](BodyInput& in) {
+         in.cartesian = CartesianMode::kPosition;
+         in.target_pose.orientation = {0.0, 0.0, 0.0, 0.0};
+       }},
   };
   for (const Case& c : cases) {
     BodyInput input{};
@@ -615,6 +621,9 @@ TEST(CommandBounds, FiniteExtremeCommandsAreRefusedNamingTheField) {
   fine.wrench.force_n = {100.0, 0.0, 0.0};
   fine.target_pose.position_m = {0.5, 0.2, 1.0};
   fine.target_pose.orientation = {0.0, 0.0, 0.0, 1.0};
+  EXPECT_EQ(sim.input_problem(base, fine), nullptr) << sim.input_problem(base, fine);
+  // A pose left zero where no pose is applied (a sender that fills none) passes.
+  fine.target_pose.orientation = {0.0, 0.0, 0.0, 0.0};
   EXPECT_EQ(sim.input_problem(base, fine), nullptr) << sim.input_problem(base, fine);
 }
 
