@@ -101,6 +101,7 @@ const BodyState* publish_body(SyntheticBody& body, std::size_t index, std::uint6
 }
 
 int run_synth(const SynthOptions& options) {
+  ns_of_seconds(options.seconds, "--seconds (0: until Ctrl-C)");  // -1 ran for good
   if (options.bodies == 0 || options.bodies > kMaxBodies)
     throw Error("--bodies must be between 1 and " + std::to_string(kMaxBodies));
   if (options.joints > kMaxJointsPerBody)
@@ -159,9 +160,8 @@ int run_synth(const SynthOptions& options) {
     }
     while (world_commands.next(world_command))
       if (control.apply(world_command, monotonic_ns())) step = 0;
-    if (const std::uint32_t holder = control.lapse(monotonic_ns()))
-      std::fprintf(stderr, kPauseLapsedFormat, "afhub synth", holder,
-                   static_cast<unsigned>(control.hold_ns / 1'000'000));
+    if (const WorldControl::Lapsed lapsed = control.lapse(monotonic_ns()))
+      std::fprintf(stderr, kPauseLapsedFormat, "afhub synth", lapsed.pid, lapsed.hold_ms);
     // Published every period, paused or not, like the physics: the state
     // channels keep no history for late joiners.
     const bool stepping = control.take_step();

@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <memory>
 #include <optional>
@@ -19,6 +20,7 @@
 #include "afhub/shm_layout/error.hpp"
 #include "afhub/shm_layout/limits.hpp"
 #include "afhub/shm_layout/world.hpp"
+#include "afhub/yaml/number_text.hpp"
 #include "commands.hpp"
 #include "connection_options.hpp"
 #include "count_option.hpp"
@@ -142,11 +144,13 @@ int run_world(WorldAction action, const WorldOptions& options) {
   if (!command) throw Error("shared memory is exhausted: the world command was not sent");
   command->action = action;
   command->step_count = options.steps;
+  command->valid_ms = static_cast<std::uint32_t>(std::ceil(options.timeout_s * 1000.0));
   writer.publish(command);
   undone.sent(sequence + 1);
 
   WorldActionWatch watch(action, options.steps, before, monotonic_ns());
-  const std::int64_t give_up = monotonic_ns() + static_cast<std::int64_t>(options.timeout_s * 1e9);
+  const std::int64_t give_up = monotonic_ns() + static_cast<std::int64_t>(options.timeout_s * 1e9) +
+                               kWorldCommandShownWithinNs;
   while (!stop_requested() && monotonic_ns() < give_up) {
     const WorldState* state = reader.latest();
     if (state && reader.updated()) {
@@ -167,8 +171,9 @@ int run_world(WorldAction action, const WorldOptions& options) {
     std::this_thread::sleep_for(std::chrono::microseconds(200));
   }
   throw Error("the command was sent but the simulation did not act on it within " +
-              std::to_string(options.timeout_s) +
-              " s: is it stalled, or waiting for lockstep clients? (`afhub status`)");
+              yaml::number_text(options.timeout_s) +
+              " s, and it will not later (read after that, it is dropped): is the simulation "
+              "stalled, or waiting for lockstep clients? (`afhub status`)");
 }
 
 }  // namespace

@@ -54,20 +54,21 @@ class World(Handle):
             self._world.pause(hold_s=THROTTLING_HOLD_S)
             self._renewed = time.monotonic()
         elif not data and self._throttling:
-            self._world.resume()
+            self._world.release()
         self._throttling = data
 
     def release_throttling(self):
         """The world runs on, as AMBF's world does once its throttling client goes quiet:
-        the client calls it when cleaned up and when the script ends. A physics that is
-        gone has nothing to resume: said, not raised."""
+        the client calls it when cleaned up and when the script ends. Only this client's
+        hold ends: a pause of the user's (afhub world pause) or another throttling
+        client's stays. A hub that is gone has nothing to release: said, not raised."""
         if not self._throttling:
             return
         self._throttling = False
         try:
-            self._world.resume(timeout_s=1.0)
+            self._world.release()
         except afhub.Error as error:
-            print(f'ambf_client: the world paused for throttling was not resumed: {error}')
+            print(f'ambf_client: the world paused for throttling was not released: {error}')
 
     def set_num_step_skips(self, n):
         try:

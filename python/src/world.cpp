@@ -2,6 +2,7 @@
 // (pause, resume, step N, reset), each confirmed by the world state as `afhub world`
 // confirms them.
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <optional>
 #include <string>
@@ -64,8 +65,8 @@ class World {
   std::string act(WorldAction action, std::int64_t steps, double timeout_s, double hold_s = 0.0) {
     require_hub();
     const std::int64_t give_up = deadline_after(timeout_s, "timeout_s");
-    if (!(hold_s == 0.0 || (hold_s >= 0.001 && hold_s <= kMaxPauseHoldMs / 1000.0)))
-      throw py::value_error("hold_s takes 0 (paused until resumed) or 0.001 to " +
+    if (!(hold_s == 0.0 || (hold_s >= kMinHoldS && hold_s <= kMaxPauseHoldMs / 1000.0)))
+      throw py::value_error("hold_s takes 0 (paused until resumed) or 0.01 to " +
                             std::to_string(kMaxPauseHoldMs / 1000) + " s, not " +
                             py::str(py::float_(hold_s)).cast<std::string>());
     if (action == WorldAction::kStep && (steps < 1 || steps > kMaxWorldStepsPerCommand))
@@ -82,6 +83,8 @@ class World {
     command->action = action;
     command->step_count = static_cast<std::uint32_t>(steps);
     command->hold_ms = static_cast<std::uint32_t>(std::lround(hold_s * 1000.0));
+    command->valid_ms = static_cast<std::uint32_t>(
+        std::max<std::int64_t>(1, (give_up - monotonic_ns()) / 1'000'000));
     writer_.publish(command);
     WorldActionWatch watch(action, static_cast<std::uint32_t>(steps), before, monotonic_ns());
 
@@ -89,7 +92,8 @@ class World {
     SignalWatch signals;
     {
       py::gil_scoped_release release;
-      while (!done && monotonic_ns() < give_up && !hub_lost() && !signals.pending()) {
+      while (!done && monotonic_ns() < give_up + kWorldCommandShownWithinNs && !hub_lost() &&
+             !signals.pending()) {
         const WorldState* now = reader_.latest();
         if (now && reader_.updated()) done = watch.shown(*now);
         if (!done) sleep_until_ns(monotonic_ns() + 200'000);
@@ -99,20 +103,38 @@ class World {
     if (done) return *done;
     require_hub();
     throw Error("the command was sent but the simulation did not act on it within " +
-                std::to_string(timeout_s) +
-                " s: is it stalled, or waiting for lockstep clients? (`afhub status`)");
+                py::str(py::float_(timeout_s)).cast<std::string>() +
+                " s, and it will not later (read after that, it is dropped): is it stalled, or "
+                "waiting for lockstep clients? (`afhub status`)");
   }
 
-  // Renews this process's held pause: a command that does nothing else.
-  void hold() {
+  // Renews this process's held pause: a command that does nothing else. One a
+  // millisecond at most goes out from this process, the others are skipped: the world's
+  // command queue holds 64, and a loop of hold() pushed other writers' pauses and
+  // resumes out of it.
+  void hold() { send_unwaited(WorldAction::kNone, kRenewalSpacingNs); }
+
+  // Ends this process's held pause; the world runs on unless another process holds it
+  // or it was paused plainly (not waited for: the world may rightly stay paused).
+  void release() { send_unwaited(WorldAction::kRelease, 0); }
+
+ private:
+  static constexpr double kMinHoldS = 0.01;  // ten renewal spacings, and a GIL's switch
+  static constexpr std::int64_t kRenewalSpacingNs = 1'000'000;
+
+  // Sends `action` unless this process sent one within `spacing_ns`.
+  void send_unwaited(WorldAction action, std::int64_t spacing_ns) {
     require_hub();
+    static std::atomic<std::int64_t> last_sent_ns{0};
+    const std::int64_t now = monotonic_ns();
+    if (spacing_ns > 0 && now - last_sent_ns.load(std::memory_order_relaxed) < spacing_ns) return;
+    last_sent_ns.store(now, std::memory_order_relaxed);
     WorldCommand* command = writer_.loan();
-    if (!command) throw Error("shared memory is exhausted: the pause was not renewed");
-    command->action = WorldAction::kNone;
+    if (!command) throw Error("shared memory is exhausted: the world command was not sent");
+    command->action = action;
     writer_.publish(command);
   }
 
- private:
   LatestReader<WorldState> reader_;
   Writer<WorldCommand> writer_;
 };
@@ -178,12 +200,17 @@ void register_world(py::module_& module) {
             return world.act(WorldAction::kPause, 1, timeout_s, hold_s);
           },
           py::arg("timeout_s") = 5.0, py::arg("hold_s") = 0.0,
-          "Stops stepping; states are still published. hold_s > 0: a held pause, which "
-          "lasts only while this process's world commands (step, hold) keep coming less "
-          "than hold_s apart: should the script die or stall, the world runs on.")
+          "Stops stepping; states are still published. hold_s (0.01 to 60) > 0: a held "
+          "pause, which lasts only while this process's world commands (step, hold) keep "
+          "coming less than hold_s apart: should the script die or stall, the world runs "
+          "on. Several processes' held pauses add up: it lasts while one of them holds it.")
       .def("hold", &World::hold,
            "Renews this process's held pause (pause(hold_s=...)); call it more often than "
-           "hold_s, from any thread.")
+           "hold_s, from any thread (one renewal a millisecond goes out, the rest are "
+           "skipped).")
+      .def("release", &World::release,
+           "Ends this process's held pause: the world runs on, unless another process "
+           "holds it too or it was paused plainly (afhub world pause). Not waited for.")
       .def(
           "resume",
           [](World& world, double timeout_s) {

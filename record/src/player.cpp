@@ -205,12 +205,11 @@ class Player : public Visitor {
     while (world_commands_.next(command)) {
       const bool was_paused = pause_.paused;
       pause_.apply(command, monotonic_ns());
-      if (command.action == WorldAction::kResume) run_on();
+      if (was_paused && !pause_.paused) run_on();  // resumed, or its last hold released
       if (command.action == WorldAction::kStep && was_paused) steps_allowed_ += command.step_count;
     }
-    if (const std::uint32_t holder = pause_.lapse(monotonic_ns())) {
-      std::fprintf(stderr, kPauseLapsedFormat, "afhub play", holder,
-                   static_cast<unsigned>(pause_.hold_ns / 1'000'000));
+    if (const WorldControl::Lapsed lapsed = pause_.lapse(monotonic_ns())) {
+      std::fprintf(stderr, kPauseLapsedFormat, "afhub play", lapsed.pid, lapsed.hold_ms);
       run_on();
     }
   }

@@ -242,10 +242,11 @@ const char* count_beyond_capacity(const char* at, std::size_t bytes, PayloadKind
       return step_tape_problem(*reinterpret_cast<const StepTape*>(at), bytes);
     case PayloadKind::kWorldCommand: {
       const auto* command = reinterpret_cast<const WorldCommand*>(at);
-      if (command->action > WorldAction::kReset) return "WorldCommand.action";
+      if (command->action > WorldAction::kRelease) return "WorldCommand.action";
       if (command->hold_ms > kMaxPauseHoldMs ||
           (command->hold_ms != 0 && command->header.publisher_pid == 0))
         return "WorldCommand.hold_ms";  // a hold needs a holder to renew it
+      if (command->valid_ms > kMaxWorldCommandValidMs) return "WorldCommand.valid_ms";
       if (command->action == WorldAction::kStep &&
           (command->step_count == 0 || command->step_count > kMaxWorldStepsPerCommand))
         return "WorldCommand.step_count";

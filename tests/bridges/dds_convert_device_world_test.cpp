@@ -140,7 +140,7 @@ TEST(DdsConvertDeviceWorld, WorldCommandRoundTripsAndUnknownActionsAreRefused) {
   fill(from);
   from.action = WorldAction::kPause;
   from.hold_ms = 1000;  // a held pause keeps its hold on the other machine
-  from.reserved = 0;    // not carried
+  from.valid_ms = 5000;
   afhub_dds_WorldCommand sample{}, received{};
   to_dds("world", from, sample);
   expect_header_on_sample(from.header, sample);
@@ -151,10 +151,13 @@ TEST(DdsConvertDeviceWorld, WorldCommandRoundTripsAndUnknownActionsAreRefused) {
   WorldCommand expected = from;
   expected.header = carried(from.header);
   expect_same_bytes(expected, to);
-  received.action = 5;
+  received.action = 6;
   EXPECT_FALSE(from_dds(received, to));
   received.action = 1;
   received.hold_ms = kMaxPauseHoldMs + 1;
+  EXPECT_FALSE(from_dds(received, to));
+  received.hold_ms = 0;
+  received.valid_ms = kMaxWorldCommandValidMs + 1;
   EXPECT_FALSE(from_dds(received, to));
 }
 

@@ -132,6 +132,34 @@ TEST(FaultsCommands, OnceToAStoppedPhysicsSaysNothingWasApplied) {
   EXPECT_EQ(run.physics->stop(), 0);
 }
 
+// A world command that its sender reported failed (the physics stopped, as by a
+// debugger) does not act once the physics runs again: a reset and a pause that failed
+// after 1 s reset the world and paused it for good when it was resumed.
+TEST(FaultsCommands, AWorldCommandReportedFailedDoesNotActLater) {
+  ArmRun run;
+  ASSERT_TRUE(run.ready()) << read_file(run.log);
+  ASSERT_TRUE(wait_until([&] { return run.now().header.sim_step > 200; }, 10s));
+  ASSERT_EQ(kill(run.physics->pid, SIGSTOP), 0);
+  const std::uint64_t stopped_at = run.now().header.sim_step;
+  const RunResult reset = run_afhub({"world", "reset", "--timeout", "1"});
+  const RunResult pause = run_afhub({"world", "pause", "--timeout", "1"});
+  ASSERT_EQ(kill(run.physics->pid, SIGCONT), 0);
+  for (const RunResult* failed : {&reset, &pause}) {
+    EXPECT_EQ(failed->exit_code, 1) << failed->err;
+    EXPECT_TRUE(contains(failed->err, "did not act on it within 1 s, and it will not later"))
+        << failed->err;
+  }
+  EXPECT_GE(run.fresh().header.sim_step, stopped_at) << "reset after it failed";
+  EXPECT_TRUE(wait_until([&] { return run.fresh().header.sim_step > stopped_at + 100; }, 10s))
+      << "paused after it failed: " << read_file(run.log);
+  EXPECT_FALSE(run.now().paused);
+  EXPECT_EQ(run.physics->stop(), 0);
+  const std::string output = read_file(run.log);
+  EXPECT_TRUE(contains(output, "ignored a world command (reset) from pid")) << output;
+  EXPECT_TRUE(contains(output, "ignored a world command (pause) from pid")) << output;
+  EXPECT_TRUE(contains(output, "past the 1.000 s its sender waited for it")) << output;
+}
+
 // A command entry for a joint without an axis (here a fixed one) is refused and
 // counted, said once; a 0, what a full-length command carries for it, is not.
 TEST(FaultsCommands, EntriesForJointsWithoutAnAxisAreRefusedAndCounted) {

@@ -213,7 +213,7 @@ std::vector<Seed> make_seeds() {
       seed_of(world, {offsetof(WorldState, light_count), offsetof(WorldState, camera_count),
                       offsetof(WorldState, body_count)}),
       seed_of(world_command, {offsetof(WorldCommand, action), offsetof(WorldCommand, step_count),
-                              offsetof(WorldCommand, hold_ms)}),
+                              offsetof(WorldCommand, hold_ms), offsetof(WorldCommand, valid_ms)}),
       body_list_seed(PayloadKind::kBodyDirectory),
       body_list_seed(PayloadKind::kCatalog),
       seed_of(health, {offsetof(Health, process_count), offsetof(Health, mempool_count)}),
@@ -442,7 +442,7 @@ class Fuzzer {
         WorldControl control;
         control.paused = random_() % 2;
         control.apply(*reinterpret_cast<const WorldCommand*>(data), 0);
-        sink += control.take_step() + control.lapse(random_());
+        sink += control.take_step() + control.lapse(random_()).pid;
         break;
       }
       case PayloadKind::kBodyDirectory: {

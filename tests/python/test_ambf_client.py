@@ -3,6 +3,7 @@ unchanged but for how they are started, against the project's models and the ECM
 AMBF corpus. The effects are checked in the simulation, from this process, while the
 script waits on input()."""
 
+import os
 import signal
 import subprocess
 import sys
@@ -323,6 +324,49 @@ def test_a_throttled_script_killed_lets_the_world_run_on(physics, tmp_path):
     runs_on('the world running on after the kill')
     wait_until(lambda: run.log().count('lapsed, nothing from it for 1000 ms') == 2, 5,
                'the physics saying twice why it runs on')
+
+
+def test_two_throttling_scripts_hold_one_pause_and_a_users_pause_outlives_them(physics, tmp_path):
+    """Two throttling scripts hold the world's pause together: the second one SIGKILLed,
+    the first one's hold keeps the world paused (the last holder alone held it, and the
+    world ran on while the first one still renewed). A script that ends cleanly releases
+    its own hold only: a pause the user took meanwhile stays (it resumed the world)."""
+    run = physics(EXAMPLES / 'arm7.yaml')
+    run.wait_for_body('arm/base')
+    source = """
+        from ambf_client import Client
+        c = Client()
+        c.connect()
+        w = c.get_world_handle()
+        w.enable_throttling(True)
+        w.update()
+        print('THROTTLED', flush=True)
+        input()
+    """
+    (tmp_path / 'a').mkdir()
+    (tmp_path / 'b').mkdir()
+    first, second = Script(tmp_path / 'a', source), Script(tmp_path / 'b', source)
+    first.read_until('THROTTLED')
+    second.read_until('THROTTLED')
+    world = afhub.World()
+    assert world.state()['pause_held']
+    second.process.kill()
+    second.process.wait(timeout=10)
+    step = world.sim_step()
+    idle_until = time.monotonic() + 2.5  # past the killed one's hold
+    while time.monotonic() < idle_until:
+        assert world.state()['paused'] and world.sim_step() == step, \
+            'the world ran on while a throttling script still held it'
+        time.sleep(0.05)
+    assert world.state()['paused_by_pid'] == first.process.pid
+    assert 'lapsed' not in run.log()
+    assert world.pause().startswith('already paused')  # the user's own, plain
+    first.enter()
+    assert first.process.wait(timeout=10) == 0
+    time.sleep(0.5)
+    state = world.state()
+    assert state['paused'] and state['paused_by_pid'] == os.getpid() and not state['pause_held']
+    assert world.sim_step() == step, 'the script ending resumed the user\'s pause'
 
 
 @needs_shared_models()

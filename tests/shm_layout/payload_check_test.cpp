@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
 #include <functional>
 #include <memory>
@@ -174,7 +175,7 @@ TEST(PayloadCheck, RefusesAnUnknownWorldActionAndAHoldBeyondAMinute) {
             PayloadError::kNone);
   EXPECT_STREQ(field, "WorldCommand.hold_ms");
   command.hold_ms = 0;
-  command.action = static_cast<WorldAction>(5);
+  command.action = static_cast<WorldAction>(6);
   EXPECT_NE(check_payload(&command, sizeof command, PayloadKind::kWorldCommand, &field),
             PayloadError::kNone);
   EXPECT_STREQ(field, "WorldCommand.action");
@@ -214,7 +215,7 @@ TEST(WorldControl, AHeldPauseLapsesOnceItsHolderIsQuiet) {
   hold.hold_ms = 500;
   control.apply(hold, 0);
   EXPECT_TRUE(control.halted());
-  EXPECT_EQ(control.lapse(500 * kMs), 0u) << "lapsed at its hold, not after it";
+  EXPECT_EQ(control.lapse(500 * kMs).pid, 0u) << "lapsed at its hold, not after it";
   // Any command of the holder's renews it: a step, or a word that does nothing.
   WorldCommand word = hold;
   word.action = WorldAction::kNone;
@@ -223,14 +224,14 @@ TEST(WorldControl, AHeldPauseLapsesOnceItsHolderIsQuiet) {
   step.action = WorldAction::kStep;
   control.apply(step, 800 * kMs);
   EXPECT_TRUE(control.take_step());
-  EXPECT_EQ(control.lapse(1200 * kMs), 0u);
+  EXPECT_EQ(control.lapse(1200 * kMs).pid, 0u);
   // Another process's commands do not.
   WorldCommand other = word;
   other.header.publisher_pid = 43;
   control.apply(other, 1250 * kMs);
-  EXPECT_EQ(control.lapse(1301 * kMs), 42u);
+  EXPECT_EQ(control.lapse(1301 * kMs).pid, 42u);
   EXPECT_FALSE(control.paused) << "the world did not run on";
-  EXPECT_EQ(control.lapse(5000 * kMs), 0u) << "said twice";
+  EXPECT_EQ(control.lapse(5000 * kMs).pid, 0u) << "said twice";
 
   // A plain pause, a user's, takes over a held one and holds until resumed.
   control.apply(hold, 0);
@@ -238,20 +239,81 @@ TEST(WorldControl, AHeldPauseLapsesOnceItsHolderIsQuiet) {
   plain.action = WorldAction::kPause;
   plain.hold_ms = 0;
   control.apply(plain, 100 * kMs);
-  EXPECT_EQ(control.lapse(60'000 * kMs), 0u);
+  EXPECT_EQ(control.lapse(60'000 * kMs).pid, 0u);
   EXPECT_TRUE(control.paused);
   // A resume ends a hold: nothing lapses later.
   control.apply(hold, 0);
   WorldCommand resume = hold;
   resume.action = WorldAction::kResume;
   control.apply(resume, 10 * kMs);
-  EXPECT_EQ(control.lapse(60'000 * kMs), 0u);
+  EXPECT_EQ(control.lapse(60'000 * kMs).pid, 0u);
   // Nor does a held pause make a plain one lapse (`afhub world pause`, then a throttling
   // script that dies).
   control.apply(plain, 0);
   control.apply(hold, 0);
-  EXPECT_EQ(control.lapse(60'000 * kMs), 0u);
+  EXPECT_EQ(control.lapse(60'000 * kMs).pid, 0u);
   EXPECT_TRUE(control.paused);
+}
+
+// Several holders hold one pause: it lasts while one of them is not quiet, and each
+// releases its own hold (a throttling script that ends); a plain pause stays.
+TEST(WorldControl, HeldPausesAddUpAndEachHolderReleasesItsOwn) {
+  constexpr std::int64_t kMs = 1'000'000;
+  const auto command = [](std::uint32_t pid, WorldAction action, std::uint32_t hold_ms = 0) {
+    WorldCommand made;
+    made.header.publisher_pid = pid;
+    made.action = action;
+    made.hold_ms = hold_ms;
+    return made;
+  };
+  const WorldCommand a_holds = command(42, WorldAction::kPause, 500);
+  const WorldCommand b_holds = command(43, WorldAction::kPause, 500);
+  const WorldCommand a_renews = command(42, WorldAction::kNone);
+  const WorldCommand a_releases = command(42, WorldAction::kRelease);
+  const WorldCommand b_releases = command(43, WorldAction::kRelease);
+  WorldControl control;
+  control.apply(a_holds, 0);
+  control.apply(b_holds, 100 * kMs);
+  control.apply(a_renews, 400 * kMs);
+  EXPECT_FALSE(control.lapse(700 * kMs)) << "B went quiet while A holds";
+  EXPECT_TRUE(control.paused);
+  EXPECT_EQ(control.paused_by_pid, 42u);
+  control.apply(a_renews, 800 * kMs);
+  const WorldControl::Lapsed lapsed = control.lapse(1301 * kMs);
+  EXPECT_EQ(lapsed.pid, 42u);
+  EXPECT_EQ(lapsed.hold_ms, 500u);
+  EXPECT_FALSE(control.paused);
+
+  // A release ends its sender's hold alone.
+  control.apply(a_holds, 0);
+  control.apply(b_holds, 0);
+  control.apply(b_releases, 0);
+  EXPECT_TRUE(control.paused) << "A still holds it";
+  EXPECT_EQ(control.paused_by_pid, 42u);
+  control.apply(a_releases, 0);
+  EXPECT_FALSE(control.paused);
+  control.apply(a_releases, 0);
+  EXPECT_FALSE(control.paused) << "a release paused a running world";
+  // A user's plain pause stays when the holders release.
+  control.apply(a_holds, 0);
+  control.apply(command(7, WorldAction::kPause), 0);
+  control.apply(a_releases, 0);
+  EXPECT_TRUE(control.paused);
+  EXPECT_EQ(control.paused_by_pid, 7u);
+
+  // Past kMaxPauseHolders, a new holder takes the place of the hold lapsing soonest.
+  control.apply(command(7, WorldAction::kResume), 0);
+  for (std::uint32_t pid = 100; pid < 100 + kMaxPauseHolders + 1; ++pid)
+    control.apply(command(pid, WorldAction::kPause, 1000), pid * kMs);
+  const auto holds = [&](std::uint32_t pid) {
+    return std::any_of(control.holds.begin(), control.holds.end(),
+                       [&](const WorldControl::Hold& hold) { return hold.pid == pid; });
+  };
+  const std::uint32_t last = 100 + kMaxPauseHolders;
+  EXPECT_FALSE(holds(100)) << "the hold lapsing soonest kept its place";
+  EXPECT_TRUE(holds(last));
+  EXPECT_FALSE(control.lapse((last + 1000) * kMs)) << "lapsed while the last one holds";
+  EXPECT_EQ(control.lapse((last + 1000) * kMs + 1).pid, last) << "the last to go quiet is said";
 }
 
 // The world state names whose pause is in force, and whether it is held.

@@ -8,8 +8,15 @@
 
 #include "afhub/shm_layout/channel_names.hpp"
 #include "afhub/shm_layout/header.hpp"
+#include "afhub/shm_layout/limits.hpp"
 
 namespace afhub::viewer {
+namespace {
+
+// How long a page's world command waits to be shown done (and is valid).
+constexpr std::uint32_t kWaitMs = 1000;
+
+}  // namespace
 
 WorldCommander::WorldCommander(const std::string& world)
     : writer_({std::string(kService), world, std::string(kCommandEvent)}),
@@ -40,6 +47,7 @@ std::string WorldCommander::run(const std::string& query) {
   if (!command) return "no shared memory for a world command";
   command->action = chosen;
   command->step_count = 1;
+  command->valid_ms = kWaitMs;
   const WorldState before = *state;
   writer_.publish(command);
   WorldActionWatch watch(chosen, 1, before, monotonic_ns());
@@ -50,14 +58,14 @@ std::string WorldCommander::run(const std::string& query) {
 // one's answer finds the world changed (a step right after a pause found the world still
 // running).
 std::string WorldCommander::wait_until_shown(WorldActionWatch& watch) {
-  constexpr std::int64_t kWaitNs = 1'000'000'000;
-  for (const std::int64_t give_up = monotonic_ns() + kWaitNs; monotonic_ns() < give_up;
-       std::this_thread::sleep_for(std::chrono::microseconds(200))) {
+  for (const std::int64_t give_up =
+           monotonic_ns() + std::int64_t{kWaitMs} * 1'000'000 + kWorldCommandShownWithinNs;
+       monotonic_ns() < give_up; std::this_thread::sleep_for(std::chrono::microseconds(200))) {
     const WorldState* state = state_.latest();
     if (state && state_.updated() && watch.shown(*state)) return "";
   }
-  return "sent, but the world has not shown it within 1 s: the physics is stalled, or "
-         "another client undid it";
+  return "sent, but the world has not shown it within 1 s, and will not later: the physics is "
+         "stalled, or another client undid it";
 }
 
 }  // namespace afhub::viewer

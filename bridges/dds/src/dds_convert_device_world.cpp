@@ -146,16 +146,18 @@ void to_dds(std::string_view channel, const WorldCommand& command,
   sample.action = static_cast<std::uint32_t>(command.action);
   sample.step_count = command.step_count;
   sample.hold_ms = command.hold_ms;
+  sample.valid_ms = command.valid_ms;
 }
 
 bool from_dds(const afhub_dds_WorldCommand& sample, WorldCommand& command) noexcept {
-  if (sample.action > static_cast<std::uint32_t>(WorldAction::kReset) ||
-      sample.hold_ms > kMaxPauseHoldMs)
+  if (sample.action > static_cast<std::uint32_t>(WorldAction::kRelease) ||
+      sample.hold_ms > kMaxPauseHoldMs || sample.valid_ms > kMaxWorldCommandValidMs)
     return false;
   from_dds(sample.header, command.header);
   command.action = static_cast<WorldAction>(sample.action);
   command.step_count = sample.step_count;
   command.hold_ms = sample.hold_ms;
+  command.valid_ms = sample.valid_ms;
   return true;
 }
 

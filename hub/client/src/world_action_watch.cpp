@@ -46,6 +46,7 @@ std::optional<std::string> WorldActionWatch::shown(const WorldState& now) {
       previous_step_ = now.header.sim_step;
       break;
     case WorldAction::kNone:
+    case WorldAction::kRelease:  // not shown: another holder may rightly keep the pause
       return "";
   }
   return std::nullopt;

@@ -1,6 +1,7 @@
 // The world command queue (see world_command_queue.hpp).
 #include "afhub/hub/world_command_queue.hpp"
 
+#include <algorithm>
 #include <cstdio>
 #include <cstring>
 
@@ -62,19 +63,33 @@ bool WorldCommandQueue::seen(const PayloadHeader& header) noexcept {
   return false;
 }
 
+bool WorldCommandQueue::expired(const WorldCommand& command) noexcept {
+  if (command.valid_ms == 0) return false;
+  const std::int64_t age_ns = monotonic_ns() - command.header.publish_stamp_ns;
+  if (age_ns <= static_cast<std::int64_t>(command.valid_ms) * 1'000'000) return false;
+  std::fprintf(stderr,
+               "afhub: ignored a world command (%s) from pid %u: read %.3f s after it was sent, "
+               "past the %.3f s its sender waited for it (it said the command failed)\n",
+               action_name(command.action), command.header.publisher_pid,
+               static_cast<double>(age_ns) * 1e-9, command.valid_ms * 1e-3);
+  return true;
+}
+
 bool WorldCommandQueue::next(WorldCommand& out) noexcept {
   for (;;) {
     auto taken = port_->subscriber.take();
     if (taken.has_error()) return false;
     const void* payload = taken.value();
-    const std::uint32_t bytes =
-        iox::mepoo::ChunkHeader::fromUserPayload(payload)->userPayloadSize();
-    const char* field = "";
-    const PayloadError error = check_payload(payload, bytes, PayloadKind::kWorldCommand, &field);
-    if (error == PayloadError::kNone) std::memcpy(&out, payload, sizeof out);
+    // Copied out, then checked: the writer could change it between a check and a copy.
+    const std::uint32_t bytes = std::min<std::uint32_t>(
+        iox::mepoo::ChunkHeader::fromUserPayload(payload)->userPayloadSize(), sizeof out);
+    std::memcpy(&out, payload, bytes);
     port_->subscriber.release(payload);
+    const char* field = "";
+    const PayloadError error = check_payload(&out, bytes, PayloadKind::kWorldCommand, &field);
     if (error == PayloadError::kNone) {
       if (out.header.publish_stamp_ns < created_ns_ || seen(out.header)) continue;
+      if (expired(out)) continue;
       return true;
     }
     if (!told_refused_)

@@ -64,7 +64,7 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
   control.paused = options.start_paused;
   if (control.paused) control.paused_by_pid = static_cast<std::uint32_t>(getpid());
   WorldCommand world_command;
-  std::uint32_t lapsed_holder = 0;  // a held pause's holder gone quiet, to be said
+  WorldControl::Lapsed lapsed_hold;  // a held pause's last holder gone quiet, to be said
   double achieved_rate_hz = 0.0;
   std::uint64_t late_counted = 0;
   report.joint_errors.resize(sim.model().joints.size());
@@ -111,7 +111,7 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
         channels->forget_commands();
         rate.restart();
       }
-    if (const std::uint32_t holder = control.lapse(clock_ns())) lapsed_holder = holder;
+    if (const WorldControl::Lapsed lapsed = control.lapse(clock_ns())) lapsed_hold = lapsed;
     if (channels->lockstep() && !control.paused) return channels->await_lockstep();
     // Behind the grid (after a stall), the controllers in phase follow the physics
     // catching up, answering each state as it comes: given time for it.
@@ -174,10 +174,9 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
     }
     rate.update(now_ns, report.steps, !control.halted());
     achieved_rate_hz = rate.rate_hz();
-    if (lapsed_holder != 0) {
-      std::fprintf(stderr, kPauseLapsedFormat, "afhub run", lapsed_holder,
-                   static_cast<unsigned>(control.hold_ns / 1'000'000));
-      lapsed_holder = 0;
+    if (lapsed_hold) {
+      std::fprintf(stderr, kPauseLapsedFormat, "afhub run", lapsed_hold.pid, lapsed_hold.hold_ms);
+      lapsed_hold = {};
     }
     if (channels && now_ns >= next_report_ns) {
       channels->report_events(stderr);

@@ -170,6 +170,7 @@ inline constexpr std::uint64_t kLayoutId = layout_detail::mix({
     AFHUB_OFF(WorldCommand, action),
     AFHUB_OFF(WorldCommand, step_count),
     AFHUB_OFF(WorldCommand, hold_ms),
+    AFHUB_OFF(WorldCommand, valid_ms),
     sizeof(BodyInfo),
     AFHUB_OFF(BodyInfo, channel),
     AFHUB_OFF(BodyInfo, owner),

@@ -81,6 +81,16 @@ inline constexpr std::uint32_t kMaxWorldStepsPerCommand = 1'000'000;
 // A held pause's longest silence (WorldCommand.hold_ms): a minute. A holder quiet for
 // longer is gone, not computing.
 inline constexpr std::uint32_t kMaxPauseHoldMs = 60'000;
+// Processes holding one pause together (several throttling scripts on one world); a
+// further one takes the place of the hold lapsing soonest.
+inline constexpr std::size_t kMaxPauseHolders = 8;
+
+// The longest a world command's sender may wait for it (WorldCommand.valid_ms): an
+// hour, `afhub world --timeout`'s bound.
+inline constexpr std::uint32_t kMaxWorldCommandValidMs = 3'600'000;
+// A command read just before its valid_ms ends is acted on in that cycle: its sender
+// reads the world states this much longer (a cycle is a millisecond; loaded, tens).
+inline constexpr std::int64_t kWorldCommandShownWithinNs = 200'000'000;
 
 // Lights and cameras whose poses the world state carries.
 inline constexpr std::size_t kMaxWorldObjects = 8;

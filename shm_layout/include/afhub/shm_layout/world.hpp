@@ -72,7 +72,26 @@ enum class WorldAction : std::uint32_t {
   kResume = 2,
   kStep = 3,  // while paused: advance step_count steps (ignored while running)
   kReset = 4,
+  kRelease = 5,  // ends its sender's held pause: the world runs on unless another holds it
 };
+
+// As `afhub world` names it: "pause", "resume", "step", "reset"; "none" otherwise.
+constexpr const char* action_name(WorldAction action) noexcept {
+  switch (action) {
+    case WorldAction::kPause:
+      return "pause";
+    case WorldAction::kResume:
+      return "resume";
+    case WorldAction::kStep:
+      return "step";
+    case WorldAction::kReset:
+      return "reset";
+    case WorldAction::kRelease:
+      return "release";
+    default:
+      return "none";
+  }
+}
 
 // Each command is acted on once, in the order it arrived, identified by its header's
 // (publisher_pid, sequence): every writer's sequence starts at 1.
@@ -86,7 +105,11 @@ struct WorldCommand {
   // that pauses the world to step it (AMBF's step throttling) holds its pause: should it
   // die or stall, the world runs on, as AMBF's does once its throttling client is quiet.
   std::uint32_t hold_ms{0};
-  std::uint32_t reserved{0};
+  // How long its sender waits to see it acted on, ms from its publish stamp (0: no
+  // bound). Read later, it is dropped and said: a command its sender reported failed
+  // never acts later (a physics stopped past an `afhub world reset --timeout 1` that
+  // failed reset the world once resumed).
+  std::uint32_t valid_ms{0};
 };
 
 }  // namespace afhub

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <cstdint>
 
 #include "afhub/shm_layout/limits.hpp"
@@ -21,35 +22,56 @@ struct WorldControl {
   bool paused = false;
   std::uint32_t paused_by_pid = 0;  // whose pause is in force
   std::uint64_t steps_to_run = 0;
-  // A held pause (WorldCommand.hold_ms): its holder (0: none) and when it lapses unless
-  // a command of the holder's comes first.
-  std::uint32_t holder_pid = 0;
-  std::int64_t hold_ns = 0;
-  std::int64_t held_until_ns = 0;
+  // Held pauses (WorldCommand.hold_ms): each holder, and when its hold lapses unless a
+  // command of its comes first. The pause lasts while one of them holds it (pid 0: free).
+  struct Hold {
+    std::uint32_t pid = 0;
+    std::int64_t hold_ns = 0;
+    std::int64_t until_ns = 0;
+  };
+  std::array<Hold, kMaxPauseHolders> holds{};
+
+  // A held pause that ended because its last holder went quiet: who, and its hold.
+  struct Lapsed {
+    std::uint32_t pid = 0;
+    std::uint32_t hold_ms = 0;
+    explicit operator bool() const noexcept { return pid != 0; }
+  };
+
+  bool held() const noexcept {
+    return std::any_of(holds.begin(), holds.end(), [](const Hold& h) { return h.pid != 0; });
+  }
 
   // Returns true when the command asks for a reset. `now_ns` times a held pause.
   bool apply(const WorldCommand& command, std::int64_t now_ns) noexcept {
-    if (holder_pid != 0 && command.header.publisher_pid == holder_pid)
-      held_until_ns = now_ns + hold_ns;
+    const std::uint32_t pid = command.header.publisher_pid;
+    for (Hold& hold : holds)
+      if (hold.pid != 0 && hold.pid == pid) hold.until_ns = now_ns + hold.hold_ns;
     switch (command.action) {
       case WorldAction::kPause:  // also ends single steps still to run
-        // A plain pause (a user's) takes over a held one and holds until resumed; a held
-        // pause asked for while plainly paused leaves the plain one in force. The last
-        // holder holds.
-        if (command.hold_ms == 0 || !paused || holder_pid != 0) {
-          paused_by_pid = command.header.publisher_pid;
-          holder_pid = command.hold_ms == 0 ? 0 : paused_by_pid;
-          hold_ns = static_cast<std::int64_t>(command.hold_ms) * 1'000'000;
-          held_until_ns = now_ns + hold_ns;
+        // A plain pause (a user's) takes over held ones and holds until resumed; a held
+        // pause asked for while plainly paused leaves the plain one in force. Held
+        // pauses add up: the world runs on once the last holder goes quiet or releases.
+        if (command.hold_ms == 0) {
+          holds = {};
+          paused_by_pid = pid;
+        } else if (!paused || held()) {
+          take_hold(pid, static_cast<std::int64_t>(command.hold_ms) * 1'000'000, now_ns);
+          paused_by_pid = pid;
         }
         paused = true;
         steps_to_run = 0;
         break;
       case WorldAction::kResume:
-        paused = false;
-        paused_by_pid = 0;
-        steps_to_run = 0;
-        holder_pid = 0;
+        run_on();
+        break;
+      case WorldAction::kRelease:
+        // The sender's hold ends: the world runs on if no other holds it. A plain pause
+        // stays.
+        for (Hold& hold : holds)
+          if (hold.pid == pid) hold = {};
+        if (paused && paused_by_pid == pid && held()) paused_by_pid = latest_holder();
+        if (paused && paused_by_pid == pid) run_on();
         break;
       case WorldAction::kStep:
         // Only while paused: steps asked for while running would otherwise pile up
@@ -68,16 +90,26 @@ struct WorldControl {
     return false;
   }
 
-  // A held pause whose holder has been quiet for its hold: the world runs on. Returns
-  // the holder's pid when it lapses now, for the caller to say; 0 otherwise.
-  std::uint32_t lapse(std::int64_t now_ns) noexcept {
-    if (holder_pid == 0 || now_ns <= held_until_ns) return 0;
-    const std::uint32_t holder = holder_pid;
-    holder_pid = 0;
-    paused = false;
-    paused_by_pid = 0;
-    steps_to_run = 0;
-    return holder;
+  // Holders quiet for their hold let go; once none holds the pause, the world runs on
+  // and the last to go quiet is returned, for the caller to say.
+  Lapsed lapse(std::int64_t now_ns) noexcept {
+    Lapsed lapsed;
+    std::int64_t lapsed_until_ns = 0;
+    for (Hold& hold : holds)
+      if (hold.pid != 0 && now_ns > hold.until_ns) {
+        if (!lapsed || hold.until_ns > lapsed_until_ns) {
+          lapsed = {hold.pid, static_cast<std::uint32_t>(hold.hold_ns / 1'000'000)};
+          lapsed_until_ns = hold.until_ns;
+        }
+        hold = {};
+      }
+    if (!lapsed) return {};
+    if (held()) {
+      paused_by_pid = latest_holder();
+      return {};
+    }
+    run_on();
+    return lapsed;
   }
 
   // What the world state says: paused only while no single steps are left to run (a
@@ -88,7 +120,7 @@ struct WorldControl {
   void describe_pause(WorldState& world) const noexcept {
     world.paused = halted();
     world.paused_by_pid = paused ? paused_by_pid : 0;
-    world.pause_held = paused && holder_pid != 0;
+    world.pause_held = paused && held();
   }
 
   // Whether to advance this cycle; a single step asked for while paused is used up.
@@ -97,6 +129,36 @@ struct WorldControl {
     if (steps_to_run == 0) return false;
     --steps_to_run;
     return true;
+  }
+
+ private:
+  void run_on() noexcept {
+    paused = false;
+    paused_by_pid = 0;
+    steps_to_run = 0;
+    holds = {};
+  }
+
+  // The pid's hold, renewed; a new holder takes a free place, or that of the hold
+  // lapsing soonest.
+  void take_hold(std::uint32_t pid, std::int64_t hold_ns, std::int64_t now_ns) noexcept {
+    Hold* place = &holds[0];
+    for (Hold& hold : holds) {
+      if (hold.pid == pid) {
+        place = &hold;
+        break;
+      }
+      if (hold.pid == 0 || (place->pid != 0 && hold.until_ns < place->until_ns)) place = &hold;
+    }
+    *place = {pid, hold_ns, now_ns + hold_ns};
+  }
+
+  // The holder whose hold lasts longest (it renewed last).
+  std::uint32_t latest_holder() const noexcept {
+    const Hold* latest = &holds[0];
+    for (const Hold& hold : holds)
+      if (hold.pid != 0 && (latest->pid == 0 || hold.until_ns > latest->until_ns)) latest = &hold;
+    return latest->pid;
   }
 };
 

@@ -28,10 +28,12 @@ class WorldCommandQueue {
   // false when none waits. Invalid payloads are refused (said once) and skipped, and
   // so are repeats and commands published before this queue was made (history from
   // a writer that outlived an earlier world): each command is acted on exactly once.
+  // A command read past its valid_ms is skipped and said.
   bool next(WorldCommand& out) noexcept;
 
  private:
   bool seen(const PayloadHeader& header) noexcept;
+  static bool expired(const WorldCommand& command) noexcept;
 
   struct Port;
   std::unique_ptr<Port> port_;
