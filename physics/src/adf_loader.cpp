@@ -139,10 +139,9 @@ void load_file(const std::string& path, const YAML::Node& root, Model& model, Un
                   ":1:1: error: this is a world file (lights, cameras, environment), "
                   "not a model: give it with --world " +
                   path + " beside the model files");
-  }
-  if (!key("bodies") && !key("joints") && !key("soft bodies"))
     model.warnings.push_back(
         path + ":1:1: warning: no 'bodies' or 'joints' list: nothing is loaded from this file");
+  }
 
   // Block names are scoped per file (as in AMBF): another file may use the same ones.
   std::map<std::string, std::size_t> body_in_file;

@@ -66,9 +66,12 @@ bool leaves_its_package(const std::string& uri) {
   const std::string package_scheme = "package://";
   if (uri.rfind(package_scheme, 0) != 0) return false;
   const std::size_t slash = uri.find('/', package_scheme.size());
+  const std::string name = uri.substr(package_scheme.size(), slash - package_scheme.size());
+  if (name == "." || name == "..") return true;
   if (slash == std::string::npos) return false;
   const fs::path inside = fs::path(uri.substr(slash + 1)).lexically_normal();
-  return !inside.empty() && *inside.begin() == "..";
+  // An absolute rest ("package://arm//etc/x") replaced the package's folder when joined.
+  return inside.is_absolute() || (!inside.empty() && *inside.begin() == "..");
 }
 
 std::string resolve_uri(const std::string& uri, const std::string& urdf_dir,

@@ -85,7 +85,9 @@ class World(Handle):
         A hold that lapsed while the script stalled is taken again first."""
         self.require_open()
         if self._throttling:
-            if not self._world.state()['paused']:
+            # paused_by_pid, not paused: a world running another client's single steps is
+            # paused still, and a pause now would end those steps.
+            if not self._world.state()['paused_by_pid']:
                 self._world.pause(hold_s=THROTTLING_HOLD_S)
             self._world.step(self._step_skips)
 

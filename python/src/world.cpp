@@ -83,8 +83,13 @@ class World {
     command->action = action;
     command->step_count = static_cast<std::uint32_t>(steps);
     command->hold_ms = static_cast<std::uint32_t>(std::lround(hold_s * 1000.0));
+    if (command->hold_ms != 0) hold_ms_ = command->hold_ms;
+    // Valid while this waits, a few of the world's cycles at least (a timeout of 0 would
+    // have it dropped or not by chance), an hour at most (the payload check's bound).
+    const std::int64_t wait_ns = std::max(give_up - monotonic_ns(), kShortestWaitNs);
     command->valid_ms = static_cast<std::uint32_t>(
-        std::max<std::int64_t>(1, (give_up - monotonic_ns()) / 1'000'000));
+        std::min<std::int64_t>(wait_ns / 1'000'000, kMaxWorldCommandValidMs));
+    const std::int64_t wait_until_ns = monotonic_ns() + wait_ns + kWorldCommandShownWithinNs;
     writer_.publish(command);
     WorldActionWatch watch(action, static_cast<std::uint32_t>(steps), before, monotonic_ns());
 
@@ -92,8 +97,7 @@ class World {
     SignalWatch signals;
     {
       py::gil_scoped_release release;
-      while (!done && monotonic_ns() < give_up + kWorldCommandShownWithinNs && !hub_lost() &&
-             !signals.pending()) {
+      while (!done && monotonic_ns() < wait_until_ns && !hub_lost() && !signals.pending()) {
         const WorldState* now = reader_.latest();
         if (now && reader_.updated()) done = watch.shown(*now);
         if (!done) sleep_until_ns(monotonic_ns() + 200'000);
@@ -112,28 +116,34 @@ class World {
   // millisecond at most goes out from this process, the others are skipped: the world's
   // command queue holds 64, and a loop of hold() pushed other writers' pauses and
   // resumes out of it.
-  void hold() { send_unwaited(WorldAction::kNone, kRenewalSpacingNs); }
+  void hold() { send_unwaited(WorldAction::kNone, kRenewalSpacingNs, hold_ms_); }
 
   // Ends this process's held pause; the world runs on unless another process holds it
   // or it was paused plainly (not waited for: the world may rightly stay paused).
-  void release() { send_unwaited(WorldAction::kRelease, 0); }
+  void release() { send_unwaited(WorldAction::kRelease, 0, 0); }
 
  private:
   static constexpr double kMinHoldS = 0.01;  // ten renewal spacings, and a GIL's switch
   static constexpr std::int64_t kRenewalSpacingNs = 1'000'000;
 
-  // Sends `action` unless this process sent one within `spacing_ns`.
-  void send_unwaited(WorldAction action, std::int64_t spacing_ns) {
+  static constexpr std::int64_t kShortestWaitNs = 50'000'000;
+
+  // Sends `action` (with `hold_ms`: a renewal takes its hold again if it lapsed while
+  // others held the pause) unless this World sent one within `spacing_ns`.
+  void send_unwaited(WorldAction action, std::int64_t spacing_ns, std::uint32_t hold_ms) {
     require_hub();
-    static std::atomic<std::int64_t> last_sent_ns{0};
     const std::int64_t now = monotonic_ns();
-    if (spacing_ns > 0 && now - last_sent_ns.load(std::memory_order_relaxed) < spacing_ns) return;
-    last_sent_ns.store(now, std::memory_order_relaxed);
+    if (spacing_ns > 0 && now - last_sent_ns_.load(std::memory_order_relaxed) < spacing_ns) return;
+    last_sent_ns_.store(now, std::memory_order_relaxed);
     WorldCommand* command = writer_.loan();
     if (!command) throw Error("shared memory is exhausted: the world command was not sent");
     command->action = action;
+    command->hold_ms = hold_ms;
     writer_.publish(command);
   }
+
+  std::atomic<std::int64_t> last_sent_ns_{0};  // hold() from any thread
+  std::atomic<std::uint32_t> hold_ms_{0};      // this World's last held pause's hold
 
   LatestReader<WorldState> reader_;
   Writer<WorldCommand> writer_;
@@ -182,8 +192,9 @@ void register_world(py::module_& module) {
           "state", [](World& world, double wait_s) { return state_dict(world.state(wait_s)); },
           py::arg("wait_s") = 2.0,
           "The newest world state as a dict: step, time (simulated s), stamp_ns, wall_time, "
-          "achieved_rate_hz, body_count, paused, paused_by_pid (whose pause is in force, 0 "
-          "when running), pause_held (it lapses once that process goes quiet), lockstep, "
+          "achieved_rate_hz, body_count, paused, paused_by_pid (whose pause is in force, also "
+          "while it runs single steps; 0 when not paused), pause_held (it lapses once that process "
+          "goes quiet), lockstep, "
           "rejected_commands, "
           "watchdog_expiries, stale_commands, lockstep_clients, late_answers, "
           "dropped_clients, nan_recoveries, and the names of the world file's lights and "
@@ -206,8 +217,8 @@ void register_world(py::module_& module) {
           "on. Several processes' held pauses add up: it lasts while one of them holds it.")
       .def("hold", &World::hold,
            "Renews this process's held pause (pause(hold_s=...)); call it more often than "
-           "hold_s, from any thread (one renewal a millisecond goes out, the rest are "
-           "skipped).")
+           "hold_s, from any thread (one renewal a millisecond goes out from a World, the rest "
+           "are skipped).")
       .def("release", &World::release,
            "Ends this process's held pause: the world runs on, unless another process "
            "holds it too or it was paused plainly (afhub world pause). Not waited for.")

@@ -162,7 +162,12 @@ class Player : public Visitor {
     void* payload = replayed.writer->loan(static_cast<std::uint32_t>(data.size()));
     if (!payload) throw Error("no shared memory left to publish " + replayed.topic);
     std::memcpy(payload, data.data(), data.size());
-    if (replayed.kind == PayloadKind::kWorldState) static_cast<WorldState*>(payload)->lockstep = 0;
+    if (replayed.kind == PayloadKind::kWorldState) {
+      // The pause is this replay's (paused-by pids of the recorded session meant nothing).
+      auto* world = static_cast<WorldState*>(payload);
+      world->lockstep = 0;
+      pause_.describe_pause(*world);
+    }
     replayed.writer->publish(payload);
     ++published_;
   }

@@ -82,6 +82,16 @@ TEST(Claims, ASecondPhysicsOfTheSameModelIsRefusedUnlessInAnotherNamespace) {
   EXPECT_TRUE(contains(second.err,
                        "afhub/arm/base is published by afhub-physics-" + std::to_string(first.pid)))
       << second.err;
+  // Another model in the same world: it alternated with the first in the world's state,
+  // and both obeyed its commands.
+  const RunResult other =
+      run_afhub({"run", AFHUB_EXAMPLE_MODELS "/gripper.yaml", "--no-autostart"});
+  EXPECT_EQ(other.exit_code, 1);
+  EXPECT_TRUE(contains(
+      other.err, "another simulation (pid " + std::to_string(first.pid) + ", 8 bodies, at step"))
+      << other.err;
+  EXPECT_TRUE(contains(other.err, "runs the world 'world'")) << other.err;
+  EXPECT_FALSE(listed("afhub/gripper/palm")) << "it published its bodies before refusing";
   ScopedProcess copy(spawn_afhub({"run", arm, "--namespace", "copy", "--no-autostart"}));
   EXPECT_TRUE(wait_until([] { return listed("copy/afhub/arm/link7"); }, 10s));
   const RunResult echo = run_afhub({"echo", "copy/afhub/arm/base", "-n", "1"});

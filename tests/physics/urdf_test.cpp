@@ -592,17 +592,19 @@ TEST(Urdf, MalformedAndInvalidFilesAreErrorsAtTheirLine) {
   const WrittenFile plain("doctype.urdf", "<?xml version=\"1.0\"?>\n<!DOCTYPE robot>\n" + robot);
   EXPECT_EQ(load(plain.path).bodies.size(), 1u);
   // A package:// path that climbs out of its package is refused, not followed.
-  const WrittenFile climbing(
-      "climbing.urdf", head +
-                           "  <link name=\"b\">\n    <visual><geometry><mesh "
-                           "filename=\"package://bad/../../../etc/passwd\"/></geometry></"
-                           "visual>\n  </link>\n  <joint name=\"j\" type=\"fixed\">\n    "
-                           "<parent link=\"a\"/>\n    <child link=\"b\"/>\n  </joint>\n</robot>\n");
-  const std::string climbed = load_error(climbing.path);
-  EXPECT_TRUE(climbed.starts_with(climbing.path + ":4:3: error: link 'b': visual mesh "
-                                                  "'package://bad/../../../etc/passwd' leads out "
-                                                  "of its package"))
-      << climbed;
+  for (const std::string uri :
+       {"package://bad/../../../etc/passwd", "package://bad//etc/passwd", "package://../x.stl"}) {
+    const WrittenFile climbing(
+        "climbing.urdf", head + "  <link name=\"b\">\n    <visual><geometry><mesh filename=\"" +
+                             uri +
+                             "\"/></geometry></visual>\n  </link>\n  <joint name=\"j\" "
+                             "type=\"fixed\">\n    <parent link=\"a\"/>\n    <child "
+                             "link=\"b\"/>\n  </joint>\n</robot>\n");
+    const std::string climbed = load_error(climbing.path);
+    EXPECT_TRUE(climbed.starts_with(climbing.path + ":4:3: error: link 'b': visual mesh '" + uri +
+                                    "' leads out of its package"))
+        << climbed;
+  }
 }
 
 // A mesh named relative to the URDF, the URDF named relative to the working folder (as

@@ -225,9 +225,10 @@ TEST(WorldControl, AHeldPauseLapsesOnceItsHolderIsQuiet) {
   control.apply(step, 800 * kMs);
   EXPECT_TRUE(control.take_step());
   EXPECT_EQ(control.lapse(1200 * kMs).pid, 0u);
-  // Another process's commands do not.
+  // Another process's commands do not (one without a hold of its own).
   WorldCommand other = word;
   other.header.publisher_pid = 43;
+  other.hold_ms = 0;
   control.apply(other, 1250 * kMs);
   EXPECT_EQ(control.lapse(1301 * kMs).pid, 42u);
   EXPECT_FALSE(control.paused) << "the world did not run on";
@@ -300,6 +301,28 @@ TEST(WorldControl, HeldPausesAddUpAndEachHolderReleasesItsOwn) {
   control.apply(a_releases, 0);
   EXPECT_TRUE(control.paused);
   EXPECT_EQ(control.paused_by_pid, 7u);
+  // Even when the release comes from the plain pause's own pid (a DDS bridge carries both
+  // a user's pause and a script's release).
+  control.apply(command(7, WorldAction::kRelease), 0);
+  EXPECT_TRUE(control.paused) << "a release ended a plain pause";
+
+  // A holder stalled past its hold while another held the pause takes it again with its
+  // next renewal, and holds once the other goes.
+  control.apply(command(7, WorldAction::kResume), 0);
+  control.apply(a_holds, 0);
+  control.apply(b_holds, 0);
+  control.apply(command(43, WorldAction::kNone), 400 * kMs);
+  EXPECT_FALSE(control.lapse(600 * kMs)) << "B holds";
+  WorldCommand a_renews_holding = a_renews;
+  a_renews_holding.hold_ms = 500;
+  control.apply(a_renews_holding, 700 * kMs);
+  control.apply(b_releases, 800 * kMs);
+  EXPECT_TRUE(control.paused) << "A's renewal did not take its hold again";
+  EXPECT_EQ(control.paused_by_pid, 42u);
+  // Such a renewal does not pause a running world.
+  control.apply(a_releases, 900 * kMs);
+  control.apply(a_renews_holding, 950 * kMs);
+  EXPECT_FALSE(control.paused);
 
   // Past kMaxPauseHolders, a new holder takes the place of the hold lapsing soonest.
   control.apply(command(7, WorldAction::kResume), 0);

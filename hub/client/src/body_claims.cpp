@@ -9,9 +9,12 @@
 #include <thread>
 
 #include "afhub/hub/bodies.hpp"
+#include "afhub/hub/channel.hpp"
 #include "afhub/hub/hub_health.hpp"
+#include "afhub/rt/clock.hpp"
 #include "afhub/shm_layout/channel_names.hpp"
 #include "afhub/shm_layout/error.hpp"
+#include "afhub/shm_layout/world.hpp"
 
 namespace afhub {
 namespace {
@@ -43,15 +46,38 @@ std::string taken_message(const std::string& channel, const Owner& owner) {
 
 }  // namespace
 
-void check_room_for_bodies(const std::vector<std::string>& channels, std::size_t publishers) {
+void check_world_free(const std::string& world_instance) {
+  // A live physics publishes its world state every step, paused too, and every 20 ms
+  // while it waits for lockstep clients; a new reader finds it within the hub's
+  // discovery interval (0.1 s).
+  LatestReader<WorldState> reader(
+      {std::string(kService), world_instance, std::string(kStateEvent)});
+  const WorldState* state = nullptr;
+  for (const std::int64_t give_up = monotonic_ns() + 300'000'000;
+       !(state = reader.latest()) && monotonic_ns() < give_up;)
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  if (!state) return;
+  const std::uint32_t pid = state->header.publisher_pid;
+  const bool fresh = monotonic_ns() - state->header.publish_stamp_ns < 1'000'000'000;
+  if (!fresh || pid == static_cast<std::uint32_t>(getpid()) || !process_exists(pid)) return;
+  throw Error("another simulation (pid " + std::to_string(pid) + ", " +
+              std::to_string(state->body_count) + " bodies, at step " +
+              std::to_string(state->header.sim_step) + ") runs the world '" + world_instance +
+              "': two in one world alternate in its state and both obey its commands. Run this "
+              "one in a namespace of its own (--namespace NAME), or stop that one");
+}
+
+std::size_t check_room_for_bodies(const std::vector<std::string>& channels,
+                                  std::size_t publishers) {
   CatalogReader catalog;
   catalog.wait(std::chrono::milliseconds(1000));
-  std::size_t live_bodies = 0;
+  std::size_t live_bodies = 0, others = 0;
   const auto owners = catalog_owners(catalog);
   for (const auto& [channel, owner] : owners) {
     if (!process_exists(owner.pid)) continue;  // gone; the hub is removing it
     ++live_bodies;
     if (owner.pid == static_cast<std::uint32_t>(getpid())) continue;
+    ++others;
     for (const std::string& mine : channels)
       if (mine == channel) throw Error(taken_message(channel, owner));
   }
@@ -64,6 +90,7 @@ void check_room_for_bodies(const std::vector<std::string>& channels, std::size_t
   const std::string what = "simulating these " + std::to_string(channels.size()) + " bodies";
   require_publisher_ports(publishers, what);
   require_subscriber_ports(1, what);  // the process's reader of command slots
+  return others;
 }
 
 void confirm_body_claims(const std::vector<std::string>& channels,

@@ -67,11 +67,15 @@ bool WorldCommandQueue::expired(const WorldCommand& command) noexcept {
   if (command.valid_ms == 0) return false;
   const std::int64_t age_ns = monotonic_ns() - command.header.publish_stamp_ns;
   if (age_ns <= static_cast<std::int64_t>(command.valid_ms) * 1'000'000) return false;
+  // Said for the first few: a stopped physics may find its whole queue expired.
+  if (++expired_said_ > kExpiredSaid) return true;
   std::fprintf(stderr,
                "afhub: ignored a world command (%s) from pid %u: read %.3f s after it was sent, "
                "past the %.3f s its sender waited for it (it said the command failed)\n",
                action_name(command.action), command.header.publisher_pid,
                static_cast<double>(age_ns) * 1e-9, command.valid_ms * 1e-3);
+  if (expired_said_ == kExpiredSaid)
+    std::fprintf(stderr, "afhub: (further world commands ignored so are not said)\n");
   return true;
 }
 

@@ -112,6 +112,7 @@ void run_loop(Simulation& sim, SimChannels* channels, const RunOptions& options,
         rate.restart();
       }
     if (const WorldControl::Lapsed lapsed = control.lapse(clock_ns())) lapsed_hold = lapsed;
+    channels->update_world_control(control);
     if (channels->lockstep() && !control.paused) return channels->await_lockstep();
     // Behind the grid (after a stall), the controllers in phase follow the physics
     // catching up, answering each state as it comes: given time for it.

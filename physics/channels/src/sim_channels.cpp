@@ -77,11 +77,11 @@ BodyEntry body_entry(const Model& model, std::size_t b, const std::vector<std::s
 }
 
 // The bodies the model publishes (passive ones publish nothing), checked with the hub
-// before this process opens a publisher: one publisher per body, and room for them.
-// The blocks of their state slots (by size: a body's state carries the joints below
-// it), and the world state's, the scene's, the pose feed's, the step tape's, the
-// directory's and the loop stats' publishers.
-std::vector<std::string> claim_bodies(const Model& model) {
+// before this process opens a publisher: one publisher per body, room for them, and
+// no other live simulation of this world. The blocks of their state slots (by size: a body's state
+// carries the joints below it), and the world state's, the scene's, the pose feed's, the step
+// tape's, the directory's and the loop stats' publishers.
+std::vector<std::string> claim_bodies(const Model& model, const std::string& world) {
   std::vector<std::string> claimed;
   std::map<std::uint32_t, std::size_t> states_by_size;
   for (std::size_t b = 0; b < model.bodies.size(); ++b) {
@@ -100,7 +100,7 @@ std::vector<std::string> claim_bodies(const Model& model) {
   std::size_t publishers = 6;
   for (const auto& [capacity, count] : states_by_size)
     publishers += slot_blocks_for(count, capacity);
-  check_room_for_bodies(claimed, publishers);
+  if (check_room_for_bodies(claimed, publishers) > 0) check_world_free(world);
   return claimed;
 }
 
@@ -108,7 +108,7 @@ std::vector<std::string> claim_bodies(const Model& model) {
 
 SimChannels::SimChannels(Simulation& sim, double watchdog_s, std::string_view name_space)
     : sim_(sim),
-      claimed_(claim_bodies(sim.model())),
+      claimed_(claim_bodies(sim.model(), world_instance(name_space))),
       world_({std::string(kService), world_instance(name_space), std::string(kStateEvent)}),
       scene_({std::string(kService), world_instance(name_space), std::string(kSceneEvent)}),
       scene_poses_(
@@ -225,6 +225,7 @@ void SimChannels::publish(const WorldClock& clock) noexcept {
   // The step's states share one stamp, read before the first is filled: a clock read
   // per state was a quarter of publishing a thousand (28 ns each on the project's VM).
   const StateStamp stamp{step, time_s, clock.step_due_ns, monotonic_ns()};
+  if (new_step) step_published_ns_ = stamp.stamp_ns;
   const int count = static_cast<int>(channels_.size());
   if (new_step && !taping) {
     share_each(sim_, count, kChannelsPerItem, [&](int c, int thread) {

@@ -43,11 +43,13 @@ void SimChannels::apply_commands(std::int64_t now_ns, bool holding) noexcept {
         now_ns = monotonic_ns();
         age_ns = now_ns - stamp_ns;
       }
-      // A lockstep answer to the step the barrier holds is as fresh as the step, however
-      // long the physics was stopped before it read it (it was ignored as old, and the
-      // step went on without it).
-      const bool answers_held_step =
-          lockstep_ && answer.lockstep && answer.step == sim_.step_count();
+      // A lockstep answer to the step the barrier holds, written after that step went
+      // out, is as fresh as the step, however long the physics was stopped before it read
+      // it (it was ignored as old, and the step went on without it). One older answers
+      // another run's step of that number (a physics restarted, or reset).
+      const bool answers_held_step = lockstep_ && answer.lockstep &&
+                                     answer.step == sim_.step_count() &&
+                                     stamp_ns >= step_published_ns_;
       if ((age_ns > channel.watchdog_ns && !answers_held_step) ||
           age_ns < -kFutureStampAllowanceNs) {
         ++stale_;

@@ -65,14 +65,23 @@ struct WorldControl {
       case WorldAction::kResume:
         run_on();
         break;
-      case WorldAction::kRelease:
+      case WorldAction::kRelease: {
         // The sender's hold ends: the world runs on if no other holds it. A plain pause
-        // stays.
+        // (it has no holds) stays, even the sender's own, or a DDS bridge's that carries
+        // both a user's pause and a script's release.
+        bool had = false;
         for (Hold& hold : holds)
-          if (hold.pid == pid) hold = {};
-        if (paused && paused_by_pid == pid && held()) paused_by_pid = latest_holder();
-        if (paused && paused_by_pid == pid) run_on();
+          if (hold.pid == pid) {
+            hold = {};
+            had = true;
+          }
+        if (!had) break;
+        if (!held())
+          run_on();
+        else if (paused_by_pid == pid)
+          paused_by_pid = latest_holder();
         break;
+      }
       case WorldAction::kStep:
         // Only while paused: steps asked for while running would otherwise pile up
         // and all run at the next pause.
@@ -85,6 +94,11 @@ struct WorldControl {
         steps_to_run = 0;
         return true;
       case WorldAction::kNone:
+        // A renewal with its hold takes the hold again when it lapsed while others held
+        // the pause (a holder stalled past its hold), so that it still holds once they
+        // go; a running world is not paused by it.
+        if (command.hold_ms != 0 && paused && held())
+          take_hold(pid, static_cast<std::int64_t>(command.hold_ms) * 1'000'000, now_ns);
         break;
     }
     return false;

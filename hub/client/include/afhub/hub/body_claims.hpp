@@ -15,8 +15,17 @@ namespace afhub {
 // Throws afhub::Error, saying what to do, when a body in `channels` is published by
 // another live process, when the catalog cannot take them all, or when iceoryx has
 // fewer than `publishers` publisher ports (a block of state slots holds many bodies,
-// see slot_blocks_for()), or no subscriber port (for its command slots), left.
-void check_room_for_bodies(const std::vector<std::string>& channels, std::size_t publishers);
+// see slot_blocks_for()), or no subscriber port (for its command slots), left. Returns
+// how many bodies other live processes publish.
+std::size_t check_room_for_bodies(const std::vector<std::string>& channels, std::size_t publishers);
+
+// Throws afhub::Error naming the simulation when another live process publishes the
+// state of world `world_instance` (world_instance(namespace)): two simulations of one
+// world alternated in its state and both obeyed its commands. A publisher that died (a
+// physics restarted at once) is no owner. Reads the world state, waiting up to 0.3 s for
+// it: for a process to call when others publish bodies. Two started at the same moment
+// may both pass.
+void check_world_free(const std::string& world_instance);
 
 // Waits up to `timeout` for the catalog to list every channel as this process's.
 // Throws afhub::Error naming the owner of a body another process holds, the bodies a

@@ -33,7 +33,9 @@ class WorldCommandQueue {
 
  private:
   bool seen(const PayloadHeader& header) noexcept;
-  static bool expired(const WorldCommand& command) noexcept;
+  bool expired(const WorldCommand& command) noexcept;
+  static constexpr unsigned kExpiredSaid = 4;
+  unsigned expired_said_ = 0;
 
   struct Port;
   std::unique_ptr<Port> port_;

@@ -129,6 +129,11 @@ class SimChannels {
   };
   // Publishes every body's state and the world state.
   void publish(const WorldClock& clock) noexcept;
+  // The world's controls as they are now, for the step republished while it waits for
+  // lockstep answers (a resume acted on before the wait showed paused until it ended).
+  void update_world_control(const WorldControl& control) noexcept {
+    last_published_.control = control;
+  }
   // What a viewer reads, at most kViewerRateHz of `now_ns` (CLOCK_MONOTONIC), paused
   // too, each only while something reads it (once without, for a viewer that joins
   // later): every scene body's pose and joints in one payload (ScenePoses), and each
@@ -276,8 +281,9 @@ class SimChannels {
   // falls behind the latest-value states catches up from its queue.
   std::string world_instance_;  // the world's name on its channels (and on the tape)
   StepTapeWriter tape_;
-  std::uint64_t taped_step_ = ~0ULL;  // a paused world's step is taped once
-  std::int64_t view_next_ns_ = 0;     // when publish_view is due next
+  std::uint64_t taped_step_ = ~0ULL;    // a paused world's step is taped once
+  std::int64_t step_published_ns_ = 0;  // when the current step's states first went out
+  std::int64_t view_next_ns_ = 0;       // when publish_view is due next
   std::unique_ptr<WorldCommandQueue> world_commands_;
   std::uint64_t rejected_ = 0, expiries_ = 0, stale_ = 0;
   bool lockstep_ = false;
