@@ -112,10 +112,15 @@ RunResult run_afhub_probe(const std::vector<std::string>& args,
 // Chunks in use per payload pool (by its chunks' payload bytes), as the probe sees them
 // (empty when it could not look).
 using PoolUsage = std::map<std::uint32_t, std::uint32_t>;
-PoolUsage chunks_in_use() {
+// `why`: what the probe said when it read nothing (a failure then shows it).
+PoolUsage chunks_in_use(std::string* why = nullptr) {
   PoolUsage usage;
   RunResult probe = run_afhub_probe({"chunks"});
-  if (probe.exit_code != 0) return usage;
+  if (why) why->clear();
+  if (probe.exit_code != 0) {
+    if (why) *why = "exit " + std::to_string(probe.exit_code) + ": " + probe.err;
+    return usage;
+  }
   std::istringstream items(probe.out);
   for (std::string item; items >> item;) {
     const auto colon = item.find(':');
@@ -316,14 +321,16 @@ TEST_P(HubRestart, EveryClientOutlivesTheHubAndReattaches) {
 
     // No chunk leak: the new hub's pools hold what the first one's did.
     PoolUsage used;
+    std::string probe_said;
     const bool same = wait_until(
         [&] {
-          used = chunks_in_use();
+          used = chunks_in_use(&probe_said);
           return same_usage(baseline, used, kInFlightChunks);
         },
         15s);
     EXPECT_TRUE(same) << "round " << round << ": payload chunks in use " << usage_text(used)
-                      << "; under the first hub " << usage_text(baseline);
+                      << "; under the first hub " << usage_text(baseline)
+                      << "; the probe: " << probe_said;
   }
   for (const auto& [what, values] : reattach_s)
     std::printf("re-attach after %s, %s: %s\n", sigkill ? "a hub SIGKILL" : "`afhub hub stop`",
