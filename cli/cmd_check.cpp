@@ -14,6 +14,7 @@
 #include "commands.hpp"
 #include "format.hpp"
 #include "gain_options.hpp"
+#include "placement_option.hpp"
 #include "urdf_options.hpp"
 
 namespace afhub::cli {
@@ -22,6 +23,7 @@ namespace {
 struct CheckOptions {
   std::vector<std::string> files;
   std::string launch_file, indices, world_file, gravity;
+  std::vector<std::string> placements;  // "FILE=x,y,z[,r,p,y]"
   double dt_s = 0.001;
   GainOptions gains;
   physics::UrdfOptions urdf;
@@ -77,6 +79,8 @@ int run_check(const CheckOptions& options) {
     request.adf_files = options.files;
     request.world_file = options.world_file;
     request.urdf = options.urdf;
+    for (const std::string& placement : options.placements)
+      request.placements.push_back(physics::parse_file_placement(placement));
     model = physics::load_scene(request);
     // The meshes too: `afhub run` reads them, and a broken one must show here first.
     meshes = physics::check_meshes(model);
@@ -106,17 +110,21 @@ int run_check(const CheckOptions& options) {
   std::printf("meshes read: %zu\n", meshes);
   print_gravity(model, gravity_source);
   print_default_gains(model);
-  // The gains in use need the bodies' inertias: the world is built, not stepped.
+  // The gains in use need the bodies' inertias, the overlaps their shapes: the world is
+  // built, not stepped.
+  std::vector<std::string> overlaps;
   try {
     const physics::Simulation sim(model, options.dt_s);
     const std::vector<std::string> notes = sim.gain_notes();
     std::printf("joint gains lowered for stability at dt %g s: %zu\n", options.dt_s, notes.size());
     for (const std::string& note : notes) std::printf("  %s\n", note.c_str());
+    overlaps = sim.overlaps_between_files();
+    for (const std::string& warning : overlaps) std::fprintf(stderr, "%s\n", warning.c_str());
   } catch (const Error& error) {
     std::fprintf(stderr, "%s\n", error.what());  // a mesh that cannot be read
     return 1;
   }
-  std::printf("warnings: %zu\n", model.warnings.size());
+  std::printf("warnings: %zu\n", model.warnings.size() + overlaps.size());
   return 0;
 }
 
@@ -134,6 +142,7 @@ void register_check(CLI::App& app, Runner& selected) {
   check->add_option("-l", options->indices,
                     "Indices into the launch file's multibody configs: 0,3");
   check->add_option("--world", options->world_file, "A world file (its gravity, as `afhub run`)");
+  add_placement_option(check, options->placements);
   check->add_option("--gravity", options->gravity,
                     "x,y,z in m/s^2: the gravity `afhub run --gravity` would use");
   check->add_option("--dt", options->dt_s,

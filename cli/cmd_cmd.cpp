@@ -320,6 +320,14 @@ int run_cmd(const CmdOptions& options) {
   const BodyEntry entry =
       wait_for_body(options.body, "afhub cmd",
                     reattach_count() > 0 ? std::numeric_limits<std::int64_t>::max() : 0);
+  // A device's driver reads forces, not body commands: none would take this one.
+  if (entry.info.kind == ChannelKind::kDevice) {
+    const std::string device(name_of(entry.info.channel));
+    throw Error(device +
+                " is a device, not a body: `afhub cmd` commands bodies (`afhub ls` lists "
+                "them); `afhub device force " +
+                device.substr(device.rfind('/') + 1) + " --force x,y,z` commands its force");
+  }
   BodyCommand prototype = build_command(options, entry);
   BodyClient body(entry);
   const std::string joints = complete_joints(options, entry, body, prototype);

@@ -62,7 +62,17 @@ int run_play(PlayCliOptions& options) {
                static_cast<unsigned long long>(report.published), report.passes,
                report.passes == 1 ? "" : "es");
   warn_if_cut_off(options.play.file, report.cut_off);
-  return 0;
+  if (report.published == 0) {
+    const char* where = options.play.start_s > 0.0 || options.play.end_s > 0.0
+                            ? " between --start and --end"
+                            : (report.cut_off.empty() ? "" : " before it was cut off");
+    std::fprintf(stderr,
+                 "afhub play: error: %s holds no message%s to replay (`afhub info %s` tells what "
+                 "it holds)\n",
+                 options.play.file.c_str(), where, options.play.file.c_str());
+    return 1;
+  }
+  return report.unmatched_globs > 0 ? 1 : 0;  // a typo in --bodies, said above
 }
 
 }  // namespace

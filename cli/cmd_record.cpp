@@ -28,6 +28,7 @@ struct RecordCliOptions {
   double buffer_mb = 256;
   double wait_s = 0.0;
   std::string recover;
+  bool overwrite = false;
   RealtimeOptions realtime;
 };
 
@@ -50,6 +51,26 @@ std::string numbered(const std::string& path, unsigned n) {
   return (file.parent_path() / (file.stem().string() + "." + std::to_string(n) +
                                 (file.has_extension() ? file.extension().string() : "")))
       .string();
+}
+
+bool holds_something(const std::string& path) {
+  std::error_code error;
+  return std::filesystem::is_regular_file(path, error) &&
+         std::filesystem::file_size(path, error) > 0 && !error;
+}
+
+// A recording is not lost to a repeated command line: a file there is refused, and a
+// recorder re-attached to a new hub takes the next number no file has.
+void choose_output(RecordCliOptions& options) {
+  if (reattach_count() > 0) {
+    const std::string first = options.record.output;
+    unsigned n = reattach_count();
+    do options.record.output = numbered(first, n++);
+    while (holds_something(options.record.output));
+  } else if (!options.overwrite && holds_something(options.record.output)) {
+    throw Error(options.record.output +
+                " exists: give another -o, or --overwrite to record over it");
+  }
 }
 
 int run_recover(const std::string& path) {
@@ -93,8 +114,7 @@ int run_record(RecordCliOptions& options) {
   // A hub lost: the file is finished (the recorder's hook), and the process re-executes
   // to wait for the next hub and record into the next file: run.mcap, run.1.mcap, ...
   survive_hub_loss("afhub record");
-  if (reattach_count() > 0)
-    options.record.output = numbered(options.record.output, reattach_count());
+  choose_output(options);
   const StartupWait wait(options.wait_s);
   wait.connect_to_hub("record");
 
@@ -138,6 +158,8 @@ void register_record(CLI::App& app, Runner& selected) {
       "`afhub info` describes it, `afhub play` replays it.");
   record->add_option("-o,--output", options->record.output, "The MCAP file to write")
       ->capture_default_str();
+  record->add_flag("--overwrite", options->overwrite,
+                   "Record over the file -o names if it exists (by default that is refused)");
   record->add_option("--bodies", options->record.body_globs,
                      "Body channels to record, as globs on the full name or its end after a "
                      "'/' (arm/*, base; default: every body)");

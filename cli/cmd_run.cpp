@@ -18,6 +18,7 @@
 #include "count_option.hpp"
 #include "format.hpp"
 #include "gain_options.hpp"
+#include "placement_option.hpp"
 #include "realtime_options.hpp"
 #include "urdf_options.hpp"
 
@@ -138,6 +139,8 @@ int run_run(const RunCliOptions& options) {
   }
   physics::Simulation& sim = *built;
   for (const std::string& note : sim.gain_notes()) std::fprintf(stderr, "%s\n", note.c_str());
+  for (const std::string& warning : sim.overlaps_between_files())
+    std::fprintf(stderr, "%s\n", warning.c_str());
   if (options.reduced_coordinates)
     std::fprintf(stderr,
                  "afhub run: %zu of %zu bodies in reduced coordinates, as links of open chains "
@@ -230,13 +233,7 @@ void register_run(CLI::App& app, Runner& selected) {
       "Put every body's channels under this prefix (copy/afhub/arm/base), and the world's "
       "(copy/world: `afhub world pause --namespace copy`), to run a second copy of a model "
       "beside the first: a live body has one publisher");
-  run->add_option("--at", options->placements,
-                  "Place a loaded file's bodies: FILE=x,y,z or FILE=x,y,z,r,p,y (metres; roll, "
-                  "pitch, yaw in radians), every body of FILE moved so, about the world's "
-                  "origin; repeat for more files (of a file loaded twice, each places the next "
-                  "copy). AMBF draws its robots at the origin, where "
-                  "loaded together they overlap and push each other apart")
-      ->allow_extra_args(false);  // one FILE=... each: files may follow
+  add_placement_option(run, options->placements);
   run->add_option("--gravity", options->gravity,
                   "x,y,z in m/s^2 for the world and every body, over the world file's and the "
                   "model files' `gravity` (by AMBF's rule a file's gravity wins over the world's)");

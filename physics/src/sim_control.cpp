@@ -73,6 +73,29 @@ const char* Simulation::axisless_entry(std::size_t index, const BodyInput& input
   return nullptr;
 }
 
+const char* Simulation::beyond_limits_entry(std::size_t index,
+                                            const BodyInput& input) const noexcept {
+  const Data& d = *data_;
+  const std::vector<int>& below = d.model.descendant_joints[index];
+  for (std::uint32_t j = 0; j < input.joint_count && j < below.size(); ++j) {
+    const JointSpec& joint = d.model.joints[below[j]];
+    if (input.joint_modes[j] != JointMode::kPosition || !joint.limit_low) continue;
+    const double target = input.joint_values[j] - joint.joint_offset_rad;
+    // A target on a limit, give or take rounding, is within it.
+    const double slack = 1e-9 * (1.0 + *joint.limit_high - *joint.limit_low);
+    if (target >= *joint.limit_low - slack && target <= *joint.limit_high + slack) continue;
+    std::snprintf(d.problem.data(), d.problem.size(),
+                  "joint %u (%s): position target %g is outside its limits [%g, %g] %s, so it "
+                  "is driven to the nearest",
+                  j, joint.name.c_str(), input.joint_values[j],
+                  *joint.limit_low + joint.joint_offset_rad,
+                  *joint.limit_high + joint.joint_offset_rad,
+                  joint.type == JointType::kPrismatic ? "(m)" : "(rad, not degrees)");
+    return d.problem.data();
+  }
+  return nullptr;
+}
+
 int Simulation::joint_driver(std::size_t joint) const noexcept {
   return data_->joint_driver[joint];
 }

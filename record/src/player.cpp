@@ -65,11 +65,14 @@ class Player : public Visitor {
 
   // A --bodies glob that matches none of the recording's bodies (a typo replayed no body
   // and said nothing), said once the first pass has seen them all.
-  void say_unmatched_globs() const {
+  // Returns how many there were.
+  unsigned say_unmatched_globs() const {
+    unsigned unmatched = 0;
     for (const std::string& glob : options_.body_globs) {
       if (std::any_of(recorded_bodies_.begin(), recorded_bodies_.end(),
                       [&](const std::string& body) { return matches_any(body, {glob}); }))
         continue;
+      ++unmatched;
       std::string some;  // the first four, as " (a, b, c, d, ...)"
       for (std::size_t i = 0; i < recorded_bodies_.size() && i < 4; ++i)
         some += (i ? ", " : " (") + recorded_bodies_[i];
@@ -79,6 +82,7 @@ class Player : public Visitor {
                    "none was replayed for it (`afhub info FILE` lists them)\n",
                    glob.c_str(), recorded_bodies_.size(), some.c_str());
     }
+    return unmatched;
   }
 
   void header(const std::string& profile, const std::string&) override {
@@ -282,8 +286,9 @@ PlayReport play(const PlayOptions& options, const std::function<bool()>& keep_go
     } catch (const EndOfPass& end) {
       if (end.stop) break;
     }
-    if (++report.passes == 1) player.say_unmatched_globs();
-  } while (options.loop && keep_going());
+    if (++report.passes == 1) report.unmatched_globs = player.say_unmatched_globs();
+    // A file with nothing to play in the range would loop for good doing nothing.
+  } while (options.loop && player.published() > 0 && keep_going());
   report.published = player.published();
   report.cut_off = player.cut_off();
   return report;

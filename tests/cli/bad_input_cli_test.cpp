@@ -129,6 +129,28 @@ TEST(BadInputCli, AnUnreadableModelOrADirectoryIsSaidSo) {
       << device.err;
 }
 
+// Two models loaded at one place were pushed apart at the first step, hard enough to blow
+// one up (the MTM over the SUJ), with nothing said at load. The overlap is said, located,
+// with the --at that mends it; placed apart, nothing is said.
+TEST(BadInputCli, ModelsLoadedOverlappingAreSaidWithTheirPlacement) {
+  const RunResult twice = run_afhub({"check", kArm, kArm});
+  EXPECT_EQ(twice.exit_code, 0) << twice.err;
+  EXPECT_TRUE(contains(twice.err, kArm +
+                                      ":54:3: warning: body 'base' overlaps body 'base1' of "
+                                      "another loaded file (" +
+                                      kArm + ":54:3) by "))
+      << twice.err;
+  EXPECT_TRUE(contains(twice.err, "place one file elsewhere with --at FILE=x,y,z")) << twice.err;
+  EXPECT_TRUE(contains(twice.err, "more pairs of bodies of different loaded files overlap"))
+      << twice.err;
+  const RunResult apart = run_afhub({"check", kArm, kArm, "--at", kArm + "=0,3,0"});
+  EXPECT_EQ(apart.exit_code, 0) << apart.err;
+  EXPECT_FALSE(contains(apart.err, "overlap")) << apart.err;
+  // One robot's own links overlap at their joints: no warning.
+  const RunResult alone = run_afhub({"check", kArm});
+  EXPECT_FALSE(contains(alone.err, "overlap")) << alone.err;
+}
+
 TEST(BadInputCli, CheckRefusesWhatRunWouldRefuse) {
   afhub::testing::ModelFolder folder;
   const std::size_t bodies = kMaxBodies + 50;
@@ -276,6 +298,33 @@ TEST(BadInputCli, CmdStopsWithThePhysicsRefusalOfItsCommand) {
   // A command within the bounds is taken.
   const RunResult taken = run_afhub({"cmd", "arm/base", "--joint", "base-link1=0.1", "--once"});
   EXPECT_EQ(taken.exit_code, 0) << taken.err;
+  EXPECT_FALSE(contains(read_file(log), "cannot reach")) << read_file(log);
+  // A target past the joint's limits (degrees typed) is taken, driven to the nearest limit,
+  // and said once: it was clamped without a word.
+  for (int i = 0; i < 2; ++i) {
+    const RunResult degrees = run_afhub({"cmd", "arm/base", "--joint", "base-link1=90", "--once"});
+    EXPECT_EQ(degrees.exit_code, 0) << degrees.err;
+  }
+  EXPECT_TRUE(wait_until([&] { return contains(read_file(log), "cannot reach"); },
+                         std::chrono::seconds(5)));
+  const std::string physics_said = read_file(log);
+  EXPECT_TRUE(contains(physics_said,
+                       "afhub run: a command for afhub/arm/base holds a target it cannot reach: "
+                       "joint 0 (base-link1): position target 90 is outside its limits [-2.96, "
+                       "2.96] (rad, not degrees), so it is driven to the nearest"))
+      << physics_said;
+  EXPECT_EQ(physics_said.find("cannot reach"), physics_said.rfind("cannot reach")) << physics_said;
+  // A device named is refused at once: its driver reads no body command, and cmd waited
+  // 5 s to say that no physics took it.
+  ScopedProcess driver(spawn_afhub({"device", "run", "virtual", "--name", "grip"},
+                                   (folder.dir() / "driver.log").string()));
+  ASSERT_TRUE(wait_until([] { return contains(run_afhub({"ls"}).out, "device/grip"); },
+                         std::chrono::seconds(20)))
+      << read_file((folder.dir() / "driver.log").string());
+  const RunResult device = run_afhub({"cmd", "grip", "--force", "1,0,0", "--once"});
+  EXPECT_EQ(device.exit_code, 1) << device.err;
+  EXPECT_TRUE(contains(device.err, "device/grip is a device, not a body")) << device.err;
+  EXPECT_TRUE(contains(device.err, "`afhub device force grip --force x,y,z`")) << device.err;
 
   // A controller whose every command is refused says so (it printed only "commanding"),
   // at most once a second.

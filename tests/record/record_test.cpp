@@ -993,9 +993,9 @@ TEST(Record, PlayPublishesTheWindowAndTheBodiesChosenAtTheRateChosen) {
   EXPECT_EQ(fast.exit_code, 0) << fast.err;
   EXPECT_EQ(published(fast.err), whole_window) << fast.err;
   EXPECT_FALSE(contains(fast.err, "matches none")) << fast.err;
-  // A glob matching no recorded body replayed none and said nothing.
+  // A glob matching no recorded body replayed none and said nothing, with exit 0.
   const RunResult typo = run_afhub({"play", file, "--fast", "--bodies", "nope*"}, 60s);
-  EXPECT_EQ(typo.exit_code, 0) << typo.err;
+  EXPECT_EQ(typo.exit_code, 1) << typo.err;
   EXPECT_TRUE(contains(typo.err, "--bodies 'nope*' matches none of the recording's")) << typo.err;
   // A window past the end plays nothing, and says so.
   const RunResult past = run_afhub({"play", file, "--fast", "--start", "100"}, 60s);
@@ -1011,6 +1011,19 @@ TEST(Record, PlayPublishesTheWindowAndTheBodiesChosenAtTheRateChosen) {
   EXPECT_GT(published(cut_play.err), 0) << cut_play.err;
   EXPECT_NE(cut_play.err.find("warning: " + cut + " was cut off"), std::string::npos)
       << cut_play.err;
+  // Cut inside its first chunk, it holds no message: that played nothing with exit 0.
+  const std::string whole = read_file(file);
+  std::uint64_t chunk_at = 8;  // after the magic, walk the records to the first chunk
+  while (chunk_at + 9 < whole.size() && whole[chunk_at] != 0x06) {
+    std::uint64_t length = 0;
+    std::memcpy(&length, whole.data() + chunk_at + 1, sizeof length);
+    chunk_at += 9 + length;
+  }
+  ASSERT_LT(chunk_at + 9, whole.size());
+  std::filesystem::resize_file(cut, chunk_at + 20);
+  const RunResult no_message = run_afhub({"play", cut, "--fast"}, 60s);
+  EXPECT_EQ(no_message.exit_code, 1) << no_message.err;
+  EXPECT_TRUE(contains(no_message.err, "holds no")) << no_message.err;
 
   LatestReader<BodyState> link3(body_state_channel("afhub/arm/link3"));
   LatestReader<BodyState> link2(body_state_channel("afhub/arm/link2"));
@@ -1905,9 +1918,11 @@ TEST(Record, BodiesAreChosenByTheirNamesAndAGlobMatchingNoneIsSaid) {
   EXPECT_EQ(bodies, std::vector<std::string>{"/afhub/rcm/base/state"});
 }
 
-// One writer per file: a second recorder on the file truncated and interleaved the
-// first's (both said they recorded), a recovery under a live recorder replaced the file
-// it went on writing, and a file deleted while recording was recorded on into nothing.
+// One writer per file, and a finished file is not recorded over unless asked: a second
+// recorder on the file truncated and interleaved the first's (both said they recorded), a
+// recovery under a live recorder replaced the file it went on writing, a file deleted
+// while recording was recorded on into nothing, and a command line run again recorded
+// over the last recording.
 TEST(Record, ARecordingsFileHasOneWriterAndItsDeletionIsAnError) {
   afhub::testing::ModelFolder folder;
   const std::string file = (folder.dir() / "held.mcap").string();
@@ -1925,13 +1940,20 @@ TEST(Record, ARecordingsFileHasOneWriterAndItsDeletionIsAnError) {
   EXPECT_NE(recover.err.find("is being written by another process"), std::string::npos)
       << recover.err;
   // A second recorder is refused before it says it writes the file.
-  const RunResult again = run_afhub({"record", "-o", file, "--duration", "1"});
+  const RunResult again = run_afhub({"record", "-o", file, "--duration", "1", "--overwrite"});
   EXPECT_EQ(again.exit_code, 1) << again.err;
   EXPECT_TRUE(contains(again.err, "is being written by another process")) << again.err;
   EXPECT_FALSE(contains(again.err, "writing " + file)) << again.err;
   first->close();
   first.reset();
   EXPECT_EQ(run_afhub({"info", file}).exit_code, 0) << "the first writer's file is whole";
+  // The same command line again recorded over the finished file.
+  const std::string finished = read_file(file);
+  const RunResult repeated = run_afhub({"record", "-o", file, "--duration", "1"});
+  EXPECT_EQ(repeated.exit_code, 1) << repeated.err;
+  EXPECT_TRUE(contains(repeated.err, file + " exists: give another -o, or --overwrite"))
+      << repeated.err;
+  EXPECT_EQ(read_file(file), finished);
 
   mcap::Writer deleted(file, {});
   std::filesystem::remove(file);

@@ -67,6 +67,12 @@ void SimChannels::apply_commands(std::int64_t now_ns, bool holding) noexcept {
           ++rejected_;
           if (Notice* notice = note(channel, kAxisless, answer.pid)) set_name(notice->why, entry);
         }
+        // Looked for until said: a controller holding a joint on its limit sends it every step.
+        const Notice& beyond = channel.notices[kBeyondLimits];
+        if (!beyond.said && !beyond.pending)
+          if (const char* entry = sim_.beyond_limits_entry(channel.index, input_))
+            if (Notice* notice = note(channel, kBeyondLimits, answer.pid))
+              set_name(notice->why, entry);
         if (lockstep_ && answer.lockstep) note_lockstep_answer(channel, answer);
         channel.applied_answer_step = answer.step;
         sim_.set_input(channel.index, input_);
@@ -138,6 +144,12 @@ int SimChannels::report_events(std::FILE* out) {
           std::fprintf(out,
                        "afhub run: refused part of a command for %s: %s (from pid %u; counted "
                        "in `afhub status`; said once per body)\n",
+                       body, n.why.data(), n.pid);
+          break;
+        case kBeyondLimits:
+          std::fprintf(out,
+                       "afhub run: a command for %s holds a target it cannot reach: %s (from pid "
+                       "%u; said once per body)\n",
                        body, n.why.data(), n.pid);
           break;
         case kExpired:

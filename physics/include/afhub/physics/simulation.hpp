@@ -61,6 +61,10 @@ class Simulation {
   // (effort, velocity or position: what a full-length command carries for such a
   // joint, `afhub cmd`'s hold included, as it reads 0) asks nothing.
   const char* axisless_entry(std::size_t body, const BodyInput& input) const noexcept;
+  // nullptr when every position target of `input` is within its joint's limits; else
+  // the first one outside them, named. It is taken, and the joint driven to the nearest
+  // limit (a target typed in degrees, or in a ROS convention's other zero, looked taken).
+  const char* beyond_limits_entry(std::size_t body, const BodyInput& input) const noexcept;
 
   // An input (checked with input_problem first) becomes the body's current one;
   // its joint values go to the body's descendant joints in order (an entry for a
@@ -105,6 +109,10 @@ class Simulation {
   const Pid& joint_gains(std::size_t joint) const noexcept;
   double joint_damping(std::size_t joint) const noexcept;
   std::vector<std::string> gain_notes() const;
+  // Warnings, "file:line:col: warning: ...", for bodies of different loaded files that
+  // overlap as built (two robots loaded at one place): the first step pushes them apart
+  // with forces that can blow a robot up. The deepest few, and how many there are.
+  std::vector<std::string> overlaps_between_files() const;
   // False as soon as any body or soft-body node holds a NaN or infinite value.
   // step() never leaves one (see nan_recoveries); this checks that.
   bool all_finite() const noexcept;

@@ -22,8 +22,9 @@ struct PlayOptions {
 
 struct PlayReport {
   std::uint64_t published = 0;
-  unsigned passes = 0;  // complete passes through the range
-  std::string cut_off;  // the file was cut off there, and played up to it ("": it was not)
+  unsigned passes = 0;           // complete passes through the range
+  unsigned unmatched_globs = 0;  // --bodies globs that matched no recorded body (each said)
+  std::string cut_off;           // the file was cut off there, and played up to it ("": it was not)
 };
 
 // Plays until the range ends (each pass, with options.loop, until `keep_going()` is

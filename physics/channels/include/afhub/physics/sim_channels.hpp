@@ -179,7 +179,17 @@ class SimChannels {
   // How far ahead of this process's clock a command's stamp may be: every process
   // reads the same CLOCK_MONOTONIC, so only a read racing the publish on another core.
   static constexpr std::int64_t kFutureStampAllowanceNs = 1'000'000;
-  enum Event { kStale, kRejected, kAxisless, kExpired, kShared, kJoined, kDropped, kEventKinds };
+  enum Event {
+    kStale,
+    kRejected,
+    kAxisless,
+    kBeyondLimits,
+    kExpired,
+    kShared,
+    kJoined,
+    kDropped,
+    kEventKinds
+  };
   struct Notice {
     bool pending = false;  // noted since the last report
     bool said = false;
@@ -188,7 +198,7 @@ class SimChannels {
     std::uint32_t other_pid = 0;  // kShared: the client in the barrier
     std::uint64_t step = 0;       // kJoined: the step it joined at
     int misses = 0;               // kDropped: late steps in a row
-    std::array<char, 160> why{};  // kRejected, kAxisless: the problem
+    std::array<char, 256> why{};  // kRejected, kAxisless, kBeyondLimits: the problem
   };
   struct Channel {
     std::size_t index = 0;  // into model bodies, or soft bodies when `soft`
