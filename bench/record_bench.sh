@@ -57,7 +57,7 @@ for pair in $(seq "$pairs"); do
     ctl=$!
     recorder=""
     if [[ $recorded == 1 ]]; then
-      "$afhub" record -o "$work/scene.mcap" --commands > "$work/record.log" 2>&1 &
+      "$afhub" record --overwrite -o "$work/scene.mcap" --commands > "$work/record.log" 2>&1 &
       recorder=$!
     fi
     sleep 2  # the controller and the recorder join before the first step
@@ -97,7 +97,7 @@ sleep 2
 : > "$work/windows.txt"
 while kill -0 "$run" 2> /dev/null; do
   on=$(monotonic_ns)
-  "$afhub" record -o "$work/toggle.mcap" --commands > "$work/toggle.log" 2>&1 &
+  "$afhub" record --overwrite -o "$work/toggle.mcap" --commands > "$work/toggle.log" 2>&1 &
   recorder=$!
   sleep 2
   off=$(monotonic_ns)
@@ -153,7 +153,7 @@ echo "== a thousand bodies at 1 kHz (afhub synth, 8 joints: 1184-byte states), r
 pids+=($!)
 sleep 3
 for compression in zstd lz4 none; do
-  "$afhub" record -o "$work/thousand.mcap" --duration "$seconds" --compression "$compression" \
+  "$afhub" record --overwrite -o "$work/thousand.mcap" --duration "$seconds" --compression "$compression" \
     > "$work/thousand.log" 2>&1 &
   recorder=$!
   start=$(date +%s.%N)

@@ -62,13 +62,13 @@ int run_play(PlayCliOptions& options) {
                static_cast<unsigned long long>(report.published), report.passes,
                report.passes == 1 ? "" : "es");
   warn_if_cut_off(options.play.file, report.cut_off);
-  if (report.published == 0) {
+  if (report.published == 0 && report.passes > 0) {
     const char* where = options.play.start_s > 0.0 || options.play.end_s > 0.0
                             ? " between --start and --end"
                             : (report.cut_off.empty() ? "" : " before it was cut off");
     std::fprintf(stderr,
-                 "afhub play: error: %s holds no message%s to replay (`afhub info %s` tells what "
-                 "it holds)\n",
+                 "afhub play: error: %s holds no body or world state%s to replay (commands and "
+                 "devices are not replayed; `afhub info %s` tells what it holds)\n",
                  options.play.file.c_str(), where, options.play.file.c_str());
     return 1;
   }

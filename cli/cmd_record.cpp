@@ -1,6 +1,7 @@
 // `afhub record`: every body's state, the world's and the scene (and with options the
 // commands and devices) to an MCAP file at the rate it is published, until Ctrl-C or --duration.
 // `afhub record --recover FILE`: gives a file that was cut off its index back.
+#include <fcntl.h>
 #include <unistd.h>
 
 #include <cmath>
@@ -13,6 +14,7 @@
 #include "afhub/hub/startup_wait.hpp"
 #include "afhub/record/mcap_reader.hpp"
 #include "afhub/record/recorder.hpp"
+#include "afhub/record/recording_lock.hpp"
 #include "afhub/rt/stop_signal.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "commands.hpp"
@@ -68,6 +70,15 @@ void choose_output(RecordCliOptions& options) {
     do options.record.output = numbered(first, n++);
     while (holds_something(options.record.output));
   } else if (!options.overwrite && holds_something(options.record.output)) {
+    // Another recorder's file is said as such: --overwrite would not take it either.
+    const int fd = ::open(options.record.output.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
+    if (fd >= 0) {
+      const struct Closer {
+        int fd;
+        ~Closer() { ::close(fd); }
+      } closer{fd};
+      mcap::lock_recording(fd, options.record.output);
+    }
     throw Error(options.record.output +
                 " exists: give another -o, or --overwrite to record over it");
   }

@@ -121,7 +121,7 @@ void load_file(const std::string& path, const YAML::Node& root, Model& model, Un
     context.high_res_folder = mesh_folder(file, *h, context.dir);
   if (const YAML::Node* l = key("low resolution path"))
     context.low_res_folder = mesh_folder(file, *l, context.dir);
-  if (const YAML::Node* gravity = key("gravity")) context.gravity = file.vec3(*gravity, "gravity");
+  if (const YAML::Node* gravity = key("gravity")) context.gravity = file.gravity(*gravity);
   context.file_index = static_cast<int>(model.file_ignores_inter_collision.size());
   bool ignore_inter_collision = false;
   if (const YAML::Node* ignore = key("ignore inter-collision"))

@@ -156,6 +156,11 @@ BodySpec read_body(const FileReader& file, const YAML::Node& block, const std::s
                              yaml::number_text(value.y) + ", " + yaml::number_text(value.z) +
                              ") has one component larger than the other two together, which no "
                              "rigid body has; check the values and their order");
+    if (body.mass_kg > 0.0 && (value.x == 0.0 || value.y == 0.0 || value.z == 0.0))
+      file.warn(inertia,
+                "'inertia' has a zero component: Bullet takes it as infinite, so the body cannot "
+                "turn about that axis; give it, or leave 'inertia' out to have it computed from "
+                "the collision mesh");
     body.inertia_kgm2 = value;
   }
   if (YAML::Node offset = block["inertial offset"])
@@ -195,7 +200,7 @@ BodySpec read_body(const FileReader& file, const YAML::Node& block, const std::s
     }
   }
   if (YAML::Node gravity = block["gravity"])
-    body.gravity_mps2 = file.vec3(gravity, "gravity");
+    body.gravity_mps2 = file.gravity(gravity);
   else
     body.gravity_mps2 = context.gravity;
 

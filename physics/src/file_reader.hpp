@@ -93,6 +93,18 @@ class FileReader : public yaml::Reader {
     return v;
   }
 
+  // {x, y, z} in m/s^2. Past 10 g it is said: gravity in mm/s^2 (-9810) fell a thousand
+  // times too fast, with nothing said.
+  Vec3 gravity(const YAML::Node& node) const {
+    const Vec3 g = vec3(node, "gravity");
+    const double magnitude = std::sqrt(g.x * g.x + g.y * g.y + g.z * g.z);
+    if (magnitude > 98.1)
+      warn(node, "'gravity' is " + yaml::number_text(magnitude) +
+                     " m/s^2, more than 10 g: ADF gives it in m/s^2 (Earth's is {x: 0, y: 0, "
+                     "z: -9.81}); check its unit");
+    return g;
+  }
+
   Vec3 vec3(const YAML::Node& node, const std::string& what, const char* a = "x",
             const char* b = "y", const char* c = "z") const {
     if (!node.IsMap())

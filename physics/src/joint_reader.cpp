@@ -1,5 +1,7 @@
 // ADF joints (JOINT blocks): parent and child (resolved across files later), pivots
 // and axes, type and limits, springs, motor, feedback and the joint PID.
+#include <algorithm>
+#include <cmath>
 #include <map>
 
 #include "adf_blocks.hpp"
@@ -93,6 +95,14 @@ void read_joint_limits(const FileReader& file, const YAML::Node& limits, JointSp
     if (*joint.limit_low > *joint.limit_high)
       fail(file.at(limits), "'joint limits' has low " + limits["low"].Scalar() + " above high " +
                                 limits["high"].Scalar() + "; swap them");
+    // Past a turn each way (give or take a file's rounding of 2 pi) a revolute limit is no
+    // limit: likely degrees.
+    if (joint.type == JointType::kRevolute &&
+        std::max(std::abs(*joint.limit_low), std::abs(*joint.limit_high)) > 2.0 * M_PI * 1.01)
+      file.warn(limits, "'joint limits' {low: " + limits["low"].Scalar() +
+                            ", high: " + limits["high"].Scalar() +
+                            "} reach past a full turn: ADF gives them in radians (90 degrees is "
+                            "1.5708); check their unit");
   }
 }
 

@@ -107,7 +107,7 @@ std::string load_world(const std::string& path, Model& model) {
   std::string name_space = "/ambf/env/";
   if (YAML::Node ns = root["namespace"])
     name_space = resolve_namespace(name_space, file.text(ns, "namespace"));
-  if (YAML::Node gravity = root["gravity"]) world.gravity_mps2 = file.vec3(gravity, "gravity");
+  if (YAML::Node gravity = root["gravity"]) world.gravity_mps2 = file.gravity(gravity);
   if (YAML::Node enclosure = root["enclosure size"])
     world.enclosure_m = file.vec3(enclosure, "enclosure size", "length", "width", "height");
   if (YAML::Node iterations = root["max iterations"]) {

@@ -13,8 +13,10 @@ namespace {
 // Deeper than this is no resting contact (a robot standing on another file's floor
 // settles within a millimetre or two).
 constexpr double kOverlapM = 0.005;
-// Bounds the work for scenes of thousands of bodies, all at one point.
-constexpr std::size_t kMaxPairsTested = 20000;
+// Bounds the work for scenes of thousands of bodies, all at one point: pairs whose boxes
+// are compared, and pairs whose shapes are.
+constexpr std::size_t kMaxPairsLookedAt = 4'000'000;
+constexpr std::size_t kMaxPairsTested = 20'000;
 constexpr std::size_t kPairsShown = 3;
 
 struct DeepestContact : btCollisionWorld::ContactResultCallback {
@@ -30,6 +32,27 @@ struct Overlap {
   int a, b;
   double depth_m;
 };
+
+// A joint from one file's body to the other's, or nullptr: moving either file would not
+// part them, the joint holds them where they are.
+const JointSpec* joint_between(const Model& model, int file_a, int file_b) {
+  for (const JointSpec& joint : model.joints) {
+    const int parent = model.bodies[joint.parent].file_index;
+    const int child = model.bodies[joint.child].file_index;
+    if ((parent == file_a && child == file_b) || (parent == file_b && child == file_a))
+      return &joint;
+  }
+  return nullptr;
+}
+
+std::string advice(const Model& model, const BodySpec& a, const BodySpec& b) {
+  if (const JointSpec* joint = joint_between(model, a.file_index, b.file_index))
+    return "the joint '" + joint->name + "' (" + joint->where.str() +
+           ") holds the two files together, so placing one elsewhere would not part them: move "
+           "that joint's pivot, or keep the two bodies from colliding (`collision groups`)";
+  return "place one file elsewhere with --at FILE=x,y,z (of a file loaded twice, each --at "
+         "naming it places the next copy)";
+}
 
 }  // namespace
 
@@ -56,15 +79,19 @@ std::vector<std::string> Simulation::overlaps_between_files() const {
            model.bodies[objects.front().object->getUserIndex()].file_index;
   });
   if (one_file) return {};
-  // Sweep along x: a pair is looked at only when its boxes meet.
+  // Sweep along x: a pair is looked at only when its boxes meet along x.
   std::sort(objects.begin(), objects.end(),
             [](const Object& x, const Object& y) { return x.low.x() < y.low.x(); });
   std::vector<Overlap> found;
-  std::size_t tested = 0;
-  for (std::size_t i = 0; i < objects.size() && tested < kMaxPairsTested; ++i)
-    for (std::size_t j = i + 1; j < objects.size() && objects[j].low.x() <= objects[i].high.x() &&
-                                tested < kMaxPairsTested;
+  std::size_t looked_at = 0, tested = 0;
+  bool stopped = false;
+  for (std::size_t i = 0; i < objects.size() && !stopped; ++i)
+    for (std::size_t j = i + 1; j < objects.size() && objects[j].low.x() <= objects[i].high.x();
          ++j) {
+      if (++looked_at > kMaxPairsLookedAt || tested == kMaxPairsTested) {
+        stopped = true;
+        break;
+      }
       btCollisionObject* a = objects[i].object;
       btCollisionObject* b = objects[j].object;
       const int ia = a->getUserIndex(), ib = b->getUserIndex();
@@ -90,14 +117,18 @@ std::vector<std::string> Simulation::overlaps_between_files() const {
     const BodySpec& b = model.bodies[found[k].b];
     char depth[32];
     std::snprintf(depth, sizeof depth, "%.0f mm", found[k].depth_m * 1e3);
-    warnings.push_back(a.where.str() + ": warning: body '" + a.name + "' overlaps body '" + b.name +
-                       "' of another loaded file (" + b.where.str() + ") by " + depth +
-                       " as loaded: the first step pushes them apart, hard enough to blow a "
-                       "robot up; place one file elsewhere with --at FILE=x,y,z");
+    warnings.push_back(a.where.str() + ": warning: body '" + a.channel + "' overlaps body '" +
+                       b.channel + "' of another loaded file (" + b.where.str() + ") by " + depth +
+                       " as loaded: the first step pushes them apart, hard enough to " +
+                       "blow a robot up; " + advice(model, a, b));
   }
   if (found.size() > kPairsShown)
     warnings.push_back("warning: " + std::to_string(found.size() - kPairsShown) +
                        " more pairs of bodies of different loaded files overlap as loaded");
+  if (stopped)
+    warnings.push_back("warning: the check for overlapping files stopped after " +
+                       std::to_string(looked_at - 1) +
+                       " pairs of bodies; more of them may overlap");
   return warnings;
 }
 

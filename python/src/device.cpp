@@ -2,7 +2,10 @@
 // channels its driver process (`afhub device run`) publishes and reads.
 #include <pybind11/stl.h>
 
+#include <chrono>
 #include <cmath>
+#include <string>
+#include <string_view>
 
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/hub_loss.hpp"
@@ -19,11 +22,33 @@ py::array vec3(const Vec3& v) {
   return py::array_t<double>(3, &v.x);
 }
 
+// The devices live now, for a name that matched none: the catalog's bodies were listed.
+std::string live_devices() {
+  CatalogReader catalog;
+  catalog.wait(std::chrono::milliseconds(1000));
+  const BodyList& list = catalog.latest();
+  std::string names;
+  for (std::uint32_t i = 0; i < list.body_count; ++i)
+    if (list.bodies[i].kind == ChannelKind::kDevice)
+      names += (names.empty() ? "" : ", ") + std::string(name_of(list.bodies[i].channel));
+  return names.empty() ? "none (a driver: `afhub device run ...`)" : names;
+}
+
+BodyEntry device_entry(const std::string& name, double wait_s) {
+  try {
+    return wait_for_entry(name, wait_s);
+  } catch (const Error& error) {
+    if (!std::string_view(error.what()).starts_with("no live body is named")) throw;
+    throw Error("no live device is named '" + name + "'; live devices: " + live_devices() +
+                " (wait_s waits for a driver started later)");
+  }
+}
+
 class Device {
  public:
   Device(const std::string& name, double wait_s)
       : entry_([&] {
-          BodyEntry entry = wait_for_entry(name, wait_s);
+          BodyEntry entry = device_entry(name, wait_s);
           if (entry.info.kind != ChannelKind::kDevice)
             throw Error("'" + std::string(name_of(entry.info.channel)) +
                         "' is a body, not a device: open it with afhub.Body");

@@ -12,9 +12,9 @@
 
 #include <zstd.h>
 
+#include "afhub/record/recording_lock.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "mcap_bytes.hpp"
-#include "recording_lock.hpp"
 
 namespace afhub::mcap {
 

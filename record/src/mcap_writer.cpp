@@ -11,9 +11,9 @@
 #include <limits>
 #include <utility>
 
+#include "afhub/record/recording_lock.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "mcap_bytes.hpp"
-#include "recording_lock.hpp"
 
 namespace afhub::mcap {
 namespace {

@@ -8,6 +8,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <thread>
 
 #include "afhub/shm_layout/limits.hpp"
 #include "afhub_process.hpp"
@@ -131,13 +132,14 @@ TEST(BadInputCli, AnUnreadableModelOrADirectoryIsSaidSo) {
 
 // Two models loaded at one place were pushed apart at the first step, hard enough to blow
 // one up (the MTM over the SUJ), with nothing said at load. The overlap is said, located,
-// with the --at that mends it; placed apart, nothing is said.
-TEST(BadInputCli, ModelsLoadedOverlappingAreSaidWithTheirPlacement) {
+// with what mends it: --at, or for files a joint holds together, that joint; placed apart,
+// nothing is said.
+TEST(BadInputCli, ModelsLoadedOverlappingAreSaidWithWhatMendsIt) {
   const RunResult twice = run_afhub({"check", kArm, kArm});
   EXPECT_EQ(twice.exit_code, 0) << twice.err;
   EXPECT_TRUE(contains(twice.err, kArm +
-                                      ":54:3: warning: body 'base' overlaps body 'base1' of "
-                                      "another loaded file (" +
+                                      ":54:3: warning: body 'afhub/arm/base' overlaps body "
+                                      "'afhub/arm/base1' of another loaded file (" +
                                       kArm + ":54:3) by "))
       << twice.err;
   EXPECT_TRUE(contains(twice.err, "place one file elsewhere with --at FILE=x,y,z")) << twice.err;
@@ -149,6 +151,27 @@ TEST(BadInputCli, ModelsLoadedOverlappingAreSaidWithTheirPlacement) {
   // One robot's own links overlap at their joints: no warning.
   const RunResult alone = run_afhub({"check", kArm});
   EXPECT_FALSE(contains(alone.err, "overlap")) << alone.err;
+  // A probe on the arm's base, in a file of its own, jointed to it and reaching into its
+  // first links: moving its file would not part them.
+  afhub::testing::ModelFolder folder;
+  const std::string probe = folder.write(
+      "probe.yaml",
+      "bodies: [BODY probe]\njoints: [JOINT arm-probe]\nBODY probe:\n  name: probe\n"
+      "  mass: 0.5\n  location: {position: {x: 0, y: 0, z: 0.3}, orientation: {r: 0, p: 0, y: "
+      "0}}\n  collision shape: BOX\n  collision geometry: {x: 0.2, y: 0.2, z: 0.2}\n"
+      "JOINT arm-probe:\n  name: arm-probe\n  parent: /afhub/arm/BODY base\n"
+      "  child: BODY probe\n  parent pivot: {x: 0, y: 0, z: 0}\n"
+      "  child pivot: {x: 0, y: 0, z: 0}\n  parent axis: {x: 0, y: 0, z: 1}\n"
+      "  child axis: {x: 0, y: 0, z: 1}\n  type: fixed\n");
+  const RunResult joined = run_afhub({"check", kArm, probe});
+  EXPECT_EQ(joined.exit_code, 0) << joined.err;
+  EXPECT_TRUE(contains(joined.err, "body 'ambf/env/probe' overlaps body 'afhub/arm/link1'"))
+      << joined.err;
+  EXPECT_TRUE(contains(joined.err,
+                       "the joint 'arm-probe' (" + probe + ":10:3) holds the two files together"))
+      << joined.err;
+  EXPECT_FALSE(contains(joined.err, "--at FILE")) << joined.err;
+  EXPECT_FALSE(contains(joined.err, "overlaps body 'afhub/arm/base'")) << "jointed: no contact";
 }
 
 TEST(BadInputCli, CheckRefusesWhatRunWouldRefuse) {
@@ -307,6 +330,7 @@ TEST(BadInputCli, CmdStopsWithThePhysicsRefusalOfItsCommand) {
   }
   EXPECT_TRUE(wait_until([&] { return contains(read_file(log), "cannot reach"); },
                          std::chrono::seconds(5)));
+  std::this_thread::sleep_for(std::chrono::seconds(1));  // a second line would be out by then
   const std::string physics_said = read_file(log);
   EXPECT_TRUE(contains(physics_said,
                        "afhub run: a command for afhub/arm/base holds a target it cannot reach: "

@@ -160,6 +160,45 @@ TEST_F(BrokenFiles, InertiasNoRigidBodyHasAreAWarning) {
   EXPECT_TRUE(warnings_of("{ix: 0.5, iy: 0.5, iz: 1}").empty());
 }
 
+// Values in the wrong unit load, with a warning at them: gravity in mm/s^2 fell a
+// thousand times too fast, limits in degrees were no limits, and a zero inertia froze an
+// axis, all without a word. Each sound value beside them says nothing.
+TEST_F(BrokenFiles, ValuesInTheWrongUnitAreAWarning) {
+  const auto warnings_of = [&](const std::string& text) {
+    std::ofstream(dir_ / "model.yaml") << text;
+    return load_adf_files({(dir_ / "model.yaml").string()}).warnings;
+  };
+  const auto model = [](const std::string& gravity, const std::string& inertia,
+                        const std::string& limits) {
+    return "gravity: " + gravity +
+           "\nbodies: [BODY a, BODY b]\njoints: [JOINT j]\nBODY a:\n  name: a\n  mass: 0\n"
+           "  inertia: {ix: 0, iy: 0, iz: 0}\nBODY b:\n  name: b\n  mass: 1\n  inertia: " +
+           inertia +
+           "\nJOINT j:\n  name: j\n  parent: BODY a\n  child: BODY b\n"
+           "  parent pivot: {x: 0, y: 0, z: 0}\n  child pivot: {x: 0, y: 0, z: 0}\n"
+           "  parent axis: {x: 0, y: 0, z: 1}\n  child axis: {x: 0, y: 0, z: 1}\n"
+           "  type: revolute\n  joint limits: " +
+           limits + "\n";
+  };
+  EXPECT_TRUE(warnings_of(model("{x: 0, y: 0, z: -9.81}", "{ix: 0.1, iy: 0.1, iz: 0.1}",
+                                "{low: -6.2832, high: 6.2832}"))
+                  .empty());
+  const std::vector<std::string> wrong = warnings_of(
+      model("{x: 0, y: 0, z: -9810}", "{ix: 0.1, iy: 0, iz: 0.1}", "{low: -90, high: 90}"));
+  ASSERT_EQ(wrong.size(), 3u);
+  EXPECT_NE(wrong[0].find("model.yaml:1:10: warning: 'gravity' is 9810 m/s^2, more than 10 g"),
+            std::string::npos)
+      << wrong[0];
+  EXPECT_NE(wrong[1].find("model.yaml:11:12: warning: 'inertia' has a zero component: Bullet "
+                          "takes it as infinite"),
+            std::string::npos)
+      << wrong[1];
+  EXPECT_NE(wrong[2].find("warning: 'joint limits' {low: -90, high: 90} reach past a full turn: "
+                          "ADF gives them in radians"),
+            std::string::npos)
+      << wrong[2];
+}
+
 TEST_F(BrokenFiles, ShapeSensorSoftBodyAndActuatorProblemsAreLocatedAndExplained) {
   const std::string body = "bodies: [BODY a]\nBODY a:\n  name: a\n  mass: 1\n";
   struct Case {

@@ -506,6 +506,10 @@ def test_device_state_and_force(tmp_path):
                    'the virtual device in the catalog')
         with pytest.raises(afhub.Error, match='is a device, not a body'):
             afhub.Body('pyhand')
+        # A name matching none lists the devices (it listed the bodies).
+        with pytest.raises(afhub.Error,
+                           match=r"no live device is named 'nosuch'; live devices: device/pyhand \("):
+            afhub.Device('nosuch')
         hand = afhub.Device('pyhand')
         assert hand.read(wait_s=5)['model'] == 'virtual'
 

@@ -1023,7 +1023,8 @@ TEST(Record, PlayPublishesTheWindowAndTheBodiesChosenAtTheRateChosen) {
   std::filesystem::resize_file(cut, chunk_at + 20);
   const RunResult no_message = run_afhub({"play", cut, "--fast"}, 60s);
   EXPECT_EQ(no_message.exit_code, 1) << no_message.err;
-  EXPECT_TRUE(contains(no_message.err, "holds no")) << no_message.err;
+  EXPECT_TRUE(contains(no_message.err, "holds no body or world state before it was cut off"))
+      << no_message.err;
 
   LatestReader<BodyState> link3(body_state_channel("afhub/arm/link3"));
   LatestReader<BodyState> link2(body_state_channel("afhub/arm/link2"));
@@ -1940,7 +1941,7 @@ TEST(Record, ARecordingsFileHasOneWriterAndItsDeletionIsAnError) {
   EXPECT_NE(recover.err.find("is being written by another process"), std::string::npos)
       << recover.err;
   // A second recorder is refused before it says it writes the file.
-  const RunResult again = run_afhub({"record", "-o", file, "--duration", "1", "--overwrite"});
+  const RunResult again = run_afhub({"record", "-o", file, "--duration", "1"});
   EXPECT_EQ(again.exit_code, 1) << again.err;
   EXPECT_TRUE(contains(again.err, "is being written by another process")) << again.err;
   EXPECT_FALSE(contains(again.err, "writing " + file)) << again.err;

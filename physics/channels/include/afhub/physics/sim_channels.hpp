@@ -198,7 +198,7 @@ class SimChannels {
     std::uint32_t other_pid = 0;  // kShared: the client in the barrier
     std::uint64_t step = 0;       // kJoined: the step it joined at
     int misses = 0;               // kDropped: late steps in a row
-    std::array<char, 256> why{};  // kRejected, kAxisless, kBeyondLimits: the problem
+    std::array<char, 160> why{};  // kRejected, kAxisless, kBeyondLimits: the problem
   };
   struct Channel {
     std::size_t index = 0;  // into model bodies, or soft bodies when `soft`
