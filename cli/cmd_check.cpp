@@ -112,19 +112,22 @@ int run_check(const CheckOptions& options) {
   print_default_gains(model);
   // The gains in use need the bodies' inertias, the overlaps their shapes: the world is
   // built, not stepped.
-  std::vector<std::string> overlaps;
+  std::vector<std::string> built_warnings;
   try {
     const physics::Simulation sim(model, options.dt_s);
     const std::vector<std::string> notes = sim.gain_notes();
     std::printf("joint gains lowered for stability at dt %g s: %zu\n", options.dt_s, notes.size());
     for (const std::string& note : notes) std::printf("  %s\n", note.c_str());
-    overlaps = sim.overlaps_between_files();
-    for (const std::string& warning : overlaps) std::fprintf(stderr, "%s\n", warning.c_str());
+    built_warnings = sim.overlaps_between_files();
+    for (const std::string& warning : sim.joints_outside_limits())
+      built_warnings.push_back(warning);
+    std::fflush(stdout);  // its lines whole before these on stderr (`check ... > log 2>&1`)
+    for (const std::string& warning : built_warnings) std::fprintf(stderr, "%s\n", warning.c_str());
   } catch (const Error& error) {
     std::fprintf(stderr, "%s\n", error.what());  // a mesh that cannot be read
     return 1;
   }
-  std::printf("warnings: %zu\n", model.warnings.size() + overlaps.size());
+  std::printf("warnings: %zu\n", model.warnings.size() + built_warnings.size());
   return 0;
 }
 

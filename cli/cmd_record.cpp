@@ -61,27 +61,47 @@ bool holds_something(const std::string& path) {
          std::filesystem::file_size(path, error) > 0 && !error;
 }
 
-// A recording is not lost to a repeated command line: a file there is refused, and a
-// recorder re-attached to a new hub takes the next number no file has.
-void choose_output(RecordCliOptions& options) {
-  if (reattach_count() > 0) {
-    const std::string first = options.record.output;
-    unsigned n = reattach_count();
-    do options.record.output = numbered(first, n++);
-    while (holds_something(options.record.output));
-  } else if (!options.overwrite && holds_something(options.record.output)) {
-    // Another recorder's file is said as such: --overwrite would not take it either.
-    const int fd = ::open(options.record.output.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
-    if (fd >= 0) {
-      const struct Closer {
-        int fd;
-        ~Closer() { ::close(fd); }
-      } closer{fd};
-      mcap::lock_recording(fd, options.record.output);
-    }
-    throw Error(options.record.output +
-                " exists: give another -o, or --overwrite to record over it");
+// Throws when another recorder (or a recovery) writes `path`.
+void require_unlocked(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
+  if (fd < 0) return;
+  const struct Closer {
+    int fd;
+    ~Closer() { ::close(fd); }
+  } closer{fd};
+  mcap::lock_recording(fd, path);
+}
+
+bool taken(const std::string& path) {
+  if (holds_something(path)) return true;
+  try {
+    require_unlocked(path);
+    return false;
+  } catch (const Error&) {
+    return true;
   }
+}
+
+// A recording is not lost to a repeated command line: a file there is refused.
+void refuse_a_recording_there(const RecordCliOptions& options) {
+  const std::string& path = options.record.output;
+  if (reattach_count() > 0 || options.overwrite || !holds_something(path)) return;
+  require_unlocked(path);  // another recorder's file is said as such
+  throw Error(path + " exists: give another -o, or --overwrite to record over it");
+}
+
+// A recorder re-attached to a new hub takes the next number no file has and no other
+// recorder writes, chosen once connected (a file written while the hub was down counts).
+// A FIFO or a device is written again as it is: numbered, it became a new regular file.
+void number_a_reattached_output(RecordCliOptions& options) {
+  const std::string first = options.record.output;
+  std::error_code error;
+  if (reattach_count() == 0 ||
+      (std::filesystem::exists(first, error) && !std::filesystem::is_regular_file(first, error)))
+    return;
+  unsigned n = reattach_count();
+  do options.record.output = numbered(first, n++);
+  while (taken(options.record.output));
 }
 
 int run_recover(const std::string& path) {
@@ -125,9 +145,10 @@ int run_record(RecordCliOptions& options) {
   // A hub lost: the file is finished (the recorder's hook), and the process re-executes
   // to wait for the next hub and record into the next file: run.mcap, run.1.mcap, ...
   survive_hub_loss("afhub record");
-  choose_output(options);
+  refuse_a_recording_there(options);
   const StartupWait wait(options.wait_s);
   wait.connect_to_hub("record");
+  number_a_reattached_output(options);
 
   const bool live = isatty(STDERR_FILENO);
   double last_seconds = 0.0;

@@ -139,8 +139,8 @@ int run_run(const RunCliOptions& options) {
   }
   physics::Simulation& sim = *built;
   for (const std::string& note : sim.gain_notes()) std::fprintf(stderr, "%s\n", note.c_str());
-  for (const std::string& warning : sim.overlaps_between_files())
-    std::fprintf(stderr, "%s\n", warning.c_str());
+  for (const auto& warnings : {sim.overlaps_between_files(), sim.joints_outside_limits()})
+    for (const std::string& warning : warnings) std::fprintf(stderr, "%s\n", warning.c_str());
   if (options.reduced_coordinates)
     std::fprintf(stderr,
                  "afhub run: %zu of %zu bodies in reduced coordinates, as links of open chains "

@@ -2,6 +2,8 @@
 #include "gain_options.hpp"
 
 #include <cmath>
+#include <cstdio>
+#include <string>
 
 #include "afhub/physics/gain_overrides.hpp"
 #include "afhub/shm_layout/error.hpp"
@@ -47,6 +49,11 @@ Vec3 parse_gravity(std::string_view text) {
     if (std::abs(value) > yaml::kMaxMagnitude)
       throw Error("--gravity: " + std::string(text) +
                   " is beyond a model file's bound of 1e9 m/s^2 per axis");
+  if (std::hypot(g[0], g[1], g[2]) > 98.1)  // as a file's gravity is warned of
+    std::fprintf(stderr,
+                 "warning: --gravity %s is more than 10 g: it is in m/s^2 (Earth's is 0,0,-9.81); "
+                 "check its unit\n",
+                 std::string(text).c_str());
   return {g[0], g[1], g[2]};
 }
 

@@ -31,6 +31,10 @@ DeviceOutput ForceSafety::apply(const DeviceCommand* command, std::int64_t now_n
   const std::int64_t age_ns = command ? now_ns - command->header.publish_stamp_ns : 0;
   const bool fresh =
       age_ns + limits_.cycle_ns <= limits_.watchdog_ns && age_ns >= -limits_.watchdog_ns;
+  // A driver SIGSTOPped while its client went on writing found a fresh command on
+  // resuming, and pushed at once with the full force it had ramped to seconds before.
+  if (last_cycle_ns_ >= 0 && now_ns - last_cycle_ns_ > limits_.watchdog_ns) applying_since_ns_ = -1;
+  last_cycle_ns_ = now_ns;
   gate = stopped_           ? ForceGate::kStopping
          : !command         ? ForceGate::kNoCommand
          : !fresh           ? ForceGate::kWatchdog

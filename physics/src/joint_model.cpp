@@ -102,7 +102,7 @@ JointModel::JointModel(const JointSpec& spec, btRigidBody& parent, btRigidBody& 
   const btTransform& a = frame_in_parent_;
   const btTransform& b = frame_in_child_;
   if (reduced) {
-    limit_gains();
+    limit_gains(own_inertia());
     return;  // attach() reads it
   }
 
@@ -199,7 +199,7 @@ JointModel::JointModel(const JointSpec& spec, btRigidBody& parent, btRigidBody& 
       if (spec.cfm) constraint_->setParam(BT_CONSTRAINT_STOP_CFM, *spec.cfm, axis_param);
     }
   }
-  limit_gains();
+  limit_gains(own_inertia());
   if (spec.enable_feedback) {
     // btVector3's constructor leaves it uninitialised: before the first step the
     // reading would be whatever the memory held (a replay caught it differing).
@@ -259,16 +259,34 @@ double JointModel::coordinate_as_placed() const {
 // joint: a lower bound of what the joint really moves, so the cap errs on the
 // stable side. Velocity output goes through Bullet's motor, which the solver
 // handles implicitly: its P and D are left as written, the damping still counts.
-void JointModel::limit_gains() {
+// The smaller of the joint's two bodies' inertias about its axis (a static one does not
+// count): all a joint is sure to move, wherever the solver carries its effort.
+double JointModel::own_inertia() const {
+  const double at_child = inertia_along(child_, frame_in_child_, axis_index_, rotational());
+  const double at_parent = inertia_along(parent_, frame_in_parent_, axis_index_, rotational());
+  double inertia = at_child;
+  if (at_parent > 0 && (inertia == 0 || at_parent < inertia)) inertia = at_parent;
+  return inertia;
+}
+
+double JointModel::inertia_about_axis(const btRigidBody& body) const {
+  return inertia_along(
+      body, body.getWorldTransform().inverse() * parent_.getWorldTransform() * frame_in_parent_,
+      axis_index_, rotational());
+}
+
+void JointModel::raise_gain_cap(double driven) {
+  if (has_axis() && driven > own_inertia()) limit_gains(driven);
+}
+
+void JointModel::limit_gains(double inertia) {
+  gains_ = spec_.controller;
+  gain_note_.clear();
   damping_ = is_spring(spec_.type) ? 0.0 : spec_.damping;  // springs damp in Bullet
   if (!has_axis()) {
     damping_ = 0.0;  // no axis to damp about
     return;
   }
-  const double at_child = inertia_along(child_, frame_in_child_, axis_index_, rotational());
-  const double at_parent = inertia_along(parent_, frame_in_parent_, axis_index_, rotational());
-  double inertia = at_child;
-  if (at_parent > 0 && (inertia == 0 || at_parent < inertia)) inertia = at_parent;
   if (inertia <= 0) return;
   const double p_cap = 0.1 * inertia / (dt_s_ * dt_s_);
   const double d_cap = 0.5 * inertia / dt_s_;

@@ -79,9 +79,16 @@ class JointModel {
   double damping() const { return damping_; }  // the file's, or lower (see gains())
   // What the stability cap lowered, with the values used; empty when nothing was.
   const std::string& gain_note() const { return gain_note_; }
+  // `body`'s inertia about the joint's axis line as built (rad joints: kg m^2), or its
+  // mass for a prismatic joint: what it adds to the inertia the joint drives.
+  double inertia_about_axis(const btRigidBody& body) const;
+  // The cap taken again for `driven`, the inertia the joint drives, when that is
+  // larger than its own two bodies' (the constructor's; see limit_gains()).
+  void raise_gain_cap(double driven);
 
  private:
-  void limit_gains();
+  void limit_gains(double inertia);
+  double own_inertia() const;
   bool rotational() const;
   btVector3 world_axis() const;
   void apply_effort(double effort) noexcept;

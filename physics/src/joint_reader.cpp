@@ -114,6 +114,7 @@ PendingJoint read_joint(const FileReader& file, const YAML::Node& block,
   JointSpec& joint = pending.spec;
   read_block_head(file, block, identifier, kJointKeys, "joint", joint);
   const std::string name_space = block_namespace(file, block, context);
+  std::erase(joint.name, ' ');  // as AMBF does: scripts name 'baselink-yawlink'
   joint.channel = body_channel_name(name_space, joint.name);
   pending.from = {context.file_index, name_space};
   YAML::Node parent = file.require(block, "parent", joint.where);

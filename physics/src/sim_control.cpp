@@ -2,7 +2,10 @@
 // its joint values go to its descendant joints in order, its actuators hold or let
 // go. Before each step its Cartesian input is applied as a force, a velocity or
 // through its PID; the watchdog clears an input or holds the joints where they are.
+#include <cmath>
 #include <cstdio>
+#include <string>
+#include <vector>
 
 #include "simulation_data.hpp"
 
@@ -83,11 +86,13 @@ const char* Simulation::beyond_limits_entry(std::size_t index,
         !has_joint_axis(joint.type))
       continue;
     const double target = input.joint_values[j] - joint.joint_offset_rad;
-    // A joint held where it rests, on a limit Bullet lets it sink past a little (what
-    // `afhub cmd` sends for the joints it is not given), is no mistake.
+    // A joint held where it rests (what `afhub cmd` sends for the joints it is not
+    // given), on a limit Bullet lets it sink past a little or outside them as built, is
+    // no mistake of the sender's.
     const double slack =
         0.05 * (*joint.limit_high - *joint.limit_low) + (is_rotational(joint.type) ? 0.01 : 0.001);
     if (target >= *joint.limit_low - slack && target <= *joint.limit_high + slack) continue;
+    if (std::abs(input.joint_values[j] - d.joints[below[j]]->position()) <= slack) continue;
     std::snprintf(d.problem.data(), d.problem.size(),
                   "joint %u (%s): position target %.6g is outside its limits [%.6g, %.6g] %s, "
                   "so it is driven to the nearest",
@@ -98,6 +103,27 @@ const char* Simulation::beyond_limits_entry(std::size_t index,
     return d.problem.data();
   }
   return nullptr;
+}
+
+std::vector<std::string> Simulation::joints_outside_limits() const {
+  std::vector<std::string> warnings;
+  const Data& d = *data_;
+  for (std::size_t j = 0; j < d.joints.size(); ++j) {
+    const JointSpec& joint = d.model.joints[j];
+    if (!joint.limit_low || !has_joint_axis(joint.type)) continue;
+    const double q = d.joints[j]->position() - joint.joint_offset_rad;
+    const double slack = 1e-4 + 1e-6 * (*joint.limit_high - *joint.limit_low);
+    if (q >= *joint.limit_low - slack && q <= *joint.limit_high + slack) continue;
+    char text[256];
+    std::snprintf(
+        text, sizeof text,
+        ": warning: joint '%s' is built at %.4f %s, outside its limits [%.6g, %.6g]: "
+        "the first steps throw it within them",
+        joint.name.c_str(), d.joints[j]->position(), is_rotational(joint.type) ? "rad" : "m",
+        *joint.limit_low + joint.joint_offset_rad, *joint.limit_high + joint.joint_offset_rad);
+    warnings.push_back(joint.where.str() + text);
+  }
+  return warnings;
 }
 
 int Simulation::joint_driver(std::size_t joint) const noexcept {

@@ -231,6 +231,7 @@ struct Simulation::Data {
 
   void build_bodies();
   void build_joints();
+  void raise_gain_caps();
   void build_chains();
   void mark_joint_islands();
   void build_soft_bodies();

@@ -527,6 +527,11 @@ class UrdfReader {
                ") of which one is larger than the other two together, which no rigid body has; "
                "check ixx..izz");
     }
+    if (in.mass > 0.0 && moments.minCoeff() <= 1e-12 * largest)
+      warn(link_at(link.name).line,
+           "link '" + link.name +
+               "': its <inertia> has a zero principal moment: Bullet takes it as infinite, so "
+               "the link cannot turn about that axis; give ixx..izz");
   }
 
   void read_links() {
@@ -724,6 +729,14 @@ class UrdfReader {
       for (const auto& [name, value] :
            {std::pair{"lower>", limits->lower}, {"upper>", limits->upper}})
         require_within(value, -yaml::kMaxMagnitude, yaml::kMaxMagnitude, joint.where, what + name);
+      // Past a turn each way a revolute limit is no limit: likely degrees (as in ADF).
+      if (urdf_joint.type == urdf::Joint::REVOLUTE &&
+          std::max(std::abs(limits->lower), std::abs(limits->upper)) > 2.0 * M_PI * 1.01)
+        warn(joint.where.line, "joint '" + joint.name + "': <limit lower=\"" +
+                                   yaml::number_text(limits->lower) + "\" upper=\"" +
+                                   yaml::number_text(limits->upper) +
+                                   "\"> reaches past a full turn: URDF gives it in radians (90 "
+                                   "degrees is 1.5708); check its unit");
     }
     // URDF's effort limit, as the motor's impulse per step at the default 1 kHz step.
     if (limits && limits->effort > 0 && has_joint_axis(joint.type))

@@ -43,6 +43,17 @@ class Safety : public ::testing::Test {
   SafetyLimits limits_{10 * kMs, 0.1};
   ForceSafety safety_{spec_, limits_};
   ForceGate gate_ = ForceGate::kApplying;
+
+  // A 1 kHz driver's cycles from `from` to `to` (both included), each with a fresh
+  // `command`; the last one's output.
+  DeviceOutput cycles(DeviceCommand command, std::int64_t from, std::int64_t to) {
+    DeviceOutput out;
+    for (std::int64_t now = from; now <= to; now += kMs) {
+      command.header.publish_stamp_ns = now;
+      out = safety_.apply(&command, now, gate_);
+    }
+    return out;
+  }
 };
 
 TEST_F(Safety, NoCommandGivesNoForce) {
@@ -52,25 +63,34 @@ TEST_F(Safety, NoCommandGivesNoForce) {
 }
 
 TEST_F(Safety, ForceRampsInOverTheRampTime) {
-  std::int64_t now = 1000 * kMs;
+  const std::int64_t now = 1000 * kMs;
   const DeviceCommand command = command_at(now, {2.0, 0.0, 0.0});
   EXPECT_NEAR(safety_.apply(&command, now, gate_).wrench.force_n.x, 0.0, 1e-12);
   EXPECT_EQ(gate_, ForceGate::kApplying);
-  // Half the ramp (50 ms) later, with a fresh command: half the force.
-  now += 50 * kMs;
-  DeviceCommand fresh = command_at(now, {2.0, 0.0, 0.0});
-  EXPECT_NEAR(safety_.apply(&fresh, now, gate_).wrench.force_n.x, 1.0, 1e-9);
-  now += 60 * kMs;
-  fresh = command_at(now, {2.0, 0.0, 0.0});
-  EXPECT_NEAR(safety_.apply(&fresh, now, gate_).wrench.force_n.x, 2.0, 1e-12);
+  // Half the ramp (50 ms) later, with fresh commands: half the force.
+  EXPECT_NEAR(cycles(command, now + kMs, now + 50 * kMs).wrench.force_n.x, 1.0, 1e-9);
+  EXPECT_NEAR(cycles(command, now + 51 * kMs, now + 110 * kMs).wrench.force_n.x, 2.0, 1e-12);
+}
+
+// The driver stopped (SIGSTOP) while its client went on writing: on resuming, the command
+// is fresh, and the force it had ramped to came back in one cycle.
+TEST_F(Safety, ADriverStoppedForLongerThanTheWatchdogRampsInAgain) {
+  const DeviceCommand command = command_at(0, {2.0, 0.0, 0.0});
+  ASSERT_NEAR(cycles(command, 0, 200 * kMs).wrench.force_n.x, 2.0, 1e-12);
+  // Stopped for 2 s: fresh commands all along, none read.
+  const std::int64_t resumed = 2200 * kMs;
+  EXPECT_NEAR(cycles(command, resumed, resumed).wrench.force_n.x, 0.0, 1e-12);
+  EXPECT_EQ(gate_, ForceGate::kApplying);
+  EXPECT_NEAR(cycles(command, resumed + kMs, resumed + 50 * kMs).wrench.force_n.x, 1.0, 1e-9);
+  // A late cycle within the watchdog is no interruption.
+  const std::int64_t late = resumed + 50 * kMs + limits_.watchdog_ns;
+  EXPECT_NEAR(cycles(command, late, late).wrench.force_n.x, 2.0 * 60 / 100, 1e-9);
 }
 
 TEST_F(Safety, ClampKeepsTheDirection) {
   const std::int64_t now = 1000 * kMs;
   const DeviceCommand command = command_at(now - 200 * kMs, {100.0, -200.0, 200.0});
-  safety_.apply(&command, now - 200 * kMs, gate_);  // the ramp starts here
-  const DeviceCommand fresh = command_at(now, {100.0, -200.0, 200.0});
-  const DeviceOutput out = safety_.apply(&fresh, now, gate_);
+  const DeviceOutput out = cycles(command, now - 200 * kMs, now);  // past the ramp
   EXPECT_NEAR(length(out.wrench.force_n), spec_.max_force_n, 1e-9);
   EXPECT_NEAR(out.wrench.force_n.x / out.wrench.force_n.z, 0.5, 1e-12);
   EXPECT_NEAR(out.wrench.force_n.y / out.wrench.force_n.z, -1.0, 1e-12);
@@ -80,9 +100,7 @@ TEST_F(Safety, TorqueAndGripperAreClampedToo) {
   DeviceCommand command = command_at(0, {});
   command.wrench.torque_nm = {0.0, 3.0, 4.0};
   command.gripper_force_n = -50.0;
-  safety_.apply(&command, 0, gate_);
-  command.header.publish_stamp_ns = 200 * kMs;
-  const DeviceOutput out = safety_.apply(&command, 200 * kMs, gate_);
+  const DeviceOutput out = cycles(command, 0, 200 * kMs);  // past the ramp
   EXPECT_NEAR(length(out.wrench.torque_nm), 0.5, 1e-12);
   EXPECT_NEAR(out.gripper_force_n, -2.0, 1e-12);
 }

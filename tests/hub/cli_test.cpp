@@ -254,8 +254,7 @@ TEST(Cli, CheckNamesTheEcmsJointsOnDefaultGains) {
   RunResult given = run_afhub({"check", ecm, "--default-gains", "1000,0,10"});
   EXPECT_EQ(given.exit_code, 0) << given.err;
   EXPECT_TRUE(contains(given.out, "sets theirs): 0")) << given.out;
-  EXPECT_TRUE(contains(given.out, "'main insertion link-tool link': P 1000 lowered to"))
-      << given.out;
+  EXPECT_TRUE(contains(given.out, "'maininsertionlink-toollink': P 1000 lowered to")) << given.out;
 }
 
 TEST(Cli, LookingToolsWithoutAHubFailFastAndSayHowToStartOne) {

@@ -199,6 +199,21 @@ TEST_F(BrokenFiles, ValuesInTheWrongUnitAreAWarning) {
       << wrong[2];
 }
 
+// AMBF takes the spaces out of bodies' and joints' names: its scripts name the ECM's
+// 'base link-yaw link' as 'baselink-yawlink', which afhub refused.
+TEST_F(BrokenFiles, NamesLoseTheirSpacesAsInAmbf) {
+  std::ofstream(dir_ / "model.yaml")
+      << "bodies: [BODY a, BODY b]\njoints: [JOINT j]\nBODY a:\n  name: base link\n  mass: 0\n"
+         "BODY b:\n  name: yaw link\n  mass: 1\nJOINT j:\n  name: base link-yaw link\n"
+         "  parent: BODY a\n  child: BODY b\n  parent pivot: {x: 0, y: 0, z: 0}\n"
+         "  child pivot: {x: 0, y: 0, z: 0}\n  parent axis: {x: 0, y: 0, z: 1}\n"
+         "  child axis: {x: 0, y: 0, z: 1}\n  type: revolute\n";
+  const Model model = load_adf_files({(dir_ / "model.yaml").string()});
+  EXPECT_EQ(model.bodies[1].name, "yawlink");
+  EXPECT_EQ(model.joints[0].name, "baselink-yawlink");
+  EXPECT_EQ(model.joints[0].channel, "ambf/env/baselink-yawlink");
+}
+
 TEST_F(BrokenFiles, ShapeSensorSoftBodyAndActuatorProblemsAreLocatedAndExplained) {
   const std::string body = "bodies: [BODY a]\nBODY a:\n  name: a\n  mass: 1\n";
   struct Case {

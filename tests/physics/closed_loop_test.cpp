@@ -181,10 +181,10 @@ TEST(ClosedLoops, EcmHoldsItsLoopsUnderOneKilohertzSinusoids) {
   Simulation sim(model, 0.001);
   double tracking = 0.0;
   const double gap = run_sinusoids(sim, 0,
-                                   {{"base link-yaw link", 0.0, 0.5, 0.5},
-                                    {"yaw link-pitch back link", 0.2, 0.3, 0.4},
-                                    {"pitch end link-main insertion link", 0.1, 0.05, 0.3},
-                                    {"main insertion link-tool link", 0.0, 0.5, 0.6}},
+                                   {{"baselink-yawlink", 0.0, 0.5, 0.5},
+                                    {"yawlink-pitchbacklink", 0.2, 0.3, 0.4},
+                                    {"pitchendlink-maininsertionlink", 0.1, 0.05, 0.3},
+                                    {"maininsertionlink-toollink", 0.0, 0.5, 0.6}},
                                    10000, &tracking);
   std::printf("ECM under sinusoids, 10 s: largest pivot gap %.4f mm, tracking error %.4f\n",
               gap * 1e3, tracking);

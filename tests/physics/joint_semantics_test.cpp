@@ -332,6 +332,75 @@ TEST(JointSemantics, LoweredGainsAreSaidAndDampingCounts) {
   EXPECT_EQ(fine.joint_gains(0).p, 100.0);
 }
 
+// A joint built outside its limits (the Allegro hand's thumb, as its URDF places it) is
+// said at load; a sender holding it where it is was named for a target past its limits
+// when it commanded another joint.
+TEST(JointSemantics, AJointBuiltOutsideItsLimitsIsSaidAndItsHoldIsNoMistake) {
+  testing::ModelFolder folder;
+  const Model model = load_adf_files(
+      {folder.write("arm.yaml", arm_model("revolute", "  joint limits: {low: 0.3, high: 1.0}\n"))});
+  Simulation sim(model, 0.001);
+  const std::vector<std::string> said = sim.joints_outside_limits();
+  ASSERT_EQ(said.size(), 1u);
+  EXPECT_NE(said[0].find("arm.yaml:"), std::string::npos) << said[0];
+  EXPECT_NE(said[0].find("warning: joint 'j' is built at 0.0000 rad, outside its limits [0.3, 1]"),
+            std::string::npos)
+      << said[0];
+  EXPECT_EQ(sim.beyond_limits_entry(0, one_joint(JointMode::kPosition, sim.joint_position(0))),
+            nullptr);
+  const char* far = sim.beyond_limits_entry(0, one_joint(JointMode::kPosition, 57.0));
+  ASSERT_NE(far, nullptr);
+  EXPECT_NE(std::string(far).find("joint 0 (j): position target 57 is outside its limits [0.3, 1]"),
+            std::string::npos)
+      << far;
+  // Within them, or a velocity, nothing.
+  EXPECT_EQ(sim.beyond_limits_entry(0, one_joint(JointMode::kPosition, 0.5)), nullptr);
+  EXPECT_EQ(sim.beyond_limits_entry(0, one_joint(JointMode::kVelocity, 57.0)), nullptr);
+  const Model inside = load_adf_files({folder.write(
+      "inside.yaml", arm_model("revolute", "  joint limits: {low: -1.0, high: 1.0}\n"))});
+  EXPECT_TRUE(Simulation(inside, 0.001).joints_outside_limits().empty());
+}
+
+// A joint is capped for the inertia it drives, not for its own light link alone: a light
+// hub carrying a 2 kg weight 0.5 m out (0.5 kg m^2 about the axis) was capped for the
+// hub's 5e-5 kg m^2, P 200 lowered to 5.3 and D 20 to 0.03, and took seconds to ring
+// down where the file's gains are critically damped (the UR5's shoulder pan overshot 62 %).
+TEST(JointSemantics, AJointIsCappedForTheInertiaItDrives) {
+  testing::ModelFolder folder;
+  const Model model = load_adf_files({folder.write(
+      "hub.yaml",
+      "gravity: {x: 0, y: 0, z: 0}\n"
+      "bodies: [BODY base, BODY hub, BODY weight]\njoints: [JOINT j, JOINT held]\n"
+      "BODY base:\n  name: base\n  mass: 0\n"
+      "BODY hub:\n  name: hub\n  mass: 0.2\n  shape: box\n  geometry: {x: 0.04, y: 0.04, "
+      "z: 0.04}\n  damping: {linear: 0, angular: 0}\n"
+      "BODY weight:\n  name: weight\n  mass: 2\n  shape: box\n  geometry: {x: 0.05, y: "
+      "0.05, z: 0.05}\n  damping: {linear: 0, angular: 0}\n"
+      "  location: {position: {x: 0.5, y: 0, z: 0}}\n"
+      "JOINT j:\n  name: j\n  parent: BODY base\n  child: BODY hub\n"
+      "  parent pivot: {x: 0, y: 0, z: 0}\n  parent axis: {x: 0, y: 1, z: 0}\n"
+      "  child pivot: {x: 0, y: 0, z: 0}\n  child axis: {x: 0, y: 1, z: 0}\n  type: revolute\n"
+      "  controller: {P: 200, I: 0, D: 20}\n  max motor impulse: 1\n"
+      "JOINT held:\n  name: held\n  parent: BODY hub\n  child: BODY weight\n"
+      "  parent pivot: {x: 0.5, y: 0, z: 0}\n  parent axis: {x: 0, y: 1, z: 0}\n"
+      "  child pivot: {x: 0, y: 0, z: 0}\n  child axis: {x: 0, y: 1, z: 0}\n  type: fixed\n")});
+  Simulation sim(model, 0.001);
+  EXPECT_EQ(sim.joint_gains(0).p, 200.0);
+  EXPECT_EQ(sim.joint_gains(0).d, 20.0);
+  EXPECT_TRUE(sim.gain_notes().empty()) << sim.gain_notes().front();
+  sim.set_input(0, one_joint(JointMode::kPosition, 0.5));
+  double highest = 0.0;
+  for (int i = 0; i < 1500; ++i) {
+    sim.step();
+    highest = std::max(highest, sim.joint_position(0));
+  }
+  std::printf("step of 0.5 rad: highest %.4f rad, after 1.5 s %.4f rad\n", highest,
+              sim.joint_position(0));
+  EXPECT_LT(highest, 0.5 * 1.05) << "overshoot";
+  EXPECT_NEAR(sim.joint_position(0), 0.5, 0.01);
+  EXPECT_TRUE(sim.all_finite());
+}
+
 // A box 0.4 x 0.1 x 0.1 m turned 30 degrees about z in its mesh: its principal
 // moments are the box's, whatever the turn (the products of inertia count).
 TEST(JointSemantics, MeshInertiaIsTheFullTensorOnPrincipalAxes) {

@@ -2,7 +2,9 @@
 // command within the watchdog's timeout gives zero force; the force, torque and
 // gripper force are clamped to the device's maxima (scaled, so a clamped force
 // keeps its direction); force ramps in over ramp_s once enabled, and again after
-// every interruption. Pure: the driver loop feeds it the newest command each cycle.
+// every interruption, the driver's own included (stopped or stalled between two cycles
+// for longer than the watchdog). Pure: the driver loop feeds it the newest command each
+// cycle.
 #pragma once
 
 #include <cstdint>
@@ -35,6 +37,7 @@ class ForceSafety {
   DeviceSpec spec_;
   SafetyLimits limits_;
   std::int64_t applying_since_ns_ = -1;  // -1: not applying; the ramp starts over
+  std::int64_t last_cycle_ns_ = -1;      // the previous apply()'s now_ns; -1: none
   bool stopped_ = false;
 };
 

@@ -113,6 +113,9 @@ class Simulation {
   // overlap as built (two robots loaded at one place): the first step pushes them apart
   // with forces that can blow a robot up. The deepest few, and how many there are.
   std::vector<std::string> overlaps_between_files() const;
+  // Warnings for joints whose bodies, as built, put them outside their limits (a URDF's
+  // zero pose can be: the Allegro hand's thumb).
+  std::vector<std::string> joints_outside_limits() const;
   // False as soon as any body or soft-body node holds a NaN or infinite value.
   // step() never leaves one (see nan_recoveries); this checks that.
   bool all_finite() const noexcept;
