@@ -1,6 +1,7 @@
 // The body's physics is silent when its newest state's stamp is old or when no new one
 // came for the stale time, whichever is first; not stepping when states come but their
-// step stays; a new physics (its sequence from 1) is live at once.
+// step stays; starting until a step is seen, from the first state and after a silence (a
+// new physics, its sequence from 1, is live at its first step).
 #include "afhub/teleop/state_freshness.hpp"
 
 #include <gtest/gtest.h>
@@ -12,12 +13,14 @@ constexpr std::int64_t kOneMs = 1'000'000;
 constexpr auto kLive = PhysicsLiveness::kLive;
 constexpr auto kSilent = PhysicsLiveness::kSilent;
 constexpr auto kNotStepping = PhysicsLiveness::kNotStepping;
+constexpr auto kStarting = PhysicsLiveness::kStarting;
 
 TEST(StateFreshness, APhysicsThatStopsIsSilentOnceItsNewestStateIsOlderThanTheBound) {
   StateFreshness freshness(50 * kOneMs);
   std::int64_t now = 1000 * kOneMs;
   std::uint64_t sequence = 1;
-  for (; sequence < 100; ++sequence, now += kOneMs)
+  EXPECT_EQ(freshness.judge(sequence, now, sequence, now), kStarting);
+  for (++sequence, now += kOneMs; sequence < 100; ++sequence, now += kOneMs)
     EXPECT_EQ(freshness.judge(sequence, now, sequence, now), kLive);  // a step each cycle
   const std::int64_t last = now - kOneMs;
   --sequence;
@@ -26,14 +29,16 @@ TEST(StateFreshness, APhysicsThatStopsIsSilentOnceItsNewestStateIsOlderThanTheBo
   // A state published late but seen now is judged by its stamp.
   EXPECT_EQ(freshness.judge(sequence + 1, last + kOneMs, sequence + 1, last + 60 * kOneMs),
             kSilent);
-  // A restarted physics: sequence and step from 1 again, live at once.
-  EXPECT_EQ(freshness.judge(1, last + 61 * kOneMs, 1, last + 61 * kOneMs), kLive);
+  // A restarted physics: sequence and step from 1 again, live at its first step.
+  EXPECT_EQ(freshness.judge(1, last + 61 * kOneMs, 1, last + 61 * kOneMs), kStarting);
+  EXPECT_EQ(freshness.judge(2, last + 62 * kOneMs, 2, last + 62 * kOneMs), kLive);
 }
 
 TEST(StateFreshness, AFrozenStampFromTheFutureGoesSilentByThisLoopsClock) {
   StateFreshness freshness(50 * kOneMs);
   const std::int64_t now = 1000 * kOneMs;
   const std::int64_t future = now + 3'600'000 * kOneMs;  // an hour ahead: a faulty writer
+  EXPECT_EQ(freshness.judge(6, future, 6, now - kOneMs), kStarting);
   EXPECT_EQ(freshness.judge(7, future, 7, now), kLive);
   EXPECT_EQ(freshness.judge(7, future, 7, now + 50 * kOneMs), kLive);
   EXPECT_EQ(freshness.judge(7, future, 7, now + 51 * kOneMs), kSilent);
@@ -42,6 +47,7 @@ TEST(StateFreshness, AFrozenStampFromTheFutureGoesSilentByThisLoopsClock) {
 TEST(StateFreshness, ALoopThatWasDescheduledJudgesOnReturnNotAfterMoreCycles) {
   StateFreshness freshness(50 * kOneMs);
   const std::int64_t now = 1000 * kOneMs;
+  EXPECT_EQ(freshness.judge(4, now - kOneMs, 4, now - kOneMs), kStarting);
   EXPECT_EQ(freshness.judge(5, now, 5, now), kLive);
   // The loop did not run for 80 ms and the physics published nothing meanwhile.
   EXPECT_EQ(freshness.judge(5, now, 5, now + 80 * kOneMs), kSilent);
@@ -53,15 +59,30 @@ TEST(StateFreshness, StatesThatComeWithoutANewStepAreNotSteppingUntilOneSteps) {
   const std::uint64_t step = 300;
   // Paused at step 300: a new state every millisecond, the same step.
   std::uint64_t sequence = 1;
+  EXPECT_EQ(freshness.judge(sequence++, now, step - 1, now), kStarting);
+  now += kOneMs;
   for (int ms = 0; ms <= 50; ++ms, ++sequence, now += kOneMs)
     EXPECT_EQ(freshness.judge(sequence, now, step, now), kLive) << ms;
   EXPECT_EQ(freshness.judge(sequence, now, step, now), kNotStepping);
   // Fresh states do not make it live; silence wins over not stepping.
   EXPECT_EQ(freshness.judge(sequence + 1, now + kOneMs, step, now + kOneMs), kNotStepping);
   EXPECT_EQ(freshness.judge(sequence + 1, now + kOneMs, step, now + 60 * kOneMs), kSilent);
-  // One step (`afhub world step`, a resume): live again at once.
+  // States again after the silence, then one step (`afhub world step`, a resume): live.
   now += 61 * kOneMs;
-  EXPECT_EQ(freshness.judge(sequence + 2, now, step + 1, now), kLive);
+  EXPECT_EQ(freshness.judge(sequence + 2, now, step, now), kStarting);
+  EXPECT_EQ(freshness.judge(sequence + 3, now + kOneMs, step + 1, now + kOneMs), kLive);
+}
+
+// A teleop started against a paused world pushed for its first 50 ms: the world's first
+// states looked live until their step had stayed for the stale time.
+TEST(StateFreshness, AWorldPausedWhenFirstSeenIsNeverLive) {
+  StateFreshness freshness(50 * kOneMs);
+  std::int64_t now = 1000 * kOneMs;
+  std::uint64_t sequence = 1;
+  for (int ms = 0; ms <= 50; ++ms, ++sequence, now += kOneMs)
+    EXPECT_EQ(freshness.judge(sequence, now, 300, now), kStarting) << ms;
+  EXPECT_EQ(freshness.judge(sequence, now, 300, now), kNotStepping);
+  EXPECT_EQ(freshness.judge(sequence + 1, now + kOneMs, 301, now + kOneMs), kLive);
 }
 
 }  // namespace

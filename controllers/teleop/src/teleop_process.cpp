@@ -68,8 +68,9 @@ struct Link {
   std::int64_t last_cycle_ns{0};
   bool held{false};  // the device's samples are stale: the body is held
   bool seen_state{false};
-  PhysicsLiveness physics{PhysicsLiveness::kLive};  // not live: the device gets no force
-  std::uint64_t commands_sent{0};                   // = the sequence of our last DeviceCommand
+  PhysicsLiveness physics{PhysicsLiveness::kStarting};  // not live: the device gets no force
+  bool liveness_said{false};       // a change of `physics` was said: its return to live is too
+  std::uint64_t commands_sent{0};  // = the sequence of our last DeviceCommand
   std::uint64_t last_reported_command{0};
   std::array<std::int64_t, kInFlight> sample_stamp_of{};  // by command sequence % kInFlight
 };
@@ -103,9 +104,15 @@ void judge_body(Link& link, const BodyState* state, std::int64_t now) {
       state ? link.state_freshness.judge(state->header.sequence, state->header.publish_stamp_ns,
                                          state->header.sim_step, now)
       : link.seen_state ? PhysicsLiveness::kSilent
-                        : PhysicsLiveness::kLive;
+                        : PhysicsLiveness::kStarting;
   if (liveness == link.physics) return;
+  const PhysicsLiveness before = link.physics;
   link.physics = liveness;
+  if (liveness == PhysicsLiveness::kStarting ||
+      (liveness == PhysicsLiveness::kLive && before == PhysicsLiveness::kStarting &&
+       !link.liveness_said))
+    return;  // seen stepping from the start: nothing to say
+  link.liveness_said = true;
   const char* name = link.binding->device_name.c_str();
   const char* body = link.binding->body.c_str();
   const double stale_ms = static_cast<double>(link.stale_ns) * 1e-6;

@@ -4,6 +4,8 @@
 // from the future is no fresher): the physics stopped or died. Not stepping: states come,
 // but their step has not changed for stale_ns: the world is paused (or a lockstep physics
 // waits), and a device moving on would pull ever harder on a body that cannot follow.
+// Starting: states come but none has stepped yet since they (re)appeared; no force until
+// one does (a teleop started against a paused world pushed for its first 50 ms).
 // Unlike DeviceFreshness this does not wait for the loop's own cycles: a false alarm on a
 // busy machine costs a force ramp, a missed one pushes the operator's hand against a
 // frozen or dead simulation.
@@ -13,7 +15,7 @@
 
 namespace afhub::teleop {
 
-enum class PhysicsLiveness : std::uint8_t { kLive, kSilent, kNotStepping };
+enum class PhysicsLiveness : std::uint8_t { kLive, kSilent, kNotStepping, kStarting };
 
 class StateFreshness {
  public:
@@ -27,14 +29,21 @@ class StateFreshness {
       stamp_ns_ = stamp_ns;
       seen_ns_ = now_ns;
     }
-    if (step != step_ || stepped_ns_ < 0) {
+    if (now_ns - stamp_ns > stale_ns_ || now_ns - seen_ns_ > stale_ns_) {
+      stepped_ns_ = -1;  // back, it must be seen stepping again
+      return PhysicsLiveness::kSilent;
+    }
+    if (stepped_ns_ < 0) {
+      moved_ = false;
+      step_ = step;
+      stepped_ns_ = now_ns;
+    } else if (step != step_) {
+      moved_ = true;
       step_ = step;
       stepped_ns_ = now_ns;
     }
-    if (now_ns - stamp_ns > stale_ns_ || now_ns - seen_ns_ > stale_ns_)
-      return PhysicsLiveness::kSilent;
-    return now_ns - stepped_ns_ > stale_ns_ ? PhysicsLiveness::kNotStepping
-                                            : PhysicsLiveness::kLive;
+    if (now_ns - stepped_ns_ > stale_ns_) return PhysicsLiveness::kNotStepping;
+    return moved_ ? PhysicsLiveness::kLive : PhysicsLiveness::kStarting;
   }
 
  private:
@@ -44,6 +53,7 @@ class StateFreshness {
   std::int64_t seen_ns_{-1};  // when this loop first saw the newest state; -1: none yet
   std::uint64_t step_{0};
   std::int64_t stepped_ns_{-1};  // when this loop first saw the newest step; -1: none yet
+  bool moved_{false};            // a step seen to change since states (re)appeared
 };
 
 }  // namespace afhub::teleop
