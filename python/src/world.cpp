@@ -84,6 +84,7 @@ class World {
     command->step_count = static_cast<std::uint32_t>(steps);
     command->hold_ms = static_cast<std::uint32_t>(std::lround(hold_s * 1000.0));
     if (command->hold_ms != 0) hold_ms_ = command->hold_ms;
+    if (action == WorldAction::kResume) hold_ms_ = 0;
     // Valid while this waits, a few of the world's cycles at least (a timeout of 0 would
     // have it dropped or not by chance), an hour at most (the payload check's bound).
     const std::int64_t wait_ns = std::max(give_up - monotonic_ns(), kShortestWaitNs);
@@ -116,11 +117,26 @@ class World {
   // millisecond at most goes out from this process, the others are skipped: the world's
   // command queue holds 64, and a loop of hold() pushed other writers' pauses and
   // resumes out of it.
-  void hold() { send_unwaited(WorldAction::kNone, kRenewalSpacingNs, hold_ms_); }
+  // A hold that lapsed (the script stalled past hold_s) or was ended (a resume, a
+  // restarted physics) is said: renewing it did nothing while the world ran on.
+  void hold() {
+    if (hold_ms_ != 0)
+      if (const WorldState* now = reader_.latest(); now && !now->paused) {
+        hold_ms_ = 0;
+        throw Error(
+            "this process's held pause is over (it lapsed, the script silent for longer than "
+            "hold_s, or the world was resumed or restarted): the world runs. "
+            "World.pause(hold_s=...) holds it again");
+      }
+    send_unwaited(WorldAction::kNone, kRenewalSpacingNs, hold_ms_);
+  }
 
   // Ends this process's held pause; the world runs on unless another process holds it
   // or it was paused plainly (not waited for: the world may rightly stay paused).
-  void release() { send_unwaited(WorldAction::kRelease, 0, 0); }
+  void release() {
+    hold_ms_ = 0;
+    send_unwaited(WorldAction::kRelease, 0, 0);
+  }
 
  private:
   static constexpr double kMinHoldS = 0.01;  // ten renewal spacings, and a GIL's switch
@@ -218,7 +234,8 @@ void register_world(py::module_& module) {
       .def("hold", &World::hold,
            "Renews this process's held pause (pause(hold_s=...)); call it more often than "
            "hold_s, from any thread (one renewal a millisecond goes out from a World, the rest "
-           "are skipped).")
+           "are skipped). Raises afhub.Error once the hold is over (it lapsed, or the world was "
+           "resumed or restarted) and the world runs.")
       .def("release", &World::release,
            "Ends this process's held pause: the world runs on, unless another process "
            "holds it too or it was paused plainly (afhub world pause). Not waited for.")

@@ -67,6 +67,13 @@ class Player : public Visitor {
   // and said nothing), said once the first pass has seen them all.
   // Returns how many there were.
   unsigned say_unmatched_globs() const {
+    if (recorded_bodies_.empty()) {  // no glob could match: the file's matter, said once
+      std::fprintf(stderr,
+                   "afhub play: warning: %s holds no body state (recorded with --bodies matching "
+                   "none?): only the world's state was replayed\n",
+                   options_.file.c_str());
+      return 0;
+    }
     unsigned unmatched = 0;
     for (const std::string& glob : options_.body_globs) {
       if (std::any_of(recorded_bodies_.begin(), recorded_bodies_.end(),
@@ -278,6 +285,9 @@ PlayReport play(const PlayOptions& options, const std::function<bool()>& keep_go
   if (!(options.start_s >= 0.0) || !(options.end_s >= 0.0) ||
       (options.end_s > 0.0 && options.end_s <= options.start_s))
     throw Error("--start and --end take seconds from the recording's start, --end after --start");
+  // A replay publishes the world's state as a physics does: beside a live one of other
+  // models, the two alternated in it (its step went 1807, 2203, 1847).
+  check_world_free(world_instance(), "Stop that one to replay into this hub");
   Player player(options, keep_going);
   PlayReport report;
   do {
@@ -287,8 +297,8 @@ PlayReport play(const PlayOptions& options, const std::function<bool()>& keep_go
       if (end.stop) break;
     }
     if (++report.passes == 1) report.unmatched_globs = player.say_unmatched_globs();
-    // A file with nothing to play in the range would loop for good doing nothing.
-  } while (options.loop && player.published() > 0 && keep_going());
+    // A file with nothing to play in the range, or a --bodies typo, would loop for good.
+  } while (options.loop && player.published() > 0 && report.unmatched_globs == 0 && keep_going());
   report.published = player.published();
   report.cut_off = player.cut_off();
   return report;

@@ -131,6 +131,10 @@ def test_world_pause_step_resume_reset(physics):
     status = subprocess.run([AFHUB, 'status'], capture_output=True, text=True, timeout=30)
     assert f'(paused by pid {os.getpid()}, a held pause' in status.stdout, status.stdout + status.stderr
     wait_until(lambda: not world.state()['paused'], 10, 'the hold lapsing once not renewed')
+    # Renewed once lapsed, it said nothing while the world ran on; said once.
+    with pytest.raises(afhub.Error, match="held pause is over .it lapsed"):
+        world.hold()
+    world.hold()
     wait_until(lambda: world.sim_step() > 100, 10, 'the world ran past step 100')
     assert world.reset().startswith('reset from step')
     assert world.sim_step() < 100

@@ -1048,6 +1048,23 @@ TEST(Record, PlayPublishesTheWindowAndTheBodiesChosenAtTheRateChosen) {
   // A lower bound only: a loaded machine makes a play slower, never faster.
   EXPECT_GE(took, 760ms) << "0.2 s of the recording at a quarter of its pace";
   EXPECT_GT(link3_updates, 20u);
+
+  // --loop with a glob matching nothing replayed the world's state for good.
+  const RunResult typo_loop =
+      run_afhub({"play", file, "--fast", "--loop", "--bodies", "nope"}, 60s);
+  EXPECT_EQ(typo_loop.exit_code, 1) << typo_loop.err;
+  EXPECT_EQ(number_after(typo_loop.err, "messages in "), 1) << typo_loop.err;  // one pass
+  // Beside a live physics of other models, a replay alternated with it in the world's state.
+  ScopedProcess gripper(
+      spawn_afhub({"run", AFHUB_EXAMPLE_MODELS "/gripper.yaml"}, scene.dir("gripper.log")));
+  LatestReader<BodyState> palm(body_state_channel("afhub/gripper/palm"));
+  ASSERT_TRUE(wait_until([&] { return palm.latest() != nullptr; }, 30s))
+      << read_file(scene.dir("gripper.log"));
+  const RunResult beside = run_afhub({"play", file, "--fast"}, 60s);
+  EXPECT_EQ(beside.exit_code, 1) << beside.err;
+  EXPECT_TRUE(contains(beside.err, "another simulation (pid " + std::to_string(gripper.pid)))
+      << beside.err;
+  EXPECT_TRUE(contains(beside.err, "Stop that one to replay into this hub")) << beside.err;
 }
 
 // What copy_with_changed_commands changes in a lockstep recording of the arm.

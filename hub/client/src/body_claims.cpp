@@ -46,7 +46,7 @@ std::string taken_message(const std::string& channel, const Owner& owner) {
 
 }  // namespace
 
-void check_world_free(const std::string& world_instance) {
+void check_world_free(const std::string& world_instance, const std::string& advice) {
   // A live physics publishes its world state every step, paused too, and every 20 ms
   // while it waits for lockstep clients; a new reader finds it within the hub's
   // discovery interval (0.1 s).
@@ -63,8 +63,7 @@ void check_world_free(const std::string& world_instance) {
   throw Error("another simulation (pid " + std::to_string(pid) + ", " +
               std::to_string(state->body_count) + " bodies, at step " +
               std::to_string(state->header.sim_step) + ") runs the world '" + world_instance +
-              "': two in one world alternate in its state and both obey its commands. Run this "
-              "one in a namespace of its own (--namespace NAME), or stop that one");
+              "': two in one world alternate in its state and both obey its commands. " + advice);
 }
 
 std::size_t check_room_for_bodies(const std::vector<std::string>& channels,

@@ -67,12 +67,17 @@ void SimChannels::apply_commands(std::int64_t now_ns, bool holding) noexcept {
           ++rejected_;
           if (Notice* notice = note(channel, kAxisless, answer.pid)) set_name(notice->why, entry);
         }
-        // Looked for until said: a controller holding a joint on its limit sends it every step.
-        const Notice& beyond = channel.notices[kBeyondLimits];
-        if (!beyond.said && !beyond.pending)
-          if (const char* entry = sim_.beyond_limits_entry(channel.index, input_))
+        // Said once per sender (a controller sends its mistake every step), for the last
+        // few senders: a second controller's mistake went unsaid once the first's was.
+        auto& told = channel.told_beyond_limits;
+        if (!channel.notices[kBeyondLimits].pending &&
+            std::find(told.begin(), told.end(), answer.pid) == told.end())
+          if (const char* entry = sim_.beyond_limits_entry(channel.index, input_)) {
+            told[channel.told_beyond_limits_count++ % told.size()] = answer.pid;
+            channel.notices[kBeyondLimits].said = false;
             if (Notice* notice = note(channel, kBeyondLimits, answer.pid))
               set_name(notice->why, entry);
+          }
         if (lockstep_ && answer.lockstep) note_lockstep_answer(channel, answer);
         channel.applied_answer_step = answer.step;
         sim_.set_input(channel.index, input_);
@@ -149,7 +154,7 @@ int SimChannels::report_events(std::FILE* out) {
         case kBeyondLimits:
           std::fprintf(out,
                        "afhub run: a command for %s holds a target it cannot reach: %s (from pid "
-                       "%u; said once per body)\n",
+                       "%u; said once per sender)\n",
                        body, n.why.data(), n.pid);
           break;
         case kExpired:

@@ -24,8 +24,11 @@ std::size_t check_room_for_bodies(const std::vector<std::string>& channels, std:
 // world alternated in its state and both obeyed its commands. A publisher that died (a
 // physics restarted at once) is no owner. Reads the world state, waiting up to 0.3 s for
 // it: for a process to call when others publish bodies. Two started at the same moment
-// may both pass.
-void check_world_free(const std::string& world_instance);
+// may both pass. `advice` ends the message.
+void check_world_free(const std::string& world_instance,
+                      const std::string& advice =
+                          "Run this one in a namespace of its own "
+                          "(--namespace NAME), or stop that one");
 
 // Waits up to `timeout` for the catalog to list every channel as this process's.
 // Throws afhub::Error naming the owner of a body another process holds, the bodies a

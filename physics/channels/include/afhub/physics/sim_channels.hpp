@@ -213,6 +213,9 @@ class SimChannels {
     bool hold_on_watchdog = false;     // the watchdog holds the joints rather than zeroing efforts
     // What report_events() says about this body; noted in the loop without allocating.
     std::array<Notice, kEventKinds> notices{};
+    // The senders last told of a target beyond a joint's limits (kBeyondLimits).
+    std::array<std::uint32_t, 4> told_beyond_limits{};
+    std::uint32_t told_beyond_limits_count = 0;
     std::uint64_t commanded_steps = 0, answered_steps = 0;  // this body's timeliness
     // The commands refused for this body, and the last one's sender and reason, as its
     // state publishes them (BodyState::refused_commands).
