@@ -73,7 +73,10 @@ void require_unlocked(const std::string& path) {
 }
 
 bool taken(const std::string& path) {
-  if (holds_something(path)) return true;
+  std::error_code error;
+  if (holds_something(path) ||
+      (std::filesystem::exists(path, error) && !std::filesystem::is_regular_file(path, error)))
+    return true;  // a directory, a FIFO nobody reads: not a file to record into
   try {
     require_unlocked(path);
     return false;

@@ -275,11 +275,28 @@ double JointModel::inertia_about_axis(const btRigidBody& body) const {
       axis_index_, rotational());
 }
 
-void JointModel::raise_gain_cap(double driven) {
-  if (has_axis() && driven > own_inertia()) limit_gains(driven);
+bool JointModel::carries(const JointModel& driver) const {
+  const bool parallel = std::abs(world_axis().dot(driver.world_axis())) > 0.99;
+  switch (spec_.type) {
+    case JointType::kFixed:
+      return true;
+    case JointType::kRevolute:
+    case JointType::kContinuous:
+      return !driver.rotational() || !parallel;
+    case JointType::kPrismatic:
+      return driver.rotational() || !parallel;
+    case JointType::kP2P:
+      return !driver.rotational();
+    default:
+      return false;
+  }
 }
 
-void JointModel::limit_gains(double inertia) {
+void JointModel::raise_gain_cap(double driven) {
+  if (has_axis() && driven > own_inertia()) limit_gains(driven, true);
+}
+
+void JointModel::limit_gains(double inertia, bool driven) {
   gains_ = spec_.controller;
   gain_note_.clear();
   damping_ = is_spring(spec_.type) ? 0.0 : spec_.damping;  // springs damp in Bullet
@@ -307,7 +324,9 @@ void JointModel::limit_gains(double inertia) {
   if (!lowered.empty())
     gain_note_ = spec_.where.str() + ": note: joint '" + spec_.name + "': " + lowered +
                  " to be stable at dt " + number(dt_s_) + " s: it moves " + number(inertia) +
-                 (rotational() ? " kg m^2" : " kg") + ", so P <= 0.1 I/dt^2 = " + number(p_cap) +
+                 (rotational() ? " kg m^2" : " kg") +
+                 (driven ? " (of the bodies it drives, for any pose)" : "") +
+                 ", so P <= 0.1 I/dt^2 = " + number(p_cap) +
                  " and D + damping <= 0.5 I/dt = " + number(d_cap);
 }
 

@@ -171,12 +171,14 @@ void Simulation::Data::build_joints() {
 // A joint's effort moves every body on its side of it, not only the link it joins: the
 // UR5's shoulder pan was capped for its own link's 0.0067 kg m^2 while it swings the arm,
 // and rang, 62 % over its target, for 5 s. With the direct solve (its islands solved
-// exactly) the effort reaches them all in the step, so the cap is taken for the
-// inertia the joint drives: each side's bodies about its axis, as built, the two sides
-// combined as one turning against the other (a side held by a static body does not
-// turn). Taken at a quarter of it, for poses that bring the bodies nearer the axis (the
-// cap's own margins then hold to 16 times less). A joint in a closed loop, a chain's
-// (reduced coordinates) or beside the iterative solver keeps its own bodies' cap.
+// exactly) the effort reaches in the step every body the joints between carry that way
+// (JointModel::carries), so the cap is taken for that inertia: each side's bodies about
+// the joint's axis, as built, the two sides combined as one turning against the other (a
+// side held by a static body does not turn). Taken at a quarter of it, for poses that
+// bring the bodies nearer the axis (the cap's own margins then hold to 16 times less).
+// A joint in a closed loop, a chain's (reduced coordinates) or beside the iterative
+// solver keeps its own bodies' cap. (An island past the direct solve's rows, a grasp's
+// many contacts say, is iterated with the raised gains: a simple case held in a trial.)
 void Simulation::Data::raise_gain_caps() {
   if (!model.world.direct_solve) return;
   constexpr double kPoseMargin = 4.0;
@@ -206,7 +208,7 @@ void Simulation::Data::raise_gain_caps() {
         if (!bodies[b].dynamic) return kHeld;
         inertia += joint.inertia_about_axis(*bodies[b].body);
         for (std::size_t k : joints_of[b]) {
-          if (k == j) continue;
+          if (k == j || !joints[k]->carries(joint)) continue;
           const int next =
               model.joints[k].parent == b ? model.joints[k].child : model.joints[k].parent;
           if (seen[next] == mark) continue;

@@ -121,7 +121,9 @@ class World {
   // restarted physics) is said: renewing it did nothing while the world ran on.
   void hold() {
     if (hold_ms_ != 0)
-      if (const WorldState* now = reader_.latest(); now && !now->paused) {
+      // Not paused while a step(n) runs: the hold is over once nobody's pause is in force.
+      if (const WorldState* now = reader_.latest();
+          now && !now->paused && now->paused_by_pid == 0) {
         hold_ms_ = 0;
         throw Error(
             "this process's held pause is over (it lapsed, the script silent for longer than "

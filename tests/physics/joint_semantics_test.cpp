@@ -367,23 +367,27 @@ TEST(JointSemantics, AJointBuiltOutsideItsLimitsIsSaidAndItsHoldIsNoMistake) {
 // down where the file's gains are critically damped (the UR5's shoulder pan overshot 62 %).
 TEST(JointSemantics, AJointIsCappedForTheInertiaItDrives) {
   testing::ModelFolder folder;
-  const Model model = load_adf_files({folder.write(
-      "hub.yaml",
-      "gravity: {x: 0, y: 0, z: 0}\n"
-      "bodies: [BODY base, BODY hub, BODY weight]\njoints: [JOINT j, JOINT held]\n"
-      "BODY base:\n  name: base\n  mass: 0\n"
-      "BODY hub:\n  name: hub\n  mass: 0.2\n  shape: box\n  geometry: {x: 0.04, y: 0.04, "
-      "z: 0.04}\n  damping: {linear: 0, angular: 0}\n"
-      "BODY weight:\n  name: weight\n  mass: 2\n  shape: box\n  geometry: {x: 0.05, y: "
-      "0.05, z: 0.05}\n  damping: {linear: 0, angular: 0}\n"
-      "  location: {position: {x: 0.5, y: 0, z: 0}}\n"
-      "JOINT j:\n  name: j\n  parent: BODY base\n  child: BODY hub\n"
-      "  parent pivot: {x: 0, y: 0, z: 0}\n  parent axis: {x: 0, y: 1, z: 0}\n"
-      "  child pivot: {x: 0, y: 0, z: 0}\n  child axis: {x: 0, y: 1, z: 0}\n  type: revolute\n"
-      "  controller: {P: 200, I: 0, D: 20}\n  max motor impulse: 1\n"
-      "JOINT held:\n  name: held\n  parent: BODY hub\n  child: BODY weight\n"
-      "  parent pivot: {x: 0.5, y: 0, z: 0}\n  parent axis: {x: 0, y: 1, z: 0}\n"
-      "  child pivot: {x: 0, y: 0, z: 0}\n  child axis: {x: 0, y: 1, z: 0}\n  type: fixed\n")});
+  const auto hub_model = [&](const std::string& held_type) {
+    return load_adf_files({folder.write(
+        "hub_" + held_type + ".yaml",
+        "gravity: {x: 0, y: 0, z: 0}\n"
+        "bodies: [BODY base, BODY hub, BODY weight]\njoints: [JOINT j, JOINT held]\n"
+        "BODY base:\n  name: base\n  mass: 0\n"
+        "BODY hub:\n  name: hub\n  mass: 0.2\n  shape: box\n  geometry: {x: 0.04, y: 0.04, "
+        "z: 0.04}\n  damping: {linear: 0, angular: 0}\n"
+        "BODY weight:\n  name: weight\n  mass: 2\n  shape: box\n  geometry: {x: 0.05, y: "
+        "0.05, z: 0.05}\n  damping: {linear: 0, angular: 0}\n"
+        "  location: {position: {x: 0.5, y: 0, z: 0}}\n"
+        "JOINT j:\n  name: j\n  parent: BODY base\n  child: BODY hub\n"
+        "  parent pivot: {x: 0, y: 0, z: 0}\n  parent axis: {x: 0, y: 1, z: 0}\n"
+        "  child pivot: {x: 0, y: 0, z: 0}\n  child axis: {x: 0, y: 1, z: 0}\n  type: revolute\n"
+        "  controller: {P: 200, I: 0, D: 20}\n  max motor impulse: 1\n"
+        "JOINT held:\n  name: held\n  parent: BODY hub\n  child: BODY weight\n"
+        "  parent pivot: {x: 0.5, y: 0, z: 0}\n  parent axis: {x: 0, y: 1, z: 0}\n"
+        "  child pivot: {x: 0, y: 0, z: 0}\n  child axis: {x: 0, y: 1, z: 0}\n  type: " +
+            held_type + "\n")});
+  };
+  const Model model = hub_model("fixed");
   Simulation sim(model, 0.001);
   EXPECT_EQ(sim.joint_gains(0).p, 200.0);
   EXPECT_EQ(sim.joint_gains(0).d, 20.0);
@@ -399,6 +403,14 @@ TEST(JointSemantics, AJointIsCappedForTheInertiaItDrives) {
   EXPECT_LT(highest, 0.5 * 1.05) << "overshoot";
   EXPECT_NEAR(sim.joint_position(0), 0.5, 0.01);
   EXPECT_TRUE(sim.all_finite());
+  // Hinged on an axis parallel to j's, the weight turns freely within a step: j moves the
+  // hub alone, and keeps the hub's cap.
+  const Model hinged = hub_model("revolute");
+  Simulation free(hinged, 0.001);
+  EXPECT_LT(free.joint_gains(0).p, 6.0);
+  ASSERT_FALSE(free.gain_notes().empty());
+  EXPECT_EQ(free.gain_notes().front().find("of the bodies it drives"), std::string::npos)
+      << free.gain_notes().front();
 }
 
 // A box 0.4 x 0.1 x 0.1 m turned 30 degrees about z in its mesh: its principal
