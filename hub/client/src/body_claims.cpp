@@ -47,9 +47,8 @@ std::string taken_message(const std::string& channel, const Owner& owner) {
 }  // namespace
 
 void check_world_free(const std::string& world_instance, const std::string& advice) {
-  // A live physics publishes its world state every step, paused too, and every 20 ms
-  // while it waits for lockstep clients; a new reader finds it within the hub's
-  // discovery interval (0.1 s).
+  // A new reader finds a live physics' world state within the hub's discovery interval
+  // (0.1 s).
   LatestReader<WorldState> reader(
       {std::string(kService), world_instance, std::string(kStateEvent)});
   const WorldState* state = nullptr;
@@ -57,12 +56,25 @@ void check_world_free(const std::string& world_instance, const std::string& advi
        !(state = reader.latest()) && monotonic_ns() < give_up;)
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
   if (!state) return;
-  const std::uint32_t pid = state->header.publisher_pid;
-  const bool fresh = monotonic_ns() - state->header.publish_stamp_ns < 1'000'000'000;
-  if (!fresh || pid == static_cast<std::uint32_t>(getpid()) || !process_exists(pid)) return;
+  // Copied before it is judged: another process writes it.
+  const WorldState first = *state;
+  const std::uint32_t pid = first.header.publisher_pid;
+  if (pid == static_cast<std::uint32_t>(getpid()) || !process_exists(pid)) return;
+  // Its owner still publishing: a newer state within 0.2 s (a live physics publishes every
+  // step, paused too, and every 20 ms while it waits for lockstep clients). The last state
+  // of a simulation that just ended stays readable, and its process may live on (a test
+  // that ran one in its own process, then started `afhub run`, was refused).
+  for (const std::int64_t give_up = monotonic_ns() + 200'000'000;
+       (state = reader.latest()) &&
+       state->header.publish_stamp_ns == first.header.publish_stamp_ns;) {
+    if (monotonic_ns() > give_up) return;
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  if (!state) return;
+  const WorldState now = *state;
   throw Error("another simulation (pid " + std::to_string(pid) + ", " +
-              std::to_string(state->body_count) + " bodies, at step " +
-              std::to_string(state->header.sim_step) + ") runs the world '" + world_instance +
+              std::to_string(now.body_count) + " bodies, at step " +
+              std::to_string(now.header.sim_step) + ") runs the world '" + world_instance +
               "': two in one world alternate in its state and both obey its commands. " + advice);
 }
 

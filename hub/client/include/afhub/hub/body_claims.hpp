@@ -22,8 +22,9 @@ std::size_t check_room_for_bodies(const std::vector<std::string>& channels, std:
 // Throws afhub::Error naming the simulation when another live process publishes the
 // state of world `world_instance` (world_instance(namespace)): two simulations of one
 // world alternated in its state and both obeyed its commands. A publisher that died (a
-// physics restarted at once) is no owner. Reads the world state, waiting up to 0.3 s for
-// it: for a process to call when others publish bodies. Two started at the same moment
+// physics restarted at once) or stopped publishing is no owner. Reads the world state,
+// waiting up to 0.3 s for it and 0.2 s for a newer one: for a process to call when others
+// publish bodies. Two started at the same moment
 // may both pass. `advice` ends the message.
 void check_world_free(const std::string& world_instance,
                       const std::string& advice =
