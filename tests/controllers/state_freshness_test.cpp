@@ -1,7 +1,8 @@
 // The body's physics is silent when its newest state's stamp is old or when no new one
 // came for the stale time, whichever is first; not stepping when states come but their
 // step stays; starting until a step is seen, from the first state and after a silence (a
-// new physics, its sequence from 1, is live at its first step).
+// new physics, its sequence from 1, is live at its first step); restarted, off for a
+// while, when its sequence or step goes back with no silence between.
 #include "afhub/teleop/state_freshness.hpp"
 
 #include <gtest/gtest.h>
@@ -83,6 +84,46 @@ TEST(StateFreshness, AWorldPausedWhenFirstSeenIsNeverLive) {
     EXPECT_EQ(freshness.judge(sequence, now, 300, now), kStarting) << ms;
   EXPECT_EQ(freshness.judge(sequence, now, 300, now), kNotStepping);
   EXPECT_EQ(freshness.judge(sequence + 1, now + kOneMs, 301, now + kOneMs), kLive);
+}
+
+// A physics restarted within the stale time (its sequence from 1 again) or a world reset
+// (its step from 0 again) put the body back at its initial pose while the states never
+// stopped: the device got the full force of the new pose error at once, with no ramp.
+TEST(StateFreshness, StatesThatGoBackWithoutASilenceTakeTheForceOffBeforeItStepsAgain) {
+  for (const bool reset : {false, true}) {
+    SCOPED_TRACE(reset ? "world reset" : "physics restarted");
+    StateFreshness freshness(50 * kOneMs);
+    std::int64_t now = 1000 * kOneMs;
+    std::uint64_t sequence = 1;
+    std::uint64_t step = 1;
+    EXPECT_EQ(freshness.judge(sequence++, now, step++, now), kStarting);
+    for (int ms = 0; ms < 100; ++ms) {
+      now += kOneMs;
+      EXPECT_EQ(freshness.judge(sequence++, now, step++, now), kLive);
+    }
+    if (!reset) sequence = 1;
+    step = 0;
+    // Stepping every millisecond from the start: off for kRestartOffNs, then live.
+    const std::int64_t back = now + kOneMs;
+    for (now = back; now - back < kRestartOffNs; now += kOneMs)
+      EXPECT_EQ(freshness.judge(sequence++, now, step++, now), PhysicsLiveness::kRestarted)
+          << (now - back) / kOneMs << " ms after";
+    EXPECT_EQ(freshness.judge(sequence++, now, step++, now), kLive);
+  }
+}
+
+// Back, then no step (reset while paused): off until it steps, however long that takes.
+TEST(StateFreshness, AWorldResetWhilePausedStaysOffUntilItSteps) {
+  StateFreshness freshness(50 * kOneMs);
+  std::int64_t now = 1000 * kOneMs;
+  EXPECT_EQ(freshness.judge(1, now, 500, now), kStarting);
+  EXPECT_EQ(freshness.judge(2, now + kOneMs, 501, now + kOneMs), kLive);
+  now += 2 * kOneMs;
+  std::uint64_t sequence = 3;
+  for (int ms = 0; ms <= 50; ++ms, now += kOneMs)
+    EXPECT_EQ(freshness.judge(sequence++, now, 0, now), PhysicsLiveness::kRestarted) << ms;
+  EXPECT_EQ(freshness.judge(sequence++, now, 0, now), kNotStepping);
+  EXPECT_EQ(freshness.judge(sequence++, now + kOneMs, 1, now + kOneMs), kLive);
 }
 
 }  // namespace

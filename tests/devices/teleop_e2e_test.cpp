@@ -539,5 +539,39 @@ TEST(TeleopEndToEnd, ADeviceNeverPushesOnAStoppedOrDeadPhysics) {
   EXPECT_LE(killed.to_zero_ms, kStaleMs + kWatchdogMs) << teleop.logs();
 }
 
+// A world reset while the device pushes into the floor: the palm is back at its start,
+// 0.2 m from where the device holds it, and its states never stopped. The force went on
+// at once with the whole new error behind it; now teleop takes it off until the world
+// steps again (at least kRestartOffNs), and the driver ramps it in from zero. The same
+// holds for a physics restarted within the stale time (its sequence from 1 again).
+TEST(TeleopEndToEnd, AWorldResetWhileTheDevicePushesRampsTheForceInAgain) {
+  afhub::testing::ModelFolder scripts;
+  const std::string csv = scripts.write("push.csv", "0,0,0,0\n1,0,0,-0.2\n");
+  Teleop teleop("reset", {"--trajectory", csv});
+  ASSERT_TRUE(teleop.restart_driver_once_running()) << teleop.logs();
+  ASSERT_TRUE(wait_until([&] { return pushing_up(teleop); }, 20s)) << teleop.logs();
+
+  ASSERT_EQ(run_afhub({"world", "reset"}).exit_code, 0);
+  bool off = false;
+  double first_force = -1.0;
+  ASSERT_TRUE(wait_until(
+      [&] {
+        const DeviceState* d = teleop.new_device_state();
+        if (!d) return false;
+        if (d->gate == ForceGate::kDisabled) off = true;
+        if (off && d->gate == ForceGate::kApplying)
+          first_force =
+              std::hypot(d->applied.force_n.x, d->applied.force_n.y, d->applied.force_n.z);
+        return first_force >= 0.0;
+      },
+      10s))
+      << teleop.logs();
+  ASSERT_TRUE(wait_until([&] { return pushing_up(teleop); }, 20s)) << teleop.logs();
+  std::printf("world reset while pushing: first force after it %.3f N\n", first_force);
+  EXPECT_LT(first_force, 0.5) << "the force came back at once, not ramped in";
+  EXPECT_EQ(occurrences(teleop.teleop_log(), "afhub/gripper/palm's states went back to step"), 1)
+      << teleop.teleop_log();
+}
+
 }  // namespace
 }  // namespace afhub::test

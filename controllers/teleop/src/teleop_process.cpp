@@ -121,6 +121,12 @@ void judge_body(Link& link, const BodyState* state, std::int64_t now) {
                  "afhub teleop: no state from %s for %.0f ms (its physics stopped or died?): "
                  "no force on device/%s until states come back\n",
                  body, stale_ms, name);
+  else if (liveness == PhysicsLiveness::kRestarted)
+    std::fprintf(stderr,
+                 "afhub teleop: %s's states went back to step %llu (its physics restarted or "
+                 "its world was reset): no force on device/%s until it steps, then the force "
+                 "ramps in\n",
+                 body, static_cast<unsigned long long>(state->header.sim_step), name);
   else if (liveness == PhysicsLiveness::kNotStepping)
     std::fprintf(stderr,
                  "afhub teleop: %s has not moved a step for %.0f ms (its world is paused?): no "

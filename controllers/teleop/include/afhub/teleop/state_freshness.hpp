@@ -6,6 +6,11 @@
 // waits), and a device moving on would pull ever harder on a body that cannot follow.
 // Starting: states come but none has stepped yet since they (re)appeared; no force until
 // one does (a teleop started against a paused world pushed for its first 50 ms).
+// Restarted: the states' sequence or step went back with no silence between: a new
+// physics took the channel (restarted within the stale time) or the world was reset, and
+// the body is back at its initial pose, far from where the device holds it. No force for
+// at least kRestartOffNs and until a step is seen, so that the driver sees the force off
+// and ramps it in again (before, the full force of the old pose error came at once).
 // Unlike DeviceFreshness this does not wait for the loop's own cycles: a false alarm on a
 // busy machine costs a force ramp, a missed one pushes the operator's hand against a
 // frozen or dead simulation.
@@ -15,7 +20,11 @@
 
 namespace afhub::teleop {
 
-enum class PhysicsLiveness : std::uint8_t { kLive, kSilent, kNotStepping, kStarting };
+enum class PhysicsLiveness : std::uint8_t { kLive, kSilent, kNotStepping, kStarting, kRestarted };
+
+// Long enough for a driver polling at 100 Hz or faster to see the force off at least
+// once (its ramp starts over only then), short against an operator's reaction.
+inline constexpr std::int64_t kRestartOffNs = 20'000'000;
 
 class StateFreshness {
  public:
@@ -25,12 +34,17 @@ class StateFreshness {
   PhysicsLiveness judge(std::uint64_t sequence, std::int64_t stamp_ns, std::uint64_t step,
                         std::int64_t now_ns) noexcept {
     if (sequence != sequence_ || stamp_ns != stamp_ns_ || seen_ns_ < 0) {
+      if (stepped_ns_ >= 0 && (sequence < sequence_ || step < step_)) {  // no silence between
+        restarted_ns_ = now_ns;
+        stepped_ns_ = -1;
+      }
       sequence_ = sequence;
       stamp_ns_ = stamp_ns;
       seen_ns_ = now_ns;
     }
     if (now_ns - stamp_ns > stale_ns_ || now_ns - seen_ns_ > stale_ns_) {
       stepped_ns_ = -1;  // back, it must be seen stepping again
+      restarted_ns_ = -1;  // the silence took the force off
       return PhysicsLiveness::kSilent;
     }
     if (stepped_ns_ < 0) {
@@ -43,6 +57,10 @@ class StateFreshness {
       stepped_ns_ = now_ns;
     }
     if (now_ns - stepped_ns_ > stale_ns_) return PhysicsLiveness::kNotStepping;
+    if (restarted_ns_ >= 0) {
+      if (moved_ && now_ns - restarted_ns_ >= kRestartOffNs) restarted_ns_ = -1;
+      else return PhysicsLiveness::kRestarted;
+    }
     return moved_ ? PhysicsLiveness::kLive : PhysicsLiveness::kStarting;
   }
 
@@ -54,6 +72,7 @@ class StateFreshness {
   std::uint64_t step_{0};
   std::int64_t stepped_ns_{-1};  // when this loop first saw the newest step; -1: none yet
   bool moved_{false};            // a step seen to change since states (re)appeared
+  std::int64_t restarted_ns_{-1};  // when the sequence or step went back; -1: not since
 };
 
 }  // namespace afhub::teleop
