@@ -90,7 +90,7 @@ int run_check(const CheckOptions& options) {
   }
   std::string gravity_source = options.world_file.empty() ? "default" : options.world_file;
   if (!options.gravity.empty()) {
-    physics::override_gravity(model, parse_gravity(options.gravity));
+    physics::override_gravity(model, parse_gravity(options.gravity, model.warnings));
     gravity_source = "--gravity";
   }
   apply_gain_options(model, options.gains);  // refused before the report, as gravity

@@ -121,7 +121,9 @@ int run_run(const RunCliOptions& options) {
   apply_gain_options(model, options.gains);  // names as the files give them: before --namespace
   if (!options.name_space.empty()) physics::prefix_channels(model, options.name_space);
   if (!options.gravity.empty()) {
-    physics::override_gravity(model, parse_gravity(options.gravity));
+    std::vector<std::string> warnings;
+    physics::override_gravity(model, parse_gravity(options.gravity, warnings));
+    for (const std::string& warning : warnings) std::fprintf(stderr, "%s\n", warning.c_str());
   }
   model.world.reduced_coordinates = options.reduced_coordinates;
 

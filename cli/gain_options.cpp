@@ -43,17 +43,15 @@ physics::Pid parse_gains(std::string_view text, std::string_view option) {
   return {numbers[0], numbers[1], numbers[2]};
 }
 
-Vec3 parse_gravity(std::string_view text) {
+Vec3 parse_gravity(std::string_view text, std::vector<std::string>& warnings) {
   const std::vector<double> g = parse_numbers(text, "--gravity", 3);
   for (const double value : g)
     if (std::abs(value) > yaml::kMaxMagnitude)
       throw Error("--gravity: " + std::string(text) +
                   " is beyond a model file's bound of 1e9 m/s^2 per axis");
-  if (std::hypot(g[0], g[1], g[2]) > 98.1)  // as a file's gravity is warned of
-    std::fprintf(stderr,
-                 "warning: --gravity %s is more than 10 g: it is in m/s^2 (Earth's is 0,0,-9.81); "
-                 "check its unit\n",
-                 std::string(text).c_str());
+  if (std::hypot(g[0], g[1], g[2]) > 98.1)
+    warnings.push_back("warning: --gravity " + std::string(text) +
+                       " is more than 10 g: it is in m/s^2 (Earth's is 0,0,-9.81); check its unit");
   return {g[0], g[1], g[2]};
 }
 

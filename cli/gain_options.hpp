@@ -27,7 +27,8 @@ physics::Pid parse_gains(std::string_view text, std::string_view option);
 // --gains in order (a later one wins over an earlier one and over the file's).
 void apply_gain_options(physics::Model& model, const GainOptions& options);
 
-// `--gravity x,y,z` in m/s^2, each within a model file's bound (1e9).
-Vec3 parse_gravity(std::string_view text);
+// `--gravity x,y,z` in m/s^2, each within a model file's bound (1e9); more than 10 g is
+// added to `warnings` (as a file's gravity is warned of).
+Vec3 parse_gravity(std::string_view text, std::vector<std::string>& warnings);
 
 }  // namespace afhub::cli

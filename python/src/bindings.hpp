@@ -37,8 +37,8 @@ Error hub_gone();
 
 // The catalog entry of the body or device `name`, waiting up to `wait_s` for it to
 // come (connecting first); afhub::Error when none comes, or hub_gone() when the hub
-// went away meanwhile.
-BodyEntry wait_for_entry(const std::string& name, double wait_s);
+// went away meanwhile. `kind` ("body", "device") names what it waits for.
+BodyEntry wait_for_entry(const std::string& name, double wait_s, const char* kind);
 
 // Exactly `size` finite numbers from any Python sequence or array; ValueError naming
 // `what` otherwise.

@@ -51,7 +51,7 @@ py::object State::joint_column(std::size_t member) const {
 
 Body::Body(const std::string& name, double wait_s)
     : entry_([&] {
-        BodyEntry entry = wait_for_entry(name, wait_s);
+        BodyEntry entry = wait_for_entry(name, wait_s, "body");
         if (entry.info.kind == ChannelKind::kDevice)
           throw Error("'" + std::string(name_of(entry.info.channel)) +
                       "' is a device, not a body: open it with afhub.Device");

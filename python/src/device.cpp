@@ -36,7 +36,7 @@ std::string live_devices() {
 
 BodyEntry device_entry(const std::string& name, double wait_s) {
   try {
-    return wait_for_entry(name, wait_s);
+    return wait_for_entry(name, wait_s, "device");
   } catch (const Error& error) {
     if (!std::string_view(error.what()).starts_with("no live body is named")) throw;
     throw Error("no live device is named '" + name + "'; live devices: " + live_devices() +

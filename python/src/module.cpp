@@ -52,13 +52,13 @@ void require_no_nul(const std::string& name) {
                           std::to_string(name.find('\0')));
 }
 
-BodyEntry wait_for_entry(const std::string& name, double wait_s) {
+BodyEntry wait_for_entry(const std::string& name, double wait_s, const char* kind) {
   require_no_nul(name);
   ensure_connected();
   const std::int64_t give_up = deadline_after(wait_s, "wait_s");
   try {
     py::gil_scoped_release release;
-    return wait_for_body(name, "afhub python", give_up, "wait longer with wait_s");
+    return wait_for_body(name, "afhub python", give_up, "wait longer with wait_s", kind);
   } catch (const Error&) {
     SignalWatch().raise_if_pending();  // Ctrl-C ended the wait
     require_hub();                     // what the catalog of a hub gone says is beside the point

@@ -40,15 +40,25 @@ Writer::Writer(const std::string& path, Options options)
   // Emptied once locked: another recorder's file is not cut under it.
   fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_CLOEXEC, 0644);
   if (fd_ < 0) throw Error("cannot create " + path + ": " + std::strerror(errno));
+  bool emptied = false;  // a regular file of ours, now empty
+  struct stat info {};
   try {
     lock_recording(fd_, path);
-    struct stat info {};
-    if (::fstat(fd_, &info) == 0 && S_ISREG(info.st_mode) && ::ftruncate(fd_, 0) != 0)
-      throw Error("cannot empty " + path + ": " + std::strerror(errno));
+    if (::fstat(fd_, &info) == 0 && S_ISREG(info.st_mode)) {
+      if (::ftruncate(fd_, 0) != 0)
+        throw Error("cannot empty " + path + ": " + std::strerror(errno));
+      emptied = true;
+    }
     pending_.insert(pending_.end(), std::begin(kMagic), std::end(kMagic));
     RecordBuilder(pending_, kHeader).str(options_.profile).str(options_.library);
     write_out();   // from now on the file reads as MCAP, cut off
   } catch (...) {  // no destructor runs for an object that was never made
+    // A file that could not take even its header (a full disk) is no recording: it
+    // was left behind empty, and a later look took it for one cut off at its start.
+    struct stat now {};
+    if (emptied && ::stat(path.c_str(), &now) == 0 && now.st_ino == info.st_ino &&
+        now.st_dev == info.st_dev)
+      ::unlink(path.c_str());
     ::close(fd_);
     throw;
   }

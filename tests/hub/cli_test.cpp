@@ -192,6 +192,16 @@ TEST(Cli, CheckAndRunSayTheGravityAndTheLoweredGains) {
   RunResult bad = run_afhub({"check", kuka, "--gravity", "0,-9.81"});
   EXPECT_EQ(bad.exit_code, 1);
   EXPECT_TRUE(contains(bad.err, "--gravity")) << bad.err;
+  // Gravity in mm/s^2 is warned of, and counted in the report's total.
+  RunResult wrong_unit = run_afhub({"check", kuka, "--gravity", "0,0,-9810"});
+  EXPECT_EQ(wrong_unit.exit_code, 0) << wrong_unit.err;
+  EXPECT_TRUE(contains(wrong_unit.err, "warning: --gravity 0,0,-9810 is more than 10 g"))
+      << wrong_unit.err;
+  const auto warnings = [](const std::string& out) {
+    const std::size_t at = out.find("warnings: ");
+    return at == std::string::npos ? -1 : std::stoi(out.substr(at + 10));
+  };
+  EXPECT_EQ(warnings(wrong_unit.out), warnings(check.out) + 1) << wrong_unit.out;
 
   afhub::testing::ModelFolder folder;
   const auto sag = [&](const std::vector<std::string>& extra) {

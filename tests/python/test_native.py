@@ -501,7 +501,7 @@ def test_lockstep_runs_are_identical(physics, tmp_path):
     assert first == second
 
 
-def test_device_state_and_force(tmp_path):
+def test_device_state_and_force(tmp_path, capfd):
     log = open(tmp_path / 'device.log', 'w')
     driver = subprocess.Popen([AFHUB, 'device', 'run', 'virtual', '--name', 'pyhand'],
                               stdout=log, stderr=subprocess.STDOUT)
@@ -514,6 +514,11 @@ def test_device_state_and_force(tmp_path):
         with pytest.raises(afhub.Error,
                            match=r"no live device is named 'nosuch'; live devices: device/pyhand \("):
             afhub.Device('nosuch')
+        # Waited for, it is said to be a device (it was said to be a body).
+        capfd.readouterr()
+        with pytest.raises(afhub.Error, match=r"no live device is named 'nosuch'"):
+            afhub.Device('nosuch', wait_s=0.1)
+        assert "no device 'nosuch' is live yet; waiting up to" in capfd.readouterr().err
         hand = afhub.Device('pyhand')
         assert hand.read(wait_s=5)['model'] == 'virtual'
 

@@ -223,6 +223,27 @@ TEST_F(McapFile, ADiskThatFillsUpLeavesAFileCutOffNotCorrupt) {
   }
 }
 
+// A disk full before the header went: the writer is refused, and leaves no empty file
+// behind that a later look would take for a recording cut off at its start.
+TEST_F(McapFile, ADiskFullAtTheStartLeavesNoFile) {
+  const std::string file = path("none.mcap");
+  signal(SIGXFSZ, SIG_IGN);
+  rlimit before{};
+  getrlimit(RLIMIT_FSIZE, &before);
+  rlimit none = before;
+  none.rlim_cur = 0;
+  setrlimit(RLIMIT_FSIZE, &none);
+  std::string error;
+  try {
+    Writer writer(file, {"afhub", "afhub", Compression::kNone, 16 * 1024, false});
+  } catch (const Error& e) {
+    error = e.what();
+  }
+  setrlimit(RLIMIT_FSIZE, &before);
+  EXPECT_NE(error.find("cannot write"), std::string::npos) << error;
+  EXPECT_FALSE(fs::exists(file));
+}
+
 // The message of the afhub::Error `scan` throws for `file`, or "" when it throws none.
 std::string scan_error(const std::string& file) {
   Collected read;

@@ -293,7 +293,7 @@ BodyEntry CatalogReader::resolve(std::string_view query) {
 }
 
 BodyEntry wait_for_body(const std::string& query, const std::string& who, std::int64_t give_up_ns,
-                        const std::string& hint) {
+                        const std::string& hint, const char* kind) {
   // No name ('', '/', ' ') is no late body: refused at once.
   if (body_channel_name({}, query).empty()) resolve_body({}, {});
   CatalogReader catalog;
@@ -310,11 +310,11 @@ BodyEntry wait_for_body(const std::string& query, const std::string& who, std::i
       }
       if (!said) {
         if (give_up_ns == std::numeric_limits<std::int64_t>::max())
-          std::fprintf(stderr, "%s: no body '%s' is live yet; waiting for it\n", who.c_str(),
+          std::fprintf(stderr, "%s: no %s '%s' is live yet; waiting for it\n", who.c_str(), kind,
                        query.c_str());
         else
-          std::fprintf(stderr, "%s: no body '%s' is live yet; waiting up to %.3g s for it\n",
-                       who.c_str(), query.c_str(),
+          std::fprintf(stderr, "%s: no %s '%s' is live yet; waiting up to %.3g s for it\n",
+                       who.c_str(), kind, query.c_str(),
                        static_cast<double>(give_up_ns - monotonic_ns()) * 1e-9);
       }
       said = true;

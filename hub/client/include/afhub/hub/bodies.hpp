@@ -199,10 +199,11 @@ class CatalogReader {
 // The catalog entry for `query` (see CatalogReader::resolve). A process started with
 // the physics that owns the body, or re-attached to a hub before it, waits for it
 // until `give_up_ns` (CLOCK_MONOTONIC; INT64_MAX: until it comes), saying so once on
-// stderr as `who`. Throws afhub::Error when it is still missing then (adding `hint`
-// to the message when it waited), on Ctrl-C, or once the hub is lost.
+// stderr as `who` (of a `kind`: "body", "device"). Throws afhub::Error when it is still
+// missing then (adding `hint` to the message when it waited), on Ctrl-C, or once the hub
+// is lost.
 BodyEntry wait_for_body(const std::string& query, const std::string& who, std::int64_t give_up_ns,
-                        const std::string& hint = "");
+                        const std::string& hint = "", const char* kind = "body");
 
 // Whether `channel`, or its end after one of its '/', matches one of `globs` (fnmatch
 // patterns: '*' crosses '/'), as the options that choose bodies (`afhub record --bodies`,
