@@ -43,7 +43,7 @@ class StateFreshness {
       seen_ns_ = now_ns;
     }
     if (now_ns - stamp_ns > stale_ns_ || now_ns - seen_ns_ > stale_ns_) {
-      stepped_ns_ = -1;  // back, it must be seen stepping again
+      stepped_ns_ = -1;    // back, it must be seen stepping again
       restarted_ns_ = -1;  // the silence took the force off
       return PhysicsLiveness::kSilent;
     }
@@ -57,10 +57,9 @@ class StateFreshness {
       stepped_ns_ = now_ns;
     }
     if (now_ns - stepped_ns_ > stale_ns_) return PhysicsLiveness::kNotStepping;
-    if (restarted_ns_ >= 0) {
-      if (moved_ && now_ns - restarted_ns_ >= kRestartOffNs) restarted_ns_ = -1;
-      else return PhysicsLiveness::kRestarted;
-    }
+    if (restarted_ns_ >= 0 && (!moved_ || now_ns - restarted_ns_ < kRestartOffNs))
+      return PhysicsLiveness::kRestarted;
+    restarted_ns_ = -1;
     return moved_ ? PhysicsLiveness::kLive : PhysicsLiveness::kStarting;
   }
 
@@ -70,8 +69,8 @@ class StateFreshness {
   std::int64_t stamp_ns_{0};
   std::int64_t seen_ns_{-1};  // when this loop first saw the newest state; -1: none yet
   std::uint64_t step_{0};
-  std::int64_t stepped_ns_{-1};  // when this loop first saw the newest step; -1: none yet
-  bool moved_{false};            // a step seen to change since states (re)appeared
+  std::int64_t stepped_ns_{-1};    // when this loop first saw the newest step; -1: none yet
+  bool moved_{false};              // a step seen to change since states (re)appeared
   std::int64_t restarted_ns_{-1};  // when the sequence or step went back; -1: not since
 };
 
