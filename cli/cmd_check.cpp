@@ -115,6 +115,7 @@ int run_check(const CheckOptions& options) {
   std::vector<std::string> built_warnings;
   try {
     const physics::Simulation sim(model, options.dt_s);
+    for (const std::string& note : sim.parted_overlaps()) std::printf("%s\n", note.c_str());
     const std::vector<std::string> notes = sim.gain_notes();
     std::printf("joint gains lowered for stability at dt %g s: %zu\n", options.dt_s, notes.size());
     for (const std::string& note : notes) std::printf("  %s\n", note.c_str());

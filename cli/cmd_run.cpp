@@ -140,6 +140,7 @@ int run_run(const RunCliOptions& options) {
     return 1;
   }
   physics::Simulation& sim = *built;
+  for (const std::string& note : sim.parted_overlaps()) std::fprintf(stderr, "%s\n", note.c_str());
   for (const std::string& note : sim.gain_notes()) std::fprintf(stderr, "%s\n", note.c_str());
   for (const auto& warnings : {sim.overlaps_between_files(), sim.joints_outside_limits()})
     for (const std::string& warning : warnings) std::fprintf(stderr, "%s\n", warning.c_str());

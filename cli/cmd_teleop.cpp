@@ -95,8 +95,14 @@ teleop::TeleopBinding bind_device(const teleop::InputDeviceSpec& spec,
   binding.spec = spec;
   binding.device_name = device_name;
   binding.body = body.channel;
-  binding.body_gains.linear = {body.linear_controller.p, body.linear_controller.d};
-  binding.body_gains.angular = {body.angular_controller.p, body.angular_controller.d};
+  // Teleop drives the body with a force: a file's force gains are taken; a velocity
+  // controller's gains are no force gains, and AMBF's attribute defaults stand instead.
+  const auto force_gains = [](const physics::Pid& pid, physics::ControllerOutput output) {
+    return output == physics::ControllerOutput::kForce ? teleop::Gains{pid.p, pid.d}
+                                                       : teleop::Gains{10.0, 1.0};
+  };
+  binding.body_gains.linear = force_gains(body.linear_controller, body.linear_output);
+  binding.body_gains.angular = force_gains(body.angular_controller, body.angular_output);
   for (int j : model.descendant_joints[root]) {
     const physics::JointSpec& joint = model.joints[static_cast<std::size_t>(j)];
     binding.gripper_joints.push_back(

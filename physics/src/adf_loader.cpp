@@ -127,6 +127,7 @@ void load_file(const std::string& path, const YAML::Node& root, Model& model, Un
   if (const YAML::Node* ignore = key("ignore inter-collision"))
     ignore_inter_collision = file.flag(*ignore, "ignore inter-collision");
   model.file_ignores_inter_collision.push_back(ignore_inter_collision);
+  model.file_parts_overlaps.push_back(false);
   // A launch or world file given as a model loaded nothing and ran an empty world.
   if (!key("bodies") && !key("joints") && !key("soft bodies")) {
     if (key("multibody configs"))

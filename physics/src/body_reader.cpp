@@ -271,13 +271,26 @@ BodySpec read_body(const FileReader& file, const YAML::Node& block, const std::s
   scale_shapes(body.collision_shapes, body.scale);
   if (YAML::Node controller = block["controller"]) {
     file.require_map(controller, "controller", "{linear: {P, I, D}, angular: {P, I, D}}");
-    if (YAML::Node linear = controller["linear"])
+    if (YAML::Node linear = controller["linear"]) {
       body.linear_controller = read_pid(file, linear, "controller.linear");
-    if (YAML::Node angular = controller["angular"])
+      body.linear_output = ControllerOutput::kForce;
+    }
+    if (YAML::Node angular = controller["angular"]) {
       body.angular_controller = read_pid(file, angular, "controller.angular");
+      body.angular_output = ControllerOutput::kForce;
+    }
   }
   if (YAML::Node output = block["controller output type"])
-    body.controller_output = read_output_type(file, output);
+    body.linear_output = body.angular_output = read_output_type(file, output);
+  for (const auto& [pid, output, what] :
+       {std::tuple{body.linear_controller, body.linear_output, "controller.linear"},
+        std::tuple{body.angular_controller, body.angular_output, "controller.angular"}})
+    if (output == ControllerOutput::kVelocity && pid.d >= 1.0)
+      file.warn(block["controller"] ? block["controller"] : block,
+                std::string(what) + " D " + yaml::number_text(pid.d) +
+                    " with VELOCITY output: the D term acts on the velocity the "
+                    "controller itself sets, and a pose command diverges from D 1; "
+                    "give D below 1, or `controller output type: FORCE`");
   read_color(file, block, body);
   return body;
 }

@@ -269,29 +269,6 @@ double JointModel::own_inertia() const {
   return inertia;
 }
 
-double JointModel::inertia_about_axis(const btRigidBody& body) const {
-  return inertia_along(
-      body, body.getWorldTransform().inverse() * parent_.getWorldTransform() * frame_in_parent_,
-      axis_index_, rotational());
-}
-
-bool JointModel::carries(const JointModel& driver) const {
-  const bool parallel = std::abs(world_axis().dot(driver.world_axis())) > 0.99;
-  switch (spec_.type) {
-    case JointType::kFixed:
-      return true;
-    case JointType::kRevolute:
-    case JointType::kContinuous:
-      return !driver.rotational() || !parallel;
-    case JointType::kPrismatic:
-      return driver.rotational() || !parallel;
-    case JointType::kP2P:
-      return !driver.rotational();
-    default:
-      return false;
-  }
-}
-
 void JointModel::raise_gain_cap(double driven) {
   if (has_axis() && driven > own_inertia()) limit_gains(driven, true);
 }
@@ -337,6 +314,10 @@ bool JointModel::rotational() const {
 btVector3 JointModel::world_axis() const {
   return parent_.getWorldTransform().getBasis() *
          frame_in_parent_.getBasis().getColumn(axis_index_);
+}
+
+btVector3 JointModel::world_pivot() const {
+  return parent_.getWorldTransform() * frame_in_parent_.getOrigin();
 }
 
 void JointModel::command(JointMode type, double value) noexcept {

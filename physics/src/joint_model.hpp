@@ -79,26 +79,20 @@ class JointModel {
   double damping() const { return damping_; }  // the file's, or lower (see gains())
   // What the stability cap lowered, with the values used; empty when nothing was.
   const std::string& gain_note() const { return gain_note_; }
-  // `body`'s inertia about the joint's axis line as built (rad joints: kg m^2), or its
-  // mass for a prismatic joint: what it adds to the inertia the joint drives.
-  double inertia_about_axis(const btRigidBody& body) const;
-  // Whether this joint carries a motion of `driver`'s along `driver`'s axis from one of
-  // its bodies to the other within a step (its own PID, explicit, acts only at the
-  // next): a fixed joint does, a hinge for a turn about a crossing axis or any slide, a
-  // slider for any turn or a slide along a crossing axis, a ball joint for a slide;
-  // one free that way (a parallel hinge, a spring, a six-dof joint) does not.
-  bool carries(const JointModel& driver) const;
   // The cap taken again for `driven`, the inertia the joint drives, when that is
   // larger than its own two bodies' (the constructor's; see limit_gains()).
   void raise_gain_cap(double driven);
+  // Its axis as built: the direction, a point on it (the parent's pivot), and whether
+  // it turns about it (or slides along it).
   btVector3 world_axis() const;
+  btVector3 world_pivot() const;
+  bool rotational() const;
   // The smaller of its two bodies' inertias about its axis (a static one does not count).
   double own_inertia() const;
 
  private:
   // `driven`: `inertia` is raise_gain_cap()'s, the bodies the joint drives.
   void limit_gains(double inertia, bool driven = false);
-  bool rotational() const;
   void apply_effort(double effort) noexcept;
   void set_motor(bool on, double velocity, double max_impulse) noexcept;
   void update_reduced_readings() noexcept;

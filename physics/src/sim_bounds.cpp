@@ -88,7 +88,8 @@ const char* Simulation::input_problem(std::size_t index, const BodyInput& input)
   if (d.bodies[index].chain >= 0 &&
       (input.cartesian == CartesianMode::kVelocity ||
        (input.cartesian == CartesianMode::kPosition &&
-        d.model.bodies[index].controller_output == ControllerOutput::kVelocity)))
+        (d.model.bodies[index].linear_output == ControllerOutput::kVelocity ||
+         d.model.bodies[index].angular_output == ControllerOutput::kVelocity))))
     return "the body is a link of a chain in reduced coordinates (--reduced-coordinates), "
            "which takes no velocity: command a wrench, a pose with a force controller, or "
            "its joints";

@@ -163,75 +163,10 @@ void Simulation::Data::build_joints() {
     if (btTypedConstraint* constraint = joints.back()->constraint())
       world.addConstraint(constraint, spec.ignore_inter_collision);
   }
+  part_overlaps();
   raise_gain_caps();
   build_chains();
   mark_joint_islands();
-}
-
-// A joint's effort moves every body on its side of it, not only the link it joins: the
-// UR5's shoulder pan was capped for its own link's 0.0067 kg m^2 while it swings the arm,
-// and rang, 62 % over its target, for 5 s. With the direct solve (its islands solved
-// exactly) the effort reaches in the step every body the joints between carry that way
-// (JointModel::carries), so the cap is taken for that inertia: each side's bodies about
-// the joint's axis, as built, the two sides combined as one turning against the other (a
-// side held by a static body does not turn). Taken at a quarter of it, for poses that
-// bring the bodies nearer the axis (the cap's own margins then hold to 16 times less).
-// A joint in a closed loop, a chain's (reduced coordinates) or beside the iterative
-// solver keeps its own bodies' cap. (An island past the direct solve's rows, a grasp's
-// many contacts say, is iterated with the raised gains: a simple case held in a trial.)
-void Simulation::Data::raise_gain_caps() {
-  if (!model.world.direct_solve) return;
-  constexpr double kPoseMargin = 4.0;
-  constexpr double kHeld = -1.0;  // a side that reaches a static body
-  // Per body, its joints (by index).
-  std::vector<std::vector<std::size_t>> joints_of(bodies.size());
-  for (std::size_t j = 0; j < model.joints.size(); ++j) {
-    joints_of[model.joints[j].parent].push_back(j);
-    joints_of[model.joints[j].child].push_back(j);
-  }
-  std::vector<int> seen(bodies.size(), -1);  // the last joint whose side visited it
-  std::vector<int> stack;
-  for (std::size_t j = 0; j < joints.size(); ++j) {
-    JointModel& joint = *joints[j];
-    if (!joint.constraint()) continue;
-    const int parent = model.joints[j].parent, child = model.joints[j].child;
-    // The inertia of `from`'s side of joint j about its axis, kHeld when a static body
-    // holds it, 0 when the side reaches `other` (a closed loop).
-    const auto side = [&](int from, int other, int mark) {
-      double inertia = 0.0;
-      stack.assign(1, from);
-      seen[from] = mark;
-      while (!stack.empty()) {
-        const int b = stack.back();
-        stack.pop_back();
-        if (b == other) return 0.0;
-        if (!bodies[b].dynamic) return kHeld;
-        inertia += joint.inertia_about_axis(*bodies[b].body);
-        for (std::size_t k : joints_of[b]) {
-          if (k == j || !joints[k]->carries(joint)) continue;
-          const int next =
-              model.joints[k].parent == b ? model.joints[k].child : model.joints[k].parent;
-          if (seen[next] == mark) continue;
-          seen[next] = mark;
-          stack.push_back(next);
-        }
-      }
-      return inertia;
-    };
-    const double child_side = side(child, parent, static_cast<int>(2 * j));
-    const double parent_side = side(parent, child, static_cast<int>(2 * j + 1));
-    // A loop: through the other end, or through the ground both ways.
-    if (child_side == 0.0 || parent_side == 0.0 || (child_side == kHeld && parent_side == kHeld))
-      continue;
-    double driven;
-    if (parent_side == kHeld)
-      driven = child_side;
-    else if (child_side == kHeld)
-      driven = parent_side;
-    else
-      driven = child_side * parent_side / (child_side + parent_side);
-    joint.raise_gain_cap(driven / kPoseMargin);
-  }
 }
 
 // Every joint that moves a body is marked for the direct solve

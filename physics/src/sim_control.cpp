@@ -186,13 +186,17 @@ void Simulation::Data::apply_cartesian(BodyData& body) noexcept {
       const btVector3 linear = l.p * linear_error + l.i * body.linear_integral + l.d * linear_rate;
       const btVector3 angular =
           a.p * angular_error + a.i * body.angular_integral + a.d * angular_rate;
-      if (spec.controller_output == ControllerOutput::kForce) {
-        push(body, linear, angular);
-        body.applied = {from_bt(linear), from_bt(angular)};
-      } else {
-        rb.setLinearVelocity(linear);
-        rb.setAngularVelocity(angular);
+      // Each part drives a force (pushed, as a FORCE command is) or sets a velocity.
+      const bool push_linear = spec.linear_output == ControllerOutput::kForce;
+      const bool push_angular = spec.angular_output == ControllerOutput::kForce;
+      const btVector3 force = push_linear ? linear : btVector3(0, 0, 0);
+      const btVector3 torque = push_angular ? angular : btVector3(0, 0, 0);
+      if (push_linear || push_angular) {
+        push(body, force, torque);
+        body.applied = {from_bt(force), from_bt(torque)};
       }
+      if (!push_linear) rb.setLinearVelocity(linear);
+      if (!push_angular) rb.setAngularVelocity(angular);
       break;
     }
   }

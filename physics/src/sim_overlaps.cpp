@@ -1,9 +1,10 @@
-// Bodies of different files that overlap as built: two robots loaded at one place (AMBF
+// Bodies that overlap as built. Of different files: two robots loaded at one place (AMBF
 // draws every model at the origin) are pushed apart at the first step with forces that
-// can blow one up, and nothing said why. Checked once, after the build, pair by pair
-// only where their bounding boxes meet.
+// can blow one up, and nothing said why. Of one robot: its links, drawn touching. Looked
+// for once, after the build, pair by pair only where their bounding boxes meet.
 #include <algorithm>
 #include <cstdio>
+#include <map>
 
 #include "simulation_data.hpp"
 
@@ -26,11 +27,6 @@ struct DeepestContact : btCollisionWorld::ContactResultCallback {
     depth_m = std::max(depth_m, -static_cast<double>(point.getDistance()));
     return 0;
   }
-};
-
-struct Overlap {
-  int a, b;
-  double depth_m;
 };
 
 // A joint from one file's body to the other's, or nullptr: moving either file would not
@@ -56,15 +52,18 @@ std::string advice(const Model& model, const BodySpec& a, const BodySpec& b) {
 
 }  // namespace
 
-std::vector<std::string> Simulation::overlaps_between_files() const {
-  Data& d = *data_;
-  const Model& model = d.model;
+// Pairs of moving bodies (or a moving and a static one) whose shapes overlap by more
+// than `depth_m` as built, among those `wanted` takes and the step would let collide,
+// looked for where their bounding boxes meet along x, within the bounds above: false
+// when these stopped the search.
+bool Simulation::Data::find_overlaps(const std::function<bool(int, int)>& wanted, double depth_m,
+                                     std::vector<Overlap>& found, std::size_t& looked_at) {
   struct Object {
     btCollisionObject* object;
     btVector3 low, high;
   };
   std::vector<Object> objects;
-  const btCollisionObjectArray& all = d.world.getCollisionObjectArray();
+  const btCollisionObjectArray& all = world.getCollisionObjectArray();
   for (int i = 0; i < all.size(); ++i) {
     btCollisionObject* object = all[i];
     if (object->getUserIndex() < 0 || !object->getBroadphaseHandle() ||
@@ -74,47 +73,91 @@ std::vector<std::string> Simulation::overlaps_between_files() const {
     object->getCollisionShape()->getAabb(object->getWorldTransform(), entry.low, entry.high);
     objects.push_back(entry);
   }
-  const bool one_file = std::all_of(objects.begin(), objects.end(), [&](const Object& o) {
-    return model.bodies[o.object->getUserIndex()].file_index ==
-           model.bodies[objects.front().object->getUserIndex()].file_index;
-  });
-  if (one_file) return {};
-  // Sweep along x: a pair is looked at only when its boxes meet along x.
   std::sort(objects.begin(), objects.end(),
             [](const Object& x, const Object& y) { return x.low.x() < y.low.x(); });
-  std::vector<Overlap> found;
-  std::size_t looked_at = 0, tested = 0;
-  bool stopped = false;
-  for (std::size_t i = 0; i < objects.size() && !stopped; ++i)
+  std::size_t tested = 0;
+  looked_at = 0;
+  for (std::size_t i = 0; i < objects.size(); ++i)
     for (std::size_t j = i + 1; j < objects.size() && objects[j].low.x() <= objects[i].high.x();
          ++j) {
-      if (++looked_at > kMaxPairsLookedAt || tested == kMaxPairsTested) {
-        stopped = true;
-        break;
-      }
+      if (++looked_at > kMaxPairsLookedAt || tested == kMaxPairsTested) return false;
       btCollisionObject* a = objects[i].object;
       btCollisionObject* b = objects[j].object;
       const int ia = a->getUserIndex(), ib = b->getUserIndex();
-      if (model.bodies[ia].file_index == model.bodies[ib].file_index) continue;
+      if (!wanted(ia, ib)) continue;
       if (a->isStaticOrKinematicObject() && b->isStaticOrKinematicObject()) continue;
       if (!TestAabbAgainstAabb2(objects[i].low, objects[i].high, objects[j].low, objects[j].high))
         continue;
       // As the step would: bodies a joint or their groups keep apart are no overlap.
       if (!a->checkCollideWith(b) || !b->checkCollideWith(a) ||
-          !d.filter.needBroadphaseCollision(a->getBroadphaseHandle(), b->getBroadphaseHandle()))
+          !filter.needBroadphaseCollision(a->getBroadphaseHandle(), b->getBroadphaseHandle()))
         continue;
       ++tested;
       DeepestContact contact;
       contact.m_collisionFilterGroup = contact.m_collisionFilterMask = btBroadphaseProxy::AllFilter;
-      d.world.contactPairTest(a, b, contact);
-      if (contact.depth_m > kOverlapM) found.push_back({ia, ib, contact.depth_m});
+      world.contactPairTest(a, b, contact);
+      if (contact.depth_m > depth_m) found.push_back({a, b, contact.depth_m});
     }
+  return true;
+}
+
+// A robot's links are drawn touching and overlapping each other: the Allegro hand's
+// thumb, as its URDF builds it, sits inside its palm, and contacts held its joints up to
+// 0.25 rad past their limits, and pulled it apart under higher damping. As MoveIt does for a
+// robot's default pose, bodies of such a file that overlap as built do not collide with each other.
+void Simulation::Data::part_overlaps() {
+  if (std::none_of(model.file_parts_overlaps.begin(), model.file_parts_overlaps.end(),
+                   [](bool parts) { return parts; }))
+    return;
+  std::vector<Overlap> found;
+  std::size_t looked_at = 0;
+  const bool whole = find_overlaps(
+      [&](int a, int b) {
+        const int file = model.bodies[a].file_index;
+        return file == model.bodies[b].file_index && model.file_parts_overlaps[file];
+      },
+      0.0, found, looked_at);
+  std::map<int, std::vector<const Overlap*>> by_file;
+  for (const Overlap& overlap : found) {
+    overlap.a->setIgnoreCollisionCheck(overlap.b, true);
+    overlap.b->setIgnoreCollisionCheck(overlap.a, true);
+    by_file[model.bodies[overlap.a->getUserIndex()].file_index].push_back(&overlap);
+  }
+  const auto name = [&](const btCollisionObject* object) {
+    return model.bodies[object->getUserIndex()].name;
+  };
+  for (const auto& [file, overlaps] : by_file) {
+    std::string some;
+    for (std::size_t k = 0; k < overlaps.size() && k < kPairsShown; ++k)
+      some += std::string(k ? ", " : "") + name(overlaps[k]->a) + " and " + name(overlaps[k]->b);
+    if (overlaps.size() > kPairsShown) some += ", ...";
+    parted_overlaps.push_back(
+        model.bodies[overlaps.front()->a->getUserIndex()].where.file +
+        ": links that overlap as built do not collide with each other: " + some + " (" +
+        std::to_string(overlaps.size()) + (overlaps.size() == 1 ? " pair)" : " pairs)"));
+  }
+  if (!whole)
+    parted_overlaps.push_back("the search for links that overlap as built stopped after " +
+                              std::to_string(looked_at - 1) + " pairs; more may collide");
+}
+
+std::vector<std::string> Simulation::overlaps_between_files() const {
+  const Model& model = data_->model;
+  if (std::all_of(model.bodies.begin(), model.bodies.end(), [&](const BodySpec& body) {
+        return body.file_index == model.bodies.front().file_index;
+      }))
+    return {};
+  std::vector<Data::Overlap> found;
+  std::size_t looked_at = 0;
+  const bool whole = data_->find_overlaps(
+      [&](int a, int b) { return model.bodies[a].file_index != model.bodies[b].file_index; },
+      kOverlapM, found, looked_at);
   std::sort(found.begin(), found.end(),
-            [](const Overlap& x, const Overlap& y) { return x.depth_m > y.depth_m; });
+            [](const Data::Overlap& x, const Data::Overlap& y) { return x.depth_m > y.depth_m; });
   std::vector<std::string> warnings;
   for (std::size_t k = 0; k < found.size() && k < kPairsShown; ++k) {
-    const BodySpec& a = model.bodies[found[k].a];
-    const BodySpec& b = model.bodies[found[k].b];
+    const BodySpec& a = model.bodies[found[k].a->getUserIndex()];
+    const BodySpec& b = model.bodies[found[k].b->getUserIndex()];
     char depth[32];
     std::snprintf(depth, sizeof depth, "%.0f mm", found[k].depth_m * 1e3);
     warnings.push_back(a.where.str() + ": warning: body '" + a.channel + "' overlaps body '" +
@@ -125,7 +168,7 @@ std::vector<std::string> Simulation::overlaps_between_files() const {
   if (found.size() > kPairsShown)
     warnings.push_back("warning: " + std::to_string(found.size() - kPairsShown) +
                        " more pairs of bodies of different loaded files overlap as loaded");
-  if (stopped)
+  if (!whole)
     warnings.push_back("warning: the check for overlapping files stopped after " +
                        std::to_string(looked_at - 1) +
                        " pairs of bodies; more of them may overlap");

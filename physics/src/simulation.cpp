@@ -98,6 +98,9 @@ const Pid& Simulation::joint_gains(std::size_t joint) const noexcept {
 double Simulation::joint_damping(std::size_t joint) const noexcept {
   return data_->joints[joint]->damping();
 }
+const std::vector<std::string>& Simulation::parted_overlaps() const noexcept {
+  return data_->parted_overlaps;
+}
 std::vector<std::string> Simulation::gain_notes() const {
   std::vector<std::string> notes;
   for (const auto& joint : data_->joints)

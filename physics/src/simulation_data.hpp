@@ -18,6 +18,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <vector>
@@ -198,6 +199,7 @@ struct Simulation::Data {
   std::vector<WorldObjectData> lights, cameras;
   std::vector<ChainPlan> chain_plans;  // what build_chains() makes
   std::vector<ChainData> chains;
+  std::vector<std::string> parted_overlaps;  // what part_overlaps() did, per file
   NanRecoveries nan_recoveries;
   btSphereShape probe{0.01};  // what an actuator feels for: 1 cm around its point
 
@@ -231,6 +233,14 @@ struct Simulation::Data {
 
   void build_bodies();
   void build_joints();
+  // Bodies overlapping as built (sim_overlaps.cpp).
+  struct Overlap {
+    btCollisionObject *a, *b;  // their user indices: the bodies
+    double depth_m;
+  };
+  bool find_overlaps(const std::function<bool(int, int)>& wanted, double depth_m,
+                     std::vector<Overlap>& found, std::size_t& looked_at);
+  void part_overlaps();
   void raise_gain_caps();
   void build_chains();
   void mark_joint_islands();

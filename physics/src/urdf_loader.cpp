@@ -277,11 +277,12 @@ class UrdfReader {
     name_space_ = "/ambf/env/" + robot_->getName() + "/";
     model_.notes.push_back(path_ + ": robot '" + robot_->getName() +
                            "': links joined by a joint do not collide with each other (URDF's "
-                           "convention)");
+                           "convention), nor links that overlap as built (MoveIt's rule)");
     place_links();
     read_links();
     read_joints();
     model_.file_ignores_inter_collision.push_back(false);
+    model_.file_parts_overlaps.push_back(true);
   }
 
  private:

@@ -332,6 +332,72 @@ TEST(Simulation, EveryJointTypeHoldsTogether) {
   }
 }
 
+// A body's pose command through its Cartesian controller, as AMBF loads it: with no
+// `controller` in its file, a velocity with P 10 and no D; with gains in its file, a
+// force. Before, both drove a velocity with D 1 by default: a free box went to 8e9 m,
+// and the PR2 gripper's palm (P 200, D 20) to 1e260 m.
+TEST(Simulation, APoseCommandReachesItsTargetWithTheFilesControllerOrAmbfsDefault) {
+  const struct {
+    const char* controller;
+    ControllerOutput linear, angular;
+  } cases[] = {
+      {"", ControllerOutput::kVelocity, ControllerOutput::kVelocity},
+      {"  controller: {linear: {P: 200, D: 20}, angular: {P: 2, D: 0.2}}\n",
+       ControllerOutput::kForce, ControllerOutput::kForce},
+      {"  controller: {linear: {P: 200, D: 20}}\n", ControllerOutput::kForce,
+       ControllerOutput::kVelocity},
+      {"  controller: {linear: {P: 20, D: 0.5}, angular: {P: 20, D: 0.5}}\n"
+       "  controller output type: VELOCITY\n",
+       ControllerOutput::kVelocity, ControllerOutput::kVelocity},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.controller);
+    testing::ModelFolder folder;
+    Model model = load_adf_files({folder.write(
+        "box.yaml",
+        std::string("bodies: [BODY box]\nBODY box:\n  name: box\n  mass: 0.6\n  shape: box\n"
+                    "  geometry: {x: 0.1, y: 0.1, z: 0.1}\n"
+                    "  location: {position: {x: 2, y: 0, z: 1}}\n") +
+            c.controller)});
+    EXPECT_TRUE(model.warnings.empty()) << model.warnings.front();
+    EXPECT_EQ(model.bodies[0].linear_output, c.linear);
+    EXPECT_EQ(model.bodies[0].angular_output, c.angular);
+    model.world.gravity_mps2 = {0.0, 0.0, 0.0};
+    Simulation sim(model, 0.001);
+    BodyInput command{};
+    command.cartesian = CartesianMode::kPosition;
+    command.target_pose.position_m = {2.3, 0.2, 1.1};                              // 0.37 m away
+    command.target_pose.orientation = {0.0, 0.0, std::sin(0.25), std::cos(0.25)};  // 0.5 rad
+    for (int step = 0; step < 3000; ++step) {
+      sim.set_input(0, command);
+      sim.step();
+    }
+    ASSERT_TRUE(sim.all_finite());
+    const Pose pose = sim.body_pose(0);
+    EXPECT_NEAR(pose.position_m.x, 2.3, 1e-3);
+    EXPECT_NEAR(pose.position_m.y, 0.2, 1e-3);
+    EXPECT_NEAR(pose.position_m.z, 1.1, 1e-3);
+    EXPECT_NEAR(std::abs(pose.orientation.z), std::sin(0.25), 1e-3);
+  }
+}
+
+// A velocity output with D from 1 diverges: said at load, with what to do.
+TEST(Simulation, AVelocityControllerWithADOfOneOrMoreIsAWarning) {
+  testing::ModelFolder folder;
+  const Model model = load_adf_files(
+      {folder.write("box.yaml",
+                    "bodies: [BODY box]\nBODY box:\n  name: box\n  mass: 1\n"
+                    "  controller: {linear: {P: 10, D: 1}, angular: {P: 10, D: 0.5}}\n"
+                    "  controller output type: VELOCITY\n")});
+  ASSERT_EQ(model.warnings.size(), 1u);
+  EXPECT_NE(model.warnings[0].find("box.yaml:5:15: warning: controller.linear D 1 with VELOCITY"),
+            std::string::npos)
+      << model.warnings[0];
+  EXPECT_NE(model.warnings[0].find("give D below 1, or `controller output type: FORCE`"),
+            std::string::npos)
+      << model.warnings[0];
+}
+
 TEST(Simulation, ModelSplitOverTwoFilesSimulates) {
   testing::ModelFolder folder;
   const std::string bodies = folder.write(

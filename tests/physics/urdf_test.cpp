@@ -217,7 +217,10 @@ TEST(Urdf, RandomCommandedConfigurationsMatchKdlWithin1e6) {
 
 // The real robots on the project's default gains: under gravity alone (the joints
 // free: the arm swings down), then under position commands, nothing blows up, no
-// joint comes apart and nothing spins away.
+// joint comes apart at any step, none leaves its limits and nothing spins away. (The
+// Allegro thumb came apart by 12.7 cm at step 15, its last joint at -5.7 rad against
+// [-0.16, 1.72], when its second joint was given the damping of the whole thumb: the
+// end of the run alone looked fine.)
 TEST(Urdf, RealRobotsStayStableUnderGravityAndPositionCommands) {
   if (!fs::exists(kShared)) GTEST_SKIP() << kShared << " is absent";
   for (const std::string& urdf : {shared_urdf("ur_description/urdf/ur5_robot.urdf"),
@@ -233,17 +236,27 @@ TEST(Urdf, RealRobotsStayStableUnderGravityAndPositionCommands) {
                 fs::path(urdf).filename().c_str(),
                 std::chrono::duration<double, std::milli>(loaded - start).count(),
                 std::chrono::duration<double, std::milli>(built - loaded).count());
-    auto check = [&](const char* phase) {
+    std::vector<double> largest_gap(model.joints.size(), 0.0);
+    auto run = [&](const char* phase) {
       SCOPED_TRACE(phase);
+      for (int step = 0; step < 5000; ++step) {
+        sim.step();
+        for (std::size_t j = 0; j < model.joints.size(); ++j)
+          largest_gap[j] = std::max(largest_gap[j], sim.joint_pivot_gap_m(j));
+      }
       ASSERT_TRUE(sim.all_finite());
       EXPECT_EQ(sim.nan_recoveries().count, 0u);
       for (std::size_t j = 0; j < model.joints.size(); ++j) {
-        EXPECT_LT(sim.joint_pivot_gap_m(j), 5e-3) << model.joints[j].name;
-        EXPECT_LT(std::abs(sim.joint_velocity(j)), 20.0) << model.joints[j].name;
+        const JointSpec& joint = model.joints[j];
+        EXPECT_LT(largest_gap[j], 5e-3) << joint.name;
+        EXPECT_LT(std::abs(sim.joint_velocity(j)), 20.0) << joint.name;
+        if (joint.limit_low && joint.limit_high) {
+          EXPECT_GT(sim.joint_position(j), *joint.limit_low - 0.05) << joint.name;
+          EXPECT_LT(sim.joint_position(j), *joint.limit_high + 0.05) << joint.name;
+        }
       }
     };
-    for (int step = 0; step < 5000; ++step) sim.step();
-    check("gravity");
+    run("gravity");
     std::size_t root = 0;
     for (std::size_t b = 0; b < model.bodies.size(); ++b)
       if (model.descendant_joints[b].size() > model.descendant_joints[root].size()) root = b;
@@ -254,8 +267,7 @@ TEST(Urdf, RealRobotsStayStableUnderGravityAndPositionCommands) {
       input.joint_values[i] = 0.3;
     }
     sim.set_input(root, input);
-    for (int step = 0; step < 5000; ++step) sim.step();
-    check("position commands");
+    run("position commands");
   }
 }
 

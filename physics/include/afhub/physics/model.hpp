@@ -102,9 +102,13 @@ struct BodySpec {
   double collision_margin = 0.001;
   std::vector<int> collision_groups;
   std::optional<Vec3> gravity_mps2;
-  // Cartesian controller for POSITION commands (AMBF's defaults).
-  Pid linear_controller{10.0, 0.0, 1.0}, angular_controller{10.0, 0.0, 1.0};
-  ControllerOutput controller_output = ControllerOutput::kVelocity;
+  // Cartesian controller for POSITION commands, as AMBF loads it: gains a file gives
+  // drive a force (or what `controller output type` says); without them a velocity, P 10
+  // and no D (a D term on a velocity the controller sets itself is unstable from D 1: a
+  // free body given a pose went to 8e9 m).
+  Pid linear_controller{10.0, 0.0, 0.0}, angular_controller{10.0, 0.0, 0.0};
+  ControllerOutput linear_output = ControllerOutput::kVelocity;
+  ControllerOutput angular_output = ControllerOutput::kVelocity;
   std::optional<std::array<double, 4>> color_rgba;  // kept for a future viewer
   std::string color_name;
 };
@@ -242,6 +246,9 @@ struct Model {
   std::vector<SensorSpec> sensors;
   std::vector<ActuatorSpec> actuators;
   std::vector<bool> file_ignores_inter_collision;  // per loaded file
+  // Per loaded file: its bodies that overlap as built do not collide with each other (a
+  // URDF's: MoveIt's rule for a robot's default pose).
+  std::vector<bool> file_parts_overlaps;
   // Files read besides the blocks' and the world's: the launch file and its color
   // config (a recording names every file a run came from).
   std::vector<std::string> other_files;

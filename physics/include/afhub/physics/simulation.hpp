@@ -109,6 +109,9 @@ class Simulation {
   const Pid& joint_gains(std::size_t joint) const noexcept;
   double joint_damping(std::size_t joint) const noexcept;
   std::vector<std::string> gain_notes() const;
+  // Notes, per file whose bodies that overlap as built do not collide (a URDF robot's
+  // links, Model::file_parts_overlaps): how many pairs, and the first few.
+  const std::vector<std::string>& parted_overlaps() const noexcept;
   // Warnings, "file:line:col: warning: ...", for bodies of different loaded files that
   // overlap as built (two robots loaded at one place): the first step pushes them apart
   // with forces that can blow a robot up. The deepest few, and how many there are.
