@@ -6,6 +6,7 @@
 
 #include "afhub/devices/safe_request.hpp"
 #include "afhub/hub/bodies.hpp"
+#include "afhub/hub/body_claims.hpp"
 #include "afhub/hub/device_tape.hpp"
 #include "afhub/hub/hub_health.hpp"
 #include "afhub/hub/hub_loss.hpp"
@@ -179,6 +180,9 @@ int run_driver(const DeviceOpener& open, const DriverOptions& options) {
   }
   std::unique_ptr<Device> device = open();
   wait.connect_to_hub("device");
+  // Two drivers of one name alternated in its state (the hand between two poses) and
+  // both took its commands: the second is refused, naming the first.
+  check_room_for_bodies({channel}, 0);
   require_chunks({written_as_slot(sizeof(DeviceState)), published_each_cycle(sizeof(LoopStats))},
                  "this driver (" + channel + ")");
   Writer<DeviceState> states(body_state_channel(channel));
@@ -187,6 +191,7 @@ int run_driver(const DeviceOpener& open, const DriverOptions& options) {
   DirectoryPublisher directory;
   directory.add(make_device_entry(options.name));
   directory.publish();
+  confirm_body_claims({channel}, kClaimConfirmTimeout);
   LoopTiming timing;  // preallocated before memory is locked and the loop starts
   const RealtimeGrant grant = apply_realtime(options.loop, who.c_str());
   LoopStatsPublisher stats("device " + options.name, channel, options.loop.period_ns, false, grant);

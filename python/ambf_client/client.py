@@ -137,23 +137,28 @@ class Client:
         matches = [name for name in names if a_name in name]  # AMBF's rule: a substring
         if len(matches) == 1:
             return matches[0], None
+        if matches:  # as AMBF's "FOUND N WITH MATCHING NAME", naming them
+            return None, f'{len(matches)} objects match it: {", ".join(matches)}'
         return None, message
 
     def get_obj_handle(self, a_name):
         """A handle to the body named a_name: its full AMBF name ('/ambf/env/ecm/baselink'),
         a part of it after a '/' ('ecm/baselink', 'baselink'), any part that only one body's
-        name holds, or 'World'. None when none or several match, saying which (as AMBF)."""
+        name holds, or 'World' ('world' too, unless a body has that name). None when none
+        or several match, saying which (as AMBF)."""
         if not isinstance(a_name, str):
             raise TypeError(f'get_obj_handle takes a name (str), not {type(a_name).__name__}')
         if self._thread is None:  # its setters would send once, then nothing would
             raise RuntimeError('get_obj_handle: the client is not connected: call connect() '
                                "first (its thread sends the handles' commands at its rate)")
-        if a_name in ('World', 'world', '/ambf/env/World'):
+        if a_name in ('World', '/ambf/env/World'):
             return self.get_world_handle()
         name, problem = self._find(a_name)
         if name is None:  # a body whose physics started after connect()
             self._read_catalog()
             name, problem = self._find(a_name)
+        if name is None and a_name == 'world':  # a body named so comes first, as in AMBF
+            return self.get_world_handle()
         if name is None:
             print(f'{a_name} NAMED OBJECT NOT FOUND: {problem}')
             return None

@@ -4,13 +4,22 @@ conversions AMBF uses ('sxyz': roll about x, then pitch about y, then yaw about 
 about the world's axes)."""
 
 import math
+import numbers
+
+
+def _number(value, name):
+    """A coordinate as a float: a real number (numpy's too), not text or a bool, which
+    float() would read ('1' as 1 N, True as 1)."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise TypeError(f'{name} is a real number, not {value!r}')
+    return float(value)
 
 
 class Vector3:
     __slots__ = ('x', 'y', 'z')
 
     def __init__(self, x=0.0, y=0.0, z=0.0):
-        self.x, self.y, self.z = float(x), float(y), float(z)
+        self.x, self.y, self.z = _number(x, 'x'), _number(y, 'y'), _number(z, 'z')
 
     def __iter__(self):
         return iter((self.x, self.y, self.z))
@@ -27,7 +36,8 @@ class Quaternion:
     __slots__ = ('x', 'y', 'z', 'w')
 
     def __init__(self, x=0.0, y=0.0, z=0.0, w=1.0):
-        self.x, self.y, self.z, self.w = float(x), float(y), float(z), float(w)
+        self.x, self.y, self.z = _number(x, 'x'), _number(y, 'y'), _number(z, 'z')
+        self.w = _number(w, 'w')
 
     def __iter__(self):
         return iter((self.x, self.y, self.z, self.w))

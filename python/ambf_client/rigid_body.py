@@ -6,18 +6,15 @@ wrench not set again within ``time_out`` seconds is cleared: forces and torques 
 refreshed; joint and pose commands hold."""
 
 import copy
-import numbers
 import operator
 import sys
 import threading
 import time
 
-import numpy as np
-
 import afhub
 
-from .geometry import (Point, Pose, Quaternion, Twist, Vector3, Wrench, quaternion_from_rpy,
-                       rpy_from_quaternion)
+from .geometry import (_number, Point, Pose, Quaternion, Twist, Vector3, Wrench,
+                       quaternion_from_rpy, rpy_from_quaternion)
 from .handle import Handle
 
 _EFFORT, _POSITION, _VELOCITY = afhub.JointType.EFFORT, afhub.JointType.POSITION, \
@@ -32,14 +29,6 @@ def _whole(idx):
         return operator.index(idx)
     except TypeError:
         return None
-
-
-def _real(value):
-    """A joint value as a float: a real number (numpy's too), not text or a bool, which
-    float() would read ('0.5' as 0.5, True as 1)."""
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
-        raise ValueError(f'a joint value is a real number, not {value!r}')
-    return float(value)
 
 
 def _unsupported(call, why):
@@ -242,7 +231,7 @@ class RigidBody(Handle):
 
     def _set_joints(self, pairs, kind):
         # Every value made a number before any is kept: a refused call changes nothing.
-        pairs = [(idx, _real(value)) for idx, value in pairs]
+        pairs = [(idx, _number(value, 'a joint value')) for idx, value in pairs]
         with self._lock:
             held = self._held()
             self._joints_for()
@@ -272,6 +261,9 @@ class RigidBody(Handle):
         # As AMBF: no indices, or not one per value, command joints 0, 1, ... in order.
         if len(index_list) == 0 or len(values) != len(index_list):
             index_list = list(range(n))
+            if len(values) > n:  # as AMBF, which said so for each value past the last joint
+                print(f'Requested Joint index is out of range with joints {n}: '
+                      f'{len(values)} values given, the last {len(values) - n} left out')
         elif any(_whole(idx) is None or not 0 <= idx < n for idx in index_list):
             print(f'Requested Joint index is out of range with joints {n}: {index_list}')
             return

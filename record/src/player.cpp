@@ -26,9 +26,10 @@ namespace {
 
 constexpr std::int64_t kPausedPublishNs = 10'000'000;  // a paused world still says so
 
-// Ends a pass: the range's end, or a stop.
+// Ends a pass: the range's end, a stop, or a rewind (`afhub world reset`).
 struct EndOfPass {
   bool stop;
+  bool rewind = false;
 };
 
 // A recorded channel published again.
@@ -195,6 +196,10 @@ class Player : public Visitor {
         continue;
       }
       take_world_commands();
+      if (rewind_) {
+        rewind_ = false;
+        throw EndOfPass{false, true};
+      }
       if (!pause_.paused || !new_step || steps_allowed_ > 0) break;
       publish_paused_world();
       sleep_until_ns(monotonic_ns() + 1'000'000);
@@ -215,7 +220,8 @@ class Player : public Visitor {
   }
 
   // Pause and resume (and a held pause's holder) as the physics keeps them, and steps
-  // while paused; a reset does nothing: a recording cannot go back.
+  // while paused; a reset goes back to the window's start (paused, it shows its first
+  // step), as a physics' reset goes back to its first state.
   void take_world_commands() {
     WorldCommand command;
     while (world_commands_.next(command)) {
@@ -223,6 +229,11 @@ class Player : public Visitor {
       pause_.apply(command, monotonic_ns());
       if (was_paused && !pause_.paused) run_on();  // resumed, or its last hold released
       if (command.action == WorldAction::kStep && was_paused) steps_allowed_ += command.step_count;
+      if (command.action == WorldAction::kReset) {
+        rewind_ = true;
+        current_step_ = ~0ull;
+        steps_allowed_ = pause_.paused ? 1 : 0;
+      }
     }
     if (const WorldControl::Lapsed lapsed = pause_.lapse(monotonic_ns())) {
       std::fprintf(stderr, kPauseLapsedFormat, "afhub play", lapsed.pid, lapsed.hold_ms);
@@ -270,6 +281,7 @@ class Player : public Visitor {
   WorldControl pause_;
   std::uint64_t steps_allowed_ = 0;
   std::uint64_t current_step_ = ~0ull;
+  bool rewind_ = false;  // a reset came: the pass starts over
   std::vector<std::uint8_t> last_world_;
   RawWriter* world_writer_ = nullptr;
   std::int64_t next_paused_publish_ns_ = 0;
@@ -290,15 +302,18 @@ PlayReport play(const PlayOptions& options, const std::function<bool()>& keep_go
   check_world_free(world_instance(), "Stop that one to replay into this hub");
   Player player(options, keep_going);
   PlayReport report;
-  do {
+  for (;;) {
     try {
       player.pass();
     } catch (const EndOfPass& end) {
       if (end.stop) break;
+      if (end.rewind) continue;
     }
     if (++report.passes == 1) report.unmatched_globs = player.say_unmatched_globs();
     // A file with nothing to play in the range, or a --bodies typo, would loop for good.
-  } while (options.loop && player.published() > 0 && report.unmatched_globs == 0 && keep_going());
+    if (!(options.loop && player.published() > 0 && report.unmatched_globs == 0 && keep_going()))
+      break;
+  }
   report.published = player.published();
   report.cut_off = player.cut_off();
   return report;

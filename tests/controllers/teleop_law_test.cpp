@@ -396,6 +396,23 @@ TEST(TeleopLaw, HoldKeepsTheTargetAndLettingGoReanchorsWithoutAJump) {
   EXPECT_NEAR(out.body_target.position_m.x, held.x + params.workspace_scale * 0.01, 1e-12);
 }
 
+// re_anchor(): a new driver's hand, elsewhere, with no stale gap between (a driver
+// restarted at once): the target continues from where it was (it followed the 3 cm
+// from the old hand to the new one, scaled: the body thrown 0.7 m in the end-to-end run).
+TEST(TeleopLaw, ReanchoringTakesANewDriversHandWithoutAJump) {
+  TeleopParams params = plain_params();
+  TeleopLaw law(params);
+  TeleopOutput out;
+  law.step(device_at(v3(0, 0, 0)), pose_at(v3(0, 0, 0)), {}, kDt, out);
+  law.step(device_at(v3(0.02, 0, 0)), pose_at(v3(0, 0, 0)), {}, kDt, out);
+  const Vec3 before = out.body_target.position_m;
+  law.re_anchor();
+  law.step(device_at(v3(-0.01, 0, 0)), pose_at(v3(0, 0, 0)), {}, kDt, out);
+  EXPECT_TRUE(near(out.body_target.position_m, before, 1e-15)) << "a jump to the new hand";
+  law.step(device_at(v3(0.0, 0, 0)), pose_at(v3(0, 0, 0)), {}, kDt, out);
+  EXPECT_NEAR(out.body_target.position_m.x, before.x + params.workspace_scale * 0.01, 1e-12);
+}
+
 TEST(TeleopLaw, RestartFromDrivesTheBodyFromWhereItIs) {
   TeleopLaw law(plain_params());
   TeleopOutput out;

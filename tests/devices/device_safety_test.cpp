@@ -20,6 +20,7 @@
 #include "afhub/rt/percentile.hpp"
 #include "afhub/shm_layout/device.hpp"
 #include "afhub_process.hpp"
+#include "text_contains.hpp"
 
 namespace afhub::test {
 namespace {
@@ -95,6 +96,21 @@ TEST_F(DeviceSafety, ForceGoesToZeroWhenTheCommandingProcessIsKilled) {
       "kills): p50 %.2f ms, p99 %.2f ms, max %.2f ms\n",
       kKills, at(0.5), at(0.99), kill_to_zero_ms.back());
   EXPECT_LE(max_applied_, 8.0 + 1e-9);
+}
+
+// A second driver of the same name was taken: the two alternated in the device's
+// state (the hand between two poses) and both took its commands. It is refused, naming
+// the first, and the first runs on.
+TEST_F(DeviceSafety, ASecondDriverOfTheSameNameIsRefused) {
+  const RunResult second = run_afhub({"device", "run", "virtual", "--name", "safe"}, 10s);
+  EXPECT_EQ(second.exit_code, 1) << second.err;
+  EXPECT_TRUE(contains(second.err, "device/safe is published by")) << second.err;
+  EXPECT_TRUE(contains(second.err, "(pid " + std::to_string(driver_.pid) + ")")) << second.err;
+  EXPECT_TRUE(contains(second.err, "a device has one driver")) << second.err;
+  const std::int64_t after = monotonic_ns();
+  EXPECT_TRUE(watch([&](const DeviceState& s) { return s.header.publish_stamp_ns > after; }, 2s))
+      << "the first driver stopped";
+  EXPECT_EQ(states_.latest()->header.publisher_pid, static_cast<std::uint32_t>(driver_.pid));
 }
 
 TEST_F(DeviceSafety, ForceNeverExceedsTheMaximumWhateverIsCommanded) {

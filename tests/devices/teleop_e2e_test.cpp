@@ -263,6 +263,47 @@ TEST(TeleopEndToEnd, WhenTheDriverDiesThePalmIsHeldAndResumesWithNoJump) {
   EXPECT_NEAR(teleop.palm().pose.position_m.x, out + kScale * 0.02, 0.01) << teleop.logs();
 }
 
+// The driver SIGKILLed and started again at once, within teleop's stale time (here
+// 2 s): no stale gap is seen, and the new driver's hand, 2 cm from the old one, was
+// taken as a move of the hand (the palm thrown 0.7 m in a fault-injection run). Teleop
+// sees the new driver, says so, and re-anchors: the palm does not jump.
+TEST(TeleopEndToEnd, ADriverRestartedAtOnceIsReanchoredWithNoJump) {
+  afhub::testing::ModelFolder scripts;
+  const std::string csv = scripts.write("out.csv", "0,0,0,0\n1,0,0,0\n2,0.02,0,0\n");
+  Teleop teleop("again", {"--trajectory", csv}, {"--stale", "2000"});
+  ASSERT_TRUE(teleop.wait_running()) << teleop.logs();
+  ASSERT_TRUE(wait_until([&] { return teleop.device().pose.position_m.x > 0.0195; }, 20s));
+  pause_ms(500);
+  const double out = teleop.palm().pose.position_m.x;
+  const std::int64_t killed_at = monotonic_ns();
+  teleop.kill_driver();
+  teleop.start_driver();  // its hand at x = 0 for 1 s
+  ASSERT_TRUE(wait_until([&] { return teleop.device().header.publish_stamp_ns > killed_at; }, 20s));
+  double jump = 0.0;
+  for (int i = 0; i < 300; ++i) {  // about 0.6 s, while the new hand stays at 0
+    jump = std::max(jump, std::abs(teleop.palm().pose.position_m.x - out));
+    pause_ms(2);
+  }
+  std::printf("driver restarted at once: largest move of the palm after it %.2e m\n", jump);
+  EXPECT_TRUE(contains(teleop.teleop_log(), "device/again has a new driver"))
+      << teleop.teleop_log();
+  EXPECT_FALSE(contains(teleop.teleop_log(), "no sample from device/again")) << teleop.logs();
+  SKIP_REAL_TIME_BOUNDS_IN_SANITIZED_BUILD();
+  EXPECT_LT(jump, 0.005) << "the palm jumped to the new driver's hand" << teleop.logs();
+}
+
+// A second teleop on the same device was taken: it anchored at the hand's pose while
+// the first held the palm in the floor, and the two pulled the palm between them with
+// the device at its maximum force. It is refused, naming the first.
+TEST(TeleopEndToEnd, ASecondTeleopOnADeviceIsRefused) {
+  Teleop teleop("twice", {});
+  ASSERT_TRUE(teleop.wait_running()) << teleop.logs();
+  const RunResult second = run_afhub(teleop.teleop_args(), 20s);
+  EXPECT_EQ(second.exit_code, 1) << second.err;
+  EXPECT_TRUE(contains(second.err, "device/twice is commanded by pid")) << second.err;
+  EXPECT_TRUE(contains(second.err, "a device takes one teleoperation")) << second.err;
+}
+
 // --feedback contact: the device renders the palm's contact force (the physics'
 // BodyState.contact_wrench), so moving through the air gives no force at all, and
 // pushing the palm into the floor an upward force, bounded by the max force.

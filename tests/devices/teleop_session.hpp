@@ -115,17 +115,17 @@ class TeleopSession {
     return "run: " + read_file(setup_.log + ".run") + "\nteleop: " + teleop_log() +
            "\ndevice: " + read_file(setup_.log + ".device");
   }
+  std::vector<std::string> teleop_args() const {
+    std::vector<std::string> args = {"teleop", setup_.devices_file};
+    args.insert(args.end(), setup_.teleop_args.begin(), setup_.teleop_args.end());
+    return args;
+  }
 
  private:
   std::vector<std::string> run_args() const {
     std::vector<std::string> args = {"run"};
     args.insert(args.end(), setup_.models.begin(), setup_.models.end());
     args.push_back("--no-autostart");
-    return args;
-  }
-  std::vector<std::string> teleop_args() const {
-    std::vector<std::string> args = {"teleop", setup_.devices_file};
-    args.insert(args.end(), setup_.teleop_args.begin(), setup_.teleop_args.end());
     return args;
   }
 

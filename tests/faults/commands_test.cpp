@@ -287,6 +287,48 @@ TEST(FaultsCommands, ARestartedPhysicsIgnoresALiveWritersOldCommand) {
   EXPECT_TRUE(contains(output, "ignored a command for afhub/arm/base from pid")) << output;
 }
 
+// A free-running controller goes on answering the states it read before a world reset
+// for a step or two: those commands, for the old pose, kicked the KUKA's joints at 19 to
+// 34 rad/s. A command answering a step this run has not reached is ignored, counted
+// and said once; one answering a current state is taken.
+TEST(FaultsCommands, CommandsAnsweringAStepFromBeforeAResetAreIgnored) {
+  ArmRun run;
+  ASSERT_TRUE(run.ready()) << read_file(run.log);
+  BodyClient link("afhub/arm/link2");
+  ASSERT_TRUE(wait_until(
+      [&] { return link.latest_state() && link.latest_state()->header.sim_step > 1500; }, 20s));
+  const std::uint64_t before_reset = link.latest_state()->header.sim_step;
+  ASSERT_EQ(run_afhub({"world", "reset"}).exit_code, 0);
+  const auto send = [&](std::uint64_t answers) {
+    BodyCommand* command = link.loan_command(1);
+    ASSERT_NE(command, nullptr);
+    command->header.sim_step = answers;
+    command->joint_count = 1;
+    command->joints[0].type = JointCommandType::kPosition;
+    command->joints[0].value = 1.0;
+    link.publish_command(command);
+  };
+  for (int i = 0; i < 100; ++i) {  // 0.1 s of steps: far from step before_reset again
+    send(before_reset);
+    std::this_thread::sleep_for(1ms);
+  }
+  ASSERT_LT(link.latest_state()->header.sim_step, before_reset) << "the world was not reset";
+  EXPECT_GE(run.fresh().stale_commands, 1u);
+  EXPECT_LT(std::abs(link.latest_state()->joints[0].position), 0.05)
+      << "a command from before the reset moved the arm";
+  ASSERT_TRUE(wait_until(
+      [&] {
+        send(link.latest_state()->header.sim_step);
+        return link.latest_state()->joints[0].position > 0.5;
+      },
+      5s))
+      << "a command answering a current state was not taken";
+  EXPECT_EQ(run.physics->stop(), 0);
+  const std::string output = read_file(run.log);
+  EXPECT_EQ(occurrences(output, "which this run has not reached"), 1) << output;
+  EXPECT_TRUE(contains(output, "answering step " + std::to_string(before_reset))) << output;
+}
+
 // A command stamped an hour ahead (forged in its slot, as a forger or a writer on
 // another clock would: afhub's own writers stamp at publish) is ignored and counted as
 // stale, said once; it does not move the arm.

@@ -170,6 +170,47 @@ def test_a_refused_value_leaves_the_command_held_before(physics, tmp_path):
     assert 'ambf_client: ' not in output, output  # the client's thread sent without a fault
 
 
+def test_a_body_named_world_is_that_body_and_wrong_types_raise(physics, tmp_path):
+    """A model's body named 'world' (the four-bar's, a URDF's root link) is that body, as
+    in AMBF (the World handle came instead, without get_pos); 'World' is the world. A value
+    of the wrong type raises TypeError naming it (None was a ValueError, and '1' was read
+    as 1 N); values past the last joint are said, as AMBF does."""
+    model = tmp_path / 'world_body.yaml'
+    model.write_text('bodies: [BODY world, BODY arm]\njoints: [JOINT j]\n'
+                     'BODY world:\n  name: world\n  mass: 0\n'
+                     'BODY arm:\n  name: arm\n  mass: 1\n  shape: box\n'
+                     '  geometry: {x: 0.1, y: 0.1, z: 0.1}\n'
+                     'JOINT j:\n  name: j\n  parent: BODY world\n  child: BODY arm\n'
+                     '  parent pivot: {x: 0, y: 0, z: 0}\n  parent axis: {x: 0, y: 0, z: 1}\n'
+                     '  child pivot: {x: 0, y: 0, z: 0}\n  child axis: {x: 0, y: 0, z: 1}\n'
+                     '  type: revolute\n')
+    physics(model).wait_for_body('arm')
+    script = Script(tmp_path, """
+        from ambf_client import Client
+        c = Client()
+        c.connect()
+        world = c.get_obj_handle('world')
+        assert world is not c.get_world_handle() and isinstance(world.get_pos().z, float), world
+        assert c.get_obj_handle('World') is c.get_world_handle()
+        for call in (lambda: world.set_joint_pos(0, None), lambda: world.set_force('1', 0, 0),
+                     lambda: world.set_pos(0, True, 0)):
+            try:
+                call()
+                print('accepted')
+            except TypeError as error:
+                print('refused:', error)
+        world.set_multiple_joint_pos([0.1, 0.2])
+        print('DONE')
+    """)
+    output = script.finish()
+    assert output.count('refused:') == 3 and 'accepted' not in output, output
+    assert "refused: a joint value is a real number, not None" in output, output
+    assert "refused: x is a real number, not '1'" in output, output
+    assert "refused: y is a real number, not True" in output, output
+    assert 'Requested Joint index is out of range with joints 1: 2 values given' in output, output
+    assert 'DONE' in output, output
+
+
 def test_names_handles_and_unsupported_calls(physics, tmp_path):
     run = physics(EXAMPLES / 'arm7.yaml')
     run.wait_for_body('arm/base')
@@ -184,7 +225,9 @@ def test_names_handles_and_unsupported_calls(physics, tmp_path):
         assert c.get_obj_handle('arm/base') is a and c.get_obj_handle('base') is a
         assert c.get_obj_handle('afhub/arm/link7').get_name() == '/afhub/arm/link7'
         assert c.get_obj_handle('World') is c.get_world_handle()
+        assert c.get_obj_handle('world') is c.get_world_handle()  # no body is named so
         assert c.get_obj_handle('no_such_body') is None
+        assert c.get_obj_handle('link') is None  # seven match: said, naming them
         assert a.get_joint_idx_from_name('link2-link3') == 2
         assert a.get_joint_pos(99) is None
         assert len(c.get_obj_pose('arm/base')) == 6
@@ -211,6 +254,7 @@ def test_names_handles_and_unsupported_calls(physics, tmp_path):
     output = script.finish()
     assert 'unsupported: get_msg_header' in output and 'OK' in output
     assert 'no_such_body NAMED OBJECT NOT FOUND' in output
+    assert 'link NAMED OBJECT NOT FOUND: 7 objects match it: /afhub/arm/link1' in output, output
 
 
 def test_misuse_is_refused_and_throttling_ends_with_the_script(physics, tmp_path):
@@ -243,7 +287,7 @@ def test_misuse_is_refused_and_throttling_ends_with_the_script(physics, tmp_path
             try:
                 a.set_joint_pos(0, value)
                 raise SystemExit(f'set_joint_pos took {value!r}')
-            except ValueError:
+            except TypeError:
                 pass
         w = c.get_world_handle()
         for skips in (0.5, 2.5, '5', True, 0, 101):

@@ -1,6 +1,8 @@
 // The teleoperation process (see teleop_process.hpp).
 #include "afhub/teleop/teleop_process.hpp"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <array>
 #include <cstdio>
@@ -9,6 +11,7 @@
 #include <optional>
 
 #include "afhub/hub/bodies.hpp"
+#include "afhub/hub/body_claims.hpp"
 #include "afhub/hub/hub_health.hpp"
 #include "afhub/hub/hub_loss.hpp"
 #include "afhub/hub/hub_presence.hpp"
@@ -66,7 +69,9 @@ struct Link {
   TeleopOutput out;
   std::size_t joints{std::numeric_limits<std::size_t>::max()};  // capped below
   std::int64_t last_cycle_ns{0};
-  bool held{false};  // the device's samples are stale: the body is held
+  bool held{false};             // the device's samples are stale: the body is held
+  std::uint32_t device_pid{0};  // the newest sample's driver, and its sequence there
+  std::uint64_t device_sequence{0};
   bool seen_state{false};
   PhysicsLiveness physics{PhysicsLiveness::kStarting};  // not live: the device gets no force
   bool liveness_said{false};       // a change of `physics` was said: its return to live is too
@@ -94,6 +99,27 @@ void wait_for_device(Link& link, const std::string& who, std::int64_t give_up_ns
     }
     sleep_until_ns(now + 10'000'000);
   }
+}
+
+// One process commands a device: a second teleop on it fought the first (the palm
+// pulled between their two anchors, the device at its file's maximum force). Refused
+// when another live process commanded it in the last half second.
+void require_device_free(const Link& link) {
+  const std::string channel = device_channel_name(link.binding->device_name);
+  LatestReader<DeviceCommand> commands(body_command_channel(channel));
+  const DeviceCommand* command = nullptr;
+  // A new reader finds a live writer within the hub's discovery interval (0.1 s).
+  for (const std::int64_t give_up = monotonic_ns() + 300'000'000;
+       !(command = commands.latest()) && monotonic_ns() < give_up;)
+    sleep_until_ns(monotonic_ns() + 2'000'000);
+  if (!command) return;
+  const std::uint32_t pid = command->header.publisher_pid;
+  if (pid == static_cast<std::uint32_t>(getpid()) || !process_exists(pid) ||
+      monotonic_ns() - command->header.publish_stamp_ns > 500'000'000)
+    return;
+  throw Error(channel + " is commanded by pid " + std::to_string(pid) +
+              " (another afhub teleop?): a device takes one teleoperation. Stop that one, or "
+              "bind this one to another device (--device NAME)");
 }
 
 // Whether the body's physics is live (its newest state; none once there was one: a
@@ -153,6 +179,19 @@ const BodyState* cycle(Link& link, std::int64_t now, TeleopLatency* latency, std
     const std::int64_t sample = link.sample_stamp_of[device->command_sequence % kInFlight];
     if (latency->to_device_force.size() < most)
       latency->to_device_force.push_back(device->header.publish_stamp_ns - sample);
+  }
+  // A driver restarted within the stale time comes with no gap in the samples.
+  const bool new_driver =
+      link.device_pid != 0 && (device->header.publisher_pid != link.device_pid ||
+                               device->header.sequence < link.device_sequence);
+  link.device_pid = device->header.publisher_pid;
+  link.device_sequence = device->header.sequence;
+  if (new_driver && !link.held) {
+    link.law.re_anchor();
+    std::fprintf(stderr,
+                 "afhub teleop: device/%s has a new driver (pid %u): %s moves on from where it "
+                 "is, with no jump\n",
+                 link.binding->device_name.c_str(), link.device_pid, link.binding->body.c_str());
   }
   const double dt = link.last_cycle_ns ? static_cast<double>(now - link.last_cycle_ns) * 1e-9 : 0.0;
   link.last_cycle_ns = now;
@@ -215,6 +254,7 @@ int run_teleop(const TeleopOptions& options, TeleopLatency* latency) {
         wait.wait_for_body(binding.body, who, binding.load_hint + ", or wait longer with --wait");
     links.push_back(std::make_unique<Link>(binding, entry, options));
     wait_for_device(*links.back(), who, wait.give_up_ns());
+    require_device_free(*links.back());
     std::fprintf(stderr, "%s: %s: device/%s drives %s\n", who.c_str(),
                  binding.spec.identifier.c_str(), binding.device_name.c_str(),
                  binding.body.c_str());

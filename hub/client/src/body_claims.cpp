@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <fstream>
 #include <map>
 #include <thread>
 
@@ -17,11 +18,20 @@
 #include "afhub/shm_layout/world.hpp"
 
 namespace afhub {
-namespace {
+namespace {}  // namespace
 
 bool process_exists(std::uint32_t pid) {
-  return pid > 0 && (kill(static_cast<pid_t>(pid), 0) == 0 || errno == EPERM);
+  if (pid == 0 || (kill(static_cast<pid_t>(pid), 0) != 0 && errno != EPERM)) return false;
+  // A zombie (dead, its parent has not reaped it yet) owns nothing: it held a restarted
+  // physics off for over a second.
+  std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
+  std::string line;
+  std::getline(stat, line);
+  const std::size_t name_end = line.rfind(')');
+  return name_end == std::string::npos || name_end + 2 >= line.size() || line[name_end + 2] != 'Z';
 }
+
+namespace {
 
 struct Owner {
   std::string name;
@@ -39,8 +49,12 @@ std::map<std::string, Owner> catalog_owners(CatalogReader& catalog) {
 }
 
 std::string taken_message(const std::string& channel, const Owner& owner) {
-  return channel + " is published by " + owner.name + " (pid " + std::to_string(owner.pid) +
-         "): a body has one publisher. Stop that process, or run this copy in another "
+  const std::string by =
+      channel + " is published by " + owner.name + " (pid " + std::to_string(owner.pid) + ")";
+  if (channel.starts_with("device/"))
+    return by + ": a device has one driver. Stop that one, or give this one another --name";
+  return by +
+         ": a body has one publisher. Stop that process, or run this copy in another "
          "namespace (--namespace)";
 }
 

@@ -88,6 +88,11 @@ class TeleopLaw {
   // re-anchors, so the body continues from where it was held with no jump.
   void hold(bool held) noexcept { held_ = held; }
 
+  // A new driver took the device (restarted within the stale time: its hand may be
+  // anywhere): the next step anchors at its pose, as after the clutch, so the body
+  // continues from where it is (it was thrown 0.7 m toward the new hand's pose).
+  void re_anchor() noexcept { was_clutched_ = true; }
+
  private:
   TeleopParams params_;
   bool anchored_{false};

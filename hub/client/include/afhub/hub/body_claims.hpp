@@ -12,6 +12,9 @@
 
 namespace afhub {
 
+// Whether process `pid` is alive: it exists and is no zombie (dead, not yet reaped).
+bool process_exists(std::uint32_t pid);
+
 // Throws afhub::Error, saying what to do, when a body in `channels` is published by
 // another live process, when the catalog cannot take them all, or when iceoryx has
 // fewer than `publishers` publisher ports (a block of state slots holds many bodies,

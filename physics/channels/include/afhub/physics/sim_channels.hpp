@@ -181,6 +181,7 @@ class SimChannels {
   static constexpr std::int64_t kFutureStampAllowanceNs = 1'000'000;
   enum Event {
     kStale,
+    kAhead,
     kRejected,
     kAxisless,
     kBeyondLimits,
@@ -196,7 +197,7 @@ class SimChannels {
     std::uint32_t pid = 0;
     double seconds = 0.0;         // kStale: the command's age (< 0: from the future)
     std::uint32_t other_pid = 0;  // kShared: the client in the barrier
-    std::uint64_t step = 0;       // kJoined: the step it joined at
+    std::uint64_t step = 0;       // kJoined: the step it joined at; kAhead: it answered
     int misses = 0;               // kDropped: late steps in a row
     std::array<char, 160> why{};  // kRejected, kAxisless, kBeyondLimits: the problem
   };
