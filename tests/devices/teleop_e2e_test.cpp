@@ -506,6 +506,25 @@ Frozen watch_force(TeleopSession& teleop, std::int64_t signalled_at, int ms) {
   return frozen;
 }
 
+// The force of the first device state that applies one (after one whose force teleop
+// disabled, when `after_off`), read within `timeout`; -1 when none came.
+double first_applied_force(TeleopSession& teleop, bool after_off,
+                           std::chrono::milliseconds timeout) {
+  bool off = !after_off;
+  double force = -1.0;
+  wait_until(
+      [&] {
+        const DeviceState* d = teleop.new_device_state();
+        if (!d) return false;
+        if (d->gate == ForceGate::kDisabled) off = true;
+        if (off && d->gate == ForceGate::kApplying)
+          force = std::hypot(d->applied.force_n.x, d->applied.force_n.y, d->applied.force_n.z);
+        return force >= 0.0;
+      },
+      timeout);
+  return force;
+}
+
 bool pushing_up(TeleopSession& teleop) {
   const DeviceState* d = teleop.new_device_state();
   return d && d->gate == ForceGate::kApplying && d->applied.force_n.z > 1.0;
@@ -533,17 +552,8 @@ TEST(TeleopEndToEnd, ADeviceNeverPushesOnAStoppedOrDeadPhysics) {
       [&] { return contains(teleop.teleop_log(), "afhub/gripper/palm's physics steps again"); },
       5s))
       << teleop.logs();
-  double first_force = -1.0;
-  ASSERT_TRUE(wait_until(
-      [&] {
-        const DeviceState* d = teleop.new_device_state();
-        if (d && d->gate == ForceGate::kApplying && first_force < 0.0)
-          first_force =
-              std::hypot(d->applied.force_n.x, d->applied.force_n.y, d->applied.force_n.z);
-        return first_force >= 0.0;
-      },
-      5s))
-      << teleop.logs();
+  const double first_force = first_applied_force(teleop, false, 5s);
+  ASSERT_GE(first_force, 0.0) << teleop.logs();
   ASSERT_TRUE(wait_until([&] { return pushing_up(teleop); }, 20s)) << teleop.logs();
 
   // A paused world publishes its states on, unmoving, while the device moves on: the
@@ -593,20 +603,8 @@ TEST(TeleopEndToEnd, AWorldResetWhileTheDevicePushesRampsTheForceInAgain) {
   ASSERT_TRUE(wait_until([&] { return pushing_up(teleop); }, 20s)) << teleop.logs();
 
   ASSERT_EQ(run_afhub({"world", "reset"}).exit_code, 0);
-  bool off = false;
-  double first_force = -1.0;
-  ASSERT_TRUE(wait_until(
-      [&] {
-        const DeviceState* d = teleop.new_device_state();
-        if (!d) return false;
-        if (d->gate == ForceGate::kDisabled) off = true;
-        if (off && d->gate == ForceGate::kApplying)
-          first_force =
-              std::hypot(d->applied.force_n.x, d->applied.force_n.y, d->applied.force_n.z);
-        return first_force >= 0.0;
-      },
-      10s))
-      << teleop.logs();
+  const double first_force = first_applied_force(teleop, true, 10s);
+  ASSERT_GE(first_force, 0.0) << "the force never went off and came back" << teleop.logs();
   ASSERT_TRUE(wait_until([&] { return pushing_up(teleop); }, 20s)) << teleop.logs();
   std::printf("world reset while pushing: first force after it %.3f N\n", first_force);
   EXPECT_LT(first_force, 0.5) << "the force came back at once, not ramped in";
