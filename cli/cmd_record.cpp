@@ -149,8 +149,23 @@ int run_record(RecordCliOptions& options) {
   // to wait for the next hub and record into the next file: run.mcap, run.1.mcap, ...
   survive_hub_loss("afhub record");
   refuse_a_recording_there(options);
+  // A re-attached recorder's --duration spans its files: what the hub's absence took
+  // counts too (each file took the whole duration again: 7.6 s for --duration 4).
+  options.record.duration_from_ns = carried_from_before_reattach();
+  carry_into_reattach(options.record.duration_from_ns);
+  const auto duration_over = [&] {
+    if (options.record.duration_from_ns == 0 || options.record.duration_s <= 0.0 ||
+        monotonic_ns() - options.record.duration_from_ns <
+            static_cast<std::int64_t>(options.record.duration_s * 1e9))
+      return false;
+    std::fprintf(stderr, "afhub record: --duration %g s ended while the hub was away\n",
+                 options.record.duration_s);
+    return true;
+  };
+  if (duration_over()) return 0;
   const StartupWait wait(options.wait_s);
   wait.connect_to_hub("record");
+  if (duration_over()) return 0;
   number_a_reattached_output(options);
 
   const bool live = isatty(STDERR_FILENO);

@@ -256,8 +256,11 @@ class Session {
         if (payload && (recorded.reader->updated() || recorded.retry))
           sample(recorded, payload, recorded.reader->latest_bytes(), now);
       }
-      // The duration counts from the first message, or from the start while none came.
-      const std::int64_t since = first_sample_ns_ != 0 ? first_sample_ns_.load() : start_ns;
+      // The duration counts from the first message, or from the start while none came
+      // (or from an earlier file's first message: duration_from_ns).
+      const std::int64_t since = options_.duration_from_ns != 0 ? options_.duration_from_ns
+                                 : first_sample_ns_ != 0        ? first_sample_ns_.load()
+                                                                : start_ns;
       if (options_.duration_s > 0.0 &&
           now - since >= static_cast<std::int64_t>(options_.duration_s * 1e9))
         break;
@@ -453,7 +456,11 @@ class Session {
     recorded.publisher_pid = header.publisher_pid;
     recorded.last = key;
     recorded.last_stamp_ns = header.publish_stamp_ns;
-    if (first_sample_ns_ == 0) first_sample_ns_ = now_ns;
+    if (first_sample_ns_ == 0) {
+      first_sample_ns_ = now_ns;
+      // The next image, after a hub loss, spans its duration from here.
+      if (options_.duration_from_ns == 0) carry_into_reattach(now_ns);
+    }
   }
 
   // A command to a body on the tape of a physics that is not paused: it comes on the

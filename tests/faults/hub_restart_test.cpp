@@ -482,6 +482,54 @@ TEST(HubLoss, ARecordingEndsCompleteWhenTheHubGoesAndGoesOnIntoTheNextFile) {
   EXPECT_EQ(player.stop(SIGINT), 0) << read_file(play_log);
 }
 
+// `afhub record --duration` through a hub SIGKILL: the duration spans the files, from
+// the first one's first message, the hub's absence included (each file took the whole
+// duration again: 7.6 s recorded for --duration 4 across two kills); the recorder ends
+// by itself.
+TEST(HubLoss, ARecordingsDurationSpansTheFilesAcrossAHubRestart) {
+  const std::string log = "/tmp/afhub-fault-duration.log", first = "/tmp/afhub-fault-duration.mcap",
+                    second = "/tmp/afhub-fault-duration.1.mcap";
+  for (const std::string& path : {log, first, second}) unlink(path.c_str());
+  ScopedProcess hub(start_test_hub());
+  ASSERT_GT(hub.pid, 0);
+  ScopedProcess physics =
+      spawn_afhub({"run", std::string(AFHUB_EXAMPLE_MODELS) + "/arm7.yaml", "--no-autostart"},
+                  "/tmp/afhub-fault-duration-physics.log");
+  constexpr double kDurationS = 8.0;
+  ScopedProcess recorder = spawn_afhub({"record", "-o", first, "--duration", "8"}, log);
+  // {first log time, last log time} of a file, from `afhub info` (0s when unreadable).
+  const auto span = [](const std::string& path) {
+    const RunResult run = run_afhub({"info", path, "--json"});
+    std::smatch start, duration;
+    if (run.exit_code != 0 ||
+        !std::regex_search(run.out, start, std::regex("\"start_ns\":([0-9]+)")) ||
+        !std::regex_search(run.out, duration, std::regex("\"duration_s\":([0-9.e+-]+)")))
+      return std::make_pair(0.0, 0.0);
+    const double from = std::stod(start[1]) * 1e-9;
+    return std::make_pair(from, from + std::stod(duration[1]));
+  };
+  ASSERT_TRUE(wait_until([&] { return span(first).second - span(first).first > 1.0; }, 30s))
+      << read_file(log);
+  kill(hub.pid, SIGKILL);
+  waitpid(hub.pid, nullptr, 0);
+  hub.pid = spawn_afhub({"hub"}, "/tmp/afhub-test-hub.log");
+  ASSERT_TRUE(wait_until([] { return probe_roudi() == RoudiPresence::kRunning; }, kHubStartWait));
+  int status = 0;
+  ASSERT_TRUE(
+      wait_until([&] { return waitpid(recorder.pid, &status, WNOHANG) == recorder.pid; }, 60s))
+      << "the recorder did not end\n"
+      << read_file(log);
+  recorder.pid = -1;
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << read_file(log);
+  const auto [begun, first_end] = span(first);
+  const auto [second_start, second_end] = span(second);  // 0s when the hub came back late
+  std::printf("--duration 8 across a hub kill: first file %.2f s, second %.2f s, %.2f s in all\n",
+              first_end - begun, second_end - second_start,
+              std::max(first_end, second_end) - begun);
+  EXPECT_LT(std::max(first_end, second_end) - begun, kDurationS + 0.2) << read_file(log);
+  EXPECT_EQ(physics.stop(), 0);
+}
+
 TEST(HubLoss, TheViewerSaysTheHubIsLostThenServesLiveFramesAgain) {
   const std::string view_log = "/tmp/afhub-fault-view.log",
                     physics_log = "/tmp/afhub-fault-view-physics.log";

@@ -26,11 +26,12 @@ void survive_hub_loss(const std::string& who) {
   if (const char* value = std::getenv(hub_loss::kReattachVariable)) {
     unsigned count = 0;
     unsigned long long lost_hub = 0;
-    long long lost_at = 0;
-    if (std::sscanf(value, "%u:%llu:%lld", &count, &lost_hub, &lost_at) == 3) {
+    long long lost_at = 0, carried = 0;
+    if (std::sscanf(value, "%u:%llu:%lld:%lld", &count, &lost_hub, &lost_at, &carried) == 4) {
       s.reattach_count = count;
       s.lost_hub = lost_hub;
       s.lost_at_ns = lost_at;
+      s.carried = carried;
     }
     unsetenv(hub_loss::kReattachVariable);
   }
@@ -60,6 +61,14 @@ bool hub_lost() noexcept {
 
 unsigned reattach_count() noexcept {
   return hub_loss::state().reattach_count;
+}
+
+void carry_into_reattach(std::int64_t value) noexcept {
+  hub_loss::state().carried.store(value, std::memory_order_relaxed);
+}
+
+std::int64_t carried_from_before_reattach() noexcept {
+  return hub_loss::state().reattach_count > 0 ? hub_loss::state().carried.load() : 0;
 }
 
 namespace hub_loss {

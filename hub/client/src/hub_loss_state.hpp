@@ -18,7 +18,8 @@
 
 namespace afhub::hub_loss {
 
-// What the process before a re-exec tells the next image: "COUNT:LOST_HUB:LOST_AT_NS".
+// What the process before a re-exec tells the next image:
+// "COUNT:LOST_HUB:LOST_AT_NS:CARRIED" (CARRIED: carry_into_reattach()'s value).
 inline constexpr const char* kReattachVariable = "AFHUB_REATTACH";
 // How often a thread waiting on the loss's handling, or for a new hub, looks again.
 inline constexpr std::int64_t kReattachPollNs = 10'000'000;
@@ -39,6 +40,7 @@ struct State {
   unsigned reattach_count = 0;
   std::uint64_t lost_hub = 0;   // the instance the previous image lost (0: not an afhub hub)
   std::int64_t lost_at_ns = 0;  // when it was lost (CLOCK_MONOTONIC)
+  std::atomic<std::int64_t> carried{0};  // carry_into_reattach(): in, then out again
 
   std::string who;  // "afhub ctl", in messages
   // What the re-exec needs, prepared at the opt-in so that the loss path itself only

@@ -45,9 +45,10 @@ void prepare_self_reexec() {
 
 void reexecute_self() noexcept {
   State& s = state();
-  std::snprintf(s.reattach_entry, sizeof s.reattach_entry, "%s=%u:%llu:%lld", kReattachVariable,
-                s.reattach_count + 1, static_cast<unsigned long long>(s.attached_hub.load()),
-                static_cast<long long>(monotonic_ns()));
+  std::snprintf(s.reattach_entry, sizeof s.reattach_entry, "%s=%u:%llu:%lld:%lld",
+                kReattachVariable, s.reattach_count + 1,
+                static_cast<unsigned long long>(s.attached_hub.load()),
+                static_cast<long long>(monotonic_ns()), static_cast<long long>(s.carried.load()));
   std::fflush(stdout);
   std::fflush(stderr);
   // Only the three standard streams go across: iceoryx's descriptors (its runtime

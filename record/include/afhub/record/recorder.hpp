@@ -23,6 +23,9 @@ struct RecordOptions {
   bool devices = false;                      // every device's state and command
   bool commands = false;                     // every command sent to a recorded body
   double duration_s = 0.0;  // from the first message (the start while none came); 0: until stopped
+  // When the duration began, when earlier (a re-attached recorder's first file's first
+  // message: the duration spans the files); 0: as above. Handed on to the next image.
+  std::int64_t duration_from_ns = 0;
   Compression compression = Compression::kZstd;
   std::size_t buffer_bytes = 256u << 20;
   std::string profile;  // "" (afhub's payloads) or "ros2" (ROS 2 messages, ros2_messages.hpp)

@@ -48,4 +48,10 @@ bool hub_lost() noexcept;
 // 0 at a normal start; after a hub loss, how many times this process re-attached.
 unsigned reattach_count() noexcept;
 
+// A value this process hands its next image when it re-attaches (afhub record: when its
+// recording began, so that --duration spans the files), and what the image before it
+// handed this one (0 at a normal start). Real-time safe.
+void carry_into_reattach(std::int64_t value) noexcept;
+std::int64_t carried_from_before_reattach() noexcept;
+
 }  // namespace afhub
