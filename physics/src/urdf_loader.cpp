@@ -59,6 +59,10 @@ class CollectedLog : public console_bridge::OutputHandler {
   bool errors = false;
 };
 
+// Past this an angle is no angle any file means (and its sine turns to noise: doubles
+// are a radian apart at 1e16).
+constexpr double kMaxOriginAngleRad = 1e6;
+
 // The file's XML elements, for their lines: the robot, each link and joint by name.
 struct XmlElements {
   TiXmlDocument document;
@@ -269,6 +273,7 @@ class UrdfReader {
                  ". Fix it here (the format: https://wiki.ros.org/urdf/XML)");
       }
     }
+    check_origin_angles(*xml_.robot);
     for (const char* element : {"transmission", "gazebo"})
       if (const TiXmlElement* first = xml_.robot->FirstChildElement(element))
         warn(location_of(path_, *first).line,
@@ -299,6 +304,30 @@ class UrdfReader {
   }
   void warn_once(const std::string& key, int line, const std::string& what) {
     if (warned_.insert(key).second) warn(line, what);
+  }
+
+  // Every <origin rpy> below `element`: urdfdom turns it into a rotation at once, and
+  // took 1e300 (whose sine is noise) as some rotation, and 90 (degrees?) as 90 rad.
+  void check_origin_angles(const TiXmlElement& element) {
+    for (const TiXmlElement* child = element.FirstChildElement(); child;
+         child = child->NextSiblingElement()) {
+      check_origin_angles(*child);
+      const char* rpy = child->Value() == std::string("origin") ? child->Attribute("rpy") : nullptr;
+      if (!rpy) continue;
+      std::istringstream values(rpy);
+      for (double angle = 0.0; values >> angle;) {
+        if (!(std::abs(angle) <= kMaxOriginAngleRad))
+          fail(location_of(path_, *child),
+               "<origin rpy=\"" + std::string(rpy) + "\"> holds " + yaml::number_text(angle) +
+                   ", which is no angle a rotation can be computed from; give radians within " +
+                   yaml::number_text(kMaxOriginAngleRad));
+        if (std::abs(angle) > 2.0 * M_PI * 1.01)
+          warn_once("rpy", child->Row(),
+                    "<origin rpy=\"" + std::string(rpy) +
+                        "\"> turns more than a full turn: URDF gives it in radians (90 degrees "
+                        "is 1.5708); check its unit");
+      }
+    }
   }
 
   // A value within the bounds an ADF file has for it (file_reader.hpp), or an error at

@@ -532,6 +532,11 @@ TEST(Urdf, MalformedAndInvalidFilesAreErrorsAtTheirLine) {
        "    <child link=\"b\"/>\n    <axis xyz=\"0 0 0\"/>\n    <limit lower=\"-1\" upper=\"1\" "
        "effort=\"1\" velocity=\"1\"/>\n  </joint>\n",
        ":5:3: error: joint 'j': its <axis> is zero", "<axis xyz=\"0 0 1\"/>"},
+      // urdfdom turned it into some rotation.
+      {"huge_rpy.urdf",
+       "  <link name=\"b\"/>\n  <joint name=\"j\" type=\"fixed\">\n    <parent link=\"a\"/>\n"
+       "    <child link=\"b\"/>\n    <origin rpy=\"1e300 0 0\"/>\n  </joint>\n",
+       ":8:5: error: <origin rpy=\"1e300 0 0\"> holds 1e+300", "give radians within 1e+06"},
       {"huge_effort.urdf",
        "  <link name=\"b\"/>\n  <joint name=\"j\" type=\"revolute\">\n    <parent link=\"a\"/>\n"
        "    <child link=\"b\"/>\n    <axis xyz=\"0 0 1\"/>\n    <limit lower=\"-1\" upper=\"1\" "
@@ -586,6 +591,21 @@ TEST(Urdf, MalformedAndInvalidFilesAreErrorsAtTheirLine) {
   EXPECT_TRUE(flat_model.warnings[0].starts_with(
       flat.path + ":4:1: warning: link 'b': its <inertia> has principal moments (1, 1, 5)"))
       << flat_model.warnings[0];
+  // Degrees where URDF takes radians load, with a warning each.
+  const WrittenFile degrees(
+      "degrees.urdf",
+      head +
+          "  <link name=\"b\"/>\n  <joint name=\"j\" type=\"revolute\">\n    <parent "
+          "link=\"a\"/>\n    <child link=\"b\"/>\n    <origin rpy=\"90 0 0\"/>\n    <limit "
+          "lower=\"-90\" upper=\"90\" effort=\"1\" velocity=\"1\"/>\n  </joint>\n</robot>\n");
+  const Model degrees_model = load(degrees.path);
+  ASSERT_EQ(degrees_model.warnings.size(), 2u);
+  EXPECT_NE(degrees_model.warnings[0].find(":8:1: warning: <origin rpy=\"90 0 0\"> turns more "
+                                           "than a full turn"),
+            std::string::npos)
+      << degrees_model.warnings[0];
+  EXPECT_NE(degrees_model.warnings[1].find("reaches past a full turn"), std::string::npos)
+      << degrees_model.warnings[1];
   const WrittenFile not_robot("not_robot.urdf", "<?xml version=\"1.0\"?>\n<model name=\"m\"/>\n");
   EXPECT_EQ(load_error(not_robot.path),
             not_robot.path +
