@@ -280,8 +280,17 @@ BodySpec read_body(const FileReader& file, const YAML::Node& block, const std::s
       body.angular_output = ControllerOutput::kForce;
     }
   }
-  if (YAML::Node output = block["controller output type"])
-    body.linear_output = body.angular_output = read_output_type(file, output);
+  // As AMBF, only with gains: a FORCE output on the velocity preset (P 10, no D) would be
+  // an undamped spring.
+  if (YAML::Node output = block["controller output type"]) {
+    const ControllerOutput type = read_output_type(file, output);
+    if (block["controller"])
+      body.linear_output = body.angular_output = type;
+    else
+      file.warn(output,
+                "'controller output type' is ignored without a 'controller' block (as in AMBF): "
+                "the body keeps its velocity controller (P 10, no D); give gains to choose FORCE");
+  }
   for (const auto& [pid, output, what] :
        {std::tuple{body.linear_controller, body.linear_output, "controller.linear"},
         std::tuple{body.angular_controller, body.angular_output, "controller.angular"}})

@@ -163,9 +163,9 @@ void Simulation::Data::build_joints() {
     if (btTypedConstraint* constraint = joints.back()->constraint())
       world.addConstraint(constraint, spec.ignore_inter_collision);
   }
-  part_overlaps();
   raise_gain_caps();
   build_chains();
+  part_overlaps();  // among chains' links too
   mark_joint_islands();
 }
 

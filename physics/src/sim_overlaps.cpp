@@ -96,7 +96,11 @@ bool Simulation::Data::find_overlaps(const std::function<bool(int, int)>& wanted
       DeepestContact contact;
       contact.m_collisionFilterGroup = contact.m_collisionFilterMask = btBroadphaseProxy::AllFilter;
       world.contactPairTest(a, b, contact);
-      if (contact.depth_m > depth_m) found.push_back({a, b, contact.depth_m});
+      // Beyond the shapes' margins, which Bullet counts in: links built touching overlap
+      // by them.
+      const double margins =
+          a->getCollisionShape()->getMargin() + b->getCollisionShape()->getMargin();
+      if (contact.depth_m > depth_m + margins) found.push_back({a, b, contact.depth_m});
     }
   return true;
 }
@@ -119,10 +123,18 @@ void Simulation::Data::part_overlaps() {
       0.0, found, looked_at);
   std::map<int, std::vector<const Overlap*>> by_file;
   for (const Overlap& overlap : found) {
-    overlap.a->setIgnoreCollisionCheck(overlap.b, true);
-    overlap.b->setIgnoreCollisionCheck(overlap.a, true);
+    filter.part(overlap.a->getUserIndex(), overlap.b->getUserIndex());
     by_file[model.bodies[overlap.a->getUserIndex()].file_index].push_back(&overlap);
   }
+  // The broadphase met them as they were added: those pairs go.
+  struct Refused : btOverlapCallback {
+    const CollisionFilter& filter;
+    explicit Refused(const CollisionFilter& f) : filter(f) {}
+    bool processOverlap(btBroadphasePair& pair) override {
+      return !filter.needBroadphaseCollision(pair.m_pProxy0, pair.m_pProxy1);
+    }
+  } refused(filter);
+  if (!found.empty()) world.getPairCache()->processAllOverlappingPairs(&refused, &dispatcher);
   const auto name = [&](const btCollisionObject* object) {
     return model.bodies[object->getUserIndex()].name;
   };

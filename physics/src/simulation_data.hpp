@@ -141,10 +141,15 @@ struct Ray {
 class CollisionFilter : public btOverlapFilterCallback {
  public:
   explicit CollisionFilter(const Model& model)
-      : model_(model), ignored_base_(model.bodies.size(), -1) {}
+      : model_(model), ignored_base_(model.bodies.size(), -1), parted_(model.bodies.size()) {}
   // A chain's first link and its static base, when their joint ignores their
   // collisions: a link is no rigid body, so the joint cannot say it (chains.hpp).
   void ignore_base(int link, int base) { ignored_base_[link] = base; }
+  // Two bodies that overlap as built and are not to collide (Data::part_overlaps).
+  void part(int a, int b) {
+    parted_[a].push_back(b);
+    parted_[b].push_back(a);
+  }
   bool needBroadphaseCollision(btBroadphaseProxy* a, btBroadphaseProxy* b) const override {
     if (!(a->m_collisionFilterGroup & b->m_collisionFilterMask) ||
         !(b->m_collisionFilterGroup & a->m_collisionFilterMask))
@@ -153,6 +158,7 @@ class CollisionFilter : public btOverlapFilterCallback {
     const int j = static_cast<const btCollisionObject*>(b->m_clientObject)->getUserIndex();
     if (i < 0 || j < 0) return true;
     if (ignored_base_[i] == j || ignored_base_[j] == i) return false;
+    if (std::find(parted_[i].begin(), parted_[i].end(), j) != parted_[i].end()) return false;
     const BodySpec& x = model_.bodies[i];
     const BodySpec& y = model_.bodies[j];
     if (x.file_index == y.file_index && model_.file_ignores_inter_collision[x.file_index])
@@ -168,7 +174,8 @@ class CollisionFilter : public btOverlapFilterCallback {
 
  private:
   const Model& model_;
-  std::vector<int> ignored_base_;  // per body
+  std::vector<int> ignored_base_;         // per body
+  std::vector<std::vector<int>> parted_;  // per body: the bodies part() keeps it from
 };
 
 // Work on chains is shared between the two threads (Simulation::share) in blocks of

@@ -157,7 +157,8 @@ class Client:
         if name is None:  # a body whose physics started after connect()
             self._read_catalog()
             name, problem = self._find(a_name)
-        if name is None and a_name == 'world':  # a body named so comes first, as in AMBF
+        if name is None and a_name == 'world' and not any(  # a body named so comes first
+                n.rsplit('/', 1)[-1] == 'world' for n in self._names):
             return self.get_world_handle()
         if name is None:
             print(f'{a_name} NAMED OBJECT NOT FOUND: {problem}')

@@ -189,33 +189,37 @@ class Player : public Visitor {
   void wait_until_due(double at_s, std::uint64_t step, PayloadKind kind) {
     const bool steps = kind == PayloadKind::kBodyState || kind == PayloadKind::kWorldState;
     const bool new_step = steps && step != current_step_;
-    while (true) {
+    for (;;) {
       if (!keep_going_()) throw EndOfPass{true};
       if (hub_lost()) {  // nothing into a hub that is gone: held until the re-exec
         sleep_until_ns(monotonic_ns() + 10'000'000);
         continue;
       }
+      // Looked at while it waits too: a reset or a pause during a long wait (a slow
+      // --rate, a gap in the recording) waited for the next message, and timed out.
       take_world_commands();
       if (rewind_) {
         rewind_ = false;
         throw EndOfPass{false, true};
       }
-      if (!pause_.paused || !new_step || steps_allowed_ > 0) break;
-      publish_paused_world();
-      sleep_until_ns(monotonic_ns() + 1'000'000);
+      if (pause_.paused) {
+        if (!new_step || steps_allowed_ > 0) break;
+        publish_paused_world();
+        sleep_until_ns(monotonic_ns() + 1'000'000);
+        continue;
+      }
+      if (options_.rate == 0.0) break;
+      const std::int64_t offset_ns =
+          static_cast<std::int64_t>((at_s - options_.start_s) * 1e9 / options_.rate);
+      const std::int64_t now = monotonic_ns();
+      if (pass_start_ns_ == 0) pass_start_ns_ = now - offset_ns;
+      const std::int64_t due = pass_start_ns_ + offset_ns;
+      if (now >= due) break;
+      sleep_until_ns(std::min(due, now + 10'000'000));
     }
     if (new_step) {
       current_step_ = step;
       if (pause_.paused) --steps_allowed_;
-    }
-    if (pause_.paused || options_.rate == 0.0) return;
-    const std::int64_t offset_ns =
-        static_cast<std::int64_t>((at_s - options_.start_s) * 1e9 / options_.rate);
-    if (pass_start_ns_ == 0) pass_start_ns_ = monotonic_ns() - offset_ns;
-    const std::int64_t due = pass_start_ns_ + offset_ns;
-    while (monotonic_ns() < due) {
-      if (!keep_going_()) throw EndOfPass{true};
-      sleep_until_ns(std::min(due, monotonic_ns() + 100'000'000));
     }
   }
 

@@ -8,6 +8,7 @@
 #include <sys/wait.h>
 
 #include <chrono>
+#include <fstream>
 #include <memory>
 #include <string>
 #include <thread>
@@ -112,6 +113,39 @@ TEST(Claims, ASecondPhysicsOfTheSameModelIsRefusedUnlessInAnotherNamespace) {
       << "the copy publishes on the first's world channel";
   EXPECT_EQ(copy.stop(), 0);
   EXPECT_EQ(first.stop(), 0);
+}
+
+// A physics killed and not yet reaped by its parent (a zombie) owns nothing: a new one
+// of the same model is taken at once (it was refused, naming the dead one, for about a
+// second, until the hub let the dead one's bodies go).
+TEST(Claims, APhysicsKilledButNotYetReapedOwnsNothing) {
+  const std::string arm = AFHUB_EXAMPLE_MODELS "/arm7.yaml";
+  ScopedProcess first(spawn_afhub({"run", arm, "--no-autostart"}));
+  ASSERT_TRUE(wait_until([] { return listed("afhub/arm/link7"); }, 10s));
+  ASSERT_EQ(kill(first.pid, SIGKILL), 0);
+  std::string state;
+  ASSERT_TRUE(wait_until(
+      [&] {
+        std::ifstream stat("/proc/" + std::to_string(first.pid) + "/stat");
+        std::getline(stat, state);
+        return state.find(") Z ") != std::string::npos;
+      },
+      5s))
+      << state;
+  const std::string log = "/tmp/afhub-claims-zombie.log";
+  ScopedProcess second(spawn_afhub({"run", arm, "--no-autostart"}, log));
+  // Its states come: it took the bodies (refused, it would have exited with "is
+  // published by" in its log).
+  LatestReader<BodyState> base(body_state_channel("afhub/arm/base"));
+  EXPECT_TRUE(wait_until(
+      [&] {
+        const BodyState* latest = base.latest();
+        return latest && latest->header.publisher_pid == static_cast<std::uint32_t>(second.pid);
+      },
+      10s))
+      << read_file(log);
+  EXPECT_FALSE(contains(read_file(log), "is published by")) << read_file(log);
+  EXPECT_EQ(second.stop(), 0) << read_file(log);
 }
 
 // kMaxBodies (4096) is the catalog's bound, no longer iceoryx's ports'. The synths step

@@ -396,6 +396,19 @@ TEST(Simulation, AVelocityControllerWithADOfOneOrMoreIsAWarning) {
   EXPECT_NE(model.warnings[0].find("give D below 1, or `controller output type: FORCE`"),
             std::string::npos)
       << model.warnings[0];
+  // FORCE with no gains would turn the preset (P 10, no D) into an undamped spring: as in
+  // AMBF, the output type goes with gains only.
+  const Model bare =
+      load_adf_files({folder.write("bare.yaml",
+                                   "bodies: [BODY box]\nBODY box:\n  name: box\n  mass: 1\n"
+                                   "  controller output type: FORCE\n")});
+  EXPECT_EQ(bare.bodies[0].linear_output, ControllerOutput::kVelocity);
+  ASSERT_EQ(bare.warnings.size(), 1u);
+  EXPECT_NE(bare.warnings[0].find(
+                "bare.yaml:5:27: warning: 'controller output type' is ignored without a "
+                "'controller' block"),
+            std::string::npos)
+      << bare.warnings[0];
 }
 
 TEST(Simulation, ModelSplitOverTwoFilesSimulates) {

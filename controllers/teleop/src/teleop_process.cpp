@@ -74,6 +74,10 @@ struct Link {
   std::uint64_t device_sequence{0};
   bool seen_state{false};
   PhysicsLiveness physics{PhysicsLiveness::kStarting};  // not live: the device gets no force
+  // Since when the force is off (not live), until the driver said so in a state: only
+  // then has it seen a command without force, and ramps the force in again (a driver
+  // polling slower than an outage lasted would push the whole force at once).
+  std::int64_t force_off_since_ns{0};
   bool liveness_said{false};       // a change of `physics` was said: its return to live is too
   std::uint64_t commands_sent{0};  // = the sequence of our last DeviceCommand
   std::uint64_t last_reported_command{0};
@@ -103,21 +107,27 @@ void wait_for_device(Link& link, const std::string& who, std::int64_t give_up_ns
 
 // One process commands a device: a second teleop on it fought the first (the palm
 // pulled between their two anchors, the device at its file's maximum force). Refused
-// when another live process commanded it in the last half second.
+// while another live process goes on commanding it, a second at most (one stopped just
+// before this one started is given that second to end).
 void require_device_free(const Link& link) {
   const std::string channel = device_channel_name(link.binding->device_name);
   LatestReader<DeviceCommand> commands(body_command_channel(channel));
-  const DeviceCommand* command = nullptr;
-  // A new reader finds a live writer within the hub's discovery interval (0.1 s).
-  for (const std::int64_t give_up = monotonic_ns() + 300'000'000;
-       !(command = commands.latest()) && monotonic_ns() < give_up;)
-    sleep_until_ns(monotonic_ns() + 2'000'000);
-  if (!command) return;
-  const std::uint32_t pid = command->header.publisher_pid;
-  if (pid == static_cast<std::uint32_t>(getpid()) || !process_exists(pid) ||
-      monotonic_ns() - command->header.publish_stamp_ns > 500'000'000)
-    return;
-  throw Error(channel + " is commanded by pid " + std::to_string(pid) +
+  const std::int64_t start = monotonic_ns();
+  std::uint32_t commander = 0;
+  for (std::int64_t now = start; now - start < 1'000'000'000;
+       sleep_until_ns(now + 2'000'000), now = monotonic_ns()) {
+    const DeviceCommand* command = commands.latest();
+    // A new reader finds a live writer within the hub's discovery interval (0.1 s).
+    if (!command) {
+      if (now - start > 300'000'000) return;
+      continue;
+    }
+    commander = command->header.publisher_pid;
+    if (commander == static_cast<std::uint32_t>(getpid()) || !process_exists(commander) ||
+        now - command->header.publish_stamp_ns > 200'000'000)
+      return;
+  }
+  throw Error(channel + " is commanded by pid " + std::to_string(commander) +
               " (another afhub teleop?): a device takes one teleoperation. Stop that one, or "
               "bind this one to another device (--device NAME)");
 }
@@ -170,6 +180,13 @@ const BodyState* cycle(Link& link, std::int64_t now, TeleopLatency* latency, std
   const BodyState* state = link.body.latest_state();
   if (hub_lost()) return nullptr;  // the driver's watchdog zeroes the force
   judge_body(link, state, now);
+  if (link.physics != PhysicsLiveness::kLive) {
+    if (link.force_off_since_ns < 0) link.force_off_since_ns = now;
+  } else if (link.force_off_since_ns >= 0 && device &&
+             device->header.publish_stamp_ns > link.force_off_since_ns &&
+             device->gate != ForceGate::kApplying) {
+    link.force_off_since_ns = -1;
+  }
   if (!device || !state) return nullptr;  // the same
   if (latency && device->command_sequence > link.last_reported_command &&
       device->command_sequence <= link.commands_sent &&
@@ -230,7 +247,8 @@ const BodyState* cycle(Link& link, std::int64_t now, TeleopLatency* latency, std
       latency->to_body_command.push_back(monotonic_ns() - device->header.publish_stamp_ns);
   }
   if (DeviceCommand* command = link.device_command.loan()) {
-    fill_device_command(link.out, link.physics == PhysicsLiveness::kLive, *command);
+    fill_device_command(
+        link.out, link.physics == PhysicsLiveness::kLive && link.force_off_since_ns < 0, *command);
     link.device_command.publish(command);
     ++link.commands_sent;
     link.sample_stamp_of[link.commands_sent % kInFlight] = device->header.publish_stamp_ns;

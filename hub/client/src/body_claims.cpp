@@ -18,7 +18,6 @@
 #include "afhub/shm_layout/world.hpp"
 
 namespace afhub {
-namespace {}  // namespace
 
 bool process_exists(std::uint32_t pid) {
   if (pid == 0 || (kill(static_cast<pid_t>(pid), 0) != 0 && errno != EPERM)) return false;

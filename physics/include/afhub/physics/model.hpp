@@ -102,10 +102,11 @@ struct BodySpec {
   double collision_margin = 0.001;
   std::vector<int> collision_groups;
   std::optional<Vec3> gravity_mps2;
-  // Cartesian controller for POSITION commands, as AMBF loads it: gains a file gives
-  // drive a force (or what `controller output type` says); without them a velocity, P 10
-  // and no D (a D term on a velocity the controller sets itself is unstable from D 1: a
-  // free body given a pose went to 8e9 m).
+  // Cartesian controller for POSITION commands: gains a file gives drive a force (or what
+  // `controller output type` says), as AMBF loads them; without them a velocity, P 10 and
+  // no D, AMBF's preset for a velocity output (one AMBF version gives D 1, on which a D
+  // term acting on the velocity the controller sets itself diverges: a free body given a
+  // pose went to 8e9 m).
   Pid linear_controller{10.0, 0.0, 0.0}, angular_controller{10.0, 0.0, 0.0};
   ControllerOutput linear_output = ControllerOutput::kVelocity;
   ControllerOutput angular_output = ControllerOutput::kVelocity;

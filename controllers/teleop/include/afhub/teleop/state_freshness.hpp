@@ -9,8 +9,9 @@
 // Restarted: the states' sequence or step went back with no silence between: a new
 // physics took the channel (restarted within the stale time) or the world was reset, and
 // the body is back at its initial pose, far from where the device holds it. No force for
-// at least kRestartOffNs and until a step is seen, so that the driver sees the force off
-// and ramps it in again (before, the full force of the old pose error came at once).
+// kRestartOffNs at least and until a step is seen (and the driver says it has had the
+// force off, teleop_process.cpp), so that the driver ramps it in again (before, the full
+// force of the new error came at once).
 // Unlike DeviceFreshness this does not wait for the loop's own cycles: a false alarm on a
 // busy machine costs a force ramp, a missed one pushes the operator's hand against a
 // frozen or dead simulation.
@@ -22,8 +23,8 @@ namespace afhub::teleop {
 
 enum class PhysicsLiveness : std::uint8_t { kLive, kSilent, kNotStepping, kStarting, kRestarted };
 
-// Long enough for a driver polling at 100 Hz or faster to see the force off at least
-// once (its ramp starts over only then), short against an operator's reaction.
+// An outage a reader of the device's state sees (20 of its states at 1 kHz), short
+// against an operator's reaction.
 inline constexpr std::int64_t kRestartOffNs = 20'000'000;
 
 class StateFreshness {
@@ -44,7 +45,7 @@ class StateFreshness {
     }
     if (now_ns - stamp_ns > stale_ns_ || now_ns - seen_ns_ > stale_ns_) {
       stepped_ns_ = -1;    // back, it must be seen stepping again
-      restarted_ns_ = -1;  // the silence took the force off
+      restarted_ns_ = -1;  // said as silent instead
       return PhysicsLiveness::kSilent;
     }
     if (stepped_ns_ < 0) {
