@@ -215,6 +215,16 @@ TEST(TeleopEndToEnd, PushingIntoTheFloorGivesAnOpposingBoundedForce) {
   EXPECT_GT(mean_up, 0.8 * kMaxForce) << "the device got no force opposing the push";
 }
 
+// The palm's largest move along x from `x` over `reads` reads 2 ms apart.
+double largest_palm_move(Teleop& teleop, double x, int reads) {
+  double largest = 0.0;
+  for (int i = 0; i < reads; ++i) {
+    largest = std::max(largest, std::abs(teleop.palm().pose.position_m.x - x));
+    pause_ms(2);
+  }
+  return largest;
+}
+
 // The driver SIGKILLed with the palm 10 cm out: teleop says so once, holds the palm
 // where it is, and when a new driver publishes (its hand back at the trajectory's
 // start, 2 cm from where the old one was) the palm continues from where it was held,
@@ -237,21 +247,13 @@ TEST(TeleopEndToEnd, WhenTheDriverDiesThePalmIsHeldAndResumesWithNoJump) {
   teleop.kill_driver();
   ASSERT_TRUE(wait_until([&] { return occurrences(teleop.teleop_log(), said) > said_before; }, 5s))
       << teleop.logs();
-  double held_drift = 0.0;
-  for (int i = 0; i < 250; ++i) {
-    held_drift = std::max(held_drift, std::abs(teleop.palm().pose.position_m.x - out));
-    pause_ms(2);
-  }
+  const double held_drift = largest_palm_move(teleop, out, 250);
   EXPECT_LT(held_drift, 0.005) << "the palm moved while the device was gone";
   EXPECT_EQ(occurrences(teleop.teleop_log(), said), said_before + 1) << teleop.teleop_log();
 
   teleop.start_driver();  // its hand at x = 0 for 1 s
   ASSERT_TRUE(wait_until([&] { return teleop.device().header.publish_stamp_ns > killed_at; }, 20s));
-  double jump = 0.0;
-  for (int i = 0; i < 300; ++i) {  // about 0.6 s, while the new hand stays at 0
-    jump = std::max(jump, std::abs(teleop.palm().pose.position_m.x - out));
-    pause_ms(2);
-  }
+  const double jump = largest_palm_move(teleop, out, 300);  // while the new hand stays at 0
   std::printf(
       "driver killed: palm drift while held %.2e m, largest move after it came back %.2e m\n",
       held_drift, jump);
@@ -280,11 +282,7 @@ TEST(TeleopEndToEnd, ADriverRestartedAtOnceIsReanchoredWithNoJump) {
   teleop.kill_driver();
   teleop.start_driver();  // its hand at x = 0 for 1 s
   ASSERT_TRUE(wait_until([&] { return teleop.device().header.publish_stamp_ns > killed_at; }, 20s));
-  double jump = 0.0;
-  for (int i = 0; i < 300; ++i) {  // about 0.6 s, while the new hand stays at 0
-    jump = std::max(jump, std::abs(teleop.palm().pose.position_m.x - out));
-    pause_ms(2);
-  }
+  const double jump = largest_palm_move(teleop, out, 300);  // while the new hand stays at 0
   std::printf("driver restarted at once: largest move of the palm after it %.2e m\n", jump);
   EXPECT_TRUE(contains(teleop.teleop_log(), "device/again has a new driver"))
       << teleop.teleop_log();
