@@ -178,12 +178,14 @@ int run_driver(const DeviceOpener& open, const DriverOptions& options) {
                      who.c_str(), static_cast<double>(monotonic_ns() - asked) * 1e-6);
     });
   }
+  // Opened before the hub is waited for: a driver re-executed after a hub loss holds its
+  // device, safe, meanwhile.
+  std::unique_ptr<Device> device = open();
   wait.connect_to_hub("device");
   // Two drivers of one name alternated in its state (the hand between two poses) and
-  // both took its commands: the second is refused, naming the first, before it opens
-  // the device.
+  // both took its commands: the second is refused, naming the first (a real device's
+  // second open fails first, its USB interface claimed).
   check_room_for_bodies({channel}, 0);
-  std::unique_ptr<Device> device = open();
   require_chunks({written_as_slot(sizeof(DeviceState)), published_each_cycle(sizeof(LoopStats))},
                  "this driver (" + channel + ")");
   Writer<DeviceState> states(body_state_channel(channel));

@@ -297,6 +297,9 @@ TEST(FaultsCommands, CommandsAnsweringAStepFromBeforeAResetAreIgnored) {
   BodyClient link("afhub/arm/link2");
   ASSERT_TRUE(wait_until(
       [&] { return link.latest_state() && link.latest_state()->header.sim_step > 1500; }, 20s));
+  // Paused, then reset: the world waits at step 0 while the old commands come (running,
+  // a loaded machine stepped past the old step before they were all sent).
+  ASSERT_EQ(run_afhub({"world", "pause"}).exit_code, 0);
   const std::uint64_t before_reset = link.latest_state()->header.sim_step;
   ASSERT_EQ(run_afhub({"world", "reset"}).exit_code, 0);
   const auto send = [&](std::uint64_t answers) {
@@ -308,14 +311,16 @@ TEST(FaultsCommands, CommandsAnsweringAStepFromBeforeAResetAreIgnored) {
     command->joints[0].value = 1.0;
     link.publish_command(command);
   };
-  for (int i = 0; i < 100; ++i) {  // 0.1 s of steps: far from step before_reset again
+  for (int i = 0; i < 20; ++i) {
     send(before_reset);
     std::this_thread::sleep_for(1ms);
   }
+  ASSERT_EQ(run_afhub({"world", "step", "200"}).exit_code, 0);
   ASSERT_LT(link.latest_state()->header.sim_step, before_reset) << "the world was not reset";
   EXPECT_GE(run.fresh().stale_commands, 1u);
   EXPECT_LT(std::abs(link.latest_state()->joints[0].position), 0.05)
       << "a command from before the reset moved the arm";
+  ASSERT_EQ(run_afhub({"world", "resume"}).exit_code, 0);
   ASSERT_TRUE(wait_until(
       [&] {
         send(link.latest_state()->header.sim_step);
