@@ -20,6 +20,7 @@
 #include <filesystem>
 #include <future>
 #include <new>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -749,14 +750,128 @@ BENCHMARK(BM_PublishOneChannel)
     ->Arg(4)
     ->Unit(benchmark::kNanosecond);
 
+// Where the two sides of a round trip run. On two CPUs, each wake-up is of a halted
+// vCPU (the floor the lockstep goal is set against); on one, each is a context switch.
+// Left to the scheduler they mix the two, differently for a forked floor and an exec'd
+// controller (a bare floor's median was 5.6 us in one run and 34 us in the next).
+enum class Placement { kFree, kApart, kTogether };
+
+// The calling thread on the first allowed CPU and the other side's CPU, until
+// destroyed. `ok` is false when the placement needs two CPUs and has one.
+class PlacedRoundTrip {
+ public:
+  explicit PlacedRoundTrip(Placement placement) {
+    pthread_getaffinity_np(pthread_self(), sizeof before_, &before_);
+    if (placement == Placement::kFree) return;
+    std::vector<int> allowed;
+    for (int cpu = 0; cpu < CPU_SETSIZE && allowed.size() < 2; ++cpu)
+      if (CPU_ISSET(cpu, &before_)) allowed.push_back(cpu);
+    if (placement == Placement::kApart && allowed.size() < 2) {
+      ok = false;
+      return;
+    }
+    pin_this_thread(allowed[0]);
+    peer_cpu = placement == Placement::kApart ? allowed[1] : allowed[0];
+  }
+  PlacedRoundTrip(const PlacedRoundTrip&) = delete;
+  PlacedRoundTrip& operator=(const PlacedRoundTrip&) = delete;
+  ~PlacedRoundTrip() { pthread_setaffinity_np(pthread_self(), sizeof before_, &before_); }
+  static void pin_this_thread(int cpu) {
+    cpu_set_t cpus;
+    CPU_ZERO(&cpus);
+    CPU_SET(cpu, &cpus);
+    pthread_setaffinity_np(pthread_self(), sizeof cpus, &cpus);
+  }
+  bool ok = true;
+  int peer_cpu = -1;  // -1: where the scheduler puts it
+
+ private:
+  cpu_set_t before_{};
+};
+
+// The floor under a lockstep round trip asleep: a forked process ping-ponging with
+// this one on a bare futex in shared memory, each asleep until the other's turn ends
+// (two futex wake-ups per round trip, as in lockstep). A `timed` round trip's waits
+// have a timeout, as every wait of afhub's has (a lockstep drops a dead client, a
+// controller notices a dead physics), which arms a kernel timer.
+class FutexPingPong {
+ public:
+  explicit FutexPingPong(int peer_cpu) {
+    void* memory =
+        mmap(nullptr, sizeof(Shared), PROT_READ | PROT_WRITE, MAP_SHARED | MAP_ANONYMOUS, -1, 0);
+    if (memory == MAP_FAILED) throw afhub::Error("mmap for the futex floor failed");
+    shared_ = new (memory) Shared;
+    // The child only touches the shared words and makes system calls: safe after a
+    // fork of this multi-threaded process.
+    child_ = fork();
+    if (child_ != 0) return;
+    if (peer_cpu >= 0) PlacedRoundTrip::pin_this_thread(peer_cpu);
+    for (std::uint32_t seen = 0;;) {
+      wait_while(seen, shared_->timed.load(std::memory_order_relaxed) != 0);
+      const std::uint32_t now = shared_->turn.load(std::memory_order_acquire);
+      if (now == kStop) _exit(0);
+      seen = now + 1;
+      pass(seen);  // odd in, even out
+    }
+  }
+  FutexPingPong(const FutexPingPong&) = delete;
+  FutexPingPong& operator=(const FutexPingPong&) = delete;
+  ~FutexPingPong() {
+    pass(kStop);
+    waitpid(child_, nullptr, 0);
+    munmap(shared_, sizeof(Shared));
+  }
+  std::int64_t round_trip_ns(bool timed) {
+    shared_->timed.store(timed ? 1 : 0, std::memory_order_relaxed);
+    const std::int64_t sent = monotonic_ns();
+    pass(++value_);
+    wait_while(value_, timed);
+    value_ = shared_->turn.load(std::memory_order_acquire);
+    return monotonic_ns() - sent;
+  }
+
+ private:
+  struct Shared {
+    std::atomic<std::uint32_t> turn{0};
+    std::atomic<std::uint32_t> timed{0};  // the peer's waits too, from its next one
+  };
+  static constexpr std::uint32_t kStop = ~0U;
+  std::uint32_t* word() { return reinterpret_cast<std::uint32_t*>(&shared_->turn); }
+  // Sleeps while the turn is `value`.
+  void wait_while(std::uint32_t value, bool timed) {
+    const timespec second{1, 0};
+    while (shared_->turn.load(std::memory_order_acquire) == value)
+      syscall(SYS_futex, word(), FUTEX_WAIT, value, timed ? &second : nullptr, nullptr, 0);
+  }
+  void pass(std::uint32_t value) {
+    shared_->turn.store(value, std::memory_order_release);
+    syscall(SYS_futex, word(), FUTEX_WAKE, 1, nullptr, nullptr, 0);
+  }
+  Shared* shared_ = nullptr;
+  pid_t child_ = -1;
+  std::uint32_t value_ = 0;
+};
+
 // Lockstep: the physics publishes a step, an `afhub ctl hold --lockstep` process
-// answers it, the physics resumes. Counters: the round trip (publish start to the
-// answer applied) p50 and p99 in us, and simulated seconds per wall second with the
-// physics step included. One body (a ball) isolates the protocol; the KUKA
-// (8 bodies published per step) is the realistic case. Both sides wait asleep on a
-// futex (iceoryx's WaitSet), or with `spin` poll with sched_yield (--spin).
-void BM_LockstepRoundTrip(benchmark::State& state, bool kuka, bool spin) {
+// answers it, the physics resumes. One body (a ball) isolates the protocol; the KUKA
+// (8 bodies published per step) is the realistic case. Both sides wait asleep on the
+// slots' futexes, or with `spin` poll with sched_yield (--spin). Asleep and placed,
+// the futex floor is measured in the same run, in turns of 200 round trips with the
+// lockstep's (the floor moves from minute to minute on a VM: 33 to 45 us within a
+// quarter of an hour), its peer where the controller is. Counters, p50 and p99 in us: the
+// round trip (publish start to the answer applied), the bare and timed floors, the
+// round trip's p50 over the bare floor's (over_floor), and simulated seconds per wall
+// second with the physics step included.
+void BM_LockstepRoundTrip(benchmark::State& state, bool kuka, bool spin, Placement placement) {
   if (kuka && !have_shared_models(state)) return;
+  const PlacedRoundTrip placed(placement);
+  if (!placed.ok) {
+    state.SkipWithError("needs two CPUs");
+    return;
+  }
+  // Not when free: the scheduler places a forked floor and an exec'd controller apart.
+  std::optional<FutexPingPong> floor;
+  if (!spin && placement != Placement::kFree) floor.emplace(placed.peer_cpu);
   afhub::testing::ModelFolder folder;
   const std::string file =
       kuka ? kKuka
@@ -773,96 +888,64 @@ void BM_LockstepRoundTrip(benchmark::State& state, bool kuka, bool spin) {
   channels.publish({});
   std::vector<std::string> client_args{"ctl", "hold", kuka ? "base" : "ball", "--lockstep"};
   if (spin) client_args.push_back("--spin");
+  if (placed.peer_cpu >= 0) {
+    client_args.push_back("--cpu");
+    client_args.push_back(std::to_string(placed.peer_cpu));
+  }
   afhub::test::ScopedProcess client(afhub::test::spawn_afhub(client_args));
   channels.wait_for_clients();  // step 0 waits for the client to join
   channels.await_lockstep();
-  LatencyHistogram round_trip;
+  LatencyHistogram round_trip, bare_floor, timed_floor;
+  std::int64_t lockstep_ns = 0;
+  std::uint64_t turn = 0;
   for (auto _ : state) {
+    const std::uint64_t kind = floor ? (turn++ / 200) % 3 : 0;
+    if (kind != 0) {
+      (kind == 1 ? bare_floor : timed_floor).record(floor->round_trip_ns(kind == 2));
+      continue;
+    }
+    const std::int64_t begin = monotonic_ns();
     sim.step();
     const std::int64_t published = monotonic_ns();
     channels.publish({});
     channels.await_lockstep();
-    round_trip.record(monotonic_ns() - published);
+    const std::int64_t answered = monotonic_ns();
+    round_trip.record(answered - published);
+    lockstep_ns += answered - begin;
   }
   state.counters["round_trip_p50_us"] = round_trip.percentile_us(0.50);
   state.counters["round_trip_p99_us"] = round_trip.percentile_us(0.99);
-  state.counters["x_real_time"] = benchmark::Counter(
-      static_cast<double>(state.iterations()) * sim.dt_s(), benchmark::Counter::kIsRate);
+  if (floor) {
+    state.counters["floor_p50_us"] = bare_floor.percentile_us(0.50);
+    state.counters["floor_p99_us"] = bare_floor.percentile_us(0.99);
+    state.counters["timed_floor_p50_us"] = timed_floor.percentile_us(0.50);
+    state.counters["over_floor"] = round_trip.percentile_us(0.50) / bare_floor.percentile_us(0.50);
+  }
+  state.counters["x_real_time"] = static_cast<double>(round_trip.count()) * sim.dt_s() /
+                                  (static_cast<double>(lockstep_ns) * 1e-9);
   state.counters["late"] = static_cast<double>(channels.late_answers());
 }
 // Fixed iterations: one run per case, so the client process starts once (a second
-// SimChannels in this process would briefly publish beside the first).
-BENCHMARK_CAPTURE(BM_LockstepRoundTrip, one_body, false, false)
-    ->Unit(benchmark::kMicrosecond)
-    ->Iterations(20000);
-BENCHMARK_CAPTURE(BM_LockstepRoundTrip, one_body_spin, false, true)
-    ->Unit(benchmark::kMicrosecond)
-    ->Iterations(20000);
-BENCHMARK_CAPTURE(BM_LockstepRoundTrip, kuka, true, false)
-    ->Unit(benchmark::kMicrosecond)
-    ->Iterations(20000);
-BENCHMARK_CAPTURE(BM_LockstepRoundTrip, kuka_spin, true, true)
-    ->Unit(benchmark::kMicrosecond)
-    ->Iterations(20000);
-
-// The floor under a lockstep round trip asleep: two processes ping-ponging on a bare
-// futex in shared memory, each sleeping until the other's turn ends (two futex
-// wake-ups of a sleeping thread per round trip, as in lockstep). Counters as above.
-// `timed`: each wait has a timeout, as every wait of afhub's has (a lockstep drops a
-// dead client, a controller notices a dead physics), which arms a kernel timer.
-void BM_BareFutexRoundTrip(benchmark::State& state, bool timed) {
-  void* shared = mmap(nullptr, sizeof(std::atomic<std::uint32_t>), PROT_READ | PROT_WRITE,
-                      MAP_SHARED | MAP_ANONYMOUS, -1, 0);
-  if (shared == MAP_FAILED) {
-    state.SkipWithError("mmap failed");
-    return;
-  }
-  auto* turn = new (shared) std::atomic<std::uint32_t>(0);
-  constexpr std::uint32_t kStop = ~0U;
-  auto* word = reinterpret_cast<std::uint32_t*>(turn);
-  // Sleeps while the turn is `value`.
-  auto wait_while = [&](std::uint32_t value) {
-    const timespec second{1, 0};
-    while (turn->load(std::memory_order_acquire) == value)
-      syscall(SYS_futex, word, FUTEX_WAIT, value, timed ? &second : nullptr, nullptr, 0);
-  };
-  auto pass = [&](std::uint32_t value) {
-    turn->store(value, std::memory_order_release);
-    syscall(SYS_futex, word, FUTEX_WAKE, 1, nullptr, nullptr, 0);
-  };
-  // The child only touches the shared word and makes system calls: safe after a fork
-  // of this multi-threaded process.
-  const pid_t child = fork();
-  if (child == 0) {
-    for (std::uint32_t seen = 0;;) {
-      wait_while(seen);
-      const std::uint32_t now = turn->load(std::memory_order_acquire);
-      if (now == kStop) _exit(0);
-      seen = now + 1;
-      pass(seen);  // odd in, even out
-    }
-  }
-  LatencyHistogram round_trip;
-  std::uint32_t value = 0;
-  for (auto _ : state) {
-    const std::int64_t sent = monotonic_ns();
-    pass(++value);
-    wait_while(value);
-    value = turn->load(std::memory_order_acquire);
-    round_trip.record(monotonic_ns() - sent);
-  }
-  pass(kStop);
-  waitpid(child, nullptr, 0);
-  munmap(shared, sizeof(std::atomic<std::uint32_t>));
-  state.counters["round_trip_p50_us"] = round_trip.percentile_us(0.50);
-  state.counters["round_trip_p99_us"] = round_trip.percentile_us(0.99);
+// SimChannels in this process would briefly publish beside the first). With the floor,
+// a third of them are the lockstep's, a third each floor's.
+void LockstepCases(benchmark::internal::Benchmark* cases) {
+  cases->Unit(benchmark::kMicrosecond)->Iterations(30000);
 }
-BENCHMARK_CAPTURE(BM_BareFutexRoundTrip, bare, false)
-    ->Unit(benchmark::kMicrosecond)
-    ->Iterations(20000);
-BENCHMARK_CAPTURE(BM_BareFutexRoundTrip, timed, true)
-    ->Unit(benchmark::kMicrosecond)
-    ->Iterations(20000);
+BENCHMARK_CAPTURE(BM_LockstepRoundTrip, one_body, false, false, Placement::kFree)
+    ->Apply(LockstepCases);
+BENCHMARK_CAPTURE(BM_LockstepRoundTrip, one_body_apart, false, false, Placement::kApart)
+    ->Apply(LockstepCases);
+BENCHMARK_CAPTURE(BM_LockstepRoundTrip, one_body_together, false, false, Placement::kTogether)
+    ->Apply(LockstepCases);
+BENCHMARK_CAPTURE(BM_LockstepRoundTrip, one_body_spin, false, true, Placement::kFree)
+    ->Apply(LockstepCases);
+BENCHMARK_CAPTURE(BM_LockstepRoundTrip, kuka, true, false, Placement::kFree)->Apply(LockstepCases);
+BENCHMARK_CAPTURE(BM_LockstepRoundTrip, kuka_apart, true, false, Placement::kApart)
+    ->Apply(LockstepCases);
+BENCHMARK_CAPTURE(BM_LockstepRoundTrip, kuka_together, true, false, Placement::kTogether)
+    ->Apply(LockstepCases);
+BENCHMARK_CAPTURE(BM_LockstepRoundTrip, kuka_spin, true, true, Placement::kFree)
+    ->Apply(LockstepCases);
 
 }  // namespace
 }  // namespace afhub::physics

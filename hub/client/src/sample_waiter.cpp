@@ -3,6 +3,8 @@
 // slot yet, which look again every kArrivalCheckNs).
 #include "afhub/hub/sample_waiter.hpp"
 
+#include <linux/futex.h>
+
 #include <algorithm>
 #include <vector>
 
@@ -15,8 +17,14 @@ namespace afhub {
 namespace {
 
 // A slot's futex says nothing of a new writer's entry (a restarted physics, a second
-// controller): a wait on slots returns this often, and the readers look for one.
-constexpr std::int64_t kArrivalCheckNs = 1'000'000;
+// controller): a wait on slots returns this often, and the readers look for one. Not
+// sooner: a timer a millisecond away, armed on every wait, made each wake-up of a
+// halted vCPU about 5 us slower on the project's VM (a lockstep round trip 1.33x the
+// bare futex floor with a 1 ms check, 1.05x with 10 ms: physics_benchmark's
+// BM_LockstepRoundTrip/one_body_apart).
+constexpr std::int64_t kArrivalCheckNs = 10'000'000;
+// Slots past the 128 that futex_waitv watches are looked at this often.
+constexpr std::int64_t kUnwatchedCheckNs = 1'000'000;
 
 }  // namespace
 
@@ -65,9 +73,8 @@ void SampleWaiter::wait(std::int64_t timeout_ns) noexcept {
         looking ? std::min(timeout_ns, kArrivalCheckNs) : timeout_ns));
     return;
   }
-  // futex_waitv watches at most 128 words; past that the wait looks again sooner.
-  const std::size_t count = std::min<std::size_t>(watches.size(), 128);
-  slot::wait({watches.data(), count}, std::min(timeout_ns, kArrivalCheckNs));
+  slot::wait(watches, std::min(timeout_ns, watches.size() > FUTEX_WAITV_MAX ? kUnwatchedCheckNs
+                                                                            : kArrivalCheckNs));
 }
 
 }  // namespace afhub
