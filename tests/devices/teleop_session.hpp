@@ -81,7 +81,8 @@ class TeleopSession {
         20s);
   }
   void kill_teleop() { kill(teleop_.pid, SIGKILL); }
-  // SIGSTOP, SIGCONT or SIGKILL to the physics.
+  // SIGSTOP, SIGCONT or SIGKILL to teleop, or to the physics.
+  void signal_teleop(int signal) { kill(teleop_.pid, signal); }
   void signal_physics(int signal) { kill(physics_.pid, signal); }
   // The same to the physics, teleop and the driver, as a machine stalling them all does.
   void signal_all(int signal) {

@@ -210,8 +210,25 @@ const BodyState* cycle(Link& link, std::int64_t now, TeleopLatency* latency, std
                  "is, with no jump\n",
                  link.binding->device_name.c_str(), link.device_pid, link.binding->body.c_str());
   }
-  const double dt = link.last_cycle_ns ? static_cast<double>(now - link.last_cycle_ns) * 1e-9 : 0.0;
+  const std::int64_t since_last_ns = link.last_cycle_ns ? now - link.last_cycle_ns : 0;
   link.last_cycle_ns = now;
+  // This process itself stood still (SIGSTOP, a debugger, a stalled machine) past the
+  // stale time: meanwhile the driver took the force off, the physics let the body go,
+  // and the hand moved on. As after a new driver, the body moves on from where it is
+  // (going on, it was pulled to where the hand had gone and the device pulled the hand
+  // back), and the force returns only through the driver's ramp.
+  const bool stood_still = since_last_ns > link.stale_ns;
+  if (stood_still) {
+    link.law.re_anchor();
+    link.force_off_since_ns = now;
+    std::fprintf(stderr,
+                 "afhub teleop: this process stood still for %.0f ms: %s moves on from where it "
+                 "is, with no jump, and the force on device/%s ramps in\n",
+                 static_cast<double>(since_last_ns) * 1e-6, link.binding->body.c_str(),
+                 link.binding->device_name.c_str());
+  }
+  // No time passed for the law across a standstill: its limits on change start over.
+  const double dt = stood_still ? 0.0 : static_cast<double>(since_last_ns) * 1e-9;
   if (const bool stale = link.freshness.stale(device->header.publish_stamp_ns, now);
       stale != link.held) {
     link.held = stale;

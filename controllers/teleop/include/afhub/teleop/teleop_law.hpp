@@ -89,9 +89,14 @@ class TeleopLaw {
   void hold(bool held) noexcept { held_ = held; }
 
   // A new driver took the device (restarted within the stale time: its hand may be
-  // anywhere): the next step anchors at its pose, as after the clutch, so the body
-  // continues from where it is (it was thrown 0.7 m toward the new hand's pose).
-  void re_anchor() noexcept { was_clutched_ = true; }
+  // anywhere), or the teleop process stood still while the hand moved: the next step
+  // anchors at the hand's pose, as after the clutch, so the body continues from where
+  // it is (it was thrown 0.7 m toward a new hand's pose), and the device's force starts
+  // again from none, within the jerk limit (the driver had it off).
+  void re_anchor() noexcept {
+    was_clutched_ = true;
+    device_wrench_ = {};
+  }
 
  private:
   TeleopParams params_;
