@@ -36,5 +36,17 @@ TEST(DeviceFreshness, ALoopDescheduledWithItsDriverFindsNoStaleDevice) {
   EXPECT_EQ(cycles, 51);
 }
 
+// The loop's own standstill: past the stale time and two of its periods.
+TEST(StoodStill, PastTheStaleTimeAndTwoPeriods) {
+  EXPECT_FALSE(stood_still(kMs, 50 * kMs, kMs));       // a cycle
+  EXPECT_FALSE(stood_still(17 * kMs, 50 * kMs, kMs));  // woken late on a loaded machine
+  EXPECT_FALSE(stood_still(50 * kMs, 50 * kMs, kMs));  // at the stale time
+  EXPECT_TRUE(stood_still(51 * kMs, 50 * kMs, kMs));   // past it
+  // A loop slower than the stale time (--rate 10: 100 ms), on time or a cycle late.
+  EXPECT_FALSE(stood_still(100 * kMs, 50 * kMs, 100 * kMs));
+  EXPECT_FALSE(stood_still(200 * kMs, 50 * kMs, 100 * kMs));
+  EXPECT_TRUE(stood_still(201 * kMs, 50 * kMs, 100 * kMs));
+}
+
 }  // namespace
 }  // namespace afhub::teleop

@@ -413,22 +413,29 @@ TEST(TeleopLaw, ReanchoringTakesANewDriversHandWithoutAJump) {
   EXPECT_NEAR(out.body_target.position_m.x, before.x + params.workspace_scale * 0.01, 1e-12);
 }
 
-// Re-anchored with the body held off the target, the device's force starts again from
-// none and grows within the jerk limit (it was the old force, then ramped down).
-TEST(TeleopLaw, ReanchoringStartsTheDeviceForceAgainFromNone) {
-  TeleopParams params = plain_params();
-  params.max_jerk_n_per_ms = 0.2;
-  TeleopLaw law(params);
-  TeleopOutput out;
-  // The body 0.2 m from the target: 2 N on the device once the ramp is done.
-  for (int i = 0; i < 20; ++i)
-    law.step(device_at(v3(0, 0, 0)), pose_at(v3(0.2, 0, 0)), {}, kDt, out);
-  ASSERT_NEAR(out.device_wrench.force_n.x, 2.0, 1e-9);
-  law.re_anchor();
-  law.step(device_at(v3(0.05, 0, 0)), pose_at(v3(0.2, 0, 0)), {}, 0.0, out);
-  EXPECT_EQ(out.device_wrench.force_n.x, 0.0);
-  law.step(device_at(v3(0.05, 0, 0)), pose_at(v3(0.2, 0, 0)), {}, kDt, out);
-  EXPECT_NEAR(out.device_wrench.force_n.x, 0.2 * kDt * 1000.0, 1e-9);
+// Re-anchored (a new driver) or restarted from the body's pose (teleop stood still),
+// with the body held off the target: the device's force starts again from none and
+// grows within the jerk limit (it was the old force, then ramped down).
+TEST(TeleopLaw, ReanchoringOrRestartingStartsTheDeviceForceAgainFromNone) {
+  for (const bool restart : {false, true}) {
+    TeleopParams params = plain_params();
+    params.max_jerk_n_per_ms = 0.2;
+    TeleopLaw law(params);
+    TeleopOutput out;
+    // The body 0.2 m from the target: 2 N on the device once the ramp is done.
+    for (int i = 0; i < 20; ++i)
+      law.step(device_at(v3(0, 0, 0)), pose_at(v3(0.2, 0, 0)), {}, kDt, out);
+    ASSERT_NEAR(out.device_wrench.force_n.x, 2.0, 1e-9);
+    if (restart)
+      law.restart_from(pose_at(v3(0.1, 0, 0)));
+    else
+      law.re_anchor();
+    law.step(device_at(v3(0.05, 0, 0)), pose_at(v3(0.2, 0, 0)), {}, 0.0, out);
+    EXPECT_EQ(out.device_wrench.force_n.x, 0.0) << (restart ? "restarted" : "re-anchored");
+    law.step(device_at(v3(0.05, 0, 0)), pose_at(v3(0.2, 0, 0)), {}, kDt, out);
+    EXPECT_NEAR(out.device_wrench.force_n.x, 0.2 * kDt * 1000.0, 1e-9)
+        << (restart ? "restarted" : "re-anchored");
+  }
 }
 
 TEST(TeleopLaw, RestartFromDrivesTheBodyFromWhereItIs) {

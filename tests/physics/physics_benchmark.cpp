@@ -9,6 +9,7 @@
 #include <sched.h>
 #include <signal.h>
 #include <sys/mman.h>
+#include <sys/prctl.h>
 #include <sys/syscall.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -278,20 +279,36 @@ void BM_LoopStep(benchmark::State& state, const std::string& file, bool direct) 
 // (SimChannels::prepare_next_step, as `afhub run` does).
 enum class Tape { kNone, kSameThread, kOtherCpu, kOtherCpuUnprepared };
 
+// The first `count` CPUs the calling thread may run on (fewer if it may run on fewer).
+std::vector<int> allowed_cpus(std::size_t count) {
+  cpu_set_t allowed;
+  std::vector<int> cpus;
+  if (pthread_getaffinity_np(pthread_self(), sizeof allowed, &allowed) != 0) return cpus;
+  for (int cpu = 0; cpu < CPU_SETSIZE && cpus.size() < count; ++cpu)
+    if (CPU_ISSET(cpu, &allowed)) cpus.push_back(cpu);
+  return cpus;
+}
+
+// The calling thread on `cpu` alone; false if refused.
+bool pin_this_thread(int cpu) {
+  cpu_set_t cpus;
+  CPU_ZERO(&cpus);
+  CPU_SET(cpu, &cpus);
+  return pthread_setaffinity_np(pthread_self(), sizeof cpus, &cpus) == 0;
+}
+
 // The stepping thread on the first CPU it may run on and a reader draining the tape on
 // the second until destroyed (then the stepping thread may run where it ran before).
 // `pinned`: both are where they should be (false with fewer than two CPUs allowed).
 struct OtherCpuDrain {
   explicit OtherCpuDrain(TapeDrain& tape) {
     pthread_getaffinity_np(pthread_self(), sizeof before, &before);
-    std::vector<int> allowed;
-    for (int cpu = 0; cpu < CPU_SETSIZE && allowed.size() < 2; ++cpu)
-      if (CPU_ISSET(cpu, &before)) allowed.push_back(cpu);
-    if (allowed.size() < 2 || !pin(pthread_self(), allowed[0])) return;
+    const std::vector<int> allowed = allowed_cpus(2);
+    if (allowed.size() < 2 || !pin_this_thread(allowed[0])) return;
     std::promise<bool> reader_pinned;
     std::future<bool> reader_pinned_result = reader_pinned.get_future();
     reader = std::thread([this, &tape, &reader_pinned, cpu = allowed[1]] {
-      reader_pinned.set_value(pin(pthread_self(), cpu));
+      reader_pinned.set_value(pin_this_thread(cpu));
       while (!stop.load()) {
         tape.drain();
         std::this_thread::sleep_for(std::chrono::milliseconds(1));
@@ -303,12 +320,6 @@ struct OtherCpuDrain {
     stop.store(true);
     if (reader.joinable()) reader.join();
     pthread_setaffinity_np(pthread_self(), sizeof before, &before);
-  }
-  static bool pin(pthread_t thread, int cpu) {
-    cpu_set_t cpus;
-    CPU_ZERO(&cpus);
-    CPU_SET(cpu, &cpus);
-    return pthread_setaffinity_np(thread, sizeof cpus, &cpus) == 0;
   }
   cpu_set_t before{};
   bool pinned = false;
@@ -373,7 +384,7 @@ BENCHMARK_CAPTURE(BM_LoopStep, four_bar_iterated, kFourBar, false)->Unit(benchma
 class ControllerElsewhere {
  public:
   // False when this process may use fewer than two CPUs.
-  static bool possible() { return first_two_cpus().second >= 0; }
+  static bool possible() { return allowed_cpus(2).size() == 2; }
 
   ControllerElsewhere(const std::vector<BodySpec>& bodies, bool commands, bool asleep) {
     answer_us_.reserve(1 << 20);
@@ -381,11 +392,11 @@ class ControllerElsewhere {
       bodies_.push_back(std::make_unique<BodyClient>(body.channel));
     for (auto& reader : bodies_)
       afhub::test::wait_until([&] { return reader->subscribed(); }, std::chrono::seconds(5));
-    const auto [stepping, reading] = first_two_cpus();
+    const std::vector<int> cpus = allowed_cpus(2);
     sched_getaffinity(0, sizeof saved_, &saved_);
-    if (!asleep) pin(stepping);
-    thread_ = std::thread([this, reading = reading, commands, asleep] {
-      pin(reading);
+    if (!asleep) pin_this_thread(cpus[0]);
+    thread_ = std::thread([this, reading = cpus[1], commands, asleep] {
+      pin_this_thread(reading);
       for (std::uint64_t seen = 0; !stop_.load(std::memory_order_relaxed);) {
         const std::uint64_t step = published_.load(std::memory_order_acquire);
         if (step == seen) {
@@ -439,20 +450,6 @@ class ControllerElsewhere {
   }
 
  private:
-  static std::pair<int, int> first_two_cpus() {
-    cpu_set_t allowed;
-    std::pair<int, int> cpus{-1, -1};
-    if (sched_getaffinity(0, sizeof allowed, &allowed) != 0) return cpus;
-    for (int cpu = 0; cpu < CPU_SETSIZE && cpus.second < 0; ++cpu)
-      if (CPU_ISSET(cpu, &allowed)) (cpus.first < 0 ? cpus.first : cpus.second) = cpu;
-    return cpus;
-  }
-  static void pin(int cpu) {
-    cpu_set_t set;
-    CPU_ZERO(&set);
-    CPU_SET(cpu, &set);
-    sched_setaffinity(0, sizeof set, &set);
-  }
   std::vector<std::unique_ptr<BodyClient>> bodies_;
   cpu_set_t saved_;
   std::vector<float> answer_us_;  // written by thread_ alone until the last answer_step
@@ -756,33 +753,24 @@ BENCHMARK(BM_PublishOneChannel)
 // controller (a bare floor's median was 5.6 us in one run and 34 us in the next).
 enum class Placement { kFree, kApart, kTogether };
 
-// The calling thread on the first allowed CPU and the other side's CPU, until
-// destroyed. `ok` is false when the placement needs two CPUs and has one.
-class PlacedRoundTrip {
+// The calling thread on the first allowed CPU, and the CPU for the other side, until
+// destroyed. `problem` says why it could not place them, or is null.
+class ScopedPlacement {
  public:
-  explicit PlacedRoundTrip(Placement placement) {
+  explicit ScopedPlacement(Placement placement) {
     pthread_getaffinity_np(pthread_self(), sizeof before_, &before_);
     if (placement == Placement::kFree) return;
-    std::vector<int> allowed;
-    for (int cpu = 0; cpu < CPU_SETSIZE && allowed.size() < 2; ++cpu)
-      if (CPU_ISSET(cpu, &before_)) allowed.push_back(cpu);
-    if (placement == Placement::kApart && allowed.size() < 2) {
-      ok = false;
+    const std::vector<int> cpus = allowed_cpus(2);
+    if (cpus.size() < (placement == Placement::kApart ? 2U : 1U) || !pin_this_thread(cpus[0])) {
+      problem = "could not pin to the CPUs the placement needs";
       return;
     }
-    pin_this_thread(allowed[0]);
-    peer_cpu = placement == Placement::kApart ? allowed[1] : allowed[0];
+    peer_cpu = placement == Placement::kApart ? cpus[1] : cpus[0];
   }
-  PlacedRoundTrip(const PlacedRoundTrip&) = delete;
-  PlacedRoundTrip& operator=(const PlacedRoundTrip&) = delete;
-  ~PlacedRoundTrip() { pthread_setaffinity_np(pthread_self(), sizeof before_, &before_); }
-  static void pin_this_thread(int cpu) {
-    cpu_set_t cpus;
-    CPU_ZERO(&cpus);
-    CPU_SET(cpu, &cpus);
-    pthread_setaffinity_np(pthread_self(), sizeof cpus, &cpus);
-  }
-  bool ok = true;
+  ScopedPlacement(const ScopedPlacement&) = delete;
+  ScopedPlacement& operator=(const ScopedPlacement&) = delete;
+  ~ScopedPlacement() { pthread_setaffinity_np(pthread_self(), sizeof before_, &before_); }
+  const char* problem = nullptr;
   int peer_cpu = -1;  // -1: where the scheduler puts it
 
  private:
@@ -792,20 +780,37 @@ class PlacedRoundTrip {
 // The floor under a lockstep round trip asleep: a forked process ping-ponging with
 // this one on a bare futex in shared memory, each asleep until the other's turn ends
 // (two futex wake-ups per round trip, as in lockstep). A `timed` round trip's waits
-// have a timeout, as every wait of afhub's has (a lockstep drops a dead client, a
-// controller notices a dead physics), which arms a kernel timer.
+// have afhub's timeout on slots (10 ms, sample_waiter.cpp) and the peer the timer slack
+// of afhub's loops (1 ns), as every wait of afhub's has one (a lockstep drops a dead
+// client, a controller notices a dead physics): it arms a kernel timer.
 class FutexPingPong {
  public:
+  // Forks the peer, pinned to `peer_cpu` unless it is -1; `problem` says why not.
   explicit FutexPingPong(int peer_cpu) {
     void* memory =
         mmap(nullptr, sizeof(Shared), PROT_READ | PROT_WRITE, MAP_SHARED | MAP_ANONYMOUS, -1, 0);
-    if (memory == MAP_FAILED) throw afhub::Error("mmap for the futex floor failed");
+    if (memory == MAP_FAILED) {
+      problem = "mmap for the futex floor failed";
+      return;
+    }
     shared_ = new (memory) Shared;
+    const pid_t parent = getpid();
     // The child only touches the shared words and makes system calls: safe after a
     // fork of this multi-threaded process.
     child_ = fork();
-    if (child_ != 0) return;
-    if (peer_cpu >= 0) PlacedRoundTrip::pin_this_thread(peer_cpu);
+    if (child_ < 0) {
+      problem = "fork for the futex floor failed";
+      return;
+    }
+    if (child_ > 0) {
+      round_trip_ns(false);  // the peer has placed itself
+      if (!shared_->placed.load()) problem = "could not pin the floor's peer";
+      return;
+    }
+    prctl(PR_SET_PDEATHSIG, SIGKILL);  // never left behind asleep
+    if (getppid() != parent) _exit(0);
+    prctl(PR_SET_TIMERSLACK, 1UL);
+    shared_->placed.store(peer_cpu < 0 || pin_this_thread(peer_cpu));
     for (std::uint32_t seen = 0;;) {
       wait_while(seen, shared_->timed.load(std::memory_order_relaxed) != 0);
       const std::uint32_t now = shared_->turn.load(std::memory_order_acquire);
@@ -817,8 +822,11 @@ class FutexPingPong {
   FutexPingPong(const FutexPingPong&) = delete;
   FutexPingPong& operator=(const FutexPingPong&) = delete;
   ~FutexPingPong() {
-    pass(kStop);
-    waitpid(child_, nullptr, 0);
+    if (!shared_) return;
+    if (child_ > 0) {
+      pass(kStop);
+      waitpid(child_, nullptr, 0);
+    }
     munmap(shared_, sizeof(Shared));
   }
   std::int64_t round_trip_ns(bool timed) {
@@ -829,19 +837,21 @@ class FutexPingPong {
     value_ = shared_->turn.load(std::memory_order_acquire);
     return monotonic_ns() - sent;
   }
+  const char* problem = nullptr;
 
  private:
   struct Shared {
     std::atomic<std::uint32_t> turn{0};
     std::atomic<std::uint32_t> timed{0};  // the peer's waits too, from its next one
+    std::atomic<bool> placed{false};
   };
   static constexpr std::uint32_t kStop = ~0U;
   std::uint32_t* word() { return reinterpret_cast<std::uint32_t*>(&shared_->turn); }
   // Sleeps while the turn is `value`.
   void wait_while(std::uint32_t value, bool timed) {
-    const timespec second{1, 0};
+    const timespec timeout{0, 10'000'000};
     while (shared_->turn.load(std::memory_order_acquire) == value)
-      syscall(SYS_futex, word(), FUTEX_WAIT, value, timed ? &second : nullptr, nullptr, 0);
+      syscall(SYS_futex, word(), FUTEX_WAIT, value, timed ? &timeout : nullptr, nullptr, 0);
   }
   void pass(std::uint32_t value) {
     shared_->turn.store(value, std::memory_order_release);
@@ -851,6 +861,13 @@ class FutexPingPong {
   pid_t child_ = -1;
   std::uint32_t value_ = 0;
 };
+
+// Whether the main thread of process `pid` may run on `cpu` alone.
+bool on_cpu_alone(pid_t pid, int cpu) {
+  cpu_set_t cpus;
+  return sched_getaffinity(pid, sizeof cpus, &cpus) == 0 && CPU_COUNT(&cpus) == 1 &&
+         CPU_ISSET(cpu, &cpus);
+}
 
 // Lockstep: the physics publishes a step, an `afhub ctl hold --lockstep` process
 // answers it, the physics resumes. One body (a ball) isolates the protocol; the KUKA
@@ -864,14 +881,20 @@ class FutexPingPong {
 // second with the physics step included.
 void BM_LockstepRoundTrip(benchmark::State& state, bool kuka, bool spin, Placement placement) {
   if (kuka && !have_shared_models(state)) return;
-  const PlacedRoundTrip placed(placement);
-  if (!placed.ok) {
-    state.SkipWithError("needs two CPUs");
+  const ScopedPlacement placed(placement);
+  if (placed.problem) {
+    state.SkipWithError(placed.problem);
     return;
   }
   // Not when free: the scheduler places a forked floor and an exec'd controller apart.
   std::optional<FutexPingPong> floor;
-  if (!spin && placement != Placement::kFree) floor.emplace(placed.peer_cpu);
+  if (!spin && placement != Placement::kFree) {
+    floor.emplace(placed.peer_cpu);
+    if (floor->problem) {
+      state.SkipWithError(floor->problem);
+      return;
+    }
+  }
   afhub::testing::ModelFolder folder;
   const std::string file =
       kuka ? kKuka
@@ -895,6 +918,10 @@ void BM_LockstepRoundTrip(benchmark::State& state, bool kuka, bool spin, Placeme
   afhub::test::ScopedProcess client(afhub::test::spawn_afhub(client_args));
   channels.wait_for_clients();  // step 0 waits for the client to join
   channels.await_lockstep();
+  if (placed.peer_cpu >= 0 && !on_cpu_alone(client.pid, placed.peer_cpu)) {
+    state.SkipWithError("the controller could not be pinned");
+    return;
+  }
   LatencyHistogram round_trip, bare_floor, timed_floor;
   std::int64_t lockstep_ns = 0;
   std::uint64_t turn = 0;
@@ -927,7 +954,8 @@ void BM_LockstepRoundTrip(benchmark::State& state, bool kuka, bool spin, Placeme
 }
 // Fixed iterations: one run per case, so the client process starts once (a second
 // SimChannels in this process would briefly publish beside the first). With the floor,
-// a third of them are the lockstep's, a third each floor's.
+// a third of them are the lockstep's, a third each floor's (so Google Benchmark's own
+// time per iteration mixes the three: read the counters).
 void LockstepCases(benchmark::internal::Benchmark* cases) {
   cases->Unit(benchmark::kMicrosecond)->Iterations(30000);
 }

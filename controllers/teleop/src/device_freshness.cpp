@@ -5,6 +5,10 @@
 
 namespace afhub::teleop {
 
+bool stood_still(std::int64_t gap_ns, std::int64_t stale_ns, std::int64_t period_ns) noexcept {
+  return gap_ns > stale_ns && gap_ns > 2 * period_ns;
+}
+
 DeviceFreshness::DeviceFreshness(std::int64_t stale_ns, std::int64_t period_ns) noexcept
     : stale_ns_(stale_ns),
       stale_cycles_(std::max<std::int64_t>(

@@ -102,6 +102,7 @@ void TeleopLaw::restart_from(const Pose& origin) noexcept {
   anchored_ = false;
   have_target_ = false;
   was_clutched_ = false;
+  device_wrench_ = {};
 }
 
 void TeleopLaw::step(const DeviceState& device, const Pose& body_pose, const Twist& body_twist,

@@ -45,6 +45,7 @@ struct Link {
         freshness(options.stale_ns, options.loop.period_ns),
         state_freshness(options.stale_ns),
         stale_ns(options.stale_ns),
+        period_ns(options.loop.period_ns),
         law(params_of(b)),
         device_state(body_state_channel(device_channel_name(b.device_name))),
         device_command(body_command_channel(device_channel_name(b.device_name))),
@@ -59,7 +60,8 @@ struct Link {
   const TeleopBinding* binding;
   DeviceFreshness freshness;
   StateFreshness state_freshness;
-  std::int64_t stale_ns;  // TeleopOptions::stale_ns
+  std::int64_t stale_ns;   // TeleopOptions::stale_ns
+  std::int64_t period_ns;  // the loop's
   TeleopLaw law;
   LatestReader<DeviceState> device_state;
   Writer<DeviceCommand> device_command;
@@ -176,6 +178,8 @@ void judge_body(Link& link, const BodyState* state, std::int64_t now) {
 // One cycle of one link: newest samples in, the two commands out. Returns the body's
 // state the cycle answered, or nullptr.
 const BodyState* cycle(Link& link, std::int64_t now, TeleopLatency* latency, std::size_t most) {
+  const std::int64_t since_last_ns = link.last_cycle_ns ? now - link.last_cycle_ns : 0;
+  link.last_cycle_ns = now;
   const DeviceState* device = link.device_state.latest();
   const BodyState* state = link.body.latest_state();
   if (hub_lost()) return nullptr;  // the driver's watchdog zeroes the force
@@ -210,25 +214,23 @@ const BodyState* cycle(Link& link, std::int64_t now, TeleopLatency* latency, std
                  "is, with no jump\n",
                  link.binding->device_name.c_str(), link.device_pid, link.binding->body.c_str());
   }
-  const std::int64_t since_last_ns = link.last_cycle_ns ? now - link.last_cycle_ns : 0;
-  link.last_cycle_ns = now;
-  // This process itself stood still (SIGSTOP, a debugger, a stalled machine) past the
-  // stale time: meanwhile the driver took the force off, the physics let the body go,
-  // and the hand moved on. As after a new driver, the body moves on from where it is
-  // (going on, it was pulled to where the hand had gone and the device pulled the hand
-  // back), and the force returns only through the driver's ramp.
-  const bool stood_still = since_last_ns > link.stale_ns;
-  if (stood_still) {
-    link.law.re_anchor();
+  // This process itself stood still (SIGSTOP, a debugger, a starved or stalled
+  // machine): meanwhile the driver took the force off, the physics let the body go, and
+  // the hand moved on. The body is driven on from where it is now, as at the start (it
+  // was pulled to where the hand had gone, and the device pulled the hand back), and the
+  // force returns only through the driver's ramp.
+  const bool standstill = stood_still(since_last_ns, link.stale_ns, link.period_ns);
+  if (standstill) {
+    link.law.restart_from(state->pose);
     link.force_off_since_ns = now;
     std::fprintf(stderr,
-                 "afhub teleop: this process stood still for %.0f ms: %s moves on from where it "
-                 "is, with no jump, and the force on device/%s ramps in\n",
+                 "afhub teleop: this process stood still for %.0f ms: %s is driven on from "
+                 "where it is now, and the force on device/%s ramps in\n",
                  static_cast<double>(since_last_ns) * 1e-6, link.binding->body.c_str(),
                  link.binding->device_name.c_str());
   }
   // No time passed for the law across a standstill: its limits on change start over.
-  const double dt = stood_still ? 0.0 : static_cast<double>(since_last_ns) * 1e-9;
+  const double dt = standstill ? 0.0 : static_cast<double>(since_last_ns) * 1e-9;
   if (const bool stale = link.freshness.stale(device->header.publish_stamp_ns, now);
       stale != link.held) {
     link.held = stale;

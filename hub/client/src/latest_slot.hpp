@@ -46,7 +46,8 @@ struct Watch {
   std::uint32_t observed;
 };
 
-// Sleeps until one of `watches` (at most 128) changes, or `timeout_ns` passes.
+// Sleeps until one of the first 128 of `watches` (futex_waitv's most) changes, or
+// `timeout_ns` passes.
 void wait(std::span<const Watch> watches, std::int64_t timeout_ns) noexcept;
 
 }  // namespace afhub::slot

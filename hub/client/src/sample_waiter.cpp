@@ -19,9 +19,9 @@ namespace {
 // A slot's futex says nothing of a new writer's entry (a restarted physics, a second
 // controller): a wait on slots returns this often, and the readers look for one. Not
 // sooner: a timer a millisecond away, armed on every wait, made each wake-up of a
-// halted vCPU about 5 us slower on the project's VM (a lockstep round trip 1.33x the
-// bare futex floor with a 1 ms check, 1.05x with 10 ms: physics_benchmark's
-// BM_LockstepRoundTrip/one_body_apart).
+// halted vCPU about 5 us slower on the project's VM (a lockstep round trip 1.36x the
+// bare futex floor with a 1 ms look, 1.09x with 10 ms, in the same hour: physics_benchmark's
+// BM_LockstepRoundTrip/one_body_apart; docs/performance.md#lockstep).
 constexpr std::int64_t kArrivalCheckNs = 10'000'000;
 // Slots past the 128 that futex_waitv watches are looked at this often.
 constexpr std::int64_t kUnwatchedCheckNs = 1'000'000;

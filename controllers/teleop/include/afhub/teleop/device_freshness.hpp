@@ -10,6 +10,11 @@
 
 namespace afhub::teleop {
 
+// Whether the loop itself stood still (stopped, starved) between two of its cycles
+// `gap_ns` apart: past the stale time, and past two of its periods, so that a loop slower
+// than the stale time, or one cycle late, is not taken for stopped.
+bool stood_still(std::int64_t gap_ns, std::int64_t stale_ns, std::int64_t period_ns) noexcept;
+
 class DeviceFreshness {
  public:
   // `period_ns`: the loop's period, by which stale_ns becomes a number of cycles.

@@ -80,7 +80,8 @@ class TeleopLaw {
             TeleopOutput& out, const Wrench& body_contact = {}) noexcept;
 
   // The target's origin for the next first cycle (default: the location), for a body
-  // that should be driven from where it is; clears the anchor.
+  // that should be driven from where it is; clears the anchor, and the device's force
+  // starts again from none, within the jerk limit.
   void restart_from(const Pose& origin) noexcept;
 
   // While held (the device's samples are stale: its driver stopped), the law acts as
@@ -89,10 +90,9 @@ class TeleopLaw {
   void hold(bool held) noexcept { held_ = held; }
 
   // A new driver took the device (restarted within the stale time: its hand may be
-  // anywhere), or the teleop process stood still while the hand moved: the next step
-  // anchors at the hand's pose, as after the clutch, so the body continues from where
-  // it is (it was thrown 0.7 m toward a new hand's pose), and the device's force starts
-  // again from none, within the jerk limit (the driver had it off).
+  // anywhere): the next step anchors at its pose, as after the clutch, so the body
+  // continues from where it is (it was thrown 0.7 m toward the new hand's pose), and the
+  // device's force starts again from none, within the jerk limit.
   void re_anchor() noexcept {
     was_clutched_ = true;
     device_wrench_ = {};
