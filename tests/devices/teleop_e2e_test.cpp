@@ -681,5 +681,28 @@ TEST(TeleopEndToEnd, AWorldResetWhileTheDevicePushesRampsTheForceInAgain) {
       << teleop.teleop_log();
 }
 
+// The same standstill with a driver whose watchdog outlasts it (300 ms against teleop's
+// 50 ms stale time) while the device pushes: the driver kept the force on meanwhile, so
+// teleop goes on as after a late cycle. Taken for a standstill, the 3 N dropped to none
+// and ramped in again.
+TEST(TeleopEndToEnd, AStandstillTheDriverOutlastedKeepsTheForce) {
+  afhub::testing::ModelFolder scripts;
+  const std::string csv = scripts.write("push.csv", "0,0,0,0\n1,0,0,-0.2\n");
+  const std::string force_log = (scripts.dir() / "force.log").string();
+  Teleop teleop("outlasted", {"--trajectory", csv, "--watchdog", "300", "--force-log", force_log});
+  ASSERT_TRUE(teleop.restart_driver_once_running()) << teleop.logs();
+  ASSERT_TRUE(wait_until([&] { return pushing_up(teleop); }, 20s)) << teleop.logs();
+  pause_ms(300);
+  const std::size_t before = read_file(force_log).size();
+  teleop.signal_teleop(SIGSTOP);
+  pause_ms(100);
+  teleop.signal_teleop(SIGCONT);
+  pause_ms(500);
+  const std::string after = read_file(force_log).substr(before);
+  EXPECT_FALSE(contains(after, " zero")) << "the force went off\n" << after << teleop.logs();
+  EXPECT_FALSE(contains(teleop.teleop_log(), "stood still")) << teleop.teleop_log();
+  EXPECT_TRUE(wait_until([&] { return pushing_up(teleop); }, 2s)) << teleop.logs();
+}
+
 }  // namespace
 }  // namespace afhub::test

@@ -218,8 +218,10 @@ const BodyState* cycle(Link& link, std::int64_t now, TeleopLatency* latency, std
   // machine): meanwhile the driver took the force off, the physics let the body go, and
   // the hand moved on. The body is driven on from where it is now, as at the start (it
   // was pulled to where the hand had gone, and the device pulled the hand back), and the
-  // force returns only through the driver's ramp.
-  const bool standstill = stood_still(since_last_ns, link.stale_ns, link.period_ns);
+  // force returns only through the driver's ramp. A driver whose watchdog outlasted the
+  // gap still applies the force: that is a late cycle (restarting dropped its 3 N).
+  const bool standstill = stood_still(since_last_ns, link.stale_ns, link.period_ns) &&
+                          device->gate != ForceGate::kApplying;
   if (standstill) {
     link.law.restart_from(state->pose);
     link.force_off_since_ns = now;

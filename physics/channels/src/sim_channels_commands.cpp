@@ -84,7 +84,13 @@ void SimChannels::apply_commands(std::int64_t now_ns, bool holding) noexcept {
             if (Notice* notice = note(channel, kBeyondLimits, answer.pid))
               set_name(notice->why, entry);
           }
-        if (lockstep_ && answer.lockstep) note_lockstep_answer(channel, answer);
+        if (lockstep_ && answer.lockstep) {
+          note_lockstep_answer(channel, answer);
+        } else if (lockstep_ && channel.lockstep_pid != 0 && answer.pid != channel.lockstep_pid) {
+          // Its command, the newest, hides the client's answer: the step waits for it.
+          if (Notice* notice = note(channel, kBesideLockstep, answer.pid))
+            notice->other_pid = channel.lockstep_pid;
+        }
         channel.applied_answer_step = answer.step;
         sim_.set_input(channel.index, input_);
         channel.last_command_ns = std::min(stamp_ns, now_ns);
@@ -185,6 +191,14 @@ int SimChannels::report_events(std::FILE* out) {
                        "takes whichever command came last, so the run depends on their timing "
                        "(said once per body); run one lockstep client per body\n",
                        body, n.other_pid, n.pid);
+          break;
+        case kBesideLockstep:
+          std::fprintf(out,
+                       "afhub run: pid %u commands %s outside the lockstep, beside its lockstep "
+                       "client pid %u: each step takes whichever command came last, and an "
+                       "answer hidden that way holds the step for --client-timeout (said once "
+                       "per body); command a lockstep body from its lockstep client only\n",
+                       n.pid, body, n.other_pid);
           break;
         case kJoined:
           std::fprintf(out,

@@ -175,7 +175,8 @@ class SimChannels {
   void publish_soft_nodes() noexcept;
   // An event to say from outside the loop. Refusals, stale commands, expiries and a
   // second lockstep client are said once per body (a short watchdog may fire every few
-  // ms, two clients alternate every step); joins and drops each time.
+  // ms, two clients alternate every step), and so is a writer beside a lockstep client;
+  // joins and drops each time.
   // How far ahead of this process's clock a command's stamp may be: every process
   // reads the same CLOCK_MONOTONIC, so only a read racing the publish on another core.
   static constexpr std::int64_t kFutureStampAllowanceNs = 1'000'000;
@@ -187,6 +188,7 @@ class SimChannels {
     kBeyondLimits,
     kExpired,
     kShared,
+    kBesideLockstep,
     kJoined,
     kDropped,
     kEventKinds
@@ -196,7 +198,7 @@ class SimChannels {
     bool said = false;
     std::uint32_t pid = 0;
     double seconds = 0.0;         // kStale: the command's age (< 0: from the future)
-    std::uint32_t other_pid = 0;  // kShared: the client in the barrier
+    std::uint32_t other_pid = 0;  // kShared, kBesideLockstep: the client in the barrier
     std::uint64_t step = 0;       // kJoined: the step it joined at; kAhead: it answered
     int misses = 0;               // kDropped: late steps in a row
     std::array<char, 160> why{};  // kRejected, kAxisless, kBeyondLimits: the problem
@@ -238,7 +240,7 @@ class SimChannels {
   };
   // The notice to fill for `event`, or nullptr when a said-once event was noted already.
   static Notice* note(Channel& channel, Event event, std::uint32_t pid) noexcept;
-  static bool said_once(Event event) { return event <= kShared; }
+  static bool said_once(Event event) { return event <= kBesideLockstep; }
   // Puts `channel` in the barrier for client `pid` (0: out of it), keeping the count.
   void set_lockstep_pid(Channel& channel, std::uint32_t pid) noexcept;
   // The world's clock as last published, for publishing a held step again.
