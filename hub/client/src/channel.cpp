@@ -337,8 +337,9 @@ void RawLatestReader::hold_writers() noexcept {
 const void* RawLatestReader::latest_slot() noexcept {
   hold_writers();
   if (held_slot_count_ == 0) return held_;
-  // The writer that updated last; the others count as looked at (a wait then
-  // sleeps until one of them updates again).
+  // The writer that updated last, unless the preferred writer has an update not read
+  // yet: that first, the newest at the next call. The others count as looked at (a
+  // wait then sleeps until one of them updates again).
   std::size_t newest = 0;
   std::int64_t newest_stamp =
       held_slots_[0].entry->control.stamp_ns.load(std::memory_order_acquire);
@@ -350,23 +351,28 @@ const void* RawLatestReader::latest_slot() noexcept {
       newest_stamp = stamp;
     }
   }
+  std::size_t chosen = newest;
   for (std::size_t i = 0; i < held_slot_count_; ++i)
-    if (i != newest)
+    if (preferred_pid_ != 0 && held_slots_[i].writer_pid == preferred_pid_ &&
+        held_slots_[i].entry->control.sequence.load(std::memory_order_acquire) != observed_[i])
+      chosen = i;
+  for (std::size_t i = 0; i < held_slot_count_; ++i)
+    if (i != chosen && i != newest)
       observed_[i] = held_slots_[i].entry->control.sequence.load(std::memory_order_acquire);
-  const slot_blocks::Found& slot = held_slots_[newest];
+  const slot_blocks::Found& slot = held_slots_[chosen];
   if (!grow_copies(slot.capacity)) return held_;
   std::uint32_t bytes = 0;
   SlotControl& control = slot.entry->control;
-  const std::uint32_t seen = observed_[newest];
+  const std::uint32_t seen = observed_[chosen];
   slot::Read read =
-      slot::read(control, slot.payload, slot.capacity, spare_.get(), observed_[newest], bytes);
+      slot::read(control, slot.payload, slot.capacity, spare_.get(), observed_[chosen], bytes);
   // Met mid-update for the first time (a writer killed in it is waited for once).
-  if (read == slot::Read::kTorn && waits_if_behind_ && observed_[newest] != seen &&
+  if (read == slot::Read::kTorn && waits_if_behind_ && observed_[chosen] != seen &&
       apart_by_more_than(control.stamp_ns.load(std::memory_order_acquire), held_stamp_ns_,
                          kStaleCopyNs)) {
-    const slot::Watch watch{&control, observed_[newest]};
+    const slot::Watch watch{&control, observed_[chosen]};
     slot::wait({&watch, 1}, kTornWaitNs);
-    read = slot::read(control, slot.payload, slot.capacity, spare_.get(), observed_[newest], bytes);
+    read = slot::read(control, slot.payload, slot.capacity, spare_.get(), observed_[chosen], bytes);
   }
   if (read != slot::Read::kCopied) return held_;
   // Checked after the copy: the writer cannot change what was checked.

@@ -336,7 +336,8 @@ void Directory::scan_entries(Block& block, bool& changed) noexcept {
     try {
       std::string key = std::string(service) + "/" + instance + "/" + event;
       index_[std::move(key)].push_back({entry, block.entry(block.scanned) + kSlotEntryHeaderBytes,
-                                        block.geometry.payload_capacity, &block});
+                                        block.geometry.payload_capacity, &block,
+                                        block.geometry.writer_pid});
     } catch (const std::bad_alloc&) {
       report("out of memory indexing a channel");
       return;

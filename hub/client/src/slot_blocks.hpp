@@ -43,7 +43,8 @@ struct Found {
   SlotEntryHeader* entry = nullptr;
   const void* payload = nullptr;
   std::uint32_t capacity = 0;
-  void* block = nullptr;  // the directory's, pinned while the reader holds the entry
+  void* block = nullptr;         // the directory's, pinned while the reader holds the entry
+  std::uint32_t writer_pid = 0;  // as its block's header said (checked, not proven)
 };
 
 // The blocks of one kind that this process reads, shared by its readers of that kind.

@@ -87,7 +87,8 @@ void SimChannels::apply_commands(std::int64_t now_ns, bool holding) noexcept {
         if (lockstep_ && answer.lockstep) {
           note_lockstep_answer(channel, answer);
         } else if (lockstep_ && channel.lockstep_pid != 0 && answer.pid != channel.lockstep_pid) {
-          // Its command, the newest, hides the client's answer: the step waits for it.
+          // Each step takes whichever command came last (the client's answers are taken
+          // first, so none is hidden).
           if (Notice* notice = note(channel, kBesideLockstep, answer.pid))
             notice->other_pid = channel.lockstep_pid;
         }
@@ -195,9 +196,9 @@ int SimChannels::report_events(std::FILE* out) {
         case kBesideLockstep:
           std::fprintf(out,
                        "afhub run: pid %u commands %s outside the lockstep, beside its lockstep "
-                       "client pid %u: each step takes whichever command came last, and an "
-                       "answer hidden that way holds the step for --client-timeout (said once "
-                       "per body); command a lockstep body from its lockstep client only\n",
+                       "client pid %u: each step takes whichever command came last, so the run "
+                       "depends on their timing (said once per body); command a lockstep body "
+                       "from its lockstep client only\n",
                        n.pid, body, n.other_pid);
           break;
         case kJoined:

@@ -86,6 +86,9 @@ void SimChannels::set_lockstep_pid(Channel& channel, std::uint32_t pid) noexcept
     }
   }
   channel.lockstep_pid = pid;
+  // Its answers are taken before another writer's newer command (`afhub cmd` beside it
+  // hid them: each one hidden held the step for the client timeout).
+  channel.publisher->command_reader().prefer_writer(pid);
   if (pid != 0) {
     const auto entry = find(pid);
     if (entry != lockstep_pids_.end())

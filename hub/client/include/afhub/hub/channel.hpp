@@ -121,6 +121,10 @@ class RawLatestReader {
   // control and the payload bytes of the last copy), as prefetch_update() does for a
   // writer: a hint, with no effect on what latest() returns.
   void prefetch() const noexcept;
+  // Slot kinds with several writers: an update of the writer of process `pid` (0: none)
+  // is returned before a newer one of another writer, which the next call returns. A
+  // lockstep client's answer is then never hidden by another writer's command.
+  void prefer_writer(std::uint32_t pid) noexcept { preferred_pid_ = pid; }
   // Whether the last latest() call found a sample newer than the one before.
   bool updated() const { return updated_; }
   // The size in bytes of the payload latest() returned.
@@ -171,6 +175,7 @@ class RawLatestReader {
   std::unique_ptr<slot_blocks::Found[]> held_slots_;
   std::array<std::uint32_t, kMaxHeldSlots> observed_{};
   std::size_t held_slot_count_ = 0;
+  std::uint32_t preferred_pid_ = 0;  // prefer_writer()
   // The checked copy latest() returns, and the buffer the next copy goes to.
   std::unique_ptr<unsigned char[]> copy_, spare_;
   std::uint32_t copy_capacity_ = 0;
