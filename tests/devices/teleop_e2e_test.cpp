@@ -345,8 +345,32 @@ TEST(TeleopEndToEnd, ASecondTeleopOnADeviceIsRefused) {
   ASSERT_TRUE(teleop.wait_running()) << teleop.logs();
   const RunResult second = run_afhub(teleop.teleop_args(), 20s);
   EXPECT_EQ(second.exit_code, 1) << second.err;
-  EXPECT_TRUE(contains(second.err, "device/twice is commanded by pid")) << second.err;
+  EXPECT_TRUE(contains(
+      second.err, "device/twice is teleoperated by pid " + std::to_string(teleop.teleop_pid())))
+      << second.err;
   EXPECT_TRUE(contains(second.err, "a device takes one teleoperation")) << second.err;
+}
+
+// Two teleops started at the same moment both passed the look at the device's
+// commands (neither commanded it yet), and fought over it. Both wait for the same body
+// and device, so they reach the device together; its claim lets one through.
+TEST(TeleopEndToEnd, OfTwoTeleopsStartedAtOnceOneIsRefused) {
+  Teleop teleop("atonce", {});
+  const std::string second_log = teleop.log_prefix() + ".second-teleop";
+  ScopedProcess second(spawn_afhub(teleop.teleop_args(), second_log));
+  ASSERT_TRUE(teleop.wait_running()) << teleop.logs();
+  const std::string refused = "a device takes one teleoperation";
+  ASSERT_TRUE(wait_until(
+      [&] {
+        return contains(teleop.teleop_log(), refused) || contains(read_file(second_log), refused);
+      },
+      10s))
+      << "neither teleop was refused\n"
+      << teleop.logs() << "\nsecond: " << read_file(second_log);
+  EXPECT_NE(contains(teleop.teleop_log(), refused), contains(read_file(second_log), refused))
+      << teleop.logs() << "\nsecond: " << read_file(second_log);
+  pause_ms(500);  // the one let through goes on teleoperating
+  EXPECT_TRUE(teleop.wait_running()) << teleop.logs();
 }
 
 // --feedback contact: the device renders the palm's contact force (the physics'

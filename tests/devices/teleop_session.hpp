@@ -81,6 +81,7 @@ class TeleopSession {
         20s);
   }
   void kill_teleop() { kill(teleop_.pid, SIGKILL); }
+  pid_t teleop_pid() const { return teleop_.pid; }
   // SIGSTOP, SIGCONT or SIGKILL to teleop, or to the physics.
   void signal_teleop(int signal) { kill(teleop_.pid, signal); }
   void signal_physics(int signal) { kill(physics_.pid, signal); }
@@ -112,6 +113,7 @@ class TeleopSession {
   const BodyState& body() { return *body_.latest(); }
   const DeviceState& device() { return *device_.latest(); }
   std::string teleop_log() { return read_file(setup_.log + ".teleop"); }
+  std::string log_prefix() const { return setup_.log; }
   std::string logs() {
     return "run: " + read_file(setup_.log + ".run") + "\nteleop: " + teleop_log() +
            "\ndevice: " + read_file(setup_.log + ".device");

@@ -16,6 +16,7 @@
 #include "afhub/hub/hub_loss.hpp"
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/hub/loop_stats_publisher.hpp"
+#include "afhub/hub/process_claim.hpp"
 #include "afhub/hub/startup_wait.hpp"
 #include "afhub/rt/clock.hpp"
 #include "afhub/rt/stop_signal.hpp"
@@ -66,6 +67,7 @@ struct Link {
   LatestReader<DeviceState> device_state;
   Writer<DeviceCommand> device_command;
   BodyClient body;
+  ProcessClaim device_claim;                         // this process teleoperates the device
   std::vector<std::unique_ptr<BodyClient>> subtree;  // below the root: contact feedback only
   std::vector<const BodyState*> multibody_states;    // the root's, then those below: per cycle
   TeleopOutput out;
@@ -109,10 +111,22 @@ void wait_for_device(Link& link, const std::string& who, std::int64_t give_up_ns
 
 // One process commands a device: a second teleop on it fought the first (the palm
 // pulled between their two anchors, the device at its file's maximum force). Refused
-// while another live process goes on commanding it, a second at most (one stopped just
-// before this one started is given that second to end).
-void require_device_free(const Link& link) {
+// when another teleop on this machine holds the device's claim (two started at the
+// same moment both passed the look below), or while another live process goes on
+// commanding it, a second at most (one stopped just before this one started is given
+// that second to end; a teleop on another machine, through the DDS bridge, holds no
+// claim here).
+void require_device_free(Link& link) {
   const std::string channel = device_channel_name(link.binding->device_name);
+  std::string claim = "teleop." + channel;
+  std::replace(claim.begin(), claim.end(), '/', '.');
+  if (pid_t holder = 0; !link.device_claim.take(claim, holder))
+    throw Error(channel + " is teleoperated by " +
+                (holder == getpid() ? std::string("this teleop already (bound twice?)")
+                 : holder > 0       ? "pid " + std::to_string(holder) + " (afhub teleop)"
+                                    : std::string("another afhub teleop")) +
+                ": a device takes one teleoperation. Stop that one, or bind this one to another "
+                "device (--device NAME)");
   LatestReader<DeviceCommand> commands(body_command_channel(channel));
   const std::int64_t start = monotonic_ns();
   std::uint32_t commander = 0;
