@@ -14,6 +14,8 @@
 #      applies no world command.
 #   4. A device across (--devices): B's device mirrored into A's hub is listed there
 #      as a device, and a force commanded on A reaches it.
+#   5. That device's driver restarted at once on B, its hand elsewhere: a teleop on A
+#      bound to the mirror sees a new driver and re-anchors (the palm does not jump).
 # The staleness B sees (mirrored states' age) and the age of the commands A applies
 # are printed from the bridges' --latency reports.
 # Usage: dds_teleop_two_machines_test.sh AFHUB_BINARY GRIPPER_MODEL FLOOR_MODEL. Needs root.
@@ -195,6 +197,7 @@ echo "  a world command older than the bound was dropped on A"
 echo "4. a device across: B's device in A's hub, its force from A"
 kill -TERM "$bridge_a" "$bridge_b"
 spawn b device2 $rt "$afhub" device run virtual --name probe
+spawned_device2=$spawned
 spawn a bridge_a3 $rt "$afhub" bridge dds --export --mirror --insecure-accept-commands --bodies 'afhub/gripper/*' --devices 'probe'
 spawn b bridge_b3 $rt "$afhub" bridge dds --export --mirror --insecure-accept-commands --bodies 'afhub/gripper/*' --devices 'probe'
 for _ in $(seq 200); do
@@ -237,4 +240,26 @@ on a "$afhub" info /tmp/probe.mcap --json >"$work/probe_info.json"
 jq -e '.channels[] | select(.topic == "/device/probe/state") | .messages > 100 and .skipped == 0'   "$work/probe_info.json" >/dev/null ||
   fail "the recording of A's mirror of device/probe skipped states: $(jq -c '.channels[] | select(.topic == "/device/probe/state")' "$work/probe_info.json")"
 echo "  A's mirror of device/probe recorded: $(jq -r '.channels[] | select(.topic == "/device/probe/state") | "\(.messages) states, \(.skipped) skipped"' "$work/probe_info.json")"
+echo "5. B's driver restarted at once, its hand 2 cm away: A's teleop on the mirror re-anchors"
+# The mirror's pid does not change with the remote driver: it numbers the new driver's
+# states afresh, as a restarted local driver's are. Without that, the palm was thrown to
+# the new hand (10 cm at the scale of 5). --stale 2000: no gap seen in the samples.
+on b cat /tmp/input_devices.yaml | on a tee /tmp/probe_devices.yaml >/dev/null
+printf '0,0.02,0,0\n60,0.02,0,0\n' | on b tee /tmp/out.csv >/dev/null
+spawn a teleop_a $rt "$afhub" teleop /tmp/probe_devices.yaml --device probe --stale 2000 --wait 30
+# palm_x: A's palm's x now.
+palm_x() { on a "$afhub" echo "$palm" --json --count 1 | jq .position_m[0]; }
+wait_until 30 "A's teleop to drive the palm with device/probe" grep -q "device/probe drives" "$work/teleop_a.log"
+sleep 1
+before=$(palm_x)
+{ kill -9 "$spawned_device2" && wait "$spawned_device2"; } 2>/dev/null || true
+spawn b device3 $rt "$afhub" device run virtual --name probe --trajectory /tmp/out.csv
+new_hand_on_a() { on a "$afhub" echo device/probe --json --count 1 | jq -e '.position[0] > 0.0195'; }
+wait_until 30 "the new driver's hand on A" new_hand_on_a
+on a "$afhub" echo "$palm" --json --count 100 --rate 100 >"$work/after.json"
+jump=$(jq -s --argjson x0 "$before" 'map(.position_m[0] - $x0 | fabs) | max' "$work/after.json")
+echo "  largest move of A's palm along x over the next second: $jump m"
+jq -e -n "$jump < 0.01" >/dev/null || fail "A's palm jumped $jump m to the new driver's hand"
+grep -q "device/probe has a new driver" "$work/teleop_a.log" || fail "A's teleop did not say it saw a new driver"
+echo "  $(grep -o "device/probe has a new driver.*" "$work/teleop_a.log" | head -1)"
 echo "$test_name: PASS"

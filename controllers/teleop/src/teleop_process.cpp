@@ -215,18 +215,21 @@ const BodyState* cycle(Link& link, std::int64_t now, TeleopLatency* latency, std
     if (latency->to_device_force.size() < most)
       latency->to_device_force.push_back(device->header.publish_stamp_ns - sample);
   }
-  // A driver restarted within the stale time comes with no gap in the samples.
+  // A driver restarted within the stale time comes with no gap in the samples. Behind
+  // the DDS bridge the pid stays the mirror's, and the numbering begins again.
+  const bool new_pid = link.device_pid != 0 && device->header.publisher_pid != link.device_pid;
   const bool new_driver =
-      link.device_pid != 0 && (device->header.publisher_pid != link.device_pid ||
-                               device->header.sequence < link.device_sequence);
+      new_pid || (link.device_pid != 0 && device->header.sequence < link.device_sequence);
   link.device_pid = device->header.publisher_pid;
   link.device_sequence = device->header.sequence;
   if (new_driver && !link.held) {
     link.law.re_anchor();
+    const std::string which = new_pid ? "pid " + std::to_string(link.device_pid)
+                                      : "its samples numbered afresh, behind a bridge?";
     std::fprintf(stderr,
-                 "afhub teleop: device/%s has a new driver (pid %u): %s moves on from where it "
-                 "is, with no jump\n",
-                 link.binding->device_name.c_str(), link.device_pid, link.binding->body.c_str());
+                 "afhub teleop: device/%s has a new driver (%s): %s moves on from where it is, "
+                 "with no jump\n",
+                 link.binding->device_name.c_str(), which.c_str(), link.binding->body.c_str());
   }
   // This process itself stood still (SIGSTOP, a debugger, a starved or stalled
   // machine): meanwhile the driver took the force off, the physics let the body go, and
