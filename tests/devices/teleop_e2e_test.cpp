@@ -373,6 +373,28 @@ TEST(TeleopEndToEnd, OfTwoTeleopsStartedAtOnceOneIsRefused) {
   EXPECT_TRUE(teleop.wait_running()) << teleop.logs();
 }
 
+// A physics stepping slower than --stale (here every 80 ms: --dt 0.08) goes silent
+// between each two steps: teleop said "no state" every 80 ms. It says once that the
+// physics is slower than --stale, with what to do, and the device still gets no force.
+TEST(TeleopEndToEnd, APhysicsSlowerThanTheStaleTimeIsSaidOnce) {
+  Teleop teleop("slow", {}, {}, {"--dt", "0.08"});
+  ASSERT_TRUE(wait_until([&] { return contains(teleop.teleop_log(), "slower than --stale"); }, 20s))
+      << teleop.logs();
+  bool pushed = false;
+  for (int i = 0; i < 1000; ++i) {  // 2 s
+    pushed |= teleop.device().gate == ForceGate::kApplying;
+    pause_ms(2);
+  }
+  const std::string log = teleop.teleop_log();
+  EXPECT_EQ(occurrences(log, "slower than --stale"), 1) << log;
+  EXPECT_TRUE(contains(log, "afhub/gripper/palm steps every 8")) << log;  // 80 ms, or late
+  EXPECT_TRUE(contains(log, "slower than --stale (50 ms)")) << log;
+  EXPECT_TRUE(contains(log, "Give teleop --stale 1")) << log;  // 120 ms or more
+  // The two silences before the second interval was seen.
+  EXPECT_LE(occurrences(log, "no state from"), 2) << log;
+  EXPECT_FALSE(pushed) << "a force on a physics slower than --stale" << teleop.logs();
+}
+
 // --feedback contact: the device renders the palm's contact force (the physics'
 // BodyState.contact_wrench), so moving through the air gives no force at all, and
 // pushing the palm into the floor an upward force, bounded by the max force.

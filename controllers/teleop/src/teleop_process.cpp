@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <limits>
 #include <memory>
@@ -82,7 +83,13 @@ struct Link {
   // then has it seen a command without force, and ramps the force in again (a driver
   // polling slower than an outage lasted would push the whole force at once).
   std::int64_t force_off_since_ns{0};
-  bool liveness_said{false};       // a change of `physics` was said: its return to live is too
+  bool liveness_said{false};  // a change of `physics` was said: its return to live is too
+  // The body's last two steps' intervals, by their states' stamps: a physics stepping
+  // slower than --stale went silent between each two steps, said every time.
+  std::uint64_t last_step{0};
+  std::int64_t last_step_stamp_ns{0};
+  std::int64_t step_gap_ns{0}, step_gap_before_ns{0};
+  bool slow_said{false};
   std::uint64_t commands_sent{0};  // = the sequence of our last DeviceCommand
   std::uint64_t last_reported_command{0};
   std::array<std::int64_t, kInFlight> sample_stamp_of{};  // by command sequence % kInFlight
@@ -148,8 +155,23 @@ void require_device_free(Link& link) {
               "bind this one to another device (--device NAME)");
 }
 
+// Whether the physics steps slower than --stale: its last two steps each came more than
+// that apart (one long gap is a stall, said as such).
+bool steps_slower_than_stale(Link& link, const BodyState* state) {
+  if (state && state->header.sim_step != link.last_step) {
+    if (link.last_step_stamp_ns > 0) {
+      link.step_gap_before_ns = link.step_gap_ns;
+      link.step_gap_ns = state->header.publish_stamp_ns - link.last_step_stamp_ns;
+    }
+    link.last_step = state->header.sim_step;
+    link.last_step_stamp_ns = state->header.publish_stamp_ns;
+  }
+  return std::min(link.step_gap_ns, link.step_gap_before_ns) > link.stale_ns;
+}
+
 // Whether the body's physics is live (its newest state; none once there was one: a
-// dead physics' channel can go away), said once at each change.
+// dead physics' channel can go away), said once at each change; a physics that steps
+// slower than --stale is said once so, with what to do.
 void judge_body(Link& link, const BodyState* state, std::int64_t now) {
   if (state) link.seen_state = true;
   const PhysicsLiveness liveness =
@@ -157,9 +179,26 @@ void judge_body(Link& link, const BodyState* state, std::int64_t now) {
                                          state->header.sim_step, now)
       : link.seen_state ? PhysicsLiveness::kSilent
                         : PhysicsLiveness::kStarting;
+  const bool slow = steps_slower_than_stale(link, state);
+  if (!slow) link.slow_said = false;
   if (liveness == link.physics) return;
   const PhysicsLiveness before = link.physics;
   link.physics = liveness;
+  if (slow) {
+    if (!link.slow_said) {
+      const double gap_ms = static_cast<double>(link.step_gap_ns) * 1e-6;
+      std::fprintf(stderr,
+                   "afhub teleop: %s steps every %.0f ms, slower than --stale (%.0f ms): its "
+                   "states go stale between steps, so device/%s gets no force. Give teleop "
+                   "--stale %.0f or more, or step the physics faster (its --dt, a lighter "
+                   "scene)\n",
+                   link.binding->body.c_str(), gap_ms, static_cast<double>(link.stale_ns) * 1e-6,
+                   link.binding->device_name.c_str(), std::ceil(gap_ms * 1.5 / 10.0) * 10.0);
+      link.slow_said = true;
+      link.liveness_said = true;
+    }
+    return;
+  }
   if (liveness == PhysicsLiveness::kStarting ||
       (liveness == PhysicsLiveness::kLive && before == PhysicsLiveness::kStarting &&
        !link.liveness_said))
