@@ -829,8 +829,12 @@ class FutexPingPong {
     }
     munmap(shared_, sizeof(Shared));
   }
-  std::int64_t round_trip_ns(bool timed) {
+  // After `pause_ns` of work here, as a physics steps before it publishes: the peer
+  // sleeps that much longer.
+  std::int64_t round_trip_ns(bool timed, std::int64_t pause_ns = 0) {
     shared_->timed.store(timed ? 1 : 0, std::memory_order_relaxed);
+    for (const std::int64_t until = monotonic_ns() + pause_ns; monotonic_ns() < until;) {
+    }
     const std::int64_t sent = monotonic_ns();
     pass(++value_);
     wait_while(value_, timed);
@@ -922,15 +926,19 @@ void BM_LockstepRoundTrip(benchmark::State& state, bool kuka, bool spin, Placeme
     state.SkipWithError("the controller could not be pinned");
     return;
   }
-  LatencyHistogram round_trip, bare_floor, timed_floor;
-  std::int64_t lockstep_ns = 0;
+  // The paused floor: the bare one after as long as the physics' mean step, which the
+  // controller sleeps through too (the longer a vCPU halts, the slower it wakes).
+  enum Turn : std::uint64_t { kLockstep, kBareFloor, kTimedFloor, kPausedFloor, kTurns };
+  LatencyHistogram round_trip, bare_floor, timed_floor, paused_floor;
+  std::int64_t lockstep_ns = 0, stepping_ns = 0, steps = 0;
   std::uint64_t turn = 0;
   for (auto _ : state) {
-    const std::uint64_t kind = floor ? (turn++ / 200) % 3 : 0;
-    if (kind != 0) {
-      (kind == 1 ? bare_floor : timed_floor).record(floor->round_trip_ns(kind == 2));
-      continue;
-    }
+    const std::uint64_t kind = floor ? (turn++ / 200) % kTurns : kLockstep;
+    if (kind == kBareFloor) bare_floor.record(floor->round_trip_ns(false));
+    if (kind == kTimedFloor) timed_floor.record(floor->round_trip_ns(true));
+    if (kind == kPausedFloor)
+      paused_floor.record(floor->round_trip_ns(false, steps ? stepping_ns / steps : 0));
+    if (kind != kLockstep) continue;
     const std::int64_t begin = monotonic_ns();
     sim.step();
     const std::int64_t published = monotonic_ns();
@@ -939,6 +947,8 @@ void BM_LockstepRoundTrip(benchmark::State& state, bool kuka, bool spin, Placeme
     const std::int64_t answered = monotonic_ns();
     round_trip.record(answered - published);
     lockstep_ns += answered - begin;
+    stepping_ns += published - begin;
+    ++steps;
   }
   state.counters["round_trip_p50_us"] = round_trip.percentile_us(0.50);
   state.counters["round_trip_p99_us"] = round_trip.percentile_us(0.99);
@@ -946,16 +956,21 @@ void BM_LockstepRoundTrip(benchmark::State& state, bool kuka, bool spin, Placeme
     state.counters["floor_p50_us"] = bare_floor.percentile_us(0.50);
     state.counters["floor_p99_us"] = bare_floor.percentile_us(0.99);
     state.counters["timed_floor_p50_us"] = timed_floor.percentile_us(0.50);
+    state.counters["paused_floor_p50_us"] = paused_floor.percentile_us(0.50);
+    state.counters["step_us"] =
+        static_cast<double>(stepping_ns) * 1e-3 / static_cast<double>(steps);
     state.counters["over_floor"] = round_trip.percentile_us(0.50) / bare_floor.percentile_us(0.50);
+    state.counters["over_paused_floor"] =
+        round_trip.percentile_us(0.50) / paused_floor.percentile_us(0.50);
   }
   state.counters["x_real_time"] = static_cast<double>(round_trip.count()) * sim.dt_s() /
                                   (static_cast<double>(lockstep_ns) * 1e-9);
   state.counters["late"] = static_cast<double>(channels.late_answers());
 }
 // Fixed iterations: one run per case, so the client process starts once (a second
-// SimChannels in this process would briefly publish beside the first). With the floor,
-// a third of them are the lockstep's, a third each floor's (so Google Benchmark's own
-// time per iteration mixes the three: read the counters).
+// SimChannels in this process would briefly publish beside the first). With the floors,
+// a quarter of them are the lockstep's, a quarter each floor's (so Google Benchmark's
+// own time per iteration mixes the four: read the counters).
 void LockstepCases(benchmark::internal::Benchmark* cases) {
   cases->Unit(benchmark::kMicrosecond)->Iterations(30000);
 }
