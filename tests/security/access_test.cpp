@@ -21,6 +21,7 @@
 #include <thread>
 
 #include "afhub/hub/hub_presence.hpp"
+#include "afhub/hub/process_claim.hpp"
 #include "afhub_process.hpp"
 #include "hub_environment.hpp"
 
@@ -186,6 +187,42 @@ TEST_F(Access, OnlyTheHubsGroupCanOpenItsSharedMemory) {
   const RunResult ls = as_other_user(kOutsider, kNobody, {"ls"});
   EXPECT_EQ(ls.exit_code, 1) << ls.err;
   EXPECT_TRUE(contains(ls.err, "lets only the group 'users' use it")) << ls.err;
+  EXPECT_EQ(hub.stop(), 0);
+}
+
+// A teleop's claim on a device (ProcessClaim, a flock in the hub's claims/) stops a
+// second teleop started at the same moment. A hub of a group makes claims/ writable by
+// its members, so that a member's teleop takes one too (it could not create the file,
+// and took none), and one held by another user's process stops it.
+TEST_F(Access, MembersTakeClaimsInTheGroupsHub) {
+  ASSERT_TRUE(users_group_with_root_and_nobody()) << std::strerror(errno);
+  ScopedProcess hub = spawn_afhub({"hub", "--group", "users"}, hub_log_);
+  ASSERT_TRUE(hub_up()) << read_file(hub_log_);
+  struct stat claims {};
+  ASSERT_EQ(stat("/run/afhub/claims", &claims), 0) << std::strerror(errno);
+  EXPECT_EQ(claims.st_mode & 07777, 03770u);
+  EXPECT_EQ(claims.st_gid, kUsersGid);
+  const std::string file = "/run/afhub/claims/teleop.device.shared";
+  // flock(1) opens and locks as ProcessClaim does; exit code 3 when it is held.
+  const auto member_claims = [&] {
+    return run_command(
+        {"setpriv", "--reuid", std::to_string(kNobody), "--regid", std::to_string(kUsersGid),
+         "--clear-groups", "flock", "-n", "-E", "3", file, "true"},
+        10s);
+  };
+  const RunResult first = member_claims();
+  EXPECT_EQ(first.exit_code, 0) << "a member could not take a claim: " << first.err;
+  {
+    ProcessClaim claim;
+    pid_t holder = -1;
+    ASSERT_TRUE(claim.take("teleop.device.shared", holder));  // the member's file, free
+    EXPECT_TRUE(claim.unavailable().empty()) << claim.unavailable();
+    EXPECT_EQ(member_claims().exit_code, 3) << "a member took a claim another process holds";
+    ProcessClaim second;
+    EXPECT_FALSE(second.take("teleop.device.shared", holder));
+    EXPECT_EQ(holder, getpid());
+  }
+  EXPECT_EQ(member_claims().exit_code, 0) << "the claim was not let go";
   EXPECT_EQ(hub.stop(), 0);
 }
 

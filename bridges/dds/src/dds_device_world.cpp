@@ -272,13 +272,16 @@ void DeviceWorldBridge::mirror_devices() noexcept {
     if (!state) continue;
     // A driver restarted on the other machine is numbered afresh here too: its readers
     // (teleop) know a new driver by its pid or its numbering, and the mirror's pid does
-    // not change (a palm was thrown to the new driver's hand).
+    // not change (a palm was thrown to the new driver's hand). Its numbering goes back
+    // only through one relay: two bridges relaying one driver interleave theirs.
     const afhub_dds_Header& remote = device_state_sample_.header;
     if (device->driver_pid != 0 && (remote.publisher_pid != device->driver_pid ||
-                                    remote.sequence_number < device->driver_sequence))
+                                    (info.publication_handle == device->relay &&
+                                     remote.sequence_number < device->driver_sequence)))
       device->state->raw().continue_sequence_after(0);
     device->driver_pid = remote.publisher_pid;
     device->driver_sequence = remote.sequence_number;
+    device->relay = info.publication_handle;
     if (!from_dds(device_state_sample_, *state)) {
       ++counters_.bad_samples;
       state->gate = ForceGate::kNoCommand;  // a loaned chunk must go somewhere

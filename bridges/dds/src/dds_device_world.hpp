@@ -79,7 +79,8 @@ class DeviceWorldBridge {
     std::unique_ptr<LatestReader<DeviceCommand>> command;
     std::unique_ptr<DeviceTapeWriter> tape;  // every state mirrored, for a recorder
     std::uint32_t driver_pid = 0;            // the remote driver's, and its newest sequence
-    std::uint64_t driver_sequence = 0;
+    std::uint64_t driver_sequence = 0;       // through the DDS writer `relay`
+    dds_instance_handle_t relay = 0;
   };
   void mirror_devices() noexcept;
   void ask_for_device(const char* channel) noexcept;

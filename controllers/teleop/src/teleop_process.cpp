@@ -84,12 +84,15 @@ struct Link {
   // polling slower than an outage lasted would push the whole force at once).
   std::int64_t force_off_since_ns{0};
   bool liveness_said{false};  // a change of `physics` was said: its return to live is too
-  // The body's last two steps' intervals, by their states' stamps: a physics stepping
-  // slower than --stale went silent between each two steps, said every time.
-  std::uint64_t last_step{0};
-  std::int64_t last_step_stamp_ns{0};
-  std::int64_t step_gap_ns{0}, step_gap_before_ns{0};
-  bool slow_said{false};
+  // The intervals between the body's last three states, by their stamps: a physics
+  // that publishes slower than --stale (it steps slower, and publishes only when it
+  // steps) went silent between each two states, said every time.
+  std::uint64_t last_sequence{0};
+  std::int64_t last_state_stamp_ns{0};
+  std::array<std::int64_t, 3> state_gaps_ns{};
+  std::size_t next_gap{0};
+  bool slow_said{false};           // said once, until the physics is live again
+  bool silence_unsaid{false};      // a silence taken for a slow physics' gap, not said yet
   std::uint64_t commands_sent{0};  // = the sequence of our last DeviceCommand
   std::uint64_t last_reported_command{0};
   std::array<std::int64_t, kInFlight> sample_stamp_of{};  // by command sequence % kInFlight
@@ -125,15 +128,20 @@ void wait_for_device(Link& link, const std::string& who, std::int64_t give_up_ns
 // claim here).
 void require_device_free(Link& link) {
   const std::string channel = device_channel_name(link.binding->device_name);
-  std::string claim = "teleop." + channel;
-  std::replace(claim.begin(), claim.end(), '/', '.');
-  if (pid_t holder = 0; !link.device_claim.take(claim, holder))
+  // A device's name has no '/' (channel_names.cpp).
+  if (pid_t holder = 0;
+      !link.device_claim.take("teleop.device." + link.binding->device_name, holder))
     throw Error(channel + " is teleoperated by " +
                 (holder == getpid() ? std::string("this teleop already (bound twice?)")
                  : holder > 0       ? "pid " + std::to_string(holder) + " (afhub teleop)"
                                     : std::string("another afhub teleop")) +
                 ": a device takes one teleoperation. Stop that one, or bind this one to another "
                 "device (--device NAME)");
+  if (!link.device_claim.unavailable().empty())
+    std::fprintf(stderr,
+                 "afhub teleop: cannot claim %s (%s): a second teleop started at the same moment "
+                 "on it would not be refused\n",
+                 channel.c_str(), link.device_claim.unavailable().c_str());
   LatestReader<DeviceCommand> commands(body_command_channel(channel));
   const std::int64_t start = monotonic_ns();
   std::uint32_t commander = 0;
@@ -155,23 +163,32 @@ void require_device_free(Link& link) {
               "bind this one to another device (--device NAME)");
 }
 
-// Whether the physics steps slower than --stale: its last two steps each came more than
-// that apart (one long gap is a stall, said as such).
-bool steps_slower_than_stale(Link& link, const BodyState* state) {
-  if (state && state->header.sim_step != link.last_step) {
-    if (link.last_step_stamp_ns > 0) {
-      link.step_gap_before_ns = link.step_gap_ns;
-      link.step_gap_ns = state->header.publish_stamp_ns - link.last_step_stamp_ns;
-    }
-    link.last_step = state->header.sim_step;
-    link.last_step_stamp_ns = state->header.publish_stamp_ns;
+// Whether the physics publishes slower than --stale: two of its last three states came
+// more than that apart (one long gap is a stall, said as such; a paused physics still
+// publishes, and is said paused).
+bool slower_than_stale(Link& link, const BodyState* state) {
+  if (state && state->header.sequence != link.last_sequence) {
+    if (link.last_state_stamp_ns > 0)
+      link.state_gaps_ns[link.next_gap++ % link.state_gaps_ns.size()] =
+          state->header.publish_stamp_ns - link.last_state_stamp_ns;
+    link.last_sequence = state->header.sequence;
+    link.last_state_stamp_ns = state->header.publish_stamp_ns;
   }
-  return std::min(link.step_gap_ns, link.step_gap_before_ns) > link.stale_ns;
+  return std::count_if(link.state_gaps_ns.begin(), link.state_gaps_ns.end(),
+                       [&](std::int64_t gap) { return gap > link.stale_ns; }) >= 2;
+}
+
+void say_no_state(const Link& link, double silent_ms) {
+  std::fprintf(stderr,
+               "afhub teleop: no state from %s for %.0f ms (its physics stopped or died?): no "
+               "force on device/%s until states come back\n",
+               link.binding->body.c_str(), silent_ms, link.binding->device_name.c_str());
 }
 
 // Whether the body's physics is live (its newest state; none once there was one: a
-// dead physics' channel can go away), said once at each change; a physics that steps
-// slower than --stale is said once so, with what to do.
+// dead physics' channel can go away), said once at each change. A physics slower than
+// --stale is said once so, with what to do, and its silences between states are not
+// said, unless one outlasts three of its gaps.
 void judge_body(Link& link, const BodyState* state, std::int64_t now) {
   if (state) link.seen_state = true;
   const PhysicsLiveness liveness =
@@ -179,24 +196,32 @@ void judge_body(Link& link, const BodyState* state, std::int64_t now) {
                                          state->header.sim_step, now)
       : link.seen_state ? PhysicsLiveness::kSilent
                         : PhysicsLiveness::kStarting;
-  const bool slow = steps_slower_than_stale(link, state);
-  if (!slow) link.slow_said = false;
+  const bool slow = slower_than_stale(link, state);
+  std::array<std::int64_t, 3> gaps = link.state_gaps_ns;
+  std::sort(gaps.begin(), gaps.end());
+  const std::int64_t gap = gaps[1];  // the median: a stall among them is not the rate
+  if (link.silence_unsaid && liveness == PhysicsLiveness::kSilent &&
+      (!state || now - link.last_state_stamp_ns > 3 * gap)) {
+    say_no_state(link, static_cast<double>(now - link.last_state_stamp_ns) * 1e-6);
+    link.silence_unsaid = false;
+  }
   if (liveness == link.physics) return;
   const PhysicsLiveness before = link.physics;
   link.physics = liveness;
-  if (slow) {
-    if (!link.slow_said) {
-      const double gap_ms = static_cast<double>(link.step_gap_ns) * 1e-6;
-      std::fprintf(stderr,
-                   "afhub teleop: %s steps every %.0f ms, slower than --stale (%.0f ms): its "
-                   "states go stale between steps, so device/%s gets no force. Give teleop "
-                   "--stale %.0f or more, or step the physics faster (its --dt, a lighter "
-                   "scene)\n",
-                   link.binding->body.c_str(), gap_ms, static_cast<double>(link.stale_ns) * 1e-6,
-                   link.binding->device_name.c_str(), std::ceil(gap_ms * 1.5 / 10.0) * 10.0);
-      link.slow_said = true;
-      link.liveness_said = true;
-    }
+  link.silence_unsaid = false;
+  if (liveness == PhysicsLiveness::kLive) link.slow_said = false;
+  if (slow && (liveness == PhysicsLiveness::kSilent || liveness == PhysicsLiveness::kStarting)) {
+    link.silence_unsaid = liveness == PhysicsLiveness::kSilent;
+    if (link.slow_said) return;
+    const double gap_ms = static_cast<double>(gap) * 1e-6;
+    std::fprintf(stderr,
+                 "afhub teleop: %s publishes a state every %.0f ms, slower than --stale (%.0f ms): "
+                 "its states go stale in between, so device/%s gets no force. Give teleop "
+                 "--stale %.0f or more, or step the physics faster (its --dt, a lighter scene)\n",
+                 link.binding->body.c_str(), gap_ms, static_cast<double>(link.stale_ns) * 1e-6,
+                 link.binding->device_name.c_str(), std::ceil(gap_ms * 1.5 / 10.0) * 10.0);
+    link.slow_said = true;
+    link.liveness_said = true;
     return;
   }
   if (liveness == PhysicsLiveness::kStarting ||
@@ -208,10 +233,7 @@ void judge_body(Link& link, const BodyState* state, std::int64_t now) {
   const char* body = link.binding->body.c_str();
   const double stale_ms = static_cast<double>(link.stale_ns) * 1e-6;
   if (liveness == PhysicsLiveness::kSilent)
-    std::fprintf(stderr,
-                 "afhub teleop: no state from %s for %.0f ms (its physics stopped or died?): "
-                 "no force on device/%s until states come back\n",
-                 body, stale_ms, name);
+    say_no_state(link, stale_ms);
   else if (liveness == PhysicsLiveness::kRestarted)
     std::fprintf(stderr,
                  "afhub teleop: %s's states went back to step %llu (its physics restarted or "
@@ -263,8 +285,8 @@ const BodyState* cycle(Link& link, std::int64_t now, TeleopLatency* latency, std
   link.device_sequence = device->header.sequence;
   if (new_driver && !link.held) {
     link.law.re_anchor();
-    const std::string which = new_pid ? "pid " + std::to_string(link.device_pid)
-                                      : "its samples numbered afresh, behind a bridge?";
+    const std::string which =
+        new_pid ? "pid " + std::to_string(link.device_pid) : "its samples numbered afresh";
     std::fprintf(stderr,
                  "afhub teleop: device/%s has a new driver (%s): %s moves on from where it is, "
                  "with no jump\n",

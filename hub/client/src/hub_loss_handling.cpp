@@ -1,6 +1,7 @@
 // Handling the hub's loss (see hub_loss_handling.hpp).
 #include "hub_loss_handling.hpp"
 
+#include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -29,18 +30,19 @@ std::uint64_t hub_instance_now() noexcept {
 bool hub_gone() noexcept {
   if (probe_roudi() != RoudiPresence::kRunning) return true;
   // The hub's lock and identity take some twenty system calls (110 us on the project's
-  // VM, every 20 ms in every process); RouDi's socket file, one.
+  // VM, every 20 ms in every process); the confirmed socket file, one.
   State& s = state();
-  struct stat socket {};
-  const bool have_socket = stat(kRoudiSocketPath, &socket) == 0;
-  if (have_socket && socket.st_ino == s.confirmed_socket_inode &&
-      socket.st_dev == s.confirmed_socket_device)
+  struct stat file {};
+  if (const int held = s.confirmed_socket.load();
+      held >= 0 && fstat(held, &file) == 0 && file.st_nlink > 0)
     return false;
+  // Opened before the identity is read: a hub replaced in between is seen by the identity.
+  const int socket_file = open(kRoudiSocketPath, O_PATH | O_CLOEXEC);
   const std::uint64_t attached = s.attached_hub, now = hub_instance_now();
-  if (have_socket && attached != 0 && now == attached) {
-    s.confirmed_socket_device = socket.st_dev;
-    s.confirmed_socket_inode = socket.st_ino;
-  }
+  if (socket_file >= 0 && (attached == 0 || now != attached))
+    close(socket_file);
+  else if (socket_file >= 0)
+    s.confirmed_socket.store(socket_file);
   return attached != 0 && now != 0 && now != attached;
 }
 

@@ -32,10 +32,11 @@ struct State {
   std::atomic<bool> exiting{false};   // the process is exiting on its own: never re-execute it
   std::atomic<std::uint64_t> attached_hub{0};  // the instance of the hub attached to
   std::atomic<pid_t> attached_hub_pid{0};
-  // RouDi's socket file (device, inode) when hub_gone() last found the attached hub
-  // running: each RouDi makes its socket anew, so while it is the same file, so is the
-  // hub. A pair torn between two threads matches nothing: the whole look is taken.
-  std::atomic<std::uint64_t> confirmed_socket_device{0}, confirmed_socket_inode{0};
+  // RouDi's socket file (an O_PATH descriptor) when hub_gone() last found the attached
+  // hub running: each RouDi makes its socket anew, so while that file is still linked,
+  // the hub is the same. Held open, its inode number cannot go to a new file. Never
+  // closed (another thread may be looking at it): one per hub confirmed. -1: none yet.
+  std::atomic<int> confirmed_socket{-1};
   // notice_hub_loss: this process's socket to RouDi and its runtime's name, once attached
   // (before the watcher starts; read by whichever thread handles the loss).
   RoudiSocket roudi_socket;

@@ -23,6 +23,7 @@
 
 #include "afhub/hub/hub_files.hpp"
 #include "afhub/hub/hub_presence.hpp"
+#include "afhub/hub/process_claim.hpp"
 #include "afhub/rt/stop_signal.hpp"
 #include "afhub_roudi.hpp"
 #include "catalog_builder.hpp"
@@ -324,6 +325,8 @@ int run_hub_daemon(const HubOptions& options) {
     iox::runtime::PoshRuntimeSingleProcess runtime(kHubRuntimeName);
     starting.reset();
     if (gid != own_gid && !made_in_group && !open_to_group(gid)) return 1;
+    // The members' teleops take their devices' claims there.
+    if (gid != own_gid) claims_directory(own_hub_directory(), gid);
     std::fprintf(stderr,
                  "afhub hub: running (pid %d, %zu payload mempools, %.1f MiB, group '%s'). Ctrl-C "
                  "stops it.\n",
