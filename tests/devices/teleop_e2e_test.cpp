@@ -8,15 +8,19 @@
 // on a wall, the palm touching nothing, pushes the device back too.
 #include <gtest/gtest.h>
 #include <signal.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <sstream>
 #include <thread>
 #include <vector>
 
+#include "afhub/hub/hub_files.hpp"
 #include "afhub/rt/percentile.hpp"
 #include "real_time.hpp"
 #include "teleop_session.hpp"
@@ -371,6 +375,32 @@ TEST(TeleopEndToEnd, OfTwoTeleopsStartedAtOnceOneIsRefused) {
       << teleop.logs() << "\nsecond: " << read_file(second_log);
   pause_ms(500);  // the one let through goes on teleoperating
   EXPECT_TRUE(teleop.wait_running()) << teleop.logs();
+}
+
+// Something planted where the device's claim goes (here a FIFO): a teleop that could
+// not take the claim could not refuse a second one started with it. It refuses to
+// start, naming the path, and the device never gets a force.
+TEST(TeleopEndToEnd, ATeleopThatCannotClaimItsDeviceDoesNotStart) {
+  const std::string claims = hub_directory() + "/claims";
+  mkdir(claims.c_str(), 0755);
+  const std::string planted = claims + "/teleop.device.planted";
+  ASSERT_EQ(mkfifo(planted.c_str(), 0644), 0) << std::strerror(errno);
+  Teleop teleop("planted", {});
+  const std::string refused = "cannot claim device/planted for this teleop (" + planted;
+  EXPECT_TRUE(wait_until([&] { return contains(teleop.teleop_log(), refused); }, 20s))
+      << teleop.logs();
+  bool pushed = false;
+  int states = 0;
+  for (int i = 0; i < 250; ++i) {  // 0.5 s
+    if (const DeviceState* d = teleop.new_device_state()) {
+      pushed |= d->gate == ForceGate::kApplying;
+      ++states;
+    }
+    pause_ms(2);
+  }
+  EXPECT_GT(states, 50) << "the driver published no states" << teleop.logs();
+  EXPECT_FALSE(pushed) << teleop.logs();
+  unlink(planted.c_str());
 }
 
 // A physics stepping slower than --stale (here every 80 ms: --dt 0.08) goes silent

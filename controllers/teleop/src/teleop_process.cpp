@@ -137,11 +137,10 @@ void require_device_free(Link& link) {
                                     : std::string("another afhub teleop")) +
                 ": a device takes one teleoperation. Stop that one, or bind this one to another "
                 "device (--device NAME)");
+  // Fails closed: a teleop that could not be refused is the fight the claim prevents.
   if (!link.device_claim.unavailable().empty())
-    std::fprintf(stderr,
-                 "afhub teleop: cannot claim %s (%s): a second teleop started at the same moment "
-                 "on it would not be refused\n",
-                 channel.c_str(), link.device_claim.unavailable().c_str());
+    throw Error("cannot claim " + channel + " for this teleop (" + link.device_claim.unavailable() +
+                "): remove what is there, or run teleop as a member of the hub's group");
   LatestReader<DeviceCommand> commands(body_command_channel(channel));
   const std::int64_t start = monotonic_ns();
   std::uint32_t commander = 0;
@@ -242,7 +241,8 @@ void judge_body(Link& link, const BodyState* state, std::int64_t now) {
                  body, static_cast<unsigned long long>(state->header.sim_step), name);
   else if (liveness == PhysicsLiveness::kNotStepping)
     std::fprintf(stderr,
-                 "afhub teleop: %s has not moved a step for %.0f ms (its world is paused?): no "
+                 "afhub teleop: %s has not moved a step for %.0f ms (its world is paused, or waits "
+                 "for lockstep clients?): no "
                  "force on device/%s until it steps again\n",
                  body, stale_ms, name);
   else

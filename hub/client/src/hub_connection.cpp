@@ -88,11 +88,14 @@ void connect_to_hub(const std::string& role, HubPolicy policy, std::chrono::mill
   claim_runtime_lock_file("/tmp/" + name + ".lock");
   {
     const StopEndsBlockingCall stoppable;
+    // Past the first port too: a hub killed between the registration and it left the
+    // port's request to RouDi waiting for good, deaf to Ctrl-C (a fault-injection run:
+    // hubs killed and restarted 30 to 110 ms apart, 1 round in 14).
     const RegistrationGuard guard("afhub " + role);
     iox::runtime::PoshRuntime::initRuntime(iox::RuntimeName_t(iox::cxx::TruncateToCapacity, name));
+    runtime_name_storage() = name;
+    count_ports_from(free_ports(std::chrono::milliseconds(500)));
   }
-  runtime_name_storage() = name;
-  count_ports_from(free_ports(std::chrono::milliseconds(500)));
   hub_loss::watch_attached_hub(hub_seen_ns);
 }
 

@@ -34,12 +34,17 @@ ProcessClaim::~ProcessClaim() {
 
 bool ProcessClaim::take(const std::string& name, pid_t& holder) {
   holder = 0;
-  const std::string path = claims_directory(hub_directory()) + "/" + name;
+  const std::string directory = claims_directory(hub_directory());
+  struct stat info {};
+  if (lstat(directory.c_str(), &info) != 0 || !S_ISDIR(info.st_mode)) {
+    unavailable_ = directory + ": not a directory (a symlink planted there?)";
+    return true;
+  }
+  const std::string path = directory + "/" + name;
   // Read-only is enough for a flock, and lets a member of the hub's group use a file
   // another made. Never a symlink, nor a FIFO planted to block the open. O_CLOEXEC: a
   // process that re-executes itself takes it again.
   const int fd = open(path.c_str(), O_RDONLY | O_CREAT | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC, 0644);
-  struct stat info {};
   if (fd < 0 || fstat(fd, &info) != 0 || !S_ISREG(info.st_mode)) {
     unavailable_ = path + ": " + (fd < 0 ? std::strerror(errno) : "not a regular file");
     if (fd >= 0) close(fd);

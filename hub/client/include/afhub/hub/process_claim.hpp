@@ -19,8 +19,9 @@ class ProcessClaim {
 
   // Takes the claim `name` (a file name) for as long as this object lives. False when
   // another process holds it: `holder` is then its pid (0 when it is in a pid namespace
-  // this process cannot see). True holding nothing when the claims' directory cannot be
-  // used (a user outside the hub's group): unavailable() then says why.
+  // this process cannot see). True holding nothing when the claim cannot be taken (the
+  // directory or the file not ours to use, or something else planted there):
+  // unavailable() then says why.
   bool take(const std::string& name, pid_t& holder);
   const std::string& unavailable() const { return unavailable_; }
 
