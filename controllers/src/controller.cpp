@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "afhub/hub/bodies.hpp"
+#include "afhub/hub/body_world.hpp"
 #include "afhub/hub/hub_health.hpp"
 #include "afhub/hub/hub_loss.hpp"
 #include "afhub/hub/hub_presence.hpp"
@@ -20,7 +21,6 @@
 #include "afhub/hub/sample_waiter.hpp"
 #include "afhub/hub/startup_wait.hpp"
 #include "afhub/rt/stop_signal.hpp"
-#include "afhub/shm_layout/channel_names.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "afhub/shm_layout/world.hpp"
 
@@ -123,33 +123,21 @@ void run_free(BodyClient& body, const ControllerOptions& options, const Controll
   run_periodic(loop, timing, steps);
 }
 
-// Whether the physics publishing `body` steps in lockstep, as its world state says: the
-// world of a namespace the body's name starts with ("", "a", "a/b" for "a/b/c": `afhub
-// run --namespace`) that the body's publisher publishes. nullopt when none comes within
-// a second (a publisher of bodies without a world, or one stalled).
+// Whether the physics publishing `body` steps in lockstep, as its world state says
+// (BodyWorld). nullopt when none comes within a second (a publisher of bodies without a
+// world, or one stalled).
 std::optional<bool> publisher_steps_in_lockstep(BodyClient& body, const std::string& channel) {
-  std::vector<std::unique_ptr<LatestReader<WorldState>>> worlds;
-  const auto add_world = [&](std::string_view name_space) {
-    worlds.push_back(std::make_unique<LatestReader<WorldState>>(
-        ChannelId{std::string(kService), world_instance(name_space), std::string(kStateEvent)}));
-  };
+  std::optional<BodyWorld> world;
   try {
-    add_world({});
-    for (std::size_t slash = channel.find('/'); slash != std::string::npos;
-         slash = channel.find('/', slash + 1))
-      add_world(std::string_view(channel).substr(0, slash));
+    world.emplace(channel);
   } catch (const Error&) {  // a hub short of ports: a message is not worth the controller
     return std::nullopt;
   }
   for (const std::int64_t give_up = monotonic_ns() + 1'000'000'000;
        monotonic_ns() < give_up && !stop_requested();
        std::this_thread::sleep_for(std::chrono::milliseconds(2))) {
-    const BodyState* state = body.latest_state();
-    if (!state) continue;
-    for (auto& world : worlds)
-      if (const WorldState* now = world->latest();
-          now && now->header.publisher_pid == state->header.publisher_pid)
-        return now->lockstep != 0;
+    if (const BodyState* state = body.latest_state())
+      if (const WorldState* now = world->of(*state)) return now->lockstep != 0;
   }
   return std::nullopt;
 }

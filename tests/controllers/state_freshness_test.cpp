@@ -86,6 +86,28 @@ TEST(StateFreshness, AWorldPausedWhenFirstSeenIsNeverLive) {
   EXPECT_EQ(freshness.judge(sequence + 1, now + kOneMs, 301, now + kOneMs), kLive);
 }
 
+// A paused world stepped by hand (`afhub world step 1`): each step moved the body, looked
+// live until it had stayed for the stale time, and the force ramped in for those 50 ms.
+// Its world state's paused flag keeps the force off; silence still wins.
+TEST(StateFreshness, APausedWorldSteppedByHandIsPausedUntilItRunsAndSteps) {
+  StateFreshness freshness(50 * kOneMs);
+  std::int64_t now = 1000 * kOneMs;
+  std::uint64_t sequence = 1, step = 100;
+  EXPECT_EQ(freshness.judge(sequence++, now, step++, now), kStarting);
+  now += kOneMs;
+  EXPECT_EQ(freshness.judge(sequence++, now, step++, now), kLive);
+  for (int ms = 0; ms < 200; ++ms, now += kOneMs) {
+    if (ms % 20 == 0) ++step;  // a step by hand every 20 ms
+    EXPECT_EQ(freshness.judge(sequence++, now, step, now, true), PhysicsLiveness::kPaused) << ms;
+  }
+  EXPECT_EQ(freshness.judge(sequence, now, step, now + 51 * kOneMs, true), kSilent);
+  now += 52 * kOneMs;
+  // Resumed: states, then a step.
+  EXPECT_EQ(freshness.judge(sequence++, now, step, now), kStarting);
+  now += kOneMs;
+  EXPECT_EQ(freshness.judge(sequence++, now, step + 1, now), kLive);
+}
+
 // A physics restarted within the stale time (its sequence from 1 again) or a world reset
 // (its step from 0 again) put the body back at its initial pose while the states never
 // stopped: the device got the full force of the new pose error at once, with no ramp.

@@ -689,7 +689,7 @@ TEST(TeleopEndToEnd, ADeviceNeverPushesOnAStoppedOrDeadPhysics) {
 
   // A paused world publishes its states on, unmoving, while the device moves on: the
   // force it would render grew to the file's maximum. No force while paused.
-  const std::string paused_said = "afhub/gripper/palm has not moved a step";
+  const std::string paused_said = "afhub/gripper/palm's world is paused";
   const std::int64_t paused_at = monotonic_ns();
   ASSERT_EQ(run_afhub({"world", "pause"}).exit_code, 0);
   const Frozen paused = watch_force(teleop, paused_at, 3000);
@@ -719,6 +719,52 @@ TEST(TeleopEndToEnd, ADeviceNeverPushesOnAStoppedOrDeadPhysics) {
   SKIP_REAL_TIME_BOUNDS_IN_SANITIZED_BUILD();
   EXPECT_LE(stopped.to_zero_ms, kStaleMs + kWatchdogMs) << teleop.logs();
   EXPECT_LE(killed.to_zero_ms, kStaleMs + kWatchdogMs) << teleop.logs();
+}
+
+// A paused world stepped by hand (`afhub world step 1`) while the device pushes into the
+// floor: each step moved the palm, looked live until it had stayed for the stale time, and
+// the force ramped in for those 50 ms (0.026 N seen). Teleop reads the world's paused flag:
+// no force until the world runs again.
+TEST(TeleopEndToEnd, APausedWorldSteppedByHandGivesNoForce) {
+  afhub::testing::ModelFolder scripts;
+  const std::string csv = scripts.write("push.csv", "0,0,0,0\n1,0,0,-0.2\n");
+  const std::string force_log = (scripts.dir() / "force.log").string();
+  Teleop teleop("stepped", {"--trajectory", csv, "--force-log", force_log});
+  ASSERT_TRUE(teleop.restart_driver_once_running()) << teleop.logs();
+  ASSERT_TRUE(wait_until([&] { return pushing_up(teleop); }, 20s)) << teleop.logs();
+
+  const std::string paused_said = "afhub/gripper/palm's world is paused";
+  ASSERT_EQ(run_afhub({"world", "pause"}).exit_code, 0);
+  ASSERT_TRUE(wait_until([&] { return contains(teleop.teleop_log(), paused_said); }, 5s))
+      << teleop.logs();
+  ASSERT_TRUE(wait_until([&] { return contains(read_file(force_log), " zero"); }, 5s))
+      << read_file(force_log) << teleop.logs();
+  const std::size_t before = read_file(force_log).size();
+  const std::uint64_t step_before = teleop.palm().header.sim_step;
+  constexpr int kSteps = 5;
+  for (int i = 0; i < kSteps; ++i) {
+    ASSERT_EQ(run_afhub({"world", "step", "1"}).exit_code, 0) << "step " << i;
+    pause_ms(150);  // past the stale time: a step by hand looked live for that long
+  }
+  const std::string after = read_file(force_log).substr(before);
+  const std::uint64_t stepped = teleop.palm().header.sim_step - step_before;
+  std::printf("paused world stepped by hand %llu times: force log after the pause: \"%s\"\n",
+              static_cast<unsigned long long>(stepped), after.c_str());
+  EXPECT_EQ(stepped, static_cast<std::uint64_t>(kSteps)) << "the world did not step by hand";
+  EXPECT_FALSE(contains(after, " force ")) << "the device pushed on a paused world\n"
+                                           << after << teleop.logs();
+  EXPECT_EQ(occurrences(teleop.teleop_log(), paused_said), 1) << teleop.teleop_log();
+  EXPECT_FALSE(contains(teleop.teleop_log(), "steps again")) << teleop.teleop_log();
+
+  // Running again: said, and the force ramps in.
+  ASSERT_EQ(run_afhub({"world", "resume"}).exit_code, 0);
+  ASSERT_TRUE(wait_until(
+      [&] { return contains(teleop.teleop_log(), "afhub/gripper/palm's physics steps again"); },
+      5s))
+      << teleop.logs();
+  const double first_force = first_applied_force(teleop, false, 5s);
+  ASSERT_GE(first_force, 0.0) << teleop.logs();
+  EXPECT_LT(first_force, 0.5) << "the force came back at once, not ramped in";
 }
 
 // A world reset while the device pushes into the floor: the palm is back at its start,

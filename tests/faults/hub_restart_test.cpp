@@ -604,7 +604,7 @@ bool stopped(pid_t pid) {
 }
 
 // A hub SIGKILLed while a process registers with it (the process held just before it
-// sends its registration: tests/faults/stop_before_registration.c). iceoryx alone waited
+// sends its registration: tests/faults/stop_around_registration.c). iceoryx alone waited
 // 60 s and aborted, or waited on. A process that outlives its hub (`afhub synth`) waits
 // for the next hub and attaches to it; another (`afhub ls`) says so and exits with code 1.
 TEST(HubLoss, AHubKilledWhileAProcessRegistersIsSeen) {
@@ -618,11 +618,12 @@ TEST(HubLoss, AHubKilledWhileAProcessRegistersIsSeen) {
     const std::vector<std::string> args =
         outlives ? std::vector<std::string>{"synth", "--bodies", "2", "--no-autostart"}
                  : std::vector<std::string>{"ls"};
-    ScopedProcess client = spawn_wrapped_afhub({"env", "LD_PRELOAD=" AFHUB_STOP_BEFORE_REGISTRATION,
+    ScopedProcess client = spawn_wrapped_afhub({"env", "LD_PRELOAD=" AFHUB_STOP_AROUND_REGISTRATION,
                                                 "AFHUB_TEST_STOP_BEFORE_REGISTRATION=" + marker},
                                                args, log);
     ASSERT_TRUE(wait_until([&] { return stopped(client.pid); }, 20s)) << read_file(log);
-    ASSERT_TRUE(contains(read_file(log), "stop_before_registration: stopped")) << read_file(log);
+    ASSERT_TRUE(contains(read_file(log), "stop_around_registration: stopped before"))
+        << read_file(log);
     kill(hub.pid, SIGKILL);
     waitpid(hub.pid, nullptr, 0);
     hub.pid = -1;
@@ -646,6 +647,38 @@ TEST(HubLoss, AHubKilledWhileAProcessRegistersIsSeen) {
         << run_afhub({"ls"}, 5s).out << read_file(log);
     EXPECT_EQ(client.stop(SIGINT), 0) << read_file(log);
   }
+}
+
+// A hub replaced (SIGKILLed, a new one started) just after a process registered with it,
+// before the process read which hub it is attached to (the process held at that read:
+// tests/faults/stop_around_registration.c). It took the new hub for its own and stayed on
+// the dead one's memory: not in the new hub's `afhub ls`, or, at its next iceoryx error,
+// re-executed to wait for a hub other than the live one, for good (a fault-injection run:
+// hubs killed and restarted 20 to 110 ms apart, 2 rounds in 14). The hub it registered
+// with is the one it saw before registering: the watcher sees it replaced, and the
+// process re-attaches to the new one.
+TEST(HubLoss, AHubReplacedJustAfterAProcessRegisteredIsSeen) {
+  const std::string marker = "/tmp/afhub-fault-registration-stopped-after";
+  const std::string log = "/tmp/afhub-fault-registration-after.log";
+  ScopedProcess hub(start_test_hub());
+  ASSERT_GT(hub.pid, 0);
+  ScopedProcess client = spawn_wrapped_afhub({"env", "LD_PRELOAD=" AFHUB_STOP_AROUND_REGISTRATION,
+                                              "AFHUB_TEST_STOP_AFTER_REGISTRATION=" + marker},
+                                             {"synth", "--bodies", "2", "--no-autostart"}, log);
+  ASSERT_TRUE(wait_until([&] { return stopped(client.pid); }, 20s)) << read_file(log);
+  ASSERT_TRUE(contains(read_file(log), "stop_around_registration: stopped after"))
+      << read_file(log);
+  kill(hub.pid, SIGKILL);
+  waitpid(hub.pid, nullptr, 0);
+  hub.pid = start_test_hub();
+  ASSERT_GT(hub.pid, 0);
+  kill(client.pid, SIGCONT);
+  const std::string reattached = "re-attached to the hub (pid " + std::to_string(hub.pid) + ")";
+  EXPECT_TRUE(wait_until([&] { return contains(read_file(log), reattached); }, 20s))
+      << read_file(log);
+  EXPECT_TRUE(wait_until([] { return contains(run_afhub({"ls"}, 5s).out, "synth"); }, 20s))
+      << run_afhub({"ls"}, 5s).out << read_file(log);
+  EXPECT_EQ(client.stop(SIGINT), 0) << read_file(log);
 }
 
 INSTANTIATE_TEST_SUITE_P(Faults, HubRestart, ::testing::Values(false, true),

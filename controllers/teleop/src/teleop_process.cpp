@@ -13,6 +13,7 @@
 
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/body_claims.hpp"
+#include "afhub/hub/body_world.hpp"
 #include "afhub/hub/hub_health.hpp"
 #include "afhub/hub/hub_loss.hpp"
 #include "afhub/hub/hub_presence.hpp"
@@ -51,7 +52,8 @@ struct Link {
         law(params_of(b)),
         device_state(body_state_channel(device_channel_name(b.device_name))),
         device_command(body_command_channel(device_channel_name(b.device_name))),
-        body(entry) {
+        body(entry),
+        world(entry.info.channel.data()) {
     if (!b.spec.enable_joint_control) joints = 0;
     // Contact feedback reads the states of the bodies below the root too.
     if (b.feedback != FeedbackSource::kProxy)
@@ -68,6 +70,7 @@ struct Link {
   LatestReader<DeviceState> device_state;
   Writer<DeviceCommand> device_command;
   BodyClient body;
+  BodyWorld world;                                   // its paused flag
   ProcessClaim device_claim;                         // this process teleoperates the device
   std::vector<std::unique_ptr<BodyClient>> subtree;  // below the root: contact feedback only
   std::vector<const BodyState*> multibody_states;    // the root's, then those below: per cycle
@@ -190,9 +193,10 @@ void say_no_state(const Link& link, double silent_ms) {
 // said, unless one outlasts three of its gaps.
 void judge_body(Link& link, const BodyState* state, std::int64_t now) {
   if (state) link.seen_state = true;
+  const WorldState* world = state ? link.world.of(*state) : nullptr;
   const PhysicsLiveness liveness =
       state ? link.state_freshness.judge(state->header.sequence, state->header.publish_stamp_ns,
-                                         state->header.sim_step, now)
+                                         state->header.sim_step, now, world && world->paused)
       : link.seen_state ? PhysicsLiveness::kSilent
                         : PhysicsLiveness::kStarting;
   const bool slow = slower_than_stale(link, state);
@@ -239,6 +243,11 @@ void judge_body(Link& link, const BodyState* state, std::int64_t now) {
                  "its world was reset): no force on device/%s until it steps, then the force "
                  "ramps in\n",
                  body, static_cast<unsigned long long>(state->header.sim_step), name);
+  else if (liveness == PhysicsLiveness::kPaused)
+    std::fprintf(stderr,
+                 "afhub teleop: %s's world is paused: no force on device/%s until it runs again "
+                 "(steps by hand give none)\n",
+                 body, name);
   else if (liveness == PhysicsLiveness::kNotStepping)
     std::fprintf(stderr,
                  "afhub teleop: %s has not moved a step for %.0f ms (its world is paused, or waits "

@@ -98,10 +98,16 @@ void watch_attached_hub(std::int64_t hub_seen_ns) {
   if (!s.armed) return;
   // Registered after the runtime, so that it runs before the runtime's destructor.
   std::atexit([] { state().exiting = true; });
-  if (const std::optional<HubIdentity> hub = running_hub()) {
-    s.attached_hub = hub->instance;
-    s.attached_hub_pid = hub->pid;
-  }
+  // The hub seen before registering (RegistrationGuard) is the one this process
+  // registered with: each hub writes its identity before its socket answers, so a
+  // different one read now replaced it meanwhile, and the watcher sees it gone. Read
+  // now instead, the replacement was taken for this process's hub (it stayed on the
+  // dead one's memory, or waited for a hub other than the live one).
+  if (s.attached_hub == 0)
+    if (const std::optional<HubIdentity> hub = running_hub()) {
+      s.attached_hub = hub->instance;
+      s.attached_hub_pid = hub->pid;
+    }
   if (!s.reexecs) {
     s.roudi_socket = find_roudi_socket();
     s.runtime_name = runtime_name();

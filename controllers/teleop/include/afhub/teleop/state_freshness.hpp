@@ -4,6 +4,10 @@
 // from the future is no fresher): the physics stopped or died. Not stepping: states come,
 // but their step has not changed for stale_ns: the world is paused (or a lockstep physics
 // waits), and a device moving on would pull ever harder on a body that cannot follow.
+// Paused: the body's world says it is paused (its world state, when the physics has
+// one: BodyWorld). A step by hand (`afhub world step`) moves the body but not the world
+// on: each one looked live until its step had stayed for stale_ns, and the force ramped
+// in for those 50 ms. After the pause, no force until a step is seen.
 // Starting: states come but none has stepped yet since they (re)appeared; no force until
 // one does (a teleop started against a paused world pushed for its first 50 ms).
 // Restarted: the states' sequence or step went back with no silence between: a new
@@ -21,7 +25,14 @@
 
 namespace afhub::teleop {
 
-enum class PhysicsLiveness : std::uint8_t { kLive, kSilent, kNotStepping, kStarting, kRestarted };
+enum class PhysicsLiveness : std::uint8_t {
+  kLive,
+  kSilent,
+  kNotStepping,
+  kPaused,
+  kStarting,
+  kRestarted
+};
 
 // An outage a reader of the device's state sees (20 of its states at 1 kHz), short
 // against an operator's reaction.
@@ -31,9 +42,10 @@ class StateFreshness {
  public:
   explicit StateFreshness(std::int64_t stale_ns) noexcept : stale_ns_(stale_ns) {}
 
-  // Once per cycle with the newest state's sequence, publish stamp and step.
+  // Once per cycle with the newest state's sequence, publish stamp and step, and
+  // whether its world says it is paused (false for a physics with no world state).
   PhysicsLiveness judge(std::uint64_t sequence, std::int64_t stamp_ns, std::uint64_t step,
-                        std::int64_t now_ns) noexcept {
+                        std::int64_t now_ns, bool world_paused = false) noexcept {
     if (sequence != sequence_ || stamp_ns != stamp_ns_ || seen_ns_ < 0) {
       if (stepped_ns_ >= 0 && (sequence < sequence_ || step < step_)) {  // no silence between
         restarted_ns_ = now_ns;
@@ -47,6 +59,10 @@ class StateFreshness {
       stepped_ns_ = -1;    // back, it must be seen stepping again
       restarted_ns_ = -1;  // said as silent instead
       return PhysicsLiveness::kSilent;
+    }
+    if (world_paused) {
+      stepped_ns_ = -1;  // it must be seen stepping once resumed
+      return PhysicsLiveness::kPaused;
     }
     if (stepped_ns_ < 0) {
       moved_ = false;
