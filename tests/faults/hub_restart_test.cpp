@@ -603,6 +603,18 @@ bool stopped(pid_t pid) {
   return end != std::string::npos && end + 2 < stat.size() && stat[end + 2] == 'T';
 }
 
+// The wrapper of a process held once `when` ("BEFORE", "AFTER") it registers
+// (tests/faults/stop_around_registration.c). A sanitized afhub wants its runtime first
+// in the preloaded libraries: told not to check.
+std::vector<std::string> stopped_around_registration(const std::string& when,
+                                                     const std::string& marker) {
+  const char* asan = std::getenv("ASAN_OPTIONS");
+  return {"env", "LD_PRELOAD=" AFHUB_STOP_AROUND_REGISTRATION,
+          "AFHUB_TEST_STOP_" + when + "_REGISTRATION=" + marker,
+          "ASAN_OPTIONS=" + std::string(asan && *asan ? asan + std::string(":") : "") +
+              "verify_asan_link_order=0"};
+}
+
 // A hub SIGKILLed while a process registers with it (the process held just before it
 // sends its registration: tests/faults/stop_around_registration.c). iceoryx alone waited
 // 60 s and aborted, or waited on. A process that outlives its hub (`afhub synth`) waits
@@ -618,9 +630,8 @@ TEST(HubLoss, AHubKilledWhileAProcessRegistersIsSeen) {
     const std::vector<std::string> args =
         outlives ? std::vector<std::string>{"synth", "--bodies", "2", "--no-autostart"}
                  : std::vector<std::string>{"ls"};
-    ScopedProcess client = spawn_wrapped_afhub({"env", "LD_PRELOAD=" AFHUB_STOP_AROUND_REGISTRATION,
-                                                "AFHUB_TEST_STOP_BEFORE_REGISTRATION=" + marker},
-                                               args, log);
+    ScopedProcess client =
+        spawn_wrapped_afhub(stopped_around_registration("BEFORE", marker), args, log);
     ASSERT_TRUE(wait_until([&] { return stopped(client.pid); }, 20s)) << read_file(log);
     ASSERT_TRUE(contains(read_file(log), "stop_around_registration: stopped before"))
         << read_file(log);
@@ -662,8 +673,7 @@ TEST(HubLoss, AHubReplacedJustAfterAProcessRegisteredIsSeen) {
   const std::string log = "/tmp/afhub-fault-registration-after.log";
   ScopedProcess hub(start_test_hub());
   ASSERT_GT(hub.pid, 0);
-  ScopedProcess client = spawn_wrapped_afhub({"env", "LD_PRELOAD=" AFHUB_STOP_AROUND_REGISTRATION,
-                                              "AFHUB_TEST_STOP_AFTER_REGISTRATION=" + marker},
+  ScopedProcess client = spawn_wrapped_afhub(stopped_around_registration("AFTER", marker),
                                              {"synth", "--bodies", "2", "--no-autostart"}, log);
   ASSERT_TRUE(wait_until([&] { return stopped(client.pid); }, 20s)) << read_file(log);
   ASSERT_TRUE(contains(read_file(log), "stop_around_registration: stopped after"))
