@@ -108,6 +108,24 @@ TEST(StateFreshness, APausedWorldSteppedByHandIsPausedUntilItRunsAndSteps) {
   EXPECT_EQ(freshness.judge(sequence++, now, step + 1, now), kLive);
 }
 
+// A world reset while paused (its step back to 0) is said once it runs again: no force
+// until it steps.
+TEST(StateFreshness, AResetWhilePausedIsARestartOnceResumed) {
+  StateFreshness freshness(50 * kOneMs);
+  std::int64_t now = 1000 * kOneMs;
+  std::uint64_t sequence = 1;
+  EXPECT_EQ(freshness.judge(sequence++, now, 500, now), kStarting);
+  now += kOneMs;
+  EXPECT_EQ(freshness.judge(sequence++, now, 501, now), kLive);
+  for (int ms = 0; ms < 100; ++ms, now += kOneMs)
+    EXPECT_EQ(freshness.judge(sequence++, now, ms < 50 ? 501 : 0, now, true),
+              PhysicsLiveness::kPaused)
+        << ms;
+  EXPECT_EQ(freshness.judge(sequence++, now, 0, now), PhysicsLiveness::kRestarted);
+  now += kOneMs;
+  EXPECT_EQ(freshness.judge(sequence++, now, 1, now), kLive);
+}
+
 // A physics restarted within the stale time (its sequence from 1 again) or a world reset
 // (its step from 0 again) put the body back at its initial pose while the states never
 // stopped: the device got the full force of the new pose error at once, with no ramp.

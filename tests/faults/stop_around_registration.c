@@ -5,8 +5,8 @@
 //   AFHUB_TEST_STOP_BEFORE_REGISTRATION: just before it sends its registration (iceoryx's
 //     first message on RouDi's socket, /tmp/roudi, a REG: "1,<runtime name>,...").
 //   AFHUB_TEST_STOP_AFTER_REGISTRATION: at the first read of the hub's identity (a file
-//     hub.id) after it sent its registration: afhub reads it once registered, to know the
-//     hub it is attached to.
+//     hub.id) after it sent its registration: the hub-loss watcher's first look, once
+//     registered (or a look of the registration's guard, should registering take 20 ms).
 #include <fcntl.h>
 #include <signal.h>
 #include <stdarg.h>
@@ -18,7 +18,7 @@
 #include <sys/un.h>
 #include <unistd.h>
 
-static volatile int registration_sent;
+static _Atomic int registration_sent;
 
 static int to_roudi(int fd) {
   struct sockaddr_un peer;
@@ -48,7 +48,7 @@ ssize_t sendto(int fd, const void* buffer, size_t size, int flags, const struct 
 }
 
 static void before_open(const char* path) {
-  const size_t length = strlen(path);
+  const size_t length = path ? strlen(path) : 0;
   if (registration_sent && length >= 7 && strcmp(path + length - 7, "/hub.id") == 0)
     stop_once("AFHUB_TEST_STOP_AFTER_REGISTRATION", "stop_around_registration: stopped after\n");
 }

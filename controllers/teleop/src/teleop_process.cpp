@@ -70,7 +70,7 @@ struct Link {
   LatestReader<DeviceState> device_state;
   Writer<DeviceCommand> device_command;
   BodyClient body;
-  BodyWorld world;                                   // its paused flag
+  BodyWorld world;                                   // its pause
   ProcessClaim device_claim;                         // this process teleoperates the device
   std::vector<std::unique_ptr<BodyClient>> subtree;  // below the root: contact feedback only
   std::vector<const BodyState*> multibody_states;    // the root's, then those below: per cycle
@@ -122,6 +122,17 @@ void wait_for_device(Link& link, const std::string& who, std::int64_t give_up_ns
   }
 }
 
+// Who holds a device's claim, for the refusal.
+std::string teleop_holding(pid_t holder) {
+  if (holder == getpid()) return "this teleop already (bound twice?)";
+  if (holder <= 0) return "another afhub teleop";
+  const std::string pid = "pid " + std::to_string(holder);
+  if (process_stopped(static_cast<std::uint32_t>(holder)))
+    return pid +
+           " (afhub teleop, stopped: SIGSTOP or a debugger holds it; it goes on once resumed)";
+  return pid + " (afhub teleop)";
+}
+
 // One process commands a device: a second teleop on it fought the first (the palm
 // pulled between their two anchors, the device at its file's maximum force). Refused
 // when another teleop on this machine holds the device's claim (two started at the
@@ -134,10 +145,7 @@ void require_device_free(Link& link) {
   // A device's name has no '/' (channel_names.cpp).
   if (pid_t holder = 0;
       !link.device_claim.take("teleop.device." + link.binding->device_name, holder))
-    throw Error(channel + " is teleoperated by " +
-                (holder == getpid() ? std::string("this teleop already (bound twice?)")
-                 : holder > 0       ? "pid " + std::to_string(holder) + " (afhub teleop)"
-                                    : std::string("another afhub teleop")) +
+    throw Error(channel + " is teleoperated by " + teleop_holding(holder) +
                 ": a device takes one teleoperation. Stop that one, or bind this one to another "
                 "device (--device NAME)");
   // Fails closed: a teleop that could not be refused is the fight the claim prevents.
@@ -196,7 +204,7 @@ void judge_body(Link& link, const BodyState* state, std::int64_t now) {
   const WorldState* world = state ? link.world.of(*state) : nullptr;
   const PhysicsLiveness liveness =
       state ? link.state_freshness.judge(state->header.sequence, state->header.publish_stamp_ns,
-                                         state->header.sim_step, now, world && world->paused)
+                                         state->header.sim_step, now, world && under_pause(*world))
       : link.seen_state ? PhysicsLiveness::kSilent
                         : PhysicsLiveness::kStarting;
   const bool slow = slower_than_stale(link, state);

@@ -19,15 +19,30 @@
 
 namespace afhub {
 
-bool process_exists(std::uint32_t pid) {
-  if (pid == 0 || (kill(static_cast<pid_t>(pid), 0) != 0 && errno != EPERM)) return false;
-  // A zombie (dead, its parent has not reaped it yet) owns nothing: it held a restarted
-  // physics off for over a second.
+namespace {
+
+// Process `pid`'s state letter in /proc/PID/stat ("pid (name) S ..."), or 0 when it
+// cannot be read.
+char process_state(std::uint32_t pid) {
   std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
   std::string line;
   std::getline(stat, line);
   const std::size_t name_end = line.rfind(')');
-  return name_end == std::string::npos || name_end + 2 >= line.size() || line[name_end + 2] != 'Z';
+  return name_end == std::string::npos || name_end + 2 >= line.size() ? 0 : line[name_end + 2];
+}
+
+}  // namespace
+
+bool process_exists(std::uint32_t pid) {
+  if (pid == 0 || (kill(static_cast<pid_t>(pid), 0) != 0 && errno != EPERM)) return false;
+  // A zombie (dead, its parent has not reaped it yet) owns nothing: it held a restarted
+  // physics off for over a second.
+  return process_state(pid) != 'Z';
+}
+
+bool process_stopped(std::uint32_t pid) {
+  const char state = pid == 0 ? 0 : process_state(pid);
+  return state == 'T' || state == 't';
 }
 
 namespace {

@@ -11,17 +11,20 @@ BodyWorld::BodyWorld(std::string_view body_channel) {
   const auto add = [&](std::string_view name_space) {
     worlds_.push_back(std::make_unique<LatestReader<WorldState>>(
         ChannelId{std::string(kService), world_instance(name_space), std::string(kStateEvent)}));
+    worlds_.back()->latest();
   };
-  add({});
-  for (std::size_t slash = body_channel.find('/'); slash != std::string_view::npos;
-       slash = body_channel.find('/', slash + 1))
+  for (std::size_t slash = body_channel.rfind('/'); slash != std::string_view::npos && slash > 0;
+       slash = body_channel.rfind('/', slash - 1))
     add(body_channel.substr(0, slash));
+  add({});
 }
 
 const WorldState* BodyWorld::of(const BodyState& body) noexcept {
   for (auto& world : worlds_)
     if (const WorldState* state = world->latest();
-        state && state->header.publisher_pid == body.header.publisher_pid)
+        state && state->header.publisher_pid == body.header.publisher_pid &&
+        state->header.sim_step + 2 >= body.header.sim_step &&
+        body.header.sim_step + 2 >= state->header.sim_step)
       return state;
   return nullptr;
 }

@@ -3,11 +3,11 @@
 
 #include <chrono>
 #include <cstdio>
-#include <fstream>
 #include <optional>
 #include <string>
 #include <thread>
 
+#include "afhub/hub/body_claims.hpp"
 #include "afhub/hub/hub_files.hpp"
 #include "afhub/hub/hub_health.hpp"
 #include "afhub/hub/hub_presence.hpp"
@@ -28,13 +28,8 @@ namespace {
 // Whether the hub, when this process sees its pid, is stopped (SIGSTOP, a debugger).
 std::optional<pid_t> stopped_hub() {
   const std::optional<pid_t> pid = running_hub_pid();
-  if (!pid || *pid <= 0) return std::nullopt;
-  std::ifstream stat("/proc/" + std::to_string(*pid) + "/stat");
-  std::string line;
-  if (!std::getline(stat, line) || line.rfind(')') == std::string::npos) return std::nullopt;
-  const std::size_t state_at = line.rfind(')') + 2;  // "pid (name) S ..."
-  if (state_at < line.size() && (line[state_at] == 'T' || line[state_at] == 't')) return pid;
-  return std::nullopt;
+  if (!pid || *pid <= 0 || !process_stopped(static_cast<std::uint32_t>(*pid))) return std::nullopt;
+  return pid;
 }
 
 // A stopped hub does not answer registration: iceoryx waited 60 s for it, then aborted.

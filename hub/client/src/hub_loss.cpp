@@ -98,11 +98,12 @@ void watch_attached_hub(std::int64_t hub_seen_ns) {
   if (!s.armed) return;
   // Registered after the runtime, so that it runs before the runtime's destructor.
   std::atexit([] { state().exiting = true; });
-  // The hub seen before registering (RegistrationGuard) is the one this process
-  // registered with: each hub writes its identity before its socket answers, so a
-  // different one read now replaced it meanwhile, and the watcher sees it gone. Read
-  // now instead, the replacement was taken for this process's hub (it stayed on the
-  // dead one's memory, or waited for a hub other than the live one).
+  // The hub this process saw before registering (RegistrationGuard), not one read now:
+  // each hub writes its identity before its socket answers, so a hub that replaced it
+  // since was taken for this process's own (it stayed on the dead one's memory, or
+  // waited for a hub other than the live one). Kept, the watcher sees it replaced. The
+  // error is now the other way: a hub replaced just before the registration was sent
+  // is taken for lost, and the process re-attaches to it once more than needed.
   if (s.attached_hub == 0)
     if (const std::optional<HubIdentity> hub = running_hub()) {
       s.attached_hub = hub->instance;

@@ -4,10 +4,11 @@
 // from the future is no fresher): the physics stopped or died. Not stepping: states come,
 // but their step has not changed for stale_ns: the world is paused (or a lockstep physics
 // waits), and a device moving on would pull ever harder on a body that cannot follow.
-// Paused: the body's world says it is paused (its world state, when the physics has
-// one: BodyWorld). A step by hand (`afhub world step`) moves the body but not the world
+// Paused: the body's world is under a pause (its world state, when the physics has one:
+// BodyWorld). Steps by hand (`afhub world step`) move the body but do not run the world
 // on: each one looked live until its step had stayed for stale_ns, and the force ramped
-// in for those 50 ms. After the pause, no force until a step is seen.
+// in for those 50 ms. After the pause, no force until a step is seen; a reset or a new
+// physics during the pause is said as Restarted then.
 // Starting: states come but none has stepped yet since they (re)appeared; no force until
 // one does (a teleop started against a paused world pushed for its first 50 ms).
 // Restarted: the states' sequence or step went back with no silence between: a new
@@ -61,8 +62,12 @@ class StateFreshness {
       return PhysicsLiveness::kSilent;
     }
     if (world_paused) {
-      stepped_ns_ = -1;  // it must be seen stepping once resumed
+      was_paused_ = true;
       return PhysicsLiveness::kPaused;
+    }
+    if (was_paused_) {  // resumed: it must be seen stepping
+      was_paused_ = false;
+      stepped_ns_ = -1;
     }
     if (stepped_ns_ < 0) {
       moved_ = false;
@@ -89,6 +94,7 @@ class StateFreshness {
   std::int64_t stepped_ns_{-1};    // when this loop first saw the newest step; -1: none yet
   bool moved_{false};              // a step seen to change since states (re)appeared
   std::int64_t restarted_ns_{-1};  // when the sequence or step went back; -1: not since
+  bool was_paused_{false};         // the last judgement was kPaused
 };
 
 }  // namespace afhub::teleop

@@ -14,6 +14,8 @@ namespace afhub {
 
 // Whether process `pid` is alive: it exists and is no zombie (dead, not yet reaped).
 bool process_exists(std::uint32_t pid);
+// Whether process `pid` is stopped: SIGSTOP, or a debugger holds it.
+bool process_stopped(std::uint32_t pid);
 
 // Throws afhub::Error, saying what to do, when a body in `channels` is published by
 // another live process, when the catalog cannot take them all, or when iceoryx has

@@ -1,7 +1,9 @@
 // The world state of the physics that publishes a body: the world of a namespace the
-// body's channel starts with ("", "a", "a/b" for "a/b/c": `afhub run --namespace`)
-// whose publisher also published the body's state. A teleop reads its paused flag, a
-// lockstep controller whether the physics waits for it.
+// body's channel starts with ("a/b", "a" or "" for "a/b/c": `afhub run --namespace`),
+// innermost first, whose publisher also published the body's state, at the same step
+// within two (a state left by a dead physics whose pid was reused, or a physics of
+// another pid namespace, is not it). A teleop reads its pause, a lockstep controller
+// whether the physics waits for it.
 #pragma once
 
 #include <memory>
@@ -16,16 +18,24 @@ namespace afhub {
 
 class BodyWorld {
  public:
-  // Readers of the candidate worlds (one port per kind: states are slots). Throws
-  // Error when the hub has no port to give.
+  // Readers of the candidate worlds (one port per kind: states are slots), each read
+  // once here (a reader's copies are made at its first state). Throws Error when the
+  // hub has no port to give.
   explicit BodyWorld(std::string_view body_channel);
 
-  // The newest world state of the process that published `body` (this reader's copy),
-  // or nullptr when none of the candidates has one. Real-time safe.
+  // The newest world state of the physics that published `body` (this reader's copy),
+  // or nullptr when no candidate matches. No heap allocation once each world's first
+  // state was read.
   const WorldState* of(const BodyState& body) noexcept;
 
  private:
-  std::vector<std::unique_ptr<LatestReader<WorldState>>> worlds_;
+  std::vector<std::unique_ptr<LatestReader<WorldState>>> worlds_;  // innermost first
 };
+
+// Whether a world under a pause: halted, or running the steps asked of it by hand
+// (`afhub world step N`), which do not run the world on.
+inline bool under_pause(const WorldState& world) noexcept {
+  return world.paused != 0 || world.paused_by_pid != 0;
+}
 
 }  // namespace afhub
