@@ -19,7 +19,7 @@
 #include "hub_reattach.hpp"
 #include "iceoryx_hoofs/log/logmanager.hpp"
 #include "iceoryx_posh/runtime/posh_runtime.hpp"
-#include "pool_exhaustion_filter.hpp"
+#include "iceoryx_stderr_filter.hpp"
 #include "registration_guard.hpp"
 
 namespace afhub {
@@ -72,7 +72,7 @@ void connect_to_hub(const std::string& role, HubPolicy policy, std::chrono::mill
     ensure_hub(policy, wait, "afhub " + role, hub_options);
   }
   quiet_iceoryx_logs();
-  filter_pool_exhaustion_lines("afhub " + role);
+  filter_iceoryx_stderr("afhub " + role);
   std::string name = "afhub-" + role + "-" + std::to_string(getpid());
   if (name.size() > 100) throw Error("process role '" + role + "' is too long for iceoryx");
   // The image before the re-exec had this name too: its socket is ours to remove
@@ -96,7 +96,8 @@ void connect_to_hub(const std::string& role, HubPolicy policy, std::chrono::mill
 
 // Fatal messages only: iceoryx logs an error at each failed loan ("unable to acquire a
 // chunk"), each step of a loop out of chunks; its errors reach on_iceoryx_error, which
-// says each kind once (a full pool's own line: filter_pool_exhaustion_lines).
+// says each kind once (a full pool's own line, and those of a hub gone, written to
+// std::cerr: filter_iceoryx_stderr).
 void quiet_iceoryx_logs() {
   iox::log::LogManager::GetLogManager().SetDefaultLogLevel(iox::log::LogLevel::kFatal,
                                                            iox::log::LogLevelOutput::kHideLogLevel);

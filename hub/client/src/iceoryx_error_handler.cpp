@@ -40,7 +40,7 @@ void on_iceoryx_error(const iox::Error error, const std::function<void()> callba
   const std::string& who = state().who;
   if (level != iox::ErrorLevel::FATAL) {
     // Said once per kind: a loop meeting it each step would write megabytes a minute.
-    // A pool out of chunks is said with the pool (pool_exhaustion_filter.hpp).
+    // A pool out of chunks is said with the pool (iceoryx_stderr_filter.hpp).
     if (error != iox::Error::kMEPOO__MEMPOOL_GETCHUNK_POOL_IS_RUNNING_OUT_OF_CHUNKS &&
         first_time(error))
       std::fprintf(stderr, "%s: iceoryx: %s (said once)\n", who.c_str(), name);

@@ -1,5 +1,5 @@
-// The filter on std::cerr (see pool_exhaustion_filter.hpp).
-#include "pool_exhaustion_filter.hpp"
+// The filter on std::cerr (see iceoryx_stderr_filter.hpp).
+#include "iceoryx_stderr_filter.hpp"
 
 #include <array>
 #include <cstdio>
@@ -7,6 +7,7 @@
 #include <iostream>
 #include <mutex>
 #include <streambuf>
+#include <string_view>
 
 #include "iceoryx_posh/mepoo/chunk_header.hpp"
 
@@ -14,10 +15,31 @@ namespace afhub {
 namespace {
 
 constexpr char kPoolLine[] = "Mempool [m_chunkSize = ";
+// How iceoryx's lines on RouDi's socket begin: its POSIX call wrapper names the source
+// file as its build saw it, and the socket's own line.
+constexpr char kSourceLine[] = "./iceoryx_hoofs/";
+constexpr char kSocketLine[] = "internal logic error in unix domain socket \"/tmp/roudi\"";
 
-class PoolExhaustionFilter : public std::streambuf {
+// Whether `line` begins as `prefix` does, as far as it goes.
+template <std::size_t N>
+bool could_begin(std::string_view line, const char (&prefix)[N]) {
+  const std::size_t n = std::min(line.size(), N - 1);
+  return line.substr(0, n) == std::string_view(prefix, n);
+}
+
+// A message to RouDi's socket that found no hub: refused, no socket, not connected.
+bool hub_gone_line(std::string_view line) {
+  if (line.rfind(kSocketLine, 0) == 0) return true;
+  if (line.rfind(kSourceLine, 0) != 0 || line.find("unix_domain_socket.cpp:") == line.npos)
+    return false;
+  for (const char* errno_part : {":::  [ 111 ]", ":::  [ 2 ]", ":::  [ 107 ]"})
+    if (line.find(errno_part) != line.npos) return true;
+  return false;
+}
+
+class IceoryxStderrFilter : public std::streambuf {
  public:
-  PoolExhaustionFilter(std::streambuf* out, std::string who) : out_(out), who_(std::move(who)) {}
+  IceoryxStderrFilter(std::streambuf* out, std::string who) : out_(out), who_(std::move(who)) {}
 
  protected:
   int overflow(int ch) override {
@@ -34,11 +56,11 @@ class PoolExhaustionFilter : public std::streambuf {
     return count;
   }
 
-  // std::cerr flushes after every <<: a part of a line that cannot be a pool line
-  // goes out now, the rest at its end.
+  // std::cerr flushes after every <<: a part of a line that cannot be one of those
+  // filtered goes out now, the rest at its end.
   int sync() override {
     const std::lock_guard lock(mutex_);
-    if (size_ > 0 && !could_be_pool_line()) pass();
+    if (size_ > 0 && !could_be_filtered()) pass();
     return out_->pubsync();
   }
 
@@ -48,12 +70,13 @@ class PoolExhaustionFilter : public std::streambuf {
     if (c == '\n')
       end_line();
     else if (size_ == line_.size())
-      pass();  // longer than any pool line
+      pass();  // longer than any line filtered
   }
 
-  bool could_be_pool_line() const {
-    const std::size_t prefix = std::min(size_, sizeof kPoolLine - 1);
-    return std::memcmp(line_.data(), kPoolLine, prefix) == 0;
+  bool could_be_filtered() const {
+    const std::string_view line(line_.data(), size_);
+    return could_begin(line, kPoolLine) || could_begin(line, kSourceLine) ||
+           could_begin(line, kSocketLine);
   }
 
   void pass() {
@@ -69,6 +92,10 @@ class PoolExhaustionFilter : public std::streambuf {
                     &chunks) == 2 &&
         std::strstr(line_.data(), "has no more space left") != nullptr;
     line_[size_ - 1] = '\n';
+    if (hub_gone_line(std::string_view(line_.data(), size_ - 1))) {
+      size_ = 0;
+      return;
+    }
     if (!pool_line) return pass();
     size_ = 0;
     if (!first_time(chunk_bytes)) return;
@@ -101,20 +128,24 @@ class PoolExhaustionFilter : public std::streambuf {
   std::streambuf* out_;
   const std::string who_;
   std::mutex mutex_;
-  std::array<char, 256> line_{};
+  std::array<char, 512> line_{};
   std::size_t size_ = 0;
   std::array<unsigned long, 64> said_{};  // the chunk sizes said, 0 for free
 };
 
 }  // namespace
 
-void filter_pool_exhaustion_lines(const std::string& who) {
+void filter_iceoryx_stderr(const std::string& who) {
   static std::once_flag once;
   std::call_once(once, [&who] {
     // Never destroyed: iceoryx may write while the process ends.
-    static auto* filter = new PoolExhaustionFilter(std::cerr.rdbuf(), who);
+    static auto* filter = new IceoryxStderrFilter(std::cerr.rdbuf(), who);
     std::cerr.rdbuf(filter);
   });
+}
+
+std::unique_ptr<std::streambuf> make_iceoryx_stderr_filter(std::streambuf* out, std::string who) {
+  return std::make_unique<IceoryxStderrFilter>(out, std::move(who));
 }
 
 }  // namespace afhub
