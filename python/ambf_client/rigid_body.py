@@ -255,19 +255,25 @@ class RigidBody(Handle):
         self._set_joint(joint_name_or_idx, effort, _EFFORT)
 
     def _set_multiple(self, values, index_list, kind):
+        """As AMBF: `values` is a vector over the joints, and each joint of `index_list`
+        takes its own entry, values[idx]; the joints not listed keep their commands. With
+        no index list (afhub's default; AMBF needs one), every joint `values` reaches."""
         n = len(self._joint_names)
         values = list(values)
-        index_list = [] if index_list is None else list(index_list)
-        # As AMBF: no indices, or not one per value, command joints 0, 1, ... in order.
-        if len(index_list) == 0 or len(values) != len(index_list):
-            index_list = list(range(n))
+        if index_list is None:
             if len(values) > n:  # as AMBF, which said so for each value past the last joint
                 print(f'Requested Joint index is out of range with joints {n}: '
                       f'{len(values)} values given, the last {len(values) - n} left out')
-        elif any(_whole(idx) is None or not 0 <= idx < n for idx in index_list):
-            print(f'Requested Joint index is out of range with joints {n}: {index_list}')
+            index_list = range(min(n, len(values)))
+        indices = [_whole(idx) for idx in index_list]
+        if any(idx is None or not 0 <= idx < n for idx in indices):
+            print(f'Requested Joint index is out of range with joints {n}: {list(index_list)}')
             return
-        self._set_joints(zip([_whole(idx) for idx in index_list], values), kind)
+        if indices and max(indices) >= len(values):
+            raise IndexError(
+                f'joint {max(indices)} has no value: {len(values)} values given. As in AMBF, '
+                f'joint i takes values[i]: give a value for each joint up to the last listed')
+        self._set_joints([(idx, values[idx]) for idx in indices], kind)
 
     def set_multiple_joint_pos(self, q_list, index_list=None):
         self._set_multiple(q_list, index_list, _POSITION)

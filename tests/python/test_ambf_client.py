@@ -138,12 +138,12 @@ def test_a_refused_value_leaves_the_command_held_before(physics, tmp_path):
         _client.connect()
         base = _client.get_obj_handle('arm/base')
         base.set_joint_pos(0, 0.3)
-        base.set_multiple_joint_pos([0.2, 0.2], numpy.array([1, 2]))  # numpy indices too
+        base.set_multiple_joint_pos([0.3, 0.2, 0.2], numpy.array([1, 2]))  # numpy indices too
         # A value that is no number after a good one: the good one is not kept either.
         for refused in (lambda: base.set_pos(math.nan, 0, 0),
                         lambda: base.set_joint_pos(1, math.inf),
-                        lambda: base.set_multiple_joint_pos([0.7, 'oops'], [1, 2]),
-                        lambda: base.set_multiple_joint_pos([0.7, None], [1, 2])):
+                        lambda: base.set_multiple_joint_pos([0.7, 0.7, 'oops'], [1, 2]),
+                        lambda: base.set_multiple_joint_pos([0.7, 0.7, None], [1, 2])):
             try:
                 refused()
             except (ValueError, TypeError) as error:
@@ -168,6 +168,39 @@ def test_a_refused_value_leaves_the_command_held_before(physics, tmp_path):
     assert output.count('refused:') == 8 and 'nothing was sent' in output, output
     assert output.count('default_publish_rate takes 10 to 100000 Hz') == 4, output
     assert 'ambf_client: ' not in output, output  # the client's thread sent without a fault
+
+
+def test_multiple_joints_take_their_own_entries_of_a_vector_as_in_ambf(physics, tmp_path):
+    """set_multiple_joint_pos(q, [2, 4]) with q over all the joints, as AMBF scripts pass it:
+    joints 2 and 4 take q[2] and q[4], and the others keep their commands (every joint was
+    switched to position control, to q's values). An index past the values raises."""
+    run = physics(EXAMPLES / 'arm7.yaml')
+    arm = run.wait_for_body('arm/base')
+    script = Script(tmp_path, """
+        from ambf_client import Client
+
+        _client = Client('afhub_test')
+        _client.connect()
+        base = _client.get_obj_handle('arm/base')
+        base.set_joint_pos(0, 0.5)
+        base.set_multiple_joint_pos([1.0, 1.0, 0.3, 1.0, -0.3, 1.0, 1.0], [2, 4])
+        try:
+            base.set_multiple_joint_pos([0.1], [3])
+        except IndexError as error:
+            print('refused:', error)
+        print('STAGE 1: commanded; press enter')
+        input()
+        _client.clean_up()
+        print('DONE')
+    """)
+    script.read_until('STAGE 1')
+    wanted = {0: 0.5, 2: 0.3, 4: -0.3}
+    reached = lambda s: all(abs(s.joint_positions[j] - q) < 0.03 for j, q in wanted.items())
+    wait_until(lambda: reached(arm.wait_next()), 15, 'joints 0, 2 and 4 reached 0.5, 0.3, -0.3')
+    assert held_for(arm, reached, 1.0), arm.read().joint_positions
+    script.enter()
+    output = script.finish()
+    assert 'refused: joint 3 has no value: 1 values given' in output, output
 
 
 def test_a_body_named_world_is_that_body_and_wrong_types_raise(physics, tmp_path):
