@@ -37,6 +37,10 @@ class Client:
         # index)
         self._parts = {}
         self._world_reader = None  # afhub.World: the world state names cameras and lights
+        # The namespace of the bodies' world (`afhub run --namespace`), None for none, and
+        # the body and publisher it was found from.
+        self._world_namespace = None
+        self._world_found_from = None
         self._common_namespace = ''
         self._world = None
         self._rate_hz = 120.0
@@ -75,9 +79,8 @@ class Client:
 
     def _read_catalog(self):
         self._names, self._parts = [], {}
-        for entry in afhub.catalog():
-            if entry['kind'] != 'body':
-                continue
+        entries = [entry for entry in afhub.catalog() if entry['kind'] == 'body']
+        for entry in entries:
             body = '/' + entry['channel']
             self._names.append(body)
             namespace = body[:body.rfind('/') + 1]  # a body's parts are named in its namespace
@@ -85,19 +88,35 @@ class Client:
                 self._parts.setdefault(namespace + sensor, ('sensor', body, []))[2].append(ray)
             for index, actuator in enumerate(entry['actuator_names']):
                 self._parts[namespace + actuator] = ('actuator', body, index)
-        if self._names:
+        self._find_world(entries)
+        if self._world_reader is not None:
             try:
-                if self._world_reader is None:
-                    self._world_reader = afhub.World()
                 state = self._world_reader.state(wait_s=1.0)
                 for kind in ('camera', 'light'):
                     for name in state[kind + 's']:
                         self._parts['/' + name.lstrip('/')] = (kind, None, None)
-            except afhub.Error:  # a world of another namespace: no cameras or lights
+            except afhub.Error:  # its physics ended meanwhile
                 pass
         self._common_namespace = os.path.commonprefix(self._names) if self._names else ''
         if self._common_namespace and not self._common_namespace.endswith('/'):
             self._common_namespace = self._common_namespace[:self._common_namespace.rfind('/') + 1]
+
+    def _find_world(self, entries):
+        """The world of the first body's physics (AMBF has one world): its namespace
+        (`afhub run --namespace NS`: World() of the default one found nothing), looked for
+        again only when that body or its publisher changed. None when no world publishes
+        it: then there is no world handle, as in AMBF with no world."""
+        found_from = (entries[0]['channel'], entries[0]['owner_pid']) if entries else None
+        if found_from == self._world_found_from:
+            return
+        self._world_found_from = found_from
+        try:
+            name_space = afhub.world_namespace(found_from[0]) if found_from else None
+        except afhub.Error:  # the body went meanwhile
+            name_space = None
+        if name_space != self._world_namespace or self._world_reader is None:
+            self._world_reader = afhub.World(name_space) if name_space is not None else None
+        self._world_namespace = name_space
 
     # ----- names and handles -----
     def get_common_namespace(self):
@@ -107,14 +126,19 @@ class Client:
         """Every live body's AMBF name ('/ambf/env/ecm/baselink'), then its sensors',
         actuators', cameras' and lights', and 'World' when a simulation runs."""
         self._read_catalog()
-        return (['World'] if self._names else []) + list(self._names) + list(self._parts)
+        world = ['World'] if self._world_namespace is not None else []
+        return world + list(self._names) + list(self._parts)
 
     def get_world_handle(self):
         if self._thread is None:  # a throttling pause is held by its thread
             raise RuntimeError('get_world_handle: the client is not connected: call connect() '
                                'first (its thread keeps the throttling pause held)')
-        if self._world is None:
-            self._world = World('World')
+        if self._world_namespace is None:  # as AMBF with no world: none
+            return None
+        if self._world is None or self._world.namespace != self._world_namespace:
+            if self._world is not None:
+                self._release_world()
+            self._world = World('World', self._world_namespace)
             self._world.set_active()
         return self._world
 

@@ -17,9 +17,10 @@ RENEW_EVERY_S = 0.2
 
 
 class World(Handle):
-    def __init__(self, name='World'):
+    def __init__(self, name='World', namespace=''):
         super().__init__(name)
-        self._world = afhub.World()
+        self.namespace = namespace  # `afhub run --namespace`
+        self._world = afhub.World(namespace)
         self._throttling = False
         self._step_skips = 1
         self._renewed = 0.0  # time.monotonic() of the last renewal

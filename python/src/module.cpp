@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "afhub/hub/bodies.hpp"
+#include "afhub/hub/body_world.hpp"
 #include "afhub/hub/hub_loss.hpp"
 #include "afhub/hub/hub_presence.hpp"
 #include "afhub/hub/loop_stats_reader.hpp"
@@ -224,6 +225,26 @@ py::dict loop_stats_dict(const LoopStats& stats) {
   return out;
 }
 
+// The namespace of the world whose physics publishes `body` (BodyWorld), or none.
+std::optional<std::string> world_namespace(const std::string& body, double wait_s) {
+  const BodyEntry entry = wait_for_entry(body, wait_s, "body");
+  const std::int64_t give_up = deadline_after(wait_s, "wait_s");
+  std::optional<std::string> found;
+  SignalWatch signals;
+  {
+    py::gil_scoped_release release;
+    BodyClient client(entry);
+    BodyWorld world(name_of(entry.info.channel));
+    for (; !found && monotonic_ns() < give_up && !signals.pending() && !hub_lost();
+         sleep_until_ns(monotonic_ns() + 2'000'000))
+      if (const BodyState* state = client.latest_state())
+        if (const std::string* name_space = world.name_space_of(*state)) found = *name_space;
+  }
+  signals.raise_if_pending();
+  require_hub();
+  return found;
+}
+
 }  // namespace afhub::python
 
 PYBIND11_MODULE(afhub, module) {
@@ -289,6 +310,11 @@ PYBIND11_MODULE(afhub, module) {
       "The channel of the body or device named by `name`: its channel name or a unique "
       "suffix of it after a '/' ('arm/base', 'base'), as the command line finds them. "
       "Raises afhub.Error listing the candidates when none or several match.");
+  module.def("world_namespace", &world_namespace, py::arg("body"), py::arg("wait_s") = 1.0,
+             "The namespace of the world whose physics publishes `body` "
+             "(World(namespace=...); '' for `afhub run` without --namespace), or None when none "
+             "does within wait_s seconds (bodies of `afhub synth`, or a device driver's, have "
+             "no world).");
   module.def(
       "loop_stats",
       [] {

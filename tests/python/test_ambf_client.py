@@ -203,6 +203,37 @@ def test_multiple_joints_take_their_own_entries_of_a_vector_as_in_ambf(physics, 
     assert 'refused: joint 3 has no value: 1 values given' in output, output
 
 
+def test_the_world_handle_is_the_bodies_world_and_none_without_one(physics, tmp_path):
+    """No simulation: no world handle (None), as AMBF. A physics run with --namespace: the
+    world handle is its world (it was the default namespace's: every call failed, saying
+    no simulation ran)."""
+    script = Script(tmp_path, """
+        from ambf_client import Client
+
+        c = Client('afhub_test')
+        c.connect()
+        print('no simulation:', c.get_world_handle(), 'World' in c.get_obj_names())
+        print('STAGE 1: press enter once a physics runs')
+        input()
+        print('names', c.get_obj_names()[:2])
+        w = c.get_world_handle()
+        step = w.get_sim_step()
+        w.reset()
+        print('world step', step, 'then', w.get_sim_step(), 'time', w.get_sim_time())
+        c.clean_up()
+        print('DONE')
+    """)
+    script.read_until('STAGE 1')
+    run = physics(EXAMPLES / 'arm7.yaml', '--namespace', 'copy')
+    run.wait_for_body('copy/afhub/arm/base')
+    script.enter()
+    output = script.finish()
+    assert 'no simulation: None False' in output, output
+    assert "names ['World', '/copy/afhub/arm/" in output, output
+    step, after = (int(word) for word in output.split('world step ')[1].split()[:3:2])
+    assert step > 0 and after < step, output
+
+
 def test_a_body_named_world_is_that_body_and_wrong_types_raise(physics, tmp_path):
     """A model's body named 'world' (the four-bar's, a URDF's root link) is that body, as
     in AMBF (the World handle came instead, without get_pos); 'World' is the world. A value

@@ -9,9 +9,11 @@ namespace afhub {
 
 BodyWorld::BodyWorld(std::string_view body_channel) {
   const auto add = [&](std::string_view name_space) {
-    worlds_.push_back(std::make_unique<LatestReader<WorldState>>(
-        ChannelId{std::string(kService), world_instance(name_space), std::string(kStateEvent)}));
-    worlds_.back()->latest();
+    worlds_.push_back(
+        {std::string(name_space),
+         std::make_unique<LatestReader<WorldState>>(ChannelId{
+             std::string(kService), world_instance(name_space), std::string(kStateEvent)})});
+    worlds_.back().reader->latest();
   };
   for (std::size_t slash = body_channel.rfind('/'); slash != std::string_view::npos && slash > 0;
        slash = body_channel.rfind('/', slash - 1))
@@ -19,14 +21,22 @@ BodyWorld::BodyWorld(std::string_view body_channel) {
   add({});
 }
 
-const WorldState* BodyWorld::of(const BodyState& body) noexcept {
-  for (auto& world : worlds_)
-    if (const WorldState* state = world->latest();
+BodyWorld::Found BodyWorld::find(const BodyState& body) noexcept {
+  for (Candidate& world : worlds_)
+    if (const WorldState* state = world.reader->latest();
         state && state->header.publisher_pid == body.header.publisher_pid &&
         state->header.sim_step + 2 >= body.header.sim_step &&
         body.header.sim_step + 2 >= state->header.sim_step)
-      return state;
-  return nullptr;
+      return {state, &world.name_space};
+  return {};
+}
+
+const WorldState* BodyWorld::of(const BodyState& body) noexcept {
+  return find(body).state;
+}
+
+const std::string* BodyWorld::name_space_of(const BodyState& body) noexcept {
+  return find(body).name_space;
 }
 
 }  // namespace afhub

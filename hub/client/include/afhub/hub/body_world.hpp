@@ -7,6 +7,7 @@
 #pragma once
 
 #include <memory>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -27,9 +28,20 @@ class BodyWorld {
   // or nullptr when no candidate matches. No heap allocation once each world's first
   // state was read.
   const WorldState* of(const BodyState& body) noexcept;
+  // The namespace of that world (`afhub run --namespace`; "" for none), or nullptr.
+  const std::string* name_space_of(const BodyState& body) noexcept;
 
  private:
-  std::vector<std::unique_ptr<LatestReader<WorldState>>> worlds_;  // innermost first
+  struct Candidate {
+    std::string name_space;
+    std::unique_ptr<LatestReader<WorldState>> reader;
+  };
+  struct Found {
+    const WorldState* state = nullptr;
+    const std::string* name_space = nullptr;
+  };
+  Found find(const BodyState& body) noexcept;
+  std::vector<Candidate> worlds_;  // innermost first
 };
 
 // Whether a world under a pause: halted, or running the steps asked of it by hand
