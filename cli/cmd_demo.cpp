@@ -170,9 +170,11 @@ void draw(CatalogReader& catalog, std::vector<std::unique_ptr<BodyClient>>& clie
           const std::string& url) {
   const BodyList& list = catalog.latest();
   std::string screen = tty ? "\033[H\033[2J" : "";
-  screen +=
-      "afhub demo: simulated live (Ctrl-C stops; try `afhub ls`, `afhub echo arm/link7`, "
-      "`afhub status` in another shell)\n";
+  // A body of the model shown (`--model`: another than the arm's link7).
+  const std::string echo =
+      list.body_count ? "`afhub echo " + std::string(name_of(list.bodies[0].channel)) + "`, " : "";
+  screen += "afhub demo: simulated live (Ctrl-C stops; try `afhub ls`, " + echo +
+            "`afhub status` in another shell)\n";
   if (!url.empty()) screen += "afhub demo: see it in a browser: " + url + "\n";
   char line[256];
   std::snprintf(line, sizeof line, "%-28s %9s %9s %9s  %-26s %s\n", "BODY", "RATE_HZ", "STEP",

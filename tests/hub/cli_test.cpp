@@ -66,6 +66,25 @@ TEST(Cli, DemoSimulatesTheExampleSceneLive) {
   EXPECT_EQ(run_afhub({"hub", "stop"}).exit_code, 0);
 }
 
+// The body the demo's first line suggests echoing is one of the model shown (with
+// --model it named the example arm's link7, which another model has not).
+TEST(Cli, TheDemosHintNamesABodyOfItsModel) {
+  expect_no_hub();
+  RunResult demo = run_afhub(
+      {"demo", "--model", AFHUB_EXAMPLE_MODELS "/gripper.yaml", "--seconds", "2", "--no-view"},
+      30s);
+  EXPECT_EQ(demo.exit_code, 0) << demo.err;
+  const std::regex hint("`afhub echo ([^`]+)`");
+  int hints = 0;
+  for (auto it = std::sregex_iterator(demo.out.begin(), demo.out.end(), hint);
+       it != std::sregex_iterator(); ++it, ++hints)
+    EXPECT_TRUE(contains(demo.out, "\n" + (*it)[1].str() + " "))
+        << (*it)[1] << " is not in the table:\n"
+        << demo.out;
+  EXPECT_GT(hints, 0) << demo.out;
+  EXPECT_EQ(run_afhub({"hub", "stop"}).exit_code, 0);
+}
+
 // The demo starts `afhub view` beside it and prints its URL, which serves the page
 // and the example scene; the viewer stops with the demo.
 TEST(Cli, DemoPrintsTheViewersUrlWhichServesTheScene) {
