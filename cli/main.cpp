@@ -14,15 +14,22 @@ std::string command(const CLI::App& app) {
   return chosen.empty() ? std::string() : chosen.front()->get_name();
 }
 
-// CLI11 says only "A subcommand is required" (for `afhub world bogus` too): name the
-// command and the subcommands it has, and what was given instead.
-int missing_subcommand(const CLI::App& app) {
+// The deepest command parsed: `at` is it, the path its words ("afhub world step").
+const CLI::App* deepest_command(const CLI::App& app, std::string& path) {
   const CLI::App* at = &app;
-  std::string path = "afhub";
+  path = "afhub";
   for (auto chosen = at->get_subcommands(); !chosen.empty(); chosen = at->get_subcommands()) {
     at = chosen.front();
     path += " " + at->get_name();
   }
+  return at;
+}
+
+// CLI11 says only "A subcommand is required" (for `afhub world bogus` too): name the
+// command and the subcommands it has, and what was given instead.
+int missing_subcommand(const CLI::App& app) {
+  std::string path;
+  const CLI::App* at = deepest_command(app, path);
   std::string choices;
   for (const CLI::App* sub : at->get_subcommands({}))
     choices += (choices.empty() ? "" : ", ") + sub->get_name();
@@ -32,6 +39,16 @@ int missing_subcommand(const CLI::App& app) {
       stderr, "%s: %s; choose one of: %s (see `%s --help`)\n", path.c_str(),
       given.empty() ? "a subcommand is required" : ("unknown subcommand '" + given + "'").c_str(),
       choices.c_str(), path.c_str());
+  return 2;
+}
+
+// A command line CLI11 refused (a missing argument, an unknown option, a value out of
+// range): said as the command's, with exit code 2 for every such mistake (CLI11's own
+// codes ran from 105 to 109, and its line named no command).
+int usage_error(const CLI::App& app, const CLI::ParseError& error) {
+  std::string path;
+  deepest_command(app, path);
+  std::fprintf(stderr, "%s: %s (see `%s --help`)\n", path.c_str(), error.what(), path.c_str());
   return 2;
 }
 
@@ -71,9 +88,10 @@ int main(int argc, char** argv) {
   } catch (const CLI::RequiredError& error) {
     if (std::string(error.what()).find("subcommand is required") != std::string::npos)
       return missing_subcommand(app);
-    return app.exit(error);
+    return usage_error(app, error);
   } catch (const CLI::ParseError& error) {
-    return app.exit(error);
+    // --help and --version end the parse too, with code 0.
+    return error.get_exit_code() == 0 ? app.exit(error) : usage_error(app, error);
   }
   // A message located in a file says "path:line: error: ..." itself: not "error" twice.
   const auto say = [&](const char* what) {

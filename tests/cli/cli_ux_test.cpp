@@ -51,6 +51,17 @@ TEST(Cli, AnUnknownOrMissingSubcommandNamesTheChoices) {
   EXPECT_EQ(none.exit_code, 2);
   EXPECT_TRUE(contains(none.err, "afhub device: a subcommand is required; choose one of: list"))
       << none.err;
+  // Every other mistake of the command line: its command named, exit code 2 (CLI11's
+  // codes were 105 to 109, its line named no command).
+  for (const auto& [args, said] : std::vector<std::pair<std::vector<std::string>, std::string>>{
+           {{"echo"}, "afhub echo: body is required (see `afhub echo --help`)"},
+           {{"ls", "--bogus"}, "afhub ls: The following argument was not expected: --bogus"},
+           {{"ctl", "sine", "base", "--rate", "abc"}, "afhub ctl sine: Could not convert"},
+           {{"run", "--steps", "-1", "x.yaml"}, "afhub run: --steps: takes a whole number"}}) {
+    RunResult wrong = run_afhub(args);
+    EXPECT_EQ(wrong.exit_code, 2) << args[0] << ": " << wrong.err;
+    EXPECT_TRUE(contains(wrong.err, said)) << wrong.err;
+  }
   RunResult version = run_afhub({"--version"});
   EXPECT_EQ(version.exit_code, 0);
   EXPECT_TRUE(contains(version.out, "afhub 0.")) << version.out;
