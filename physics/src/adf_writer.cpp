@@ -131,6 +131,8 @@ void write_joint(std::ostream& out, const Model& model, const JointSpec& joint) 
   out << "  offset: " << number(joint.offset_rad) << "\n";
   if (joint.damping != 0.0) out << "  damping: " << number(joint.damping) << "\n";
   out << "  max motor impulse: " << number(joint.max_motor_impulse) << "\n";
+  if (joint.max_velocity)  // afhub's key (AMBF has none)
+    out << "  max velocity: " << number(*joint.max_velocity) << "\n";
 }
 
 }  // namespace

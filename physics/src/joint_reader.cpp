@@ -27,6 +27,7 @@ const std::set<std::string> kJointKeys = {"name",
                                           "equilibrium point",
                                           "enable motor",
                                           "max motor impulse",
+                                          "max velocity",
                                           "joint erp",
                                           "joint cfm",
                                           "ignore inter-collision",
@@ -140,6 +141,10 @@ PendingJoint read_joint(const FileReader& file, const YAML::Node& block,
     joint.equilibrium = file.number(equilibrium, "equilibrium point");
   file.optional_non_negative(block, "max motor impulse", joint.max_motor_impulse,
                              "max motor impulse");
+  if (YAML::Node velocity = block["max velocity"]) {
+    joint.max_velocity = file.non_negative(velocity, "max velocity");
+    if (*joint.max_velocity == 0.0) joint.max_velocity.reset();  // as URDF's 0: none given
+  }
   if (YAML::Node erp = block["joint erp"]) joint.erp = file.non_negative(erp, "joint erp");
   if (YAML::Node cfm = block["joint cfm"]) joint.cfm = file.non_negative(cfm, "joint cfm");
   file.optional_flag(block, "ignore inter-collision", joint.ignore_inter_collision);

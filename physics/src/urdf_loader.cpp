@@ -771,6 +771,9 @@ class UrdfReader {
     // URDF's effort limit, as the motor's impulse per step at the default 1 kHz step.
     if (limits && limits->effort > 0 && has_joint_axis(joint.type))
       joint.max_motor_impulse = limits->effort * 1e-3;
+    // 0 is what many files give for none.
+    if (limits && limits->velocity > 0 && has_joint_axis(joint.type))
+      joint.max_velocity = limits->velocity;
   }
 
   const std::string path_, dir_;

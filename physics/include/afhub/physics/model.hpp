@@ -164,6 +164,10 @@ struct JointSpec {
   double stiffness = 0.0;
   std::optional<double> equilibrium;  // default: mid-limits
   double max_motor_impulse = 0.1;
+  // The fastest its motor drives it (rad/s or m/s; URDF's <limit velocity>, ADF's afhub
+  // key "max velocity"): velocity commands are capped to it, and no effort of the motor
+  // pushes it faster. None: no cap.
+  std::optional<double> max_velocity;
   std::optional<double> erp, cfm;
   bool ignore_inter_collision = true;
   bool enable_feedback = false;
