@@ -129,7 +129,7 @@ int run_world(WorldAction action, const WorldOptions& options) {
   connect_to_hub("world", HubPolicy::kRequire);
   LatestReader<WorldState> reader(world_channel(options, kStateEvent));
   const WorldState before = first_world_state(reader);
-  if (action == WorldAction::kStep && !before.paused)
+  if (action == WorldAction::kStep && !under_pause(before))
     throw Error(
         "the world is running, so there is nothing to step: pause it first (`afhub world "
         "pause`), then `afhub world step N`");

@@ -74,7 +74,7 @@ class World {
                             std::to_string(kMaxWorldStepsPerCommand) +
                             "; to run on, World.resume()");
     const WorldState before = state(2.0);
-    if (action == WorldAction::kStep && !before.paused)
+    if (action == WorldAction::kStep && !under_pause(before))
       throw Error(
           "the world is running, so there is nothing to step: pause it first "
           "(World.pause()), then World.step(n)");

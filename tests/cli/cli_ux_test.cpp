@@ -226,6 +226,10 @@ TEST(World, ALongStepSaysItRunsAndPauseStopsIt) {
       },
       10s))
       << "the world did not step, or said it was paused while it stepped";
+  // More steps asked while they run: added (it was refused, the world said running).
+  RunResult more = run_afhub({"world", "step", "5"});
+  EXPECT_EQ(more.exit_code, 0) << more.err;
+  EXPECT_TRUE(contains(more.out, "stepped 5 steps")) << more.out;
   RunResult pause = run_afhub({"world", "pause"});
   ASSERT_EQ(pause.exit_code, 0) << pause.err;
   EXPECT_TRUE(contains(pause.out, "paused at step")) << pause.out;

@@ -41,7 +41,7 @@ std::string WorldCommander::run(const std::string& query) {
   std::lock_guard lock(mutex_);
   const WorldState* state = state_.latest();
   if (!state) return "no simulation is running: nothing publishes the world state";
-  if (chosen == WorldAction::kStep && !state->paused)
+  if (chosen == WorldAction::kStep && !under_pause(*state))
     return "the world is running, so there is nothing to step: pause it first";
   WorldCommand* command = writer_.loan();
   if (!command) return "no shared memory for a world command";

@@ -19,7 +19,9 @@ WorldActionWatch::WorldActionWatch(WorldAction action, std::uint32_t steps,
                                    const WorldState& before, std::int64_t sent_ns)
     : action_(action),
       steps_(steps),
-      paused_before_(before.paused != 0),
+      // A world running steps by hand is under its pause: a pause halts it (it was not
+      // halted), a resume runs it on (it was not running).
+      paused_before_(action == WorldAction::kResume ? under_pause(before) : before.paused != 0),
       step_before_(before.header.sim_step),
       sent_ns_(sent_ns),
       previous_step_(before.header.sim_step) {}
@@ -31,7 +33,7 @@ std::optional<std::string> WorldActionWatch::shown(const WorldState& now) {
       if (now.paused) return (paused_before_ ? "already paused " : "paused ") + at(now);
       break;
     case WorldAction::kResume:
-      if (!now.paused) return (paused_before_ ? "resumed " : "already running ") + at(now);
+      if (!under_pause(now)) return (paused_before_ ? "resumed " : "already running ") + at(now);
       break;
     case WorldAction::kStep:
       if (now.header.sim_step >= step_before_ + steps_)

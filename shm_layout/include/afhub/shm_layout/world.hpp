@@ -66,6 +66,12 @@ struct WorldState {
   std::array<WorldObjectPose, kMaxWorldObjects> cameras{};
 };
 
+// Whether the world is under a pause: halted (`paused`), or running the steps asked of
+// it by hand (`afhub world step N`), which do not run it on (paused_by_pid stays).
+constexpr bool under_pause(const WorldState& world) noexcept {
+  return world.paused != 0 || world.paused_by_pid != 0;
+}
+
 enum class WorldAction : std::uint32_t {
   kNone = 0,
   kPause = 1,

@@ -44,10 +44,4 @@ class BodyWorld {
   std::vector<Candidate> worlds_;  // innermost first
 };
 
-// Whether a world under a pause: halted, or running the steps asked of it by hand
-// (`afhub world step N`), which do not run the world on.
-inline bool under_pause(const WorldState& world) noexcept {
-  return world.paused != 0 || world.paused_by_pid != 0;
-}
-
 }  // namespace afhub
