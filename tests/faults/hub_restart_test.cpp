@@ -615,6 +615,30 @@ std::vector<std::string> stopped_around_registration(const std::string& when,
               "verify_asan_link_order=0"};
 }
 
+// Ctrl-C just after the hub was lost, while the process re-executes itself to wait for
+// the next: the new image had no handlers yet, and the signal ended it with code 130
+// (44 of 75 in a fault-injection run, sent 20 to 100 ms after the hub's SIGKILL). The
+// stop signals go across the re-exec blocked, and end the wait with code 0 as
+// documented. `afhub synth` here, a delay of 0 to 135 ms each round.
+TEST(HubLoss, CtrlCJustAfterTheHubIsLostEndsTheProcessWithCodeZero) {
+  const std::string log = "/tmp/afhub-fault-ctrl-c.log";
+  for (int delay_ms = 0; delay_ms <= 135; delay_ms += 15) {
+    SCOPED_TRACE("SIGINT " + std::to_string(delay_ms) + " ms after the hub's SIGKILL");
+    ScopedProcess hub(start_test_hub());
+    ASSERT_GT(hub.pid, 0);
+    ScopedProcess synth = spawn_afhub({"synth", "--bodies", "1", "--no-autostart"}, log);
+    ASSERT_TRUE(wait_until([] { return contains(run_afhub({"ls"}, 5s).out, "synth"); }, 20s))
+        << read_file(log);
+    std::this_thread::sleep_for(300ms);  // past its start: it looks at the catalog every 10 ms
+    kill(hub.pid, SIGKILL);
+    waitpid(hub.pid, nullptr, 0);
+    hub.pid = -1;
+    std::this_thread::sleep_for(std::chrono::milliseconds(delay_ms));
+    kill(synth.pid, SIGINT);
+    EXPECT_EQ(wait_for_exit(synth, 20s), 0) << read_file(log);
+  }
+}
+
 // A hub SIGKILLed while a process registers with it (the process held just before it
 // sends its registration: tests/faults/stop_around_registration.c). iceoryx alone waited
 // 60 s and aborted, or waited on. A process that outlives its hub (`afhub synth`) waits

@@ -12,7 +12,9 @@
 #include "afhub/hub/bodies.hpp"
 #include "afhub/hub/channel.hpp"
 #include "afhub/hub/hub_health.hpp"
+#include "afhub/hub/hub_loss.hpp"
 #include "afhub/rt/clock.hpp"
+#include "afhub/rt/stop_signal.hpp"
 #include "afhub/shm_layout/channel_names.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "afhub/shm_layout/world.hpp"
@@ -134,6 +136,9 @@ std::size_t check_room_for_bodies(const std::vector<std::string>& channels,
 
 void confirm_body_claims(const std::vector<std::string>& channels,
                          std::chrono::milliseconds timeout) {
+  // Ctrl-C meanwhile ends the process (exit code 0), as while it registered: it waited
+  // the whole timeout, then said the hub was stalled (a hub lost just before, too).
+  const StopEndsBlockingCall stoppable;
   CatalogReader catalog;
   catalog.wait(timeout);
   const auto me = static_cast<std::uint32_t>(getpid());
@@ -149,6 +154,10 @@ void confirm_body_claims(const std::vector<std::string>& channels,
       if (found == owners.end() || found->second.pid != me) missing.push_back(channel);
     }
     if (missing.empty()) return;
+    if (hub_lost())
+      throw Error(
+          "the hub went away before it listed this process's bodies: start this "
+          "again once a hub runs");
     if (std::chrono::steady_clock::now() > deadline) {
       const std::string not_listed = "the hub did not list " + std::to_string(missing.size()) +
                                      " of " + std::to_string(channels.size()) +

@@ -34,6 +34,7 @@ void survive_hub_loss(const std::string& who) {
       s.carried = carried;
     }
     unsetenv(hub_loss::kReattachVariable);
+    hub_loss::unblock_stop_signals();  // blocked across the re-exec; the handlers are in
   }
   hub_loss::prepare_self_reexec();  // after unsetenv: the next image gets a fresh count
   hub_loss::install_iceoryx_error_handler();

@@ -3,6 +3,7 @@
 
 #include <fcntl.h>
 #include <pthread.h>
+#include <signal.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -10,12 +11,16 @@
 #include <cstring>
 #include <fstream>
 
+#include "afhub/rt/stop_signal.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "afhub/shm_layout/header.hpp"
 #include "hub_loss_state.hpp"
 
 namespace afhub::hub_loss {
 namespace {
+
+// Those install_stop_signal_handlers() handles (rt/stop_signal.cpp).
+constexpr int kStopSignals[] = {SIGINT, SIGTERM, SIGHUP, SIGQUIT};
 
 std::vector<std::string> own_arguments() {
   std::ifstream in("/proc/self/cmdline", std::ios::binary);
@@ -55,11 +60,22 @@ void reexecute_self() noexcept {
   // name's lock file among them) would otherwise keep their locks in the new image.
   if (close_range(3, ~0U, CLOSE_RANGE_CLOEXEC) != 0)
     for (int fd = 3; fd < 65536; ++fd) fcntl(fd, F_SETFD, FD_CLOEXEC);
-  pthread_sigmask(SIG_SETMASK, &s.signal_mask, nullptr);
+  sigset_t mask = s.signal_mask;
+  for (const int signal : kStopSignals) sigaddset(&mask, signal);
+  pthread_sigmask(SIG_SETMASK, &mask, nullptr);
+  // One another thread took since the caller looked would be lost with this image.
+  if (stop_requested()) _exit(0);
   execve("/proc/self/exe", s.argv.data(), s.envp.data());
   std::fprintf(stderr, "%s: cannot re-execute itself to re-attach: %s\n", s.who.c_str(),
                std::strerror(errno));
   _exit(1);
+}
+
+void unblock_stop_signals() noexcept {
+  sigset_t stop;
+  sigemptyset(&stop);
+  for (const int signal : kStopSignals) sigaddset(&stop, signal);
+  pthread_sigmask(SIG_UNBLOCK, &stop, nullptr);
 }
 
 }  // namespace afhub::hub_loss

@@ -23,8 +23,9 @@
 
 namespace afhub {
 
-// Opts this process in; call once, before connect_to_hub(). `who` names it in messages
-// ("afhub ctl"). The arguments to re-execute with are read from /proc/self/cmdline now.
+// Opts this process in; call once, after install_stop_signal_handlers() and before
+// connect_to_hub(). `who` names it in messages ("afhub ctl"). The arguments to
+// re-execute with are read from /proc/self/cmdline now.
 void survive_hub_loss(const std::string& who);
 
 // Opts in a process that cannot re-execute itself (a Python interpreter, with its
