@@ -74,9 +74,10 @@ std::vector<PlacedMesh> read_placed_meshes(const FileReader& file, const YAML::N
     if (YAML::Node scale = entry["scale"]) {
       placed.scale = file.vec3(scale, what + " scale");
       for (double axis : {placed.scale.x, placed.scale.y, placed.scale.z})
-        if (!(axis > 0) || axis > kMaxScale)
-          fail(file.at(scale), "each axis of a '" + what + "' scale must be above 0 and at most " +
-                                   yaml::number_text(kMaxScale));
+        if (!(std::abs(axis) > 0) || std::abs(axis) > kMaxScale)
+          fail(file.at(scale), "each axis of a '" + what + "' scale must be other than 0 and " +
+                                   "within -" + yaml::number_text(kMaxScale) + " to " +
+                                   yaml::number_text(kMaxScale) + " (negative: mirrored)");
     }
     meshes.push_back(std::move(placed));
   }

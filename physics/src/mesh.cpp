@@ -43,9 +43,14 @@ TriangleMesh scaled(const RawMesh& raw, const std::string& path, const Vec3& sca
                     "): not a finite point within 100 km of the origin; repair the mesh");
     mesh.vertices.push_back(point);
   }
+  // A mirrored mesh (an odd number of negative axes) turns its triangles inside out:
+  // each is wound back the other way, so that its normal faces out again.
+  const bool mirrored = scale.x * scale.y * scale.z < 0;
   mesh.triangles.reserve(raw.triangles.size() / 3);
   for (std::size_t t = 0; t < raw.triangles.size(); t += 3)
-    mesh.triangles.push_back({raw.triangles[t], raw.triangles[t + 1], raw.triangles[t + 2]});
+    mesh.triangles.push_back(
+        mirrored ? std::array{raw.triangles[t], raw.triangles[t + 2], raw.triangles[t + 1]}
+                 : std::array{raw.triangles[t], raw.triangles[t + 1], raw.triangles[t + 2]});
   if (mesh.triangles.empty())
     throw Error(path + ": error: the mesh has no triangles; export it with faces");
   return mesh;

@@ -400,15 +400,17 @@ class UrdfReader {
     return fs::absolute(resolved).lexically_normal().string();
   }
 
-  // A mesh's scale per axis, each positive and within the bound ADF scales have.
+  // A mesh's scale per axis, each within the bound ADF scales have, and negative for a
+  // mirrored mesh (as RViz and Gazebo take it), never 0.
   Vec3 mesh_scale(const urdf::Mesh& mesh, const std::string& link) {
     const urdf::Vector3& s = mesh.scale;
     for (double axis : {s.x, s.y, s.z})
-      if (!(axis > 0) || axis > kMaxScale)
+      if (!(std::abs(axis) > 0) || std::abs(axis) > kMaxScale)
         fail(link_at(link), "link '" + link + "': mesh '" + mesh.filename + "' has scale " +
                                 yaml::number_text(s.x) + " " + yaml::number_text(s.y) + " " +
                                 yaml::number_text(s.z) +
-                                "; give each axis a scale above 0 and at most 1000");
+                                "; give each axis a scale other than 0 within -1000 to 1000 "
+                                "(a negative one mirrors the mesh)");
     return {s.x, s.y, s.z};
   }
 
@@ -488,7 +490,7 @@ class UrdfReader {
                             : !collisions.empty() ? &collisions.front()
                                                   : nullptr;
     const Vec3* s = first ? &first->placed.scale : nullptr;
-    body.scale = s && s->x == s->y && s->x == s->z ? s->x : 1.0;
+    body.scale = s && s->x > 0 && s->x == s->y && s->x == s->z ? s->x : 1.0;
     auto own = [&](const LinkMesh& mesh) {
       const Vec3& m = mesh.placed.scale;
       return mesh.at_origin && m.x == body.scale && m.y == body.scale && m.z == body.scale;

@@ -330,7 +330,8 @@ TEST_F(BadInput, AbsurdValuesAreRefusedWithTheirLocation) {
       {"  mass: 1\n  collision meshes: [{offset: {position: {x: 1, y: 0, z: 0}}}]\n",
        "model.yaml:5:22: error: 'collision meshes' entry needs 'mesh'"},
       {"  mass: 1\n  visual meshes: [{mesh: part.stl, scale: {x: 1, y: 0, z: 1}}]\n",
-       "error: each axis of a 'visual meshes' scale must be above 0 and at most 1000"},
+       "error: each axis of a 'visual meshes' scale must be other than 0 and within -1000 to "
+       "1000 (negative: mirrored)"},
   };
   folder_.write("part.stl", "solid part\nendsolid part\n");
   for (const Case& c : cases) {

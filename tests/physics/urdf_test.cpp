@@ -16,6 +16,7 @@
 
 #include "afhub/physics/adf_loader.hpp"
 #include "afhub/physics/adf_writer.hpp"
+#include "afhub/physics/mesh.hpp"
 #include "afhub/physics/mesh_fallback.hpp"
 #include "afhub/physics/scene_loader.hpp"
 #include "afhub/physics/simulation.hpp"
@@ -738,8 +739,9 @@ TEST(Urdf, ElementsNestedPastTheLimitAreAnErrorNotACrash) {
 // compound. Two cubes 0.6 m apart, 0.5 m below the link frame, land the block level
 // on a floor 1 m below it (a single cube under the centre of mass, or the meshes at
 // the link frame, would land it elsewhere or tipped).
-// Two cubes 0.3 m tall (each scaled per axis, differently in x) under a block, and a
-// small sphere: the block rests on the cubes.
+// Two cubes 0.3 m tall (each scaled per axis, differently in x, one mirrored in y: a
+// negative scale, as RViz and Gazebo take it, was refused) under a block, and a small
+// sphere: the block rests on the cubes.
 TEST(Urdf, SeveralPlacedCollisionMeshesCollideAsOneCompound) {
   const std::string cube = kModels + "/meshes/cube.obj";
   auto mesh = [&](const std::string& xyz, const std::string& scale) {
@@ -755,7 +757,7 @@ TEST(Urdf, SeveralPlacedCollisionMeshesCollideAsOneCompound) {
       "<robot name=\"block\"><link name=\"block\"><inertial><mass value=\"1\"/>"
       "<inertia ixx=\"0.01\" ixy=\"0\" ixz=\"0\" iyy=\"0.01\" iyz=\"0\" "
       "izz=\"0.01\"/></inertial>" +
-          mesh("0.3 0 -0.5", "0.2 0.1 0.3") + mesh("-0.3 0 -0.5", "0.1 0.1 0.3") +
+          mesh("0.3 0 -0.5", "0.2 -0.1 0.3") + mesh("-0.3 0 -0.5", "0.1 0.1 0.3") +
           "<collision><geometry><sphere radius=\"0.05\"/></geometry></collision>"
           "</link></robot>\n");
   Model model;
@@ -787,9 +789,33 @@ TEST(Urdf, SeveralPlacedCollisionMeshesCollideAsOneCompound) {
   EXPECT_EQ(read_back.collision_mesh_parts[1].offset.position_m.x, -0.3);
   EXPECT_EQ(read_back.collision_mesh_parts[0].scale.x, 0.2);
   EXPECT_EQ(read_back.collision_mesh_parts[0].scale.z, 0.3);
+  EXPECT_EQ(read_back.collision_mesh_parts[0].scale.y, -0.1);
   Simulation again(converted, 0.001);
   for (int step = 0; step < 3000; ++step) again.step();
   EXPECT_NEAR(again.body_pose(1).position_m.z, pose.position_m.z, 1e-6);
+}
+
+// A mirrored mesh keeps its triangles facing out: the cube's volume, summed from its
+// triangles' windings, is the same mirrored (it came out negative, inside out).
+TEST(Urdf, AMirroredMeshIsWoundOutward) {
+  const std::string cube = kModels + "/meshes/cube.obj";
+  const auto volume = [&](const Vec3& scale) {
+    const TriangleMesh mesh = load_body_meshes({{cube, scale, {}, "test"}}).at(0);
+    double sum = 0.0;
+    for (const auto& [a, b, c] : mesh.triangles) {
+      const auto& p = mesh.vertices[a];
+      const auto& q = mesh.vertices[b];
+      const auto& r = mesh.vertices[c];
+      sum += p[0] * (q[1] * r[2] - q[2] * r[1]) - p[1] * (q[0] * r[2] - q[2] * r[0]) +
+             p[2] * (q[0] * r[1] - q[1] * r[0]);
+    }
+    return sum / 6.0;
+  };
+  const double plain = volume({0.2, 0.1, 0.3});
+  EXPECT_GT(plain, 0.0);
+  EXPECT_NEAR(volume({0.2, -0.1, 0.3}), plain, 1e-12);
+  EXPECT_NEAR(volume({-0.2, -0.1, -0.3}), plain, 1e-12);
+  EXPECT_NEAR(volume({-0.2, -0.1, 0.3}), plain, 1e-12) << "two axes: a turn, not a mirror";
 }
 
 // --mesh-fallback box: a link with a collision mesh that cannot be used (no
