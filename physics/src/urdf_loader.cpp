@@ -274,11 +274,7 @@ class UrdfReader {
       }
     }
     check_origin_angles(*xml_.robot);
-    for (const char* element : {"transmission", "gazebo"})
-      if (const TiXmlElement* first = xml_.robot->FirstChildElement(element))
-        warn(location_of(path_, *first).line,
-             std::string("<") + element +
-                 "> elements are ignored (afhub simulates the links and joints)");
+    warn_unread_elements();
     name_space_ = "/ambf/env/" + robot_->getName() + "/";
     model_.notes.push_back(path_ + ": robot '" + robot_->getName() +
                            "': links joined by a joint do not collide with each other (URDF's "
@@ -304,6 +300,39 @@ class UrdfReader {
   }
   void warn_once(const std::string& key, int line, const std::string& what) {
     if (warned_.insert(key).second) warn(line, what);
+  }
+
+  // Each kind of element afhub does not read, once, at its first: <transmission> and
+  // <gazebo> as ROS tools' own, and any other (a <sensor>, a misspelt <colision>),
+  // which went by without a word.
+  void warn_unread_elements() {
+    static const std::set<std::string> kRobot = {"link", "joint", "material"},
+                                       kLink = {"inertial", "visual", "collision"},
+                                       kJoint = {"origin", "parent",      "child",
+                                                 "axis",   "limit",       "dynamics",
+                                                 "mimic",  "calibration", "safety_controller"};
+    const auto look = [&](const TiXmlElement& parent, const std::set<std::string>& known,
+                          const std::string& in) {
+      for (const TiXmlElement* child = parent.FirstChildElement(); child;
+           child = child->NextSiblingElement()) {
+        const std::string name = child->ValueStr();
+        if (known.count(name)) continue;
+        const bool tools = in.empty() && (name == "transmission" || name == "gazebo");
+        warn_once(in + "<" + name + ">", location_of(path_, *child).line,
+                  "<" + name + "> elements" + (in.empty() ? "" : " in a " + in) +
+                      (tools ? " are ignored (afhub simulates the links and joints)"
+                             : " are not read (afhub reads " +
+                                   (in.empty() ? std::string("<link>, <joint> and <material>")
+                                    : in == "link"
+                                        ? std::string("<inertial>, <visual> and <collision>")
+                                        : std::string("its <origin>, <parent>, <child>, <axis>, "
+                                                      "<limit>, <dynamics> and <mimic>")) +
+                                   ")"));
+      }
+    };
+    look(*xml_.robot, kRobot, "");
+    for (const auto& [name, link] : xml_.links) look(*link, kLink, "link");
+    for (const auto& [name, joint] : xml_.joints) look(*joint, kJoint, "joint");
   }
 
   // Every <origin rpy> below `element`: urdfdom turns it into a rotation at once, and

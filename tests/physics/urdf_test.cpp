@@ -795,6 +795,32 @@ TEST(Urdf, SeveralPlacedCollisionMeshesCollideAsOneCompound) {
   EXPECT_NEAR(again.body_pose(1).position_m.z, pose.position_m.z, 1e-6);
 }
 
+// Elements afhub does not read are said, once per kind, at their line: a <sensor>, a
+// misspelt <colision> (its link then collided as nothing), anything unknown (they went
+// by without a word; <transmission> and <gazebo> were said).
+TEST(Urdf, ElementsItDoesNotReadAreSaidAtTheirLine) {
+  const WrittenFile file(
+      "unread.urdf",
+      "<robot name=\"u\">\n"
+      "  <link name=\"base\"><inertial><mass value=\"1\"/><inertia ixx=\"0.01\" iyy=\"0.01\" "
+      "izz=\"0.01\" ixy=\"0\" ixz=\"0\" iyz=\"0\"/></inertial>\n"
+      "    <colision><geometry><box size=\"1 1 1\"/></geometry></colision></link>\n"
+      "  <sensor name=\"s\"/>\n  <sensor name=\"t\"/>\n  <transmission name=\"x\"/>\n"
+      "  <joint name=\"j\" type=\"fixed\"><parent link=\"base\"/><child link=\"a\"/><bar/>"
+      "</joint>\n  <link name=\"a\"/>\n</robot>\n");
+  const Model model = load(file.path);
+  std::string warnings;
+  for (const std::string& warning : model.warnings) warnings += warning + "\n";
+  for (const char* said :
+       {":3:1: warning: <colision> elements in a link are not read",
+        ":4:1: warning: <sensor> elements are not read (afhub reads <link>, <joint> and",
+        ":6:1: warning: <transmission> elements are ignored",
+        ":7:1: warning: <bar> elements in a joint are not read"})
+    EXPECT_NE(warnings.find(said), std::string::npos) << said << "\n" << warnings;
+  EXPECT_EQ(std::count(warnings.begin(), warnings.end(), '\n'), 4) << "once per kind:\n"
+                                                                   << warnings;
+}
+
 // A mirrored mesh keeps its triangles facing out: the cube's volume, summed from its
 // triangles' windings, is the same mirrored (it came out negative, inside out).
 TEST(Urdf, AMirroredMeshIsWoundOutward) {
