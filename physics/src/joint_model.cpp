@@ -274,7 +274,6 @@ void JointModel::raise_gain_cap(double driven) {
 }
 
 void JointModel::limit_gains(double inertia, bool driven) {
-  inertia_ = inertia;
   gains_ = spec_.controller;
   gain_note_.clear();
   damping_ = is_spring(spec_.type) ? 0.0 : spec_.damping;  // springs damp in Bullet
@@ -424,20 +423,23 @@ void JointModel::apply_control() noexcept {
       }
     }
   }
+  double motor_impulse = spec_.max_motor_impulse;
   if (const std::optional<double>& fastest = spec_.max_velocity) {
     motor_velocity = std::clamp(motor_velocity, -*fastest, *fastest);
-    // The motor's effort leaves the joint at most that fast after this step, reckoned
-    // with the inertia it is sure to move (it may fall short, never past: cut only once
-    // at the limit, one step of 50 N m on 0.01 kg m^2 took it from 0.49 to 5.5 rad/s).
-    if (effort != 0.0 && inertia_ > 0.0) {
-      const double room = std::max(0.0, *fastest - (effort > 0.0 ? velocity_ : -velocity_));
-      const double most = room * inertia_ / dt_s_;
-      effort = std::clamp(effort, -most, most);
+    // An effort goes through the motor instead, toward the cap in its direction with at
+    // most that effort: the solver gives all of it while the joint is slower (holding
+    // against gravity or a load) and no more than keeps it at the cap. Applied as it was,
+    // one step took it past (50 N m on 0.01 kg m^2: 5 rad/s more); cut by the speed it
+    // could reach in a step, it lost its hold (a UR5's shoulder sagged 0.4 rad).
+    if (effort != 0.0 && !motor) {
+      motor = true;
+      motor_velocity = std::copysign(*fastest, effort);
+      motor_impulse = std::abs(effort) * dt_s_;
+      effort = 0.0;  // the motor's push is read back with the constraint's
     }
   }
   // Joint damping, which upstream parses but never applies to hinges and sliders.
   effort -= damping_ * velocity_;
-  double motor_impulse = spec_.max_motor_impulse;
   // Bullet holds a limit only once it is crossed, so a fast joint went a step's
   // travel past it. A joint that would cross a limit within this step is braked by
   // its motor instead, to arrive on the limit (a speculative limit).

@@ -113,7 +113,6 @@ class JointModel {
   double dt_s_;
   Pid gains_;
   double damping_ = 0.0;
-  double inertia_ = 0.0;  // what the gains were capped for (limit_gains), and the velocity cap
   std::string gain_note_;
 
   bool commanded_ = false;

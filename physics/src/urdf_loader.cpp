@@ -331,8 +331,11 @@ class UrdfReader {
       }
     };
     look(*xml_.robot, kRobot, "");
-    for (const auto& [name, link] : xml_.links) look(*link, kLink, "link");
-    for (const auto& [name, joint] : xml_.joints) look(*joint, kJoint, "joint");
+    for (const TiXmlElement* child = xml_.robot->FirstChildElement(); child;  // in file order
+         child = child->NextSiblingElement()) {
+      if (child->ValueStr() == "link") look(*child, kLink, "link");
+      if (child->ValueStr() == "joint") look(*child, kJoint, "joint");
+    }
   }
 
   // Every <origin rpy> below `element`: urdfdom turns it into a rotation at once, and

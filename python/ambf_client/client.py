@@ -102,12 +102,14 @@ class Client:
             self._common_namespace = self._common_namespace[:self._common_namespace.rfind('/') + 1]
 
     def _find_world(self, entries):
-        """The world of the first body's physics (AMBF has one world): its namespace
-        (`afhub run --namespace NS`: World() of the default one found nothing), looked for
-        again only when that body or its publisher changed. None when no world publishes
-        it: then there is no world handle, as in AMBF with no world."""
-        found_from = (entries[0]['channel'], entries[0]['owner_pid']) if entries else None
-        if found_from == self._world_found_from:
+        """The world of the bodies' physics (AMBF has one world): that of the first body
+        an `afhub run` publishes (before `afhub synth`'s and others'), its namespace
+        (`afhub run --namespace NS`: World() of the default one found nothing). Looked for
+        again when that body or its publisher changed, or none was found. None when no
+        world publishes it: then there is no world handle, as in AMBF with no world."""
+        ordered = sorted(entries, key=lambda e: not e['owner'].startswith('afhub-physics'))
+        found_from = (ordered[0]['channel'], ordered[0]['owner_pid']) if ordered else None
+        if found_from == self._world_found_from and self._world_namespace is not None:
             return
         self._world_found_from = found_from
         try:

@@ -313,8 +313,7 @@ PYBIND11_MODULE(afhub, module) {
   module.def("world_namespace", &world_namespace, py::arg("body"), py::arg("wait_s") = 1.0,
              "The namespace of the world whose physics publishes `body` "
              "(World(namespace=...); '' for `afhub run` without --namespace), or None when none "
-             "does within wait_s seconds (bodies of `afhub synth`, or a device driver's, have "
-             "no world).");
+             "does within wait_s seconds.");
   module.def(
       "loop_stats",
       [] {

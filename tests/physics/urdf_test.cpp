@@ -513,6 +513,58 @@ TEST(Urdf, AVelocityLimitCapsTheJointsSpeed) {
   EXPECT_EQ(*converted.joints[0].max_velocity, 0.5);
 }
 
+// The cap takes nothing from holding: a lift capped at 5 mm/s holds its 1 kg platform
+// against gravity as an uncapped one does (a cap reckoned from the speed one step could
+// reach sagged a UR5's shoulder by 0.4 rad, and let a loaded lift fall at 3x its cap),
+// then rises at the cap.
+TEST(Urdf, AVelocityLimitTakesNothingFromHoldingAgainstGravity) {
+  const auto lift = [](double velocity) {
+    return "<robot name=\"lift\"><link name=\"base\"><inertial><mass value=\"1\"/><inertia "
+           "ixx=\"0.01\" iyy=\"0.01\" izz=\"0.01\" ixy=\"0\" ixz=\"0\" iyz=\"0\"/></inertial>"
+           "</link><link name=\"platform\"><inertial><mass value=\"1\"/><inertia ixx=\"0.01\" "
+           "iyy=\"0.01\" izz=\"0.01\" ixy=\"0\" ixz=\"0\" iyz=\"0\"/></inertial></link>"
+           "<joint name=\"lift\" type=\"prismatic\"><parent link=\"base\"/><child "
+           "link=\"platform\"/><axis xyz=\"0 0 1\"/><limit lower=\"-1\" upper=\"1\" "
+           "effort=\"100\" velocity=\"" +
+           std::to_string(velocity) + "\"/></joint></robot>";
+  };
+  // Held at 0 for a second, then sent to 0.3 m for two: the sag, the fastest rise, the end.
+  const auto run = [](const std::string& path) {
+    Model model = load(path);
+    model.joints[0].controller = {2000.0, 0.0, 50.0};
+    Simulation sim(model, 0.001);
+    BodyInput input;
+    input.joint_count = 1;
+    input.joint_modes[0] = JointMode::kPosition;
+    input.joint_values[0] = 0.0;
+    const auto body = static_cast<std::size_t>(model.joints[0].parent);
+    sim.set_input(body, input);
+    for (int step = 0; step < 1000; ++step) sim.step();
+    const double sag = sim.joint_position(0);
+    input.joint_values[0] = 0.3;
+    sim.set_input(body, input);
+    double fastest = 0.0;
+    for (int step = 0; step < 2000; ++step) {
+      sim.step();
+      fastest = std::max(fastest, std::abs(sim.joint_velocity(0)));
+    }
+    return std::array{sag, fastest, sim.joint_position(0)};
+  };
+  constexpr double kCap = 0.005;  // m/s: at most 5 N at rest, reckoned from one step's reach
+  const WrittenFile capped("lift.urdf", lift(kCap)), free("lift0.urdf", lift(0.0));
+  const auto [capped_sag, capped_fastest, capped_end] = run(capped.path);
+  const auto [free_sag, free_fastest, free_end] = run(free.path);
+  std::printf(
+      "lift held at 0: sag %.4f m capped, %.4f m uncapped; fastest %.3f / %.3f m/s; "
+      "after 2 s at %.3f / %.3f m\n",
+      capped_sag, free_sag, capped_fastest, free_fastest, capped_end, free_end);
+  EXPECT_LT(std::abs(free_sag), 0.01);
+  EXPECT_NEAR(capped_sag, free_sag, 1e-3) << "the cap took from the hold";
+  EXPECT_LE(capped_fastest, kCap * 1.01);
+  EXPECT_GT(free_fastest, 0.5);
+  EXPECT_NEAR(capped_end - capped_sag, 2 * kCap, 0.2 * kCap) << "two seconds at the cap";
+}
+
 TEST(Urdf, BadFilesGetALocatedErrorNamingTheProblem) {
   const std::string missing = load_error(kModels + "/missing_mesh.urdf");
   EXPECT_NE(missing.find("missing_mesh.urdf:4:3: error: link 'base'"), std::string::npos)

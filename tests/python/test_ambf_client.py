@@ -15,7 +15,7 @@ import pytest
 
 import afhub
 from ambf_client import Actuator, Client, Sensor
-from conftest import ECM, EXAMPLES, needs_shared_models, wait_until
+from conftest import AFHUB, ECM, EXAMPLES, needs_shared_models, wait_until
 
 LAUNCH = EXAMPLES / 'launch.yaml'
 
@@ -206,7 +206,8 @@ def test_multiple_joints_take_their_own_entries_of_a_vector_as_in_ambf(physics, 
 def test_the_world_handle_is_the_bodies_world_and_none_without_one(physics, tmp_path):
     """No simulation: no world handle (None), as AMBF. A physics run with --namespace: the
     world handle is its world (it was the default namespace's: every call failed, saying
-    no simulation ran)."""
+    no simulation ran), also when `afhub synth` (whose world is the default one) came
+    first in the catalog."""
     script = Script(tmp_path, """
         from ambf_client import Client
 
@@ -215,8 +216,9 @@ def test_the_world_handle_is_the_bodies_world_and_none_without_one(physics, tmp_
         print('no simulation:', c.get_world_handle(), 'World' in c.get_obj_names())
         print('STAGE 1: press enter once a physics runs')
         input()
-        print('names', c.get_obj_names()[:2])
+        print('names', c.get_obj_names()[:3])
         w = c.get_world_handle()
+        print('namespace', repr(w.namespace))
         step = w.get_sim_step()
         w.reset()
         print('world step', step, 'then', w.get_sim_step(), 'time', w.get_sim_time())
@@ -224,12 +226,20 @@ def test_the_world_handle_is_the_bodies_world_and_none_without_one(physics, tmp_
         print('DONE')
     """)
     script.read_until('STAGE 1')
-    run = physics(EXAMPLES / 'arm7.yaml', '--namespace', 'copy')
-    run.wait_for_body('copy/afhub/arm/base')
-    script.enter()
-    output = script.finish()
+    synth = subprocess.Popen([AFHUB, 'synth', '--bodies', '1', '--no-autostart'],
+                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        wait_until(lambda: 'synth/body0' in afhub.bodies(), 10, 'synth listed')
+        run = physics(EXAMPLES / 'arm7.yaml', '--namespace', 'copy')
+        run.wait_for_body('copy/afhub/arm/base')
+        script.enter()
+        output = script.finish()
+    finally:
+        synth.send_signal(signal.SIGINT)
+        synth.wait(timeout=10)
     assert 'no simulation: None False' in output, output
-    assert "names ['World', '/copy/afhub/arm/" in output, output
+    assert "names ['World', '/synth/body0', '/copy/afhub/arm/" in output, output
+    assert "namespace 'copy'" in output, output
     step, after = (int(word) for word in output.split('world step ')[1].split()[:3:2])
     assert step > 0 and after < step, output
 

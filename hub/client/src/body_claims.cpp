@@ -18,6 +18,8 @@
 #include "afhub/shm_layout/channel_names.hpp"
 #include "afhub/shm_layout/error.hpp"
 #include "afhub/shm_layout/world.hpp"
+#include "hub_loss_handling.hpp"
+#include "hub_loss_state.hpp"
 
 namespace afhub {
 
@@ -154,10 +156,13 @@ void confirm_body_claims(const std::vector<std::string>& channels,
       if (found == owners.end() || found->second.pid != me) missing.push_back(channel);
     }
     if (missing.empty()) return;
-    if (hub_lost())
+    if (hub_lost()) {
+      // A process that outlives its hub is being re-executed: it waits for that.
+      if (hub_loss::state().reexecs) hub_loss::wait_for_reexec();
       throw Error(
           "the hub went away before it listed this process's bodies: start this "
           "again once a hub runs");
+    }
     if (std::chrono::steady_clock::now() > deadline) {
       const std::string not_listed = "the hub did not list " + std::to_string(missing.size()) +
                                      " of " + std::to_string(channels.size()) +
