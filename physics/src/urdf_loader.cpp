@@ -306,35 +306,30 @@ class UrdfReader {
   // <gazebo> as ROS tools' own, and any other (a <sensor>, a misspelt <colision>),
   // which went by without a word.
   void warn_unread_elements() {
-    static const std::set<std::string> kRobot = {"link", "joint", "material"},
-                                       kLink = {"inertial", "visual", "collision"},
-                                       kJoint = {"origin", "parent",      "child",
-                                                 "axis",   "limit",       "dynamics",
-                                                 "mimic",  "calibration", "safety_controller"};
     const auto look = [&](const TiXmlElement& parent, const std::set<std::string>& known,
-                          const std::string& in) {
+                          const std::string& in, const std::string& reads) {
       for (const TiXmlElement* child = parent.FirstChildElement(); child;
            child = child->NextSiblingElement()) {
         const std::string name = child->ValueStr();
         if (known.count(name)) continue;
-        const bool tools = in.empty() && (name == "transmission" || name == "gazebo");
+        const bool tool = in.empty() && (name == "transmission" || name == "gazebo");
         warn_once(in + "<" + name + ">", location_of(path_, *child).line,
                   "<" + name + "> elements" + (in.empty() ? "" : " in a " + in) +
-                      (tools ? " are ignored (afhub simulates the links and joints)"
-                             : " are not read (afhub reads " +
-                                   (in.empty() ? std::string("<link>, <joint> and <material>")
-                                    : in == "link"
-                                        ? std::string("<inertial>, <visual> and <collision>")
-                                        : std::string("its <origin>, <parent>, <child>, <axis>, "
-                                                      "<limit>, <dynamics> and <mimic>")) +
-                                   ")"));
+                      (tool ? " are ignored (afhub simulates the links and joints)"
+                            : " are not read (afhub reads " + reads + ")"));
       }
     };
-    look(*xml_.robot, kRobot, "");
+    look(*xml_.robot, {"link", "joint", "material"}, "", "<link>, <joint> and <material>");
     for (const TiXmlElement* child = xml_.robot->FirstChildElement(); child;  // in file order
          child = child->NextSiblingElement()) {
-      if (child->ValueStr() == "link") look(*child, kLink, "link");
-      if (child->ValueStr() == "joint") look(*child, kJoint, "joint");
+      if (child->ValueStr() == "link")
+        look(*child, {"inertial", "visual", "collision"}, "link",
+             "<inertial>, <visual> and <collision>");
+      if (child->ValueStr() == "joint")
+        look(*child,
+             {"origin", "parent", "child", "axis", "limit", "dynamics", "mimic", "calibration",
+              "safety_controller"},
+             "joint", "its <origin>, <parent>, <child>, <axis>, <limit>, <dynamics> and <mimic>");
     }
   }
 
