@@ -648,20 +648,26 @@ Frozen watch_force(TeleopSession& teleop, std::int64_t signalled_at, int ms) {
   return frozen;
 }
 
-// The force of the first device state that applies one (after one whose force teleop
-// disabled, when `after_off`), read within `timeout`; -1 when none came.
-double first_applied_force(TeleopSession& teleop, bool after_off,
-                           std::chrono::milliseconds timeout) {
-  bool off = !after_off;
+// The first force the driver logged after it logged none, in its --force-log from byte
+// `from` on, or -1 if none came within `timeout`. The driver logs every change between
+// force and none, where reading device states missed the ramp's first tens of
+// milliseconds under the sanitizers.
+double first_logged_force_after_off(const std::string& force_log, std::size_t from,
+                                    std::chrono::milliseconds timeout) {
   double force = -1.0;
   wait_until(
       [&] {
-        const DeviceState* d = teleop.new_device_state();
-        if (!d) return false;
-        if (d->gate == ForceGate::kDisabled) off = true;
-        if (off && d->gate == ForceGate::kApplying)
-          force = std::hypot(d->applied.force_n.x, d->applied.force_n.y, d->applied.force_n.z);
-        return force >= 0.0;
+        std::istringstream lines(read_file(force_log).substr(from));
+        bool off = false;
+        for (std::string line; std::getline(lines, line);) {
+          off = off || line.find(" zero") != std::string::npos;
+          double x = 0, y = 0, z = 0;
+          if (off && std::sscanf(line.c_str(), "%*s force %lf %lf %lf", &x, &y, &z) == 3) {
+            force = std::hypot(x, y, z);
+            return true;
+          }
+        }
+        return false;
       },
       timeout);
   return force;
@@ -684,7 +690,8 @@ void expect_said_once_but_for_silences(const std::string& window, const std::str
 TEST(TeleopEndToEnd, ADeviceNeverPushesOnAStoppedOrDeadPhysics) {
   afhub::testing::ModelFolder scripts;
   const std::string csv = scripts.write("push.csv", "0,0,0,0\n1,0,0,-0.2\n");
-  Teleop teleop("frozen", {"--trajectory", csv});
+  const std::string force_log = (scripts.dir() / "force.log").string();
+  Teleop teleop("frozen", {"--trajectory", csv, "--force-log", force_log});
   ASSERT_TRUE(teleop.restart_driver_once_running()) << teleop.logs();
   ASSERT_TRUE(wait_until([&] { return pushing_up(teleop); }, 20s)) << teleop.logs();
 
@@ -692,6 +699,7 @@ TEST(TeleopEndToEnd, ADeviceNeverPushesOnAStoppedOrDeadPhysics) {
   // staleness limit before, under load, was said too).
   const std::string said = "no state from afhub/gripper/palm";
   const int said_before_stop = occurrences(teleop.teleop_log(), said);
+  const std::size_t log_before_stop = read_file(force_log).size();
   const std::int64_t stopped_at = monotonic_ns();
   teleop.signal_physics(SIGSTOP);
   const Frozen stopped = watch_force(teleop, stopped_at, 3000);
@@ -703,8 +711,8 @@ TEST(TeleopEndToEnd, ADeviceNeverPushesOnAStoppedOrDeadPhysics) {
       [&] { return contains(teleop.teleop_log(), "afhub/gripper/palm's physics steps again"); },
       5s))
       << teleop.logs();
-  const double first_force = first_applied_force(teleop, false, 5s);
-  ASSERT_GE(first_force, 0.0) << teleop.logs();
+  const double first_force = first_logged_force_after_off(force_log, log_before_stop, 5s);
+  ASSERT_GE(first_force, 0.0) << read_file(force_log) << teleop.logs();
   ASSERT_TRUE(wait_until([&] { return pushing_up(teleop); }, 20s)) << teleop.logs();
 
   // A paused world publishes its states on, unmoving, while the device moves on: the
@@ -756,6 +764,7 @@ TEST(TeleopEndToEnd, APausedWorldSteppedByHandGivesNoForce) {
 
   const std::string paused_said = "afhub/gripper/palm's world is paused";
   const std::size_t log_before = teleop.teleop_log().size();
+  const std::size_t log_before_pause = read_file(force_log).size();
   const int zeros_before = occurrences(read_file(force_log), " zero");
   ASSERT_EQ(run_afhub({"world", "pause"}).exit_code, 0);
   ASSERT_TRUE(
@@ -796,8 +805,8 @@ TEST(TeleopEndToEnd, APausedWorldSteppedByHandGivesNoForce) {
       },
       5s))
       << teleop.logs();
-  const double first_force = first_applied_force(teleop, false, 5s);
-  ASSERT_GE(first_force, 0.0) << teleop.logs();
+  const double first_force = first_logged_force_after_off(force_log, log_before_pause, 5s);
+  ASSERT_GE(first_force, 0.0) << read_file(force_log) << teleop.logs();
   EXPECT_LT(first_force, 0.5) << "the force came back at once, not ramped in";
 }
 
@@ -823,24 +832,9 @@ TEST(TeleopEndToEnd, AWorldResetWhileTheDevicePushesRampsTheForceInAgain) {
       [&] { return contains(teleop.teleop_log(), "afhub/gripper/palm's physics steps again"); },
       10s))
       << teleop.logs();
-  double first_force = -1.0;
-  ASSERT_TRUE(wait_until(
-      [&] {
-        std::istringstream lines(read_file(force_log).substr(before));
-        bool off = false;
-        for (std::string line; std::getline(lines, line);) {
-          off = off || line.find(" zero") != std::string::npos;
-          double x = 0, y = 0, z = 0;
-          if (off && std::sscanf(line.c_str(), "%*s force %lf %lf %lf", &x, &y, &z) == 3) {
-            first_force = std::hypot(x, y, z);
-            return true;
-          }
-        }
-        return false;
-      },
-      10s))
-      << "the force never went off and came back\n"
-      << read_file(force_log) << teleop.logs();
+  const double first_force = first_logged_force_after_off(force_log, before, 10s);
+  ASSERT_GE(first_force, 0.0) << "the force never went off and came back\n"
+                              << read_file(force_log) << teleop.logs();
   std::printf("world reset while pushing: first force after it %.3f N\n", first_force);
   EXPECT_LT(first_force, 0.5) << "the force came back at once, not ramped in";
   EXPECT_EQ(occurrences(teleop.teleop_log(), "afhub/gripper/palm's states went back to step"), 1)
