@@ -4,6 +4,7 @@
 #include <exception>
 #include <string>
 
+#include "afhub/shm_layout/error.hpp"
 #include "commands.hpp"
 
 namespace {
@@ -100,6 +101,9 @@ int main(int argc, char** argv) {
   };
   try {
     return selected ? selected() : 2;
+  } catch (const afhub::Stopped& stopped) {
+    std::fprintf(stderr, "afhub %s: %s\n", command(app).c_str(), stopped.what());
+    return 0;
   } catch (const std::exception& error) {
     // afhub's own messages, and a library's said as they are: never std::terminate.
     say(error.what());

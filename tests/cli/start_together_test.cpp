@@ -77,5 +77,33 @@ TEST(StartTogether, ControllerStartedBeforeTheHubAndThePhysicsAttaches) {
   EXPECT_EQ(hub.stop(), 0);
 }
 
+// Ctrl-C during a wait is the user's stop, not a failure: it said "no hub came up" or
+// "no body" (waited for it) and exited 1.
+TEST(StartTogether, CtrlCWhileWaitingForTheHubOrABodyEndsWithZeroSayingSo) {
+  ASSERT_NE(probe_roudi(), RoudiPresence::kRunning) << "a hub is running before the test";
+  afhub::testing::ModelFolder folder;
+  const std::string hub_wait_log = (folder.dir() / "hub_wait.log").string();
+  ScopedProcess for_hub(spawn_afhub({"ctl", "hold", "base", "--wait", "20"}, hub_wait_log));
+  ASSERT_TRUE(
+      wait_until([&] { return contains(read_file(hub_wait_log), "waiting up to 20 s"); }, 10s))
+      << read_file(hub_wait_log);
+  EXPECT_EQ(for_hub.stop(SIGINT), 0) << read_file(hub_wait_log);
+  EXPECT_TRUE(contains(read_file(hub_wait_log), "afhub ctl: stopped while waiting for a hub\n"))
+      << read_file(hub_wait_log);
+
+  ScopedProcess hub(start_test_hub());
+  ASSERT_GT(hub.pid, 0);
+  const std::string body_wait_log = (folder.dir() / "body_wait.log").string();
+  ScopedProcess for_body(spawn_afhub({"ctl", "hold", "nosuch", "--wait", "20"}, body_wait_log));
+  ASSERT_TRUE(wait_until(
+      [&] { return contains(read_file(body_wait_log), "no body 'nosuch' is live yet"); }, 10s))
+      << read_file(body_wait_log);
+  EXPECT_EQ(for_body.stop(SIGINT), 0) << read_file(body_wait_log);
+  const std::string said = read_file(body_wait_log);
+  EXPECT_TRUE(contains(said, "afhub ctl: stopped while waiting for body 'nosuch'\n")) << said;
+  EXPECT_FALSE(contains(said, "error")) << said;
+  EXPECT_EQ(hub.stop(), 0);
+}
+
 }  // namespace
 }  // namespace afhub::test

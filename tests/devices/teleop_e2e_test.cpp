@@ -414,6 +414,22 @@ TEST(TeleopEndToEnd, ATeleopThatCannotClaimItsDeviceDoesNotStart) {
   unlink(planted.c_str());
 }
 
+// Ctrl-C while teleop waits for its device's driver ends it with 0, as every other
+// wait (it exited 1).
+TEST(TeleopEndToEnd, CtrlCWhileWaitingForTheDeviceEndsWithZero) {
+  afhub::testing::ModelFolder folder;
+  const std::string log = (folder.dir() / "teleop.log").string();
+  ScopedProcess physics(spawn_afhub({"run", kGripper, "--no-autostart"}, log + ".run"));
+  ScopedProcess teleop(
+      spawn_afhub({"teleop", kVirtualHand, "--device", "absent", "--wait", "30"}, log));
+  ASSERT_TRUE(
+      wait_until([&] { return contains(read_file(log), "waiting for device/absent"); }, 20s))
+      << read_file(log) << read_file(log + ".run");
+  EXPECT_EQ(teleop.stop(SIGINT), 0) << read_file(log);
+  EXPECT_TRUE(contains(read_file(log), "afhub teleop: stopped while waiting for device/absent\n"))
+      << read_file(log);
+}
+
 // A physics stepping slower than --stale (here every 80 ms: --dt 0.08) goes silent
 // between each two steps: teleop said "no state" every 80 ms. It says once that the
 // physics is slower than --stale, with what to do, and the device still gets no force;

@@ -106,7 +106,7 @@ void wait_for_device(Link& link, const std::string& who, std::int64_t give_up_ns
   const std::string& name = link.binding->device_name;
   bool said = false;
   while (!link.device_state.latest()) {
-    if (stop_requested()) throw Error(who + ": stopped while waiting for device/" + name);
+    if (stop_requested()) throw Stopped("stopped while waiting for device/" + name);
     const std::int64_t now = monotonic_ns();
     if (now >= give_up_ns)
       throw Error("no device '" + name + "' (channel device/" + name + ") for " +

@@ -303,7 +303,9 @@ BodyEntry wait_for_body(const std::string& query, const std::string& who, std::i
     try {
       return catalog.resolve(query);
     } catch (const Error& error) {
-      if (monotonic_ns() > give_up_ns || stop_requested() || hub_lost()) {
+      if (stop_requested())
+        throw Stopped(std::string("stopped while waiting for ") + kind + " '" + query + "'");
+      if (monotonic_ns() > give_up_ns || hub_lost()) {
         if (!said) throw;
         throw Error(std::string(error.what()) + " (waited for it" +
                     (hint.empty() ? "" : "; " + hint) + ")");

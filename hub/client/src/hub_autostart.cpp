@@ -62,7 +62,7 @@ void wait_for_hub(std::chrono::milliseconds wait, const std::string& who) {
                seconds);
   const auto deadline = std::chrono::steady_clock::now() + wait;
   while (probe_roudi() != RoudiPresence::kRunning) {
-    if (stop_requested()) throw Error("stopped while waiting for a hub");
+    if (stop_requested()) throw Stopped("stopped while waiting for a hub");
     if (std::chrono::steady_clock::now() > deadline)
       throw Error("no hub came up within " + std::string(seconds) +
                   " s. Start one with `afhub hub` (foreground), or `afhub run MODEL`, which "

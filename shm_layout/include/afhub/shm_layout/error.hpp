@@ -13,4 +13,11 @@ class Error : public std::runtime_error {
   explicit Error(const std::string& message) : std::runtime_error(message) {}
 };
 
+// A wait (for the hub, a body, a device) that Ctrl-C or SIGTERM ended: the user's stop,
+// not a failure, so the command says what it waited for and ends with 0.
+class Stopped : public Error {
+ public:
+  explicit Stopped(const std::string& message) : Error(message) {}
+};
+
 }  // namespace afhub
