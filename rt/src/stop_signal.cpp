@@ -2,6 +2,7 @@
 #include "afhub/rt/stop_signal.hpp"
 
 #include <signal.h>
+#include <sys/syscall.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -11,8 +12,12 @@ namespace {
 std::atomic<bool> g_stop{false};
 std::atomic<int> g_blocking_calls{0};
 std::atomic<bool (*)() noexcept> g_stop_source{nullptr};
-extern "C" void on_stop_signal(int) {
-  g_stop = true;
+std::atomic<pid_t> g_forward_to{0};
+extern "C" void on_stop_signal(int signal) {
+  g_stop = true;  // before the look at g_forward_to: see forward_stop_signals_to_this_thread
+  const pid_t to = g_forward_to;
+  if (to != 0 && to != static_cast<pid_t>(syscall(SYS_gettid)))
+    syscall(SYS_tgkill, getpid(), to, signal);
   if (g_blocking_calls > 0) _exit(0);  // stuck in a call that never looks at the flag
 }
 }  // namespace
@@ -30,6 +35,10 @@ bool stop_requested() {
   if (g_stop) return true;
   bool (*const source)() noexcept = g_stop_source;
   return source && source();
+}
+
+void forward_stop_signals_to_this_thread() noexcept {
+  g_forward_to = static_cast<pid_t>(syscall(SYS_gettid));
 }
 
 void set_stop_source(bool (*requested)() noexcept) {

@@ -603,16 +603,22 @@ bool stopped(pid_t pid) {
   return end != std::string::npos && end + 2 < stat.size() && stat[end + 2] == 'T';
 }
 
-// The wrapper of a process held once `when` ("BEFORE", "AFTER") it registers
-// (tests/faults/stop_around_registration.c). A sanitized afhub wants its runtime first
-// in the preloaded libraries: told not to check.
-std::vector<std::string> stopped_around_registration(const std::string& when,
-                                                     const std::string& marker) {
+// The wrapper of a process with a fault hook (tests/faults/*.c) preloaded, its variable
+// set. A sanitized afhub wants its runtime first in the preloaded libraries: told not
+// to check.
+std::vector<std::string> with_hook(const std::string& library, const std::string& variable) {
   const char* asan = std::getenv("ASAN_OPTIONS");
-  return {"env", "LD_PRELOAD=" AFHUB_STOP_AROUND_REGISTRATION,
-          "AFHUB_TEST_STOP_" + when + "_REGISTRATION=" + marker,
+  return {"env", "LD_PRELOAD=" + library, variable,
           "ASAN_OPTIONS=" + std::string(asan && *asan ? asan + std::string(":") : "") +
               "verify_asan_link_order=0"};
+}
+
+// ... of a process held once `when` ("BEFORE", "AFTER") it registers
+// (tests/faults/stop_around_registration.c).
+std::vector<std::string> stopped_around_registration(const std::string& when,
+                                                     const std::string& marker) {
+  return with_hook(AFHUB_STOP_AROUND_REGISTRATION,
+                   "AFHUB_TEST_STOP_" + when + "_REGISTRATION=" + marker);
 }
 
 // Ctrl-C just after the hub was lost, while the process re-executes itself to wait for
@@ -636,6 +642,34 @@ TEST(HubLoss, CtrlCJustAfterTheHubIsLostEndsTheProcessWithCodeZero) {
     std::this_thread::sleep_for(std::chrono::milliseconds(delay_ms));
     kill(synth.pid, SIGINT);
     EXPECT_EQ(wait_for_exit(synth, 20s), 0) << read_file(log);
+  }
+}
+
+// Ctrl-C in the last moment before the re-exec, taken by another thread than the one
+// re-executing (tests/faults/stop_signal_at_exec.c): the flag it set went with the old
+// image, and the new one waited for a hub for good. The signal is passed on to the
+// re-executing thread, which holds it blocked across the exec.
+// Five rounds: half of such rounds ended in the old image without the forwarding.
+TEST(HubLoss, CtrlCAsTheProcessReexecutesEndsItWithCodeZero) {
+  const std::string marker = "/tmp/afhub-fault-sigint-at-exec";
+  const std::string log = "/tmp/afhub-fault-sigint-at-exec.log";
+  for (int round = 0; round < 5; ++round) {
+    SCOPED_TRACE("round " + std::to_string(round));
+    unlink(marker.c_str());
+    ScopedProcess hub(start_test_hub());
+    ASSERT_GT(hub.pid, 0);
+    ScopedProcess synth = spawn_wrapped_afhub(
+        with_hook(AFHUB_STOP_SIGNAL_AT_EXEC, "AFHUB_TEST_SIGINT_AT_EXEC=" + marker),
+        {"synth", "--bodies", "1", "--no-autostart"}, log);
+    ASSERT_TRUE(wait_until([] { return contains(run_afhub({"ls"}, 5s).out, "synth"); }, 20s))
+        << read_file(log);
+    kill(hub.pid, SIGKILL);
+    waitpid(hub.pid, nullptr, 0);
+    hub.pid = -1;
+    ASSERT_TRUE(wait_until([&] { return access(marker.c_str(), F_OK) == 0; }, 20s))
+        << "it did not re-execute\n"
+        << read_file(log);
+    EXPECT_EQ(wait_for_exit(synth, 10s), 0) << read_file(log);
   }
 }
 

@@ -63,7 +63,9 @@ void reexecute_self() noexcept {
   sigset_t mask = s.signal_mask;
   for (const int signal : kStopSignals) sigaddset(&mask, signal);
   pthread_sigmask(SIG_SETMASK, &mask, nullptr);
-  // One another thread took since the caller looked would be lost with this image.
+  // One another thread took since the caller looked would be lost with this image;
+  // one it takes from now on comes to this thread too, held for the new image.
+  forward_stop_signals_to_this_thread();
   if (stop_requested()) _exit(0);
   execve("/proc/self/exe", s.argv.data(), s.envp.data());
   std::fprintf(stderr, "%s: cannot re-execute itself to re-attach: %s\n", s.who.c_str(),
