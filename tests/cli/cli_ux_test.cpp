@@ -229,7 +229,9 @@ TEST(World, ALongStepSaysItRunsAndPauseStopsIt) {
   // More steps asked while they run: added (it was refused, the world said running).
   RunResult more = run_afhub({"world", "step", "5"});
   EXPECT_EQ(more.exit_code, 0) << more.err;
-  EXPECT_TRUE(contains(more.out, "stepped 5 steps")) << more.out;
+  // Said so: the world runs on (it said "now paused").
+  EXPECT_TRUE(contains(more.out, "stepped 5 steps, and steps asked by another run on: now at step"))
+      << more.out;
   RunResult pause = run_afhub({"world", "pause"});
   ASSERT_EQ(pause.exit_code, 0) << pause.err;
   EXPECT_TRUE(contains(pause.out, "paused at step")) << pause.out;

@@ -45,6 +45,26 @@ TEST(WorldActionWatch, StepsAreShownOnceTheCountHasGoneOnByAll) {
   EXPECT_EQ(one.shown(at_step(11, true)), "stepped 1 step: now paused at step 11 (t = 0.011 s)");
 }
 
+// Steps asked while others run by hand are added to them: the world is still under its
+// pause, not halted, once these have gone by (it said "now paused").
+TEST(WorldActionWatch, StepsAddedToOthersRunningSaySoOnceTheirCountHasGoneBy) {
+  WorldState stepping = at_step(10, false, -5);
+  stepping.paused_by_pid = 42;
+  WorldActionWatch step(WorldAction::kStep, 5, stepping, kSentNs);
+  stepping = at_step(14, false);
+  stepping.paused_by_pid = 42;
+  EXPECT_EQ(step.shown(stepping), std::nullopt);
+  stepping.header.sim_step = 15;
+  stepping.header.sim_time_s = 0.015;
+  EXPECT_EQ(step.shown(stepping),
+            "stepped 5 steps, and steps asked by another run on: now at step 15 (t = 0.015 s)");
+
+  WorldActionWatch resumed(WorldAction::kStep, 2, at_step(10, true, -5), kSentNs);
+  EXPECT_EQ(resumed.shown(at_step(12, false)),
+            "stepped 2 steps, and the world was resumed since: now running at step 12 (t = "
+            "0.012 s)");
+}
+
 TEST(WorldActionWatch, ResetIsShownByTheCountGoingBack) {
   WorldActionWatch reset(WorldAction::kReset, 1, at_step(100, false, -5), kSentNs);
   EXPECT_EQ(reset.shown(at_step(101, false)), std::nullopt);

@@ -35,11 +35,15 @@ std::optional<std::string> WorldActionWatch::shown(const WorldState& now) {
     case WorldAction::kResume:
       if (!under_pause(now)) return (paused_before_ ? "resumed " : "already running ") + at(now);
       break;
-    case WorldAction::kStep:
-      if (now.header.sim_step >= step_before_ + steps_)
-        return "stepped " + std::to_string(steps_) + (steps_ == 1 ? " step" : " steps") +
-               ": now paused " + at(now);
-      break;
+    case WorldAction::kStep: {
+      if (now.header.sim_step < step_before_ + steps_) break;
+      const std::string stepped =
+          "stepped " + std::to_string(steps_) + (steps_ == 1 ? " step" : " steps");
+      if (now.paused) return stepped + ": now paused " + at(now);
+      // Steps asked by another command, before or beside these, are added to them.
+      if (under_pause(now)) return stepped + ", and steps asked by another run on: now " + at(now);
+      return stepped + ", and the world was resumed since: now running " + at(now);
+    }
     case WorldAction::kReset:
       // The step count goes back to 0; from step 0 it cannot (see the header).
       if (now.header.sim_step < previous_step_ || (step_before_ == 0 && states_after_sending_ >= 2))
