@@ -59,9 +59,11 @@ TEST_F(PidNamespaceTest, HubInItsOwnPidNamespaceKeepsItsClients) {
       << read_file(hub_log_);
   std::this_thread::sleep_for(2s);  // 100 of the hub's liveness rounds
 
+  // Outside the hub's pid namespace, a client's name says its own.
   const std::string status = run_afhub({"status"}).out;
-  EXPECT_TRUE(contains(status, "afhub-ctl-" + std::to_string(hold.pid))) << status;
-  EXPECT_TRUE(contains(status, "afhub-physics-" + std::to_string(physics.pid))) << status;
+  const std::string here = "-ns" + std::to_string(own_pid_namespace()) + "-";
+  EXPECT_TRUE(contains(status, "afhub-ctl" + here + std::to_string(hold.pid))) << status;
+  EXPECT_TRUE(contains(status, "afhub-physics" + here + std::to_string(physics.pid))) << status;
   EXPECT_TRUE(running(hold.pid) && running(physics.pid));
   EXPECT_FALSE(contains(read_file(hub_log_), "is gone")) << read_file(hub_log_);
 
@@ -73,7 +75,8 @@ TEST_F(PidNamespaceTest, HubInItsOwnPidNamespaceKeepsItsClients) {
 }
 
 // A client in a child pid namespace is pid 1 there, a pid that always exists for the
-// hub: killed, it must be cleaned up all the same.
+// hub: killed, it must be cleaned up all the same. (Its name says its namespace:
+// "afhub-ctl-ns<inode>-1".)
 TEST_F(PidNamespaceTest, KilledClientInAChildPidNamespaceIsCleanedUp) {
   ScopedProcess hub = spawn_afhub({"hub"}, hub_log_);
   ASSERT_TRUE(hub_up()) << read_file(hub_log_);
@@ -81,18 +84,51 @@ TEST_F(PidNamespaceTest, KilledClientInAChildPidNamespaceIsCleanedUp) {
       spawn_afhub({"run", kModel, "--no-autostart"}, "/tmp/afhub-pidns-run.log");
   ScopedProcess hold = spawn_wrapped_afhub(kOwnPidNamespace, {"ctl", "hold", "arm/base"},
                                            "/tmp/afhub-pidns-ctl.log");
-  ASSERT_TRUE(wait_until([] { return contains(run_afhub({"status"}).out, "afhub-ctl-1 "); }, 10s))
+  const auto listed = [] {
+    const std::string status = run_afhub({"status"}).out;
+    return contains(status, "afhub-ctl-ns") && contains(status, "-1 ");
+  };
+  ASSERT_TRUE(wait_until(listed, 10s))
       << run_afhub({"status"}).out << read_file("/tmp/afhub-pidns-ctl.log");
 
   kill(hold.pid, SIGKILL);  // and, through --kill-child, the controller in it
   waitpid(hold.pid, nullptr, 0);
   hold.pid = -1;
-  EXPECT_TRUE(
-      wait_until([&] { return contains(read_file(hub_log_), "afhub-ctl-1 (pid 1) is gone"); }, 2s))
+  EXPECT_TRUE(wait_until([&] { return contains(read_file(hub_log_), "-1 (pid 1) is gone"); }, 2s))
       << read_file(hub_log_);
-  EXPECT_TRUE(wait_until([] { return !contains(run_afhub({"status"}).out, "afhub-ctl-1 "); }, 5s));
+  EXPECT_TRUE(wait_until([&] { return !listed(); }, 5s)) << run_afhub({"status"}).out;
   EXPECT_TRUE(running(physics.pid));
   EXPECT_EQ(physics.stop(), 0);
+  EXPECT_EQ(hub.stop(), 0);
+}
+
+// Two physics that are each pid 1 in a pid namespace of their own (two containers'
+// entry points) run on one hub: the second was refused by iceoryx, both named
+// afhub-physics-1, and crashed.
+TEST_F(PidNamespaceTest, TwoPid1ProcessesOfOwnNamespacesShareTheHub) {
+  ScopedProcess hub = spawn_afhub({"hub"}, hub_log_);
+  ASSERT_TRUE(hub_up()) << read_file(hub_log_);
+  ScopedProcess a =
+      spawn_wrapped_afhub(kOwnPidNamespace, {"run", kModel, "--namespace", "a", "--no-autostart"},
+                          "/tmp/afhub-pidns-a.log");
+  ScopedProcess b =
+      spawn_wrapped_afhub(kOwnPidNamespace, {"run", kModel, "--namespace", "b", "--no-autostart"},
+                          "/tmp/afhub-pidns-b.log");
+  EXPECT_TRUE(wait_until(
+      [] {
+        const std::string ls = run_afhub({"ls"}).out;
+        return contains(ls, "a/afhub/arm/base") && contains(ls, "b/afhub/arm/base");
+      },
+      20s))
+      << run_afhub({"ls"}).out << read_file("/tmp/afhub-pidns-a.log")
+      << read_file("/tmp/afhub-pidns-b.log");
+  EXPECT_TRUE(running(a.pid) && running(b.pid))
+      << read_file("/tmp/afhub-pidns-a.log") << read_file("/tmp/afhub-pidns-b.log");
+  for (ScopedProcess* physics : {&a, &b}) {  // unshare passes on no SIGTERM: --kill-child
+    kill(physics->pid, SIGKILL);
+    waitpid(physics->pid, nullptr, 0);
+    physics->pid = -1;
+  }
   EXPECT_EQ(hub.stop(), 0);
 }
 

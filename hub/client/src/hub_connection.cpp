@@ -73,7 +73,15 @@ void connect_to_hub(const std::string& role, HubPolicy policy, std::chrono::mill
   }
   quiet_iceoryx_logs();
   filter_iceoryx_stderr("afhub " + role);
-  std::string name = "afhub-" + role + "-" + std::to_string(getpid());
+  // A pid is unique only in its pid namespace: a process in another than the hub's (a
+  // container's pid 1 beside another's) names its namespace too (iceoryx refused the
+  // second of two same names).
+  const std::optional<HubIdentity> hub = running_hub();
+  const std::uint64_t pid_namespace = own_pid_namespace();
+  const bool elsewhere = hub && hub->pid_namespace != 0 && pid_namespace != hub->pid_namespace;
+  const std::string name = "afhub-" + role + "-" +
+                           (elsewhere ? "ns" + std::to_string(pid_namespace) + "-" : "") +
+                           std::to_string(getpid());
   if (name.size() > 100) throw Error("process role '" + role + "' is too long for iceoryx");
   // The image before the re-exec had this name too: its socket is ours to remove
   // (iceoryx would, with a warning).

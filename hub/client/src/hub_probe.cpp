@@ -2,6 +2,7 @@
 // the hub's lock and identity files, never through iceoryx.
 #include <fcntl.h>
 #include <sys/socket.h>
+#include <sys/stat.h>
 #include <sys/un.h>
 #include <unistd.h>
 
@@ -42,13 +43,20 @@ std::optional<HubIdentity> running_hub() {
   if (fd >= 0) {
     char text[64] = {};
     if (read(fd, text, sizeof text - 1) > 0) {
-      unsigned long long instance = 0;
+      unsigned long long instance = 0, pid_namespace = 0;
       int pid = 0;
-      if (std::sscanf(text, "%d %llu", &pid, &instance) == 2) hub.instance = instance;
+      const int fields = std::sscanf(text, "%d %llu %llu", &pid, &instance, &pid_namespace);
+      if (fields >= 2) hub.instance = instance;
+      if (fields == 3) hub.pid_namespace = pid_namespace;
     }
     close(fd);
   }
   return hub;
+}
+
+std::uint64_t own_pid_namespace() noexcept {
+  struct stat info {};
+  return stat("/proc/self/ns/pid", &info) == 0 ? info.st_ino : 0;
 }
 
 std::optional<pid_t> running_hub_pid() {

@@ -64,12 +64,14 @@ struct HubLock {
   }
 };
 
-// Writes "<pid> <instance>" beside the lock, atomically (clients read it at any time).
+// Writes "<pid> <instance> <pid namespace>" beside the lock, atomically (clients read it
+// at any time).
 bool write_hub_identity(const std::string& directory) {
   std::uint64_t instance = 0;
   while (instance == 0)
     if (getrandom(&instance, sizeof instance, 0) != sizeof instance) return false;
-  const std::string text = std::to_string(getpid()) + " " + std::to_string(instance) + "\n";
+  const std::string text = std::to_string(getpid()) + " " + std::to_string(instance) + " " +
+                           std::to_string(own_pid_namespace()) + "\n";
   const std::string path = hub_identity_path(directory), draft = path + ".new";
   unlink(draft.c_str());
   const int fd = open_own_file(draft, O_WRONLY | O_CREAT | O_EXCL, 0644);

@@ -18,12 +18,16 @@ enum class RoudiPresence { kAbsent, kRunning };
 RoudiPresence probe_roudi() noexcept;
 
 // A running hub: its pid here (0 when it runs in a pid namespace this process cannot
-// see) and the random instance number it drew at start, which tells one hub from the
-// next even when pids repeat across pid namespaces.
+// see), the random instance number it drew at start, which tells one hub from the
+// next even when pids repeat across pid namespaces, and its pid namespace (0: not said).
 struct HubIdentity {
   pid_t pid = 0;
   std::uint64_t instance = 0;
+  std::uint64_t pid_namespace = 0;
 };
+
+// This process's pid namespace (the inode of /proc/self/ns/pid), 0 if unreadable.
+std::uint64_t own_pid_namespace() noexcept;
 
 // The running afhub hub, if one holds the lock in hub_directory() (hub_files.hpp).
 std::optional<HubIdentity> running_hub();
