@@ -102,20 +102,33 @@ class Client:
             self._common_namespace = self._common_namespace[:self._common_namespace.rfind('/') + 1]
 
     def _find_world(self, entries):
-        """The world of the bodies' physics (AMBF has one world): that of the first body
-        an `afhub run` publishes (before `afhub synth`'s and others'), its namespace
-        (`afhub run --namespace NS`: World() of the default one found nothing). Looked for
-        again when that body or its publisher changed, or none was found. None when no
-        world publishes it: then there is no world handle, as in AMBF with no world."""
-        ordered = sorted(entries, key=lambda e: not e['owner'].startswith('afhub-physics'))
-        found_from = (ordered[0]['channel'], ordered[0]['owner_pid']) if ordered else None
+        """The world of the bodies' physics (AMBF has one world): with several `afhub run`,
+        the default namespace's, else that of the first body an `afhub run` publishes
+        (before `afhub synth`'s and others'), in its namespace (`afhub run --namespace NS`:
+        World() of the default one found nothing). Looked for again when the bodies'
+        publishers changed, or none was found. None when no world publishes them: then
+        there is no world handle, as in AMBF with no world."""
+        physics = [e for e in entries if e['owner'].startswith('afhub-physics')]
+        first_of_each = {}  # a body of each `afhub run` (or the first body), in that order
+        for entry in physics or entries[:1]:
+            first_of_each.setdefault(entry['owner_pid'], entry['channel'])
+        found_from = tuple(first_of_each.items())
         if found_from == self._world_found_from and self._world_namespace is not None:
             return
         self._world_found_from = found_from
-        try:
-            name_space = afhub.world_namespace(found_from[0]) if found_from else None
-        except afhub.Error:  # the body went meanwhile
-            name_space = None
+        worlds = []
+        for channel in first_of_each.values():
+            try:
+                name_space = afhub.world_namespace(channel)
+            except afhub.Error:  # the body went meanwhile
+                continue
+            if name_space is not None and name_space not in worlds:
+                worlds.append(name_space)
+        name_space = '' if '' in worlds else (worlds[0] if worlds else None)
+        if len(worlds) > 1 and name_space != self._world_namespace:
+            print(f"ambf_client: {len(worlds)} simulations run (namespaces "
+                  f"{', '.join(repr(w) for w in worlds)}); the world handle is that of namespace "
+                  f"{name_space!r}", file=sys.stderr)
         if name_space != self._world_namespace or self._world_reader is None:
             self._world_reader = afhub.World(name_space) if name_space is not None else None
         self._world_namespace = name_space
@@ -135,7 +148,10 @@ class Client:
         if self._thread is None:  # a throttling pause is held by its thread
             raise RuntimeError('get_world_handle: the client is not connected: call connect() '
                                'first (its thread keeps the throttling pause held)')
+        if self._world_namespace is None:  # a physics started after connect()
+            self._read_catalog()
         if self._world_namespace is None:  # as AMBF with no world: none
+            print('World NAMED OBJECT NOT FOUND: no simulation runs (`afhub run MODEL`)')
             return None
         if self._world is None or self._world.namespace != self._world_namespace:
             if self._world is not None:

@@ -5,6 +5,7 @@ watchdog never releases it while the script sleeps or waits on input()). As in A
 wrench not set again within ``time_out`` seconds is cleared: forces and torques must be
 refreshed; joint and pose commands hold."""
 
+import collections
 import copy
 import operator
 import sys
@@ -70,6 +71,11 @@ class RigidBody(Handle):
         self._actuators = []  # flags of the body's actuators, once one is set
         self._last_command = 0.0
         self._told_refusal = None
+        # The command held before each of the last setters: a command the physics refuses
+        # (a value beyond the body's bounds, which only the physics knows) is dropped by
+        # going back to the one before it, which the physics took; re-sent, the refused
+        # one let the watchdog release the body.
+        self._before = collections.deque(maxlen=16)
         self._publish_flags = {'children': True, 'joint_names': True, 'joint_positions': True}
 
     # ----- state -----
@@ -373,16 +379,24 @@ class RigidBody(Handle):
             self._active = True
             self._last_command = now
         try:
-            self.run_publisher(now)
+            sent = self.run_publisher(now)
         except Exception:
             with self._lock:
-                for name, value in held.items():
-                    setattr(self, name, value)
+                self._restore(held)
             raise
+        if sent:
+            with self._lock:
+                self._before.append(held)
+
+    def _restore(self, held):
+        for name, value in held.items():
+            setattr(self, name, value)
 
     def run_publisher(self, now=None):
-        """Sends the command this handle holds (the client's thread calls it at its rate).
-        A wrench not refreshed within time_out is cleared first, as AMBF does."""
+        """Sends the command this handle holds (the client's thread calls it at its rate);
+        False when the physics had refused an earlier one, which is then dropped (the
+        command goes back to the one held before the setter that made it) and this one is
+        not sent. A wrench not refreshed within time_out is cleared first, as AMBF does."""
         now = time.monotonic() if now is None else now
         with self._lock:
             if self._cartesian == 'force' and now - self._last_command > self._time_out:
@@ -401,10 +415,15 @@ class RigidBody(Handle):
                 kwargs['actuators'] = self._actuators
             try:
                 self._body.command(joints[0], joints[1], **kwargs)
+                return True
             except afhub.CommandRefused as refusal:
+                if self._before:
+                    self._restore(self._before.pop())
                 if str(refusal) != self._told_refusal:
-                    print(f'ambf_client: {refusal}', file=sys.stderr)
+                    print(f'ambf_client: {refusal}; {self._name} goes back to the command it '
+                          'held before the setter that made it', file=sys.stderr)
                     self._told_refusal = str(refusal)
+                return False
 
 
 def _xyz(v):

@@ -170,6 +170,45 @@ def test_a_refused_value_leaves_the_command_held_before(physics, tmp_path):
     assert 'ambf_client: ' not in output, output  # the client's thread sent without a fault
 
 
+def test_a_command_the_physics_refuses_is_dropped_and_the_one_before_holds(physics, tmp_path):
+    """An effort beyond the body's bounds, which only the physics knows: it refuses the
+    whole command. The handle re-sent the refused command, the watchdog released the arm
+    after 0.5 s, and it fell (a UR5 in the exploratory run). It now goes back to the
+    command it held before that setter, which the physics takes: the arm holds."""
+    run = physics(EXAMPLES / 'arm7.yaml')
+    arm = run.wait_for_body('arm/base')
+    script = Script(tmp_path, """
+        import time
+        from ambf_client import Client
+
+        _client = Client('afhub_test')
+        _client.connect()
+        base = _client.get_obj_handle('arm/base')
+        base.set_joint_pos(1, 0.4)
+        time.sleep(1.0)
+        base.set_joint_effort(3, 1e9)  # beyond any bound of the arm
+        print('STAGE 1: refused; press enter')
+        input()
+        base.set_joint_pos(0, 0.3)  # setters go on
+        print('STAGE 2: commanded; press enter')
+        input()
+        _client.clean_up()
+        print('DONE')
+    """)
+    script.read_until('STAGE 1')
+    wait_until(lambda: abs(arm.wait_next().joint_positions[1] - 0.4) < 0.03, 15,
+               'joint 1 reached its target')
+    assert held_for(arm, lambda s: abs(s.joint_positions[1] - 0.4) < 0.03, 1.5), \
+        'the arm was released after the refused command'
+    script.enter()
+    script.read_until('STAGE 2')
+    joint_0_reaches_and_holds(arm, 0.3, 'a setter after the refused command')
+    script.enter()
+    output = script.finish()
+    assert output.count('goes back to the command it held before the setter') == 1, output
+    assert 'joint 3 (link3-link4) effort 1e+09 N m is beyond its bound' in output, output
+
+
 def test_multiple_joints_take_their_own_entries_of_a_vector_as_in_ambf(physics, tmp_path):
     """set_multiple_joint_pos(q, [2, 4]) with q over all the joints, as AMBF scripts pass it:
     joints 2 and 4 take q[2] and q[4], and the others keep their commands (every joint was
@@ -207,7 +246,9 @@ def test_the_world_handle_is_the_bodies_world_and_none_without_one(physics, tmp_
     """No simulation: no world handle (None), as AMBF. A physics run with --namespace: the
     world handle is its world (it was the default namespace's: every call failed, saying
     no simulation ran), also when `afhub synth` (whose world is the default one) came
-    first in the catalog."""
+    first in the catalog, and when it started after connect() (None for good, until
+    something read the catalog again). With a second physics in the default namespace,
+    the default one's, said (the first started was taken)."""
     script = Script(tmp_path, """
         from ambf_client import Client
 
@@ -216,12 +257,16 @@ def test_the_world_handle_is_the_bodies_world_and_none_without_one(physics, tmp_
         print('no simulation:', c.get_world_handle(), 'World' in c.get_obj_names())
         print('STAGE 1: press enter once a physics runs')
         input()
-        print('names', c.get_obj_names()[:3])
         w = c.get_world_handle()
         print('namespace', repr(w.namespace))
+        print('names', c.get_obj_names()[:3])
         step = w.get_sim_step()
         w.reset()
         print('world step', step, 'then', w.get_sim_step(), 'time', w.get_sim_time())
+        print('STAGE 2: press enter once a second physics runs')
+        input()
+        names = c.get_obj_names()
+        print('then namespace', repr(c.get_world_handle().namespace), len(names))
         c.clean_up()
         print('DONE')
     """)
@@ -233,15 +278,24 @@ def test_the_world_handle_is_the_bodies_world_and_none_without_one(physics, tmp_
         run = physics(EXAMPLES / 'arm7.yaml', '--namespace', 'copy')
         run.wait_for_body('copy/afhub/arm/base')
         script.enter()
+        script.read_until('STAGE 2')
+        synth.send_signal(signal.SIGINT)  # its world is the default one
+        synth.wait(timeout=10)
+        physics(EXAMPLES / 'arm7.yaml').wait_for_body('afhub/arm/base')
+        wait_until(lambda: 'afhub/arm/base' in afhub.bodies(), 10, 'the second physics listed')
+        script.enter()
         output = script.finish()
     finally:
         synth.send_signal(signal.SIGINT)
         synth.wait(timeout=10)
     assert 'no simulation: None False' in output, output
+    assert 'World NAMED OBJECT NOT FOUND: no simulation runs' in output, output
     assert "names ['World', '/synth/body0', '/copy/afhub/arm/" in output, output
     assert "namespace 'copy'" in output, output
     step, after = (int(word) for word in output.split('world step ')[1].split()[:3:2])
     assert step > 0 and after < step, output
+    assert "then namespace '' 17" in output, output
+    assert output.count("2 simulations run (namespaces 'copy', '')") == 1, output
 
 
 def test_a_body_named_world_is_that_body_and_wrong_types_raise(physics, tmp_path):
