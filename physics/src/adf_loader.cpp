@@ -11,6 +11,7 @@
 
 #include <filesystem>
 #include <map>
+#include <unordered_set>
 
 #include "adf_blocks.hpp"
 #include "afhub/physics/lineage.hpp"
@@ -227,6 +228,21 @@ void load_adf_files_into(const std::vector<std::string>& paths, Model& model,
     const int body = scope.find(item.parent, item.from, item.parent_at, "parent", owner);
     (item.sensor ? model.sensors[item.index].parent : model.actuators[item.index].parent) = body;
   }
+  // Sensors and actuators are found by name in their body's namespace: a name met there
+  // before gets the smallest index that frees it, as AMBF names copies (the two grippers
+  // of AMBF's input devices file had one "Proximity0", the first's, and one
+  // "Constraint0", the second's; now the second's are "Proximity01" and "Constraint01").
+  std::unordered_set<std::string> taken;
+  const auto name_freely = [&](std::string& name, int parent) {
+    const std::string& channel = parent >= 0 ? model.bodies[parent].channel : std::string();
+    const std::string space = channel.substr(0, channel.rfind('/') + 1);
+    std::string free = name;
+    for (int index = 1; !taken.insert(space + free).second; ++index)
+      free = name + std::to_string(index);
+    name = free;
+  };
+  for (SensorSpec& sensor : model.sensors) name_freely(sensor.name, sensor.parent);
+  for (ActuatorSpec& actuator : model.actuators) name_freely(actuator.name, actuator.parent);
   compute_lineage(model);
   check_model(model);
 }

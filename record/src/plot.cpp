@@ -71,6 +71,13 @@ class Series : public Visitor {
  public:
   explicit Series(const PlotOptions& options) : options_(options) {}
 
+  void header(const std::string& profile, const std::string&) override {
+    if (!profile.empty())
+      throw Error(options_.file + " was recorded with --profile " + profile +
+                  ": `afhub plot` plots afhub's own recordings (no --profile); ROS 2 tools "
+                  "read this one");
+  }
+
   void channel(const Channel& channel) override {
     const auto instance = channel.metadata.find("afhub_instance");
     if (instance == channel.metadata.end() || !channel.topic.ends_with("/state") ||

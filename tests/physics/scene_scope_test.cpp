@@ -176,6 +176,15 @@ TEST_F(SceneScope, TheSameModelLoadedTwiceGetsItsOwnChannelsNamedAsAmbfNamesCopi
     EXPECT_EQ(model.sensors[copy].parent, 2 * copy + 1);
     EXPECT_EQ(model.actuators[copy].parent, 2 * copy + 1);
   }
+  // Clients find sensors and actuators by name in their body's namespace: named as
+  // copies too (each copy's was "range" and "grip": one name for three).
+  EXPECT_EQ(model.sensors[0].name, "range");
+  EXPECT_EQ(model.sensors[1].name, "range1");
+  EXPECT_EQ(model.sensors[2].name, "range2");
+  EXPECT_EQ(model.actuators[2].name, "grip2");
+  // In other namespaces the same names are other names: kept.
+  const Model two = load_adf_files({psm_, ecm_});
+  EXPECT_EQ(two.sensors[1].name, "range");
   EXPECT_NE(model.joints[0].channel, model.joints[1].channel);
   ASSERT_EQ(model.warnings.size(), 2u);
   EXPECT_TRUE(contains(model.warnings[0],

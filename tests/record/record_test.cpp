@@ -591,6 +591,11 @@ TEST(Record, AsAROS2BagEveryMessageReadsWithFoxglovesDecodersAndJointStatesWithA
   const RunResult recorded = run_afhub(
       {"record", "-o", file, "--duration", "1", "--profile", "ros2", "--commands", "--world"}, 60s);
   ASSERT_EQ(recorded.exit_code, 0) << recorded.err;
+  // afhub's plot reads afhub's payloads: it said the file recorded no such body.
+  const RunResult plotted = run_afhub({"plot", file, "base", "-o", scene.dir("ros2.png")});
+  EXPECT_EQ(plotted.exit_code, 1) << plotted.err;
+  EXPECT_TRUE(contains(plotted.err, "was recorded with --profile ros2: `afhub plot` plots afhub's"))
+      << plotted.err;
   const RunResult check =
       run_command({"node", kChecker, file, "--jointstate", "/afhub/arm/base/joint_states"}, 120s);
   ASSERT_EQ(check.exit_code, 0) << check.err;
