@@ -14,19 +14,16 @@
 #include "commands.hpp"
 #include "format.hpp"
 #include "gain_options.hpp"
-#include "placement_option.hpp"
-#include "urdf_options.hpp"
+#include "scene_options.hpp"
 
 namespace afhub::cli {
 namespace {
 
 struct CheckOptions {
-  std::vector<std::string> files;
-  std::string launch_file, indices, world_file, gravity;
-  std::vector<std::string> placements;  // "FILE=x,y,z[,r,p,y]"
+  SceneOptions scene;
+  std::string gravity;
   double dt_s = 0.001;
   GainOptions gains;
-  physics::UrdfOptions urdf;
 };
 
 std::string vec3_text(const Vec3& v) {
@@ -72,23 +69,15 @@ int run_check(const CheckOptions& options) {
   physics::Model model;
   std::size_t meshes = 0;
   try {
-    physics::SceneRequest request;
-    request.launch_file = options.launch_file;
-    if (!options.indices.empty())
-      request.launch_indices = physics::parse_index_list(options.indices);
-    request.adf_files = options.files;
-    request.world_file = options.world_file;
-    request.urdf = options.urdf;
-    for (const std::string& placement : options.placements)
-      request.placements.push_back(physics::parse_file_placement(placement));
-    model = physics::load_scene(request);
+    model = physics::load_scene(scene_request(options.scene));
     // The meshes too: `afhub run` reads them, and a broken one must show here first.
     meshes = physics::check_meshes(model);
   } catch (const Error& error) {
     std::fprintf(stderr, "%s\n", error.what());  // already "file:line:col: error: ..."
     return 1;
   }
-  std::string gravity_source = options.world_file.empty() ? "default" : options.world_file;
+  const std::string& world_file = options.scene.world_file;
+  std::string gravity_source = world_file.empty() ? "default" : world_file;
   if (!options.gravity.empty()) {
     physics::override_gravity(model, parse_gravity(options.gravity, model.warnings));
     gravity_source = "--gravity";
@@ -139,20 +128,12 @@ void register_check(CLI::App& app, Runner& selected) {
   auto* check = app.add_subcommand(
       "check",
       "Validate AMBF description files without simulating: bodies, joints, loops, mass, warnings.");
-  check->add_option("files", options->files, "ADF and URDF files, loaded together");
-  check->add_option("--launch", options->launch_file,
-                    "A launch file: its world config, colors, and the models picked with -l "
-                    "(as `afhub run --launch`)");
-  check->add_option("-l", options->indices,
-                    "Indices into the launch file's multibody configs: 0,3");
-  check->add_option("--world", options->world_file, "A world file (its gravity, as `afhub run`)");
-  add_placement_option(check, options->placements);
+  add_scene_options(check, options->scene, "A world file (its gravity, as `afhub run`)");
   check->add_option("--gravity", options->gravity,
                     "x,y,z in m/s^2: the gravity `afhub run --gravity` would use");
   check->add_option("--dt", options->dt_s,
                     "The step the joint gains are checked for (default 0.001 s, as `afhub run`)");
   add_gain_options(check, options->gains);
-  add_urdf_options(check, options->urdf);
   check->callback([&selected, options] { selected = [options] { return run_check(*options); }; });
 }
 

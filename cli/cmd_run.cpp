@@ -18,20 +18,17 @@
 #include "count_option.hpp"
 #include "format.hpp"
 #include "gain_options.hpp"
-#include "placement_option.hpp"
 #include "realtime_options.hpp"
-#include "urdf_options.hpp"
+#include "scene_options.hpp"
 
 namespace afhub::cli {
 namespace {
 
 struct RunCliOptions {
-  std::vector<std::string> files;
-  std::string launch_file, indices, adf_list, world_file, report_file, step_log_file, watchdog_hold,
-      name_space;
+  SceneOptions scene;
+  std::string report_file, step_log_file, watchdog_hold, name_space;
   std::string gravity;                       // "x,y,z": over the world's and every file's
   std::vector<std::string> watchdog_bodies;  // "BODY=SECONDS"
-  std::vector<std::string> placements;       // "FILE=x,y,z[,r,p,y]"
   double dt_s = 0.001;
   double watchdog_s = 0.5;
   std::uint64_t steps = 0;
@@ -51,7 +48,6 @@ struct RunCliOptions {
   double max_catch_up_ms = 100.0;
   std::string mesh_fallback = "refuse";
   GainOptions gains;
-  physics::UrdfOptions urdf;
 };
 
 int run_run(const RunCliOptions& options) {
@@ -100,16 +96,7 @@ int run_run(const RunCliOptions& options) {
                     "'");
       watchdog_bodies.emplace_back(entry.substr(0, equals), *seconds);
     }
-  physics::SceneRequest request;
-  request.launch_file = options.launch_file;
-  if (!options.indices.empty()) request.launch_indices = physics::parse_index_list(options.indices);
-  request.adf_files = split_commas(options.adf_list);
-  request.adf_files.insert(request.adf_files.end(), options.files.begin(), options.files.end());
-  request.world_file = options.world_file;
-  request.urdf = options.urdf;
-  for (const std::string& placement : options.placements)
-    request.placements.push_back(physics::parse_file_placement(placement));
-
+  const physics::SceneRequest request = scene_request(options.scene);
   physics::Model model;
   try {
     model = physics::load_scene(request);
@@ -224,24 +211,17 @@ void register_run(CLI::App& app, Runner& selected) {
       "run",
       "Simulate AMBF descriptions in Bullet; every active body publishes its state and reads "
       "its commands on the hub's channels.");
-  run->add_option("files", options->files, "ADF and URDF files, loaded together");
-  run->add_option("--launch", options->launch_file,
-                  "A launch file: its world config, colors, and the models picked with -l");
-  run->add_option("-l", options->indices, "Indices into the launch file's multibody configs: 0,3");
-  run->add_option("-a", options->adf_list, "ADF files, comma-separated: a.yaml,b.yaml");
-  run->add_option("--world", options->world_file,
-                  "A world file (gravity, enclosure, lights, cameras, environment)");
+  add_scene_options(run, options->scene,
+                    "A world file (gravity, enclosure, lights, cameras, environment)");
   run->add_option(
       "--namespace", options->name_space,
       "Put every body's channels under this prefix (copy/afhub/arm/base), and the world's "
       "(copy/world: `afhub world pause --namespace copy`), to run a second copy of a model "
       "beside the first: a live body has one publisher");
-  add_placement_option(run, options->placements);
   run->add_option("--gravity", options->gravity,
                   "x,y,z in m/s^2 for the world and every body, over the world file's and the "
                   "model files' `gravity` (by AMBF's rule a file's gravity wins over the world's)");
   add_gain_options(run, options->gains);
-  add_urdf_options(run, options->urdf);
   run->add_flag("--reduced-coordinates", options->reduced_coordinates,
                 "Simulate each open chain hanging from a static body (an arm on its base) in "
                 "joint coordinates, Bullet's multibody: no constraint rows hold it together, "

@@ -265,6 +265,8 @@ std::vector<int> parse_index_list(const std::string& text) {
     int value = -1;
     const char* first = text.data() + start;
     const char* last = text.data() + end;
+    while (first < last && *first == ' ') ++first;  // "0, 3" as written in prose
+    while (last > first && last[-1] == ' ') --last;
     auto [ptr, ec] = std::from_chars(first, last, value);
     if (ec != std::errc() || ptr != last || value < 0)
       throw Error("'" + text + "' is not a list of model indices such as 0,3,5");

@@ -606,6 +606,22 @@ TEST(Run, CheckAndRunTakeALaunchFileAndRefuseItWithNoModelPicked) {
   RunResult picked = run_afhub({"check", "--launch", launch, "-l", "0,2"}, 60s);
   EXPECT_EQ(picked.exit_code, 0) << picked.err;
   EXPECT_TRUE(contains(picked.out + picked.err, "arm")) << picked.out;
+  // -l repeated, or with spaces, picks the same (both were refused); check takes -a as
+  // run does (it was refused).
+  for (const std::vector<std::string>& same :
+       {std::vector<std::string>{"check", "--launch", launch, "-l", "0", "-l", "2"},
+        std::vector<std::string>{"check", "--launch", launch, "-l", "0, 2"}}) {
+    RunResult again = run_afhub(same, 60s);
+    EXPECT_EQ(again.exit_code, 0) << again.err;
+    EXPECT_EQ(again.out, picked.out) << again.err;
+  }
+  const std::string arm = AFHUB_EXAMPLE_MODELS "/arm7.yaml",
+                    gripper = AFHUB_EXAMPLE_MODELS "/gripper.yaml";
+  RunResult listed = run_afhub({"check", "-a", arm + "," + gripper}, 60s);
+  RunResult given = run_afhub({"check", arm, gripper}, 60s);
+  EXPECT_EQ(listed.exit_code, 0) << listed.err;
+  EXPECT_EQ(listed.out, given.out) << listed.err;
+  EXPECT_TRUE(contains(listed.out, "afhub/gripper/palm")) << listed.out;
   for (const std::vector<std::string>& args :
        {std::vector<std::string>{"check", "--launch", launch},
         std::vector<std::string>{"run", "--launch", launch, "--offline"}}) {
