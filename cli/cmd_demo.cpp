@@ -186,8 +186,9 @@ void draw(CatalogReader& catalog, std::vector<std::unique_ptr<BodyClient>>& clie
     const BodyState* state = clients[i]->latest_state();
     if (!state) continue;
     const Vec3& p = state->pose.position_m;
-    std::snprintf(line, sizeof line, "%-28s %9.1f %9llu %9.3f  [%7.3f %7.3f %7.3f]   ",
-                  channel.c_str(), list.bodies[i].publish_rate_hz,
+    // Not measured yet ("-", as `afhub ls` says it), not 0 Hz.
+    std::snprintf(line, sizeof line, "%-28s %9s %9llu %9.3f  [%7.3f %7.3f %7.3f]   ",
+                  channel.c_str(), rate_text(list.bodies[i].publish_rate_hz).c_str(),
                   static_cast<unsigned long long>(state->header.sim_step), state->header.sim_time_s,
                   p.x, p.y, p.z);
     screen += line;

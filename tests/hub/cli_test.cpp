@@ -63,6 +63,15 @@ TEST(Cli, DemoSimulatesTheExampleSceneLive) {
   for (const char* body : {"afhub/arm/link7", "afhub/rcm/insertion_link", "afhub/gripper/palm"})
     EXPECT_TRUE(contains(demo.out, body)) << body << " missing:\n" << demo.out;
   EXPECT_FALSE(contains(demo.out, "http://")) << "--no-view starts no viewer";
+  // A rate not measured yet (the first seconds) is "-", as in `afhub ls`: it said 0.0.
+  std::istringstream lines(demo.out);
+  for (std::string line; std::getline(lines, line);) {
+    std::istringstream fields(line);
+    std::string body, rate;
+    if (fields >> body >> rate && body == "afhub/arm/link7") {
+      EXPECT_NE(rate, "0.0") << line;
+    }
+  }
   EXPECT_EQ(run_afhub({"hub", "stop"}).exit_code, 0);
 }
 
