@@ -3,6 +3,7 @@
 // simulation has acted on it, and says what happened.
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -62,8 +63,9 @@ bool undoes(WorldAction later, WorldAction mine) {
       return later == WorldAction::kResume;
     case WorldAction::kResume:
       return later == WorldAction::kPause;
-    case WorldAction::kStep:
-      return later == WorldAction::kResume || later == WorldAction::kReset;
+    case WorldAction::kStep:  // a pause ends the steps still to run
+      return later == WorldAction::kPause || later == WorldAction::kResume ||
+             later == WorldAction::kReset;
     default:
       return false;
   }
@@ -149,11 +151,26 @@ int run_world(WorldAction action, const WorldOptions& options) {
   undone.sent(sequence + 1);
 
   WorldActionWatch watch(action, options.steps, before, monotonic_ns());
-  const std::int64_t give_up = monotonic_ns() + static_cast<std::int64_t>(options.timeout_s * 1e9) +
-                               kWorldCommandShownWithinNs;
-  while (!stop_requested() && monotonic_ns() < give_up) {
+  std::int64_t give_up = monotonic_ns() + static_cast<std::int64_t>(options.timeout_s * 1e9) +
+                         kWorldCommandShownWithinNs;
+  // Steps take their time: once the world steps them, the wait lasts while it does (a
+  // step longer than --timeout failed, saying the world had not acted).
+  std::uint64_t stepping_at = before.header.sim_step;
+  while (monotonic_ns() < give_up) {
     const WorldState* state = reader.latest();
+    if (stop_requested()) {
+      if (action == WorldAction::kStep && state && state->header.sim_step > before.header.sim_step)
+        throw Stopped("stopped waiting at step " + std::to_string(state->header.sim_step) +
+                      ": the world runs the rest of the steps on (`afhub world pause` ends them)");
+      throw Stopped(
+          "stopped waiting: the command was sent, and the world acts on it if it "
+          "reads it within --timeout");
+    }
     if (state && reader.updated()) {
+      if (action == WorldAction::kStep && state->header.sim_step > stepping_at) {
+        stepping_at = state->header.sim_step;
+        give_up = std::max(give_up, monotonic_ns() + 2'000'000'000);
+      }
       if (const std::optional<std::string> said = watch.shown(*state)) {
         std::printf("%s\n", said->c_str());
         return 0;
@@ -170,6 +187,11 @@ int run_world(WorldAction action, const WorldOptions& options) {
     }
     std::this_thread::sleep_for(std::chrono::microseconds(200));
   }
+  if (stepping_at > before.header.sim_step)
+    throw Error("the world stepped from step " + std::to_string(before.header.sim_step) + " to " +
+                std::to_string(stepping_at) + " of the " + std::to_string(options.steps) +
+                " steps asked, then stalled for 2 s: is the simulation stopped, or waiting for "
+                "lockstep clients? (`afhub status`)");
   throw Error("the command was sent but the simulation did not act on it within " +
               yaml::number_text(options.timeout_s) +
               " s, and it will not later (read after that, it is dropped): is the simulation "

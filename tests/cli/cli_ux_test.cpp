@@ -217,8 +217,26 @@ TEST(World, ALongStepSaysItRunsAndPauseStopsIt) {
   EXPECT_EQ(absurd.exit_code, 1);
   EXPECT_TRUE(contains(absurd.err, "from 1 to 1000000")) << absurd.err;
 
+  // Longer than --timeout: it waits while the world steps (it failed, saying the world
+  // had not acted).
+  const RunResult long_step = run_afhub({"world", "step", "1500", "--timeout", "0.5"}, 30s);
+  EXPECT_EQ(long_step.exit_code, 0) << long_step.err;
+  EXPECT_TRUE(contains(long_step.out, "stepped 1500 steps: now paused")) << long_step.out;
+  // Ctrl-C while it steps: said, exit 0, the steps run on (it said the world had not acted
+  // within its timeout, exit 1).
+  const std::string interrupted_log = (folder.dir() / "interrupted.log").string();
+  ScopedProcess interrupted(spawn_afhub({"world", "step", "100000"}, interrupted_log));
+  const std::uint64_t before_interrupted = world.latest()->header.sim_step;
+  ASSERT_TRUE(
+      wait_until([&] { return world.latest()->header.sim_step > before_interrupted + 50; }, 10s));
+  EXPECT_EQ(interrupted.stop(SIGINT), 0) << read_file(interrupted_log);
+  EXPECT_TRUE(contains(read_file(interrupted_log), "stopped waiting at step"))
+      << read_file(interrupted_log);
+  ASSERT_EQ(run_afhub({"world", "pause"}).exit_code, 0);
+
   const std::uint64_t paused_at = world.latest()->header.sim_step;
-  ScopedProcess stepping(spawn_afhub({"world", "step", "1000000"}));
+  const std::string stepping_log = (folder.dir() / "stepping.log").string();
+  ScopedProcess stepping(spawn_afhub({"world", "step", "1000000"}, stepping_log));
   ASSERT_TRUE(wait_until(
       [&] {
         const WorldState* w = world.latest();
@@ -235,6 +253,13 @@ TEST(World, ALongStepSaysItRunsAndPauseStopsIt) {
   RunResult pause = run_afhub({"world", "pause"});
   ASSERT_EQ(pause.exit_code, 0) << pause.err;
   EXPECT_TRUE(contains(pause.out, "paused at step")) << pause.out;
+  // The long step says its steps were ended by that pause (it waited out its timeout and
+  // said the world had not acted).
+  EXPECT_EQ(wait_for_exit(stepping, 5s), 0) << read_file(stepping_log);
+  EXPECT_TRUE(contains(read_file(stepping_log), "and undone since by another process (pid "))
+      << read_file(stepping_log);
+  EXPECT_TRUE(contains(read_file(stepping_log), ": paused): now paused at step"))
+      << read_file(stepping_log);
   ASSERT_TRUE(wait_until([&] { return world.latest()->paused == 1; }, 2s));
   const std::uint64_t stopped_at = world.latest()->header.sim_step;
   // Still for as many of the world's own publishes as 100 steps would take.
