@@ -633,7 +633,7 @@ TEST(HubLoss, CtrlCJustAfterTheHubIsLostEndsTheProcessWithCodeZero) {
     ScopedProcess hub(start_test_hub());
     ASSERT_GT(hub.pid, 0);
     ScopedProcess synth = spawn_afhub({"synth", "--bodies", "1", "--no-autostart"}, log);
-    ASSERT_TRUE(wait_until([] { return contains(run_afhub({"ls"}, 5s).out, "synth"); }, 20s))
+    ASSERT_TRUE(wait_until([] { return contains(run_afhub({"ls"}, 5s).out, "synth/body0"); }, 20s))
         << read_file(log);
     std::this_thread::sleep_for(300ms);  // past its start: it looks at the catalog every 10 ms
     kill(hub.pid, SIGKILL);
@@ -661,7 +661,7 @@ TEST(HubLoss, CtrlCAsTheProcessReexecutesEndsItWithCodeZero) {
     ScopedProcess synth = spawn_wrapped_afhub(
         with_hook(AFHUB_STOP_SIGNAL_AT_EXEC, "AFHUB_TEST_SIGINT_AT_EXEC=" + marker),
         {"synth", "--bodies", "1", "--no-autostart"}, log);
-    ASSERT_TRUE(wait_until([] { return contains(run_afhub({"ls"}, 5s).out, "synth"); }, 20s))
+    ASSERT_TRUE(wait_until([] { return contains(run_afhub({"ls"}, 5s).out, "synth/body0"); }, 20s))
         << read_file(log);
     kill(hub.pid, SIGKILL);
     waitpid(hub.pid, nullptr, 0);
@@ -712,7 +712,7 @@ TEST(HubLoss, AHubKilledWhileAProcessRegistersIsSeen) {
     ASSERT_GT(hub.pid, 0);
     EXPECT_TRUE(wait_until([&] { return contains(read_file(log), "re-attached to the hub"); }, 20s))
         << read_file(log);
-    EXPECT_TRUE(wait_until([] { return contains(run_afhub({"ls"}, 5s).out, "synth"); }, 20s))
+    EXPECT_TRUE(wait_until([] { return contains(run_afhub({"ls"}, 5s).out, "synth/body0"); }, 20s))
         << run_afhub({"ls"}, 5s).out << read_file(log);
     EXPECT_EQ(client.stop(SIGINT), 0) << read_file(log);
   }
@@ -744,7 +744,7 @@ TEST(HubLoss, AHubReplacedJustAfterAProcessRegisteredIsSeen) {
   const std::string reattached = "re-attached to the hub (pid " + std::to_string(hub.pid) + ")";
   EXPECT_TRUE(wait_until([&] { return contains(read_file(log), reattached); }, 20s))
       << read_file(log);
-  EXPECT_TRUE(wait_until([] { return contains(run_afhub({"ls"}, 5s).out, "synth"); }, 20s))
+  EXPECT_TRUE(wait_until([] { return contains(run_afhub({"ls"}, 5s).out, "synth/body0"); }, 20s))
       << run_afhub({"ls"}, 5s).out << read_file(log);
   EXPECT_EQ(client.stop(SIGINT), 0) << read_file(log);
 }
