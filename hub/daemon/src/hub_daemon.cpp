@@ -214,9 +214,18 @@ bool iceoryx_locks_are_free() {
     struct stat info {};
     if (lstat(path, &info) != 0) continue;
     const char* problem = nullptr;
+    // Held, it may be a hub that is ending: its lock freed, the process not yet gone
+    // (CI: a hub started right after `afhub hub stop` found it held, and gave up).
+    const auto released = [path] {
+      for (int waited_ms = 0; flock_held(path); waited_ms += 50) {
+        if (waited_ms >= 5000) return false;
+        std::this_thread::sleep_for(std::chrono::milliseconds(50));
+      }
+      return true;
+    };
     if (!S_ISREG(info.st_mode) || info.st_uid != geteuid())
       problem = "belongs to another user (planted there?)";
-    else if (flock_held(path))
+    else if (!released())
       problem = "is held by another process";
     if (!problem) continue;
     const std::optional<pid_t> holder = flock_holder(path);
